@@ -1,0 +1,102 @@
+#include "session/chunk_file.hpp"
+
+#include "common/error.hpp"
+
+namespace posefuse::session {
+
+namespace {
+
+constexpr int kMaxVarintBytes = 10;  // a 64-bit varint has at most 10 bytes
+
+std::string chunk_field(std::uint64_t index) { return "chunk[" + std::to_string(index) + "]"; }
+
+}  // namespace
+
+ChunkFileReader::ChunkFileReader(const std::filesystem::path& path, std::uint64_t max_chunk_bytes)
+    : path_(path), max_chunk_bytes_(max_chunk_bytes) {
+  in_.open(path, std::ios::binary);
+  if (!in_) throw Error(ErrorCode::kNotFound, path.string(), "cannot open chunk file");
+}
+
+bool ChunkFileReader::next(SessionChunk& chunk) {
+  const std::string field = chunk_field(chunks_read_);
+  const std::string where = " (chunk starts at byte offset " + std::to_string(offset_) + ")";
+
+  // Length prefix: base-128 varint, least significant group first.
+  std::uint64_t length = 0;
+  int bytes = 0;
+  while (true) {
+    const int c = in_.get();
+    if (c == std::char_traits<char>::eof()) {
+      if (bytes == 0 && !in_.bad()) return false;  // clean end between chunks
+      throw Error(ErrorCode::kDataLoss, field, "file ends inside the length prefix" + where);
+    }
+    const auto byte = static_cast<std::uint64_t>(c);
+    if (bytes == kMaxVarintBytes - 1 && byte > 1) {
+      throw Error(ErrorCode::kDataLoss, field, "corrupt length prefix (overflows 64 bits)" + where);
+    }
+    length |= (byte & 0x7F) << (7 * bytes);
+    ++bytes;
+    if ((byte & 0x80) == 0) break;
+    if (bytes == kMaxVarintBytes) {
+      throw Error(ErrorCode::kDataLoss, field, "corrupt length prefix (longer than 10 bytes)" + where);
+    }
+  }
+  if (length > max_chunk_bytes_) {
+    throw Error(ErrorCode::kResourceExhausted, field,
+                "length " + std::to_string(length) + " bytes exceeds the limit of " +
+                    std::to_string(max_chunk_bytes_) + where);
+  }
+
+  buffer_.resize(length);
+  in_.read(buffer_.data(), static_cast<std::streamsize>(length));
+  const auto got = static_cast<std::uint64_t>(in_.gcount());
+  if (got != length) {
+    throw Error(ErrorCode::kDataLoss, field,
+                "truncated: expected " + std::to_string(length) + " bytes, file has " +
+                    std::to_string(got) + where);
+  }
+  chunk.Clear();
+  if (!chunk.ParseFromString(buffer_)) {
+    throw Error(ErrorCode::kDataLoss, field, "corrupt: not a valid SessionChunk" + where);
+  }
+  offset_ += static_cast<std::uint64_t>(bytes) + length;
+  ++chunks_read_;
+  return true;
+}
+
+ChunkFileWriter::ChunkFileWriter(const std::filesystem::path& path, std::uint64_t max_chunk_bytes)
+    : path_(path), max_chunk_bytes_(max_chunk_bytes) {
+  out_.open(path, std::ios::binary | std::ios::trunc);
+  if (!out_) throw_precondition(path.string(), "cannot create chunk file");
+}
+
+void ChunkFileWriter::write(const SessionChunk& chunk) {
+  const std::uint64_t length = chunk.ByteSizeLong();
+  if (length > max_chunk_bytes_) {
+    throw Error(ErrorCode::kResourceExhausted, chunk_field(chunks_written_),
+                "serialised size " + std::to_string(length) + " bytes exceeds the limit of " +
+                    std::to_string(max_chunk_bytes_));
+  }
+  char prefix[kMaxVarintBytes];
+  int n = 0;
+  std::uint64_t rest = length;
+  do {
+    const auto group = static_cast<char>(rest & 0x7F);
+    rest >>= 7;
+    prefix[n++] = static_cast<char>(group | (rest ? 0x80 : 0));
+  } while (rest);
+  buffer_.clear();
+  chunk.SerializeToString(&buffer_);
+  out_.write(prefix, n);
+  out_.write(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
+  if (!out_) throw Error(ErrorCode::kDataLoss, path_.string(), "write failed");
+  ++chunks_written_;
+}
+
+void ChunkFileWriter::finish() {
+  out_.close();
+  if (!out_) throw Error(ErrorCode::kDataLoss, path_.string(), "write failed on close");
+}
+
+}  // namespace posefuse::session

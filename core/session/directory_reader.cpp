@@ -1,0 +1,365 @@
+#include "session/directory_reader.hpp"
+
+#include <algorithm>
+#include <set>
+
+#include "common/error.hpp"
+#include "session/chunk_order.hpp"
+#include "session/directory_layout.hpp"
+#include "session/file_bytes.hpp"
+#include "session/image_codec.hpp"
+#include "session/json_message.hpp"
+#include "session/text_fields.hpp"
+#include "session/wav.hpp"
+
+namespace posefuse::session {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+enum class FrameKind { kDepth, kBodyIndex, kColor };
+
+// depth/, body_index/ or color/: one file per frame named <t_us>.<ext>, read in t_us order.
+class FrameFolderStream : public ChunkSource {
+ public:
+  FrameFolderStream(const fs::path& folder, const char* folder_name, FrameKind kind)
+      : kind_(kind) {
+    for (const fs::directory_entry& entry : fs::directory_iterator(folder)) {
+      const std::string file = entry.path().filename().string();
+      if (file.starts_with(".")) continue;  // editor and OS droppings
+      const std::string name = std::string(folder_name) + "/" + file;
+      const std::string ext = entry.path().extension().string();
+      const bool ext_ok = ext == ".png" || (kind == FrameKind::kColor && (ext == ".jpg" || ext == ".jpeg"));
+      if (!entry.is_regular_file() || !ext_ok) {
+        throw_invalid(name, kind == FrameKind::kColor
+                                ? "expected files named <t_us>.jpg or <t_us>.png"
+                                : "expected files named <t_us>.png");
+      }
+      const std::int64_t t_us = parse_int64(entry.path().stem().string(), name);
+      files_.push_back({t_us, entry.path(), name});
+    }
+    std::sort(files_.begin(), files_.end(),
+              [](const File& a, const File& b) { return a.t_us < b.t_us; });
+    for (std::size_t i = 1; i < files_.size(); ++i) {
+      if (files_[i].t_us == files_[i - 1].t_us) {
+        throw_invalid(files_[i].name, "two frames at " + std::to_string(files_[i].t_us) + " us");
+      }
+    }
+  }
+
+  bool next(SessionChunk& chunk) override {
+    if (next_ == files_.size()) return false;
+    const File& file = files_[next_++];
+    std::string bytes = read_file_bytes(file.path, file.name);
+    chunk.Clear();
+    if (kind_ == FrameKind::kDepth) {
+      const ImageSize size = png_size(bytes, file.name);
+      v1::DepthFrame* frame = chunk.mutable_depth();
+      frame->set_t_us(file.t_us);
+      frame->set_width(size.width);
+      frame->set_height(size.height);
+      frame->set_encoding(v1::DepthFrame::PNG16);
+      frame->set_data(std::move(bytes));
+    } else if (kind_ == FrameKind::kBodyIndex) {
+      const ImageSize size = png_size(bytes, file.name);
+      v1::BodyIndexFrame* frame = chunk.mutable_body_index();
+      frame->set_t_us(file.t_us);
+      frame->set_width(size.width);
+      frame->set_height(size.height);
+      frame->set_encoding(v1::BodyIndexFrame::PNG8);
+      frame->set_data(std::move(bytes));
+    } else {
+      const bool png = file.path.extension() == ".png";
+      const ImageSize size = png ? png_size(bytes, file.name) : jpeg_size(bytes, file.name);
+      v1::ColorFrame* frame = chunk.mutable_color();
+      frame->set_t_us(file.t_us);
+      frame->set_width(size.width);
+      frame->set_height(size.height);
+      frame->set_encoding(png ? v1::ColorFrame::PNG : v1::ColorFrame::JPEG);
+      frame->set_data(std::move(bytes));
+    }
+    return true;
+  }
+
+ private:
+  struct File {
+    std::int64_t t_us;
+    fs::path path;
+    std::string name;
+  };
+  FrameKind kind_;
+  std::vector<File> files_;
+  std::size_t next_ = 0;
+};
+
+// skeleton.csv: one row per joint; consecutive rows with the same (t_us, body_id) form a frame.
+class SkeletonStream : public ChunkSource {
+ public:
+  explicit SkeletonStream(const fs::path& path)
+      : csv_(path, layout::kSkeletonCsv, layout::kSkeletonColumns) {
+    have_row_ = csv_.next();
+  }
+
+  bool next(SessionChunk& chunk) override {
+    if (!have_row_) return false;
+    chunk.Clear();
+    v1::SkeletonFrame* frame = chunk.mutable_skeleton();
+    frame->set_t_us(parse_int64(csv_.at(0), csv_.field(0)));
+    const std::uint64_t body_id = parse_uint64(csv_.at(1), csv_.field(1));
+    if (body_id > 0xFFFFFFFFu) throw_invalid(csv_.field(1), "body id is too large");
+    frame->set_body_id(static_cast<std::uint32_t>(body_id));
+    while (have_row_ && parse_int64(csv_.at(0), csv_.field(0)) == frame->t_us() &&
+           parse_uint64(csv_.at(1), csv_.field(1)) == body_id) {
+      add_joint(*frame);
+      have_row_ = csv_.next();
+    }
+    return true;
+  }
+
+ private:
+  void add_joint(v1::SkeletonFrame& frame) {
+    const std::uint64_t index = parse_uint64(csv_.at(2), csv_.field(2));
+    const auto expected = static_cast<std::uint64_t>(frame.joints_size());
+    if (index != expected) {
+      throw_invalid(csv_.field(2), "joint " + std::to_string(index) + " where joint " +
+                                       std::to_string(expected) +
+                                       " was expected (rows of a frame list joints 0..24 in order)");
+    }
+    if (index >= layout::kKinectJointNames.size()) {
+      throw_invalid(csv_.field(2), "a frame has more than 25 joints");
+    }
+    if (csv_.at(3) != layout::kKinectJointNames[index]) {
+      throw_invalid(csv_.field(3), "'" + std::string(csv_.at(3)) + "' but joint " +
+                                       std::to_string(index) + " is " +
+                                       layout::kKinectJointNames[index]);
+    }
+    v1::SkeletonJoint* joint = frame.add_joints();
+    v1::SkeletonJoint::State state{};
+    if (!v1::SkeletonJoint::State_Parse(std::string(csv_.at(4)), &state)) {
+      throw_invalid(csv_.field(4), "'" + std::string(csv_.at(4)) +
+                                       "' is not NOT_TRACKED, INFERRED or TRACKED");
+    }
+    joint->set_state(state);
+    joint->mutable_position_m()->set_x(parse_double(csv_.at(5), csv_.field(5)));
+    joint->mutable_position_m()->set_y(parse_double(csv_.at(6), csv_.field(6)));
+    joint->mutable_position_m()->set_z(parse_double(csv_.at(7), csv_.field(7)));
+    joint->mutable_orientation()->set_w(parse_double(csv_.at(8), csv_.field(8)));
+    joint->mutable_orientation()->set_x(parse_double(csv_.at(9), csv_.field(9)));
+    joint->mutable_orientation()->set_y(parse_double(csv_.at(10), csv_.field(10)));
+    joint->mutable_orientation()->set_z(parse_double(csv_.at(11), csv_.field(11)));
+  }
+
+  CsvReader csv_;
+  bool have_row_ = false;
+};
+
+// imu/<device_id>.csv: samples, grouped into batches of kImuSamplesPerBatch rows.
+class ImuStream : public ChunkSource {
+ public:
+  ImuStream(const fs::path& path, std::string device_id)
+      : csv_(path, std::string(layout::kImuDir) + "/" + device_id + ".csv", layout::kImuColumns),
+        device_id_(std::move(device_id)) {}
+
+  bool next(SessionChunk& chunk) override {
+    chunk.Clear();
+    v1::ImuBatch* batch = chunk.mutable_imu();
+    batch->set_device_id(device_id_);
+    while (batch->t_us_size() < layout::kImuSamplesPerBatch && csv_.next()) {
+      batch->add_t_us(parse_int64(csv_.at(0), csv_.field(0)));
+      for (int k = 0; k < 3; ++k) {
+        batch->add_gyr_rad_s(parse_float(csv_.at(1 + k), csv_.field(1 + k)));
+        batch->add_acc_m_s2(parse_float(csv_.at(4 + k), csv_.field(4 + k)));
+        batch->add_mag_ut(parse_float(csv_.at(7 + k), csv_.field(7 + k)));
+      }
+    }
+    return batch->t_us_size() > 0;
+  }
+
+ private:
+  CsvReader csv_;
+  std::string device_id_;
+};
+
+// audio.wav cut into chunks by audio_chunks.csv (t_us of each chunk's first frame, frame count).
+class AudioStream : public ChunkSource {
+ public:
+  AudioStream(const fs::path& wav, const fs::path& chunks)
+      : wav_(wav, layout::kAudioWav),
+        csv_(chunks, layout::kAudioChunksCsv, layout::kAudioChunkColumns) {}
+
+  bool next(SessionChunk& chunk) override {
+    if (!csv_.next()) {
+      if (wav_.frames_left() > 0) {
+        throw_invalid(layout::kAudioChunksCsv,
+                      "covers " + std::to_string(wav_.total_frames() - wav_.frames_left()) +
+                          " sample frames, audio.wav has " + std::to_string(wav_.total_frames()));
+      }
+      return false;
+    }
+    chunk.Clear();
+    v1::AudioChunk* audio = chunk.mutable_audio();
+    audio->set_t_us(parse_int64(csv_.at(0), csv_.field(0)));
+    const std::uint64_t frames = parse_uint64(csv_.at(1), csv_.field(1));
+    if (frames > wav_.frames_left()) {
+      throw_invalid(csv_.field(1), std::to_string(frames) + " sample frames, but audio.wav has only " +
+                                       std::to_string(wav_.frames_left()) + " left");
+    }
+    audio->set_sample_rate_hz(wav_.format().sample_rate_hz);
+    audio->set_channels(wav_.format().channels);
+    audio->set_pcm_s16le(wav_.read_frames(frames));
+    return true;
+  }
+
+ private:
+  WavReader wav_;
+  CsvReader csv_;
+};
+
+// sync_events.csv: one event per row.
+class SyncEventStream : public ChunkSource {
+ public:
+  explicit SyncEventStream(const fs::path& path)
+      : csv_(path, layout::kSyncEventsCsv, layout::kSyncEventColumns) {}
+
+  bool next(SessionChunk& chunk) override {
+    if (!csv_.next()) return false;
+    chunk.Clear();
+    v1::SyncEvent* event = chunk.mutable_sync_event();
+    event->set_t_us(parse_int64(csv_.at(0), csv_.field(0)));
+    event->set_device_id(std::string(csv_.at(1)));
+    v1::SyncEvent::Kind kind{};
+    if (!v1::SyncEvent::Kind_Parse(std::string(csv_.at(2)), &kind)) {
+      throw_invalid(csv_.field(2), "'" + std::string(csv_.at(2)) +
+                                       "' is not BUZZER_STOP, BLE_BROADCAST_RECEIPT or OTHER");
+    }
+    event->set_kind(kind);
+    event->set_payload(from_hex(csv_.at(3), csv_.field(3)));
+    return true;
+  }
+
+ private:
+  CsvReader csv_;
+};
+
+bool is_file(const fs::path& path) {
+  std::error_code ec;
+  return fs::is_regular_file(path, ec);
+}
+
+bool is_folder(const fs::path& path) {
+  std::error_code ec;
+  return fs::is_directory(path, ec);
+}
+
+}  // namespace
+
+DirectoryReader::DirectoryReader(const fs::path& directory) : directory_(directory) {
+  if (!is_folder(directory)) {
+    throw Error(ErrorCode::kNotFound, directory.string(), "is not a recording directory");
+  }
+  const fs::path header_path = directory / layout::kHeaderJson;
+  if (!is_file(header_path)) {
+    throw Error(ErrorCode::kNotFound, layout::kHeaderJson,
+                "missing in " + directory.string() + "; every recording directory has one");
+  }
+  message_from_json(read_file_bytes(header_path, layout::kHeaderJson), layout::kHeaderJson,
+                    header_);
+
+  if (is_folder(directory / layout::kDepthDir)) {
+    streams_.push_back(std::make_unique<FrameFolderStream>(directory / layout::kDepthDir,
+                                                           layout::kDepthDir, FrameKind::kDepth));
+  }
+  if (is_folder(directory / layout::kBodyIndexDir)) {
+    streams_.push_back(std::make_unique<FrameFolderStream>(
+        directory / layout::kBodyIndexDir, layout::kBodyIndexDir, FrameKind::kBodyIndex));
+  }
+  if (is_file(directory / layout::kSkeletonCsv)) {
+    streams_.push_back(std::make_unique<SkeletonStream>(directory / layout::kSkeletonCsv));
+  }
+  if (is_folder(directory / layout::kColorDir)) {
+    streams_.push_back(std::make_unique<FrameFolderStream>(directory / layout::kColorDir,
+                                                           layout::kColorDir, FrameKind::kColor));
+  }
+  const fs::path imu_folder = directory / layout::kImuDir;
+  if (is_folder(imu_folder)) {
+    std::set<std::string> known;
+    for (const v1::ImuDevice& device : header_.imu_devices()) known.insert(device.device_id());
+    for (const fs::directory_entry& entry : fs::directory_iterator(imu_folder)) {
+      const std::string file = entry.path().filename().string();
+      if (file.starts_with(".")) continue;
+      const std::string device_id = entry.path().stem().string();
+      if (entry.path().extension() != ".csv" || !known.contains(device_id)) {
+        throw_invalid(std::string(layout::kImuDir) + "/" + file,
+                      "expected <device_id>.csv for a device listed in header.json imu_devices");
+      }
+    }
+    for (const v1::ImuDevice& device : header_.imu_devices()) {
+      const fs::path path = imu_folder / (device.device_id() + ".csv");
+      if (is_file(path)) streams_.push_back(std::make_unique<ImuStream>(path, device.device_id()));
+    }
+  }
+  const bool has_wav = is_file(directory / layout::kAudioWav);
+  const bool has_audio_chunks = is_file(directory / layout::kAudioChunksCsv);
+  if (has_wav != has_audio_chunks) {
+    throw Error(ErrorCode::kNotFound, has_wav ? layout::kAudioChunksCsv : layout::kAudioWav,
+                std::string("missing; audio.wav and audio_chunks.csv come together"));
+  }
+  if (has_wav) {
+    streams_.push_back(std::make_unique<AudioStream>(directory / layout::kAudioWav,
+                                                     directory / layout::kAudioChunksCsv));
+  }
+  if (is_file(directory / layout::kSyncEventsCsv)) {
+    streams_.push_back(std::make_unique<SyncEventStream>(directory / layout::kSyncEventsCsv));
+  }
+  pending_.resize(streams_.size());
+  for (std::size_t i = 0; i < streams_.size(); ++i) refill(i);
+}
+
+DirectoryReader::~DirectoryReader() = default;
+
+void DirectoryReader::refill(std::size_t stream) {
+  SessionChunk chunk;
+  if (streams_[stream]->next(chunk)) {
+    pending_[stream] = std::move(chunk);
+  } else {
+    pending_[stream].reset();
+  }
+}
+
+bool DirectoryReader::next(SessionChunk& chunk) {
+  if (!header_sent_) {
+    chunk.Clear();
+    *chunk.mutable_header() = header_;
+    header_sent_ = true;
+    return true;
+  }
+  std::optional<std::size_t> best;
+  ChunkOrderKey best_key;
+  for (std::size_t i = 0; i < pending_.size(); ++i) {
+    if (!pending_[i]) continue;
+    const ChunkOrderKey key = chunk_order_key(*pending_[i], header_);
+    if (!best || key < best_key) {
+      best = i;
+      best_key = key;
+    }
+  }
+  if (best) {
+    chunk = std::move(*pending_[*best]);
+    refill(*best);
+    return true;
+  }
+  if (!end_sent_) {
+    end_sent_ = true;
+    const fs::path end_path = directory_ / layout::kEndJson;
+    if (is_file(end_path)) {
+      chunk.Clear();
+      message_from_json(read_file_bytes(end_path, layout::kEndJson), layout::kEndJson,
+                        *chunk.mutable_end());
+      return true;
+    }
+  }
+  return false;
+}
+
+}  // namespace posefuse::session

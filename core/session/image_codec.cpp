@@ -1,0 +1,235 @@
+#include "session/image_codec.hpp"
+
+#include <bit>
+#include <cstring>
+#include <vector>
+
+#include <opencv2/imgcodecs.hpp>
+#include <zstd.h>
+
+#include "common/error.hpp"
+
+namespace posefuse::session {
+
+namespace {
+
+static_assert(std::endian::native == std::endian::little,
+              "RAW_U16_LE payloads are copied as-is; a big-endian host needs a byte swap here");
+
+void check_dimensions(std::uint32_t width, std::uint32_t height, const std::string& field) {
+  if (width == 0 || height == 0 || width > kMaxImageSide || height > kMaxImageSide) {
+    throw_invalid(field + ".width", "image size " + std::to_string(width) + "x" +
+                                        std::to_string(height) + " is outside 1.." +
+                                        std::to_string(kMaxImageSide));
+  }
+}
+
+std::string size_text(std::uint32_t width, std::uint32_t height) {
+  return std::to_string(width) + "x" + std::to_string(height);
+}
+
+// Decodes a PNG payload and checks its type and size against the chunk's fields.
+cv::Mat decode_png(const std::string& data, int expected_type, std::uint32_t width,
+                   std::uint32_t height, const std::string& field) {
+  const std::string data_field = field + ".data";
+  // Reading the header first rejects non-PNG bytes and oversized images before any decoding.
+  const ImageSize header = png_size(data, data_field);
+  if (header.width != width || header.height != height) {
+    throw_invalid(data_field, "PNG is " + size_text(header.width, header.height) +
+                                  ", the chunk says " + size_text(width, height));
+  }
+  const cv::Mat encoded(1, static_cast<int>(data.size()), CV_8UC1,
+                        const_cast<char*>(data.data()));
+  cv::Mat image = cv::imdecode(encoded, cv::IMREAD_UNCHANGED);
+  if (image.empty()) throw_invalid(data_field, "PNG cannot be decoded");
+  if (image.type() != expected_type) {
+    throw_invalid(data_field, std::string("PNG has the wrong pixel type (expected ") +
+                                  (expected_type == CV_16UC1 ? "16" : "8") +
+                                  "-bit single channel)");
+  }
+  return image;
+}
+
+cv::Mat raw_to_mat(const std::string& data, int type, std::uint32_t width, std::uint32_t height,
+                   const std::string& field, const char* encoding_name) {
+  cv::Mat image(static_cast<int>(height), static_cast<int>(width), type);
+  const std::size_t expected = image.total() * image.elemSize();
+  if (data.size() != expected) {
+    throw_invalid(field + ".data", "has " + std::to_string(data.size()) + " bytes, expected " +
+                                       std::to_string(expected) + " (" + size_text(width, height) +
+                                       " " + encoding_name + ")");
+  }
+  std::memcpy(image.data, data.data(), expected);
+  return image;
+}
+
+std::string encode_png(const cv::Mat& image) {
+  std::vector<unsigned char> bytes;
+  if (!cv::imencode(".png", image, bytes)) {
+    throw Error(ErrorCode::kInternal, "png", "OpenCV could not encode the image");
+  }
+  return std::string(bytes.begin(), bytes.end());
+}
+
+std::string mat_bytes(const cv::Mat& image) {
+  const cv::Mat contiguous = image.isContinuous() ? image : image.clone();
+  return std::string(reinterpret_cast<const char*>(contiguous.data),
+                     contiguous.total() * contiguous.elemSize());
+}
+
+std::uint32_t read_be32(std::string_view bytes, std::size_t at) {
+  std::uint32_t v = 0;
+  for (std::size_t i = 0; i < 4; ++i) v = (v << 8) | static_cast<unsigned char>(bytes[at + i]);
+  return v;
+}
+
+std::uint32_t read_be16(std::string_view bytes, std::size_t at) {
+  return (static_cast<std::uint32_t>(static_cast<unsigned char>(bytes[at])) << 8) |
+         static_cast<unsigned char>(bytes[at + 1]);
+}
+
+}  // namespace
+
+cv::Mat decode_depth(const v1::DepthFrame& frame, const std::string& field) {
+  check_dimensions(frame.width(), frame.height(), field);
+  switch (frame.encoding()) {
+    case v1::DepthFrame::RAW_U16_LE:
+      return raw_to_mat(frame.data(), CV_16UC1, frame.width(), frame.height(), field, "RAW_U16_LE");
+    case v1::DepthFrame::PNG16:
+      return decode_png(frame.data(), CV_16UC1, frame.width(), frame.height(), field);
+    case v1::DepthFrame::ZSTD_U16_LE: {
+      const std::size_t expected = std::size_t{frame.width()} * frame.height() * 2;
+      const std::string& data = frame.data();
+      const unsigned long long content = ZSTD_getFrameContentSize(data.data(), data.size());
+      if (content == ZSTD_CONTENTSIZE_ERROR) {
+        throw_invalid(field + ".data", "is not a zstd frame");
+      }
+      if (content != ZSTD_CONTENTSIZE_UNKNOWN && content != expected) {
+        throw_invalid(field + ".data", "zstd content is " + std::to_string(content) +
+                                           " bytes, expected " + std::to_string(expected) + " (" +
+                                           size_text(frame.width(), frame.height()) + " u16)");
+      }
+      std::string raw(expected, '\0');
+      const std::size_t got = ZSTD_decompress(raw.data(), raw.size(), data.data(), data.size());
+      if (ZSTD_isError(got)) {
+        throw_invalid(field + ".data", std::string("zstd: ") + ZSTD_getErrorName(got));
+      }
+      if (got != expected) {
+        throw_invalid(field + ".data", "zstd content is " + std::to_string(got) +
+                                           " bytes, expected " + std::to_string(expected));
+      }
+      return raw_to_mat(raw, CV_16UC1, frame.width(), frame.height(), field, "ZSTD_U16_LE");
+    }
+    default:
+      throw_invalid(field + ".encoding",
+                    "unknown depth encoding " + std::to_string(frame.encoding()));
+  }
+}
+
+v1::DepthFrame encode_depth(const cv::Mat& depth_mm, v1::DepthFrame::Encoding encoding,
+                            std::int64_t t_us) {
+  if (depth_mm.type() != CV_16UC1) throw_invalid("depth_mm", "expected a CV_16UC1 image");
+  v1::DepthFrame frame;
+  frame.set_t_us(t_us);
+  frame.set_width(static_cast<std::uint32_t>(depth_mm.cols));
+  frame.set_height(static_cast<std::uint32_t>(depth_mm.rows));
+  frame.set_encoding(encoding);
+  switch (encoding) {
+    case v1::DepthFrame::RAW_U16_LE:
+      frame.set_data(mat_bytes(depth_mm));
+      break;
+    case v1::DepthFrame::PNG16:
+      frame.set_data(encode_png(depth_mm));
+      break;
+    case v1::DepthFrame::ZSTD_U16_LE: {
+      const std::string raw = mat_bytes(depth_mm);
+      std::string packed(ZSTD_compressBound(raw.size()), '\0');
+      const std::size_t size = ZSTD_compress(packed.data(), packed.size(), raw.data(), raw.size(), 3);
+      if (ZSTD_isError(size)) {
+        throw Error(ErrorCode::kInternal, "depth", std::string("zstd: ") + ZSTD_getErrorName(size));
+      }
+      packed.resize(size);
+      frame.set_data(std::move(packed));
+      break;
+    }
+    default:
+      throw_invalid("encoding", "unknown depth encoding " + std::to_string(encoding));
+  }
+  return frame;
+}
+
+cv::Mat decode_body_index(const v1::BodyIndexFrame& frame, const std::string& field) {
+  check_dimensions(frame.width(), frame.height(), field);
+  switch (frame.encoding()) {
+    case v1::BodyIndexFrame::RAW_U8:
+      return raw_to_mat(frame.data(), CV_8UC1, frame.width(), frame.height(), field, "RAW_U8");
+    case v1::BodyIndexFrame::PNG8:
+      return decode_png(frame.data(), CV_8UC1, frame.width(), frame.height(), field);
+    default:
+      throw_invalid(field + ".encoding",
+                    "unknown body index encoding " + std::to_string(frame.encoding()));
+  }
+}
+
+v1::BodyIndexFrame encode_body_index(const cv::Mat& body_index,
+                                     v1::BodyIndexFrame::Encoding encoding, std::int64_t t_us) {
+  if (body_index.type() != CV_8UC1) throw_invalid("body_index", "expected a CV_8UC1 image");
+  v1::BodyIndexFrame frame;
+  frame.set_t_us(t_us);
+  frame.set_width(static_cast<std::uint32_t>(body_index.cols));
+  frame.set_height(static_cast<std::uint32_t>(body_index.rows));
+  frame.set_encoding(encoding);
+  switch (encoding) {
+    case v1::BodyIndexFrame::RAW_U8: frame.set_data(mat_bytes(body_index)); break;
+    case v1::BodyIndexFrame::PNG8: frame.set_data(encode_png(body_index)); break;
+    default: throw_invalid("encoding", "unknown body index encoding " + std::to_string(encoding));
+  }
+  return frame;
+}
+
+ImageSize png_size(std::string_view bytes, const std::string& field) {
+  // 8-byte signature, then the IHDR chunk: length(4) "IHDR"(4) width(4) height(4).
+  static constexpr std::string_view kSignature("\x89PNG\r\n\x1a\n", 8);
+  if (bytes.size() < 24 || bytes.substr(0, 8) != kSignature || bytes.substr(12, 4) != "IHDR") {
+    throw_invalid(field, "is not a PNG file");
+  }
+  const ImageSize size{read_be32(bytes, 16), read_be32(bytes, 20)};
+  if (size.width == 0 || size.height == 0 || size.width > kMaxImageSide ||
+      size.height > kMaxImageSide) {
+    throw_invalid(field, "PNG size " + size_text(size.width, size.height) + " is outside 1.." +
+                             std::to_string(kMaxImageSide));
+  }
+  return size;
+}
+
+ImageSize jpeg_size(std::string_view bytes, const std::string& field) {
+  if (bytes.size() < 4 || static_cast<unsigned char>(bytes[0]) != 0xFF ||
+      static_cast<unsigned char>(bytes[1]) != 0xD8) {
+    throw_invalid(field, "is not a JPEG file");
+  }
+  // Walk the marker segments (each FF xx LLLL ...) up to the first start-of-frame (SOF0..SOF15
+  // except DHT C4, JPG C8, DAC CC), which holds precision(1) height(2) width(2).
+  std::size_t at = 2;
+  while (at + 4 <= bytes.size()) {
+    if (static_cast<unsigned char>(bytes[at]) != 0xFF) break;
+    const auto marker = static_cast<unsigned char>(bytes[at + 1]);
+    if (marker == 0xFF) {  // fill byte
+      ++at;
+      continue;
+    }
+    const std::uint32_t length = read_be16(bytes, at + 2);
+    const bool is_sof = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 &&
+                        marker != 0xCC;
+    if (is_sof) {
+      if (at + 9 > bytes.size()) break;
+      const ImageSize size{read_be16(bytes, at + 7), read_be16(bytes, at + 5)};
+      if (size.width == 0 || size.height == 0) break;
+      return size;
+    }
+    if (marker == 0xDA || length < 2) break;  // start of scan before any frame header
+    at += 2 + length;
+  }
+  throw_invalid(field, "JPEG has no readable frame header");
+}
+
+}  // namespace posefuse::session

@@ -1,0 +1,40 @@
+#pragma once
+// Depth, body index and color frame payloads <-> images.
+//
+// Decoders check that the payload really is what the chunk says (encoding, width, height, byte
+// count) and throw posefuse::Error (kInvalidArgument) naming `field` + ".data" (or ".encoding")
+// otherwise, so they double as the validator's size checks.
+#include <cstdint>
+#include <string>
+#include <string_view>
+
+#include <opencv2/core.hpp>
+
+#include "posefuse/v1/session.pb.h"
+
+namespace posefuse::session {
+
+// Largest accepted image side, pixels: bounds what a hostile width/height can make us allocate.
+inline constexpr std::uint32_t kMaxImageSide = 8192;
+
+// Depth frame -> CV_16UC1 (mm, 0 = no reading), from any encoding.
+cv::Mat decode_depth(const v1::DepthFrame& frame, const std::string& field = "depth");
+v1::DepthFrame encode_depth(const cv::Mat& depth_mm, v1::DepthFrame::Encoding encoding,
+                            std::int64_t t_us);
+
+// Body index frame -> CV_8UC1 (255 = background, else body id 0..5).
+cv::Mat decode_body_index(const v1::BodyIndexFrame& frame, const std::string& field = "body_index");
+v1::BodyIndexFrame encode_body_index(const cv::Mat& body_index,
+                                     v1::BodyIndexFrame::Encoding encoding, std::int64_t t_us);
+
+// Width and height read from an encoded file's header without decoding the pixels.
+struct ImageSize {
+  std::uint32_t width = 0;
+  std::uint32_t height = 0;
+};
+// PNG: the IHDR chunk. Throws kInvalidArgument naming `field` if the bytes are not a PNG.
+ImageSize png_size(std::string_view bytes, const std::string& field);
+// JPEG: the first start-of-frame marker. Throws kInvalidArgument if none is found.
+ImageSize jpeg_size(std::string_view bytes, const std::string& field);
+
+}  // namespace posefuse::session

@@ -1,0 +1,67 @@
+#pragma once
+// Checks a session chunk stream in order before any stage uses it.
+//
+// Every failure throws posefuse::Error (kInvalidArgument) whose field names the exact place,
+// e.g. "chunk[7].imu[3].gyr_rad_s" or "chunk[0].header.depth_intrinsics.fx", and whose message
+// gives the value and the rule, so the server can return it as INVALID_ARGUMENT unchanged.
+#include <cstdint>
+#include <map>
+#include <optional>
+#include <string>
+
+#include "posefuse/v1/session.pb.h"
+
+namespace posefuse::session {
+
+// The only SessionHeader.format_version this code reads and writes.
+inline constexpr std::uint32_t kFormatVersion = 1;
+// A quaternion field counts as unit when | |q| - 1 | <= this.
+inline constexpr double kUnitQuaternionTolerance = 1e-3;
+inline constexpr int kSkeletonJointCount = 25;
+inline constexpr std::uint32_t kMaxBodyId = 5;
+inline constexpr std::size_t kMaxSyncPayloadBytes = 4096;
+// Device ids appear in file names (imu/<device_id>.csv): [A-Za-z0-9_.-]{1,64}, not "." or "..".
+bool is_valid_device_id(const std::string& device_id);
+
+// Checks one header on its own. `field` prefixes error field names.
+void validate_header(const v1::SessionHeader& header, const std::string& field = "header");
+
+// Checks the content of one data chunk against the header (sizes, encodings, finite values,
+// enum values) but not its order in the stream. Decodes PNG/zstd images to check them.
+// Header and end chunks are rejected here: they only make sense in a stream.
+void validate_chunk(const v1::SessionChunk& chunk, const v1::SessionHeader& header,
+                    const std::string& field);
+
+// Checks a stream chunk by chunk: header first and exactly once, per-stream timestamp order,
+// every chunk's content (validate_chunk), the end marker last with matching counts.
+class SessionValidator {
+ public:
+  void check(const v1::SessionChunk& chunk);
+  // Call after the last chunk: throws if the header or the end marker never came.
+  void finish() const;
+
+  bool has_header() const { return header_.has_value(); }
+  const v1::SessionHeader& header() const { return *header_; }
+  bool ended() const { return ended_; }
+  std::uint64_t chunks_checked() const { return index_; }
+  // Counts of what has been checked so far, as the end marker should report them.
+  const v1::EndOfSession& counts() const { return counts_; }
+
+ private:
+  void check_order(const v1::SessionChunk& chunk, const std::string& field);
+  void count(const v1::SessionChunk& chunk);
+  void check_end(const v1::EndOfSession& end, const std::string& field) const;
+
+  std::uint64_t index_ = 0;
+  std::optional<v1::SessionHeader> header_;
+  bool ended_ = false;
+  v1::EndOfSession counts_;
+  // Last timestamp per stream, to enforce order.
+  std::optional<std::int64_t> last_depth_t_us_, last_body_index_t_us_, last_color_t_us_,
+      last_audio_t_us_;
+  std::map<std::uint32_t, std::int64_t> last_skeleton_t_us_;  // by body_id
+  std::map<std::string, std::int64_t> last_imu_t_us_;         // by device_id
+  std::map<std::string, std::int64_t> last_sync_t_us_;        // by device_id
+};
+
+}  // namespace posefuse::session
