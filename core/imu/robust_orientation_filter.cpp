@@ -114,6 +114,7 @@ Quat RobustOrientationFilter::update(const ImuSample& s) {
   if (!started_) {
     // First sample: level the estimate at once, no integration step.
     started_ = true;
+    acc_lp1_I_ = s.acc_m_s2;
     acc_lp_I_ = s.acc_m_s2;
     gyr_lp_ = s.gyr_rad_s;
     acc_lp_A_ = s.acc_m_s2;
@@ -129,15 +130,26 @@ Quat RobustOrientationFilter::update(const ImuSample& s) {
 
   mag_heading_rate_ = 0.0;
   const bool mag_used = s.mag_uT.allFinite() && correct_heading(s.mag_uT, dt_s, (s.gyr_rad_s - bias_).norm());
+  if (dt_s > 0.0) {
+    const Eigen::Matrix3d E_from_A = (E_from_I_ * I_from_A_).toRotationMatrix();
+    const double k_acc = lowpass_gain(dt_s, 0.5 * params_.tau_acc_s);
+    E_from_A_lp1_acc_ += k_acc * (E_from_A - E_from_A_lp1_acc_);
+    E_from_A_lp_acc_ += k_acc * (E_from_A_lp1_acc_ - E_from_A_lp_acc_);
+    E_from_A_lp_mag_z_ += lowpass_gain(dt_s, params_.tau_mag_s) * (E_from_A.row(2).transpose() - E_from_A_lp_mag_z_);
+  }
   if (dt_s > 0.0 && time_s_ > params_.init_s) {
     update_rest_bias(dt_s);
     if (!at_rest()) {
       // Motion: the corrections the accelerometer (horizontal axes) and magnetometer (vertical
       // axis) keep making are the drift a residual bias causes: e_E ~ -correction / dt.
-      Vec3 e_E(-acc_correction_rate_E_.x(), -acc_correction_rate_E_.y(), 0.0);
-      if (mag_used && mag_recover_left_s_ <= 0.0) e_E.z() = -mag_heading_rate_;
-      const Quat E_from_A = E_from_I_ * I_from_A_;
-      bias_ += lowpass_gain(dt_s, params_.bias_motion_tau_s) * rotate(E_from_A.conjugate(), e_E);
+      // Those corrections answer the drift through the low-passes (tau_acc_s, tau_mag_s), so
+      // the drift is compared with the bias error seen through equally low-passed rotations:
+      // e_E ~ lowpass(E_from_A) * e_A. Fast turning shrinks the low-passed rotation and with
+      // it the update, where the lagging corrections say little about a sensor-frame bias.
+      const Eigen::Vector2d e_horizontal(-acc_correction_rate_E_.x(), -acc_correction_rate_E_.y());
+      Vec3 step_A = E_from_A_lp_acc_.topRows<2>().transpose() * e_horizontal;
+      if (mag_used && mag_recover_left_s_ <= 0.0) step_A += -mag_heading_rate_ * E_from_A_lp_mag_z_;
+      bias_ += lowpass_gain(dt_s, params_.bias_motion_tau_s) * step_A;
       const double limit = params_.bias_limit_rad_s;
       bias_ = bias_.cwiseMax(Vec3::Constant(-limit)).cwiseMin(Vec3::Constant(limit));
     }
@@ -194,9 +206,12 @@ void RobustOrientationFilter::update_rest_bias(double dt_s) {
 void RobustOrientationFilter::correct_inclination(const Vec3& acc_m_s2, double dt_s) {
   // Low-pass in the almost-inertial frame I: accelerations while the sensor moves and turns
   // average out there, gravity does not.
-  double k = dt_s > 0.0 ? lowpass_gain(dt_s, params_.tau_acc_s) : 1.0;
+  // Two first-order stages of tau_acc_s / 2 each: -40 dB/decade, so a 1 Hz back-and-forth
+  // movement is damped ~90x at tau_acc_s = 3 s where one stage would only damp it ~19x.
+  double k = dt_s > 0.0 ? lowpass_gain(dt_s, 0.5 * params_.tau_acc_s) : 1.0;
   if (time_s_ < params_.init_s) k = std::max(k, 1.0 / init_weight_count_);
-  acc_lp_I_ += k * (rotate(I_from_A_, acc_m_s2) - acc_lp_I_);
+  acc_lp1_I_ += k * (rotate(I_from_A_, acc_m_s2) - acc_lp1_I_);
+  acc_lp_I_ += k * (acc_lp1_I_ - acc_lp_I_);
 
   // Rotate E_from_I so that the filtered vector becomes vertical: the smallest rotation taking
   // a = normalised E_from_I * acc_lp_I to +z, quaternion [w, a_y / 2w, -a_x / 2w, 0] with
@@ -244,13 +259,7 @@ bool RobustOrientationFilter::correct_heading(const Vec3& mag_uT, double dt_s, d
       mag_ref_dip_ = std::asin(std::clamp(mag_ref_sin_dip_, -1.0, 1.0));
     }
     const bool disturbed = !fits_reference(norm, sin_dip);
-    if (disturbed && !mag_disturbed_) {
-      hi_normal_.setZero();
-      hi_rhs_.setZero();
-      hi_weight_ = 0.0;
-      hi_sum_sq_ = 0.0;
-      hi_check_s_ = 0.0;
-    }
+    if (disturbed && !mag_disturbed_) reset_hard_iron_fit();
     mag_disturbed_ = disturbed;
     if (disturbed) {
       // Track a candidate new field and a candidate hard iron; use neither for heading yet.
@@ -339,11 +348,18 @@ void RobustOrientationFilter::update_hard_iron_fit(const Vec3& mag_uT, const Qua
   const double rms_uT = std::sqrt(std::max(0.0, residual_sq) / (3.0 * hi_weight_));
   if (rms_uT > params_.mag_hard_iron_max_rms * mag_ref_norm_) return;
   hard_iron_uT_ = x.tail<3>();
-  mag_recover_left_s_ = params_.mag_recover_s;
+  mag_ref_norm_ = norm;
+  mag_ref_sin_dip_ = -b_E.z() / norm;
+  if (mag_disturbed_) mag_recover_left_s_ = params_.mag_recover_s;
+  reset_hard_iron_fit();
+}
+
+void RobustOrientationFilter::reset_hard_iron_fit() {
   hi_normal_.setZero();
   hi_rhs_.setZero();
   hi_weight_ = 0.0;
   hi_sum_sq_ = 0.0;
+  hi_check_s_ = 0.0;
 }
 
 }  // namespace posefuse::imu

@@ -114,6 +114,7 @@ class RobustOrientationFilter {
   bool correct_heading(const Vec3& mag_uT, double dt_s, double gyr_norm_rad_s);
   void update_rest_bias(double dt_s);
   void update_hard_iron_fit(const Vec3& mag_uT, const Quat& E_from_A, double dt_s);
+  void reset_hard_iron_fit();
   bool fits_reference(double norm_uT, double sin_dip) const;
 
   Params params_;
@@ -129,7 +130,8 @@ class RobustOrientationFilter {
   double init_weight_count_ = 0.0;  // samples seen during start-up, for equal-weight averaging
 
   // Inclination.
-  Vec3 acc_lp_I_ = Vec3::Zero();
+  Vec3 acc_lp1_I_ = Vec3::Zero();  // first low-pass stage
+  Vec3 acc_lp_I_ = Vec3::Zero();   // second stage: the filtered vector
   Vec3 acc_correction_rate_E_ = Vec3::Zero();  // last tilt correction / dt, for the bias
 
   // Rest detection and bias.
@@ -138,6 +140,10 @@ class RobustOrientationFilter {
   double rest_s_ = 0.0;
   Vec3 bias_ = Vec3::Zero();
   double bias_var_ = 0.0;
+  // E_from_A low-passed like the corrections (for the motion bias update).
+  Eigen::Matrix3d E_from_A_lp1_acc_ = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d E_from_A_lp_acc_ = Eigen::Matrix3d::Zero();
+  Vec3 E_from_A_lp_mag_z_ = Vec3::Zero();  // its third row, with tau_mag_s
 
   // Heading and magnetic reference.
   bool mag_ref_valid_ = false;
