@@ -1,0 +1,365 @@
+#include "imu/robust_orientation_filter.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+
+#include "common/error.hpp"
+
+namespace posefuse::imu {
+
+namespace {
+
+// Gain of a first-order low-pass with time constant tau for one step of dt (backward Euler:
+// stable for any dt, no exp() per sample).
+double lowpass_gain(double dt_s, double tau_s) { return dt_s / (tau_s + dt_s); }
+
+// Rotates v by the unit quaternion q without building a matrix (v' = v + 2 w (u x v) + 2 u x (u x v)).
+Vec3 rotate(const Quat& q, const Vec3& v) {
+  const Vec3 u(q.x(), q.y(), q.z());
+  const Vec3 t = 2.0 * u.cross(v);
+  return v + q.w() * t + u.cross(t);
+}
+
+// cos and sin of a half angle; a short series when small (the per-sample case) to stay cheap.
+void half_angle_cos_sin(double angle_rad, double& c, double& s) {
+  const double h = 0.5 * angle_rad;
+  if (std::abs(h) < 0.05) {
+    const double h2 = h * h;
+    c = 1.0 - h2 * (0.5 - h2 / 24.0);
+    s = h * (1.0 - h2 * (1.0 / 6.0 - h2 / 120.0));
+  } else {
+    c = std::cos(h);
+    s = std::sin(h);
+  }
+}
+
+}  // namespace
+
+RobustOrientationFilter::RobustOrientationFilter() : RobustOrientationFilter(Params{}) {}
+
+RobustOrientationFilter::RobustOrientationFilter(const Params& params) : params_(params) {
+  const auto positive = [](double v, const char* name) {
+    if (!(v > 0.0) || !std::isfinite(v)) {
+      throw_invalid(std::string("RobustOrientationFilter::Params::") + name,
+                    "is " + std::to_string(v) + ", must be finite and > 0");
+    }
+  };
+  positive(params.tau_acc_s, "tau_acc_s");
+  positive(params.tau_mag_s, "tau_mag_s");
+  positive(params.rest_tau_s, "rest_tau_s");
+  positive(params.rest_min_s, "rest_min_s");
+  positive(params.rest_gyr_threshold_rad_s, "rest_gyr_threshold_rad_s");
+  positive(params.rest_acc_threshold_m_s2, "rest_acc_threshold_m_s2");
+  positive(params.bias_sigma_init_rad_s, "bias_sigma_init_rad_s");
+  positive(params.bias_drift_rad_s_per_sqrt_s, "bias_drift_rad_s_per_sqrt_s");
+  positive(params.bias_sigma_rest_rad_s, "bias_sigma_rest_rad_s");
+  positive(params.bias_motion_tau_s, "bias_motion_tau_s");
+  positive(params.bias_limit_rad_s, "bias_limit_rad_s");
+  positive(params.mag_norm_threshold, "mag_norm_threshold");
+  positive(params.mag_dip_threshold_rad, "mag_dip_threshold_rad");
+  positive(params.mag_ref_tau_s, "mag_ref_tau_s");
+  positive(params.mag_new_field_s, "mag_new_field_s");
+  positive(params.mag_new_field_min_gyr_rad_s, "mag_new_field_min_gyr_rad_s");
+  positive(params.mag_hard_iron_tau_s, "mag_hard_iron_tau_s");
+  positive(params.mag_hard_iron_min_excitation, "mag_hard_iron_min_excitation");
+  positive(params.mag_hard_iron_max_rms, "mag_hard_iron_max_rms");
+  positive(params.mag_recover_tau_s, "mag_recover_tau_s");
+  positive(params.mag_recover_s, "mag_recover_s");
+  positive(params.init_s, "init_s");
+  bias_var_ = params.bias_sigma_init_rad_s * params.bias_sigma_init_rad_s;
+}
+
+void RobustOrientationFilter::reset_keeping_calibration() {
+  const Params params = params_;
+  const Vec3 bias = bias_;
+  const double bias_var = bias_var_;
+  const bool ref_valid = mag_ref_valid_;
+  const double ref_norm = mag_ref_norm_, ref_dip = mag_ref_dip_, ref_sin_dip = mag_ref_sin_dip_;
+  const Vec3 hard_iron = hard_iron_uT_;
+  *this = RobustOrientationFilter(params);
+  bias_ = bias;
+  bias_var_ = bias_var;
+  mag_ref_valid_ = ref_valid;
+  mag_ref_norm_ = ref_norm;
+  mag_ref_dip_ = ref_dip;
+  mag_ref_sin_dip_ = ref_sin_dip;
+  hard_iron_uT_ = hard_iron;
+}
+
+std::vector<Quat> RobustOrientationFilter::process(const std::vector<ImuSample>& samples) {
+  validate_imu_stream(samples, "imu");
+  std::vector<Quat> out;
+  out.reserve(samples.size());
+  for (const ImuSample& s : samples) out.push_back(update(s));
+  return out;
+}
+
+Quat RobustOrientationFilter::update(const ImuSample& s) {
+  if (!s.gyr_rad_s.allFinite()) throw_invalid("imu.gyr_rad_s", "not finite at t_us " + std::to_string(s.t_us));
+  if (!s.acc_m_s2.allFinite()) throw_invalid("imu.acc_m_s2", "not finite at t_us " + std::to_string(s.t_us));
+  double dt_s = 0.0;
+  if (started_) {
+    if (s.t_us <= last_t_us_) {
+      throw_invalid("imu.t_us", "timestamp " + std::to_string(s.t_us) + " is not after the previous one (" +
+                                    std::to_string(last_t_us_) + ")");
+    }
+    dt_s = 1e-6 * static_cast<double>(s.t_us - last_t_us_);
+  }
+  last_t_us_ = s.t_us;
+
+  if (!started_) {
+    // First sample: level the estimate at once, no integration step.
+    started_ = true;
+    acc_lp1_I_ = s.acc_m_s2;
+    acc_lp_I_ = s.acc_m_s2;
+    gyr_lp_ = s.gyr_rad_s;
+    acc_lp_A_ = s.acc_m_s2;
+    init_weight_count_ = 1.0;
+    correct_inclination(s.acc_m_s2, 0.0);
+  } else {
+    time_s_ += dt_s;
+    init_weight_count_ += 1.0;
+    integrate_gyro(s.gyr_rad_s, dt_s);
+    update_rest_detection(s, dt_s);
+    correct_inclination(s.acc_m_s2, dt_s);
+  }
+
+  mag_heading_rate_ = 0.0;
+  const bool mag_used = s.mag_uT.allFinite() && correct_heading(s.mag_uT, dt_s, (s.gyr_rad_s - bias_).norm());
+  if (dt_s > 0.0) {
+    const Eigen::Matrix3d E_from_A = (E_from_I_ * I_from_A_).toRotationMatrix();
+    const double k_acc = lowpass_gain(dt_s, 0.5 * params_.tau_acc_s);
+    E_from_A_lp1_acc_ += k_acc * (E_from_A - E_from_A_lp1_acc_);
+    E_from_A_lp_acc_ += k_acc * (E_from_A_lp1_acc_ - E_from_A_lp_acc_);
+    E_from_A_lp_mag_z_ += lowpass_gain(dt_s, params_.tau_mag_s) * (E_from_A.row(2).transpose() - E_from_A_lp_mag_z_);
+  }
+  if (dt_s > 0.0 && time_s_ > params_.init_s) {
+    update_rest_bias(dt_s);
+    if (!at_rest()) {
+      // Motion: the corrections the accelerometer (horizontal axes) and magnetometer (vertical
+      // axis) keep making are the drift a residual bias causes: e_E ~ -correction / dt.
+      // Those corrections answer the drift through the low-passes (tau_acc_s, tau_mag_s), so
+      // the drift is compared with the bias error seen through equally low-passed rotations:
+      // e_E ~ lowpass(E_from_A) * e_A. Fast turning shrinks the low-passed rotation and with
+      // it the update, where the lagging corrections say little about a sensor-frame bias.
+      const Eigen::Vector2d e_horizontal(-acc_correction_rate_E_.x(), -acc_correction_rate_E_.y());
+      Vec3 step_A = E_from_A_lp_acc_.topRows<2>().transpose() * e_horizontal;
+      if (mag_used && mag_recover_left_s_ <= 0.0) step_A += -mag_heading_rate_ * E_from_A_lp_mag_z_;
+      bias_ += lowpass_gain(dt_s, params_.bias_motion_tau_s) * step_A;
+      const double limit = params_.bias_limit_rad_s;
+      bias_ = bias_.cwiseMax(Vec3::Constant(-limit)).cwiseMin(Vec3::Constant(limit));
+    }
+  }
+
+  const Quat W_from_E(heading_qw_, 0.0, 0.0, heading_qz_);
+  return W_from_E * E_from_I_ * I_from_A_;
+}
+
+void RobustOrientationFilter::integrate_gyro(const Vec3& gyr_rad_s, double dt_s) {
+  // Exponential map of the bias-corrected rate over one step, as a short series (|w| dt << 1
+  // at IMU rates; the 4th-order terms keep it exact to ~1e-12 up to 0.1 rad per step).
+  const Vec3 h = 0.5 * dt_s * (gyr_rad_s - bias_);
+  const double h2 = h.squaredNorm();
+  double c, s;
+  if (h2 < 0.0025) {
+    c = 1.0 - h2 * (0.5 - h2 / 24.0);
+    s = 1.0 - h2 * (1.0 / 6.0 - h2 / 120.0);
+  } else {
+    const double a = std::sqrt(h2);
+    c = std::cos(a);
+    s = std::sin(a) / a;
+  }
+  const Quat step(c, s * h.x(), s * h.y(), s * h.z());
+  I_from_A_ = I_from_A_ * step;
+  I_from_A_.normalize();
+}
+
+void RobustOrientationFilter::update_rest_detection(const ImuSample& s, double dt_s) {
+  const double k = lowpass_gain(dt_s, params_.rest_tau_s);
+  gyr_lp_ += k * (s.gyr_rad_s - gyr_lp_);
+  acc_lp_A_ += k * (s.acc_m_s2 - acc_lp_A_);
+  const double gyr_th = params_.rest_gyr_threshold_rad_s;
+  const double acc_th = params_.rest_acc_threshold_m_s2;
+  // Besides being steady, the rate must be small in absolute terms: a slow constant turn about
+  // the vertical is steady too, but no bias is that large.
+  const bool steady = (s.gyr_rad_s - gyr_lp_).squaredNorm() < gyr_th * gyr_th &&
+                      (s.acc_m_s2 - acc_lp_A_).squaredNorm() < acc_th * acc_th &&
+                      gyr_lp_.squaredNorm() < params_.bias_limit_rad_s * params_.bias_limit_rad_s;
+  rest_s_ = steady ? rest_s_ + dt_s : 0.0;
+}
+
+void RobustOrientationFilter::update_rest_bias(double dt_s) {
+  const double drift = params_.bias_drift_rad_s_per_sqrt_s;
+  bias_var_ += drift * drift * dt_s;
+  if (!at_rest()) return;
+  // At rest the low-passed gyro measures the bias directly (scalar Kalman update per axis).
+  const double r = params_.bias_sigma_rest_rad_s * params_.bias_sigma_rest_rad_s;
+  const double gain = bias_var_ / (bias_var_ + r);
+  bias_ += gain * (gyr_lp_ - bias_);
+  bias_var_ *= 1.0 - gain;
+}
+
+void RobustOrientationFilter::correct_inclination(const Vec3& acc_m_s2, double dt_s) {
+  // Low-pass in the almost-inertial frame I: accelerations while the sensor moves and turns
+  // average out there, gravity does not.
+  // Two first-order stages of tau_acc_s / 2 each: -40 dB/decade, so a 1 Hz back-and-forth
+  // movement is damped ~90x at tau_acc_s = 3 s where one stage would only damp it ~19x.
+  double k = dt_s > 0.0 ? lowpass_gain(dt_s, 0.5 * params_.tau_acc_s) : 1.0;
+  if (time_s_ < params_.init_s) k = std::max(k, 1.0 / init_weight_count_);
+  acc_lp1_I_ += k * (rotate(I_from_A_, acc_m_s2) - acc_lp1_I_);
+  acc_lp_I_ += k * (acc_lp1_I_ - acc_lp_I_);
+
+  // Rotate E_from_I so that the filtered vector becomes vertical: the smallest rotation taking
+  // a = normalised E_from_I * acc_lp_I to +z, quaternion [w, a_y / 2w, -a_x / 2w, 0] with
+  // w = sqrt((1 + a_z) / 2).
+  const double norm = acc_lp_I_.norm();
+  acc_correction_rate_E_.setZero();
+  if (norm < 1e-9) return;
+  const Vec3 a = rotate(E_from_I_, acc_lp_I_) / norm;
+  Quat correction;
+  const double w = std::sqrt(std::max(0.0, 0.5 * (1.0 + a.z())));
+  if (w < 1e-6) {
+    correction = Quat(0.0, 1.0, 0.0, 0.0);  // upside down: turn half-way about x
+  } else {
+    correction = Quat(w, 0.5 * a.y() / w, -0.5 * a.x() / w, 0.0);
+    if (dt_s > 0.0) acc_correction_rate_E_ = Vec3(a.y() / w, -a.x() / w, 0.0) / dt_s;
+  }
+  E_from_I_ = correction * E_from_I_;
+  E_from_I_.normalize();
+}
+
+bool RobustOrientationFilter::fits_reference(double norm_uT, double sin_dip) const {
+  const double cos_dip = std::sqrt(std::max(0.0, 1.0 - mag_ref_sin_dip_ * mag_ref_sin_dip_));
+  return std::abs(norm_uT - mag_ref_norm_) < params_.mag_norm_threshold * mag_ref_norm_ &&
+         std::abs(sin_dip - mag_ref_sin_dip_) < params_.mag_dip_threshold_rad * cos_dip;
+}
+
+bool RobustOrientationFilter::correct_heading(const Vec3& mag_uT, double dt_s, double gyr_norm_rad_s) {
+  const Quat E_from_A = E_from_I_ * I_from_A_;
+  const Vec3 m_E = rotate(E_from_A, mag_uT - hard_iron_uT_);
+  const double norm = m_E.norm();
+  if (norm < 1e-6) return false;
+  const double sin_dip = -m_E.z() / norm;  // positive when the field points down
+
+  double k = dt_s > 0.0 ? lowpass_gain(dt_s, params_.tau_mag_s) : 1.0;
+  if (time_s_ < params_.init_s && !mag_ref_valid_) {
+    // Start-up: learn the reference as the plain mean and converge the heading fast.
+    mag_init_count_ += 1.0;
+    mag_ref_norm_ += (norm - mag_ref_norm_) / mag_init_count_;
+    mag_ref_sin_dip_ += (sin_dip - mag_ref_sin_dip_) / mag_init_count_;
+    k = std::max(k, 1.0 / mag_init_count_);
+    mag_disturbed_ = false;
+  } else {
+    if (!mag_ref_valid_) {
+      mag_ref_valid_ = true;
+      mag_ref_dip_ = std::asin(std::clamp(mag_ref_sin_dip_, -1.0, 1.0));
+    }
+    const bool disturbed = !fits_reference(norm, sin_dip);
+    if (disturbed && !mag_disturbed_) reset_hard_iron_fit();
+    mag_disturbed_ = disturbed;
+    if (disturbed) {
+      // Track a candidate new field and a candidate hard iron; use neither for heading yet.
+      const double cos_cand = std::sqrt(std::max(0.0, 1.0 - cand_sin_dip_ * cand_sin_dip_));
+      const bool fits_candidate = cand_valid_ &&
+                                  std::abs(norm - cand_norm_) < params_.mag_norm_threshold * cand_norm_ &&
+                                  std::abs(sin_dip - cand_sin_dip_) < params_.mag_dip_threshold_rad * cos_cand;
+      if (fits_candidate) {
+        const double kc = lowpass_gain(dt_s, 1.0);
+        cand_norm_ += kc * (norm - cand_norm_);
+        cand_sin_dip_ += kc * (sin_dip - cand_sin_dip_);
+        if (gyr_norm_rad_s > params_.mag_new_field_min_gyr_rad_s) cand_s_ += dt_s;
+      } else {
+        cand_valid_ = true;
+        cand_norm_ = norm;
+        cand_sin_dip_ = sin_dip;
+        cand_s_ = 0.0;
+      }
+      update_hard_iron_fit(mag_uT, E_from_A, dt_s);
+      if (cand_s_ >= params_.mag_new_field_s) {
+        mag_ref_norm_ = cand_norm_;
+        mag_ref_sin_dip_ = cand_sin_dip_;
+        mag_ref_dip_ = std::asin(std::clamp(cand_sin_dip_, -1.0, 1.0));
+        cand_valid_ = false;
+        mag_recover_left_s_ = params_.mag_recover_s;
+      }
+      return false;
+    }
+    cand_valid_ = false;
+    // Undisturbed: the reference follows slowly (sensor warm-up, slow changes of place).
+    const double kr = lowpass_gain(dt_s, params_.mag_ref_tau_s);
+    mag_ref_norm_ += kr * (norm - mag_ref_norm_);
+    mag_ref_sin_dip_ += kr * (sin_dip - mag_ref_sin_dip_);
+    if (mag_recover_left_s_ > 0.0) {
+      k = std::max(k, lowpass_gain(dt_s, params_.mag_recover_tau_s));
+      mag_recover_left_s_ -= dt_s;
+    }
+  }
+
+  // Heading error: the angle that turns the horizontal field, seen through Rz(heading), onto
+  // +x (magnetic north). Rz(heading) as a 2D rotation: cos = w^2 - z^2, sin = 2 w z.
+  const double hc = heading_qw_ * heading_qw_ - heading_qz_ * heading_qz_;
+  const double hs = 2.0 * heading_qw_ * heading_qz_;
+  const double north = hc * m_E.x() - hs * m_E.y();
+  const double west = hs * m_E.x() + hc * m_E.y();
+  if (north * north + west * west < 1e-12) return false;  // field vertical: no heading information
+  const double error_rad = -std::atan2(west, north);
+  const double step_rad = k * error_rad;
+  double c, s;
+  half_angle_cos_sin(step_rad, c, s);
+  const double qw = c * heading_qw_ - s * heading_qz_;
+  const double qz = c * heading_qz_ + s * heading_qw_;
+  const double n = std::sqrt(qw * qw + qz * qz);
+  heading_qw_ = qw / n;
+  heading_qz_ = qz / n;
+  if (dt_s > 0.0) mag_heading_rate_ = step_rad / dt_s;
+  return true;
+}
+
+void RobustOrientationFilter::update_hard_iron_fit(const Vec3& mag_uT, const Quat& E_from_A, double dt_s) {
+  // Model while a new sensor-fixed offset is present: m_A = A_from_E * b_E + h_A, with b_E the
+  // (constant) field in E. Linear in x = [b_E; h_A]: J = [A_from_E, I].
+  const double forget = 1.0 - lowpass_gain(dt_s, params_.mag_hard_iron_tau_s);
+  const Eigen::Matrix3d A_from_E = E_from_A.conjugate().toRotationMatrix();
+  Eigen::Matrix<double, 3, 6> J;
+  J << A_from_E, Eigen::Matrix3d::Identity();
+  hi_normal_ = forget * hi_normal_ + J.transpose() * J;
+  hi_rhs_ = forget * hi_rhs_ + J.transpose() * mag_uT;
+  hi_sum_sq_ = forget * hi_sum_sq_ + mag_uT.squaredNorm();
+  hi_weight_ = forget * hi_weight_ + 1.0;
+  hi_check_s_ += dt_s;
+  if (hi_check_s_ < 0.5) return;
+  hi_check_s_ = 0.0;
+
+  // Excitation: all six directions must be seen; the smallest eigenvalue of the averaged normal
+  // matrix is 0 without rotation and up to 1 (per sample) with rotations spread evenly.
+  const Eigen::Matrix<double, 6, 6> averaged = hi_normal_ / hi_weight_;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(averaged, Eigen::EigenvaluesOnly);
+  if (eig.eigenvalues()(0) < params_.mag_hard_iron_min_excitation) return;
+  const Eigen::Matrix<double, 6, 1> x = hi_normal_.ldlt().solve(hi_rhs_);
+  const Vec3 b_E = x.head<3>();
+  const double norm = b_E.norm();
+  if (!x.allFinite() || norm < 1e-6 || !fits_reference(norm, -b_E.z() / norm)) return;
+  // The model must explain the samples: weighted residual sum |J x - m|^2 from the sums.
+  const double residual_sq = hi_sum_sq_ - 2.0 * x.dot(hi_rhs_) + x.dot(hi_normal_ * x);
+  const double rms_uT = std::sqrt(std::max(0.0, residual_sq) / (3.0 * hi_weight_));
+  if (rms_uT > params_.mag_hard_iron_max_rms * mag_ref_norm_) return;
+  hard_iron_uT_ = x.tail<3>();
+  mag_ref_norm_ = norm;
+  mag_ref_sin_dip_ = -b_E.z() / norm;
+  if (mag_disturbed_) mag_recover_left_s_ = params_.mag_recover_s;
+  reset_hard_iron_fit();
+}
+
+void RobustOrientationFilter::reset_hard_iron_fit() {
+  hi_normal_.setZero();
+  hi_rhs_.setZero();
+  hi_weight_ = 0.0;
+  hi_sum_sq_ = 0.0;
+  hi_check_s_ = 0.0;
+}
+
+}  // namespace posefuse::imu

@@ -1,0 +1,169 @@
+#pragma once
+// Robust 9-axis orientation filter (beyond paper 1, II-D): separate inclination and heading
+// corrections in the spirit of VQF (Laidig & Seel 2023), written for posefuse.
+//
+// The orientation is kept as three factors, W_from_A = Rz(heading) * E_from_I * I_from_A:
+//  - I_from_A: strapdown integration of the bias-corrected gyroscope ("I" is an almost-inertial
+//    frame that drifts slowly with the residual gyro bias);
+//  - E_from_I: inclination correction. The accelerometer is rotated into I and low-pass filtered
+//    there, so short accelerations, taps and vibration average out while the sensor turns; the
+//    correction rotates the filtered vector onto the vertical (rotation about a horizontal axis);
+//  - Rz(heading): heading correction about the vertical from the magnetometer, so a bad magnetic
+//    field can never tilt the estimate.
+// Gyro bias: a small Kalman filter, fed by the low-passed gyro during detected rest (accurate)
+// and, slowly, by the corrections the accelerometer and magnetometer make during motion.
+// Magnetic disturbances: the field's norm and dip are compared with a reference learned online;
+// a disturbed sample is not used. A new field that stays consistent while the sensor rotates is
+// adopted after a while (moving to another room); a new sensor-fixed offset (a magnet attached to
+// the sensor: hard iron) is estimated by least squares from the rotation and then removed.
+// Details and parameter guidance: docs/imu-robust.md.
+#include <vector>
+
+#include "imu/imu_sample.hpp"
+
+namespace posefuse::imu {
+
+class RobustOrientationFilter {
+ public:
+  struct Params {
+    // Inclination: time constant of the inertial-frame accelerometer low-pass. Longer averages
+    // out longer accelerations but lets gyro-bias drift build up a larger tilt error.
+    double tau_acc_s = 3.0;
+    // Heading: time constant with which the magnetometer pulls the heading.
+    double tau_mag_s = 9.0;
+
+    // Rest detection: gyro and accelerometer are low-passed with rest_tau_s; the sensor is at
+    // rest when both deviate from their low-pass by less than the thresholds for at least
+    // rest_min_s.
+    double rest_tau_s = 0.5;
+    double rest_min_s = 1.5;
+    double rest_gyr_threshold_rad_s = 2.0 * 3.14159265358979 / 180.0;
+    double rest_acc_threshold_m_s2 = 0.5;
+
+    // Gyro bias Kalman filter (per axis, rad/s). Initial uncertainty, random-walk drift of the
+    // bias, and the noise of one rest measurement (the low-passed gyro).
+    double bias_sigma_init_rad_s = 0.5 * 3.14159265358979 / 180.0;
+    double bias_drift_rad_s_per_sqrt_s = 0.002 * 3.14159265358979 / 180.0;
+    double bias_sigma_rest_rad_s = 0.3 * 3.14159265358979 / 180.0;
+    // During motion the bias follows the rate of the accelerometer/magnetometer corrections
+    // with this time constant (slow: those corrections are noisy and lag by ~tau_acc_s).
+    double bias_motion_tau_s = 60.0;
+    // Largest bias the filter will accept (rad/s); MEMS gyros are well inside this.
+    double bias_limit_rad_s = 5.0 * 3.14159265358979 / 180.0;
+
+    // Magnetic disturbance: a sample is undisturbed when its norm is within
+    // mag_norm_threshold (fraction of the reference norm) and its dip angle within
+    // mag_dip_threshold_rad of the reference. The reference follows undisturbed samples with
+    // mag_ref_tau_s.
+    double mag_norm_threshold = 0.1;
+    double mag_dip_threshold_rad = 10.0 * 3.14159265358979 / 180.0;
+    double mag_ref_tau_s = 30.0;
+    // A disturbed but self-consistent new field (norm and dip steady) is adopted as the new
+    // reference after mag_new_field_s of consistent samples while turning faster than
+    // mag_new_field_min_gyr_rad_s (a sensor-fixed magnet would not stay consistent then).
+    double mag_new_field_s = 20.0;
+    double mag_new_field_min_gyr_rad_s = 20.0 * 3.14159265358979 / 180.0;
+    // Hard-iron re-learning: while disturbed, fit m_A = A_from_E * b_E + h_A by exponentially
+    // forgetting least squares (time constant mag_hard_iron_tau_s); accept h_A once the
+    // rotation excites all directions (smallest normalised eigenvalue above
+    // mag_hard_iron_min_excitation), the fitted field b_E matches the reference and the fit
+    // explains the samples (RMS residual below mag_hard_iron_max_rms times the reference norm).
+    double mag_hard_iron_tau_s = 20.0;
+    double mag_hard_iron_min_excitation = 0.05;
+    double mag_hard_iron_max_rms = 0.05;
+    // After the magnetometer was rejected for a while, the heading may have drifted; the first
+    // accepted samples pull with the faster time constant mag_recover_tau_s for
+    // mag_recover_s.
+    double mag_recover_tau_s = 2.0;
+    double mag_recover_s = 2.0;
+
+    // Start-up: for the first init_s seconds low-passes average with equal weights (fast
+    // convergence from an unknown start) and magnetic rejection is off while the reference is
+    // learned.
+    double init_s = 1.0;
+  };
+
+  RobustOrientationFilter();
+  explicit RobustOrientationFilter(const Params& params);
+
+  // One sample; returns W_from_A (W: x magnetic north, y west, z up). Does not allocate.
+  // Throws posefuse::Error for non-finite gyro/acc or a timestamp not after the previous one.
+  Quat update(const ImuSample& sample);
+
+  // Whole stream from the current state; validates it first (validate_imu_stream).
+  std::vector<Quat> process(const std::vector<ImuSample>& samples);
+
+  // Inspection (tests, diagnostics).
+  const Params& params() const { return params_; }
+  const Vec3& gyro_bias_rad_s() const { return bias_; }
+  bool at_rest() const { return rest_s_ >= params_.rest_min_s; }
+  bool mag_disturbed() const { return mag_disturbed_; }
+  const Vec3& hard_iron_uT() const { return hard_iron_uT_; }
+  double mag_ref_norm_uT() const { return mag_ref_norm_; }
+  double mag_ref_dip_rad() const { return mag_ref_dip_; }
+
+  // Carries what the filter learned about the sensor (bias and its uncertainty, magnetic
+  // reference, hard iron) into a fresh run, e.g. for a second pass over a recording.
+  void reset_keeping_calibration();
+
+ private:
+  void integrate_gyro(const Vec3& gyr_rad_s, double dt_s);
+  void update_rest_detection(const ImuSample& s, double dt_s);
+  void correct_inclination(const Vec3& acc_m_s2, double dt_s);
+  // Returns whether the magnetometer corrected the heading this sample.
+  bool correct_heading(const Vec3& mag_uT, double dt_s, double gyr_norm_rad_s);
+  void update_rest_bias(double dt_s);
+  void update_hard_iron_fit(const Vec3& mag_uT, const Quat& E_from_A, double dt_s);
+  void reset_hard_iron_fit();
+  bool fits_reference(double norm_uT, double sin_dip) const;
+
+  Params params_;
+
+  // Orientation factors.
+  Quat I_from_A_ = Quat::Identity();
+  Quat E_from_I_ = Quat::Identity();
+  double heading_qw_ = 1.0, heading_qz_ = 0.0;  // Rz(heading) as the quaternion (w, 0, 0, z)
+
+  bool started_ = false;
+  std::int64_t last_t_us_ = 0;
+  double time_s_ = 0.0;
+  double init_weight_count_ = 0.0;  // samples seen during start-up, for equal-weight averaging
+
+  // Inclination.
+  Vec3 acc_lp1_I_ = Vec3::Zero();  // first low-pass stage
+  Vec3 acc_lp_I_ = Vec3::Zero();   // second stage: the filtered vector
+  Vec3 acc_correction_rate_E_ = Vec3::Zero();  // last tilt correction / dt, for the bias
+
+  // Rest detection and bias.
+  Vec3 gyr_lp_ = Vec3::Zero();
+  Vec3 acc_lp_A_ = Vec3::Zero();
+  double rest_s_ = 0.0;
+  Vec3 bias_ = Vec3::Zero();
+  double bias_var_ = 0.0;
+  // E_from_A low-passed like the corrections (for the motion bias update).
+  Eigen::Matrix3d E_from_A_lp1_acc_ = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d E_from_A_lp_acc_ = Eigen::Matrix3d::Zero();
+  Vec3 E_from_A_lp_mag_z_ = Vec3::Zero();  // its third row, with tau_mag_s
+
+  // Heading and magnetic reference.
+  bool mag_ref_valid_ = false;
+  double mag_ref_norm_ = 0.0;
+  double mag_ref_dip_ = 0.0;      // rad, positive when the field points down
+  double mag_ref_sin_dip_ = 0.0;
+  double mag_init_count_ = 0.0;
+  bool mag_disturbed_ = false;
+  double mag_heading_rate_ = 0.0;  // last heading correction / dt, for the bias
+  double mag_recover_left_s_ = 0.0;
+  // Candidate for a new field.
+  double cand_norm_ = 0.0, cand_sin_dip_ = 0.0, cand_s_ = 0.0;
+  bool cand_valid_ = false;
+  // Hard iron: current offset and the forgetting least-squares fit of [b_E; h_A].
+  Vec3 hard_iron_uT_ = Vec3::Zero();
+  Eigen::Matrix<double, 6, 6> hi_normal_ = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> hi_rhs_ = Eigen::Matrix<double, 6, 1>::Zero();
+  double hi_weight_ = 0.0;
+  double hi_sum_sq_ = 0.0;
+  double hi_check_s_ = 0.0;
+};
+
+}  // namespace posefuse::imu
