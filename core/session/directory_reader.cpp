@@ -53,36 +53,32 @@ class FrameFolderStream : public ChunkSource {
     const File& file = files_[next_++];
     std::string bytes = read_file_bytes(file.path, file.name);
     chunk.Clear();
+    const bool jpeg = kind_ == FrameKind::kColor && file.path.extension() != ".png";
+    // The size comes from the file's header before the bytes move into the chunk.
+    const ImageSize size = jpeg ? jpeg_size(bytes, file.name) : png_size(bytes, file.name);
     if (kind_ == FrameKind::kDepth) {
-      const ImageSize size = png_size(bytes, file.name);
-      v1::DepthFrame* frame = chunk.mutable_depth();
-      frame->set_t_us(file.t_us);
-      frame->set_width(size.width);
-      frame->set_height(size.height);
-      frame->set_encoding(v1::DepthFrame::PNG16);
-      frame->set_data(std::move(bytes));
+      fill(chunk.mutable_depth(), file.t_us, size, v1::DepthFrame::PNG16, std::move(bytes));
     } else if (kind_ == FrameKind::kBodyIndex) {
-      const ImageSize size = png_size(bytes, file.name);
-      v1::BodyIndexFrame* frame = chunk.mutable_body_index();
-      frame->set_t_us(file.t_us);
-      frame->set_width(size.width);
-      frame->set_height(size.height);
-      frame->set_encoding(v1::BodyIndexFrame::PNG8);
-      frame->set_data(std::move(bytes));
+      fill(chunk.mutable_body_index(), file.t_us, size, v1::BodyIndexFrame::PNG8, std::move(bytes));
     } else {
-      const bool png = file.path.extension() == ".png";
-      const ImageSize size = png ? png_size(bytes, file.name) : jpeg_size(bytes, file.name);
-      v1::ColorFrame* frame = chunk.mutable_color();
-      frame->set_t_us(file.t_us);
-      frame->set_width(size.width);
-      frame->set_height(size.height);
-      frame->set_encoding(png ? v1::ColorFrame::PNG : v1::ColorFrame::JPEG);
-      frame->set_data(std::move(bytes));
+      fill(chunk.mutable_color(), file.t_us, size, jpeg ? v1::ColorFrame::JPEG : v1::ColorFrame::PNG,
+           std::move(bytes));
     }
     return true;
   }
 
  private:
+  // DepthFrame, BodyIndexFrame and ColorFrame share these fields.
+  template <typename Frame>
+  static void fill(Frame* frame, std::int64_t t_us, ImageSize size,
+                   typename Frame::Encoding encoding, std::string bytes) {
+    frame->set_t_us(t_us);
+    frame->set_width(size.width);
+    frame->set_height(size.height);
+    frame->set_encoding(encoding);
+    frame->set_data(std::move(bytes));
+  }
+
   struct File {
     std::int64_t t_us;
     fs::path path;

@@ -285,6 +285,15 @@ void validate_header(const v1::SessionHeader& header, const std::string& field) 
                       " and audio_channels " + std::to_string(header.audio_channels()) +
                       " must both be 0 (no audio) or both be positive");
   }
+  if (header.audio_channels() > kMaxAudioChannels) {
+    throw_invalid(field + ".audio_channels", "is " + std::to_string(header.audio_channels()) +
+                                                 ", at most " + std::to_string(kMaxAudioChannels));
+  }
+  if (header.audio_sample_rate_hz() > kMaxAudioSampleRateHz) {
+    throw_invalid(field + ".audio_sample_rate_hz",
+                  "is " + std::to_string(header.audio_sample_rate_hz()) + ", at most " +
+                      std::to_string(kMaxAudioSampleRateHz));
+  }
   for (const auto& [key, value] : header.options()) {
     if (key.empty()) throw_invalid(field + ".options", "has an empty key");
   }
