@@ -53,36 +53,32 @@ class FrameFolderStream : public ChunkSource {
     const File& file = files_[next_++];
     std::string bytes = read_file_bytes(file.path, file.name);
     chunk.Clear();
+    const bool jpeg = kind_ == FrameKind::kColor && file.path.extension() != ".png";
+    // The size comes from the file's header before the bytes move into the chunk.
+    const ImageSize size = jpeg ? jpeg_size(bytes, file.name) : png_size(bytes, file.name);
     if (kind_ == FrameKind::kDepth) {
-      const ImageSize size = png_size(bytes, file.name);
-      v1::DepthFrame* frame = chunk.mutable_depth();
-      frame->set_t_us(file.t_us);
-      frame->set_width(size.width);
-      frame->set_height(size.height);
-      frame->set_encoding(v1::DepthFrame::PNG16);
-      frame->set_data(std::move(bytes));
+      fill(chunk.mutable_depth(), file.t_us, size, v1::DepthFrame::PNG16, std::move(bytes));
     } else if (kind_ == FrameKind::kBodyIndex) {
-      const ImageSize size = png_size(bytes, file.name);
-      v1::BodyIndexFrame* frame = chunk.mutable_body_index();
-      frame->set_t_us(file.t_us);
-      frame->set_width(size.width);
-      frame->set_height(size.height);
-      frame->set_encoding(v1::BodyIndexFrame::PNG8);
-      frame->set_data(std::move(bytes));
+      fill(chunk.mutable_body_index(), file.t_us, size, v1::BodyIndexFrame::PNG8, std::move(bytes));
     } else {
-      const bool png = file.path.extension() == ".png";
-      const ImageSize size = png ? png_size(bytes, file.name) : jpeg_size(bytes, file.name);
-      v1::ColorFrame* frame = chunk.mutable_color();
-      frame->set_t_us(file.t_us);
-      frame->set_width(size.width);
-      frame->set_height(size.height);
-      frame->set_encoding(png ? v1::ColorFrame::PNG : v1::ColorFrame::JPEG);
-      frame->set_data(std::move(bytes));
+      fill(chunk.mutable_color(), file.t_us, size, jpeg ? v1::ColorFrame::JPEG : v1::ColorFrame::PNG,
+           std::move(bytes));
     }
     return true;
   }
 
  private:
+  // DepthFrame, BodyIndexFrame and ColorFrame share these fields.
+  template <typename Frame>
+  static void fill(Frame* frame, std::int64_t t_us, ImageSize size,
+                   typename Frame::Encoding encoding, std::string bytes) {
+    frame->set_t_us(t_us);
+    frame->set_width(size.width);
+    frame->set_height(size.height);
+    frame->set_encoding(encoding);
+    frame->set_data(std::move(bytes));
+  }
+
   struct File {
     std::int64_t t_us;
     fs::path path;
@@ -130,25 +126,35 @@ class SkeletonStream : public ChunkSource {
       throw_invalid(csv_.field(2), "a frame has more than 25 joints");
     }
     if (csv_.at(3) != layout::kKinectJointNames[index]) {
-      throw_invalid(csv_.field(3), "'" + std::string(csv_.at(3)) + "' but joint " +
+      throw_invalid(csv_.field(3), quoted(csv_.at(3)) + " but joint " +
                                        std::to_string(index) + " is " +
                                        layout::kKinectJointNames[index]);
     }
     v1::SkeletonJoint* joint = frame.add_joints();
     v1::SkeletonJoint::State state{};
     if (!v1::SkeletonJoint::State_Parse(std::string(csv_.at(4)), &state)) {
-      throw_invalid(csv_.field(4), "'" + std::string(csv_.at(4)) +
-                                       "' is not NOT_TRACKED, INFERRED or TRACKED");
+      throw_invalid(csv_.field(4), quoted(csv_.at(4)) +
+                                       " is not NOT_TRACKED, INFERRED or TRACKED");
     }
     joint->set_state(state);
-    joint->mutable_position_m()->set_x(parse_double(csv_.at(5), csv_.field(5)));
-    joint->mutable_position_m()->set_y(parse_double(csv_.at(6), csv_.field(6)));
-    joint->mutable_position_m()->set_z(parse_double(csv_.at(7), csv_.field(7)));
-    joint->mutable_orientation()->set_w(parse_double(csv_.at(8), csv_.field(8)));
-    joint->mutable_orientation()->set_x(parse_double(csv_.at(9), csv_.field(9)));
-    joint->mutable_orientation()->set_y(parse_double(csv_.at(10), csv_.field(10)));
-    joint->mutable_orientation()->set_z(parse_double(csv_.at(11), csv_.field(11)));
+    // An all-zero vector or quaternion is left unset: proto3 reads an unset message as all
+    // zeros anyway, and leaving it unset makes directory -> chunks -> directory exact.
+    const double p[3] = {number(5), number(6), number(7)};
+    if (p[0] != 0 || p[1] != 0 || p[2] != 0) {
+      joint->mutable_position_m()->set_x(p[0]);
+      joint->mutable_position_m()->set_y(p[1]);
+      joint->mutable_position_m()->set_z(p[2]);
+    }
+    const double q[4] = {number(8), number(9), number(10), number(11)};
+    if (q[0] != 0 || q[1] != 0 || q[2] != 0 || q[3] != 0) {
+      joint->mutable_orientation()->set_w(q[0]);
+      joint->mutable_orientation()->set_x(q[1]);
+      joint->mutable_orientation()->set_y(q[2]);
+      joint->mutable_orientation()->set_z(q[3]);
+    }
   }
+
+  double number(std::size_t column) const { return parse_double(csv_.at(column), csv_.field(column)); }
 
   CsvReader csv_;
   bool have_row_ = false;
@@ -230,8 +236,8 @@ class SyncEventStream : public ChunkSource {
     event->set_device_id(std::string(csv_.at(1)));
     v1::SyncEvent::Kind kind{};
     if (!v1::SyncEvent::Kind_Parse(std::string(csv_.at(2)), &kind)) {
-      throw_invalid(csv_.field(2), "'" + std::string(csv_.at(2)) +
-                                       "' is not BUZZER_STOP, BLE_BROADCAST_RECEIPT or OTHER");
+      throw_invalid(csv_.field(2), quoted(csv_.at(2)) +
+                                       " is not BUZZER_STOP, BLE_BROADCAST_RECEIPT or OTHER");
     }
     event->set_kind(kind);
     event->set_payload(from_hex(csv_.at(3), csv_.field(3)));

@@ -86,7 +86,7 @@ void check_intrinsics(const v1::CameraIntrinsics& k, const std::string& field) {
 void require_size(std::uint32_t width, std::uint32_t height, const v1::CameraIntrinsics& expected,
                   const std::string& field, const char* source) {
   if (width != expected.width() || height != expected.height()) {
-    throw_invalid(field + ".width", "frame is " + std::to_string(width) + "x" +
+    throw_invalid(field + (width != expected.width() ? ".width" : ".height"), "frame is " + std::to_string(width) + "x" +
                                         std::to_string(height) + ", " + source + " says " +
                                         std::to_string(expected.width()) + "x" +
                                         std::to_string(expected.height()));
@@ -285,6 +285,15 @@ void validate_header(const v1::SessionHeader& header, const std::string& field) 
                       " and audio_channels " + std::to_string(header.audio_channels()) +
                       " must both be 0 (no audio) or both be positive");
   }
+  if (header.audio_channels() > kMaxAudioChannels) {
+    throw_invalid(field + ".audio_channels", "is " + std::to_string(header.audio_channels()) +
+                                                 ", at most " + std::to_string(kMaxAudioChannels));
+  }
+  if (header.audio_sample_rate_hz() > kMaxAudioSampleRateHz) {
+    throw_invalid(field + ".audio_sample_rate_hz",
+                  "is " + std::to_string(header.audio_sample_rate_hz()) + ", at most " +
+                      std::to_string(kMaxAudioSampleRateHz));
+  }
   for (const auto& [key, value] : header.options()) {
     if (key.empty()) throw_invalid(field + ".options", "has an empty key");
   }
@@ -404,7 +413,6 @@ void SessionValidator::count(const v1::SessionChunk& chunk) {
       break;
     case v1::SessionChunk::kColor: counts_.set_color_frames(counts_.color_frames() + 1); break;
     case v1::SessionChunk::kImu:
-      counts_.set_imu_batches(counts_.imu_batches() + 1);
       (*counts_.mutable_imu_samples())[chunk.imu().device_id()] +=
           static_cast<std::uint64_t>(chunk.imu().t_us_size());
       break;
@@ -429,7 +437,6 @@ void SessionValidator::check_end(const v1::EndOfSession& end, const std::string&
   compare(end.body_index_frames(), counts_.body_index_frames(), "body_index_frames");
   compare(end.skeleton_frames(), counts_.skeleton_frames(), "skeleton_frames");
   compare(end.color_frames(), counts_.color_frames(), "color_frames");
-  compare(end.imu_batches(), counts_.imu_batches(), "imu_batches");
   compare(end.audio_chunks(), counts_.audio_chunks(), "audio_chunks");
   compare(end.audio_frames(), counts_.audio_frames(), "audio_frames");
   compare(end.sync_events(), counts_.sync_events(), "sync_events");

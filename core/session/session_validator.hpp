@@ -20,6 +20,8 @@ inline constexpr double kUnitQuaternionTolerance = 1e-3;
 inline constexpr int kSkeletonJointCount = 25;
 inline constexpr std::uint32_t kMaxBodyId = 5;
 inline constexpr std::size_t kMaxSyncPayloadBytes = 4096;
+inline constexpr std::uint32_t kMaxAudioChannels = 64;
+inline constexpr std::uint32_t kMaxAudioSampleRateHz = 384'000;
 // Device ids appear in file names (imu/<device_id>.csv): [A-Za-z0-9_.-]{1,64}, not "." or "..".
 bool is_valid_device_id(const std::string& device_id);
 

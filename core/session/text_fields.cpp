@@ -26,7 +26,7 @@ T parse_number(std::string_view text, const std::string& field, const char* what
   // from_chars accepts no leading '+'; we never write one and do not accept one.
   const auto result = std::from_chars(begin, end, value);
   if (text.empty() || result.ec != std::errc() || result.ptr != end) {
-    throw_invalid(field, "'" + std::string(text) + "' is not " + what);
+    throw_invalid(field, quoted(text) + " is not " + what);
   }
   return value;
 }
@@ -47,6 +47,15 @@ std::int64_t parse_int64(std::string_view text, const std::string& field) {
 }
 std::uint64_t parse_uint64(std::string_view text, const std::string& field) {
   return parse_number<std::uint64_t>(text, field, "a non-negative 64-bit integer");
+}
+
+std::string quoted(std::string_view text) {
+  std::string out;
+  out.reserve(text.size() + 2);
+  out += '\'';
+  out += text;
+  out += '\'';
+  return out;
 }
 
 std::string to_hex(std::string_view bytes) {

@@ -24,6 +24,8 @@ std::int64_t parse_int64(std::string_view text, const std::string& field);
 std::uint64_t parse_uint64(std::string_view text, const std::string& field);
 
 std::string to_hex(std::string_view bytes);
+// 'text' in single quotes, for error messages.
+std::string quoted(std::string_view text);
 std::string from_hex(std::string_view hex, const std::string& field);
 
 // Reads a CSV file line by line, checking the header row against `columns`.

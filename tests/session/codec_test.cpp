@@ -1,0 +1,183 @@
+// Payload codecs and small file formats: depth / body index images, IMU batches, WAV, CSV text.
+#include <gtest/gtest.h>
+
+#include <fstream>
+#include <limits>
+
+#include <opencv2/imgcodecs.hpp>
+
+#include "fixture.hpp"
+#include "session/image_codec.hpp"
+#include "session/imu_batch.hpp"
+#include "session/text_fields.hpp"
+#include "session/wav.hpp"
+
+namespace posefuse::session::testing {
+namespace {
+
+cv::Mat ramp_depth() {
+  cv::Mat depth(12, 16, CV_16UC1);
+  for (int r = 0; r < depth.rows; ++r) {
+    for (int c = 0; c < depth.cols; ++c) depth.at<std::uint16_t>(r, c) = static_cast<std::uint16_t>(r * 4000 + c);
+  }
+  return depth;
+}
+
+TEST(DepthCodec, EveryEncodingRoundTrips) {
+  const cv::Mat depth = ramp_depth();
+  for (const auto encoding : {v1::DepthFrame::RAW_U16_LE, v1::DepthFrame::PNG16,
+                              v1::DepthFrame::ZSTD_U16_LE}) {
+    const v1::DepthFrame frame = encode_depth(depth, encoding, 5);
+    EXPECT_EQ(frame.width(), 16u);
+    EXPECT_EQ(frame.height(), 12u);
+    const cv::Mat back = decode_depth(frame);
+    ASSERT_EQ(back.type(), CV_16UC1);
+    EXPECT_EQ(cv::norm(back, depth, cv::NORM_INF), 0.0) << encoding;
+  }
+}
+
+TEST(DepthCodec, RawIsLittleEndianRowMajor) {
+  const v1::DepthFrame frame = encode_depth(ramp_depth(), v1::DepthFrame::RAW_U16_LE, 0);
+  ASSERT_EQ(frame.data().size(), 16u * 12u * 2u);
+  // Pixel (row 1, col 2) = 4002 = 0x0FA2.
+  const std::size_t at = 2 * (1 * 16 + 2);
+  EXPECT_EQ(static_cast<unsigned char>(frame.data()[at]), 0xA2);
+  EXPECT_EQ(static_cast<unsigned char>(frame.data()[at + 1]), 0x0F);
+}
+
+TEST(DepthCodec, ZstdOfWrongSizeIsInvalid) {
+  v1::DepthFrame frame = encode_depth(ramp_depth(), v1::DepthFrame::ZSTD_U16_LE, 0);
+  frame.set_height(13);
+  expect_error([&] { decode_depth(frame); }, ErrorCode::kInvalidArgument, "depth.data");
+  frame.set_height(12);
+  frame.set_data("not zstd");
+  expect_error([&] { decode_depth(frame); }, ErrorCode::kInvalidArgument, "depth.data");
+}
+
+TEST(DepthCodec, HostileSizesAreRejectedBeforeAllocating) {
+  v1::DepthFrame frame;
+  frame.set_width(100000);
+  frame.set_height(100000);
+  frame.set_encoding(v1::DepthFrame::RAW_U16_LE);
+  expect_error([&] { decode_depth(frame); }, ErrorCode::kInvalidArgument, "depth.width");
+}
+
+TEST(BodyIndexCodec, RoundTripsAndChecksPngType) {
+  cv::Mat ids(12, 16, CV_8UC1, cv::Scalar(255));
+  ids(cv::Rect(2, 2, 5, 5)).setTo(3);
+  for (const auto encoding : {v1::BodyIndexFrame::RAW_U8, v1::BodyIndexFrame::PNG8}) {
+    EXPECT_EQ(cv::norm(decode_body_index(encode_body_index(ids, encoding, 0)), ids, cv::NORM_INF),
+              0.0);
+  }
+  // A 16-bit PNG is not a body index map.
+  v1::BodyIndexFrame frame = encode_body_index(ids, v1::BodyIndexFrame::PNG8, 0);
+  frame.set_data(encode_depth(ramp_depth(), v1::DepthFrame::PNG16, 0).data());
+  expect_error([&] { decode_body_index(frame); }, ErrorCode::kInvalidArgument, "body_index.data");
+}
+
+TEST(ImageSize, ReadsPngAndJpegHeaders) {
+  const cv::Mat bgr(7, 9, CV_8UC3, cv::Scalar(1, 2, 3));
+  std::vector<unsigned char> png, jpeg;
+  cv::imencode(".png", bgr, png);
+  cv::imencode(".jpg", bgr, jpeg);
+  const ImageSize p = png_size(std::string(png.begin(), png.end()), "p");
+  const ImageSize j = jpeg_size(std::string(jpeg.begin(), jpeg.end()), "j");
+  EXPECT_EQ(p.width, 9u);
+  EXPECT_EQ(p.height, 7u);
+  EXPECT_EQ(j.width, 9u);
+  EXPECT_EQ(j.height, 7u);
+  expect_error([&] { jpeg_size(std::string(png.begin(), png.end()), "j"); },
+               ErrorCode::kInvalidArgument, "j");
+  expect_error([&] { png_size("\x89PNG", "p"); }, ErrorCode::kInvalidArgument, "p");
+}
+
+TEST(ImuBatchCodec, RoundTripsSamples) {
+  std::vector<imu::ImuSample> samples(3);
+  for (int i = 0; i < 3; ++i) {
+    samples[i].t_us = 1000 + 12500 * i;
+    samples[i].gyr_rad_s = {0.5 * i, -0.25, 1.0};
+    samples[i].acc_m_s2 = {0.0, 0.125, 9.75};
+    samples[i].mag_uT = {20.5, -3.0, -40.0 + i};
+  }
+  const v1::ImuBatch batch = batch_from_samples("wrist_l", samples);
+  EXPECT_EQ(batch.device_id(), "wrist_l");
+  ASSERT_EQ(batch.gyr_rad_s_size(), 9);
+  EXPECT_EQ(batch.gyr_rad_s(3), 0.5f);  // sample 1 x: xyz interleaved
+  const auto back = samples_from_batch(batch);
+  ASSERT_EQ(back.size(), 3u);
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_EQ(back[i].t_us, samples[i].t_us);
+    EXPECT_EQ(back[i].gyr_rad_s, samples[i].gyr_rad_s);
+    EXPECT_EQ(back[i].acc_m_s2, samples[i].acc_m_s2);
+    EXPECT_EQ(back[i].mag_uT, samples[i].mag_uT);
+  }
+}
+
+TEST(ImuBatchCodec, EmptyOrMismatchedBatch) {
+  expect_error([&] { samples_from_batch(v1::ImuBatch()); }, ErrorCode::kInvalidArgument, "imu.t_us");
+  v1::ImuBatch batch = batch_from_samples("b", std::vector<imu::ImuSample>(2));
+  batch.mutable_mag_ut()->RemoveLast();
+  expect_error([&] { samples_from_batch(batch); }, ErrorCode::kInvalidArgument, "imu.mag_uT");
+}
+
+TEST(Wav, RoundTripsAndSkipsUnknownChunks) {
+  TempDir dir;
+  std::string pcm;
+  for (int i = 0; i < 10; ++i) pcm += std::string{static_cast<char>(i), static_cast<char>(-i)};
+  {
+    WavWriter writer(dir / "a.wav", {48000, 2});
+    writer.write_frames(pcm.substr(0, 8));
+    writer.write_frames(pcm.substr(8));
+    writer.finish();
+  }
+  WavReader reader(dir / "a.wav", "a.wav");
+  EXPECT_EQ(reader.format().sample_rate_hz, 48000u);
+  EXPECT_EQ(reader.format().channels, 2);
+  EXPECT_EQ(reader.total_frames(), 5u);
+  const std::string first = reader.read_frames(2);
+  EXPECT_EQ(first + reader.read_frames(3), pcm);
+  expect_error([&] { reader.read_frames(1); }, ErrorCode::kDataLoss, "a.wav.data");
+
+  // Insert an odd-sized LIST chunk before "data", as some recorders do.
+  std::ifstream in(dir / "a.wav", std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  bytes.insert(36, std::string("LIST\x03\x00\x00\x00" "abc\x00", 12));
+  std::ofstream(dir / "b.wav", std::ios::binary) << bytes;
+  WavReader with_list(dir / "b.wav", "b.wav");
+  EXPECT_EQ(with_list.read_frames(5), pcm);
+}
+
+TEST(Wav, TruncatedOrNotPcm) {
+  TempDir dir;
+  {
+    WavWriter writer(dir / "a.wav", {16000, 1});
+    writer.write_frames(std::string(200, '\x01'));
+    writer.finish();
+  }
+  std::ifstream in(dir / "a.wav", std::ios::binary);
+  std::string bytes((std::istreambuf_iterator<char>(in)), {});
+  std::ofstream(dir / "cut.wav", std::ios::binary) << bytes.substr(0, bytes.size() - 10);
+  expect_error([&] { WavReader r(dir / "cut.wav", "cut.wav"); }, ErrorCode::kDataLoss,
+               "cut.wav.data");
+  bytes[34] = 8;  // 8 bits per sample
+  std::ofstream(dir / "u8.wav", std::ios::binary) << bytes;
+  expect_error([&] { WavReader r(dir / "u8.wav", "u8.wav"); }, ErrorCode::kInvalidArgument,
+               "u8.wav.fmt");
+}
+
+TEST(TextFields, NumbersRoundTripExactly) {
+  for (const double v : {0.1, -1e-300, 1.0 / 3.0, 6.02214076e23}) {
+    EXPECT_EQ(parse_double(format_double(v), "v"), v);
+  }
+  for (const float v : {0.1f, 9.81f, -3.4e38f}) EXPECT_EQ(parse_float(format_float(v), "v"), v);
+  EXPECT_TRUE(std::isnan(parse_float(format_float(std::numeric_limits<float>::quiet_NaN()), "v")));
+  EXPECT_EQ(parse_int64("-42", "v"), -42);
+  expect_error([&] { parse_int64("12x", "f"); }, ErrorCode::kInvalidArgument, "f");
+  expect_error([&] { parse_double("", "f"); }, ErrorCode::kInvalidArgument, "f");
+  expect_error([&] { parse_uint64("-1", "f"); }, ErrorCode::kInvalidArgument, "f");
+  EXPECT_EQ(from_hex(to_hex(std::string("\x00\xff\x10", 3)), "h"), std::string("\x00\xff\x10", 3));
+  expect_error([&] { from_hex("0g", "h"); }, ErrorCode::kInvalidArgument, "h");
+}
+
+}  // namespace
+}  // namespace posefuse::session::testing
