@@ -2,7 +2,7 @@
 // skeletons, three IMUs at 80 Hz) written and read back as a chunk file per depth encoding,
 // with and without validation, and through the directory form.
 //
-//   build/bench/session_io_bench [seconds=10]
+//   build/bench/bench_session_io [seconds=10]
 //
 // Prints one row per case: size on disk, seconds, and recorded seconds per wall second
 // (> 1 means faster than real time).
