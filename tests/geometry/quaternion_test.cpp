@@ -6,7 +6,7 @@
 namespace pg = posefuse::geometry;
 
 TEST(Quaternion, RotationVectorRoundTrip) {
-  for (const pg::Vec3 rv : {pg::Vec3(0.3, -0.2, 1.1), pg::Vec3(1e-9, 0, 0), pg::Vec3(0, 3.1, 0)}) {
+  for (const pg::Vec3& rv : {pg::Vec3(0.3, -0.2, 1.1), pg::Vec3(1e-9, 0, 0), pg::Vec3(0, 3.1, 0)}) {
     const pg::Quat q = pg::quat_from_rotation_vector(rv);
     EXPECT_NEAR(q.norm(), 1.0, 1e-12);
     EXPECT_TRUE(pg::rotation_vector_from_quat(q).isApprox(rv, 1e-9)) << rv.transpose();
