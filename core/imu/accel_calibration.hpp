@@ -23,7 +23,7 @@ struct AccelCalibrationParams {
   std::size_t min_orientations = 9;
   // See EllipsoidFit::condition_number. Orientations that leave an axis never pointing (close
   // to) up or down, or lie in a plane, exceed it.
-  double max_condition_number = 1e3;
+  double max_condition_number = 100.0;
 };
 
 // Default-constructed: the factory calibration (identity, zero offset).

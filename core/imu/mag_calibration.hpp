@@ -27,7 +27,7 @@ struct MagCalibrationParams {
   // "in all directions" for 3000 samples typically well over 80%.
   double min_direction_coverage = 0.6;
   // See EllipsoidFit::condition_number.
-  double max_condition_number = 1e3;
+  double max_condition_number = 100.0;
 };
 
 // The correction of eq. 3 (scaled to uT). Default-constructed: the identity (raw readings).
