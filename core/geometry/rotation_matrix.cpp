@@ -43,7 +43,10 @@ Quat quat_from_rotation_matrix(const Mat3& R) {
     y = (R(1, 2) + R(2, 1)) * s;
     w = (R(1, 0) - R(0, 1)) * s;
   }
-  return Quat(w, x, y, z).normalized();
+  // Unit already for an orthonormal R; normalising covers nearly orthonormal input. One
+  // reciprocal square root and multiplications: this runs once per orientation-filter sample.
+  const double inverse_norm = 1.0 / std::sqrt(w * w + x * x + y * y + z * z);
+  return Quat(w * inverse_norm, x * inverse_norm, y * inverse_norm, z * inverse_norm);
 }
 
 }  // namespace posefuse::geometry

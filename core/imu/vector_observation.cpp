@@ -18,30 +18,30 @@ const char* observation_status_name(ObservationStatus status) {
 
 Mat3 W_from_A_matrix_from_vectors(const Vec3& acc, const Vec3& mag, const ObservationLimits& limits,
                                   ObservationStatus* status) {
+  // Squared norms and one cross product decide everything; only the two directions that are
+  // used need a square root (this runs once per filter sample).
   ObservationStatus result = ObservationStatus::kOk;
   Mat3 W_from_A = Mat3::Identity();
-  const double acc_norm = acc.norm();
-  const double mag_norm = mag.norm();
-  if (!std::isfinite(acc_norm) || !std::isfinite(mag_norm)) {
+  const double acc_sq = acc.squaredNorm();
+  const double mag_sq = mag.squaredNorm();
+  const Vec3 acc_cross_mag = acc.cross(mag);  // |.| = |acc| |mag| sin(angle)
+  const double cross_sq = acc_cross_mag.squaredNorm();
+  const double min_sin = limits.min_sin_acc_mag_angle;
+  if (!std::isfinite(acc_sq) || !std::isfinite(mag_sq) || !std::isfinite(cross_sq)) {
     result = ObservationStatus::kNonFinite;
-  } else if (acc_norm < limits.min_acc_norm_m_s2) {
+  } else if (!(acc_sq >= limits.min_acc_norm_m_s2 * limits.min_acc_norm_m_s2)) {
     result = ObservationStatus::kNoGravity;
-  } else if (mag_norm < limits.min_mag_norm_uT) {
+  } else if (!(mag_sq >= limits.min_mag_norm_uT * limits.min_mag_norm_uT)) {
     result = ObservationStatus::kNoMagneticField;
+  } else if (!(cross_sq >= min_sin * min_sin * acc_sq * mag_sq) || !(cross_sq > 0.0)) {
+    result = ObservationStatus::kFieldAlongGravity;
   } else {
-    const Vec3 up = acc / acc_norm;                 // g_hat
-    const Vec3 west_unnormalised = up.cross(mag / mag_norm);  // g x m, |.| = sin(angle)
-    const double sin_angle = west_unnormalised.norm();
-    if (!(sin_angle >= limits.min_sin_acc_mag_angle)) {
-      result = ObservationStatus::kFieldAlongGravity;
-    } else {
-      const Vec3 west = west_unnormalised / sin_angle;
-      // (g x m) x g is already unit: both factors are unit and orthogonal.
-      const Vec3 north = west.cross(up);
-      W_from_A.row(0) = north;  // eq. 1, V'_X
-      W_from_A.row(1) = west;   // eq. 1, V'_Y
-      W_from_A.row(2) = up;     // eq. 1, V'_Z
-    }
+    const Vec3 up = acc * (1.0 / std::sqrt(acc_sq));                      // g_hat
+    const Vec3 west = acc_cross_mag * (1.0 / std::sqrt(cross_sq));         // g x m, normalised
+    const Vec3 north = west.cross(up);  // (g x m) x g: unit, both factors unit and orthogonal
+    W_from_A.row(0) = north;  // eq. 1, V'_X
+    W_from_A.row(1) = west;   // eq. 1, V'_Y
+    W_from_A.row(2) = up;     // eq. 1, V'_Z
   }
   if (status != nullptr) *status = result;
   return W_from_A;

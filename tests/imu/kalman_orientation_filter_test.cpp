@@ -111,7 +111,17 @@ TEST(KalmanPrediction, ConstantRateAboutEachAxisIntegratesExactly) {
     const int steps = 400;  // 5 s, 12.5 rad: almost two turns
     for (int i = 0; i < steps; ++i) q = Phi * q;
     const Quat expected = start * Quat(Eigen::AngleAxisd(rate * dt * steps, axis));
-    EXPECT_LT(angle_between(Quat(q[0], q[1], q[2], q[3]), expected), 1e-10) << axis.transpose();
+    EXPECT_LT(quat_distance(Quat(q[0], q[1], q[2], q[3]), expected), 1e-12) << axis.transpose();
+  }
+  // Both ways of evaluating cos(h) and sin(h)/h (series below h = 0.05, library above) and the
+  // switch between them agree with the closed form.
+  for (const double rate : {0.1, 7.99, 8.0, 8.01, 20.0, 300.0}) {
+    const Vec3 axis = Vec3(0.3, -0.2, 0.9).normalized();
+    const Mat4 Phi = quaternion_transition_matrix(rate * axis, 0.0125);
+    const Vec4 q = Phi * Vec4(start.w(), start.x(), start.y(), start.z());
+    const Quat expected = start * Quat(Eigen::AngleAxisd(rate * 0.0125, axis));
+    EXPECT_LT(quat_distance(Quat(q[0], q[1], q[2], q[3]), expected), 1e-15) << rate;
+    EXPECT_NEAR(q.norm(), 1.0, 1e-15);
   }
   // Zero rate: exactly the identity.
   EXPECT_EQ(quaternion_transition_matrix(Vec3::Zero(), 0.0125), Mat4::Identity());
@@ -134,7 +144,7 @@ TEST(KalmanPrediction, FilterWithoutObservationsFollowsGyro) {
       out = filter.update(s);
     }
     const Quat expected = start * Quat(Eigen::AngleAxisd(1.3 * steps * 1e-6 * kPeriodUs, Vec3::Unit(axis)));
-    EXPECT_LT(angle_between(out, expected), 1e-10);
+    EXPECT_LT(quat_distance(out, expected), 1e-12);
   }
 }
 

@@ -2,6 +2,7 @@
 // Synthetic IMU signals for tests: a sensor with a known W_from_A reads
 //   acc = A_from_W g_W (specific force, +g up at rest), mag = A_from_W m_W,
 // with W x north, y west, z up.
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <random>
@@ -27,6 +28,12 @@ inline Quat random_orientation(std::mt19937& rng) {
 inline Vec3 random_vector(std::mt19937& rng, double sigma) {
   std::normal_distribution<double> n(0.0, sigma);
   return Vec3(n(rng), n(rng), n(rng));
+}
+
+// Distance between unit quaternions as rotations (sign-invariant), precise near zero where
+// acos of the dot product (angle_between) resolves only ~1e-8 rad. About half the angle.
+inline double quat_distance(const Quat& a, const Quat& b) {
+  return std::min((a.coeffs() - b.coeffs()).norm(), (a.coeffs() + b.coeffs()).norm());
 }
 
 // Noise-free readings of a sensor at W_from_A rotating at `rate_A` (rad/s, sensor frame).

@@ -18,7 +18,7 @@ constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 TEST(VectorObservation, SensorAlignedWithWorldGivesIdentity) {
   const VectorObservation obs = observe_W_from_A(up_specific_force_W(), earth_field_W());
   ASSERT_TRUE(obs.ok());
-  EXPECT_LT(posefuse::geometry::angle_between(obs.W_from_A, Quat::Identity()), 1e-12);
+  EXPECT_LT(quat_distance(obs.W_from_A, Quat::Identity()), 1e-15);
 }
 
 // Sensor x axis pointing east: W_from_A takes A's x to W's -y (east = -west), a -90 degree yaw.
@@ -52,7 +52,7 @@ TEST(VectorObservation, MatchesTruthAndEigenForRandomOrientations) {
     const VectorObservation obs = observe_W_from_A(s.acc_m_s2, s.mag_uT);
     ASSERT_TRUE(obs.ok());
     EXPECT_NEAR(std::abs(obs.W_from_A.dot(Quat(matrix))), 1.0, 1e-12);
-    EXPECT_LT(posefuse::geometry::angle_between(obs.W_from_A, truth), 1e-7);
+    EXPECT_LT(quat_distance(obs.W_from_A, truth), 1e-13);
   }
 }
 
