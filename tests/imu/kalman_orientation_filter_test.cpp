@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "common/error.hpp"
+#include "expect_error.hpp"
 #include "synthetic_imu.hpp"
 
 using namespace posefuse::imu;
@@ -245,30 +246,17 @@ TEST(KalmanOrientationFilter, HandlesMagDropoutAndTimeGap) {
 
 TEST(KalmanOrientationFilter, RejectsBadStreams) {
   KalmanOrientationFilter filter;
-  try {
-    filter.process({});
-    FAIL() << "expected an error";
-  } catch (const posefuse::Error& e) {
-    EXPECT_EQ(e.code(), posefuse::ErrorCode::kInvalidArgument);
-    EXPECT_EQ(e.field(), "imu");
-  }
+  using posefuse::ErrorCode;
+  using posefuse::testing::expect_error;
+  expect_error([&] { filter.process({}); }, ErrorCode::kInvalidArgument, "imu", "no samples");
   Recording rec = simulate(Quat::Identity(), [](double) { return Vec3::Zero(); }, 10, Noise{}, 1);
   std::vector<ImuSample> nan_gyro = rec.samples;
   nan_gyro[4].gyr_rad_s.z() = kNaN;
-  try {
-    filter.process(nan_gyro);
-    FAIL() << "expected an error";
-  } catch (const posefuse::Error& e) {
-    EXPECT_EQ(e.field(), "imu[4].gyr_rad_s");
-  }
+  expect_error([&] { filter.process(nan_gyro); }, ErrorCode::kInvalidArgument, "imu[4].gyr_rad_s");
   std::vector<ImuSample> backwards = rec.samples;
   backwards[6].t_us = backwards[5].t_us - 1;
-  try {
-    filter.process(backwards);
-    FAIL() << "expected an error";
-  } catch (const posefuse::Error& e) {
-    EXPECT_EQ(e.field(), "imu[6].t_us");
-  }
+  expect_error([&] { filter.process(backwards); }, ErrorCode::kInvalidArgument, "imu[6].t_us",
+               "not after the previous one");
 }
 
 TEST(KalmanOrientationFilter, UpdateRejectsBadSampleAndKeepsState) {
@@ -278,15 +266,12 @@ TEST(KalmanOrientationFilter, UpdateRejectsBadSampleAndKeepsState) {
   const Quat before = filter.W_from_A();
   ImuSample repeated = rec.samples[5];
   repeated.t_us = rec.samples[4].t_us;
-  EXPECT_THROW(filter.update(repeated), posefuse::Error);
+  posefuse::testing::expect_error([&] { filter.update(repeated); },
+                                  posefuse::ErrorCode::kInvalidArgument, "imu[5].t_us");
   ImuSample nan_acc = rec.samples[5];
   nan_acc.acc_m_s2.x() = kNaN;
-  try {
-    filter.update(nan_acc);
-    FAIL() << "expected an error";
-  } catch (const posefuse::Error& e) {
-    EXPECT_EQ(e.field(), "imu[5].acc_m_s2");
-  }
+  posefuse::testing::expect_error([&] { filter.update(nan_acc); },
+                                  posefuse::ErrorCode::kInvalidArgument, "imu[5].acc_m_s2");
   EXPECT_EQ(filter.W_from_A().coeffs(), before.coeffs());
   EXPECT_NO_THROW(filter.update(rec.samples[5]));
 }
@@ -295,13 +280,9 @@ TEST(KalmanOrientationFilter, FirstSampleMustGiveAnObservation) {
   Recording rec = simulate(Quat::Identity(), [](double) { return Vec3::Zero(); }, 10, Noise{}, 3);
   rec.samples[0].mag_uT.setConstant(kNaN);
   KalmanOrientationFilter filter;
-  try {
-    filter.process(rec.samples);
-    FAIL() << "expected an error";
-  } catch (const posefuse::Error& e) {
-    EXPECT_EQ(e.code(), posefuse::ErrorCode::kFailedPrecondition);
-    EXPECT_EQ(e.field(), "imu[0].mag_uT");
-  }
+  posefuse::testing::expect_error([&] { filter.process(rec.samples); },
+                                  posefuse::ErrorCode::kFailedPrecondition, "imu[0].mag_uT",
+                                  "the first sample must give an orientation");
   EXPECT_FALSE(filter.initialised());
 }
 

@@ -6,6 +6,7 @@
 #include <random>
 
 #include "common/error.hpp"
+#include "expect_error.hpp"
 #include "synthetic_imu.hpp"
 
 using namespace posefuse::imu;
@@ -35,14 +36,9 @@ std::vector<Vec3> rotated_readings(int count, const Distortion& d, double noise_
 }
 
 void expect_refusal(const std::vector<Vec3>& readings, const std::string& message_part) {
-  try {
-    calibrate_magnetometer(readings);
-    FAIL() << "expected a refusal";
-  } catch (const posefuse::Error& e) {
-    EXPECT_EQ(e.code(), posefuse::ErrorCode::kFailedPrecondition);
-    EXPECT_EQ(e.field(), "mag_samples");
-    EXPECT_NE(std::string(e.what()).find(message_part), std::string::npos) << e.what();
-  }
+  posefuse::testing::expect_error([&] { calibrate_magnetometer(readings); },
+                                  posefuse::ErrorCode::kFailedPrecondition, "mag_samples",
+                                  message_part);
 }
 
 }  // namespace
@@ -87,13 +83,8 @@ TEST(MagCalibration, SkipsMissingReadingsAndRejectsInfinite) {
   EXPECT_EQ(result.report.missing_count, 1u);
   EXPECT_TRUE(result.calibration.apply(raw[10]).array().isNaN().all());  // missing stays missing
   raw[20].y() = std::numeric_limits<double>::infinity();
-  try {
-    calibrate_magnetometer(raw);
-    FAIL() << "expected an error";
-  } catch (const posefuse::Error& e) {
-    EXPECT_EQ(e.code(), posefuse::ErrorCode::kInvalidArgument);
-    EXPECT_EQ(e.field(), "mag_samples[20]");
-  }
+  posefuse::testing::expect_error([&] { calibrate_magnetometer(raw); },
+                                  posefuse::ErrorCode::kInvalidArgument, "mag_samples[20]");
 }
 
 // A sensor turned about one axis only (here about W's vertical, the usual mistake of turning it
@@ -148,13 +139,9 @@ TEST(EllipsoidFit, RefusesHyperboloid) {
       points.push_back(Vec3(r * std::cos(a), r * std::sin(a), z) + Vec3(3, 1, -2));
     }
   }
-  try {
-    fit_ellipsoid(points, "points", 1e3);
-    FAIL() << "expected a refusal";
-  } catch (const posefuse::Error& e) {
-    EXPECT_EQ(e.code(), posefuse::ErrorCode::kFailedPrecondition);
-    EXPECT_NE(std::string(e.what()).find("not an ellipsoid"), std::string::npos) << e.what();
-  }
+  posefuse::testing::expect_error([&] { fit_ellipsoid(points, "points", 1e3); },
+                                  posefuse::ErrorCode::kFailedPrecondition, "points",
+                                  "not an ellipsoid");
 }
 
 TEST(EllipsoidFit, ExactOnNoiseFreeEllipsoid) {
