@@ -127,21 +127,33 @@ TEST(DirectionCoverage, CountsEqualAreaBins) {
   EXPECT_EQ(direction_coverage({Vec3::Zero()}, Vec3::Zero()), 0.0);
 }
 
-// The shared fit refuses a quadric that is not an ellipsoid: points on the hyperboloid
-// x^2 + y^2 - z^2 = 1 determine the quadric well but it is not positive definite.
-TEST(EllipsoidFit, RefusesHyperboloid) {
+namespace {
+// Points on the one-sheet hyperboloid x^2 + y^2 - z^2 = 1 (|z| <= 1.2), scaled and shifted: they
+// cover 75% of the directions from their mean and determine the quadric well, but it is not
+// positive definite.
+std::vector<Vec3> hyperboloid_points(double scale) {
   std::vector<Vec3> points;
-  for (int i = 0; i < 40; ++i) {
+  for (int i = 0; i < 60; ++i) {
     for (int j = 0; j < 10; ++j) {
-      const double z = -1.0 + 0.2 * j;
+      const double z = -1.2 + 0.24 * j;
       const double r = std::sqrt(1.0 + z * z);
-      const double a = i * 2.0 * EIGEN_PI / 40.0;
-      points.push_back(Vec3(r * std::cos(a), r * std::sin(a), z) + Vec3(3, 1, -2));
+      const double a = i * 2.0 * EIGEN_PI / 60.0;
+      points.push_back(scale * Vec3(r * std::cos(a), r * std::sin(a), z) + Vec3(3, 1, -2));
     }
   }
-  posefuse::testing::expect_error([&] { fit_ellipsoid(points, "points", 1e3); },
+  return points;
+}
+}  // namespace
+
+TEST(EllipsoidFit, RefusesHyperboloid) {
+  posefuse::testing::expect_error([&] { fit_ellipsoid(hyperboloid_points(1.0), "points", 1e3); },
                                   posefuse::ErrorCode::kFailedPrecondition, "points",
                                   "not an ellipsoid");
+}
+
+// Readings that are no ellipsoid (a disturbed field) are refused by the calibration itself.
+TEST(MagCalibration, RefusesReadingsThatAreNotAnEllipsoid) {
+  expect_refusal(hyperboloid_points(40.0), "not an ellipsoid");
 }
 
 TEST(EllipsoidFit, ExactOnNoiseFreeEllipsoid) {
