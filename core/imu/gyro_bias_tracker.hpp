@@ -33,7 +33,9 @@ class GyroBiasTracker {
     double still_threshold_rad_s = 3.0 * 3.14159265358979323846 / 180.0;  // paper: 3 deg/s
     int window_samples = 800;                  // memory of the average, in still samples (>= 1)
     double max_still_rate_rad_s = std::numeric_limits<double>::infinity();  // off = paper
-    Vec3 initial_bias_rad_s = Vec3::Zero();    // e.g. the factory or last session's bias
+    // E.g. the factory or last session's bias; used until the first still sample, whose value
+    // then replaces it (the running mean starts there).
+    Vec3 initial_bias_rad_s = Vec3::Zero();
   };
 
   GyroBiasTracker() : GyroBiasTracker(Params{}) {}
