@@ -22,4 +22,9 @@ struct ImuSample {
 // Magnetometer NaN is allowed (a missing reading); infinities are not.
 void validate_imu_stream(const std::vector<ImuSample>& samples, const char* stream_name = "imu");
 
+// The per-sample part of validate_imu_stream (finite gyro/acc, no infinite magnetometer) for
+// code that receives samples one at a time; `index` only names the sample in the error.
+// Timestamps are the caller's to check against the previous sample.
+void validate_imu_sample(const ImuSample& sample, const char* stream_name, std::size_t index);
+
 }  // namespace posefuse::imu
