@@ -19,6 +19,7 @@
 #include "eval/orientation_error.hpp"
 #include "geometry/frames.hpp"
 #include "imu/robust_offline.hpp"
+#include "imu/kalman_orientation_filter.hpp"
 #include "imu/robust_orientation_filter.hpp"
 
 namespace {
@@ -43,9 +44,17 @@ std::vector<Quat> run_causal(const std::vector<ImuSample>& samples) {
   return out;
 }
 
-// Add new filters here (e.g. the paper-faithful Kalman filter: run_causal<KalmanOrientationFilter>).
+// Add new filters here.
 const std::vector<Mode>& modes() {
   static const std::vector<Mode> table = {
+      {"faithful", "paper 1's quaternion Kalman filter and gyro bias test (default parameters)",
+       run_causal<posefuse::imu::KalmanOrientationFilter>},
+      {"faithful-gated", "the same Kalman filter; bias test also needs |rate - bias| < 3 deg/s",
+       [](const std::vector<ImuSample>& s) {
+         posefuse::imu::KalmanOrientationFilter::Params params;
+         params.gyro_bias.max_still_rate_rad_s = 3.0 * EIGEN_PI / 180.0;
+         return posefuse::imu::KalmanOrientationFilter(params).process(s);
+       }},
       {"robust", "RobustOrientationFilter, causal (default parameters)",
        run_causal<posefuse::imu::RobustOrientationFilter>},
       {"robust-offline", "robust filter, forward+backward passes over the whole recording (non-causal)",
