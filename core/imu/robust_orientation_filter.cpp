@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -67,6 +68,10 @@ RobustOrientationFilter::RobustOrientationFilter(const Params& params) : params_
   positive(params.mag_hard_iron_tau_s, "mag_hard_iron_tau_s");
   positive(params.mag_hard_iron_min_excitation, "mag_hard_iron_min_excitation");
   positive(params.mag_hard_iron_max_rms, "mag_hard_iron_max_rms");
+  positive(params.mag_accept_after_s, "mag_accept_after_s");
+  positive(params.mag_hard_iron_min_s, "mag_hard_iron_min_s");
+  positive(params.mag_hard_iron_min_change, "mag_hard_iron_min_change");
+  positive(params.mag_hard_iron_return_s, "mag_hard_iron_return_s");
   positive(params.mag_recover_tau_s, "mag_recover_tau_s");
   positive(params.mag_recover_s, "mag_recover_s");
   positive(params.init_s, "init_s");
@@ -258,10 +263,19 @@ bool RobustOrientationFilter::correct_heading(const Vec3& mag_uT, double dt_s, d
       mag_ref_valid_ = true;
       mag_ref_dip_ = std::asin(std::clamp(mag_ref_sin_dip_, -1.0, 1.0));
     }
-    const bool disturbed = !fits_reference(norm, sin_dip);
-    if (disturbed && !mag_disturbed_) reset_hard_iron_fit();
-    mag_disturbed_ = disturbed;
-    if (disturbed) {
+    // Once disturbed, the field must fit the reference for mag_accept_after_s before it is
+    // trusted again: a wrong field passes the test by chance in some orientations.
+    if (!fits_reference(norm, sin_dip)) {
+      if (!mag_disturbed_) reset_hard_iron_fit();
+      mag_disturbed_ = true;
+      mag_clean_s_ = 0.0;
+    } else {
+      mag_clean_s_ += dt_s;
+      if (mag_clean_s_ >= params_.mag_accept_after_s) mag_disturbed_ = false;
+    }
+    if (mag_disturbed_) {
+      // The magnet may have been taken off again: does the field fit with the previous offset?
+      if (check_previous_hard_iron(mag_uT, E_from_A, dt_s)) return false;
       // Track a candidate new field and a candidate hard iron; use neither for heading yet.
       const double cos_cand = std::sqrt(std::max(0.0, 1.0 - cand_sin_dip_ * cand_sin_dip_));
       const bool fits_candidate = cand_valid_ &&
@@ -331,7 +345,8 @@ void RobustOrientationFilter::update_hard_iron_fit(const Vec3& mag_uT, const Qua
   hi_sum_sq_ = forget * hi_sum_sq_ + mag_uT.squaredNorm();
   hi_weight_ = forget * hi_weight_ + 1.0;
   hi_check_s_ += dt_s;
-  if (hi_check_s_ < 0.5) return;
+  hi_duration_s_ += dt_s;
+  if (hi_check_s_ < 0.5 || hi_duration_s_ < params_.mag_hard_iron_min_s) return;
   hi_check_s_ = 0.0;
 
   // Excitation: all six directions must be seen; the smallest eigenvalue of the averaged normal
@@ -343,15 +358,48 @@ void RobustOrientationFilter::update_hard_iron_fit(const Vec3& mag_uT, const Qua
   const Vec3 b_E = x.head<3>();
   const double norm = b_E.norm();
   if (!x.allFinite() || norm < 1e-6 || !fits_reference(norm, -b_E.z() / norm)) return;
-  // The model must explain the samples: weighted residual sum |J x - m|^2 from the sums.
-  const double residual_sq = hi_sum_sq_ - 2.0 * x.dot(hi_rhs_) + x.dot(hi_normal_ * x);
-  const double rms_uT = std::sqrt(std::max(0.0, residual_sq) / (3.0 * hi_weight_));
-  if (rms_uT > params_.mag_hard_iron_max_rms * mag_ref_norm_) return;
+  // RMS of |J x - m| over the (weighted) samples, from the accumulated sums.
+  const auto rms_uT = [&](const Eigen::Matrix<double, 6, 1>& v) {
+    const double residual_sq = hi_sum_sq_ - 2.0 * v.dot(hi_rhs_) + v.dot(hi_normal_ * v);
+    return std::sqrt(std::max(0.0, residual_sq) / (3.0 * hi_weight_));
+  };
+  // The best field for the current offset, for comparison: b = N_bb^-1 (r_b - N_bh h).
+  Eigen::Matrix<double, 6, 1> x_current;
+  x_current.tail<3>() = hard_iron_uT_;
+  x_current.head<3>() = hi_normal_.topLeftCorner<3, 3>().ldlt().solve(
+      hi_rhs_.head<3>() - hi_normal_.topRightCorner<3, 3>() * hard_iron_uT_);
+  // Accept only a clear, well-explained change: a field disturbance that is not a sensor-fixed
+  // offset (a magnet beside the path) must not leave a wrong offset behind.
+  const double rms_new = rms_uT(x);
+  if (rms_new > params_.mag_hard_iron_max_rms * mag_ref_norm_ || rms_new > 0.5 * rms_uT(x_current) ||
+      (x.tail<3>() - hard_iron_uT_).norm() < params_.mag_hard_iron_min_change * mag_ref_norm_) {
+    return;
+  }
+  hard_iron_prev_uT_ = hard_iron_uT_;
   hard_iron_uT_ = x.tail<3>();
   mag_ref_norm_ = norm;
   mag_ref_sin_dip_ = -b_E.z() / norm;
   if (mag_disturbed_) mag_recover_left_s_ = params_.mag_recover_s;
   reset_hard_iron_fit();
+}
+
+bool RobustOrientationFilter::check_previous_hard_iron(const Vec3& mag_uT, const Quat& E_from_A, double dt_s) {
+  if (hard_iron_prev_uT_ == hard_iron_uT_) return false;
+  const Vec3 m_E = rotate(E_from_A, mag_uT - hard_iron_prev_uT_);
+  const double norm = m_E.norm();
+  if (norm < 1e-6 || !fits_reference(norm, -m_E.z() / norm)) {
+    prev_fit_s_ = 0.0;
+    return false;
+  }
+  prev_fit_s_ += dt_s;
+  if (prev_fit_s_ < params_.mag_hard_iron_return_s) return false;
+  std::swap(hard_iron_uT_, hard_iron_prev_uT_);
+  prev_fit_s_ = 0.0;
+  mag_clean_s_ = params_.mag_accept_after_s;  // this field has just fitted for a while
+  mag_disturbed_ = false;
+  mag_recover_left_s_ = params_.mag_recover_s;
+  reset_hard_iron_fit();
+  return true;
 }
 
 void RobustOrientationFilter::reset_hard_iron_fit() {
@@ -360,6 +408,7 @@ void RobustOrientationFilter::reset_hard_iron_fit() {
   hi_weight_ = 0.0;
   hi_sum_sq_ = 0.0;
   hi_check_s_ = 0.0;
+  hi_duration_s_ = 0.0;
 }
 
 }  // namespace posefuse::imu

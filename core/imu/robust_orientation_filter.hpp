@@ -28,9 +28,9 @@ class RobustOrientationFilter {
   struct Params {
     // Inclination: time constant of the inertial-frame accelerometer low-pass. Longer averages
     // out longer accelerations but lets gyro-bias drift build up a larger tilt error.
-    double tau_acc_s = 3.0;
+    double tau_acc_s = 4.0;
     // Heading: time constant with which the magnetometer pulls the heading.
-    double tau_mag_s = 9.0;
+    double tau_mag_s = 20.0;
 
     // Rest detection: gyro and accelerometer are low-passed with rest_tau_s; the sensor is at
     // rest when both deviate from their low-pass by less than the thresholds for at least
@@ -58,6 +58,8 @@ class RobustOrientationFilter {
     double mag_norm_threshold = 0.1;
     double mag_dip_threshold_rad = 10.0 * 3.14159265358979 / 180.0;
     double mag_ref_tau_s = 30.0;
+    // After a disturbance, the field must fit the reference this long before it is used again.
+    double mag_accept_after_s = 0.5;
     // A disturbed but self-consistent new field (norm and dip steady) is adopted as the new
     // reference after mag_new_field_s of consistent samples while turning faster than
     // mag_new_field_min_gyr_rad_s (a sensor-fixed magnet would not stay consistent then).
@@ -71,6 +73,14 @@ class RobustOrientationFilter {
     double mag_hard_iron_tau_s = 20.0;
     double mag_hard_iron_min_excitation = 0.05;
     double mag_hard_iron_max_rms = 0.05;
+    // ... and only after mag_hard_iron_min_s of disturbed samples, when the new offset differs
+    // from the current one by more than mag_hard_iron_min_change times the reference norm and
+    // halves the RMS residual of the current one.
+    double mag_hard_iron_min_s = 10.0;
+    double mag_hard_iron_min_change = 0.15;
+    // The previous offset comes back (magnet taken off) once the field fits the reference
+    // with it for mag_hard_iron_return_s without a break.
+    double mag_hard_iron_return_s = 2.0;
     // After the magnetometer was rejected for a while, the heading may have drifted; the first
     // accepted samples pull with the faster time constant mag_recover_tau_s for
     // mag_recover_s.
@@ -115,6 +125,8 @@ class RobustOrientationFilter {
   void update_rest_bias(double dt_s);
   void update_hard_iron_fit(const Vec3& mag_uT, const Quat& E_from_A, double dt_s);
   void reset_hard_iron_fit();
+  // Switches back to the previous hard iron when the field fits with it again; returns whether it did.
+  bool check_previous_hard_iron(const Vec3& mag_uT, const Quat& E_from_A, double dt_s);
   bool fits_reference(double norm_uT, double sin_dip) const;
 
   Params params_;
@@ -152,6 +164,7 @@ class RobustOrientationFilter {
   double mag_ref_sin_dip_ = 0.0;
   double mag_init_count_ = 0.0;
   bool mag_disturbed_ = false;
+  double mag_clean_s_ = 0.0;  // time the field has fitted the reference without a break
   double mag_heading_rate_ = 0.0;  // last heading correction / dt, for the bias
   double mag_recover_left_s_ = 0.0;
   // Candidate for a new field.
@@ -159,11 +172,14 @@ class RobustOrientationFilter {
   bool cand_valid_ = false;
   // Hard iron: current offset and the forgetting least-squares fit of [b_E; h_A].
   Vec3 hard_iron_uT_ = Vec3::Zero();
+  Vec3 hard_iron_prev_uT_ = Vec3::Zero();
+  double prev_fit_s_ = 0.0;
   Eigen::Matrix<double, 6, 6> hi_normal_ = Eigen::Matrix<double, 6, 6>::Zero();
   Eigen::Matrix<double, 6, 1> hi_rhs_ = Eigen::Matrix<double, 6, 1>::Zero();
   double hi_weight_ = 0.0;
   double hi_sum_sq_ = 0.0;
   double hi_check_s_ = 0.0;
+  double hi_duration_s_ = 0.0;
 };
 
 }  // namespace posefuse::imu
