@@ -1,5 +1,7 @@
 #include "imu/robust_offline.hpp"
 
+#include <algorithm>
+
 namespace posefuse::imu {
 
 std::vector<Quat> robust_orientation_offline(const std::vector<ImuSample>& samples,
@@ -11,16 +13,19 @@ std::vector<Quat> robust_orientation_offline(const std::vector<ImuSample>& sampl
 
   // Backward pass: reversed time, negated rotation rate (the sensor turns the other way).
   std::vector<Quat> backward(n);
-  filter.reset_keeping_calibration();
+  filter.reset_keeping_calibration(/*flip_gyro=*/true);
   const std::int64_t t_end_us = samples.back().t_us;
   for (std::size_t j = 0; j < n; ++j) {
-    ImuSample s = samples[n - 1 - j];
+    const std::size_t i = n - 1 - j;
+    ImuSample s = samples[i];
     s.t_us = t_end_us - s.t_us;
-    s.gyr_rad_s = -s.gyr_rad_s;
-    backward[n - 1 - j] = filter.update(s);
+    // The forward pass integrates the interval (i-1, i] with the rate of sample i; the same
+    // interval backwards, (i+1 -> i), must use the rate of sample i+1 or the pass lags a sample.
+    s.gyr_rad_s = -samples[std::min(i + 1, n - 1)].gyr_rad_s;
+    backward[i] = filter.update(s);
   }
 
-  filter.reset_keeping_calibration();
+  filter.reset_keeping_calibration(/*flip_gyro=*/true);
   std::vector<Quat> out(n);
   for (std::size_t i = 0; i < n; ++i) {
     const Quat forward = filter.update(samples[i]);

@@ -18,6 +18,13 @@ namespace {
 // stable for any dt, no exp() per sample).
 double lowpass_gain(double dt_s, double tau_s) { return dt_s / (tau_s + dt_s); }
 
+// Brings a quaternion that is already almost unit back to unit length (first-order Newton step
+// on |q| = 1, no square root; the per-step rounding drift is ~1e-16).
+void renormalize(Quat& q) { q.coeffs() *= 0.5 * (3.0 - q.squaredNorm()); }
+
+// Time constant of the candidate-field averages: only needs to smooth sensor noise.
+constexpr double kCandidateTau_s = 1.0;
+
 // Rotates v by the unit quaternion q without building a matrix (v' = v + 2 w (u x v) + 2 u x (u x v)).
 Vec3 rotate(const Quat& q, const Vec3& v) {
   const Vec3 u(q.x(), q.y(), q.z());
@@ -78,7 +85,7 @@ RobustOrientationFilter::RobustOrientationFilter(const Params& params) : params_
   bias_var_ = params.bias_sigma_init_rad_s * params.bias_sigma_init_rad_s;
 }
 
-void RobustOrientationFilter::reset_keeping_calibration() {
+void RobustOrientationFilter::reset_keeping_calibration(bool flip_gyro) {
   const Params params = params_;
   const Vec3 bias = bias_;
   const double bias_var = bias_var_;
@@ -86,7 +93,7 @@ void RobustOrientationFilter::reset_keeping_calibration() {
   const double ref_norm = mag_ref_norm_, ref_dip = mag_ref_dip_, ref_sin_dip = mag_ref_sin_dip_;
   const Vec3 hard_iron = hard_iron_uT_;
   *this = RobustOrientationFilter(params);
-  bias_ = bias;
+  bias_ = flip_gyro ? Vec3(-bias) : bias;
   bias_var_ = bias_var;
   mag_ref_valid_ = ref_valid;
   mag_ref_norm_ = ref_norm;
@@ -113,6 +120,7 @@ Quat RobustOrientationFilter::update(const ImuSample& s) {
                                     std::to_string(last_t_us_) + ")");
     }
     dt_s = 1e-6 * static_cast<double>(s.t_us - last_t_us_);
+    if (s.t_us - last_t_us_ != gains_.dt_us) update_gains(s.t_us - last_t_us_);
   }
   last_t_us_ = s.t_us;
 
@@ -133,14 +141,15 @@ Quat RobustOrientationFilter::update(const ImuSample& s) {
     correct_inclination(s.acc_m_s2, dt_s);
   }
 
+  const Quat E_from_A_q = E_from_I_ * I_from_A_;
   mag_heading_rate_ = 0.0;
-  const bool mag_used = s.mag_uT.allFinite() && correct_heading(s.mag_uT, dt_s, (s.gyr_rad_s - bias_).norm());
+  const bool mag_used =
+      s.mag_uT.allFinite() && correct_heading(s.mag_uT, E_from_A_q, dt_s, (s.gyr_rad_s - bias_).norm());
   if (dt_s > 0.0) {
-    const Eigen::Matrix3d E_from_A = (E_from_I_ * I_from_A_).toRotationMatrix();
-    const double k_acc = lowpass_gain(dt_s, 0.5 * params_.tau_acc_s);
-    E_from_A_lp1_acc_ += k_acc * (E_from_A - E_from_A_lp1_acc_);
-    E_from_A_lp_acc_ += k_acc * (E_from_A_lp1_acc_ - E_from_A_lp_acc_);
-    E_from_A_lp_mag_z_ += lowpass_gain(dt_s, params_.tau_mag_s) * (E_from_A.row(2).transpose() - E_from_A_lp_mag_z_);
+    const Eigen::Matrix3d E_from_A = E_from_A_q.toRotationMatrix();
+    E_from_A_lp1_acc_ += gains_.acc_stage * (E_from_A - E_from_A_lp1_acc_);
+    E_from_A_lp_acc_ += gains_.acc_stage * (E_from_A_lp1_acc_ - E_from_A_lp_acc_);
+    E_from_A_lp_mag_z_ += gains_.mag * (E_from_A.row(2).transpose() - E_from_A_lp_mag_z_);
   }
   if (dt_s > 0.0 && time_s_ > params_.init_s) {
     update_rest_bias(dt_s);
@@ -154,14 +163,28 @@ Quat RobustOrientationFilter::update(const ImuSample& s) {
       const Eigen::Vector2d e_horizontal(-acc_correction_rate_E_.x(), -acc_correction_rate_E_.y());
       Vec3 step_A = E_from_A_lp_acc_.topRows<2>().transpose() * e_horizontal;
       if (mag_used && mag_recover_left_s_ <= 0.0) step_A += -mag_heading_rate_ * E_from_A_lp_mag_z_;
-      bias_ += lowpass_gain(dt_s, params_.bias_motion_tau_s) * step_A;
+      bias_ += gains_.bias_motion * step_A;
       const double limit = params_.bias_limit_rad_s;
       bias_ = bias_.cwiseMax(Vec3::Constant(-limit)).cwiseMin(Vec3::Constant(limit));
     }
   }
 
   const Quat W_from_E(heading_qw_, 0.0, 0.0, heading_qz_);
-  return W_from_E * E_from_I_ * I_from_A_;
+  return W_from_E * E_from_A_q;
+}
+
+void RobustOrientationFilter::update_gains(std::int64_t dt_us) {
+  const double dt_s = 1e-6 * static_cast<double>(dt_us);
+  gains_.dt_us = dt_us;
+  gains_.inv_dt = 1.0 / dt_s;
+  gains_.rest = lowpass_gain(dt_s, params_.rest_tau_s);
+  gains_.acc_stage = lowpass_gain(dt_s, 0.5 * params_.tau_acc_s);
+  gains_.mag = lowpass_gain(dt_s, params_.tau_mag_s);
+  gains_.mag_ref = lowpass_gain(dt_s, params_.mag_ref_tau_s);
+  gains_.mag_recover = lowpass_gain(dt_s, params_.mag_recover_tau_s);
+  gains_.candidate = lowpass_gain(dt_s, kCandidateTau_s);
+  gains_.hard_iron = lowpass_gain(dt_s, params_.mag_hard_iron_tau_s);
+  gains_.bias_motion = lowpass_gain(dt_s, params_.bias_motion_tau_s);
 }
 
 void RobustOrientationFilter::integrate_gyro(const Vec3& gyr_rad_s, double dt_s) {
@@ -180,11 +203,11 @@ void RobustOrientationFilter::integrate_gyro(const Vec3& gyr_rad_s, double dt_s)
   }
   const Quat step(c, s * h.x(), s * h.y(), s * h.z());
   I_from_A_ = I_from_A_ * step;
-  I_from_A_.normalize();
+  renormalize(I_from_A_);
 }
 
 void RobustOrientationFilter::update_rest_detection(const ImuSample& s, double dt_s) {
-  const double k = lowpass_gain(dt_s, params_.rest_tau_s);
+  const double k = gains_.rest;
   gyr_lp_ += k * (s.gyr_rad_s - gyr_lp_);
   acc_lp_A_ += k * (s.acc_m_s2 - acc_lp_A_);
   const double gyr_th = params_.rest_gyr_threshold_rad_s;
@@ -213,7 +236,7 @@ void RobustOrientationFilter::correct_inclination(const Vec3& acc_m_s2, double d
   // average out there, gravity does not.
   // Two first-order stages of tau_acc_s / 2 each: -40 dB/decade, so a 1 Hz back-and-forth
   // movement is damped ~90x at tau_acc_s = 3 s where one stage would only damp it ~19x.
-  double k = dt_s > 0.0 ? lowpass_gain(dt_s, 0.5 * params_.tau_acc_s) : 1.0;
+  double k = dt_s > 0.0 ? gains_.acc_stage : 1.0;
   if (time_s_ < params_.init_s) k = std::max(k, 1.0 / init_weight_count_);
   acc_lp1_I_ += k * (rotate(I_from_A_, acc_m_s2) - acc_lp1_I_);
   acc_lp_I_ += k * (acc_lp1_I_ - acc_lp_I_);
@@ -224,17 +247,18 @@ void RobustOrientationFilter::correct_inclination(const Vec3& acc_m_s2, double d
   const double norm = acc_lp_I_.norm();
   acc_correction_rate_E_.setZero();
   if (norm < 1e-9) return;
-  const Vec3 a = rotate(E_from_I_, acc_lp_I_) / norm;
+  const Vec3 a = rotate(E_from_I_, acc_lp_I_) * (1.0 / norm);
   Quat correction;
   const double w = std::sqrt(std::max(0.0, 0.5 * (1.0 + a.z())));
   if (w < 1e-6) {
     correction = Quat(0.0, 1.0, 0.0, 0.0);  // upside down: turn half-way about x
   } else {
-    correction = Quat(w, 0.5 * a.y() / w, -0.5 * a.x() / w, 0.0);
-    if (dt_s > 0.0) acc_correction_rate_E_ = Vec3(a.y() / w, -a.x() / w, 0.0) / dt_s;
+    const double inv_w = 1.0 / w;
+    correction = Quat(w, 0.5 * inv_w * a.y(), -0.5 * inv_w * a.x(), 0.0);
+    if (dt_s > 0.0) acc_correction_rate_E_ = Vec3(a.y(), -a.x(), 0.0) * (inv_w * gains_.inv_dt);
   }
   E_from_I_ = correction * E_from_I_;
-  E_from_I_.normalize();
+  renormalize(E_from_I_);
 }
 
 bool RobustOrientationFilter::fits_reference(double norm_uT, double sin_dip) const {
@@ -243,14 +267,14 @@ bool RobustOrientationFilter::fits_reference(double norm_uT, double sin_dip) con
          std::abs(sin_dip - mag_ref_sin_dip_) < params_.mag_dip_threshold_rad * cos_dip;
 }
 
-bool RobustOrientationFilter::correct_heading(const Vec3& mag_uT, double dt_s, double gyr_norm_rad_s) {
-  const Quat E_from_A = E_from_I_ * I_from_A_;
+bool RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_from_A, double dt_s,
+                                              double gyr_norm_rad_s) {
   const Vec3 m_E = rotate(E_from_A, mag_uT - hard_iron_uT_);
   const double norm = m_E.norm();
   if (norm < 1e-6) return false;
   const double sin_dip = -m_E.z() / norm;  // positive when the field points down
 
-  double k = dt_s > 0.0 ? lowpass_gain(dt_s, params_.tau_mag_s) : 1.0;
+  double k = dt_s > 0.0 ? gains_.mag : 1.0;
   if (time_s_ < params_.init_s && !mag_ref_valid_) {
     // Start-up: learn the reference as the plain mean and converge the heading fast.
     mag_init_count_ += 1.0;
@@ -282,7 +306,7 @@ bool RobustOrientationFilter::correct_heading(const Vec3& mag_uT, double dt_s, d
                                   std::abs(norm - cand_norm_) < params_.mag_norm_threshold * cand_norm_ &&
                                   std::abs(sin_dip - cand_sin_dip_) < params_.mag_dip_threshold_rad * cos_cand;
       if (fits_candidate) {
-        const double kc = lowpass_gain(dt_s, 1.0);
+        const double kc = gains_.candidate;
         cand_norm_ += kc * (norm - cand_norm_);
         cand_sin_dip_ += kc * (sin_dip - cand_sin_dip_);
         if (gyr_norm_rad_s > params_.mag_new_field_min_gyr_rad_s) cand_s_ += dt_s;
@@ -304,11 +328,11 @@ bool RobustOrientationFilter::correct_heading(const Vec3& mag_uT, double dt_s, d
     }
     cand_valid_ = false;
     // Undisturbed: the reference follows slowly (sensor warm-up, slow changes of place).
-    const double kr = lowpass_gain(dt_s, params_.mag_ref_tau_s);
+    const double kr = gains_.mag_ref;
     mag_ref_norm_ += kr * (norm - mag_ref_norm_);
     mag_ref_sin_dip_ += kr * (sin_dip - mag_ref_sin_dip_);
     if (mag_recover_left_s_ > 0.0) {
-      k = std::max(k, lowpass_gain(dt_s, params_.mag_recover_tau_s));
+      k = std::max(k, gains_.mag_recover);
       mag_recover_left_s_ -= dt_s;
     }
   }
@@ -320,7 +344,14 @@ bool RobustOrientationFilter::correct_heading(const Vec3& mag_uT, double dt_s, d
   const double north = hc * m_E.x() - hs * m_E.y();
   const double west = hs * m_E.x() + hc * m_E.y();
   if (north * north + west * west < 1e-12) return false;  // field vertical: no heading information
-  const double error_rad = -std::atan2(west, north);
+  double error_rad;
+  if (north > 0.0 && std::abs(west) < 0.2 * north) {
+    // Small error (the usual case): atan series, |x| < 0.2 keeps it within 1e-7 rad.
+    const double x = west / north, x2 = x * x;
+    error_rad = -x * (1.0 - x2 * (1.0 / 3.0 - x2 * (1.0 / 5.0 - x2 / 7.0)));
+  } else {
+    error_rad = -std::atan2(west, north);
+  }
   const double step_rad = k * error_rad;
   double c, s;
   half_angle_cos_sin(step_rad, c, s);
@@ -329,14 +360,14 @@ bool RobustOrientationFilter::correct_heading(const Vec3& mag_uT, double dt_s, d
   const double n = std::sqrt(qw * qw + qz * qz);
   heading_qw_ = qw / n;
   heading_qz_ = qz / n;
-  if (dt_s > 0.0) mag_heading_rate_ = step_rad / dt_s;
+  if (dt_s > 0.0) mag_heading_rate_ = step_rad * gains_.inv_dt;
   return true;
 }
 
 void RobustOrientationFilter::update_hard_iron_fit(const Vec3& mag_uT, const Quat& E_from_A, double dt_s) {
   // Model while a new sensor-fixed offset is present: m_A = A_from_E * b_E + h_A, with b_E the
   // (constant) field in E. Linear in x = [b_E; h_A]: J = [A_from_E, I].
-  const double forget = 1.0 - lowpass_gain(dt_s, params_.mag_hard_iron_tau_s);
+  const double forget = 1.0 - gains_.hard_iron;
   const Eigen::Matrix3d A_from_E = E_from_A.conjugate().toRotationMatrix();
   Eigen::Matrix<double, 3, 6> J;
   J << A_from_E, Eigen::Matrix3d::Identity();

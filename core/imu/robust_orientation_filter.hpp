@@ -113,15 +113,17 @@ class RobustOrientationFilter {
   double mag_ref_dip_rad() const { return mag_ref_dip_; }
 
   // Carries what the filter learned about the sensor (bias and its uncertainty, magnetic
-  // reference, hard iron) into a fresh run, e.g. for a second pass over a recording.
-  void reset_keeping_calibration();
+  // reference, hard iron) into a fresh run, e.g. for a second pass over a recording. With
+  // `flip_gyro` the next run feeds the gyro negated (a time-reversed pass), so the bias flips too.
+  void reset_keeping_calibration(bool flip_gyro = false);
 
  private:
   void integrate_gyro(const Vec3& gyr_rad_s, double dt_s);
   void update_rest_detection(const ImuSample& s, double dt_s);
   void correct_inclination(const Vec3& acc_m_s2, double dt_s);
   // Returns whether the magnetometer corrected the heading this sample.
-  bool correct_heading(const Vec3& mag_uT, double dt_s, double gyr_norm_rad_s);
+  bool correct_heading(const Vec3& mag_uT, const Quat& E_from_A, double dt_s, double gyr_norm_rad_s);
+  void update_gains(std::int64_t dt_us);
   void update_rest_bias(double dt_s);
   void update_hard_iron_fit(const Vec3& mag_uT, const Quat& E_from_A, double dt_s);
   void reset_hard_iron_fit();
@@ -130,6 +132,15 @@ class RobustOrientationFilter {
   bool fits_reference(double norm_uT, double sin_dip) const;
 
   Params params_;
+
+  // Low-pass gains dt / (tau + dt) for the current step length, recomputed only when it changes.
+  struct Gains {
+    std::int64_t dt_us = -1;
+    double inv_dt = 0;
+    double rest = 0, acc_stage = 0, mag = 0, mag_ref = 0, mag_recover = 0, candidate = 0, hard_iron = 0,
+           bias_motion = 0;
+  };
+  Gains gains_;
 
   // Orientation factors.
   Quat I_from_A_ = Quat::Identity();
