@@ -142,28 +142,24 @@ Quat RobustOrientationFilter::update(const ImuSample& s) {
   }
 
   const Quat E_from_A_q = E_from_I_ * I_from_A_;
-  mag_heading_rate_ = 0.0;
-  const bool mag_used =
-      s.mag_uT.allFinite() && correct_heading(s.mag_uT, E_from_A_q, dt_s, (s.gyr_rad_s - bias_).norm());
+  if (s.mag_uT.allFinite()) correct_heading(s.mag_uT, E_from_A_q, dt_s, (s.gyr_rad_s - bias_).norm());
   if (dt_s > 0.0) {
     const Eigen::Matrix3d E_from_A = E_from_A_q.toRotationMatrix();
     E_from_A_lp1_acc_ += gains_.acc_stage * (E_from_A - E_from_A_lp1_acc_);
     E_from_A_lp_acc_ += gains_.acc_stage * (E_from_A_lp1_acc_ - E_from_A_lp_acc_);
-    E_from_A_lp_mag_z_ += gains_.mag * (E_from_A.row(2).transpose() - E_from_A_lp_mag_z_);
   }
   if (dt_s > 0.0 && time_s_ > params_.init_s) {
     update_rest_bias(dt_s);
     if (!at_rest()) {
-      // Motion: the corrections the accelerometer (horizontal axes) and magnetometer (vertical
-      // axis) keep making are the drift a residual bias causes: e_E ~ -correction / dt.
-      // Those corrections answer the drift through the low-passes (tau_acc_s, tau_mag_s), so
-      // the drift is compared with the bias error seen through equally low-passed rotations:
-      // e_E ~ lowpass(E_from_A) * e_A. Fast turning shrinks the low-passed rotation and with
-      // it the update, where the lagging corrections say little about a sensor-frame bias.
+      // Motion: the corrections the accelerometer keeps making about the horizontal axes are
+      // the drift a residual bias causes: e_E ~ -correction / dt. They answer the drift through
+      // the tau_acc_s low-pass, so the drift is compared with the bias error seen through an
+      // equally low-passed rotation: e_E ~ lowpass(E_from_A) * e_A. Fast turning shrinks the
+      // low-passed rotation and with it the update, where the lagging corrections say little
+      // about a sensor-frame bias. The magnetometer is deliberately not used here: through the
+      // bias it could tilt the estimate, and it must only ever touch the heading.
       const Eigen::Vector2d e_horizontal(-acc_correction_rate_E_.x(), -acc_correction_rate_E_.y());
-      Vec3 step_A = E_from_A_lp_acc_.topRows<2>().transpose() * e_horizontal;
-      if (mag_used && mag_recover_left_s_ <= 0.0) step_A += -mag_heading_rate_ * E_from_A_lp_mag_z_;
-      bias_ += gains_.bias_motion * step_A;
+      bias_ += gains_.bias_motion * (E_from_A_lp_acc_.topRows<2>().transpose() * e_horizontal);
       const double limit = params_.bias_limit_rad_s;
       bias_ = bias_.cwiseMax(Vec3::Constant(-limit)).cwiseMin(Vec3::Constant(limit));
     }
@@ -267,11 +263,11 @@ bool RobustOrientationFilter::fits_reference(double norm_uT, double sin_dip) con
          std::abs(sin_dip - mag_ref_sin_dip_) < params_.mag_dip_threshold_rad * cos_dip;
 }
 
-bool RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_from_A, double dt_s,
+void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_from_A, double dt_s,
                                               double gyr_norm_rad_s) {
   const Vec3 m_E = rotate(E_from_A, mag_uT - hard_iron_uT_);
   const double norm = m_E.norm();
-  if (norm < 1e-6) return false;
+  if (norm < 1e-6) return;
   const double sin_dip = -m_E.z() / norm;  // positive when the field points down
 
   double k = dt_s > 0.0 ? gains_.mag : 1.0;
@@ -299,7 +295,7 @@ bool RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
     }
     if (mag_disturbed_) {
       // The magnet may have been taken off again: does the field fit with the previous offset?
-      if (check_previous_hard_iron(mag_uT, E_from_A, dt_s)) return false;
+      if (check_previous_hard_iron(mag_uT, E_from_A, dt_s)) return;
       // Track a candidate new field and a candidate hard iron; use neither for heading yet.
       const double cos_cand = std::sqrt(std::max(0.0, 1.0 - cand_sin_dip_ * cand_sin_dip_));
       const bool fits_candidate = cand_valid_ &&
@@ -324,7 +320,7 @@ bool RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
         cand_valid_ = false;
         mag_recover_left_s_ = params_.mag_recover_s;
       }
-      return false;
+      return;
     }
     cand_valid_ = false;
     // Undisturbed: the reference follows slowly (sensor warm-up, slow changes of place).
@@ -343,7 +339,7 @@ bool RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
   const double hs = 2.0 * heading_qw_ * heading_qz_;
   const double north = hc * m_E.x() - hs * m_E.y();
   const double west = hs * m_E.x() + hc * m_E.y();
-  if (north * north + west * west < 1e-12) return false;  // field vertical: no heading information
+  if (north * north + west * west < 1e-12) return;  // field vertical: no heading information
   double error_rad;
   if (north > 0.0 && std::abs(west) < 0.2 * north) {
     // Small error (the usual case): atan series, |x| < 0.2 keeps it within 1e-7 rad.
@@ -360,8 +356,6 @@ bool RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
   const double n = std::sqrt(qw * qw + qz * qz);
   heading_qw_ = qw / n;
   heading_qz_ = qz / n;
-  if (dt_s > 0.0) mag_heading_rate_ = step_rad * gains_.inv_dt;
-  return true;
 }
 
 void RobustOrientationFilter::update_hard_iron_fit(const Vec3& mag_uT, const Quat& E_from_A, double dt_s) {

@@ -121,8 +121,7 @@ class RobustOrientationFilter {
   void integrate_gyro(const Vec3& gyr_rad_s, double dt_s);
   void update_rest_detection(const ImuSample& s, double dt_s);
   void correct_inclination(const Vec3& acc_m_s2, double dt_s);
-  // Returns whether the magnetometer corrected the heading this sample.
-  bool correct_heading(const Vec3& mag_uT, const Quat& E_from_A, double dt_s, double gyr_norm_rad_s);
+  void correct_heading(const Vec3& mag_uT, const Quat& E_from_A, double dt_s, double gyr_norm_rad_s);
   void update_gains(std::int64_t dt_us);
   void update_rest_bias(double dt_s);
   void update_hard_iron_fit(const Vec3& mag_uT, const Quat& E_from_A, double dt_s);
@@ -163,10 +162,9 @@ class RobustOrientationFilter {
   double rest_s_ = 0.0;
   Vec3 bias_ = Vec3::Zero();
   double bias_var_ = 0.0;
-  // E_from_A low-passed like the corrections (for the motion bias update).
+  // E_from_A low-passed like the accelerometer (two stages), for the motion bias update.
   Eigen::Matrix3d E_from_A_lp1_acc_ = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d E_from_A_lp_acc_ = Eigen::Matrix3d::Zero();
-  Vec3 E_from_A_lp_mag_z_ = Vec3::Zero();  // its third row, with tau_mag_s
 
   // Heading and magnetic reference.
   bool mag_ref_valid_ = false;
@@ -176,7 +174,6 @@ class RobustOrientationFilter {
   double mag_init_count_ = 0.0;
   bool mag_disturbed_ = false;
   double mag_clean_s_ = 0.0;  // time the field has fitted the reference without a break
-  double mag_heading_rate_ = 0.0;  // last heading correction / dt, for the bias
   double mag_recover_left_s_ = 0.0;
   // Candidate for a new field.
   double cand_norm_ = 0.0, cand_sin_dip_ = 0.0, cand_s_ = 0.0;
