@@ -86,19 +86,12 @@ RobustOrientationFilter::RobustOrientationFilter(const Params& params) : params_
 }
 
 void RobustOrientationFilter::reset_keeping_calibration(bool flip_gyro) {
-  const Params params = params_;
   const Vec3 bias = bias_;
   const double bias_var = bias_var_;
-  const bool ref_valid = mag_ref_valid_;
-  const double ref_norm = mag_ref_norm_, ref_dip = mag_ref_dip_, ref_sin_dip = mag_ref_sin_dip_;
   const Vec3 hard_iron = hard_iron_uT_;
-  *this = RobustOrientationFilter(params);
+  *this = RobustOrientationFilter(params_);
   bias_ = flip_gyro ? Vec3(-bias) : bias;
   bias_var_ = bias_var;
-  mag_ref_valid_ = ref_valid;
-  mag_ref_norm_ = ref_norm;
-  mag_ref_dip_ = ref_dip;
-  mag_ref_sin_dip_ = ref_sin_dip;
   hard_iron_uT_ = hard_iron;
 }
 

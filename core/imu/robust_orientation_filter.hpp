@@ -105,6 +105,9 @@ class RobustOrientationFilter {
 
   // Inspection (tests, diagnostics).
   const Params& params() const { return params_; }
+  // The orientation before the heading correction: gyro integration with the inclination
+  // correction, in a frame E whose heading drifts with the gyro (W_from_A = Rz * E_from_A).
+  Quat E_from_A() const { return E_from_I_ * I_from_A_; }
   const Vec3& gyro_bias_rad_s() const { return bias_; }
   bool at_rest() const { return rest_s_ >= params_.rest_min_s; }
   bool mag_disturbed() const { return mag_disturbed_; }
@@ -112,9 +115,10 @@ class RobustOrientationFilter {
   double mag_ref_norm_uT() const { return mag_ref_norm_; }
   double mag_ref_dip_rad() const { return mag_ref_dip_; }
 
-  // Carries what the filter learned about the sensor (bias and its uncertainty, magnetic
-  // reference, hard iron) into a fresh run, e.g. for a second pass over a recording. With
-  // `flip_gyro` the next run feeds the gyro negated (a time-reversed pass), so the bias flips too.
+  // Starts a fresh run that keeps what the filter learned about the sensor itself (gyro bias
+  // and its uncertainty, hard iron), e.g. for a second pass over a recording. The magnetic
+  // reference is learned anew from the run's own start, as in the first run. With `flip_gyro`
+  // the next run feeds the gyro negated (a time-reversed pass), so the bias flips too.
   void reset_keeping_calibration(bool flip_gyro = false);
 
  private:
