@@ -135,7 +135,7 @@ Quat RobustOrientationFilter::update(const ImuSample& s) {
   }
 
   const Quat E_from_A_q = E_from_I_ * I_from_A_;
-  if (s.mag_uT.allFinite()) correct_heading(s.mag_uT, E_from_A_q, dt_s, (s.gyr_rad_s - bias_).norm());
+  if (s.mag_uT.allFinite()) correct_heading(s.mag_uT, E_from_A_q, dt_s, (s.gyr_rad_s - bias_).squaredNorm());
   if (dt_s > 0.0) {
     const Eigen::Matrix3d E_from_A = E_from_A_q.toRotationMatrix();
     E_from_A_lp1_acc_ += gains_.acc_stage * (E_from_A - E_from_A_lp1_acc_);
@@ -250,14 +250,19 @@ void RobustOrientationFilter::correct_inclination(const Vec3& acc_m_s2, double d
   renormalize(E_from_I_);
 }
 
-bool RobustOrientationFilter::fits_reference(double norm_uT, double sin_dip) const {
-  const double cos_dip = std::sqrt(std::max(0.0, 1.0 - mag_ref_sin_dip_ * mag_ref_sin_dip_));
-  return std::abs(norm_uT - mag_ref_norm_) < params_.mag_norm_threshold * mag_ref_norm_ &&
-         std::abs(sin_dip - mag_ref_sin_dip_) < params_.mag_dip_threshold_rad * cos_dip;
+bool RobustOrientationFilter::fits_field(double norm_uT, double sin_dip, double ref_norm_uT,
+                                         double ref_sin_dip) const {
+  // |norm - ref| < threshold * ref and |dip - ref dip| < threshold, the latter to first order
+  // in sin(dip): |sin dip - sin ref| < threshold * cos(ref). Squared, to avoid square roots.
+  const double d_norm = norm_uT - ref_norm_uT;
+  const double d_sin = sin_dip - ref_sin_dip;
+  const double max_norm = params_.mag_norm_threshold * ref_norm_uT;
+  const double max_dip = params_.mag_dip_threshold_rad;
+  return d_norm * d_norm < max_norm * max_norm && d_sin * d_sin < max_dip * max_dip * (1.0 - ref_sin_dip * ref_sin_dip);
 }
 
 void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_from_A, double dt_s,
-                                              double gyr_norm_rad_s) {
+                                              double gyr_sq_rad2_s2) {
   const Vec3 m_E = rotate(E_from_A, mag_uT - hard_iron_uT_);
   const double norm = m_E.norm();
   if (norm < 1e-6) return;
@@ -272,10 +277,7 @@ void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
     k = std::max(k, 1.0 / mag_init_count_);
     mag_disturbed_ = false;
   } else {
-    if (!mag_ref_valid_) {
-      mag_ref_valid_ = true;
-      mag_ref_dip_ = std::asin(std::clamp(mag_ref_sin_dip_, -1.0, 1.0));
-    }
+    mag_ref_valid_ = true;
     // Once disturbed, the field must fit the reference for mag_accept_after_s before it is
     // trusted again: a wrong field passes the test by chance in some orientations.
     if (!fits_reference(norm, sin_dip)) {
@@ -290,15 +292,12 @@ void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
       // The magnet may have been taken off again: does the field fit with the previous offset?
       if (check_previous_hard_iron(mag_uT, E_from_A, dt_s)) return;
       // Track a candidate new field and a candidate hard iron; use neither for heading yet.
-      const double cos_cand = std::sqrt(std::max(0.0, 1.0 - cand_sin_dip_ * cand_sin_dip_));
-      const bool fits_candidate = cand_valid_ &&
-                                  std::abs(norm - cand_norm_) < params_.mag_norm_threshold * cand_norm_ &&
-                                  std::abs(sin_dip - cand_sin_dip_) < params_.mag_dip_threshold_rad * cos_cand;
-      if (fits_candidate) {
+      if (cand_valid_ && fits_field(norm, sin_dip, cand_norm_, cand_sin_dip_)) {
         const double kc = gains_.candidate;
         cand_norm_ += kc * (norm - cand_norm_);
         cand_sin_dip_ += kc * (sin_dip - cand_sin_dip_);
-        if (gyr_norm_rad_s > params_.mag_new_field_min_gyr_rad_s) cand_s_ += dt_s;
+        const double min_gyr = params_.mag_new_field_min_gyr_rad_s;
+        if (gyr_sq_rad2_s2 > min_gyr * min_gyr) cand_s_ += dt_s;
       } else {
         cand_valid_ = true;
         cand_norm_ = norm;
@@ -309,7 +308,6 @@ void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
       if (cand_s_ >= params_.mag_new_field_s) {
         mag_ref_norm_ = cand_norm_;
         mag_ref_sin_dip_ = cand_sin_dip_;
-        mag_ref_dip_ = std::asin(std::clamp(cand_sin_dip_, -1.0, 1.0));
         cand_valid_ = false;
         mag_recover_left_s_ = params_.mag_recover_s;
       }
@@ -346,9 +344,9 @@ void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
   half_angle_cos_sin(step_rad, c, s);
   const double qw = c * heading_qw_ - s * heading_qz_;
   const double qz = c * heading_qz_ + s * heading_qw_;
-  const double n = std::sqrt(qw * qw + qz * qz);
-  heading_qw_ = qw / n;
-  heading_qz_ = qz / n;
+  const double renorm = 0.5 * (3.0 - (qw * qw + qz * qz));  // as renormalize()
+  heading_qw_ = qw * renorm;
+  heading_qz_ = qz * renorm;
 }
 
 void RobustOrientationFilter::update_hard_iron_fit(const Vec3& mag_uT, const Quat& E_from_A, double dt_s) {

@@ -17,6 +17,7 @@
 // adopted after a while (moving to another room); a new sensor-fixed offset (a magnet attached to
 // the sensor: hard iron) is estimated by least squares from the rotation and then removed.
 // Details and parameter guidance: docs/imu-robust.md.
+#include <cmath>
 #include <vector>
 
 #include "imu/imu_sample.hpp"
@@ -113,7 +114,7 @@ class RobustOrientationFilter {
   bool mag_disturbed() const { return mag_disturbed_; }
   const Vec3& hard_iron_uT() const { return hard_iron_uT_; }
   double mag_ref_norm_uT() const { return mag_ref_norm_; }
-  double mag_ref_dip_rad() const { return mag_ref_dip_; }
+  double mag_ref_dip_rad() const { return std::asin(mag_ref_sin_dip_); }
 
   // Starts a fresh run that keeps what the filter learned about the sensor itself (gyro bias
   // and its uncertainty, hard iron), e.g. for a second pass over a recording. The magnetic
@@ -125,14 +126,17 @@ class RobustOrientationFilter {
   void integrate_gyro(const Vec3& gyr_rad_s, double dt_s);
   void update_rest_detection(const ImuSample& s, double dt_s);
   void correct_inclination(const Vec3& acc_m_s2, double dt_s);
-  void correct_heading(const Vec3& mag_uT, const Quat& E_from_A, double dt_s, double gyr_norm_rad_s);
+  void correct_heading(const Vec3& mag_uT, const Quat& E_from_A, double dt_s, double gyr_sq_rad2_s2);
   void update_gains(std::int64_t dt_us);
   void update_rest_bias(double dt_s);
   void update_hard_iron_fit(const Vec3& mag_uT, const Quat& E_from_A, double dt_s);
   void reset_hard_iron_fit();
   // Switches back to the previous hard iron when the field fits with it again; returns whether it did.
   bool check_previous_hard_iron(const Vec3& mag_uT, const Quat& E_from_A, double dt_s);
-  bool fits_reference(double norm_uT, double sin_dip) const;
+  bool fits_field(double norm_uT, double sin_dip, double ref_norm_uT, double ref_sin_dip) const;
+  bool fits_reference(double norm_uT, double sin_dip) const {
+    return fits_field(norm_uT, sin_dip, mag_ref_norm_, mag_ref_sin_dip_);
+  }
 
   Params params_;
 
@@ -173,8 +177,7 @@ class RobustOrientationFilter {
   // Heading and magnetic reference.
   bool mag_ref_valid_ = false;
   double mag_ref_norm_ = 0.0;
-  double mag_ref_dip_ = 0.0;      // rad, positive when the field points down
-  double mag_ref_sin_dip_ = 0.0;
+  double mag_ref_sin_dip_ = 0.0;  // sine of the dip angle, positive when the field points down
   double mag_init_count_ = 0.0;
   bool mag_disturbed_ = false;
   double mag_clean_s_ = 0.0;  // time the field has fitted the reference without a break
