@@ -79,6 +79,25 @@ std::function<Vec3(double)> wobble(double rest_s) {
 
 std::size_t index_at(double t_s) { return static_cast<std::size_t>(t_s * kRateHz); }
 
+// The common scene: 10 s of rest, then turning about all axes, with a small gyro bias.
+SynthOptions turning(double duration_s) {
+  SynthOptions o;
+  o.duration_s = duration_s;
+  o.body_rate_rad_s = wobble(10.0);
+  o.gyro_bias_rad_s = Vec3(0.5, 0.3, -0.4) * kDeg;
+  return o;
+}
+
+// Every estimate from `first` on is within `max_deg` (total error) of the truth.
+void expect_tracks(const std::vector<Quat>& est, const std::vector<Quat>& truth, std::size_t first,
+                   double max_deg) {
+  ASSERT_EQ(est.size(), truth.size());
+  for (std::size_t i = first; i < est.size(); ++i) {
+    ASSERT_TRUE(est[i].coeffs().allFinite()) << "sample " << i;
+    EXPECT_LT(orientation_error(est[i], truth[i]).total_rad, max_deg * kDeg) << "sample " << i;
+  }
+}
+
 }  // namespace
 
 TEST(RobustOrientationFilter, BiasConvergesOnStillSensor) {
@@ -96,26 +115,13 @@ TEST(RobustOrientationFilter, BiasConvergesOnStillSensor) {
 }
 
 TEST(RobustOrientationFilter, TracksRotatingSensor) {
-  SynthOptions o;
-  o.duration_s = 90.0;
-  o.body_rate_rad_s = wobble(10.0);
-  o.gyro_bias_rad_s = Vec3(0.5, 0.3, -0.4) * kDeg;
-  const Synthetic data = make_stream(o);
-  RobustOrientationFilter filter;
-  const std::vector<Quat> est = filter.process(data.imu);
-  double worst = 0.0;
-  for (std::size_t i = index_at(5.0); i < est.size(); ++i) {
-    worst = std::max(worst, orientation_error(est[i], data.W_from_A[i]).total_rad);
-  }
-  EXPECT_LT(worst, 1.0 * kDeg);
+  const Synthetic data = make_stream(turning(90.0));
+  expect_tracks(RobustOrientationFilter().process(data.imu), data.W_from_A, index_at(5.0), 1.0);
 }
 
 TEST(RobustOrientationFilter, TransientFieldDisturbanceKeepsInclinationAndHeading) {
   // A magnet passes nearby for 10 s while the sensor turns: +40 uT roughly sideways in W.
-  SynthOptions o;
-  o.duration_s = 60.0;
-  o.body_rate_rad_s = wobble(10.0);
-  o.gyro_bias_rad_s = Vec3(0.5, 0.3, -0.4) * kDeg;
+  SynthOptions o = turning(60.0);
   const Synthetic clean = make_stream(o);
   o.mag_uT = [](const Quat& W_from_A, double t) {
     const Vec3 extra_W = (t >= 30.0 && t < 40.0) ? Vec3(10.0, 35.0, 15.0) : Vec3::Zero();
@@ -146,9 +152,7 @@ TEST(RobustOrientationFilter, TransientFieldDisturbanceKeepsInclinationAndHeadin
 TEST(RobustOrientationFilter, MagnetometerNeverTiltsTheEstimate) {
   // A field whose dip disagrees with the reference by 30 degrees from t = 20 s on, for good:
   // whatever the filter does with it, inclination must stay right.
-  SynthOptions o;
-  o.duration_s = 80.0;
-  o.body_rate_rad_s = wobble(10.0);
+  SynthOptions o = turning(80.0);
   o.mag_uT = [](const Quat& W_from_A, double t) {
     const Vec3 field_W = t < 20.0 ? kField_W : Vec3(Eigen::AngleAxisd(30.0 * kDeg, Vec3::UnitY()) * kField_W);
     return Vec3(W_from_A.conjugate() * field_W);
@@ -164,10 +168,7 @@ TEST(RobustOrientationFilter, MagnetometerNeverTiltsTheEstimate) {
 TEST(RobustOrientationFilter, AttachedMagnetIsRejectedThenRelearnedThenForgotten) {
   // A magnet fixed to the sensor from 30 s to 100 s: a constant offset in A (hard iron).
   const Vec3 magnet_A(15.0, -10.0, 25.0);
-  SynthOptions o;
-  o.duration_s = 140.0;
-  o.body_rate_rad_s = wobble(10.0);
-  o.gyro_bias_rad_s = Vec3(0.5, 0.3, -0.4) * kDeg;
+  SynthOptions o = turning(140.0);
   o.mag_uT = [magnet_A](const Quat& W_from_A, double t) {
     const Vec3 offset = (t >= 30.0 && t < 100.0) ? magnet_A : Vec3(Vec3::Zero());
     return Vec3(W_from_A.conjugate() * kField_W + offset);
@@ -186,18 +187,14 @@ TEST(RobustOrientationFilter, AttachedMagnetIsRejectedThenRelearnedThenForgotten
   EXPECT_LT((hard_iron_before_removal - magnet_A).norm(), 1.0);  // learned within 1 uT of 30 uT
   EXPECT_LT(filter.hard_iron_uT().norm(), 1.0);                  // and dropped after removal
   EXPECT_FALSE(filter.mag_disturbed());
-  for (std::size_t i = index_at(5.0); i < est.size(); ++i) {
-    EXPECT_LT(orientation_error(est[i], data.W_from_A[i]).total_rad, 2.0 * kDeg) << "t index " << i;
-  }
+  expect_tracks(est, data.W_from_A, index_at(5.0), 2.0);
   EXPECT_LT(orientation_error(est.back(), data.W_from_A.back()).total_rad, 1.0 * kDeg);
 }
 
 TEST(RobustOrientationFilter, AdoptsANewUniformFieldThatPersists) {
   // Moving into another room: from 30 s the field is 25% stronger with a steeper dip. With the
   // sensor turning, a consistent new field is adopted and heading stays right afterwards.
-  SynthOptions o;
-  o.duration_s = 120.0;
-  o.body_rate_rad_s = wobble(10.0);
+  SynthOptions o = turning(120.0);
   o.mag_uT = [](const Quat& W_from_A, double t) {
     const Vec3 field_W = t < 30.0 ? kField_W : Vec3(22.0, 0.0, -52.0);
     return Vec3(W_from_A.conjugate() * field_W);
@@ -211,16 +208,9 @@ TEST(RobustOrientationFilter, AdoptsANewUniformFieldThatPersists) {
 }
 
 TEST(RobustOrientationFilter, OfflineTracksRotatingSensor) {
-  SynthOptions o;
-  o.duration_s = 60.0;
-  o.body_rate_rad_s = wobble(10.0);
-  o.gyro_bias_rad_s = Vec3(0.5, 0.3, -0.4) * kDeg;
-  const Synthetic data = make_stream(o);
-  const std::vector<Quat> est = posefuse::imu::robust_orientation_offline(data.imu);
-  ASSERT_EQ(est.size(), data.imu.size());
-  for (std::size_t i = 0; i < est.size(); ++i) {
-    EXPECT_LT(orientation_error(est[i], data.W_from_A[i]).total_rad, 1.0 * kDeg) << "t index " << i;
-  }
+  const Synthetic data = make_stream(turning(60.0));
+  // Offline has no start-up: the backward pass brings a converged estimate to the first sample.
+  expect_tracks(posefuse::imu::robust_orientation_offline(data.imu), data.W_from_A, 0, 1.0);
 }
 
 TEST(RobustOrientationFilter, RejectsBadInput) {
@@ -258,16 +248,9 @@ TEST(RobustOrientationFilter, RejectsBadInput) {
 }
 
 TEST(RobustOrientationFilter, MissingMagnetometerReadingsAreSkipped) {
-  SynthOptions o;
-  o.duration_s = 40.0;
-  o.body_rate_rad_s = wobble(10.0);
-  Synthetic data = make_stream(o);
+  Synthetic data = make_stream(turning(40.0));
   for (std::size_t i = index_at(20.0); i < index_at(25.0); ++i) {
     data.imu[i].mag_uT = Vec3::Constant(std::numeric_limits<double>::quiet_NaN());
   }
-  const std::vector<Quat> est = RobustOrientationFilter().process(data.imu);
-  for (std::size_t i = index_at(5.0); i < est.size(); ++i) {
-    ASSERT_TRUE(est[i].coeffs().allFinite());
-    EXPECT_LT(orientation_error(est[i], data.W_from_A[i]).total_rad, 1.0 * kDeg) << "t index " << i;
-  }
+  expect_tracks(RobustOrientationFilter().process(data.imu), data.W_from_A, index_at(5.0), 1.0);
 }
