@@ -64,7 +64,7 @@ class RobustOrientationFilter {
     // A disturbed but self-consistent new field (norm and dip steady) is adopted as the new
     // reference after mag_new_field_s of consistent samples while turning faster than
     // mag_new_field_min_gyr_rad_s (a sensor-fixed magnet would not stay consistent then).
-    double mag_new_field_s = 20.0;
+    double mag_new_field_s = 10.0;
     double mag_new_field_min_gyr_rad_s = 20.0 * 3.14159265358979 / 180.0;
     // Hard-iron re-learning: while disturbed, fit m_A = A_from_E * b_E + h_A by exponentially
     // forgetting least squares (time constant mag_hard_iron_tau_s); accept h_A once the
