@@ -1,8 +1,23 @@
 #include "imu/robust_offline.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 namespace posefuse::imu {
+
+namespace {
+
+// `tilt_source` turned about the vertical so that it differs from `heading_source` by a pure
+// tilt: with D = tilt_source * heading_source^-1 = (w, x, y, z), Rz(psi) * D has no z part for
+// psi = -2 atan2(z, w), so heading (as the BROAD metric splits it) comes from heading_source and
+// inclination from tilt_source.
+Quat with_heading_of(const Quat& tilt_source, const Quat& heading_source) {
+  const Quat D = tilt_source * heading_source.conjugate();
+  const double psi = -2.0 * std::atan2(D.z(), D.w());
+  return Quat(Eigen::AngleAxisd(psi, Vec3::UnitZ())) * tilt_source;
+}
+
+}  // namespace
 
 std::vector<Quat> robust_orientation_offline(const std::vector<ImuSample>& samples,
                                              const RobustOrientationFilter::Params& params) {
@@ -30,7 +45,8 @@ std::vector<Quat> robust_orientation_offline(const std::vector<ImuSample>& sampl
   for (std::size_t i = 0; i < n; ++i) {
     const Quat forward = filter.update(samples[i]);
     const Quat b = geometry::same_hemisphere(backward[i], forward);
-    out[i] = Quat(forward.coeffs() + b.coeffs()).normalized();
+    const Quat averaged = Quat(forward.coeffs() + b.coeffs()).normalized();
+    out[i] = with_heading_of(averaged, forward);
   }
   return out;
 }
