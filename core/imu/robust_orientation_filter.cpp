@@ -223,8 +223,8 @@ void RobustOrientationFilter::update_rest_bias(double dt_s) {
 void RobustOrientationFilter::correct_inclination(const Vec3& acc_m_s2, double dt_s) {
   // Low-pass in the almost-inertial frame I: accelerations while the sensor moves and turns
   // average out there, gravity does not.
-  // Two first-order stages of tau_acc_s / 2 each: -40 dB/decade, so a 1 Hz back-and-forth
-  // movement is damped ~90x at tau_acc_s = 3 s where one stage would only damp it ~19x.
+  // Two first-order stages of tau_acc_s / 2 each: -40 dB/decade, so at the default 4 s a 1 Hz
+  // back-and-forth movement is damped ~160x, where one 4 s stage would damp it only ~25x.
   double k = dt_s > 0.0 ? gains_.acc_stage : 1.0;
   if (time_s_ < params_.init_s) k = std::max(k, 1.0 / init_weight_count_);
   acc_lp1_I_ += k * (rotate(I_from_A_, acc_m_s2) - acc_lp1_I_);
