@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -16,6 +17,13 @@ namespace {
 // Gain of a first-order low-pass with time constant tau for one step of dt (backward Euler:
 // stable for any dt, no exp() per sample).
 double lowpass_gain(double dt_s, double tau_s) { return dt_s / (tau_s + dt_s); }
+
+// Brings a quaternion that is already almost unit back to unit length (first-order Newton step
+// on |q| = 1, no square root; the per-step rounding drift is ~1e-16).
+void renormalize(Quat& q) { q.coeffs() *= 0.5 * (3.0 - q.squaredNorm()); }
+
+// Time constant of the candidate-field averages: only needs to smooth sensor noise.
+constexpr double kCandidateTau_s = 1.0;
 
 // Rotates v by the unit quaternion q without building a matrix (v' = v + 2 w (u x v) + 2 u x (u x v)).
 Vec3 rotate(const Quat& q, const Vec3& v) {
@@ -67,26 +75,23 @@ RobustOrientationFilter::RobustOrientationFilter(const Params& params) : params_
   positive(params.mag_hard_iron_tau_s, "mag_hard_iron_tau_s");
   positive(params.mag_hard_iron_min_excitation, "mag_hard_iron_min_excitation");
   positive(params.mag_hard_iron_max_rms, "mag_hard_iron_max_rms");
+  positive(params.mag_accept_after_s, "mag_accept_after_s");
+  positive(params.mag_hard_iron_min_s, "mag_hard_iron_min_s");
+  positive(params.mag_hard_iron_min_change, "mag_hard_iron_min_change");
+  positive(params.mag_hard_iron_return_s, "mag_hard_iron_return_s");
   positive(params.mag_recover_tau_s, "mag_recover_tau_s");
   positive(params.mag_recover_s, "mag_recover_s");
   positive(params.init_s, "init_s");
   bias_var_ = params.bias_sigma_init_rad_s * params.bias_sigma_init_rad_s;
 }
 
-void RobustOrientationFilter::reset_keeping_calibration() {
-  const Params params = params_;
+void RobustOrientationFilter::reset_keeping_calibration(bool flip_gyro) {
   const Vec3 bias = bias_;
   const double bias_var = bias_var_;
-  const bool ref_valid = mag_ref_valid_;
-  const double ref_norm = mag_ref_norm_, ref_dip = mag_ref_dip_, ref_sin_dip = mag_ref_sin_dip_;
   const Vec3 hard_iron = hard_iron_uT_;
-  *this = RobustOrientationFilter(params);
-  bias_ = bias;
+  *this = RobustOrientationFilter(params_);
+  bias_ = flip_gyro ? Vec3(-bias) : bias;
   bias_var_ = bias_var;
-  mag_ref_valid_ = ref_valid;
-  mag_ref_norm_ = ref_norm;
-  mag_ref_dip_ = ref_dip;
-  mag_ref_sin_dip_ = ref_sin_dip;
   hard_iron_uT_ = hard_iron;
 }
 
@@ -108,6 +113,7 @@ Quat RobustOrientationFilter::update(const ImuSample& s) {
                                     std::to_string(last_t_us_) + ")");
     }
     dt_s = 1e-6 * static_cast<double>(s.t_us - last_t_us_);
+    if (s.t_us - last_t_us_ != gains_.dt_us) update_gains(s.t_us - last_t_us_);
   }
   last_t_us_ = s.t_us;
 
@@ -128,35 +134,46 @@ Quat RobustOrientationFilter::update(const ImuSample& s) {
     correct_inclination(s.acc_m_s2, dt_s);
   }
 
-  mag_heading_rate_ = 0.0;
-  const bool mag_used = s.mag_uT.allFinite() && correct_heading(s.mag_uT, dt_s, (s.gyr_rad_s - bias_).norm());
+  const Quat E_from_A_q = E_from_I_ * I_from_A_;
+  if (s.mag_uT.allFinite()) correct_heading(s.mag_uT, E_from_A_q, dt_s, (s.gyr_rad_s - bias_).squaredNorm());
   if (dt_s > 0.0) {
-    const Eigen::Matrix3d E_from_A = (E_from_I_ * I_from_A_).toRotationMatrix();
-    const double k_acc = lowpass_gain(dt_s, 0.5 * params_.tau_acc_s);
-    E_from_A_lp1_acc_ += k_acc * (E_from_A - E_from_A_lp1_acc_);
-    E_from_A_lp_acc_ += k_acc * (E_from_A_lp1_acc_ - E_from_A_lp_acc_);
-    E_from_A_lp_mag_z_ += lowpass_gain(dt_s, params_.tau_mag_s) * (E_from_A.row(2).transpose() - E_from_A_lp_mag_z_);
+    const Eigen::Matrix3d E_from_A = E_from_A_q.toRotationMatrix();
+    E_from_A_lp1_acc_ += gains_.acc_stage * (E_from_A - E_from_A_lp1_acc_);
+    E_from_A_lp_acc_ += gains_.acc_stage * (E_from_A_lp1_acc_ - E_from_A_lp_acc_);
   }
   if (dt_s > 0.0 && time_s_ > params_.init_s) {
     update_rest_bias(dt_s);
     if (!at_rest()) {
-      // Motion: the corrections the accelerometer (horizontal axes) and magnetometer (vertical
-      // axis) keep making are the drift a residual bias causes: e_E ~ -correction / dt.
-      // Those corrections answer the drift through the low-passes (tau_acc_s, tau_mag_s), so
-      // the drift is compared with the bias error seen through equally low-passed rotations:
-      // e_E ~ lowpass(E_from_A) * e_A. Fast turning shrinks the low-passed rotation and with
-      // it the update, where the lagging corrections say little about a sensor-frame bias.
+      // Motion: the corrections the accelerometer keeps making about the horizontal axes are
+      // the drift a residual bias causes: e_E ~ -correction / dt. They answer the drift through
+      // the tau_acc_s low-pass, so the drift is compared with the bias error seen through an
+      // equally low-passed rotation: e_E ~ lowpass(E_from_A) * e_A. Fast turning shrinks the
+      // low-passed rotation and with it the update, where the lagging corrections say little
+      // about a sensor-frame bias. The magnetometer is deliberately not used here: through the
+      // bias it could tilt the estimate, and it must only ever touch the heading.
       const Eigen::Vector2d e_horizontal(-acc_correction_rate_E_.x(), -acc_correction_rate_E_.y());
-      Vec3 step_A = E_from_A_lp_acc_.topRows<2>().transpose() * e_horizontal;
-      if (mag_used && mag_recover_left_s_ <= 0.0) step_A += -mag_heading_rate_ * E_from_A_lp_mag_z_;
-      bias_ += lowpass_gain(dt_s, params_.bias_motion_tau_s) * step_A;
+      bias_ += gains_.bias_motion * (E_from_A_lp_acc_.topRows<2>().transpose() * e_horizontal);
       const double limit = params_.bias_limit_rad_s;
       bias_ = bias_.cwiseMax(Vec3::Constant(-limit)).cwiseMin(Vec3::Constant(limit));
     }
   }
 
   const Quat W_from_E(heading_qw_, 0.0, 0.0, heading_qz_);
-  return W_from_E * E_from_I_ * I_from_A_;
+  return W_from_E * E_from_A_q;
+}
+
+void RobustOrientationFilter::update_gains(std::int64_t dt_us) {
+  const double dt_s = 1e-6 * static_cast<double>(dt_us);
+  gains_.dt_us = dt_us;
+  gains_.inv_dt = 1.0 / dt_s;
+  gains_.rest = lowpass_gain(dt_s, params_.rest_tau_s);
+  gains_.acc_stage = lowpass_gain(dt_s, 0.5 * params_.tau_acc_s);
+  gains_.mag = lowpass_gain(dt_s, params_.tau_mag_s);
+  gains_.mag_ref = lowpass_gain(dt_s, params_.mag_ref_tau_s);
+  gains_.mag_recover = lowpass_gain(dt_s, params_.mag_recover_tau_s);
+  gains_.candidate = lowpass_gain(dt_s, kCandidateTau_s);
+  gains_.hard_iron = lowpass_gain(dt_s, params_.mag_hard_iron_tau_s);
+  gains_.bias_motion = lowpass_gain(dt_s, params_.bias_motion_tau_s);
 }
 
 void RobustOrientationFilter::integrate_gyro(const Vec3& gyr_rad_s, double dt_s) {
@@ -175,11 +192,11 @@ void RobustOrientationFilter::integrate_gyro(const Vec3& gyr_rad_s, double dt_s)
   }
   const Quat step(c, s * h.x(), s * h.y(), s * h.z());
   I_from_A_ = I_from_A_ * step;
-  I_from_A_.normalize();
+  renormalize(I_from_A_);
 }
 
 void RobustOrientationFilter::update_rest_detection(const ImuSample& s, double dt_s) {
-  const double k = lowpass_gain(dt_s, params_.rest_tau_s);
+  const double k = gains_.rest;
   gyr_lp_ += k * (s.gyr_rad_s - gyr_lp_);
   acc_lp_A_ += k * (s.acc_m_s2 - acc_lp_A_);
   const double gyr_th = params_.rest_gyr_threshold_rad_s;
@@ -206,9 +223,9 @@ void RobustOrientationFilter::update_rest_bias(double dt_s) {
 void RobustOrientationFilter::correct_inclination(const Vec3& acc_m_s2, double dt_s) {
   // Low-pass in the almost-inertial frame I: accelerations while the sensor moves and turns
   // average out there, gravity does not.
-  // Two first-order stages of tau_acc_s / 2 each: -40 dB/decade, so a 1 Hz back-and-forth
-  // movement is damped ~90x at tau_acc_s = 3 s where one stage would only damp it ~19x.
-  double k = dt_s > 0.0 ? lowpass_gain(dt_s, 0.5 * params_.tau_acc_s) : 1.0;
+  // Two first-order stages of tau_acc_s / 2 each: -40 dB/decade, so at the default 4 s a 1 Hz
+  // back-and-forth movement is damped ~160x, where one 4 s stage would damp it only ~25x.
+  double k = dt_s > 0.0 ? gains_.acc_stage : 1.0;
   if (time_s_ < params_.init_s) k = std::max(k, 1.0 / init_weight_count_);
   acc_lp1_I_ += k * (rotate(I_from_A_, acc_m_s2) - acc_lp1_I_);
   acc_lp_I_ += k * (acc_lp1_I_ - acc_lp_I_);
@@ -219,33 +236,39 @@ void RobustOrientationFilter::correct_inclination(const Vec3& acc_m_s2, double d
   const double norm = acc_lp_I_.norm();
   acc_correction_rate_E_.setZero();
   if (norm < 1e-9) return;
-  const Vec3 a = rotate(E_from_I_, acc_lp_I_) / norm;
+  const Vec3 a = rotate(E_from_I_, acc_lp_I_) * (1.0 / norm);
   Quat correction;
   const double w = std::sqrt(std::max(0.0, 0.5 * (1.0 + a.z())));
   if (w < 1e-6) {
     correction = Quat(0.0, 1.0, 0.0, 0.0);  // upside down: turn half-way about x
   } else {
-    correction = Quat(w, 0.5 * a.y() / w, -0.5 * a.x() / w, 0.0);
-    if (dt_s > 0.0) acc_correction_rate_E_ = Vec3(a.y() / w, -a.x() / w, 0.0) / dt_s;
+    const double inv_w = 1.0 / w;
+    correction = Quat(w, 0.5 * inv_w * a.y(), -0.5 * inv_w * a.x(), 0.0);
+    if (dt_s > 0.0) acc_correction_rate_E_ = Vec3(a.y(), -a.x(), 0.0) * (inv_w * gains_.inv_dt);
   }
   E_from_I_ = correction * E_from_I_;
-  E_from_I_.normalize();
+  renormalize(E_from_I_);
 }
 
-bool RobustOrientationFilter::fits_reference(double norm_uT, double sin_dip) const {
-  const double cos_dip = std::sqrt(std::max(0.0, 1.0 - mag_ref_sin_dip_ * mag_ref_sin_dip_));
-  return std::abs(norm_uT - mag_ref_norm_) < params_.mag_norm_threshold * mag_ref_norm_ &&
-         std::abs(sin_dip - mag_ref_sin_dip_) < params_.mag_dip_threshold_rad * cos_dip;
+bool RobustOrientationFilter::fits_field(double norm_uT, double sin_dip, double ref_norm_uT,
+                                         double ref_sin_dip) const {
+  // |norm - ref| < threshold * ref and |dip - ref dip| < threshold, the latter to first order
+  // in sin(dip): |sin dip - sin ref| < threshold * cos(ref). Squared, to avoid square roots.
+  const double d_norm = norm_uT - ref_norm_uT;
+  const double d_sin = sin_dip - ref_sin_dip;
+  const double max_norm = params_.mag_norm_threshold * ref_norm_uT;
+  const double max_dip = params_.mag_dip_threshold_rad;
+  return d_norm * d_norm < max_norm * max_norm && d_sin * d_sin < max_dip * max_dip * (1.0 - ref_sin_dip * ref_sin_dip);
 }
 
-bool RobustOrientationFilter::correct_heading(const Vec3& mag_uT, double dt_s, double gyr_norm_rad_s) {
-  const Quat E_from_A = E_from_I_ * I_from_A_;
+void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_from_A, double dt_s,
+                                              double gyr_sq_rad2_s2) {
   const Vec3 m_E = rotate(E_from_A, mag_uT - hard_iron_uT_);
   const double norm = m_E.norm();
-  if (norm < 1e-6) return false;
+  if (norm < 1e-6) return;
   const double sin_dip = -m_E.z() / norm;  // positive when the field points down
 
-  double k = dt_s > 0.0 ? lowpass_gain(dt_s, params_.tau_mag_s) : 1.0;
+  double k = dt_s > 0.0 ? gains_.mag : 1.0;
   if (time_s_ < params_.init_s && !mag_ref_valid_) {
     // Start-up: learn the reference as the plain mean and converge the heading fast.
     mag_init_count_ += 1.0;
@@ -254,24 +277,27 @@ bool RobustOrientationFilter::correct_heading(const Vec3& mag_uT, double dt_s, d
     k = std::max(k, 1.0 / mag_init_count_);
     mag_disturbed_ = false;
   } else {
-    if (!mag_ref_valid_) {
-      mag_ref_valid_ = true;
-      mag_ref_dip_ = std::asin(std::clamp(mag_ref_sin_dip_, -1.0, 1.0));
+    mag_ref_valid_ = true;
+    // Once disturbed, the field must fit the reference for mag_accept_after_s before it is
+    // trusted again: a wrong field passes the test by chance in some orientations.
+    if (!fits_reference(norm, sin_dip)) {
+      if (!mag_disturbed_) reset_hard_iron_fit();
+      mag_disturbed_ = true;
+      mag_clean_s_ = 0.0;
+    } else {
+      mag_clean_s_ += dt_s;
+      if (mag_clean_s_ >= params_.mag_accept_after_s) mag_disturbed_ = false;
     }
-    const bool disturbed = !fits_reference(norm, sin_dip);
-    if (disturbed && !mag_disturbed_) reset_hard_iron_fit();
-    mag_disturbed_ = disturbed;
-    if (disturbed) {
+    if (mag_disturbed_) {
+      // The magnet may have been taken off again: does the field fit with the previous offset?
+      if (check_previous_hard_iron(mag_uT, E_from_A, dt_s)) return;
       // Track a candidate new field and a candidate hard iron; use neither for heading yet.
-      const double cos_cand = std::sqrt(std::max(0.0, 1.0 - cand_sin_dip_ * cand_sin_dip_));
-      const bool fits_candidate = cand_valid_ &&
-                                  std::abs(norm - cand_norm_) < params_.mag_norm_threshold * cand_norm_ &&
-                                  std::abs(sin_dip - cand_sin_dip_) < params_.mag_dip_threshold_rad * cos_cand;
-      if (fits_candidate) {
-        const double kc = lowpass_gain(dt_s, 1.0);
+      if (cand_valid_ && fits_field(norm, sin_dip, cand_norm_, cand_sin_dip_)) {
+        const double kc = gains_.candidate;
         cand_norm_ += kc * (norm - cand_norm_);
         cand_sin_dip_ += kc * (sin_dip - cand_sin_dip_);
-        if (gyr_norm_rad_s > params_.mag_new_field_min_gyr_rad_s) cand_s_ += dt_s;
+        const double min_gyr = params_.mag_new_field_min_gyr_rad_s;
+        if (gyr_sq_rad2_s2 > min_gyr * min_gyr) cand_s_ += dt_s;
       } else {
         cand_valid_ = true;
         cand_norm_ = norm;
@@ -282,19 +308,18 @@ bool RobustOrientationFilter::correct_heading(const Vec3& mag_uT, double dt_s, d
       if (cand_s_ >= params_.mag_new_field_s) {
         mag_ref_norm_ = cand_norm_;
         mag_ref_sin_dip_ = cand_sin_dip_;
-        mag_ref_dip_ = std::asin(std::clamp(cand_sin_dip_, -1.0, 1.0));
         cand_valid_ = false;
         mag_recover_left_s_ = params_.mag_recover_s;
       }
-      return false;
+      return;
     }
     cand_valid_ = false;
     // Undisturbed: the reference follows slowly (sensor warm-up, slow changes of place).
-    const double kr = lowpass_gain(dt_s, params_.mag_ref_tau_s);
+    const double kr = gains_.mag_ref;
     mag_ref_norm_ += kr * (norm - mag_ref_norm_);
     mag_ref_sin_dip_ += kr * (sin_dip - mag_ref_sin_dip_);
     if (mag_recover_left_s_ > 0.0) {
-      k = std::max(k, lowpass_gain(dt_s, params_.mag_recover_tau_s));
+      k = std::max(k, gains_.mag_recover);
       mag_recover_left_s_ -= dt_s;
     }
   }
@@ -305,24 +330,29 @@ bool RobustOrientationFilter::correct_heading(const Vec3& mag_uT, double dt_s, d
   const double hs = 2.0 * heading_qw_ * heading_qz_;
   const double north = hc * m_E.x() - hs * m_E.y();
   const double west = hs * m_E.x() + hc * m_E.y();
-  if (north * north + west * west < 1e-12) return false;  // field vertical: no heading information
-  const double error_rad = -std::atan2(west, north);
+  if (north * north + west * west < 1e-12) return;  // field vertical: no heading information
+  double error_rad;
+  if (north > 0.0 && std::abs(west) < 0.2 * north) {
+    // Small error (the usual case): atan series, |x| < 0.2 keeps it within 1e-7 rad.
+    const double x = west / north, x2 = x * x;
+    error_rad = -x * (1.0 - x2 * (1.0 / 3.0 - x2 * (1.0 / 5.0 - x2 / 7.0)));
+  } else {
+    error_rad = -std::atan2(west, north);
+  }
   const double step_rad = k * error_rad;
   double c, s;
   half_angle_cos_sin(step_rad, c, s);
   const double qw = c * heading_qw_ - s * heading_qz_;
   const double qz = c * heading_qz_ + s * heading_qw_;
-  const double n = std::sqrt(qw * qw + qz * qz);
-  heading_qw_ = qw / n;
-  heading_qz_ = qz / n;
-  if (dt_s > 0.0) mag_heading_rate_ = step_rad / dt_s;
-  return true;
+  const double renorm = 0.5 * (3.0 - (qw * qw + qz * qz));  // as renormalize()
+  heading_qw_ = qw * renorm;
+  heading_qz_ = qz * renorm;
 }
 
 void RobustOrientationFilter::update_hard_iron_fit(const Vec3& mag_uT, const Quat& E_from_A, double dt_s) {
   // Model while a new sensor-fixed offset is present: m_A = A_from_E * b_E + h_A, with b_E the
   // (constant) field in E. Linear in x = [b_E; h_A]: J = [A_from_E, I].
-  const double forget = 1.0 - lowpass_gain(dt_s, params_.mag_hard_iron_tau_s);
+  const double forget = 1.0 - gains_.hard_iron;
   const Eigen::Matrix3d A_from_E = E_from_A.conjugate().toRotationMatrix();
   Eigen::Matrix<double, 3, 6> J;
   J << A_from_E, Eigen::Matrix3d::Identity();
@@ -331,7 +361,8 @@ void RobustOrientationFilter::update_hard_iron_fit(const Vec3& mag_uT, const Qua
   hi_sum_sq_ = forget * hi_sum_sq_ + mag_uT.squaredNorm();
   hi_weight_ = forget * hi_weight_ + 1.0;
   hi_check_s_ += dt_s;
-  if (hi_check_s_ < 0.5) return;
+  hi_duration_s_ += dt_s;
+  if (hi_check_s_ < 0.5 || hi_duration_s_ < params_.mag_hard_iron_min_s) return;
   hi_check_s_ = 0.0;
 
   // Excitation: all six directions must be seen; the smallest eigenvalue of the averaged normal
@@ -343,15 +374,48 @@ void RobustOrientationFilter::update_hard_iron_fit(const Vec3& mag_uT, const Qua
   const Vec3 b_E = x.head<3>();
   const double norm = b_E.norm();
   if (!x.allFinite() || norm < 1e-6 || !fits_reference(norm, -b_E.z() / norm)) return;
-  // The model must explain the samples: weighted residual sum |J x - m|^2 from the sums.
-  const double residual_sq = hi_sum_sq_ - 2.0 * x.dot(hi_rhs_) + x.dot(hi_normal_ * x);
-  const double rms_uT = std::sqrt(std::max(0.0, residual_sq) / (3.0 * hi_weight_));
-  if (rms_uT > params_.mag_hard_iron_max_rms * mag_ref_norm_) return;
+  // RMS of |J x - m| over the (weighted) samples, from the accumulated sums.
+  const auto rms_uT = [&](const Eigen::Matrix<double, 6, 1>& v) {
+    const double residual_sq = hi_sum_sq_ - 2.0 * v.dot(hi_rhs_) + v.dot(hi_normal_ * v);
+    return std::sqrt(std::max(0.0, residual_sq) / (3.0 * hi_weight_));
+  };
+  // The best field for the current offset, for comparison: b = N_bb^-1 (r_b - N_bh h).
+  Eigen::Matrix<double, 6, 1> x_current;
+  x_current.tail<3>() = hard_iron_uT_;
+  x_current.head<3>() = hi_normal_.topLeftCorner<3, 3>().ldlt().solve(
+      hi_rhs_.head<3>() - hi_normal_.topRightCorner<3, 3>() * hard_iron_uT_);
+  // Accept only a clear, well-explained change: a field disturbance that is not a sensor-fixed
+  // offset (a magnet beside the path) must not leave a wrong offset behind.
+  const double rms_new = rms_uT(x);
+  if (rms_new > params_.mag_hard_iron_max_rms * mag_ref_norm_ || rms_new > 0.5 * rms_uT(x_current) ||
+      (x.tail<3>() - hard_iron_uT_).norm() < params_.mag_hard_iron_min_change * mag_ref_norm_) {
+    return;
+  }
+  hard_iron_prev_uT_ = hard_iron_uT_;
   hard_iron_uT_ = x.tail<3>();
   mag_ref_norm_ = norm;
   mag_ref_sin_dip_ = -b_E.z() / norm;
   if (mag_disturbed_) mag_recover_left_s_ = params_.mag_recover_s;
   reset_hard_iron_fit();
+}
+
+bool RobustOrientationFilter::check_previous_hard_iron(const Vec3& mag_uT, const Quat& E_from_A, double dt_s) {
+  if (hard_iron_prev_uT_ == hard_iron_uT_) return false;
+  const Vec3 m_E = rotate(E_from_A, mag_uT - hard_iron_prev_uT_);
+  const double norm = m_E.norm();
+  if (norm < 1e-6 || !fits_reference(norm, -m_E.z() / norm)) {
+    prev_fit_s_ = 0.0;
+    return false;
+  }
+  prev_fit_s_ += dt_s;
+  if (prev_fit_s_ < params_.mag_hard_iron_return_s) return false;
+  std::swap(hard_iron_uT_, hard_iron_prev_uT_);
+  prev_fit_s_ = 0.0;
+  mag_clean_s_ = params_.mag_accept_after_s;  // this field has just fitted for a while
+  mag_disturbed_ = false;
+  mag_recover_left_s_ = params_.mag_recover_s;
+  reset_hard_iron_fit();
+  return true;
 }
 
 void RobustOrientationFilter::reset_hard_iron_fit() {
@@ -360,6 +424,7 @@ void RobustOrientationFilter::reset_hard_iron_fit() {
   hi_weight_ = 0.0;
   hi_sum_sq_ = 0.0;
   hi_check_s_ = 0.0;
+  hi_duration_s_ = 0.0;
 }
 
 }  // namespace posefuse::imu

@@ -17,6 +17,7 @@
 // adopted after a while (moving to another room); a new sensor-fixed offset (a magnet attached to
 // the sensor: hard iron) is estimated by least squares from the rotation and then removed.
 // Details and parameter guidance: docs/imu-robust.md.
+#include <cmath>
 #include <vector>
 
 #include "imu/imu_sample.hpp"
@@ -28,9 +29,9 @@ class RobustOrientationFilter {
   struct Params {
     // Inclination: time constant of the inertial-frame accelerometer low-pass. Longer averages
     // out longer accelerations but lets gyro-bias drift build up a larger tilt error.
-    double tau_acc_s = 3.0;
+    double tau_acc_s = 4.0;
     // Heading: time constant with which the magnetometer pulls the heading.
-    double tau_mag_s = 9.0;
+    double tau_mag_s = 20.0;
 
     // Rest detection: gyro and accelerometer are low-passed with rest_tau_s; the sensor is at
     // rest when both deviate from their low-pass by less than the thresholds for at least
@@ -58,10 +59,12 @@ class RobustOrientationFilter {
     double mag_norm_threshold = 0.1;
     double mag_dip_threshold_rad = 10.0 * 3.14159265358979 / 180.0;
     double mag_ref_tau_s = 30.0;
+    // After a disturbance, the field must fit the reference this long before it is used again.
+    double mag_accept_after_s = 0.5;
     // A disturbed but self-consistent new field (norm and dip steady) is adopted as the new
     // reference after mag_new_field_s of consistent samples while turning faster than
     // mag_new_field_min_gyr_rad_s (a sensor-fixed magnet would not stay consistent then).
-    double mag_new_field_s = 20.0;
+    double mag_new_field_s = 10.0;
     double mag_new_field_min_gyr_rad_s = 20.0 * 3.14159265358979 / 180.0;
     // Hard-iron re-learning: while disturbed, fit m_A = A_from_E * b_E + h_A by exponentially
     // forgetting least squares (time constant mag_hard_iron_tau_s); accept h_A once the
@@ -71,6 +74,14 @@ class RobustOrientationFilter {
     double mag_hard_iron_tau_s = 20.0;
     double mag_hard_iron_min_excitation = 0.05;
     double mag_hard_iron_max_rms = 0.05;
+    // ... and only after mag_hard_iron_min_s of disturbed samples, when the new offset differs
+    // from the current one by more than mag_hard_iron_min_change times the reference norm and
+    // halves the RMS residual of the current one.
+    double mag_hard_iron_min_s = 10.0;
+    double mag_hard_iron_min_change = 0.15;
+    // The previous offset comes back (magnet taken off) once the field fits the reference
+    // with it for mag_hard_iron_return_s without a break.
+    double mag_hard_iron_return_s = 2.0;
     // After the magnetometer was rejected for a while, the heading may have drifted; the first
     // accepted samples pull with the faster time constant mag_recover_tau_s for
     // mag_recover_s.
@@ -95,29 +106,48 @@ class RobustOrientationFilter {
 
   // Inspection (tests, diagnostics).
   const Params& params() const { return params_; }
+  // The orientation before the heading correction: gyro integration with the inclination
+  // correction, in a frame E whose heading drifts with the gyro (W_from_A = Rz * E_from_A).
+  Quat E_from_A() const { return E_from_I_ * I_from_A_; }
   const Vec3& gyro_bias_rad_s() const { return bias_; }
   bool at_rest() const { return rest_s_ >= params_.rest_min_s; }
   bool mag_disturbed() const { return mag_disturbed_; }
   const Vec3& hard_iron_uT() const { return hard_iron_uT_; }
   double mag_ref_norm_uT() const { return mag_ref_norm_; }
-  double mag_ref_dip_rad() const { return mag_ref_dip_; }
+  double mag_ref_dip_rad() const { return std::asin(mag_ref_sin_dip_); }
 
-  // Carries what the filter learned about the sensor (bias and its uncertainty, magnetic
-  // reference, hard iron) into a fresh run, e.g. for a second pass over a recording.
-  void reset_keeping_calibration();
+  // Starts a fresh run that keeps what the filter learned about the sensor itself (gyro bias
+  // and its uncertainty, hard iron), e.g. for a second pass over a recording. The magnetic
+  // reference is learned anew from the run's own start, as in the first run. With `flip_gyro`
+  // the next run feeds the gyro negated (a time-reversed pass), so the bias flips too.
+  void reset_keeping_calibration(bool flip_gyro = false);
 
  private:
   void integrate_gyro(const Vec3& gyr_rad_s, double dt_s);
   void update_rest_detection(const ImuSample& s, double dt_s);
   void correct_inclination(const Vec3& acc_m_s2, double dt_s);
-  // Returns whether the magnetometer corrected the heading this sample.
-  bool correct_heading(const Vec3& mag_uT, double dt_s, double gyr_norm_rad_s);
+  void correct_heading(const Vec3& mag_uT, const Quat& E_from_A, double dt_s, double gyr_sq_rad2_s2);
+  void update_gains(std::int64_t dt_us);
   void update_rest_bias(double dt_s);
   void update_hard_iron_fit(const Vec3& mag_uT, const Quat& E_from_A, double dt_s);
   void reset_hard_iron_fit();
-  bool fits_reference(double norm_uT, double sin_dip) const;
+  // Switches back to the previous hard iron when the field fits with it again; returns whether it did.
+  bool check_previous_hard_iron(const Vec3& mag_uT, const Quat& E_from_A, double dt_s);
+  bool fits_field(double norm_uT, double sin_dip, double ref_norm_uT, double ref_sin_dip) const;
+  bool fits_reference(double norm_uT, double sin_dip) const {
+    return fits_field(norm_uT, sin_dip, mag_ref_norm_, mag_ref_sin_dip_);
+  }
 
   Params params_;
+
+  // Low-pass gains dt / (tau + dt) for the current step length, recomputed only when it changes.
+  struct Gains {
+    std::int64_t dt_us = -1;
+    double inv_dt = 0;
+    double rest = 0, acc_stage = 0, mag = 0, mag_ref = 0, mag_recover = 0, candidate = 0, hard_iron = 0,
+           bias_motion = 0;
+  };
+  Gains gains_;
 
   // Orientation factors.
   Quat I_from_A_ = Quat::Identity();
@@ -140,30 +170,31 @@ class RobustOrientationFilter {
   double rest_s_ = 0.0;
   Vec3 bias_ = Vec3::Zero();
   double bias_var_ = 0.0;
-  // E_from_A low-passed like the corrections (for the motion bias update).
+  // E_from_A low-passed like the accelerometer (two stages), for the motion bias update.
   Eigen::Matrix3d E_from_A_lp1_acc_ = Eigen::Matrix3d::Zero();
   Eigen::Matrix3d E_from_A_lp_acc_ = Eigen::Matrix3d::Zero();
-  Vec3 E_from_A_lp_mag_z_ = Vec3::Zero();  // its third row, with tau_mag_s
 
   // Heading and magnetic reference.
   bool mag_ref_valid_ = false;
   double mag_ref_norm_ = 0.0;
-  double mag_ref_dip_ = 0.0;      // rad, positive when the field points down
-  double mag_ref_sin_dip_ = 0.0;
+  double mag_ref_sin_dip_ = 0.0;  // sine of the dip angle, positive when the field points down
   double mag_init_count_ = 0.0;
   bool mag_disturbed_ = false;
-  double mag_heading_rate_ = 0.0;  // last heading correction / dt, for the bias
+  double mag_clean_s_ = 0.0;  // time the field has fitted the reference without a break
   double mag_recover_left_s_ = 0.0;
   // Candidate for a new field.
   double cand_norm_ = 0.0, cand_sin_dip_ = 0.0, cand_s_ = 0.0;
   bool cand_valid_ = false;
   // Hard iron: current offset and the forgetting least-squares fit of [b_E; h_A].
   Vec3 hard_iron_uT_ = Vec3::Zero();
+  Vec3 hard_iron_prev_uT_ = Vec3::Zero();
+  double prev_fit_s_ = 0.0;
   Eigen::Matrix<double, 6, 6> hi_normal_ = Eigen::Matrix<double, 6, 6>::Zero();
   Eigen::Matrix<double, 6, 1> hi_rhs_ = Eigen::Matrix<double, 6, 1>::Zero();
   double hi_weight_ = 0.0;
   double hi_sum_sq_ = 0.0;
   double hi_check_s_ = 0.0;
+  double hi_duration_s_ = 0.0;
 };
 
 }  // namespace posefuse::imu
