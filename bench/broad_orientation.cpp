@@ -49,10 +49,11 @@ const std::vector<Mode>& modes() {
       {"faithful", "paper 1's quaternion Kalman filter and gyro bias test (default parameters)",
        run_causal<posefuse::imu::KalmanOrientationFilter>},
       {"faithful-gated", "the same Kalman filter; bias test also needs |rate - bias| < 3 deg/s",
-       [](const std::vector<ImuSample>& s) {
+       [](const std::vector<ImuSample>& s, std::vector<Quat>& W_from_A) {
          posefuse::imu::KalmanOrientationFilter::Params params;
          params.gyro_bias.max_still_rate_rad_s = 3.0 * EIGEN_PI / 180.0;
-         return posefuse::imu::KalmanOrientationFilter(params).process(s);
+         posefuse::imu::KalmanOrientationFilter filter(params);
+         for (std::size_t i = 0; i < s.size(); ++i) W_from_A[i] = filter.update(s[i]);
        }},
       {"robust", "RobustOrientationFilter, causal (default parameters)",
        run_causal<posefuse::imu::RobustOrientationFilter>},
