@@ -1,0 +1,47 @@
+#pragma once
+// A running posefuse server: the gRPC server with the PoseFuse service, the standard health
+// service (grpc.health.v1) and server reflection, the worker pool and the session registry.
+// Used by posefuse-server's main and, in-process, by the integration tests.
+#include <memory>
+
+#include <grpcpp/grpcpp.h>
+
+#include "server/posefuse_service.hpp"
+#include "server/server_options.hpp"
+#include "server/session_registry.hpp"
+#include "server/worker_pool.hpp"
+
+namespace posefuse::server {
+
+class PoseFuseServer {
+ public:
+  // Binds and starts serving. Throws posefuse::Error (kInvalidArgument naming the option) for
+  // bad options, kFailedPrecondition when the address cannot be bound.
+  explicit PoseFuseServer(ServerOptions options);
+  ~PoseFuseServer();  // shuts down if still running
+
+  // The bound port (useful with port 0).
+  int port() const { return port_; }
+  const ServerOptions& options() const { return options_; }
+  SessionRegistry& registry() { return *registry_; }
+
+  // Health NOT_SERVING, stop accepting calls, give calls in flight shutdown_grace_s to finish,
+  // then cancel them. Idempotent.
+  void shutdown();
+  // Blocks until shutdown() has completed.
+  void wait();
+
+ private:
+  ServerOptions options_;
+  std::unique_ptr<WorkerPool> pool_;
+  std::unique_ptr<SessionRegistry> registry_;
+  std::unique_ptr<PoseFuseService> service_;
+  std::unique_ptr<grpc::Server> server_;
+  int port_ = 0;
+  bool shut_down_ = false;
+};
+
+// Checks option values; throws kInvalidArgument naming the flag ("--workers").
+void validate_options(const ServerOptions& options);
+
+}  // namespace posefuse::server
