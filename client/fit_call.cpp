@@ -90,16 +90,15 @@ FitOutcome run_fit(const std::shared_ptr<grpc::Channel>& channel,
     }
   });
 
-  auto last_report = started - std::chrono::seconds(1);
-  auto report = [&](bool force) {
-    const auto now = std::chrono::steady_clock::now();
-    if (!on_progress || (!force && now - last_report < std::chrono::milliseconds(200))) return;
-    last_report = now;
-    on_progress({chunks_sent.load(), depth_frames_sent.load(), fraction.load(),
-                 std::chrono::duration<double>(now - started).count()});
+  auto progress_now = [&] {
+    return FitProgress{chunks_sent.load(), depth_frames_sent.load(), fraction.load(),
+                       std::chrono::duration<double>(std::chrono::steady_clock::now() - started)
+                           .count()};
   };
+  auto last_report = started;
   v1::FitResult result;
   while (stream->Read(&result)) {
+    ++outcome.results_received;
     if (!outcome.local_error) {
       try {
         writer.write(result);
@@ -108,12 +107,15 @@ FitOutcome run_fit(const std::shared_ptr<grpc::Channel>& channel,
         context.TryCancel();
       }
     }
-    report(false);
+    const auto now = std::chrono::steady_clock::now();
+    if (on_progress && now - last_report >= std::chrono::milliseconds(200)) {
+      last_report = now;
+      on_progress(progress_now());
+    }
   }
   sender.join();
-  report(true);
   outcome.status = stream->Finish();
-  outcome.chunks_sent = chunks_sent.load();
+  outcome.progress = progress_now();
   if (read_error && !outcome.local_error) outcome.local_error = read_error;
   if (!outcome.local_error && outcome.status.ok()) {
     try {

@@ -26,7 +26,8 @@ struct FitProgress {
 struct FitOutcome {
   grpc::Status status;               // the call's status from the server
   std::optional<Error> local_error;  // the recording could not be read, or results not written
-  std::uint64_t chunks_sent = 0;
+  FitProgress progress;              // final counts
+  std::uint64_t results_received = 0;
 };
 
 // Streams `recording` over `channel` and writes results with `writer`. `on_progress` is called

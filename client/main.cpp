@@ -99,6 +99,7 @@ class ProgressLine {
   void show(const client::FitProgress& p, bool last) {
     if (!tty_ && !last && p.elapsed_s - last_line_s_ < 2.0) return;
     last_line_s_ = p.elapsed_s;
+    shown_ = true;
     const double fps = p.elapsed_s > 0 ? p.depth_frames_sent / p.elapsed_s : 0.0;
     std::string eta = "--";
     char percent[16] = "";
@@ -112,9 +113,14 @@ class ProgressLine {
                  last ? "0 s" : eta.c_str(), tty_ ? "   " : "\n");
     if (tty_ && last) std::fputc('\n', stderr);
   }
+  // Ends a line left open on a terminal, so that an error starts on its own line.
+  void interrupt() {
+    if (tty_ && shown_) std::fputc('\n', stderr);
+  }
 
  private:
   bool tty_;
+  bool shown_ = false;
   double last_line_s_ = -1e9;
 };
 
@@ -125,22 +131,23 @@ int command_fit(const Arguments& args) {
   const std::string server = args.flag("--server", "127.0.0.1:50051");
   client::ResultWriter writer(args.flag("--out", ""));
   ProgressLine progress;
-  client::FitProgress last;
-  const client::FitOutcome outcome =
-      client::run_fit(client::make_channel(server), args.positional[0], writer,
-                      [&](const client::FitProgress& p) {
-                        last = p;
-                        progress.show(p, false);
-                      });
-  if (outcome.local_error) throw *outcome.local_error;
+  const client::FitOutcome outcome = client::run_fit(
+      client::make_channel(server), args.positional[0], writer,
+      [&](const client::FitProgress& p) { progress.show(p, false); });
+  if (outcome.local_error) {
+    progress.interrupt();
+    throw *outcome.local_error;
+  }
   if (!outcome.status.ok()) {
-    std::fprintf(stderr, "\nposefuse: fit failed: %s\n",
-                 client::status_line(outcome.status, server).c_str());
-    std::fprintf(stderr, "posefuse: partial results are in %s\n",
-                 writer.directory().string().c_str());
+    progress.interrupt();
+    std::fprintf(stderr, "posefuse: fit: %s\n", client::status_line(outcome.status, server).c_str());
+    if (outcome.results_received > 0) {
+      std::fprintf(stderr, "posefuse: fit: partial results are in %s\n",
+                   writer.directory().string().c_str());
+    }
     return 1;
   }
-  progress.show(last, true);
+  progress.show(outcome.progress, true);
   const posefuse::v1::Summary* summary = writer.summary();
   std::printf("results: %s\n", writer.directory().string().c_str());
   std::printf("  %llu IMU orientations in imu_orientations/, calibration.json, summary.json\n",
