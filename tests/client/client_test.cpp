@@ -79,13 +79,13 @@ TEST_F(ClientTest, FitWritesResultFiles) {
   demo::write_demo_session(dir_ / "demo");
 
   ResultWriter writer(dir_ / "out");
-  int progress_calls = 0;
   const FitOutcome outcome =
-      run_fit(make_channel("127.0.0.1:" + std::to_string(server.port())), dir_ / "demo", writer,
-              [&](const FitProgress&) { ++progress_calls; });
+      run_fit(make_channel("127.0.0.1:" + std::to_string(server.port())), dir_ / "demo", writer);
   ASSERT_FALSE(outcome.local_error) << outcome.local_error->what();
   ASSERT_TRUE(outcome.status.ok()) << outcome.status.error_message();
-  EXPECT_GE(progress_calls, 1);
+  EXPECT_EQ(outcome.progress.chunks_sent, 952u);
+  EXPECT_EQ(outcome.progress.depth_frames_sent, 300u);
+  EXPECT_DOUBLE_EQ(outcome.progress.fraction_read, 1.0);
   EXPECT_EQ(writer.orientation_samples(), 1600u);
   // Header row + one row per sample.
   EXPECT_EQ(line_count(dir_ / "out" / "imu_orientations" / "arm_left.csv"), 801u);
