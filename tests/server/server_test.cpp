@@ -6,6 +6,7 @@
 #include <thread>
 #include <vector>
 
+#include <grpcpp/generic/generic_stub.h>
 #include <gtest/gtest.h>
 
 #include "client/demo_session.hpp"
@@ -262,6 +263,53 @@ TEST_F(ServerTest, HealthSaysServing) {
   const grpc::Status status = health->Check(&context, {}, &response);
   ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_EQ(response.status(), grpc::health::v1::HealthCheckResponse::SERVING);
+}
+
+// Server reflection, asked with a raw generic call (no reflection client library is packaged):
+// a ServerReflectionRequest with list_services = "*" (field 7), and the answer must name the
+// PoseFuse service.
+TEST_F(ServerTest, ReflectionListsThePoseFuseService) {
+  start();
+  grpc::GenericStub stub(channel_);
+  grpc::CompletionQueue cq;
+  grpc::ClientContext context;
+  set_test_deadline(context);
+  auto call = stub.PrepareCall(
+      &context, "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo", &cq);
+  auto step = [&](void* tag) {
+    void* got = nullptr;
+    bool ok = false;
+    EXPECT_TRUE(cq.Next(&got, &ok));
+    EXPECT_EQ(got, tag);
+    return ok;
+  };
+  int tags[5];
+  call->StartCall(&tags[0]);
+  ASSERT_TRUE(step(&tags[0]));
+  const std::string request = std::string("\x3a\x01*", 3);  // field 7, length 1, "*"
+  grpc::Slice slice(request);
+  grpc::ByteBuffer request_buffer(&slice, 1);
+  call->Write(request_buffer, &tags[1]);
+  ASSERT_TRUE(step(&tags[1]));
+  grpc::ByteBuffer response_buffer;
+  call->Read(&response_buffer, &tags[2]);
+  ASSERT_TRUE(step(&tags[2]));
+  call->WritesDone(&tags[3]);
+  step(&tags[3]);
+  grpc::Status status;
+  call->Finish(&status, &tags[4]);
+  step(&tags[4]);
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  std::vector<grpc::Slice> slices;
+  ASSERT_TRUE(response_buffer.Dump(&slices).ok());
+  std::string response;
+  for (const auto& s : slices) response.append(reinterpret_cast<const char*>(s.begin()), s.size());
+  EXPECT_NE(response.find("posefuse.v1.PoseFuse"), std::string::npos);
+  cq.Shutdown();
+  void* ignored_tag;
+  bool ignored_ok;
+  while (cq.Next(&ignored_tag, &ignored_ok)) {
+  }
 }
 
 TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
