@@ -18,9 +18,11 @@ using posefuse::server::ServerOptions;
 constexpr const char* kUsage =
     "usage: posefuse-server [--listen HOST:PORT] [--workers N] [--max-sessions N]\n"
     "                       [--max-message-mb MB] [--idle-timeout-s S] [--max-queued-chunks N]\n"
-    "                       [--shutdown-grace-s S]\n"
+    "                       [--shutdown-grace-s S] [--data-dir DIR] [--recordings-root DIR]\n"
+    "                       [--max-jobs N]\n"
     "defaults: --listen 127.0.0.1:50051 --workers <cores> --max-sessions 16 --max-message-mb 16\n"
-    "          --idle-timeout-s 60 --max-queued-chunks 8 --shutdown-grace-s 10\n";
+    "          --idle-timeout-s 60 --max-queued-chunks 8 --shutdown-grace-s 10 --max-jobs 1\n"
+    "batch jobs are off without --data-dir; SubmitJob by reference needs --recordings-root\n";
 
 unsigned parse_count(std::string_view text, const std::string& flag) {
   const std::uint64_t value = posefuse::session::parse_uint64(text, flag);
@@ -53,6 +55,9 @@ ServerOptions parse_flags(int argc, char** argv) {
     else if (flag == "--idle-timeout-s") options.idle_timeout_s = posefuse::session::parse_double(value, flag);
     else if (flag == "--max-queued-chunks") options.max_queued_chunks = parse_count(value, flag);
     else if (flag == "--shutdown-grace-s") options.shutdown_grace_s = posefuse::session::parse_double(value, flag);
+    else if (flag == "--data-dir") options.data_dir = value;
+    else if (flag == "--recordings-root") options.recordings_root = value;
+    else if (flag == "--max-jobs") options.max_jobs = parse_count(value, flag);
     else posefuse::throw_invalid(flag, "unknown flag (see --help)");
   }
   return options;

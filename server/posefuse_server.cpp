@@ -9,6 +9,7 @@
 
 #include "common/error.hpp"
 #include "server/log.hpp"
+#include "server/sqlite_job_store.hpp"
 
 namespace posefuse::server {
 
@@ -24,6 +25,7 @@ void validate_options(const ServerOptions& o) {
   }
   if (o.max_queued_chunks == 0) throw_invalid("--max-queued-chunks", "must be at least 1");
   if (o.max_queued_results == 0) throw_invalid("--max-queued-results", "must be at least 1");
+  if (o.max_jobs == 0) throw_invalid("--max-jobs", "must be at least 1");
   if (!(o.shutdown_grace_s >= 0.0 && std::isfinite(o.shutdown_grace_s))) {
     throw_invalid("--shutdown-grace-s", "must be >= 0 seconds");
   }
@@ -38,7 +40,18 @@ PoseFuseServer::PoseFuseServer(ServerOptions options) : options_(std::move(optio
   const auto check_interval = std::chrono::milliseconds(static_cast<long>(
       std::clamp(options_.idle_timeout_s * 1000.0 / 4.0, 10.0, 250.0)));
   registry_ = std::make_unique<SessionRegistry>(options_.max_sessions, check_interval);
-  service_ = std::make_unique<PoseFuseService>(options_, *pool_, *registry_);
+  if (!options_.data_dir.empty()) {
+    std::error_code error;
+    std::filesystem::create_directories(options_.data_dir, error);
+    if (error) {
+      throw Error(ErrorCode::kFailedPrecondition, "--data-dir",
+                  "cannot create '" + options_.data_dir + "': " + error.message());
+    }
+    job_store_ = std::make_unique<SqliteJobStore>(std::filesystem::path(options_.data_dir) /
+                                                  "jobs.sqlite");
+    jobs_ = std::make_unique<JobRunner>(*job_store_, *pool_, options_.max_jobs);
+  }
+  service_ = std::make_unique<PoseFuseService>(options_, *pool_, *registry_, jobs_.get());
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
@@ -52,6 +65,7 @@ PoseFuseServer::PoseFuseServer(ServerOptions options) : options_(std::move(optio
                 "cannot listen on '" + options_.listen + "' (address in use or invalid?)");
   }
   server_->GetHealthCheckService()->SetServingStatus(true);
+  if (jobs_) jobs_->resume_unfinished();
   log_event("info", "server_start",
             {{"listen", options_.listen},
              {"port", std::to_string(port_)},
@@ -71,6 +85,7 @@ void PoseFuseServer::shutdown() {
   const auto grace = std::chrono::duration_cast<std::chrono::milliseconds>(
       std::chrono::duration<double>(options_.shutdown_grace_s));
   server_->Shutdown(std::chrono::system_clock::now() + grace);
+  jobs_.reset();  // running jobs stop between chunks and stay RUNNING: resumed at next start
   log_event("info", "server_stopped");
 }
 

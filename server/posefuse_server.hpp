@@ -6,6 +6,8 @@
 
 #include <grpcpp/grpcpp.h>
 
+#include "server/job_runner.hpp"
+#include "server/job_store.hpp"
 #include "server/posefuse_service.hpp"
 #include "server/server_options.hpp"
 #include "server/session_registry.hpp"
@@ -24,6 +26,7 @@ class PoseFuseServer {
   int port() const { return port_; }
   const ServerOptions& options() const { return options_; }
   SessionRegistry& registry() { return *registry_; }
+  JobRunner* jobs() { return jobs_.get(); }
 
   // Health NOT_SERVING, stop accepting calls, give calls in flight shutdown_grace_s to finish,
   // then cancel them. Idempotent.
@@ -35,6 +38,8 @@ class PoseFuseServer {
   ServerOptions options_;
   std::unique_ptr<WorkerPool> pool_;
   std::unique_ptr<SessionRegistry> registry_;
+  std::unique_ptr<JobStore> job_store_;
+  std::unique_ptr<JobRunner> jobs_;
   std::unique_ptr<PoseFuseService> service_;
   std::unique_ptr<grpc::Server> server_;
   int port_ = 0;

@@ -14,6 +14,10 @@ struct ServerOptions {
   unsigned max_queued_chunks = 8;          // per session: read but not yet processed
   unsigned max_queued_results = 64;        // per session: computed but not yet sent
   double shutdown_grace_s = 10.0;          // calls in flight get this long to finish
+  // Batch jobs: off unless data_dir is set (job store: <data_dir>/jobs.sqlite).
+  std::string data_dir;
+  std::string recordings_root;             // SubmitJob by reference reads only under this
+  unsigned max_jobs = 1;                   // jobs running at once
 };
 
 }  // namespace posefuse::server

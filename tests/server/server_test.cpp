@@ -330,7 +330,7 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   EXPECT_FALSE(info.jobs_supported());
 }
 
-TEST_F(ServerTest, JobCallsAreUnimplementedForNow) {
+TEST_F(ServerTest, JobCallsWithoutDataDirAreFailedPrecondition) {
   start();
   grpc::ClientContext context;
   set_test_deadline(context);
@@ -338,7 +338,7 @@ TEST_F(ServerTest, JobCallsAreUnimplementedForNow) {
   v1::GetJobRequest request;
   request.set_job_id("x");
   EXPECT_EQ(stub_->GetJob(&context, request, &job).error_code(),
-            grpc::StatusCode::UNIMPLEMENTED);
+            grpc::StatusCode::FAILED_PRECONDITION);
 }
 
 TEST(ServerOptions, BadValuesNameTheFlag) {
