@@ -238,7 +238,7 @@ int command_info(const Arguments& args) {
               static_cast<double>(limits.max_message_bytes()) / (1024.0 * 1024.0),
               limits.max_sessions(), limits.max_queued_chunks(), limits.idle_timeout_s(),
               limits.workers());
-  std::printf("batch jobs: %s\n", info.jobs_supported() ? "supported" : "not yet implemented");
+  std::printf("batch jobs: %s\n", info.jobs_supported() ? "on" : "off (server started without --data-dir)");
   return 0;
 }
 
