@@ -1,7 +1,5 @@
 // The client library: reading recordings (directory and chunk file), the Fit call against an
 // in-process server, result files, and error lines.
-#include <unistd.h>
-
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -15,6 +13,7 @@
 #include "client/result_writer.hpp"
 #include "server/posefuse_server.hpp"
 #include "session/file_bytes.hpp"
+#include "tests/server/test_support.hpp"
 
 namespace posefuse::client {
 namespace {
@@ -23,15 +22,6 @@ namespace fs = std::filesystem;
 
 class ClientTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("posefuse_client_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
-
   static std::size_t line_count(const fs::path& path) {
     std::ifstream in(path);
     std::size_t n = 0;
@@ -39,7 +29,8 @@ class ClientTest : public ::testing::Test {
     return n;
   }
 
-  fs::path dir_;
+  test::TempDir temp_;
+  const fs::path& dir_ = temp_.path();
 };
 
 TEST_F(ClientTest, RecordingReadsBothFormsWithProgress) {

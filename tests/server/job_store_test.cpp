@@ -1,13 +1,12 @@
 // SqliteJobStore: jobs and results survive closing and reopening the database (a server
 // restart), listing pages newest first, unfinished() finds what a restarted server must resume.
-#include <unistd.h>
-
 #include <filesystem>
 
 #include <gtest/gtest.h>
 
 #include "common/error.hpp"
 #include "server/sqlite_job_store.hpp"
+#include "tests/server/test_support.hpp"
 
 namespace posefuse::server {
 namespace {
@@ -16,14 +15,6 @@ namespace fs = std::filesystem;
 
 class JobStoreTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("posefuse_job_store_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
-  void TearDown() override { fs::remove_all(dir_); }
   fs::path db() const { return dir_ / "jobs.sqlite"; }
 
   static v1::JobSpec spec(const std::string& label) {
@@ -33,7 +24,8 @@ class JobStoreTest : public ::testing::Test {
     return s;
   }
 
-  fs::path dir_;
+  test::TempDir temp_;
+  const fs::path& dir_ = temp_.path();
 };
 
 TEST_F(JobStoreTest, JobsAndResultsSurviveReopening) {

@@ -1,9 +1,6 @@
 // Batch jobs through the real server: submit by reference, watch, results, listing, errors, and
 // a job left RUNNING by a stopped server that the next server completes.
-#include <unistd.h>
-
 #include <filesystem>
-#include <map>
 
 #include <gtest/gtest.h>
 
@@ -13,29 +10,20 @@
 #include "server/posefuse_server.hpp"
 #include "server/sqlite_job_store.hpp"
 #include "session/chunk_file.hpp"
+#include "tests/server/test_support.hpp"
 
 namespace posefuse::server {
 namespace {
 
 namespace fs = std::filesystem;
-
-void set_test_deadline(grpc::ClientContext& context) {
-  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
-}
+using test::orientation_samples;
+using test::set_test_deadline;
 
 class JobsTest : public ::testing::Test {
  protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() /
-           ("posefuse_jobs_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    fs::remove_all(dir_);
     fs::create_directories(dir_ / "recordings");
     demo::write_demo_session(dir_ / "recordings" / "demo.pfchunks");
-  }
-  void TearDown() override {
-    server_.reset();
-    fs::remove_all(dir_);
   }
 
   void start() {
@@ -67,11 +55,9 @@ class JobsTest : public ::testing::Test {
     set_test_deadline(context);
     v1::WatchJobRequest request;
     request.set_job_id(id);
-    auto reader = stub_->WatchJob(&context, request);
-    std::vector<v1::Job> states;
-    v1::Job job;
-    while (reader->Read(&job)) states.push_back(job);
-    EXPECT_TRUE(reader->Finish().ok());
+    grpc::Status status;
+    auto states = test::read_all<v1::Job>(*stub_->WatchJob(&context, request), status);
+    EXPECT_TRUE(status.ok()) << status.error_message();
     return states;
   }
 
@@ -80,27 +66,12 @@ class JobsTest : public ::testing::Test {
     set_test_deadline(context);
     v1::GetJobResultsRequest request;
     request.set_job_id(id);
-    auto reader = stub_->GetJobResults(&context, request);
-    std::vector<v1::FitResult> out;
-    v1::FitResult result;
-    while (reader->Read(&result)) out.push_back(result);
-    const grpc::Status s = reader->Finish();
-    if (status) *status = s;
-    return out;
+    grpc::Status ignored;
+    return test::read_all<v1::FitResult>(*stub_->GetJobResults(&context, request), status ? *status : ignored);
   }
 
-  static std::map<std::string, std::size_t> orientation_samples(
-      const std::vector<v1::FitResult>& results) {
-    std::map<std::string, std::size_t> n;
-    for (const auto& r : results) {
-      if (r.has_imu_orientations()) {
-        n[r.imu_orientations().device_id()] += r.imu_orientations().t_us_size();
-      }
-    }
-    return n;
-  }
-
-  fs::path dir_;
+  test::TempDir temp_;
+  const fs::path& dir_ = temp_.path();
   std::unique_ptr<PoseFuseServer> server_;
   std::unique_ptr<v1::PoseFuse::Stub> stub_;
 };

@@ -14,6 +14,7 @@
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "posefuse/v1/service.grpc.pb.h"
 #include "server/posefuse_server.hpp"
+#include "tests/server/test_support.hpp"
 
 namespace posefuse::server {
 namespace {
@@ -25,11 +26,7 @@ struct CallResult {
   std::vector<v1::FitResult> results;
 
   std::map<std::string, std::size_t> orientation_samples() const {
-    std::map<std::string, std::size_t> n;
-    for (const auto& r : results) {
-      if (r.has_imu_orientations()) n[r.imu_orientations().device_id()] += r.imu_orientations().t_us_size();
-    }
-    return n;
+    return test::orientation_samples(results);
   }
   std::vector<v1::ItemError> item_errors() const {
     std::vector<v1::ItemError> out;
@@ -40,9 +37,7 @@ struct CallResult {
   }
 };
 
-void set_test_deadline(grpc::ClientContext& context) {
-  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
-}
+using test::set_test_deadline;
 
 class ServerTest : public ::testing::Test {
  protected:
