@@ -39,12 +39,17 @@ const char* code_name(grpc::StatusCode code) {
 
 FitSession* FitSession::start(grpc::CallbackServerContext* context, std::uint64_t id,
                               const ServerOptions& options, WorkerPool& pool,
-                              SessionRegistry& registry) {
-  auto session = std::make_shared<FitSession>(context, id, options, pool, registry);
+                              SessionRegistry& registry, Metrics& metrics) {
+  auto session = std::make_shared<FitSession>(context, id, options, pool, registry, metrics);
   session->self_ = session;
   session->sink_ = std::make_unique<Sink>(*session);
-  session->pipeline_ = std::make_unique<session::SessionPipeline>(session::make_default_stages(),
-                                                                  *session->sink_);
+  session::PipelineOptions pipeline_options;
+  pipeline_options.on_stage_time = [&metrics](std::string_view stage, double seconds) {
+    metrics.stage_time(stage, seconds);
+  };
+  session->pipeline_ = std::make_unique<session::SessionPipeline>(
+      session::make_default_stages(), *session->sink_, pipeline_options);
+  metrics.session_started();
   registry.watch(id, session);
   log_event("info", "session_start", {{"session", std::to_string(id)}, {"peer", context->peer()}});
   std::lock_guard lock(session->mu_);
@@ -53,8 +58,19 @@ FitSession* FitSession::start(grpc::CallbackServerContext* context, std::uint64_
 }
 
 FitSession::FitSession(grpc::CallbackServerContext* context, std::uint64_t id,
-                       const ServerOptions& options, WorkerPool& pool, SessionRegistry& registry)
-    : context_(context), id_(id), options_(options), pool_(pool), registry_(registry) {}
+                       const ServerOptions& options, WorkerPool& pool, SessionRegistry& registry,
+                       Metrics& metrics)
+    : context_(context),
+      id_(id),
+      options_(options),
+      pool_(pool),
+      registry_(registry),
+      metrics_(metrics) {}
+
+void FitSession::clear_inbox_locked() {
+  metrics_.queued_chunks_add(-static_cast<std::int64_t>(inbox_.size()));
+  inbox_.clear();
+}
 
 void FitSession::start_read_locked() {
   read_pending_ = true;
@@ -70,6 +86,8 @@ void FitSession::OnReadDone(bool ok) {
     input_closed_ = true;
   } else {
     ++chunks_read_;
+    metrics_.chunk_received();
+    metrics_.queued_chunks_add(1);
     inbox_.push_back(std::move(read_buffer_));
     read_buffer_.Clear();
     if (inbox_.size() < options_.max_queued_chunks) start_read_locked();
@@ -101,6 +119,7 @@ void FitSession::work() {
       if (!inbox_.empty()) {
         chunk = std::move(inbox_.front());
         inbox_.pop_front();
+        metrics_.queued_chunks_add(-1);
         if (!read_pending_ && !input_closed_ && inbox_.size() < options_.max_queued_chunks) {
           start_read_locked();
         }
@@ -142,7 +161,10 @@ void FitSession::work() {
 void FitSession::enqueue_result(v1::FitResult&& result) {
   std::lock_guard lock(mu_);
   if (finished_ || final_status_) return;
-  if (result.has_item_error()) ++item_errors_;
+  if (result.has_item_error()) {
+    ++item_errors_;
+    metrics_.item_error();
+  }
   outbox_.push_back(std::move(result));
   if (!write_pending_) start_write_locked();
 }
@@ -180,13 +202,14 @@ void FitSession::OnWriteDone(bool ok) {
 void FitSession::finish_after_writes_locked(grpc::Status status) {
   if (final_status_) return;
   final_status_ = std::move(status);
-  inbox_.clear();
+  clear_inbox_locked();
   if (!write_pending_ && outbox_.empty()) finish_now_locked(*final_status_);
 }
 
 void FitSession::finish_now_locked(grpc::Status status) {
   if (finished_) return;
   finished_ = true;
+  metrics_.session_finished(code_name(status.error_code()));
   const double seconds = std::chrono::duration<double>(Clock::now() - started_at_).count();
   log_event("info", "session_end",
             {{"session", std::to_string(id_)},
@@ -201,7 +224,7 @@ void FitSession::OnCancel() {
   std::lock_guard lock(mu_);
   // Cancelled work stops: queued chunks and results are dropped, the worker sees
   // final_status_ before its next chunk.
-  inbox_.clear();
+  clear_inbox_locked();
   outbox_.clear();
   if (!final_status_) final_status_ = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled");
   if (!write_pending_) finish_now_locked(*final_status_);
@@ -218,7 +241,7 @@ void FitSession::check_idle(Clock::time_point now) {
   final_status_ = grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED,
                                "no message from the client for " +
                                    std::to_string(options_.idle_timeout_s) + " s (idle timeout)");
-  inbox_.clear();
+  clear_inbox_locked();
   outbox_.clear();
   if (write_pending_) {
     context_->TryCancel();  // the pending write fails; OnWriteDone finishes the call

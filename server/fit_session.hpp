@@ -26,6 +26,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "posefuse/v1/service.grpc.pb.h"
+#include "server/metrics.hpp"
 #include "server/server_options.hpp"
 #include "server/session_registry.hpp"
 #include "server/worker_pool.hpp"
@@ -40,7 +41,7 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
   // Starts the call; the returned reactor keeps itself alive until OnDone.
   static FitSession* start(grpc::CallbackServerContext* context, std::uint64_t id,
                            const ServerOptions& options, WorkerPool& pool,
-                           SessionRegistry& registry);
+                           SessionRegistry& registry, Metrics& metrics);
 
   void OnReadDone(bool ok) override;
   void OnWriteDone(bool ok) override;
@@ -50,7 +51,7 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
 
   // Use start(); public only for make_shared.
   FitSession(grpc::CallbackServerContext* context, std::uint64_t id, const ServerOptions& options,
-             WorkerPool& pool, SessionRegistry& registry);
+             WorkerPool& pool, SessionRegistry& registry, Metrics& metrics);
 
  private:
   class Sink;
@@ -64,12 +65,14 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
   // Sends `status` once every queued result is out; stops taking chunks.
   void finish_after_writes_locked(grpc::Status status);
   void finish_now_locked(grpc::Status status);
+  void clear_inbox_locked();
 
   grpc::CallbackServerContext* const context_;
   const std::uint64_t id_;
   const ServerOptions& options_;
   WorkerPool& pool_;
   SessionRegistry& registry_;
+  Metrics& metrics_;
   const Clock::time_point started_at_ = Clock::now();
 
   std::mutex mu_;

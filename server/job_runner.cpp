@@ -61,8 +61,8 @@ bool is_terminal(v1::Job::State state) {
   return state == v1::Job::SUCCEEDED || state == v1::Job::FAILED || state == v1::Job::CANCELLED;
 }
 
-JobRunner::JobRunner(JobStore& store, WorkerPool& pool, unsigned max_running)
-    : store_(store), pool_(pool), max_running_(std::max(1u, max_running)) {}
+JobRunner::JobRunner(JobStore& store, WorkerPool& pool, Metrics& metrics, unsigned max_running)
+    : store_(store), pool_(pool), metrics_(metrics), max_running_(std::max(1u, max_running)) {}
 
 JobRunner::~JobRunner() {
   std::unique_lock lock(mu_);
@@ -137,7 +137,11 @@ void JobRunner::run(const std::string& job_id) {
     StoreSink sink(store_, job, [this](const v1::Job& j) { publish(j); });
     try {
       auto source = open_recording(record->recording_path);
-      session::SessionPipeline pipeline(session::make_default_stages(), sink);
+      session::PipelineOptions pipeline_options;
+      pipeline_options.on_stage_time = [this](std::string_view stage, double seconds) {
+        metrics_.stage_time(stage, seconds);
+      };
+      session::SessionPipeline pipeline(session::make_default_stages(), sink, pipeline_options);
       session::SessionChunk chunk;
       bool cancelled = false;
       while (source->next(chunk)) {
@@ -170,6 +174,7 @@ void JobRunner::run(const std::string& job_id) {
       job.set_update_time_unix_us(now_unix_us());
       store_.update(job);
       publish(job);
+      metrics_.job_finished(v1::Job::State_Name(job.state()));
       log_event("info", "job_end", {{"job", job_id}, {"state", v1::Job::State_Name(job.state())}});
     }
   }

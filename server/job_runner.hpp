@@ -19,6 +19,7 @@
 #include <string>
 
 #include "server/job_store.hpp"
+#include "server/metrics.hpp"
 #include "server/worker_pool.hpp"
 
 namespace posefuse::server {
@@ -27,7 +28,7 @@ bool is_terminal(v1::Job::State state);
 
 class JobRunner {
  public:
-  JobRunner(JobStore& store, WorkerPool& pool, unsigned max_running);
+  JobRunner(JobStore& store, WorkerPool& pool, Metrics& metrics, unsigned max_running);
   ~JobRunner();  // stops running jobs (they stay RUNNING in the store) and waits for them
 
   // Re-queues every unfinished job in the store. Call once at start.
@@ -54,6 +55,7 @@ class JobRunner {
 
   JobStore& store_;
   WorkerPool& pool_;
+  Metrics& metrics_;
   const unsigned max_running_;
   std::mutex mu_;
   std::condition_variable idle_;

@@ -19,7 +19,7 @@ constexpr const char* kUsage =
     "usage: posefuse-server [--listen HOST:PORT] [--workers N] [--max-sessions N]\n"
     "                       [--max-message-mb MB] [--idle-timeout-s S] [--max-queued-chunks N]\n"
     "                       [--shutdown-grace-s S] [--data-dir DIR] [--recordings-root DIR]\n"
-    "                       [--max-jobs N]\n"
+    "                       [--max-jobs N] [--metrics-listen HOST:PORT]\n"
     "defaults: --listen 127.0.0.1:50051 --workers <cores> --max-sessions 16 --max-message-mb 16\n"
     "          --idle-timeout-s 60 --max-queued-chunks 8 --shutdown-grace-s 10 --max-jobs 1\n"
     "batch jobs are off without --data-dir; SubmitJob by reference needs --recordings-root\n";
@@ -58,6 +58,7 @@ ServerOptions parse_flags(int argc, char** argv) {
     else if (flag == "--data-dir") options.data_dir = value;
     else if (flag == "--recordings-root") options.recordings_root = value;
     else if (flag == "--max-jobs") options.max_jobs = parse_count(value, flag);
+    else if (flag == "--metrics-listen") options.metrics_listen = value;
     else posefuse::throw_invalid(flag, "unknown flag (see --help)");
   }
   return options;

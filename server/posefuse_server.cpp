@@ -49,9 +49,17 @@ PoseFuseServer::PoseFuseServer(ServerOptions options) : options_(std::move(optio
     }
     job_store_ = std::make_unique<SqliteJobStore>(std::filesystem::path(options_.data_dir) /
                                                   "jobs.sqlite");
-    jobs_ = std::make_unique<JobRunner>(*job_store_, *pool_, options_.max_jobs);
+    jobs_ = std::make_unique<JobRunner>(*job_store_, *pool_, metrics_, options_.max_jobs);
   }
-  service_ = std::make_unique<PoseFuseService>(options_, *pool_, *registry_, jobs_.get());
+  service_ =
+      std::make_unique<PoseFuseService>(options_, *pool_, *registry_, metrics_, jobs_.get());
+
+  // Before the gRPC server, so that a bad --metrics-listen fails before anything serves.
+  if (!options_.metrics_listen.empty()) {
+    metrics_http_ = std::make_unique<MetricsHttpServer>(options_.metrics_listen,
+                                                        [this] { return render_metrics(); });
+    log_event("info", "metrics_start", {{"port", std::to_string(metrics_http_->port())}});
+  }
 
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
@@ -77,6 +85,11 @@ PoseFuseServer::PoseFuseServer(ServerOptions options) : options_(std::move(optio
 
 PoseFuseServer::~PoseFuseServer() { shutdown(); }
 
+std::string PoseFuseServer::render_metrics() const {
+  return metrics_.render({registry_->active(), pool_->queued(),
+                          static_cast<unsigned>(pool_->threads())});
+}
+
 void PoseFuseServer::shutdown() {
   if (shut_down_) return;
   shut_down_ = true;
@@ -85,6 +98,7 @@ void PoseFuseServer::shutdown() {
   const auto grace = std::chrono::duration_cast<std::chrono::milliseconds>(
       std::chrono::duration<double>(options_.shutdown_grace_s));
   server_->Shutdown(std::chrono::system_clock::now() + grace);
+  metrics_http_.reset();
   jobs_.reset();  // running jobs stop between chunks and stay RUNNING: resumed at next start
   log_event("info", "server_stopped");
 }

@@ -8,6 +8,8 @@
 
 #include "server/job_runner.hpp"
 #include "server/job_store.hpp"
+#include "server/metrics.hpp"
+#include "server/metrics_http.hpp"
 #include "server/posefuse_service.hpp"
 #include "server/server_options.hpp"
 #include "server/session_registry.hpp"
@@ -27,6 +29,9 @@ class PoseFuseServer {
   const ServerOptions& options() const { return options_; }
   SessionRegistry& registry() { return *registry_; }
   JobRunner* jobs() { return jobs_.get(); }
+  // The metrics endpoint's port, 0 when it is off.
+  int metrics_port() const { return metrics_http_ ? metrics_http_->port() : 0; }
+  std::string render_metrics() const;
 
   // Health NOT_SERVING, stop accepting calls, give calls in flight shutdown_grace_s to finish,
   // then cancel them. Idempotent.
@@ -36,12 +41,14 @@ class PoseFuseServer {
 
  private:
   ServerOptions options_;
+  Metrics metrics_;
   std::unique_ptr<WorkerPool> pool_;
   std::unique_ptr<SessionRegistry> registry_;
   std::unique_ptr<JobStore> job_store_;
   std::unique_ptr<JobRunner> jobs_;
   std::unique_ptr<PoseFuseService> service_;
   std::unique_ptr<grpc::Server> server_;
+  std::unique_ptr<MetricsHttpServer> metrics_http_;
   int port_ = 0;
   bool shut_down_ = false;
 };

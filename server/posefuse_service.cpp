@@ -38,20 +38,21 @@ constexpr std::size_t kMaxPageSize = 1000;
 }  // namespace
 
 PoseFuseService::PoseFuseService(const ServerOptions& options, WorkerPool& pool,
-                                 SessionRegistry& registry, JobRunner* jobs)
-    : options_(options), pool_(pool), registry_(registry), jobs_(jobs) {}
+                                 SessionRegistry& registry, Metrics& metrics, JobRunner* jobs)
+    : options_(options), pool_(pool), registry_(registry), metrics_(metrics), jobs_(jobs) {}
 
 grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>* PoseFuseService::Fit(
     grpc::CallbackServerContext* context) {
   const std::optional<std::uint64_t> id = registry_.try_admit();
   if (!id) {
+    metrics_.session_refused();
     log_event("info", "session_refused", {{"reason", "max_sessions"}, {"peer", context->peer()}});
     return new Refused<grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>>(grpc::Status(
         grpc::StatusCode::RESOURCE_EXHAUSTED,
         "server busy: " + std::to_string(options_.max_sessions) +
             " sessions are running (--max-sessions); retry later"));
   }
-  return FitSession::start(context, *id, options_, pool_, registry_);
+  return FitSession::start(context, *id, options_, pool_, registry_, metrics_);
 }
 
 grpc::ServerUnaryReactor* PoseFuseService::GetServerInfo(grpc::CallbackServerContext* context,

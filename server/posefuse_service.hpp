@@ -6,6 +6,7 @@
 
 #include "posefuse/v1/service.grpc.pb.h"
 #include "server/job_runner.hpp"
+#include "server/metrics.hpp"
 #include "server/server_options.hpp"
 #include "server/session_registry.hpp"
 #include "server/worker_pool.hpp"
@@ -16,7 +17,7 @@ class PoseFuseService final : public v1::PoseFuse::CallbackService {
  public:
   // `jobs` may be null: batch jobs are off.
   PoseFuseService(const ServerOptions& options, WorkerPool& pool, SessionRegistry& registry,
-                  JobRunner* jobs);
+                  Metrics& metrics, JobRunner* jobs);
 
   grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>* Fit(
       grpc::CallbackServerContext* context) override;
@@ -43,6 +44,7 @@ class PoseFuseService final : public v1::PoseFuse::CallbackService {
   const ServerOptions& options_;
   WorkerPool& pool_;
   SessionRegistry& registry_;
+  Metrics& metrics_;
   JobRunner* jobs_;
 };
 

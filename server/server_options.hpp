@@ -18,6 +18,7 @@ struct ServerOptions {
   std::string data_dir;
   std::string recordings_root;             // SubmitJob by reference reads only under this
   unsigned max_jobs = 1;                   // jobs running at once
+  std::string metrics_listen;              // IPv4 HOST:PORT for GET /metrics; empty = off
 };
 
 }  // namespace posefuse::server

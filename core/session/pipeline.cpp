@@ -54,6 +54,18 @@ SessionPipeline::SessionPipeline(std::vector<std::unique_ptr<Stage>> stages, Res
 
 SessionPipeline::~SessionPipeline() = default;
 
+template <class Call>
+void SessionPipeline::timed(Stage& stage, Call&& call) {
+  if (!options_.on_stage_time) {
+    call();
+    return;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  call();  // a throwing stage call is not timed: it is counted as an item error instead
+  options_.on_stage_time(
+      stage.name(), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+}
+
 void SessionPipeline::push(const v1::SessionChunk& chunk) {
   const std::uint64_t index = index_++;
   const std::string field = "chunk[" + std::to_string(index) + "]";
@@ -73,7 +85,9 @@ void SessionPipeline::push(const v1::SessionChunk& chunk) {
   }
 
   if (chunk.has_header()) {
-    for (const auto& stage : stages_) stage->start(chunk.header(), *output_);
+    for (const auto& stage : stages_) {
+      timed(*stage, [&] { stage->start(chunk.header(), *output_); });
+    }
     return;
   }
   if (chunk.has_end()) {
@@ -90,7 +104,7 @@ void SessionPipeline::process_data_chunk(const v1::SessionChunk& chunk) {
   if (chunk.has_depth()) ++depth_frames_;
   for (const auto& stage : stages_) {
     try {
-      stage->on_chunk(chunk, *output_);
+      timed(*stage, [&] { stage->on_chunk(chunk, *output_); });
     } catch (const Error& error) {
       item_error(error, error.field());
     }
@@ -117,7 +131,7 @@ void SessionPipeline::item_error(const Error& error, const std::string& field) {
 
 void SessionPipeline::end_session() {
   ended_ = true;
-  for (const auto& stage : stages_) stage->finish(*output_);
+  for (const auto& stage : stages_) timed(*stage, [&] { stage->finish(*output_); });
   v1::FitResult calibration;
   *calibration.mutable_calibration() = output_->calibration();
   output_->emit(std::move(calibration));

@@ -17,6 +17,7 @@
 // Not thread-safe: one session is processed in order on one thread (DESIGN.md "Threads").
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -30,6 +31,9 @@ namespace posefuse::session {
 struct PipelineOptions {
   std::uint64_t progress_every_chunks = 64;
   std::uint64_t max_item_errors = 100;
+  // Called after every stage call (start, on_chunk, finish) with the stage's name and the wall
+  // time it took, for metrics. May be empty.
+  std::function<void(std::string_view stage, double seconds)> on_stage_time;
 };
 
 class SessionPipeline {
@@ -59,6 +63,9 @@ class SessionPipeline {
   void end_session();
   void emit_progress();
   void note_camera_time(const v1::SessionChunk& chunk);
+  // Runs `call` on `stage`, reporting its duration to options_.on_stage_time.
+  template <class Call>
+  void timed(Stage& stage, Call&& call);
 
   std::vector<std::unique_ptr<Stage>> stages_;
   ResultSink& sink_;

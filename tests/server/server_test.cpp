@@ -6,6 +6,11 @@
 #include <thread>
 #include <vector>
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
 #include <grpcpp/generic/generic_stub.h>
 #include <gtest/gtest.h>
 
@@ -334,6 +339,51 @@ TEST_F(ServerTest, JobCallsWithoutDataDirAreFailedPrecondition) {
   request.set_job_id("x");
   EXPECT_EQ(stub_->GetJob(&context, request, &job).error_code(),
             grpc::StatusCode::FAILED_PRECONDITION);
+}
+
+// A plain HTTP GET on loopback; returns the whole response (head and body).
+std::string http_get(int port, const std::string& path) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(static_cast<std::uint16_t>(port));
+  ::inet_pton(AF_INET, "127.0.0.1", &address.sin_addr);
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) {
+    ::close(fd);
+    return "";
+  }
+  const std::string request = "GET " + path + " HTTP/1.1\r\nHost: test\r\n\r\n";
+  ::send(fd, request.data(), request.size(), 0);
+  std::string response;
+  char buffer[4096];
+  for (ssize_t n; (n = ::recv(fd, buffer, sizeof buffer, 0)) > 0;) {
+    response.append(buffer, static_cast<std::size_t>(n));
+  }
+  ::close(fd);
+  return response;
+}
+
+TEST_F(ServerTest, MetricsEndpointCountsSessionsAndStageCalls) {
+  ServerOptions options;
+  options.metrics_listen = "127.0.0.1:0";
+  start(options);
+  ASSERT_GT(server_->metrics_port(), 0);
+  ASSERT_TRUE(fit(demo::make_demo_session()).status.ok());
+  // The session's slot is released (and its end counted) right after the call.
+  ASSERT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
+
+  const std::string response = http_get(server_->metrics_port(), "/metrics");
+  EXPECT_EQ(response.rfind("HTTP/1.1 200 OK\r\n", 0), 0u) << response;
+  EXPECT_NE(response.find("\nposefuse_sessions_finished_total{status=\"OK\"} 1\n"),
+            std::string::npos)
+      << response;
+  EXPECT_NE(response.find("\nposefuse_sessions_in_flight 0\n"), std::string::npos);
+  EXPECT_NE(response.find("\nposefuse_chunks_received_total 952\n"), std::string::npos);
+  // start + 950 data chunks + finish.
+  EXPECT_NE(response.find("\nposefuse_stage_calls_total{stage=\"imu_orientation\"} 952\n"),
+            std::string::npos);
+  EXPECT_NE(response.find("\nposefuse_queued_chunks 0\n"), std::string::npos);
+  EXPECT_EQ(http_get(server_->metrics_port(), "/other").rfind("HTTP/1.1 404", 0), 0u);
 }
 
 TEST(ServerOptions, BadValuesNameTheFlag) {
