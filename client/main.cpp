@@ -1,0 +1,278 @@
+// posefuse: the reference command-line client (docs/server.md).
+//   posefuse fit RECORDING --server ADDR --out DIR
+//   posefuse convert IN OUT
+//   posefuse health --server ADDR
+//   posefuse info --server ADDR
+//   posefuse demo-session OUT
+// Every failure ends with one readable line on stderr and a non-zero exit status.
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "client/demo_session.hpp"
+#include "client/fit_call.hpp"
+#include "common/error.hpp"
+#include "grpc/health/v1/health.grpc.pb.h"
+#include "posefuse/v1/service.grpc.pb.h"
+#include "session/convert.hpp"
+
+namespace {
+
+using posefuse::Error;
+namespace client = posefuse::client;
+
+constexpr const char* kUsage =
+    "usage:\n"
+    "  posefuse fit RECORDING --server HOST:PORT --out DIR   stream a recording, write results\n"
+    "  posefuse convert IN OUT             recording directory <-> chunk file (.pfchunks)\n"
+    "  posefuse health --server HOST:PORT  exit 0 when the server is SERVING\n"
+    "  posefuse info --server HOST:PORT    versions, stages, options and limits\n"
+    "  posefuse demo-session OUT           write the synthetic demo session (a directory, or a\n"
+    "                                      chunk file when OUT ends in .pfchunks)\n"
+    "RECORDING is a recording directory or a chunk file. --server defaults to 127.0.0.1:50051.\n";
+
+constexpr int kExitUsage = 2;
+
+// Positional arguments and --flag values of one command.
+struct Arguments {
+  std::vector<std::string> positional;
+  std::map<std::string, std::string> flags;
+
+  std::string flag(const std::string& name, const std::string& fallback) const {
+    const auto it = flags.find(name);
+    return it == flags.end() ? fallback : it->second;
+  }
+};
+
+Arguments parse_arguments(int argc, char** argv, int first) {
+  Arguments args;
+  for (int i = first; i < argc; ++i) {
+    std::string text = argv[i];
+    if (text.rfind("--", 0) != 0) {
+      args.positional.push_back(text);
+      continue;
+    }
+    if (const auto eq = text.find('='); eq != std::string::npos) {
+      args.flags[text.substr(0, eq)] = text.substr(eq + 1);
+    } else if (i + 1 < argc) {
+      args.flags[text] = argv[++i];
+    } else {
+      throw posefuse::Error(posefuse::ErrorCode::kInvalidArgument, text, "needs a value");
+    }
+  }
+  return args;
+}
+
+void require(bool ok, const std::string& what) {
+  if (!ok) throw Error(posefuse::ErrorCode::kInvalidArgument, "usage", what);
+}
+
+void check_flags(const Arguments& args, const std::vector<std::string>& known) {
+  for (const auto& [name, value] : args.flags) {
+    bool found = false;
+    for (const auto& k : known) found = found || k == name;
+    require(found, "unknown option " + name);
+  }
+}
+
+std::string format_eta(double seconds) {
+  if (seconds < 0 || !std::isfinite(seconds)) return "--";
+  char text[32];
+  if (seconds < 60) {
+    std::snprintf(text, sizeof text, "%.0f s", seconds);
+  } else {
+    std::snprintf(text, sizeof text, "%d min %02d s", static_cast<int>(seconds) / 60,
+                  static_cast<int>(seconds) % 60);
+  }
+  return text;
+}
+
+// The progress line: rewritten in place on a terminal, a line every few seconds otherwise.
+class ProgressLine {
+ public:
+  ProgressLine() : tty_(isatty(STDERR_FILENO) == 1) {}
+
+  void show(const client::FitProgress& p, bool last) {
+    if (!tty_ && !last && p.elapsed_s - last_line_s_ < 2.0) return;
+    last_line_s_ = p.elapsed_s;
+    shown_ = true;
+    const double fps = p.elapsed_s > 0 ? p.depth_frames_sent / p.elapsed_s : 0.0;
+    std::string eta = "--";
+    char percent[16] = "";
+    if (p.fraction_read > 0) {
+      std::snprintf(percent, sizeof percent, " (%3.0f%%)", 100.0 * p.fraction_read);
+      eta = format_eta(p.elapsed_s * (1.0 - p.fraction_read) / p.fraction_read);
+    }
+    std::fprintf(stderr, "%sfit: %llu chunks%s, %llu frames, %.1f frames/s, ETA %s%s",
+                 tty_ ? "\r" : "", static_cast<unsigned long long>(p.chunks_sent), percent,
+                 static_cast<unsigned long long>(p.depth_frames_sent), fps,
+                 last ? "0 s" : eta.c_str(), tty_ ? "   " : "\n");
+    if (tty_ && last) std::fputc('\n', stderr);
+  }
+  // Ends a line left open on a terminal, so that an error starts on its own line.
+  void interrupt() {
+    if (tty_ && shown_) std::fputc('\n', stderr);
+  }
+
+ private:
+  bool tty_;
+  bool shown_ = false;
+  double last_line_s_ = -1e9;
+};
+
+int command_fit(const Arguments& args) {
+  check_flags(args, {"--server", "--out"});
+  require(args.positional.size() == 1, "fit takes one RECORDING (see posefuse --help)");
+  require(args.flags.count("--out") == 1, "fit needs --out DIR");
+  const std::string server = args.flag("--server", "127.0.0.1:50051");
+  client::ResultWriter writer(args.flag("--out", ""));
+  ProgressLine progress;
+  const client::FitOutcome outcome = client::run_fit(
+      client::make_channel(server), args.positional[0], writer,
+      [&](const client::FitProgress& p) { progress.show(p, false); });
+  if (outcome.local_error) {
+    progress.interrupt();
+    throw *outcome.local_error;
+  }
+  if (!outcome.status.ok()) {
+    progress.interrupt();
+    std::fprintf(stderr, "posefuse: fit: %s\n", client::status_line(outcome.status, server).c_str());
+    if (outcome.results_received > 0) {
+      std::fprintf(stderr, "posefuse: fit: partial results are in %s\n",
+                   writer.directory().string().c_str());
+    }
+    return 1;
+  }
+  progress.show(outcome.progress, true);
+  const posefuse::v1::Summary* summary = writer.summary();
+  std::printf("results: %s\n", writer.directory().string().c_str());
+  std::printf("  %llu IMU orientations in imu_orientations/, calibration.json, summary.json\n",
+              static_cast<unsigned long long>(writer.orientation_samples()));
+  if (summary != nullptr) {
+    std::printf("  %llu chunks, %llu depth frames, %.1f s of recording processed in %.2f s\n",
+                static_cast<unsigned long long>(summary->chunks()),
+                static_cast<unsigned long long>(summary->depth_frames()),
+                summary->stream_duration_s(), summary->processing_duration_s());
+  }
+  std::printf("  %llu warnings, %llu item errors (warnings.txt)\n",
+              static_cast<unsigned long long>(writer.warnings()),
+              static_cast<unsigned long long>(writer.item_errors()));
+  return 0;
+}
+
+int command_convert(const Arguments& args) {
+  check_flags(args, {});
+  require(args.positional.size() == 2, "convert takes IN and OUT");
+  const std::filesystem::path in = args.positional[0], out = args.positional[1];
+  const std::uint64_t chunks = std::filesystem::is_directory(in)
+                                   ? posefuse::session::directory_to_chunk_file(in, out)
+                                   : posefuse::session::chunk_file_to_directory(in, out);
+  std::printf("converted %llu chunks: %s -> %s\n", static_cast<unsigned long long>(chunks),
+              in.string().c_str(), out.string().c_str());
+  return 0;
+}
+
+void set_deadline(grpc::ClientContext& context) {
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(5));
+}
+
+int command_health(const Arguments& args) {
+  check_flags(args, {"--server"});
+  require(args.positional.empty(), "health takes no positional arguments");
+  const std::string server = args.flag("--server", "127.0.0.1:50051");
+  auto stub = grpc::health::v1::Health::NewStub(client::make_channel(server));
+  grpc::ClientContext context;
+  set_deadline(context);
+  grpc::health::v1::HealthCheckRequest request;
+  grpc::health::v1::HealthCheckResponse response;
+  const grpc::Status status = stub->Check(&context, request, &response);
+  if (!status.ok()) {
+    std::fprintf(stderr, "posefuse: health: %s\n", client::status_line(status, server).c_str());
+    return 1;
+  }
+  const std::string name =
+      grpc::health::v1::HealthCheckResponse::ServingStatus_Name(response.status());
+  std::printf("%s\n", name.c_str());
+  return response.status() == grpc::health::v1::HealthCheckResponse::SERVING ? 0 : 1;
+}
+
+int command_info(const Arguments& args) {
+  check_flags(args, {"--server"});
+  require(args.positional.empty(), "info takes no positional arguments");
+  const std::string server = args.flag("--server", "127.0.0.1:50051");
+  auto stub = posefuse::v1::PoseFuse::NewStub(client::make_channel(server));
+  grpc::ClientContext context;
+  set_deadline(context);
+  posefuse::v1::ServerInfo info;
+  const grpc::Status status = stub->GetServerInfo(&context, {}, &info);
+  if (!status.ok()) {
+    std::fprintf(stderr, "posefuse: info: %s\n", client::status_line(status, server).c_str());
+    return 1;
+  }
+  std::printf("posefuse-server %s (%s; gRPC %s, protobuf %s)\n", info.server_version().c_str(),
+              info.api_version().c_str(), info.grpc_version().c_str(),
+              info.protobuf_version().c_str());
+  std::printf("session format versions:");
+  for (const auto v : info.session_format_versions()) std::printf(" %u", v);
+  std::printf("\nstages:\n");
+  for (const auto& stage : info.stages()) {
+    std::printf("  %-18s %s\n", stage.name().c_str(), stage.description().c_str());
+  }
+  std::printf("options (SessionHeader.options):\n");
+  for (const auto& option : info.options()) {
+    std::printf("  %-18s default %-6s %s\n", option.key().c_str(),
+                option.default_value().c_str(), option.description().c_str());
+  }
+  std::printf("models: %s\n", info.models().empty() ? "none loaded" : "");
+  for (const auto& model : info.models()) {
+    std::printf("  %s %s: %s\n", model.name().c_str(), model.version().c_str(),
+                model.description().c_str());
+  }
+  const auto& limits = info.limits();
+  std::printf("limits: max message %.1f MiB, %u sessions, %u queued chunks per session, "
+              "idle timeout %.0f s, %u workers\n",
+              static_cast<double>(limits.max_message_bytes()) / (1024.0 * 1024.0),
+              limits.max_sessions(), limits.max_queued_chunks(), limits.idle_timeout_s(),
+              limits.workers());
+  std::printf("batch jobs: %s\n", info.jobs_supported() ? "on" : "off (server started without --data-dir)");
+  return 0;
+}
+
+int command_demo_session(const Arguments& args) {
+  check_flags(args, {});
+  require(args.positional.size() == 1, "demo-session takes OUT");
+  const std::uint64_t chunks = posefuse::demo::write_demo_session(args.positional[0]);
+  std::printf("demo session (synthetic placeholder until the simulator exists): %llu chunks in %s\n",
+              static_cast<unsigned long long>(chunks), args.positional[0].c_str());
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2 || std::string(argv[1]) == "--help" || std::string(argv[1]) == "-h") {
+    std::fputs(kUsage, argc < 2 ? stderr : stdout);
+    return argc < 2 ? kExitUsage : 0;
+  }
+  const std::string command = argv[1];
+  try {
+    const Arguments args = parse_arguments(argc, argv, 2);
+    if (command == "fit") return command_fit(args);
+    if (command == "convert") return command_convert(args);
+    if (command == "health") return command_health(args);
+    if (command == "info") return command_info(args);
+    if (command == "demo-session") return command_demo_session(args);
+    std::fprintf(stderr, "posefuse: unknown command '%s'\n%s", command.c_str(), kUsage);
+    return kExitUsage;
+  } catch (const Error& error) {
+    std::fprintf(stderr, "posefuse: %s: %s\n", command.c_str(), error.what());
+    return error.field() == "usage" ? kExitUsage : 1;
+  } catch (const std::exception& error) {
+    std::fprintf(stderr, "posefuse: %s: %s\n", command.c_str(), error.what());
+    return 1;
+  }
+}

@@ -1,0 +1,187 @@
+#include "session/pipeline.hpp"
+
+#include <string>
+#include <utility>
+
+namespace posefuse::session {
+
+// The StageOutput the stages write to: forwards to the sink and counts warnings.
+class SessionPipeline::Output : public StageOutput {
+ public:
+  explicit Output(SessionPipeline& pipeline) : pipeline_(pipeline) {}
+
+  void emit(v1::FitResult&& result) override {
+    if (result.has_warning()) ++pipeline_.warnings_;
+    if (result.has_item_error()) ++pipeline_.item_errors_;
+    pipeline_.sink_.emit(std::move(result));
+  }
+  void warn(const std::string& code, const std::string& field,
+            const std::string& message) override {
+    v1::FitResult result;
+    v1::Warning& warning = *result.mutable_warning();
+    warning.set_code(code);
+    warning.set_field(field);
+    warning.set_message(message);
+    emit(std::move(result));
+  }
+  v1::CalibrationReport& calibration() override { return calibration_; }
+
+ private:
+  SessionPipeline& pipeline_;
+  v1::CalibrationReport calibration_;
+};
+
+namespace {
+
+// SessionValidator numbers chunks by how many it has accepted; after a rejected chunk that
+// differs from the position in the stream, which is what the caller needs to find the chunk.
+std::string stream_field(const std::string& field, std::uint64_t validator_index,
+                         std::uint64_t stream_index) {
+  const std::string validator_prefix = "chunk[" + std::to_string(validator_index) + "]";
+  if (field.rfind(validator_prefix, 0) != 0) return field;
+  return "chunk[" + std::to_string(stream_index) + "]" + field.substr(validator_prefix.size());
+}
+
+}  // namespace
+
+SessionPipeline::SessionPipeline(std::vector<std::unique_ptr<Stage>> stages, ResultSink& sink,
+                                 PipelineOptions options)
+    : stages_(std::move(stages)),
+      sink_(sink),
+      options_(options),
+      output_(std::make_unique<Output>(*this)),
+      started_at_(std::chrono::steady_clock::now()) {}
+
+SessionPipeline::~SessionPipeline() = default;
+
+template <class Call>
+void SessionPipeline::timed(Stage& stage, Call&& call) {
+  if (!options_.on_stage_time) {
+    call();
+    return;
+  }
+  const auto start = std::chrono::steady_clock::now();
+  call();  // a throwing stage call is not timed: it is counted as an item error instead
+  options_.on_stage_time(
+      stage.name(), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+}
+
+void SessionPipeline::push(const v1::SessionChunk& chunk) {
+  const std::uint64_t index = index_++;
+  const std::string field = "chunk[" + std::to_string(index) + "]";
+  if (ended_) {
+    throw_invalid(field, "chunk after the end marker (a session ends with exactly one)");
+  }
+  try {
+    validator_.check(chunk);
+  } catch (const Error& error) {
+    // Without a valid header nothing else can be interpreted: the session cannot go on.
+    if (!validator_.has_header()) throw;
+    item_error(error, stream_field(error.field(), validator_.chunks_checked(), index));
+    // An end marker whose counts disagree still ends the stream (the disagreement was reported;
+    // chunks rejected above are one honest cause of it).
+    if (chunk.has_end()) end_session();
+    return;
+  }
+
+  if (chunk.has_header()) {
+    for (const auto& stage : stages_) {
+      timed(*stage, [&] { stage->start(chunk.header(), *output_); });
+    }
+    return;
+  }
+  if (chunk.has_end()) {
+    end_session();
+    return;
+  }
+  process_data_chunk(chunk);
+  // Item errors from stages go through item_error too.
+  if (index_ % options_.progress_every_chunks == 0) emit_progress();
+}
+
+void SessionPipeline::process_data_chunk(const v1::SessionChunk& chunk) {
+  note_camera_time(chunk);
+  if (chunk.has_depth()) ++depth_frames_;
+  for (const auto& stage : stages_) {
+    try {
+      timed(*stage, [&] { stage->on_chunk(chunk, *output_); });
+    } catch (const Error& error) {
+      item_error(error, error.field());
+    }
+  }
+}
+
+void SessionPipeline::item_error(const Error& error, const std::string& field) {
+  v1::FitResult result;
+  v1::ItemError& item = *result.mutable_item_error();
+  item.set_code(error_code_name(error.code()));
+  item.set_field(field);
+  // Error::what() is "field: message"; the message alone, since the field is separate.
+  const std::string what = error.what();
+  const std::string prefix = error.field() + ": ";
+  item.set_message(what.rfind(prefix, 0) == 0 ? what.substr(prefix.size()) : what);
+  output_->emit(std::move(result));
+  if (item_errors_ > options_.max_item_errors) {
+    throw Error(ErrorCode::kInvalidArgument, "chunks",
+                std::to_string(item_errors_) + " chunks or items rejected (limit " +
+                    std::to_string(options_.max_item_errors) +
+                    "); the last: " + field + ": " + item.message());
+  }
+}
+
+void SessionPipeline::end_session() {
+  ended_ = true;
+  for (const auto& stage : stages_) timed(*stage, [&] { stage->finish(*output_); });
+  v1::FitResult calibration;
+  *calibration.mutable_calibration() = output_->calibration();
+  output_->emit(std::move(calibration));
+  emit_progress();
+
+  v1::FitResult result;
+  v1::Summary& summary = *result.mutable_summary();
+  summary.set_chunks(index_);
+  summary.set_depth_frames(depth_frames_);
+  summary.set_frames_fitted(0);  // no body-fitting stage yet
+  summary.set_recovered_segments(0);
+  summary.set_warnings(warnings_);
+  summary.set_item_errors(item_errors_);
+  if (first_camera_t_us_) {
+    summary.set_stream_duration_s(static_cast<double>(*last_camera_t_us_ - *first_camera_t_us_) *
+                                  1e-6);
+  }
+  summary.set_processing_duration_s(
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started_at_).count());
+  output_->emit(std::move(result));
+}
+
+void SessionPipeline::close() {
+  if (ended_) return;
+  throw_invalid("end", "the stream stopped after " + std::to_string(index_) +
+                           " chunks without an end marker (truncated upload or recording?)");
+}
+
+void SessionPipeline::emit_progress() {
+  v1::FitResult result;
+  v1::Progress& progress = *result.mutable_progress();
+  progress.set_chunks_processed(index_);
+  progress.set_frames_processed(depth_frames_);
+  progress.set_stream_t_us(last_camera_t_us_.value_or(0));
+  output_->emit(std::move(result));
+}
+
+void SessionPipeline::note_camera_time(const v1::SessionChunk& chunk) {
+  std::optional<std::int64_t> t_us;
+  switch (chunk.chunk_case()) {
+    case v1::SessionChunk::kDepth: t_us = chunk.depth().t_us(); break;
+    case v1::SessionChunk::kBodyIndex: t_us = chunk.body_index().t_us(); break;
+    case v1::SessionChunk::kSkeleton: t_us = chunk.skeleton().t_us(); break;
+    case v1::SessionChunk::kColor: t_us = chunk.color().t_us(); break;
+    case v1::SessionChunk::kAudio: t_us = chunk.audio().t_us(); break;
+    default: break;  // IMU and sync events are on their devices' clocks
+  }
+  if (!t_us) return;
+  if (!first_camera_t_us_ || *t_us < *first_camera_t_us_) first_camera_t_us_ = t_us;
+  if (!last_camera_t_us_ || *t_us > *last_camera_t_us_) last_camera_t_us_ = t_us;
+}
+
+}  // namespace posefuse::session

@@ -1,0 +1,84 @@
+#pragma once
+// SessionPipeline: runs one session's chunk stream through SessionValidator and the stages.
+//
+// Chunks arrive in stream order (push). Each is validated first:
+//  - a chunk that fails validation is answered with an ItemError naming the field and skipped;
+//    everything accepted before and after it is kept (the validator's state only advances on
+//    accepted chunks);
+//  - errors that make the session impossible are thrown as posefuse::Error and end it: no or an
+//    invalid header, a stage that cannot start with the header's options, a chunk after the end
+//    marker, input that stops without an end marker (close), more than max_item_errors bad
+//    chunks (the recording is not worth going on with).
+// Accepted data chunks go to every stage in order; a posefuse::Error from a stage is an ItemError
+// for that chunk. Progress results are emitted every progress_every_chunks chunks. After the end
+// marker the stages finish, then the pipeline sends one CalibrationReport, a last Progress and
+// the Summary.
+//
+// Not thread-safe: one session is processed in order on one thread (DESIGN.md "Threads").
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "common/error.hpp"
+#include "session/pipeline_stage.hpp"
+#include "session/session_validator.hpp"
+
+namespace posefuse::session {
+
+struct PipelineOptions {
+  std::uint64_t progress_every_chunks = 64;
+  std::uint64_t max_item_errors = 100;
+  // Called after every stage call (start, on_chunk, finish) with the stage's name and the wall
+  // time it took, for metrics. May be empty.
+  std::function<void(std::string_view stage, double seconds)> on_stage_time;
+};
+
+class SessionPipeline {
+ public:
+  SessionPipeline(std::vector<std::unique_ptr<Stage>> stages, ResultSink& sink,
+                  PipelineOptions options = {});
+  ~SessionPipeline();
+  SessionPipeline(const SessionPipeline&) = delete;
+  SessionPipeline& operator=(const SessionPipeline&) = delete;
+
+  // The next chunk of the stream. Throws posefuse::Error only for session-ending errors.
+  void push(const v1::SessionChunk& chunk);
+  // The input has ended. Throws kInvalidArgument (field "end") if the end marker never came.
+  void close();
+
+  bool ended() const { return ended_; }
+  std::uint64_t chunks_received() const { return index_; }
+  std::uint64_t item_errors() const { return item_errors_; }
+  std::uint64_t warnings() const { return warnings_; }
+  std::uint64_t depth_frames() const { return depth_frames_; }
+
+ private:
+  class Output;
+
+  void item_error(const Error& error, const std::string& field);
+  void process_data_chunk(const v1::SessionChunk& chunk);
+  void end_session();
+  void emit_progress();
+  void note_camera_time(const v1::SessionChunk& chunk);
+  // Runs `call` on `stage`, reporting its duration to options_.on_stage_time.
+  template <class Call>
+  void timed(Stage& stage, Call&& call);
+
+  std::vector<std::unique_ptr<Stage>> stages_;
+  ResultSink& sink_;
+  PipelineOptions options_;
+  std::unique_ptr<Output> output_;
+  SessionValidator validator_;
+  bool ended_ = false;
+  std::uint64_t index_ = 0;  // chunks received, accepted or not
+  std::uint64_t item_errors_ = 0;
+  std::uint64_t warnings_ = 0;
+  std::uint64_t depth_frames_ = 0;
+  std::optional<std::int64_t> first_camera_t_us_, last_camera_t_us_;
+  std::chrono::steady_clock::time_point started_at_;
+};
+
+}  // namespace posefuse::session

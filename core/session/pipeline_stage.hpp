@@ -1,0 +1,63 @@
+#pragma once
+// The interface every pipeline stage implements (IMU orientation now; forearm recovery and body
+// fitting later), and the output a stage writes its results to.
+//
+// A stage sees the validated session in stream order: start() with the header, on_chunk() for
+// every accepted data chunk, finish() once after the end marker. It emits results as soon as it
+// knows them and adds its part of the calibration report, which the pipeline sends once after
+// every stage has finished. Stages hold all their state themselves (no globals), so many
+// sessions run at once.
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "posefuse/v1/results.pb.h"
+#include "posefuse/v1/session.pb.h"
+
+namespace posefuse::session {
+
+// Where results go (the server's stream, a test's vector, a file writer).
+class ResultSink {
+ public:
+  virtual ~ResultSink() = default;
+  virtual void emit(v1::FitResult&& result) = 0;
+};
+
+// What a stage writes to. Owned by the pipeline; counts warnings for the summary.
+class StageOutput {
+ public:
+  virtual ~StageOutput() = default;
+  virtual void emit(v1::FitResult&& result) = 0;
+  virtual void warn(const std::string& code, const std::string& field,
+                    const std::string& message) = 0;
+  // The session's calibration report, filled by the stages in finish() and sent after them.
+  virtual v1::CalibrationReport& calibration() = 0;
+};
+
+// A SessionHeader.options key a stage reads (listed by the server's GetServerInfo).
+struct StageOption {
+  std::string key;            // e.g. "imu.tau_acc_s"
+  std::string default_value;  // as text, as written in SessionHeader.options
+  std::string description;    // one line, with the unit
+};
+
+class Stage {
+ public:
+  virtual ~Stage() = default;
+  // Stable name used in logs, metrics and ServerInfo, e.g. "imu_orientation".
+  virtual std::string_view name() const = 0;
+  // One line: what the stage computes and from what.
+  virtual std::string_view description() const = 0;
+  virtual std::vector<StageOption> options() const { return {}; }
+  // The validated header. Throws posefuse::Error for options the stage cannot use; that ends
+  // the session (the pipeline cannot run without the stage).
+  virtual void start(const v1::SessionHeader& header, StageOutput& out) = 0;
+  // One validated data chunk, in stream order. A posefuse::Error thrown here becomes an
+  // ItemError for this chunk and the session goes on, so a stage must leave its state
+  // consistent when it throws.
+  virtual void on_chunk(const v1::SessionChunk& chunk, StageOutput& out) = 0;
+  // After the end marker: emit what is left and add to out.calibration().
+  virtual void finish(StageOutput& out) = 0;
+};
+
+}  // namespace posefuse::session

@@ -1,0 +1,13 @@
+#include "session/stages/default_stages.hpp"
+
+#include "session/stages/imu_orientation_stage.hpp"
+
+namespace posefuse::session {
+
+std::vector<std::unique_ptr<Stage>> make_default_stages() {
+  std::vector<std::unique_ptr<Stage>> stages;
+  stages.push_back(std::make_unique<ImuOrientationStage>());
+  return stages;
+}
+
+}  // namespace posefuse::session

@@ -1,0 +1,114 @@
+#include "session/stages/imu_orientation_stage.hpp"
+
+#include <cmath>
+#include <limits>
+
+#include "common/error.hpp"
+#include "geometry/quaternion.hpp"
+#include "session/imu_batch.hpp"
+#include "session/text_fields.hpp"
+
+namespace posefuse::session {
+
+namespace {
+
+constexpr const char* kTauAccKey = "imu.tau_acc_s";
+constexpr const char* kTauMagKey = "imu.tau_mag_s";
+
+// A positive, finite time constant from the header options, or `fallback` when absent.
+double time_constant_option(const v1::SessionHeader& header, const char* key, double fallback) {
+  const auto it = header.options().find(key);
+  if (it == header.options().end()) return fallback;
+  const std::string field = std::string("header.options[") + key + "]";
+  const double value = parse_double(it->second, field);
+  if (!std::isfinite(value) || value <= 0.0) {
+    throw_invalid(field, "is '" + it->second + "', must be a positive number of seconds");
+  }
+  return value;
+}
+
+v1::Vec3 to_proto(const imu::Vec3& v) {
+  v1::Vec3 out;
+  out.set_x(v.x());
+  out.set_y(v.y());
+  out.set_z(v.z());
+  return out;
+}
+
+}  // namespace
+
+std::string_view ImuOrientationStage::description() const {
+  return "orientation W_from_A of every IMU sample (robust 9-axis filter), gyro bias per device";
+}
+
+std::vector<StageOption> ImuOrientationStage::options() const {
+  const imu::RobustOrientationFilter::Params defaults;
+  return {
+      {kTauAccKey, format_double(defaults.tau_acc_s),
+       "inclination: time constant of the accelerometer low-pass, seconds"},
+      {kTauMagKey, format_double(defaults.tau_mag_s),
+       "heading: time constant of the magnetometer correction, seconds"},
+  };
+}
+
+void ImuOrientationStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) {
+  imu::RobustOrientationFilter::Params params;
+  params.tau_acc_s = time_constant_option(header, kTauAccKey, params.tau_acc_s);
+  params.tau_mag_s = time_constant_option(header, kTauMagKey, params.tau_mag_s);
+  for (const v1::ImuDevice& device : header.imu_devices()) {
+    device_order_.push_back(device.device_id());
+    devices_.emplace(device.device_id(), Device{imu::RobustOrientationFilter(params)});
+  }
+}
+
+void ImuOrientationStage::on_chunk(const v1::SessionChunk& chunk, StageOutput& out) {
+  if (!chunk.has_imu()) return;
+  const v1::ImuBatch& batch = chunk.imu();
+  const auto it = devices_.find(batch.device_id());
+  if (it == devices_.end()) {
+    // The validator rejects unknown devices; reaching this is a bug of ours.
+    throw Error(ErrorCode::kInternal, "imu.device_id",
+                "'" + batch.device_id() + "' has no filter");
+  }
+  Device& device = it->second;
+  const std::vector<imu::ImuSample> samples = samples_from_batch(batch);
+
+  v1::FitResult result;
+  v1::ImuOrientationBatch& orientations = *result.mutable_imu_orientations();
+  orientations.set_device_id(batch.device_id());
+  orientations.mutable_t_us()->Reserve(static_cast<int>(samples.size()));
+  orientations.mutable_w_from_a()->Reserve(4 * static_cast<int>(samples.size()));
+  for (const imu::ImuSample& sample : samples) {
+    const imu::Quat W_from_A = geometry::same_hemisphere(device.filter.update(sample),
+                                                         device.last_W_from_A);
+    device.last_W_from_A = W_from_A;
+    orientations.add_t_us(sample.t_us);
+    for (const double value : geometry::to_wxyz(W_from_A)) orientations.add_w_from_a(value);
+  }
+  device.samples += samples.size();
+  out.emit(std::move(result));
+}
+
+void ImuOrientationStage::finish(StageOutput& out) {
+  for (std::size_t i = 0; i < device_order_.size(); ++i) {
+    const std::string& id = device_order_[i];
+    const Device& device = devices_.at(id);
+    v1::ImuCalibration& calibration = *out.calibration().add_imus();
+    calibration.set_device_id(id);
+    calibration.set_mag_fit_residual(std::numeric_limits<double>::quiet_NaN());
+    calibration.set_mag_coverage(0.0);
+    calibration.set_calibrated(false);
+    if (device.samples == 0) {
+      calibration.set_mag_field_ut(std::numeric_limits<double>::quiet_NaN());
+      out.warn("IMU_NO_SAMPLES", "header.imu_devices[" + std::to_string(i) + "]",
+               "device '" + id + "' sent no samples; no orientation or gyro bias for it");
+      continue;
+    }
+    calibration.set_mag_field_ut(device.filter.mag_ref_norm_uT() > 0.0
+                                     ? device.filter.mag_ref_norm_uT()
+                                     : std::numeric_limits<double>::quiet_NaN());
+    *calibration.mutable_gyro_bias_rad_s() = to_proto(device.filter.gyro_bias_rad_s());
+  }
+}
+
+}  // namespace posefuse::session

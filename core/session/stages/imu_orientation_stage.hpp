@@ -1,0 +1,42 @@
+#pragma once
+// Pipeline stage: orientation W_from_A of every IMU, sample by sample, with
+// imu::RobustOrientationFilter (one filter per device in header.imu_devices).
+//
+// Each ImuBatch is answered at once with an ImuOrientationBatch of the same t_us (device clock)
+// and one W_from_A per sample; the quaternion sign is kept continuous from sample to sample.
+// K_from_A stays empty until the camera alignment stage exists. At the end every device gets an
+// ImuCalibration entry: the gyro bias the filter estimated and the magnetic field magnitude it
+// learned. `calibrated` stays false: the paper's magnetometer calibration (ellipsoid fit, paper 1
+// section III) is not run by this stage, so mag_fit_residual is NaN and mag_coverage 0.
+//
+// Options (SessionHeader.options): "imu.tau_acc_s", "imu.tau_mag_s" (see options()).
+#include <map>
+#include <string>
+
+#include "imu/robust_orientation_filter.hpp"
+#include "session/pipeline_stage.hpp"
+
+namespace posefuse::session {
+
+class ImuOrientationStage : public Stage {
+ public:
+  std::string_view name() const override { return "imu_orientation"; }
+  std::string_view description() const override;
+  std::vector<StageOption> options() const override;
+
+  void start(const v1::SessionHeader& header, StageOutput& out) override;
+  void on_chunk(const v1::SessionChunk& chunk, StageOutput& out) override;
+  void finish(StageOutput& out) override;
+
+ private:
+  struct Device {
+    imu::RobustOrientationFilter filter;
+    std::uint64_t samples = 0;
+    imu::Quat last_W_from_A = imu::Quat::Identity();
+  };
+  // In header order, so the calibration report lists devices as the header does.
+  std::vector<std::string> device_order_;
+  std::map<std::string, Device> devices_;
+};
+
+}  // namespace posefuse::session

@@ -1,0 +1,62 @@
+#!/usr/bin/env bash
+# The README's first command: builds posefuse, makes the demo session, starts the real
+# posefuse-server on a free loopback port, runs the posefuse client against it, stops the server
+# and prints where the results are.
+#   scripts/demo.sh                      results in build/demo/results
+#   DEMO_DIR=/tmp/demo scripts/demo.sh   choose the folder
+# The demo session is synthetic, made in code (client/demo_session.cpp): a placeholder until the
+# simulator (issue 4) exists.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+build_dir=${BUILD_DIR:-$root/build}
+demo_dir=${DEMO_DIR:-$build_dir/demo}
+
+"$root/scripts/build.sh"
+server_bin="$build_dir/server/posefuse-server"
+client_bin="$build_dir/client/posefuse"
+
+rm -rf "$demo_dir"
+mkdir -p "$demo_dir"
+session="$demo_dir/demo-session.pfchunks"
+"$client_bin" demo-session "$session"
+
+# Port 0: the server picks a free port and logs it (event=server_start ... port=N).
+server_log="$demo_dir/server.log"
+"$server_bin" --listen 127.0.0.1:0 2>"$server_log" &
+server_pid=$!
+stop_server() {
+  if kill -0 "$server_pid" 2>/dev/null; then
+    kill -TERM "$server_pid"
+    wait "$server_pid" || true
+  fi
+}
+trap stop_server EXIT
+
+port=""
+for _ in $(seq 1 100); do
+  port=$(sed -n 's/.*event=server_start .* port=\([0-9]*\).*/\1/p' "$server_log")
+  [ -n "$port" ] && break
+  kill -0 "$server_pid" 2>/dev/null || { echo "demo: the server did not start:" >&2; cat "$server_log" >&2; exit 1; }
+  sleep 0.1
+done
+[ -n "$port" ] || { echo "demo: the server did not report its port" >&2; exit 1; }
+address="127.0.0.1:$port"
+
+for _ in $(seq 1 50); do
+  if "$client_bin" health --server "$address" >/dev/null 2>&1; then break; fi
+  sleep 0.1
+done
+echo "demo: posefuse-server on $address is $("$client_bin" health --server "$address")"
+
+results="$demo_dir/results"
+"$client_bin" fit "$session" --server "$address" --out "$results"
+
+stop_server
+trap - EXIT
+echo
+echo "demo: done. Results in $results"
+echo "  imu_orientations/*.csv  W_from_A per IMU sample (t_us,w,x,y,z)"
+echo "  calibration.json        gyro bias and field magnitude per IMU"
+echo "  summary.json            counts and durations"
+echo "  warnings.txt            warnings and per-chunk errors (empty when none)"
+echo "  server log: $server_log"

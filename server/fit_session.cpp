@@ -1,0 +1,262 @@
+#include "server/fit_session.hpp"
+
+#include "server/log.hpp"
+#include "server/status.hpp"
+#include "session/stages/default_stages.hpp"
+
+namespace posefuse::server {
+
+// The pipeline's results go straight to the session's send queue.
+class FitSession::Sink : public session::ResultSink {
+ public:
+  explicit Sink(FitSession& session) : session_(session) {}
+  void emit(v1::FitResult&& result) override { session_.enqueue_result(std::move(result)); }
+
+ private:
+  FitSession& session_;
+};
+
+namespace {
+
+const char* code_name(grpc::StatusCode code) {
+  switch (code) {
+    case grpc::StatusCode::OK: return "OK";
+    case grpc::StatusCode::CANCELLED: return "CANCELLED";
+    case grpc::StatusCode::INVALID_ARGUMENT: return "INVALID_ARGUMENT";
+    case grpc::StatusCode::DEADLINE_EXCEEDED: return "DEADLINE_EXCEEDED";
+    case grpc::StatusCode::NOT_FOUND: return "NOT_FOUND";
+    case grpc::StatusCode::RESOURCE_EXHAUSTED: return "RESOURCE_EXHAUSTED";
+    case grpc::StatusCode::FAILED_PRECONDITION: return "FAILED_PRECONDITION";
+    case grpc::StatusCode::OUT_OF_RANGE: return "OUT_OF_RANGE";
+    case grpc::StatusCode::DATA_LOSS: return "DATA_LOSS";
+    case grpc::StatusCode::INTERNAL: return "INTERNAL";
+    case grpc::StatusCode::UNAVAILABLE: return "UNAVAILABLE";
+    default: return "OTHER";
+  }
+}
+
+}  // namespace
+
+FitSession* FitSession::start(grpc::CallbackServerContext* context, std::uint64_t id,
+                              const ServerOptions& options, WorkerPool& pool,
+                              SessionRegistry& registry, Metrics& metrics) {
+  auto session = std::make_shared<FitSession>(context, id, options, pool, registry, metrics);
+  session->self_ = session;
+  session->sink_ = std::make_unique<Sink>(*session);
+  session::PipelineOptions pipeline_options;
+  pipeline_options.on_stage_time = [&metrics](std::string_view stage, double seconds) {
+    metrics.stage_time(stage, seconds);
+  };
+  session->pipeline_ = std::make_unique<session::SessionPipeline>(
+      session::make_default_stages(), *session->sink_, pipeline_options);
+  metrics.session_started();
+  registry.watch(id, session);
+  log_event("info", "session_start", {{"session", std::to_string(id)}, {"peer", context->peer()}});
+  std::lock_guard lock(session->mu_);
+  session->start_read_locked();
+  return session.get();
+}
+
+FitSession::FitSession(grpc::CallbackServerContext* context, std::uint64_t id,
+                       const ServerOptions& options, WorkerPool& pool, SessionRegistry& registry,
+                       Metrics& metrics)
+    : context_(context),
+      id_(id),
+      options_(options),
+      pool_(pool),
+      registry_(registry),
+      metrics_(metrics) {}
+
+void FitSession::clear_inbox_locked() {
+  metrics_.queued_chunks_add(-static_cast<std::int64_t>(inbox_.size()));
+  inbox_.clear();
+}
+
+void FitSession::start_read_locked() {
+  read_pending_ = true;
+  StartRead(&read_buffer_);
+}
+
+void FitSession::OnReadDone(bool ok) {
+  std::lock_guard lock(mu_);
+  read_pending_ = false;
+  if (finished_ || final_status_) return;
+  last_read_at_ = Clock::now();
+  if (!ok) {
+    input_closed_ = true;
+  } else {
+    ++chunks_read_;
+    metrics_.chunk_received();
+    metrics_.queued_chunks_add(1);
+    inbox_.push_back(std::move(read_buffer_));
+    read_buffer_.Clear();
+    if (inbox_.size() < options_.max_queued_chunks) start_read_locked();
+  }
+  schedule_locked();
+}
+
+void FitSession::schedule_locked() {
+  if (worker_scheduled_ || finished_) return;
+  worker_scheduled_ = true;
+  pool_.submit([self = shared_from_this()] { self->work(); });
+}
+
+void FitSession::work() {
+  for (;;) {
+    v1::SessionChunk chunk;
+    bool input_ended = false;
+    {
+      std::lock_guard lock(mu_);
+      if (finished_ || final_status_) {
+        worker_scheduled_ = false;
+        return;
+      }
+      if (outbox_.size() >= options_.max_queued_results) {
+        worker_waits_for_writes_ = true;
+        worker_scheduled_ = false;
+        return;
+      }
+      if (!inbox_.empty()) {
+        chunk = std::move(inbox_.front());
+        inbox_.pop_front();
+        metrics_.queued_chunks_add(-1);
+        if (!read_pending_ && !input_closed_ && inbox_.size() < options_.max_queued_chunks) {
+          start_read_locked();
+        }
+      } else if (input_closed_) {
+        input_ended = true;
+      } else {
+        worker_scheduled_ = false;
+        return;
+      }
+    }
+
+    std::optional<grpc::Status> status;
+    try {
+      if (input_ended) {
+        pipeline_->close();  // throws: the end marker never came
+      } else {
+        pipeline_->push(chunk);
+      }
+      if (pipeline_->ended()) status = grpc::Status::OK;
+    } catch (const Error& error) {
+      log_event("info", "session_error", {{"session", std::to_string(id_)},
+                                          {"code", error_code_name(error.code())},
+                                          {"field", error.field()}});
+      status = to_status(error);
+    } catch (const std::exception& error) {
+      log_event("error", "session_internal_error", {{"session", std::to_string(id_)}});
+      status = grpc::Status(grpc::StatusCode::INTERNAL,
+                            std::string("internal error: ") + error.what());
+    }
+    if (status) {
+      std::lock_guard lock(mu_);
+      worker_scheduled_ = false;
+      finish_after_writes_locked(std::move(*status));
+      return;
+    }
+  }
+}
+
+void FitSession::enqueue_result(v1::FitResult&& result) {
+  std::lock_guard lock(mu_);
+  if (finished_ || final_status_) return;
+  if (result.has_item_error()) {
+    ++item_errors_;
+    metrics_.item_error();
+  }
+  outbox_.push_back(std::move(result));
+  if (!write_pending_) start_write_locked();
+}
+
+void FitSession::start_write_locked() {
+  write_buffer_ = std::move(outbox_.front());
+  outbox_.pop_front();
+  write_pending_ = true;
+  StartWrite(&write_buffer_);
+}
+
+void FitSession::OnWriteDone(bool ok) {
+  std::lock_guard lock(mu_);
+  write_pending_ = false;
+  last_read_at_ = Clock::now();  // the client is alive: it is receiving
+  if (!ok) {
+    // The client is gone or stopped the stream; nothing more can be sent.
+    outbox_.clear();
+    if (!final_status_) final_status_ = grpc::Status(grpc::StatusCode::CANCELLED, "stream broken");
+    finish_now_locked(*final_status_);
+    return;
+  }
+  if (!outbox_.empty() && !finished_) {
+    start_write_locked();
+  } else if (final_status_) {
+    finish_now_locked(*final_status_);
+    return;
+  }
+  if (worker_waits_for_writes_ && outbox_.size() < options_.max_queued_results / 2 + 1) {
+    worker_waits_for_writes_ = false;
+    schedule_locked();
+  }
+}
+
+void FitSession::finish_after_writes_locked(grpc::Status status) {
+  if (final_status_) return;
+  final_status_ = std::move(status);
+  clear_inbox_locked();
+  if (!write_pending_ && outbox_.empty()) finish_now_locked(*final_status_);
+}
+
+void FitSession::finish_now_locked(grpc::Status status) {
+  if (finished_) return;
+  finished_ = true;
+  metrics_.session_finished(code_name(status.error_code()));
+  const double seconds = std::chrono::duration<double>(Clock::now() - started_at_).count();
+  log_event("info", "session_end",
+            {{"session", std::to_string(id_)},
+             {"status", code_name(status.error_code())},
+             {"chunks", std::to_string(chunks_read_)},
+             {"item_errors", std::to_string(item_errors_)},
+             {"seconds", std::to_string(seconds)}});
+  Finish(std::move(status));
+}
+
+void FitSession::OnCancel() {
+  std::lock_guard lock(mu_);
+  // Cancelled work stops: queued chunks and results are dropped, the worker sees
+  // final_status_ before its next chunk.
+  clear_inbox_locked();
+  outbox_.clear();
+  if (!final_status_) final_status_ = grpc::Status(grpc::StatusCode::CANCELLED, "cancelled");
+  if (!write_pending_) finish_now_locked(*final_status_);
+}
+
+void FitSession::check_idle(Clock::time_point now) {
+  std::lock_guard lock(mu_);
+  if (finished_ || final_status_) return;
+  const bool waiting_for_client = (read_pending_ && inbox_.empty() && !worker_scheduled_) ||
+                                  write_pending_;
+  if (!waiting_for_client) return;
+  if (now - last_read_at_ < std::chrono::duration<double>(options_.idle_timeout_s)) return;
+  log_event("info", "session_idle", {{"session", std::to_string(id_)}});
+  final_status_ = grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED,
+                               "no message from the client for " +
+                                   std::to_string(options_.idle_timeout_s) + " s (idle timeout)");
+  clear_inbox_locked();
+  outbox_.clear();
+  if (write_pending_) {
+    context_->TryCancel();  // the pending write fails; OnWriteDone finishes the call
+  } else {
+    finish_now_locked(*final_status_);
+  }
+}
+
+void FitSession::OnDone() {
+  std::shared_ptr<FitSession> keep_until_return;
+  {
+    std::lock_guard lock(mu_);
+    keep_until_return = std::move(self_);
+  }
+  registry_.release(id_);
+}
+
+}  // namespace posefuse::server

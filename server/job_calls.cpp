@@ -1,0 +1,216 @@
+#include "server/job_calls.hpp"
+
+#include <deque>
+#include <memory>
+#include <mutex>
+
+#include "server/status.hpp"
+
+namespace posefuse::server {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// Reads the JobSpec, then answers with the stored job. Uploads are not implemented yet.
+class SubmitJob : public grpc::ServerReadReactor<v1::SubmitJobRequest> {
+ public:
+  SubmitJob(JobRunner& runner, fs::path root, v1::Job* response)
+      : runner_(runner), root_(std::move(root)), response_(response) {
+    StartRead(&request_);
+  }
+  void OnReadDone(bool ok) override {
+    if (!ok || !request_.has_spec()) {
+      Finish(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                          "spec: the first SubmitJobRequest must be a JobSpec"));
+      return;
+    }
+    const v1::JobSpec& spec = request_.spec();
+    if (spec.source_case() != v1::JobSpec::kRecordingUri) {
+      Finish(grpc::Status(grpc::StatusCode::UNIMPLEMENTED,
+                          "spec.upload: uploaded jobs are not implemented yet; submit a "
+                          "recording_uri or stream with Fit"));
+      return;
+    }
+    try {
+      const fs::path path = resolve_recording(spec.recording_uri(), root_);
+      *response_ = runner_.submit(spec, path.string());
+      Finish(grpc::Status::OK);
+    } catch (const Error& error) {
+      Finish(to_status(error));
+    }
+  }
+  void OnDone() override { delete this; }
+
+ private:
+  JobRunner& runner_;
+  fs::path root_;
+  v1::Job* response_;
+  v1::SubmitJobRequest request_;
+};
+
+// Streams messages from a queue, one write at a time; the last one finishes the call. Owned by a
+// shared_ptr (self_) until OnDone, so that listeners holding a weak_ptr never see it destroyed.
+template <class Message>
+class QueuedWriter : public grpc::ServerWriteReactor<Message> {
+ public:
+  void OnWriteDone(bool ok) override {
+    std::lock_guard lock(mu_);
+    writing_ = false;
+    if (!ok) {
+      finish_locked(grpc::Status(grpc::StatusCode::CANCELLED, "stream broken"));
+      return;
+    }
+    next_locked();
+  }
+  void OnCancel() override {
+    std::lock_guard lock(mu_);
+    if (!writing_) finish_locked(grpc::Status(grpc::StatusCode::CANCELLED, "cancelled"));
+  }
+  void OnDone() override {
+    std::shared_ptr<QueuedWriter> keep_until_return;
+    {
+      std::lock_guard lock(mu_);
+      keep_until_return = std::move(self_);
+    }
+    on_done();
+  }
+
+ protected:
+  virtual void on_done() {}
+  // Queues `message`; `last` finishes the call with OK after it.
+  void push(Message message, bool last) {
+    std::lock_guard lock(mu_);
+    if (finished_ || last_queued_) return;
+    queue_.push_back(std::move(message));
+    last_queued_ = last;
+    if (!writing_) next_locked();
+  }
+  void finish(grpc::Status status) {
+    std::lock_guard lock(mu_);
+    if (!writing_) finish_locked(std::move(status));
+  }
+
+  std::shared_ptr<QueuedWriter> self_;
+
+ private:
+  void next_locked() {
+    if (finished_) return;
+    if (queue_.empty()) {
+      if (last_queued_) finish_locked(grpc::Status::OK);
+      return;
+    }
+    buffer_ = std::move(queue_.front());
+    queue_.pop_front();
+    writing_ = true;
+    this->StartWrite(&buffer_);
+  }
+  void finish_locked(grpc::Status status) {
+    if (finished_) return;
+    finished_ = true;
+    this->Finish(std::move(status));
+  }
+
+  std::mutex mu_;
+  std::deque<Message> queue_;
+  Message buffer_;
+  bool writing_ = false;
+  bool last_queued_ = false;
+  bool finished_ = false;
+};
+
+class WatchJob : public QueuedWriter<v1::Job> {
+ public:
+  WatchJob(JobRunner& runner, std::string job_id) : runner_(runner), job_id_(std::move(job_id)) {}
+  void start(const std::shared_ptr<WatchJob>& self) {
+    self_ = self;
+    // Subscribe before reading the current state, so that no change is missed.
+    std::weak_ptr<WatchJob> weak = self;
+    token_ = runner_.subscribe(job_id_, [weak](const v1::Job& job) {
+      if (auto watcher = weak.lock()) watcher->push(job, is_terminal(job.state()));
+    });
+    const auto record = runner_.store().get(job_id_);
+    if (!record) {
+      finish(grpc::Status(grpc::StatusCode::NOT_FOUND, "job_id: no job '" + job_id_ + "'"));
+      return;
+    }
+    push(record->job, is_terminal(record->job.state()));
+  }
+
+ private:
+  void on_done() override { runner_.unsubscribe(token_); }
+  JobRunner& runner_;
+  std::string job_id_;
+  std::uint64_t token_ = 0;
+};
+
+class JobResults : public QueuedWriter<v1::FitResult> {
+ public:
+  void start(const std::shared_ptr<JobResults>& self, JobRunner& runner, const std::string& id) {
+    self_ = self;
+    const auto record = runner.store().get(id);
+    if (!record) {
+      finish(grpc::Status(grpc::StatusCode::NOT_FOUND, "job_id: no job '" + id + "'"));
+      return;
+    }
+    if (!is_terminal(record->job.state())) {
+      finish(grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
+                          "job_id: job '" + id + "' is " +
+                              v1::Job::State_Name(record->job.state()) +
+                              "; its results are complete when it has finished (WatchJob)"));
+      return;
+    }
+    std::vector<v1::FitResult> results = runner.store().results(id);
+    if (results.empty()) {
+      finish(grpc::Status::OK);
+      return;
+    }
+    for (std::size_t i = 0; i < results.size(); ++i) {
+      push(std::move(results[i]), i + 1 == results.size());
+    }
+  }
+};
+
+}  // namespace
+
+fs::path resolve_recording(const std::string& uri, const fs::path& root) {
+  if (root.empty()) {
+    throw Error(ErrorCode::kFailedPrecondition, "spec.recording_uri",
+                "the server was started without --recordings-root; submit by reference is off");
+  }
+  std::string path = uri;
+  if (path.rfind("file://", 0) == 0) path = path.substr(7);
+  if (path.empty()) throw_invalid("spec.recording_uri", "is empty");
+  const fs::path canonical_root = fs::weakly_canonical(root);
+  const fs::path resolved = fs::weakly_canonical(canonical_root / fs::path(path).relative_path());
+  const auto [root_end, unused] =
+      std::mismatch(canonical_root.begin(), canonical_root.end(), resolved.begin(), resolved.end());
+  if (root_end != canonical_root.end()) {
+    throw_invalid("spec.recording_uri", "'" + uri + "' is outside the server's recordings root");
+  }
+  if (!fs::exists(resolved)) {
+    throw Error(ErrorCode::kNotFound, "spec.recording_uri", "'" + uri + "' does not exist");
+  }
+  return resolved;
+}
+
+grpc::ServerReadReactor<v1::SubmitJobRequest>* submit_job(JobRunner& runner,
+                                                          const fs::path& root,
+                                                          v1::Job* response) {
+  return new SubmitJob(runner, root, response);
+}
+
+grpc::ServerWriteReactor<v1::Job>* watch_job(JobRunner& runner, const std::string& job_id) {
+  auto watcher = std::make_shared<WatchJob>(runner, job_id);
+  watcher->start(watcher);
+  return watcher.get();
+}
+
+grpc::ServerWriteReactor<v1::FitResult>* job_results(JobRunner& runner,
+                                                     const std::string& job_id) {
+  auto writer = std::make_shared<JobResults>();
+  writer->start(writer, runner, job_id);
+  return writer.get();
+}
+
+}  // namespace posefuse::server

@@ -1,0 +1,25 @@
+#pragma once
+// The batch-job calls of posefuse.v1.PoseFuse (SubmitJob, GetJob, ListJobs, CancelJob,
+// WatchJob, GetJobResults) on the callback API, over a JobRunner.
+#include <filesystem>
+#include <string>
+
+#include <grpcpp/grpcpp.h>
+
+#include "posefuse/v1/service.grpc.pb.h"
+#include "server/job_runner.hpp"
+
+namespace posefuse::server {
+
+// Resolves a submitted recording_uri ("path" or "file://path") against `root`; the result must
+// stay inside root. Throws posefuse::Error: kFailedPrecondition when root is empty (submission
+// by reference disabled), kInvalidArgument for a path outside root, kNotFound when missing.
+std::filesystem::path resolve_recording(const std::string& uri, const std::filesystem::path& root);
+
+grpc::ServerReadReactor<v1::SubmitJobRequest>* submit_job(JobRunner& runner,
+                                                          const std::filesystem::path& root,
+                                                          v1::Job* response);
+grpc::ServerWriteReactor<v1::Job>* watch_job(JobRunner& runner, const std::string& job_id);
+grpc::ServerWriteReactor<v1::FitResult>* job_results(JobRunner& runner, const std::string& job_id);
+
+}  // namespace posefuse::server

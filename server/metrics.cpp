@@ -1,0 +1,103 @@
+#include "server/metrics.hpp"
+
+#include <cstdio>
+
+namespace posefuse::server {
+
+namespace {
+
+void header(std::string& out, const char* name, const char* type, const char* help) {
+  out += "# HELP ";
+  out += name;
+  out += ' ';
+  out += help;
+  out += "\n# TYPE ";
+  out += name;
+  out += ' ';
+  out += type;
+  out += '\n';
+}
+
+std::string number(double value) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.9g", value);
+  return text;
+}
+
+void sample(std::string& out, const char* name, const std::string& labels, double value) {
+  out += name;
+  if (!labels.empty()) out += "{" + labels + "}";
+  out += ' ' + number(value) + '\n';
+}
+
+template <class Map>
+void increment(Map& map, std::string_view key) {
+  auto it = map.find(key);
+  if (it == map.end()) it = map.emplace(std::string(key), typename Map::mapped_type{}).first;
+  ++it->second;
+}
+
+}  // namespace
+
+void Metrics::session_finished(std::string_view status) {
+  std::lock_guard lock(mu_);
+  increment(sessions_finished_, status);
+}
+
+void Metrics::stage_time(std::string_view stage, double seconds) {
+  std::lock_guard lock(mu_);
+  auto it = stages_.find(stage);
+  if (it == stages_.end()) it = stages_.emplace(std::string(stage), StageTotals{}).first;
+  ++it->second.calls;
+  it->second.seconds += seconds;
+}
+
+void Metrics::job_finished(std::string_view state) {
+  std::lock_guard lock(mu_);
+  increment(jobs_finished_, state);
+}
+
+std::string Metrics::render(const Gauges& gauges) const {
+  std::string out;
+  header(out, "posefuse_sessions_in_flight", "gauge", "Fit calls running now.");
+  sample(out, "posefuse_sessions_in_flight", "", gauges.sessions_in_flight);
+  header(out, "posefuse_sessions_started_total", "counter", "Fit calls admitted.");
+  sample(out, "posefuse_sessions_started_total", "", static_cast<double>(sessions_started_.load()));
+  header(out, "posefuse_sessions_refused_total", "counter",
+         "Fit calls refused with RESOURCE_EXHAUSTED (--max-sessions).");
+  sample(out, "posefuse_sessions_refused_total", "", static_cast<double>(sessions_refused_.load()));
+  header(out, "posefuse_chunks_received_total", "counter", "Session chunks received by Fit calls.");
+  sample(out, "posefuse_chunks_received_total", "", static_cast<double>(chunks_received_.load()));
+  header(out, "posefuse_item_errors_total", "counter", "Chunks or items answered with ItemError.");
+  sample(out, "posefuse_item_errors_total", "", static_cast<double>(item_errors_.load()));
+  header(out, "posefuse_queued_chunks", "gauge",
+         "Chunks received and waiting for the pipeline, over all sessions.");
+  sample(out, "posefuse_queued_chunks", "", static_cast<double>(queued_chunks_.load()));
+  header(out, "posefuse_worker_queue_depth", "gauge", "Tasks waiting for a worker thread.");
+  sample(out, "posefuse_worker_queue_depth", "", static_cast<double>(gauges.worker_queue));
+  header(out, "posefuse_workers", "gauge", "Worker threads.");
+  sample(out, "posefuse_workers", "", gauges.workers);
+
+  std::lock_guard lock(mu_);
+  header(out, "posefuse_sessions_finished_total", "counter", "Fit calls finished, by status.");
+  for (const auto& [status, n] : sessions_finished_) {
+    sample(out, "posefuse_sessions_finished_total", "status=\"" + status + "\"",
+           static_cast<double>(n));
+  }
+  header(out, "posefuse_stage_calls_total", "counter", "Pipeline stage calls, by stage.");
+  for (const auto& [stage, totals] : stages_) {
+    sample(out, "posefuse_stage_calls_total", "stage=\"" + stage + "\"",
+           static_cast<double>(totals.calls));
+  }
+  header(out, "posefuse_stage_seconds_total", "counter", "Wall time in pipeline stages, by stage.");
+  for (const auto& [stage, totals] : stages_) {
+    sample(out, "posefuse_stage_seconds_total", "stage=\"" + stage + "\"", totals.seconds);
+  }
+  header(out, "posefuse_jobs_finished_total", "counter", "Batch jobs finished, by state.");
+  for (const auto& [state, n] : jobs_finished_) {
+    sample(out, "posefuse_jobs_finished_total", "state=\"" + state + "\"", static_cast<double>(n));
+  }
+  return out;
+}
+
+}  // namespace posefuse::server

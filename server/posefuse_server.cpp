@@ -1,0 +1,108 @@
+#include "server/posefuse_server.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <thread>
+
+#include <grpcpp/ext/proto_server_reflection_plugin.h>
+#include <grpcpp/health_check_service_interface.h>
+
+#include "common/error.hpp"
+#include "server/log.hpp"
+#include "server/sqlite_job_store.hpp"
+
+namespace posefuse::server {
+
+void validate_options(const ServerOptions& o) {
+  if (o.listen.empty()) throw_invalid("--listen", "is empty; expected host:port");
+  if (o.max_sessions == 0) throw_invalid("--max-sessions", "must be at least 1");
+  if (!(o.max_message_mb > 0.0 && o.max_message_mb <= 1024.0)) {
+    throw_invalid("--max-message-mb", "is " + std::to_string(o.max_message_mb) +
+                                          ", must be in (0, 1024]");
+  }
+  if (!(o.idle_timeout_s > 0.0 && std::isfinite(o.idle_timeout_s))) {
+    throw_invalid("--idle-timeout-s", "must be a positive number of seconds");
+  }
+  if (o.max_queued_chunks == 0) throw_invalid("--max-queued-chunks", "must be at least 1");
+  if (o.max_queued_results == 0) throw_invalid("--max-queued-results", "must be at least 1");
+  if (o.max_jobs == 0) throw_invalid("--max-jobs", "must be at least 1");
+  if (!(o.shutdown_grace_s >= 0.0 && std::isfinite(o.shutdown_grace_s))) {
+    throw_invalid("--shutdown-grace-s", "must be >= 0 seconds");
+  }
+}
+
+PoseFuseServer::PoseFuseServer(ServerOptions options) : options_(std::move(options)) {
+  validate_options(options_);
+  const unsigned workers =
+      options_.workers > 0 ? options_.workers : std::max(1u, std::thread::hardware_concurrency());
+  pool_ = std::make_unique<WorkerPool>(workers);
+  // The idle check runs a few times per timeout, at most every 250 ms.
+  const auto check_interval = std::chrono::milliseconds(static_cast<long>(
+      std::clamp(options_.idle_timeout_s * 1000.0 / 4.0, 10.0, 250.0)));
+  registry_ = std::make_unique<SessionRegistry>(options_.max_sessions, check_interval);
+  if (!options_.data_dir.empty()) {
+    std::error_code error;
+    std::filesystem::create_directories(options_.data_dir, error);
+    if (error) {
+      throw Error(ErrorCode::kFailedPrecondition, "--data-dir",
+                  "cannot create '" + options_.data_dir + "': " + error.message());
+    }
+    job_store_ = std::make_unique<SqliteJobStore>(std::filesystem::path(options_.data_dir) /
+                                                  "jobs.sqlite");
+    jobs_ = std::make_unique<JobRunner>(*job_store_, *pool_, metrics_, options_.max_jobs);
+  }
+  service_ =
+      std::make_unique<PoseFuseService>(options_, *pool_, *registry_, metrics_, jobs_.get());
+
+  // Before the gRPC server, so that a bad --metrics-listen fails before anything serves.
+  if (!options_.metrics_listen.empty()) {
+    metrics_http_ = std::make_unique<MetricsHttpServer>(options_.metrics_listen,
+                                                        [this] { return render_metrics(); });
+    log_event("info", "metrics_start", {{"port", std::to_string(metrics_http_->port())}});
+  }
+
+  grpc::EnableDefaultHealthCheckService(true);
+  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
+  grpc::ServerBuilder builder;
+  builder.AddListeningPort(options_.listen, grpc::InsecureServerCredentials(), &port_);
+  builder.RegisterService(service_.get());
+  builder.SetMaxReceiveMessageSize(static_cast<int>(options_.max_message_mb * 1024 * 1024));
+  server_ = builder.BuildAndStart();
+  if (!server_ || port_ == 0) {
+    throw Error(ErrorCode::kFailedPrecondition, "--listen",
+                "cannot listen on '" + options_.listen + "' (address in use or invalid?)");
+  }
+  server_->GetHealthCheckService()->SetServingStatus(true);
+  if (jobs_) jobs_->resume_unfinished();
+  log_event("info", "server_start",
+            {{"listen", options_.listen},
+             {"port", std::to_string(port_)},
+             {"workers", std::to_string(workers)},
+             {"max_sessions", std::to_string(options_.max_sessions)},
+             {"max_message_mb", std::to_string(options_.max_message_mb)},
+             {"idle_timeout_s", std::to_string(options_.idle_timeout_s)}});
+}
+
+PoseFuseServer::~PoseFuseServer() { shutdown(); }
+
+std::string PoseFuseServer::render_metrics() const {
+  return metrics_.render({registry_->active(), pool_->queued(),
+                          static_cast<unsigned>(pool_->threads())});
+}
+
+void PoseFuseServer::shutdown() {
+  if (shut_down_) return;
+  shut_down_ = true;
+  log_event("info", "server_shutdown", {{"sessions", std::to_string(registry_->active())}});
+  server_->GetHealthCheckService()->SetServingStatus(false);
+  const auto grace = std::chrono::duration_cast<std::chrono::milliseconds>(
+      std::chrono::duration<double>(options_.shutdown_grace_s));
+  server_->Shutdown(std::chrono::system_clock::now() + grace);
+  metrics_http_.reset();
+  jobs_.reset();  // running jobs stop between chunks and stay RUNNING: resumed at next start
+  log_event("info", "server_stopped");
+}
+
+void PoseFuseServer::wait() { server_->Wait(); }
+
+}  // namespace posefuse::server

@@ -1,0 +1,59 @@
+#pragma once
+// A running posefuse server: the gRPC server with the PoseFuse service, the standard health
+// service (grpc.health.v1) and server reflection, the worker pool and the session registry.
+// Used by posefuse-server's main and, in-process, by the integration tests.
+#include <memory>
+
+#include <grpcpp/grpcpp.h>
+
+#include "server/job_runner.hpp"
+#include "server/job_store.hpp"
+#include "server/metrics.hpp"
+#include "server/metrics_http.hpp"
+#include "server/posefuse_service.hpp"
+#include "server/server_options.hpp"
+#include "server/session_registry.hpp"
+#include "server/worker_pool.hpp"
+
+namespace posefuse::server {
+
+class PoseFuseServer {
+ public:
+  // Binds and starts serving. Throws posefuse::Error (kInvalidArgument naming the option) for
+  // bad options, kFailedPrecondition when the address cannot be bound.
+  explicit PoseFuseServer(ServerOptions options);
+  ~PoseFuseServer();  // shuts down if still running
+
+  // The bound port (useful with port 0).
+  int port() const { return port_; }
+  const ServerOptions& options() const { return options_; }
+  SessionRegistry& registry() { return *registry_; }
+  JobRunner* jobs() { return jobs_.get(); }
+  // The metrics endpoint's port, 0 when it is off.
+  int metrics_port() const { return metrics_http_ ? metrics_http_->port() : 0; }
+  std::string render_metrics() const;
+
+  // Health NOT_SERVING, stop accepting calls, give calls in flight shutdown_grace_s to finish,
+  // then cancel them. Idempotent.
+  void shutdown();
+  // Blocks until shutdown() has completed.
+  void wait();
+
+ private:
+  ServerOptions options_;
+  Metrics metrics_;
+  std::unique_ptr<WorkerPool> pool_;
+  std::unique_ptr<SessionRegistry> registry_;
+  std::unique_ptr<JobStore> job_store_;
+  std::unique_ptr<JobRunner> jobs_;
+  std::unique_ptr<PoseFuseService> service_;
+  std::unique_ptr<grpc::Server> server_;
+  std::unique_ptr<MetricsHttpServer> metrics_http_;
+  int port_ = 0;
+  bool shut_down_ = false;
+};
+
+// Checks option values; throws kInvalidArgument naming the flag ("--workers").
+void validate_options(const ServerOptions& options);
+
+}  // namespace posefuse::server

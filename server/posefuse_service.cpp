@@ -1,0 +1,162 @@
+#include "server/posefuse_service.hpp"
+
+#include <google/protobuf/stubs/common.h>
+
+#include "server/fit_session.hpp"
+#include "server/job_calls.hpp"
+#include "server/status.hpp"
+#include "server/log.hpp"
+#include "session/session_validator.hpp"
+#include "session/stages/default_stages.hpp"
+
+namespace posefuse::server {
+
+namespace {
+
+// Refuses a call at once (over the session limit, jobs off).
+template <class Reactor>
+class Refused : public Reactor {
+ public:
+  explicit Refused(grpc::Status status) { this->Finish(std::move(status)); }
+  void OnDone() override { delete this; }
+};
+
+grpc::Status jobs_off() {
+  return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
+                      "batch jobs are off: the server was started without --data-dir");
+}
+
+grpc::ServerUnaryReactor* finish_unary(grpc::CallbackServerContext* context, grpc::Status status) {
+  grpc::ServerUnaryReactor* reactor = context->DefaultReactor();
+  reactor->Finish(std::move(status));
+  return reactor;
+}
+
+constexpr std::size_t kDefaultPageSize = 50;
+constexpr std::size_t kMaxPageSize = 1000;
+
+}  // namespace
+
+PoseFuseService::PoseFuseService(const ServerOptions& options, WorkerPool& pool,
+                                 SessionRegistry& registry, Metrics& metrics, JobRunner* jobs)
+    : options_(options), pool_(pool), registry_(registry), metrics_(metrics), jobs_(jobs) {}
+
+grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>* PoseFuseService::Fit(
+    grpc::CallbackServerContext* context) {
+  const std::optional<std::uint64_t> id = registry_.try_admit();
+  if (!id) {
+    metrics_.session_refused();
+    log_event("info", "session_refused", {{"reason", "max_sessions"}, {"peer", context->peer()}});
+    return new Refused<grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>>(grpc::Status(
+        grpc::StatusCode::RESOURCE_EXHAUSTED,
+        "server busy: " + std::to_string(options_.max_sessions) +
+            " sessions are running (--max-sessions); retry later"));
+  }
+  return FitSession::start(context, *id, options_, pool_, registry_, metrics_);
+}
+
+grpc::ServerUnaryReactor* PoseFuseService::GetServerInfo(grpc::CallbackServerContext* context,
+                                                         const v1::GetServerInfoRequest*,
+                                                         v1::ServerInfo* response) {
+  *response = server_info(options_, static_cast<unsigned>(pool_.threads()), jobs_ != nullptr);
+  return finish_unary(context, grpc::Status::OK);
+}
+
+grpc::ServerReadReactor<v1::SubmitJobRequest>* PoseFuseService::SubmitJob(
+    grpc::CallbackServerContext*, v1::Job* response) {
+  if (!jobs_) return new Refused<grpc::ServerReadReactor<v1::SubmitJobRequest>>(jobs_off());
+  return submit_job(*jobs_, options_.recordings_root, response);
+}
+
+grpc::ServerUnaryReactor* PoseFuseService::GetJob(grpc::CallbackServerContext* context,
+                                                  const v1::GetJobRequest* request,
+                                                  v1::Job* response) {
+  if (!jobs_) return finish_unary(context, jobs_off());
+  const auto record = jobs_->store().get(request->job_id());
+  if (!record) {
+    return finish_unary(context, grpc::Status(grpc::StatusCode::NOT_FOUND,
+                                              "job_id: no job '" + request->job_id() + "'"));
+  }
+  *response = record->job;
+  return finish_unary(context, grpc::Status::OK);
+}
+
+grpc::ServerUnaryReactor* PoseFuseService::ListJobs(grpc::CallbackServerContext* context,
+                                                    const v1::ListJobsRequest* request,
+                                                    v1::ListJobsResponse* response) {
+  if (!jobs_) return finish_unary(context, jobs_off());
+  const std::size_t page_size =
+      request->page_size() == 0 ? kDefaultPageSize
+                                : std::min<std::size_t>(request->page_size(), kMaxPageSize);
+  std::vector<v1::Job::State> states;
+  for (const int state : request->states()) states.push_back(static_cast<v1::Job::State>(state));
+  try {
+    // One more than asked for tells whether another page exists.
+    std::vector<v1::Job> jobs = jobs_->store().list(page_size + 1, request->page_token(), states);
+    if (jobs.size() > page_size) {
+      jobs.pop_back();
+      response->set_next_page_token(jobs.back().job_id());
+    }
+    for (v1::Job& job : jobs) *response->add_jobs() = std::move(job);
+  } catch (const Error& error) {
+    return finish_unary(context, to_status(error));
+  }
+  return finish_unary(context, grpc::Status::OK);
+}
+
+grpc::ServerUnaryReactor* PoseFuseService::CancelJob(grpc::CallbackServerContext* context,
+                                                     const v1::CancelJobRequest* request,
+                                                     v1::Job* response) {
+  if (!jobs_) return finish_unary(context, jobs_off());
+  const auto job = jobs_->cancel(request->job_id());
+  if (!job) {
+    return finish_unary(context, grpc::Status(grpc::StatusCode::NOT_FOUND,
+                                              "job_id: no job '" + request->job_id() + "'"));
+  }
+  *response = *job;
+  return finish_unary(context, grpc::Status::OK);
+}
+
+grpc::ServerWriteReactor<v1::Job>* PoseFuseService::WatchJob(grpc::CallbackServerContext*,
+                                                             const v1::WatchJobRequest* request) {
+  if (!jobs_) return new Refused<grpc::ServerWriteReactor<v1::Job>>(jobs_off());
+  return watch_job(*jobs_, request->job_id());
+}
+
+grpc::ServerWriteReactor<v1::FitResult>* PoseFuseService::GetJobResults(
+    grpc::CallbackServerContext*, const v1::GetJobResultsRequest* request) {
+  if (!jobs_) return new Refused<grpc::ServerWriteReactor<v1::FitResult>>(jobs_off());
+  return job_results(*jobs_, request->job_id());
+}
+
+v1::ServerInfo server_info(const ServerOptions& options, unsigned workers, bool jobs) {
+  v1::ServerInfo info;
+  info.set_server_version(POSEFUSE_VERSION);
+  info.set_api_version("posefuse.v1");
+  info.add_session_format_versions(session::kFormatVersion);
+  info.set_grpc_version(grpc::Version());
+  info.set_protobuf_version(google::protobuf::internal::VersionString(GOOGLE_PROTOBUF_VERSION));
+  for (const auto& stage : session::make_default_stages()) {
+    v1::StageInfo& stage_info = *info.add_stages();
+    stage_info.set_name(std::string(stage->name()));
+    stage_info.set_description(std::string(stage->description()));
+    for (const session::StageOption& option : stage->options()) {
+      v1::OptionInfo& option_info = *info.add_options();
+      option_info.set_key(option.key);
+      option_info.set_stage(std::string(stage->name()));
+      option_info.set_default_value(option.default_value);
+      option_info.set_description(option.description);
+    }
+  }
+  // No body model is loaded yet (core/body lands later); the list stays empty until then.
+  v1::ServerLimits& limits = *info.mutable_limits();
+  limits.set_max_message_bytes(static_cast<std::uint64_t>(options.max_message_mb * 1024 * 1024));
+  limits.set_max_sessions(options.max_sessions);
+  limits.set_max_queued_chunks(options.max_queued_chunks);
+  limits.set_idle_timeout_s(options.idle_timeout_s);
+  limits.set_workers(workers);
+  info.set_jobs_supported(jobs);
+  return info;
+}
+
+}  // namespace posefuse::server

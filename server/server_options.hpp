@@ -1,0 +1,24 @@
+#pragma once
+// Everything the server is configured with (flags of posefuse-server, see docs/server.md).
+#include <cstdint>
+#include <string>
+
+namespace posefuse::server {
+
+struct ServerOptions {
+  std::string listen = "127.0.0.1:50051";  // host:port; port 0 picks a free one
+  unsigned workers = 0;                    // pipeline threads; 0 = one per CPU core
+  unsigned max_sessions = 16;              // concurrent Fit calls; beyond: RESOURCE_EXHAUSTED
+  double max_message_mb = 16.0;            // largest message received, MiB
+  double idle_timeout_s = 60.0;            // a Fit stream silent this long is ended
+  unsigned max_queued_chunks = 8;          // per session: read but not yet processed
+  unsigned max_queued_results = 64;        // per session: computed but not yet sent
+  double shutdown_grace_s = 10.0;          // calls in flight get this long to finish
+  // Batch jobs: off unless data_dir is set (job store: <data_dir>/jobs.sqlite).
+  std::string data_dir;
+  std::string recordings_root;             // SubmitJob by reference reads only under this
+  unsigned max_jobs = 1;                   // jobs running at once
+  std::string metrics_listen;              // IPv4 HOST:PORT for GET /metrics; empty = off
+};
+
+}  // namespace posefuse::server

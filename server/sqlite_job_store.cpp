@@ -1,0 +1,230 @@
+#include "server/sqlite_job_store.hpp"
+
+#include <sqlite3.h>
+
+#include <random>
+
+#include "common/error.hpp"
+
+namespace posefuse::server {
+
+namespace {
+
+// One prepared statement; finalized on destruction. Errors throw kInternal with SQLite's text.
+class Statement {
+ public:
+  Statement(sqlite3* db, const std::string& sql) : db_(db) {
+    if (sqlite3_prepare_v2(db, sql.c_str(), -1, &stmt_, nullptr) != SQLITE_OK) fail("prepare");
+  }
+  ~Statement() { sqlite3_finalize(stmt_); }
+  Statement(const Statement&) = delete;
+  Statement& operator=(const Statement&) = delete;
+
+  Statement& bind(int index, const std::string& text) {
+    check(sqlite3_bind_text(stmt_, index, text.data(), static_cast<int>(text.size()),
+                            SQLITE_TRANSIENT));
+    return *this;
+  }
+  Statement& bind_blob(int index, const std::string& bytes) {
+    check(sqlite3_bind_blob(stmt_, index, bytes.data(), static_cast<int>(bytes.size()),
+                            SQLITE_TRANSIENT));
+    return *this;
+  }
+  Statement& bind(int index, std::int64_t value) {
+    check(sqlite3_bind_int64(stmt_, index, value));
+    return *this;
+  }
+  // True while there is a row.
+  bool step() {
+    const int rc = sqlite3_step(stmt_);
+    if (rc == SQLITE_ROW) return true;
+    if (rc != SQLITE_DONE) fail("step");
+    return false;
+  }
+  std::int64_t int64(int column) const { return sqlite3_column_int64(stmt_, column); }
+  std::string text(int column) const {
+    const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(stmt_, column));
+    return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(stmt_, column)))
+             : std::string();
+  }
+  std::string blob(int column) const {
+    const auto* p = static_cast<const char*>(sqlite3_column_blob(stmt_, column));
+    return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(stmt_, column)))
+             : std::string();
+  }
+
+ private:
+  void check(int rc) {
+    if (rc != SQLITE_OK) fail("bind");
+  }
+  [[noreturn]] void fail(const char* what) {
+    throw Error(ErrorCode::kInternal, "job_store", std::string(what) + ": " + sqlite3_errmsg(db_));
+  }
+  sqlite3* db_;
+  sqlite3_stmt* stmt_ = nullptr;
+};
+
+std::string new_job_id() {
+  std::random_device random;
+  static const char* const kHex = "0123456789abcdef";
+  std::string id;
+  for (int i = 0; i < 8; ++i) {
+    const unsigned value = random();
+    for (int k = 0; k < 4; ++k) id += kHex[(value >> (4 * k)) & 0xF];
+  }
+  return id;
+}
+
+v1::Job parse_job(const std::string& bytes) {
+  v1::Job job;
+  if (!job.ParseFromString(bytes)) {
+    throw Error(ErrorCode::kDataLoss, "job_store.jobs.job", "stored job does not parse");
+  }
+  return job;
+}
+
+}  // namespace
+
+SqliteJobStore::SqliteJobStore(const std::filesystem::path& path) : path_(path) {
+  if (sqlite3_open_v2(path.c_str(), &db_,
+                      SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
+                      nullptr) != SQLITE_OK) {
+    const std::string message = db_ ? sqlite3_errmsg(db_) : "out of memory";
+    sqlite3_close(db_);
+    db_ = nullptr;
+    throw Error(ErrorCode::kFailedPrecondition, path.string(), "cannot open the job store: " + message);
+  }
+  sqlite3_busy_timeout(db_, 5000);
+  try {
+    exec("PRAGMA journal_mode=WAL");
+    exec("CREATE TABLE IF NOT EXISTS jobs ("
+         " seq INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT UNIQUE NOT NULL,"
+         " state INTEGER NOT NULL, recording_path TEXT NOT NULL, job BLOB NOT NULL)");
+    exec("CREATE TABLE IF NOT EXISTS results ("
+         " job_id TEXT NOT NULL, seq INTEGER NOT NULL, result BLOB NOT NULL,"
+         " PRIMARY KEY (job_id, seq))");
+  } catch (const Error& error) {
+    sqlite3_close(db_);
+    throw Error(ErrorCode::kFailedPrecondition, path.string(), error.what());
+  }
+}
+
+SqliteJobStore::~SqliteJobStore() { sqlite3_close(db_); }
+
+void SqliteJobStore::exec(const char* sql) {
+  char* message = nullptr;
+  if (sqlite3_exec(db_, sql, nullptr, nullptr, &message) != SQLITE_OK) {
+    const std::string text = message ? message : "unknown error";
+    sqlite3_free(message);
+    throw Error(ErrorCode::kInternal, "job_store", text);
+  }
+}
+
+v1::Job SqliteJobStore::create(const v1::JobSpec& spec, const std::string& recording_path,
+                               std::int64_t now_unix_us) {
+  v1::Job job;
+  job.set_job_id(new_job_id());
+  job.set_state(v1::Job::QUEUED);
+  job.set_create_time_unix_us(now_unix_us);
+  job.set_update_time_unix_us(now_unix_us);
+  job.set_label(spec.label());
+  if (spec.has_recording_uri()) job.set_recording_uri(spec.recording_uri());
+  std::lock_guard lock(mu_);
+  Statement insert(db_, "INSERT INTO jobs (id, state, recording_path, job) VALUES (?, ?, ?, ?)");
+  insert.bind(1, job.job_id()).bind(2, std::int64_t{job.state()}).bind(3, recording_path);
+  insert.bind_blob(4, job.SerializeAsString());
+  insert.step();
+  return job;
+}
+
+std::optional<JobRecord> SqliteJobStore::get(const std::string& job_id) {
+  std::lock_guard lock(mu_);
+  Statement select(db_, "SELECT job, recording_path FROM jobs WHERE id = ?");
+  select.bind(1, job_id);
+  if (!select.step()) return std::nullopt;
+  return JobRecord{parse_job(select.blob(0)), select.text(1)};
+}
+
+std::vector<v1::Job> SqliteJobStore::list(std::size_t limit, const std::string& after_job_id,
+                                          const std::vector<v1::Job::State>& states) {
+  std::string sql = "SELECT job FROM jobs WHERE 1";
+  if (!after_job_id.empty()) sql += " AND seq < (SELECT seq FROM jobs WHERE id = ?)";
+  if (!states.empty()) {
+    sql += " AND state IN (";
+    for (std::size_t i = 0; i < states.size(); ++i) sql += i ? ", ?" : "?";
+    sql += ")";
+  }
+  sql += " ORDER BY seq DESC LIMIT ?";
+  std::lock_guard lock(mu_);
+  Statement select(db_, sql);
+  int index = 1;
+  if (!after_job_id.empty()) select.bind(index++, after_job_id);
+  for (const v1::Job::State state : states) select.bind(index++, std::int64_t{state});
+  select.bind(index, static_cast<std::int64_t>(limit));
+  std::vector<v1::Job> jobs;
+  while (select.step()) jobs.push_back(parse_job(select.blob(0)));
+  return jobs;
+}
+
+void SqliteJobStore::update(const v1::Job& job) {
+  std::lock_guard lock(mu_);
+  Statement update(db_, "UPDATE jobs SET state = ?, job = ? WHERE id = ?");
+  update.bind(1, std::int64_t{job.state()}).bind_blob(2, job.SerializeAsString());
+  update.bind(3, job.job_id());
+  update.step();
+  if (sqlite3_changes(db_) == 0) {
+    throw Error(ErrorCode::kNotFound, "job_id", "no job '" + job.job_id() + "'");
+  }
+}
+
+void SqliteJobStore::append_results(const std::string& job_id,
+                                    const std::vector<v1::FitResult>& results) {
+  std::lock_guard lock(mu_);
+  exec("BEGIN IMMEDIATE");
+  try {
+    Statement next(db_, "SELECT COALESCE(MAX(seq) + 1, 0) FROM results WHERE job_id = ?");
+    next.bind(1, job_id);
+    next.step();
+    std::int64_t seq = next.int64(0);
+    for (const v1::FitResult& result : results) {
+      Statement row(db_, "INSERT INTO results (job_id, seq, result) VALUES (?, ?, ?)");
+      row.bind(1, job_id).bind(2, seq++).bind_blob(3, result.SerializeAsString());
+      row.step();
+    }
+    exec("COMMIT");
+  } catch (...) {
+    exec("ROLLBACK");
+    throw;
+  }
+}
+
+std::vector<v1::FitResult> SqliteJobStore::results(const std::string& job_id) {
+  std::lock_guard lock(mu_);
+  Statement select(db_, "SELECT result FROM results WHERE job_id = ? ORDER BY seq");
+  select.bind(1, job_id);
+  std::vector<v1::FitResult> results;
+  while (select.step()) {
+    if (!results.emplace_back().ParseFromString(select.blob(0))) {
+      throw Error(ErrorCode::kDataLoss, "job_store.results", "stored result does not parse");
+    }
+  }
+  return results;
+}
+
+void SqliteJobStore::clear_results(const std::string& job_id) {
+  std::lock_guard lock(mu_);
+  Statement remove(db_, "DELETE FROM results WHERE job_id = ?");
+  remove.bind(1, job_id);
+  remove.step();
+}
+
+std::vector<JobRecord> SqliteJobStore::unfinished() {
+  std::lock_guard lock(mu_);
+  Statement select(db_, "SELECT job, recording_path FROM jobs WHERE state IN (?, ?) ORDER BY seq");
+  select.bind(1, std::int64_t{v1::Job::QUEUED}).bind(2, std::int64_t{v1::Job::RUNNING});
+  std::vector<JobRecord> records;
+  while (select.step()) records.push_back({parse_job(select.blob(0)), select.text(1)});
+  return records;
+}
+
+}  // namespace posefuse::server

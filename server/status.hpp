@@ -1,0 +1,13 @@
+#pragma once
+// posefuse::Error -> gRPC status (DESIGN.md "Errors"). The message is the error's
+// "field: message" line unchanged, so the client can print it as one readable line.
+#include <grpcpp/support/status.h>
+
+#include "common/error.hpp"
+
+namespace posefuse::server {
+
+grpc::StatusCode status_code(ErrorCode code);
+grpc::Status to_status(const Error& error);
+
+}  // namespace posefuse::server

@@ -1,0 +1,120 @@
+// The client library: reading recordings (directory and chunk file), the Fit call against an
+// in-process server, result files, and error lines.
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "client/demo_session.hpp"
+#include "client/fit_call.hpp"
+#include "client/recording.hpp"
+#include "client/result_writer.hpp"
+#include "server/posefuse_server.hpp"
+#include "session/file_bytes.hpp"
+#include "tests/server/test_support.hpp"
+
+namespace posefuse::client {
+namespace {
+
+namespace fs = std::filesystem;
+
+class ClientTest : public ::testing::Test {
+ protected:
+  static std::size_t line_count(const fs::path& path) {
+    std::ifstream in(path);
+    std::size_t n = 0;
+    for (std::string line; std::getline(in, line);) ++n;
+    return n;
+  }
+
+  test::TempDir temp_;
+  const fs::path& dir_ = temp_.path();
+};
+
+TEST_F(ClientTest, RecordingReadsBothFormsWithProgress) {
+  const std::uint64_t written = demo::write_demo_session(dir_ / "demo.pfchunks");
+  demo::write_demo_session(dir_ / "demo_dir");
+  for (const fs::path& path : {dir_ / "demo.pfchunks", dir_ / "demo_dir"}) {
+    SCOPED_TRACE(path.string());
+    Recording recording(path);
+    session::SessionChunk chunk;
+    std::uint64_t n = 0;
+    double last_fraction = 0.0;
+    while (recording.next(chunk)) {
+      ++n;
+      const double f = recording.fraction_read();
+      EXPECT_GE(f, last_fraction);
+      last_fraction = f;
+    }
+    EXPECT_EQ(n, written);
+    EXPECT_DOUBLE_EQ(recording.fraction_read(), 1.0);
+  }
+}
+
+TEST_F(ClientTest, MissingRecordingIsNotFound) {
+  try {
+    Recording recording(dir_ / "nothing");
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kNotFound);
+  }
+}
+
+TEST_F(ClientTest, FitWritesResultFiles) {
+  server::ServerOptions options;
+  options.listen = "127.0.0.1:0";
+  options.workers = 1;
+  server::PoseFuseServer server(options);
+  demo::write_demo_session(dir_ / "demo");
+
+  ResultWriter writer(dir_ / "out");
+  const FitOutcome outcome =
+      run_fit(make_channel("127.0.0.1:" + std::to_string(server.port())), dir_ / "demo", writer);
+  ASSERT_FALSE(outcome.local_error) << outcome.local_error->what();
+  ASSERT_TRUE(outcome.status.ok()) << outcome.status.error_message();
+  EXPECT_EQ(outcome.progress.chunks_sent, 952u);
+  EXPECT_EQ(outcome.progress.depth_frames_sent, 300u);
+  EXPECT_DOUBLE_EQ(outcome.progress.fraction_read, 1.0);
+  EXPECT_EQ(writer.orientation_samples(), 1600u);
+  // Header row + one row per sample.
+  EXPECT_EQ(line_count(dir_ / "out" / "imu_orientations" / "arm_left.csv"), 801u);
+  EXPECT_EQ(line_count(dir_ / "out" / "imu_orientations" / "base.csv"), 801u);
+  EXPECT_EQ(line_count(dir_ / "out" / "warnings.txt"), 0u);
+  const std::string calibration = session::read_file_bytes(dir_ / "out" / "calibration.json", "c");
+  EXPECT_NE(calibration.find("\"gyro_bias_rad_s\""), std::string::npos);
+  ASSERT_NE(writer.summary(), nullptr);
+  EXPECT_EQ(writer.summary()->depth_frames(), 300u);
+}
+
+TEST_F(ClientTest, UnreachableServerGivesOneReadableLine) {
+  demo::write_demo_session(dir_ / "demo.pfchunks");
+  ResultWriter writer(dir_ / "out");
+  // Port 1 on loopback: nothing listens there.
+  const FitOutcome outcome = run_fit(make_channel("127.0.0.1:1"), dir_ / "demo.pfchunks", writer);
+  EXPECT_EQ(outcome.status.error_code(), grpc::StatusCode::UNAVAILABLE);
+  const std::string line = status_line(outcome.status, "127.0.0.1:1");
+  EXPECT_EQ(line.rfind("cannot reach the server at 127.0.0.1:1", 0), 0u) << line;
+  EXPECT_EQ(line.find('\n'), std::string::npos);
+}
+
+TEST_F(ClientTest, ServerErrorLineCarriesCodeAndField) {
+  const grpc::Status status(grpc::StatusCode::INVALID_ARGUMENT,
+                            "chunk[0].header.depth_intrinsics.fx: is -1, must be > 0");
+  EXPECT_EQ(status_line(status, "h:1"),
+            "server h:1: INVALID_ARGUMENT: chunk[0].header.depth_intrinsics.fx: is -1, must be > 0");
+}
+
+TEST_F(ClientTest, ResultWriterRejectsUnsafeDeviceIds) {
+  ResultWriter writer(dir_ / "out");
+  v1::FitResult result;
+  result.mutable_imu_orientations()->set_device_id("../escape");
+  result.mutable_imu_orientations()->add_t_us(1);
+  for (int k = 0; k < 4; ++k) result.mutable_imu_orientations()->add_w_from_a(k == 0 ? 1.0 : 0.0);
+  EXPECT_THROW(writer.write(result), Error);
+  EXPECT_FALSE(fs::exists(dir_ / "escape.csv"));
+}
+
+}  // namespace
+}  // namespace posefuse::client

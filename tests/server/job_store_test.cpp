@@ -1,0 +1,109 @@
+// SqliteJobStore: jobs and results survive closing and reopening the database (a server
+// restart), listing pages newest first, unfinished() finds what a restarted server must resume.
+#include <filesystem>
+
+#include <gtest/gtest.h>
+
+#include "common/error.hpp"
+#include "server/sqlite_job_store.hpp"
+#include "tests/server/test_support.hpp"
+
+namespace posefuse::server {
+namespace {
+
+namespace fs = std::filesystem;
+
+class JobStoreTest : public ::testing::Test {
+ protected:
+  fs::path db() const { return dir_ / "jobs.sqlite"; }
+
+  static v1::JobSpec spec(const std::string& label) {
+    v1::JobSpec s;
+    s.set_label(label);
+    s.set_recording_uri(label + ".pfchunks");
+    return s;
+  }
+
+  test::TempDir temp_;
+  const fs::path& dir_ = temp_.path();
+};
+
+TEST_F(JobStoreTest, JobsAndResultsSurviveReopening) {
+  std::string id;
+  {
+    SqliteJobStore store(db());
+    v1::Job job = store.create(spec("a"), "/recordings/a.pfchunks", 1000);
+    id = job.job_id();
+    EXPECT_EQ(job.state(), v1::Job::QUEUED);
+    job.set_state(v1::Job::RUNNING);
+    job.mutable_progress()->set_chunks_processed(64);
+    store.update(job);
+    v1::FitResult progress, summary;
+    progress.mutable_progress()->set_chunks_processed(64);
+    summary.mutable_summary()->set_chunks(100);
+    store.append_results(id, {progress});
+    store.append_results(id, {summary});
+  }
+  SqliteJobStore reopened(db());
+  const auto record = reopened.get(id);
+  ASSERT_TRUE(record);
+  EXPECT_EQ(record->job.state(), v1::Job::RUNNING);
+  EXPECT_EQ(record->job.progress().chunks_processed(), 64u);
+  EXPECT_EQ(record->job.recording_uri(), "a.pfchunks");
+  EXPECT_EQ(record->recording_path, "/recordings/a.pfchunks");
+  const auto results = reopened.results(id);
+  ASSERT_EQ(results.size(), 2u);
+  EXPECT_TRUE(results[0].has_progress());
+  EXPECT_EQ(results[1].summary().chunks(), 100u);
+  const auto unfinished = reopened.unfinished();
+  ASSERT_EQ(unfinished.size(), 1u);
+  EXPECT_EQ(unfinished[0].job.job_id(), id);
+  reopened.clear_results(id);
+  EXPECT_TRUE(reopened.results(id).empty());
+}
+
+TEST_F(JobStoreTest, ListsNewestFirstWithPagesAndStateFilter) {
+  SqliteJobStore store(db());
+  std::vector<std::string> ids;
+  for (int i = 0; i < 5; ++i) ids.push_back(store.create(spec("j" + std::to_string(i)), "p", i).job_id());
+  v1::Job done = store.get(ids[1])->job;
+  done.set_state(v1::Job::SUCCEEDED);
+  store.update(done);
+
+  const auto first_page = store.list(2, "", {});
+  ASSERT_EQ(first_page.size(), 2u);
+  EXPECT_EQ(first_page[0].job_id(), ids[4]);
+  EXPECT_EQ(first_page[1].job_id(), ids[3]);
+  const auto second_page = store.list(2, first_page.back().job_id(), {});
+  ASSERT_EQ(second_page.size(), 2u);
+  EXPECT_EQ(second_page[0].job_id(), ids[2]);
+  const auto succeeded = store.list(10, "", {v1::Job::SUCCEEDED});
+  ASSERT_EQ(succeeded.size(), 1u);
+  EXPECT_EQ(succeeded[0].job_id(), ids[1]);
+  EXPECT_EQ(store.unfinished().size(), 4u);
+  EXPECT_FALSE(store.get("no-such-job"));
+}
+
+TEST_F(JobStoreTest, UpdatingAnUnknownJobIsNotFound) {
+  SqliteJobStore store(db());
+  v1::Job job;
+  job.set_job_id("missing");
+  try {
+    store.update(job);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kNotFound);
+  }
+}
+
+TEST_F(JobStoreTest, UnopenableDatabaseIsFailedPrecondition) {
+  try {
+    SqliteJobStore store(dir_ / "no" / "such" / "dir" / "jobs.sqlite");
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kFailedPrecondition);
+  }
+}
+
+}  // namespace
+}  // namespace posefuse::server

@@ -1,0 +1,178 @@
+// Batch jobs through the real server: submit by reference, watch, results, listing, errors, and
+// a job left RUNNING by a stopped server that the next server completes.
+#include <filesystem>
+
+#include <gtest/gtest.h>
+
+#include "client/demo_session.hpp"
+#include "client/fit_call.hpp"
+#include "posefuse/v1/service.grpc.pb.h"
+#include "server/posefuse_server.hpp"
+#include "server/sqlite_job_store.hpp"
+#include "session/chunk_file.hpp"
+#include "tests/server/test_support.hpp"
+
+namespace posefuse::server {
+namespace {
+
+namespace fs = std::filesystem;
+using test::orientation_samples;
+using test::set_test_deadline;
+
+class JobsTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    fs::create_directories(dir_ / "recordings");
+    demo::write_demo_session(dir_ / "recordings" / "demo.pfchunks");
+  }
+
+  void start() {
+    ServerOptions options;
+    options.listen = "127.0.0.1:0";
+    options.workers = 2;
+    options.data_dir = (dir_ / "data").string();
+    options.recordings_root = (dir_ / "recordings").string();
+    server_ = std::make_unique<PoseFuseServer>(options);
+    stub_ = v1::PoseFuse::NewStub(
+        client::make_channel("127.0.0.1:" + std::to_string(server_->port())));
+  }
+
+  grpc::Status submit(const std::string& uri, v1::Job& job) {
+    grpc::ClientContext context;
+    set_test_deadline(context);
+    auto writer = stub_->SubmitJob(&context, &job);
+    v1::SubmitJobRequest request;
+    request.mutable_spec()->set_label("test");
+    request.mutable_spec()->set_recording_uri(uri);
+    writer->Write(request);
+    writer->WritesDone();
+    return writer->Finish();
+  }
+
+  // Every state WatchJob reports until the job has finished.
+  std::vector<v1::Job> watch(const std::string& id) {
+    grpc::ClientContext context;
+    set_test_deadline(context);
+    v1::WatchJobRequest request;
+    request.set_job_id(id);
+    grpc::Status status;
+    auto states = test::read_all<v1::Job>(*stub_->WatchJob(&context, request), status);
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    return states;
+  }
+
+  std::vector<v1::FitResult> results(const std::string& id, grpc::Status* status = nullptr) {
+    grpc::ClientContext context;
+    set_test_deadline(context);
+    v1::GetJobResultsRequest request;
+    request.set_job_id(id);
+    grpc::Status ignored;
+    return test::read_all<v1::FitResult>(*stub_->GetJobResults(&context, request), status ? *status : ignored);
+  }
+
+  test::TempDir temp_;
+  const fs::path& dir_ = temp_.path();
+  std::unique_ptr<PoseFuseServer> server_;
+  std::unique_ptr<v1::PoseFuse::Stub> stub_;
+};
+
+TEST_F(JobsTest, SubmittedJobRunsToSucceededWithEveryResult) {
+  start();
+  v1::Job job;
+  const grpc::Status status = submit("demo.pfchunks", job);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_FALSE(job.job_id().empty());
+  EXPECT_EQ(job.label(), "test");
+
+  const std::vector<v1::Job> states = watch(job.job_id());
+  ASSERT_FALSE(states.empty());
+  EXPECT_EQ(states.back().state(), v1::Job::SUCCEEDED);
+  EXPECT_EQ(states.back().summary().depth_frames(), 300u);
+
+  const auto all = results(job.job_id());
+  const auto samples = orientation_samples(all);
+  EXPECT_EQ(samples.at(demo::kArmDevice), 800u);
+  EXPECT_EQ(samples.at(demo::kBaseDevice), 800u);
+  ASSERT_FALSE(all.empty());
+  EXPECT_TRUE(all.back().has_summary());
+
+  grpc::ClientContext context;
+  set_test_deadline(context);
+  v1::ListJobsResponse listing;
+  ASSERT_TRUE(stub_->ListJobs(&context, {}, &listing).ok());
+  ASSERT_EQ(listing.jobs_size(), 1);
+  EXPECT_EQ(listing.jobs(0).job_id(), job.job_id());
+  EXPECT_TRUE(listing.next_page_token().empty());
+}
+
+TEST_F(JobsTest, BadSubmissionsNameTheField) {
+  start();
+  v1::Job job;
+  grpc::Status status = submit("../outside.pfchunks", job);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
+  EXPECT_EQ(status.error_message().rfind("spec.recording_uri", 0), 0u);
+  status = submit("missing.pfchunks", job);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::NOT_FOUND) << status.error_message();
+
+  grpc::ClientContext context;
+  set_test_deadline(context);
+  v1::CancelJobRequest cancel;
+  cancel.set_job_id("no-such-job");
+  EXPECT_EQ(stub_->CancelJob(&context, cancel, &job).error_code(), grpc::StatusCode::NOT_FOUND);
+}
+
+TEST_F(JobsTest, JobWithBadRecordingFailsWithTheField) {
+  // A chunk file that is a truncated demo session: no end marker.
+  {
+    const auto chunks = demo::make_demo_session();
+    session::ChunkFileWriter out(dir_ / "recordings" / "truncated.pfchunks");
+    for (std::size_t i = 0; i + 1 < chunks.size(); ++i) out.write(chunks[i]);
+    out.finish();
+  }
+  start();
+  v1::Job job;
+  ASSERT_TRUE(submit("truncated.pfchunks", job).ok());
+  const auto states = watch(job.job_id());
+  ASSERT_FALSE(states.empty());
+  EXPECT_EQ(states.back().state(), v1::Job::FAILED);
+  EXPECT_EQ(states.back().error_code(), static_cast<int>(grpc::StatusCode::INVALID_ARGUMENT));
+  EXPECT_EQ(states.back().error_message().rfind("end: ", 0), 0u) << states.back().error_message();
+}
+
+TEST_F(JobsTest, JobLeftRunningByAStoppedServerCompletesAfterRestart) {
+  // What a server killed mid-job leaves behind: the job RUNNING with partial results.
+  std::string id;
+  {
+    fs::create_directories(dir_ / "data");
+    SqliteJobStore store(dir_ / "data" / "jobs.sqlite");
+    v1::JobSpec spec;
+    spec.set_recording_uri("demo.pfchunks");
+    v1::Job job = store.create(spec, (dir_ / "recordings" / "demo.pfchunks").string(), 1);
+    id = job.job_id();
+    job.set_state(v1::Job::RUNNING);
+    store.update(job);
+    v1::FitResult partial;
+    partial.mutable_progress()->set_chunks_processed(64);
+    store.append_results(id, {partial});
+  }
+  start();
+  const auto states = watch(id);
+  ASSERT_FALSE(states.empty());
+  EXPECT_EQ(states.back().state(), v1::Job::SUCCEEDED);
+  const auto all = results(id);
+  // Restarted from the beginning: the partial results were replaced, nothing is doubled.
+  EXPECT_EQ(orientation_samples(all).at(demo::kArmDevice), 800u);
+  std::size_t summaries = 0;
+  for (const auto& r : all) summaries += r.has_summary();
+  EXPECT_EQ(summaries, 1u);
+}
+
+TEST_F(JobsTest, ResultsOfAnUnknownJobAreNotFound) {
+  start();
+  grpc::Status status;
+  results("nope", &status);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::NOT_FOUND);
+}
+
+}  // namespace
+}  // namespace posefuse::server

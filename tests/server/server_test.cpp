@@ -1,0 +1,401 @@
+// posefuse-server in process on 127.0.0.1:0, driven over a real gRPC channel.
+// No timing assertions: waits are for conditions, with generous deadlines only against hangs.
+#include <chrono>
+#include <map>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <grpcpp/generic/generic_stub.h>
+#include <gtest/gtest.h>
+
+#include "client/demo_session.hpp"
+#include "client/fit_call.hpp"
+#include "grpc/health/v1/health.grpc.pb.h"
+#include "posefuse/v1/service.grpc.pb.h"
+#include "server/posefuse_server.hpp"
+#include "tests/server/test_support.hpp"
+
+namespace posefuse::server {
+namespace {
+
+using Stream = grpc::ClientReaderWriter<v1::SessionChunk, v1::FitResult>;
+
+struct CallResult {
+  grpc::Status status;
+  std::vector<v1::FitResult> results;
+
+  std::map<std::string, std::size_t> orientation_samples() const {
+    return test::orientation_samples(results);
+  }
+  std::vector<v1::ItemError> item_errors() const {
+    std::vector<v1::ItemError> out;
+    for (const auto& r : results) {
+      if (r.has_item_error()) out.push_back(r.item_error());
+    }
+    return out;
+  }
+};
+
+using test::set_test_deadline;
+
+class ServerTest : public ::testing::Test {
+ protected:
+  void start(ServerOptions options = {}) {
+    options.listen = "127.0.0.1:0";
+    if (options.workers == 0) options.workers = 2;
+    server_ = std::make_unique<PoseFuseServer>(options);
+    address_ = "127.0.0.1:" + std::to_string(server_->port());
+    channel_ = client::make_channel(address_);
+    stub_ = v1::PoseFuse::NewStub(channel_);
+  }
+
+  // Sends `chunks` (while receiving) and returns the status and every result.
+  CallResult fit(const std::vector<v1::SessionChunk>& chunks) {
+    grpc::ClientContext context;
+    set_test_deadline(context);
+    auto stream = stub_->Fit(&context);
+    std::thread sender([&] {
+      for (const auto& chunk : chunks) {
+        if (!stream->Write(chunk)) return;
+      }
+      stream->WritesDone();
+    });
+    CallResult call;
+    v1::FitResult result;
+    while (stream->Read(&result)) call.results.push_back(result);
+    sender.join();
+    call.status = stream->Finish();
+    return call;
+  }
+
+  // Waits until the server has admitted `n` sessions (false after 30 s).
+  bool wait_for_active(unsigned n) {
+    const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+    while (server_->registry().active() != n) {
+      if (std::chrono::steady_clock::now() > give_up) return false;
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return true;
+  }
+
+  std::unique_ptr<PoseFuseServer> server_;
+  std::string address_;
+  std::shared_ptr<grpc::Channel> channel_;
+  std::unique_ptr<v1::PoseFuse::Stub> stub_;
+};
+
+std::size_t nth_index(const std::vector<v1::SessionChunk>& chunks, v1::SessionChunk::ChunkCase kind,
+                      int n) {
+  int seen = 0;
+  for (std::size_t i = 0; i < chunks.size(); ++i) {
+    if (chunks[i].chunk_case() == kind && (kind != v1::SessionChunk::kImu ||
+                                           chunks[i].imu().device_id() == demo::kArmDevice)) {
+      if (seen++ == n) return i;
+    }
+  }
+  ADD_FAILURE() << "no such chunk";
+  return 0;
+}
+
+TEST_F(ServerTest, DemoSessionFitReturnsAnOrientationForEveryImuSample) {
+  start();
+  const auto chunks = demo::make_demo_session();
+  const CallResult call = fit(chunks);
+  ASSERT_TRUE(call.status.ok()) << call.status.error_message();
+  const auto samples = call.orientation_samples();
+  EXPECT_EQ(samples.at(demo::kArmDevice), 800u);
+  EXPECT_EQ(samples.at(demo::kBaseDevice), 800u);
+  EXPECT_TRUE(call.item_errors().empty());
+  ASSERT_FALSE(call.results.empty());
+  ASSERT_TRUE(call.results.back().has_summary());
+  EXPECT_EQ(call.results.back().summary().chunks(), chunks.size());
+  EXPECT_EQ(call.results.back().summary().depth_frames(), 300u);
+}
+
+TEST_F(ServerTest, TightQueuesStillDeliverEveryResult) {
+  ServerOptions options;
+  options.max_queued_chunks = 1;
+  options.max_queued_results = 1;
+  start(options);
+  const CallResult call = fit(demo::make_demo_session());
+  ASSERT_TRUE(call.status.ok()) << call.status.error_message();
+  EXPECT_EQ(call.orientation_samples().at(demo::kArmDevice), 800u);
+  EXPECT_TRUE(call.results.back().has_summary());
+}
+
+TEST_F(ServerTest, MalformedChunksAreItemErrorsNamingTheFieldAndTheSessionCompletes) {
+  start();
+  auto chunks = demo::make_demo_session();
+  const std::size_t nan_imu = nth_index(chunks, v1::SessionChunk::kImu, 3);
+  chunks[nan_imu].mutable_imu()->set_acc_m_s2(7, std::nanf(""));
+  const std::size_t bad_depth = nth_index(chunks, v1::SessionChunk::kDepth, 20);
+  chunks[bad_depth].mutable_depth()->set_width(63);
+  const std::size_t early = nth_index(chunks, v1::SessionChunk::kImu, 10);
+  const std::size_t late = nth_index(chunks, v1::SessionChunk::kImu, 11);
+  std::swap(chunks[early], chunks[late]);  // `late` now holds the earlier batch: out of order
+
+  const CallResult call = fit(chunks);
+  ASSERT_TRUE(call.status.ok()) << call.status.error_message();
+  // Errors come in stream order: the swapped arm batches come before depth frame 20.
+  ASSERT_LT(late, bad_depth);
+  const auto errors = call.item_errors();
+  ASSERT_GE(errors.size(), 3u);
+  EXPECT_EQ(errors[0].field(), "chunk[" + std::to_string(nan_imu) + "].imu[2].acc_m_s2");
+  EXPECT_EQ(errors[0].code(), "invalid argument");
+  EXPECT_EQ(errors[1].field(), "chunk[" + std::to_string(late) + "].imu[0].t_us");
+  EXPECT_EQ(errors[2].field(), "chunk[" + std::to_string(bad_depth) + "].depth.width");
+  // Two arm batches of 32 were rejected; everything else was processed.
+  EXPECT_EQ(call.orientation_samples().at(demo::kArmDevice), 800u - 64u);
+  EXPECT_EQ(call.orientation_samples().at(demo::kBaseDevice), 800u);
+  ASSERT_TRUE(call.results.back().has_summary());
+  EXPECT_EQ(call.results.back().summary().depth_frames(), 299u);
+}
+
+TEST_F(ServerTest, StreamWithoutHeaderIsInvalidArgument) {
+  start();
+  auto chunks = demo::make_demo_session();
+  chunks.erase(chunks.begin());
+  const CallResult call = fit(chunks);
+  EXPECT_EQ(call.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(call.status.error_message().rfind("chunk[0]: expected the header first", 0), 0u)
+      << call.status.error_message();
+}
+
+TEST_F(ServerTest, StreamWithoutEndMarkerIsInvalidArgumentAfterTheResults) {
+  start();
+  auto chunks = demo::make_demo_session();
+  chunks.pop_back();
+  const CallResult call = fit(chunks);
+  EXPECT_EQ(call.status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(call.status.error_message().rfind("end: ", 0), 0u) << call.status.error_message();
+  EXPECT_EQ(call.orientation_samples().at(demo::kArmDevice), 800u);
+}
+
+TEST_F(ServerTest, OversizedMessageIsResourceExhausted) {
+  ServerOptions options;
+  options.max_message_mb = 1.0;
+  start(options);
+  auto chunks = demo::make_demo_session();
+  const std::size_t depth = nth_index(chunks, v1::SessionChunk::kDepth, 0);
+  chunks[depth].mutable_depth()->set_data(std::string(2 << 20, '\0'));
+  const CallResult call = fit(chunks);
+  EXPECT_EQ(call.status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED)
+      << call.status.error_message();
+}
+
+TEST_F(ServerTest, SessionsBeyondTheLimitAreRefusedWithResourceExhausted) {
+  ServerOptions options;
+  options.max_sessions = 2;
+  start(options);
+  const auto chunks = demo::make_demo_session();
+  grpc::ClientContext a, b;
+  set_test_deadline(a);
+  set_test_deadline(b);
+  auto stream_a = stub_->Fit(&a);
+  auto stream_b = stub_->Fit(&b);
+  ASSERT_TRUE(stream_a->Write(chunks[0]));
+  ASSERT_TRUE(stream_b->Write(chunks[0]));
+  ASSERT_TRUE(wait_for_active(2));
+
+  const CallResult refused = fit(chunks);
+  EXPECT_EQ(refused.status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
+  EXPECT_TRUE(refused.results.empty());
+
+  a.TryCancel();
+  b.TryCancel();
+  EXPECT_EQ(stream_a->Finish().error_code(), grpc::StatusCode::CANCELLED);
+  EXPECT_EQ(stream_b->Finish().error_code(), grpc::StatusCode::CANCELLED);
+}
+
+TEST_F(ServerTest, ClientThatCancelsMidStreamFreesItsSlot) {
+  ServerOptions options;
+  options.max_sessions = 1;
+  start(options);
+  const auto chunks = demo::make_demo_session();
+  {
+    grpc::ClientContext context;
+    set_test_deadline(context);
+    auto stream = stub_->Fit(&context);
+    // Send until the server has answered something (it is mid-session), then cancel.
+    std::size_t i = 0;
+    v1::FitResult result;
+    for (; i < chunks.size() / 2; ++i) ASSERT_TRUE(stream->Write(chunks[i]));
+    ASSERT_TRUE(stream->Read(&result));
+    context.TryCancel();
+    EXPECT_EQ(stream->Finish().error_code(), grpc::StatusCode::CANCELLED);
+  }
+  ASSERT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
+  const CallResult call = fit(chunks);
+  EXPECT_TRUE(call.status.ok()) << call.status.error_message();
+  EXPECT_EQ(call.orientation_samples().at(demo::kArmDevice), 800u);
+}
+
+TEST_F(ServerTest, IdleStreamIsEndedWithDeadlineExceeded) {
+  ServerOptions options;
+  options.idle_timeout_s = 0.2;
+  start(options);
+  const auto chunks = demo::make_demo_session();
+  grpc::ClientContext context;
+  set_test_deadline(context);
+  auto stream = stub_->Fit(&context);
+  ASSERT_TRUE(stream->Write(chunks[0]));
+  // Send nothing more: the server ends the call.
+  v1::FitResult result;
+  while (stream->Read(&result)) {
+  }
+  const grpc::Status status = stream->Finish();
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED) << status.error_message();
+  EXPECT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
+}
+
+TEST_F(ServerTest, HealthSaysServing) {
+  start();
+  auto health = grpc::health::v1::Health::NewStub(channel_);
+  grpc::ClientContext context;
+  set_test_deadline(context);
+  grpc::health::v1::HealthCheckResponse response;
+  const grpc::Status status = health->Check(&context, {}, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(response.status(), grpc::health::v1::HealthCheckResponse::SERVING);
+}
+
+// Server reflection, asked with a raw generic call (no reflection client library is packaged):
+// a ServerReflectionRequest with list_services = "*" (field 7), and the answer must name the
+// PoseFuse service.
+TEST_F(ServerTest, ReflectionListsThePoseFuseService) {
+  start();
+  grpc::GenericStub stub(channel_);
+  grpc::CompletionQueue cq;
+  grpc::ClientContext context;
+  set_test_deadline(context);
+  auto call = stub.PrepareCall(
+      &context, "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo", &cq);
+  auto step = [&](void* tag) {
+    void* got = nullptr;
+    bool ok = false;
+    EXPECT_TRUE(cq.Next(&got, &ok));
+    EXPECT_EQ(got, tag);
+    return ok;
+  };
+  int tags[5];
+  call->StartCall(&tags[0]);
+  ASSERT_TRUE(step(&tags[0]));
+  const std::string request = std::string("\x3a\x01*", 3);  // field 7, length 1, "*"
+  grpc::Slice slice(request);
+  grpc::ByteBuffer request_buffer(&slice, 1);
+  call->Write(request_buffer, &tags[1]);
+  ASSERT_TRUE(step(&tags[1]));
+  grpc::ByteBuffer response_buffer;
+  call->Read(&response_buffer, &tags[2]);
+  ASSERT_TRUE(step(&tags[2]));
+  call->WritesDone(&tags[3]);
+  step(&tags[3]);
+  grpc::Status status;
+  call->Finish(&status, &tags[4]);
+  step(&tags[4]);
+  EXPECT_TRUE(status.ok()) << status.error_message();
+  std::vector<grpc::Slice> slices;
+  ASSERT_TRUE(response_buffer.Dump(&slices).ok());
+  std::string response;
+  for (const auto& s : slices) response.append(reinterpret_cast<const char*>(s.begin()), s.size());
+  EXPECT_NE(response.find("posefuse.v1.PoseFuse"), std::string::npos);
+  cq.Shutdown();
+  void* ignored_tag;
+  bool ignored_ok;
+  while (cq.Next(&ignored_tag, &ignored_ok)) {
+  }
+}
+
+TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
+  ServerOptions options;
+  options.max_sessions = 3;
+  start(options);
+  grpc::ClientContext context;
+  set_test_deadline(context);
+  v1::ServerInfo info;
+  ASSERT_TRUE(stub_->GetServerInfo(&context, {}, &info).ok());
+  EXPECT_EQ(info.api_version(), "posefuse.v1");
+  ASSERT_EQ(info.stages_size(), 1);
+  EXPECT_EQ(info.stages(0).name(), "imu_orientation");
+  ASSERT_EQ(info.options_size(), 2);
+  EXPECT_EQ(info.options(0).key(), "imu.tau_acc_s");
+  EXPECT_EQ(info.limits().max_sessions(), 3u);
+  EXPECT_EQ(info.limits().workers(), 2u);
+  EXPECT_FALSE(info.jobs_supported());
+}
+
+TEST_F(ServerTest, JobCallsWithoutDataDirAreFailedPrecondition) {
+  start();
+  grpc::ClientContext context;
+  set_test_deadline(context);
+  v1::Job job;
+  v1::GetJobRequest request;
+  request.set_job_id("x");
+  EXPECT_EQ(stub_->GetJob(&context, request, &job).error_code(),
+            grpc::StatusCode::FAILED_PRECONDITION);
+}
+
+// A plain HTTP GET on loopback; returns the whole response (head and body).
+std::string http_get(int port, const std::string& path) {
+  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
+  sockaddr_in address{};
+  address.sin_family = AF_INET;
+  address.sin_port = htons(static_cast<std::uint16_t>(port));
+  ::inet_pton(AF_INET, "127.0.0.1", &address.sin_addr);
+  if (::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) {
+    ::close(fd);
+    return "";
+  }
+  const std::string request = "GET " + path + " HTTP/1.1\r\nHost: test\r\n\r\n";
+  ::send(fd, request.data(), request.size(), 0);
+  std::string response;
+  char buffer[4096];
+  for (ssize_t n; (n = ::recv(fd, buffer, sizeof buffer, 0)) > 0;) {
+    response.append(buffer, static_cast<std::size_t>(n));
+  }
+  ::close(fd);
+  return response;
+}
+
+TEST_F(ServerTest, MetricsEndpointCountsSessionsAndStageCalls) {
+  ServerOptions options;
+  options.metrics_listen = "127.0.0.1:0";
+  start(options);
+  ASSERT_GT(server_->metrics_port(), 0);
+  ASSERT_TRUE(fit(demo::make_demo_session()).status.ok());
+  // The session's slot is released (and its end counted) right after the call.
+  ASSERT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
+
+  const std::string response = http_get(server_->metrics_port(), "/metrics");
+  EXPECT_EQ(response.rfind("HTTP/1.1 200 OK\r\n", 0), 0u) << response;
+  EXPECT_NE(response.find("\nposefuse_sessions_finished_total{status=\"OK\"} 1\n"),
+            std::string::npos)
+      << response;
+  EXPECT_NE(response.find("\nposefuse_sessions_in_flight 0\n"), std::string::npos);
+  EXPECT_NE(response.find("\nposefuse_chunks_received_total 952\n"), std::string::npos);
+  // start + 950 data chunks + finish.
+  EXPECT_NE(response.find("\nposefuse_stage_calls_total{stage=\"imu_orientation\"} 952\n"),
+            std::string::npos);
+  EXPECT_NE(response.find("\nposefuse_queued_chunks 0\n"), std::string::npos);
+  EXPECT_EQ(http_get(server_->metrics_port(), "/other").rfind("HTTP/1.1 404", 0), 0u);
+}
+
+TEST(ServerOptions, BadValuesNameTheFlag) {
+  ServerOptions options;
+  options.max_sessions = 0;
+  try {
+    validate_options(options);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), "--max-sessions");
+  }
+}
+
+}  // namespace
+}  // namespace posefuse::server

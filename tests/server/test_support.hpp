@@ -1,0 +1,64 @@
+#pragma once
+// Small helpers shared by the server, job and client tests.
+#include <unistd.h>
+
+#include <chrono>
+#include <filesystem>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <grpcpp/grpcpp.h>
+#include <gtest/gtest.h>
+
+#include "posefuse/v1/results.pb.h"
+
+namespace posefuse::test {
+
+// A fresh folder for the current test, removed afterwards.
+class TempDir {
+ public:
+  TempDir()
+      : path_(std::filesystem::temp_directory_path() /
+              ("posefuse_test_" + std::to_string(::getpid()) + "_" +
+               ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(path_);
+  }
+  ~TempDir() { std::filesystem::remove_all(path_); }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
+
+// A generous deadline that only guards against hangs.
+inline void set_test_deadline(grpc::ClientContext& context) {
+  context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
+}
+
+// Every message of a server stream, and its final status.
+template <class Message, class Reader>
+std::vector<Message> read_all(Reader& reader, grpc::Status& status) {
+  std::vector<Message> messages;
+  Message message;
+  while (reader.Read(&message)) messages.push_back(message);
+  status = reader.Finish();
+  return messages;
+}
+
+// device_id -> number of W_from_A samples in the results.
+inline std::map<std::string, std::size_t> orientation_samples(
+    const std::vector<v1::FitResult>& results) {
+  std::map<std::string, std::size_t> n;
+  for (const auto& r : results) {
+    if (r.has_imu_orientations()) {
+      n[r.imu_orientations().device_id()] += r.imu_orientations().t_us_size();
+    }
+  }
+  return n;
+}
+
+}  // namespace posefuse::test

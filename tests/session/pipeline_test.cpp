@@ -1,0 +1,343 @@
+// SessionPipeline and the IMU orientation stage, without gRPC: the demo session (client/) in,
+// FitResults out.
+#include <cmath>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "client/demo_session.hpp"
+#include "common/error.hpp"
+#include "geometry/quaternion.hpp"
+#include "session/pipeline.hpp"
+#include "session/stages/default_stages.hpp"
+
+namespace posefuse::session {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+
+class CollectingSink : public ResultSink {
+ public:
+  void emit(v1::FitResult&& result) override { results.push_back(std::move(result)); }
+
+  std::vector<v1::FitResult> of(v1::FitResult::ResultCase kind) const {
+    std::vector<v1::FitResult> out;
+    for (const auto& r : results) {
+      if (r.result_case() == kind) out.push_back(r);
+    }
+    return out;
+  }
+  std::vector<v1::ItemError> item_errors() const {
+    std::vector<v1::ItemError> out;
+    for (const auto& r : of(v1::FitResult::kItemError)) out.push_back(r.item_error());
+    return out;
+  }
+  // device_id -> (t_us, W_from_A) of every orientation result, in order.
+  std::map<std::string, std::vector<std::pair<std::int64_t, geometry::Quat>>> orientations()
+      const {
+    std::map<std::string, std::vector<std::pair<std::int64_t, geometry::Quat>>> out;
+    for (const auto& r : of(v1::FitResult::kImuOrientations)) {
+      const auto& b = r.imu_orientations();
+      for (int i = 0; i < b.t_us_size(); ++i) {
+        out[b.device_id()].emplace_back(
+            b.t_us(i), geometry::Quat(b.w_from_a(4 * i), b.w_from_a(4 * i + 1),
+                                      b.w_from_a(4 * i + 2), b.w_from_a(4 * i + 3)));
+      }
+    }
+    return out;
+  }
+
+  std::vector<v1::FitResult> results;
+};
+
+void run(const std::vector<v1::SessionChunk>& chunks, CollectingSink& sink) {
+  SessionPipeline pipeline(make_default_stages(), sink);
+  for (const auto& chunk : chunks) pipeline.push(chunk);
+  pipeline.close();
+}
+
+std::size_t index_of_nth(const std::vector<v1::SessionChunk>& chunks,
+                         v1::SessionChunk::ChunkCase kind, int n, const std::string& device = "") {
+  int seen = 0;
+  for (std::size_t i = 0; i < chunks.size(); ++i) {
+    if (chunks[i].chunk_case() != kind) continue;
+    if (!device.empty() && chunks[i].imu().device_id() != device) continue;
+    if (seen++ == n) return i;
+  }
+  ADD_FAILURE() << "no such chunk";
+  return 0;
+}
+
+std::uint64_t total_samples(const std::vector<v1::SessionChunk>& chunks, const std::string& device) {
+  std::uint64_t n = 0;
+  for (const auto& c : chunks) {
+    if (c.has_imu() && c.imu().device_id() == device) n += c.imu().t_us_size();
+  }
+  return n;
+}
+
+TEST(SessionPipeline, DemoSessionGivesAnOrientationForEveryImuSample) {
+  const auto chunks = demo::make_demo_session();
+  CollectingSink sink;
+  run(chunks, sink);
+
+  EXPECT_TRUE(sink.item_errors().empty());
+  const auto orientations = sink.orientations();
+  for (const char* device : {demo::kArmDevice, demo::kBaseDevice}) {
+    SCOPED_TRACE(device);
+    std::vector<std::int64_t> input_t_us;
+    for (const auto& c : chunks) {
+      if (c.has_imu() && c.imu().device_id() == device) {
+        input_t_us.insert(input_t_us.end(), c.imu().t_us().begin(), c.imu().t_us().end());
+      }
+    }
+    ASSERT_EQ(input_t_us.size(), 800u);  // 10 s at 80 Hz
+    const auto& out = orientations.at(device);
+    ASSERT_EQ(out.size(), input_t_us.size());
+    for (std::size_t i = 0; i < out.size(); ++i) {
+      EXPECT_EQ(out[i].first, input_t_us[i]);
+      EXPECT_NEAR(out[i].second.norm(), 1.0, 1e-9);
+      if (i > 0) {
+        EXPECT_GE(out[i].second.coeffs().dot(out[i - 1].second.coeffs()), 0.0);
+      }
+    }
+  }
+
+  // The last three results: calibration report, progress, summary.
+  ASSERT_GE(sink.results.size(), 3u);
+  const auto n = sink.results.size();
+  ASSERT_TRUE(sink.results[n - 3].has_calibration());
+  ASSERT_TRUE(sink.results[n - 2].has_progress());
+  ASSERT_TRUE(sink.results[n - 1].has_summary());
+  const v1::Summary& summary = sink.results[n - 1].summary();
+  EXPECT_EQ(summary.chunks(), chunks.size());
+  EXPECT_EQ(summary.depth_frames(), 300u);
+  EXPECT_EQ(summary.item_errors(), 0u);
+  EXPECT_NEAR(summary.stream_duration_s(), 299.0 / 30.0, 1e-5);
+  EXPECT_EQ(sink.results[n - 2].progress().chunks_processed(), chunks.size());
+
+  const v1::CalibrationReport& report = sink.results[n - 3].calibration();
+  ASSERT_EQ(report.imus_size(), 2);
+  EXPECT_EQ(report.imus(0).device_id(), demo::kArmDevice);
+  EXPECT_EQ(report.imus(1).device_id(), demo::kBaseDevice);
+  // The base rests all session: its bias estimate must approach the generator's
+  // (-0.004, 0.006, 0.002) rad/s; 0.002 rad/s is 0.11 deg/s.
+  const auto& bias = report.imus(1).gyro_bias_rad_s();
+  EXPECT_NEAR(bias.x(), -0.004, 0.002);
+  EXPECT_NEAR(bias.y(), 0.006, 0.002);
+  EXPECT_NEAR(bias.z(), 0.002, 0.002);
+  // The filter learned the demo's 49 uT field.
+  EXPECT_NEAR(report.imus(1).mag_field_ut(), 49.0, 1.0);
+}
+
+TEST(SessionPipeline, ArmOrientationFollowsTheDemoTruth) {
+  const auto chunks = demo::make_demo_session();
+  CollectingSink sink;
+  run(chunks, sink);
+  const auto arm = sink.orientations().at(demo::kArmDevice);
+  double sum_deg = 0.0, max_deg = 0.0;
+  int n = 0;
+  for (const auto& [t_us, W_from_A] : arm) {
+    const double t_s = static_cast<double>(t_us - demo::kArmClockStartUs) * 1e-6;
+    if (t_s < 1.0) continue;  // start-up
+    const double error_deg =
+        geometry::angle_between(W_from_A, demo::demo_arm_W_from_A(t_s)) * 180.0 / kPi;
+    sum_deg += error_deg;
+    max_deg = std::max(max_deg, error_deg);
+    ++n;
+  }
+  ASSERT_GT(n, 0);
+  RecordProperty("mean_error_deg", std::to_string(sum_deg / n));
+  RecordProperty("max_error_deg", std::to_string(max_deg));
+  EXPECT_LT(sum_deg / n, 3.0);
+  EXPECT_LT(max_deg, 8.0);
+}
+
+TEST(SessionPipeline, NanInImuIsAnItemErrorAndTheRestCompletes) {
+  auto chunks = demo::make_demo_session();
+  const std::size_t bad = index_of_nth(chunks, v1::SessionChunk::kImu, 5, demo::kArmDevice);
+  chunks[bad].mutable_imu()->set_gyr_rad_s(4, std::nanf(""));
+  CollectingSink sink;
+  run(chunks, sink);
+
+  const auto errors = sink.item_errors();
+  ASSERT_GE(errors.size(), 1u);
+  EXPECT_EQ(errors[0].code(), "invalid argument");
+  EXPECT_EQ(errors[0].field(), "chunk[" + std::to_string(bad) + "].imu[1].gyr_rad_s");
+  // The end marker counted the rejected batch; the mismatch is reported, nothing else.
+  ASSERT_EQ(errors.size(), 2u);
+  EXPECT_EQ(errors[1].field().rfind("chunk[" + std::to_string(chunks.size() - 1) + "].end.", 0), 0u)
+      << errors[1].field();
+  const auto arm = sink.orientations().at(demo::kArmDevice);
+  EXPECT_EQ(arm.size(), total_samples(chunks, demo::kArmDevice) - 32);
+  EXPECT_EQ(sink.orientations().at(demo::kBaseDevice).size(), 800u);
+  ASSERT_TRUE(sink.results.back().has_summary());
+  EXPECT_EQ(sink.results.back().summary().item_errors(), 2u);
+}
+
+TEST(SessionPipeline, WrongDepthSizeNamesTheFieldAndLaterChunksKeepTheirStreamIndex) {
+  auto chunks = demo::make_demo_session();
+  const std::size_t bad_depth = index_of_nth(chunks, v1::SessionChunk::kDepth, 3);
+  chunks[bad_depth].mutable_depth()->set_width(63);
+  // A second bad chunk later: its field must carry its own position in the stream, although
+  // the validator accepted one chunk fewer than the stream holds.
+  const std::size_t bad_skeleton = index_of_nth(chunks, v1::SessionChunk::kSkeleton, 10);
+  chunks[bad_skeleton].mutable_skeleton()->mutable_joints()->RemoveLast();
+  CollectingSink sink;
+  run(chunks, sink);
+
+  const auto errors = sink.item_errors();
+  ASSERT_GE(errors.size(), 2u);
+  EXPECT_EQ(errors[0].field(), "chunk[" + std::to_string(bad_depth) + "].depth.width");
+  EXPECT_EQ(errors[1].field().rfind("chunk[" + std::to_string(bad_skeleton) + "].skeleton", 0),
+            0u)
+      << errors[1].field();
+  ASSERT_TRUE(sink.results.back().has_summary());
+  EXPECT_EQ(sink.results.back().summary().depth_frames(), 299u);
+  EXPECT_EQ(sink.orientations().at(demo::kArmDevice).size(), 800u);
+}
+
+TEST(SessionPipeline, OutOfOrderImuBatchIsRejectedAndTheStreamGoesOn) {
+  auto chunks = demo::make_demo_session();
+  const std::size_t first = index_of_nth(chunks, v1::SessionChunk::kImu, 4, demo::kArmDevice);
+  const std::size_t second = index_of_nth(chunks, v1::SessionChunk::kImu, 5, demo::kArmDevice);
+  std::swap(chunks[first], chunks[second]);
+  CollectingSink sink;
+  run(chunks, sink);
+
+  const auto errors = sink.item_errors();
+  ASSERT_GE(errors.size(), 1u);
+  EXPECT_EQ(errors[0].field(), "chunk[" + std::to_string(second) + "].imu[0].t_us");
+  const auto arm = sink.orientations().at(demo::kArmDevice);
+  EXPECT_EQ(arm.size(), 800u - 32u);
+  for (std::size_t i = 1; i < arm.size(); ++i) {
+    EXPECT_GT(arm[i].first, arm[i - 1].first);
+  }
+  EXPECT_TRUE(sink.results.back().has_summary());
+}
+
+TEST(SessionPipeline, SessionEndingErrorsAreThrownWithTheField) {
+  const auto chunks = demo::make_demo_session();
+  CollectingSink sink;
+  {
+    SessionPipeline pipeline(make_default_stages(), sink);
+    try {
+      pipeline.push(chunks[1]);  // a data chunk before the header
+      FAIL() << "no error";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.field(), "chunk[0]");
+    }
+  }
+  {
+    auto header = chunks[0];
+    header.mutable_header()->mutable_depth_intrinsics()->set_fx(-1.0);
+    SessionPipeline pipeline(make_default_stages(), sink);
+    try {
+      pipeline.push(header);
+      FAIL() << "no error";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.field(), "chunk[0].header.depth_intrinsics.fx");
+    }
+  }
+  {
+    SessionPipeline pipeline(make_default_stages(), sink);
+    for (std::size_t i = 0; i + 1 < chunks.size(); ++i) pipeline.push(chunks[i]);
+    try {
+      pipeline.close();
+      FAIL() << "no error";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.field(), "end");
+      EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument);
+    }
+  }
+  {
+    SessionPipeline pipeline(make_default_stages(), sink);
+    for (const auto& chunk : chunks) pipeline.push(chunk);
+    EXPECT_TRUE(pipeline.ended());
+    try {
+      pipeline.push(chunks[1]);
+      FAIL() << "no error";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.field(), "chunk[" + std::to_string(chunks.size()) + "]");
+    }
+  }
+}
+
+TEST(SessionPipeline, BadStageOptionEndsTheSession) {
+  auto chunks = demo::make_demo_session();
+  (*chunks[0].mutable_header()->mutable_options())["imu.tau_acc_s"] = "-2";
+  CollectingSink sink;
+  SessionPipeline pipeline(make_default_stages(), sink);
+  try {
+    pipeline.push(chunks[0]);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), "header.options[imu.tau_acc_s]");
+  }
+}
+
+TEST(SessionPipeline, TooManyBadChunksEndTheSession) {
+  auto chunks = demo::make_demo_session();
+  CollectingSink sink;
+  PipelineOptions options;
+  options.max_item_errors = 3;
+  SessionPipeline pipeline(make_default_stages(), sink, options);
+  pipeline.push(chunks[0]);
+  v1::SessionChunk empty;  // no chunk kind set
+  for (int i = 0; i < 3; ++i) pipeline.push(empty);
+  EXPECT_THROW(pipeline.push(empty), Error);
+}
+
+// A stage plugged in beside the IMU stage sees every accepted chunk in order, finishes once and
+// contributes to the single calibration report.
+class RecordingStage : public Stage {
+ public:
+  explicit RecordingStage(std::vector<std::string>& log) : log_(log) {}
+  std::string_view name() const override { return "recording"; }
+  std::string_view description() const override { return "test stage"; }
+  void start(const v1::SessionHeader&, StageOutput&) override { log_.push_back("start"); }
+  void on_chunk(const v1::SessionChunk& chunk, StageOutput&) override {
+    if (chunk.has_depth()) {
+      log_.push_back("depth");
+      if (log_.size() == 3) throw_precondition("depth", "this stage rejects the second frame");
+    }
+  }
+  void finish(StageOutput& out) override {
+    log_.push_back("finish");
+    out.calibration().mutable_body_shape()->set_estimated(true);
+    out.warn("TEST_WARNING", "stage", "from the test stage");
+  }
+
+ private:
+  std::vector<std::string>& log_;
+};
+
+TEST(SessionPipeline, PluggedStageSeesChunksInOrderAndStageErrorsAreItemErrors) {
+  const auto chunks = demo::make_demo_session();
+  std::vector<std::string> log;
+  std::vector<std::unique_ptr<Stage>> stages = make_default_stages();
+  stages.push_back(std::make_unique<RecordingStage>(log));
+  CollectingSink sink;
+  SessionPipeline pipeline(std::move(stages), sink);
+  for (const auto& chunk : chunks) pipeline.push(chunk);
+  pipeline.close();
+
+  ASSERT_EQ(log.size(), 302u);
+  EXPECT_EQ(log.front(), "start");
+  EXPECT_EQ(log.back(), "finish");
+  const auto errors = sink.item_errors();
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_EQ(errors[0].code(), "failed precondition");
+  EXPECT_EQ(errors[0].field(), "depth");
+  const auto calibrations = sink.of(v1::FitResult::kCalibration);
+  ASSERT_EQ(calibrations.size(), 1u);
+  EXPECT_TRUE(calibrations[0].calibration().body_shape().estimated());
+  EXPECT_EQ(calibrations[0].calibration().imus_size(), 2);
+  EXPECT_EQ(sink.results.back().summary().warnings(), 1u);
+  EXPECT_EQ(sink.results.back().summary().item_errors(), 1u);
+}
+
+}  // namespace
+}  // namespace posefuse::session
