@@ -28,7 +28,8 @@ MeshScene::MeshScene(std::shared_ptr<EmbreeDevice> device, const Eigen::Matrix3X
   if (faces.minCoeff() < 0 || faces.maxCoeff() >= num_vertices)
     throw_invalid("faces", "vertex index outside [0, " + std::to_string(num_vertices) + ")");
   scene_ = rtcNewScene(device_->handle());
-  rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_DYNAMIC);
+  // ROBUST: watertight ray-triangle tests, so no ray slips through a shared edge.
+  rtcSetSceneFlags(scene_, RTC_SCENE_FLAG_DYNAMIC | RTC_SCENE_FLAG_ROBUST);
   rtcSetSceneBuildQuality(scene_, RTC_BUILD_QUALITY_LOW);
   geometry_ = rtcNewGeometry(device_->handle(), RTC_GEOMETRY_TYPE_TRIANGLE);
   rtcSetGeometryBuildQuality(geometry_, RTC_BUILD_QUALITY_REFIT);

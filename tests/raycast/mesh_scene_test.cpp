@@ -239,3 +239,43 @@ TEST(MeshScene, SharesOneDeviceAndRejectsBadInput) {
 
 }  // namespace
 }  // namespace posefuse::raycast
+
+#include "body/body_evaluator.hpp"
+#include "body/template_generator.hpp"
+
+namespace posefuse::raycast {
+namespace {
+
+// The template rendered from the front has no pinholes: no ray slips through a shared edge
+// (the mesh has vertices exactly on the camera's centre column).
+TEST(MeshScene, TemplateRenderIsWatertight) {
+  for (body::Sex sex : {body::Sex::kMale, body::Sex::kFemale}) {
+    const auto model = body::make_template(sex);
+    const body::PoseLayout layout = body::PoseLayout::upper_body();
+    body::BodyEvaluator eval(model, layout);
+    Eigen::VectorXd theta = layout.zero();
+    theta[layout.index_of("pelvis_y")] = 3.14159265358979;
+    theta[layout.index_of("translation_y")] = -0.9;
+    theta[layout.index_of("translation_z")] = 2.2;
+    eval.evaluate(Eigen::VectorXd::Zero(10), theta, body::Derivatives::kNone);
+    MeshScene scene(EmbreeDevice::shared(), model->faces, model->num_vertices());
+    scene.update_vertices(eval.vertices());
+    DepthIntrinsics intrinsics;
+    intrinsics.k1 = intrinsics.k2 = intrinsics.k3 = 0;  // centre column rays lie exactly in x = 0
+    const DepthCamera camera(intrinsics);
+    RenderImages images;
+    scene.render(camera, 1, images);
+    int holes = 0, body_pixels = 0;
+    for (int row = 1; row + 1 < images.height; ++row)
+      for (int col = 1; col + 1 < images.width; ++col) {
+        auto hit = [&](int c, int r) { return images.depth_mm[static_cast<size_t>(r) * images.width + c] > 0; };
+        body_pixels += hit(col, row);
+        if (!hit(col, row) && hit(col - 1, row) && hit(col + 1, row) && hit(col, row - 1) && hit(col, row + 1)) ++holes;
+      }
+    EXPECT_GT(body_pixels, 15000);
+    EXPECT_EQ(holes, 0);
+  }
+}
+
+}  // namespace
+}  // namespace posefuse::raycast
