@@ -272,7 +272,7 @@ TEST(MeshScene, TemplateRenderIsWatertight) {
         body_pixels += hit(col, row);
         if (!hit(col, row) && hit(col - 1, row) && hit(col + 1, row) && hit(col, row - 1) && hit(col, row + 1)) ++holes;
       }
-    EXPECT_GT(body_pixels, 15000);
+    EXPECT_GT(body_pixels, 10000);
     EXPECT_EQ(holes, 0);
   }
 }
