@@ -259,4 +259,10 @@ void BodyEvaluator::add_vertex_pose_jacobian(int i, double scale,
   for (size_t c = 0; c < dofs.size(); ++c) out.col(dofs[c]) += scale * block.col(static_cast<Eigen::Index>(c));
 }
 
+void BodyEvaluator::add_vertex_pose_jacobian(int i, const Eigen::Matrix3d& m, Eigen::Ref<Eigen::Matrix3Xd> out) const {
+  const auto dofs = vertex_dofs(i);
+  const auto block = vertex_pose_jacobian(i);
+  for (size_t c = 0; c < dofs.size(); ++c) out.col(dofs[c]) += m * block.col(static_cast<Eigen::Index>(c));
+}
+
 }  // namespace posefuse::body

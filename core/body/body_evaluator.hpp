@@ -61,6 +61,8 @@ class BodyEvaluator {
 
   // Adds scale * d vertex(i) / d theta into the dense 3 x N block `out`.
   void add_vertex_pose_jacobian(int i, double scale, Eigen::Ref<Eigen::Matrix3Xd> out) const;
+  // Adds m * d vertex(i) / d theta into `out` (m: 3 x 3).
+  void add_vertex_pose_jacobian(int i, const Eigen::Matrix3d& m, Eigen::Ref<Eigen::Matrix3Xd> out) const;
 
  private:
   void update_shape(const Eigen::Ref<const Eigen::VectorXd>& beta);

@@ -139,7 +139,8 @@ TEST(PoseLayout, DofCountsMatchPaper2) {
   EXPECT_EQ(PoseLayout::upper_body().size(), 40);
   EXPECT_EQ(PoseLayout::full_body().size(), 48);
   int limited = 0;
-  for (const Dof& d : PoseLayout::full_body().dofs()) {
+  const PoseLayout full = PoseLayout::full_body();
+  for (const Dof& d : full.dofs()) {
     if (d.limited) {
       ++limited;
       EXPECT_LT(d.min_rad, d.max_rad) << d.name;
