@@ -19,6 +19,26 @@ Eigen::VectorXd random_vector(int n, double scale, unsigned seed) {
   return x;
 }
 
+struct NumericDerivative {
+  Eigen::Matrix3Xd vertices, joints;
+};
+
+// Central difference of the posed vertices and joints w.r.t. entry `index` of beta (shape) or
+// of theta (otherwise).
+NumericDerivative central_difference(BodyEvaluator& probe, const Eigen::VectorXd& beta, const Eigen::VectorXd& theta,
+                                     bool shape, int index) {
+  const double h = 1e-6;
+  Eigen::VectorXd beta_plus = beta, beta_minus = beta, theta_plus = theta, theta_minus = theta;
+  (shape ? beta_plus : theta_plus)[index] += h;
+  (shape ? beta_minus : theta_minus)[index] -= h;
+  probe.evaluate(beta_plus, theta_plus, Derivatives::kNone);
+  NumericDerivative out{probe.vertices(), probe.joints()};
+  probe.evaluate(beta_minus, theta_minus, Derivatives::kNone);
+  out.vertices = (out.vertices - probe.vertices()) / (2 * h);
+  out.joints = (out.joints - probe.joints()) / (2 * h);
+  return out;
+}
+
 // Central differences of every vertex and joint against the analytic pose Jacobian.
 void check_pose_jacobian(const std::shared_ptr<SmplModel>& model, const PoseLayout& layout,
                          unsigned seed) {
@@ -36,25 +56,14 @@ void check_pose_jacobian(const std::shared_ptr<SmplModel>& model, const PoseLayo
   const Eigen::MatrixXd joint_analytic = eval.joint_pose_jacobian();
 
   BodyEvaluator probe(model, layout);
-  const double h = 1e-6;
   for (int d = 0; d < layout.size(); ++d) {
-    Eigen::VectorXd plus = theta, minus = theta;
-    plus[d] += h;
-    minus[d] -= h;
-    probe.evaluate(beta, plus, Derivatives::kNone);
-    const Eigen::Matrix3Xd vp = probe.vertices(), jp = probe.joints();
-    probe.evaluate(beta, minus, Derivatives::kNone);
-    const Eigen::Matrix3Xd vm = probe.vertices(), jm = probe.joints();
-    for (int i = 0; i < v; ++i) {
-      const Eigen::Vector3d numeric = (vp.col(i) - vm.col(i)) / (2 * h);
-      ASSERT_LT((numeric - analytic.block<3, 1>(3 * i, d)).norm(), 1e-6)
+    const NumericDerivative numeric = central_difference(probe, beta, theta, false, d);
+    for (int i = 0; i < v; ++i)
+      ASSERT_LT((numeric.vertices.col(i) - analytic.block<3, 1>(3 * i, d)).norm(), 1e-6)
           << "vertex " << i << " dof " << layout.dof(d).name;
-    }
-    for (int j = 0; j < kNumJoints; ++j) {
-      const Eigen::Vector3d numeric = (jp.col(j) - jm.col(j)) / (2 * h);
-      ASSERT_LT((numeric - joint_analytic.block<3, 1>(3 * j, d)).norm(), 1e-6)
+    for (int j = 0; j < kNumJoints; ++j)
+      ASSERT_LT((numeric.joints.col(j) - joint_analytic.block<3, 1>(3 * j, d)).norm(), 1e-6)
           << "joint " << j << " dof " << layout.dof(d).name;
-    }
   }
 }
 
@@ -80,20 +89,13 @@ TEST(BodyEvaluator, ShapeJacobianMatchesFiniteDifferences) {
     const Eigen::VectorXd theta = random_vector(layout.size(), 0.8, 51);
     eval.evaluate(beta, theta, Derivatives::kPoseAndShape);
     BodyEvaluator probe(model, layout);
-    const double h = 1e-6;
     for (int b = 0; b < 10; ++b) {
-      Eigen::VectorXd plus = beta, minus = beta;
-      plus[b] += h;
-      minus[b] -= h;
-      probe.evaluate(plus, theta, Derivatives::kNone);
-      const Eigen::Matrix3Xd vp = probe.vertices(), jp = probe.joints();
-      probe.evaluate(minus, theta, Derivatives::kNone);
-      const Eigen::Matrix3Xd vm = probe.vertices(), jm = probe.joints();
+      const NumericDerivative numeric = central_difference(probe, beta, theta, true, b);
       for (int i = 0; i < model->num_vertices(); ++i)
-        ASSERT_LT(((vp.col(i) - vm.col(i)) / (2 * h) - eval.vertex_shape_jacobian(i).col(b)).norm(), 1e-6)
+        ASSERT_LT((numeric.vertices.col(i) - eval.vertex_shape_jacobian(i).col(b)).norm(), 1e-6)
             << "vertex " << i << " beta " << b;
       for (int j = 0; j < kNumJoints; ++j)
-        ASSERT_LT(((jp.col(j) - jm.col(j)) / (2 * h) - eval.joint_shape_jacobian().block<3, 1>(3 * j, b)).norm(), 1e-6)
+        ASSERT_LT((numeric.joints.col(j) - eval.joint_shape_jacobian().block<3, 1>(3 * j, b)).norm(), 1e-6)
             << "joint " << j << " beta " << b;
     }
   }
