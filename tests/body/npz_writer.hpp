@@ -40,7 +40,7 @@ inline std::string npy(const std::vector<int64_t>& shape, const std::vector<doub
     else if (dtype == "<i4") put(out, static_cast<uint32_t>(static_cast<int32_t>(v)), 4);
     else if (dtype == "<u4") put(out, static_cast<uint32_t>(v), 4);
     else if (dtype == "<i8") put(out, static_cast<uint64_t>(static_cast<int64_t>(v)), 8);
-    else put(out, 0, 16);  // unsupported dtypes: filler bytes
+    else out.append(16, '\0');  // unsupported dtypes: filler bytes
   }
   return out;
 }
