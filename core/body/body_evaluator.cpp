@@ -76,6 +76,7 @@ BodyEvaluator::BodyEvaluator(std::shared_ptr<const SmplModel> model, PoseLayout 
   rotations_.resize(kNumJoints);
   left_jacobians_.resize(kNumJoints);
   dof_rate_.resize(layout_.size());
+  for (const Dof& dof : layout_.dofs()) dof_is_translation_.push_back(dof.kind == DofKind::kTranslation);
   dof_local_rotation_derivative_.resize(layout_.size());
   joints_.resize(3, kNumJoints);
   vertices_.resize(3, num_vertices_);
@@ -156,6 +157,7 @@ void BodyEvaluator::evaluate(const Eigen::Ref<const Eigen::VectorXd>& beta,
   const bool pose_derivatives = what != Derivatives::kNone;
   const bool shape_derivatives = what == Derivatives::kPoseAndShape;
   const auto& parents = m.parents;
+  const bool posedirs = m.has_posedirs();
 
   // d c(k) / d beta (72 x B), needed for the shape Jacobian.
   if (shape_derivatives) {
@@ -188,7 +190,7 @@ void BodyEvaluator::evaluate(const Eigen::Ref<const Eigen::VectorXd>& beta,
       const Eigen::Vector3d p = rotations_[k] * rest + offsets[k];
       v += w * p;
       if (!pose_derivatives) continue;
-      if (m.has_posedirs()) blended_rotation += w * rotations_[k];
+      if (posedirs) blended_rotation += w * rotations_[k];
       for (int j = k; j >= 0; j = parents[j]) {
         sum_below[j] += w * p;
         weight_below[j] += w;
@@ -201,13 +203,12 @@ void BodyEvaluator::evaluate(const Eigen::Ref<const Eigen::VectorXd>& beta,
         const int j = influence_joint_[e];
         const Eigen::Vector3d lever = sum_below[j] - weight_below[j] * joints_.col(j);
         for (int d : layout_.dofs_of_joint(j)) {
-          const Dof& dof = layout_.dof(d);
           Eigen::Vector3d col;
-          if (dof.kind == DofKind::kTranslation) {
-            col = weight_below[j] * dof.axis;
+          if (dof_is_translation_[d]) {
+            col = weight_below[j] * layout_.dof(d).axis;
           } else {
             col = dof_rate_[d].cross(lever);
-            if (m.has_posedirs() && j > 0) {
+            if (posedirs && j > 0) {
               const Eigen::Matrix3d& dr = dof_local_rotation_derivative_[d];
               Eigen::Vector3d offset_rate = Eigen::Vector3d::Zero();
               for (int r = 0; r < 3; ++r)

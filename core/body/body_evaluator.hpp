@@ -94,6 +94,7 @@ class BodyEvaluator {
   Eigen::Vector3d translation_;
   std::vector<Eigen::Matrix3d> local_rotations_, rotations_;
   std::vector<Eigen::Matrix3d> left_jacobians_;
+  std::vector<char> dof_is_translation_;
   std::vector<Eigen::Vector3d> dof_rate_;           // W_d per DOF (world frame)
   std::vector<Eigen::Matrix3d> dof_local_rotation_derivative_;  // d R_loc / d theta_d
   Eigen::Matrix3Xd joints_;
