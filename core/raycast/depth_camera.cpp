@@ -41,6 +41,7 @@ void validate(const DepthIntrinsics& c) {
 
 DepthCamera::DepthCamera(const DepthIntrinsics& intrinsics) : intrinsics_(intrinsics) {
   validate(intrinsics_);
+  max_undistorted_radius_ = max_image_radius(intrinsics_);
   pixel_rays_.resize(static_cast<size_t>(width()) * height());
   for (int row = 0; row < height(); ++row)
     for (int col = 0; col < width(); ++col) {
@@ -67,6 +68,8 @@ double DepthCamera::undistort_radius(double r_distorted) const {
 std::optional<Eigen::Vector2d> DepthCamera::project(const Eigen::Vector3d& p_K) const {
   if (!(p_K.z() > 0) || !p_K.allFinite()) return std::nullopt;
   const double xn = -p_K.x() / p_K.z(), yn = -p_K.y() / p_K.z();
+  // Beyond the validated field the polynomial may fold back into the image.
+  if (xn * xn + yn * yn > max_undistorted_radius_ * max_undistorted_radius_) return std::nullopt;
   const double l = radial_factor(intrinsics_, xn * xn + yn * yn);
   return Eigen::Vector2d(intrinsics_.cx + intrinsics_.fx * l * xn, intrinsics_.cy + intrinsics_.fy * l * yn);
 }

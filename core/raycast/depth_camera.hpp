@@ -38,7 +38,9 @@ class DepthCamera {
   int width() const { return intrinsics_.width; }
   int height() const { return intrinsics_.height; }
 
-  // Image coordinates of a point in K; nullopt when it is not in front of the camera.
+  // Image coordinates of a point in K; nullopt when it is not in front of the camera or lies
+  // far outside the field of view (beyond 1.2 x the image corner's radius, where the distortion
+  // polynomial is not validated and may fold back into the image).
   std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& p_K) const;
   // Unit ray direction in K through image coordinates (u, v) (inverse of project).
   Eigen::Vector3d ray_direction(double u, double v) const;
@@ -52,6 +54,7 @@ class DepthCamera {
  private:
   DepthIntrinsics intrinsics_;
   std::vector<Eigen::Vector3f> pixel_rays_;  // z = 1 rays per pixel
+  double max_undistorted_radius_ = 0;
 };
 
 }  // namespace posefuse::raycast

@@ -26,6 +26,15 @@ TEST_P(TemplateTest, IsClosedOrientedManifoldSphere) {
             << signed_volume(model->v_template, model->faces) << "\n";
 }
 
+TEST_P(TemplateTest, IsDeterministic) {
+  const auto a = make_template(GetParam()), b = make_template(GetParam());
+  EXPECT_EQ(a->v_template, b->v_template);
+  EXPECT_EQ(a->shapedirs, b->shapedirs);
+  EXPECT_EQ(a->faces, b->faces);
+  EXPECT_EQ(Eigen::MatrixXd(a->weights), Eigen::MatrixXd(b->weights));
+  EXPECT_EQ(Eigen::MatrixXd(a->J_regressor), Eigen::MatrixXd(b->J_regressor));
+}
+
 INSTANTIATE_TEST_SUITE_P(Sexes, TemplateTest, ::testing::Values(Sex::kMale, Sex::kFemale));
 
 }  // namespace

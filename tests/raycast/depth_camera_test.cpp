@@ -34,6 +34,7 @@ TEST(DepthCamera, SignConventionsOfFrameK) {
   EXPECT_LT(up->y(), 212.0);
   EXPECT_NEAR(up->x(), 256.0, 1e-9);
   EXPECT_FALSE(camera.project({0, 0, -1}).has_value());
+  EXPECT_FALSE(camera.project({5, 0, 1}).has_value());  // 79 deg off axis: outside the model's field
   const Eigen::Vector3f& centre = camera.pixel_ray(256, 212);
   EXPECT_NEAR(centre.x(), 0.f, 1e-7f);
   EXPECT_FLOAT_EQ(centre.z(), 1.f);
