@@ -43,6 +43,8 @@ class BodyEvaluator {
   const Eigen::Matrix3Xd& rest_joints() const { return rest_joints_; }  // 3 x 24, shaped
   const Eigen::Matrix3d& joint_rotation(int j) const { return rotations_[j]; }  // global R(j)
 
+  // Jacobians below belong to the last evaluate() that asked for them (Derivatives::kPose or
+  // kPoseAndShape); an evaluate() with fewer derivatives leaves them stale.
   // Pose Jacobian of vertex i: d vertex / d theta[vertex_dofs(i)[c]] is column c.
   std::span<const int> vertex_dofs(int i) const {
     return {dof_index_.data() + dof_begin_[i], static_cast<size_t>(dof_begin_[i + 1] - dof_begin_[i])};
