@@ -90,13 +90,16 @@ void BodyEvaluator::update_shape(const Eigen::Ref<const Eigen::VectorXd>& beta) 
   if (beta.size() > num_betas_)
     throw_invalid("beta", "size " + std::to_string(beta.size()) + ", model has " +
                               std::to_string(num_betas_) + " shape directions");
-  Eigen::VectorXd padded = Eigen::VectorXd::Zero(num_betas_);
-  for (Eigen::Index b = 0; b < beta.size(); ++b) {
-    if (!std::isfinite(beta[b])) throw_invalid("beta[" + std::to_string(b) + "]", "not finite");
-    padded[b] = beta[b];
+  // Compared in place: evaluate() must not allocate on the fitter's hot path.
+  bool same = shape_valid_;
+  for (Eigen::Index b = 0; b < num_betas_; ++b) {
+    const double value = b < beta.size() ? beta[b] : 0.0;
+    if (!std::isfinite(value)) throw_invalid("beta[" + std::to_string(b) + "]", "not finite");
+    same = same && value == beta_[b];
   }
-  if (shape_valid_ && padded == beta_) return;
-  beta_ = padded;
+  if (same) return;
+  beta_.setZero();
+  beta_.head(beta.size()) = beta;
   const SmplModel& m = *model_;
   v_shaped_ = Eigen::Map<const Eigen::VectorXd>(m.v_template.data(), 3 * num_vertices_);
   if (num_betas_ > 0) v_shaped_.noalias() += m.shapedirs * beta_;
@@ -163,13 +166,12 @@ void BodyEvaluator::evaluate(const Eigen::Ref<const Eigen::VectorXd>& beta,
   if (shape_derivatives) {
     for (int k = 0; k < kNumJoints; ++k) {
       const int p = parents[k];
-      if (p < 0) {
-        joint_shape_jacobian_.middleRows<3>(0) = rest_joint_shape_dirs_.middleRows<3>(0);
-      } else {
-        joint_shape_jacobian_.middleRows<3>(3 * k) =
-            joint_shape_jacobian_.middleRows<3>(3 * p) +
-            rotations_[p] * (rest_joint_shape_dirs_.middleRows<3>(3 * k) -
-                             rest_joint_shape_dirs_.middleRows<3>(3 * p));
+      for (int b = 0; b < num_betas_; ++b) {  // column by column: no temporaries
+        const Eigen::Vector3d rest_dir = rest_joint_shape_dirs_.block<3, 1>(3 * k, b);
+        joint_shape_jacobian_.block<3, 1>(3 * k, b) =
+            p < 0 ? rest_dir
+                  : Eigen::Vector3d(joint_shape_jacobian_.block<3, 1>(3 * p, b) +
+                                    rotations_[p] * (rest_dir - rest_joint_shape_dirs_.block<3, 1>(3 * p, b)));
       }
     }
   }
