@@ -1,0 +1,84 @@
+#include "raycast/depth_camera.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "common/error.hpp"
+
+namespace posefuse::raycast {
+namespace {
+
+double radial_factor(const DepthIntrinsics& c, double r2) {
+  return 1 + r2 * (c.k1 + r2 * (c.k2 + r2 * c.k3));
+}
+
+// Largest undistorted radius seen by the image (its corners), with a margin.
+double max_image_radius(const DepthIntrinsics& c) {
+  const double du = std::max(c.cx, c.width - c.cx) / c.fx, dv = std::max(c.cy, c.height - c.cy) / c.fy;
+  return 1.2 * std::hypot(du, dv);
+}
+
+}  // namespace
+
+void validate(const DepthIntrinsics& c) {
+  if (c.width <= 0 || c.height <= 0 || c.width > 16384 || c.height > 16384)
+    throw_invalid("intrinsics.size", std::to_string(c.width) + "x" + std::to_string(c.height) + " is not a valid image size");
+  const std::pair<const char*, double> values[] = {{"fx", c.fx}, {"fy", c.fy}, {"cx", c.cx}, {"cy", c.cy},
+                                                   {"k1", c.k1}, {"k2", c.k2}, {"k3", c.k3}};
+  for (const auto& [name, value] : values)
+    if (!std::isfinite(value)) throw_invalid(std::string("intrinsics.") + name, "not finite");
+  if (c.fx <= 0 || c.fy <= 0)
+    throw_invalid("intrinsics.fx", "focal lengths must be positive, got " + std::to_string(c.fx) + ", " + std::to_string(c.fy));
+  // r * L(r^2) must increase over the image so that distortion can be inverted.
+  const double r_max = max_image_radius(c);
+  for (int i = 1; i <= 200; ++i) {
+    const double r = r_max * i / 200.0, r2 = r * r;
+    const double slope = 1 + r2 * (3 * c.k1 + r2 * (5 * c.k2 + r2 * 7 * c.k3));
+    if (slope <= 0)
+      throw_invalid("intrinsics.k", "radial distortion folds over at normalised radius " + std::to_string(r));
+  }
+}
+
+DepthCamera::DepthCamera(const DepthIntrinsics& intrinsics) : intrinsics_(intrinsics) {
+  validate(intrinsics_);
+  max_undistorted_radius_ = max_image_radius(intrinsics_);
+  pixel_rays_.resize(static_cast<size_t>(width()) * height());
+  for (int row = 0; row < height(); ++row)
+    for (int col = 0; col < width(); ++col) {
+      const Eigen::Vector3d d = ray_direction(col, row);
+      pixel_rays_[row * width() + col] = (d / d.z()).cast<float>();
+    }
+}
+
+double DepthCamera::distort_radius(double r) const { return r * radial_factor(intrinsics_, r * r); }
+
+double DepthCamera::undistort_radius(double r_distorted) const {
+  double r = r_distorted;
+  for (int i = 0; i < 20; ++i) {
+    const double r2 = r * r;
+    const double f = r * radial_factor(intrinsics_, r2) - r_distorted;
+    const double slope = 1 + r2 * (3 * intrinsics_.k1 + r2 * (5 * intrinsics_.k2 + r2 * 7 * intrinsics_.k3));
+    const double step = f / slope;
+    r -= step;
+    if (std::abs(step) < 1e-14) break;
+  }
+  return r;
+}
+
+std::optional<Eigen::Vector2d> DepthCamera::project(const Eigen::Vector3d& p_K) const {
+  if (!(p_K.z() > 0) || !p_K.allFinite()) return std::nullopt;
+  const double xn = -p_K.x() / p_K.z(), yn = -p_K.y() / p_K.z();
+  // Beyond the validated field the polynomial may fold back into the image.
+  if (xn * xn + yn * yn > max_undistorted_radius_ * max_undistorted_radius_) return std::nullopt;
+  const double l = radial_factor(intrinsics_, xn * xn + yn * yn);
+  return Eigen::Vector2d(intrinsics_.cx + intrinsics_.fx * l * xn, intrinsics_.cy + intrinsics_.fy * l * yn);
+}
+
+Eigen::Vector3d DepthCamera::ray_direction(double u, double v) const {
+  const double xd = (u - intrinsics_.cx) / intrinsics_.fx, yd = (v - intrinsics_.cy) / intrinsics_.fy;
+  const double rd = std::hypot(xd, yd);
+  const double scale = rd > 0 ? undistort_radius(rd) / rd : 1.0;
+  return Eigen::Vector3d(-xd * scale, -yd * scale, 1.0).normalized();
+}
+
+}  // namespace posefuse::raycast

@@ -1,0 +1,60 @@
+#pragma once
+// Depth camera model: pinhole intrinsics with radial distortion (Brown's model, k1 k2 k3),
+// as the Kinect v2 depth camera and its SDK use.
+//
+// Conventions (paper 1, II-B): the camera frame K has x to the left, y up and z forward (the
+// viewing direction). Pixel (col, row) has its centre at image coordinates (u, v) = (col, row),
+// u growing to the right and v growing downwards in the image, as OpenCV. Therefore
+//   x_n = -x / z,  y_n = -y / z                  (normalised, image-aligned: right, down)
+//   L   = 1 + k1 r^2 + k2 r^4 + k3 r^6,  r^2 = x_n^2 + y_n^2
+//   u   = cx + fx * L * x_n,  v = cy + fy * L * y_n
+// A point to the camera's left (x > 0) lands left of the centre column (u < cx); a point above
+// the optical axis (y > 0) lands above the centre row (v < cy). Depth images store z (not the
+// ray length) in millimetres, 0 where nothing was seen.
+#include <Eigen/Core>
+#include <optional>
+#include <vector>
+
+namespace posefuse::raycast {
+
+struct DepthIntrinsics {
+  // Typical Kinect v2 depth camera values; a session header supplies each device's own.
+  int width = 512;
+  int height = 424;
+  double fx = 365.0, fy = 365.0;  // px
+  double cx = 256.0, cy = 212.0;  // px
+  double k1 = 0.09, k2 = -0.27, k3 = 0.09;
+};
+
+// Throws posefuse::Error for non-positive sizes or focal lengths, non-finite values, or a
+// distortion that is not monotonic over the image (cannot be inverted).
+void validate(const DepthIntrinsics& intrinsics);
+
+class DepthCamera {
+ public:
+  explicit DepthCamera(const DepthIntrinsics& intrinsics);
+
+  const DepthIntrinsics& intrinsics() const { return intrinsics_; }
+  int width() const { return intrinsics_.width; }
+  int height() const { return intrinsics_.height; }
+
+  // Image coordinates of a point in K; nullopt when it is not in front of the camera or lies
+  // far outside the field of view (beyond 1.2 x the image corner's radius, where the distortion
+  // polynomial is not validated and may fold back into the image).
+  std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& p_K) const;
+  // Unit ray direction in K through image coordinates (u, v) (inverse of project).
+  Eigen::Vector3d ray_direction(double u, double v) const;
+  // Direction in K with z = 1 through the centre of pixel (col, row), from a table.
+  const Eigen::Vector3f& pixel_ray(int col, int row) const { return pixel_rays_[row * width() + col]; }
+
+  // Radial distortion: distorted radius for an undistorted one, and its inverse (Newton).
+  double distort_radius(double r) const;
+  double undistort_radius(double r_distorted) const;
+
+ private:
+  DepthIntrinsics intrinsics_;
+  std::vector<Eigen::Vector3f> pixel_rays_;  // z = 1 rays per pixel
+  double max_undistorted_radius_ = 0;
+};
+
+}  // namespace posefuse::raycast
