@@ -11,7 +11,6 @@
 
 using posefuse::Error;
 using posefuse::geometry::angle_between;
-using posefuse::geometry::quat_from_rotation_vector;
 using namespace posefuse::sim;
 using namespace posefuse::sim::testing;
 
@@ -23,33 +22,6 @@ ImuSynthOptions ideal_options() {
   ImuSynthOptions o;
   o.error_model = ImuErrorModel::none();
   return o;
-}
-
-// Integrates gyro samples at uniform times from q0: the rate between samples is the cubic
-// through the four nearest samples (interpolation error ~ h^4), integrated by 16 midpoint
-// sub-steps per interval. Both errors are far below what the tests check.
-Quat integrate_gyro(const std::vector<posefuse::imu::ImuSample>& samples, const Quat& q0) {
-  const std::size_t n = samples.size();
-  const double h = 1e-6 * static_cast<double>(samples[1].t_us - samples[0].t_us);
-  Quat q = q0;
-  constexpr int kSub = 16;
-  for (std::size_t k = 0; k + 1 < n; ++k) {
-    const std::size_t first = std::min(k > 0 ? k - 1 : 0, n - 4);
-    for (int s = 0; s < kSub; ++s) {
-      // Position of the sub-step midpoint in units of h, relative to sample `first`.
-      const double x = static_cast<double>(k - first) + (s + 0.5) / kSub;
-      Vec3 omega = Vec3::Zero();
-      for (int i = 0; i < 4; ++i) {
-        double weight = 1.0;
-        for (int j = 0; j < 4; ++j) {
-          if (j != i) weight *= (x - j) / static_cast<double>(i - j);
-        }
-        omega += weight * samples[first + static_cast<std::size_t>(i)].gyr_rad_s;
-      }
-      q = (q * quat_from_rotation_vector(omega * h / kSub)).normalized();
-    }
-  }
-  return q;
 }
 
 SensorKinematics complex_motion(double t1 = 10.2) {
