@@ -6,6 +6,7 @@
 #include <sstream>
 
 #include "common/error.hpp"
+#include "sim/option_checks.hpp"
 
 namespace posefuse::sim {
 namespace {
@@ -341,9 +342,7 @@ Quat W_from_bvh_world() { return Quat(Eigen::AngleAxisd(EIGEN_PI / 2.0, Vec3::Un
 BvhWorldPose forward_kinematics(const BvhSkeleton& skeleton, const BvhLocalPose& pose,
                                 double metres_per_unit) {
   check_pose_matches(skeleton, pose);
-  if (!(metres_per_unit > 0) || !std::isfinite(metres_per_unit)) {
-    throw_invalid("metres_per_unit", "must be positive and finite, got " + std::to_string(metres_per_unit));
-  }
+  require_positive(metres_per_unit, "metres_per_unit");
   const std::size_t n = skeleton.joints.size();
   std::vector<Quat> M_from_joint(n);
   std::vector<Vec3> p_M(n);
@@ -375,9 +374,7 @@ BvhWorldPose forward_kinematics(const BvhSkeleton& skeleton, const BvhLocalPose&
 }
 
 BvhClip resample(const BvhClip& clip, double rate_hz) {
-  if (!(rate_hz > 0) || !std::isfinite(rate_hz)) {
-    throw_invalid("rate_hz", "must be positive and finite, got " + std::to_string(rate_hz));
-  }
+  require_positive(rate_hz, "rate_hz");
   if (clip.frames.empty()) throw_invalid("clip.frames", "clip has no frames");
   if (!(clip.frame_time_s > 0)) throw_invalid("clip.frame_time_s", "must be > 0");
   for (const BvhLocalPose& pose : clip.frames) check_pose_matches(clip.skeleton, pose);

@@ -5,13 +5,14 @@
 #include <string>
 
 #include "common/error.hpp"
+#include "sim/option_checks.hpp"
 #include "sim/sim_rng.hpp"
 
 namespace posefuse::sim {
 namespace {
 
 void check_clock(const DeviceClock& c) {
-  if (!std::isfinite(c.offset_s)) throw_invalid("clock.offset_s", "must be finite");
+  require_finite(c.offset_s, "clock.offset_s");
   if (!(std::abs(c.drift) < 0.01)) {
     throw_invalid("clock.drift", "must be finite with |drift| < 0.01, got " + std::to_string(c.drift));
   }
@@ -21,7 +22,7 @@ void check_clock(const DeviceClock& c) {
 
 std::int64_t DeviceClock::to_device_us(double t_camera_s) const {
   check_clock(*this);
-  if (!std::isfinite(t_camera_s)) throw_invalid("t_camera_s", "must be finite");
+  require_finite(t_camera_s, "t_camera_s");
   return std::llround((offset_s + (1.0 + drift) * t_camera_s) * 1e6);
 }
 
@@ -33,10 +34,8 @@ double DeviceClock::to_camera_s(std::int64_t t_device_us) const {
 DeviceTicks regular_device_ticks(const DeviceClock& clock, double rate_hz, double t_camera_begin_s,
                                  double t_camera_end_s) {
   check_clock(clock);
-  if (!(rate_hz > 0) || !std::isfinite(rate_hz)) throw_invalid("rate_hz", "must be positive and finite");
-  if (!std::isfinite(t_camera_begin_s) || !std::isfinite(t_camera_end_s) || t_camera_end_s < t_camera_begin_s) {
-    throw_invalid("t_camera_end_s", "must be finite and >= t_camera_begin_s");
-  }
+  require_positive(rate_hz, "rate_hz");
+  require_interval(t_camera_begin_s, t_camera_end_s, "t_camera_end_s");
   const double period_s = 1.0 / rate_hz;
   const double device_begin_s = clock.offset_s + (1.0 + clock.drift) * t_camera_begin_s;
   const double device_end_s = clock.offset_s + (1.0 + clock.drift) * t_camera_end_s;

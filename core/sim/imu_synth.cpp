@@ -6,6 +6,7 @@
 #include <Eigen/Eigenvalues>
 
 #include "common/error.hpp"
+#include "sim/option_checks.hpp"
 #include "session/imu_batch.hpp"
 #include "sim/sim_rng.hpp"
 
@@ -30,25 +31,19 @@ Mat3 scale_misalignment(SimRng& rng, double scale_sigma, double misalignment_sig
   return m;
 }
 
-void check_non_negative(double value, const char* field) {
-  if (!(value >= 0) || !std::isfinite(value)) {
-    throw_invalid(std::string("error_model.") + field, "must be finite and >= 0, got " + std::to_string(value));
-  }
-}
-
 void check_model(const ImuErrorModel& m) {
-  check_non_negative(m.gyr_noise_density_rad_s_sqrt_hz, "gyr_noise_density_rad_s_sqrt_hz");
-  check_non_negative(m.acc_noise_density_m_s2_sqrt_hz, "acc_noise_density_m_s2_sqrt_hz");
-  check_non_negative(m.mag_noise_uT, "mag_noise_uT");
-  check_non_negative(m.gyr_bias_sigma_rad_s, "gyr_bias_sigma_rad_s");
-  check_non_negative(m.gyr_bias_random_walk_rad_s_sqrt_s, "gyr_bias_random_walk_rad_s_sqrt_s");
-  check_non_negative(m.acc_bias_sigma_m_s2, "acc_bias_sigma_m_s2");
-  check_non_negative(m.gyr_scale_sigma, "gyr_scale_sigma");
-  check_non_negative(m.acc_scale_sigma, "acc_scale_sigma");
-  check_non_negative(m.misalignment_sigma_rad, "misalignment_sigma_rad");
-  check_non_negative(m.hard_iron_sigma_uT, "hard_iron_sigma_uT");
-  check_non_negative(m.soft_iron_diagonal_sigma, "soft_iron_diagonal_sigma");
-  check_non_negative(m.soft_iron_off_diagonal_sigma, "soft_iron_off_diagonal_sigma");
+  require_non_negative(m.gyr_noise_density_rad_s_sqrt_hz, "error_model.gyr_noise_density_rad_s_sqrt_hz");
+  require_non_negative(m.acc_noise_density_m_s2_sqrt_hz, "error_model.acc_noise_density_m_s2_sqrt_hz");
+  require_non_negative(m.mag_noise_uT, "error_model.mag_noise_uT");
+  require_non_negative(m.gyr_bias_sigma_rad_s, "error_model.gyr_bias_sigma_rad_s");
+  require_non_negative(m.gyr_bias_random_walk_rad_s_sqrt_s, "error_model.gyr_bias_random_walk_rad_s_sqrt_s");
+  require_non_negative(m.acc_bias_sigma_m_s2, "error_model.acc_bias_sigma_m_s2");
+  require_non_negative(m.gyr_scale_sigma, "error_model.gyr_scale_sigma");
+  require_non_negative(m.acc_scale_sigma, "error_model.acc_scale_sigma");
+  require_non_negative(m.misalignment_sigma_rad, "error_model.misalignment_sigma_rad");
+  require_non_negative(m.hard_iron_sigma_uT, "error_model.hard_iron_sigma_uT");
+  require_non_negative(m.soft_iron_diagonal_sigma, "error_model.soft_iron_diagonal_sigma");
+  require_non_negative(m.soft_iron_off_diagonal_sigma, "error_model.soft_iron_off_diagonal_sigma");
 }
 
 void check_errors(const ImuErrors& e) {
@@ -127,10 +122,8 @@ ImuErrors draw_imu_errors(const ImuErrorModel& model, std::uint64_t seed) {
 }
 
 std::vector<double> uniform_times(double t_begin_s, double t_end_s, double rate_hz) {
-  if (!(rate_hz > 0) || !std::isfinite(rate_hz)) throw_invalid("rate_hz", "must be positive and finite");
-  if (!std::isfinite(t_begin_s) || !std::isfinite(t_end_s) || t_end_s < t_begin_s) {
-    throw_invalid("t_end_s", "must be finite and >= t_begin_s");
-  }
+  require_positive(rate_hz, "rate_hz");
+  require_interval(t_begin_s, t_end_s, "t_end_s");
   std::vector<double> t;
   const auto count = static_cast<std::size_t>(std::floor((t_end_s - t_begin_s) * rate_hz + 1e-9)) + 1;
   t.reserve(count);
@@ -140,13 +133,9 @@ std::vector<double> uniform_times(double t_begin_s, double t_end_s, double rate_
 
 ImuSynthResult synthesize_imu(const SensorKinematics& motion, const std::vector<double>& t_s,
                               const ImuSynthOptions& options) {
-  if (!(options.nominal_rate_hz > 0) || !std::isfinite(options.nominal_rate_hz)) {
-    throw_invalid("options.nominal_rate_hz", "must be positive and finite");
-  }
-  if (!std::isfinite(options.gravity_m_s2)) throw_invalid("options.gravity_m_s2", "must be finite");
-  if (!(options.earth_field.horizontal_uT > 0) || !std::isfinite(options.earth_field.horizontal_uT)) {
-    throw_invalid("options.earth_field.horizontal_uT", "must be positive and finite");
-  }
+  require_positive(options.nominal_rate_hz, "options.nominal_rate_hz");
+  require_finite(options.gravity_m_s2, "options.gravity_m_s2");
+  require_positive(options.earth_field.horizontal_uT, "options.earth_field.horizontal_uT");
   if (!(std::abs(options.earth_field.dip_rad) < static_cast<double>(EIGEN_PI) / 2)) {
     throw_invalid("options.earth_field.dip_rad", "must be inside (-pi/2, pi/2)");
   }
@@ -155,9 +144,7 @@ ImuSynthResult synthesize_imu(const SensorKinematics& motion, const std::vector<
     const MagDisturbance& d = options.disturbances[i];
     const std::string field = "options.disturbances[" + std::to_string(i) + "]";
     if (!std::isfinite(d.t_s) || !d.field_uT.allFinite()) throw_invalid(field, "non-finite value");
-    if (d.kind == MagDisturbance::Kind::kTransient && !(d.width_s > 0 && std::isfinite(d.width_s))) {
-      throw_invalid(field + ".width_s", "must be positive and finite");
-    }
+    if (d.kind == MagDisturbance::Kind::kTransient) require_positive(d.width_s, field + ".width_s");
   }
   for (std::size_t k = 0; k < t_s.size(); ++k) {
     if (!std::isfinite(t_s[k]) || (k > 0 && !(t_s[k] > t_s[k - 1]))) {

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "common/error.hpp"
+#include "sim/option_checks.hpp"
 
 namespace posefuse::sim {
 namespace {
@@ -17,22 +18,6 @@ Quat rotation(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(an
 double smootherstep(double x) {
   x = std::clamp(x, 0.0, 1.0);
   return x * x * x * (x * (6.0 * x - 15.0) + 10.0);
-}
-
-void check_positive(double value, const std::string& field) {
-  if (!(value > 0) || !std::isfinite(value)) {
-    throw_invalid(field, "must be positive and finite, got " + std::to_string(value));
-  }
-}
-
-void check_non_negative(double value, const std::string& field) {
-  if (!(value >= 0) || !std::isfinite(value)) {
-    throw_invalid(field, "must be finite and >= 0, got " + std::to_string(value));
-  }
-}
-
-void check_finite(double value, const std::string& field) {
-  if (!std::isfinite(value)) throw_invalid(field, "must be finite");
 }
 
 void check_repetitions(int repetitions) {
@@ -69,14 +54,14 @@ ArmPose arm_pose(const ArmGeometry& g, const ArmAngles& a) {
 }
 
 SensorTrajectory imu_trajectory(const ArmGeometry& geometry, const ScriptedMotion& motion, double dt_s) {
-  check_positive(dt_s, "dt_s");
-  check_positive(motion.duration_s, "motion.duration_s");
+  require_positive(dt_s, "dt_s");
+  require_positive(motion.duration_s, "motion.duration_s");
   if (!motion.angles) throw_invalid("motion.angles", "no angle function");
   if (!geometry.shoulder_p_W_m.allFinite()) throw_invalid("geometry.shoulder_p_W_m", "must be finite");
-  check_finite(geometry.heading_rad, "geometry.heading_rad");
-  check_positive(geometry.upper_arm_m, "geometry.upper_arm_m");
-  check_non_negative(geometry.strap_to_elbow_m, "geometry.strap_to_elbow_m");
-  check_non_negative(geometry.strap_radius_m, "geometry.strap_radius_m");
+  require_finite(geometry.heading_rad, "geometry.heading_rad");
+  require_positive(geometry.upper_arm_m, "geometry.upper_arm_m");
+  require_non_negative(geometry.strap_to_elbow_m, "geometry.strap_to_elbow_m");
+  require_non_negative(geometry.strap_radius_m, "geometry.strap_radius_m");
   if (!geometry.F_from_A.coeffs().allFinite() || std::abs(geometry.F_from_A.norm() - 1.0) > 1e-6) {
     throw_invalid("geometry.F_from_A", "must be a unit quaternion");
   }
@@ -99,11 +84,11 @@ SensorTrajectory imu_trajectory(const ArmGeometry& geometry, const ScriptedMotio
 }
 
 ScriptedMotion forearm_rolling(const ForearmRollingOptions& o) {
-  check_finite(o.amplitude_rad, "amplitude_rad");
-  check_positive(o.period_s, "period_s");
+  require_finite(o.amplitude_rad, "amplitude_rad");
+  require_positive(o.period_s, "period_s");
   check_repetitions(o.repetitions);
-  check_non_negative(o.hold_s, "hold_s");
-  check_finite(o.elbow_flexion_rad, "elbow_flexion_rad");
+  require_non_negative(o.hold_s, "hold_s");
+  require_finite(o.elbow_flexion_rad, "elbow_flexion_rad");
   ScriptedMotion m;
   const double cycles = o.repetitions;
   m.duration_s = 2.0 * o.hold_s + cycles * o.period_s;
@@ -121,13 +106,13 @@ ScriptedMotion forearm_rolling(const ForearmRollingOptions& o) {
 }
 
 ScriptedMotion arm_raising(const ArmRaisingOptions& o) {
-  check_finite(o.peak_rad, "peak_rad");
-  check_positive(o.raise_s, "raise_s");
-  check_positive(o.lower_s, "lower_s");
-  check_non_negative(o.pause_top_s, "pause_top_s");
-  check_non_negative(o.pause_bottom_s, "pause_bottom_s");
+  require_finite(o.peak_rad, "peak_rad");
+  require_positive(o.raise_s, "raise_s");
+  require_positive(o.lower_s, "lower_s");
+  require_non_negative(o.pause_top_s, "pause_top_s");
+  require_non_negative(o.pause_bottom_s, "pause_bottom_s");
   check_repetitions(o.repetitions);
-  check_non_negative(o.hold_s, "hold_s");
+  require_non_negative(o.hold_s, "hold_s");
   ScriptedMotion m;
   const double cycle = o.raise_s + o.pause_top_s + o.lower_s + o.pause_bottom_s;
   // The last repetition ends after lowering; hold_s follows.
@@ -164,9 +149,9 @@ ArmAngles calibration_pose_angles() {
 }
 
 ScriptedMotion calibration_hold(const CalibrationHoldOptions& o) {
-  check_positive(o.duration_s, "duration_s");
-  check_non_negative(o.sway_rad, "sway_rad");
-  check_positive(o.sway_hz, "sway_hz");
+  require_positive(o.duration_s, "duration_s");
+  require_non_negative(o.sway_rad, "sway_rad");
+  require_positive(o.sway_hz, "sway_hz");
   ScriptedMotion m;
   m.duration_s = o.duration_s;
   m.angles = [o](double t) {

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "common/error.hpp"
+#include "sim/option_checks.hpp"
 
 namespace posefuse::sim {
 namespace {
@@ -17,10 +18,8 @@ bool finite(const Vec3& v) { return v.allFinite(); }
 
 SensorKinematics::SensorKinematics(SensorTrajectory trajectory) : trajectory_(std::move(trajectory)) {
   const SensorTrajectory& t = trajectory_;
-  if (!(t.dt_s > 0) || !std::isfinite(t.dt_s)) {
-    throw_invalid("trajectory.dt_s", "must be positive and finite, got " + std::to_string(t.dt_s));
-  }
-  if (!std::isfinite(t.t0_s)) throw_invalid("trajectory.t0_s", "must be finite");
+  require_positive(t.dt_s, "trajectory.dt_s");
+  require_finite(t.t0_s, "trajectory.t0_s");
   const std::size_t n = t.p_W_m.size();
   if (t.W_from_A.size() != n) {
     throw_invalid("trajectory.W_from_A", std::to_string(t.W_from_A.size()) + " orientations for " +

@@ -4,16 +4,11 @@
 #include <cmath>
 
 #include "common/error.hpp"
+#include "sim/option_checks.hpp"
 #include "sim/sim_rng.hpp"
 
 namespace posefuse::sim {
 namespace {
-
-void check_positive(double value, const std::string& field) {
-  if (!(value > 0) || !std::isfinite(value)) {
-    throw_invalid(field, "must be positive and finite, got " + std::to_string(value));
-  }
-}
 
 void check_devices(const std::vector<SimDevice>& devices) {
   if (devices.empty()) throw_invalid("devices", "no devices");
@@ -54,17 +49,15 @@ std::uint32_t ble_sequence_from_payload(const std::string& payload) {
 BleBroadcastResult ble_broadcast_receipts(const std::vector<SimDevice>& devices,
                                           const BleBroadcastOptions& options, std::uint64_t seed) {
   check_devices(devices);
-  if (!std::isfinite(options.first_broadcast_s)) throw_invalid("ble.first_broadcast_s", "must be finite");
-  check_positive(options.interval_s, "ble.interval_s");
-  check_positive(options.clock_resolution_s, "ble.clock_resolution_s");
+  require_finite(options.first_broadcast_s, "ble.first_broadcast_s");
+  require_positive(options.interval_s, "ble.interval_s");
+  require_positive(options.clock_resolution_s, "ble.clock_resolution_s");
   if (!(options.receive_probability > 0 && options.receive_probability <= 1)) {
     throw_invalid("ble.receive_probability", "must be in (0, 1]");
   }
   if (options.rounds_received_by_all < 1) throw_invalid("ble.rounds_received_by_all", "must be >= 1");
   if (options.max_rounds < 1 || options.max_rounds > 100000) throw_invalid("ble.max_rounds", "must be in 1..100000");
-  if (!(options.receipt_jitter_s >= 0) || !std::isfinite(options.receipt_jitter_s)) {
-    throw_invalid("ble.receipt_jitter_s", "must be finite and >= 0");
-  }
+  require_non_negative(options.receipt_jitter_s, "ble.receipt_jitter_s");
 
   SimRng rng(seed, "ble_broadcast");
   BleBroadcastResult result;
@@ -97,22 +90,20 @@ BleBroadcastResult ble_broadcast_receipts(const std::vector<SimDevice>& devices,
 BuzzerResult buzzer_stop(const SimDevice& base, const BuzzerOptions& buzzer, const AudioOptions& audio,
                          std::uint64_t seed) {
   check_devices({base});
-  check_positive(buzzer.duration_s, "buzzer.duration_s");
-  check_positive(buzzer.amplitude, "buzzer.amplitude");
-  check_positive(buzzer.speed_of_sound_m_s, "buzzer.speed_of_sound_m_s");
-  if (!(buzzer.distance_m >= 0) || !std::isfinite(buzzer.distance_m)) {
-    throw_invalid("buzzer.distance_m", "must be finite and >= 0");
-  }
+  require_positive(buzzer.duration_s, "buzzer.duration_s");
+  require_positive(buzzer.amplitude, "buzzer.amplitude");
+  require_positive(buzzer.speed_of_sound_m_s, "buzzer.speed_of_sound_m_s");
+  require_non_negative(buzzer.distance_m, "buzzer.distance_m");
   if (audio.sample_rate_hz < 8000 || audio.sample_rate_hz > 384000) {
     throw_invalid("audio.sample_rate_hz", "must be in 8000..384000, got " + std::to_string(audio.sample_rate_hz));
   }
   const double rate = audio.sample_rate_hz;
-  check_positive(buzzer.tone_hz, "buzzer.tone_hz");
+  require_positive(buzzer.tone_hz, "buzzer.tone_hz");
   if (buzzer.tone_hz >= rate / 2) throw_invalid("buzzer.tone_hz", "must be below the Nyquist frequency");
-  if (!std::isfinite(audio.t_begin_s)) throw_invalid("audio.t_begin_s", "must be finite");
-  check_positive(audio.duration_s, "audio.duration_s");
-  check_positive(audio.chunk_s, "audio.chunk_s");
-  if (!(audio.noise_rms >= 0) || !std::isfinite(audio.noise_rms)) throw_invalid("audio.noise_rms", "must be finite and >= 0");
+  require_finite(audio.t_begin_s, "audio.t_begin_s");
+  require_positive(audio.duration_s, "audio.duration_s");
+  require_positive(audio.chunk_s, "audio.chunk_s");
+  require_non_negative(audio.noise_rms, "audio.noise_rms");
 
   BuzzerResult result;
   result.stop_camera_s = base.clock.to_camera_s(buzzer.stop_device_us);
