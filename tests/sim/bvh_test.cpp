@@ -398,3 +398,30 @@ TEST(BvhMalformed, MissingFile) {
     EXPECT_EQ(e.code(), ErrorCode::kNotFound);
   }
 }
+
+// Every prefix of a valid file, and the file with any one byte replaced, either parses or is
+// rejected with posefuse::Error: never a crash, a hang or another exception type.
+TEST(BvhMalformed, EveryPrefixAndByteFlipRejectedCleanly) {
+  const std::string full = chain_text("Zrotation Yrotation Xrotation",
+                                      {"1 2 3 10 20 30 1 2 3 4 5 6", "1 2 3 10 20 30 1 2 3 4 5 6"});
+  int parsed = 0;
+  for (std::size_t n = 0; n < full.size(); ++n) {
+    try {
+      parse_bvh(full.substr(0, n));
+      ++parsed;
+    } catch (const Error&) {
+    }
+  }
+  // Only cuts inside the last number of the last line (or its newline) still parse.
+  EXPECT_LE(parsed, 3);
+  for (std::size_t i = 0; i < full.size(); ++i) {
+    for (char c : {'\0', '{', '}', 'x', '-', '\n', ' '}) {
+      std::string changed = full;
+      changed[i] = c;
+      try {
+        parse_bvh(changed);
+      } catch (const Error&) {
+      }
+    }
+  }
+}
