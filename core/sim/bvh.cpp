@@ -71,7 +71,8 @@ class Parser {
     double value = 0.0;
     const char* first = t.text.data();
     const char* last = first + t.text.size();
-    if (!t.text.empty() && *first == '+') ++first;  // from_chars does not accept a leading '+'
+    // from_chars does not accept a leading '+'; skip one, but not "+-5".
+    if (!t.text.empty() && *first == '+' && t.text.size() > 1 && first[1] != '-') ++first;
     const auto [ptr, ec] = std::from_chars(first, last, value);
     if (ec != std::errc() || ptr != last || !std::isfinite(value)) {
       fail(t.line, std::string(what) + " is not a finite number: '" + std::string(t.text) + "'");

@@ -338,6 +338,12 @@ TEST(BvhMalformed, NonNumericValues) {
                   kFirstFrameLine, ErrorCode::kInvalidArgument);
   expect_rejected(chain_text("Zrotation Yrotation Xrotation", {"0 0 0 inf 0 0 0 0 0 0 0 0"}),
                   kFirstFrameLine, ErrorCode::kInvalidArgument);
+  expect_rejected(chain_text("Zrotation Yrotation Xrotation", {"0 0 0 +-5 0 0 0 0 0 0 0 0"}),
+                  kFirstFrameLine, ErrorCode::kInvalidArgument);
+  expect_rejected(chain_text("Zrotation Yrotation Xrotation", {"0 0 0 + 0 0 0 0 0 0 0 0"}),
+                  kFirstFrameLine, ErrorCode::kInvalidArgument);
+  EXPECT_EQ(parse_bvh(chain_text("Zrotation Yrotation Xrotation", {"+1 0 0 0 0 0 0 0 0 0 0 1e1"}))
+                .frames[0].translation[0].x(), 1.0);
   std::string text = chain_text("Zrotation Yrotation Xrotation", {"0 0 0 0 0 0 0 0 0 0 0 0"});
   text.replace(text.find("OFFSET 0 10 0"), 13, "OFFSET 0 ten 0");
   expect_rejected(text, 8, ErrorCode::kInvalidArgument);
