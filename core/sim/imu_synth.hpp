@@ -1,0 +1,115 @@
+#pragma once
+// IMU signal synthesis: what a cheap 9-axis IMU reports for a known motion (paper 1, II-D/E).
+//
+// Ideal signals in the sensor frame A, from the motion in W (sensor_trajectory.hpp):
+//   angular rate     omega_A
+//   specific force   f_A = A_from_W * (a_W + g z_W)     (reads +g up at rest)
+//   magnetic field   m_A = A_from_W * m_W,  m_W = (H, 0, -H tan(dip))  (W: x magnetic north, z up)
+// Measured signals (the error model below, all frames A):
+//   gyr = M_g omega_A + b_g(t) + n_g
+//   acc = M_a f_A + b_a + n_a
+//   mag = S (m_A + A_from_W d_W(t)) + h + h_jump(t) + n_m
+// with M scale and misalignment matrices, b biases (the gyro's drifts as a random walk),
+// S soft iron (symmetric), h hard iron, d_W transient external fields and h_jump hard-iron
+// steps (a magnet attached to the strap) from MagDisturbance events, n white noise.
+// The inverse of the magnetometer part is paper 1 eq. 3 with S = H diag(alpha, beta, gamma) H^T.
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "imu/imu_sample.hpp"
+#include "posefuse/v1/session.pb.h"
+#include "sim/sensor_trajectory.hpp"
+
+namespace posefuse::sim {
+
+using Mat3 = Eigen::Matrix3d;
+
+// The local earth field. Defaults: a mid-latitude site (about 48 uT total, 64 degrees dip).
+struct EarthField {
+  double horizontal_uT = 21.0;             // horizontal (north) component, uT, > 0
+  double dip_rad = 64.0 * static_cast<double>(EIGEN_PI) / 180;  // inclination below the horizon, rad, in (-pi/2, pi/2)
+  Vec3 m_W_uT() const;                     // (H, 0, -H tan(dip))
+};
+
+// Statistical description of a cheap consumer IMU (MEMS parts of the WICED Sense class).
+// White noise densities are per sqrt(Hz): a sample at rate f has standard deviation
+// density * sqrt(f), so that integrating the gyro gives an angle random walk of
+// density * sqrt(T) per axis over T seconds. Zero disables a term.
+struct ImuErrorModel {
+  double gyr_noise_density_rad_s_sqrt_hz = 2.5e-4;  // 0.014 deg/s/sqrt(Hz)
+  double acc_noise_density_m_s2_sqrt_hz = 1.5e-3;   // 150 ug/sqrt(Hz)
+  double mag_noise_uT = 0.3;                        // per sample, standard deviation
+  double gyr_bias_sigma_rad_s = 0.01;               // turn-on bias per axis (0.57 deg/s)
+  double gyr_bias_random_walk_rad_s_sqrt_s = 1e-4;  // bias drift: std grows as this * sqrt(t)
+  double acc_bias_sigma_m_s2 = 0.05;                // per axis (about 5 mg)
+  double gyr_scale_sigma = 0.01;                    // relative, per axis (1 %)
+  double acc_scale_sigma = 0.005;                   // relative, per axis (0.5 %)
+  double misalignment_sigma_rad = 0.005;            // off-diagonal of M_g and M_a (0.3 deg)
+  double hard_iron_sigma_uT = 10.0;                 // per axis
+  double soft_iron_diagonal_sigma = 0.05;           // S = I + E, E symmetric: diagonal
+  double soft_iron_off_diagonal_sigma = 0.02;       // and off-diagonal entries
+
+  // All terms zero: ideal signals.
+  static ImuErrorModel none();
+};
+
+// One realisation of the static errors of one device (ground truth of its calibration).
+struct ImuErrors {
+  Vec3 gyr_bias_rad_s = Vec3::Zero();  // at t = first sample; drifts from there
+  Mat3 gyr_scale_misalignment = Mat3::Identity();
+  Vec3 acc_bias_m_s2 = Vec3::Zero();
+  Mat3 acc_scale_misalignment = Mat3::Identity();
+  Vec3 hard_iron_uT = Vec3::Zero();
+  Mat3 soft_iron = Mat3::Identity();  // symmetric positive definite
+};
+
+// Draws the static errors: M = diag(1 + s) + N (N off-diagonal only), S = I + E symmetric.
+ImuErrors draw_imu_errors(const ImuErrorModel& model, std::uint64_t seed);
+
+// A magnetic disturbance.
+struct MagDisturbance {
+  enum class Kind {
+    kTransient,     // an external object passing by: field_uT (in W) times
+                    // exp(-0.5 ((t - t_s) / width_s)^2)
+    kHardIronJump,  // a magnet attached to the sensor: field_uT (in A) added from t_s on
+  };
+  Kind kind = Kind::kTransient;
+  double t_s = 0.0;      // centre (transient) or onset (jump), camera clock seconds
+  double width_s = 0.5;  // transient only, > 0
+  Vec3 field_uT = Vec3::Zero();
+};
+
+struct ImuSynthOptions {
+  double nominal_rate_hz = 80.0;  // sets the white noise per sample (see ImuErrorModel)
+  double gravity_m_s2 = 9.81;
+  EarthField earth_field;
+  ImuErrorModel error_model;
+  // The static errors; drawn from error_model with the seed when not given.
+  std::optional<ImuErrors> errors;
+  std::vector<MagDisturbance> disturbances;
+  std::uint64_t seed = 1;
+};
+
+struct ImuSynthResult {
+  std::vector<imu::ImuSample> samples;     // t_us = round(t_s * 1e6): the camera clock
+  ImuErrors errors;                        // what was applied
+  std::vector<Vec3> gyr_bias_rad_s;        // true gyro bias at each sample (drift included)
+  std::vector<Quat> W_from_A;              // true orientation at each sample
+};
+
+// Samples at the given times (camera clock seconds, strictly increasing, inside the
+// trajectory's valid range). Throws kInvalidArgument / kOutOfRange naming the field.
+ImuSynthResult synthesize_imu(const SensorKinematics& motion, const std::vector<double>& t_s,
+                              const ImuSynthOptions& options);
+
+// t_begin + k / rate_hz for all k with the time <= t_end.
+std::vector<double> uniform_times(double t_begin_s, double t_end_s, double rate_hz);
+
+// The samples cut into ImuBatch chunks of at most `samples_per_batch` samples.
+std::vector<v1::ImuBatch> imu_batches(const std::string& device_id,
+                                      const std::vector<imu::ImuSample>& samples,
+                                      std::size_t samples_per_batch = 32);
+
+}  // namespace posefuse::sim

@@ -1,0 +1,52 @@
+#include "sim/uniform_cubic_spline.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "common/error.hpp"
+#include "sim/option_checks.hpp"
+
+namespace posefuse::sim {
+
+UniformCubicSpline::UniformCubicSpline(double t0_s, double dt_s, std::vector<Eigen::VectorXd> values)
+    : t0_s_(t0_s), dt_s_(dt_s), values_(std::move(values)) {
+  require_finite(t0_s, "spline.t0_s");
+  require_positive(dt_s, "spline.dt_s");
+  const std::size_t n = values_.size();
+  if (n < 2) throw_invalid("spline.values", "needs at least 2 values, got " + std::to_string(n));
+  const Eigen::Index dim = values_[0].size();
+  for (std::size_t k = 0; k < n; ++k) {
+    if (values_[k].size() != dim || !values_[k].allFinite()) {
+      throw_invalid("spline.values[" + std::to_string(k) + "]", "wrong size or not finite");
+    }
+  }
+  // Tridiagonal system M_{k-1} + 4 M_k + M_{k+1} = 6 (y_{k+1} - 2 y_k + y_{k-1}) / dt^2 for the
+  // interior second derivatives, M_0 = M_{n-1} = 0; Thomas algorithm.
+  second_derivatives_.assign(n, Eigen::VectorXd::Zero(dim));
+  if (n < 3) return;
+  std::vector<double> c(n, 0.0);
+  std::vector<Eigen::VectorXd> d(n, Eigen::VectorXd::Zero(dim));
+  const double scale = 6.0 / (dt_s * dt_s);
+  for (std::size_t k = 1; k + 1 < n; ++k) {
+    const Eigen::VectorXd rhs = scale * (values_[k + 1] - 2.0 * values_[k] + values_[k - 1]);
+    const double denominator = 4.0 - (k > 1 ? c[k - 1] : 0.0);
+    c[k] = 1.0 / denominator;
+    d[k] = (rhs - (k > 1 ? d[k - 1] : Eigen::VectorXd::Zero(dim))) / denominator;
+  }
+  for (std::size_t k = n - 2; k >= 1; --k) {
+    second_derivatives_[k] = d[k] - c[k] * second_derivatives_[k + 1];
+  }
+}
+
+Eigen::VectorXd UniformCubicSpline::at(double t_s) const {
+  const double u = std::clamp((t_s - t0_s_) / dt_s_, 0.0, static_cast<double>(values_.size() - 1));
+  const std::size_t i = std::min(static_cast<std::size_t>(u), values_.size() - 2);
+  const double b = u - static_cast<double>(i);  // weight of the right point
+  const double a = 1.0 - b;
+  const double h2 = dt_s_ * dt_s_ / 6.0;
+  return a * values_[i] + b * values_[i + 1] +
+         h2 * ((a * a * a - a) * second_derivatives_[i] + (b * b * b - b) * second_derivatives_[i + 1]);
+}
+
+}  // namespace posefuse::sim

@@ -1,0 +1,30 @@
+#pragma once
+// Natural cubic spline through vector values on a uniform grid: C2-smooth, passes through
+// every value, second derivative zero at both ends. Used to turn 60-120 Hz motion capture into
+// the dense, smooth poses that IMU synthesis differentiates (slerp between frames would give
+// piecewise-constant rates and impulsive accelerations).
+#include <Eigen/Core>
+#include <vector>
+
+namespace posefuse::sim {
+
+class UniformCubicSpline {
+ public:
+  // values[k] at t0 + k * dt. kInvalidArgument for fewer than 2 values, differing sizes,
+  // non-finite values or dt not > 0.
+  UniformCubicSpline(double t0_s, double dt_s, std::vector<Eigen::VectorXd> values);
+
+  double t_begin_s() const { return t0_s_; }
+  double t_end_s() const { return t0_s_ + dt_s_ * static_cast<double>(values_.size() - 1); }
+
+  // Clamped to [t_begin_s, t_end_s].
+  Eigen::VectorXd at(double t_s) const;
+
+ private:
+  double t0_s_;
+  double dt_s_;
+  std::vector<Eigen::VectorXd> values_;
+  std::vector<Eigen::VectorXd> second_derivatives_;
+};
+
+}  // namespace posefuse::sim
