@@ -4,6 +4,8 @@
 //   posefuse health --server ADDR
 //   posefuse info --server ADDR
 //   posefuse demo-session OUT
+//   posefuse submit RECORDING_URI [--label TEXT] | jobs | watch JOB_ID | cancel JOB_ID
+//   posefuse results JOB_ID --out DIR          (all with --server ADDR)
 // Every failure ends with one readable line on stderr and a non-zero exit status.
 #include <unistd.h>
 
@@ -33,6 +35,13 @@ constexpr const char* kUsage =
     "  posefuse info --server HOST:PORT    versions, stages, options and limits\n"
     "  posefuse demo-session OUT           write the synthetic demo session (a directory, or a\n"
     "                                      chunk file when OUT ends in .pfchunks)\n"
+    "batch jobs (server started with --data-dir):\n"
+    "  posefuse submit RECORDING_URI [--label TEXT]  a recording under the server's\n"
+    "                                      --recordings-root; prints the job id\n"
+    "  posefuse jobs                       list jobs, newest first\n"
+    "  posefuse watch JOB_ID               follow a job until it has finished\n"
+    "  posefuse cancel JOB_ID              cancel a queued or running job\n"
+    "  posefuse results JOB_ID --out DIR   write a finished job's results like fit does\n"
     "RECORDING is a recording directory or a chunk file. --server defaults to 127.0.0.1:50051.\n";
 
 constexpr int kExitUsage = 2;
@@ -242,6 +251,112 @@ int command_info(const Arguments& args) {
   return 0;
 }
 
+std::string job_line(const posefuse::v1::Job& job) {
+  std::string line = job.job_id() + "  " + posefuse::v1::Job::State_Name(job.state());
+  if (job.has_progress()) {
+    line += "  " + std::to_string(job.progress().chunks_processed()) + " chunks";
+  }
+  if (!job.label().empty()) line += "  label=" + job.label();
+  if (!job.recording_uri().empty()) line += "  " + job.recording_uri();
+  if (job.state() == posefuse::v1::Job::FAILED) line += "  error: " + job.error_message();
+  return line;
+}
+
+std::unique_ptr<posefuse::v1::PoseFuse::Stub> job_stub(const Arguments& args,
+                                                       std::size_t positional) {
+  check_flags(args, {"--server", "--label", "--out"});
+  require(args.positional.size() == positional, "wrong number of arguments (see --help)");
+  return posefuse::v1::PoseFuse::NewStub(
+      client::make_channel(args.flag("--server", "127.0.0.1:50051")));
+}
+
+int call_failed(const char* command, const Arguments& args, const grpc::Status& status) {
+  std::fprintf(stderr, "posefuse: %s: %s\n", command,
+               client::status_line(status, args.flag("--server", "127.0.0.1:50051")).c_str());
+  return 1;
+}
+
+int command_submit(const Arguments& args) {
+  auto stub = job_stub(args, 1);
+  grpc::ClientContext context;
+  set_deadline(context);
+  posefuse::v1::Job job;
+  auto writer = stub->SubmitJob(&context, &job);
+  posefuse::v1::SubmitJobRequest request;
+  request.mutable_spec()->set_recording_uri(args.positional[0]);
+  request.mutable_spec()->set_label(args.flag("--label", ""));
+  writer->Write(request);
+  writer->WritesDone();
+  const grpc::Status status = writer->Finish();
+  if (!status.ok()) return call_failed("submit", args, status);
+  std::printf("%s\n", job_line(job).c_str());
+  return 0;
+}
+
+int command_jobs(const Arguments& args) {
+  auto stub = job_stub(args, 0);
+  std::string page_token;
+  do {
+    grpc::ClientContext context;
+    set_deadline(context);
+    posefuse::v1::ListJobsRequest request;
+    request.set_page_token(page_token);
+    posefuse::v1::ListJobsResponse response;
+    const grpc::Status status = stub->ListJobs(&context, request, &response);
+    if (!status.ok()) return call_failed("jobs", args, status);
+    for (const auto& job : response.jobs()) std::printf("%s\n", job_line(job).c_str());
+    page_token = response.next_page_token();
+  } while (!page_token.empty());
+  return 0;
+}
+
+int command_watch(const Arguments& args) {
+  auto stub = job_stub(args, 1);
+  grpc::ClientContext context;  // no deadline: a job may run for long
+  posefuse::v1::WatchJobRequest request;
+  request.set_job_id(args.positional[0]);
+  auto reader = stub->WatchJob(&context, request);
+  posefuse::v1::Job job;
+  while (reader->Read(&job)) std::printf("%s\n", job_line(job).c_str());
+  const grpc::Status status = reader->Finish();
+  if (!status.ok()) return call_failed("watch", args, status);
+  return job.state() == posefuse::v1::Job::SUCCEEDED ? 0 : 1;
+}
+
+int command_cancel(const Arguments& args) {
+  auto stub = job_stub(args, 1);
+  grpc::ClientContext context;
+  set_deadline(context);
+  posefuse::v1::CancelJobRequest request;
+  request.set_job_id(args.positional[0]);
+  posefuse::v1::Job job;
+  const grpc::Status status = stub->CancelJob(&context, request, &job);
+  if (!status.ok()) return call_failed("cancel", args, status);
+  std::printf("%s\n", job_line(job).c_str());
+  return 0;
+}
+
+int command_results(const Arguments& args) {
+  auto stub = job_stub(args, 1);
+  require(args.flags.count("--out") == 1, "results needs --out DIR");
+  client::ResultWriter writer(args.flag("--out", ""));
+  grpc::ClientContext context;
+  posefuse::v1::GetJobResultsRequest request;
+  request.set_job_id(args.positional[0]);
+  auto reader = stub->GetJobResults(&context, request);
+  posefuse::v1::FitResult result;
+  while (reader->Read(&result)) writer.write(result);
+  const grpc::Status status = reader->Finish();
+  if (!status.ok()) return call_failed("results", args, status);
+  writer.finish();
+  std::printf("results: %s (%llu IMU orientations, %llu warnings, %llu item errors)\n",
+              writer.directory().string().c_str(),
+              static_cast<unsigned long long>(writer.orientation_samples()),
+              static_cast<unsigned long long>(writer.warnings()),
+              static_cast<unsigned long long>(writer.item_errors()));
+  return 0;
+}
+
 int command_demo_session(const Arguments& args) {
   check_flags(args, {});
   require(args.positional.size() == 1, "demo-session takes OUT");
@@ -266,6 +381,11 @@ int main(int argc, char** argv) {
     if (command == "health") return command_health(args);
     if (command == "info") return command_info(args);
     if (command == "demo-session") return command_demo_session(args);
+    if (command == "submit") return command_submit(args);
+    if (command == "jobs") return command_jobs(args);
+    if (command == "watch") return command_watch(args);
+    if (command == "cancel") return command_cancel(args);
+    if (command == "results") return command_results(args);
     std::fprintf(stderr, "posefuse: unknown command '%s'\n%s", command.c_str(), kUsage);
     return kExitUsage;
   } catch (const Error& error) {

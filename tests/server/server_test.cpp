@@ -157,6 +157,37 @@ TEST_F(ServerTest, MalformedChunksAreItemErrorsNamingTheFieldAndTheSessionComple
   EXPECT_EQ(call.results.back().summary().depth_frames(), 299u);
 }
 
+TEST_F(ServerTest, UnknownEnumValueIsAnItemErrorNamingTheField) {
+  start();
+  auto chunks = demo::make_demo_session();
+  const std::size_t skeleton = nth_index(chunks, v1::SessionChunk::kSkeleton, 4);
+  // A value from a newer schema (or garbage): proto3 keeps it, the validator must reject it.
+  chunks[skeleton].mutable_skeleton()->mutable_joints(3)->set_state(
+      static_cast<v1::SkeletonJoint::State>(7));
+  const CallResult call = fit(chunks);
+  ASSERT_TRUE(call.status.ok()) << call.status.error_message();
+  const auto errors = call.item_errors();
+  ASSERT_GE(errors.size(), 1u);
+  EXPECT_EQ(errors[0].field(), "chunk[" + std::to_string(skeleton) + "].skeleton.joints[3].state");
+}
+
+TEST_F(ServerTest, ManyConcurrentSessionsEachGetEveryResult) {
+  ServerOptions options;
+  options.max_sessions = 8;
+  start(options);
+  const auto chunks = demo::make_demo_session();
+  std::vector<CallResult> calls(8);
+  std::vector<std::thread> clients;
+  for (auto& call : calls) clients.emplace_back([&] { call = fit(chunks); });
+  for (auto& client : clients) client.join();
+  for (const CallResult& call : calls) {
+    ASSERT_TRUE(call.status.ok()) << call.status.error_message();
+    EXPECT_EQ(call.orientation_samples().at(demo::kArmDevice), 800u);
+    EXPECT_EQ(call.orientation_samples().at(demo::kBaseDevice), 800u);
+    EXPECT_TRUE(call.results.back().has_summary());
+  }
+}
+
 TEST_F(ServerTest, StreamWithoutHeaderIsInvalidArgument) {
   start();
   auto chunks = demo::make_demo_session();
