@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <string>
+#include <tuple>
 
 #include <Eigen/Sparse>
 
@@ -15,7 +16,7 @@ namespace {
 
 using Triplets = std::vector<Eigen::Triplet<double>>;
 
-// Rows of J and r for one linearisation point; columns 3i..3i+2 are p_i, the last 3 are b_A.
+// Rows of J and r for one linearisation point; columns 3i..3i+2 are p_i, then b_A, e0_K, e1_K.
 struct LinearSystem {
   Triplets jacobian;
   std::vector<double> residual;
@@ -36,12 +37,21 @@ struct Problem {
   GapSmootherOptions options;
 
   int bias_column() const { return 3 * static_cast<int>(t_s.size()); }
+  int drift0_column() const { return bias_column() + 3; }
+  int drift1_column() const { return bias_column() + 6; }
+  // Time in the window scaled to [-1, 1] for the linear-in-time attitude-leak term.
+  double tau(std::size_t i) const {
+    const double mid = 0.5 * (t_s.front() + t_s.back()), half = 0.5 * (t_s.back() - t_s.front());
+    return (t_s[i] - mid) / half;
+  }
 
   LinearSystem linearise(const Eigen::VectorXd& x) const {
     LinearSystem sys;
     const std::size_t n = t_s.size();
     const double sa = options.acc_sigma_m_s2;
-    const Vec3 b = x.tail<3>();
+    const Vec3 b = x.segment<3>(bias_column());
+    const Vec3 e0 = x.segment<3>(drift0_column());
+    const Vec3 e1 = x.segment<3>(drift1_column());
     const Vec3& g_K = arm->gravity_K();
     for (std::size_t i = 1; i + 1 < n; ++i) {
       // Second difference on an uneven grid against eq. 12's net acceleration.
@@ -53,7 +63,7 @@ struct Problem {
       const Vec3 second_difference = c_prev * x.segment<3>(3 * static_cast<int>(i - 1)) +
                                      c_mid * x.segment<3>(3 * static_cast<int>(i)) +
                                      c_next * x.segment<3>(3 * static_cast<int>(i + 1));
-      const Vec3 r = (second_difference - (R * (s.specific_force_A - b) - g_K)) / sa;
+      const Vec3 r = (second_difference - (R * (s.specific_force_A - b) - g_K - e0 - tau(i) * e1)) / sa;
       for (int k = 0; k < 3; ++k) {
         const int row = sys.add_row();
         sys.residual[static_cast<std::size_t>(row)] = r[k];
@@ -61,6 +71,8 @@ struct Problem {
         sys.jacobian.emplace_back(row, 3 * static_cast<int>(i) + k, c_mid / sa);
         sys.jacobian.emplace_back(row, 3 * static_cast<int>(i + 1) + k, c_next / sa);
         for (int c = 0; c < 3; ++c) sys.jacobian.emplace_back(row, bias_column() + c, R(k, c) / sa);
+        sys.jacobian.emplace_back(row, drift0_column() + k, 1.0 / sa);
+        sys.jacobian.emplace_back(row, drift1_column() + k, tau(i) / sa);
       }
     }
     const double sp = options.position_sigma_m;
@@ -87,11 +99,15 @@ struct Problem {
         }
       }
     }
-    const double sb = options.bias_prior_sigma_m_s2;
+    const double sb = options.bias_prior_sigma_m_s2, se = options.leak_prior_sigma_m_s2;
     for (int k = 0; k < 3; ++k) {
-      const int row = sys.add_row();
-      sys.residual[static_cast<std::size_t>(row)] = b[k] / sb;
-      sys.jacobian.emplace_back(row, bias_column() + k, 1.0 / sb);
+      for (const auto& [column, value, sigma] : {std::tuple{bias_column(), b[k], sb},
+                                                  std::tuple{drift0_column(), e0[k], se},
+                                                  std::tuple{drift1_column(), e1[k], se}}) {
+        const int row = sys.add_row();
+        sys.residual[static_cast<std::size_t>(row)] = value / sigma;
+        sys.jacobian.emplace_back(row, column + k, 1.0 / sigma);
+      }
     }
     return sys;
   }
@@ -106,7 +122,7 @@ double cost_of(const LinearSystem& sys) {
 void check_options(const GapSmootherOptions& o) {
   if (!(o.boundary_window_s > 0.0)) throw_invalid("options.boundary_window_s", "must be > 0");
   if (!(o.acc_sigma_m_s2 > 0.0) || !(o.position_sigma_m > 0.0) || !(o.sphere_sigma_m > 0.0) ||
-      !(o.bias_prior_sigma_m_s2 > 0.0)) {
+      !(o.bias_prior_sigma_m_s2 > 0.0) || !(o.leak_prior_sigma_m_s2 > 0.0)) {
     throw_invalid("options", "every sigma must be > 0");
   }
 }
@@ -135,7 +151,7 @@ RecoveredGap recover_gap_smoother(const GapRecoveryInput& input, const GapSpan& 
     problem.t_s.push_back(static_cast<double>(t) * 1e-6);
   }
   const std::size_t n = problem.t_s.size();  // >= 2: the arm covers [t_start, t_end]
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(3 * static_cast<int>(n) + 3);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(3 * static_cast<int>(n) + 9);
   for (std::size_t i = 0; i < n; ++i) {
     const std::int64_t t = input.arm[problem.arm_index[i]].t_us;
     const double ts = static_cast<double>(t) * 1e-6;

@@ -8,12 +8,15 @@
 // the raw visible positions on both sides and the accelerations everywhere constrain the same
 // trajectory, so the boundary velocity is whatever the positions *and* the accelerations imply.
 //
-// Unknowns: p_i at the arm sample times in [t_start - W, t_end + W], and a constant
-// accelerometer bias b_A. Residuals (each divided by its sigma):
-//   acceleration  second difference of p at i - (rot(K_from_A_i, f_i - b_A) - g_K)  (eq. 12)
+// Unknowns: p_i at the arm sample times in [t_start - W, t_end + W], a constant accelerometer
+// bias b_A, and an acceleration error in K that is linear over the window, e0 + tau e1 with
+// tau in [-1, 1]: gravity leaking through a slowly wandering attitude error, which is neither
+// white nor constant in A. Residuals (each divided by its sigma):
+//   acceleration  second difference of p at i - (rot(K_from_A_i, f_i - b_A) - g_K - e0 - tau_i e1)
+//                 (eq. 12 with the error terms)
 //   position      visible track sample z_j - p(t_j) (linear between the two nearest p_i)
 //   sphere        |p_i - C_i| - d_ul, C_i from eq. 13 (soft: the shoulder is itself measured)
-//   bias prior    b_A
+//   priors        b_A, e0, e1 (zero mean)
 // solved by Gauss-Newton on the sparse normal equations (only the sphere term is nonlinear).
 #include "forearm/gap_input.hpp"
 
@@ -25,6 +28,7 @@ struct GapSmootherOptions {
   double position_sigma_m = 0.01;    // depth-camera IMU position error
   double sphere_sigma_m = 0.015;     // shoulder position + upper-arm length error
   double bias_prior_sigma_m_s2 = 0.3;
+  double leak_prior_sigma_m_s2 = 0.3;  // e0, e1: ~2 degrees of attitude error times g
   bool use_shoulder_sphere = true;
   int max_iterations = 15;
 };
