@@ -2,10 +2,13 @@
 // white noise, at several sample rates.
 //
 // Bound: with tone amplitude A, noise sigma_n and an envelope window of L samples, the envelope
-// noise is about sigma_n * sqrt(2 / L) and the edge ramp falls by A per window, so the edge
-// error is about sigma_n / A * sqrt(2 / L) * window. For A = 8000, sigma_n = 800 and a 5 ms
-// window (L >= 40) that is <= 0.11 ms; we allow 0.3 ms, still below one BLE clock tick
-// (0.3125 ms) and 1% of a 30 Hz depth frame, and also require the error within 4 reported sigmas.
+// noise is about sigma_n * sqrt(2 / L) and the edge ramp falls by A per window, so the noise
+// part of the edge error is about sigma_n / A * sqrt(2 / L) * window: <= 0.11 ms for A = 8000,
+// sigma_n = 800 and a 5 ms window (L >= 40). On top come the sample grid (half a sample, 62 us
+// at 8 kHz) and the mirror-frequency bias (<= 1 / (2 sin omega) samples, 74 us for 2.7 kHz at
+// 8 kHz): ~0.25 ms worst case at 8 kHz, less at higher rates. We allow 0.3 ms, still below one
+// BLE clock tick (0.3125 ms) and 1% of a 30 Hz depth frame, and also require the error within
+// 4 reported sigmas.
 #include <gtest/gtest.h>
 
 #include <cmath>
