@@ -194,6 +194,19 @@ std::vector<std::int64_t> ArmTimeline::arm_times_between(std::int64_t t0, std::i
   return out;
 }
 
+ArmTimeline checked_gap_timeline(const GapRecoveryInput& input, const GapSpan& gap) {
+  validate(input);
+  if (gap.t_start_us < 0) {
+    throw_precondition("track.before_gap", "the gap starts the track: no visible sample before it");
+  }
+  if (gap.t_end_us < 0) {
+    throw_precondition("track.after_gap", "the gap ends the track: no visible sample after it");
+  }
+  ArmTimeline arm(input);
+  arm.require_coverage(gap.t_start_us, gap.t_end_us, "arm");
+  return arm;
+}
+
 Vec3 position_at(const RecoveredGap& gap, std::int64_t t) {
   if (gap.t_us.empty() || t < gap.t_us.front() || t > gap.t_us.back()) {
     throw Error(ErrorCode::kOutOfRange, "t_us", std::to_string(t) + " is outside the recovered gap");

@@ -69,6 +69,11 @@ class ArmTimeline {
   std::vector<Vec3> net_acc_K_;
 };
 
+// What every recovery checks first: validate(input), a visible sample on both sides of the gap
+// (kFailedPrecondition "track.before_gap" / "track.after_gap"), and arm and shoulder series
+// covering it ("arm"). Returns the timeline over `input` (which must outlive it).
+ArmTimeline checked_gap_timeline(const GapRecoveryInput& input, const GapSpan& gap);
+
 // eq. 12: rot(K_from_A, a_measured) - rot(K_from_W, [0, 0, 9.81]).
 Vec3 net_acceleration(const Quat& K_from_A, const Vec3& specific_force_A, const Vec3& gravity_K);
 

@@ -6,7 +6,6 @@
 #include <Eigen/Dense>
 
 #include "common/error.hpp"
-#include "forearm/paper_recovery.hpp"
 
 namespace posefuse::forearm {
 
@@ -113,10 +112,7 @@ Vec3 LiveGapEstimator::update(const ArmSample& sample, const Vec3& shoulder_K) {
 
 RecoveredGap recover_gap_live(const GapRecoveryInput& input, const GapSpan& gap,
                               const LiveGapOptions& options) {
-  validate(input);
-  require_gap_boundaries(gap);
-  const ArmTimeline arm(input);
-  arm.require_coverage(gap.t_start_us, gap.t_end_us, "arm");
+  const ArmTimeline arm = checked_gap_timeline(input, gap);
   LiveGapEstimator live(input.model, input.K_from_W, options);
   live.begin(input.track, input.arm, gap.t_start_us);
   RecoveredGap out;

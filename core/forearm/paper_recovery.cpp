@@ -1,22 +1,36 @@
 #include "forearm/paper_recovery.hpp"
 
-#include <string>
-
-#include "common/error.hpp"
+#include <vector>
 
 namespace posefuse::forearm {
 
-void require_gap_boundaries(const GapSpan& gap) {
-  if (gap.t_start_us < 0) throw_precondition("track.before_gap", "the gap starts the track: no visible sample before it");
-  if (gap.t_end_us < 0) throw_precondition("track.after_gap", "the gap ends the track: no visible sample after it");
+namespace {
+
+// Trapezoidal integral of `rate` over `t_us` from `initial`, then bent by
+// (final_value - end) (t_i - t_0) / (t_n - t_0) so that it ends at `final_value`
+// (II-L.1 for velocity, II-L.2 for position).
+std::vector<Vec3> integrate_to_end(const std::vector<std::int64_t>& t_us, const Vec3& initial,
+                                   const std::vector<Vec3>& rate, const Vec3& final_value) {
+  const std::size_t n = t_us.size();
+  std::vector<Vec3> out(n);
+  out[0] = initial;
+  for (std::size_t i = 1; i < n; ++i) {
+    const double dt = static_cast<double>(t_us[i] - t_us[i - 1]) * 1e-6;
+    out[i] = out[i - 1] + 0.5 * (rate[i - 1] + rate[i]) * dt;
+  }
+  const Vec3 drift = final_value - out[n - 1];
+  const double duration = static_cast<double>(t_us[n - 1] - t_us[0]);
+  for (std::size_t i = 0; i < n; ++i) {
+    out[i] += drift * (static_cast<double>(t_us[i] - t_us[0]) / duration);
+  }
+  return out;
 }
+
+}  // namespace
 
 RecoveredGap recover_gap_paper(const GapRecoveryInput& input, const GapSpan& gap,
                                const PaperRecoveryOptions& options) {
-  validate(input);
-  require_gap_boundaries(gap);
-  const ArmTimeline arm(input);
-  arm.require_coverage(gap.t_start_us, gap.t_end_us, "arm");
+  const ArmTimeline arm = checked_gap_timeline(input, gap);
 
   // II-K.1: p0, v0 from the 500 ms before the gap; pn, vn from the 500 ms after it.
   const BoundaryState entry = fit_boundary_line(input.track, gap.t_start_us, -1, options.boundary_window_s);
@@ -28,31 +42,14 @@ RecoveredGap recover_gap_paper(const GapRecoveryInput& input, const GapSpan& gap
   for (std::int64_t t : arm.arm_times_between(gap.t_start_us, gap.t_end_us)) out.t_us.push_back(t);
   out.t_us.push_back(gap.t_end_us);
   const std::size_t n = out.t_us.size();
-  const double duration = static_cast<double>(gap.t_end_us - gap.t_start_us) * 1e-6;
-  std::vector<double> fraction(n);  // (t_i - t_0) / (t_n - t_0)
-  std::vector<Vec3> acc(n), vel(n), pos(n);
+  std::vector<Vec3> acc(n);
   for (std::size_t i = 0; i < n; ++i) {
-    fraction[i] = static_cast<double>(out.t_us[i] - gap.t_start_us) * 1e-6 / duration;
     acc[i] = arm.net_acceleration_K(static_cast<double>(out.t_us[i]));  // eq. 12
   }
-
   // II-L.1: integrate from v0, then add (vn - vn') (t_i - t0) / (tn - t0).
-  vel[0] = entry.v_K;
-  for (std::size_t i = 1; i < n; ++i) {
-    const double dt = static_cast<double>(out.t_us[i] - out.t_us[i - 1]) * 1e-6;
-    vel[i] = vel[i - 1] + 0.5 * (acc[i - 1] + acc[i]) * dt;
-  }
-  const Vec3 velocity_drift = exit.v_K - vel[n - 1];
-  for (std::size_t i = 0; i < n; ++i) vel[i] += velocity_drift * fraction[i];
-
+  const std::vector<Vec3> vel = integrate_to_end(out.t_us, entry.v_K, acc, exit.v_K);
   // II-L.2: integrate from p0, then add (pn - pn') (t_i - t0) / (tn - t0).
-  pos[0] = entry.p_K;
-  for (std::size_t i = 1; i < n; ++i) {
-    const double dt = static_cast<double>(out.t_us[i] - out.t_us[i - 1]) * 1e-6;
-    pos[i] = pos[i - 1] + 0.5 * (vel[i - 1] + vel[i]) * dt;
-  }
-  const Vec3 position_drift = exit.p_K - pos[n - 1];
-  for (std::size_t i = 0; i < n; ++i) pos[i] += position_drift * fraction[i];
+  std::vector<Vec3> pos = integrate_to_end(out.t_us, entry.p_K, vel, exit.p_K);
 
   // II-L.3: shortest translation that puts the elbow d_ul from the shoulder (eq. 13).
   if (options.apply_shoulder_sphere) {

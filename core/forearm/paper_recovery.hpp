@@ -18,7 +18,4 @@ struct PaperRecoveryOptions {
 RecoveredGap recover_gap_paper(const GapRecoveryInput& input, const GapSpan& gap,
                                const PaperRecoveryOptions& options = {});
 
-// Shared check: the gap has a visible sample on both sides (find_gaps gives -1 where not).
-void require_gap_boundaries(const GapSpan& gap);
-
 }  // namespace posefuse::forearm
