@@ -1,5 +1,7 @@
 #include "sync/clock_map.hpp"
 
+#include <cmath>
+
 #include "common/error.hpp"
 
 namespace posefuse::sync {
@@ -32,6 +34,7 @@ const LinearClock& ClockMap::camera_from(const std::string& device) const {
 }
 
 double ClockMap::to_camera_us(const std::string& device, double device_us) const {
+  if (!std::isfinite(device_us)) throw_invalid("device_us", "not finite");
   return camera_from(device).to_reference_us(device_us);
 }
 

@@ -56,8 +56,9 @@ void validate(const std::vector<ClockObservation>& obs, const ClockFitOptions& o
                                          std::to_string(obs[i].sigma_us));
     }
   }
-  if (!(o.drift_prior_sigma > 0.0) || !(o.outlier_sigmas > 0.0) || !(o.min_sigma_us > 0.0)) {
-    throw_invalid("options", "drift_prior_sigma, outlier_sigmas and min_sigma_us must be > 0");
+  if (!(o.drift_prior_sigma > 0.0) || !(o.outlier_sigmas > 0.0) || !(o.min_sigma_us > 0.0) ||
+      o.max_iterations < 1) {
+    throw_invalid("options", "drift_prior_sigma, outlier_sigmas, min_sigma_us and max_iterations must be > 0");
   }
 }
 

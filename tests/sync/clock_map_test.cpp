@@ -1,6 +1,8 @@
 // The whole chain: arm IMU -> base IMU (broadcasts) -> camera (buzzer events).
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include "../imu/expect_error.hpp"
 #include "sync/clock_map.hpp"
 
@@ -37,6 +39,7 @@ TEST(ClockMap, RefusesUnknownAndDuplicateDevices) {
   expect_error([&] { map.add_direct("base", LinearClock{}); }, ErrorCode::kInvalidArgument, "device");
   expect_error([&] { map.add_via("arm", "nobody", LinearClock{}); }, ErrorCode::kNotFound, "via");
   expect_error([&] { map.to_camera_us("arm", 0.0); }, ErrorCode::kNotFound, "device");
+  expect_error([&] { map.to_camera_us("base", NAN); }, ErrorCode::kInvalidArgument, "device_us");
 }
 
 }  // namespace

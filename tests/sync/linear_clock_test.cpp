@@ -130,6 +130,7 @@ TEST(LinearClock, RefusesBadInput) {
   expect_error([] { broadcast_observations({{1, "arm", INFINITY}}, "arm", "base"); },
                ErrorCode::kInvalidArgument, "receipts[0].t_device_us");
   expect_error([] { lower_envelope({{0, 1, 1}}, 0.0); }, ErrorCode::kInvalidArgument, "bin_us");
+  expect_error([] { fit_linear_clock({{0, 1, 1}}, {.max_iterations = 0}); }, ErrorCode::kInvalidArgument, "options");
 }
 
 }  // namespace
