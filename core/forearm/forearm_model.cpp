@@ -1,0 +1,116 @@
+#include "forearm/forearm_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "common/error.hpp"
+#include "geometry/quaternion.hpp"
+
+namespace posefuse::forearm {
+
+Quat F_from_A_calibration(const Quat& K_from_F_sdk, const Quat& K_from_W, const Quat& W_from_A) {
+  return (K_from_F_sdk.conjugate() * K_from_W * W_from_A).normalized();  // eq. 9
+}
+
+Quat K_from_F_from_imu(const Quat& K_from_W, const Quat& W_from_A, const Quat& F_from_A) {
+  return (K_from_W * W_from_A * F_from_A.conjugate()).normalized();  // eq. 11
+}
+
+Vec3 imu_position_from_strap(const Vec3& strap_K, const Vec3& elbow_K, const Vec3& wrist_K,
+                             const Quat& K_from_F, double r_m) {
+  if (!strap_K.allFinite()) throw_invalid("strap_K", "not finite");
+  if (!elbow_K.allFinite()) throw_invalid("elbow_K", "not finite");
+  if (!wrist_K.allFinite()) throw_invalid("wrist_K", "not finite");
+  if (!K_from_F.coeffs().allFinite()) throw_invalid("K_from_F", "not finite");
+  const Vec3 axis = wrist_K - elbow_K;
+  const double length_sq = axis.squaredNorm();
+  if (length_sq < 1e-8) throw_invalid("elbow_K/wrist_K", "elbow and wrist coincide");
+  const double u = std::clamp((strap_K - elbow_K).dot(axis) / length_sq, 0.0, 1.0);
+  const Vec3 origin_K = elbow_K + u * axis;
+  return origin_K + K_from_F.normalized() * Vec3(r_m, 0.0, 0.0);  // eq. 10
+}
+
+namespace {
+
+void check_frame(const CalibrationFrame& f, std::size_t i) {
+  const std::string at = "frames[" + std::to_string(i) + "].";
+  if (!f.shoulder_K.allFinite()) throw_invalid(at + "shoulder_K", "not finite");
+  if (!f.elbow_K.allFinite()) throw_invalid(at + "elbow_K", "not finite");
+  if (!f.wrist_K.allFinite()) throw_invalid(at + "wrist_K", "not finite");
+  if (!f.strap_K.allFinite()) throw_invalid(at + "strap_K", "not finite");
+  if (!f.K_from_F_sdk.coeffs().allFinite() || f.K_from_F_sdk.norm() < 0.5) {
+    throw_invalid(at + "K_from_F_sdk", "not a finite quaternion");
+  }
+  if (!f.W_from_A.coeffs().allFinite() || f.W_from_A.norm() < 0.5) {
+    throw_invalid(at + "W_from_A", "not a finite quaternion");
+  }
+  if ((f.wrist_K - f.elbow_K).norm() < 1e-4) throw_invalid(at + "wrist_K", "coincides with the elbow");
+}
+
+}  // namespace
+
+ForearmCalibration calibrate_forearm(const std::vector<CalibrationFrame>& frames, const Quat& K_from_W,
+                                     const CalibrationOptions& options) {
+  if (!K_from_W.coeffs().allFinite()) throw_invalid("K_from_W", "not finite");
+  if (options.min_still_frames < 2 || !(options.still_radius_m > 0.0)) {
+    throw_invalid("options", "min_still_frames must be >= 2 and still_radius_m > 0");
+  }
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    check_frame(frames[i], i);
+    if (i > 0 && frames[i].t_us <= frames[i - 1].t_us) {
+      throw_invalid("frames[" + std::to_string(i) + "].t_us", "not after the previous frame");
+    }
+  }
+  // Longest run of frames whose elbow and wrist stay within still_radius_m of the run's first
+  // frame (a radius, not a frame-to-frame speed: joint noise makes per-frame speeds unreliable).
+  std::size_t best_first = 0, best_count = 0;
+  for (std::size_t first = 0; first < frames.size() && frames.size() - first > best_count; ++first) {
+    std::size_t end = first + 1;
+    while (end < frames.size() &&
+           (frames[end].elbow_K - frames[first].elbow_K).norm() < options.still_radius_m &&
+           (frames[end].wrist_K - frames[first].wrist_K).norm() < options.still_radius_m) {
+      ++end;
+    }
+    if (end - first > best_count) {
+      best_first = first;
+      best_count = end - first;
+    }
+  }
+  if (best_count < static_cast<std::size_t>(options.min_still_frames)) {
+    throw_precondition("frames", "the calibration pose is held still for " + std::to_string(best_count) +
+                                     " frames; need " + std::to_string(options.min_still_frames));
+  }
+
+  ForearmCalibration out;
+  out.first_frame = best_first;
+  out.frame_count = best_count;
+  Eigen::Vector4d quat_sum = Eigen::Vector4d::Zero();
+  std::vector<Quat> per_frame;
+  const double n = static_cast<double>(best_count);
+  for (std::size_t i = best_first; i < best_first + best_count; ++i) {
+    const CalibrationFrame& f = frames[i];
+    const Vec3 axis = (f.wrist_K - f.elbow_K).normalized();
+    const double along = (f.strap_K - f.elbow_K).dot(axis);  // strap projected on the core line
+    const Vec3 core_point = f.elbow_K + along * axis;
+    out.model.r_m += (f.strap_K - core_point).norm() / n;
+    out.model.d_se_m += along / n;
+    out.model.d_sw_m += (f.wrist_K - core_point).norm() / n;
+    out.model.d_ul_m += (f.elbow_K - f.shoulder_K).norm() / n;
+    const Quat q = F_from_A_calibration(f.K_from_F_sdk.normalized(), K_from_W, f.W_from_A.normalized());
+    per_frame.push_back(per_frame.empty() ? q : geometry::same_hemisphere(q, per_frame.front()));
+    quat_sum += geometry::to_wxyz(per_frame.back());
+  }
+  // Normalised mean of hemisphere-aligned quaternions: the chordal mean, fine for the small
+  // spread of a held pose.
+  out.model.F_from_A = geometry::from_wxyz(quat_sum.normalized());
+  double spread_sq = 0.0;
+  for (const Quat& q : per_frame) {
+    const double a = geometry::angle_between(q, out.model.F_from_A);
+    spread_sq += a * a / n;
+  }
+  out.F_from_A_spread_rad = std::sqrt(spread_sq);
+  return out;
+}
+
+}  // namespace posefuse::forearm

@@ -1,0 +1,53 @@
+#pragma once
+// Rigid forearm model (paper 1, II-H) and the IMU position from a visible strap (II-I, eq. 10).
+#include <cstdint>
+#include <vector>
+
+#include "forearm/forearm_types.hpp"
+
+namespace posefuse::forearm {
+
+// eq. 9: ^A_F q = ^F_K q'^-1 x ^W_K q x ^A_W q, i.e. F_from_A = F_from_K' * K_from_W * W_from_A,
+// with K_from_F' the camera SDK's forearm orientation in the calibration pose.
+Quat F_from_A_calibration(const Quat& K_from_F_sdk, const Quat& K_from_W, const Quat& W_from_A);
+
+// eq. 11: K_from_A = K_from_W * W_from_A and K_from_F = K_from_A * A_from_F.
+Quat K_from_F_from_imu(const Quat& K_from_W, const Quat& W_from_A, const Quat& F_from_A);
+
+// eq. 10: F's origin is the strap point projected onto the elbow-wrist segment; the IMU is at
+// F_o + rot(K_from_F, [r, 0, 0]). Throws posefuse::Error kInvalidArgument "elbow_K/wrist_K" when
+// elbow and wrist coincide, or a named input is not finite.
+Vec3 imu_position_from_strap(const Vec3& strap_K, const Vec3& elbow_K, const Vec3& wrist_K,
+                             const Quat& K_from_F, double r_m);
+
+// One camera frame of the calibration pose (II-H): skeleton joints, the strap point seen in
+// RGB/depth (II-I), the SDK forearm orientation, and the arm IMU's filter output.
+struct CalibrationFrame {
+  std::int64_t t_us = 0;
+  Vec3 shoulder_K = Vec3::Zero();
+  Vec3 elbow_K = Vec3::Zero();
+  Vec3 wrist_K = Vec3::Zero();
+  Vec3 strap_K = Vec3::Zero();
+  Quat K_from_F_sdk = Quat::Identity();
+  Quat W_from_A = Quat::Identity();
+};
+
+struct CalibrationOptions {
+  double still_radius_m = 0.02;   // elbow and wrist within this of the hold's first frame
+  int min_still_frames = 15;      // half a second at 30 Hz
+};
+
+struct ForearmCalibration {
+  ForearmModel model;
+  std::size_t first_frame = 0;  // the still run used
+  std::size_t frame_count = 0;
+  double F_from_A_spread_rad = 0.0;  // RMS angle of the per-frame eq. 9 results from their mean
+};
+
+// Averages r, d_se, d_sw, d_ul and eq. 9 over the longest run of still frames. Throws
+// posefuse::Error: kInvalidArgument "frames[i].*" (non-finite, out-of-order), kFailedPrecondition
+// "frames" when no still run reaches min_still_frames ("too short a calibration").
+ForearmCalibration calibrate_forearm(const std::vector<CalibrationFrame>& frames, const Quat& K_from_W,
+                                     const CalibrationOptions& options = {});
+
+}  // namespace posefuse::forearm

@@ -1,0 +1,138 @@
+// Rigid forearm model (II-H, eqs. 9-11) and the occlusion tests (II-J) on exact geometry.
+#include <gtest/gtest.h>
+
+#include <numbers>
+#include <random>
+
+#include "../imu/expect_error.hpp"
+#include "forearm/forearm_model.hpp"
+#include "forearm/occlusion_tests.hpp"
+#include "synthetic_arm.hpp"
+
+namespace posefuse::forearm {
+namespace {
+
+using namespace posefuse::forearm::testing;
+using posefuse::testing::expect_error;
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+TEST(ForearmModel, Eq9And11RoundTrip) {
+  const ArmMotion motion;
+  const Quat K_from_F = motion.K_from_F(0.7);
+  const Quat W_from_A = motion.K_from_W.conjugate() * K_from_F * motion.model.F_from_A;
+  const Quat F_from_A = F_from_A_calibration(K_from_F, motion.K_from_W, W_from_A);
+  EXPECT_LT(geometry::angle_between(F_from_A, motion.model.F_from_A), 1e-9);
+  EXPECT_LT(geometry::angle_between(K_from_F_from_imu(motion.K_from_W, W_from_A, F_from_A), K_from_F), 1e-9);
+}
+
+TEST(ForearmModel, Eq10FromAnyStrapPoint) {
+  const ArmMotion motion;
+  for (double t : {0.3, 1.1, 2.4}) {
+    const Quat K_from_F = motion.K_from_F(t);
+    const Vec3 elbow = motion.elbow(t), wrist = motion.wrist(t);
+    // A point on the strap surface at another angle around the core still projects to F_o.
+    const Vec3 strap = elbow + K_from_F * Vec3(0.02, motion.model.d_se_m, 0.02);
+    const Vec3 imu = imu_position_from_strap(strap, elbow, wrist, K_from_F, motion.model.r_m);
+    EXPECT_LT((imu - motion.imu_position(t)).norm(), 1e-12);
+  }
+  expect_error([] { imu_position_from_strap(Vec3::Zero(), Vec3::Ones(), Vec3::Ones(), Quat::Identity(), 0.03); },
+               ErrorCode::kInvalidArgument, "elbow_K/wrist_K");
+  expect_error([] { imu_position_from_strap(Vec3::Constant(NAN), Vec3::Zero(), Vec3::Ones(), Quat::Identity(), 0.03); },
+               ErrorCode::kInvalidArgument, "strap_K");
+}
+
+// Calibration pose: the arm moves, holds still for 1 s (30 frames), moves again. Joints and
+// strap carry 3 mm noise, the SDK orientation 3 degrees: averaged over 30 frames that is
+// ~0.6 mm and ~0.6 degrees (per axis ~0.3); bounds 3 mm and 1.5 degrees.
+TEST(ForearmModel, CalibrationAveragesTheStillFrames) {
+  const ArmMotion motion;
+  std::mt19937 rng(5);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  auto noise = [&](double sigma) -> Vec3 {
+    const double x = n01(rng), y = n01(rng), z = n01(rng);
+    return Vec3(x, y, z) * sigma;
+  };
+  std::vector<CalibrationFrame> frames;
+  for (int k = 0; k < 60; ++k) {
+    // Moving before frame 15 and after frame 44, the pose of t = 0.3 s held in between.
+    const double tt = k < 15 ? 0.06 * k - 0.6 : k < 45 ? 0.3 : 0.3 + 0.06 * (k - 44);
+    CalibrationFrame f;
+    f.t_us = k * 33'333;
+    const Quat K_from_F = motion.K_from_F(tt);
+    f.shoulder_K = motion.shoulder(tt) + noise(0.003);
+    f.elbow_K = motion.elbow(tt) + noise(0.003);
+    f.wrist_K = motion.wrist(tt) + noise(0.003);
+    f.strap_K = motion.imu_position(tt) + noise(0.003);
+    f.K_from_F_sdk = geometry::quat_from_rotation_vector(noise(3.0 * kDeg / std::sqrt(3.0))) * K_from_F;
+    f.W_from_A = motion.K_from_W.conjugate() * K_from_F * motion.model.F_from_A;
+    frames.push_back(f);
+  }
+  const ForearmCalibration c = calibrate_forearm(frames, motion.K_from_W);
+  EXPECT_GE(c.frame_count, 28u);
+  EXPECT_LE(c.frame_count, 31u);
+  EXPECT_NEAR(c.model.r_m, motion.model.r_m, 0.003);
+  EXPECT_NEAR(c.model.d_se_m, motion.model.d_se_m, 0.003);
+  EXPECT_NEAR(c.model.d_sw_m, motion.model.d_sw_m, 0.003);
+  EXPECT_NEAR(c.model.d_ul_m, motion.model.d_ul_m, 0.003);
+  EXPECT_LT(geometry::angle_between(c.model.F_from_A, motion.model.F_from_A), 1.5 * kDeg);
+  EXPECT_GT(c.F_from_A_spread_rad, 1.0 * kDeg);  // the SDK noise is visible in the spread
+
+  // Too short a hold is refused.
+  std::vector<CalibrationFrame> short_hold(frames.begin() + 10, frames.begin() + 22);
+  expect_error([&] { calibrate_forearm(short_hold, motion.K_from_W); }, ErrorCode::kFailedPrecondition, "frames");
+  frames[20].strap_K.x() = NAN;
+  expect_error([&] { calibrate_forearm(frames, motion.K_from_W); }, ErrorCode::kInvalidArgument, "frames[20].strap_K");
+}
+
+TEST(OcclusionTests, ForearmDirectionWithin30Degrees) {
+  const Quat K_from_F = Quat::Identity();  // IMU forearm axis = K's y
+  const Vec3 elbow(0.0, 0.0, 2.0);
+  for (double deg : {0.0, 20.0, 29.0, 31.0, 60.0}) {
+    const Vec3 wrist = elbow + 0.26 * Vec3(std::sin(deg * kDeg), std::cos(deg * kDeg), 0.0);
+    const Vec3 strap = elbow + 0.85 * (wrist - elbow);
+    const VisualCheck c = check_visual_forearm(elbow, wrist, strap, K_from_F);
+    EXPECT_NEAR(c.direction_angle_rad, deg * kDeg, 1e-9);
+    EXPECT_EQ(c.accepted(), deg < 30.0) << deg;
+    if (deg > 30.0) {
+      EXPECT_EQ(c.rejection, VisualRejection::kDirectionDisagrees);
+    }
+  }
+}
+
+TEST(OcclusionTests, GrazingViewIsRejected) {
+  // Forearm pointing at the camera: along the ray to its midpoint.
+  const Vec3 elbow(0.0, 0.0, 2.0), wrist(0.0, 0.0, 1.74);
+  const Quat K_from_F = Quat::FromTwoVectors(Vec3::UnitY(), wrist - elbow);
+  const VisualCheck along = check_visual_forearm(elbow, wrist, elbow + 0.85 * (wrist - elbow), K_from_F);
+  EXPECT_NEAR(along.ray_angle_rad, 0.0, 1e-9);
+  EXPECT_EQ(along.rejection, VisualRejection::kGrazingView);
+  // 25 degrees off the ray passes, 15 degrees does not.
+  for (double deg : {15.0, 25.0}) {
+    const Vec3 dir(std::sin(deg * kDeg), 0.0, -std::cos(deg * kDeg));
+    const Vec3 w = elbow + 0.26 * dir;
+    const Quat q = Quat::FromTwoVectors(Vec3::UnitY(), dir);
+    const VisualCheck c = check_visual_forearm(elbow, w, elbow + 0.85 * (w - elbow), q);
+    EXPECT_EQ(c.accepted(), deg > 20.0) << deg << " ray angle " << c.ray_angle_rad / kDeg;
+  }
+}
+
+TEST(OcclusionTests, StrapWithin5cmAndNearerTheWrist) {
+  const Vec3 elbow(0.0, 0.0, 2.0), wrist(0.0, 0.26, 2.0);
+  const Quat K_from_F = Quat::Identity();
+  const Vec3 on_axis = elbow + 0.85 * (wrist - elbow);
+  EXPECT_TRUE(check_visual_forearm(elbow, wrist, on_axis + Vec3(0.04, 0, 0), K_from_F).accepted());
+  const VisualCheck far = check_visual_forearm(elbow, wrist, on_axis + Vec3(0.06, 0, 0), K_from_F);
+  EXPECT_EQ(far.rejection, VisualRejection::kStrapOffSegment);
+  EXPECT_NEAR(far.strap.distance_m, 0.06, 1e-12);
+  const VisualCheck near_elbow = check_visual_forearm(elbow, wrist, elbow + 0.4 * (wrist - elbow), K_from_F);
+  EXPECT_EQ(near_elbow.rejection, VisualRejection::kStrapNearerElbow);
+  // Beyond the wrist end: distance to the segment, not to the line.
+  const VisualCheck beyond = check_visual_forearm(elbow, wrist, wrist + Vec3(0, 0.06, 0), K_from_F);
+  EXPECT_EQ(beyond.rejection, VisualRejection::kStrapOffSegment);
+  EXPECT_EQ(check_visual_forearm(elbow, elbow, on_axis, K_from_F).rejection, VisualRejection::kDegenerate);
+  EXPECT_EQ(check_visual_forearm(elbow, wrist, Vec3::Constant(NAN), K_from_F).rejection,
+            VisualRejection::kDegenerate);
+}
+
+}  // namespace
+}  // namespace posefuse::forearm
