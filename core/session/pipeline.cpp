@@ -31,19 +31,6 @@ class SessionPipeline::Output : public StageOutput {
   v1::CalibrationReport calibration_;
 };
 
-namespace {
-
-// SessionValidator numbers chunks by how many it has accepted; after a rejected chunk that
-// differs from the position in the stream, which is what the caller needs to find the chunk.
-std::string stream_field(const std::string& field, std::uint64_t validator_index,
-                         std::uint64_t stream_index) {
-  const std::string validator_prefix = "chunk[" + std::to_string(validator_index) + "]";
-  if (field.rfind(validator_prefix, 0) != 0) return field;
-  return "chunk[" + std::to_string(stream_index) + "]" + field.substr(validator_prefix.size());
-}
-
-}  // namespace
-
 SessionPipeline::SessionPipeline(std::vector<std::unique_ptr<Stage>> stages, ResultSink& sink,
                                  PipelineOptions options)
     : stages_(std::move(stages)),
@@ -77,7 +64,7 @@ void SessionPipeline::push(const v1::SessionChunk& chunk) {
   } catch (const Error& error) {
     // Without a valid header nothing else can be interpreted: the session cannot go on.
     if (!validator_.has_header()) throw;
-    item_error(error, stream_field(error.field(), validator_.chunks_checked(), index));
+    item_error(error, error.field());
     // An end marker whose counts disagree still ends the stream (the disagreement was reported;
     // chunks rejected above are one honest cause of it).
     if (chunk.has_end()) end_session();

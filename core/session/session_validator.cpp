@@ -320,7 +320,9 @@ void validate_chunk(const v1::SessionChunk& chunk, const v1::SessionHeader& head
 }
 
 void SessionValidator::check(const v1::SessionChunk& chunk) {
-  const std::string field = "chunk[" + std::to_string(index_) + "]";
+  // Every chunk takes a position, also one that is rejected, so that error fields name the
+  // chunk's position in the stream.
+  const std::string field = "chunk[" + std::to_string(index_++) + "]";
   if (ended_) throw_invalid(field, kind_name(chunk) + " chunk after the end marker");
   if (!header_) {
     if (!chunk.has_header()) {
@@ -338,7 +340,6 @@ void SessionValidator::check(const v1::SessionChunk& chunk) {
     check_order(chunk, field);
     count(chunk);
   }
-  ++index_;
 }
 
 void SessionValidator::finish() const {

@@ -45,6 +45,7 @@ class SessionValidator {
   bool has_header() const { return header_.has_value(); }
   const v1::SessionHeader& header() const { return *header_; }
   bool ended() const { return ended_; }
+  // Chunks passed to check(), rejected ones included.
   std::uint64_t chunks_checked() const { return index_; }
   // Counts of what has been checked so far, as the end marker should report them.
   const v1::EndOfSession& counts() const { return counts_; }

@@ -33,6 +33,18 @@ TEST(SessionValidator, AcceptsFixtureAndCountsIt) {
   EXPECT_EQ(validator.counts().audio_frames(), 4800u);
 }
 
+TEST(SessionValidator, RejectedChunksKeepTheirStreamPosition) {
+  // A caller that skips a rejected chunk and goes on must still get error fields that name the
+  // position in the stream, not the count of accepted chunks.
+  const auto session = make_session();
+  SessionValidator validator;
+  validator.check(session[0]);
+  const SessionChunk empty;
+  expect_error([&] { validator.check(empty); }, ErrorCode::kInvalidArgument, "chunk[1]");
+  expect_error([&] { validator.check(empty); }, ErrorCode::kInvalidArgument, "chunk[2]");
+  EXPECT_EQ(validator.chunks_checked(), 3u);
+}
+
 TEST(SessionValidator, HeaderMustComeFirst) {
   auto session = make_session();
   session.erase(session.begin());
