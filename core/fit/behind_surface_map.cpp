@@ -116,7 +116,8 @@ BehindSurfaceMap::BehindSurfaceMap(const DepthFrame& frame, const raycast::Depth
 bool BehindSurfaceMap::is_behind(const Eigen::Vector3d& p_K) const {
   const auto uv = camera_->project(p_K);
   if (!uv) return false;
-  const long col = std::lround(uv->x()), row = std::lround(uv->y());
+  // Pixel c covers image coordinates [c - 0.5, c + 0.5) (centres at integers).
+  const int col = static_cast<int>(std::floor(uv->x() + 0.5)), row = static_cast<int>(std::floor(uv->y() + 0.5));
   if (col < 0 || row < 0 || col >= camera_->width() || row >= camera_->height()) return false;
   const uint16_t depth = depth_mm_[static_cast<size_t>(row) * camera_->width() + col];
   return depth != kNoDepth && p_K.z() >= depth * 1e-3;
