@@ -58,13 +58,13 @@ BehindSurfaceMap::BehindSurfaceMap(const DepthFrame& frame, const raycast::Depth
     throw_invalid("behind_params.margin_m", "must be non-negative and finite, got " + std::to_string(params.margin_m));
   const PointCloud cloud = build_point_cloud(frame, camera);
 
-  depth_mm_.assign(cloud.in_cloud.size(), kNoDepth);
+  depth_mm_.assign(cloud.valid.size(), kNoDepth);
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(kInf), hi = Eigen::Vector3d::Constant(-kInf);
-  for (size_t i = 0; i < cloud.in_cloud.size(); ++i) {
-    if (!cloud.in_cloud[i]) continue;
+  for (size_t i = 0; i < cloud.valid.size(); ++i) {
+    if (!cloud.valid[i]) continue;
     depth_mm_[i] = frame.depth_mm[i];
-    lo = lo.cwiseMin(cloud.points_K[i].cast<double>());
-    hi = hi.cwiseMax(cloud.points_K[i].cast<double>());
+    lo = lo.cwiseMin(cloud.value_K[i].cast<double>());
+    hi = hi.cwiseMax(cloud.value_K[i].cast<double>());
   }
   lo -= Eigen::Vector3d::Constant(params.margin_m);
   hi += Eigen::Vector3d::Constant(params.margin_m);

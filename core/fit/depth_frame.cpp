@@ -20,22 +20,25 @@ void validate(const DepthFrame& frame, const raycast::DepthCamera& camera) {
                                           std::to_string(pixels));
 }
 
+VectorImage VectorImage::empty(int width, int height) {
+  VectorImage image;
+  image.width = width;
+  image.height = height;
+  const size_t pixels = static_cast<size_t>(width) * height;
+  image.value_K.assign(pixels, Eigen::Vector3f::Zero());
+  image.valid.assign(pixels, 0);
+  return image;
+}
+
 PointCloud build_point_cloud(const DepthFrame& frame, const raycast::DepthCamera& camera) {
   validate(frame, camera);
-  PointCloud cloud;
-  cloud.width = frame.width;
-  cloud.height = frame.height;
-  const size_t pixels = static_cast<size_t>(frame.width) * frame.height;
-  cloud.points_K.assign(pixels, Eigen::Vector3f::Zero());
-  cloud.in_cloud.assign(pixels, 0);
+  PointCloud cloud = VectorImage::empty(frame.width, frame.height);
   for (int row = 0; row < frame.height; ++row)
     for (int col = 0; col < frame.width; ++col) {
       const size_t i = static_cast<size_t>(row) * frame.width + col;
       if (frame.body_index[i] == kNoBody || frame.depth_mm[i] == kNoDepth) continue;
       // Depth images store z, and pixel_ray has z = 1, so the point is z times the ray.
-      cloud.points_K[i] = camera.pixel_ray(col, row) * (frame.depth_mm[i] * 1e-3f);
-      cloud.in_cloud[i] = 1;
-      ++cloud.count;
+      cloud.set(i, camera.pixel_ray(col, row) * (frame.depth_mm[i] * 1e-3f));
     }
   if (cloud.count == 0) throw_precondition("frame.body_index", "the silhouette holds no pixel with a depth reading");
   return cloud;

@@ -23,18 +23,28 @@ struct DepthFrame {
 // frame does not match the camera's image size or its buffers have the wrong length.
 void validate(const DepthFrame& frame, const raycast::DepthCamera& camera);
 
-// Silhouette pixels with a depth reading, unprojected into K. `points_K` is image-sized;
-// `in_cloud[i]` says whether pixel i holds a point (silhouette and depth > 0).
-struct PointCloud {
+// An image of 3D vectors in K (points or normals) where only some pixels hold a value.
+struct VectorImage {
   int width = 0;
   int height = 0;
-  std::vector<Eigen::Vector3f> points_K;  // metres; zero where !in_cloud
-  std::vector<uint8_t> in_cloud;
-  int count = 0;                          // number of pixels with in_cloud set
+  std::vector<Eigen::Vector3f> value_K;  // zero where !valid
+  std::vector<uint8_t> valid;
+  int count = 0;                         // number of valid pixels
 
-  bool has(int col, int row) const { return in_cloud[static_cast<size_t>(row) * width + col] != 0; }
-  const Eigen::Vector3f& at(int col, int row) const { return points_K[static_cast<size_t>(row) * width + col]; }
+  // width x height pixels, none valid.
+  static VectorImage empty(int width, int height);
+  void set(size_t pixel, const Eigen::Vector3f& v) {
+    value_K[pixel] = v;
+    valid[pixel] = 1;
+    ++count;
+  }
+  bool has(int col, int row) const { return valid[static_cast<size_t>(row) * width + col] != 0; }
+  const Eigen::Vector3f& at(int col, int row) const { return value_K[static_cast<size_t>(row) * width + col]; }
 };
+
+// Silhouette pixels with a depth reading (body index != kNoBody and depth > 0), unprojected
+// into K, metres.
+using PointCloud = VectorImage;
 
 // Throws posefuse::Error (field "frame.body_index") when the silhouette holds no pixel with depth.
 PointCloud build_point_cloud(const DepthFrame& frame, const raycast::DepthCamera& camera);

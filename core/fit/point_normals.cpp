@@ -36,8 +36,8 @@ std::optional<Eigen::Vector3f> normal_at(const PointCloud& cloud, int col, int r
   for (int nr = row_lo; nr <= row_hi; ++nr) {
     const size_t base = static_cast<size_t>(nr) * cloud.width;
     for (int nc = col_lo; nc <= col_hi; ++nc) {
-      if (!cloud.in_cloud[base + nc]) continue;
-      const Eigen::Vector3f d = cloud.points_K[base + nc] - centre;
+      if (!cloud.valid[base + nc]) continue;
+      const Eigen::Vector3f d = cloud.value_K[base + nc] - centre;
       if (d.squaredNorm() > max_d2) continue;
       ++n;
       sum += d;
@@ -69,21 +69,13 @@ std::optional<Eigen::Vector3f> estimate_normal_at(const PointCloud& cloud, int c
 
 NormalMap estimate_normals(const PointCloud& cloud, const NormalParams& params) {
   validate(params);
-  NormalMap map;
-  map.width = cloud.width;
-  map.height = cloud.height;
-  const size_t pixels = static_cast<size_t>(cloud.width) * cloud.height;
-  map.normals_K.assign(pixels, Eigen::Vector3f::Zero());
-  map.has_normal.assign(pixels, 0);
+  NormalMap map = VectorImage::empty(cloud.width, cloud.height);
   for (int row = 0; row < cloud.height; ++row)
     for (int col = 0; col < cloud.width; ++col) {
       if (!cloud.has(col, row)) continue;
       const auto normal = normal_at(cloud, col, row, params);
       if (!normal) continue;
-      const size_t i = static_cast<size_t>(row) * cloud.width + col;
-      map.normals_K[i] = *normal;
-      map.has_normal[i] = 1;
-      ++map.count;
+      map.set(static_cast<size_t>(row) * cloud.width + col, *normal);
     }
   return map;
 }

@@ -19,16 +19,8 @@ struct NormalParams {
   int min_neighbours = 6;
 };
 
-struct NormalMap {
-  int width = 0;
-  int height = 0;
-  std::vector<Eigen::Vector3f> normals_K;  // unit, towards the camera; zero where !has_normal
-  std::vector<uint8_t> has_normal;
-  int count = 0;
-
-  bool has(int col, int row) const { return has_normal[static_cast<size_t>(row) * width + col] != 0; }
-  const Eigen::Vector3f& at(int col, int row) const { return normals_K[static_cast<size_t>(row) * width + col]; }
-};
+// Unit normals towards the camera; pixels without enough neighbours are not valid.
+using NormalMap = VectorImage;
 
 // Throws posefuse::Error (field "normal_params.*") for a non-positive window, radius or count.
 void validate(const NormalParams& params);

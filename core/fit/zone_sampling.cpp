@@ -158,7 +158,7 @@ std::vector<int8_t> assign_zones(const PointCloud& cloud, const KinectSkeleton& 
     }
   if (segments.empty()) throw_precondition("skeleton", "no bone projects into the depth image");
 
-  std::vector<int8_t> zone(cloud.in_cloud.size(), -1);
+  std::vector<int8_t> zone(cloud.valid.size(), -1);
   for (int row = 0; row < cloud.height; ++row)
     for (int col = 0; col < cloud.width; ++col) {
       if (!cloud.has(col, row)) continue;
@@ -183,9 +183,9 @@ std::vector<DepthSample> sample_depth_pixels(const PointCloud& cloud, const Kine
   const std::vector<int8_t> zone = assign_zones(cloud, skeleton_K, camera);
 
   // Distance of each pixel to the nearest pixel outside the cloud; the cloud may fill the image.
-  std::vector<uint8_t> outside(cloud.in_cloud.size());
+  std::vector<uint8_t> outside(cloud.valid.size());
   bool any_outside = false;
-  for (size_t i = 0; i < outside.size(); ++i) any_outside |= (outside[i] = !cloud.in_cloud[i]) != 0;
+  for (size_t i = 0; i < outside.size(); ++i) any_outside |= (outside[i] = !cloud.valid[i]) != 0;
   std::vector<float> to_outside_px(outside.size(), std::numeric_limits<float>::infinity());
   if (any_outside) to_outside_px = silhouette_distance_map(outside, cloud.width, cloud.height).distance_px;
 
@@ -217,7 +217,7 @@ std::vector<DepthSample> sample_depth_pixels(const PointCloud& cloud, const Kine
       s.row = i / cloud.width;
       s.zone = BodyZone(z);
       s.near_edge = static_cast<int>(k) < edge_n;
-      s.p_K = cloud.points_K[static_cast<size_t>(i)];
+      s.p_K = cloud.value_K[static_cast<size_t>(i)];
       samples.push_back(s);
     }
   }

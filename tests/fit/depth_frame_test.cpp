@@ -36,9 +36,9 @@ TEST(FitPointCloud, KeepsOnlySilhouettePixelsWithDepth) {
   frame.depth_mm[6] = kNoDepth;   // body without depth
   const PointCloud cloud = build_point_cloud(frame, camera);
   EXPECT_EQ(cloud.count, 32 * 24 - 2);
-  EXPECT_FALSE(cloud.in_cloud[5]);
-  EXPECT_FALSE(cloud.in_cloud[6]);
-  EXPECT_TRUE(cloud.in_cloud[7]);
+  EXPECT_FALSE(cloud.valid[5]);
+  EXPECT_FALSE(cloud.valid[6]);
+  EXPECT_TRUE(cloud.valid[7]);
   // x left, y up: the top-left pixel sees a point to the left (x > 0) and above (y > 0).
   EXPECT_GT(cloud.at(0, 0).x(), 0);
   EXPECT_GT(cloud.at(0, 0).y(), 0);

@@ -58,8 +58,8 @@ TEST(FitZoneSampling, QuotasHonouredWithNearEdgeShare) {
   for (int z = 0; z < kBodyZoneCount; ++z) EXPECT_EQ(edges[z], std::lround(0.3 * expected[z])) << body_zone_name(BodyZone(z));
 
   // Samples are distinct cloud pixels, their p_K is the cloud's, and near_edge is true.
-  std::vector<uint8_t> outside(figure.cloud.in_cloud.size());
-  for (size_t i = 0; i < outside.size(); ++i) outside[i] = !figure.cloud.in_cloud[i];
+  std::vector<uint8_t> outside(figure.cloud.valid.size());
+  for (size_t i = 0; i < outside.size(); ++i) outside[i] = !figure.cloud.valid[i];
   const auto to_outside = silhouette_distance_map(outside, figure.cloud.width, figure.cloud.height);
   std::set<std::pair<int, int>> seen;
   for (const auto& s : samples) {
