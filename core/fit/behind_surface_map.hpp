@@ -25,6 +25,7 @@ struct BehindSurfaceParams {
 
 class BehindSurfaceMap {
  public:
+  // `camera` must outlive the map (it is kept by pointer: its ray table is large).
   // Throws posefuse::Error for a frame that does not match the camera ("frame.*"), an empty
   // silhouette ("frame.body_index"), bad params ("behind_params.*"), or a grid over max_voxels.
   BehindSurfaceMap(const DepthFrame& frame, const raycast::DepthCamera& camera, const BehindSurfaceParams& params = {});

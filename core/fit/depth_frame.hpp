@@ -33,6 +33,7 @@ struct VectorImage {
 
   // width x height pixels, none valid.
   static VectorImage empty(int width, int height);
+  // Sets a pixel that is not valid yet.
   void set(size_t pixel, const Eigen::Vector3f& v) {
     value_K[pixel] = v;
     valid[pixel] = 1;

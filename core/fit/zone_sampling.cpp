@@ -144,6 +144,9 @@ const char* body_zone_name(BodyZone zone) {
 
 std::vector<int8_t> assign_zones(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
                                  const raycast::DepthCamera& camera) {
+  if (cloud.width != camera.width() || cloud.height != camera.height() ||
+      cloud.valid.size() != static_cast<size_t>(cloud.width) * cloud.height)
+    throw_invalid("cloud.width", "cloud size does not match the camera");
   std::array<std::optional<Eigen::Vector2d>, kKinectJointCount> joint_px;
   for (int j = 0; j < kKinectJointCount; ++j) {
     if (!skeleton_K[j].allFinite()) throw_invalid("skeleton[" + std::to_string(j) + "]", "not finite");
@@ -178,8 +181,6 @@ std::vector<int8_t> assign_zones(const PointCloud& cloud, const KinectSkeleton& 
 std::vector<DepthSample> sample_depth_pixels(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
                                              const raycast::DepthCamera& camera, const ZoneSamplingParams& params) {
   validate(params);
-  if (cloud.width != camera.width() || cloud.height != camera.height())
-    throw_invalid("cloud.width", "cloud size does not match the camera");
   const std::vector<int8_t> zone = assign_zones(cloud, skeleton_K, camera);
 
   // Distance of each pixel to the nearest pixel outside the cloud; the cloud may fill the image.

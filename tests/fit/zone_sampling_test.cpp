@@ -137,6 +137,9 @@ TEST(FitZoneSampling, BadInputNamesTheField) {
   params.edge_share = 1.5;
   EXPECT_EQ(testing::error_field([&] { sample_depth_pixels(figure.cloud, figure.skeleton, figure.camera, params); }),
             "zone_params.edge_share");
+  PointCloud wrong_size = figure.cloud;
+  wrong_size.width -= 1;
+  EXPECT_EQ(testing::error_field([&] { sample_depth_pixels(wrong_size, figure.skeleton, figure.camera); }), "cloud.width");
   KinectSkeleton skeleton = figure.skeleton;
   skeleton[5].x() = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ(testing::error_field([&] { sample_depth_pixels(figure.cloud, skeleton, figure.camera); }), "skeleton[5]");
