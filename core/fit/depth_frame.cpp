@@ -1,0 +1,47 @@
+#include "fit/depth_frame.hpp"
+
+#include <string>
+
+#include "common/error.hpp"
+
+namespace posefuse::fit {
+
+void validate(const DepthFrame& frame, const raycast::DepthCamera& camera) {
+  if (frame.width != camera.width() || frame.height != camera.height())
+    throw_invalid("frame.width", std::to_string(frame.width) + "x" + std::to_string(frame.height) +
+                                     " does not match the camera's " + std::to_string(camera.width()) + "x" +
+                                     std::to_string(camera.height()));
+  const size_t pixels = static_cast<size_t>(frame.width) * frame.height;
+  if (frame.depth_mm.size() != pixels)
+    throw_invalid("frame.depth_mm", "has " + std::to_string(frame.depth_mm.size()) + " values, expected " +
+                                        std::to_string(pixels));
+  if (frame.body_index.size() != pixels)
+    throw_invalid("frame.body_index", "has " + std::to_string(frame.body_index.size()) + " values, expected " +
+                                          std::to_string(pixels));
+}
+
+VectorImage VectorImage::empty(int width, int height) {
+  VectorImage image;
+  image.width = width;
+  image.height = height;
+  const size_t pixels = static_cast<size_t>(width) * height;
+  image.value_K.assign(pixels, Eigen::Vector3f::Zero());
+  image.valid.assign(pixels, 0);
+  return image;
+}
+
+PointCloud build_point_cloud(const DepthFrame& frame, const raycast::DepthCamera& camera) {
+  validate(frame, camera);
+  PointCloud cloud = VectorImage::empty(frame.width, frame.height);
+  for (int row = 0; row < frame.height; ++row)
+    for (int col = 0; col < frame.width; ++col) {
+      const size_t i = static_cast<size_t>(row) * frame.width + col;
+      if (frame.body_index[i] == kNoBody || frame.depth_mm[i] == kNoDepth) continue;
+      // Depth images store z, and pixel_ray has z = 1, so the point is z times the ray.
+      cloud.set(i, camera.pixel_ray(col, row) * (frame.depth_mm[i] * 1e-3f));
+    }
+  if (cloud.count == 0) throw_precondition("frame.body_index", "the silhouette holds no pixel with a depth reading");
+  return cloud;
+}
+
+}  // namespace posefuse::fit

@@ -1,0 +1,53 @@
+#pragma once
+// One depth frame as the Kinect v2 SDK gives it, and its point cloud in the camera frame K
+// (x left, y up, z forward; metres) through the DepthCamera's unprojection (paper 2, II-A).
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "raycast/depth_camera.hpp"
+
+namespace posefuse::fit {
+
+inline constexpr uint16_t kNoDepth = 0;       // depth pixel without a reading
+inline constexpr uint8_t kNoBody = 255;       // body-index pixel outside every body
+
+struct DepthFrame {
+  int width = 0;
+  int height = 0;
+  std::vector<uint16_t> depth_mm;    // row-major, z in millimetres, kNoDepth = no reading
+  std::vector<uint8_t> body_index;   // row-major, kNoBody = background
+};
+
+// Throws posefuse::Error (field "frame.width", "frame.depth_mm", "frame.body_index") when the
+// frame does not match the camera's image size or its buffers have the wrong length.
+void validate(const DepthFrame& frame, const raycast::DepthCamera& camera);
+
+// An image of 3D vectors in K (points or normals) where only some pixels hold a value.
+struct VectorImage {
+  int width = 0;
+  int height = 0;
+  std::vector<Eigen::Vector3f> value_K;  // zero where !valid
+  std::vector<uint8_t> valid;
+  int count = 0;                         // number of valid pixels
+
+  // width x height pixels, none valid.
+  static VectorImage empty(int width, int height);
+  // Sets a pixel that is not valid yet.
+  void set(size_t pixel, const Eigen::Vector3f& v) {
+    value_K[pixel] = v;
+    valid[pixel] = 1;
+    ++count;
+  }
+  bool has(int col, int row) const { return valid[static_cast<size_t>(row) * width + col] != 0; }
+  const Eigen::Vector3f& at(int col, int row) const { return value_K[static_cast<size_t>(row) * width + col]; }
+};
+
+// Silhouette pixels with a depth reading (body index != kNoBody and depth > 0), unprojected
+// into K, metres.
+using PointCloud = VectorImage;
+
+// Throws posefuse::Error (field "frame.body_index") when the silhouette holds no pixel with depth.
+PointCloud build_point_cloud(const DepthFrame& frame, const raycast::DepthCamera& camera);
+
+}  // namespace posefuse::fit

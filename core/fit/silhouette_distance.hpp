@@ -1,0 +1,34 @@
+#pragma once
+// D_2D of paper 2 (II-D, Eq. 6-7): for every pixel, the closest silhouette pixel and its
+// quasi-Euclidean distance (8-neighbour chamfer with steps 1 and sqrt(2)). Inside the silhouette
+// the closest pixel is the pixel itself (distance 0).
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "fit/depth_frame.hpp"
+
+namespace posefuse::fit {
+
+struct SilhouetteDistanceMap {
+  int width = 0;
+  int height = 0;
+  std::vector<float> distance_px;      // quasi-Euclidean distance to the silhouette
+  std::vector<int32_t> closest_pixel;  // row-major index of the closest silhouette pixel
+
+  // D_2D at image coordinates (u, v): the closest silhouette pixel's (col, row). Coordinates
+  // outside the image are clamped to the border pixel first.
+  Eigen::Vector2d closest(double u, double v) const;
+};
+
+// Quasi-Euclidean distance between pixels offset by (dx, dy): max + (sqrt(2) - 1) min.
+float quasi_euclidean_distance(int dx, int dy);
+
+// `silhouette[i] != 0` marks silhouette pixels. Throws posefuse::Error (field "silhouette") for
+// a wrong size or an empty silhouette.
+SilhouetteDistanceMap silhouette_distance_map(const std::vector<uint8_t>& silhouette, int width, int height);
+
+// Silhouette of a frame: body index != kNoBody (depth is not required).
+std::vector<uint8_t> silhouette_of(const DepthFrame& frame);
+
+}  // namespace posefuse::fit

@@ -1,0 +1,228 @@
+#include "fit/zone_sampling.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <optional>
+#include <random>
+#include <string>
+#include <utility>
+
+#include "common/error.hpp"
+#include "fit/silhouette_distance.hpp"
+
+namespace posefuse::fit {
+
+namespace {
+
+struct Bone {
+  int from, to;
+  BodyZone zone;
+};
+
+// Kinect v2 joint indices (session::kKinectJointNames order).
+enum Joint : int {
+  kSpineBase = 0, kSpineMid, kNeck, kHead, kShoulderLeft, kElbowLeft, kWristLeft, kHandLeft,
+  kShoulderRight, kElbowRight, kWristRight, kHandRight, kHipLeft, kKneeLeft, kAnkleLeft, kFootLeft,
+  kHipRight, kKneeRight, kAnkleRight, kFootRight, kSpineShoulder, kHandTipLeft, kThumbLeft,
+  kHandTipRight, kThumbRight,
+};
+
+constexpr Bone kBones[] = {
+    {kSpineShoulder, kNeck, BodyZone::kHead},        {kNeck, kHead, BodyZone::kHead},
+    {kSpineBase, kSpineMid, BodyZone::kTorso},       {kSpineMid, kSpineShoulder, BodyZone::kTorso},
+    {kSpineShoulder, kShoulderLeft, BodyZone::kTorso}, {kSpineShoulder, kShoulderRight, BodyZone::kTorso},
+    {kSpineBase, kHipLeft, BodyZone::kTorso},        {kSpineBase, kHipRight, BodyZone::kTorso},
+    {kShoulderLeft, kElbowLeft, BodyZone::kLeftUpperArm},
+    {kElbowLeft, kWristLeft, BodyZone::kLeftForearm}, {kWristLeft, kHandLeft, BodyZone::kLeftForearm},
+    {kHandLeft, kHandTipLeft, BodyZone::kLeftForearm},
+    {kShoulderRight, kElbowRight, BodyZone::kRightUpperArm},
+    {kElbowRight, kWristRight, BodyZone::kRightForearm}, {kWristRight, kHandRight, BodyZone::kRightForearm},
+    {kHandRight, kHandTipRight, BodyZone::kRightForearm},
+    {kHipLeft, kKneeLeft, BodyZone::kLeftLeg},       {kKneeLeft, kAnkleLeft, BodyZone::kLeftLeg},
+    {kAnkleLeft, kFootLeft, BodyZone::kLeftLeg},
+    {kHipRight, kKneeRight, BodyZone::kRightLeg},    {kKneeRight, kAnkleRight, BodyZone::kRightLeg},
+    {kAnkleRight, kFootRight, BodyZone::kRightLeg},
+};
+
+double point_segment_distance2(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
+  const Eigen::Vector2d ab = b - a;
+  const double len2 = ab.squaredNorm();
+  const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
+  return (a + t * ab - p).squaredNorm();
+}
+
+void validate(const ZoneSamplingParams& params) {
+  if (params.num_samples < 1 || params.num_samples > 1'000'000)
+    throw_invalid("zone_params.num_samples", "must be in [1, 1e6], got " + std::to_string(params.num_samples));
+  double total = 0;
+  for (int z = 0; z < kBodyZoneCount; ++z) {
+    const double share = params.zone_share[z];
+    if (!std::isfinite(share) || share < 0)
+      throw_invalid(std::string("zone_params.zone_share[") + body_zone_name(BodyZone(z)) + "]",
+                    "must be finite and non-negative, got " + std::to_string(share));
+    total += share;
+  }
+  if (std::abs(total - 1.0) > 1e-6)
+    throw_invalid("zone_params.zone_share", "must sum to 1, sums to " + std::to_string(total));
+  if (!std::isfinite(params.edge_share) || params.edge_share < 0 || params.edge_share > 1)
+    throw_invalid("zone_params.edge_share", "must be in [0, 1], got " + std::to_string(params.edge_share));
+  if (!std::isfinite(params.edge_band_px) || params.edge_band_px < 0)
+    throw_invalid("zone_params.edge_band_px", "must be finite and non-negative, got " + std::to_string(params.edge_band_px));
+}
+
+// Splits `total` into integer quotas proportional to `shares` (largest remainder), never giving
+// a zone more than `available[z]`; the shortfall is handed to zones that still have pixels.
+std::array<int, kBodyZoneCount> zone_quotas(int total, const std::array<double, kBodyZoneCount>& shares,
+                                            const std::array<int, kBodyZoneCount>& available) {
+  std::array<int, kBodyZoneCount> quota{};
+  int left = total;
+  for (int round = 0; left > 0 && round <= kBodyZoneCount; ++round) {
+    double open_share = 0;
+    for (int z = 0; z < kBodyZoneCount; ++z)
+      if (quota[z] < available[z]) open_share += shares[z];
+    // Zones with a zero share only take pixels when nothing else is left.
+    const bool use_equal = open_share <= 0;
+    std::array<double, kBodyZoneCount> weight{};
+    double weight_sum = 0;
+    for (int z = 0; z < kBodyZoneCount; ++z)
+      if (quota[z] < available[z]) weight_sum += weight[z] = use_equal ? 1.0 : shares[z];
+    if (weight_sum <= 0) break;
+    std::array<std::pair<double, int>, kBodyZoneCount> remainders{};
+    int given = 0;
+    for (int z = 0; z < kBodyZoneCount; ++z) {
+      const double exact = left * weight[z] / weight_sum;
+      const int whole = std::min(static_cast<int>(std::floor(exact)), available[z] - quota[z]);
+      quota[z] += whole;
+      given += whole;
+      remainders[z] = {quota[z] < available[z] ? exact - std::floor(exact) : -1.0, z};
+    }
+    std::stable_sort(remainders.begin(), remainders.end(), [](auto& a, auto& b) { return a.first > b.first; });
+    for (const auto& [remainder, z] : remainders)
+      if (given < left && remainder > 0 && quota[z] < available[z]) {
+        ++quota[z];
+        ++given;
+      }
+    left -= given;
+    if (given == 0) {
+      // Only fractional shares remained: hand single pixels out in zone order.
+      for (int z = 0; z < kBodyZoneCount && left > 0; ++z)
+        if (quota[z] < available[z] && weight[z] > 0) {
+          ++quota[z];
+          --left;
+        }
+    }
+  }
+  return quota;
+}
+
+// Draws `count` distinct entries of `pool` (partial Fisher-Yates), appending them to `out`.
+void draw(std::vector<int>& pool, int count, std::mt19937_64& rng, std::vector<int>& out) {
+  for (int i = 0; i < count; ++i) {
+    std::uniform_int_distribution<size_t> pick(static_cast<size_t>(i), pool.size() - 1);
+    std::swap(pool[static_cast<size_t>(i)], pool[pick(rng)]);
+    out.push_back(pool[static_cast<size_t>(i)]);
+  }
+}
+
+}  // namespace
+
+const char* body_zone_name(BodyZone zone) {
+  switch (zone) {
+    case BodyZone::kHead: return "head";
+    case BodyZone::kTorso: return "torso";
+    case BodyZone::kLeftUpperArm: return "left_upper_arm";
+    case BodyZone::kLeftForearm: return "left_forearm";
+    case BodyZone::kRightUpperArm: return "right_upper_arm";
+    case BodyZone::kRightForearm: return "right_forearm";
+    case BodyZone::kLeftLeg: return "left_leg";
+    case BodyZone::kRightLeg: return "right_leg";
+  }
+  return "unknown";
+}
+
+std::vector<int8_t> assign_zones(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
+                                 const raycast::DepthCamera& camera) {
+  if (cloud.width != camera.width() || cloud.height != camera.height() ||
+      cloud.valid.size() != static_cast<size_t>(cloud.width) * cloud.height)
+    throw_invalid("cloud.width", "cloud size does not match the camera");
+  std::array<std::optional<Eigen::Vector2d>, kKinectJointCount> joint_px;
+  for (int j = 0; j < kKinectJointCount; ++j) {
+    if (!skeleton_K[j].allFinite()) throw_invalid("skeleton[" + std::to_string(j) + "]", "not finite");
+    joint_px[j] = camera.project(skeleton_K[j]);
+  }
+  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> segments;
+  std::vector<BodyZone> segment_zone;
+  for (const Bone& bone : kBones)
+    if (joint_px[bone.from] && joint_px[bone.to]) {
+      segments.emplace_back(*joint_px[bone.from], *joint_px[bone.to]);
+      segment_zone.push_back(bone.zone);
+    }
+  if (segments.empty()) throw_precondition("skeleton", "no bone projects into the depth image");
+
+  std::vector<int8_t> zone(cloud.valid.size(), -1);
+  for (int row = 0; row < cloud.height; ++row)
+    for (int col = 0; col < cloud.width; ++col) {
+      if (!cloud.has(col, row)) continue;
+      const Eigen::Vector2d p(col, row);
+      double best = std::numeric_limits<double>::infinity();
+      for (size_t s = 0; s < segments.size(); ++s) {
+        const double d2 = point_segment_distance2(p, segments[s].first, segments[s].second);
+        if (d2 < best) {
+          best = d2;
+          zone[static_cast<size_t>(row) * cloud.width + col] = static_cast<int8_t>(segment_zone[s]);
+        }
+      }
+    }
+  return zone;
+}
+
+std::vector<DepthSample> sample_depth_pixels(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
+                                             const raycast::DepthCamera& camera, const ZoneSamplingParams& params) {
+  validate(params);
+  const std::vector<int8_t> zone = assign_zones(cloud, skeleton_K, camera);
+
+  // Distance of each pixel to the nearest pixel outside the cloud; the cloud may fill the image.
+  std::vector<uint8_t> outside(cloud.valid.size());
+  bool any_outside = false;
+  for (size_t i = 0; i < outside.size(); ++i) any_outside |= (outside[i] = !cloud.valid[i]) != 0;
+  std::vector<float> to_outside_px(outside.size(), std::numeric_limits<float>::infinity());
+  if (any_outside) to_outside_px = silhouette_distance_map(outside, cloud.width, cloud.height).distance_px;
+
+  std::array<std::vector<int>, kBodyZoneCount> edge_pixels, inner_pixels;
+  for (size_t i = 0; i < zone.size(); ++i) {
+    if (zone[i] < 0) continue;
+    (to_outside_px[i] <= params.edge_band_px ? edge_pixels : inner_pixels)[zone[i]].push_back(static_cast<int>(i));
+  }
+  std::array<int, kBodyZoneCount> available{};
+  for (int z = 0; z < kBodyZoneCount; ++z) available[z] = static_cast<int>(edge_pixels[z].size() + inner_pixels[z].size());
+  const int total = std::min(params.num_samples, cloud.count);
+  const auto quota = zone_quotas(total, params.zone_share, available);
+
+  std::mt19937_64 rng(params.seed);
+  std::vector<int> picked;
+  std::vector<DepthSample> samples;
+  samples.reserve(static_cast<size_t>(total));
+  for (int z = 0; z < kBodyZoneCount; ++z) {
+    const int edge_n_wanted = static_cast<int>(std::lround(params.edge_share * quota[z]));
+    const int edge_n = std::min(static_cast<int>(edge_pixels[z].size()),
+                                std::max(edge_n_wanted, quota[z] - static_cast<int>(inner_pixels[z].size())));
+    picked.clear();
+    draw(edge_pixels[z], edge_n, rng, picked);
+    draw(inner_pixels[z], quota[z] - edge_n, rng, picked);
+    for (size_t k = 0; k < picked.size(); ++k) {
+      const int i = picked[k];
+      DepthSample s;
+      s.col = i % cloud.width;
+      s.row = i / cloud.width;
+      s.zone = BodyZone(z);
+      s.near_edge = static_cast<int>(k) < edge_n;
+      s.p_K = cloud.value_K[static_cast<size_t>(i)];
+      samples.push_back(s);
+    }
+  }
+  return samples;
+}
+
+}  // namespace posefuse::fit

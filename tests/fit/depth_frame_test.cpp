@@ -1,0 +1,73 @@
+#include "fit/depth_frame.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "common/error.hpp"
+#include "synthetic_frames.hpp"
+
+namespace posefuse::fit {
+namespace {
+
+TEST(FitPointCloud, PlanePointsLieOnThePlaneAndReprojectToTheirPixel) {
+  const raycast::DepthCamera camera{raycast::DepthIntrinsics{}};
+  const Eigen::Vector3d point(0, 0, 1.5), normal = Eigen::Vector3d(0.3, 0.2, -1).normalized();
+  const DepthFrame frame = testing::render_plane(camera, point, normal);
+  const PointCloud cloud = build_point_cloud(frame, camera);
+  ASSERT_EQ(cloud.count, camera.width() * camera.height());
+  for (int row = 0; row < camera.height(); row += 7)
+    for (int col = 0; col < camera.width(); col += 7) {
+      const Eigen::Vector3d p = cloud.at(col, row).cast<double>();
+      // Depth is stored to the millimetre, so the point is off the plane by at most 0.5 mm in z.
+      EXPECT_LT(std::abs(normal.dot(p - point)), 0.0006);
+      const auto uv = camera.project(p);
+      ASSERT_TRUE(uv);
+      EXPECT_NEAR(uv->x(), col, 1e-3);
+      EXPECT_NEAR(uv->y(), row, 1e-3);
+    }
+}
+
+TEST(FitPointCloud, KeepsOnlySilhouettePixelsWithDepth) {
+  const raycast::DepthCamera camera{testing::small_intrinsics(32, 24)};
+  DepthFrame frame = testing::render_plane(camera, {0, 0, 2}, {0, 0, -1});
+  frame.body_index[5] = kNoBody;  // background with depth
+  frame.depth_mm[6] = kNoDepth;   // body without depth
+  const PointCloud cloud = build_point_cloud(frame, camera);
+  EXPECT_EQ(cloud.count, 32 * 24 - 2);
+  EXPECT_FALSE(cloud.valid[5]);
+  EXPECT_FALSE(cloud.valid[6]);
+  EXPECT_TRUE(cloud.valid[7]);
+  // x left, y up: the top-left pixel sees a point to the left (x > 0) and above (y > 0).
+  EXPECT_GT(cloud.at(0, 0).x(), 0);
+  EXPECT_GT(cloud.at(0, 0).y(), 0);
+  EXPECT_FLOAT_EQ(cloud.at(0, 0).z(), 2.0f);
+}
+
+TEST(FitPointCloud, BadInputNamesTheField) {
+  const raycast::DepthCamera camera{testing::small_intrinsics(32, 24)};
+  const DepthFrame good = testing::render_plane(camera, {0, 0, 2}, {0, 0, -1});
+  DepthFrame frame = good;
+  frame.width = 31;
+  EXPECT_EQ(testing::error_field([&] { build_point_cloud(frame, camera); }), "frame.width");
+  frame = good;
+  frame.depth_mm.pop_back();
+  EXPECT_EQ(testing::error_field([&] { build_point_cloud(frame, camera); }), "frame.depth_mm");
+  frame = good;
+  frame.body_index.resize(10);
+  EXPECT_EQ(testing::error_field([&] { build_point_cloud(frame, camera); }), "frame.body_index");
+  frame = good;
+  std::fill(frame.body_index.begin(), frame.body_index.end(), kNoBody);
+  EXPECT_EQ(testing::error_field([&] { build_point_cloud(frame, camera); }), "frame.body_index");
+
+  raycast::DepthIntrinsics nan_intrinsics = testing::small_intrinsics(32, 24);
+  nan_intrinsics.fx = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(testing::error_field([&] { raycast::DepthCamera{nan_intrinsics}; }), "intrinsics.fx");
+  nan_intrinsics = testing::small_intrinsics(32, 24);
+  nan_intrinsics.cy = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(testing::error_field([&] { raycast::DepthCamera{nan_intrinsics}; }), "intrinsics.cy");
+}
+
+}  // namespace
+}  // namespace posefuse::fit
