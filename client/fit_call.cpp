@@ -108,7 +108,7 @@ std::string status_line(const grpc::Status& status, const std::string& address) 
   }
   if (status.error_code() == grpc::StatusCode::UNAVAILABLE) {
     return "cannot reach the server at " + address + " (UNAVAILABLE: " + status.error_message() +
-           "); is posefuse-server running?";
+           "); is posefuse-server running (and if it uses TLS, was --tls-ca given)?";
   }
   return "server " + address + ": " + code_name(status.error_code()) + ": " +
          status.error_message();

@@ -13,11 +13,11 @@
 #include "client/channel_security.hpp"
 #include "client/demo_session.hpp"
 #include "client/fit_call.hpp"
-#include "grpc/health/v1/health.grpc.pb.h"
 #include "posefuse/v1/service.grpc.pb.h"
 #include "server/posefuse_server.hpp"
 #include "server/security.hpp"
 #include "session/file_bytes.hpp"
+#include "tests/server/health_check.hpp"
 #include "tests/server/test_support.hpp"
 
 namespace posefuse::server {
@@ -32,7 +32,8 @@ constexpr const char* kOtherToken = "fedcba9876543210fedcba9876543210";
 // The certificate files, made once for the whole test binary and removed at exit.
 class Certificates {
  public:
-  Certificates() : dir_(fs::temp_directory_path() / ("posefuse_tls_" + std::to_string(::getpid()))) {
+  Certificates()
+      : dir_(fs::temp_directory_path() / ("posefuse_tls_" + std::to_string(::getpid()))) {
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     ok_ = make_ca("ca") && make_ca("other_ca") &&
@@ -44,7 +45,9 @@ class Certificates {
 
   bool ok() const { return ok_; }
   std::string file(const std::string& name) const { return (dir_ / name).string(); }
-  std::string pem(const std::string& name) const { return session::read_file_bytes(file(name), name); }
+  std::string pem(const std::string& name) const {
+    return session::read_file_bytes(file(name), name);
+  }
 
  private:
   bool run(const std::string& command) const {
@@ -76,7 +79,9 @@ const Certificates& certificates() {
 
 class SecurityTest : public ::testing::Test {
  protected:
-  void SetUp() override { ASSERT_TRUE(certificates().ok()) << "openssl failed to make test certificates"; }
+  void SetUp() override {
+    ASSERT_TRUE(certificates().ok()) << "openssl failed to make the test certificates";
+  }
 
   void start(ServerOptions options) {
     options.listen = "127.0.0.1:0";
@@ -225,11 +230,8 @@ TEST_F(SecurityTest, HealthNeedsNoToken) {
   options.tls_cert = certificates().file("server.crt");
   options.tls_key = certificates().file("server.key");
   start(options);
-  auto health = grpc::health::v1::Health::NewStub(client::make_channel(address_, trusting("ca")));
-  grpc::ClientContext context;
-  set_test_deadline(context);
   grpc::health::v1::HealthCheckResponse response;
-  const grpc::Status status = health->Check(&context, {}, &response);
+  const grpc::Status status = test::check_health(client::make_channel(address_, trusting("ca")), &response);
   ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_EQ(response.status(), grpc::health::v1::HealthCheckResponse::SERVING);
 }
@@ -289,9 +291,11 @@ TEST_F(SecurityTest, TokensFileRejectsShortTokensAndCommentOnlyFiles) {
 }
 
 TEST(ClientSecurity, TokenComesFromTheFileElseTheEnvironment) {
-  const fs::path path = fs::temp_directory_path() / ("posefuse_token_" + std::to_string(::getpid()));
+  const fs::path path =
+      fs::temp_directory_path() / ("posefuse_token_" + std::to_string(::getpid()));
   std::ofstream(path) << "# my clinic\n  " << kToken << " \n";
-  EXPECT_EQ(client::load_channel_security("", "", "", path.string(), "from-env").bearer_token, kToken);
+  EXPECT_EQ(client::load_channel_security("", "", "", path.string(), "from-env").bearer_token,
+            kToken);
   EXPECT_EQ(client::load_channel_security("", "", "", "", "from-env").bearer_token, "from-env");
   EXPECT_EQ(client::load_channel_security("", "", "", "", nullptr).bearer_token, "");
   fs::remove(path);
