@@ -3,6 +3,9 @@
 #include <atomic>
 #include <mutex>
 #include <thread>
+#include <vector>
+
+#include <grpcpp/support/client_interceptor.h>
 
 #include "client/recording.hpp"
 #include "posefuse/v1/service.grpc.pb.h"
@@ -34,18 +37,78 @@ const char* code_name(grpc::StatusCode code) {
   }
 }
 
+// Adds `authorization: Bearer <token>` to every call's initial metadata. An interceptor rather
+// than call credentials, because gRPC sends call credentials only over TLS and a token must
+// also work behind a TLS-terminating proxy on a private network.
+class BearerTokenInterceptor : public grpc::experimental::Interceptor {
+ public:
+  explicit BearerTokenInterceptor(const std::string& token) : value_("Bearer " + token) {}
+  void Intercept(grpc::experimental::InterceptorBatchMethods* methods) override {
+    if (methods->QueryInterceptionHookPoint(
+            grpc::experimental::InterceptionHookPoints::PRE_SEND_INITIAL_METADATA)) {
+      methods->GetSendInitialMetadata()->insert({"authorization", value_});
+    }
+    methods->Proceed();
+  }
+
+ private:
+  std::string value_;
+};
+
+class BearerTokenInterceptorFactory : public grpc::experimental::ClientInterceptorFactoryInterface {
+ public:
+  explicit BearerTokenInterceptorFactory(std::string token) : token_(std::move(token)) {}
+  grpc::experimental::Interceptor* CreateClientInterceptor(
+      grpc::experimental::ClientRpcInfo*) override {
+    return new BearerTokenInterceptor(token_);
+  }
+
+ private:
+  std::string token_;
+};
+
+bool tls_failure(const std::string& message) {
+  for (const char* sign : {"ssl", "SSL", "handshake", "Handshake", "TLS", "certificate"}) {
+    if (message.find(sign) != std::string::npos) return true;
+  }
+  return false;
+}
+
 }  // namespace
 
-std::shared_ptr<grpc::Channel> make_channel(const std::string& address) {
+std::shared_ptr<grpc::Channel> make_channel(const std::string& address,
+                                            const ChannelSecurity& security) {
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(64 << 20);
-  return grpc::CreateCustomChannel(address, grpc::InsecureChannelCredentials(), args);
+  std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
+  if (security.tls()) {
+    grpc::SslCredentialsOptions ssl;
+    ssl.pem_root_certs = security.ca_pem;  // empty: the system's trusted CAs
+    ssl.pem_cert_chain = security.cert_chain_pem;
+    ssl.pem_private_key = security.private_key_pem;
+    credentials = grpc::SslCredentials(ssl);
+  }
+  std::vector<std::unique_ptr<grpc::experimental::ClientInterceptorFactoryInterface>> interceptors;
+  if (!security.bearer_token.empty()) {
+    interceptors.push_back(std::make_unique<BearerTokenInterceptorFactory>(security.bearer_token));
+  }
+  return grpc::experimental::CreateCustomChannelWithInterceptors(address, credentials, args,
+                                                                 std::move(interceptors));
 }
 
 std::string status_line(const grpc::Status& status, const std::string& address) {
+  if (status.error_code() == grpc::StatusCode::UNAUTHENTICATED) {
+    return "server " + address + " refused the call: UNAUTHENTICATED: " + status.error_message() +
+           " (pass a valid token with --token-file FILE or POSEFUSE_TOKEN)";
+  }
+  if (status.error_code() == grpc::StatusCode::UNAVAILABLE && tls_failure(status.error_message())) {
+    return "TLS handshake with the server at " + address + " failed (" + status.error_message() +
+           "); check --tls-ca (the CA that signed the server's certificate) and, for mutual "
+           "TLS, --tls-cert/--tls-key";
+  }
   if (status.error_code() == grpc::StatusCode::UNAVAILABLE) {
     return "cannot reach the server at " + address + " (UNAVAILABLE: " + status.error_message() +
-           "); is posefuse-server running?";
+           "); is posefuse-server running (and if it uses TLS, was --tls-ca given)?";
   }
   return "server " + address + ": " + code_name(status.error_code()) + ": " +
          status.error_message();

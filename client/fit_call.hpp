@@ -11,6 +11,7 @@
 
 #include <grpcpp/grpcpp.h>
 
+#include "client/channel_security.hpp"
 #include "client/result_writer.hpp"
 #include "common/error.hpp"
 
@@ -37,8 +38,10 @@ FitOutcome run_fit(const std::shared_ptr<grpc::Channel>& channel,
                    const std::filesystem::path& recording, ResultWriter& writer,
                    const std::function<void(const FitProgress&)>& on_progress = {});
 
-// A channel to `address` (host:port) with the client's message size limits.
-std::shared_ptr<grpc::Channel> make_channel(const std::string& address);
+// A channel to `address` (host:port) with the client's message size limits, secured as
+// `security` says (plaintext, no token by default).
+std::shared_ptr<grpc::Channel> make_channel(const std::string& address,
+                                            const ChannelSecurity& security = {});
 
 // One readable line for a failed call, e.g.
 // "server 127.0.0.1:50051: INVALID_ARGUMENT: chunk[0].header.depth_intrinsics.fx: ...".

@@ -10,6 +10,7 @@
 #include <unistd.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstdio>
 #include <map>
 #include <string>
@@ -42,7 +43,11 @@ constexpr const char* kUsage =
     "  posefuse watch JOB_ID               follow a job until it has finished\n"
     "  posefuse cancel JOB_ID              cancel a queued or running job\n"
     "  posefuse results JOB_ID --out DIR   write a finished job's results like fit does\n"
-    "RECORDING is a recording directory or a chunk file. --server defaults to 127.0.0.1:50051.\n";
+    "RECORDING is a recording directory or a chunk file. --server defaults to 127.0.0.1:50051.\n"
+    "security (every command that talks to the server; docs/server.md \"Security\"):\n"
+    "  --tls-ca FILE                       TLS, verifying the server against this CA (PEM)\n"
+    "  --tls-cert FILE --tls-key FILE      client certificate and key for mutual TLS\n"
+    "  --token-file FILE                   bearer token (else the POSEFUSE_TOKEN variable)\n";
 
 constexpr int kExitUsage = 2;
 
@@ -86,6 +91,22 @@ void check_flags(const Arguments& args, const std::vector<std::string>& known) {
     for (const auto& k : known) found = found || k == name;
     require(found, "unknown option " + name);
   }
+}
+
+// check_flags for a command that calls the server: --server and the security options too.
+void check_server_flags(const Arguments& args, std::vector<std::string> known) {
+  for (const char* flag : {"--server", "--tls-ca", "--tls-cert", "--tls-key", "--token-file"}) {
+    known.emplace_back(flag);
+  }
+  check_flags(args, known);
+}
+
+std::shared_ptr<grpc::Channel> connect(const Arguments& args) {
+  return client::make_channel(
+      args.flag("--server", "127.0.0.1:50051"),
+      client::load_channel_security(args.flag("--tls-ca", ""), args.flag("--tls-cert", ""),
+                                    args.flag("--tls-key", ""), args.flag("--token-file", ""),
+                                    std::getenv("POSEFUSE_TOKEN")));
 }
 
 std::string format_eta(double seconds) {
@@ -134,14 +155,14 @@ class ProgressLine {
 };
 
 int command_fit(const Arguments& args) {
-  check_flags(args, {"--server", "--out"});
+  check_server_flags(args, {"--out"});
   require(args.positional.size() == 1, "fit takes one RECORDING (see posefuse --help)");
   require(args.flags.count("--out") == 1, "fit needs --out DIR");
   const std::string server = args.flag("--server", "127.0.0.1:50051");
   client::ResultWriter writer(args.flag("--out", ""));
   ProgressLine progress;
   const client::FitOutcome outcome = client::run_fit(
-      client::make_channel(server), args.positional[0], writer,
+      connect(args), args.positional[0], writer,
       [&](const client::FitProgress& p) { progress.show(p, false); });
   if (outcome.local_error) {
     progress.interrupt();
@@ -190,10 +211,10 @@ void set_deadline(grpc::ClientContext& context) {
 }
 
 int command_health(const Arguments& args) {
-  check_flags(args, {"--server"});
+  check_server_flags(args, {});
   require(args.positional.empty(), "health takes no positional arguments");
   const std::string server = args.flag("--server", "127.0.0.1:50051");
-  auto stub = grpc::health::v1::Health::NewStub(client::make_channel(server));
+  auto stub = grpc::health::v1::Health::NewStub(connect(args));
   grpc::ClientContext context;
   set_deadline(context);
   grpc::health::v1::HealthCheckRequest request;
@@ -210,10 +231,10 @@ int command_health(const Arguments& args) {
 }
 
 int command_info(const Arguments& args) {
-  check_flags(args, {"--server"});
+  check_server_flags(args, {});
   require(args.positional.empty(), "info takes no positional arguments");
   const std::string server = args.flag("--server", "127.0.0.1:50051");
-  auto stub = posefuse::v1::PoseFuse::NewStub(client::make_channel(server));
+  auto stub = posefuse::v1::PoseFuse::NewStub(connect(args));
   grpc::ClientContext context;
   set_deadline(context);
   posefuse::v1::ServerInfo info;
@@ -264,10 +285,9 @@ std::string job_line(const posefuse::v1::Job& job) {
 
 std::unique_ptr<posefuse::v1::PoseFuse::Stub> job_stub(const Arguments& args,
                                                        std::size_t positional) {
-  check_flags(args, {"--server", "--label", "--out"});
+  check_server_flags(args, {"--label", "--out"});
   require(args.positional.size() == positional, "wrong number of arguments (see --help)");
-  return posefuse::v1::PoseFuse::NewStub(
-      client::make_channel(args.flag("--server", "127.0.0.1:50051")));
+  return posefuse::v1::PoseFuse::NewStub(connect(args));
 }
 
 int call_failed(const char* command, const Arguments& args, const grpc::Status& status) {

@@ -9,6 +9,7 @@
 
 #include "common/error.hpp"
 #include "server/log.hpp"
+#include "server/security.hpp"
 #include "server/sqlite_job_store.hpp"
 
 namespace posefuse::server {
@@ -29,10 +30,22 @@ void validate_options(const ServerOptions& o) {
   if (!(o.shutdown_grace_s >= 0.0 && std::isfinite(o.shutdown_grace_s))) {
     throw_invalid("--shutdown-grace-s", "must be >= 0 seconds");
   }
+  if (o.tls_cert.empty() != o.tls_key.empty()) {
+    throw_invalid(o.tls_cert.empty() ? "--tls-cert" : "--tls-key",
+                  "is missing: --tls-cert and --tls-key go together");
+  }
+  if (!o.tls_client_ca.empty() && o.tls_cert.empty()) {
+    throw_invalid("--tls-client-ca", "needs --tls-cert and --tls-key (mutual TLS is TLS first)");
+  }
 }
 
 PoseFuseServer::PoseFuseServer(ServerOptions options) : options_(std::move(options)) {
   validate_options(options_);
+  // Security files first: a bad one fails before any thread or port exists.
+  const std::shared_ptr<grpc::ServerCredentials> credentials = make_server_credentials(options_);
+  if (!options_.tokens_file.empty()) {
+    tokens_ = std::make_unique<BearerTokens>(BearerTokens::load(options_.tokens_file));
+  }
   const unsigned workers =
       options_.workers > 0 ? options_.workers : std::max(1u, std::thread::hardware_concurrency());
   pool_ = std::make_unique<WorkerPool>(workers);
@@ -52,7 +65,8 @@ PoseFuseServer::PoseFuseServer(ServerOptions options) : options_(std::move(optio
     jobs_ = std::make_unique<JobRunner>(*job_store_, *pool_, metrics_, options_.max_jobs);
   }
   service_ =
-      std::make_unique<PoseFuseService>(options_, *pool_, *registry_, metrics_, jobs_.get());
+      std::make_unique<PoseFuseService>(options_, *pool_, *registry_, metrics_, jobs_.get(),
+                                        tokens_.get());
 
   // Before the gRPC server, so that a bad --metrics-listen fails before anything serves.
   if (!options_.metrics_listen.empty()) {
@@ -64,13 +78,16 @@ PoseFuseServer::PoseFuseServer(ServerOptions options) : options_(std::move(optio
   grpc::EnableDefaultHealthCheckService(true);
   grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
-  builder.AddListeningPort(options_.listen, grpc::InsecureServerCredentials(), &port_);
+  builder.AddListeningPort(options_.listen, credentials, &port_);
   builder.RegisterService(service_.get());
   builder.SetMaxReceiveMessageSize(static_cast<int>(options_.max_message_mb * 1024 * 1024));
   server_ = builder.BuildAndStart();
   if (!server_ || port_ == 0) {
     throw Error(ErrorCode::kFailedPrecondition, "--listen",
-                "cannot listen on '" + options_.listen + "' (address in use or invalid?)");
+                "cannot listen on '" + options_.listen + "' (address in use or invalid?" +
+                    (options_.tls_cert.empty()
+                         ? std::string(")")
+                         : std::string(" or --tls-cert and --tls-key are not a matching pair?)")));
   }
   server_->GetHealthCheckService()->SetServingStatus(true);
   if (jobs_) jobs_->resume_unfinished();
@@ -81,6 +98,11 @@ PoseFuseServer::PoseFuseServer(ServerOptions options) : options_(std::move(optio
              {"max_sessions", std::to_string(options_.max_sessions)},
              {"max_message_mb", std::to_string(options_.max_message_mb)},
              {"idle_timeout_s", std::to_string(options_.idle_timeout_s)}});
+  // The security mode, never a token or key.
+  log_event("info", "security",
+            {{"transport", transport_mode(options_)},
+             {"auth", tokens_ ? "bearer_token" : "none"},
+             {"tokens", std::to_string(tokens_ ? tokens_->size() : 0)}});
 }
 
 PoseFuseServer::~PoseFuseServer() { shutdown(); }

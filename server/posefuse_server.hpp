@@ -11,6 +11,7 @@
 #include "server/metrics.hpp"
 #include "server/metrics_http.hpp"
 #include "server/posefuse_service.hpp"
+#include "server/security.hpp"
 #include "server/server_options.hpp"
 #include "server/session_registry.hpp"
 #include "server/worker_pool.hpp"
@@ -46,6 +47,7 @@ class PoseFuseServer {
   std::unique_ptr<SessionRegistry> registry_;
   std::unique_ptr<JobStore> job_store_;
   std::unique_ptr<JobRunner> jobs_;
+  std::unique_ptr<BearerTokens> tokens_;  // null: no token needed
   std::unique_ptr<PoseFuseService> service_;
   std::unique_ptr<grpc::Server> server_;
   std::unique_ptr<MetricsHttpServer> metrics_http_;

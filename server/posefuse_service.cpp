@@ -38,11 +38,30 @@ constexpr std::size_t kMaxPageSize = 1000;
 }  // namespace
 
 PoseFuseService::PoseFuseService(const ServerOptions& options, WorkerPool& pool,
-                                 SessionRegistry& registry, Metrics& metrics, JobRunner* jobs)
-    : options_(options), pool_(pool), registry_(registry), metrics_(metrics), jobs_(jobs) {}
+                                 SessionRegistry& registry, Metrics& metrics, JobRunner* jobs,
+                                 const BearerTokens* tokens)
+    : options_(options),
+      pool_(pool),
+      registry_(registry),
+      metrics_(metrics),
+      jobs_(jobs),
+      tokens_(tokens) {}
+
+grpc::Status PoseFuseService::authenticate(const grpc::CallbackServerContext* context,
+                                           const char* call) const {
+  if (!tokens_) return grpc::Status::OK;
+  grpc::Status status = tokens_->check(*context);
+  if (!status.ok()) {
+    log_event("info", "call_unauthenticated", {{"call", call}, {"peer", context->peer()}});
+  }
+  return status;
+}
 
 grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>* PoseFuseService::Fit(
     grpc::CallbackServerContext* context) {
+  if (grpc::Status denied = authenticate(context, "Fit"); !denied.ok()) {
+    return new Refused<grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>>(denied);
+  }
   const std::optional<std::uint64_t> id = registry_.try_admit();
   if (!id) {
     metrics_.session_refused();
@@ -58,12 +77,18 @@ grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>* PoseFuseService::Fit(
 grpc::ServerUnaryReactor* PoseFuseService::GetServerInfo(grpc::CallbackServerContext* context,
                                                          const v1::GetServerInfoRequest*,
                                                          v1::ServerInfo* response) {
+  if (grpc::Status denied = authenticate(context, "GetServerInfo"); !denied.ok()) {
+    return finish_unary(context, denied);
+  }
   *response = server_info(options_, static_cast<unsigned>(pool_.threads()), jobs_ != nullptr);
   return finish_unary(context, grpc::Status::OK);
 }
 
 grpc::ServerReadReactor<v1::SubmitJobRequest>* PoseFuseService::SubmitJob(
-    grpc::CallbackServerContext*, v1::Job* response) {
+    grpc::CallbackServerContext* context, v1::Job* response) {
+  if (grpc::Status denied = authenticate(context, "SubmitJob"); !denied.ok()) {
+    return new Refused<grpc::ServerReadReactor<v1::SubmitJobRequest>>(denied);
+  }
   if (!jobs_) return new Refused<grpc::ServerReadReactor<v1::SubmitJobRequest>>(jobs_off());
   return submit_job(*jobs_, options_.recordings_root, response);
 }
@@ -71,6 +96,9 @@ grpc::ServerReadReactor<v1::SubmitJobRequest>* PoseFuseService::SubmitJob(
 grpc::ServerUnaryReactor* PoseFuseService::GetJob(grpc::CallbackServerContext* context,
                                                   const v1::GetJobRequest* request,
                                                   v1::Job* response) {
+  if (grpc::Status denied = authenticate(context, "GetJob"); !denied.ok()) {
+    return finish_unary(context, denied);
+  }
   if (!jobs_) return finish_unary(context, jobs_off());
   const auto record = jobs_->store().get(request->job_id());
   if (!record) {
@@ -84,6 +112,9 @@ grpc::ServerUnaryReactor* PoseFuseService::GetJob(grpc::CallbackServerContext* c
 grpc::ServerUnaryReactor* PoseFuseService::ListJobs(grpc::CallbackServerContext* context,
                                                     const v1::ListJobsRequest* request,
                                                     v1::ListJobsResponse* response) {
+  if (grpc::Status denied = authenticate(context, "ListJobs"); !denied.ok()) {
+    return finish_unary(context, denied);
+  }
   if (!jobs_) return finish_unary(context, jobs_off());
   const std::size_t page_size =
       request->page_size() == 0 ? kDefaultPageSize
@@ -107,6 +138,9 @@ grpc::ServerUnaryReactor* PoseFuseService::ListJobs(grpc::CallbackServerContext*
 grpc::ServerUnaryReactor* PoseFuseService::CancelJob(grpc::CallbackServerContext* context,
                                                      const v1::CancelJobRequest* request,
                                                      v1::Job* response) {
+  if (grpc::Status denied = authenticate(context, "CancelJob"); !denied.ok()) {
+    return finish_unary(context, denied);
+  }
   if (!jobs_) return finish_unary(context, jobs_off());
   const auto job = jobs_->cancel(request->job_id());
   if (!job) {
@@ -117,14 +151,20 @@ grpc::ServerUnaryReactor* PoseFuseService::CancelJob(grpc::CallbackServerContext
   return finish_unary(context, grpc::Status::OK);
 }
 
-grpc::ServerWriteReactor<v1::Job>* PoseFuseService::WatchJob(grpc::CallbackServerContext*,
+grpc::ServerWriteReactor<v1::Job>* PoseFuseService::WatchJob(grpc::CallbackServerContext* context,
                                                              const v1::WatchJobRequest* request) {
+  if (grpc::Status denied = authenticate(context, "WatchJob"); !denied.ok()) {
+    return new Refused<grpc::ServerWriteReactor<v1::Job>>(denied);
+  }
   if (!jobs_) return new Refused<grpc::ServerWriteReactor<v1::Job>>(jobs_off());
   return watch_job(*jobs_, request->job_id());
 }
 
 grpc::ServerWriteReactor<v1::FitResult>* PoseFuseService::GetJobResults(
-    grpc::CallbackServerContext*, const v1::GetJobResultsRequest* request) {
+    grpc::CallbackServerContext* context, const v1::GetJobResultsRequest* request) {
+  if (grpc::Status denied = authenticate(context, "GetJobResults"); !denied.ok()) {
+    return new Refused<grpc::ServerWriteReactor<v1::FitResult>>(denied);
+  }
   if (!jobs_) return new Refused<grpc::ServerWriteReactor<v1::FitResult>>(jobs_off());
   return job_results(*jobs_, request->job_id());
 }

@@ -7,6 +7,7 @@
 #include "posefuse/v1/service.grpc.pb.h"
 #include "server/job_runner.hpp"
 #include "server/metrics.hpp"
+#include "server/security.hpp"
 #include "server/server_options.hpp"
 #include "server/session_registry.hpp"
 #include "server/worker_pool.hpp"
@@ -15,9 +16,10 @@ namespace posefuse::server {
 
 class PoseFuseService final : public v1::PoseFuse::CallbackService {
  public:
-  // `jobs` may be null: batch jobs are off.
+  // `jobs` may be null: batch jobs are off. `tokens` may be null: no bearer token is needed;
+  // otherwise every call without an accepted one ends UNAUTHENTICATED before doing anything.
   PoseFuseService(const ServerOptions& options, WorkerPool& pool, SessionRegistry& registry,
-                  Metrics& metrics, JobRunner* jobs);
+                  Metrics& metrics, JobRunner* jobs, const BearerTokens* tokens);
 
   grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>* Fit(
       grpc::CallbackServerContext* context) override;
@@ -46,6 +48,10 @@ class PoseFuseService final : public v1::PoseFuse::CallbackService {
   SessionRegistry& registry_;
   Metrics& metrics_;
   JobRunner* jobs_;
+  const BearerTokens* tokens_;
+
+  // OK without tokens or with an accepted one; logs a refusal (peer and call, never the token).
+  grpc::Status authenticate(const grpc::CallbackServerContext* context, const char* call) const;
 };
 
 // What GetServerInfo returns (also used by tests).

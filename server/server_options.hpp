@@ -19,6 +19,12 @@ struct ServerOptions {
   std::string recordings_root;             // SubmitJob by reference reads only under this
   unsigned max_jobs = 1;                   // jobs running at once
   std::string metrics_listen;              // IPv4 HOST:PORT for GET /metrics; empty = off
+  // Security (docs/server.md "Security"): PEM files; TLS is on when tls_cert is set, mutual TLS
+  // when tls_client_ca is set too. Bearer tokens are required when tokens_file is set.
+  std::string tls_cert;
+  std::string tls_key;
+  std::string tls_client_ca;
+  std::string tokens_file;
 };
 
 }  // namespace posefuse::server

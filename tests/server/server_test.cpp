@@ -16,9 +16,9 @@
 
 #include "client/demo_session.hpp"
 #include "client/fit_call.hpp"
-#include "grpc/health/v1/health.grpc.pb.h"
 #include "posefuse/v1/service.grpc.pb.h"
 #include "server/posefuse_server.hpp"
+#include "tests/server/health_check.hpp"
 #include "tests/server/test_support.hpp"
 
 namespace posefuse::server {
@@ -287,11 +287,8 @@ TEST_F(ServerTest, IdleStreamIsEndedWithDeadlineExceeded) {
 
 TEST_F(ServerTest, HealthSaysServing) {
   start();
-  auto health = grpc::health::v1::Health::NewStub(channel_);
-  grpc::ClientContext context;
-  set_test_deadline(context);
   grpc::health::v1::HealthCheckResponse response;
-  const grpc::Status status = health->Check(&context, {}, &response);
+  const grpc::Status status = test::check_health(channel_, &response);
   ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_EQ(response.status(), grpc::health::v1::HealthCheckResponse::SERVING);
 }

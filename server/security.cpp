@@ -1,0 +1,129 @@
+#include "server/security.hpp"
+
+#include <sstream>
+
+#include "common/error.hpp"
+#include "session/file_bytes.hpp"
+
+namespace posefuse::server {
+
+namespace {
+
+void require_pem(const std::string& text, std::string_view marker, const std::string& path,
+                 const std::string& flag, const char* what) {
+  if (text.find("-----BEGIN ") == std::string::npos || text.find(marker) == std::string::npos) {
+    throw_invalid(flag, "'" + path + "' is not a PEM " + what);
+  }
+}
+
+std::string trim(const std::string& line) {
+  const auto first = line.find_first_not_of(" \t\r");
+  if (first == std::string::npos) return {};
+  const auto last = line.find_last_not_of(" \t\r");
+  return line.substr(first, last - first + 1);
+}
+
+// Visible ASCII only: what a metadata value may carry and a file editor shows plainly.
+bool valid_token_characters(const std::string& token) {
+  for (const unsigned char c : token) {
+    if (c < 0x21 || c > 0x7e) return false;
+  }
+  return true;
+}
+
+// Looks at every byte of `accepted` whatever `presented` holds, so the time taken tells nothing
+// about how many leading characters matched.
+bool equal_constant_time(std::string_view presented, std::string_view accepted) {
+  unsigned char difference = presented.size() == accepted.size() ? 0 : 1;
+  for (std::size_t i = 0; i < accepted.size(); ++i) {
+    const unsigned char p = i < presented.size() ? static_cast<unsigned char>(presented[i]) : 0;
+    difference |= static_cast<unsigned char>(p ^ static_cast<unsigned char>(accepted[i]));
+  }
+  return difference == 0;
+}
+
+grpc::Status unauthenticated(const std::string& why) {
+  return grpc::Status(grpc::StatusCode::UNAUTHENTICATED,
+                      why + "; this server requires 'authorization: Bearer <token>' metadata "
+                            "with a token from its --tokens-file");
+}
+
+}  // namespace
+
+std::string read_security_file(const std::string& path, const std::string& flag) {
+  std::string text = session::read_file_bytes(path, flag);
+  if (text.empty()) throw_invalid(flag, "'" + path + "' is empty");
+  return text;
+}
+
+std::shared_ptr<grpc::ServerCredentials> make_server_credentials(const ServerOptions& options) {
+  if (options.tls_cert.empty()) return grpc::InsecureServerCredentials();
+  grpc::SslServerCredentialsOptions::PemKeyCertPair pair;
+  pair.cert_chain = read_security_file(options.tls_cert, "--tls-cert");
+  require_pem(pair.cert_chain, "CERTIFICATE-----", options.tls_cert, "--tls-cert", "certificate");
+  pair.private_key = read_security_file(options.tls_key, "--tls-key");
+  require_pem(pair.private_key, "PRIVATE KEY-----", options.tls_key, "--tls-key", "private key");
+
+  grpc::SslServerCredentialsOptions ssl(GRPC_SSL_DONT_REQUEST_CLIENT_CERTIFICATE);
+  ssl.pem_key_cert_pairs.push_back(std::move(pair));
+  if (!options.tls_client_ca.empty()) {
+    ssl.pem_root_certs = read_security_file(options.tls_client_ca, "--tls-client-ca");
+    require_pem(ssl.pem_root_certs, "CERTIFICATE-----", options.tls_client_ca, "--tls-client-ca",
+                "CA certificate");
+    ssl.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
+  }
+  return grpc::SslServerCredentials(ssl);
+}
+
+std::string transport_mode(const ServerOptions& options) {
+  if (options.tls_cert.empty()) return "plaintext";
+  return options.tls_client_ca.empty() ? "tls" : "mutual-tls";
+}
+
+BearerTokens BearerTokens::load(const std::string& path) {
+  const std::string flag = "--tokens-file";
+  std::istringstream text(read_security_file(path, flag));
+  std::vector<std::string> tokens;
+  std::string line;
+  for (int line_number = 1; std::getline(text, line); ++line_number) {
+    const std::string token = trim(line);
+    if (token.empty() || token[0] == '#') continue;
+    // The messages name the line, never the token.
+    const std::string where = "'" + path + "' line " + std::to_string(line_number);
+    if (!valid_token_characters(token)) {
+      throw_invalid(flag, where + ": a token may hold only visible ASCII characters, no spaces");
+    }
+    if (token.size() < kMinTokenLength) {
+      throw_invalid(flag, where + ": token shorter than " + std::to_string(kMinTokenLength) +
+                              " characters (make one with: openssl rand -hex 32)");
+    }
+    tokens.push_back(token);
+  }
+  if (tokens.empty()) throw_invalid(flag, "'" + path + "' holds no tokens");
+  return BearerTokens(std::move(tokens));
+}
+
+BearerTokens::BearerTokens(std::vector<std::string> tokens) : tokens_(std::move(tokens)) {}
+
+bool BearerTokens::accepts(std::string_view token) const {
+  bool accepted = false;
+  for (const std::string& candidate : tokens_) {
+    accepted = equal_constant_time(token, candidate) || accepted;  // no early exit
+  }
+  return accepted;
+}
+
+grpc::Status BearerTokens::check(const grpc::CallbackServerContext& context) const {
+  const auto& metadata = context.client_metadata();
+  const auto found = metadata.find("authorization");
+  if (found == metadata.end()) return unauthenticated("no bearer token");
+  const std::string_view value(found->second.data(), found->second.size());
+  constexpr std::string_view kScheme = "Bearer ";
+  if (value.substr(0, kScheme.size()) != kScheme) {
+    return unauthenticated("authorization metadata is not of the form 'Bearer <token>'");
+  }
+  if (!accepts(value.substr(kScheme.size()))) return unauthenticated("bearer token not accepted");
+  return grpc::Status::OK;
+}
+
+}  // namespace posefuse::server

@@ -1,0 +1,51 @@
+#pragma once
+// Transport security and bearer-token authentication of posefuse-server (docs/server.md
+// "Security"). TLS and mutual TLS come from PEM files; tokens from a tokens file. Nothing here
+// ever logs or returns a token or key.
+#include <memory>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <grpcpp/grpcpp.h>
+
+#include "server/server_options.hpp"
+
+namespace posefuse::server {
+
+// Reads a whole file for `flag`; throws posefuse::Error (field `flag`) when it cannot be read
+// or is empty.
+std::string read_security_file(const std::string& path, const std::string& flag);
+
+// Insecure credentials without --tls-cert; otherwise TLS from --tls-cert/--tls-key, and with
+// --tls-client-ca clients must present a certificate signed by that CA. Throws posefuse::Error
+// naming the flag for an unreadable file or one that is not PEM of the expected kind.
+std::shared_ptr<grpc::ServerCredentials> make_server_credentials(const ServerOptions& options);
+
+// "plaintext", "tls" or "mutual-tls": what the server logs at start.
+std::string transport_mode(const ServerOptions& options);
+
+// The accepted bearer tokens. check() compares in time that does not depend on where a
+// presented token differs from an accepted one.
+class BearerTokens {
+ public:
+  // One token per line; blank lines and lines starting with '#' are skipped; surrounding
+  // whitespace is trimmed. Throws posefuse::Error (field "--tokens-file") for an unreadable
+  // file, no tokens, or a token that is too short or has characters not allowed in metadata.
+  static BearerTokens load(const std::string& path);
+  explicit BearerTokens(std::vector<std::string> tokens);
+
+  std::size_t size() const { return tokens_.size(); }
+  // OK when the call carries `authorization: Bearer <accepted token>`; UNAUTHENTICATED with a
+  // message that says what is missing otherwise (never echoing what was sent).
+  grpc::Status check(const grpc::CallbackServerContext& context) const;
+  bool accepts(std::string_view token) const;
+
+ private:
+  std::vector<std::string> tokens_;
+};
+
+// Tokens this short are refused: they could be guessed.
+constexpr std::size_t kMinTokenLength = 16;
+
+}  // namespace posefuse::server
