@@ -37,12 +37,12 @@ struct PosedScene {
   std::vector<uint16_t> depth_mm;
 };
 
-PosedScene posed_scene(double spine_deg = 0.0) {
+PosedScene posed_scene(double spine_deg = 0.0, double yaw_deg = 0.0) {
   static const auto model = body::make_template(body::Sex::kMale);
   const body::PoseLayout layout = body::PoseLayout::all_joints();
   body::BodyEvaluator eval(model, layout);
   Eigen::VectorXd theta = layout.zero();
-  theta[layout.index_of("pelvis_y")] = kPi;
+  theta[layout.index_of("pelvis_y")] = kPi + yaw_deg * kDeg;
   theta[layout.index_of("translation_y")] = -0.95;
   theta[layout.index_of("translation_z")] = 2.5;
   theta[layout.index_of("left_shoulder_z")] = -40 * kDeg;
@@ -186,6 +186,19 @@ TEST(CameraSkeleton, OccludedJointsAreInferredWithLargerError) {
   const v1::SkeletonFrame f = CameraSkeletonSimulator(camera, drop_only, 5).simulate(scene.joints, scene.depth_mm, 0, 0, 0);
   EXPECT_NEAR(position(f, kShoulderLeft).y(), truth(1, kShoulderLeft) - 0.05, 1e-9);
   EXPECT_NEAR(position(f, kShoulderRight).y(), truth(1, kShoulderRight), 1e-9);
+}
+
+TEST(CameraSkeleton, FarArmOfSideViewIsInferred) {
+  // Turned 90 deg, the subject's right side faces the camera; the left arm is behind the torso.
+  const PosedScene scene = posed_scene(0.0, 90.0);
+  const Eigen::Matrix3Xd truth = camera_joints_from_smpl(scene.joints);
+  ASSERT_GT(truth(2, kElbowLeft), truth(2, kElbowRight) + 0.3);
+  const v1::SkeletonFrame f = CameraSkeletonSimulator(small_camera(), error_free(), 2)
+                                  .simulate(scene.joints, scene.depth_mm, 0, 0, 0);
+  for (int j : {kElbowLeft, kWristLeft, kHandLeft}) EXPECT_EQ(f.joints(j).state(), v1::SkeletonJoint::INFERRED) << j;
+  for (int j : {kShoulderRight, kElbowRight, kWristRight, kHandRight, kHeadJoint}) {
+    EXPECT_EQ(f.joints(j).state(), v1::SkeletonJoint::TRACKED) << j;
+  }
 }
 
 TEST(CameraSkeleton, JumpRateNearConfigured) {
