@@ -80,11 +80,8 @@ void validate(const CameraSkeletonOptions& o) {
   if (!o.down_K.allFinite() || std::abs(o.down_K.norm() - 1.0) > 1e-6) {
     throw_invalid("down_K", "must be a finite unit vector");
   }
-  for (const auto& [p, name] : {std::pair{o.jump_probability, "jump_probability"},
-                                std::pair{o.hand_flip_probability, "hand_flip_probability"}}) {
-    require_non_negative(p, name);
-    if (p > 1.0) throw_invalid(name, "must be <= 1, got " + std::to_string(p));
-  }
+  require_probability(o.jump_probability, "jump_probability");
+  require_probability(o.hand_flip_probability, "hand_flip_probability");
   require_interval(o.jump_min_m, o.jump_max_m, "jump_max_m");
   require_non_negative(o.jump_min_m, "jump_min_m");
 }

@@ -53,11 +53,7 @@ void validate(const DepthNoiseOptions& options) {
     throw_invalid("edge_slope_deg", "must lie in (max_incidence_deg, 90), got " +
                                         std::to_string(options.edge_slope_deg));
   }
-  require_non_negative(options.flying_pixel_probability, "flying_pixel_probability");
-  if (options.flying_pixel_probability > 1.0) {
-    throw_invalid("flying_pixel_probability",
-                  "must be <= 1, got " + std::to_string(options.flying_pixel_probability));
-  }
+  require_probability(options.flying_pixel_probability, "flying_pixel_probability");
   require_positive(options.min_range_m, "min_range_m");
   require_interval(options.min_range_m, options.max_range_m, "max_range_m");
   if (options.max_range_m > 65.0) {

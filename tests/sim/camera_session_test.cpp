@@ -9,6 +9,7 @@
 #include "raycast/mesh_scene.hpp"
 #include "session/image_codec.hpp"
 #include "session/session_validator.hpp"
+#include "test_camera.hpp"
 
 using namespace posefuse;
 using namespace posefuse::sim;
@@ -17,11 +18,7 @@ namespace {
 
 CameraSessionOptions small_session() {
   CameraSessionOptions o;
-  o.intrinsics.width = 128;
-  o.intrinsics.height = 106;
-  o.intrinsics.fx = o.intrinsics.fy = 365.0 / 4;
-  o.intrinsics.cx = 64.0;
-  o.intrinsics.cy = 53.0;
+  o.intrinsics = sim::testing::quarter_kinect_intrinsics();
   o.duration_s = 1.0;
   o.seed = 12;
   o.depth_noise.max_edge_shift_px = 1;  // the SDK's ~2 px at full resolution, at a quarter of it

@@ -8,6 +8,7 @@
 #include "body/template_generator.hpp"
 #include "common/error.hpp"
 #include "raycast/mesh_scene.hpp"
+#include "test_camera.hpp"
 
 using posefuse::Error;
 using namespace posefuse::sim;
@@ -15,20 +16,12 @@ namespace body = posefuse::body;
 namespace raycast = posefuse::raycast;
 namespace v1 = posefuse::v1;
 
+using posefuse::sim::testing::small_camera;
+
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDeg = kPi / 180.0;
-
-raycast::DepthCamera small_camera() {
-  raycast::DepthIntrinsics k;
-  k.width = 128;
-  k.height = 106;
-  k.fx = k.fy = 365.0 / 4;
-  k.cx = 64.0;
-  k.cy = 53.0;
-  return raycast::DepthCamera(k);
-}
 
 // The template facing the camera 2.5 m away, arms lowered 40 deg, spine bent by `spine_deg`
 // per spine joint; the body frame is K itself.

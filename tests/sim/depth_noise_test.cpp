@@ -7,25 +7,17 @@
 
 #include "common/error.hpp"
 #include "raycast/mesh_scene.hpp"
+#include "test_camera.hpp"
 
 using posefuse::Error;
 using namespace posefuse::sim;
 namespace raycast = posefuse::raycast;
 
+using posefuse::sim::testing::small_camera;
+
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
-
-// The Kinect v2 depth camera at a quarter of its resolution (intrinsics scaled by 1/4).
-raycast::DepthCamera small_camera() {
-  raycast::DepthIntrinsics k;
-  k.width = 128;
-  k.height = 106;
-  k.fx = k.fy = 365.0 / 4;
-  k.cx = 64.0;
-  k.cy = 53.0;
-  return raycast::DepthCamera(k);
-}
 
 std::vector<uint16_t> render_planes(const raycast::DepthCamera& camera, const std::vector<RoomPlane>& planes) {
   std::vector<uint16_t> depth(static_cast<std::size_t>(camera.width()) * camera.height(), 0);
