@@ -22,6 +22,12 @@ void require_non_negative(double value, const std::string& field) {
   }
 }
 
+void require_probability(double value, const std::string& field) {
+  if (!(value >= 0 && value <= 1)) {
+    throw_invalid(field, "must be a probability in [0, 1], got " + std::to_string(value));
+  }
+}
+
 void require_interval(double begin, double end, const std::string& field) {
   if (!std::isfinite(begin) || !std::isfinite(end) || end < begin) {
     throw_invalid(field, "interval [" + std::to_string(begin) + ", " + std::to_string(end) +
