@@ -12,6 +12,7 @@
 #include <numbers>
 #include <vector>
 
+#include "bench_clock.hpp"
 #include "body/body_evaluator.hpp"
 #include "body/template_generator.hpp"
 #include "fit/behind_surface_map.hpp"
@@ -25,21 +26,15 @@ using namespace posefuse;
 
 namespace {
 
-double thread_cpu_ms() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
-}
-
 // Median wall and thread-CPU milliseconds over `repeats` calls after one warm-up call.
 void report(const char* frame_name, const char* operation, int repeats, const std::function<void()>& fn) {
   fn();
   std::vector<double> wall, cpu;
   for (int i = 0; i < repeats; ++i) {
     const auto start = std::chrono::steady_clock::now();
-    const double cpu_start = thread_cpu_ms();
+    const double cpu_start = 1e3 * posefuse::bench::thread_cpu_seconds();
     fn();
-    cpu.push_back(thread_cpu_ms() - cpu_start);
+    cpu.push_back(1e3 * posefuse::bench::thread_cpu_seconds() - cpu_start);
     wall.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
   }
   std::sort(wall.begin(), wall.end());

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_clock.hpp"
 #include "imu/kalman_orientation_filter.hpp"
 
 namespace {
@@ -59,14 +60,6 @@ std::vector<ImuSample> make_stream(std::size_t count, bool with_mag) {
   return out;
 }
 
-// Thread CPU time: on the shared development machine other processes take the core away at
-// random; CPU time counts only the time this thread actually ran.
-double thread_cpu_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
-}
-
 struct Timing {
   double best_s = 1e300;    // thread CPU time
   double median_s = 0.0;    // thread CPU time
@@ -82,9 +75,9 @@ Timing time_runs(std::size_t samples, int repeats, Run run) {
   for (int r = 0; r < repeats; ++r) {
     const long before = g_allocations.load();
     const auto start = std::chrono::steady_clock::now();
-    const double cpu_start = thread_cpu_seconds();
+    const double cpu_start = posefuse::bench::thread_cpu_seconds();
     run();
-    seconds.push_back(thread_cpu_seconds() - cpu_start);
+    seconds.push_back(posefuse::bench::thread_cpu_seconds() - cpu_start);
     const auto stop = std::chrono::steady_clock::now();
     allocations = g_allocations.load() - before;
     wall_seconds.push_back(std::chrono::duration<double>(stop - start).count());

@@ -9,6 +9,7 @@
 #include <numbers>
 #include <vector>
 
+#include "bench_clock.hpp"
 #include "body/body_evaluator.hpp"
 #include "body/template_generator.hpp"
 #include "raycast/mesh_scene.hpp"
@@ -16,12 +17,6 @@
 using namespace posefuse;
 
 namespace {
-
-double thread_cpu_us() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return 1e6 * static_cast<double>(t.tv_sec) + 1e-3 * static_cast<double>(t.tv_nsec);
-}
 
 // Medians over `repeats` calls (after 3 warm-up calls) of the wall time and of the CPU time of
 // this thread, in microseconds. On a shared machine the wall time includes waiting for a core;
@@ -34,9 +29,9 @@ Timing median_us(int repeats, const std::function<void()>& fn) {
   std::vector<double> wall, cpu;
   for (int i = 0; i < repeats; ++i) {
     const auto start = std::chrono::steady_clock::now();
-    const double cpu_start = thread_cpu_us();
+    const double cpu_start = 1e6 * posefuse::bench::thread_cpu_seconds();
     fn();
-    cpu.push_back(thread_cpu_us() - cpu_start);
+    cpu.push_back(1e6 * posefuse::bench::thread_cpu_seconds() - cpu_start);
     wall.push_back(std::chrono::duration<double, std::micro>(std::chrono::steady_clock::now() - start).count());
   }
   std::nth_element(wall.begin(), wall.begin() + repeats / 2, wall.end());

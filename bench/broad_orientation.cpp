@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_clock.hpp"
 #include "broad_trial.hpp"
 #include "common/error.hpp"
 #include "eval/orientation_error.hpp"
@@ -63,13 +64,6 @@ const std::vector<Mode>& modes() {
        }},
   };
   return table;
-}
-
-// CPU time of this thread: the speed of the filter itself, not of whatever else the machine runs.
-double thread_cpu_seconds() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
 }
 
 void print_usage(std::FILE* to) {
@@ -136,9 +130,9 @@ int run(int argc, char** argv) {
     const posefuse::bench::BroadTrial trial = posefuse::bench::read_broad_trial(file.string());
     posefuse::imu::validate_imu_stream(trial.imu, trial.name.c_str());
     std::vector<Quat> W_from_A(trial.imu.size(), Quat::Identity());
-    const double start_s = thread_cpu_seconds();
+    const double start_s = posefuse::bench::thread_cpu_seconds();
     mode->run(trial.imu, W_from_A);
-    const double seconds = thread_cpu_seconds() - start_s;
+    const double seconds = posefuse::bench::thread_cpu_seconds() - start_s;
 
     std::vector<Quat> ENU_from_A(W_from_A.size());
     const Quat ENU_from_W = posefuse::geometry::ENU_from_W();

@@ -14,16 +14,15 @@
 #include <string>
 #include <vector>
 
+#include "bench_clock.hpp"
 #include "common/error.hpp"
 #include "sim/bvh.hpp"
 #include "sim/bvh_sensor.hpp"
 #include "sim/imu_synth.hpp"
 
 namespace {
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
+using Clock = posefuse::bench::WallClock;
+using posefuse::bench::wall_ms_since;
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -47,7 +46,7 @@ int main(int argc, char** argv) {
     try {
       auto start = Clock::now();
       const posefuse::sim::BvhClip clip = posefuse::sim::load_bvh(path);
-      const double parse_ms = ms_since(start);
+      const double parse_ms = wall_ms_since(start);
       start = Clock::now();
       // A plausibility check of the Y-up -> Z-up mapping: the head is above the hips in W.
       const int head = clip.skeleton.find("Head");
@@ -61,10 +60,10 @@ int main(int argc, char** argv) {
         }
       }
       head_above_hips_m /= static_cast<double>(clip.frames.size());
-      const double fk_ms = ms_since(start);
+      const double fk_ms = wall_ms_since(start);
       start = Clock::now();
       const posefuse::sim::BvhClip resampled = posefuse::sim::resample(clip, 30.0);
-      const double resample_ms = ms_since(start);
+      const double resample_ms = wall_ms_since(start);
 
       // An ideal wrist IMU on the right forearm, 80 % of the way to the hand, at 80 Hz.
       double imu_ms = 0.0, max_rate = 0.0, max_force = 0.0;
@@ -79,7 +78,7 @@ int main(int argc, char** argv) {
         options.error_model = posefuse::sim::ImuErrorModel::none();
         const auto imu = posefuse::sim::synthesize_imu(
             motion, posefuse::sim::uniform_times(motion.t_begin_s(), motion.t_end_s(), 80.0), options);
-        imu_ms = ms_since(start);
+        imu_ms = wall_ms_since(start);
         for (const auto& sample : imu.samples) {
           max_rate = std::max(max_rate, sample.gyr_rad_s.norm());
           max_force = std::max(max_force, sample.acc_m_s2.norm());

@@ -8,16 +8,8 @@
 #include <cstdlib>
 #include <ctime>
 
+#include "bench_clock.hpp"
 #include "sim/camera_session.hpp"
-
-namespace {
-// Thread CPU time: the machine is shared, so wall time alone overstates the cost.
-double thread_cpu_ms() {
-  timespec ts{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-  return ts.tv_sec * 1e3 + ts.tv_nsec * 1e-6;
-}
-}  // namespace
 
 int main(int argc, char** argv) {
   using namespace posefuse;
@@ -30,10 +22,10 @@ int main(int argc, char** argv) {
   options.duration_s = seconds;
   const body::PoseLayout layout = body::PoseLayout::full_body();
   const auto start = std::chrono::steady_clock::now();
-  const double cpu_start_ms = thread_cpu_ms();
+  const double cpu_start_ms = 1e3 * posefuse::bench::thread_cpu_seconds();
   const sim::CameraSessionResult r = sim::simulate_camera_session(options, layout, sim::arm_raising_sequence(layout, 4.0));
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  const double cpu_ms = thread_cpu_ms() - cpu_start_ms;
+  const double cpu_ms = 1e3 * posefuse::bench::thread_cpu_seconds() - cpu_start_ms;
   std::size_t bytes = 0;
   for (const auto& c : r.chunks) bytes += c.ByteSizeLong();
   std::printf("%zu frames of %dx%d: wall %.1f ms (%.2f ms per frame), thread CPU %.1f ms (%.2f ms per frame), "

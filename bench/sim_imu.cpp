@@ -7,14 +7,13 @@
 #include <cstdio>
 #include <cstdlib>
 
+#include "bench_clock.hpp"
 #include "sim/imu_device.hpp"
 #include "sim/scripted_motion.hpp"
 
 namespace {
-using Clock = std::chrono::steady_clock;
-double ms_since(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
+using Clock = posefuse::bench::WallClock;
+using posefuse::bench::wall_ms_since;
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -30,17 +29,17 @@ int main(int argc, char** argv) {
   auto start = Clock::now();
   const ScriptedMotion motion = forearm_rolling(rolling);
   const SensorTrajectory grid = imu_trajectory(ArmGeometry(), motion);
-  const double grid_ms = ms_since(start);
+  const double grid_ms = wall_ms_since(start);
   start = Clock::now();
   const SensorKinematics kinematics(grid);
-  const double kinematics_ms = ms_since(start);
+  const double kinematics_ms = wall_ms_since(start);
 
   const SimDevice arm{"arm_right", {-1.5, -40e-6}};
   const SimDevice base{"base", {3.0, 20e-6}};
   ImuDeviceOptions options;
   start = Clock::now();
   const ImuDeviceResult imu = simulate_imu_device(kinematics, arm, options, 0.0, motion.duration_s);
-  const double imu_ms = ms_since(start);
+  const double imu_ms = wall_ms_since(start);
   start = Clock::now();
   const BleBroadcastResult ble = ble_broadcast_receipts({base, arm}, BleBroadcastOptions(), 1);
   BuzzerOptions buzzer;
@@ -48,7 +47,7 @@ int main(int argc, char** argv) {
   AudioOptions audio;
   audio.duration_s = motion.duration_s;
   const BuzzerResult sound = buzzer_stop(base, buzzer, audio, 1);
-  const double sync_ms = ms_since(start);
+  const double sync_ms = wall_ms_since(start);
 
   std::printf("motion %.1f s: pose grid %zu poses\n", motion.duration_s, grid.p_W_m.size());
   std::printf("%-34s %10s\n", "step", "ms");
