@@ -8,29 +8,6 @@
 #include "sim/uniform_cubic_spline.hpp"
 
 namespace posefuse::sim {
-namespace {
-
-// Zero-phase Gaussian smoothing over frames, kernel truncated at 3 sigma and renormalised.
-std::vector<Eigen::VectorXd> gaussian_smooth(const std::vector<Eigen::VectorXd>& frames, double sigma_frames) {
-  if (sigma_frames <= 0) return frames;
-  const auto radius = static_cast<std::ptrdiff_t>(std::ceil(3.0 * sigma_frames));
-  const auto n = static_cast<std::ptrdiff_t>(frames.size());
-  std::vector<Eigen::VectorXd> out(frames.size());
-  for (std::ptrdiff_t k = 0; k < n; ++k) {
-    Eigen::VectorXd sum = Eigen::VectorXd::Zero(frames[0].size());
-    double weight_sum = 0.0;
-    for (std::ptrdiff_t j = std::max<std::ptrdiff_t>(0, k - radius); j <= std::min(n - 1, k + radius); ++j) {
-      const double x = static_cast<double>(j - k) / sigma_frames;
-      const double w = std::exp(-0.5 * x * x);
-      sum += w * frames[static_cast<std::size_t>(j)];
-      weight_sum += w;
-    }
-    out[static_cast<std::size_t>(k)] = sum / weight_sum;
-  }
-  return out;
-}
-
-}  // namespace
 
 SensorTrajectory bvh_sensor_trajectory(const BvhClip& clip, const BvhSensorMount& mount,
                                        double metres_per_unit, double smoothing_s, double dt_s) {

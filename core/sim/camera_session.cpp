@@ -64,6 +64,7 @@ CameraSessionResult simulate_camera_session(const CameraSessionOptions& options,
     throw_invalid("body_id", "is " + std::to_string(options.body_id) + ", must be 0..5");
   }
   validate(options.depth_noise);
+  for (const ForearmStrap& strap : options.forearm_straps) validate(strap);
   if (!poses) throw_invalid("poses", "is empty");
   const raycast::DepthCamera camera(options.intrinsics);  // validates the intrinsics
   const auto model = body::make_template(options.sex);
@@ -111,6 +112,7 @@ CameraSessionResult simulate_camera_session(const CameraSessionOptions& options,
         skeleton.simulate(joints, noisy.depth_mm, f, t_us, options.body_id));
     result.t_us.push_back(t_us);
     result.true_camera_joints_K.push_back(camera_joints_from_smpl(joints));
+    result.truth.push_back(frame_truth(evaluator, scene, options.K_from_W, options.forearm_straps));
   }
   return result;
 }

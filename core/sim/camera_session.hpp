@@ -4,7 +4,9 @@
 // the error models of depth_noise.hpp and camera_skeleton.hpp, plus the ground truth.
 //
 // Frames: the body model's canonical frame W (metres, y up, floor y = 0, see
-// body/template_generator.hpp) is placed in the camera frame K by K_from_W. The room is the
+// body/template_generator.hpp) is placed in the camera frame K by K_from_W. This "W" is the
+// room frame R of room_frame.hpp (K_from_W here is K_from_R there), not DESIGN.md's z-up world;
+// W_from_R(heading) relates the two for the IMUs. The room is the
 // floor y_W = 0 (a plane in K through K_from_W) and a wall facing the camera at z_K =
 // wall_distance_m.
 #include <cstdint>
@@ -21,6 +23,7 @@
 #include "raycast/depth_camera.hpp"
 #include "sim/camera_skeleton.hpp"
 #include "sim/depth_noise.hpp"
+#include "sim/frame_truth.hpp"
 
 namespace posefuse::sim {
 
@@ -41,6 +44,8 @@ struct CameraSessionOptions {
   CameraSkeletonOptions skeleton;
   std::uint32_t body_id = 0;
   std::uint64_t seed = 1;
+  // Forearms whose ground truth (frame_truth.hpp: K_from_F, IMU pose, occlusion) is wanted.
+  std::vector<ForearmStrap> forearm_straps;
 };
 
 struct CameraSessionResult {
@@ -48,6 +53,7 @@ struct CameraSessionResult {
   std::vector<v1::SessionChunk> chunks;  // per frame: depth, body index, skeleton
   std::vector<std::int64_t> t_us;        // frame times (camera clock)
   std::vector<Eigen::Matrix3Xd> true_camera_joints_K;  // error-free 25 joints per frame
+  std::vector<FrameTruth> truth;  // per frame: SMPL and camera joints, forearms of forearm_straps
 };
 
 // Raises both arms sideways from hanging (-75 deg) to above the shoulders (+75 deg) and back,

@@ -14,12 +14,6 @@ constexpr double kPi = 3.14159265358979323846;
 
 Quat rotation(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, axis)); }
 
-// 0 -> 1 with zero first and second derivatives at both ends (C2).
-double smootherstep(double x) {
-  x = std::clamp(x, 0.0, 1.0);
-  return x * x * x * (x * (6.0 * x - 15.0) + 10.0);
-}
-
 void check_repetitions(int repetitions) {
   if (repetitions < 1 || repetitions > 10000) {
     throw_invalid("repetitions", "must be in 1..10000, got " + std::to_string(repetitions));
@@ -37,12 +31,24 @@ Quat S_from_hanging() {
 
 }  // namespace
 
+double smootherstep(double x) {
+  x = std::clamp(x, 0.0, 1.0);
+  return x * x * x * (x * (6.0 * x - 15.0) + 10.0);
+}
+
+Quat S_from_upper_arm(const ArmAngles& a) {
+  return rotation(-a.shoulder_abduction_rad, Vec3::UnitX()) * rotation(a.shoulder_flexion_rad, -Vec3::UnitY()) *
+         S_from_hanging() * rotation(a.humeral_rotation_rad, Vec3::UnitY());
+}
+
+Quat upper_arm_from_forearm(const ArmAngles& a) {
+  return rotation(a.elbow_flexion_rad, Vec3::UnitX()) * rotation(a.supination_rad, Vec3::UnitY());
+}
+
 ArmPose arm_pose(const ArmGeometry& g, const ArmAngles& a) {
   const Quat W_from_S = rotation(g.heading_rad, Vec3::UnitZ());
-  const Quat S_from_U = rotation(-a.shoulder_abduction_rad, Vec3::UnitX()) *
-                        rotation(a.shoulder_flexion_rad, -Vec3::UnitY()) * S_from_hanging() *
-                        rotation(a.humeral_rotation_rad, Vec3::UnitY());
-  const Quat U_from_F = rotation(a.elbow_flexion_rad, Vec3::UnitX()) * rotation(a.supination_rad, Vec3::UnitY());
+  const Quat S_from_U = S_from_upper_arm(a);
+  const Quat U_from_F = upper_arm_from_forearm(a);
   const Quat W_from_U = (W_from_S * S_from_U).normalized();
   ArmPose pose;
   pose.W_from_F = (W_from_U * U_from_F).normalized();

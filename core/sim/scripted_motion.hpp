@@ -49,6 +49,15 @@ struct ArmPose {
 
 ArmPose arm_pose(const ArmGeometry& geometry, const ArmAngles& angles);
 
+// The two rotations of the chain above: S_from_U (upper arm in the subject frame) and U_from_F
+// (forearm in the upper arm's frame).
+Quat S_from_upper_arm(const ArmAngles& angles);
+Quat upper_arm_from_forearm(const ArmAngles& angles);
+
+// 0 -> 1 for x from 0 to 1 (clamped outside) with zero first and second derivatives at both
+// ends: 6x^5 - 15x^4 + 10x^3. Ramps built from it are C2.
+double smootherstep(double x);
+
 // A motion: joint angles as a function of time on [0, duration_s] (held constant outside).
 struct ScriptedMotion {
   std::function<ArmAngles(double t_s)> angles;

@@ -49,4 +49,23 @@ Eigen::VectorXd UniformCubicSpline::at(double t_s) const {
          h2 * ((a * a * a - a) * second_derivatives_[i] + (b * b * b - b) * second_derivatives_[i + 1]);
 }
 
+std::vector<Eigen::VectorXd> gaussian_smooth(const std::vector<Eigen::VectorXd>& frames, double sigma_frames) {
+  if (!(sigma_frames > 0) || frames.empty()) return frames;
+  const auto radius = static_cast<std::ptrdiff_t>(std::ceil(3.0 * sigma_frames));
+  const auto n = static_cast<std::ptrdiff_t>(frames.size());
+  std::vector<Eigen::VectorXd> out(frames.size());
+  for (std::ptrdiff_t k = 0; k < n; ++k) {
+    Eigen::VectorXd sum = Eigen::VectorXd::Zero(frames[0].size());
+    double weight_sum = 0.0;
+    for (std::ptrdiff_t j = std::max<std::ptrdiff_t>(0, k - radius); j <= std::min(n - 1, k + radius); ++j) {
+      const double x = static_cast<double>(j - k) / sigma_frames;
+      const double w = std::exp(-0.5 * x * x);
+      sum += w * frames[static_cast<std::size_t>(j)];
+      weight_sum += w;
+    }
+    out[static_cast<std::size_t>(k)] = sum / weight_sum;
+  }
+  return out;
+}
+
 }  // namespace posefuse::sim

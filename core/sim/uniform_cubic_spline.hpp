@@ -27,4 +27,9 @@ class UniformCubicSpline {
   std::vector<Eigen::VectorXd> second_derivatives_;
 };
 
+// Zero-phase Gaussian smoothing of a sequence of equally spaced vectors, standard deviation
+// sigma_frames (in samples; <= 0 returns the input); the kernel is cut at 3 sigma and, near the
+// ends, renormalised over the samples that exist.
+std::vector<Eigen::VectorXd> gaussian_smooth(const std::vector<Eigen::VectorXd>& frames, double sigma_frames);
+
 }  // namespace posefuse::sim

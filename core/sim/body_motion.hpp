@@ -1,0 +1,27 @@
+#pragma once
+// A whole-body motion of the simulated subject: one pose sequence that drives the rendered
+// body, the camera skeleton and the IMUs alike.
+#include <string>
+#include <vector>
+
+#include "sim/camera_session.hpp"
+
+namespace posefuse::sim {
+
+// A named time interval of a motion, e.g. "behind_head" (forearm likely occluded) or
+// "calibration_hold" (paper 1, Fig. 3b, where the forearm model is measured).
+struct MotionPhase {
+  std::string name;
+  double begin_s = 0.0;
+  double end_s = 0.0;
+};
+
+struct BodyMotion {
+  // theta of body::PoseLayout::all_joints() (translation, then a rotation vector per SMPL
+  // joint) in the room frame R (room_frame.hpp), defined on [0, duration_s] and held outside.
+  PoseSequence poses;
+  double duration_s = 0.0;
+  std::vector<MotionPhase> phases;  // in time order; may be empty
+};
+
+}  // namespace posefuse::sim
