@@ -25,18 +25,22 @@ ArmAngles arm(double abduction_deg, double flexion_deg, double humeral_rotation_
   return a;
 }
 
-// Key arm poses (right arm; the left one mirrors them). Tuned so that the template body's
-// joints land where the papers' descriptions put them (checked in tests/sim/exercises_test).
+// Key arm poses (right arm; the left one mirrors them): angles found by a grid search (5-10 deg
+// steps) that puts the default male template's elbow and wrist closest to target positions
+// (behind the head: wrist about 14 cm behind the skull-base joint at its height; behind the
+// back: wrist behind the lower back at the midline; combing: hand above the forehead, then
+// above the back of the head; guard: fist in front of the chin). Checked in
+// tests/sim/exercises_test.
 ArmAngles hanging() { return arm(8, 0, 0, 0); }
 ArmAngles calibration() { return arm(90, 0, 90, 90); }   // paper 1 Fig. 3b
-ArmAngles behind_head() { return arm(115, 25, 110, 145); }
+ArmAngles behind_head() { return arm(150, -10, 120, 120); }
 ArmAngles in_front_of_belly() { return arm(12, 20, -80, 95); }
-ArmAngles behind_back() { return arm(20, -35, -90, 105); }
+ArmAngles behind_back() { return arm(15, -35, -90, 75); }
 ArmAngles raised() { return arm(150, 0, 0, 0); }
 ArmAngles forearm_forward(double supination_deg) { return arm(8, 0, 0, 90, supination_deg); }
-ArmAngles comb_front() { return arm(30, 120, 0, 120); }
-ArmAngles comb_back() { return arm(115, 30, 90, 130); }
-ArmAngles guard() { return arm(10, 40, -20, 125); }
+ArmAngles comb_front() { return arm(150, 35, 90, 105); }
+ArmAngles comb_back() { return arm(155, -10, 100, 105); }
+ArmAngles guard() { return arm(15, 30, -10, 135); }
 ArmAngles punch() { return arm(5, 90, 0, 5, -90); }
 
 // One straight piece of the timeline: from `from` to `to` over duration_s with a C2 ramp (a
