@@ -207,7 +207,7 @@ const std::vector<ExerciseDef>& definitions() {
          BodyPoseAngles right = rest_pose(), left = rest_pose();
          right.trunk_lateral_tilt_rad = 20 * kDeg;
          left.trunk_lateral_tilt_rad = -20 * kDeg;
-         t.move(right, s(1.5), "tilt_right");
+         t.move(right, s(1.5));
          t.hold(s(0.5), "tilt_right");
          t.move(left, s(3.0));
          t.hold(s(0.5), "tilt_left");

@@ -186,7 +186,7 @@ TEST(Exercises, OtherExercisesMoveTheRightParts) {
   const BodyMotion tilt = make_exercise("torso_tilt");
   const SkeletonPose right = pose_at(tilt, middle(phase(tilt, "tilt_right")));
   const SkeletonPose left = pose_at(tilt, middle(phase(tilt, "tilt_left")));
-  // 20 deg spread over spine1..3 moves the neck 0.4 m above spine1 by about 8 cm.
+  // 20 deg spread over spine1..3 moves the neck (0.4 m above spine1) sideways by about 10 cm.
   EXPECT_LT(joint(right, body::kNeck).x(), -0.06);
   EXPECT_GT(joint(left, body::kNeck).x(), 0.06);
   EXPECT_NEAR(joint(right, body::kNeck).x(), -joint(left, body::kNeck).x(), 1e-9);
