@@ -39,7 +39,7 @@ SensorTrajectory forearm_imu_trajectory(const BodyMotion& motion, const Eigen::M
   out.p_W_m.reserve(n);
   out.W_from_A.reserve(n);
   for (std::size_t k = 0; k < n; ++k) {
-    const double t = std::clamp(out.t0_s + static_cast<double>(k) * dt_s, 0.0, motion.duration_s);
+    const double t = out.t0_s + static_cast<double>(k) * dt_s;
     const Eigen::VectorXd theta = motion.poses(t);
     if (theta.size() != layout.size() || !theta.allFinite()) {
       throw_invalid("motion.poses", "gave a theta of size " + std::to_string(theta.size()) + " (all_joints has " +

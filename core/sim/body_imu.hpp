@@ -17,7 +17,7 @@
 
 namespace posefuse::sim {
 
-// Grid t0 = -2 dt_s .. duration + 2 dt_s (the motion holds its end poses outside), so that
+// Grid t0 = -2 dt_s .. duration + 2 dt_s (BodyMotion continues smoothly there), so that
 // SensorKinematics' valid range is exactly [0, duration]. rest_joints: the subject's
 // (template_rest_joints). Throws posefuse::Error for bad input, naming the field.
 SensorTrajectory forearm_imu_trajectory(const BodyMotion& motion, const Eigen::Matrix3Xd& rest_joints,

@@ -18,7 +18,9 @@ struct MotionPhase {
 
 struct BodyMotion {
   // theta of body::PoseLayout::all_joints() (translation, then a rotation vector per SMPL
-  // joint) in the room frame R (room_frame.hpp), defined on [0, duration_s] and held outside.
+  // joint) in the room frame R (room_frame.hpp), defined on [0, duration_s]. Just outside it
+  // the motion continues C2-smoothly (exercises hold their rest pose; BVH motions extrapolate
+  // along the end tangents), because IMU synthesis differentiates a few ms beyond the ends.
   PoseSequence poses;
   double duration_s = 0.0;
   std::vector<MotionPhase> phases;  // in time order; may be empty

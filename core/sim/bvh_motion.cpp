@@ -82,7 +82,7 @@ BodyMotion bvh_motion(const BvhClip& clip, const BvhMotionOptions& options, BvhP
   BodyMotion motion;
   motion.duration_s = clip.duration_s();
   motion.poses = [spline](double t_s) {
-    const Eigen::VectorXd v = spline->at(t_s);
+    const Eigen::VectorXd v = spline->at_extended(t_s);
     Eigen::VectorXd theta(3 + 3 * body::kNumJoints);
     theta.head<3>() = v.tail<3>();
     for (int j = 0; j < body::kNumJoints; ++j) {

@@ -13,7 +13,8 @@
 // translation are smoothed frame by frame with a zero-phase Gaussian of standard deviation
 // smoothing_s (mocap noise of a few mm would otherwise reach the accelerometer as tens of
 // m/s^2; see docs/simulator.md) and joined by a natural cubic spline, so the motion is C2 and
-// passes near every frame.
+// passes near every frame. Outside the clip the spline continues along its end tangents (C2),
+// so that an IMU's differentiation stencils at the clip's ends see no kink.
 #include <Eigen/Core>
 
 #include "body/template_generator.hpp"

@@ -49,6 +49,20 @@ Eigen::VectorXd UniformCubicSpline::at(double t_s) const {
          h2 * ((a * a * a - a) * second_derivatives_[i] + (b * b * b - b) * second_derivatives_[i + 1]);
 }
 
+Eigen::VectorXd UniformCubicSpline::at_extended(double t_s) const {
+  const std::size_t last = values_.size() - 1;
+  // End slopes of the cubic pieces (second derivative zero at the ends).
+  if (t_s < t_begin_s()) {
+    const Eigen::VectorXd slope = (values_[1] - values_[0]) / dt_s_ - dt_s_ / 6.0 * second_derivatives_[1];
+    return values_[0] + (t_s - t_begin_s()) * slope;
+  }
+  if (t_s > t_end_s()) {
+    const Eigen::VectorXd slope = (values_[last] - values_[last - 1]) / dt_s_ + dt_s_ / 6.0 * second_derivatives_[last - 1];
+    return values_[last] + (t_s - t_end_s()) * slope;
+  }
+  return at(t_s);
+}
+
 std::vector<Eigen::VectorXd> gaussian_smooth(const std::vector<Eigen::VectorXd>& frames, double sigma_frames) {
   if (!(sigma_frames > 0) || frames.empty()) return frames;
   const auto radius = static_cast<std::ptrdiff_t>(std::ceil(3.0 * sigma_frames));

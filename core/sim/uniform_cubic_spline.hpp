@@ -19,6 +19,10 @@ class UniformCubicSpline {
 
   // Clamped to [t_begin_s, t_end_s].
   Eigen::VectorXd at(double t_s) const;
+  // Outside [t_begin_s, t_end_s] continued along the end tangent; because the second derivative
+  // is zero at the ends, the continuation is still C2 (used where a few samples beyond the ends
+  // are differentiated).
+  Eigen::VectorXd at_extended(double t_s) const;
 
  private:
   double t0_s_;
