@@ -27,13 +27,14 @@ ArmAngles arm(double abduction_deg, double flexion_deg, double humeral_rotation_
 
 // Key arm poses (right arm; the left one mirrors them): angles found by a grid search (5-10 deg
 // steps) that puts the default male template's elbow and wrist closest to target positions
-// (behind the head: wrist about 14 cm behind the skull-base joint at its height; behind the
+// (behind the head: upper arm almost vertical, forearm across the back of the head at its
+// height, wrist 12 cm behind the skull-base joint; behind the
 // back: wrist behind the lower back at the midline; combing: hand above the forehead, then
 // above the back of the head; guard: fist in front of the chin). Checked in
 // tests/sim/exercises_test.
 ArmAngles hanging() { return arm(8, 0, 0, 0); }
 ArmAngles calibration() { return arm(90, 0, 90, 90); }   // paper 1 Fig. 3b
-ArmAngles behind_head() { return arm(150, -10, 120, 120); }
+ArmAngles behind_head() { return arm(175, -10, 110, 100); }
 ArmAngles in_front_of_belly() { return arm(12, 20, -80, 95); }
 ArmAngles behind_back() { return arm(15, -35, -90, 75); }
 ArmAngles raised() { return arm(150, 0, 0, 0); }

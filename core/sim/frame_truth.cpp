@@ -6,15 +6,9 @@ namespace posefuse::sim {
 namespace {
 
 constexpr int kForearmSamples = 9;
-constexpr double kVisibilityTolerance_m = 0.015;
-
-// The skin point over axis point a facing the camera centre (K's origin).
-Vec3 skin_towards_camera(const raycast::MeshScene& scene, const Vec3& a, const Vec3& axis) {
-  Vec3 towards = -a - (-a).dot(axis) * axis;
-  if (towards.norm() < 1e-9) return a;  // looking along the forearm
-  towards.normalize();
-  return a + scene.closest_point(a).distance * towards;
-}
+// A sight line to a point on the forearm axis passes the forearm's own skin within its radius
+// (3-4 cm on the template) before reaching it; only a surface farther in front hides it.
+constexpr double kOwnSkinDepth_m = 0.06;
 
 }  // namespace
 
@@ -38,19 +32,18 @@ FrameTruth frame_truth(const body::BodyEvaluator& evaluator, const raycast::Mesh
     f.K_from_A = (K_from_R_rotation * pose.R_from_A).normalized();
     f.imu_K_m = K_from_R * pose.imu_R_m;
 
-    const Vec3 axis = (f.wrist_K_m - f.elbow_K_m).normalized();
     Eigen::Matrix3Xd points(3, kForearmSamples + 1);
     for (int i = 0; i < kForearmSamples; ++i) {
       const double s = 0.1 + 0.8 * i / (kForearmSamples - 1);
-      points.col(i) = skin_towards_camera(scene_K, f.elbow_K_m + s * (f.wrist_K_m - f.elbow_K_m), axis);
+      points.col(i) = f.elbow_K_m + s * (f.wrist_K_m - f.elbow_K_m);
     }
-    points.col(kForearmSamples) = skin_towards_camera(scene_K, f.strap_K_m, axis);
-    const std::vector<bool> visible = scene_K.visible(points, kVisibilityTolerance_m);
+    points.col(kForearmSamples) = f.strap_K_m;
+    const std::vector<bool> visible = scene_K.visible(points, kOwnSkinDepth_m);
     int seen = 0;
     for (int i = 0; i < kForearmSamples; ++i) seen += visible[static_cast<std::size_t>(i)] ? 1 : 0;
     f.visible_fraction = static_cast<double>(seen) / kForearmSamples;
     f.strap_visible = visible[kForearmSamples];
-    f.occluded = f.visible_fraction < 0.5;
+    f.occluded = !f.strap_visible || f.visible_fraction < 0.5;
     truth.forearms.push_back(f);
   }
   return truth;

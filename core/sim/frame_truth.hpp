@@ -3,12 +3,12 @@
 // the 25 camera-skeleton joints (error-free) in K, and per strapped forearm the forearm frame
 // K_from_F, the IMU's pose in K and whether the forearm is occluded in the camera's view.
 //
-// Occlusion (what hides the strap from the camera in paper 1, II-I/J): nine points along the
-// forearm from 10 % to 90 % of the elbow -> wrist segment, each moved from the axis to the skin
-// facing the camera (by the distance from the axis to the nearest mesh point, perpendicular to
-// the axis towards the camera centre), are tested with MeshScene::visible with a tolerance of
-// 1.5 cm (the skin point itself lies within a few mm of the polygonal surface). The strap point
-// is tested the same way at d_se. `occluded` is visible_fraction < 0.5.
+// Occlusion (what hides the strap from the camera in paper 1, II-I/J): nine points on the
+// forearm axis from 10 % to 90 % of the elbow -> wrist segment are tested with
+// MeshScene::visible, ignoring surfaces within 6 cm before each point (the forearm's own skin,
+// radius 3-4 cm on the template); anything else on the line of sight from the camera centre
+// hides the point. The strap centre (F's origin) is tested the same way. `occluded`: the strap
+// is hidden (paper 1's occlusion: the strap cannot be detected) or most of the forearm is.
 #include <vector>
 
 #include <Eigen/Geometry>

@@ -159,7 +159,9 @@ TEST(Exercises, ProtocolKeyPosesPutTheForearmWhereThePaperSays) {
   const BodyMotion m = make_exercise("forearm_protocol");
   const SkeletonPose head = pose_at(m, middle(phase(m, "behind_head")));
   EXPECT_LT(joint(head, body::kRightWrist).z(), joint(head, body::kHead).z() - 0.08) << "behind the head";
-  EXPECT_NEAR(joint(head, body::kRightWrist).y(), joint(head, body::kHead).y(), 0.08) << "at head height";
+  // At head height: SMPL's head joint is the skull base, the template's head reaches 16 cm above.
+  EXPECT_GT(joint(head, body::kRightWrist).y(), joint(head, body::kHead).y());
+  EXPECT_LT(joint(head, body::kRightWrist).y(), joint(head, body::kHead).y() + 0.16);
   EXPECT_LT(std::abs(joint(head, body::kRightWrist).x()), 0.12) << "near the midline";
   const SkeletonPose belly = pose_at(m, middle(phase(m, "in_front_of_belly")));
   EXPECT_GT(joint(belly, body::kRightWrist).z(), joint(belly, body::kSpine1).z() + 0.12) << "in front";
