@@ -22,7 +22,7 @@ struct BvhSensorMount {
 // dt_s over the clip's duration. Motion capture noise of a few mm is amplified by double
 // differentiation into accelerations of tens of m/s^2 at 60 Hz, so the frames are first
 // smoothed by a zero-phase Gaussian of standard deviation smoothing_s (0 = none; at the ends
-// the kernel is truncated and renormalised). kInvalidArgument naming the field for an unknown
+// the frames are continued by point reflection, see gaussian_smooth). kInvalidArgument naming the field for an unknown
 // joint, a clip with fewer than 2 frames, or bad numbers.
 SensorTrajectory bvh_sensor_trajectory(const BvhClip& clip, const BvhSensorMount& mount,
                                        double metres_per_unit, double smoothing_s = 0.0,

@@ -64,17 +64,28 @@ Eigen::VectorXd UniformCubicSpline::at_extended(double t_s) const {
 }
 
 std::vector<Eigen::VectorXd> gaussian_smooth(const std::vector<Eigen::VectorXd>& frames, double sigma_frames) {
-  if (!(sigma_frames > 0) || frames.empty()) return frames;
+  if (!(sigma_frames > 0) || frames.size() < 2) return frames;
   const auto radius = static_cast<std::ptrdiff_t>(std::ceil(3.0 * sigma_frames));
   const auto n = static_cast<std::ptrdiff_t>(frames.size());
+  const auto at = [&](std::ptrdiff_t j) -> const Eigen::VectorXd& {
+    return frames[static_cast<std::size_t>(std::clamp<std::ptrdiff_t>(j, 0, n - 1))];
+  };
+  // Beyond the ends the sequence is continued by point reflection about the end value
+  // (x_{-k} = 2 x_0 - x_k), which keeps a linear trend linear: a truncated kernel would pull
+  // the end values towards the interior and bend a steady motion there.
+  const auto extended = [&](std::ptrdiff_t j) -> Eigen::VectorXd {
+    if (j < 0) return 2.0 * at(0) - at(-j);
+    if (j >= n) return 2.0 * at(n - 1) - at(2 * (n - 1) - j);
+    return at(j);
+  };
   std::vector<Eigen::VectorXd> out(frames.size());
   for (std::ptrdiff_t k = 0; k < n; ++k) {
     Eigen::VectorXd sum = Eigen::VectorXd::Zero(frames[0].size());
     double weight_sum = 0.0;
-    for (std::ptrdiff_t j = std::max<std::ptrdiff_t>(0, k - radius); j <= std::min(n - 1, k + radius); ++j) {
+    for (std::ptrdiff_t j = k - radius; j <= k + radius; ++j) {
       const double x = static_cast<double>(j - k) / sigma_frames;
       const double w = std::exp(-0.5 * x * x);
-      sum += w * frames[static_cast<std::size_t>(j)];
+      sum += w * extended(j);
       weight_sum += w;
     }
     out[static_cast<std::size_t>(k)] = sum / weight_sum;

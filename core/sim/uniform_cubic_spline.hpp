@@ -32,8 +32,9 @@ class UniformCubicSpline {
 };
 
 // Zero-phase Gaussian smoothing of a sequence of equally spaced vectors, standard deviation
-// sigma_frames (in samples; <= 0 returns the input); the kernel is cut at 3 sigma and, near the
-// ends, renormalised over the samples that exist.
+// sigma_frames (in samples; <= 0 returns the input); the kernel is cut at 3 sigma; beyond the
+// ends the sequence is continued by point reflection about the end values (a linear trend
+// stays linear, so a steady motion is not bent near the ends).
 std::vector<Eigen::VectorXd> gaussian_smooth(const std::vector<Eigen::VectorXd>& frames, double sigma_frames);
 
 }  // namespace posefuse::sim
