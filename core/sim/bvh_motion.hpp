@@ -26,7 +26,7 @@ namespace posefuse::sim {
 struct BvhMotionOptions {
   body::Sex sex = body::Sex::kMale;
   Eigen::VectorXd betas = Eigen::VectorXd::Zero(body::kTemplateNumBetas);
-  double smoothing_s = 0.02;  // >= 0
+  double smoothing_s = 0.03;  // >= 0; see tests/sim/body_imu_test (MocapNoiseIsSmoothed...)
   bool face_front = true;
 };
 
