@@ -120,9 +120,36 @@ struct ExerciseDef {
   CycleBuilder cycle;
 };
 
-void to_calibration(Timeline& t, const ExerciseOptions& o, const std::function<double(double)>& s) {
+using Seconds = std::function<double(double)>;
+
+void to_calibration(Timeline& t, const ExerciseOptions& o, const Seconds& s) {
   t.move(with_arm(calibration(), o.arm), s(1.5));
   t.hold(s(1.0), "calibration_hold");
+}
+
+// Moves the arm(s) to `pose` and holds it; the hold is named `phase`.
+void reach(Timeline& t, const ExerciseOptions& o, const Seconds& s, const ArmAngles& pose, const std::string& phase,
+           double hold_s) {
+  t.move(with_arm(pose, o.arm), s(1.5));
+  t.hold(s(hold_s), phase);
+}
+
+void back_to_calibration(Timeline& t, const ExerciseOptions& o, const Seconds& s, double move_s) {
+  t.move(with_arm(calibration(), o.arm), s(move_s));
+  t.hold(s(0.5), "calibration_hold");
+}
+
+// Paper 1, III: from the calibration pose behind the head and back.
+void behind_head_cycle(Timeline& t, const ExerciseOptions& o, const Seconds& s) {
+  reach(t, o, s, behind_head(), "behind_head", 1.0);
+  back_to_calibration(t, o, s, 1.5);
+}
+
+// Paper 1, III: in front of the belly, on behind the back, back to the calibration pose.
+void behind_back_cycle(Timeline& t, const ExerciseOptions& o, const Seconds& s) {
+  reach(t, o, s, in_front_of_belly(), "in_front_of_belly", 0.5);
+  reach(t, o, s, behind_back(), "behind_back", 1.0);
+  back_to_calibration(t, o, s, 2.0);
 }
 
 const std::vector<ExerciseDef>& definitions() {
@@ -134,40 +161,17 @@ const std::vector<ExerciseDef>& definitions() {
          t.move(rest_pose(), s(1.5));
          t.hold(s(0.5));
        }},
-      {"forearm_behind_head", to_calibration,
-       [](Timeline& t, const ExerciseOptions& o, const auto& s) {
-         t.move(with_arm(behind_head(), o.arm), s(1.5), "behind_head");
-         t.hold(s(1.0), "behind_head");
-         t.move(with_arm(calibration(), o.arm), s(1.5));
-         t.hold(s(0.5), "calibration_hold");
-       }},
+      {"forearm_behind_head", to_calibration, behind_head_cycle},
       {"forearm_in_front_of_belly", to_calibration,
        [](Timeline& t, const ExerciseOptions& o, const auto& s) {
-         t.move(with_arm(in_front_of_belly(), o.arm), s(1.5), "in_front_of_belly");
-         t.hold(s(1.0), "in_front_of_belly");
-         t.move(with_arm(calibration(), o.arm), s(1.5));
-         t.hold(s(0.5), "calibration_hold");
+         reach(t, o, s, in_front_of_belly(), "in_front_of_belly", 1.0);
+         back_to_calibration(t, o, s, 1.5);
        }},
-      {"forearm_behind_back", to_calibration,
-       [](Timeline& t, const ExerciseOptions& o, const auto& s) {
-         t.move(with_arm(in_front_of_belly(), o.arm), s(1.5), "in_front_of_belly");
-         t.move(with_arm(behind_back(), o.arm), s(1.5), "behind_back");
-         t.hold(s(1.0), "behind_back");
-         t.move(with_arm(calibration(), o.arm), s(2.0));
-         t.hold(s(0.5), "calibration_hold");
-       }},
+      {"forearm_behind_back", to_calibration, behind_back_cycle},
       {"forearm_protocol", to_calibration,
        [](Timeline& t, const ExerciseOptions& o, const auto& s) {
-         t.move(with_arm(behind_head(), o.arm), s(1.5), "behind_head");
-         t.hold(s(1.0), "behind_head");
-         t.move(with_arm(calibration(), o.arm), s(1.5));
-         t.hold(s(0.5), "calibration_hold");
-         t.move(with_arm(in_front_of_belly(), o.arm), s(1.5), "in_front_of_belly");
-         t.hold(s(1.0), "in_front_of_belly");
-         t.move(with_arm(behind_back(), o.arm), s(1.5), "behind_back");
-         t.hold(s(1.0), "behind_back");
-         t.move(with_arm(calibration(), o.arm), s(2.0));
-         t.hold(s(0.5), "calibration_hold");
+         behind_head_cycle(t, o, s);
+         behind_back_cycle(t, o, s);
        }},
       {"arm_raising", nullptr,
        [](Timeline& t, const ExerciseOptions& o, const auto& s) {

@@ -19,8 +19,9 @@
 // Every motion starts and ends at rest (arms hanging 8 deg away from the body) with a still
 // hold, and moves between key poses with C2 ramps (smootherstep of the anatomical angles), so
 // angular rates and accelerations are continuous and an IMU on the body reads smooth signals.
-// Phases name the intervals where a key pose is held or reached, e.g. "behind_head",
-// "behind_back", "in_front_of_belly" (where the forearm is likely occluded from the camera).
+// Phases name the intervals where a key pose is held, e.g. "behind_head", "behind_back",
+// "in_front_of_belly" (where the forearm is likely occluded from the camera), or a movement is
+// repeated ("rolling", "combing", "punch_right").
 #include <string>
 #include <string_view>
 #include <vector>
