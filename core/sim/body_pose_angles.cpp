@@ -2,7 +2,6 @@
 
 #include <cmath>
 
-#include "body/pose_parameters.hpp"
 #include "body/smpl_model.hpp"
 #include "common/error.hpp"
 
@@ -81,7 +80,7 @@ Eigen::VectorXd all_joints_theta(const BodyPoseAngles& angles) {
                    angles.trunk_lateral_tilt_rad, angles.trunk_flexion_rad, angles.trunk_rotation_rad}) {
     if (!std::isfinite(v)) throw_invalid("angles", "has a non-finite trunk or scapula angle");
   }
-  Eigen::VectorXd theta = body::PoseLayout::all_joints().zero();
+  Eigen::VectorXd theta = Eigen::VectorXd::Zero(all_joints_rotation_index(body::kNumJoints));
   Vec3 shoulder, elbow;
   right_arm_rotations(angles.right_arm, shoulder, elbow);
   set_rotation(theta, body::kRightShoulder, shoulder);

@@ -40,7 +40,8 @@ BodyPoseAngles blend(const BodyPoseAngles& a, const BodyPoseAngles& b, double w)
 // theta of PoseLayout::all_joints(). Throws kInvalidArgument for non-finite angles.
 Eigen::VectorXd all_joints_theta(const BodyPoseAngles& angles);
 
-// Index of joint j's first rotation component in an all_joints theta (3 + 3 j).
+// Index of joint j's first rotation component in an all_joints theta (3 + 3 j); for j = 24 the
+// size of that theta (75).
 inline int all_joints_rotation_index(int joint) { return 3 + 3 * joint; }
 
 }  // namespace posefuse::sim
