@@ -49,6 +49,38 @@ TEST(UniformCubicSpline, InterpolatesSmoothly) {
   EXPECT_THROW(UniformCubicSpline(0.0, h, {scalar(1.0), scalar(std::nan(""))}), Error);
 }
 
+// Beyond its ends the spline continues along the end tangents: value and slope continue, the
+// curvature (zero at a natural end) too. Gaussian smoothing keeps a straight line straight up to
+// the ends (point reflection) and smooths a step symmetrically.
+TEST(UniformCubicSpline, ContinuesAlongTheEndTangents) {
+  std::vector<Eigen::VectorXd> wave;
+  const double h = 0.05;
+  for (int k = 0; k <= 40; ++k) wave.push_back(scalar(std::sin(1.3 * k * h) + 0.5 * k * h));
+  const UniformCubicSpline spline(0.0, h, wave);
+  const double e = 1e-6;
+  for (double end : {spline.t_begin_s(), spline.t_end_s()}) {
+    const double slope_in = end == 0.0 ? (spline.at(e)[0] - spline.at(0.0)[0]) / e
+                                       : (spline.at(end)[0] - spline.at(end - e)[0]) / e;
+    const double outside = end == 0.0 ? -0.01 : end + 0.01;
+    EXPECT_NEAR(spline.at_extended(outside)[0], spline.at(end)[0] + (outside - end) * slope_in, 1e-6);
+    EXPECT_EQ(spline.at_extended(end)[0], spline.at(end)[0]);
+  }
+  EXPECT_EQ(spline.at_extended(1.0)[0], spline.at(1.0)[0]);
+
+  std::vector<Eigen::VectorXd> line, step;
+  for (int k = 0; k < 20; ++k) {
+    line.push_back(scalar(2.0 - 0.3 * k));
+    step.push_back(scalar(k < 10 ? 0.0 : 1.0));
+  }
+  const auto smooth_line = gaussian_smooth(line, 2.5);
+  for (int k = 0; k < 20; ++k) EXPECT_NEAR(smooth_line[static_cast<std::size_t>(k)][0], 2.0 - 0.3 * k, 1e-12) << k;
+  const auto smooth_step = gaussian_smooth(step, 1.5);
+  for (int k = 0; k < 10; ++k) {
+    EXPECT_NEAR(smooth_step[static_cast<std::size_t>(k)][0] + smooth_step[static_cast<std::size_t>(19 - k)][0], 1.0, 1e-12);
+  }
+  EXPECT_EQ(gaussian_smooth(step, 0.0)[3][0], 0.0);
+}
+
 // A sensor on a joint turning at 2 rad/s about the vertical: away from the clip's ends the
 // synthesized kinematics read that rate about the joint's y axis and the centripetal
 // acceleration of its 10 cm offset.
