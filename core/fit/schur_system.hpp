@@ -1,0 +1,45 @@
+#pragma once
+// The LM normal equations of paper 2, eq. 16, over the pose theta (N DOF) and the n
+// correspondences (u_i, v_i) together, solved by eliminating the correspondences.
+//
+// Each correspondence enters only its own 6 data residuals (eq. 5), so J^T J has the arrow
+// structure [[H, E_1 .. E_n], [E_i^T, C_i]] with 2 x 2 blocks C_i. The Schur complement
+//   (H + D - sum_i E_i C_i'^-1 E_i^T) dtheta = -g + sum_i E_i C_i'^-1 g_i,
+//   du_i = -C_i'^-1 (g_i + E_i^T dtheta),        C_i' = C_i + gamma diag(C_i)
+// costs O(n N^2) instead of O((N + 2n)^3); the reduced N x N system is solved by dense LDLT.
+// Damping (ours, Marquardt): gamma * diag(J^T J), each diagonal entry clamped below by
+// min_diagonal so that a DOF no residual sees still gets a finite, tiny step.
+#include <Eigen/Core>
+#include <vector>
+
+namespace posefuse::fit {
+
+using UvJacobian = Eigen::Matrix<double, 6, 2>;
+
+class SchurSystem {
+ public:
+  static constexpr double kMinDiagonal = 1e-6;
+
+  // J_pose: K x N pose Jacobian of the residuals r (K). Rows 6i .. 6i + 5 belong to correspondence
+  // i (i < num_blocks), whose own Jacobian is J_uv[i]; the remaining rows depend on the pose only.
+  void linearise(const Eigen::Ref<const Eigen::MatrixXd>& J_pose, const Eigen::Ref<const Eigen::VectorXd>& r,
+                 const std::vector<UvJacobian>& J_uv, int num_blocks);
+
+  // Solves (J^T J + gamma diag(J^T J)) delta = -J^T r for delta = (d_pose, d_uv[0 .. n-1]).
+  // Returns false when the reduced system is not positive definite (the caller raises gamma).
+  bool solve(double gamma, Eigen::VectorXd& d_pose, std::vector<Eigen::Vector2d>& d_uv);
+
+ private:
+  int num_pose_ = 0, num_blocks_ = 0;
+  Eigen::MatrixXd hessian_;  // H = J_pose^T J_pose (lower triangle filled)
+  Eigen::VectorXd gradient_;  // g = J_pose^T r
+  Eigen::MatrixXd coupling_;  // E: N x 2n, E_i = A_i^T B_i
+  std::vector<Eigen::Matrix2d> block_hessian_;   // C_i = B_i^T B_i
+  std::vector<Eigen::Vector2d> block_gradient_;  // g_i = B_i^T r_i
+  // Work space of solve().
+  Eigen::MatrixXd reduced_, scaled_coupling_;
+  Eigen::VectorXd rhs_;
+  std::vector<Eigen::Matrix2d> damped_inverse_;
+};
+
+}  // namespace posefuse::fit
