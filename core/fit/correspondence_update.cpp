@@ -1,5 +1,6 @@
 #include "fit/correspondence_update.hpp"
 
+#include <Eigen/Geometry>
 #include <random>
 
 #include "common/error.hpp"

@@ -21,6 +21,12 @@ struct FitOptions {
   // (paper: "normal vector points perpendicular to the camera's optical axis"). Ours: a vertex
   // qualifies when |n . ray| <= bg_contour_max_cos and it is visible (Embree ray cast).
   double bg_contour_max_cos = 0.35;
+  // D_2D returns silhouette pixel centres, but the silhouette's edge lies up to about half a
+  // pixel diagonal beyond them: a model point exactly on the true outline often rounds to a pixel
+  // outside. Ours: a point counts as outside only beyond this distance from the closest
+  // silhouette pixel centre, and its target is that far from the centre towards the point.
+  // With 0 (the paper's reading) the bg term pulls a correct pose inwards.
+  double silhouette_edge_px = 0.7;
 
   // --- Solver (II-F) ---
   int max_iterations = 20;       // paper 2 IV-C: at most 20 LM iterations per frame
@@ -31,8 +37,12 @@ struct FitOptions {
   double damping_increase = 10;  // gamma *= this after a rejected step ("increased exponentially")
   double damping_decrease = 0.3; // gamma *= this after an accepted step (ours)
   double max_damping = 1e8;      // give up the iteration (converged) beyond this
-  // Stop when an accepted step lowers the energy by less than this fraction.
+  // Stop when an accepted step lowers the energy by less than this fraction ...
   double min_relative_decrease = 1e-5;
+  // ... or moves none of the 16 bgJoint joints by more than this (ours). Without it the fit spends
+  // its iterations trading nearly redundant DOFs (spine2 / spine3 twist) against each other while
+  // the point sets and correspondences are re-selected: the energy keeps changing, the body not.
+  double min_joint_step_m = 0.0005;
 
   // --- Correspondences (II-I, II-J) ---
   bool discrete_update = true;   // eq. 17 after every accepted step

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <optional>
 
 #include "common/error.hpp"
 #include "fit/camera_projection.hpp"
@@ -15,10 +18,18 @@ constexpr double kContourVisibilityTolerance_m = 0.01;
 // Points closer to the camera plane than this are not projected.
 constexpr double kMinDepth_m = 0.05;
 
-bool projects_outside(const SilhouetteDistanceMap& silhouette, const Eigen::Vector2d& pixel) {
+// The bg target of a point projecting to `pixel` (options.silhouette_edge_px), or nullopt when the
+// point projects inside the silhouette.
+std::optional<Eigen::Vector2d> silhouette_target(const SilhouetteDistanceMap& silhouette, const Eigen::Vector2d& pixel,
+                                                 double edge_px) {
   const long col = std::lround(pixel.x()), row = std::lround(pixel.y());
-  if (col < 0 || row < 0 || col >= silhouette.width || row >= silhouette.height) return true;
-  return silhouette.distance_px[static_cast<size_t>(row) * silhouette.width + col] > 0;
+  const bool in_image = col >= 0 && row >= 0 && col < silhouette.width && row < silhouette.height;
+  if (in_image && silhouette.distance_px[static_cast<size_t>(row) * silhouette.width + col] == 0) return std::nullopt;
+  const Eigen::Vector2d centre = silhouette.closest(pixel.x(), pixel.y());
+  const Eigen::Vector2d offset = pixel - centre;
+  const double distance = offset.norm();
+  if (distance <= edge_px) return std::nullopt;
+  return centre + (edge_px / distance) * offset;
 }
 
 }  // namespace
@@ -115,34 +126,45 @@ void FrameFitter::select_point_sets(const FrameObservation& o) {
     for (int k = 0; k < options_.max_bg_points; ++k) selected_[k] = selected_[static_cast<size_t>(k * stride)];
     selected_.resize(static_cast<size_t>(options_.max_bg_points));
   }
-  const double bg_weight = selected_.empty() ? 0.0 : std::sqrt(options_.lambda_bg / static_cast<double>(selected_.size()));
+  bg_weight_ = selected_.empty() ? 0.0 : std::sqrt(options_.lambda_bg / static_cast<double>(selected_.size()));
+  // Q (eq. 12) is counted here and kept for the iteration, like H.
+  build_blocks(eval_, o);
+  float_weight_ = float_.empty() ? 0.0 : std::sqrt(options_.lambda_float / static_cast<double>(float_.size()));
+  for (BehindPoint& f : float_) f.block.weight = float_weight_;
+}
+
+void FrameFitter::build_blocks(const body::BodyEvaluator& eval, const FrameObservation& o) {
+  // The sets' members stay fixed within an iteration; whether each is outside the silhouette
+  // (bg), inside but in front of the surface (float) or neither, and its D_2D / D_3D target, are
+  // taken at the pose being evaluated, so a trial step that pushes other contour points out of
+  // the silhouette pays for it.
   bg_.clear();
   float_.clear();
   for (int v : selected_) {
-    const Eigen::Vector3d p = vertices.col(v);
+    const Eigen::Vector3d p = eval.vertices().col(v);
+    if (p.z() < kMinDepth_m) continue;
     const Eigen::Vector2d pixel = project_with_jacobian(intrinsics_, p).pixel;
-    if (projects_outside(o.silhouette, pixel)) {
-      bg_.push_back({v, {o.silhouette.closest(pixel.x(), pixel.y()), bg_weight}});
+    if (const auto target = silhouette_target(o.silhouette, pixel, options_.silhouette_edge_px)) {
+      bg_.push_back({v, {*target, bg_weight_}});
     } else if (!o.behind->is_behind(p)) {
       // U_float (eq. 12) is the part of U_bg inside the silhouette but in front of the surface.
-      float_.push_back({v, {o.behind->closest_behind(p), 1.0}});
+      float_.push_back({v, {o.behind->closest_behind(p), float_weight_}});
     }
   }
-  const double float_weight = float_.empty() ? 0.0 : std::sqrt(options_.lambda_float / static_cast<double>(float_.size()));
-  for (BehindPoint& f : float_) f.block.weight = float_weight;
   // bgJoint (eq. 7): joints that project outside the silhouette.
   bg_joint_.clear();
   const double joint_weight = std::sqrt(options_.lambda_bg_joint / kBgJointCount);
   for (int j : kBgJoints) {
-    const Eigen::Vector3d p = eval_.joints().col(j);
+    const Eigen::Vector3d p = eval.joints().col(j);
     if (p.z() < kMinDepth_m) continue;
     const Eigen::Vector2d pixel = project_with_jacobian(intrinsics_, p).pixel;
-    if (projects_outside(o.silhouette, pixel))
-      bg_joint_.push_back({j, {o.silhouette.closest(pixel.x(), pixel.y()), joint_weight}});
+    if (const auto target = silhouette_target(o.silhouette, pixel, options_.silhouette_edge_px))
+      bg_joint_.push_back({j, {*target, joint_weight}});
   }
 }
 
-EnergyTerms FrameFitter::linearise(const Eigen::VectorXd& theta) {
+EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::VectorXd& theta) {
+  build_blocks(eval_, o);
   const int n = static_cast<int>(data_.size());
   const int N = layout_.size();
   EnergyTerms e;
@@ -186,17 +208,15 @@ EnergyTerms FrameFitter::linearise(const Eigen::VectorXd& theta) {
   return e;
 }
 
-EnergyTerms FrameFitter::energy_at(const body::BodyEvaluator& eval, const body::BodySurface& surface,
-                                   const std::vector<body::SurfacePoint>& correspondences,
-                                   const Eigen::VectorXd& theta) const {
+EnergyTerms FrameFitter::energy_at(const FrameObservation& o, const body::BodyEvaluator& eval,
+                                   const body::BodySurface& surface,
+                                   const std::vector<body::SurfacePoint>& correspondences, const Eigen::VectorXd& theta) {
+  build_blocks(eval, o);
   EnergyTerms e;
   for (size_t i = 0; i < data_.size(); ++i) e.data += data_[i].residual(surface, correspondences[i]).squaredNorm();
-  const auto silhouette_energy = [&](const SilhouettePoint& s, const Eigen::Vector3d& x) {
-    // A point that moved behind the camera plane keeps its last meaningful penalty: none.
-    return x.z() < kMinDepth_m ? 0.0 : s.block.residual(intrinsics_, x).squaredNorm();
-  };
-  for (const SilhouettePoint& s : bg_) e.bg += silhouette_energy(s, eval.vertices().col(s.index));
-  for (const SilhouettePoint& s : bg_joint_) e.bg_joint += silhouette_energy(s, eval.joints().col(s.index));
+  for (const SilhouettePoint& s : bg_) e.bg += s.block.residual(intrinsics_, eval.vertices().col(s.index)).squaredNorm();
+  for (const SilhouettePoint& s : bg_joint_)
+    e.bg_joint += s.block.residual(intrinsics_, eval.joints().col(s.index)).squaredNorm();
   for (const BehindPoint& f : float_) e.float_term += f.block.residual(eval.vertices().col(f.vertex)).squaredNorm();
   e.limit = limit_.energy(layout_, theta);
   for (const ForearmDirectionResidual& f : imu_) e.imu += f.residual(eval.joints()).squaredNorm();
@@ -212,12 +232,12 @@ FitResult FrameFitter::fit(const FrameObservation& observation, const Eigen::Vec
   pose_model(theta, beta);  // checks theta and beta
   init_correspondences(observation);
   select_point_sets(observation);
-  result.initial_energy = energy_at(eval_, surface_, correspondences_, theta);
+  result.initial_energy = energy_at(observation, eval_, surface_, correspondences_, theta);
 
   double gamma = options_.initial_damping;
   for (int iteration = 0; iteration < options_.max_iterations; ++iteration) {
     if (iteration > 0) select_point_sets(observation);
-    const double energy_before = linearise(theta).total();
+    const double energy_before = linearise(observation, theta).total();
     ++result.iterations;
     double energy_after = energy_before;
     bool accepted = false;
@@ -230,7 +250,7 @@ FitResult FrameFitter::fit(const FrameObservation& observation, const Eigen::Vec
         // II-I: the correspondences follow their (du, dv) over face borders.
         for (size_t i = 0; i < correspondences_.size(); ++i)
           trial_correspondences_[i] = trial_surface_.walk(correspondences_[i], uv_step_[i].x(), uv_step_[i].y()).end;
-        energy_after = energy_at(trial_eval_, trial_surface_, trial_correspondences_, trial_theta_).total();
+        energy_after = energy_at(observation, trial_eval_, trial_surface_, trial_correspondences_, trial_theta_).total();
         if (energy_after < energy_before) {
           accepted = true;
           break;
@@ -244,18 +264,22 @@ FitResult FrameFitter::fit(const FrameObservation& observation, const Eigen::Vec
       break;
     }
     ++result.accepted_steps;
+    if (std::getenv("FIT_TRACE")) std::printf("it %d gamma %.3g E %.5g -> %.5g |step| %.4g bg %zu float %zu\n", iteration, gamma, energy_before, energy_after, step_.norm(), bg_.size(), float_.size());
     gamma = std::max(gamma * options_.damping_decrease, 1e-12);
+    double joint_step = 0;
+    for (int j : kBgJoints) joint_step = std::max(joint_step, (trial_eval_.joints().col(j) - eval_.joints().col(j)).norm());
     theta = trial_theta_;
     std::swap(correspondences_, trial_correspondences_);
     pose_model(theta, beta);
     update_correspondences(observation, iteration + 1);
-    if (energy_before - energy_after < options_.min_relative_decrease * energy_before) {
+    if (energy_before - energy_after < options_.min_relative_decrease * energy_before ||
+        joint_step < options_.min_joint_step_m) {
       result.status = FitStatus::kConverged;
       break;
     }
   }
   select_point_sets(observation);
-  result.energy = energy_at(eval_, surface_, correspondences_, theta);
+  result.energy = energy_at(observation, eval_, surface_, correspondences_, theta);
   result.theta = theta;
   result.correspondences = correspondences_;
   return result;
@@ -268,7 +292,7 @@ EnergyTerms FrameFitter::energy(const FrameObservation& observation, const Eigen
   pose_model(theta, beta);
   init_correspondences(observation);
   select_point_sets(observation);
-  return energy_at(eval_, surface_, correspondences_, theta);
+  return energy_at(observation, eval_, surface_, correspondences_, theta);
 }
 
 }  // namespace posefuse::fit

@@ -92,11 +92,15 @@ class FrameFitter {
   void pose_model(const Eigen::VectorXd& theta, const Eigen::VectorXd& beta);
   void init_correspondences(const FrameObservation& observation);
   void update_correspondences(const FrameObservation& observation, int iteration);
+  // Chooses U_bg (H, the bg weight) and counts Q (the float weight) at the current pose.
   void select_point_sets(const FrameObservation& observation);
+  // The bg, float and bgJoint blocks of the chosen sets at the pose of `eval`.
+  void build_blocks(const body::BodyEvaluator& eval, const FrameObservation& observation);
   // Fills the residual vector and pose / uv Jacobians at the current state; returns per-term energy.
-  EnergyTerms linearise(const Eigen::VectorXd& theta);
-  EnergyTerms energy_at(const body::BodyEvaluator& eval, const body::BodySurface& surface,
-                        const std::vector<body::SurfacePoint>& correspondences, const Eigen::VectorXd& theta) const;
+  EnergyTerms linearise(const FrameObservation& observation, const Eigen::VectorXd& theta);
+  EnergyTerms energy_at(const FrameObservation& observation, const body::BodyEvaluator& eval,
+                        const body::BodySurface& surface, const std::vector<body::SurfacePoint>& correspondences,
+                        const Eigen::VectorXd& theta);
 
   std::shared_ptr<const body::SmplModel> model_;
   body::PoseLayout layout_;
@@ -115,6 +119,7 @@ class FrameFitter {
   std::vector<SilhouettePoint> bg_, bg_joint_;
   std::vector<BehindPoint> float_;
   std::vector<body::SurfacePoint> correspondences_, trial_correspondences_;
+  double bg_weight_ = 0, float_weight_ = 0;
 
   // Work space.
   Eigen::MatrixXd jacobian_;
