@@ -2,8 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
-#include <cstdlib>
 #include <optional>
 
 #include "common/error.hpp"
@@ -264,7 +262,6 @@ FitResult FrameFitter::fit(const FrameObservation& observation, const Eigen::Vec
       break;
     }
     ++result.accepted_steps;
-    if (std::getenv("FIT_TRACE")) std::printf("it %d gamma %.3g E %.5g -> %.5g |step| %.4g bg %zu float %zu\n", iteration, gamma, energy_before, energy_after, step_.norm(), bg_.size(), float_.size());
     gamma = std::max(gamma * options_.damping_decrease, 1e-12);
     double joint_step = 0;
     for (int j : kBgJoints) joint_step = std::max(joint_step, (trial_eval_.joints().col(j) - eval_.joints().col(j)).norm());
