@@ -4,7 +4,10 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
+#include <functional>
+#include <limits>
 #include <cstdio>
 #include <numbers>
 #include <random>
@@ -105,6 +108,112 @@ TEST(FrameFitter, FitsARenderedFrameBackFromAPerturbedStart) {
     EXPECT_LT(bone_angle, 2 * kDeg) << "variant " << variant;
     EXPECT_LT(result.energy.total(), result.initial_energy.total());
   }
+}
+
+}  // namespace
+}  // namespace posefuse::fit
+
+namespace posefuse::fit {
+namespace {
+
+struct DegenerateInputs : ::testing::Test {
+  Scene s;
+  Eigen::VectorXd truth = testing::facing_pose(s.layout, 2.2, 0);
+  testing::ModelFrame rendered = testing::render_model_frame(s.model, s.layout, s.beta, truth, s.camera);
+  FitOptions options;
+};
+
+ErrorCode code_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.code();
+  }
+  return ErrorCode::kInternal;
+}
+
+TEST_F(DegenerateInputs, EmptySilhouetteIsRefusedWithTheFieldNamed) {
+  DepthFrame frame = rendered.frame;
+  std::fill(frame.body_index.begin(), frame.body_index.end(), kNoBody);
+  const auto prepare = [&] { prepare_observation(frame, s.camera, rendered.skeleton_K, options); };
+  EXPECT_EQ(testing::error_field(prepare), "frame.body_index");
+  EXPECT_EQ(code_of(prepare), ErrorCode::kFailedPrecondition);
+}
+
+TEST_F(DegenerateInputs, DepthWithoutAnyReadingIsRefused) {
+  // The Kinect marks missing depth with 0 (uint16 has no NaN): a silhouette without readings.
+  DepthFrame frame = rendered.frame;
+  std::fill(frame.depth_mm.begin(), frame.depth_mm.end(), kNoDepth);
+  EXPECT_EQ(testing::error_field([&] { prepare_observation(frame, s.camera, rendered.skeleton_K, options); }),
+            "frame.body_index");
+}
+
+TEST_F(DegenerateInputs, MissingOrNonFiniteSkeletonIsRefused) {
+  const auto missing = [&] { prepare_observation(rendered.frame, s.camera, std::nullopt, options); };
+  EXPECT_EQ(testing::error_field(missing), "skeleton");
+  EXPECT_EQ(code_of(missing), ErrorCode::kFailedPrecondition);
+  KinectSkeleton nan_skeleton = rendered.skeleton_K;
+  nan_skeleton[5].x() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(testing::error_field([&] { prepare_observation(rendered.frame, s.camera, nan_skeleton, options); }),
+            "skeleton[5]");
+}
+
+TEST_F(DegenerateInputs, BadObservationPoseShapeAndOptionsAreRefused) {
+  FrameFitter fitter(s.model, s.layout, s.camera.intrinsics());
+  const FrameObservation good = prepare_observation(rendered.frame, s.camera, rendered.skeleton_K, options);
+  FrameObservation nan_points = good;
+  nan_points.points_K[3].y() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(testing::error_field([&] { fitter.fit(nan_points, truth, s.beta); }), "observation.points_K[3]");
+  FrameObservation no_samples = good;
+  no_samples.points_K.clear();
+  no_samples.normals_K.clear();
+  EXPECT_EQ(testing::error_field([&] { fitter.fit(no_samples, truth, s.beta); }), "observation.points_K");
+  FrameObservation bad_imu = good;
+  bad_imu.forearm.left_K = Eigen::Vector3d(0, 0, 2);
+  EXPECT_EQ(testing::error_field([&] { fitter.fit(bad_imu, truth, s.beta); }), "observation.forearm.left_K");
+  Eigen::VectorXd nan_theta = truth;
+  nan_theta[7] = std::numeric_limits<double>::infinity();
+  EXPECT_EQ(testing::error_field([&] { fitter.fit(good, nan_theta, s.beta); }), "theta[7]");
+  EXPECT_EQ(testing::error_field([&] { fitter.fit(good, truth.head(12), s.beta); }), "theta");
+  EXPECT_EQ(testing::error_field([&] { fitter.fit(good, truth, Eigen::VectorXd::Zero(14)); }), "beta");
+  FitOptions bad = options;
+  bad.sigma_p_m = 0;
+  EXPECT_EQ(testing::error_field([&] { FrameFitter(s.model, s.layout, s.camera.intrinsics(), bad); }),
+            "fit_options.sigma_p_m");
+  bad = options;
+  bad.lambda_imu = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_EQ(testing::error_field([&] { FrameFitter(s.model, s.layout, s.camera.intrinsics(), bad); }),
+            "fit_options.lambda_imu");
+  // After refusing, the fitter still fits.
+  const FitResult result = fitter.fit(good, truth, s.beta);
+  EXPECT_TRUE(result.theta.allFinite());
+}
+
+TEST(FrameFitterEnergy, ImuTermPullsTheForearmTowardsTheImuDirection) {
+  // Same frame, the left forearm IMU says the forearm points 20 degrees elsewhere: with the imu
+  // term the fitted forearm turns towards it, without it (lambda_imu = 0) it does not.
+  Scene s;
+  const Eigen::VectorXd truth = testing::facing_pose(s.layout, 2.2, 0);
+  const testing::ModelFrame rendered = testing::render_model_frame(s.model, s.layout, s.beta, truth, s.camera);
+  const Eigen::Vector3d true_direction = testing::forearm_direction(rendered.joints_K, true);
+  const Eigen::Vector3d axis = true_direction.unitOrthogonal();
+  const Eigen::Vector3d imu_direction = Eigen::AngleAxisd(20 * kDeg, axis) * true_direction;
+  body::BodyEvaluator eval(s.model, s.layout);
+  double angle_to_imu[2];
+  for (int with_imu = 0; with_imu < 2; ++with_imu) {
+    FitOptions options;
+    options.lambda_imu = with_imu ? 15 : 0;
+    FrameFitter fitter(s.model, s.layout, s.camera.intrinsics(), options);
+    const FrameObservation observation = prepare_observation(rendered.frame, s.camera, rendered.skeleton_K, options,
+                                                             ForearmDirections{imu_direction, std::nullopt});
+    const FitResult result = fitter.fit(observation, truth, s.beta);
+    eval.evaluate(s.beta, result.theta, body::Derivatives::kNone);
+    angle_to_imu[with_imu] = std::acos(std::clamp(testing::forearm_direction(eval.joints(), true).dot(imu_direction), -1.0, 1.0));
+    if (!with_imu) {
+      EXPECT_EQ(result.energy.imu, 0.0);
+    }
+  }
+  EXPECT_LT(angle_to_imu[1], angle_to_imu[0] - 2 * kDeg);
 }
 
 }  // namespace
