@@ -53,6 +53,7 @@ FrameFitter::FrameFitter(std::shared_ptr<const body::SmplModel> model, body::Pos
       scene_(raycast::EmbreeDevice::shared(), model_->faces, model_->num_vertices()),
       discrete_(*model_, options_) {
   point_jacobian_.setZero(3, layout_.size());
+  data_jacobian_.setZero(6, layout_.size());
 }
 
 void FrameFitter::set_up_blocks(const FrameObservation& o) {
@@ -67,7 +68,7 @@ void FrameFitter::set_up_blocks(const FrameObservation& o) {
   if (o.forearm.right_K) imu_.push_back({body::kRightElbow, body::kRightWrist, *o.forearm.right_K, imu_weight});
   const int limited = LimitResidual::size(layout_);
   limit_.weight = limited > 0 ? std::sqrt(options_.lambda_limit / limited) : 0.0;
-  // Largest residual count: every set at its cap.
+  // Largest residual count: every set at its cap (data rows live in the residual vector only).
   const int max_rows = 6 * static_cast<int>(n) + 5 * options_.max_bg_points + 2 * kBgJointCount + limited + 6;
   if (jacobian_.rows() < max_rows || jacobian_.cols() != layout_.size()) jacobian_.resize(max_rows, layout_.size());
   if (residual_.size() < max_rows) residual_.resize(max_rows);
@@ -166,16 +167,20 @@ EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::Vecto
   const int n = static_cast<int>(data_.size());
   const int N = layout_.size();
   EnergyTerms e;
+  system_.reset(N, n);
   int row = 0;
   auto take = [&](int count, double& energy) {
     energy += residual_.segment(row, count).squaredNorm();
     row += count;
   };
   for (int i = 0; i < n; ++i) {
-    data_[i].evaluate(surface_, eval_, correspondences_[i], residual_.segment<6>(row), jacobian_.middleRows(row, 6),
+    // The data rows go straight into the normal equations (only their non-zero columns).
+    data_[i].evaluate(surface_, eval_, correspondences_[i], residual_.segment<6>(row), data_jacobian_,
                       uv_jacobian_[i]);
+    system_.add_block(i, data_jacobian_, uv_jacobian_[i], residual_.segment<6>(row));
     take(6, e.data);
   }
+  const int pose_rows_begin = row;
   for (const SilhouettePoint& s : bg_) {
     point_jacobian_.setZero();
     eval_.add_vertex_pose_jacobian(s.index, 1.0, point_jacobian_);
@@ -202,7 +207,8 @@ EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::Vecto
     f.evaluate(eval_.joints(), eval_.joint_pose_jacobian(), residual_.segment<3>(row), jacobian_.middleRows(row, 3));
     take(3, e.imu);
   }
-  system_.linearise(jacobian_.topRows(row).leftCols(N), residual_.head(row), uv_jacobian_, n);
+  system_.add_pose_rows(jacobian_.middleRows(pose_rows_begin, row - pose_rows_begin),
+                        residual_.segment(pose_rows_begin, row - pose_rows_begin));
   return e;
 }
 

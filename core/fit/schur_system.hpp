@@ -19,9 +19,20 @@ using UvJacobian = Eigen::Matrix<double, 6, 2>;
 class SchurSystem {
  public:
   static constexpr double kMinDiagonal = 1e-6;
+  static constexpr int kMaxPose = 96;  // largest pose dimension (full body: 48)
 
-  // J_pose: K x N pose Jacobian of the residuals r (K). Rows 6i .. 6i + 5 belong to correspondence
-  // i (i < num_blocks), whose own Jacobian is J_uv[i]; the remaining rows depend on the pose only.
+  // Starts new normal equations for N pose DOF and n correspondences.
+  void reset(int num_pose, int num_blocks);
+  // The 6 data residuals r of correspondence i: their pose Jacobian A (6 x N, mostly zero
+  // columns: only the DOFs that move the face's vertices) and their (u, v) Jacobian B. Only the
+  // non-zero columns of A enter J^T J, which is why the blocks are added one by one.
+  void add_block(int i, const Eigen::Ref<const Eigen::MatrixXd>& A, const UvJacobian& B,
+                 const Eigen::Ref<const Eigen::Matrix<double, 6, 1>>& r);
+  // Residual rows that depend on the pose only: J (k x N) and r (k).
+  void add_pose_rows(const Eigen::Ref<const Eigen::MatrixXd>& J, const Eigen::Ref<const Eigen::VectorXd>& r);
+
+  // Shorthand: reset, then rows 6i .. 6i + 5 of J_pose as block i (i < num_blocks) with J_uv[i],
+  // the remaining rows as pose rows.
   void linearise(const Eigen::Ref<const Eigen::MatrixXd>& J_pose, const Eigen::Ref<const Eigen::VectorXd>& r,
                  const std::vector<UvJacobian>& J_uv, int num_blocks);
 
@@ -33,11 +44,13 @@ class SchurSystem {
   int num_pose_ = 0, num_blocks_ = 0;
   Eigen::MatrixXd hessian_;  // H = J_pose^T J_pose (lower triangle filled)
   Eigen::VectorXd gradient_;  // g = J_pose^T r
-  Eigen::MatrixXd coupling_;  // E: N x 2n, E_i = A_i^T B_i
+  // E_i = A_i^T B_i, stored packed: rows block_columns_[block_begin_[i] ..] of E_i.
+  std::vector<int> block_begin_, block_columns_;
+  std::vector<Eigen::Vector2d> block_coupling_;
   std::vector<Eigen::Matrix2d> block_hessian_;   // C_i = B_i^T B_i
   std::vector<Eigen::Vector2d> block_gradient_;  // g_i = B_i^T r_i
-  // Work space of solve().
-  Eigen::MatrixXd reduced_, scaled_coupling_;
+  // Work space.
+  Eigen::MatrixXd reduced_;
   Eigen::VectorXd rhs_;
   std::vector<Eigen::Matrix2d> damped_inverse_;
 };
