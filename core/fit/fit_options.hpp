@@ -33,7 +33,7 @@ struct FitOptions {
   // Damping. Paper 2 adds gamma * I with gamma = 1000 at the start. Our pose DOFs (metres,
   // radians) and correspondences (barycentrics) live on very different scales, so we damp with
   // gamma * diag(J^T J) (Marquardt) instead; gamma is then relative and starts much lower.
-  double initial_damping = 1e-3;
+  double initial_damping = 1e-2;
   double damping_increase = 10;  // gamma *= this after a rejected step ("increased exponentially")
   double damping_decrease = 0.3; // gamma *= this after an accepted step (ours)
   double max_damping = 1e8;      // give up the iteration (converged) beyond this
@@ -42,7 +42,7 @@ struct FitOptions {
   // ... or moves none of the 16 bgJoint joints by more than this (ours). Without it the fit spends
   // its iterations trading nearly redundant DOFs (spine2 / spine3 twist) against each other while
   // the point sets and correspondences are re-selected: the energy keeps changing, the body not.
-  double min_joint_step_m = 0.0005;
+  double min_joint_step_m = 0.001;
 
   // --- Correspondences (II-I, II-J) ---
   bool discrete_update = true;   // eq. 17 after every accepted step
