@@ -34,15 +34,12 @@ void SchurSystem::add_block(int i, const Eigen::Ref<const Eigen::MatrixXd>& A, c
     if (!A.col(c).isZero(0.0)) columns[m++] = c;
   Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, kMaxPose> packed(6, m);
   for (int k = 0; k < m; ++k) packed.col(k) = A.col(columns[k]);
-  Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxPose, kMaxPose> packed_hessian(m, m);
-  packed_hessian.noalias() = packed.transpose().lazyProduct(packed);  // small: no blocked GEMM
-  const Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxPose, 1> packed_gradient = packed.transpose() * r;
-  const Eigen::Matrix<double, Eigen::Dynamic, 2, 0, kMaxPose, 2> packed_coupling = packed.transpose().lazyProduct(B);
   for (int a = 0; a < m; ++a) {
-    gradient_[columns[a]] += packed_gradient[a];
-    block_columns_.push_back(columns[a]);
-    block_coupling_.emplace_back(packed_coupling.row(a).transpose());
-    for (int b = 0; b <= a; ++b) hessian_(columns[a], columns[b]) += packed_hessian(a, b);  // lower triangle
+    const int row = columns[a];
+    gradient_[row] += packed.col(a).dot(r);
+    block_columns_.push_back(row);
+    block_coupling_.emplace_back(B.transpose() * packed.col(a));
+    for (int b = 0; b <= a; ++b) hessian_(row, columns[b]) += packed.col(a).dot(packed.col(b));  // lower triangle
   }
   block_begin_[i + 1] = static_cast<int>(block_columns_.size());
   block_hessian_[i].noalias() = B.transpose() * B;
@@ -87,9 +84,9 @@ bool SchurSystem::solve(double gamma, Eigen::VectorXd& d_pose, std::vector<Eigen
       for (int b = block_begin_[i]; b <= a; ++b) reduced_(block_columns_[a], block_columns_[b]) -= ea.dot(block_coupling_[b]);
     }
   }
-  const Eigen::LDLT<Eigen::MatrixXd, Eigen::Lower> ldlt(reduced_);
-  if (ldlt.info() != Eigen::Success || !ldlt.isPositive()) return false;
-  d_pose = ldlt.solve(rhs_);
+  ldlt_.compute(reduced_);  // reuses its storage from the previous solve
+  if (ldlt_.info() != Eigen::Success || !ldlt_.isPositive()) return false;
+  d_pose = ldlt_.solve(rhs_);
   if (!d_pose.allFinite()) return false;
   d_uv.resize(num_blocks_);
   for (int i = 0; i < num_blocks_; ++i) {

@@ -9,6 +9,7 @@
 // costs O(n N^2) instead of O((N + 2n)^3); the reduced N x N system is solved by dense LDLT.
 // Damping (ours, Marquardt): gamma * diag(J^T J), each diagonal entry clamped below by
 // min_diagonal so that a DOF no residual sees still gets a finite, tiny step.
+#include <Eigen/Cholesky>
 #include <Eigen/Core>
 #include <vector>
 
@@ -53,6 +54,7 @@ class SchurSystem {
   Eigen::MatrixXd reduced_;
   Eigen::VectorXd rhs_;
   std::vector<Eigen::Matrix2d> damped_inverse_;
+  Eigen::LDLT<Eigen::MatrixXd, Eigen::Lower> ldlt_;
 };
 
 }  // namespace posefuse::fit
