@@ -46,7 +46,7 @@ int main(int argc, char** argv) {
   std::mt19937 rng(42);
   std::uniform_real_distribution<double> uni(-1, 1);
 
-  std::vector<double> fit_wall, fit_cpu, prep_cpu, iterations, start_error, mean_error, max_error;
+  std::vector<double> fit_wall, fit_cpu, prep_cpu, iterations, start_error, mean_error, max_error, limb_error;
   std::printf("frame  start_mm  mean_mm  max_mm  iters  rejected  E_start    E_end      E_truth    status       cpu_ms\n");
   for (int f = 0; f < frames; ++f) {
     Eigen::VectorXd truth = fit::testing::facing_pose(layout, 2.0 + 0.1 * (f % 5), f);
@@ -95,6 +95,11 @@ int main(int argc, char** argv) {
         std::printf("  %s %.1f", body::smpl_joint_names()[j], 1e3 * (eval.joints().col(j) - rendered.joints_K.col(j)).norm());
       std::printf("\n");
     }
+    double limb_sum = 0;  // paper 2's Fig. 4 joints
+    for (int j : {body::kLeftShoulder, body::kRightShoulder, body::kLeftElbow, body::kRightElbow, body::kLeftWrist,
+                  body::kRightWrist})
+      limb_sum += (eval.joints().col(j) - rendered.joints_K.col(j)).norm();
+    limb_error.push_back(limb_sum / 6);
     iterations.push_back(result.iterations);
     start_error.push_back(start_max);
     mean_error.push_back(sum / fit::kBgJointCount);
@@ -115,5 +120,7 @@ int main(int argc, char** argv) {
   std::printf("start joint error:      median of max %.1f mm\n", 1e3 * percentile(start_error, 0.5));
   std::printf("joint error (16 joints): median of mean %.2f mm, median of max %.2f mm, worst max %.2f mm\n",
               1e3 * percentile(mean_error, 0.5), 1e3 * percentile(max_error, 0.5), 1e3 * percentile(max_error, 1.0));
+  std::printf("upper-limb error (shoulders, elbows, wrists): median of mean %.2f mm, worst mean %.2f mm\n",
+              1e3 * percentile(limb_error, 0.5), 1e3 * percentile(limb_error, 1.0));
   return 0;
 }

@@ -93,6 +93,7 @@ bool SchurSystem::solve(double gamma, Eigen::VectorXd& d_pose, std::vector<Eigen
     Eigen::Vector2d coupled = block_gradient_[i];
     for (int a = block_begin_[i]; a < block_begin_[i + 1]; ++a) coupled += block_coupling_[a] * d_pose[block_columns_[a]];
     d_uv[i] = -damped_inverse_[i] * coupled;
+    if (!d_uv[i].allFinite()) return false;
   }
   return true;
 }
