@@ -239,11 +239,12 @@ FitResult FrameFitter::fit(const FrameObservation& observation, const Eigen::Vec
   result.initial_energy = energy_at(observation, eval_, surface_, correspondences_, theta);
 
   double gamma = options_.initial_damping;
+  double raise = options_.damping_increase;
   for (int iteration = 0; iteration < options_.max_iterations; ++iteration) {
     if (iteration > 0) select_point_sets(observation);
     const double energy_before = linearise(observation, theta).total();
     ++result.iterations;
-    double energy_after = energy_before;
+    double energy_after = energy_before, joint_step = 0;
     bool accepted = false;
     while (gamma <= options_.max_damping) {
       if (system_.solve(gamma, step_, uv_step_)) {
@@ -255,22 +256,31 @@ FitResult FrameFitter::fit(const FrameObservation& observation, const Eigen::Vec
         for (size_t i = 0; i < correspondences_.size(); ++i)
           trial_correspondences_[i] = trial_surface_.walk(correspondences_[i], uv_step_[i].x(), uv_step_[i].y()).end;
         energy_after = energy_at(observation, trial_eval_, trial_surface_, trial_correspondences_, trial_theta_).total();
+        joint_step = 0;
+        for (int j : kBgJoints)
+          joint_step = std::max(joint_step, (trial_eval_.joints().col(j) - eval_.joints().col(j)).norm());
         if (energy_after < energy_before) {
           accepted = true;
           break;
         }
         ++result.rejected_steps;
+        // Damping has shrunk the step below the convergence motion without finding a decrease:
+        // more damping would only shrink it further.
+        if (joint_step < options_.min_joint_step_m) break;
       }
-      gamma *= options_.damping_increase;
+      gamma *= raise;
+      raise *= 2;
     }
     if (!accepted) {  // no step lowers the energy: a (local) minimum
       result.status = FitStatus::kConverged;
       break;
     }
     ++result.accepted_steps;
-    gamma = std::max(gamma * options_.damping_decrease, 1e-12);
-    double joint_step = 0;
-    for (int j : kBgJoints) joint_step = std::max(joint_step, (trial_eval_.joints().col(j) - eval_.joints().col(j)).norm());
+    // Gain ratio (Nielsen): how well the quadratic model predicted the decrease.
+    const double predicted = system_.predicted_decrease(gamma, step_, uv_step_);
+    const double rho = predicted > 0 ? (energy_before - energy_after) / predicted : 0.0;
+    gamma = std::max(gamma * std::max(options_.damping_decrease, 1 - std::pow(2 * rho - 1, 3)), 1e-12);
+    raise = options_.damping_increase;
     theta = trial_theta_;
     std::swap(correspondences_, trial_correspondences_);
     pose_model(theta, beta);

@@ -98,4 +98,15 @@ bool SchurSystem::solve(double gamma, Eigen::VectorXd& d_pose, std::vector<Eigen
   return true;
 }
 
+double SchurSystem::predicted_decrease(double gamma, const Eigen::VectorXd& d_pose,
+                                      const std::vector<Eigen::Vector2d>& d_uv) const {
+  double damped = 0, linear = gradient_.dot(d_pose);
+  for (int d = 0; d < num_pose_; ++d) damped += std::max(hessian_(d, d), kMinDiagonal) * d_pose[d] * d_pose[d];
+  for (int i = 0; i < num_blocks_; ++i) {
+    linear += block_gradient_[i].dot(d_uv[i]);
+    for (int k = 0; k < 2; ++k) damped += std::max(block_hessian_[i](k, k), kMinDiagonal) * d_uv[i][k] * d_uv[i][k];
+  }
+  return gamma * damped - linear;
+}
+
 }  // namespace posefuse::fit

@@ -40,6 +40,9 @@ class SchurSystem {
   // Solves (J^T J + gamma diag(J^T J)) delta = -J^T r for delta = (d_pose, d_uv[0 .. n-1]).
   // Returns false when the reduced system is not positive definite (the caller raises gamma).
   bool solve(double gamma, Eigen::VectorXd& d_pose, std::vector<Eigen::Vector2d>& d_uv);
+  // Decrease of the quadratic model |r + J delta|^2 for a step solve() returned with this gamma:
+  // gamma delta^T D delta - g^T delta (for LM's gain ratio).
+  double predicted_decrease(double gamma, const Eigen::VectorXd& d_pose, const std::vector<Eigen::Vector2d>& d_uv) const;
 
  private:
   int num_pose_ = 0, num_blocks_ = 0;
