@@ -3,10 +3,11 @@
 // Marquardt over the pose theta and the data-term correspondences U together (eq. 15-16),
 // with the correspondences eliminated by a Schur complement (fit/schur_system.hpp), moved by
 // mesh walking after each accepted step (II-I) and by the discrete update between iterations
-// (II-J, fit/correspondence_update.hpp). The bg / float point sets are re-selected at every
-// iteration from the model's visible contour (Embree ray casts); their D_2D / D_3D targets and
-// the correspondences' discrete choices are held fixed within an iteration, so every trial step
-// of that iteration is judged on the same energy.
+// (II-J, fit/correspondence_update.hpp). The bg point set U_bg is re-selected at every iteration
+// from the model's visible contour (Embree ray casts) and then kept for the iteration's trial
+// steps; which of its points are outside the silhouette (bg) or in front of the surface (float),
+// and their D_2D / D_3D targets, are re-evaluated at each trial pose, so a trial is judged on the
+// energy it really has (with the sets' members fixed).
 //
 // Energy (eq. 4): data + lambda_bg bg + lambda_bgJoint bgJoint + lambda_float float
 // + lambda_limit limit + lambda_imu imu, each term a residual block of fit/residual_blocks.hpp.
