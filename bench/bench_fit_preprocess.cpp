@@ -19,7 +19,7 @@
 #include "fit/point_normals.hpp"
 #include "fit/silhouette_distance.hpp"
 #include "fit/zone_sampling.hpp"
-#include "raycast/mesh_scene.hpp"
+#include "model_frames.hpp"
 #include "synthetic_frames.hpp"
 
 using namespace posefuse;
@@ -42,10 +42,6 @@ void report(const char* frame_name, const char* operation, int repeats, const st
   std::printf("%-6s %-40s %9.2f ms %9.2f ms\n", frame_name, operation, wall[repeats / 2], cpu[repeats / 2]);
 }
 
-// SMPL joint for each Kinect v2 joint (kKinectJointNames order); hand tips and thumbs use the hand.
-constexpr int kSmplForKinect[fit::kKinectJointCount] = {0, 6, 12, 15, 16, 18, 20, 22, 17, 19, 21, 23, 1,
-                                                        4, 7, 10, 2, 5, 8, 11, 9, 22, 22, 23, 23};
-
 struct BodyFrame {
   fit::DepthFrame frame;
   fit::KinectSkeleton skeleton_K;
@@ -55,7 +51,6 @@ BodyFrame render_body(const raycast::DepthCamera& camera) {
   constexpr double deg = std::numbers::pi / 180;
   const auto model = body::make_template(body::Sex::kMale);
   const body::PoseLayout layout = body::PoseLayout::upper_body();
-  body::BodyEvaluator eval(model, layout);
   Eigen::VectorXd theta = layout.zero();
   theta[layout.index_of("translation_y")] = -0.9;
   theta[layout.index_of("translation_z")] = 2.0;
@@ -63,15 +58,8 @@ BodyFrame render_body(const raycast::DepthCamera& camera) {
   theta[layout.index_of("left_shoulder_z")] = -40 * deg;
   theta[layout.index_of("right_shoulder_z")] = 50 * deg;
   theta[layout.index_of("left_elbow_y")] = -70 * deg;
-  eval.evaluate(Eigen::VectorXd::Zero(10), theta, body::Derivatives::kNone);
-  raycast::MeshScene scene(raycast::EmbreeDevice::shared(), model->faces, model->num_vertices());
-  scene.update_vertices(eval.vertices());
-  raycast::RenderImages images;
-  scene.render(camera, 0, images);
-  BodyFrame out;
-  out.frame = {images.width, images.height, images.depth_mm, images.body_index};
-  for (int k = 0; k < fit::kKinectJointCount; ++k) out.skeleton_K[k] = eval.joints().col(kSmplForKinect[k]);
-  return out;
+  const auto rendered = fit::testing::render_model_frame(model, layout, Eigen::VectorXd::Zero(10), theta, camera);
+  return {rendered.frame, rendered.skeleton_K};
 }
 
 void bench_frame(const char* name, const raycast::DepthCamera& camera, const fit::DepthFrame& frame,

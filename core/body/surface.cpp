@@ -1,6 +1,7 @@
 #include "body/surface.hpp"
 
 #include <Eigen/Geometry>
+#include <array>
 #include <cmath>
 
 #include "body/mesh_topology.hpp"
@@ -82,11 +83,30 @@ void BodySurface::normal_pose_jacobian(const SurfacePoint& s, const BodyEvaluato
                                        Eigen::Ref<Eigen::Matrix3Xd> out) const {
   // S_n = Pi(m), m = sum_k w_k n_k, n_k = N_k / |N_k|, N_k = sum over faces (b - a) x (c - a);
   // d N_k = sum over faces ([c - b]x J_a + [a - c]x J_b + [b - a]x J_c).
+  // The 3 x 3 factors are summed per vertex first, so that each vertex of the corners' 1-rings
+  // costs one product with its pose Jacobian (about 12 instead of 54).
   const Eigen::Vector3d w = weights_of(s);
   Eigen::Vector3d m = Eigen::Vector3d::Zero();
   for (int k = 0; k < 3; ++k) m += w[k] * vertex_normals_.col(faces_(k, s.face));
   const Eigen::Vector3d unit = m.normalized();
   const Eigen::Matrix3d outer = (Eigen::Matrix3d::Identity() - unit * unit.transpose()) / m.norm();
+  constexpr int kMaxRing = 96;
+  std::array<int, kMaxRing> ring_vertex;
+  std::array<Eigen::Matrix3d, kMaxRing> ring_factor;
+  int ring_size = 0;
+  const auto accumulate = [&](int vertex, const Eigen::Matrix3d& factor) {
+    for (int r = 0; r < ring_size; ++r)
+      if (ring_vertex[r] == vertex) {
+        ring_factor[r] += factor;
+        return;
+      }
+    if (ring_size == kMaxRing) {  // an unusually high valence: flush into the output directly
+      eval.add_vertex_pose_jacobian(vertex, factor, out);
+      return;
+    }
+    ring_vertex[ring_size] = vertex;
+    ring_factor[ring_size++] = factor;
+  };
   for (int k = 0; k < 3; ++k) {
     const int vertex = faces_(k, s.face);
     const Eigen::Vector3d n = vertex_normals_.col(vertex);
@@ -94,11 +114,12 @@ void BodySurface::normal_pose_jacobian(const SurfacePoint& s, const BodyEvaluato
         w[k] * outer * (Eigen::Matrix3d::Identity() - n * n.transpose()) / vertex_normal_sums_.col(vertex).norm();
     for (int f : faces_of_vertex_[vertex]) {
       const Eigen::Vector3d a = corner(f, 0), b = corner(f, 1), c = corner(f, 2);
-      eval.add_vertex_pose_jacobian(faces_(0, f), Eigen::Matrix3d(chain * skew(c - b)), out);
-      eval.add_vertex_pose_jacobian(faces_(1, f), Eigen::Matrix3d(chain * skew(a - c)), out);
-      eval.add_vertex_pose_jacobian(faces_(2, f), Eigen::Matrix3d(chain * skew(b - a)), out);
+      accumulate(faces_(0, f), chain * skew(c - b));
+      accumulate(faces_(1, f), chain * skew(a - c));
+      accumulate(faces_(2, f), chain * skew(b - a));
     }
   }
+  for (int r = 0; r < ring_size; ++r) eval.add_vertex_pose_jacobian(ring_vertex[r], ring_factor[r], out);
 }
 
 WalkResult BodySurface::walk(const SurfacePoint& start, double du, double dv) const {

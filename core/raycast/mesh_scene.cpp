@@ -159,6 +159,37 @@ std::vector<bool> MeshScene::visible(const Eigen::Matrix3Xd& points_K, double to
   return result;
 }
 
+void MeshScene::first_hits(const std::vector<Eigen::Vector3d>& through_K, std::vector<ClosestPoint>& hits) const {
+  if (!has_vertices_) throw_precondition("vertices", "ray query before update_vertices");
+  hits.assign(through_K.size(), ClosestPoint{});
+  RTCIntersectContext context;
+  rtcInitIntersectContext(&context);
+  for (size_t i = 0; i < through_K.size(); ++i) {
+    const Eigen::Vector3d& p = through_K[i];
+    const double length = p.norm();
+    if (!p.allFinite() || length <= 0) continue;
+    const Eigen::Vector3d direction = p / length;
+    RTCRayHit rh;
+    rh.ray.org_x = rh.ray.org_y = rh.ray.org_z = 0.f;
+    rh.ray.dir_x = static_cast<float>(direction.x());
+    rh.ray.dir_y = static_cast<float>(direction.y());
+    rh.ray.dir_z = static_cast<float>(direction.z());
+    rh.ray.tnear = 0.f;
+    rh.ray.tfar = std::numeric_limits<float>::infinity();
+    rh.ray.time = 0.f;
+    rh.ray.mask = 0xFFFFFFFFu;
+    rh.ray.id = 0;
+    rh.ray.flags = 0;
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(scene_, &context, &rh);
+    if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) continue;
+    // Embree's (u, v) weight corners 1 and 2; ours weight corners 0 and 1 (see the header).
+    hits[i] = {static_cast<int>(rh.hit.primID), 1.0 - rh.hit.u - rh.hit.v, rh.hit.u,
+               static_cast<double>(rh.ray.tfar) * direction, static_cast<double>(rh.ray.tfar)};
+  }
+}
+
 namespace {
 
 struct ClosestPointSearch {

@@ -57,6 +57,11 @@ class MeshScene {
   // mesh up to `tolerance_m` before the point (so a point on the surface sees itself).
   std::vector<bool> visible(const Eigen::Matrix3Xd& points_K, double tolerance_m = 0.002) const;
 
+  // First hit of the ray from the camera centre through each point (any distance along the ray):
+  // face, barycentrics, hit point and ray length; face = -1 where the ray misses. The fitter uses
+  // it at its depth samples as a render of the model restricted to those pixels (paper 2, II-J).
+  void first_hits(const std::vector<Eigen::Vector3d>& through_K, std::vector<ClosestPoint>& hits) const;
+
   // Nearest point of the mesh surface to p (throws if no vertices were set).
   ClosestPoint closest_point(const Eigen::Vector3d& p_K) const;
 

@@ -193,6 +193,44 @@ TEST(MeshScene, VisibilityOfSurfacePoints) {
   EXPECT_TRUE(v[1]);   // off to the side, nothing in between
 }
 
+TEST(MeshScene, FirstHitsAgreeWithTheRenderAndTheSurfaceConvention) {
+  const Eigen::Vector3d centre(0.1, -0.05, 2);
+  const TestMesh sphere = icosphere(centre, 0.3, 3);
+  MeshScene scene(EmbreeDevice::shared(), sphere.faces, static_cast<int>(sphere.vertices.cols()));
+  scene.update_vertices(sphere.vertices);
+  const DepthCamera camera(DepthIntrinsics{});
+  RenderImages images;
+  scene.render(camera, 0, images);
+  // Rays through points at an arbitrary distance along pixel rays: a hit on the front of the sphere
+  // with the render's face and barycentrics, or a miss where the render saw nothing.
+  std::vector<Eigen::Vector3d> through;
+  std::vector<int> pixel;
+  for (int row = 150; row < 280; row += 13)
+    for (int col = 180; col < 340; col += 11) {
+      through.push_back(0.7 * camera.pixel_ray(col, row).cast<double>());
+      pixel.push_back(row * camera.width() + col);
+    }
+  std::vector<ClosestPoint> hits;
+  scene.first_hits(through, hits);
+  ASSERT_EQ(hits.size(), through.size());
+  int hit_count = 0;
+  for (size_t i = 0; i < hits.size(); ++i) {
+    const int p = pixel[i];
+    ASSERT_EQ(hits[i].face, images.face[static_cast<size_t>(p)]) << i;
+    if (hits[i].face < 0) continue;
+    ++hit_count;
+    EXPECT_NEAR(hits[i].u, images.u[static_cast<size_t>(p)], 1e-5);
+    EXPECT_NEAR(hits[i].v, images.v[static_cast<size_t>(p)], 1e-5);
+    const Eigen::Vector3i f = sphere.faces.col(hits[i].face);
+    const Eigen::Vector3d on_face = hits[i].u * sphere.vertices.col(f[0]) + hits[i].v * sphere.vertices.col(f[1]) +
+                                    (1 - hits[i].u - hits[i].v) * sphere.vertices.col(f[2]);
+    EXPECT_LT((on_face - hits[i].point).norm(), 1e-5);
+    EXPECT_NEAR(hits[i].point.z(), images.depth_mm[static_cast<size_t>(p)] * 1e-3, 6e-4);
+    EXPECT_LT((hits[i].point - centre).dot(hits[i].point), 0);  // front side: outward normal faces the camera
+  }
+  EXPECT_GT(hit_count, 40);
+}
+
 TEST(MeshScene, ClosestPointMatchesBruteForce) {
   const TestMesh sphere = icosphere({0.1, 0.2, 2}, 0.3, 2);
   MeshScene scene(EmbreeDevice::shared(), sphere.faces, static_cast<int>(sphere.vertices.cols()));

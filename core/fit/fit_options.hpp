@@ -1,0 +1,64 @@
+#pragma once
+// Parameters of the per-frame fit (paper 2, II-D to II-J), with the paper's IV-C values as the
+// defaults where the paper gives one. Everything else is ours and says so.
+#include <cstdint>
+
+namespace posefuse::fit {
+
+struct FitOptions {
+  // --- Energy (eq. 4-12), paper 2 IV-C ---
+  int num_samples = 250;         // N_s: depth samples of the data term (eq. 5)
+  double sigma_p_m = 0.003;      // sigma_p: position scale of the data term, metres
+  double sigma_n = 0.25;         // sigma_n: normal scale of the data term (unit vectors)
+  double lambda_bg = 10;         // eq. 6, residuals in pixels
+  double lambda_bg_joint = 25;   // eq. 7, residuals in pixels
+  double lambda_float = 0.25;    // eq. 12, residuals in metres
+  double lambda_limit = 10000;   // eq. 8, residuals in radians
+  double lambda_imu = 15;        // eq. 9, unit-vector differences
+  int max_bg_points = 150;       // H_max: size cap of the bg point set U_bg (eq. 6)
+
+  // bg points are model vertices whose normal is nearly perpendicular to the viewing ray
+  // (paper: "normal vector points perpendicular to the camera's optical axis"). Ours: a vertex
+  // qualifies when |n . ray| <= bg_contour_max_cos and it is visible (Embree ray cast).
+  double bg_contour_max_cos = 0.35;
+  // D_2D returns silhouette pixel centres, but the silhouette's edge lies up to about half a
+  // pixel diagonal beyond them: a model point exactly on the true outline often rounds to a pixel
+  // outside. Ours: a point counts as outside only beyond this distance from the closest
+  // silhouette pixel centre, and its target is that far from the centre towards the point.
+  // With 0 (the paper's reading) the bg term pulls a correct pose inwards.
+  double silhouette_edge_px = 0.7;
+
+  // --- Solver (II-F) ---
+  int max_iterations = 20;       // paper 2 IV-C: at most 20 LM iterations per frame
+  // Damping. Paper 2 adds gamma * I with gamma = 1000 at the start. Our pose DOFs (metres,
+  // radians) and correspondences (barycentrics) live on very different scales, so we damp with
+  // gamma * diag(J^T J) (Marquardt) instead; gamma is then relative and starts much lower.
+  double initial_damping = 1e-2;
+  // After a rejected step gamma *= damping_increase, then twice that, ... ("increased
+  // exponentially"); after an accepted one gamma *= max(damping_decrease, 1 - (2 rho - 1)^3), rho
+  // the gain ratio (Nielsen; ours). 1e-2 / 4 / 0.5 were chosen over 1e-3 / 10 / 0.3 with
+  // bench_fit_frame (docs/fitting.md).
+  double damping_increase = 4;
+  double damping_decrease = 0.5;
+  double max_damping = 1e8;      // give up the iteration (converged) beyond this
+  // Stop when an accepted step lowers the energy by less than this fraction ...
+  double min_relative_decrease = 1e-5;
+  // ... or moves none of the 16 bgJoint joints by more than this (ours). Without it the fit spends
+  // its iterations trading nearly redundant DOFs (spine2 / spine3 twist) against each other while
+  // the point sets and correspondences are re-selected: the energy keeps changing, the body not.
+  double min_joint_step_m = 0.001;
+
+  // --- Correspondences (II-I, II-J) ---
+  bool discrete_update = true;   // eq. 17 after every accepted step
+  int num_candidate_sets = 10;   // U^cand_{t % 10}
+  int candidates_per_set = 64;   // ours; the paper gives no count
+  double limb_candidate_density = 3;  // upper limbs, neck and head get 3x the density
+  int max_climb_steps = 30;      // adjacent-face climb (II-J) per sample and update
+  uint64_t seed = 1;             // candidate sets are pre-randomised from this seed
+};
+
+// Throws posefuse::Error naming the field ("fit_options.sigma_p_m", ...) for a non-finite,
+// non-positive (scales, counts) or negative (weights) value.
+void validate(const FitOptions& options);
+
+}  // namespace posefuse::fit

@@ -1,0 +1,311 @@
+#include "fit/frame_fitter.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+#include "common/error.hpp"
+#include "fit/camera_projection.hpp"
+
+namespace posefuse::fit {
+namespace {
+
+// A model point on the visible contour sees itself along its ray up to this gap: grazing rays
+// meet the neighbouring faces of the vertex a little before it.
+constexpr double kContourVisibilityTolerance_m = 0.01;
+// Points closer to the camera plane than this are not projected.
+constexpr double kMinDepth_m = 0.05;
+
+// The bg target of a point projecting to `pixel` (options.silhouette_edge_px), or nullopt when the
+// point projects inside the silhouette.
+std::optional<Eigen::Vector2d> silhouette_target(const SilhouetteDistanceMap& silhouette, const Eigen::Vector2d& pixel,
+                                                 double edge_px) {
+  const long col = std::lround(pixel.x()), row = std::lround(pixel.y());
+  const bool in_image = col >= 0 && row >= 0 && col < silhouette.width && row < silhouette.height;
+  if (in_image && silhouette.distance_px[static_cast<size_t>(row) * silhouette.width + col] == 0) return std::nullopt;
+  const Eigen::Vector2d centre = silhouette.closest(pixel.x(), pixel.y());
+  const Eigen::Vector2d offset = pixel - centre;
+  const double distance = offset.norm();
+  if (distance <= edge_px) return std::nullopt;
+  return centre + (edge_px / distance) * offset;
+}
+
+}  // namespace
+
+const char* fit_status_name(FitStatus status) {
+  switch (status) {
+    case FitStatus::kConverged: return "converged";
+    case FitStatus::kMaxIterations: return "max_iterations";
+  }
+  return "unknown";
+}
+
+FrameFitter::FrameFitter(std::shared_ptr<const body::SmplModel> model, body::PoseLayout layout,
+                         const raycast::DepthIntrinsics& intrinsics, const FitOptions& options)
+    : model_((validate(options), raycast::validate(intrinsics), std::move(model))),
+      layout_(std::move(layout)),
+      intrinsics_(intrinsics),
+      options_(options),
+      eval_(model_, layout_),
+      trial_eval_(model_, layout_),
+      surface_(model_->faces, model_->num_vertices()),
+      trial_surface_(model_->faces, model_->num_vertices()),
+      scene_(raycast::EmbreeDevice::shared(), model_->faces, model_->num_vertices()),
+      discrete_(*model_, options_) {
+  point_jacobian_.setZero(3, layout_.size());
+  data_jacobian_.setZero(6, layout_.size());
+}
+
+void FrameFitter::set_up_blocks(const FrameObservation& o) {
+  const size_t n = o.points_K.size();
+  const double sqrt_n = std::sqrt(static_cast<double>(n));
+  data_.resize(n);
+  for (size_t i = 0; i < n; ++i)
+    data_[i] = {o.points_K[i], o.normals_K[i], 1 / (options_.sigma_p_m * sqrt_n), 1 / (options_.sigma_n * sqrt_n)};
+  imu_.clear();
+  const double imu_weight = std::sqrt(options_.lambda_imu);
+  if (o.forearm.left_K) imu_.push_back({body::kLeftElbow, body::kLeftWrist, *o.forearm.left_K, imu_weight});
+  if (o.forearm.right_K) imu_.push_back({body::kRightElbow, body::kRightWrist, *o.forearm.right_K, imu_weight});
+  const int limited = LimitResidual::size(layout_);
+  limit_.weight = limited > 0 ? std::sqrt(options_.lambda_limit / limited) : 0.0;
+  // Largest residual count: every set at its cap (data rows live in the residual vector only).
+  const int max_rows = 6 * static_cast<int>(n) + 5 * options_.max_bg_points + 2 * kBgJointCount + limited + 6;
+  if (jacobian_.rows() < max_rows || jacobian_.cols() != layout_.size()) jacobian_.resize(max_rows, layout_.size());
+  if (residual_.size() < max_rows) residual_.resize(max_rows);
+  uv_jacobian_.resize(n);
+}
+
+void FrameFitter::pose_model(const Eigen::VectorXd& theta, const Eigen::VectorXd& beta) {
+  eval_.evaluate(beta, theta, body::Derivatives::kPose);
+  surface_.update(eval_.vertices());
+  scene_.update_vertices(eval_.vertices());
+}
+
+void FrameFitter::init_correspondences(const FrameObservation& o) {
+  // Start from the model point on each sample's camera ray, or the closest model point where the
+  // ray misses the model; then the discrete update as in every iteration.
+  scene_.first_hits(o.points_K, hits_);
+  correspondences_.resize(o.points_K.size());
+  for (size_t i = 0; i < hits_.size(); ++i) {
+    const raycast::ClosestPoint hit = hits_[i].face >= 0 ? hits_[i] : scene_.closest_point(o.points_K[i]);
+    correspondences_[i] = {hit.face, hit.u, hit.v};
+  }
+  update_correspondences(o, 0);
+}
+
+void FrameFitter::update_correspondences(const FrameObservation& o, int iteration) {
+  if (!options_.discrete_update) return;
+  scene_.first_hits(o.points_K, hits_);
+  hit_points_.resize(hits_.size());
+  for (size_t i = 0; i < hits_.size(); ++i) hit_points_[i] = {hits_[i].face, hits_[i].u, hits_[i].v};
+  const SampleTargets targets{&o.points_K, &o.normals_K, 1 / (options_.sigma_p_m * options_.sigma_p_m),
+                              1 / (options_.sigma_n * options_.sigma_n)};
+  discrete_.update(surface_, targets, hit_points_, iteration, correspondences_);
+}
+
+void FrameFitter::select_point_sets(const FrameObservation& o) {
+  const Eigen::Matrix3Xd& vertices = eval_.vertices();
+  const Eigen::Matrix3Xd& normals = surface_.vertex_normals();
+  // U_bg (eq. 6): visible vertices whose normal is nearly perpendicular to the viewing ray.
+  contour_vertices_.clear();
+  for (int v = 0; v < vertices.cols(); ++v) {
+    const Eigen::Vector3d p = vertices.col(v);
+    if (p.z() < kMinDepth_m) continue;
+    if (std::abs(normals.col(v).dot(p.normalized())) <= options_.bg_contour_max_cos) contour_vertices_.push_back(v);
+  }
+  contour_points_.resize(3, static_cast<Eigen::Index>(contour_vertices_.size()));
+  for (size_t k = 0; k < contour_vertices_.size(); ++k) contour_points_.col(static_cast<Eigen::Index>(k)) = vertices.col(contour_vertices_[k]);
+  const std::vector<bool> visible = scene_.visible(contour_points_, kContourVisibilityTolerance_m);
+  selected_.clear();
+  for (size_t k = 0; k < contour_vertices_.size(); ++k)
+    if (visible[k]) selected_.push_back(contour_vertices_[k]);
+  // At most H_max points, spread evenly over the contour (vertex order follows the body parts).
+  if (static_cast<int>(selected_.size()) > options_.max_bg_points) {
+    const double stride = static_cast<double>(selected_.size()) / options_.max_bg_points;
+    for (int k = 0; k < options_.max_bg_points; ++k) selected_[k] = selected_[static_cast<size_t>(k * stride)];
+    selected_.resize(static_cast<size_t>(options_.max_bg_points));
+  }
+  bg_weight_ = selected_.empty() ? 0.0 : std::sqrt(options_.lambda_bg / static_cast<double>(selected_.size()));
+  // Q (eq. 12) is counted here and kept for the iteration, like H.
+  build_blocks(eval_, o);
+  float_weight_ = float_.empty() ? 0.0 : std::sqrt(options_.lambda_float / static_cast<double>(float_.size()));
+  for (BehindPoint& f : float_) f.block.weight = float_weight_;
+}
+
+void FrameFitter::build_blocks(const body::BodyEvaluator& eval, const FrameObservation& o) {
+  // The sets' members stay fixed within an iteration; whether each is outside the silhouette
+  // (bg), inside but in front of the surface (float) or neither, and its D_2D / D_3D target, are
+  // taken at the pose being evaluated, so a trial step that pushes other contour points out of
+  // the silhouette pays for it.
+  bg_.clear();
+  float_.clear();
+  for (int v : selected_) {
+    const Eigen::Vector3d p = eval.vertices().col(v);
+    if (p.z() < kMinDepth_m) continue;
+    const Eigen::Vector2d pixel = project_with_jacobian(intrinsics_, p).pixel;
+    if (const auto target = silhouette_target(o.silhouette, pixel, options_.silhouette_edge_px)) {
+      bg_.push_back({v, {*target, bg_weight_}});
+    } else if (!o.behind->is_behind(p)) {
+      // U_float (eq. 12) is the part of U_bg inside the silhouette but in front of the surface.
+      float_.push_back({v, {o.behind->closest_behind(p), float_weight_}});
+    }
+  }
+  // bgJoint (eq. 7): joints that project outside the silhouette.
+  bg_joint_.clear();
+  const double joint_weight = std::sqrt(options_.lambda_bg_joint / kBgJointCount);
+  for (int j : kBgJoints) {
+    const Eigen::Vector3d p = eval.joints().col(j);
+    if (p.z() < kMinDepth_m) continue;
+    const Eigen::Vector2d pixel = project_with_jacobian(intrinsics_, p).pixel;
+    if (const auto target = silhouette_target(o.silhouette, pixel, options_.silhouette_edge_px))
+      bg_joint_.push_back({j, {*target, joint_weight}});
+  }
+}
+
+EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::VectorXd& theta) {
+  build_blocks(eval_, o);
+  const int n = static_cast<int>(data_.size());
+  const int N = layout_.size();
+  EnergyTerms e;
+  system_.reset(N, n);
+  int row = 0;
+  auto take = [&](int count, double& energy) {
+    energy += residual_.segment(row, count).squaredNorm();
+    row += count;
+  };
+  for (int i = 0; i < n; ++i) {
+    // The data rows go straight into the normal equations (only their non-zero columns).
+    data_[i].evaluate(surface_, eval_, correspondences_[i], residual_.segment<6>(row), data_jacobian_,
+                      uv_jacobian_[i]);
+    system_.add_block(i, data_jacobian_, uv_jacobian_[i], residual_.segment<6>(row));
+    take(6, e.data);
+  }
+  const int pose_rows_begin = row;
+  for (const SilhouettePoint& s : bg_) {
+    point_jacobian_.setZero();
+    eval_.add_vertex_pose_jacobian(s.index, 1.0, point_jacobian_);
+    s.block.evaluate(intrinsics_, eval_.vertices().col(s.index), point_jacobian_, residual_.segment<2>(row),
+                     jacobian_.middleRows(row, 2));
+    take(2, e.bg);
+  }
+  for (const SilhouettePoint& s : bg_joint_) {
+    s.block.evaluate(intrinsics_, eval_.joints().col(s.index), eval_.joint_pose_jacobian().middleRows<3>(3 * s.index),
+                     residual_.segment<2>(row), jacobian_.middleRows(row, 2));
+    take(2, e.bg_joint);
+  }
+  for (const BehindPoint& f : float_) {
+    point_jacobian_.setZero();
+    eval_.add_vertex_pose_jacobian(f.vertex, 1.0, point_jacobian_);
+    f.block.evaluate(eval_.vertices().col(f.vertex), point_jacobian_, residual_.segment<3>(row),
+                     jacobian_.middleRows(row, 3));
+    take(3, e.float_term);
+  }
+  const int limited = LimitResidual::size(layout_);
+  limit_.evaluate(layout_, theta, residual_.segment(row, limited), jacobian_.middleRows(row, limited));
+  take(limited, e.limit);
+  for (const ForearmDirectionResidual& f : imu_) {
+    f.evaluate(eval_.joints(), eval_.joint_pose_jacobian(), residual_.segment<3>(row), jacobian_.middleRows(row, 3));
+    take(3, e.imu);
+  }
+  system_.add_pose_rows(jacobian_.middleRows(pose_rows_begin, row - pose_rows_begin),
+                        residual_.segment(pose_rows_begin, row - pose_rows_begin));
+  return e;
+}
+
+EnergyTerms FrameFitter::energy_at(const FrameObservation& o, const body::BodyEvaluator& eval,
+                                   const body::BodySurface& surface,
+                                   const std::vector<body::SurfacePoint>& correspondences, const Eigen::VectorXd& theta) {
+  build_blocks(eval, o);
+  EnergyTerms e;
+  for (size_t i = 0; i < data_.size(); ++i) e.data += data_[i].residual(surface, correspondences[i]).squaredNorm();
+  for (const SilhouettePoint& s : bg_) e.bg += s.block.residual(intrinsics_, eval.vertices().col(s.index)).squaredNorm();
+  for (const SilhouettePoint& s : bg_joint_)
+    e.bg_joint += s.block.residual(intrinsics_, eval.joints().col(s.index)).squaredNorm();
+  for (const BehindPoint& f : float_) e.float_term += f.block.residual(eval.vertices().col(f.vertex)).squaredNorm();
+  e.limit = limit_.energy(layout_, theta);
+  for (const ForearmDirectionResidual& f : imu_) e.imu += f.residual(eval.joints()).squaredNorm();
+  return e;
+}
+
+FitResult FrameFitter::fit(const FrameObservation& observation, const Eigen::VectorXd& theta0,
+                           const Eigen::VectorXd& beta) {
+  validate(observation);
+  FitResult result;
+  set_up_blocks(observation);
+  Eigen::VectorXd theta = theta0;
+  pose_model(theta, beta);  // checks theta and beta
+  init_correspondences(observation);
+  select_point_sets(observation);
+  result.initial_energy = energy_at(observation, eval_, surface_, correspondences_, theta);
+
+  double gamma = options_.initial_damping;
+  double raise = options_.damping_increase;
+  for (int iteration = 0; iteration < options_.max_iterations; ++iteration) {
+    if (iteration > 0) select_point_sets(observation);
+    const double energy_before = linearise(observation, theta).total();
+    ++result.iterations;
+    double energy_after = energy_before, joint_step = 0;
+    bool accepted = false;
+    while (gamma <= options_.max_damping) {
+      if (system_.solve(gamma, step_, uv_step_)) {
+        trial_theta_ = theta + step_;
+        trial_eval_.evaluate(beta, trial_theta_, body::Derivatives::kNone);
+        trial_surface_.update(trial_eval_.vertices());
+        trial_correspondences_.resize(correspondences_.size());
+        // II-I: the correspondences follow their (du, dv) over face borders.
+        for (size_t i = 0; i < correspondences_.size(); ++i)
+          trial_correspondences_[i] = trial_surface_.walk(correspondences_[i], uv_step_[i].x(), uv_step_[i].y()).end;
+        energy_after = energy_at(observation, trial_eval_, trial_surface_, trial_correspondences_, trial_theta_).total();
+        joint_step = 0;
+        for (int j : kBgJoints)
+          joint_step = std::max(joint_step, (trial_eval_.joints().col(j) - eval_.joints().col(j)).norm());
+        if (energy_after < energy_before) {
+          accepted = true;
+          break;
+        }
+        ++result.rejected_steps;
+        // Damping has shrunk the step below the convergence motion without finding a decrease:
+        // more damping would only shrink it further.
+        if (joint_step < options_.min_joint_step_m) break;
+      }
+      gamma *= raise;
+      raise *= 2;
+    }
+    if (!accepted) {  // no step lowers the energy: a (local) minimum
+      result.status = FitStatus::kConverged;
+      break;
+    }
+    ++result.accepted_steps;
+    // Gain ratio (Nielsen): how well the quadratic model predicted the decrease.
+    const double predicted = system_.predicted_decrease(gamma, step_, uv_step_);
+    const double rho = predicted > 0 ? (energy_before - energy_after) / predicted : 0.0;
+    gamma = std::max(gamma * std::max(options_.damping_decrease, 1 - std::pow(2 * rho - 1, 3)), 1e-12);
+    raise = options_.damping_increase;
+    theta = trial_theta_;
+    std::swap(correspondences_, trial_correspondences_);
+    pose_model(theta, beta);
+    update_correspondences(observation, iteration + 1);
+    if (energy_before - energy_after < options_.min_relative_decrease * energy_before ||
+        joint_step < options_.min_joint_step_m) {
+      result.status = FitStatus::kConverged;
+      break;
+    }
+  }
+  select_point_sets(observation);
+  result.energy = energy_at(observation, eval_, surface_, correspondences_, theta);
+  result.theta = theta;
+  result.correspondences = correspondences_;
+  return result;
+}
+
+EnergyTerms FrameFitter::energy(const FrameObservation& observation, const Eigen::VectorXd& theta,
+                                const Eigen::VectorXd& beta) {
+  validate(observation);
+  set_up_blocks(observation);
+  pose_model(theta, beta);
+  init_correspondences(observation);
+  select_point_sets(observation);
+  return energy_at(observation, eval_, surface_, correspondences_, theta);
+}
+
+}  // namespace posefuse::fit

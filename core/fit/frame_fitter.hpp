@@ -1,0 +1,139 @@
+#pragma once
+// Per-frame fit of the body model to one depth frame (paper 2, II-D to II-J): Levenberg-
+// Marquardt over the pose theta and the data-term correspondences U together (eq. 15-16),
+// with the correspondences eliminated by a Schur complement (fit/schur_system.hpp), moved by
+// mesh walking after each accepted step (II-I) and by the discrete update between iterations
+// (II-J, fit/correspondence_update.hpp). The bg point set U_bg is re-selected at every iteration
+// from the model's visible contour (Embree ray casts) and then kept for the iteration's trial
+// steps; which of its points are outside the silhouette (bg) or in front of the surface (float),
+// and their D_2D / D_3D targets, are re-evaluated at each trial pose, so a trial is judged on the
+// energy it really has (with the sets' members fixed).
+//
+// Energy (eq. 4): data + lambda_bg bg + lambda_bgJoint bgJoint + lambda_float float
+// + lambda_limit limit + lambda_imu imu, each term a residual block of fit/residual_blocks.hpp.
+// The shape beta is fixed during the fit (personalised beforehand, paper 2 III).
+//
+// A FrameFitter owns its evaluators, Embree scene and work buffers: one per worker thread; fit()
+// reuses them, so after the first frame the loop allocates little (see docs/fitting.md).
+#include <Eigen/Core>
+#include <memory>
+#include <vector>
+
+#include "body/body_evaluator.hpp"
+#include "body/surface.hpp"
+#include "fit/correspondence_update.hpp"
+#include "fit/fit_options.hpp"
+#include "fit/frame_observation.hpp"
+#include "fit/residual_blocks.hpp"
+#include "fit/schur_system.hpp"
+#include "raycast/mesh_scene.hpp"
+
+namespace posefuse::fit {
+
+// The 16 joints of the bgJoint term (eq. 7): the upper body's joints without the hands (orbs).
+inline constexpr int kBgJointCount = 16;
+inline constexpr int kBgJoints[kBgJointCount] = {
+    body::kPelvis,       body::kLeftHip,       body::kRightHip,      body::kSpine1,
+    body::kSpine2,       body::kSpine3,        body::kNeck,          body::kLeftCollar,
+    body::kRightCollar,  body::kHead,          body::kLeftShoulder,  body::kRightShoulder,
+    body::kLeftElbow,    body::kRightElbow,    body::kLeftWrist,     body::kRightWrist};
+
+// Energy of each term of eq. 4, weights included (E = sum of all).
+struct EnergyTerms {
+  double data = 0, bg = 0, bg_joint = 0, float_term = 0, limit = 0, imu = 0;
+  double total() const { return data + bg + bg_joint + float_term + limit + imu; }
+};
+
+enum class FitStatus {
+  kConverged,      // an accepted step lowered E by less than min_relative_decrease, or no step could
+  kMaxIterations,  // stopped after max_iterations LM iterations
+};
+const char* fit_status_name(FitStatus status);
+
+struct FitResult {
+  Eigen::VectorXd theta;
+  std::vector<body::SurfacePoint> correspondences;  // nu_i, one per observation sample
+  EnergyTerms energy;          // at theta (point sets selected at theta)
+  EnergyTerms initial_energy;  // at the start pose, after the first correspondence update
+  int iterations = 0;          // LM iterations (one linearisation each)
+  int accepted_steps = 0;
+  int rejected_steps = 0;      // trial steps that raised the energy (gamma was raised)
+  FitStatus status = FitStatus::kMaxIterations;
+};
+
+class FrameFitter {
+ public:
+  // Throws posefuse::Error for a null or invalid model, invalid intrinsics or options.
+  FrameFitter(std::shared_ptr<const body::SmplModel> model, body::PoseLayout layout,
+              const raycast::DepthIntrinsics& intrinsics, const FitOptions& options = {});
+
+  // Fits theta from theta0 with the shape beta held fixed. Throws posefuse::Error for an invalid
+  // observation (see validate(FrameObservation)), a theta0 of the wrong size or not finite
+  // ("theta"), or a beta that does not fit the model ("beta").
+  FitResult fit(const FrameObservation& observation, const Eigen::VectorXd& theta0, const Eigen::VectorXd& beta);
+
+  // Energy of eq. 4 at theta with correspondences found by the discrete update from scratch (the
+  // fit's starting energy; lets a caller compare poses without fitting).
+  EnergyTerms energy(const FrameObservation& observation, const Eigen::VectorXd& theta, const Eigen::VectorXd& beta);
+
+  const FitOptions& options() const { return options_; }
+  const body::PoseLayout& layout() const { return layout_; }
+
+ private:
+  struct SilhouettePoint {
+    int index;  // vertex (bg) or joint (bgJoint)
+    SilhouetteResidual block;
+  };
+  struct BehindPoint {
+    int vertex;
+    BehindResidual block;
+  };
+
+  void set_up_blocks(const FrameObservation& observation);
+  void pose_model(const Eigen::VectorXd& theta, const Eigen::VectorXd& beta);
+  void init_correspondences(const FrameObservation& observation);
+  void update_correspondences(const FrameObservation& observation, int iteration);
+  // Chooses U_bg (H, the bg weight) and counts Q (the float weight) at the current pose.
+  void select_point_sets(const FrameObservation& observation);
+  // The bg, float and bgJoint blocks of the chosen sets at the pose of `eval`.
+  void build_blocks(const body::BodyEvaluator& eval, const FrameObservation& observation);
+  // Fills the residual vector and pose / uv Jacobians at the current state; returns per-term energy.
+  EnergyTerms linearise(const FrameObservation& observation, const Eigen::VectorXd& theta);
+  EnergyTerms energy_at(const FrameObservation& observation, const body::BodyEvaluator& eval,
+                        const body::BodySurface& surface, const std::vector<body::SurfacePoint>& correspondences,
+                        const Eigen::VectorXd& theta);
+
+  std::shared_ptr<const body::SmplModel> model_;
+  body::PoseLayout layout_;
+  raycast::DepthIntrinsics intrinsics_;
+  FitOptions options_;
+  body::BodyEvaluator eval_, trial_eval_;
+  body::BodySurface surface_, trial_surface_;
+  raycast::MeshScene scene_;
+  DiscreteCorrespondenceUpdate discrete_;
+  SchurSystem system_;
+
+  // Per-frame state.
+  std::vector<DataResidual> data_;
+  std::vector<ForearmDirectionResidual> imu_;
+  LimitResidual limit_;
+  std::vector<SilhouettePoint> bg_, bg_joint_;
+  std::vector<BehindPoint> float_;
+  std::vector<body::SurfacePoint> correspondences_, trial_correspondences_;
+  double bg_weight_ = 0, float_weight_ = 0;
+
+  // Work space.
+  Eigen::MatrixXd jacobian_;
+  Eigen::VectorXd residual_;
+  std::vector<UvJacobian> uv_jacobian_;
+  Eigen::Matrix3Xd point_jacobian_;
+  Eigen::MatrixXd data_jacobian_;  // 6 x N
+  Eigen::Matrix3Xd contour_points_;
+  std::vector<int> contour_vertices_, selected_;
+  std::vector<raycast::ClosestPoint> hits_;
+  std::vector<body::SurfacePoint> hit_points_;
+  Eigen::VectorXd step_, trial_theta_;
+  std::vector<Eigen::Vector2d> uv_step_;
+};
+
+}  // namespace posefuse::fit

@@ -1,0 +1,72 @@
+#include "fit/frame_observation.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "common/error.hpp"
+#include "fit/point_normals.hpp"
+
+namespace posefuse::fit {
+namespace {
+
+// Fewer samples than this cannot constrain 40 DOF.
+constexpr size_t kMinSamples = 10;
+
+void check_unit(const std::optional<Eigen::Vector3d>& v, const char* field) {
+  if (v && (!v->allFinite() || std::abs(v->norm() - 1) > 1e-3))
+    throw_invalid(field, "must be a finite unit vector");
+}
+
+}  // namespace
+
+void validate(const FrameObservation& o) {
+  if (o.points_K.empty()) throw_precondition("observation.points_K", "no depth samples");
+  if (o.normals_K.size() != o.points_K.size())
+    throw_invalid("observation.normals_K", std::to_string(o.normals_K.size()) + " normals for " +
+                                               std::to_string(o.points_K.size()) + " points");
+  for (size_t i = 0; i < o.points_K.size(); ++i) {
+    if (!o.points_K[i].allFinite() || o.points_K[i].z() <= 0)
+      throw_invalid("observation.points_K[" + std::to_string(i) + "]", "not finite or not in front of the camera");
+    if (!o.normals_K[i].allFinite() || std::abs(o.normals_K[i].norm() - 1) > 1e-3)
+      throw_invalid("observation.normals_K[" + std::to_string(i) + "]", "not a finite unit vector");
+  }
+  if (o.silhouette.width <= 0 || o.silhouette.height <= 0 ||
+      o.silhouette.closest_pixel.size() != static_cast<size_t>(o.silhouette.width) * o.silhouette.height)
+    throw_invalid("observation.silhouette", "empty or inconsistent D_2D map");
+  if (!o.behind) throw_invalid("observation.behind", "D_3D map missing");
+  check_unit(o.forearm.left_K, "observation.forearm.left_K");
+  check_unit(o.forearm.right_K, "observation.forearm.right_K");
+}
+
+FrameObservation prepare_observation(const DepthFrame& frame, const raycast::DepthCamera& camera,
+                                     const std::optional<KinectSkeleton>& skeleton_K, const FitOptions& options,
+                                     const ForearmDirections& forearm) {
+  validate(options);
+  validate(frame, camera);
+  if (!skeleton_K) throw_precondition("skeleton", "missing: depth sampling needs the camera skeleton (paper 2, II-H)");
+  const PointCloud cloud = build_point_cloud(frame, camera);
+  ZoneSamplingParams zones;
+  zones.num_samples = options.num_samples;
+  zones.seed = options.seed;
+  const std::vector<DepthSample> samples = sample_depth_pixels(cloud, *skeleton_K, camera, zones);
+  FrameObservation o;
+  o.points_K.reserve(samples.size());
+  o.normals_K.reserve(samples.size());
+  for (const DepthSample& s : samples) {
+    const auto normal = estimate_normal_at(cloud, s.col, s.row);
+    if (!normal) continue;
+    o.points_K.push_back(s.p_K.cast<double>());
+    o.normals_K.push_back(normal->cast<double>().normalized());
+  }
+  if (o.points_K.size() < kMinSamples)
+    throw_precondition("frame.depth_mm", std::to_string(o.points_K.size()) +
+                                             " depth samples with a surface normal; the fit needs at least " +
+                                             std::to_string(kMinSamples));
+  o.silhouette = silhouette_distance_map(silhouette_of(frame), frame.width, frame.height);
+  o.behind.emplace(frame, camera);
+  o.forearm = forearm;
+  validate(o);
+  return o;
+}
+
+}  // namespace posefuse::fit

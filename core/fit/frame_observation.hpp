@@ -1,0 +1,49 @@
+#pragma once
+// Everything the per-frame fit (FrameFitter) reads from one frame (paper 2, II-A, II-D, II-H):
+// the N_s depth samples with their normals, D_2D, D_3D and the forearm directions from the
+// wrist IMUs. prepare_observation() builds it from a depth frame and its camera skeleton with
+// the preprocessing of fit/ (depth_frame, zone_sampling, point_normals, silhouette_distance,
+// behind_surface_map).
+#include <Eigen/Core>
+#include <optional>
+#include <vector>
+
+#include "fit/behind_surface_map.hpp"
+#include "fit/depth_frame.hpp"
+#include "fit/fit_options.hpp"
+#include "fit/silhouette_distance.hpp"
+#include "fit/zone_sampling.hpp"
+#include "raycast/depth_camera.hpp"
+
+namespace posefuse::fit {
+
+// Forearm pointing directions E_left, E_right of eq. 9 in K (unit, elbow -> wrist), from the
+// wrist IMU orientations; absent when that IMU has no orientation for the frame.
+struct ForearmDirections {
+  std::optional<Eigen::Vector3d> left_K, right_K;
+};
+
+struct FrameObservation {
+  std::vector<Eigen::Vector3d> points_K;   // p_i, metres
+  std::vector<Eigen::Vector3d> normals_K;  // n_i, unit, towards the camera
+  SilhouetteDistanceMap silhouette;        // D_2D
+  std::optional<BehindSurfaceMap> behind;  // D_3D (always set by prepare_observation)
+  ForearmDirections forearm;
+};
+
+// Throws posefuse::Error naming the field: no samples ("observation.points_K"), sizes that differ
+// ("observation.normals_K"), a non-finite or non-unit value ("observation.points_K[i]", ...), a
+// missing D_3D ("observation.behind"), an empty D_2D ("observation.silhouette"), a forearm
+// direction that is not a unit vector ("observation.forearm.left_K").
+void validate(const FrameObservation& observation);
+
+// II-H preprocessing: point cloud, zone sampling of options.num_samples pixels by the camera
+// skeleton, PCA normals (samples without a normal are dropped), D_2D, D_3D. Throws
+// posefuse::Error for a frame that does not match the camera ("frame.*"), an empty silhouette
+// or one without depth readings ("frame.body_index"), a missing skeleton ("skeleton"), a
+// non-finite joint ("skeleton[i]"), or too few samples with a normal ("frame.depth_mm").
+FrameObservation prepare_observation(const DepthFrame& frame, const raycast::DepthCamera& camera,
+                                     const std::optional<KinectSkeleton>& skeleton_K, const FitOptions& options,
+                                     const ForearmDirections& forearm = {});
+
+}  // namespace posefuse::fit
