@@ -22,18 +22,22 @@ double pronation_angle(const Quat& K_from_F_reference, const Quat& K_from_F, Sid
   return side == Side::kRight ? -twist : twist;
 }
 
-Quat K_from_F_palm_facing_camera(const Vec3& elbow_K, const Vec3& wrist_K) {
+Quat K_from_F_calibration_pose(const Vec3& shoulder_K, const Vec3& elbow_K, const Vec3& wrist_K) {
+  if (!shoulder_K.allFinite()) throw_invalid("shoulder_K", "not finite");
   if (!elbow_K.allFinite()) throw_invalid("elbow_K", "not finite");
   if (!wrist_K.allFinite()) throw_invalid("wrist_K", "not finite");
-  const Vec3 forearm = wrist_K - elbow_K;
-  if (forearm.norm() < 1e-4) throw_invalid("elbow_K/wrist_K", "elbow and wrist coincide");
-  const Vec3 y = forearm.normalized();
-  const Vec3 ray = (0.5 * (elbow_K + wrist_K)).normalized();
-  const Vec3 x_raw = ray - ray.dot(y) * y;
-  if (x_raw.norm() < 0.17) {  // within 10 degrees of the ray: the palm direction is undefined
-    throw_invalid("elbow_K/wrist_K", "the forearm points along the camera ray");
+  const char* field = "shoulder_K/elbow_K/wrist_K";
+  const Vec3 upper = elbow_K - shoulder_K, forearm = wrist_K - elbow_K;
+  if (upper.norm() < 1e-4 || forearm.norm() < 1e-4) throw_invalid(field, "two joints coincide");
+  const Vec3 normal = upper.normalized().cross(forearm.normalized());
+  if (normal.norm() < std::sin(20.0 * std::numbers::pi / 180.0)) {
+    throw_invalid(field, "the elbow is straighter than 160 degrees: the arm's plane is undefined");
   }
-  const Vec3 x = x_raw.normalized();
+  const Vec3 y = forearm.normalized();
+  Vec3 x = normal.normalized();
+  const double away = x.dot((0.5 * (elbow_K + wrist_K)).normalized());
+  if (std::abs(away) < 0.1) throw_invalid(field, "the arm's plane contains the camera ray: the palm side is undefined");
+  if (away < 0.0) x = -x;
   geometry::Mat3 K_from_F;
   K_from_F.col(0) = x;
   K_from_F.col(1) = y;

@@ -23,12 +23,13 @@ double twist_about_y(const Quat& q);
 // Pronation (+) / supination (-) angle in (-pi, pi] of K_from_F relative to K_from_F_reference.
 double pronation_angle(const Quat& K_from_F_reference, const Quat& K_from_F, Side side);
 
-// F in the calibration pose from the skeleton alone (paper 1, II-H: the palm faces the camera):
-// y_F along elbow -> wrist, x_F (back of the hand) away from the camera, i.e. along the camera
-// ray to the forearm's middle made perpendicular to y_F, z_F = x_F x y_F. Throws
-// posefuse::Error kInvalidArgument "elbow_K/wrist_K" when they coincide or the forearm points
-// along the camera ray (the palm direction is then undefined), "elbow_K"/"wrist_K" non-finite.
-Quat K_from_F_palm_facing_camera(const Vec3& elbow_K, const Vec3& wrist_K);
+// F in the calibration pose from the skeleton alone (paper 1, II-H: upper arm and forearm in the
+// coronal plane, the palm facing the camera): y_F along elbow -> wrist, x_F (back of the hand)
+// the normal of the shoulder-elbow-wrist plane on the side away from the camera, z_F = x_F x y_F.
+// Throws posefuse::Error kInvalidArgument naming the joint when one is not finite,
+// "shoulder_K/elbow_K/wrist_K" when the elbow is straighter than 160 degrees (the plane is
+// undefined) or the plane contains the camera ray (the side is undefined).
+Quat K_from_F_calibration_pose(const Vec3& shoulder_K, const Vec3& elbow_K, const Vec3& wrist_K);
 
 // eq. 11 for one sample with the IMU mounting (F_from_A, the paper's ^A_F q from eq. 9).
 struct ForearmSample {

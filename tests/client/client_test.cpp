@@ -81,7 +81,10 @@ TEST_F(ClientTest, FitWritesResultFiles) {
   // Header row + one row per sample.
   EXPECT_EQ(line_count(dir_ / "out" / "imu_orientations" / "arm_left.csv"), 801u);
   EXPECT_EQ(line_count(dir_ / "out" / "imu_orientations" / "base.csv"), 801u);
-  EXPECT_EQ(line_count(dir_ / "out" / "warnings.txt"), 0u);
+  // The demo has arm IMUs but no camera alignment (forearm.K_from_B): the forearm stage says so.
+  EXPECT_EQ(line_count(dir_ / "out" / "warnings.txt"), 1u);
+  EXPECT_NE(session::read_file_bytes(dir_ / "out" / "warnings.txt", "w").find("FOREARM_NO_CAMERA_ALIGNMENT"),
+            std::string::npos);
   const std::string calibration = session::read_file_bytes(dir_ / "out" / "calibration.json", "c");
   EXPECT_NE(calibration.find("\"gyro_bias_rad_s\""), std::string::npos);
   ASSERT_NE(writer.summary(), nullptr);

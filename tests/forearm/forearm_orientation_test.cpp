@@ -36,20 +36,25 @@ TEST(ForearmOrientation, PronationSignPerArm) {
   EXPECT_NEAR(pronation_angle(reference, reference * rot(80 * kDeg, Vec3::UnitX()), Side::kRight), 0.0, 1e-12);
 }
 
-TEST(ForearmOrientation, PalmFacingCameraFrame) {
-  // Forearm straight up 2 m in front of the camera: y_F = +y_K, back of the hand away from the
-  // camera: x_F = +z_K, z_F = x x y = -x_K.
-  const Quat K_from_F = K_from_F_palm_facing_camera(Vec3(0.3, 0.2, 2.0), Vec3(0.3, 0.45, 2.0));
-  EXPECT_LT((K_from_F * Vec3::UnitY() - Vec3::UnitY()).norm(), 1e-3);
-  const Vec3 away = Vec3(0.3, 0.0, 2.0).normalized();  // the ray to the middle, minus its y part
-  EXPECT_LT((K_from_F * Vec3::UnitX() - away).norm(), 1e-12);
-  EXPECT_LT((K_from_F * Vec3::UnitZ() - away.cross(Vec3::UnitY())).norm(), 1e-12);
-  expect_error([] { K_from_F_palm_facing_camera(Vec3(0, 0, 1), Vec3(0, 0, 1.3)); }, ErrorCode::kInvalidArgument,
-               "elbow_K/wrist_K", "camera ray");
-  expect_error([] { K_from_F_palm_facing_camera(Vec3(0, 0, 1), Vec3(0, 0, 1)); }, ErrorCode::kInvalidArgument,
-               "elbow_K/wrist_K", "coincide");
-  expect_error([] { K_from_F_palm_facing_camera(Vec3(NAN, 0, 1), Vec3(0, 0, 1)); }, ErrorCode::kInvalidArgument,
-               "elbow_K");
+TEST(ForearmOrientation, CalibrationPoseFrame) {
+  // Paper 1 Fig. 3b seen from the camera: upper arm sideways (to the camera's left, +x_K),
+  // forearm straight up, 2 m away. The arm's plane is z_K = 2; the back of the hand faces away
+  // from the camera: x_F = +z_K, y_F = +y_K, z_F = x x y = -x_K (the thumb towards the head).
+  const Vec3 shoulder(0.0, 0.2, 2.0), elbow(0.3, 0.2, 2.0), wrist(0.3, 0.45, 2.0);
+  const Quat K_from_F = K_from_F_calibration_pose(shoulder, elbow, wrist);
+  EXPECT_LT((K_from_F * Vec3::UnitX() - Vec3::UnitZ()).norm(), 1e-12);
+  EXPECT_LT((K_from_F * Vec3::UnitY() - Vec3::UnitY()).norm(), 1e-12);
+  EXPECT_LT((K_from_F * Vec3::UnitZ() + Vec3::UnitX()).norm(), 1e-12);
+  // The same with the shoulder on the other side (a left arm): x_F still points away.
+  const Quat left = K_from_F_calibration_pose(Vec3(0.6, 0.2, 2.0), elbow, wrist);
+  EXPECT_LT((left * Vec3::UnitX() - Vec3::UnitZ()).norm(), 1e-12);
+  expect_error([&] { K_from_F_calibration_pose(shoulder, elbow, Vec3(0.6, 0.2, 2.0)); }, ErrorCode::kInvalidArgument,
+               "shoulder_K/elbow_K/wrist_K", "straighter");
+  // An arm plane that contains the camera ray (the arm points at the camera in a vertical plane).
+  expect_error([&] { K_from_F_calibration_pose(Vec3(0, 0.2, 2.3), Vec3(0, 0.2, 2.0), Vec3(0, 0.45, 2.0)); },
+               ErrorCode::kInvalidArgument, "shoulder_K/elbow_K/wrist_K", "camera ray");
+  expect_error([&] { K_from_F_calibration_pose(Vec3(NAN, 0, 1), elbow, wrist); }, ErrorCode::kInvalidArgument,
+               "shoulder_K");
 }
 
 TEST(ForearmOrientation, SampleFollowsEq11) {

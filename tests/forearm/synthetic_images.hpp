@@ -62,6 +62,28 @@ struct ForearmImages {
   }
 };
 
+// Pixels [col0, col1] x [row0, row1] that can see the cylinder: the projected end circles'
+// bounding box with a margin (rays elsewhere only see the wall).
+struct PixelBox {
+  int col0, col1, row0, row1;
+  bool contains(int col, int row) const { return col >= col0 && col <= col1 && row >= row0 && row <= row1; }
+};
+inline PixelBox cylinder_box(const ForearmScene& s, const PinholeCamera& camera, const Quat& cam_from_K,
+                             const Vec3& cam_from_K_m) {
+  PixelBox box{camera.width, -1, camera.height, -1};
+  for (const Vec3& end : {s.elbow_K, s.wrist_K}) {
+    const Vec3 p = cam_from_K * end + cam_from_K_m;
+    const auto uv = geometry::project(camera, p);
+    if (!uv) return {0, camera.width - 1, 0, camera.height - 1};
+    const int margin = 4 + static_cast<int>(std::ceil(1.5 * camera.fx * s.radius_m / p.z()));
+    box.col0 = std::min(box.col0, static_cast<int>(uv->x()) - margin);
+    box.col1 = std::max(box.col1, static_cast<int>(uv->x()) + margin);
+    box.row0 = std::min(box.row0, static_cast<int>(uv->y()) - margin);
+    box.row1 = std::max(box.row1, static_cast<int>(uv->y()) + margin);
+  }
+  return box;
+}
+
 inline ForearmImages render_forearm(const ForearmScene& s, const StrapCameras& c, double gray_noise = 0.0,
                                     double depth_noise_m = 0.0, std::uint64_t seed = 1) {
   std::mt19937_64 rng(seed);
@@ -70,11 +92,12 @@ inline ForearmImages render_forearm(const ForearmScene& s, const StrapCameras& c
   out.gray.resize(static_cast<std::size_t>(c.color.width * c.color.height));
   const Quat K_from_color = c.color_from_depth.conjugate();
   const Vec3 color_origin_K = K_from_color * (-c.color_from_depth_m);
+  const PixelBox color_box = cylinder_box(s, c.color, c.color_from_depth, c.color_from_depth_m);
   for (int row = 0; row < c.color.height; ++row) {
     for (int col = 0; col < c.color.width; ++col) {
-      const Vec3 dir = K_from_color * geometry::back_project(c.color, col, row, 1.0);
       double axial = 0.0, level = s.wall_level;
-      if (hit_cylinder(s, color_origin_K, dir, &axial)) {
+      if (color_box.contains(col, row) &&
+          hit_cylinder(s, color_origin_K, K_from_color * geometry::back_project(c.color, col, row, 1.0), &axial)) {
         const bool on_strap = s.strap_visible && std::abs(axial - s.strap_to_elbow_m) <= s.strap_width_m / 2;
         level = on_strap ? s.strap_level : s.skin_level;
       }
@@ -84,11 +107,12 @@ inline ForearmImages render_forearm(const ForearmScene& s, const StrapCameras& c
     }
   }
   out.depth_mm.resize(static_cast<std::size_t>(c.depth.width * c.depth.height));
+  const PixelBox depth_box = cylinder_box(s, c.depth, Quat::Identity(), Vec3::Zero());
   for (int row = 0; row < c.depth.height; ++row) {
     for (int col = 0; col < c.depth.width; ++col) {
-      const Vec3 dir = geometry::back_project(c.depth, col, row, 1.0);  // z = 1
       double axial = 0.0;
-      const auto t = hit_cylinder(s, Vec3::Zero(), dir, &axial);
+      std::optional<double> t;  // along a z = 1 ray: the depth itself
+      if (depth_box.contains(col, row)) t = hit_cylinder(s, Vec3::Zero(), geometry::back_project(c.depth, col, row, 1.0), &axial);
       const double z = (t ? *t : s.wall_z_m) + depth_noise_m * normal(rng);
       out.depth_mm[static_cast<std::size_t>(row * c.depth.width + col)] =
           static_cast<std::uint16_t>(std::lround(z * 1000.0));
