@@ -2,7 +2,8 @@
 // Colour and depth images of a forearm for strap-detection tests (paper 1, II-I): the forearm is
 // a cylinder of radius r around the elbow -> wrist segment, skin grey except a black band
 // (the strap) centred d_se from the elbow, in front of a grey wall. Rendered by exact
-// ray-cylinder intersection per pixel centre, then optional Gaussian noise.
+// ray-cylinder intersection per pixel centre, then optional Gaussian noise (inside the
+// forearm's bounding box only, where the strap search looks).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -101,7 +102,7 @@ inline ForearmImages render_forearm(const ForearmScene& s, const StrapCameras& c
         const bool on_strap = s.strap_visible && std::abs(axial - s.strap_to_elbow_m) <= s.strap_width_m / 2;
         level = on_strap ? s.strap_level : s.skin_level;
       }
-      level += gray_noise * normal(rng);
+      if (color_box.contains(col, row)) level += gray_noise * normal(rng);  // only where it matters: fast
       out.gray[static_cast<std::size_t>(row * c.color.width + col)] =
           static_cast<std::uint8_t>(std::clamp(std::lround(level), 0L, 255L));
     }
@@ -113,7 +114,7 @@ inline ForearmImages render_forearm(const ForearmScene& s, const StrapCameras& c
       double axial = 0.0;
       std::optional<double> t;  // along a z = 1 ray: the depth itself
       if (depth_box.contains(col, row)) t = hit_cylinder(s, Vec3::Zero(), geometry::back_project(c.depth, col, row, 1.0), &axial);
-      const double z = (t ? *t : s.wall_z_m) + depth_noise_m * normal(rng);
+      const double z = (t ? *t : s.wall_z_m) + (depth_box.contains(col, row) ? depth_noise_m * normal(rng) : 0.0);
       out.depth_mm[static_cast<std::size_t>(row * c.depth.width + col)] =
           static_cast<std::uint16_t>(std::lround(z * 1000.0));
     }
