@@ -5,9 +5,8 @@
 #include <string>
 #include <vector>
 
-#include <Eigen/Eigenvalues>
-
 #include "common/error.hpp"
+#include "geometry/point_pca.hpp"
 
 namespace posefuse::forearm {
 
@@ -71,21 +70,13 @@ Vec3 closest_on_segment_to_ray(const Vec3& a, const Vec3& b, const Vec3& origin,
 // through them (PCA) when they span one, else the plane z = mean z. A depth pixel is 5-11 mm
 // wide at 2 m, so this keeps the colour image's finer position along the forearm.
 Vec3 surface_point_on_ray(const std::vector<Vec3>& samples, const Vec3& origin, const Vec3& direction) {
-  Vec3 centroid = Vec3::Zero();
-  for (const Vec3& p : samples) centroid += p;
-  centroid /= static_cast<double>(samples.size());
-  Vec3 normal = Vec3::UnitZ();
-  if (samples.size() >= 3) {
-    Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-    for (const Vec3& p : samples) scatter += (p - centroid) * (p - centroid).transpose();
-    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eigen(scatter);
-    // A plane needs two well-spread directions; otherwise keep z = const.
-    if (eigen.eigenvalues()(1) > 1e-8 * static_cast<double>(samples.size())) normal = eigen.eigenvectors().col(0);
-  }
+  const geometry::PointPca pca = geometry::point_pca(samples);
+  // A plane needs two well-spread directions (more than ~0.1 mm); otherwise keep z = const.
+  const Vec3 normal = samples.size() >= 3 && pca.variances(1) > 1e-8 ? pca.normal() : Vec3::UnitZ();
   const double denominator = normal.dot(direction);
-  if (std::abs(denominator) < 0.1) return centroid;  // surface seen edge-on: no stable intersection
-  const Vec3 hit = origin + (normal.dot(centroid - origin) / denominator) * direction;
-  return (hit - centroid).norm() < 0.02 ? hit : centroid;
+  if (std::abs(denominator) < 0.1) return pca.centroid;  // surface seen edge-on: no stable intersection
+  const Vec3 hit = origin + (normal.dot(pca.centroid - origin) / denominator) * direction;
+  return (hit - pca.centroid).norm() < 0.02 ? hit : pca.centroid;
 }
 
 }  // namespace
