@@ -101,8 +101,8 @@ void check_inputs(const IrImageView& ir, const DepthView& depth, const PinholeCa
     throw_invalid("ir.pixels", "missing or not the camera's " + std::to_string(camera.width) + "x" +
                                    std::to_string(camera.height));
   }
-  if (!depth.millimetres || depth.width != camera.width || depth.height != camera.height) {
-    throw_invalid("depth.millimetres", "missing or not the camera's " + std::to_string(camera.width) + "x" +
+  if (!depth.pixels || depth.width != camera.width || depth.height != camera.height) {
+    throw_invalid("depth.pixels", "missing or not the camera's " + std::to_string(camera.width) + "x" +
                                            std::to_string(camera.height));
   }
 }
@@ -247,7 +247,7 @@ PanelInCamera panel_in_camera(const IrImageView& ir, const DepthView& depth, con
     std::vector<Vec3> x_group, y_group, board;
     for (int row = 0; row < depth.height; ++row) {
       for (int col = 0; col < depth.width; ++col) {
-        const std::uint16_t z = depth.millimetres[static_cast<std::size_t>(row) * static_cast<std::size_t>(depth.width) +
+        const std::uint16_t z = depth.pixels[static_cast<std::size_t>(row) * static_cast<std::size_t>(depth.width) +
                                                   static_cast<std::size_t>(col)];
         if (z == 0) continue;
         const Vec3 p = geometry::back_project(camera, col, row, z * 1e-3);

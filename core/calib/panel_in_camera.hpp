@@ -26,6 +26,7 @@
 #include <cstdint>
 
 #include "calib/panel.hpp"
+#include "geometry/image_view.hpp"
 #include "geometry/pinhole_camera.hpp"
 
 namespace posefuse::calib {
@@ -33,16 +34,8 @@ namespace posefuse::calib {
 using geometry::PinholeCamera;
 using geometry::Vec2;
 
-struct IrImageView {
-  int width = 0;
-  int height = 0;
-  const std::uint16_t* pixels = nullptr;  // row-major infrared intensities
-};
-struct DepthView {
-  int width = 0;
-  int height = 0;
-  const std::uint16_t* millimetres = nullptr;  // row-major, 0 = no reading; same pixels as the IR
-};
+using geometry::IrImageView;
+using DepthView = geometry::DepthImageView;  // the same pixels as the IR image (one sensor)
 
 struct PanelCameraOptions {
   double bright_fraction = 0.6;   // of the image maximum
@@ -69,7 +62,7 @@ struct PanelInCamera {
   double marker_residual_px = 0.0;        // RMS reprojection of the model markers
 };
 
-// Throws posefuse::Error: kInvalidArgument "ir.pixels" / "depth.millimetres" (missing or size
+// Throws posefuse::Error: kInvalidArgument "ir.pixels" / "depth.pixels" (missing or size
 // not the camera's), "camera.*" (bad intrinsics), "panel.*"; kFailedPrecondition "ir" (not four
 // bright points), "ir.markers" (no L among them), "depth.x_strip" / "depth.y_strip" /
 // "depth.board" (too few points, not a strip, not flat), "panel.axes" (skew), "panel.origin"

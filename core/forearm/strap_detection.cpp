@@ -38,8 +38,8 @@ void check_inputs(const GrayImageView& color, const DepthImageView& depth, const
                                       " does not match the colour camera's " + std::to_string(cameras.color.width) +
                                       "x" + std::to_string(cameras.color.height));
   }
-  if (depth.millimetres == nullptr || depth.width != cameras.depth.width || depth.height != cameras.depth.height) {
-    throw_invalid("depth.millimetres", "image " + std::to_string(depth.width) + "x" + std::to_string(depth.height) +
+  if (depth.pixels == nullptr || depth.width != cameras.depth.width || depth.height != cameras.depth.height) {
+    throw_invalid("depth.pixels", "image " + std::to_string(depth.width) + "x" + std::to_string(depth.height) +
                                            " does not match the depth camera's " + std::to_string(cameras.depth.width) +
                                            "x" + std::to_string(cameras.depth.height));
   }
@@ -162,7 +162,7 @@ StrapDetection detect_strap(const GrayImageView& color, const DepthImageView& de
   std::vector<Vec3> samples;
   for (int row = std::max(0, row0 - r); row <= std::min(depth.height - 1, row0 + r); ++row) {
     for (int col = std::max(0, col0 - r); col <= std::min(depth.width - 1, col0 + r); ++col) {
-      const std::uint16_t mm = depth.millimetres[row * depth.width + col];
+      const std::uint16_t mm = depth.pixels[row * depth.width + col];
       if (mm == 0) continue;
       const Vec3 p_K = geometry::back_project(cameras.depth, col, row, mm * 1e-3);
       const auto px = geometry::project(cameras.color, to_color(p_K));

@@ -22,6 +22,7 @@
 #include <cstdint>
 
 #include "forearm/forearm_types.hpp"
+#include "geometry/image_view.hpp"
 #include "geometry/pinhole_camera.hpp"
 
 namespace posefuse::forearm {
@@ -29,17 +30,8 @@ namespace posefuse::forearm {
 using geometry::PinholeCamera;
 using geometry::Vec2;
 
-// Row-major images that the caller owns (e.g. a decoded cv::Mat's data).
-struct GrayImageView {
-  int width = 0;
-  int height = 0;
-  const std::uint8_t* pixels = nullptr;  // width * height grey levels
-};
-struct DepthImageView {
-  int width = 0;
-  int height = 0;
-  const std::uint16_t* millimetres = nullptr;  // width * height, 0 = no reading
-};
+using geometry::DepthImageView;
+using geometry::GrayImageView;
 
 // The two cameras of II-I: depth (frame K) and colour, p_color = color_from_depth * p_K.
 struct StrapCameras {
@@ -82,7 +74,7 @@ struct StrapDetection {
 };
 
 // Throws posefuse::Error kInvalidArgument naming the input for images without pixels or whose
-// size disagrees with the cameras ("color.pixels", "depth.millimetres"), non-finite joints
+// size disagrees with the cameras ("color.pixels", "depth.pixels"), non-finite joints
 // ("elbow_K", "wrist_K"), or options out of range ("options"). A strap that is not seen is not
 // an error: the result's miss says why.
 StrapDetection detect_strap(const GrayImageView& color, const DepthImageView& depth,

@@ -107,7 +107,7 @@ TEST(StrapDetection, RefusesBadInput) {
                ErrorCode::kInvalidArgument, "color.pixels");
   DepthImageView no_depth{cameras.depth.width, cameras.depth.height, nullptr};
   expect_error([&] { detect_strap(images.gray_view(cameras), no_depth, cameras, scene.elbow_K, scene.wrist_K); },
-               ErrorCode::kInvalidArgument, "depth.millimetres");
+               ErrorCode::kInvalidArgument, "depth.pixels");
   expect_error([&] {
     detect_strap(images.gray_view(cameras), images.depth_view(cameras), cameras, Vec3::Constant(NAN), scene.wrist_K);
   }, ErrorCode::kInvalidArgument, "elbow_K");
