@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "../forearm/synthetic_images.hpp"
+#include "forearm/forearm_orientation.hpp"
 #include "geometry/rotation_matrix.hpp"
 #include "session/image_codec.hpp"
 #include "session/text_fields.hpp"
@@ -278,6 +279,76 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
   e.set_sync_events(sync_events);
   chunks.push_back(end);
   return chunks;
+}
+
+namespace {
+
+// The truth frame within 2 ms of t_us, or npos.
+std::size_t frame_near(const ForearmSessionTruth& truth, std::int64_t t_us) {
+  const auto it = std::lower_bound(truth.frame_t_us.begin(), truth.frame_t_us.end(), t_us - 2000);
+  if (it == truth.frame_t_us.end() || std::abs(*it - t_us) > 2000) return static_cast<std::size_t>(-1);
+  return static_cast<std::size_t>(it - truth.frame_t_us.begin());
+}
+
+Vec3 vec(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+}  // namespace
+
+ForearmSessionErrors evaluate_forearm_results(const ForearmSessionTruth& truth,
+                                              const std::vector<v1::FitResult>& results) {
+  constexpr std::size_t kNone = static_cast<std::size_t>(-1);
+  ForearmSessionErrors e;
+  double orientation_sq = 0.0, visible_sq = 0.0;
+  std::map<int, double> recovered_sq;
+  for (const v1::FitResult& result : results) {
+    if (result.has_forearm_orientations()) {
+      const v1::ForearmOrientationBatch& b = result.forearm_orientations();
+      for (int i = 0; i < b.t_us_size() && 4 * i + 3 < b.k_from_f_size() && i < b.pronation_rad_size(); ++i) {
+        const std::size_t k = frame_near(truth, b.t_us(i));
+        if (k == kNone) continue;
+        const Quat K_from_F(b.k_from_f(4 * i), b.k_from_f(4 * i + 1), b.k_from_f(4 * i + 2), b.k_from_f(4 * i + 3));
+        const double angle = geometry::angle_between(K_from_F, truth.K_from_F[k]);
+        orientation_sq += angle * angle;
+        e.orientation_max_rad = std::max(e.orientation_max_rad, angle);
+        const double true_pronation =
+            forearm::pronation_angle(truth.K_from_F_calibration, truth.K_from_F[k], forearm::Side::kRight);
+        e.pronation_max_rad = std::max(e.pronation_max_rad, std::abs(b.pronation_rad(i) - true_pronation));
+        ++e.orientation_samples;
+      }
+    } else if (result.has_frame()) {
+      const std::size_t k = frame_near(truth, result.frame().t_us());
+      if (k == kNone) continue;
+      ++e.frames;
+      for (const v1::ImuPosition& p : result.frame().imu_positions()) {
+        const double error = (vec(p.position_m()) - truth.imu_K[k]).norm();
+        if (p.source() == v1::VISUAL) {
+          visible_sq += error * error;
+          ++e.visible_frames;
+        } else if (p.source() == v1::PREDICTED) {
+          e.predicted_max_m = std::max(e.predicted_max_m, error);
+          ++e.predicted_frames;
+        }
+      }
+    } else if (result.has_recovered_segment()) {
+      const v1::RecoveredSegment& s = result.recovered_segment();
+      ++e.segments;
+      ForearmSessionErrors::Recovered& r = e.recovered[s.method()];
+      for (const auto& sample : s.samples()) {
+        const std::size_t k = frame_near(truth, sample.t_us());
+        if (k == kNone) continue;
+        const double error = (vec(sample.imu_m()) - truth.imu_K[k]).norm();
+        recovered_sq[s.method()] += error * error;
+        r.max_m = std::max(r.max_m, error);
+        ++r.samples;
+      }
+    }
+  }
+  if (e.orientation_samples > 0) e.orientation_rms_rad = std::sqrt(orientation_sq / e.orientation_samples);
+  if (e.visible_frames > 0) e.visible_rms_m = std::sqrt(visible_sq / e.visible_frames);
+  for (auto& [method, r] : e.recovered) {
+    if (r.samples > 0) r.rms_m = std::sqrt(recovered_sq[method] / r.samples);
+  }
+  return e;
 }
 
 }  // namespace posefuse::session::testing

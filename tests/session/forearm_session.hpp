@@ -8,9 +8,11 @@
 // colour + depth images of the forearm as a cylinder with the black strap
 // (tests/forearm/synthetic_images.hpp); during the occlusion the strap is not drawn.
 #include <cstdint>
+#include <map>
 #include <vector>
 
 #include "forearm/forearm_types.hpp"
+#include "posefuse/v1/results.pb.h"
 #include "posefuse/v1/session.pb.h"
 
 namespace posefuse::session::testing {
@@ -41,5 +43,23 @@ struct ForearmSessionTruth {
 // Header, data chunks in approximate camera-time order, end marker.
 std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& options,
                                                    ForearmSessionTruth* truth);
+
+// The forearm stage's results against the truth. Truth exists at camera frames only, so IMU
+// samples and recovered samples are compared where they lie within 2 ms of a frame.
+struct ForearmSessionErrors {
+  std::size_t orientation_samples = 0;
+  double orientation_rms_rad = 0.0, orientation_max_rad = 0.0, pronation_max_rad = 0.0;
+  std::size_t frames = 0, visible_frames = 0, predicted_frames = 0;
+  double visible_rms_m = 0.0, predicted_max_m = 0.0;
+  // Per RecoveredSegment method (PAPER, SMOOTHER): samples compared, RMS and maximum error.
+  struct Recovered {
+    std::size_t samples = 0;
+    double rms_m = 0.0, max_m = 0.0;
+  };
+  std::map<int, Recovered> recovered;
+  std::size_t segments = 0;
+};
+ForearmSessionErrors evaluate_forearm_results(const ForearmSessionTruth& truth,
+                                              const std::vector<v1::FitResult>& results);
 
 }  // namespace posefuse::session::testing

@@ -56,13 +56,7 @@ const StageRun& run_session(const ForearmSessionOptions& options) {
   return *slot;
 }
 
-Vec3 vec(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 Quat quat(const v1::Quaternion& q) { return Quat(q.w(), q.x(), q.y(), q.z()); }
-
-std::size_t frame_index(const ForearmSessionTruth& truth, std::int64_t t_us) {
-  const auto it = std::lower_bound(truth.frame_t_us.begin(), truth.frame_t_us.end(), t_us);
-  return static_cast<std::size_t>(it - truth.frame_t_us.begin());
-}
 
 TEST(ForearmStage, CalibratesTheForearmModel) {
   const StageRun& r = run_session({});
@@ -95,95 +89,48 @@ TEST(ForearmStage, CalibratesTheForearmModel) {
 
 TEST(ForearmStage, OrientationAndPronationForEveryImuSample) {
   const StageRun& r = run_session({});
-  std::size_t samples = 0;
-  double sum_sq = 0.0, max_error = 0.0, pronation_max_error = 0.0;
-  for (const auto& result : r.sink.results) {
-    if (!result.has_forearm_orientations()) continue;
-    const v1::ForearmOrientationBatch& b = result.forearm_orientations();
-    EXPECT_EQ(b.device_id(), "arm_r");
-    ASSERT_EQ(b.k_from_f_size(), 4 * b.t_us_size());
-    for (int i = 0; i < b.t_us_size(); ++i) {
-      // Truth at the nearest camera frame (IMU samples are within 6 ms of one; the forearm
-      // turns at most ~1.5 rad/s here, so compare only samples within 2 ms of a frame).
-      const std::size_t k = frame_index(r.truth, b.t_us(i) - 2000);
-      if (k >= r.truth.frame_t_us.size() || std::abs(r.truth.frame_t_us[k] - b.t_us(i)) > 2000) continue;
-      const Quat K_from_F(b.k_from_f(4 * i), b.k_from_f(4 * i + 1), b.k_from_f(4 * i + 2), b.k_from_f(4 * i + 3));
-      const double e = geometry::angle_between(K_from_F, r.truth.K_from_F[k]);
-      sum_sq += e * e;
-      max_error = std::max(max_error, e);
-      const double true_pronation =
-          forearm::pronation_angle(r.truth.K_from_F_calibration, r.truth.K_from_F[k], forearm::Side::kRight);
-      pronation_max_error = std::max(pronation_max_error, std::abs(b.pronation_rad(i) - true_pronation));
-      ++samples;
-    }
-  }
-  ASSERT_GT(samples, 50u);
-  const double rms = std::sqrt(sum_sq / samples);
-  std::printf("forearm orientation: %zu samples, RMS %.2f deg, max %.2f deg; pronation max error %.2f deg\n", samples,
-              rms / kDeg, max_error / kDeg, pronation_max_error / kDeg);
-  // Filter noise, the 2 ms time offset and the calibration's eq. 9 error (< 2 degrees).
-  EXPECT_LT(rms, 3.0 * kDeg) << "RMS " << rms / kDeg << " deg over " << samples;
-  EXPECT_LT(max_error, 6.0 * kDeg);
-  EXPECT_LT(pronation_max_error, 6.0 * kDeg);
+  const testing::ForearmSessionErrors e = testing::evaluate_forearm_results(r.truth, r.sink.results);
+  ASSERT_GT(e.orientation_samples, 50u);
+  std::printf("forearm orientation: %zu samples, RMS %.2f deg, max %.2f deg; pronation max error %.2f deg\n",
+              e.orientation_samples, e.orientation_rms_rad / kDeg, e.orientation_max_rad / kDeg,
+              e.pronation_max_rad / kDeg);
+  // Filter noise and the calibration's eq. 9 error (< 2 degrees).
+  EXPECT_LT(e.orientation_rms_rad, 3.0 * kDeg);
+  EXPECT_LT(e.orientation_max_rad, 6.0 * kDeg);
+  EXPECT_LT(e.pronation_max_rad, 6.0 * kDeg);
 }
 
 TEST(ForearmStage, ImuPositionsVisibleThenPredictedThenRecovered) {
   const ForearmSessionOptions options;
   const StageRun& r = run_session(options);
-  double visible_sq = 0.0;
-  std::size_t visible = 0, predicted = 0, frames = 0;
-  double predicted_max = 0.0;
+  // Predicted positions only inside the occlusion; every frame answered once.
   for (const auto& result : r.sink.results) {
     if (!result.has_frame()) continue;
-    ++frames;
-    const std::size_t k = frame_index(r.truth, result.frame().t_us());
-    ASSERT_LT(k, r.truth.frame_t_us.size());
     ASSERT_EQ(result.frame().forearms_size(), 1);
     for (const v1::ImuPosition& p : result.frame().imu_positions()) {
-      const double e = (vec(p.position_m()) - r.truth.imu_K[k]).norm();
-      if (p.source() == v1::VISUAL) {
-        visible_sq += e * e;
-        ++visible;
-      } else {
-        EXPECT_EQ(p.source(), v1::PREDICTED);
-        const double t = r.truth.frame_t_us[k] * 1e-6;
-        EXPECT_GE(t, options.occlusion_begin_s);
-        EXPECT_LT(t, options.occlusion_end_s);
-        predicted_max = std::max(predicted_max, e);
-        ++predicted;
-      }
+      if (p.source() == v1::VISUAL) continue;
+      EXPECT_EQ(p.source(), v1::PREDICTED);
+      const double t = static_cast<double>(result.frame().t_us()) * 1e-6;
+      EXPECT_GE(t, options.occlusion_begin_s);
+      EXPECT_LT(t, options.occlusion_end_s + 1e-3);
     }
   }
-  EXPECT_EQ(frames, r.truth.frame_t_us.size());
-  EXPECT_GT(visible, frames / 2);
-  EXPECT_GE(predicted, 20u);  // the 0.9 s occlusion at 30 Hz
-  EXPECT_LT(std::sqrt(visible_sq / visible), 0.012) << "visible RMS";
-  EXPECT_LT(predicted_max, 0.15) << "live estimate max";
-
-  std::map<v1::RecoveredSegment::Method, double> max_error;
-  for (const auto& result : r.sink.results) {
-    if (!result.has_recovered_segment()) continue;
-    const v1::RecoveredSegment& s = result.recovered_segment();
-    EXPECT_EQ(s.device_id(), "arm_r");
-    double worst = 0.0;
-    for (const auto& sample : s.samples()) {
-      const std::size_t k = frame_index(r.truth, sample.t_us() - 20000);
-      // Truth only at camera frames: compare the samples within 2 ms of one.
-      for (std::size_t j = k; j < std::min(k + 3, r.truth.frame_t_us.size()); ++j) {
-        if (std::abs(r.truth.frame_t_us[j] - sample.t_us()) <= 2000) {
-          worst = std::max(worst, (vec(sample.imu_m()) - r.truth.imu_K[j]).norm());
-        }
-      }
-    }
-    max_error[s.method()] = std::max(max_error[s.method()], worst);
-  }
-  ASSERT_EQ(max_error.size(), 2u) << "one segment per method";
+  const testing::ForearmSessionErrors e = testing::evaluate_forearm_results(r.truth, r.sink.results);
+  EXPECT_EQ(e.frames, r.truth.frame_t_us.size());
+  EXPECT_GT(e.visible_frames, e.frames / 2);
+  EXPECT_GE(e.predicted_frames, 20u);  // the 0.9 s occlusion at 30 Hz
+  EXPECT_EQ(e.segments, 2u);           // one per method
+  ASSERT_EQ(e.recovered.size(), 2u);
+  const auto& smoother = e.recovered.at(v1::RecoveredSegment::SMOOTHER);
+  const auto& paper = e.recovered.at(v1::RecoveredSegment::PAPER);
   std::printf("IMU position: visible %zu frames RMS %.1f mm; predicted %zu frames max %.1f mm; recovered max: "
-              "smoother %.1f mm, paper %.1f mm\n", visible, 1e3 * std::sqrt(visible_sq / visible), predicted,
-              1e3 * predicted_max, 1e3 * max_error[v1::RecoveredSegment::SMOOTHER],
-              1e3 * max_error[v1::RecoveredSegment::PAPER]);
-  EXPECT_LT(max_error[v1::RecoveredSegment::SMOOTHER], 0.04);
-  EXPECT_LT(max_error[v1::RecoveredSegment::PAPER], 0.08);
+              "smoother %.1f mm, paper %.1f mm\n", e.visible_frames, 1e3 * e.visible_rms_m, e.predicted_frames,
+              1e3 * e.predicted_max_m, 1e3 * smoother.max_m, 1e3 * paper.max_m);
+  EXPECT_LT(e.visible_rms_m, 0.012);
+  EXPECT_LT(e.predicted_max_m, 0.15);
+  EXPECT_GE(smoother.samples, 8u);  // 80 Hz samples within 2 ms of a 30 Hz frame, ~1 s
+  EXPECT_LT(smoother.max_m, 0.04);
+  EXPECT_LT(paper.max_m, 0.08);
   EXPECT_EQ(r.sink.results.back().summary().recovered_segments(), 2u);
 }
 
