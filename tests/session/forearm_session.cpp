@@ -182,6 +182,8 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
   std::uint64_t frames = 0;
   *truth = ForearmSessionTruth{};
   truth->K_from_W = camera.K_from_W;
+  truth->device_us_at_camera_zero = {{arm_device.device_id, arm_device.clock.to_device_us(0.0)},
+                                     {base_device.device_id, base_device.clock.to_device_us(0.0)}};
   truth->model = {arm.strap_radius_m, arm.strap_to_elbow_m, d_sw, arm.upper_arm_m, arm.F_from_A};
   truth->K_from_F_calibration = camera.K_from_W * sim::arm_pose(arm, sim::calibration_pose_angles()).W_from_F;
   for (int k = 0;; ++k) {

@@ -9,6 +9,7 @@
 // (tests/forearm/synthetic_images.hpp); during the occlusion the strap is not drawn.
 #include <cstdint>
 #include <map>
+#include <string>
 #include <vector>
 
 #include "forearm/forearm_types.hpp"
@@ -38,6 +39,9 @@ struct ForearmSessionTruth {
   forearm::ForearmModel model;              // r, d_se, d_sw, d_ul and F_from_A
   forearm::Quat K_from_W = forearm::Quat::Identity();
   forearm::Quat K_from_F_calibration = forearm::Quat::Identity();  // the forearm in the calibration pose
+  // Each IMU's clock reading at camera time 0, when both take their first sample: the true
+  // camera_t - device_t there is minus this.
+  std::map<std::string, std::int64_t> device_us_at_camera_zero;
 };
 
 // Header, data chunks in approximate camera-time order, end marker.
