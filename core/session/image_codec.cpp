@@ -158,6 +158,40 @@ v1::DepthFrame encode_depth(const cv::Mat& depth_mm, v1::DepthFrame::Encoding en
   return frame;
 }
 
+cv::Mat decode_color_gray(const v1::ColorFrame& frame, const std::string& field) {
+  check_dimensions(frame.width(), frame.height(), field);
+  const std::string data_field = field + ".data";
+  // The header first: rejects other bytes and oversized images before any decoding.
+  ImageSize header;
+  switch (frame.encoding()) {
+    case v1::ColorFrame::PNG: header = png_size(frame.data(), data_field); break;
+    case v1::ColorFrame::JPEG: header = jpeg_size(frame.data(), data_field); break;
+    default:
+      throw_invalid(field + ".encoding", "unknown color encoding " + std::to_string(frame.encoding()));
+  }
+  if (header.width != frame.width() || header.height != frame.height()) {
+    throw_invalid(data_field, "image is " + size_text(header.width, header.height) + ", the chunk says " +
+                                  size_text(frame.width(), frame.height()));
+  }
+  const cv::Mat encoded(1, static_cast<int>(frame.data().size()), CV_8UC1, const_cast<char*>(frame.data().data()));
+  cv::Mat gray = cv::imdecode(encoded, cv::IMREAD_GRAYSCALE);
+  if (gray.empty() || gray.type() != CV_8UC1) throw_invalid(data_field, "image cannot be decoded");
+  return gray;
+}
+
+v1::ColorFrame encode_color_png(const cv::Mat& image, std::int64_t t_us) {
+  if (image.depth() != CV_8U || (image.channels() != 1 && image.channels() != 3)) {
+    throw_invalid("color", "expected an 8-bit grey or BGR image");
+  }
+  v1::ColorFrame frame;
+  frame.set_t_us(t_us);
+  frame.set_width(static_cast<std::uint32_t>(image.cols));
+  frame.set_height(static_cast<std::uint32_t>(image.rows));
+  frame.set_encoding(v1::ColorFrame::PNG);
+  frame.set_data(encode_png(image));
+  return frame;
+}
+
 cv::Mat decode_body_index(const v1::BodyIndexFrame& frame, const std::string& field) {
   check_dimensions(frame.width(), frame.height(), field);
   switch (frame.encoding()) {

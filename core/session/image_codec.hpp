@@ -27,6 +27,12 @@ cv::Mat decode_body_index(const v1::BodyIndexFrame& frame, const std::string& fi
 v1::BodyIndexFrame encode_body_index(const cv::Mat& body_index,
                                      v1::BodyIndexFrame::Encoding encoding, std::int64_t t_us);
 
+// Colour frame -> CV_8UC1 grey levels (the strap search, paper 1 II-I, needs brightness only),
+// from JPEG or PNG, 8-bit grey or BGR; checks the size against the chunk's width and height.
+cv::Mat decode_color_gray(const v1::ColorFrame& frame, const std::string& field = "color");
+// An 8-bit grey or BGR image as a PNG colour frame.
+v1::ColorFrame encode_color_png(const cv::Mat& image, std::int64_t t_us);
+
 // Width and height read from an encoded file's header without decoding the pixels.
 struct ImageSize {
   std::uint32_t width = 0;

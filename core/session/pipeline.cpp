@@ -13,7 +13,25 @@ class SessionPipeline::Output : public StageOutput {
   void emit(v1::FitResult&& result) override {
     if (result.has_warning()) ++pipeline_.warnings_;
     if (result.has_item_error()) ++pipeline_.item_errors_;
+    if (result.has_recovered_segment()) ++pipeline_.recovered_segments_;
+    const std::size_t emitter = pipeline_.current_stage_;
+    if (emitter >= pipeline_.stages_.size() || emitter + 1 == pipeline_.stages_.size()) {
+      pipeline_.sink_.emit(std::move(result));
+      return;
+    }
+    // Later stages see it after the sink, so that the stream keeps cause before effect.
+    const v1::FitResult copy = result;
     pipeline_.sink_.emit(std::move(result));
+    for (std::size_t next = emitter + 1; next < pipeline_.stages_.size(); ++next) {
+      pipeline_.current_stage_ = next;
+      try {
+        pipeline_.stages_[next]->on_result(copy, *this);
+      } catch (const Error& error) {
+        pipeline_.current_stage_ = emitter;
+        pipeline_.item_error(error, error.field());
+      }
+    }
+    pipeline_.current_stage_ = emitter;
   }
   void warn(const std::string& code, const std::string& field,
             const std::string& message) override {
@@ -72,8 +90,9 @@ void SessionPipeline::push(const v1::SessionChunk& chunk) {
   }
 
   if (chunk.has_header()) {
-    for (const auto& stage : stages_) {
-      timed(*stage, [&] { stage->start(chunk.header(), *output_); });
+    for (current_stage_ = 0; current_stage_ < stages_.size(); ++current_stage_) {
+      Stage& stage = *stages_[current_stage_];
+      timed(stage, [&] { stage.start(chunk.header(), *output_); });
     }
     return;
   }
@@ -89,9 +108,10 @@ void SessionPipeline::push(const v1::SessionChunk& chunk) {
 void SessionPipeline::process_data_chunk(const v1::SessionChunk& chunk) {
   note_camera_time(chunk);
   if (chunk.has_depth()) ++depth_frames_;
-  for (const auto& stage : stages_) {
+  for (current_stage_ = 0; current_stage_ < stages_.size(); ++current_stage_) {
+    Stage& stage = *stages_[current_stage_];
     try {
-      timed(*stage, [&] { stage->on_chunk(chunk, *output_); });
+      timed(stage, [&] { stage.on_chunk(chunk, *output_); });
     } catch (const Error& error) {
       item_error(error, error.field());
     }
@@ -118,7 +138,11 @@ void SessionPipeline::item_error(const Error& error, const std::string& field) {
 
 void SessionPipeline::end_session() {
   ended_ = true;
-  for (const auto& stage : stages_) timed(*stage, [&] { stage->finish(*output_); });
+  for (current_stage_ = 0; current_stage_ < stages_.size(); ++current_stage_) {
+    Stage& stage = *stages_[current_stage_];
+    timed(stage, [&] { stage.finish(*output_); });
+  }
+  current_stage_ = stages_.size();  // the pipeline's own results go to no stage
   v1::FitResult calibration;
   *calibration.mutable_calibration() = output_->calibration();
   output_->emit(std::move(calibration));
@@ -129,7 +153,7 @@ void SessionPipeline::end_session() {
   summary.set_chunks(index_);
   summary.set_depth_frames(depth_frames_);
   summary.set_frames_fitted(0);  // no body-fitting stage yet
-  summary.set_recovered_segments(0);
+  summary.set_recovered_segments(recovered_segments_);
   summary.set_warnings(warnings_);
   summary.set_item_errors(item_errors_);
   if (first_camera_t_us_) {

@@ -58,6 +58,11 @@ class Stage {
   virtual void on_chunk(const v1::SessionChunk& chunk, StageOutput& out) = 0;
   // After the end marker: emit what is left and add to out.calibration().
   virtual void finish(StageOutput& out) = 0;
+  // A result emitted by a stage that runs before this one, as it is emitted (e.g. the IMU
+  // orientations the forearm stage builds on). Called before the emitting stage returns, so a
+  // stage sees an earlier stage's results for a chunk before its own on_chunk for that chunk.
+  // Errors thrown here are item errors, as from on_chunk.
+  virtual void on_result(const v1::FitResult& /*result*/, StageOutput& /*out*/) {}
 };
 
 }  // namespace posefuse::session

@@ -81,11 +81,59 @@ TEST_F(ClientTest, FitWritesResultFiles) {
   // Header row + one row per sample.
   EXPECT_EQ(line_count(dir_ / "out" / "imu_orientations" / "arm_left.csv"), 801u);
   EXPECT_EQ(line_count(dir_ / "out" / "imu_orientations" / "base.csv"), 801u);
-  EXPECT_EQ(line_count(dir_ / "out" / "warnings.txt"), 0u);
+  // The demo has arm IMUs but no camera alignment (forearm.K_from_B): the forearm stage says so.
+  EXPECT_EQ(line_count(dir_ / "out" / "warnings.txt"), 1u);
+  EXPECT_NE(session::read_file_bytes(dir_ / "out" / "warnings.txt", "w").find("FOREARM_NO_CAMERA_ALIGNMENT"),
+            std::string::npos);
   const std::string calibration = session::read_file_bytes(dir_ / "out" / "calibration.json", "c");
   EXPECT_NE(calibration.find("\"gyro_bias_rad_s\""), std::string::npos);
   ASSERT_NE(writer.summary(), nullptr);
   EXPECT_EQ(writer.summary()->depth_frames(), 300u);
+}
+
+TEST_F(ClientTest, ForearmResultsGoToCsvFiles) {
+  ResultWriter writer(dir_ / "out");
+  v1::FitResult orientations;
+  v1::ForearmOrientationBatch& batch = *orientations.mutable_forearm_orientations();
+  batch.set_device_id("arm_r");
+  batch.set_arm(v1::RIGHT);
+  for (int i = 0; i < 3; ++i) {
+    batch.add_t_us(1000 + 12500 * i);
+    for (const double v : {1.0, 0.0, 0.0, 0.0}) batch.add_k_from_f(v);
+    batch.add_pronation_rad(0.1 * i);
+  }
+  writer.write(orientations);
+  v1::FitResult frame;
+  frame.mutable_frame()->set_t_us(33333);
+  v1::ImuPosition& p = *frame.mutable_frame()->add_imu_positions();
+  p.set_device_id("arm_r");
+  p.mutable_position_m()->set_z(2.0);
+  p.set_source(v1::PREDICTED);
+  writer.write(frame);
+  v1::FitResult segment;
+  v1::RecoveredSegment& s = *segment.mutable_recovered_segment();
+  s.set_device_id("arm_r");
+  s.set_method(v1::RecoveredSegment::SMOOTHER);
+  s.add_samples()->set_t_us(5);
+  s.add_samples()->set_t_us(6);
+  writer.write(segment);
+  writer.finish();
+  EXPECT_EQ(writer.forearm_samples(), 3u);
+  EXPECT_EQ(line_count(dir_ / "out" / "forearm_orientations" / "arm_r.csv"), 4u);
+  EXPECT_EQ(line_count(dir_ / "out" / "imu_positions.csv"), 2u);
+  EXPECT_NE(session::read_file_bytes(dir_ / "out" / "imu_positions.csv", "p").find("33333,arm_r,0,0,2,PREDICTED"),
+            std::string::npos);
+  EXPECT_EQ(line_count(dir_ / "out" / "recovered_segments.csv"), 3u);
+  EXPECT_NE(session::read_file_bytes(dir_ / "out" / "recovered_segments.csv", "s").find("arm_r,SMOOTHER"),
+            std::string::npos);
+  // A malformed batch (3 samples, 2 angles) is refused with the field named.
+  batch.mutable_pronation_rad()->RemoveLast();
+  try {
+    writer.write(orientations);
+    ADD_FAILURE() << "accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), "forearm_orientations.K_from_F");
+  }
 }
 
 TEST_F(ClientTest, UnreachableServerGivesOneReadableLine) {

@@ -349,10 +349,13 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   v1::ServerInfo info;
   ASSERT_TRUE(stub_->GetServerInfo(&context, {}, &info).ok());
   EXPECT_EQ(info.api_version(), "posefuse.v1");
-  ASSERT_EQ(info.stages_size(), 1);
+  ASSERT_EQ(info.stages_size(), 2);
   EXPECT_EQ(info.stages(0).name(), "imu_orientation");
-  ASSERT_EQ(info.options_size(), 2);
+  EXPECT_EQ(info.stages(1).name(), "forearm");
+  ASSERT_EQ(info.options_size(), 6);
   EXPECT_EQ(info.options(0).key(), "imu.tau_acc_s");
+  EXPECT_EQ(info.options(2).key(), "forearm.K_from_B");
+  EXPECT_EQ(info.options(2).stage(), "forearm");
   EXPECT_EQ(info.limits().max_sessions(), 3u);
   EXPECT_EQ(info.limits().workers(), 2u);
   EXPECT_FALSE(info.jobs_supported());

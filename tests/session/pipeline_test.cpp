@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "client/demo_session.hpp"
 #include "common/error.hpp"
 #include "geometry/quaternion.hpp"
@@ -291,7 +293,7 @@ TEST(SessionPipeline, TooManyBadChunksEndTheSession) {
 }
 
 // A stage plugged in beside the IMU stage sees every accepted chunk in order, finishes once and
-// contributes to the single calibration report.
+// contributes to the single calibration report; it receives the earlier stages' results.
 class RecordingStage : public Stage {
  public:
   explicit RecordingStage(std::vector<std::string>& log) : log_(log) {}
@@ -304,11 +306,17 @@ class RecordingStage : public Stage {
       if (log_.size() == 3) throw_precondition("depth", "this stage rejects the second frame");
     }
   }
+  // Results of the stages before this one (the IMU and forearm stages), as they are emitted.
+  void on_result(const v1::FitResult& result, StageOutput&) override {
+    if (result.has_imu_orientations()) ++orientation_batches_seen;
+  }
   void finish(StageOutput& out) override {
     log_.push_back("finish");
     out.calibration().mutable_body_shape()->set_estimated(true);
     out.warn("TEST_WARNING", "stage", "from the test stage");
   }
+
+  int orientation_batches_seen = 0;
 
  private:
   std::vector<std::string>& log_;
@@ -318,13 +326,18 @@ TEST(SessionPipeline, PluggedStageSeesChunksInOrderAndStageErrorsAreItemErrors) 
   const auto chunks = demo::make_demo_session();
   std::vector<std::string> log;
   std::vector<std::unique_ptr<Stage>> stages = make_default_stages();
-  stages.push_back(std::make_unique<RecordingStage>(log));
+  auto recording = std::make_unique<RecordingStage>(log);
+  RecordingStage& recorder = *recording;
+  stages.push_back(std::move(recording));
   CollectingSink sink;
   SessionPipeline pipeline(std::move(stages), sink);
   for (const auto& chunk : chunks) pipeline.push(chunk);
   pipeline.close();
 
   ASSERT_EQ(log.size(), 302u);
+  EXPECT_EQ(recorder.orientation_batches_seen,
+            static_cast<int>(sink.of(v1::FitResult::kImuOrientations).size()));
+  EXPECT_GT(recorder.orientation_batches_seen, 0);
   EXPECT_EQ(log.front(), "start");
   EXPECT_EQ(log.back(), "finish");
   const auto errors = sink.item_errors();
@@ -335,7 +348,12 @@ TEST(SessionPipeline, PluggedStageSeesChunksInOrderAndStageErrorsAreItemErrors) 
   ASSERT_EQ(calibrations.size(), 1u);
   EXPECT_TRUE(calibrations[0].calibration().body_shape().estimated());
   EXPECT_EQ(calibrations[0].calibration().imus_size(), 2);
-  EXPECT_EQ(sink.results.back().summary().warnings(), 1u);
+  // The test stage's warning, next to the forearm stage's (the demo has no camera alignment).
+  const auto warnings = sink.of(v1::FitResult::kWarning);
+  EXPECT_EQ(std::count_if(warnings.begin(), warnings.end(),
+                          [](const v1::FitResult& r) { return r.warning().code() == "TEST_WARNING"; }),
+            1);
+  EXPECT_EQ(sink.results.back().summary().warnings(), warnings.size());
   EXPECT_EQ(sink.results.back().summary().item_errors(), 1u);
 }
 

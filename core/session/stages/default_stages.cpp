@@ -1,5 +1,6 @@
 #include "session/stages/default_stages.hpp"
 
+#include "session/stages/forearm_stage.hpp"
 #include "session/stages/imu_orientation_stage.hpp"
 
 namespace posefuse::session {
@@ -7,6 +8,7 @@ namespace posefuse::session {
 std::vector<std::unique_ptr<Stage>> make_default_stages() {
   std::vector<std::unique_ptr<Stage>> stages;
   stages.push_back(std::make_unique<ImuOrientationStage>());
+  stages.push_back(std::make_unique<ForearmStage>());  // needs the IMU orientations first
   return stages;
 }
 

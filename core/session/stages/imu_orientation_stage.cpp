@@ -6,6 +6,7 @@
 #include "common/error.hpp"
 #include "geometry/quaternion.hpp"
 #include "session/imu_batch.hpp"
+#include "session/stages/proto_values.hpp"
 #include "session/text_fields.hpp"
 
 namespace posefuse::session {
@@ -25,14 +26,6 @@ double time_constant_option(const v1::SessionHeader& header, const char* key, do
     throw_invalid(field, "is '" + it->second + "', must be a positive number of seconds");
   }
   return value;
-}
-
-v1::Vec3 to_proto(const imu::Vec3& v) {
-  v1::Vec3 out;
-  out.set_x(v.x());
-  out.set_y(v.y());
-  out.set_z(v.z());
-  return out;
 }
 
 }  // namespace

@@ -1,0 +1,226 @@
+#include "session/stages/arm_tracker.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "common/error.hpp"
+#include "forearm/forearm_model.hpp"
+#include "forearm/gap_smoother.hpp"
+#include "forearm/paper_recovery.hpp"
+#include "session/stages/proto_values.hpp"
+
+namespace posefuse::session {
+
+namespace {
+
+using forearm::Quat;
+using forearm::Vec3;
+
+// II-K.1: the boundary fits use 500 ms either side (the recoveries' default window).
+constexpr double kBoundaryWindowS = 0.5;
+
+v1::Arm arm_enum(forearm::Side side) { return side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT; }
+
+// Index of the last sample at or before t (samples sorted by t_us); npos when none.
+template <class Series>
+std::size_t index_at_or_before(const Series& series, std::int64_t t_us) {
+  const auto it = std::upper_bound(series.begin(), series.end(), t_us,
+                                   [](std::int64_t t, const auto& s) { return t < s.t_us; });
+  return it == series.begin() ? static_cast<std::size_t>(-1) : static_cast<std::size_t>(it - series.begin() - 1);
+}
+
+// The samples of `series` with t in [t0, t1].
+template <class Series>
+Series slice(const Series& series, std::int64_t t0_us, std::int64_t t1_us) {
+  Series out;
+  for (const auto& s : series) {
+    if (s.t_us >= t0_us && s.t_us <= t1_us) out.push_back(s);
+  }
+  return out;
+}
+
+}  // namespace
+
+ArmTracker::ArmTracker(std::string device_id, forearm::Side side, const forearm::ForearmModel& model,
+                       bool has_model, const Quat& K_from_W, const Quat& K_from_F_reference)
+    : device_id_(std::move(device_id)),
+      side_(side),
+      model_(model),
+      has_model_(has_model),
+      K_from_W_(K_from_W),
+      K_from_F_reference_(K_from_F_reference) {}
+
+std::string ArmTracker::field() const { return "forearm[" + device_id_ + "]"; }
+
+void ArmTracker::add_imu(const std::vector<std::int64_t>& t_us, const std::vector<Quat>& W_from_A,
+                         const std::vector<Vec3>& specific_force_A, StageOutput& out) {
+  v1::FitResult result;
+  v1::ForearmOrientationBatch& batch = *result.mutable_forearm_orientations();
+  batch.set_device_id(device_id_);
+  batch.set_arm(arm_enum(side_));
+  for (std::size_t i = 0; i < t_us.size(); ++i) {
+    if (!arm_.empty() && t_us[i] <= arm_.back().t_us) continue;  // clock mapping kept monotonic
+    const forearm::ForearmSample s =
+        forearm::forearm_sample(K_from_W_, W_from_A[i], model_.F_from_A, K_from_F_reference_, side_);
+    const Quat K_from_F = K_from_F_.empty() ? s.K_from_F : geometry::same_hemisphere(s.K_from_F, K_from_F_.back());
+    arm_.push_back({t_us[i], s.K_from_A, specific_force_A[i]});
+    K_from_F_.push_back(K_from_F);
+    pronation_.push_back(s.pronation_rad);
+    batch.add_t_us(t_us[i]);
+    for (const double v : geometry::to_wxyz(K_from_F)) batch.add_k_from_f(v);
+    batch.add_pronation_rad(s.pronation_rad);
+  }
+  if (batch.t_us_size() > 0) out.emit(std::move(result));
+}
+
+Quat ArmTracker::K_from_F_at(std::int64_t t_us) const {
+  const std::size_t i = index_at_or_before(arm_, t_us);
+  if (i == static_cast<std::size_t>(-1)) return K_from_F_.front();
+  if (i + 1 >= arm_.size()) return K_from_F_.back();
+  const double f = static_cast<double>(t_us - arm_[i].t_us) / static_cast<double>(arm_[i + 1].t_us - arm_[i].t_us);
+  return K_from_F_[i].slerp(f, K_from_F_[i + 1]).normalized();
+}
+
+double ArmTracker::pronation_at(std::int64_t t_us) const {
+  return forearm::pronation_angle(K_from_F_reference_, K_from_F_at(t_us), side_);
+}
+
+void ArmTracker::process(bool all, StageOutput& out) {
+  while (!frames_.empty() && !arm_.empty() && (all || frames_.front().t_us <= arm_.back().t_us)) {
+    process_frame(frames_.front(), out);
+    frames_.pop_front();
+  }
+  const std::int64_t window_us = static_cast<std::int64_t>(std::llround(1e6 * kBoundaryWindowS));
+  while (!pending_gaps_.empty() && !track_.empty() &&
+         (all || track_.back().t_us >= pending_gaps_.front().t_end_us + window_us)) {
+    const PendingGap gap = pending_gaps_.front();
+    pending_gaps_.erase(pending_gaps_.begin());
+    recover(gap.t_start_us, gap.t_end_us, out);
+  }
+}
+
+void ArmTracker::process_frame(const ArmFrame& frame, StageOutput& out) {
+  const Quat K_from_F = K_from_F_at(frame.t_us);
+  forearm::TrackSample sample{frame.t_us, Vec3::Zero(), false};
+  if (has_model_ && frame.forearm_tracked && frame.strap_K) {
+    const forearm::VisualCheck check = forearm::check_visual_forearm(frame.elbow_K, frame.wrist_K, *frame.strap_K, K_from_F);
+    if (check.accepted()) {
+      sample.p_K = forearm::imu_position_from_strap(*frame.strap_K, frame.elbow_K, frame.wrist_K, K_from_F, model_.r_m);
+      sample.visible = true;
+    }
+  }
+  if (track_.empty() || frame.t_us > track_.back().t_us) track_.push_back(sample);
+  if (frame.shoulder_tracked && (shoulder_.empty() || frame.t_us > shoulder_.back().t_us)) {
+    shoulder_.push_back({frame.t_us, frame.shoulder_K});
+  }
+
+  v1::FitResult result;
+  v1::FrameResult& out_frame = *result.mutable_frame();
+  out_frame.set_t_us(frame.t_us);
+  v1::ForearmOrientation& orientation = *out_frame.add_forearms();
+  orientation.set_arm(arm_enum(side_));
+  *orientation.mutable_k_from_f() = to_proto(K_from_F);
+  orientation.set_pronation_rad(pronation_at(frame.t_us));
+  orientation.set_source(v1::FUSED);
+  orientation.set_confidence(1.0);
+
+  std::optional<Vec3> position;
+  v1::Source source = v1::SOURCE_UNSPECIFIED;
+  if (sample.visible) {
+    ++visible_frames_;
+    last_visible_us_ = frame.t_us;
+    if (in_gap_) {
+      pending_gaps_.push_back({gap_start_us_, frame.t_us});
+      in_gap_ = false;
+      live_.reset();
+    }
+    position = sample.p_K;
+    source = v1::VISUAL;
+  } else if (has_model_) {
+    if (!in_gap_ && last_visible_us_) {
+      in_gap_ = true;
+      ++gaps_;
+      gap_start_us_ = *last_visible_us_;
+      live_.emplace(model_, K_from_W_);
+      try {
+        live_->begin(track_, arm_, gap_start_us_);
+        live_next_arm_ = index_at_or_before(arm_, gap_start_us_) + 1;
+      } catch (const Error& error) {
+        live_.reset();
+        out.warn("FOREARM_NO_LIVE_ESTIMATE", field(), std::string("gap from t_us ") + std::to_string(gap_start_us_) +
+                                                          ": " + error.what());
+      }
+    }
+    if (in_gap_ && live_) {
+      const Vec3 shoulder = shoulder_.empty() ? frame.shoulder_K : shoulder_.back().p_K;
+      while (live_next_arm_ < arm_.size() && arm_[live_next_arm_].t_us <= frame.t_us) {
+        live_->update(arm_[live_next_arm_], shoulder);
+        ++live_next_arm_;
+      }
+      if (live_next_arm_ > 0 && arm_[live_next_arm_ - 1].t_us > gap_start_us_) {
+        position = live_->position_K();
+        source = v1::PREDICTED;
+      }
+    }
+  }
+  if (position) {
+    v1::ImuPosition& p = *out_frame.add_imu_positions();
+    p.set_device_id(device_id_);
+    *p.mutable_position_m() = to_proto(*position);
+    p.set_source(source);
+  }
+  out.emit(std::move(result));
+}
+
+void ArmTracker::recover(std::int64_t t_start_us, std::int64_t t_end_us, StageOutput& out) {
+  const std::string where = field() + ".gap[" + std::to_string(t_start_us) + ".." + std::to_string(t_end_us) + "]";
+  // Only the data around the gap: validation and the smoother's system stay small in long sessions.
+  const std::int64_t margin_us = 1'500'000;
+  forearm::GapRecoveryInput input;
+  input.track = slice(track_, t_start_us - margin_us, t_end_us + margin_us);
+  input.arm = slice(arm_, t_start_us - margin_us, t_end_us + margin_us);
+  input.shoulder = slice(shoulder_, t_start_us - 2 * margin_us, t_end_us + 2 * margin_us);
+  input.model = model_;
+  input.K_from_W = K_from_W_;
+  try {
+    const std::vector<forearm::GapSpan> gaps = forearm::find_gaps(input.track);
+    const auto gap = std::find_if(gaps.begin(), gaps.end(), [&](const auto& g) { return g.t_start_us == t_start_us; });
+    if (gap == gaps.end()) throw Error(ErrorCode::kInternal, where, "gap not found in its own track");
+    const forearm::RecoveredGap paper = forearm::recover_gap_paper(input, *gap);
+    const forearm::RecoveredGap smoother = forearm::recover_gap_smoother(input, *gap);
+    for (const auto& [method, recovered] :
+         {std::pair{v1::RecoveredSegment::PAPER, &paper}, std::pair{v1::RecoveredSegment::SMOOTHER, &smoother}}) {
+      v1::FitResult result;
+      v1::RecoveredSegment& segment = *result.mutable_recovered_segment();
+      segment.set_arm(arm_enum(side_));
+      segment.set_device_id(device_id_);
+      segment.set_method(method);
+      segment.set_t_start_us(t_start_us);
+      segment.set_t_end_us(t_end_us);
+      for (std::size_t i = 0; i < recovered->t_us.size(); ++i) {
+        const Quat K_from_F = K_from_F_at(recovered->t_us[i]);
+        const Vec3 strap_centre = recovered->p_K[i] - K_from_F * Vec3(model_.r_m, 0.0, 0.0);
+        v1::RecoveredSegment::Sample& s = *segment.add_samples();
+        s.set_t_us(recovered->t_us[i]);
+        *s.mutable_imu_m() = to_proto(recovered->p_K[i]);
+        *s.mutable_elbow_m() = to_proto(strap_centre + K_from_F * Vec3(0.0, -model_.d_se_m, 0.0));
+        *s.mutable_wrist_m() = to_proto(strap_centre + K_from_F * Vec3(0.0, model_.d_sw_m, 0.0));
+        *s.mutable_k_from_f() = to_proto(K_from_F);
+      }
+      out.emit(std::move(result));
+    }
+  } catch (const Error& error) {
+    out.warn("FOREARM_GAP_NOT_RECOVERED", where, error.what());
+  }
+}
+
+void ArmTracker::finish(StageOutput& out) {
+  process(true, out);
+  if (in_gap_) {
+    out.warn("FOREARM_GAP_OPEN", field(),
+             "the forearm was still occluded at the end (since t_us " + std::to_string(gap_start_us_) +
+                 "): that gap cannot be recovered");
+  }
+}
+
+}  // namespace posefuse::session

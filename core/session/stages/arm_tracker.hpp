@@ -1,0 +1,92 @@
+#pragma once
+// One calibrated forearm through the session, in time order (paper 1, II-I to II-L), the part
+// of the forearm stage that runs once the clocks, the camera alignment and the forearm model
+// are known:
+//  - every arm IMU sample: K_from_A and K_from_F by eq. 11, the pronation angle
+//    (forearm_orientation.hpp) -> one ForearmOrientationBatch per call of add_imu;
+//  - every camera frame: the IMU position from the strap by eq. 10 when the II-J tests accept
+//    the visual forearm (VISUAL), else, inside a gap, the causal live estimate (PREDICTED)
+//    -> one FrameResult;
+//  - every gap, once the boundary window after it has been seen: recover_gap_paper and
+//    recover_gap_smoother -> two RecoveredSegments.
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "forearm/forearm_orientation.hpp"
+#include "forearm/gap_input.hpp"
+#include "forearm/live_gap.hpp"
+#include "forearm/occlusion_tests.hpp"
+#include "session/pipeline_stage.hpp"
+
+namespace posefuse::session {
+
+// What the stage saw of one arm in one camera frame.
+struct ArmFrame {
+  std::int64_t t_us = 0;  // camera clock
+  forearm::Vec3 shoulder_K = forearm::Vec3::Zero();
+  forearm::Vec3 elbow_K = forearm::Vec3::Zero();
+  forearm::Vec3 wrist_K = forearm::Vec3::Zero();
+  bool shoulder_tracked = false;
+  bool forearm_tracked = false;  // elbow and wrist TRACKED
+  forearm::Quat K_from_wrist_sdk = forearm::Quat(0, 0, 0, 0);  // zero when the SDK gave none
+  std::optional<forearm::Vec3> strap_K;  // strap seen (II-I)
+};
+
+class ArmTracker {
+ public:
+  // `has_model` false: the strap was never seen in the calibration, so r and d_se are unknown
+  // and only orientations are produced.
+  ArmTracker(std::string device_id, forearm::Side side, const forearm::ForearmModel& model, bool has_model,
+             const forearm::Quat& K_from_W, const forearm::Quat& K_from_F_reference);
+
+  // Arm IMU samples on the camera clock, in time order (earlier or equal times are dropped).
+  void add_imu(const std::vector<std::int64_t>& t_us, const std::vector<forearm::Quat>& W_from_A,
+               const std::vector<forearm::Vec3>& specific_force_A, StageOutput& out);
+  // Camera frames up to the last IMU sample (so K_from_F is interpolated, not extrapolated);
+  // with `all` every queued frame (end of session). Then the gaps whose after-window is complete.
+  void add_frame(const ArmFrame& frame) { frames_.push_back(frame); }
+  void process(bool all, StageOutput& out);
+  // End of session: a gap still open is reported, pending gaps are recovered with what exists.
+  void finish(StageOutput& out);
+
+  std::uint64_t visible_frames() const { return visible_frames_; }
+  std::uint64_t gaps() const { return gaps_; }
+
+ private:
+  void process_frame(const ArmFrame& frame, StageOutput& out);
+  void recover(std::int64_t t_start_us, std::int64_t t_end_us, StageOutput& out);
+  forearm::Quat K_from_F_at(std::int64_t t_us) const;
+  double pronation_at(std::int64_t t_us) const;
+  std::string field() const;
+
+  std::string device_id_;
+  forearm::Side side_;
+  forearm::ForearmModel model_;
+  bool has_model_;
+  forearm::Quat K_from_W_;
+  forearm::Quat K_from_F_reference_;
+
+  std::vector<forearm::ArmSample> arm_;
+  std::vector<forearm::Quat> K_from_F_;
+  std::vector<double> pronation_;
+  std::vector<forearm::TrackSample> track_;
+  std::vector<forearm::ShoulderSample> shoulder_;
+  std::deque<ArmFrame> frames_;  // queued, not yet processed
+
+  std::optional<std::int64_t> last_visible_us_;
+  bool in_gap_ = false;
+  std::int64_t gap_start_us_ = 0;
+  std::optional<forearm::LiveGapEstimator> live_;
+  std::size_t live_next_arm_ = 0;
+  struct PendingGap {
+    std::int64_t t_start_us, t_end_us;
+  };
+  std::vector<PendingGap> pending_gaps_;
+  std::uint64_t visible_frames_ = 0;
+  std::uint64_t gaps_ = 0;
+};
+
+}  // namespace posefuse::session

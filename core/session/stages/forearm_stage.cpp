@@ -1,0 +1,452 @@
+#include "session/stages/forearm_stage.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include "common/error.hpp"
+#include "forearm/forearm_orientation.hpp"
+#include "session/image_codec.hpp"
+#include "session/imu_batch.hpp"
+#include "session/stages/proto_values.hpp"
+#include "session/text_fields.hpp"
+
+namespace posefuse::session {
+
+namespace {
+
+using forearm::Quat;
+using forearm::Vec3;
+
+constexpr const char* kKFromBKey = "forearm.K_from_B";
+constexpr const char* kCalibrationSKey = "forearm.calibration_s";
+constexpr const char* kCalibrationOrientationKey = "forearm.calibration_orientation";
+constexpr const char* kBodyIdKey = "forearm.body_id";
+// A depth frame belongs to a skeleton frame of the same t_us (same sensor); allow clock jitter.
+constexpr std::int64_t kDepthToleranceUs = 1000;
+// Frames waiting for their depth or colour image before they are processed without.
+constexpr std::size_t kMaxPendingFrames = 4;
+
+std::optional<std::string> option(const v1::SessionHeader& header, const char* key) {
+  const auto it = header.options().find(key);
+  if (it == header.options().end()) return std::nullopt;
+  return it->second;
+}
+
+std::string option_field(const char* key) { return std::string("header.options[") + key + "]"; }
+
+// "w x y z" (spaces or commas), a unit quaternion within 1e-3.
+Quat parse_quaternion(const std::string& text, const std::string& field) {
+  std::string spaced = text;
+  for (char& c : spaced) {
+    if (c == ',') c = ' ';
+  }
+  std::istringstream words(spaced);
+  std::vector<double> values;
+  for (std::string word; words >> word;) values.push_back(parse_double(word, field));
+  if (values.size() != 4) throw_invalid(field, "is '" + text + "', expected four numbers 'w x y z'");
+  const Quat q(values[0], values[1], values[2], values[3]);
+  if (!q.coeffs().allFinite() || std::abs(q.norm() - 1.0) > 1e-3) {
+    throw_invalid(field, "is '" + text + "', not a unit quaternion");
+  }
+  return q.normalized();
+}
+
+geometry::PinholeCamera pinhole(const v1::CameraIntrinsics& c) {
+  return {static_cast<int>(c.width()), static_cast<int>(c.height()), c.fx(), c.fy(), c.cx(), c.cy(),
+          c.k1(), c.k2(), c.k3(), c.p1(), c.p2()};
+}
+
+Vec3 position(const v1::SkeletonJoint& joint) {
+  return {joint.position_m().x(), joint.position_m().y(), joint.position_m().z()};
+}
+
+// Chordal mean of hemisphere-aligned unit quaternions (fine for the small spread of a hold).
+Quat mean_rotation(const std::vector<Quat>& rotations) {
+  Eigen::Vector4d sum = Eigen::Vector4d::Zero();
+  for (const Quat& q : rotations) sum += geometry::to_wxyz(geometry::same_hemisphere(q, rotations.front()));
+  return geometry::from_wxyz(sum.normalized());
+}
+
+// Kinect v2 joint indices of one arm: shoulder, elbow, wrist.
+struct ArmJoints {
+  int shoulder, elbow, wrist;
+};
+ArmJoints arm_joints(forearm::Side side) {
+  return side == forearm::Side::kLeft ? ArmJoints{4, 5, 6} : ArmJoints{8, 9, 10};
+}
+
+}  // namespace
+
+ForearmStage::ForearmStage() = default;
+ForearmStage::~ForearmStage() = default;
+
+std::string_view ForearmStage::description() const {
+  return "forearm orientation and pronation per arm IMU sample, IMU position per camera frame (strap in RGB, "
+         "eq. 10), occlusion gaps recovered (paper 1 and smoother), clocks from buzzer and BLE";
+}
+
+std::vector<StageOption> ForearmStage::options() const {
+  return {
+      {kKFromBKey, "", "base IMU orientation in the camera frame, 'w x y z' (paper 1 eq. 8); required"},
+      {kCalibrationSKey, "5", "the calibration pose is searched in this many seconds from the first skeleton frame"},
+      {kCalibrationOrientationKey, "pose",
+       "forearm orientation in the calibration pose: 'pose' (arm plane, palm to the camera) or 'sdk' (SDK wrist, eq. 9)"},
+      {kBodyIdKey, "", "skeleton body id to follow; default: the first one in the stream"},
+  };
+}
+
+void ForearmStage::start(const v1::SessionHeader& header, StageOutput& out) {
+  for (const v1::ImuDevice& d : header.imu_devices()) {
+    Device device;
+    device.id = d.device_id();
+    if (d.role() == v1::ImuDevice::ARM_LEFT) device.side = forearm::Side::kLeft;
+    if (d.role() == v1::ImuDevice::ARM_RIGHT) device.side = forearm::Side::kRight;
+    if (d.role() == v1::ImuDevice::BASE && base_id_.empty()) base_id_ = d.device_id();
+    if (device.side || d.device_id() == base_id_) devices_.push_back(std::move(device));
+  }
+  const bool has_arm = std::any_of(devices_.begin(), devices_.end(), [](const Device& d) { return d.side.has_value(); });
+  if (!has_arm) return;  // nothing to do: no arm IMU
+  if (const auto text = option(header, kCalibrationSKey)) {
+    calibration_s_ = parse_double(*text, option_field(kCalibrationSKey));
+    if (!std::isfinite(calibration_s_) || calibration_s_ <= 0.0) {
+      throw_invalid(option_field(kCalibrationSKey), "is '" + *text + "', must be a positive number of seconds");
+    }
+  }
+  if (const auto text = option(header, kCalibrationOrientationKey)) {
+    if (*text != "pose" && *text != "sdk") {
+      throw_invalid(option_field(kCalibrationOrientationKey), "is '" + *text + "', expected 'pose' or 'sdk'");
+    }
+    pose_orientation_ = *text == "pose";
+  }
+  if (const auto text = option(header, kBodyIdKey)) {
+    body_id_ = static_cast<std::uint32_t>(parse_uint64(*text, option_field(kBodyIdKey)));
+  }
+  if (const auto text = option(header, kKFromBKey)) K_from_B_ = parse_quaternion(*text, option_field(kKFromBKey));
+
+  if (base_id_.empty()) {
+    out.warn("FOREARM_NO_BASE_IMU", "header.imu_devices",
+             "no BASE IMU: neither the clocks (buzzer) nor the camera alignment (eq. 7) can be found; no forearm results");
+    return;
+  }
+  if (!K_from_B_) {
+    out.warn("FOREARM_NO_CAMERA_ALIGNMENT", option_field(kKFromBKey),
+             "missing: the base IMU's orientation in the camera frame (eq. 8) is needed for K_from_W (eq. 7); "
+             "no forearm results");
+    return;
+  }
+  forearm::StrapCameras cameras;
+  cameras.depth = pinhole(header.depth_intrinsics());
+  if (header.has_color_intrinsics()) {
+    cameras.color = pinhole(header.color_intrinsics());
+    if (header.has_color_from_depth()) {
+      const auto& r = header.color_from_depth().rotation();
+      const auto& t = header.color_from_depth().translation_m();
+      cameras.color_from_depth = Quat(r.w(), r.x(), r.y(), r.z()).normalized();
+      cameras.color_from_depth_m = Vec3(t.x(), t.y(), t.z());
+    }
+    cameras_ = cameras;
+    color_tolerance_us_ = header.color_rate_hz() > 0.0 ? 0.5e6 / header.color_rate_hz() : 20000.0;
+  } else {
+    out.warn("FOREARM_NO_COLOR", "header.color_intrinsics",
+             "no colour stream: the strap (paper 1, II-I) cannot be seen, so only forearm orientations are produced");
+  }
+  clocks_ = std::make_unique<StreamClocks>(base_id_, header.audio_sample_rate_hz(), header.audio_channels());
+  active_ = true;
+}
+
+void ForearmStage::on_result(const v1::FitResult& result, StageOutput& /*out*/) {
+  if (!active_ || !result.has_imu_orientations()) return;
+  const v1::ImuOrientationBatch& batch = result.imu_orientations();
+  for (Device& device : devices_) {
+    if (device.id != batch.device_id()) continue;
+    device.pending_orientations.clear();
+    for (int i = 0; i < batch.t_us_size() && 4 * i + 3 < batch.w_from_a_size(); ++i) {
+      device.pending_orientations.emplace_back(
+          batch.t_us(i), Quat(batch.w_from_a(4 * i), batch.w_from_a(4 * i + 1), batch.w_from_a(4 * i + 2),
+                              batch.w_from_a(4 * i + 3)));
+    }
+  }
+}
+
+void ForearmStage::add_imu(Device& device, const v1::ImuBatch& batch) {
+  const std::vector<imu::ImuSample> samples = samples_from_batch(batch);
+  const auto orientations = std::move(device.pending_orientations);
+  device.pending_orientations.clear();
+  if (orientations.size() != samples.size()) {
+    throw Error(ErrorCode::kFailedPrecondition, "imu", "device '" + device.id +
+                                                            "': no orientation from the IMU stage for this batch");
+  }
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    if (orientations[i].first != samples[i].t_us) {
+      throw Error(ErrorCode::kInternal, "imu", "orientation and sample times differ");
+    }
+    device.imu.push_back({samples[i].t_us, orientations[i].second, samples[i].acc_m_s2});
+  }
+}
+
+void ForearmStage::on_chunk(const v1::SessionChunk& chunk, StageOutput& out) {
+  if (!active_) return;
+  clocks_->add(chunk);
+  switch (chunk.chunk_case()) {
+    case v1::SessionChunk::kImu:
+      for (Device& device : devices_) {
+        if (device.id == chunk.imu().device_id()) add_imu(device, chunk.imu());
+      }
+      break;
+    case v1::SessionChunk::kDepth:
+      depth_images_.push_back({chunk.depth().t_us(), decode_depth(chunk.depth())});
+      if (depth_images_.size() > kMaxPendingFrames) depth_images_.pop_front();
+      break;
+    case v1::SessionChunk::kColor:
+      if (!cameras_) break;
+      color_images_.push_back({chunk.color().t_us(), decode_color_gray(chunk.color())});
+      if (color_images_.size() > kMaxPendingFrames) color_images_.pop_front();
+      break;
+    case v1::SessionChunk::kSkeleton:
+      if (!body_id_) body_id_ = chunk.skeleton().body_id();
+      if (chunk.skeleton().body_id() != *body_id_) break;
+      pending_frames_.push_back({chunk.skeleton().t_us(), chunk.skeleton()});
+      if (!first_frame_us_) first_frame_us_ = chunk.skeleton().t_us();
+      last_frame_us_ = chunk.skeleton().t_us();
+      break;
+    default: break;
+  }
+  resolve_frames(false);
+  if (!calibrated_) try_calibrate(false, out);
+  if (calibrated_) feed_trackers(false, out);
+}
+
+void ForearmStage::resolve_frames(bool all) {
+  const auto find = [](const std::deque<Image>& images, std::int64_t t_us, double tolerance_us, bool* wait) {
+    const Image* best = nullptr;
+    for (const Image& image : images) {
+      if (std::abs(static_cast<double>(image.t_us - t_us)) <= tolerance_us &&
+          (!best || std::abs(image.t_us - t_us) < std::abs(best->t_us - t_us))) {
+        best = &image;
+      }
+    }
+    // An image for this time may still come while no later one has arrived.
+    *wait = !best && (images.empty() || images.back().t_us < t_us + tolerance_us);
+    return best;
+  };
+  while (!pending_frames_.empty()) {
+    const PendingFrame& frame = pending_frames_.front();
+    bool wait_depth = false, wait_color = false;
+    const Image* depth = find(depth_images_, frame.t_us, kDepthToleranceUs, &wait_depth);
+    const Image* color = cameras_ ? find(color_images_, frame.t_us, color_tolerance_us_, &wait_color) : nullptr;
+    if ((wait_depth || wait_color) && !all && pending_frames_.size() <= kMaxPendingFrames) return;
+    detect_arms(frame, depth, color);
+    pending_frames_.pop_front();
+  }
+}
+
+void ForearmStage::detect_arms(const PendingFrame& frame, const Image* depth, const Image* color) {
+  for (Device& device : devices_) {
+    if (!device.side || device.calibration_failed) continue;
+    const ArmJoints j = arm_joints(*device.side);
+    const auto& joints = frame.skeleton.joints();
+    ArmFrame arm;
+    arm.t_us = frame.t_us;
+    arm.shoulder_K = position(joints[j.shoulder]);
+    arm.elbow_K = position(joints[j.elbow]);
+    arm.wrist_K = position(joints[j.wrist]);
+    arm.shoulder_tracked = joints[j.shoulder].state() == v1::SkeletonJoint::TRACKED;
+    arm.forearm_tracked = joints[j.elbow].state() == v1::SkeletonJoint::TRACKED &&
+                          joints[j.wrist].state() == v1::SkeletonJoint::TRACKED;
+    const auto& q = joints[j.wrist].orientation();
+    arm.K_from_wrist_sdk = Quat(q.w(), q.x(), q.y(), q.z());
+    if (arm.forearm_tracked && depth && color && cameras_) {
+      const forearm::GrayImageView gray{color->pixels.cols, color->pixels.rows, color->pixels.ptr<std::uint8_t>()};
+      const forearm::DepthImageView mm{depth->pixels.cols, depth->pixels.rows, depth->pixels.ptr<std::uint16_t>()};
+      const forearm::StrapDetection strap = forearm::detect_strap(gray, mm, *cameras_, arm.elbow_K, arm.wrist_K);
+      if (strap.found()) arm.strap_K = strap.strap_K;
+    }
+    if (device.tracker) {
+      device.tracker->add_frame(arm);
+    } else {
+      device.frames.push_back(arm);
+    }
+  }
+}
+
+void ForearmStage::try_calibrate(bool finishing, StageOutput& out) {
+  const std::int64_t window_end_us =
+      first_frame_us_ ? *first_frame_us_ + static_cast<std::int64_t>(std::llround(calibration_s_ * 1e6)) : 0;
+  if (!finishing && (!first_frame_us_ || last_frame_us_ < window_end_us)) return;
+  std::vector<std::string> arm_ids;
+  for (const Device& d : devices_) {
+    if (d.side) arm_ids.push_back(d.id);
+  }
+  if (!clock_map_) clock_map_ = clocks_->try_build(arm_ids);
+  if (!clock_map_) {
+    if (finishing) {
+      const StreamClocks::Missing missing = clocks_->why_not(arm_ids);
+      out.warn("FOREARM_NO_SYNC", missing.field, missing.message + "; no forearm results");
+    }
+    return;
+  }
+  const Device& base = *std::find_if(devices_.begin(), devices_.end(), [&](const Device& d) { return d.id == base_id_; });
+  if (base.imu.empty()) {
+    if (finishing) out.warn("FOREARM_NO_BASE_IMU", "imu", "the base IMU '" + base_id_ + "' sent no samples");
+    return;
+  }
+  if (!finishing) {
+    // Wait until every arm IMU's samples reach past the calibration window.
+    for (const Device& d : devices_) {
+      if (!d.side) continue;
+      if (d.imu.empty() || clock_map_->to_camera_us(d.id, static_cast<double>(d.imu.back().t_device_us)) <
+                               static_cast<double>(window_end_us)) {
+        return;
+      }
+    }
+  }
+  if (!first_frame_us_) {
+    out.warn("FOREARM_CALIBRATION", "skeleton", "no skeleton frames: no calibration pose (paper 1, II-H)");
+    return;
+  }
+  std::vector<Quat> W_from_B;
+  for (const ImuRecord& r : base.imu) W_from_B.push_back(r.W_from_A);
+  K_from_W_ = (*K_from_B_ * mean_rotation(W_from_B).conjugate()).normalized();  // eq. 7
+  calibrated_ = true;
+  for (Device& device : devices_) {
+    if (device.side) calibrate_arm(device, out);
+  }
+}
+
+std::optional<Quat> ForearmStage::W_from_A_at(const Device& device, std::int64_t t_camera_us) const {
+  // Samples are few (the calibration window): map them as needed.
+  const auto camera_us = [&](const ImuRecord& r) {
+    return clock_map_->to_camera_us(device.id, static_cast<double>(r.t_device_us));
+  };
+  const double t = static_cast<double>(t_camera_us);
+  for (std::size_t i = 0; i + 1 < device.imu.size(); ++i) {
+    const double t0 = camera_us(device.imu[i]), t1 = camera_us(device.imu[i + 1]);
+    if (t0 <= t && t <= t1 && t1 > t0) {
+      return device.imu[i].W_from_A.slerp((t - t0) / (t1 - t0), device.imu[i + 1].W_from_A).normalized();
+    }
+  }
+  return std::nullopt;
+}
+
+void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
+  const std::string field = "forearm[" + device.id + "]";
+  const std::int64_t window_end_us = *first_frame_us_ + static_cast<std::int64_t>(std::llround(calibration_s_ * 1e6));
+  std::vector<forearm::CalibrationFrame> with_strap, without_strap;
+  for (const ArmFrame& f : device.frames) {
+    if (f.t_us > window_end_us) break;
+    if (!f.forearm_tracked || !f.shoulder_tracked) continue;
+    const std::optional<Quat> W_from_A = W_from_A_at(device, f.t_us);
+    if (!W_from_A) continue;
+    forearm::CalibrationFrame c;
+    c.t_us = f.t_us;
+    c.shoulder_K = f.shoulder_K;
+    c.elbow_K = f.elbow_K;
+    c.wrist_K = f.wrist_K;
+    c.W_from_A = *W_from_A;
+    if (pose_orientation_) {
+      try {
+        c.K_from_F_sdk = forearm::K_from_F_calibration_pose(f.shoulder_K, f.elbow_K, f.wrist_K);
+      } catch (const Error&) {
+        continue;  // a straight arm or one seen edge-on: not the calibration pose
+      }
+    } else {
+      if (f.K_from_wrist_sdk.norm() < 0.5) continue;  // the SDK gave no orientation
+      c.K_from_F_sdk = f.K_from_wrist_sdk.normalized();
+    }
+    // Without a strap the lengths are placeholders; only eq. 9 is used then.
+    c.strap_K = f.strap_K.value_or(f.elbow_K + 0.8 * (f.wrist_K - f.elbow_K));
+    without_strap.push_back(c);
+    if (f.strap_K) with_strap.push_back(c);
+  }
+  device.strap_frames = static_cast<std::uint32_t>(with_strap.size());
+  bool has_model = true;
+  try {
+    device.calibration = forearm::calibrate_forearm(with_strap, *K_from_W_, calibration_options_);
+  } catch (const Error& strap_error) {
+    try {
+      device.calibration = forearm::calibrate_forearm(without_strap, *K_from_W_, calibration_options_);
+      has_model = false;
+      out.warn("FOREARM_STRAP_NOT_SEEN", field + ".strap",
+               "the strap was seen in " + std::to_string(with_strap.size()) + " of " +
+                   std::to_string(without_strap.size()) + " calibration frames (" + strap_error.what() +
+                   "): forearm orientation only, no IMU positions");
+    } catch (const Error& error) {
+      device.calibration_failed = true;
+      device.frames.clear();
+      out.warn("FOREARM_CALIBRATION", field + ".calibration",
+               std::string("no usable calibration pose (paper 1, II-H) in the first ") + format_double(calibration_s_) +
+                   " s: " + error.what() + "; no results for this arm");
+      return;
+    }
+  }
+  device.has_model = has_model;
+  const std::vector<forearm::CalibrationFrame>& used = has_model ? with_strap : without_strap;
+  std::vector<Quat> held;
+  for (std::size_t i = 0; i < device.calibration->frame_count; ++i) {
+    held.push_back(used[device.calibration->first_frame + i].K_from_F_sdk);
+  }
+  device.tracker = std::make_unique<ArmTracker>(device.id, *device.side, device.calibration->model, has_model,
+                                                *K_from_W_, mean_rotation(held));
+  for (const ArmFrame& f : device.frames) device.tracker->add_frame(f);
+  device.frames.clear();
+}
+
+void ForearmStage::feed_trackers(bool all, StageOutput& out) {
+  for (Device& device : devices_) {
+    if (!device.tracker) continue;
+    std::vector<std::int64_t> t_us;
+    std::vector<Quat> W_from_A;
+    std::vector<Vec3> force;
+    for (const ImuRecord& r : device.imu) {
+      t_us.push_back(std::llround(clock_map_->to_camera_us(device.id, static_cast<double>(r.t_device_us))));
+      W_from_A.push_back(r.W_from_A);
+      force.push_back(r.specific_force_A);
+    }
+    if (!device.imu.empty()) {
+      if (!device.first_device_us) device.first_device_us = device.imu.front().t_device_us;
+      device.imu.clear();
+    }
+    device.tracker->add_imu(t_us, W_from_A, force, out);
+    device.tracker->process(all, out);
+  }
+}
+
+void ForearmStage::finish(StageOutput& out) {
+  if (!active_) return;
+  resolve_frames(true);
+  if (!calibrated_) try_calibrate(true, out);
+  if (calibrated_) {
+    feed_trackers(true, out);
+    for (Device& device : devices_) {
+      if (device.tracker) device.tracker->finish(out);
+    }
+  }
+  v1::CalibrationReport& report = out.calibration();
+  for (const Device& device : devices_) {
+    if (clock_map_ && clock_map_->has(device.id)) {
+      const double first_us = static_cast<double>(
+          device.first_device_us.value_or(device.imu.empty() ? 0 : device.imu.front().t_device_us));
+      const sync::LinearClock& clock = clock_map_->camera_from(device.id);
+      (*report.mutable_clock_offset_us())[device.id] = std::llround(clock.to_reference_us(first_us) - first_us);
+      (*report.mutable_clock_offset_sigma_us())[device.id] = clock.sigma_us(first_us);
+      (*report.mutable_clock_drift_ppm())[device.id] = clock.drift * 1e6;
+    }
+    if (!device.side || !device.calibration) continue;
+    const forearm::ForearmCalibration& c = *device.calibration;
+    v1::ForearmModel& model = *report.add_forearms();
+    model.set_arm(*device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT);
+    model.set_device_id(device.id);
+    model.set_r_m(device.has_model ? c.model.r_m : 0.0);
+    model.set_d_se_m(device.has_model ? c.model.d_se_m : 0.0);
+    model.set_d_sw_m(device.has_model ? c.model.d_sw_m : 0.0);
+    model.set_d_ul_m(c.model.d_ul_m);
+    *model.mutable_a_from_f() = to_proto(Quat(c.model.F_from_A.conjugate()));
+    model.set_estimated(true);
+    model.set_calibration_frames(static_cast<std::uint32_t>(c.frame_count));
+    model.set_a_from_f_spread_rad(c.F_from_A_spread_rad);
+    model.set_strap_frames(device.strap_frames);
+  }
+  if (K_from_W_) *report.mutable_k_from_w() = to_proto(*K_from_W_);
+}
+
+}  // namespace posefuse::session

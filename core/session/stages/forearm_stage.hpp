@@ -1,0 +1,115 @@
+#pragma once
+// Pipeline stage: forearm fusion of paper 1 (II-F to II-L) for every arm IMU of the session.
+// Runs after the IMU orientation stage, whose W_from_A it receives through Stage::on_result.
+//
+// Inputs: header (IMU roles, depth and colour cameras, options), skeleton frames (shoulder,
+// elbow, wrist of the person `forearm.body_id`), depth and colour frames (strap detection,
+// II-I), IMU batches (specific force), audio and sync events (clocks, II-G).
+//
+// Order of work:
+//  1. Until calibrated everything is buffered. Clocks: the base IMU's buzzer stop heard in the
+//     audio, BLE receipts for the arm IMUs (stream_clocks.hpp). Camera alignment: eq. 7,
+//     K_from_W = K_from_B * (mean W_from_B of the base IMU)^-1, K_from_B from the option
+//     forearm.K_from_B (the rig's eq. 8 calibration, core/calib).
+//  2. When the camera clock passes forearm.calibration_s after the first skeleton frame, each
+//     arm is calibrated (II-H, forearm_model.hpp calibrate_forearm): r, d_se, d_sw, d_ul and
+//     eq. 9 over the longest still run. The forearm orientation in the pose comes from the
+//     skeleton: the shoulder-elbow-wrist plane with the palm towards the camera
+//     (forearm.calibration_orientation = pose, forearm_orientation.hpp), or from the SDK's
+//     wrist orientation (= sdk, the paper's K_from_F', whose axes must then be F's).
+//  3. Then in time order (arm_tracker.hpp): forearm orientation + pronation per IMU sample
+//     (ForearmOrientationBatch), per camera frame a FrameResult with the forearm orientation and
+//     the IMU position (VISUAL from the strap, or PREDICTED by the live estimator in a gap), and
+//     two RecoveredSegments (PAPER, SMOOTHER) per gap 0.5 s after it closes.
+// Problems that stop an arm are warnings naming them (the rest of the session goes on):
+// FOREARM_NO_BASE_IMU, FOREARM_NO_CAMERA_ALIGNMENT, FOREARM_NO_SYNC (no buzzer event, the stop
+// not heard, no shared BLE broadcast), FOREARM_CALIBRATION (too short or no calibration hold),
+// FOREARM_STRAP_NOT_SEEN (no positions: orientation only), FOREARM_GAP_NOT_RECOVERED,
+// FOREARM_GAP_OPEN, FOREARM_NO_LIVE_ESTIMATE.
+#include <deque>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "forearm/forearm_model.hpp"
+#include "forearm/strap_detection.hpp"
+#include "session/pipeline_stage.hpp"
+#include "session/stages/arm_tracker.hpp"
+#include "session/stages/stream_clocks.hpp"
+
+namespace posefuse::session {
+
+class ForearmStage : public Stage {
+ public:
+  ForearmStage();
+  ~ForearmStage() override;
+  std::string_view name() const override { return "forearm"; }
+  std::string_view description() const override;
+  std::vector<StageOption> options() const override;
+
+  void start(const v1::SessionHeader& header, StageOutput& out) override;
+  void on_chunk(const v1::SessionChunk& chunk, StageOutput& out) override;
+  void on_result(const v1::FitResult& result, StageOutput& out) override;
+  void finish(StageOutput& out) override;
+
+ private:
+  struct ImuRecord {
+    std::int64_t t_device_us = 0;
+    forearm::Quat W_from_A;
+    forearm::Vec3 specific_force_A;
+  };
+  struct Device {
+    std::string id;
+    std::optional<forearm::Side> side;  // none: the base IMU
+    std::vector<std::pair<std::int64_t, forearm::Quat>> pending_orientations;
+    std::vector<ImuRecord> imu;  // device clock, as received
+    std::optional<std::int64_t> first_device_us;  // first sample handed to the tracker
+    std::vector<ArmFrame> frames;  // camera frames until calibration
+    std::optional<forearm::ForearmCalibration> calibration;
+    bool calibration_failed = false;
+    std::uint32_t strap_frames = 0;
+    bool has_model = false;
+    std::unique_ptr<ArmTracker> tracker;
+  };
+  struct PendingFrame {
+    std::int64_t t_us = 0;
+    v1::SkeletonFrame skeleton;
+  };
+  struct Image {
+    std::int64_t t_us = 0;
+    cv::Mat pixels;
+  };
+
+  void add_imu(Device& device, const v1::ImuBatch& batch);
+  void resolve_frames(bool all);
+  void detect_arms(const PendingFrame& frame, const Image* depth, const Image* color);
+  void try_calibrate(bool finishing, StageOutput& out);
+  void calibrate_arm(Device& device, StageOutput& out);
+  void feed_trackers(bool all, StageOutput& out);
+  std::optional<forearm::Quat> W_from_A_at(const Device& device, std::int64_t t_camera_us) const;
+
+  bool active_ = false;
+  std::vector<Device> devices_;  // header order
+  std::string base_id_;
+  std::optional<forearm::Quat> K_from_B_;
+  double calibration_s_ = 5.0;
+  bool pose_orientation_ = true;
+  std::optional<std::uint32_t> body_id_;
+  std::optional<forearm::StrapCameras> cameras_;
+  double color_tolerance_us_ = 0.0;
+  forearm::CalibrationOptions calibration_options_;
+  std::unique_ptr<StreamClocks> clocks_;
+  std::optional<sync::ClockMap> clock_map_;
+  std::optional<forearm::Quat> K_from_W_;
+  std::optional<std::int64_t> first_frame_us_;
+  std::int64_t last_frame_us_ = 0;
+  bool calibrated_ = false;
+  std::deque<PendingFrame> pending_frames_;
+  std::deque<Image> depth_images_, color_images_;
+};
+
+}  // namespace posefuse::session

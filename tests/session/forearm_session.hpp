@@ -1,0 +1,69 @@
+#pragma once
+// A small synthetic session for the forearm stage, with its ground truth, from the simulator's
+// pieces: the scripted right arm (sim/scripted_motion.hpp) holds the calibration pose (paper 1,
+// Fig. 3b) and then moves (abduction, flexion, elbow, supination); its IMU and a static base IMU
+// on the camera are simulated on their own clocks (sim/imu_device.hpp) with the buzzer stop in the
+// camera audio and BLE broadcast receipts (sim/sync_signals.hpp). The camera frames are drawn
+// here: a skeleton (shoulder, elbow, wrist with joint noise; INFERRED while occluded), and
+// colour + depth images of the forearm as a cylinder with the black strap
+// (tests/forearm/synthetic_images.hpp); during the occlusion the strap is not drawn.
+#include <cstdint>
+#include <map>
+#include <string>
+#include <vector>
+
+#include "forearm/forearm_types.hpp"
+#include "posefuse/v1/results.pb.h"
+#include "posefuse/v1/session.pb.h"
+
+namespace posefuse::session::testing {
+
+struct ForearmSessionOptions {
+  double duration_s = 9.0;
+  double hold_s = 3.0;              // calibration pose from t = 0 (camera clock)
+  double occlusion_begin_s = 5.5;   // strap hidden and elbow/wrist INFERRED in [begin, end)
+  double occlusion_end_s = 6.4;
+  bool strap_drawn = true;          // false: the strap is never seen
+  bool buzzer = true;               // false: no BUZZER_STOP event
+  bool camera_alignment = true;     // false: no forearm.K_from_B option
+  double joint_noise_m = 0.004;
+  double calibration_s = 4.0;       // the stage option
+  std::uint64_t seed = 7;
+};
+
+struct ForearmSessionTruth {
+  std::vector<std::int64_t> frame_t_us;     // camera clock
+  std::vector<forearm::Vec3> imu_K;         // true IMU position per frame
+  std::vector<forearm::Quat> K_from_F;      // true forearm orientation per frame
+  std::vector<double> supination_rad;       // the script's supination angle per frame
+  forearm::ForearmModel model;              // r, d_se, d_sw, d_ul and F_from_A
+  forearm::Quat K_from_W = forearm::Quat::Identity();
+  forearm::Quat K_from_F_calibration = forearm::Quat::Identity();  // the forearm in the calibration pose
+  // Each IMU's clock reading at camera time 0, when both take their first sample: the true
+  // camera_t - device_t there is minus this.
+  std::map<std::string, std::int64_t> device_us_at_camera_zero;
+};
+
+// Header, data chunks in approximate camera-time order, end marker.
+std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& options,
+                                                   ForearmSessionTruth* truth);
+
+// The forearm stage's results against the truth. Truth exists at camera frames only, so IMU
+// samples and recovered samples are compared where they lie within 2 ms of a frame.
+struct ForearmSessionErrors {
+  std::size_t orientation_samples = 0;
+  double orientation_rms_rad = 0.0, orientation_max_rad = 0.0, pronation_max_rad = 0.0;
+  std::size_t frames = 0, visible_frames = 0, predicted_frames = 0;
+  double visible_rms_m = 0.0, predicted_max_m = 0.0;
+  // Per RecoveredSegment method (PAPER, SMOOTHER): samples compared, RMS and maximum error.
+  struct Recovered {
+    std::size_t samples = 0;
+    double rms_m = 0.0, max_m = 0.0;
+  };
+  std::map<int, Recovered> recovered;
+  std::size_t segments = 0;
+};
+ForearmSessionErrors evaluate_forearm_results(const ForearmSessionTruth& truth,
+                                              const std::vector<v1::FitResult>& results);
+
+}  // namespace posefuse::session::testing

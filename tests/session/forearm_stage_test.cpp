@@ -1,0 +1,200 @@
+// The forearm stage in the pipeline on a synthetic session (tests/session/forearm_session.hpp):
+// calibration, orientation and pronation per IMU sample, IMU position per frame, a gap's live
+// estimate and recovered segments, and clear warnings for sessions it cannot use.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <numbers>
+
+#include "forearm/forearm_orientation.hpp"
+#include "forearm_session.hpp"
+#include "session/pipeline.hpp"
+#include "session/stages/default_stages.hpp"
+
+namespace posefuse::session {
+namespace {
+
+using forearm::Quat;
+using forearm::Vec3;
+using testing::ForearmSessionOptions;
+using testing::ForearmSessionTruth;
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+struct Sink : ResultSink {
+  void emit(v1::FitResult&& result) override { results.push_back(std::move(result)); }
+  std::vector<v1::FitResult> results;
+  std::vector<v1::Warning> warnings() const {
+    std::vector<v1::Warning> out;
+    for (const auto& r : results) {
+      if (r.has_warning()) out.push_back(r.warning());
+    }
+    return out;
+  }
+};
+
+struct StageRun {
+  ForearmSessionTruth truth;
+  Sink sink;
+};
+
+// One pipeline run per options, shared by the tests that read it.
+const StageRun& run_session(const ForearmSessionOptions& options) {
+  static std::map<std::string, std::unique_ptr<StageRun>> cache;
+  const std::string key = std::to_string(options.strap_drawn) + std::to_string(options.buzzer) +
+                          std::to_string(options.camera_alignment) + std::to_string(options.hold_s);
+  auto& slot = cache[key];
+  if (!slot) {
+    slot = std::make_unique<StageRun>();
+    const auto chunks = testing::make_forearm_session(options, &slot->truth);
+    SessionPipeline pipeline(make_default_stages(), slot->sink);
+    for (const auto& chunk : chunks) pipeline.push(chunk);
+    pipeline.close();
+  }
+  return *slot;
+}
+
+Quat quat(const v1::Quaternion& q) { return Quat(q.w(), q.x(), q.y(), q.z()); }
+
+TEST(ForearmStage, CalibratesTheForearmModel) {
+  const StageRun& r = run_session({});
+  for (const auto& w : r.sink.warnings()) ADD_FAILURE() << w.code() << " " << w.field() << ": " << w.message();
+  const auto calibration = std::find_if(r.sink.results.begin(), r.sink.results.end(),
+                                        [](const v1::FitResult& x) { return x.has_calibration(); });
+  ASSERT_NE(calibration, r.sink.results.end());
+  ASSERT_EQ(calibration->calibration().forearms_size(), 1);
+  const v1::ForearmModel& model = calibration->calibration().forearms(0);
+  EXPECT_TRUE(model.estimated());
+  EXPECT_EQ(model.device_id(), "arm_r");
+  EXPECT_EQ(model.arm(), v1::RIGHT);
+  EXPECT_GE(model.calibration_frames(), 80u);  // the 3 s hold at 30 Hz
+  // Joint noise 4 mm averaged over the hold; a colour pixel is 5 mm, a depth pixel 14 mm here.
+  std::printf("calibration: r %.4f (true %.4f) d_se %.4f (%.4f) d_sw %.4f (%.4f) d_ul %.4f (%.4f) m, A_from_F %.2f deg\n",
+              model.r_m(), r.truth.model.r_m, model.d_se_m(), r.truth.model.d_se_m, model.d_sw_m(),
+              r.truth.model.d_sw_m, model.d_ul_m(), r.truth.model.d_ul_m,
+              geometry::angle_between(quat(model.a_from_f()), r.truth.model.F_from_A.conjugate()) / kDeg);
+  EXPECT_NEAR(model.r_m(), r.truth.model.r_m, 0.006);
+  EXPECT_NEAR(model.d_se_m(), r.truth.model.d_se_m, 0.006);
+  EXPECT_NEAR(model.d_sw_m(), r.truth.model.d_sw_m, 0.006);
+  EXPECT_NEAR(model.d_ul_m(), r.truth.model.d_ul_m, 0.003);
+  const Quat A_from_F = quat(model.a_from_f());
+  EXPECT_LT(geometry::angle_between(A_from_F, r.truth.model.F_from_A.conjugate()), 2.0 * kDeg);
+  // Clocks: offsets reported for both IMUs with a sub-millisecond uncertainty.
+  EXPECT_EQ(calibration->calibration().clock_offset_us_size(), 2);
+  EXPECT_LT(calibration->calibration().clock_offset_sigma_us().at("arm_r"), 1000.0);
+  for (const auto& [device, d0] : r.truth.device_us_at_camera_zero) {
+    // Buzzer edge (~0.1 ms at 16 kHz) plus BLE ticks (0.3 ms) for the arm.
+    const double error_us = static_cast<double>(calibration->calibration().clock_offset_us().at(device) + d0);
+    std::printf("clock offset error %s: %.0f us (reported sigma %.0f us)\n", device.c_str(), error_us,
+                calibration->calibration().clock_offset_sigma_us().at(device));
+    EXPECT_LT(std::abs(error_us), 1000.0) << device;
+  }
+  EXPECT_LT(geometry::angle_between(quat(calibration->calibration().k_from_w()), r.truth.K_from_W), 1.0 * kDeg);
+}
+
+TEST(ForearmStage, OrientationAndPronationForEveryImuSample) {
+  const StageRun& r = run_session({});
+  const testing::ForearmSessionErrors e = testing::evaluate_forearm_results(r.truth, r.sink.results);
+  ASSERT_GT(e.orientation_samples, 50u);
+  std::printf("forearm orientation: %zu samples, RMS %.2f deg, max %.2f deg; pronation max error %.2f deg\n",
+              e.orientation_samples, e.orientation_rms_rad / kDeg, e.orientation_max_rad / kDeg,
+              e.pronation_max_rad / kDeg);
+  // Filter noise and the calibration's eq. 9 error (< 2 degrees).
+  EXPECT_LT(e.orientation_rms_rad, 3.0 * kDeg);
+  EXPECT_LT(e.orientation_max_rad, 6.0 * kDeg);
+  EXPECT_LT(e.pronation_max_rad, 6.0 * kDeg);
+}
+
+TEST(ForearmStage, ImuPositionsVisibleThenPredictedThenRecovered) {
+  const ForearmSessionOptions options;
+  const StageRun& r = run_session(options);
+  // Predicted positions only inside the occlusion; every frame answered once.
+  for (const auto& result : r.sink.results) {
+    if (!result.has_frame()) continue;
+    ASSERT_EQ(result.frame().forearms_size(), 1);
+    for (const v1::ImuPosition& p : result.frame().imu_positions()) {
+      if (p.source() == v1::VISUAL) continue;
+      EXPECT_EQ(p.source(), v1::PREDICTED);
+      const double t = static_cast<double>(result.frame().t_us()) * 1e-6;
+      EXPECT_GE(t, options.occlusion_begin_s);
+      EXPECT_LT(t, options.occlusion_end_s + 1e-3);
+    }
+  }
+  const testing::ForearmSessionErrors e = testing::evaluate_forearm_results(r.truth, r.sink.results);
+  EXPECT_EQ(e.frames, r.truth.frame_t_us.size());
+  EXPECT_GT(e.visible_frames, e.frames / 2);
+  EXPECT_GE(e.predicted_frames, 20u);  // the 0.9 s occlusion at 30 Hz
+  EXPECT_EQ(e.segments, 2u);           // one per method
+  ASSERT_EQ(e.recovered.size(), 2u);
+  const auto& smoother = e.recovered.at(v1::RecoveredSegment::SMOOTHER);
+  const auto& paper = e.recovered.at(v1::RecoveredSegment::PAPER);
+  std::printf("IMU position: visible %zu frames RMS %.1f mm; predicted %zu frames max %.1f mm; recovered max: "
+              "smoother %.1f mm, paper %.1f mm\n", e.visible_frames, 1e3 * e.visible_rms_m, e.predicted_frames,
+              1e3 * e.predicted_max_m, 1e3 * smoother.max_m, 1e3 * paper.max_m);
+  EXPECT_LT(e.visible_rms_m, 0.012);
+  EXPECT_LT(e.predicted_max_m, 0.15);
+  EXPECT_GE(smoother.samples, 8u);  // 80 Hz samples within 2 ms of a 30 Hz frame, ~1 s
+  EXPECT_LT(smoother.max_m, 0.04);
+  EXPECT_LT(paper.max_m, 0.08);
+  EXPECT_EQ(r.sink.results.back().summary().recovered_segments(), 2u);
+}
+
+bool has_warning(const StageRun& r, const std::string& code, const std::string& field_part, const std::string& text) {
+  for (const auto& w : r.sink.warnings()) {
+    if (w.code() == code && w.field().find(field_part) != std::string::npos &&
+        w.message().find(text) != std::string::npos) {
+      return true;
+    }
+  }
+  return false;
+}
+
+std::size_t count(const StageRun& r, v1::FitResult::ResultCase kind) {
+  return static_cast<std::size_t>(std::count_if(r.sink.results.begin(), r.sink.results.end(),
+                                                [&](const v1::FitResult& x) { return x.result_case() == kind; }));
+}
+
+TEST(ForearmStage, NoBuzzerEventIsNamed) {
+  ForearmSessionOptions options;
+  options.buzzer = false;
+  const StageRun& r = run_session(options);
+  EXPECT_TRUE(has_warning(r, "FOREARM_NO_SYNC", "sync_event", "no BUZZER_STOP event"));
+  EXPECT_EQ(count(r, v1::FitResult::kForearmOrientations), 0u);
+  EXPECT_EQ(count(r, v1::FitResult::kFrame), 0u);
+  EXPECT_GT(count(r, v1::FitResult::kImuOrientations), 0u);  // the IMU stage is unaffected
+}
+
+TEST(ForearmStage, TooShortCalibrationIsNamed) {
+  ForearmSessionOptions options;
+  options.hold_s = -1.0;  // already moving at full speed at t = 0: no 15-frame still run
+  const StageRun& r = run_session(options);
+  EXPECT_TRUE(has_warning(r, "FOREARM_CALIBRATION", "forearm[arm_r].calibration", "held still for"));
+  EXPECT_EQ(count(r, v1::FitResult::kForearmOrientations), 0u);
+}
+
+TEST(ForearmStage, StrapNeverSeenGivesOrientationOnly) {
+  ForearmSessionOptions options;
+  options.strap_drawn = false;
+  const StageRun& r = run_session(options);
+  EXPECT_TRUE(has_warning(r, "FOREARM_STRAP_NOT_SEEN", "forearm[arm_r].strap", "seen in 0 of"));
+  EXPECT_GT(count(r, v1::FitResult::kForearmOrientations), 0u);
+  for (const auto& result : r.sink.results) {
+    if (result.has_frame()) {
+      EXPECT_EQ(result.frame().imu_positions_size(), 0);
+    }
+  }
+  EXPECT_EQ(count(r, v1::FitResult::kRecoveredSegment), 0u);
+}
+
+TEST(ForearmStage, NoCameraAlignmentIsNamed) {
+  ForearmSessionOptions options;
+  options.camera_alignment = false;
+  const StageRun& r = run_session(options);
+  EXPECT_TRUE(has_warning(r, "FOREARM_NO_CAMERA_ALIGNMENT", "header.options[forearm.K_from_B]", "eq. 8"));
+  EXPECT_EQ(count(r, v1::FitResult::kFrame), 0u);
+}
+
+}  // namespace
+}  // namespace posefuse::session
