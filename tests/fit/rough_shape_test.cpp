@@ -1,5 +1,7 @@
 #include "fit/rough_shape.hpp"
 
+#include "fit/personalisation.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
@@ -99,6 +101,49 @@ TEST(FitRoughShape, RefusesWhenNotInThePoseOrNotInView) {
   bad.min_step = 0;
   EXPECT_EQ(testing::error_field([&] { estimate_rough_shape(*female(), {posed({})}, nullptr, bad); }),
             "rough_options.min_step");
+}
+
+// The fine-tuning seam: the refiner gets the rough shape and a full-body pose built from the chosen
+// frame, and its result becomes the subject's shape. (The refiner here only records its inputs;
+// the real one is the LM fitter with the shape free.)
+TEST(FitPersonalisation, FineTuningSeamGetsTheRoughShapeAndAFullBodyStart) {
+  const PoseLayout layout = PoseLayout::full_body();
+  const testing::PosedSubject subject = testing::pose_subject(*female(), layout, true_shape(), controlled_pose(layout));
+  const std::vector<TrackedSkeleton> frames(5, subject.skeleton);
+
+  const Personalisation rough_only = personalise(female(), frames, &kinect(), nullptr);
+  EXPECT_FALSE(rough_only.fine_tuned);
+  EXPECT_EQ(rough_only.beta(), rough_only.rough.beta);
+  EXPECT_EQ(rough_only.fine_tune_frame, 2u);
+  for (int s = 0; s < kBodySegmentCount; ++s) EXPECT_NEAR(rough_only.segment_lengths[s], rough_only.rough.measured[s], 1e-3);
+
+  std::size_t seen_frame = 99;
+  Eigen::VectorXd seen_beta, seen_theta;
+  Eigen::VectorXd refined_beta = true_shape();
+  const ShapePoseRefiner refiner = [&](std::size_t frame, const Eigen::VectorXd& beta0, const Eigen::VectorXd& theta0) {
+    seen_frame = frame;
+    seen_beta = beta0;
+    seen_theta = theta0;
+    return ShapePoseFit{refined_beta, theta0, 1.5};
+  };
+  PersonalisationOptions options;
+  options.fine_tune_frame = 4;
+  const Personalisation p = personalise(female(), frames, &kinect(), refiner, options);
+  EXPECT_EQ(seen_frame, 4u);
+  EXPECT_EQ(seen_beta, p.rough.beta);
+  ASSERT_EQ(seen_theta.size(), layout.size());
+  const JointPose start = pose_joints(rest_joints(*female(), p.rough.beta), layout, seen_theta);
+  for (int j = 0; j < body::kNumJoints; ++j)
+    EXPECT_LT((start.positions_K.col(j) - subject.joints.positions_K.col(j)).norm(), 0.02) << body::smpl_joint_names()[j];
+  EXPECT_TRUE(p.fine_tuned);
+  EXPECT_EQ(p.beta(), refined_beta);
+  EXPECT_EQ(p.fine.energy, 1.5);
+
+  refined_beta[3] = std::nan("");
+  EXPECT_EQ(testing::error_field([&] { personalise(female(), frames, &kinect(), refiner); }), "fine_tuning.beta");
+  options.fine_tune_frame = 5;
+  EXPECT_EQ(testing::error_field([&] { personalise(female(), frames, &kinect(), nullptr, options); }),
+            "personalisation_options.fine_tune_frame");
 }
 
 }  // namespace
