@@ -22,8 +22,10 @@
 namespace posefuse::fit {
 
 struct ControlledPoseLimits {
-  double max_knee_bend_deg = 20;
-  double max_elbow_bend_deg = 25;
+  // Generous because the camera skeleton's own errors bend straight limbs: upper-limb biases of
+  // 5-10 cm (simulator, after paper 2's 50-101 mm) make a straight arm look bent by up to ~30 deg.
+  double max_knee_bend_deg = 30;
+  double max_elbow_bend_deg = 40;
   // Angle between an upper arm and the trunk's downward direction (shoulders -> hips).
   double min_arm_abduction_deg = 20, max_arm_abduction_deg = 100;
   // Angle of the shoulder line out of the image plane (0 = facing the camera squarely).

@@ -1,6 +1,7 @@
 #include "fit/skeleton_pose_init.hpp"
 
 #include <Eigen/Geometry>
+#include <Eigen/Eigenvalues>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
@@ -118,33 +119,59 @@ struct Builder {
 
   bool has_dofs(int joint) const { return !layout.dofs_of_joint(joint).empty(); }
 
+  // Rigid fit of the model's straight rest trunk to the observed trunk joints (Kabsch with
+  // translation): the long shoulder and spine baselines keep the pelvis rotation from inheriting
+  // the few-centimetre errors of the hip joints, which only 17 cm apart would turn it by 10-20 deg.
   void global() {
-    const std::string why = unusable({kSpineBase, kSpineMid, kHipLeft, kHipRight});
-    if (!why.empty()) {
-      if (!has_previous) {
-        const int joint = [&] {
-          for (int j : {kSpineBase, kSpineMid, kHipLeft, kHipRight})
-            if (!joint_unusable_reason(skeleton, j, options.accept_inferred_joints).empty()) return j;
-          return int(kSpineBase);
-        }();
-        throw_precondition(std::string("skeleton.") + kinect_joint_name(joint),
-                           why + ": the global pose needs SpineBase, SpineMid, HipLeft and HipRight when there is no previous pose");
+    const Eigen::Vector3d rest_collars = 0.5 * (rest.col(body::kLeftCollar) + rest.col(body::kRightCollar));
+    const std::pair<int, Eigen::Vector3d> trunk[] = {
+        {kSpineBase, rest.col(body::kPelvis)},         {kSpineMid, rest.col(body::kSpine2)},
+        {kHipLeft, rest.col(body::kLeftHip)},          {kHipRight, rest.col(body::kRightHip)},
+        {kSpineShoulder, rest_collars},                {kShoulderLeft, rest.col(body::kLeftShoulder)},
+        {kShoulderRight, rest.col(body::kRightShoulder)}};
+    std::vector<Eigen::Vector3d> from, to;
+    std::string first_missing;
+    int first_missing_joint = kSpineBase;
+    for (const auto& [joint, rest_point] : trunk) {
+      const std::string why = joint_unusable_reason(skeleton, joint, options.accept_inferred_joints);
+      if (why.empty()) {
+        from.push_back(rest_point);
+        to.push_back(obs(joint));
+      } else if (first_missing.empty()) {
+        first_missing = why;
+        first_missing_joint = joint;
       }
-      fall_back(InitSegment::kGlobal, why);
-      return;
     }
-    const Eigen::Vector3d hips = obs(kHipLeft) - obs(kHipRight), spine = obs(kSpineMid) - obs(kSpineBase);
-    if (!long_enough(InitSegment::kGlobal, hips, kHipRight, kHipLeft) ||
-        !long_enough(InitSegment::kGlobal, spine, kSpineBase, kSpineMid)) {
-      if (!has_previous) throw_precondition("skeleton", "the global pose cannot be built: " + fallbacks.back().reason);
-      return;
+    Eigen::Vector3d from_mean = Eigen::Vector3d::Zero(), to_mean = Eigen::Vector3d::Zero();
+    for (size_t i = 0; i < from.size(); ++i) {
+      from_mean += from[i] / static_cast<double>(from.size());
+      to_mean += to[i] / static_cast<double>(from.size());
     }
-    const Eigen::Matrix3d r = best_rotation(rest.col(body::kLeftHip) - rest.col(body::kRightHip),
-                                            rest.col(body::kSpine2) - rest.col(body::kPelvis), hips, spine);
+    Eigen::Matrix3d h = Eigen::Matrix3d::Zero(), spread = Eigen::Matrix3d::Zero();
+    for (size_t i = 0; i < from.size(); ++i) {
+      h += (from[i] - from_mean) * (to[i] - to_mean).transpose();
+      spread += (to[i] - to_mean) * (to[i] - to_mean).transpose();
+    }
+    // Needs three joints that do not lie on one line.
+    const Eigen::Vector3d extent = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(spread).eigenvalues();
+    if (from.size() < 3 || extent[1] < options.min_bone_length_m * options.min_bone_length_m) {
+      const std::string why = std::to_string(from.size()) + " of the 7 trunk joints usable" +
+                              (first_missing.empty() ? std::string(", all on one line") : " (" + first_missing + ")");
+      if (!has_previous)
+        throw_precondition(std::string("skeleton.") + kinect_joint_name(first_missing_joint),
+                           why + ": the global pose needs three trunk joints (SpineBase, SpineMid, SpineShoulder, "
+                                 "hips, shoulders) when there is no previous pose");
+      return fall_back(InitSegment::kGlobal, why);
+    }
+    const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
+    Eigen::Matrix3d d = Eigen::Matrix3d::Identity();
+    d(2, 2) = (svd.matrixV() * svd.matrixU().transpose()).determinant() < 0 ? -1.0 : 1.0;
+    const Eigen::Matrix3d r = svd.matrixV() * d * svd.matrixU().transpose();
     set_joint_rotation(body::kPelvis, nearest_equivalent(rotation_vector(r), joint_rotation_vector(body::kPelvis)));
-    const Eigen::Vector3d translation = obs(kSpineBase) - rest.col(body::kPelvis);
-    for (int d : layout.dofs_of_joint(body::kPelvis))
-      if (layout.dof(d).kind == body::DofKind::kTranslation) theta[d] = translation.dot(layout.dof(d).axis);
+    // The pelvis joint's posed position is J(0) + translation.
+    const Eigen::Vector3d translation = to_mean + r * (rest.col(body::kPelvis) - from_mean) - rest.col(body::kPelvis);
+    for (int dof : layout.dofs_of_joint(body::kPelvis))
+      if (layout.dof(dof).kind == body::DofKind::kTranslation) theta[dof] = translation.dot(layout.dof(dof).axis);
   }
 
   void spine() {
@@ -186,12 +213,18 @@ struct Builder {
     swing(collar, rest.col(shoulder) - rest.col(collar), bone);
   }
 
-  void limb(InitSegment segment, int joint, int child, int observed_from, int observed_to) {
+  // Aims the bone from the model's posed joint at the observed child joint (rather than along the
+  // observed bone): each built joint then inherits the error of one observed joint instead of
+  // the sum of the errors along the chain.
+  void limb(InitSegment segment, int joint, int child, int observed_child) {
     if (!has_dofs(joint)) return;
-    const std::string why = unusable({observed_from, observed_to});
+    const std::string why = unusable({observed_child});
     if (!why.empty()) return fall_back(segment, why);
-    const Eigen::Vector3d bone = obs(observed_to) - obs(observed_from);
-    if (!long_enough(segment, bone, observed_from, observed_to)) return;
+    const JointPose pose = pose_joints(rest, layout, theta);
+    const Eigen::Vector3d bone = obs(observed_child) - pose.positions_K.col(joint);
+    if (bone.norm() < options.min_bone_length_m)
+      return fall_back(segment, std::string(kinect_joint_name(observed_child)) + " lies on the model's " +
+                                    body::smpl_joint_names()[joint] + " joint");
     swing(joint, rest.col(child) - rest.col(joint), bone);
   }
 };
@@ -259,16 +292,16 @@ SkeletonInitResult SkeletonPoseInitializer::initialise(const TrackedSkeleton& sk
   b.neck();
   b.collar(InitSegment::kLeftCollar, body::kLeftCollar, body::kLeftShoulder, kShoulderLeft);
   b.collar(InitSegment::kRightCollar, body::kRightCollar, body::kRightShoulder, kShoulderRight);
-  b.limb(InitSegment::kLeftShoulder, body::kLeftShoulder, body::kLeftElbow, kShoulderLeft, kElbowLeft);
-  b.limb(InitSegment::kRightShoulder, body::kRightShoulder, body::kRightElbow, kShoulderRight, kElbowRight);
-  b.limb(InitSegment::kLeftElbow, body::kLeftElbow, body::kLeftWrist, kElbowLeft, kWristLeft);
-  b.limb(InitSegment::kRightElbow, body::kRightElbow, body::kRightWrist, kElbowRight, kWristRight);
-  b.limb(InitSegment::kLeftWrist, body::kLeftWrist, body::kLeftHand, kWristLeft, kHandLeft);
-  b.limb(InitSegment::kRightWrist, body::kRightWrist, body::kRightHand, kWristRight, kHandRight);
-  b.limb(InitSegment::kLeftHip, body::kLeftHip, body::kLeftKnee, kHipLeft, kKneeLeft);
-  b.limb(InitSegment::kRightHip, body::kRightHip, body::kRightKnee, kHipRight, kKneeRight);
-  b.limb(InitSegment::kLeftKnee, body::kLeftKnee, body::kLeftAnkle, kKneeLeft, kAnkleLeft);
-  b.limb(InitSegment::kRightKnee, body::kRightKnee, body::kRightAnkle, kKneeRight, kAnkleRight);
+  b.limb(InitSegment::kLeftShoulder, body::kLeftShoulder, body::kLeftElbow, kElbowLeft);
+  b.limb(InitSegment::kRightShoulder, body::kRightShoulder, body::kRightElbow, kElbowRight);
+  b.limb(InitSegment::kLeftElbow, body::kLeftElbow, body::kLeftWrist, kWristLeft);
+  b.limb(InitSegment::kRightElbow, body::kRightElbow, body::kRightWrist, kWristRight);
+  b.limb(InitSegment::kLeftWrist, body::kLeftWrist, body::kLeftHand, kHandLeft);
+  b.limb(InitSegment::kRightWrist, body::kRightWrist, body::kRightHand, kHandRight);
+  b.limb(InitSegment::kLeftHip, body::kLeftHip, body::kLeftKnee, kKneeLeft);
+  b.limb(InitSegment::kRightHip, body::kRightHip, body::kRightKnee, kKneeRight);
+  b.limb(InitSegment::kLeftKnee, body::kLeftKnee, body::kLeftAnkle, kAnkleLeft);
+  b.limb(InitSegment::kRightKnee, body::kRightKnee, body::kRightAnkle, kAnkleRight);
 
   SkeletonInitResult result;
   result.theta = std::move(b.theta);

@@ -3,9 +3,11 @@
 // skeleton", optimised next to the previous frame's result (the lower energy wins).
 //
 // Built segment by segment, root first, each from the camera joints it needs:
-//   global     pelvis rotation (3 DOF): the rotation that best maps the model's rest hip->hip and
-//              pelvis->spine2 vectors onto HipRight->HipLeft and SpineBase->SpineMid (Kabsch);
-//              translation puts the pelvis joint on SpineBase.                 [SpineBase, SpineMid, HipLeft, HipRight]
+//   global     pelvis rotation (3 DOF) and translation: the rigid motion that best maps the model's
+//              straight rest trunk (pelvis, spine2, hips, collar midpoint, shoulders) onto the
+//              observed SpineBase, SpineMid, hips, SpineShoulder and shoulders (Kabsch, every usable
+//              one of the 7; at least 3 not on one line). The long shoulder and spine baselines
+//              keep the few-cm hip errors from turning the whole body.
 //   spine      the rotation of the upper trunk that maps rest shoulder->shoulder and spine2->
 //              (collar midpoint) onto ShoulderRight->ShoulderLeft and SpineMid->SpineShoulder,
 //              relative to the pelvis, split equally between spine2 and spine3 (same axis, half the
@@ -14,13 +16,14 @@
 //   neck       2-DOF swing that points the model's Head (head joint + head_above_skull_base_m
 //              up the head) from the neck along Neck->Head; the head's own rotation is not
 //              observable from one point and is kept.                                 [Neck, Head]
-//   collars    2-DOF swing pointing the posed collar joint at the observed shoulder (scapular
+//   collars    2-DOF swing aiming the posed collar joint at the observed shoulder (scapular
 //              elevation, paper 2 V-C.5).                                            [Shoulder*]
-//   shoulders, elbows, wrists, hips (and knees in the full-body layout): 2-DOF swing of the bone
-//              onto the observed bone: Shoulder->Elbow, Elbow->Wrist, Wrist->Hand, Hip->Knee,
-//              Knee->Ankle.
+//   shoulders, elbows, wrists, hips (and knees in the full-body layout): 2-DOF swing aiming the
+//              model's posed joint at the observed child joint (Elbow, Wrist, Hand, Knee, Ankle):
+//              each built joint inherits the error of one observed joint rather than the sum of
+//              the errors along the arm.
 // A swing is the smallest rotation taking the rest bone (in the parent's posed frame) onto the
-// observed direction; its axis is perpendicular to the bone, so for a joint whose roll DOF paper 2
+// target direction; its axis is perpendicular to the bone, so for a joint whose roll DOF paper 2
 // removed (II-B) it lies in the plane of the two remaining DOF axes and is represented exactly.
 // Afterwards every limited DOF is clamped into its limits (body/pose_parameters.cpp, eq. 8).
 //

@@ -62,11 +62,12 @@ TEST(FitSkeletonInit, ErrorFreeSkeletonGivesTheKnownJoints) {
   const SkeletonInitResult result = init.initialise(truth.skeleton, Eigen::VectorXd());
   EXPECT_TRUE(result.fallbacks.empty()) << result.fallbacks.front().reason;
   const JointPose built = pose_joints(init.rest_joints(), layout, result.theta);
-  // The arms' swings are recovered exactly once the trunk is right; the trunk folds spine1 into
-  // the pelvis and splits the upper trunk equally between spine2 and spine3.
-  EXPECT_LT(max_joint_error(built, truth.joints, kArmJoints), 0.02);  // measured 10 mm
-  EXPECT_LT(max_joint_error(built, truth.joints, kTrunkJoints), 0.025);  // measured 16 mm
-  EXPECT_LT((built.positions_K.col(body::kPelvis) - truth.joints.positions_K.col(body::kPelvis)).norm(), 1e-9);
+  // The arms aim at the observed joints; the trunk is a rigid fit of the straight rest trunk plus
+  // an upper-trunk rotation split equally between spine2 and spine3 (spine1 stays 0), so a bent
+  // trunk is matched only approximately.
+  EXPECT_LT(max_joint_error(built, truth.joints, kArmJoints), 0.02);
+  EXPECT_LT(max_joint_error(built, truth.joints, kTrunkJoints), 0.04);  // measured 32 mm (the neck)
+  EXPECT_LT((built.positions_K.col(body::kPelvis) - truth.joints.positions_K.col(body::kPelvis)).norm(), 0.01);
 }
 
 TEST(FitSkeletonInit, FullBodyLayoutBuildsTheKnees) {
@@ -116,12 +117,10 @@ TEST(FitSkeletonInit, MissingJointsKeepThePreviousSegmentsAndSaySo) {
   for (int d = 0; d < layout.size(); ++d) previous[d] = 0.01 * (d % 7) - 0.03;  // within every limit
   const SkeletonInitResult result = init.initialise(damaged, previous);
 
-  const std::pair<InitSegment, const char*> expected[] = {
-      {InitSegment::kNeck, "Head is not tracked"},
-      {InitSegment::kLeftShoulder, "ElbowLeft is inferred"},
-      {InitSegment::kLeftElbow, "ElbowLeft is inferred"},
-      {InitSegment::kRightElbow, "WristRight is not finite"},
-      {InitSegment::kRightWrist, "WristRight is not finite"}};
+  // A segment needs the observed joint it aims at (the model's own joint is the other end).
+  const std::pair<InitSegment, const char*> expected[] = {{InitSegment::kNeck, "Head is not tracked"},
+                                                          {InitSegment::kLeftShoulder, "ElbowLeft is inferred"},
+                                                          {InitSegment::kRightElbow, "WristRight is not finite"}};
   ASSERT_EQ(result.fallbacks.size(), std::size(expected));
   for (size_t i = 0; i < std::size(expected); ++i) {
     EXPECT_EQ(result.fallbacks[i].segment, expected[i].first);
@@ -129,10 +128,10 @@ TEST(FitSkeletonInit, MissingJointsKeepThePreviousSegmentsAndSaySo) {
     EXPECT_NE(result.fallbacks[i].reason.find("previous pose"), std::string::npos);
   }
   auto dofs_of = [&](int joint) { return layout.dofs_of_joint(joint); };
-  for (int joint : {body::kNeck, body::kLeftShoulder, body::kLeftElbow, body::kRightElbow, body::kRightWrist})
+  for (int joint : {body::kNeck, body::kLeftShoulder, body::kRightElbow})
     for (int d : dofs_of(joint)) EXPECT_EQ(result.theta[d], previous[d]) << layout.dof(d).name;
   // Segments with their joints are built from this skeleton as before (a child of a segment that
-  // fell back, like the left wrist, is built relative to its parent's kept pose instead).
+  // fell back, like the left elbow, is aimed from its parent's kept pose instead).
   for (int joint : {body::kPelvis, body::kSpine2, body::kLeftCollar, body::kRightShoulder, body::kLeftHip})
     for (int d : dofs_of(joint)) EXPECT_NEAR(result.theta[d], full.theta[d], 1e-12) << layout.dof(d).name;
 
@@ -140,8 +139,8 @@ TEST(FitSkeletonInit, MissingJointsKeepThePreviousSegmentsAndSaySo) {
   SkeletonInitOptions accept;
   accept.accept_inferred_joints = true;
   const SkeletonInitResult accepted = SkeletonPoseInitializer(male(), layout, beta, accept).initialise(damaged, previous);
-  EXPECT_FALSE(accepted.fell_back(InitSegment::kLeftElbow));
-  for (int d : dofs_of(body::kLeftElbow)) EXPECT_NEAR(accepted.theta[d], full.theta[d], 1e-12);
+  EXPECT_FALSE(accepted.fell_back(InitSegment::kLeftShoulder));
+  for (int d : dofs_of(body::kLeftShoulder)) EXPECT_NEAR(accepted.theta[d], full.theta[d], 1e-12);
 }
 
 TEST(FitSkeletonInit, FirstFrameWithoutAPreviousPose) {
@@ -155,13 +154,15 @@ TEST(FitSkeletonInit, FirstFrameWithoutAPreviousPose) {
   ASSERT_TRUE(result.fell_back(InitSegment::kLeftElbow));
   EXPECT_NE(result.fallbacks.front().reason.find("rest pose"), std::string::npos);
   for (int d : layout.dofs_of_joint(body::kLeftElbow)) EXPECT_EQ(result.theta[d], 0.0);
-  // Without the hips there is no global pose to start from.
+  // With only the two shoulders of the trunk there is no global pose to start from ...
+  TrackedSkeleton no_trunk = truth.skeleton;
+  for (int j : {kSpineBase, kSpineMid, kHipLeft, kHipRight, kSpineShoulder}) no_trunk.tracking[j] = JointTracking::kInferred;
+  EXPECT_EQ(testing::error_field([&] { init.initialise(no_trunk, Eigen::VectorXd()); }), "skeleton.SpineBase");
+  // ... but with a previous pose the global segment falls back, and one hip is enough with the rest.
+  EXPECT_TRUE(init.initialise(no_trunk, known_pose(layout)).fell_back(InitSegment::kGlobal));
   TrackedSkeleton no_hip = truth.skeleton;
-  no_hip.tracking[kHipLeft] = JointTracking::kInferred;
-  EXPECT_EQ(testing::error_field([&] { init.initialise(no_hip, Eigen::VectorXd()); }), "skeleton.HipLeft");
-  // ... but with a previous pose the global segment falls back.
-  const SkeletonInitResult kept = init.initialise(no_hip, known_pose(layout));
-  EXPECT_TRUE(kept.fell_back(InitSegment::kGlobal));
+  no_hip.tracking[kHipLeft] = JointTracking::kNotTracked;
+  EXPECT_FALSE(init.initialise(no_hip, Eigen::VectorXd()).fell_back(InitSegment::kGlobal));
 }
 
 TEST(FitSkeletonInit, NothingUsableIsAClearError) {
