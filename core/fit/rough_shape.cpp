@@ -24,6 +24,7 @@ void validate(const RoughShapeOptions& o) {
   positive(o.initial_step, "initial_step");
   positive(o.min_step, "min_step");
   positive(o.length_unit_m, "length_unit_m");
+  positive(o.max_abs_beta, "max_abs_beta");
   if (o.max_iterations < 1) throw_invalid("rough_options.max_iterations", "must be at least 1");
   if (!std::isfinite(o.min_gradient_norm) || o.min_gradient_norm < 0)
     throw_invalid("rough_options.min_gradient_norm", "must be finite and non-negative");
@@ -81,7 +82,7 @@ double energy_of(const SegmentLengths& model, const SegmentLengths& measured) {
 const char* rough_shape_stop_name(RoughShapeStop stop) {
   switch (stop) {
     case RoughShapeStop::kStepBelowMinimum: return "step below minimum";
-    case RoughShapeStop::kGradientVanished: return "gradient vanished";
+    case RoughShapeStop::kConverged: return "converged";
     case RoughShapeStop::kMaxIterations: return "max iterations";
   }
   return "?";
@@ -133,11 +134,17 @@ RoughShapeResult estimate_rough_shape(const body::SmplModel& model, const std::v
       r.stop = RoughShapeStop::kStepBelowMinimum;
       break;
     }
-    if (gradient.norm() <= options.min_gradient_norm) {
-      r.stop = RoughShapeStop::kGradientVanished;
+    // Projected gradient: components pushing a beta further past its bound do not count.
+    Eigen::VectorXd projected = gradient;
+    for (int b = 0; b < betas; ++b)
+      if ((r.beta[b] >= options.max_abs_beta && gradient[b] < 0) || (r.beta[b] <= -options.max_abs_beta && gradient[b] > 0))
+        projected[b] = 0;
+    if (projected.norm() <= options.min_gradient_norm) {
+      r.stop = RoughShapeStop::kConverged;
       break;
     }
-    const Eigen::VectorXd candidate = r.beta - step * gradient;
+    const Eigen::VectorXd candidate =
+        (r.beta - step * gradient).cwiseMax(-options.max_abs_beta).cwiseMin(options.max_abs_beta);
     const double candidate_energy = evaluate(candidate, nullptr);
     if (candidate_energy < energy) {
       r.beta = candidate;

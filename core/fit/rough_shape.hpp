@@ -3,7 +3,7 @@
 // segment measurements match the camera skeleton's (eq. 18), with the paper's step rule (eq. 19):
 // beta starts at 0, the step size lambda at 1; an update that does not lower E_s is rejected and
 // halves lambda; the search stops when lambda < 0.01 (or after max_iterations, or when the
-// gradient vanishes). Measurements are averaged over the frames of the controlled pose.
+// gradient vanishes). Betas are kept within +-max_abs_beta. Measurements are averaged over the frames of the controlled pose.
 //
 // The controlled pose (paper 2, Fig. 3; the paper shows it but gives no numbers, these are ours):
 // standing facing the camera, legs and arms straight, arms held away from the trunk so that the
@@ -46,10 +46,14 @@ struct RoughShapeOptions {
   double initial_step = 1.0;              // lambda_0 (paper: 1)
   double min_step = 0.01;                 // convergence when lambda falls below (paper: 0.01)
   int max_iterations = 200'000;
-  double min_gradient_norm = 1e-12;       // stop when the gradient vanishes (E_s at a minimum)
+  double min_gradient_norm = 1e-12;       // stop when the (projected) gradient vanishes
+  // Betas are kept in [-max_abs_beta, max_abs_beta] (projected gradient descent; not in the
+  // paper): the camera skeleton's joint biases can otherwise push the shape far outside the
+  // model's range (betas of -8 on the simulator's skeleton, see docs/benchmarks.md).
+  double max_abs_beta = 3.0;
 };
 
-enum class RoughShapeStop { kStepBelowMinimum, kGradientVanished, kMaxIterations };
+enum class RoughShapeStop { kStepBelowMinimum, kConverged, kMaxIterations };
 const char* rough_shape_stop_name(RoughShapeStop stop);
 
 struct RoughShapeResult {

@@ -70,6 +70,20 @@ TEST(FitRoughShape, AveragesNoisyFrames) {
   for (int s = 0; s < kBodySegmentCount; ++s) EXPECT_NEAR(r.model[s], truth[s], 0.005) << body_segment_name(BodySegment(s));
 }
 
+// Camera-skeleton biases can ask for a shape outside the model's range: betas stop at the bound.
+TEST(FitRoughShape, BetasStayWithinTheirBound) {
+  const PoseLayout layout = PoseLayout::full_body();
+  TrackedSkeleton frame = testing::pose_subject(*female(), layout, true_shape(), controlled_pose(layout)).skeleton;
+  for (const auto& [shoulder, elbow] : {std::pair{kShoulderLeft, kElbowLeft}, std::pair{kShoulderRight, kElbowRight}}) {
+    const Eigen::Vector3d upper = frame.positions_K[elbow] - frame.positions_K[shoulder];
+    frame.positions_K[elbow] -= 0.12 * upper.normalized();  // upper arms 12 cm too short
+  }
+  const RoughShapeResult r = estimate_rough_shape(*female(), {frame}, &kinect());
+  EXPECT_EQ(r.beta[3], -3.0);  // upper_arm_length at its bound
+  EXPECT_LE(r.beta.cwiseAbs().maxCoeff(), 3.0);
+  EXPECT_NE(r.stop, RoughShapeStop::kMaxIterations);
+}
+
 std::string refusal(const TrackedSkeleton& frame) {
   const TrackedSkeleton good = testing::pose_subject(*female(), PoseLayout::full_body(), true_shape(),
                                                      controlled_pose(PoseLayout::full_body())).skeleton;
