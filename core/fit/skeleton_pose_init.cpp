@@ -202,17 +202,6 @@ struct Builder {
     swing(body::kNeck, rest.col(body::kHead) - rest.col(body::kNeck) + options.head_above_skull_base_m * head_up, bone);
   }
 
-  void collar(InitSegment segment, int collar, int shoulder, int observed_shoulder) {
-    if (!has_dofs(collar)) return;
-    const std::string why = unusable({observed_shoulder});
-    if (!why.empty()) return fall_back(segment, why);
-    const JointPose pose = pose_joints(rest, layout, theta);
-    const Eigen::Vector3d bone = obs(observed_shoulder) - pose.positions_K.col(collar);
-    if (bone.norm() < options.min_bone_length_m)
-      return fall_back(segment, std::string(kinect_joint_name(observed_shoulder)) + " lies on the model's collar joint");
-    swing(collar, rest.col(shoulder) - rest.col(collar), bone);
-  }
-
   // Aims the bone from the model's posed joint at the observed child joint (rather than along the
   // observed bone): each built joint then inherits the error of one observed joint instead of
   // the sum of the errors along the chain.
@@ -290,18 +279,26 @@ SkeletonInitResult SkeletonPoseInitializer::initialise(const TrackedSkeleton& sk
   b.global();
   b.spine();
   b.neck();
-  b.collar(InitSegment::kLeftCollar, body::kLeftCollar, body::kLeftShoulder, kShoulderLeft);
-  b.collar(InitSegment::kRightCollar, body::kRightCollar, body::kRightShoulder, kShoulderRight);
-  b.limb(InitSegment::kLeftShoulder, body::kLeftShoulder, body::kLeftElbow, kElbowLeft);
-  b.limb(InitSegment::kRightShoulder, body::kRightShoulder, body::kRightElbow, kElbowRight);
-  b.limb(InitSegment::kLeftElbow, body::kLeftElbow, body::kLeftWrist, kWristLeft);
-  b.limb(InitSegment::kRightElbow, body::kRightElbow, body::kRightWrist, kWristRight);
-  b.limb(InitSegment::kLeftWrist, body::kLeftWrist, body::kLeftHand, kHandLeft);
-  b.limb(InitSegment::kRightWrist, body::kRightWrist, body::kRightHand, kHandRight);
-  b.limb(InitSegment::kLeftHip, body::kLeftHip, body::kLeftKnee, kKneeLeft);
-  b.limb(InitSegment::kRightHip, body::kRightHip, body::kRightKnee, kKneeRight);
-  b.limb(InitSegment::kLeftKnee, body::kLeftKnee, body::kLeftAnkle, kAnkleLeft);
-  b.limb(InitSegment::kRightKnee, body::kRightKnee, body::kRightAnkle, kAnkleRight);
+  // Root first: each segment is aimed from its parent's pose as built so far.
+  struct Limb {
+    InitSegment segment;
+    int joint, child, observed_child;
+  };
+  static constexpr Limb kLimbs[] = {
+      {InitSegment::kLeftCollar, body::kLeftCollar, body::kLeftShoulder, kShoulderLeft},
+      {InitSegment::kRightCollar, body::kRightCollar, body::kRightShoulder, kShoulderRight},
+      {InitSegment::kLeftShoulder, body::kLeftShoulder, body::kLeftElbow, kElbowLeft},
+      {InitSegment::kRightShoulder, body::kRightShoulder, body::kRightElbow, kElbowRight},
+      {InitSegment::kLeftElbow, body::kLeftElbow, body::kLeftWrist, kWristLeft},
+      {InitSegment::kRightElbow, body::kRightElbow, body::kRightWrist, kWristRight},
+      {InitSegment::kLeftWrist, body::kLeftWrist, body::kLeftHand, kHandLeft},
+      {InitSegment::kRightWrist, body::kRightWrist, body::kRightHand, kHandRight},
+      {InitSegment::kLeftHip, body::kLeftHip, body::kLeftKnee, kKneeLeft},
+      {InitSegment::kRightHip, body::kRightHip, body::kRightKnee, kKneeRight},
+      {InitSegment::kLeftKnee, body::kLeftKnee, body::kLeftAnkle, kAnkleLeft},
+      {InitSegment::kRightKnee, body::kRightKnee, body::kRightAnkle, kAnkleRight},
+  };
+  for (const Limb& l : kLimbs) b.limb(l.segment, l.joint, l.child, l.observed_child);
 
   SkeletonInitResult result;
   result.theta = std::move(b.theta);

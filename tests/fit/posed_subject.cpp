@@ -6,6 +6,12 @@
 
 namespace posefuse::fit::testing {
 
+const std::shared_ptr<body::SmplModel>& template_model(body::Sex sex) {
+  static const std::shared_ptr<body::SmplModel> male = body::make_template(body::Sex::kMale);
+  static const std::shared_ptr<body::SmplModel> female = body::make_template(body::Sex::kFemale);
+  return sex == body::Sex::kMale ? male : female;
+}
+
 Eigen::VectorXd facing_pose(const body::PoseLayout& layout, double depth_m,
                             std::initializer_list<std::pair<const char*, double>> degrees) {
   Eigen::VectorXd theta = layout.zero();

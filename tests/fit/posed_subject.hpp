@@ -7,10 +7,14 @@
 
 #include "body/pose_parameters.hpp"
 #include "body/smpl_model.hpp"
+#include "body/template_generator.hpp"
 #include "fit/joint_kinematics.hpp"
 #include "fit/tracked_skeleton.hpp"
 
 namespace posefuse::fit::testing {
+
+// The built-in template of either sex, built once per test binary.
+const std::shared_ptr<body::SmplModel>& template_model(body::Sex sex);
 
 // theta of `layout` for a subject facing the camera, pelvis at `depth_m`, with every named DOF
 // ({name, degrees}) set; other DOFs zero.

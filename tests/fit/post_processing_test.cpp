@@ -75,10 +75,7 @@ TEST(FitPoseSmoothing, BadInputNamesTheField) {
   EXPECT_EQ(testing::error_field([&] { smoother.push(nan); }), "theta");
 }
 
-const std::shared_ptr<body::SmplModel>& male() {
-  static const std::shared_ptr<body::SmplModel> model = body::make_template(body::Sex::kMale);
-  return model;
-}
+const std::shared_ptr<body::SmplModel>& male() { return testing::template_model(body::Sex::kMale); }
 
 // The IMU's orientation for a forearm whose thumb is turned by `roll` about the forearm from
 // `thumb_K`, with the IMU strapped at A_from_F: K_from_A = K_from_F * F_from_A.

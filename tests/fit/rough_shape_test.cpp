@@ -17,10 +17,7 @@ namespace {
 
 using body::PoseLayout;
 
-const std::shared_ptr<body::SmplModel>& female() {
-  static const std::shared_ptr<body::SmplModel> model = body::make_template(body::Sex::kFemale);
-  return model;
-}
+const std::shared_ptr<body::SmplModel>& female() { return testing::template_model(body::Sex::kFemale); }
 
 Eigen::VectorXd true_shape() {
   Eigen::VectorXd beta = Eigen::VectorXd::Zero(10);

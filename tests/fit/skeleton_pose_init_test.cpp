@@ -17,10 +17,7 @@ namespace {
 
 using body::PoseLayout;
 
-const std::shared_ptr<body::SmplModel>& male() {
-  static const std::shared_ptr<body::SmplModel> model = body::make_template(body::Sex::kMale);
-  return model;
-}
+const std::shared_ptr<body::SmplModel>& male() { return testing::template_model(body::Sex::kMale); }
 
 Eigen::VectorXd shape() {
   Eigen::VectorXd beta = Eigen::VectorXd::Zero(10);
