@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <string>
 
@@ -37,6 +38,32 @@ std::pair<double, double> radial_factor_range(const raycast::DepthIntrinsics& c,
   return {lo, hi};
 }
 
+// FNV-1a style hash of what voxel classifications depend on: 64-bit words of the depth image,
+// the grid and the camera's intrinsics.
+uint64_t classification_stamp(const raycast::DepthCamera& camera, const std::vector<uint16_t>& depth_mm,
+                              const Eigen::Vector3d& origin, const Eigen::Vector3i& size, double voxel_size) {
+  uint64_t h = 1469598103934665603ull;
+  auto mix = [&](uint64_t word) {
+    h ^= word;
+    h *= 1099511628211ull;
+    h ^= h >> 29;
+  };
+  auto mix_double = [&](double v) {
+    uint64_t word;
+    std::memcpy(&word, &v, sizeof word);
+    mix(word);
+  };
+  for (size_t i = 0; i < depth_mm.size(); i += 4) {
+    uint64_t word = 0;
+    for (size_t k = 0; k < 4 && i + k < depth_mm.size(); ++k) word |= uint64_t(depth_mm[i + k]) << (16 * k);
+    mix(word);
+  }
+  const raycast::DepthIntrinsics& c = camera.intrinsics();
+  for (double v : {origin.x(), origin.y(), origin.z(), voxel_size, c.fx, c.fy, c.cx, c.cy, c.k1, c.k2, c.k3}) mix_double(v);
+  for (int v : {size.x(), size.y(), size.z(), c.width, c.height}) mix(static_cast<uint64_t>(v));
+  return h | 1;  // never 0, the empty cache's stamp
+}
+
 // [min, max] of the products of two intervals.
 std::pair<double, double> product_range(double a0, double a1, double b0, double b1) {
   const double p[4] = {a0 * b0, a0 * b1, a1 * b0, a1 * b1};
@@ -70,6 +97,8 @@ BehindSurfaceMap::BehindSurfaceMap(const DepthFrame& frame, const raycast::Depth
     throw Error(ErrorCode::kResourceExhausted, "behind_params.max_voxels",
                 "the cloud's bounding box needs " + std::to_string(voxels) + " voxels, limit " +
                     std::to_string(params.max_voxels));
+
+  stamp_ = classification_stamp(camera, depth_mm_, origin_K_, size_, voxel_size_m_);
 
   level_size_.push_back({camera.width(), camera.height()});
   min_depth_mm_.push_back(depth_mm_);
@@ -159,9 +188,9 @@ Eigen::Vector3d BehindSurfaceMap::closest_behind(const Eigen::Vector3d& p_K) con
 
 Eigen::Vector3d BehindSurfaceMap::closest_behind(const Eigen::Vector3d& p_K, BehindSurfaceCache& cache) const {
   const size_t voxels = static_cast<size_t>(size_.x()) * size_.y() * size_.z();
-  if (cache.map_ != this || cache.state_.size() != voxels) {
+  if (cache.map_stamp_ != stamp_ || cache.state_.size() != voxels) {
     cache.state_.assign(voxels, 0);
-    cache.map_ = this;
+    cache.map_stamp_ = stamp_;
   }
   return search(p_K, &cache);
 }

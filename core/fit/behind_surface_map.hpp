@@ -30,12 +30,13 @@ namespace posefuse::fit {
 class BehindSurfaceMap;
 
 // Voxel classifications remembered between queries of one thread (float points of successive LM
-// iterations lie close together). Bound to the last map it was used with; reset automatically
-// when used with another.
+// iterations lie close together). Bound to the last map it was used with and reset when used with
+// another: maps are told apart by a 64-bit hash of everything a classification depends on (depth,
+// grid, camera), not by address, since a new frame's map often reuses the old one's memory.
 class BehindSurfaceCache {
  private:
   friend class BehindSurfaceMap;
-  const BehindSurfaceMap* map_ = nullptr;
+  uint64_t map_stamp_ = 0;
   std::vector<uint8_t> state_;
 };
 
@@ -90,6 +91,7 @@ class BehindSurfaceMap {
   // no pixel of the block has depth); level 0 is depth_mm_ with kNoReading for kNoDepth.
   std::vector<std::vector<uint16_t>> min_depth_mm_;
   std::vector<Eigen::Vector2i> level_size_;
+  uint64_t stamp_ = 0;  // identifies the classification for BehindSurfaceCache
   Eigen::Vector3d origin_K_;
   Eigen::Vector3i size_;
   double voxel_size_m_;

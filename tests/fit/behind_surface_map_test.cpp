@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <limits>
+#include <optional>
 #include <random>
 
 #include "dense_behind_surface.hpp"
@@ -181,6 +182,20 @@ TEST(FitBehindSurface, QuerySearchEqualsDenseTransformOnRandomFrames) {
     }
   }
   EXPECT_GT(compared_in_front, 2000);
+}
+
+// A cache used with a new frame's map (which may sit at the old map's address) starts afresh.
+TEST(FitBehindSurface, CacheFollowsTheFrameNotTheAddress) {
+  const raycast::DepthCamera camera{testing::small_intrinsics(64, 53)};
+  const Eigen::Vector3d floating(0.0, 0.0, 0.7);
+  BehindSurfaceCache cache;
+  std::optional<BehindSurfaceMap> map;
+  map.emplace(testing::render_plane(camera, {0, 0, 1.0}, {0, 0, -1}), camera);
+  EXPECT_NEAR(map->closest_behind(floating, cache).z(), 1.0, map->voxel_size_m());
+  map.reset();
+  map.emplace(testing::render_plane(camera, {0, 0, 1.4}, {0, 0, -1}), camera);  // same storage
+  EXPECT_EQ(map->closest_behind(floating, cache), map->closest_behind(floating));
+  EXPECT_NEAR(map->closest_behind(floating, cache).z(), 1.4, map->voxel_size_m());
 }
 
 TEST(FitBehindSurface, BadInputNamesTheField) {
