@@ -79,8 +79,8 @@ int main() {
   std::uniform_real_distribution<double> uniform(-1.0, 1.0);
   const int frames = 300;
   std::vector<double> cpu_us;
-  double init_error = 0, skeleton_error = 0;
-  int joints = 0;
+  // Per joint kind (shoulders, elbows, wrists): sums of the errors of both sides.
+  double init_error[3] = {}, skeleton_error[3] = {};
   Eigen::VectorXd previous;
   for (int i = 0; i < frames; ++i) {
     Eigen::VectorXd theta = facing(layout, 2.0 + 1.0 * (uniform(rng) + 1) / 2);
@@ -98,16 +98,21 @@ int main() {
     const std::pair<int, int> pairs[] = {{body::kLeftShoulder, fit::kShoulderLeft}, {body::kRightShoulder, fit::kShoulderRight},
                                          {body::kLeftElbow, fit::kElbowLeft},       {body::kRightElbow, fit::kElbowRight},
                                          {body::kLeftWrist, fit::kWristLeft},       {body::kRightWrist, fit::kWristRight}};
-    for (const auto& [smpl, kinect] : pairs) {
-      init_error += (built.positions_K.col(smpl) - f.truth.positions_K.col(smpl)).norm();
-      skeleton_error += (f.skeleton.positions_K[kinect] - f.true_camera_joints.col(kinect)).norm();
-      ++joints;
+    for (int k = 0; k < 6; ++k) {
+      const auto [smpl, kinect] = pairs[k];
+      init_error[k / 2] += (built.positions_K.col(smpl) - f.truth.positions_K.col(smpl)).norm();
+      skeleton_error[k / 2] += (f.skeleton.positions_K[kinect] - f.true_camera_joints.col(kinect)).norm();
     }
   }
   std::printf("Starting pose from the camera skeleton (%d random upper-body poses, 40 DOF)\n", frames);
   std::printf("  initialise: median %.1f us per frame (thread CPU)\n", median(cpu_us));
-  std::printf("  shoulders/elbows/wrists mean error: camera skeleton %.1f mm, built pose %.1f mm\n",
-              1e3 * skeleton_error / joints, 1e3 * init_error / joints);
+  std::printf("  mean position error, mm  %10s %10s %10s %10s\n", "shoulders", "elbows", "wrists", "all");
+  const double per_kind = 2.0 * frames / 1e3;
+  std::printf("  camera skeleton          %10.1f %10.1f %10.1f %10.1f\n", skeleton_error[0] / per_kind,
+              skeleton_error[1] / per_kind, skeleton_error[2] / per_kind,
+              (skeleton_error[0] + skeleton_error[1] + skeleton_error[2]) / (3 * per_kind));
+  std::printf("  built starting pose      %10.1f %10.1f %10.1f %10.1f\n", init_error[0] / per_kind,
+              init_error[1] / per_kind, init_error[2] / per_kind, (init_error[0] + init_error[1] + init_error[2]) / (3 * per_kind));
 
   // 2. Rough shape on the controlled pose.
   const body::PoseLayout full = body::PoseLayout::full_body();

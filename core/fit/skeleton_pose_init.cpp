@@ -57,6 +57,20 @@ struct Builder {
   const bool has_previous;
   Eigen::VectorXd theta;
   std::vector<SegmentFallback> fallbacks;
+  std::vector<int> clamped_dofs;
+
+  // Clamps a joint's limited DOFs as soon as they are built, so that its children are aimed from
+  // the pose the joint will really have.
+  void clamp(int joint) {
+    if (!options.clamp_to_limits) return;
+    for (int d : layout.dofs_of_joint(joint)) {
+      const body::Dof& dof = layout.dof(d);
+      if (!dof.limited) continue;
+      const double clamped = std::clamp(theta[d], dof.min_rad, dof.max_rad);
+      if (clamped != theta[d]) clamped_dofs.push_back(d);
+      theta[d] = clamped;
+    }
+  }
 
   Eigen::Vector3d obs(int joint) const { return skeleton.positions_K[joint]; }
 
@@ -115,6 +129,7 @@ struct Builder {
         }
     }
     set_joint_rotation(joint, angle * axis);
+    clamp(joint);
   }
 
   bool has_dofs(int joint) const { return !layout.dofs_of_joint(joint).empty(); }
@@ -190,6 +205,8 @@ struct Builder {
     const Eigen::Vector3d w = rotation_vector(pose.K_from_joint[body::kSpine1].transpose() * upper_K);
     set_joint_rotation(body::kSpine2, 0.5 * w);
     set_joint_rotation(body::kSpine3, 0.5 * w);
+    clamp(body::kSpine2);
+    clamp(body::kSpine3);
   }
 
   void neck() {
@@ -275,7 +292,7 @@ SkeletonInitResult SkeletonPoseInitializer::initialise(const TrackedSkeleton& sk
                                        ? "no joint is tracked or inferred with a finite position"
                                        : "no joint is tracked with a finite position");
 
-  Builder b{layout_, rest_joints_, options_, skeleton, has_previous, has_previous ? previous_theta : layout_.zero(), {}};
+  Builder b{layout_, rest_joints_, options_, skeleton, has_previous, has_previous ? previous_theta : layout_.zero(), {}, {}};
   b.global();
   b.spine();
   b.neck();
@@ -301,16 +318,13 @@ SkeletonInitResult SkeletonPoseInitializer::initialise(const TrackedSkeleton& sk
   for (const Limb& l : kLimbs) b.limb(l.segment, l.joint, l.child, l.observed_child);
 
   SkeletonInitResult result;
+  // DOFs kept from the previous pose are clamped too.
+  for (int joint = 0; joint < body::kNumJoints; ++joint) b.clamp(joint);
+  std::sort(b.clamped_dofs.begin(), b.clamped_dofs.end());
+  b.clamped_dofs.erase(std::unique(b.clamped_dofs.begin(), b.clamped_dofs.end()), b.clamped_dofs.end());
   result.theta = std::move(b.theta);
   result.fallbacks = std::move(b.fallbacks);
-  if (options_.clamp_to_limits)
-    for (int d = 0; d < layout_.size(); ++d) {
-      const body::Dof& dof = layout_.dof(d);
-      if (!dof.limited) continue;
-      const double clamped = std::clamp(result.theta[d], dof.min_rad, dof.max_rad);
-      if (clamped != result.theta[d]) result.clamped_dofs.push_back(d);
-      result.theta[d] = clamped;
-    }
+  result.clamped_dofs = std::move(b.clamped_dofs);
   return result;
 }
 

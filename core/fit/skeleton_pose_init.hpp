@@ -25,7 +25,9 @@
 // A swing is the smallest rotation taking the rest bone (in the parent's posed frame) onto the
 // target direction; its axis is perpendicular to the bone, so for a joint whose roll DOF paper 2
 // removed (II-B) it lies in the plane of the two remaining DOF axes and is represented exactly.
-// Afterwards every limited DOF is clamped into its limits (body/pose_parameters.cpp, eq. 8).
+// Each joint's limited DOFs are clamped into their limits (body/pose_parameters.cpp, eq. 8) as
+// soon as it is built, so its children are aimed from the pose it really has (clamping at the
+// end instead left wrists 13 cm off on the simulator's skeleton).
 //
 // Degrading: a segment whose joints are not tracked, not finite, inferred (unless
 // accept_inferred_joints) or too close together keeps the previous frame's values for its DOFs
