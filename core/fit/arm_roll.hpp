@@ -46,6 +46,7 @@ struct ForearmRoll {
 };
 
 // Throws posefuse::Error "K_from_A" / "A_from_F" for non-finite or far-from-unit quaternions,
+// kFailedPrecondition "K_from_A" when the IMU's thumb axis lies along the fitted forearm,
 // "arm_roll_options.*" for axes that are not orthonormal, "pose" when the elbow and wrist coincide.
 ForearmRoll forearm_roll(const JointPose& pose, ArmSide side, const Eigen::Quaterniond& K_from_A,
                          const Eigen::Quaterniond& A_from_F, const ArmRollOptions& options = {});

@@ -160,6 +160,10 @@ TEST(FitArmRoll, BadInputNamesTheField) {
   ArmRollOptions bad;
   bad.thumb_F = Eigen::Vector3d::UnitY();
   EXPECT_EQ(testing::error_field([&] { forearm_roll(pose, ArmSide::kLeft, unit, unit, bad); }), "arm_roll_options.thumb_F");
+  // An IMU whose thumb axis points along the fitted forearm gives no roll.
+  const Eigen::Vector3d along = (pose.positions_K.col(body::kLeftWrist) - pose.positions_K.col(body::kLeftElbow)).normalized();
+  const Eigen::Quaterniond thumb_along = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitX(), along);
+  EXPECT_EQ(testing::error_field([&] { forearm_roll(pose, ArmSide::kLeft, thumb_along, unit); }), "K_from_A");
   JointPose broken = pose;
   broken.positions_K.col(body::kLeftWrist) = broken.positions_K.col(body::kLeftElbow);
   EXPECT_EQ(testing::error_field([&] { forearm_roll(broken, ArmSide::kLeft, unit, unit); }), "pose");
