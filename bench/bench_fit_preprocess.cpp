@@ -1,6 +1,6 @@
 // Speed of the depth preprocessing for model fitting (paper 2, II-D/H; issue 7) on one 512x424
 // frame: point cloud, normals of every cloud pixel, silhouette distance map (D_2D), behind-
-// surface map (D_3D, 0.02 m), zone sampling of N_s = 250 pixels and the normals of those samples.
+// surface map (D_3D, 0.02 m: the first full-grid version and today's query-time search), zone sampling of N_s = 250 pixels and the normals of those samples.
 // Frames: the built-in body template rendered with Embree at 2.0 m (a realistic silhouette, its
 // Kinect-like skeleton taken from the model's joints), and a plane filling the whole image (the
 // worst case for per-pixel work). Single-threaded; prints medians of wall and thread CPU time.
@@ -10,6 +10,7 @@
 #include <ctime>
 #include <functional>
 #include <numbers>
+#include <random>
 #include <vector>
 
 #include "bench_clock.hpp"
@@ -19,6 +20,7 @@
 #include "fit/point_normals.hpp"
 #include "fit/silhouette_distance.hpp"
 #include "fit/zone_sampling.hpp"
+#include "dense_behind_surface.hpp"
 #include "model_frames.hpp"
 #include "synthetic_frames.hpp"
 
@@ -62,6 +64,27 @@ BodyFrame render_body(const raycast::DepthCamera& camera) {
   return {rendered.frame, rendered.skeleton_K};
 }
 
+// Float points as the fitter selects them (paper 2, II-D.6): inside the silhouette when
+// projected, but in front of the observed surface.
+std::vector<Eigen::Vector3d> float_like_points(const fit::PointCloud& cloud, const fit::BehindSurfaceMap& map,
+                                               const raycast::DepthCamera& camera, int count) {
+  std::mt19937_64 rng(3);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  std::vector<Eigen::Vector3d> points;
+  while (static_cast<int>(points.size()) < count) {
+    const size_t pixel = static_cast<size_t>(uniform(rng) * cloud.valid.size());
+    if (!cloud.valid[pixel]) continue;
+    const Eigen::Vector3d p = cloud.value_K[pixel].cast<double>() +
+                              Eigen::Vector3d(0.04 * (uniform(rng) - 0.5), 0.04 * (uniform(rng) - 0.5), -0.1 * uniform(rng));
+    const auto uv = camera.project(p);
+    if (!uv || map.is_behind(p)) continue;
+    const int col = static_cast<int>(std::lround(uv->x())), row = static_cast<int>(std::lround(uv->y()));
+    if (col < 0 || row < 0 || col >= cloud.width || row >= cloud.height || !cloud.has(col, row)) continue;
+    points.push_back(p);
+  }
+  return points;
+}
+
 void bench_frame(const char* name, const raycast::DepthCamera& camera, const fit::DepthFrame& frame,
                  const fit::KinectSkeleton& skeleton_K, int repeats) {
   const fit::PointCloud cloud = fit::build_point_cloud(frame, camera);
@@ -71,15 +94,28 @@ void bench_frame(const char* name, const raycast::DepthCamera& camera, const fit
   const std::vector<uint8_t> silhouette = fit::silhouette_of(frame);
   report(name, "silhouette distance map (D_2D)", repeats,
          [&] { fit::silhouette_distance_map(silhouette, frame.width, frame.height); });
-  report(name, "behind-surface map (D_3D, 0.02 m)", repeats, [&] { fit::BehindSurfaceMap(frame, camera); });
   const fit::BehindSurfaceMap d3d(frame, camera);
   const Eigen::Vector3i grid = d3d.grid_size();
   std::printf("%-6s %-40s %4d x %d x %d\n", name, "D_3D grid", grid.x(), grid.y(), grid.z());
+  report(name, "D_3D before: full grid + EDT (reference)", repeats,
+         [&] { fit::testing::dense_behind_distance2(fit::BehindSurfaceMap(frame, camera)); });
+  report(name, "D_3D map construction (query-time search)", repeats, [&] { fit::BehindSurfaceMap(frame, camera); });
+  // A fitter's load: float points (paper 2: a subset of H_max = 150 bg points) over 20 LM
+  // iterations, each a cloud point pushed up to 0.1 m towards the camera and 2 cm sideways, kept
+  // when it still projects into the silhouette.
+  const std::vector<Eigen::Vector3d> floating = float_like_points(cloud, d3d, camera, 20 * 150);
+  report(name, "D_3D map + 3000 float-point queries", repeats, [&] {
+    const fit::BehindSurfaceMap map(frame, camera);
+    for (const auto& p : floating) map.closest_behind(p);
+  });
+  report(name, "D_3D map + 3000 queries, cached", repeats, [&] {
+    const fit::BehindSurfaceMap map(frame, camera);
+    fit::BehindSurfaceCache cache;
+    for (const auto& p : floating) map.closest_behind(p, cache);
+  });
   report(name, "zone sampling, N_s = 250", repeats, [&] { fit::sample_depth_pixels(cloud, skeleton_K, camera); });
   const auto samples = fit::sample_depth_pixels(cloud, skeleton_K, camera);
-  report(name, "normals of the 250 samples", repeats, [&] {
-    for (const auto& s : samples) fit::estimate_normal_at(cloud, s.col, s.row);
-  });
+  report(name, "normals of the 250 samples", repeats, [&] { fit::estimate_sample_normals(cloud, samples); });
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <string>
 
@@ -10,43 +11,64 @@
 namespace posefuse::fit {
 
 namespace {
-
 constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr uint16_t kNoReading = std::numeric_limits<uint16_t>::max();
 
-// 1D squared distance transform along one line (Felzenszwalb & Huttenlocher 2012): for each
-// position q, min_p (q - p)^2 + f[p] and its argmin p. Scratch buffers are passed in to avoid
-// reallocating per line.
-void distance_transform_1d(const std::vector<double>& f, int n, std::vector<double>& d, std::vector<int>& arg,
-                           std::vector<int>& v, std::vector<double>& z) {
-  int k = -1;
-  for (int q = 0; q < n; ++q) {
-    if (f[q] == kInf) continue;
-    while (k >= 0) {
-      const double s = ((f[q] + double(q) * q) - (f[v[k]] + double(v[k]) * v[k])) / (2.0 * (q - v[k]));
-      if (s <= z[k]) {
-        --k;
-      } else {
-        break;
-      }
+// Range of the radial factor L(s) = 1 + k1 s + k2 s^2 + k3 s^3 over s = r^2 in [s0, s1]: the
+// end points and the stationary points of the cubic inside.
+std::pair<double, double> radial_factor_range(const raycast::DepthIntrinsics& c, double s0, double s1) {
+  auto factor = [&](double s) { return 1 + s * (c.k1 + s * (c.k2 + s * c.k3)); };
+  double lo = std::min(factor(s0), factor(s1)), hi = std::max(factor(s0), factor(s1));
+  auto consider = [&](double s) {
+    if (!(s > s0 && s < s1)) return;
+    lo = std::min(lo, factor(s));
+    hi = std::max(hi, factor(s));
+  };
+  // L'(s) = k1 + 2 k2 s + 3 k3 s^2.
+  const double a = 3 * c.k3, b = 2 * c.k2;
+  if (a == 0) {
+    if (b != 0) consider(-c.k1 / b);
+  } else {
+    const double disc = b * b - 4 * a * c.k1;
+    if (disc >= 0) {
+      consider((-b - std::sqrt(disc)) / (2 * a));
+      consider((-b + std::sqrt(disc)) / (2 * a));
     }
-    ++k;
-    v[k] = q;
-    z[k] = k == 0 ? -kInf : ((f[q] + double(q) * q) - (f[v[k - 1]] + double(v[k - 1]) * v[k - 1])) / (2.0 * (q - v[k - 1]));
-    z[k + 1] = kInf;
   }
-  if (k < 0) {
-    std::fill(d.begin(), d.begin() + n, kInf);
-    std::fill(arg.begin(), arg.begin() + n, -1);
-    return;
-  }
-  int j = 0;
-  for (int q = 0; q < n; ++q) {
-    while (z[j + 1] < q) ++j;
-    d[q] = double(q - v[j]) * (q - v[j]) + f[v[j]];
-    arg[q] = v[j];
-  }
+  return {lo, hi};
 }
 
+// FNV-1a style hash of what voxel classifications depend on: 64-bit words of the depth image,
+// the grid and the camera's intrinsics.
+uint64_t classification_stamp(const raycast::DepthCamera& camera, const std::vector<uint16_t>& depth_mm,
+                              const Eigen::Vector3d& origin, const Eigen::Vector3i& size, double voxel_size) {
+  uint64_t h = 1469598103934665603ull;
+  auto mix = [&](uint64_t word) {
+    h ^= word;
+    h *= 1099511628211ull;
+    h ^= h >> 29;
+  };
+  auto mix_double = [&](double v) {
+    uint64_t word;
+    std::memcpy(&word, &v, sizeof word);
+    mix(word);
+  };
+  for (size_t i = 0; i < depth_mm.size(); i += 4) {
+    uint64_t word = 0;
+    for (size_t k = 0; k < 4 && i + k < depth_mm.size(); ++k) word |= uint64_t(depth_mm[i + k]) << (16 * k);
+    mix(word);
+  }
+  const raycast::DepthIntrinsics& c = camera.intrinsics();
+  for (double v : {origin.x(), origin.y(), origin.z(), voxel_size, c.fx, c.fy, c.cx, c.cy, c.k1, c.k2, c.k3}) mix_double(v);
+  for (int v : {size.x(), size.y(), size.z(), c.width, c.height}) mix(static_cast<uint64_t>(v));
+  return h | 1;  // never 0, the empty cache's stamp
+}
+
+// [min, max] of the products of two intervals.
+std::pair<double, double> product_range(double a0, double a1, double b0, double b1) {
+  const double p[4] = {a0 * b0, a0 * b1, a1 * b0, a1 * b1};
+  return {*std::min_element(p, p + 4), *std::max_element(p, p + 4)};
+}
 }  // namespace
 
 BehindSurfaceMap::BehindSurfaceMap(const DepthFrame& frame, const raycast::DepthCamera& camera,
@@ -76,67 +98,171 @@ BehindSurfaceMap::BehindSurfaceMap(const DepthFrame& frame, const raycast::Depth
                 "the cloud's bounding box needs " + std::to_string(voxels) + " voxels, limit " +
                     std::to_string(params.max_voxels));
 
-  voxel_behind_.assign(static_cast<size_t>(voxels), 0);
-  for (int k = 0; k < size_.z(); ++k)
-    for (int j = 0; j < size_.y(); ++j)
-      for (int i = 0; i < size_.x(); ++i) voxel_behind_[index(i, j, k)] = is_behind(voxel_centre_K(i, j, k));
+  stamp_ = classification_stamp(camera, depth_mm_, origin_K_, size_, voxel_size_m_);
 
-  // Separable exact EDT over x, then y, then z; `nearest_behind_` follows the argmin of each pass.
-  std::vector<double> dist2(static_cast<size_t>(voxels));
-  nearest_behind_.assign(static_cast<size_t>(voxels), -1);
-  for (size_t v = 0; v < dist2.size(); ++v) {
-    dist2[v] = voxel_behind_[v] ? 0.0 : kInf;
-    if (voxel_behind_[v]) nearest_behind_[v] = static_cast<int32_t>(v);
-  }
-  const int longest = size_.maxCoeff();
-  std::vector<double> f(longest), d(longest), z(longest + 1);
-  std::vector<int> arg(longest), hull(longest);
-  std::vector<int32_t> line_nearest(longest);
-  const int axis_size[3] = {size_.x(), size_.y(), size_.z()};
-  const size_t stride[3] = {1, static_cast<size_t>(size_.x()), static_cast<size_t>(size_.x()) * size_.y()};
-  for (int axis = 0; axis < 3; ++axis) {
-    const int n = axis_size[axis];
-    const int a = (axis + 1) % 3, b = (axis + 2) % 3;
-    for (int ib = 0; ib < axis_size[b]; ++ib)
-      for (int ia = 0; ia < axis_size[a]; ++ia) {
-        const size_t start = ia * stride[a] + ib * stride[b];
-        for (int q = 0; q < n; ++q) {
-          f[q] = dist2[start + q * stride[axis]];
-          line_nearest[q] = nearest_behind_[start + q * stride[axis]];
-        }
-        distance_transform_1d(f, n, d, arg, hull, z);
-        for (int q = 0; q < n; ++q) {
-          dist2[start + q * stride[axis]] = d[q];
-          nearest_behind_[start + q * stride[axis]] = arg[q] < 0 ? -1 : line_nearest[arg[q]];
-        }
+  level_size_.push_back({camera.width(), camera.height()});
+  min_depth_mm_.push_back(depth_mm_);
+  for (uint16_t& d : min_depth_mm_.back())
+    if (d == kNoDepth) d = kNoReading;
+  while (level_size_.back().x() > 1 || level_size_.back().y() > 1) {
+    const Eigen::Vector2i fine = level_size_.back();
+    const Eigen::Vector2i coarse((fine.x() + 1) / 2, (fine.y() + 1) / 2);
+    std::vector<uint16_t> level(static_cast<size_t>(coarse.x()) * coarse.y(), kNoReading);
+    const std::vector<uint16_t>& below = min_depth_mm_.back();
+    for (int row = 0; row < fine.y(); ++row)
+      for (int col = 0; col < fine.x(); ++col) {
+        uint16_t& m = level[static_cast<size_t>(row / 2) * coarse.x() + col / 2];
+        m = std::min(m, below[static_cast<size_t>(row) * fine.x() + col]);
       }
+    min_depth_mm_.push_back(std::move(level));
+    level_size_.push_back(coarse);
   }
+}
+
+int BehindSurfaceMap::first_possible_layer(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi) const {
+  // The voxel centres of the box lie in the axis-aligned box [a, b] in K.
+  const Eigen::Vector3d a = voxel_centre_K(lo.x(), lo.y(), lo.z()), b = voxel_centre_K(hi.x(), hi.y(), hi.z());
+  if (!(a.z() > 0)) return 0;  // the box reaches the camera plane: no bound
+  // Normalised image-aligned coordinates x_n = -x / z, y_n = -y / z (raycast/depth_camera.hpp)
+  // over the box: their extremes lie at the corners.
+  double xn0 = kInf, xn1 = -kInf, yn0 = kInf, yn1 = -kInf;
+  for (double z : {a.z(), b.z()})
+    for (double x : {a.x(), b.x()})
+      for (double y : {a.y(), b.y()}) {
+        xn0 = std::min(xn0, -x / z), xn1 = std::max(xn1, -x / z);
+        yn0 = std::min(yn0, -y / z), yn1 = std::max(yn1, -y / z);
+      }
+  // Distortion scales (x_n, y_n) by L(r^2); bound L over the rectangle's range of r^2.
+  const double near_x = xn0 > 0 ? xn0 : (xn1 < 0 ? xn1 : 0.0), near_y = yn0 > 0 ? yn0 : (yn1 < 0 ? yn1 : 0.0);
+  const double far_x = std::max(std::abs(xn0), std::abs(xn1)), far_y = std::max(std::abs(yn0), std::abs(yn1));
+  const raycast::DepthIntrinsics& c = camera_->intrinsics();
+  const auto [l0, l1] = radial_factor_range(c, near_x * near_x + near_y * near_y, far_x * far_x + far_y * far_y);
+  const auto [xd0, xd1] = product_range(l0, l1, xn0, xn1);
+  const auto [yd0, yd1] = product_range(l0, l1, yn0, yn1);
+  // Pixels (floor(u + 0.5)) the voxel centres can land on, one pixel of slack for rounding.
+  const int col0 = std::max(0, static_cast<int>(std::floor(c.cx + c.fx * xd0 + 0.5)) - 1);
+  const int col1 = std::min(camera_->width() - 1, static_cast<int>(std::floor(c.cx + c.fx * xd1 + 0.5)) + 1);
+  const int row0 = std::max(0, static_cast<int>(std::floor(c.cy + c.fy * yd0 + 0.5)) - 1);
+  const int row1 = std::min(camera_->height() - 1, static_cast<int>(std::floor(c.cy + c.fy * yd1 + 0.5)) + 1);
+  if (col0 > col1 || row0 > row1) return size_.z();  // the box is outside the image: nothing behind
+  // The coarsest level where the window spans at most 4 x 4 blocks.
+  int level = 0;
+  while (level + 1 < static_cast<int>(level_size_.size()) &&
+         std::max(col1 - col0, row1 - row0) >> level > 3)
+    ++level;
+  uint16_t least = kNoReading;
+  for (int row = row0 >> level; row <= row1 >> level; ++row)
+    for (int col = col0 >> level; col <= col1 >> level; ++col)
+      least = std::min(least, min_depth_mm_[level][static_cast<size_t>(row) * level_size_[level].x() + col]);
+  if (least == kNoReading) return size_.z();
+  // Voxels with centre z below least * 1e-3 are in front of every depth they can project onto;
+  // one layer of slack keeps the bound safe against rounding.
+  return std::max(0, static_cast<int>(std::floor((least * 1e-3 - origin_K_.z()) / voxel_size_m_)) - 1);
+}
+
+uint16_t BehindSurfaceMap::depth_at(const Eigen::Vector3d& p_K) const {
+  const auto uv = camera_->project(p_K);
+  if (!uv) return kNoDepth;
+  // Pixel c covers image coordinates [c - 0.5, c + 0.5) (centres at integers).
+  const int col = static_cast<int>(std::floor(uv->x() + 0.5)), row = static_cast<int>(std::floor(uv->y() + 0.5));
+  if (col < 0 || row < 0 || col >= camera_->width() || row >= camera_->height()) return kNoDepth;
+  return depth_mm_[static_cast<size_t>(row) * camera_->width() + col];
 }
 
 bool BehindSurfaceMap::is_behind(const Eigen::Vector3d& p_K) const {
-  const auto uv = camera_->project(p_K);
-  if (!uv) return false;
-  // Pixel c covers image coordinates [c - 0.5, c + 0.5) (centres at integers).
-  const int col = static_cast<int>(std::floor(uv->x() + 0.5)), row = static_cast<int>(std::floor(uv->y() + 0.5));
-  if (col < 0 || row < 0 || col >= camera_->width() || row >= camera_->height()) return false;
-  const uint16_t depth = depth_mm_[static_cast<size_t>(row) * camera_->width() + col];
+  const uint16_t depth = depth_at(p_K);
   return depth != kNoDepth && p_K.z() >= depth * 1e-3;
 }
 
-Eigen::Vector3d BehindSurfaceMap::closest_behind(const Eigen::Vector3d& p_K) const {
+Eigen::Vector3i BehindSurfaceMap::voxel_of(const Eigen::Vector3d& p_K) const {
+  // Clamp in floating point before the cast so that far-away points cannot overflow int.
+  return ((p_K - origin_K_) / voxel_size_m_)
+      .array()
+      .round()
+      .max(0.0)
+      .min((size_.array() - 1).cast<double>())
+      .cast<int>();
+}
+
+Eigen::Vector3d BehindSurfaceMap::closest_behind(const Eigen::Vector3d& p_K) const { return search(p_K, nullptr); }
+
+Eigen::Vector3d BehindSurfaceMap::closest_behind(const Eigen::Vector3d& p_K, BehindSurfaceCache& cache) const {
+  const size_t voxels = static_cast<size_t>(size_.x()) * size_.y() * size_.z();
+  if (cache.map_stamp_ != stamp_ || cache.state_.size() != voxels) {
+    cache.state_.assign(voxels, 0);
+    cache.map_stamp_ = stamp_;
+  }
+  return search(p_K, &cache);
+}
+
+Eigen::Vector3d BehindSurfaceMap::search(const Eigen::Vector3d& p_K, BehindSurfaceCache* cache) const {
   if (!p_K.allFinite()) throw_invalid("p_K", "not finite");
   if (is_behind(p_K)) return p_K;
-  // Clamp in floating point before the cast so that far-away points cannot overflow int.
-  const Eigen::Vector3i cell = ((p_K - origin_K_) / voxel_size_m_)
-                                   .array()
-                                   .round()
-                                   .max(0.0)
-                                   .min((size_.array() - 1).cast<double>())
-                                   .cast<int>();
-  const int32_t nearest = nearest_behind_[index(cell.x(), cell.y(), cell.z())];
-  if (nearest < 0) throw_precondition("behind_surface_map", "no voxel lies behind the observed surface");
-  const int i = nearest % size_.x(), j = (nearest / size_.x()) % size_.y(), k = nearest / (size_.x() * size_.y());
-  return voxel_centre_K(i, j, k);
+  const Eigen::Vector3i c = voxel_of(p_K);
+  // Shells of Chebyshev radius r hold only voxels at squared grid distance >= r^2, so once the
+  // best squared distance found is <= r^2 no later shell can beat it: the result is a nearest
+  // behind voxel of the whole grid, as a full distance transform would give.
+  const int max_radius = std::max({c.x(), size_.x() - 1 - c.x(), c.y(), size_.y() - 1 - c.y(), c.z(),
+                                   size_.z() - 1 - c.z()});
+  int64_t best_d2 = std::numeric_limits<int64_t>::max();
+  Eigen::Vector3i best(-1, -1, -1);
+  // 0 = not classified yet, 1 = not behind, 2 = behind.
+  auto behind = [&](const Eigen::Vector3i& v) {
+    if (!cache) return voxel_is_behind(v.x(), v.y(), v.z());
+    uint8_t& state = cache->state_[(static_cast<size_t>(v.z()) * size_.y() + v.y()) * size_.x() + v.x()];
+    if (state == 0) state = voxel_is_behind(v.x(), v.y(), v.z()) ? 2 : 1;
+    return state == 2;
+  };
+  auto consider = [&](int di, int dj, int dk) {
+    const int64_t d2 = int64_t(di) * di + int64_t(dj) * dj + int64_t(dk) * dk;
+    if (d2 >= best_d2) return;
+    const Eigen::Vector3i v(c.x() + di, c.y() + dj, c.z() + dk);
+    if (!behind(v)) return;
+    best_d2 = d2;
+    best = v;
+  };
+  // (1) An upper bound: a float point (paper 2, Eq. 12) projects onto a pixel with depth d and
+  // lies in front of it, so the voxels around its ray at depth d and a little beyond are usually
+  // behind; otherwise the voxels straight behind the query's.
+  auto try_bound = [&](const Eigen::Vector3i& v) {
+    const int64_t d2 = (v - c).cast<int64_t>().squaredNorm();
+    if (d2 >= best_d2 || !behind(v)) return false;
+    best_d2 = d2;
+    best = v;
+    return true;
+  };
+  if (const uint16_t depth = depth_at(p_K); depth != kNoDepth && p_K.z() > 0) {
+    for (int step = 0; step < 4; ++step)
+      if (try_bound(voxel_of(p_K * ((depth * 1e-3 + step * 0.5 * voxel_size_m_) / p_K.z())))) break;
+  }
+  if (best.x() < 0)
+    for (int k = c.z(); k < size_.z(); ++k)
+      if (try_bound({c.x(), c.y(), k})) break;
+  // (2) Layers that can hold a behind voxel within that bound.
+  Eigen::Vector3i box_lo = Eigen::Vector3i::Zero(), box_hi = size_.array() - 1;
+  if (best.x() >= 0) {
+    const int reach = static_cast<int>(std::ceil(std::sqrt(static_cast<double>(best_d2))));
+    box_lo = box_lo.cwiseMax((c.array() - reach).matrix());
+    box_hi = box_hi.cwiseMin((c.array() + reach).matrix());
+  }
+  const int first_layer = first_possible_layer(box_lo, box_hi);
+  // (3) Shells in those layers.
+  for (int r = std::max(0, first_layer - c.z()); r <= max_radius && best_d2 > int64_t(r) * r; ++r) {
+    const int k_lo = std::max({-r, -c.z(), first_layer - c.z()}), k_hi = std::min(r, size_.z() - 1 - c.z());
+    const int j_lo = std::max(-r, -c.y()), j_hi = std::min(r, size_.y() - 1 - c.y());
+    const int i_lo = std::max(-r, -c.x()), i_hi = std::min(r, size_.x() - 1 - c.x());
+    for (int dk = k_lo; dk <= k_hi; ++dk)
+      for (int dj = j_lo; dj <= j_hi; ++dj) {
+        if (std::abs(dk) == r || std::abs(dj) == r) {
+          for (int di = i_lo; di <= i_hi; ++di) consider(di, dj, dk);
+        } else {
+          if (-r >= i_lo) consider(-r, dj, dk);
+          if (r <= i_hi && r > 0) consider(r, dj, dk);
+        }
+      }
+  }
+  if (best.x() < 0) throw_precondition("behind_surface_map", "no voxel lies behind the observed surface");
+  return voxel_centre_K(best.x(), best.y(), best.z());
 }
 
 }  // namespace posefuse::fit

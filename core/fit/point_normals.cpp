@@ -67,6 +67,22 @@ std::optional<Eigen::Vector3f> estimate_normal_at(const PointCloud& cloud, int c
   return normal_at(cloud, col, row, params);
 }
 
+std::vector<std::optional<Eigen::Vector3f>> estimate_sample_normals(const PointCloud& cloud,
+                                                                    const std::vector<DepthSample>& samples,
+                                                                    const NormalParams& params) {
+  validate(params);
+  std::vector<std::optional<Eigen::Vector3f>> normals;
+  normals.reserve(samples.size());
+  for (size_t i = 0; i < samples.size(); ++i) {
+    const DepthSample& s = samples[i];
+    if (s.col < 0 || s.row < 0 || s.col >= cloud.width || s.row >= cloud.height)
+      throw_invalid("samples[" + std::to_string(i) + "]",
+                    "pixel (" + std::to_string(s.col) + ", " + std::to_string(s.row) + ") is outside the image");
+    normals.push_back(cloud.has(s.col, s.row) ? normal_at(cloud, s.col, s.row, params) : std::nullopt);
+  }
+  return normals;
+}
+
 NormalMap estimate_normals(const PointCloud& cloud, const NormalParams& params) {
   validate(params);
   NormalMap map = VectorImage::empty(cloud.width, cloud.height);

@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "fit/depth_frame.hpp"
+#include "fit/zone_sampling.hpp"
 
 namespace posefuse::fit {
 
@@ -29,7 +30,13 @@ void validate(const NormalParams& params);
 std::optional<Eigen::Vector3f> estimate_normal_at(const PointCloud& cloud, int col, int row,
                                                   const NormalParams& params = {});
 
-// Normals at every cloud pixel.
+// Normals at the sampled pixels only, in sample order: all the fitter needs (the data term
+// uses the N_s samples), about 0.6 us per sample instead of 11 ms for every pixel of a body frame.
+std::vector<std::optional<Eigen::Vector3f>> estimate_sample_normals(const PointCloud& cloud,
+                                                                    const std::vector<DepthSample>& samples,
+                                                                    const NormalParams& params = {});
+
+// Normals at every cloud pixel (for tests and pictures; the fitter needs only the samples').
 NormalMap estimate_normals(const PointCloud& cloud, const NormalParams& params = {});
 
 }  // namespace posefuse::fit

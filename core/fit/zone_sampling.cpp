@@ -11,6 +11,7 @@
 
 #include "common/error.hpp"
 #include "fit/silhouette_distance.hpp"
+#include "fit/tracked_skeleton.hpp"
 
 namespace posefuse::fit {
 
@@ -19,14 +20,6 @@ namespace {
 struct Bone {
   int from, to;
   BodyZone zone;
-};
-
-// Kinect v2 joint indices (session::kKinectJointNames order).
-enum Joint : int {
-  kSpineBase = 0, kSpineMid, kNeck, kHead, kShoulderLeft, kElbowLeft, kWristLeft, kHandLeft,
-  kShoulderRight, kElbowRight, kWristRight, kHandRight, kHipLeft, kKneeLeft, kAnkleLeft, kFootLeft,
-  kHipRight, kKneeRight, kAnkleRight, kFootRight, kSpineShoulder, kHandTipLeft, kThumbLeft,
-  kHandTipRight, kThumbRight,
 };
 
 constexpr Bone kBones[] = {

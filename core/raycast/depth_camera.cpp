@@ -8,10 +8,6 @@
 namespace posefuse::raycast {
 namespace {
 
-double radial_factor(const DepthIntrinsics& c, double r2) {
-  return 1 + r2 * (c.k1 + r2 * (c.k2 + r2 * c.k3));
-}
-
 // Largest undistorted radius seen by the image (its corners), with a margin.
 double max_image_radius(const DepthIntrinsics& c) {
   const double du = std::max(c.cx, c.width - c.cx) / c.fx, dv = std::max(c.cy, c.height - c.cy) / c.fy;
@@ -50,28 +46,19 @@ DepthCamera::DepthCamera(const DepthIntrinsics& intrinsics) : intrinsics_(intrin
     }
 }
 
-double DepthCamera::distort_radius(double r) const { return r * radial_factor(intrinsics_, r * r); }
+double DepthCamera::distort_radius(double r) const { return r * radial_factor(r * r); }
 
 double DepthCamera::undistort_radius(double r_distorted) const {
   double r = r_distorted;
   for (int i = 0; i < 20; ++i) {
     const double r2 = r * r;
-    const double f = r * radial_factor(intrinsics_, r2) - r_distorted;
+    const double f = r * radial_factor(r2) - r_distorted;
     const double slope = 1 + r2 * (3 * intrinsics_.k1 + r2 * (5 * intrinsics_.k2 + r2 * 7 * intrinsics_.k3));
     const double step = f / slope;
     r -= step;
     if (std::abs(step) < 1e-14) break;
   }
   return r;
-}
-
-std::optional<Eigen::Vector2d> DepthCamera::project(const Eigen::Vector3d& p_K) const {
-  if (!(p_K.z() > 0) || !p_K.allFinite()) return std::nullopt;
-  const double xn = -p_K.x() / p_K.z(), yn = -p_K.y() / p_K.z();
-  // Beyond the validated field the polynomial may fold back into the image.
-  if (xn * xn + yn * yn > max_undistorted_radius_ * max_undistorted_radius_) return std::nullopt;
-  const double l = radial_factor(intrinsics_, xn * xn + yn * yn);
-  return Eigen::Vector2d(intrinsics_.cx + intrinsics_.fx * l * xn, intrinsics_.cy + intrinsics_.fy * l * yn);
 }
 
 Eigen::Vector3d DepthCamera::ray_direction(double u, double v) const {

@@ -41,12 +41,24 @@ class DepthCamera {
   // Image coordinates of a point in K; nullopt when it is not in front of the camera or lies
   // far outside the field of view (beyond 1.2 x the image corner's radius, where the distortion
   // polynomial is not validated and may fold back into the image).
-  std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& p_K) const;
+  // Inline: D_3D (fit/behind_surface_map) classifies voxels by projecting them, millions per frame.
+  std::optional<Eigen::Vector2d> project(const Eigen::Vector3d& p_K) const {
+    if (!(p_K.z() > 0) || !p_K.allFinite()) return std::nullopt;
+    const double xn = -p_K.x() / p_K.z(), yn = -p_K.y() / p_K.z();
+    // Beyond the validated field the polynomial may fold back into the image.
+    if (xn * xn + yn * yn > max_undistorted_radius_ * max_undistorted_radius_) return std::nullopt;
+    const double l = radial_factor(xn * xn + yn * yn);
+    return Eigen::Vector2d(intrinsics_.cx + intrinsics_.fx * l * xn, intrinsics_.cy + intrinsics_.fy * l * yn);
+  }
   // Unit ray direction in K through image coordinates (u, v) (inverse of project).
   Eigen::Vector3d ray_direction(double u, double v) const;
   // Direction in K with z = 1 through the centre of pixel (col, row), from a table.
   const Eigen::Vector3f& pixel_ray(int col, int row) const { return pixel_rays_[row * width() + col]; }
 
+  // L(r^2) = 1 + k1 r^2 + k2 r^4 + k3 r^6.
+  double radial_factor(double r2) const {
+    return 1 + r2 * (intrinsics_.k1 + r2 * (intrinsics_.k2 + r2 * intrinsics_.k3));
+  }
   // Radial distortion: distorted radius for an undistorted one, and its inverse (Newton).
   double distort_radius(double r) const;
   double undistort_radius(double r_distorted) const;

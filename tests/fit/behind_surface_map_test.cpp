@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <limits>
+#include <optional>
+#include <random>
 
+#include "dense_behind_surface.hpp"
 #include "synthetic_frames.hpp"
 
 namespace posefuse::fit {
@@ -87,6 +90,112 @@ TEST(FitBehindSurface, NearestBehindVoxelEqualsBruteForce) {
         ++checked;
       }
   EXPECT_GT(checked, 200);
+}
+
+// A random scene: a few spheres in front of an optional tilted back plane, millimetre noise
+// and pixels of the silhouette without a depth reading.
+DepthFrame random_scene(const raycast::DepthCamera& camera, std::mt19937_64& rng) {
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  struct Sphere {
+    Eigen::Vector3d centre;
+    double radius;
+  };
+  std::vector<Sphere> spheres;
+  const int count = 2 + static_cast<int>(uniform(rng) * 3);
+  for (int s = 0; s < count; ++s)
+    spheres.push_back({{-0.5 + uniform(rng), -0.4 + 0.8 * uniform(rng), 0.9 + 1.5 * uniform(rng)}, 0.08 + 0.3 * uniform(rng)});
+  const bool back_plane = uniform(rng) < 0.5;
+  const Eigen::Vector3d plane_normal = Eigen::Vector3d(0.3 * (uniform(rng) - 0.5), 0.3 * (uniform(rng) - 0.5), -1).normalized();
+  const double plane_depth = 2.6 + 0.5 * uniform(rng);
+  DepthFrame frame = testing::render_frame(camera, [&](const Eigen::Vector3d& ray) -> std::optional<double> {
+    std::optional<double> nearest;
+    const Eigen::Vector3d dir = ray.normalized();
+    for (const Sphere& s : spheres) {
+      const double b = dir.dot(s.centre), c = s.centre.squaredNorm() - s.radius * s.radius;
+      const double disc = b * b - c;
+      if (disc < 0) continue;
+      const double t = b - std::sqrt(disc);
+      const double z = t * dir.z();
+      if (t > 0 && (!nearest || z < *nearest)) nearest = z;
+    }
+    if (back_plane && !nearest) {
+      const double t = plane_depth * plane_normal.z() / plane_normal.dot(ray);
+      if (t > 0) nearest = t;
+    }
+    return nearest;
+  });
+  std::normal_distribution<double> noise_mm(0.0, 5.0);
+  for (size_t i = 0; i < frame.depth_mm.size(); ++i) {
+    if (frame.depth_mm[i] == kNoDepth) continue;
+    if (uniform(rng) < 0.05) {
+      frame.depth_mm[i] = kNoDepth;  // silhouette pixel without a reading
+      continue;
+    }
+    frame.depth_mm[i] = static_cast<uint16_t>(std::max(1.0, frame.depth_mm[i] + noise_mm(rng)));
+  }
+  return frame;
+}
+
+// The query-time shell search returns a behind voxel exactly as near (on the grid) as the full
+// distance transform of the first implementation, for points anywhere around random scenes.
+TEST(FitBehindSurface, QuerySearchEqualsDenseTransformOnRandomFrames) {
+  const raycast::DepthCamera camera{testing::small_intrinsics(64, 53)};
+  std::mt19937_64 rng(7);
+  std::uniform_real_distribution<double> uniform(0.0, 1.0);
+  int compared_in_front = 0;
+  for (int scene = 0; scene < 6; ++scene) {
+    BehindSurfaceParams params;
+    params.voxel_size_m = scene % 2 == 0 ? 0.04 : 0.05;
+    const DepthFrame frame = random_scene(camera, rng);
+    const BehindSurfaceMap map(frame, camera, params);
+    const std::vector<double> dense = testing::dense_behind_distance2(map);
+    const Eigen::Vector3i n = map.grid_size();
+    const PointCloud cloud = build_point_cloud(frame, camera);
+    for (int q = 0; q < 1000; ++q) {
+      Eigen::Vector3d p;
+      if (q % 4 == 0) {
+        // Anywhere in the grid's box grown by 0.2 m (outside points are clamped into the grid).
+        const Eigen::Vector3d lo = map.grid_origin_K() - Eigen::Vector3d::Constant(0.2);
+        const Eigen::Vector3d extent = map.voxel_size_m() * n.cast<double>() + Eigen::Vector3d::Constant(0.4);
+        p = lo + extent.cwiseProduct(Eigen::Vector3d(uniform(rng), uniform(rng), uniform(rng)));
+      } else {
+        // A float-like point: up to 0.15 m in front of a cloud point, a little sideways.
+        size_t pixel;
+        do {
+          pixel = static_cast<size_t>(uniform(rng) * cloud.valid.size());
+        } while (!cloud.valid[pixel]);
+        p = cloud.value_K[pixel].cast<double>() +
+            Eigen::Vector3d(0.04 * (uniform(rng) - 0.5), 0.04 * (uniform(rng) - 0.5), -0.15 * uniform(rng));
+      }
+      const Eigen::Vector3d d3d = map.closest_behind(p);
+      if (map.is_behind(p)) {
+        EXPECT_EQ(d3d, p);
+        continue;
+      }
+      const Eigen::Vector3i cell = map.voxel_of(p), found = map.voxel_of(d3d);
+      ASSERT_LT((map.voxel_centre_K(found.x(), found.y(), found.z()) - d3d).norm(), 1e-9);
+      ASSERT_TRUE(map.voxel_is_behind(found.x(), found.y(), found.z()));
+      const double d2 = (found - cell).cast<double>().squaredNorm();
+      const size_t index = (static_cast<size_t>(cell.z()) * n.y() + cell.y()) * n.x() + cell.x();
+      ASSERT_EQ(d2, dense[index]) << "scene " << scene << " query " << q;
+      ++compared_in_front;
+    }
+  }
+  EXPECT_GT(compared_in_front, 2000);
+}
+
+// A cache used with a new frame's map (which may sit at the old map's address) starts afresh.
+TEST(FitBehindSurface, CacheFollowsTheFrameNotTheAddress) {
+  const raycast::DepthCamera camera{testing::small_intrinsics(64, 53)};
+  const Eigen::Vector3d floating(0.0, 0.0, 0.7);
+  BehindSurfaceCache cache;
+  std::optional<BehindSurfaceMap> map;
+  map.emplace(testing::render_plane(camera, {0, 0, 1.0}, {0, 0, -1}), camera);
+  EXPECT_NEAR(map->closest_behind(floating, cache).z(), 1.0, map->voxel_size_m());
+  map.reset();
+  map.emplace(testing::render_plane(camera, {0, 0, 1.4}, {0, 0, -1}), camera);  // same storage
+  EXPECT_EQ(map->closest_behind(floating, cache), map->closest_behind(floating));
+  EXPECT_NEAR(map->closest_behind(floating, cache).z(), 1.4, map->voxel_size_m());
 }
 
 TEST(FitBehindSurface, BadInputNamesTheField) {

@@ -93,6 +93,28 @@ TEST(FitNormals, SinglePixelQueryAgreesWithTheMap) {
     }
 }
 
+TEST(FitNormals, SampleNormalsAgreeWithTheMap) {
+  const raycast::DepthCamera camera{testing::small_intrinsics(64, 53)};
+  const PointCloud cloud = build_point_cloud(testing::render_sphere(camera, {0, 0, 1}, 0.3), camera);
+  const NormalMap normals = estimate_normals(cloud);
+  std::vector<DepthSample> samples;
+  for (int row = 1; row < camera.height(); row += 4)
+    for (int col = 2; col < camera.width(); col += 5) samples.push_back({col, row, BodyZone::kTorso, false, {}});
+  const auto sampled = estimate_sample_normals(cloud, samples);
+  ASSERT_EQ(sampled.size(), samples.size());
+  int with_normal = 0;
+  for (size_t i = 0; i < samples.size(); ++i) {
+    ASSERT_EQ(sampled[i].has_value(), normals.has(samples[i].col, samples[i].row));
+    if (!sampled[i]) continue;
+    EXPECT_TRUE(sampled[i]->isApprox(normals.at(samples[i].col, samples[i].row)));
+    ++with_normal;
+  }
+  EXPECT_GT(with_normal, 20);
+  samples.push_back({64, 0, BodyZone::kTorso, false, {}});
+  EXPECT_EQ(testing::error_field([&] { estimate_sample_normals(cloud, samples); }),
+            "samples[" + std::to_string(samples.size() - 1) + "]");
+}
+
 TEST(FitNormals, BadParamsNameTheField) {
   const raycast::DepthCamera camera{testing::small_intrinsics(32, 24)};
   const PointCloud cloud = build_point_cloud(testing::render_plane(camera, {0, 0, 2}, {0, 0, -1}), camera);

@@ -1,0 +1,173 @@
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <numbers>
+#include <random>
+
+#include "body/template_generator.hpp"
+#include "fit/arm_roll.hpp"
+#include "fit/pose_smoothing.hpp"
+#include "posed_subject.hpp"
+#include "synthetic_frames.hpp"
+
+namespace posefuse::fit {
+namespace {
+
+using body::PoseLayout;
+constexpr double kDeg = std::numbers::pi / 180;
+
+TEST(FitPoseSmoothing, CentredMovingAverageOfThreeFrames) {
+  const PoseLayout layout = PoseLayout::upper_body();
+  std::vector<Eigen::VectorXd> raw;
+  for (int t = 0; t < 6; ++t) raw.push_back(Eigen::VectorXd::Constant(layout.size(), 0.01 * t * t));
+  const std::vector<Eigen::VectorXd> smoothed = smooth_poses(layout, raw);
+  ASSERT_EQ(smoothed.size(), raw.size());
+  // Ends average the frames that exist.
+  EXPECT_TRUE(smoothed[0].isApprox((raw[0] + raw[1]) / 2));
+  for (int t = 1; t < 5; ++t) EXPECT_TRUE(smoothed[t].isApprox((raw[t - 1] + raw[t] + raw[t + 1]) / 3)) << t;
+  EXPECT_TRUE(smoothed[5].isApprox((raw[4] + raw[5]) / 2));
+  // Window 1 is the raw sequence; window 5 averages five.
+  EXPECT_EQ(smooth_poses(layout, raw, {1}), raw);
+  EXPECT_TRUE(smooth_poses(layout, raw, {5})[2].isApprox((raw[0] + raw[1] + raw[2] + raw[3] + raw[4]) / 5));
+}
+
+TEST(FitPoseSmoothing, StreamingEmitsOneFrameLate) {
+  const PoseLayout layout = PoseLayout::upper_body();
+  PoseSmoother smoother(layout);
+  const Eigen::VectorXd a = layout.zero(), b = Eigen::VectorXd::Constant(layout.size(), 0.3);
+  EXPECT_FALSE(smoother.push(a).has_value());
+  const auto first = smoother.push(b);
+  ASSERT_TRUE(first.has_value());
+  EXPECT_TRUE(first->isApprox((a + b) / 2));
+  const std::vector<Eigen::VectorXd> rest = smoother.flush();
+  ASSERT_EQ(rest.size(), 1u);
+  EXPECT_TRUE(rest[0].isApprox((a + b) / 2));
+}
+
+// A subject facing the camera turns slowly through 180 degrees about y, where the pelvis rotation
+// vector flips between (0, pi - e, 0) and (0, -(pi - e), 0): the average must stay near the truth.
+TEST(FitPoseSmoothing, PelvisRotationIsUnwrappedBeforeAveraging) {
+  const PoseLayout layout = PoseLayout::upper_body();
+  const int y = layout.index_of("pelvis_y");
+  std::vector<Eigen::VectorXd> raw;
+  for (int t = 0; t < 5; ++t) {
+    Eigen::VectorXd theta = layout.zero();
+    const double angle = std::numbers::pi - 0.02 + 0.01 * t;  // crosses pi
+    theta[y] = angle > std::numbers::pi ? angle - 2 * std::numbers::pi : angle;  // as a log map gives it
+    raw.push_back(theta);
+  }
+  const std::vector<Eigen::VectorXd> smoothed = smooth_poses(layout, raw);
+  for (int t = 1; t < 4; ++t) {
+    const Eigen::AngleAxisd truth(std::numbers::pi - 0.02 + 0.01 * t, Eigen::Vector3d::UnitY());
+    const Eigen::AngleAxisd got(std::abs(smoothed[t][y]), Eigen::Vector3d::UnitY() * (smoothed[t][y] < 0 ? -1 : 1));
+    EXPECT_LT(Eigen::Quaterniond(truth).angularDistance(Eigen::Quaterniond(got)), 1e-9) << t;
+  }
+}
+
+TEST(FitPoseSmoothing, BadInputNamesTheField) {
+  const PoseLayout layout = PoseLayout::upper_body();
+  EXPECT_EQ(testing::error_field([&] { PoseSmoother(layout, {2}); }), "smoothing_options.window_frames");
+  EXPECT_EQ(testing::error_field([&] { PoseSmoother(layout, {0}); }), "smoothing_options.window_frames");
+  PoseSmoother smoother(layout);
+  EXPECT_EQ(testing::error_field([&] { smoother.push(Eigen::VectorXd::Zero(3)); }), "theta");
+  Eigen::VectorXd nan = layout.zero();
+  nan[4] = std::nan("");
+  EXPECT_EQ(testing::error_field([&] { smoother.push(nan); }), "theta");
+}
+
+const std::shared_ptr<body::SmplModel>& male() { return testing::template_model(body::Sex::kMale); }
+
+// The IMU's orientation for a forearm whose thumb is turned by `roll` about the forearm from
+// `thumb_K`, with the IMU strapped at A_from_F: K_from_A = K_from_F * F_from_A.
+Eigen::Quaterniond imu_orientation(const Eigen::Vector3d& along_K, const Eigen::Vector3d& thumb_K, double roll,
+                                   const Eigen::Quaterniond& A_from_F) {
+  const Eigen::Vector3d thumb = Eigen::AngleAxisd(roll, along_K) * thumb_K;
+  Eigen::Matrix3d K_from_F;
+  K_from_F.col(0) = thumb;           // thumb_F = x
+  K_from_F.col(1) = along_K;         // along_F = y
+  K_from_F.col(2) = thumb.cross(along_K);
+  return Eigen::Quaterniond(K_from_F) * A_from_F.conjugate();
+}
+
+TEST(FitArmRoll, PronationFromNeutralWithTheElbowBent) {
+  const PoseLayout layout = PoseLayout::upper_body();
+  // Upper arms hanging, elbows bent 90 degrees forward: the roll-free model forearm is in the
+  // neutral position (thumb up).
+  const Eigen::VectorXd theta = testing::facing_pose(layout, 2.0, {{"left_shoulder_z", -90}, {"left_elbow_y", -90},
+                                                                   {"right_shoulder_z", 90}, {"right_elbow_y", 90}});
+  const JointPose pose = pose_joints(rest_joints(*male(), Eigen::VectorXd()), layout, theta);
+  const Eigen::Quaterniond A_from_F(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized()));
+  for (ArmSide side : {ArmSide::kLeft, ArmSide::kRight}) {
+    const bool left = side == ArmSide::kLeft;
+    const int elbow = left ? body::kLeftElbow : body::kRightElbow, wrist = left ? body::kLeftWrist : body::kRightWrist;
+    const Eigen::Vector3d along = (pose.positions_K.col(wrist) - pose.positions_K.col(elbow)).normalized();
+    const Eigen::Vector3d up_K = Eigen::Vector3d::UnitY();  // the camera's y is up
+    EXPECT_LT((pose.K_from_joint[elbow] * Eigen::Vector3d::UnitZ() - up_K).norm(), 1e-9);  // thumb up
+    for (double roll_deg : {-80.0, -20.0, 0.0, 35.0, 90.0}) {
+      const ForearmRoll r = forearm_roll(pose, side, imu_orientation(along, up_K, roll_deg * kDeg, A_from_F), A_from_F);
+      EXPECT_NEAR(r.roll_rad, roll_deg * kDeg, 1e-9);
+      ASSERT_TRUE(r.pronation_rad.has_value());
+      // Turning the thumb medially is pronation on both sides.
+      const Eigen::Vector3d thumb = Eigen::AngleAxisd(roll_deg * kDeg, along) * up_K;
+      // The subject faces the camera: its left arm is on K's -x side, so medial is +x there.
+      const Eigen::Vector3d medial = Eigen::Vector3d::UnitX() * (left ? 1.0 : -1.0);
+      EXPECT_NEAR(*r.pronation_rad, (left ? 1 : -1) * roll_deg * kDeg, 1e-9);
+      if (roll_deg * (left ? 1 : -1) > 0) {
+        EXPECT_GT(thumb.dot(medial), 0) << "pronation turns the thumb medially";
+      }
+      EXPECT_NEAR(r.axis_disagreement_rad, 0, 1e-7);
+      EXPECT_LT((r.K_from_forearm * Eigen::Vector3d::UnitZ() - thumb).norm(), 1e-9);
+    }
+  }
+}
+
+TEST(FitArmRoll, RollOfAnyPoseAndNoPronationWithAStraightElbow) {
+  const PoseLayout layout = PoseLayout::upper_body();
+  const Eigen::Matrix3Xd rest = rest_joints(*male(), Eigen::VectorXd());
+  std::mt19937_64 rng(5);
+  std::uniform_real_distribution<double> uniform(-1.0, 1.0);
+  for (int trial = 0; trial < 20; ++trial) {
+    Eigen::VectorXd theta = testing::facing_pose(layout, 2.0, {});
+    for (int d = 6; d < layout.size(); ++d)
+      if (layout.dof(d).limited) theta[d] = 0.5 * (layout.dof(d).min_rad + layout.dof(d).max_rad) +
+                                            0.45 * uniform(rng) * (layout.dof(d).max_rad - layout.dof(d).min_rad);
+    const JointPose pose = pose_joints(rest, layout, theta);
+    const Eigen::Vector3d along = (pose.positions_K.col(body::kLeftWrist) - pose.positions_K.col(body::kLeftElbow)).normalized();
+    Eigen::Vector3d thumb = pose.K_from_joint[body::kLeftElbow] * Eigen::Vector3d::UnitZ();
+    thumb = (thumb - thumb.dot(along) * along).normalized();
+    const double roll = 3.0 * uniform(rng);
+    const Eigen::Quaterniond A_from_F(Eigen::AngleAxisd(2 * uniform(rng), Eigen::Vector3d(uniform(rng), 1, 0).normalized()));
+    const ForearmRoll r = forearm_roll(pose, ArmSide::kLeft, imu_orientation(along, thumb, roll, A_from_F), A_from_F);
+    EXPECT_NEAR(r.roll_rad, roll, 1e-9) << trial;
+  }
+  // Straight arm: roll is defined, pronation is not.
+  const JointPose straight = pose_joints(rest, layout, testing::facing_pose(layout, 2.0, {}));
+  const Eigen::Vector3d along = (straight.positions_K.col(body::kLeftWrist) - straight.positions_K.col(body::kLeftElbow)).normalized();
+  const Eigen::Vector3d thumb = straight.K_from_joint[body::kLeftElbow] * Eigen::Vector3d::UnitZ();
+  const ForearmRoll r = forearm_roll(straight, ArmSide::kLeft, imu_orientation(along, thumb, 0.4, Eigen::Quaterniond::Identity()),
+                                     Eigen::Quaterniond::Identity());
+  EXPECT_NEAR(r.roll_rad, 0.4, 1e-9);
+  EXPECT_FALSE(r.pronation_rad.has_value());
+}
+
+TEST(FitArmRoll, BadInputNamesTheField) {
+  const PoseLayout layout = PoseLayout::upper_body();
+  const JointPose pose = pose_joints(rest_joints(*male(), Eigen::VectorXd()), layout, testing::facing_pose(layout, 2.0, {}));
+  const Eigen::Quaterniond unit = Eigen::Quaterniond::Identity();
+  EXPECT_EQ(testing::error_field([&] { forearm_roll(pose, ArmSide::kLeft, Eigen::Quaterniond(2, 0, 0, 0), unit); }), "K_from_A");
+  EXPECT_EQ(testing::error_field([&] { forearm_roll(pose, ArmSide::kLeft, unit, Eigen::Quaterniond(std::nan(""), 0, 0, 0)); }),
+            "A_from_F");
+  ArmRollOptions bad;
+  bad.thumb_F = Eigen::Vector3d::UnitY();
+  EXPECT_EQ(testing::error_field([&] { forearm_roll(pose, ArmSide::kLeft, unit, unit, bad); }), "arm_roll_options.thumb_F");
+  // An IMU whose thumb axis points along the fitted forearm gives no roll.
+  const Eigen::Vector3d along = (pose.positions_K.col(body::kLeftWrist) - pose.positions_K.col(body::kLeftElbow)).normalized();
+  const Eigen::Quaterniond thumb_along = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitX(), along);
+  EXPECT_EQ(testing::error_field([&] { forearm_roll(pose, ArmSide::kLeft, thumb_along, unit); }), "K_from_A");
+  JointPose broken = pose;
+  broken.positions_K.col(body::kLeftWrist) = broken.positions_K.col(body::kLeftElbow);
+  EXPECT_EQ(testing::error_field([&] { forearm_roll(broken, ArmSide::kLeft, unit, unit); }), "pose");
+}
+
+}  // namespace
+}  // namespace posefuse::fit
