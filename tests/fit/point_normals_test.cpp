@@ -99,7 +99,7 @@ TEST(FitNormals, SampleNormalsAgreeWithTheMap) {
   const NormalMap normals = estimate_normals(cloud);
   std::vector<DepthSample> samples;
   for (int row = 1; row < camera.height(); row += 4)
-    for (int col = 2; col < camera.width(); col += 5) samples.push_back({col, row, BodyZone::kTorso, false, {}});
+    for (int col = 2; col < camera.width(); col += 5) samples.push_back({col, row, BodyZone::kTorso, false, Eigen::Vector3f::Zero()});
   const auto sampled = estimate_sample_normals(cloud, samples);
   ASSERT_EQ(sampled.size(), samples.size());
   int with_normal = 0;
@@ -110,7 +110,7 @@ TEST(FitNormals, SampleNormalsAgreeWithTheMap) {
     ++with_normal;
   }
   EXPECT_GT(with_normal, 20);
-  samples.push_back({64, 0, BodyZone::kTorso, false, {}});
+  samples.push_back({64, 0, BodyZone::kTorso, false, Eigen::Vector3f::Zero()});
   EXPECT_EQ(testing::error_field([&] { estimate_sample_normals(cloud, samples); }),
             "samples[" + std::to_string(samples.size() - 1) + "]");
 }
