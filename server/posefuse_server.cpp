@@ -89,7 +89,11 @@ PoseFuseServer::PoseFuseServer(ServerOptions options) : options_(std::move(optio
                          ? std::string(")")
                          : std::string(" or --tls-cert and --tls-key are not a matching pair?)")));
   }
-  server_->GetHealthCheckService()->SetServingStatus(true);
+  // The overall status ("") and the PoseFuse service's own, so that a probe may ask either;
+  // shutdown() turns both to NOT_SERVING.
+  grpc::HealthCheckServiceInterface& health = *server_->GetHealthCheckService();
+  health.SetServingStatus(v1::PoseFuse::service_full_name(), true);
+  health.SetServingStatus(true);
   if (jobs_) jobs_->resume_unfinished();
   log_event("info", "server_start",
             {{"listen", options_.listen},
