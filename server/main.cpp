@@ -19,11 +19,12 @@ constexpr const char* kUsage =
     "usage: posefuse-server [--listen HOST:PORT] [--workers N] [--max-sessions N]\n"
     "                       [--max-message-mb MB] [--idle-timeout-s S] [--max-queued-chunks N]\n"
     "                       [--shutdown-grace-s S] [--data-dir DIR] [--recordings-root DIR]\n"
-    "                       [--max-jobs N] [--metrics-listen HOST:PORT]\n"
+    "                       [--max-jobs N] [--max-upload-mb MB] [--metrics-listen HOST:PORT]\n"
     "                       [--tls-cert FILE --tls-key FILE [--tls-client-ca FILE]]\n"
     "                       [--tokens-file FILE]\n"
     "defaults: --listen 127.0.0.1:50051 --workers <cores> --max-sessions 16 --max-message-mb 16\n"
     "          --idle-timeout-s 60 --max-queued-chunks 8 --shutdown-grace-s 10 --max-jobs 1\n"
+    "          --max-upload-mb 8192\n"
     "batch jobs are off without --data-dir; SubmitJob by reference needs --recordings-root\n"
     "plaintext without --tls-cert; no token needed without --tokens-file (docs/server.md)\n";
 
@@ -61,6 +62,7 @@ ServerOptions parse_flags(int argc, char** argv) {
     else if (flag == "--data-dir") options.data_dir = value;
     else if (flag == "--recordings-root") options.recordings_root = value;
     else if (flag == "--max-jobs") options.max_jobs = parse_count(value, flag);
+    else if (flag == "--max-upload-mb") options.max_upload_mb = posefuse::session::parse_double(value, flag);
     else if (flag == "--metrics-listen") options.metrics_listen = value;
     else if (flag == "--tls-cert") options.tls_cert = value;
     else if (flag == "--tls-key") options.tls_key = value;

@@ -11,6 +11,7 @@
 #include "server/log.hpp"
 #include "server/security.hpp"
 #include "server/sqlite_job_store.hpp"
+#include "server/upload_spool.hpp"
 
 namespace posefuse::server {
 
@@ -27,6 +28,9 @@ void validate_options(const ServerOptions& o) {
   if (o.max_queued_chunks == 0) throw_invalid("--max-queued-chunks", "must be at least 1");
   if (o.max_queued_results == 0) throw_invalid("--max-queued-results", "must be at least 1");
   if (o.max_jobs == 0) throw_invalid("--max-jobs", "must be at least 1");
+  if (!(o.max_upload_mb > 0.0 && std::isfinite(o.max_upload_mb))) {
+    throw_invalid("--max-upload-mb", "must be a positive number of MiB");
+  }
   if (!(o.shutdown_grace_s >= 0.0 && std::isfinite(o.shutdown_grace_s))) {
     throw_invalid("--shutdown-grace-s", "must be >= 0 seconds");
   }
@@ -55,10 +59,16 @@ PoseFuseServer::PoseFuseServer(ServerOptions options) : options_(std::move(optio
   registry_ = std::make_unique<SessionRegistry>(options_.max_sessions, check_interval);
   if (!options_.data_dir.empty()) {
     std::error_code error;
-    std::filesystem::create_directories(options_.data_dir, error);
+    std::filesystem::create_directories(upload_spool_dir(options_.data_dir), error);
     if (error) {
       throw Error(ErrorCode::kFailedPrecondition, "--data-dir",
-                  "cannot create '" + options_.data_dir + "': " + error.message());
+                  "cannot create '" + options_.data_dir + "' and its uploads/ folder: " +
+                      error.message());
+    }
+    // Uploads that a stopped server was receiving never became jobs: their clients got no job
+    // id and send again.
+    if (const std::size_t removed = remove_partial_uploads(upload_spool_dir(options_.data_dir))) {
+      log_event("info", "partial_uploads_removed", {{"count", std::to_string(removed)}});
     }
     job_store_ = std::make_unique<SqliteJobStore>(std::filesystem::path(options_.data_dir) /
                                                   "jobs.sqlite");

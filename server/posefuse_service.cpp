@@ -45,7 +45,13 @@ PoseFuseService::PoseFuseService(const ServerOptions& options, WorkerPool& pool,
       registry_(registry),
       metrics_(metrics),
       jobs_(jobs),
-      tokens_(tokens) {}
+      tokens_(tokens) {
+  if (jobs_) {
+    submit_context_.emplace(SubmitJobContext{
+        *jobs_, pool_, options_.recordings_root, upload_spool_dir(options_.data_dir),
+        static_cast<std::uint64_t>(options_.max_upload_mb * 1024 * 1024)});
+  }
+}
 
 grpc::Status PoseFuseService::authenticate(const grpc::CallbackServerContext* context,
                                            const char* call) const {
@@ -90,7 +96,7 @@ grpc::ServerReadReactor<v1::SubmitJobRequest>* PoseFuseService::SubmitJob(
     return new Refused<grpc::ServerReadReactor<v1::SubmitJobRequest>>(denied);
   }
   if (!jobs_) return new Refused<grpc::ServerReadReactor<v1::SubmitJobRequest>>(jobs_off());
-  return submit_job(*jobs_, options_.recordings_root, response);
+  return submit_job(*submit_context_, response);
 }
 
 grpc::ServerUnaryReactor* PoseFuseService::GetJob(grpc::CallbackServerContext* context,
