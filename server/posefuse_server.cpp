@@ -4,10 +4,10 @@
 #include <cmath>
 #include <thread>
 
-#include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/health_check_service_interface.h>
 
 #include "common/error.hpp"
+#include "grpc/health/v1/health.pb.h"
 #include "server/log.hpp"
 #include "server/security.hpp"
 #include "server/sqlite_job_store.hpp"
@@ -85,11 +85,20 @@ PoseFuseServer::PoseFuseServer(ServerOptions options) : options_(std::move(optio
     log_event("info", "metrics_start", {{"port", std::to_string(metrics_http_->port())}});
   }
 
+  // Naming a health message links health.proto's descriptor into the server, so that
+  // reflection can describe the health service as well as answer its name.
+  reflection_ = std::make_unique<ReflectionService>(
+      std::vector<std::string>{
+          v1::PoseFuse::service_full_name(),
+          grpc::health::v1::HealthCheckRequest::descriptor()->file()->service(0)->full_name(),
+          reflection::ServerReflection::service_full_name()},
+      tokens_.get());
+
   grpc::EnableDefaultHealthCheckService(true);
-  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   builder.AddListeningPort(options_.listen, credentials, &port_);
   builder.RegisterService(service_.get());
+  builder.RegisterService(reflection_.get());
   builder.SetMaxReceiveMessageSize(static_cast<int>(options_.max_message_mb * 1024 * 1024));
   server_ = builder.BuildAndStart();
   if (!server_ || port_ == 0) {

@@ -1,6 +1,7 @@
 #include "server/security.hpp"
 
 #include "common/error.hpp"
+#include "server/log.hpp"
 #include "server/text_lines.hpp"
 #include "session/file_bytes.hpp"
 
@@ -113,6 +114,16 @@ grpc::Status BearerTokens::check(const grpc::CallbackServerContext& context) con
   }
   if (!accepts(value.substr(kScheme.size()))) return unauthenticated("bearer token not accepted");
   return grpc::Status::OK;
+}
+
+grpc::Status authenticate_call(const BearerTokens* tokens,
+                               const grpc::CallbackServerContext& context, const char* call) {
+  if (!tokens) return grpc::Status::OK;
+  grpc::Status status = tokens->check(context);
+  if (!status.ok()) {
+    log_event("info", "call_unauthenticated", {{"call", call}, {"peer", context.peer()}});
+  }
+  return status;
 }
 
 }  // namespace posefuse::server

@@ -84,7 +84,7 @@ client_status=0
 NODE_PATH=$npm_dir/node_modules node "$here/interop_client.js" \
   --address "127.0.0.1:$port" \
   --recording "$run/recordings/demo.pfchunks" --recording-uri demo.pfchunks \
-  --proto-dir "$source/proto" --proto-dir "$source/client/proto" --proto-dir "$here/proto" \
+  --proto-dir "$source/proto" --proto-dir "$source/client/proto" --proto-dir "$source/server/proto" \
   "${token_args[@]}" || client_status=$?
 
 server_status=0
