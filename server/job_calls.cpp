@@ -1,120 +1,16 @@
 #include "server/job_calls.hpp"
 
-#include <atomic>
 #include <deque>
 #include <memory>
 #include <mutex>
 
-#include "server/log.hpp"
-#include "server/random_id.hpp"
 #include "server/status.hpp"
-#include "server/upload_spool.hpp"
-#include "session/pipeline.hpp"
 
 namespace posefuse::server {
 
 namespace {
 
 namespace fs = std::filesystem;
-
-// Reads the JobSpec; by reference, answers with the stored job at once. By upload, each chunk
-// read goes to the UploadSpool on the worker pool (validation decodes images: never on a reactor
-// thread), and only then is the next one read, so at most one chunk is held and a fast client
-// is slowed by flow control; the whole session spooled, the job is stored and returned.
-class SubmitJob : public grpc::ServerReadReactor<v1::SubmitJobRequest> {
- public:
-  SubmitJob(const SubmitJobContext& context, v1::Job* response)
-      : context_(context), response_(response) {
-    StartRead(&request_);
-  }
-  void OnReadDone(bool ok) override {
-    if (!spool_) {
-      read_spec(ok);
-      return;
-    }
-    // Past the spec: the worker adds the chunk (or commits at the end) and reads on.
-    context_.pool.submit([this, ok] { ok ? add_chunk() : commit(); });
-  }
-  void OnCancel() override { cancelled_ = true; }
-  void OnDone() override { delete this; }
-
- private:
-  void read_spec(bool ok) {
-    if (!ok || !request_.has_spec()) {
-      Finish(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                          "spec: the first SubmitJobRequest must be a JobSpec"));
-      return;
-    }
-    spec_ = request_.spec();
-    try {
-      if (spec_.source_case() == v1::JobSpec::kRecordingUri) {
-        const fs::path path = resolve_recording(spec_.recording_uri(), context_.recordings_root);
-        *response_ = context_.runner.submit(spec_, path.string());
-        Finish(grpc::Status::OK);
-        return;
-      }
-      if (!spec_.upload()) {
-        throw_invalid("spec.source", "neither recording_uri nor upload is set");
-      }
-      spool_ = std::make_unique<UploadSpool>(
-          context_.spool_dir / (random_hex_id() + ".pfchunks"), context_.max_upload_bytes,
-          session::PipelineOptions{}.max_item_errors);
-      log_event("info", "upload_start", {});
-    } catch (const Error& error) {
-      Finish(to_status(error));
-      return;
-    }
-    StartRead(&request_);
-  }
-
-  void add_chunk() {
-    try {
-      if (!request_.has_chunk()) {
-        throw_invalid("chunk[" + std::to_string(spool_->chunks()) + "]",
-                      "after the JobSpec an upload holds only SessionChunk messages");
-      }
-      spool_->add(request_.chunk());
-    } catch (const Error& error) {
-      end_upload(to_status(error));
-      return;
-    }
-    request_.Clear();
-    StartRead(&request_);  // last: OnReadDone may run at once on another thread
-  }
-
-  void commit() {
-    if (cancelled_) {
-      end_upload(grpc::Status(grpc::StatusCode::CANCELLED, "upload cancelled"));
-      return;
-    }
-    try {
-      const fs::path& path = spool_->commit();
-      *response_ = context_.runner.submit(spec_, path.string());
-    } catch (const Error& error) {
-      end_upload(to_status(error));
-      return;
-    }
-    log_event("info", "upload_end", {{"job", response_->job_id()},
-                                      {"chunks", std::to_string(spool_->chunks())},
-                                      {"bytes", std::to_string(spool_->bytes())}});
-    Finish(grpc::Status::OK);
-  }
-
-  // A refused upload leaves nothing: the partial file goes now, not when the call is done.
-  void end_upload(grpc::Status status) {
-    log_event("info", "upload_refused", {{"code", std::to_string(status.error_code())},
-                                         {"chunks", std::to_string(spool_->chunks())}});
-    spool_.reset();
-    Finish(std::move(status));
-  }
-
-  const SubmitJobContext& context_;
-  v1::Job* response_;
-  v1::SubmitJobRequest request_;
-  v1::JobSpec spec_;
-  std::unique_ptr<UploadSpool> spool_;
-  std::atomic<bool> cancelled_{false};
-};
 
 // Streams messages from a queue, one write at a time; the last one finishes the call. Owned by a
 // shared_ptr (self_) until OnDone, so that listeners holding a weak_ptr never see it destroyed.
@@ -259,11 +155,6 @@ fs::path resolve_recording(const std::string& uri, const fs::path& root) {
     throw Error(ErrorCode::kNotFound, "spec.recording_uri", "'" + uri + "' does not exist");
   }
   return resolved;
-}
-
-grpc::ServerReadReactor<v1::SubmitJobRequest>* submit_job(const SubmitJobContext& context,
-                                                          v1::Job* response) {
-  return new SubmitJob(context, response);
 }
 
 grpc::ServerWriteReactor<v1::Job>* watch_job(JobRunner& runner, const std::string& job_id) {

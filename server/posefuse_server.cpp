@@ -11,6 +11,7 @@
 #include "server/log.hpp"
 #include "server/security.hpp"
 #include "server/sqlite_job_store.hpp"
+#include "server/submit_job_call.hpp"
 #include "server/upload_spool.hpp"
 
 namespace posefuse::server {

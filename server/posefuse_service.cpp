@@ -41,8 +41,9 @@ PoseFuseService::PoseFuseService(const ServerOptions& options, WorkerPool& pool,
       tokens_(tokens) {
   if (jobs_) {
     submit_context_.emplace(SubmitJobContext{
-        *jobs_, pool_, options_.recordings_root, upload_spool_dir(options_.data_dir),
-        static_cast<std::uint64_t>(options_.max_upload_mb * 1024 * 1024)});
+        *jobs_, pool_, registry_, options_.recordings_root, upload_spool_dir(options_.data_dir),
+        static_cast<std::uint64_t>(options_.max_upload_mb * 1024 * 1024),
+        std::chrono::duration<double>(options_.idle_timeout_s), options_.max_sessions});
   }
 }
 
@@ -84,7 +85,7 @@ grpc::ServerReadReactor<v1::SubmitJobRequest>* PoseFuseService::SubmitJob(
     return new RefusedCall<grpc::ServerReadReactor<v1::SubmitJobRequest>>(denied);
   }
   if (!jobs_) return new RefusedCall<grpc::ServerReadReactor<v1::SubmitJobRequest>>(jobs_off());
-  return submit_job(*submit_context_, response);
+  return SubmitJobCall::start(*submit_context_, response);
 }
 
 grpc::ServerUnaryReactor* PoseFuseService::GetJob(grpc::CallbackServerContext* context,

@@ -7,7 +7,7 @@
 #include "posefuse/v1/service.grpc.pb.h"
 #include <optional>
 
-#include "server/job_calls.hpp"
+#include "server/submit_job_call.hpp"
 #include "server/job_runner.hpp"
 #include "server/metrics.hpp"
 #include "server/security.hpp"

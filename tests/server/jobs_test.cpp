@@ -2,6 +2,7 @@
 // a job left RUNNING by a stopped server that the next server completes.
 #include <filesystem>
 #include <fstream>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -295,6 +296,65 @@ TEST_F(JobsTest, UploadsThatCannotBeASessionAreInvalidArgumentNamingTheField) {
   }
   EXPECT_EQ(job_count(), 0u);
   EXPECT_EQ(files_in_spool(), 0u);
+}
+
+TEST_F(JobsTest, SilentUploadEndsWithDeadlineExceededAndLeavesNothing) {
+  ServerOptions options;
+  options.idle_timeout_s = 0.3;
+  start(options);
+  const auto chunks = demo::make_demo_session();
+  grpc::ClientContext context;
+  set_test_deadline(context);
+  v1::Job job;
+  auto writer = stub_->SubmitJob(&context, &job);
+  v1::SubmitJobRequest request;
+  request.mutable_spec()->set_upload(true);
+  ASSERT_TRUE(writer->Write(request));
+  for (int i = 0; i < 3; ++i) {
+    *request.mutable_chunk() = chunks[static_cast<std::size_t>(i)];
+    ASSERT_TRUE(writer->Write(request));
+  }
+  // Then nothing: the server ends the call after the idle timeout (Finish waits for it).
+  const grpc::Status status = writer->Finish();
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED) << status.error_message();
+  EXPECT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
+  EXPECT_EQ(job_count(), 0u);
+  EXPECT_EQ(files_in_spool(), 0u);
+}
+
+TEST_F(JobsTest, AnUploadTakesASessionSlot) {
+  ServerOptions options;
+  options.max_sessions = 1;
+  start(options);
+  const auto chunks = demo::make_demo_session();
+  grpc::ClientContext upload_context;
+  set_test_deadline(upload_context);
+  v1::Job job;
+  auto upload_writer = stub_->SubmitJob(&upload_context, &job);
+  v1::SubmitJobRequest request;
+  request.mutable_spec()->set_upload(true);
+  ASSERT_TRUE(upload_writer->Write(request));
+  *request.mutable_chunk() = chunks[0];
+  ASSERT_TRUE(upload_writer->Write(request));
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (server_->registry().active() != 1 && std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_EQ(server_->registry().active(), 1u);
+  // The slot is taken: a second upload is refused at once.
+  v1::Job other;
+  const grpc::Status refused = upload(chunks, other);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << refused.error_message();
+  // The first upload goes on and completes; its slot is freed.
+  for (std::size_t i = 1; i < chunks.size(); ++i) {
+    *request.mutable_chunk() = chunks[i];
+    ASSERT_TRUE(upload_writer->Write(request));
+  }
+  upload_writer->WritesDone();
+  const grpc::Status status = upload_writer->Finish();
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(watch(job.job_id()).back().state(), v1::Job::SUCCEEDED);
+  EXPECT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
 }
 
 TEST_F(JobsTest, UploadedJobLeftRunningCompletesAfterRestartAndPartialUploadsAreRemoved) {
