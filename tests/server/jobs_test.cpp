@@ -62,21 +62,41 @@ class JobsTest : public ::testing::Test {
     return states;
   }
 
-  // SubmitJob by upload: the spec, then `chunks`.
-  grpc::Status upload(const std::vector<v1::SessionChunk>& chunks, v1::Job& job) {
+  // An upload call after its spec and the first `count` of `chunks` (fewer when the server ends
+  // the call early), still open: the test sends more or closes it.
+  struct OpenUpload {
     grpc::ClientContext context;
-    set_test_deadline(context);
-    auto writer = stub_->SubmitJob(&context, &job);
+    v1::Job job;
+    std::unique_ptr<grpc::ClientWriter<v1::SubmitJobRequest>> writer;
+    bool send(const v1::SessionChunk& chunk) {
+      v1::SubmitJobRequest request;
+      *request.mutable_chunk() = chunk;
+      return writer->Write(request);
+    }
+    grpc::Status close() {
+      writer->WritesDone();
+      return writer->Finish();
+    }
+  };
+  std::unique_ptr<OpenUpload> open_upload(const std::vector<v1::SessionChunk>& chunks,
+                                          std::size_t count) {
+    auto call = std::make_unique<OpenUpload>();
+    set_test_deadline(call->context);
+    call->writer = stub_->SubmitJob(&call->context, &call->job);
     v1::SubmitJobRequest request;
     request.mutable_spec()->set_label("uploaded");
     request.mutable_spec()->set_upload(true);
-    writer->Write(request);
-    for (const auto& chunk : chunks) {
-      *request.mutable_chunk() = chunk;
-      if (!writer->Write(request)) break;  // the server has ended the call
-    }
-    writer->WritesDone();
-    return writer->Finish();
+    bool open = call->writer->Write(request);
+    for (std::size_t i = 0; open && i < count; ++i) open = call->send(chunks[i]);
+    return call;
+  }
+
+  // SubmitJob by upload: the spec, then `chunks`.
+  grpc::Status upload(const std::vector<v1::SessionChunk>& chunks, v1::Job& job) {
+    const auto call = open_upload(chunks, chunks.size());
+    const grpc::Status status = call->close();
+    job = call->job;
+    return status;
   }
 
   std::size_t files_in_spool() const {
@@ -302,20 +322,9 @@ TEST_F(JobsTest, SilentUploadEndsWithDeadlineExceededAndLeavesNothing) {
   ServerOptions options;
   options.idle_timeout_s = 0.3;
   start(options);
-  const auto chunks = demo::make_demo_session();
-  grpc::ClientContext context;
-  set_test_deadline(context);
-  v1::Job job;
-  auto writer = stub_->SubmitJob(&context, &job);
-  v1::SubmitJobRequest request;
-  request.mutable_spec()->set_upload(true);
-  ASSERT_TRUE(writer->Write(request));
-  for (int i = 0; i < 3; ++i) {
-    *request.mutable_chunk() = chunks[static_cast<std::size_t>(i)];
-    ASSERT_TRUE(writer->Write(request));
-  }
+  const auto call = open_upload(demo::make_demo_session(), 3);
   // Then nothing: the server ends the call after the idle timeout (Finish waits for it).
-  const grpc::Status status = writer->Finish();
+  const grpc::Status status = call->writer->Finish();
   EXPECT_EQ(status.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED) << status.error_message();
   EXPECT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
   EXPECT_EQ(job_count(), 0u);
@@ -327,15 +336,7 @@ TEST_F(JobsTest, AnUploadTakesASessionSlot) {
   options.max_sessions = 1;
   start(options);
   const auto chunks = demo::make_demo_session();
-  grpc::ClientContext upload_context;
-  set_test_deadline(upload_context);
-  v1::Job job;
-  auto upload_writer = stub_->SubmitJob(&upload_context, &job);
-  v1::SubmitJobRequest request;
-  request.mutable_spec()->set_upload(true);
-  ASSERT_TRUE(upload_writer->Write(request));
-  *request.mutable_chunk() = chunks[0];
-  ASSERT_TRUE(upload_writer->Write(request));
+  const auto first = open_upload(chunks, 1);
   const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
   while (server_->registry().active() != 1 && std::chrono::steady_clock::now() < give_up) {
     std::this_thread::sleep_for(std::chrono::milliseconds(5));
@@ -346,13 +347,10 @@ TEST_F(JobsTest, AnUploadTakesASessionSlot) {
   const grpc::Status refused = upload(chunks, other);
   EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << refused.error_message();
   // The first upload goes on and completes; its slot is freed.
-  for (std::size_t i = 1; i < chunks.size(); ++i) {
-    *request.mutable_chunk() = chunks[i];
-    ASSERT_TRUE(upload_writer->Write(request));
-  }
-  upload_writer->WritesDone();
-  const grpc::Status status = upload_writer->Finish();
+  for (std::size_t i = 1; i < chunks.size(); ++i) ASSERT_TRUE(first->send(chunks[i]));
+  const grpc::Status status = first->close();
   ASSERT_TRUE(status.ok()) << status.error_message();
+  const v1::Job& job = first->job;
   EXPECT_EQ(watch(job.job_id()).back().state(), v1::Job::SUCCEEDED);
   EXPECT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
 }
