@@ -99,6 +99,14 @@ class JobsTest : public ::testing::Test {
     return status;
   }
 
+  // A refused upload: `code`, a message starting with `prefix`, no job and no file left.
+  void expect_refused(const grpc::Status& status, grpc::StatusCode code, const std::string& prefix) {
+    EXPECT_EQ(status.error_code(), code) << status.error_message();
+    EXPECT_EQ(status.error_message().rfind(prefix, 0), 0u) << status.error_message();
+    EXPECT_EQ(job_count(), 0u);
+    EXPECT_EQ(files_in_spool(), 0u);
+  }
+
   std::size_t files_in_spool() const {
     std::size_t n = 0;
     for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir_ / "data" / "uploads")) ++n;
@@ -265,11 +273,8 @@ TEST_F(JobsTest, TruncatedUploadIsInvalidArgumentAndLeavesNoJobAndNoFile) {
   chunks.resize(chunks.size() / 2);  // the client stops half way, without the end marker
   v1::Job job;
   const grpc::Status status = upload(chunks, job);
-  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT) << status.error_message();
-  EXPECT_EQ(status.error_message().rfind("end: ", 0), 0u) << status.error_message();
+  expect_refused(status, grpc::StatusCode::INVALID_ARGUMENT, "end: ");
   EXPECT_NE(status.error_message().find("truncated"), std::string::npos);
-  EXPECT_EQ(job_count(), 0u);
-  EXPECT_EQ(files_in_spool(), 0u);
 }
 
 TEST_F(JobsTest, OversizedUploadIsResourceExhaustedAndLeavesNoJobAndNoFile) {
@@ -278,11 +283,8 @@ TEST_F(JobsTest, OversizedUploadIsResourceExhaustedAndLeavesNoJobAndNoFile) {
   start(options);
   v1::Job job;
   const grpc::Status status = upload(demo::make_demo_session(), job);
-  EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << status.error_message();
-  EXPECT_EQ(status.error_message().rfind("upload: ", 0), 0u) << status.error_message();
+  expect_refused(status, grpc::StatusCode::RESOURCE_EXHAUSTED, "upload: ");
   EXPECT_NE(status.error_message().find("--max-upload-mb"), std::string::npos);
-  EXPECT_EQ(job_count(), 0u);
-  EXPECT_EQ(files_in_spool(), 0u);
 }
 
 TEST_F(JobsTest, UploadsThatCannotBeASessionAreInvalidArgumentNamingTheField) {
@@ -324,11 +326,8 @@ TEST_F(JobsTest, SilentUploadEndsWithDeadlineExceededAndLeavesNothing) {
   start(options);
   const auto call = open_upload(demo::make_demo_session(), 3);
   // Then nothing: the server ends the call after the idle timeout (Finish waits for it).
-  const grpc::Status status = call->writer->Finish();
-  EXPECT_EQ(status.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED) << status.error_message();
+  expect_refused(call->writer->Finish(), grpc::StatusCode::DEADLINE_EXCEEDED, "no message");
   EXPECT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
-  EXPECT_EQ(job_count(), 0u);
-  EXPECT_EQ(files_in_spool(), 0u);
 }
 
 TEST_F(JobsTest, AnUploadTakesASessionSlot) {
