@@ -29,8 +29,9 @@ void validate_options(const ServerOptions& o) {
   if (o.max_queued_chunks == 0) throw_invalid("--max-queued-chunks", "must be at least 1");
   if (o.max_queued_results == 0) throw_invalid("--max-queued-results", "must be at least 1");
   if (o.max_jobs == 0) throw_invalid("--max-jobs", "must be at least 1");
-  if (!(o.max_upload_mb > 0.0 && std::isfinite(o.max_upload_mb))) {
-    throw_invalid("--max-upload-mb", "must be a positive number of MiB");
+  if (!(o.max_upload_mb > 0.0 && o.max_upload_mb <= 1024.0 * 1024.0)) {
+    throw_invalid("--max-upload-mb", "is " + std::to_string(o.max_upload_mb) +
+                                         ", must be in (0, 1048576] (MiB; at most 1 TiB)");
   }
   if (!(o.shutdown_grace_s >= 0.0 && std::isfinite(o.shutdown_grace_s))) {
     throw_invalid("--shutdown-grace-s", "must be >= 0 seconds");

@@ -126,7 +126,7 @@ void SubmitJobCall::finish_locked(grpc::Status status) {
   finished_ = true;
   if (spool_ && !status.ok()) {
     log_event("info", "upload_refused", {{"session", std::to_string(*slot_)},
-                                         {"code", std::to_string(status.error_code())},
+                                         {"status", status_code_name(status.error_code())},
                                          {"chunks", std::to_string(spool_->chunks())}});
   }
   spool_.reset();  // an upload that did not become a job leaves no file

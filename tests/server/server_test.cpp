@@ -414,15 +414,26 @@ TEST_F(ServerTest, MetricsEndpointCountsSessionsAndStageCalls) {
   EXPECT_EQ(http_get(server_->metrics_port(), "/other").rfind("HTTP/1.1 404", 0), 0u);
 }
 
+// The field of the error validate_options throws for `options` ("" when it accepts them).
+std::string rejected_flag(const ServerOptions& options) {
+  try {
+    validate_options(options);
+  } catch (const Error& e) {
+    return e.field();
+  }
+  return "";
+}
+
 TEST(ServerOptions, BadValuesNameTheFlag) {
   ServerOptions options;
   options.max_sessions = 0;
-  try {
-    validate_options(options);
-    FAIL() << "no error";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.field(), "--max-sessions");
+  EXPECT_EQ(rejected_flag(options), "--max-sessions");
+  for (const double mb : {0.0, -1.0, 2e6, std::nan("")}) {
+    options = ServerOptions{};
+    options.max_upload_mb = mb;
+    EXPECT_EQ(rejected_flag(options), "--max-upload-mb") << mb;
   }
+  EXPECT_EQ(rejected_flag(ServerOptions{}), "");
 }
 
 }  // namespace
