@@ -271,7 +271,12 @@ int command_info(const Arguments& args) {
               static_cast<double>(limits.max_message_bytes()) / (1024.0 * 1024.0),
               limits.max_sessions(), limits.max_queued_chunks(), limits.idle_timeout_s(),
               limits.workers());
-  std::printf("batch jobs: %s\n", info.jobs_supported() ? "on" : "off (server started without --data-dir)");
+  if (info.jobs_supported()) {
+    std::printf("batch jobs: on, uploads up to %.0f MiB\n",
+                static_cast<double>(limits.max_upload_bytes()) / (1024.0 * 1024.0));
+  } else {
+    std::printf("batch jobs: off (server started without --data-dir)\n");
+  }
   return 0;
 }
 

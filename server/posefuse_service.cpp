@@ -190,6 +190,7 @@ v1::ServerInfo server_info(const ServerOptions& options, unsigned workers, bool 
   limits.set_max_queued_chunks(options.max_queued_chunks);
   limits.set_idle_timeout_s(options.idle_timeout_s);
   limits.set_workers(workers);
+  limits.set_max_upload_bytes(static_cast<std::uint64_t>(options.max_upload_mb * 1024 * 1024));
   info.set_jobs_supported(jobs);
   return info;
 }

@@ -343,6 +343,7 @@ TEST_F(ServerTest, ReflectionServesTheFilesOfASymbolWithTheirImports) {
 TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   ServerOptions options;
   options.max_sessions = 3;
+  options.max_upload_mb = 2.0;
   start(options);
   grpc::ClientContext context;
   set_test_deadline(context);
@@ -355,6 +356,7 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   EXPECT_EQ(info.options(0).key(), "imu.tau_acc_s");
   EXPECT_EQ(info.limits().max_sessions(), 3u);
   EXPECT_EQ(info.limits().workers(), 2u);
+  EXPECT_EQ(info.limits().max_upload_bytes(), 2u << 20);
   EXPECT_FALSE(info.jobs_supported());
 }
 
