@@ -18,6 +18,7 @@
 
 #include "client/demo_session.hpp"
 #include "client/fit_call.hpp"
+#include "client/recording.hpp"
 #include "common/error.hpp"
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "posefuse/v1/service.grpc.pb.h"
@@ -39,6 +40,8 @@ constexpr const char* kUsage =
     "batch jobs (server started with --data-dir):\n"
     "  posefuse submit RECORDING_URI [--label TEXT]  a recording under the server's\n"
     "                                      --recordings-root; prints the job id\n"
+    "  posefuse upload RECORDING [--label TEXT]  stream a local recording into the server's\n"
+    "                                      job store; prints the job id\n"
     "  posefuse jobs                       list jobs, newest first\n"
     "  posefuse watch JOB_ID               follow a job until it has finished\n"
     "  posefuse cancel JOB_ID              cancel a queued or running job\n"
@@ -268,7 +271,12 @@ int command_info(const Arguments& args) {
               static_cast<double>(limits.max_message_bytes()) / (1024.0 * 1024.0),
               limits.max_sessions(), limits.max_queued_chunks(), limits.idle_timeout_s(),
               limits.workers());
-  std::printf("batch jobs: %s\n", info.jobs_supported() ? "on" : "off (server started without --data-dir)");
+  if (info.jobs_supported()) {
+    std::printf("batch jobs: on, uploads up to %.0f MiB\n",
+                static_cast<double>(limits.max_upload_bytes()) / (1024.0 * 1024.0));
+  } else {
+    std::printf("batch jobs: off (server started without --data-dir)\n");
+  }
   return 0;
 }
 
@@ -309,6 +317,31 @@ int command_submit(const Arguments& args) {
   writer->WritesDone();
   const grpc::Status status = writer->Finish();
   if (!status.ok()) return call_failed("submit", args, status);
+  std::printf("%s\n", job_line(job).c_str());
+  return 0;
+}
+
+// Streams a local recording into the server's job store (SubmitJob by upload): the server
+// spools it to disk and runs it like a job by reference.
+int command_upload(const Arguments& args) {
+  auto stub = job_stub(args, 1);
+  client::Recording recording(args.positional[0]);
+  grpc::ClientContext context;  // no deadline: a long recording takes as long as it takes
+  posefuse::v1::Job job;
+  auto writer = stub->SubmitJob(&context, &job);
+  posefuse::v1::SubmitJobRequest request;
+  request.mutable_spec()->set_upload(true);
+  request.mutable_spec()->set_label(args.flag("--label", ""));
+  bool open = writer->Write(request);
+  std::uint64_t chunks = 0;
+  while (open && recording.next(*request.mutable_chunk())) {
+    open = writer->Write(request);  // false: the server ended the call; Finish says why
+    ++chunks;
+  }
+  if (open) writer->WritesDone();
+  const grpc::Status status = writer->Finish();
+  if (!status.ok()) return call_failed("upload", args, status);
+  std::fprintf(stderr, "posefuse: uploaded %llu chunks\n", static_cast<unsigned long long>(chunks));
   std::printf("%s\n", job_line(job).c_str());
   return 0;
 }
@@ -402,6 +435,7 @@ int main(int argc, char** argv) {
     if (command == "info") return command_info(args);
     if (command == "demo-session") return command_demo_session(args);
     if (command == "submit") return command_submit(args);
+    if (command == "upload") return command_upload(args);
     if (command == "jobs") return command_jobs(args);
     if (command == "watch") return command_watch(args);
     if (command == "cancel") return command_cancel(args);

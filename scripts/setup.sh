@@ -5,9 +5,14 @@ set -euo pipefail
 here=$(cd "$(dirname "$0")" && pwd)
 mapfile -t wanted < <(grep -v '^\s*#' "$here/packages.txt" | sed '/^\s*$/d')
 
+# A package counts as present when it is installed or an installed package provides it (e.g. a
+# nodejs package that bundles npm and conflicts with Debian's separate npm package).
+provided=" $(dpkg-query -W -f='${Status}|${Provides}\n' 2>/dev/null |
+  sed -n 's/^install ok installed|//p' | sed 's/ *([^)]*)//g' | tr ',\n' '  ') "
 missing=()
 for pkg in "${wanted[@]}"; do
-  if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q 'install ok installed'; then
+  if ! dpkg-query -W -f='${Status}' "$pkg" 2>/dev/null | grep -q 'install ok installed' &&
+     [[ "$provided" != *" $pkg "* ]]; then
     missing+=("$pkg")
   fi
 done

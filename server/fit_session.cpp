@@ -16,26 +16,6 @@ class FitSession::Sink : public session::ResultSink {
   FitSession& session_;
 };
 
-namespace {
-
-const char* code_name(grpc::StatusCode code) {
-  switch (code) {
-    case grpc::StatusCode::OK: return "OK";
-    case grpc::StatusCode::CANCELLED: return "CANCELLED";
-    case grpc::StatusCode::INVALID_ARGUMENT: return "INVALID_ARGUMENT";
-    case grpc::StatusCode::DEADLINE_EXCEEDED: return "DEADLINE_EXCEEDED";
-    case grpc::StatusCode::NOT_FOUND: return "NOT_FOUND";
-    case grpc::StatusCode::RESOURCE_EXHAUSTED: return "RESOURCE_EXHAUSTED";
-    case grpc::StatusCode::FAILED_PRECONDITION: return "FAILED_PRECONDITION";
-    case grpc::StatusCode::OUT_OF_RANGE: return "OUT_OF_RANGE";
-    case grpc::StatusCode::DATA_LOSS: return "DATA_LOSS";
-    case grpc::StatusCode::INTERNAL: return "INTERNAL";
-    case grpc::StatusCode::UNAVAILABLE: return "UNAVAILABLE";
-    default: return "OTHER";
-  }
-}
-
-}  // namespace
 
 FitSession* FitSession::start(grpc::CallbackServerContext* context, std::uint64_t id,
                               const ServerOptions& options, WorkerPool& pool,
@@ -209,11 +189,11 @@ void FitSession::finish_after_writes_locked(grpc::Status status) {
 void FitSession::finish_now_locked(grpc::Status status) {
   if (finished_) return;
   finished_ = true;
-  metrics_.session_finished(code_name(status.error_code()));
+  metrics_.session_finished(status_code_name(status.error_code()));
   const double seconds = std::chrono::duration<double>(Clock::now() - started_at_).count();
   log_event("info", "session_end",
             {{"session", std::to_string(id_)},
-             {"status", code_name(status.error_code())},
+             {"status", status_code_name(status.error_code())},
              {"chunks", std::to_string(chunks_read_)},
              {"item_errors", std::to_string(item_errors_)},
              {"seconds", std::to_string(seconds)}});

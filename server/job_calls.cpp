@@ -12,43 +12,6 @@ namespace {
 
 namespace fs = std::filesystem;
 
-// Reads the JobSpec, then answers with the stored job. Uploads are not implemented yet.
-class SubmitJob : public grpc::ServerReadReactor<v1::SubmitJobRequest> {
- public:
-  SubmitJob(JobRunner& runner, fs::path root, v1::Job* response)
-      : runner_(runner), root_(std::move(root)), response_(response) {
-    StartRead(&request_);
-  }
-  void OnReadDone(bool ok) override {
-    if (!ok || !request_.has_spec()) {
-      Finish(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                          "spec: the first SubmitJobRequest must be a JobSpec"));
-      return;
-    }
-    const v1::JobSpec& spec = request_.spec();
-    if (spec.source_case() != v1::JobSpec::kRecordingUri) {
-      Finish(grpc::Status(grpc::StatusCode::UNIMPLEMENTED,
-                          "spec.upload: uploaded jobs are not implemented yet; submit a "
-                          "recording_uri or stream with Fit"));
-      return;
-    }
-    try {
-      const fs::path path = resolve_recording(spec.recording_uri(), root_);
-      *response_ = runner_.submit(spec, path.string());
-      Finish(grpc::Status::OK);
-    } catch (const Error& error) {
-      Finish(to_status(error));
-    }
-  }
-  void OnDone() override { delete this; }
-
- private:
-  JobRunner& runner_;
-  fs::path root_;
-  v1::Job* response_;
-  v1::SubmitJobRequest request_;
-};
-
 // Streams messages from a queue, one write at a time; the last one finishes the call. Owned by a
 // shared_ptr (self_) until OnDone, so that listeners holding a weak_ptr never see it destroyed.
 template <class Message>
@@ -192,12 +155,6 @@ fs::path resolve_recording(const std::string& uri, const fs::path& root) {
     throw Error(ErrorCode::kNotFound, "spec.recording_uri", "'" + uri + "' does not exist");
   }
   return resolved;
-}
-
-grpc::ServerReadReactor<v1::SubmitJobRequest>* submit_job(JobRunner& runner,
-                                                          const fs::path& root,
-                                                          v1::Job* response) {
-  return new SubmitJob(runner, root, response);
 }
 
 grpc::ServerWriteReactor<v1::Job>* watch_job(JobRunner& runner, const std::string& job_id) {

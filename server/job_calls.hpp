@@ -1,6 +1,7 @@
 #pragma once
-// The batch-job calls of posefuse.v1.PoseFuse (SubmitJob, GetJob, ListJobs, CancelJob,
-// WatchJob, GetJobResults) on the callback API, over a JobRunner.
+// The batch-job calls of posefuse.v1.PoseFuse that stream (WatchJob, GetJobResults) on the
+// callback API, over a JobRunner, and the resolution of a recording submitted by reference
+// (SubmitJob itself: submit_job_call.hpp).
 #include <filesystem>
 #include <string>
 
@@ -16,9 +17,6 @@ namespace posefuse::server {
 // by reference disabled), kInvalidArgument for a path outside root, kNotFound when missing.
 std::filesystem::path resolve_recording(const std::string& uri, const std::filesystem::path& root);
 
-grpc::ServerReadReactor<v1::SubmitJobRequest>* submit_job(JobRunner& runner,
-                                                          const std::filesystem::path& root,
-                                                          v1::Job* response);
 grpc::ServerWriteReactor<v1::Job>* watch_job(JobRunner& runner, const std::string& job_id);
 grpc::ServerWriteReactor<v1::FitResult>* job_results(JobRunner& runner, const std::string& job_id);
 

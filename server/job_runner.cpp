@@ -55,6 +55,14 @@ class StoreSink : public session::ResultSink {
   std::vector<v1::FitResult> pending_;
 };
 
+// An uploaded recording (no recording_uri) is the server's own spooled copy: once its job has
+// finished nothing reads it again. A recording submitted by reference belongs to its owner.
+void drop_uploaded_recording(const JobRecord& record) {
+  if (!record.job.recording_uri().empty()) return;
+  std::error_code ignored;
+  std::filesystem::remove(record.recording_path, ignored);
+}
+
 }  // namespace
 
 bool is_terminal(v1::Job::State state) {
@@ -112,6 +120,7 @@ std::optional<v1::Job> JobRunner::cancel(const std::string& job_id) {
   record->job.set_state(v1::Job::CANCELLED);
   record->job.set_update_time_unix_us(now_unix_us());
   store_.update(record->job);
+  drop_uploaded_recording(*record);
   publish(record->job);
   return record->job;
 }
@@ -173,6 +182,7 @@ void JobRunner::run(const std::string& job_id) {
     if (!handed_back) {
       job.set_update_time_unix_us(now_unix_us());
       store_.update(job);
+      drop_uploaded_recording(*record);
       publish(job);
       metrics_.job_finished(v1::Job::State_Name(job.state()));
       log_event("info", "job_end", {{"job", job_id}, {"state", v1::Job::State_Name(job.state())}});

@@ -4,13 +4,15 @@
 #include <cmath>
 #include <thread>
 
-#include <grpcpp/ext/proto_server_reflection_plugin.h>
 #include <grpcpp/health_check_service_interface.h>
 
 #include "common/error.hpp"
+#include "grpc/health/v1/health.pb.h"
 #include "server/log.hpp"
 #include "server/security.hpp"
 #include "server/sqlite_job_store.hpp"
+#include "server/submit_job_call.hpp"
+#include "server/upload_spool.hpp"
 
 namespace posefuse::server {
 
@@ -27,6 +29,10 @@ void validate_options(const ServerOptions& o) {
   if (o.max_queued_chunks == 0) throw_invalid("--max-queued-chunks", "must be at least 1");
   if (o.max_queued_results == 0) throw_invalid("--max-queued-results", "must be at least 1");
   if (o.max_jobs == 0) throw_invalid("--max-jobs", "must be at least 1");
+  if (!(o.max_upload_mb > 0.0 && o.max_upload_mb <= 1024.0 * 1024.0)) {
+    throw_invalid("--max-upload-mb", "is " + std::to_string(o.max_upload_mb) +
+                                         ", must be in (0, 1048576] (MiB; at most 1 TiB)");
+  }
   if (!(o.shutdown_grace_s >= 0.0 && std::isfinite(o.shutdown_grace_s))) {
     throw_invalid("--shutdown-grace-s", "must be >= 0 seconds");
   }
@@ -55,10 +61,16 @@ PoseFuseServer::PoseFuseServer(ServerOptions options) : options_(std::move(optio
   registry_ = std::make_unique<SessionRegistry>(options_.max_sessions, check_interval);
   if (!options_.data_dir.empty()) {
     std::error_code error;
-    std::filesystem::create_directories(options_.data_dir, error);
+    std::filesystem::create_directories(upload_spool_dir(options_.data_dir), error);
     if (error) {
       throw Error(ErrorCode::kFailedPrecondition, "--data-dir",
-                  "cannot create '" + options_.data_dir + "': " + error.message());
+                  "cannot create '" + options_.data_dir + "' and its uploads/ folder: " +
+                      error.message());
+    }
+    // Uploads that a stopped server was receiving never became jobs: their clients got no job
+    // id and send again.
+    if (const std::size_t removed = remove_partial_uploads(upload_spool_dir(options_.data_dir))) {
+      log_event("info", "partial_uploads_removed", {{"count", std::to_string(removed)}});
     }
     job_store_ = std::make_unique<SqliteJobStore>(std::filesystem::path(options_.data_dir) /
                                                   "jobs.sqlite");
@@ -75,11 +87,20 @@ PoseFuseServer::PoseFuseServer(ServerOptions options) : options_(std::move(optio
     log_event("info", "metrics_start", {{"port", std::to_string(metrics_http_->port())}});
   }
 
+  // Naming a health message links health.proto's descriptor into the server, so that
+  // reflection can describe the health service as well as answer its name.
+  reflection_ = std::make_unique<ReflectionService>(
+      std::vector<std::string>{
+          v1::PoseFuse::service_full_name(),
+          grpc::health::v1::HealthCheckRequest::descriptor()->file()->service(0)->full_name(),
+          reflection::ServerReflection::service_full_name()},
+      tokens_.get());
+
   grpc::EnableDefaultHealthCheckService(true);
-  grpc::reflection::InitProtoReflectionServerBuilderPlugin();
   grpc::ServerBuilder builder;
   builder.AddListeningPort(options_.listen, credentials, &port_);
   builder.RegisterService(service_.get());
+  builder.RegisterService(reflection_.get());
   builder.SetMaxReceiveMessageSize(static_cast<int>(options_.max_message_mb * 1024 * 1024));
   server_ = builder.BuildAndStart();
   if (!server_ || port_ == 0) {
@@ -89,7 +110,11 @@ PoseFuseServer::PoseFuseServer(ServerOptions options) : options_(std::move(optio
                          ? std::string(")")
                          : std::string(" or --tls-cert and --tls-key are not a matching pair?)")));
   }
-  server_->GetHealthCheckService()->SetServingStatus(true);
+  // The overall status ("") and the PoseFuse service's own, so that a probe may ask either;
+  // shutdown() turns both to NOT_SERVING.
+  grpc::HealthCheckServiceInterface& health = *server_->GetHealthCheckService();
+  health.SetServingStatus(v1::PoseFuse::service_full_name(), true);
+  health.SetServingStatus(true);
   if (jobs_) jobs_->resume_unfinished();
   log_event("info", "server_start",
             {{"listen", options_.listen},

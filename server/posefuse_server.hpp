@@ -1,7 +1,8 @@
 #pragma once
 // A running posefuse server: the gRPC server with the PoseFuse service, the standard health
-// service (grpc.health.v1) and server reflection, the worker pool and the session registry.
-// Used by posefuse-server's main and, in-process, by the integration tests.
+// service (grpc.health.v1) and server reflection (reflection_service.hpp), the worker pool and
+// the session registry. Used by posefuse-server's main and, in-process, by the integration
+// tests.
 #include <memory>
 
 #include <grpcpp/grpcpp.h>
@@ -11,6 +12,7 @@
 #include "server/metrics.hpp"
 #include "server/metrics_http.hpp"
 #include "server/posefuse_service.hpp"
+#include "server/reflection_service.hpp"
 #include "server/security.hpp"
 #include "server/server_options.hpp"
 #include "server/session_registry.hpp"
@@ -49,6 +51,7 @@ class PoseFuseServer {
   std::unique_ptr<JobRunner> jobs_;
   std::unique_ptr<BearerTokens> tokens_;  // null: no token needed
   std::unique_ptr<PoseFuseService> service_;
+  std::unique_ptr<ReflectionService> reflection_;
   std::unique_ptr<grpc::Server> server_;
   std::unique_ptr<MetricsHttpServer> metrics_http_;
   int port_ = 0;

@@ -4,6 +4,7 @@
 
 #include "server/fit_session.hpp"
 #include "server/job_calls.hpp"
+#include "server/refused_call.hpp"
 #include "server/status.hpp"
 #include "server/log.hpp"
 #include "session/session_validator.hpp"
@@ -12,14 +13,6 @@
 namespace posefuse::server {
 
 namespace {
-
-// Refuses a call at once (over the session limit, jobs off).
-template <class Reactor>
-class Refused : public Reactor {
- public:
-  explicit Refused(grpc::Status status) { this->Finish(std::move(status)); }
-  void OnDone() override { delete this; }
-};
 
 grpc::Status jobs_off() {
   return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
@@ -45,28 +38,30 @@ PoseFuseService::PoseFuseService(const ServerOptions& options, WorkerPool& pool,
       registry_(registry),
       metrics_(metrics),
       jobs_(jobs),
-      tokens_(tokens) {}
+      tokens_(tokens) {
+  if (jobs_) {
+    submit_context_.emplace(SubmitJobContext{
+        *jobs_, pool_, registry_, options_.recordings_root, upload_spool_dir(options_.data_dir),
+        static_cast<std::uint64_t>(options_.max_upload_mb * 1024 * 1024),
+        std::chrono::duration<double>(options_.idle_timeout_s), options_.max_sessions});
+  }
+}
 
 grpc::Status PoseFuseService::authenticate(const grpc::CallbackServerContext* context,
                                            const char* call) const {
-  if (!tokens_) return grpc::Status::OK;
-  grpc::Status status = tokens_->check(*context);
-  if (!status.ok()) {
-    log_event("info", "call_unauthenticated", {{"call", call}, {"peer", context->peer()}});
-  }
-  return status;
+  return authenticate_call(tokens_, *context, call);
 }
 
 grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>* PoseFuseService::Fit(
     grpc::CallbackServerContext* context) {
   if (grpc::Status denied = authenticate(context, "Fit"); !denied.ok()) {
-    return new Refused<grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>>(denied);
+    return new RefusedCall<grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>>(denied);
   }
   const std::optional<std::uint64_t> id = registry_.try_admit();
   if (!id) {
     metrics_.session_refused();
     log_event("info", "session_refused", {{"reason", "max_sessions"}, {"peer", context->peer()}});
-    return new Refused<grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>>(grpc::Status(
+    return new RefusedCall<grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>>(grpc::Status(
         grpc::StatusCode::RESOURCE_EXHAUSTED,
         "server busy: " + std::to_string(options_.max_sessions) +
             " sessions are running (--max-sessions); retry later"));
@@ -87,10 +82,10 @@ grpc::ServerUnaryReactor* PoseFuseService::GetServerInfo(grpc::CallbackServerCon
 grpc::ServerReadReactor<v1::SubmitJobRequest>* PoseFuseService::SubmitJob(
     grpc::CallbackServerContext* context, v1::Job* response) {
   if (grpc::Status denied = authenticate(context, "SubmitJob"); !denied.ok()) {
-    return new Refused<grpc::ServerReadReactor<v1::SubmitJobRequest>>(denied);
+    return new RefusedCall<grpc::ServerReadReactor<v1::SubmitJobRequest>>(denied);
   }
-  if (!jobs_) return new Refused<grpc::ServerReadReactor<v1::SubmitJobRequest>>(jobs_off());
-  return submit_job(*jobs_, options_.recordings_root, response);
+  if (!jobs_) return new RefusedCall<grpc::ServerReadReactor<v1::SubmitJobRequest>>(jobs_off());
+  return SubmitJobCall::start(*submit_context_, response);
 }
 
 grpc::ServerUnaryReactor* PoseFuseService::GetJob(grpc::CallbackServerContext* context,
@@ -154,18 +149,18 @@ grpc::ServerUnaryReactor* PoseFuseService::CancelJob(grpc::CallbackServerContext
 grpc::ServerWriteReactor<v1::Job>* PoseFuseService::WatchJob(grpc::CallbackServerContext* context,
                                                              const v1::WatchJobRequest* request) {
   if (grpc::Status denied = authenticate(context, "WatchJob"); !denied.ok()) {
-    return new Refused<grpc::ServerWriteReactor<v1::Job>>(denied);
+    return new RefusedCall<grpc::ServerWriteReactor<v1::Job>>(denied);
   }
-  if (!jobs_) return new Refused<grpc::ServerWriteReactor<v1::Job>>(jobs_off());
+  if (!jobs_) return new RefusedCall<grpc::ServerWriteReactor<v1::Job>>(jobs_off());
   return watch_job(*jobs_, request->job_id());
 }
 
 grpc::ServerWriteReactor<v1::FitResult>* PoseFuseService::GetJobResults(
     grpc::CallbackServerContext* context, const v1::GetJobResultsRequest* request) {
   if (grpc::Status denied = authenticate(context, "GetJobResults"); !denied.ok()) {
-    return new Refused<grpc::ServerWriteReactor<v1::FitResult>>(denied);
+    return new RefusedCall<grpc::ServerWriteReactor<v1::FitResult>>(denied);
   }
-  if (!jobs_) return new Refused<grpc::ServerWriteReactor<v1::FitResult>>(jobs_off());
+  if (!jobs_) return new RefusedCall<grpc::ServerWriteReactor<v1::FitResult>>(jobs_off());
   return job_results(*jobs_, request->job_id());
 }
 
@@ -195,6 +190,7 @@ v1::ServerInfo server_info(const ServerOptions& options, unsigned workers, bool 
   limits.set_max_queued_chunks(options.max_queued_chunks);
   limits.set_idle_timeout_s(options.idle_timeout_s);
   limits.set_workers(workers);
+  limits.set_max_upload_bytes(static_cast<std::uint64_t>(options.max_upload_mb * 1024 * 1024));
   info.set_jobs_supported(jobs);
   return info;
 }

@@ -5,6 +5,9 @@
 #include <grpcpp/grpcpp.h>
 
 #include "posefuse/v1/service.grpc.pb.h"
+#include <optional>
+
+#include "server/submit_job_call.hpp"
 #include "server/job_runner.hpp"
 #include "server/metrics.hpp"
 #include "server/security.hpp"
@@ -49,6 +52,7 @@ class PoseFuseService final : public v1::PoseFuse::CallbackService {
   Metrics& metrics_;
   JobRunner* jobs_;
   const BearerTokens* tokens_;
+  std::optional<SubmitJobContext> submit_context_;  // set when jobs are on
 
   // OK without tokens or with an accepted one; logs a refusal (peer and call, never the token).
   grpc::Status authenticate(const grpc::CallbackServerContext* context, const char* call) const;

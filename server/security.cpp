@@ -1,8 +1,8 @@
 #include "server/security.hpp"
 
-#include <sstream>
-
 #include "common/error.hpp"
+#include "server/log.hpp"
+#include "server/text_lines.hpp"
 #include "session/file_bytes.hpp"
 
 namespace posefuse::server {
@@ -14,13 +14,6 @@ void require_pem(const std::string& text, std::string_view marker, const std::st
   if (text.find("-----BEGIN ") == std::string::npos || text.find(marker) == std::string::npos) {
     throw_invalid(flag, "'" + path + "' is not a PEM " + what);
   }
-}
-
-std::string trim(const std::string& line) {
-  const auto first = line.find_first_not_of(" \t\r");
-  if (first == std::string::npos) return {};
-  const auto last = line.find_last_not_of(" \t\r");
-  return line.substr(first, last - first + 1);
 }
 
 // Visible ASCII only: what a metadata value may carry and a file editor shows plainly.
@@ -82,14 +75,11 @@ std::string transport_mode(const ServerOptions& options) {
 
 BearerTokens BearerTokens::load(const std::string& path) {
   const std::string flag = "--tokens-file";
-  std::istringstream text(read_security_file(path, flag));
   std::vector<std::string> tokens;
-  std::string line;
-  for (int line_number = 1; std::getline(text, line); ++line_number) {
-    const std::string token = trim(line);
-    if (token.empty() || token[0] == '#') continue;
+  for (const TextLine& line : meaningful_lines(read_security_file(path, flag))) {
+    const std::string& token = line.text;
     // The messages name the line, never the token.
-    const std::string where = "'" + path + "' line " + std::to_string(line_number);
+    const std::string where = "'" + path + "' line " + std::to_string(line.number);
     if (!valid_token_characters(token)) {
       throw_invalid(flag, where + ": a token may hold only visible ASCII characters, no spaces");
     }
@@ -124,6 +114,16 @@ grpc::Status BearerTokens::check(const grpc::CallbackServerContext& context) con
   }
   if (!accepts(value.substr(kScheme.size()))) return unauthenticated("bearer token not accepted");
   return grpc::Status::OK;
+}
+
+grpc::Status authenticate_call(const BearerTokens* tokens,
+                               const grpc::CallbackServerContext& context, const char* call) {
+  if (!tokens) return grpc::Status::OK;
+  grpc::Status status = tokens->check(context);
+  if (!status.ok()) {
+    log_event("info", "call_unauthenticated", {{"call", call}, {"peer", context.peer()}});
+  }
+  return status;
 }
 
 }  // namespace posefuse::server

@@ -45,6 +45,11 @@ class BearerTokens {
   std::vector<std::string> tokens_;
 };
 
+// OK when `tokens` is null (no token needed) or the call carries an accepted one; otherwise
+// UNAUTHENTICATED, logged with the call's name and peer (never the token).
+grpc::Status authenticate_call(const BearerTokens* tokens,
+                               const grpc::CallbackServerContext& context, const char* call);
+
 // Tokens this short are refused: they could be guessed.
 constexpr std::size_t kMinTokenLength = 16;
 

@@ -2,9 +2,8 @@
 
 #include <sqlite3.h>
 
-#include <random>
-
 #include "common/error.hpp"
+#include "server/random_id.hpp"
 
 namespace posefuse::server {
 
@@ -64,17 +63,6 @@ class Statement {
   sqlite3_stmt* stmt_ = nullptr;
 };
 
-std::string new_job_id() {
-  std::random_device random;
-  static const char* const kHex = "0123456789abcdef";
-  std::string id;
-  for (int i = 0; i < 8; ++i) {
-    const unsigned value = random();
-    for (int k = 0; k < 4; ++k) id += kHex[(value >> (4 * k)) & 0xF];
-  }
-  return id;
-}
-
 v1::Job parse_job(const std::string& bytes) {
   v1::Job job;
   if (!job.ParseFromString(bytes)) {
@@ -123,7 +111,7 @@ void SqliteJobStore::exec(const char* sql) {
 v1::Job SqliteJobStore::create(const v1::JobSpec& spec, const std::string& recording_path,
                                std::int64_t now_unix_us) {
   v1::Job job;
-  job.set_job_id(new_job_id());
+  job.set_job_id(random_hex_id());
   job.set_state(v1::Job::QUEUED);
   job.set_create_time_unix_us(now_unix_us);
   job.set_update_time_unix_us(now_unix_us);

@@ -9,5 +9,7 @@ namespace posefuse::server {
 
 grpc::StatusCode status_code(ErrorCode code);
 grpc::Status to_status(const Error& error);
+// "INVALID_ARGUMENT", ... for logs and metrics labels ("OTHER" for codes the server never uses).
+const char* status_code_name(grpc::StatusCode code);
 
 }  // namespace posefuse::server

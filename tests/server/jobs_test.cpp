@@ -1,6 +1,8 @@
 // Batch jobs through the real server: submit by reference, watch, results, listing, errors, and
 // a job left RUNNING by a stopped server that the next server completes.
 #include <filesystem>
+#include <fstream>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -26,8 +28,7 @@ class JobsTest : public ::testing::Test {
     demo::write_demo_session(dir_ / "recordings" / "demo.pfchunks");
   }
 
-  void start() {
-    ServerOptions options;
+  void start(ServerOptions options = {}) {
     options.listen = "127.0.0.1:0";
     options.workers = 2;
     options.data_dir = (dir_ / "data").string();
@@ -59,6 +60,65 @@ class JobsTest : public ::testing::Test {
     auto states = test::read_all<v1::Job>(*stub_->WatchJob(&context, request), status);
     EXPECT_TRUE(status.ok()) << status.error_message();
     return states;
+  }
+
+  // An upload call after its spec and the first `count` of `chunks` (fewer when the server ends
+  // the call early), still open: the test sends more or closes it.
+  struct OpenUpload {
+    grpc::ClientContext context;
+    v1::Job job;
+    std::unique_ptr<grpc::ClientWriter<v1::SubmitJobRequest>> writer;
+    bool send(const v1::SessionChunk& chunk) {
+      v1::SubmitJobRequest request;
+      *request.mutable_chunk() = chunk;
+      return writer->Write(request);
+    }
+    grpc::Status close() {
+      writer->WritesDone();
+      return writer->Finish();
+    }
+  };
+  std::unique_ptr<OpenUpload> open_upload(const std::vector<v1::SessionChunk>& chunks,
+                                          std::size_t count) {
+    auto call = std::make_unique<OpenUpload>();
+    set_test_deadline(call->context);
+    call->writer = stub_->SubmitJob(&call->context, &call->job);
+    v1::SubmitJobRequest request;
+    request.mutable_spec()->set_label("uploaded");
+    request.mutable_spec()->set_upload(true);
+    bool open = call->writer->Write(request);
+    for (std::size_t i = 0; open && i < count; ++i) open = call->send(chunks[i]);
+    return call;
+  }
+
+  // SubmitJob by upload: the spec, then `chunks`.
+  grpc::Status upload(const std::vector<v1::SessionChunk>& chunks, v1::Job& job) {
+    const auto call = open_upload(chunks, chunks.size());
+    const grpc::Status status = call->close();
+    job = call->job;
+    return status;
+  }
+
+  // A refused upload: `code`, a message starting with `prefix`, no job and no file left.
+  void expect_refused(const grpc::Status& status, grpc::StatusCode code, const std::string& prefix) {
+    EXPECT_EQ(status.error_code(), code) << status.error_message();
+    EXPECT_EQ(status.error_message().rfind(prefix, 0), 0u) << status.error_message();
+    EXPECT_EQ(job_count(), 0u);
+    EXPECT_EQ(files_in_spool(), 0u);
+  }
+
+  std::size_t files_in_spool() const {
+    std::size_t n = 0;
+    for ([[maybe_unused]] const auto& entry : fs::directory_iterator(dir_ / "data" / "uploads")) ++n;
+    return n;
+  }
+
+  std::size_t job_count() {
+    grpc::ClientContext context;
+    set_test_deadline(context);
+    v1::ListJobsResponse listing;
+    EXPECT_TRUE(stub_->ListJobs(&context, {}, &listing).ok());
+    return static_cast<std::size_t>(listing.jobs_size());
   }
 
   std::vector<v1::FitResult> results(const std::string& id, grpc::Status* status = nullptr) {
@@ -165,6 +225,159 @@ TEST_F(JobsTest, JobLeftRunningByAStoppedServerCompletesAfterRestart) {
   std::size_t summaries = 0;
   for (const auto& r : all) summaries += r.has_summary();
   EXPECT_EQ(summaries, 1u);
+}
+
+TEST_F(JobsTest, UploadedJobRunsToSucceededWithEveryResultAndDropsItsSpoolFile) {
+  start();
+  v1::Job job;
+  const grpc::Status status = upload(demo::make_demo_session(), job);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(job.label(), "uploaded");
+  EXPECT_TRUE(job.recording_uri().empty());
+  const auto states = watch(job.job_id());
+  ASSERT_FALSE(states.empty());
+  EXPECT_EQ(states.back().state(), v1::Job::SUCCEEDED);
+  EXPECT_EQ(states.back().summary().depth_frames(), 300u);
+  const auto samples = orientation_samples(results(job.job_id()));
+  EXPECT_EQ(samples.at(demo::kArmDevice), 800u);
+  EXPECT_EQ(samples.at(demo::kBaseDevice), 800u);
+  // The spooled copy is gone once the job has finished (its results are in the store).
+  EXPECT_EQ(files_in_spool(), 0u);
+}
+
+TEST_F(JobsTest, UploadWithBadDataChunksIsAcceptedAndTheJobReportsThemAsFitWould) {
+  start();
+  auto chunks = demo::make_demo_session();
+  for (auto& chunk : chunks) {
+    if (chunk.has_depth()) {
+      chunk.mutable_depth()->set_width(63);  // the first depth frame only
+      break;
+    }
+  }
+  v1::Job job;
+  ASSERT_TRUE(upload(chunks, job).ok());
+  EXPECT_EQ(watch(job.job_id()).back().state(), v1::Job::SUCCEEDED);
+  std::vector<v1::ItemError> errors;
+  for (const auto& r : results(job.job_id())) {
+    if (r.has_item_error()) errors.push_back(r.item_error());
+  }
+  // The bad frame, then the end marker whose depth count includes it (as Fit reports them).
+  ASSERT_EQ(errors.size(), 2u);
+  EXPECT_NE(errors[0].field().find("depth.width"), std::string::npos) << errors[0].field();
+  EXPECT_NE(errors[1].field().find("end.depth_frames"), std::string::npos) << errors[1].field();
+}
+
+TEST_F(JobsTest, TruncatedUploadIsInvalidArgumentAndLeavesNoJobAndNoFile) {
+  start();
+  auto chunks = demo::make_demo_session();
+  chunks.resize(chunks.size() / 2);  // the client stops half way, without the end marker
+  v1::Job job;
+  const grpc::Status status = upload(chunks, job);
+  expect_refused(status, grpc::StatusCode::INVALID_ARGUMENT, "end: ");
+  EXPECT_NE(status.error_message().find("truncated"), std::string::npos);
+}
+
+TEST_F(JobsTest, OversizedUploadIsResourceExhaustedAndLeavesNoJobAndNoFile) {
+  ServerOptions options;
+  options.max_upload_mb = 0.25;  // the demo session is about 0.5 MiB
+  start(options);
+  v1::Job job;
+  const grpc::Status status = upload(demo::make_demo_session(), job);
+  expect_refused(status, grpc::StatusCode::RESOURCE_EXHAUSTED, "upload: ");
+  EXPECT_NE(status.error_message().find("--max-upload-mb"), std::string::npos);
+}
+
+TEST_F(JobsTest, UploadsThatCannotBeASessionAreInvalidArgumentNamingTheField) {
+  start();
+  const auto chunks = demo::make_demo_session();
+  v1::Job job;
+  // No header first.
+  grpc::Status status = upload({chunks.begin() + 1, chunks.end()}, job);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(status.error_message().rfind("chunk[0]", 0), 0u) << status.error_message();
+  // A chunk after the end marker.
+  auto extra = chunks;
+  extra.push_back(chunks[1]);
+  status = upload(extra, job);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(status.error_message().rfind("chunk[" + std::to_string(chunks.size()) + "]", 0), 0u)
+      << status.error_message();
+  // A second spec instead of a chunk.
+  {
+    grpc::ClientContext context;
+    set_test_deadline(context);
+    auto writer = stub_->SubmitJob(&context, &job);
+    v1::SubmitJobRequest request;
+    request.mutable_spec()->set_upload(true);
+    writer->Write(request);
+    writer->Write(request);
+    writer->WritesDone();
+    status = writer->Finish();
+    EXPECT_EQ(status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+    EXPECT_EQ(status.error_message().rfind("chunk[0]: ", 0), 0u) << status.error_message();
+  }
+  EXPECT_EQ(job_count(), 0u);
+  EXPECT_EQ(files_in_spool(), 0u);
+}
+
+TEST_F(JobsTest, SilentUploadEndsWithDeadlineExceededAndLeavesNothing) {
+  ServerOptions options;
+  options.idle_timeout_s = 0.3;
+  start(options);
+  const auto call = open_upload(demo::make_demo_session(), 3);
+  // Then nothing: the server ends the call after the idle timeout (Finish waits for it).
+  expect_refused(call->writer->Finish(), grpc::StatusCode::DEADLINE_EXCEEDED, "no message");
+  EXPECT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
+}
+
+TEST_F(JobsTest, AnUploadTakesASessionSlot) {
+  ServerOptions options;
+  options.max_sessions = 1;
+  start(options);
+  const auto chunks = demo::make_demo_session();
+  const auto first = open_upload(chunks, 1);
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (server_->registry().active() != 1 && std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_EQ(server_->registry().active(), 1u);
+  // The slot is taken: a second upload is refused at once.
+  v1::Job other;
+  const grpc::Status refused = upload(chunks, other);
+  EXPECT_EQ(refused.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << refused.error_message();
+  // The first upload goes on and completes; its slot is freed.
+  for (std::size_t i = 1; i < chunks.size(); ++i) ASSERT_TRUE(first->send(chunks[i]));
+  const grpc::Status status = first->close();
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  const v1::Job& job = first->job;
+  EXPECT_EQ(watch(job.job_id()).back().state(), v1::Job::SUCCEEDED);
+  EXPECT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
+}
+
+TEST_F(JobsTest, UploadedJobLeftRunningCompletesAfterRestartAndPartialUploadsAreRemoved) {
+  // What a server killed mid-job leaves behind: an uploaded job RUNNING with its spooled chunk
+  // file, and the partial file of an upload that was still arriving.
+  const fs::path spool = dir_ / "data" / "uploads";
+  fs::create_directories(spool);
+  demo::write_demo_session(spool / "a.pfchunks");
+  std::ofstream(spool / "b.pfchunks.partial") << "the first bytes of an upload";
+  std::string id;
+  {
+    SqliteJobStore store(dir_ / "data" / "jobs.sqlite");
+    v1::JobSpec spec;
+    spec.set_upload(true);
+    v1::Job job = store.create(spec, (spool / "a.pfchunks").string(), 1);
+    id = job.job_id();
+    job.set_state(v1::Job::RUNNING);
+    store.update(job);
+  }
+  start();
+  EXPECT_FALSE(fs::exists(spool / "b.pfchunks.partial"));
+  const auto states = watch(id);
+  ASSERT_FALSE(states.empty());
+  EXPECT_EQ(states.back().state(), v1::Job::SUCCEEDED);
+  EXPECT_EQ(orientation_samples(results(id)).at(demo::kArmDevice), 800u);
+  EXPECT_EQ(files_in_spool(), 0u);
 }
 
 TEST_F(JobsTest, ResultsOfAnUnknownJobAreNotFound) {

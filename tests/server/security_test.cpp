@@ -18,6 +18,7 @@
 #include "server/security.hpp"
 #include "session/file_bytes.hpp"
 #include "tests/server/health_check.hpp"
+#include "tests/server/reflection_call.hpp"
 #include "tests/server/test_support.hpp"
 
 namespace posefuse::server {
@@ -234,6 +235,18 @@ TEST_F(SecurityTest, HealthNeedsNoToken) {
   const grpc::Status status = test::check_health(client::make_channel(address_, trusting("ca")), &response);
   ASSERT_TRUE(status.ok()) << status.error_message();
   EXPECT_EQ(response.status(), grpc::health::v1::HealthCheckResponse::SERVING);
+}
+
+TEST_F(SecurityTest, ReflectionNeedsTheToken) {
+  start(token_options());
+  grpc::reflection::v1alpha::ServerReflectionRequest request;
+  request.set_list_services("*");
+  grpc::reflection::v1alpha::ServerReflectionResponse response;
+  grpc::Status status = test::ask_reflection(client::make_channel(address_), request, &response);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::UNAUTHENTICATED) << status.error_message();
+  status = test::ask_reflection(client::make_channel(address_, with_token(kToken)), request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(response.list_services_response().service_size(), 3);
 }
 
 // The field of the posefuse::Error that starting a server with `options` throws.

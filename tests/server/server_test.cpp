@@ -1,5 +1,6 @@
 // posefuse-server in process on 127.0.0.1:0, driven over a real gRPC channel.
 // No timing assertions: waits are for conditions, with generous deadlines only against hangs.
+#include <algorithm>
 #include <chrono>
 #include <map>
 #include <string>
@@ -11,7 +12,7 @@
 #include <sys/socket.h>
 #include <unistd.h>
 
-#include <grpcpp/generic/generic_stub.h>
+#include <google/protobuf/descriptor.pb.h>
 #include <gtest/gtest.h>
 
 #include "client/demo_session.hpp"
@@ -19,6 +20,7 @@
 #include "posefuse/v1/service.grpc.pb.h"
 #include "server/posefuse_server.hpp"
 #include "tests/server/health_check.hpp"
+#include "tests/server/reflection_call.hpp"
 #include "tests/server/test_support.hpp"
 
 namespace posefuse::server {
@@ -293,56 +295,55 @@ TEST_F(ServerTest, HealthSaysServing) {
   EXPECT_EQ(response.status(), grpc::health::v1::HealthCheckResponse::SERVING);
 }
 
-// Server reflection, asked with a raw generic call (no reflection client library is packaged):
-// a ServerReflectionRequest with list_services = "*" (field 7), and the answer must name the
-// PoseFuse service.
-TEST_F(ServerTest, ReflectionListsThePoseFuseService) {
+// Server reflection (grpc.reflection.v1alpha) through its generated stub.
+TEST_F(ServerTest, ReflectionListsTheServices) {
   start();
-  grpc::GenericStub stub(channel_);
-  grpc::CompletionQueue cq;
-  grpc::ClientContext context;
-  set_test_deadline(context);
-  auto call = stub.PrepareCall(
-      &context, "/grpc.reflection.v1alpha.ServerReflection/ServerReflectionInfo", &cq);
-  auto step = [&](void* tag) {
-    void* got = nullptr;
-    bool ok = false;
-    EXPECT_TRUE(cq.Next(&got, &ok));
-    EXPECT_EQ(got, tag);
-    return ok;
-  };
-  int tags[5];
-  call->StartCall(&tags[0]);
-  ASSERT_TRUE(step(&tags[0]));
-  const std::string request = std::string("\x3a\x01*", 3);  // field 7, length 1, "*"
-  grpc::Slice slice(request);
-  grpc::ByteBuffer request_buffer(&slice, 1);
-  call->Write(request_buffer, &tags[1]);
-  ASSERT_TRUE(step(&tags[1]));
-  grpc::ByteBuffer response_buffer;
-  call->Read(&response_buffer, &tags[2]);
-  ASSERT_TRUE(step(&tags[2]));
-  call->WritesDone(&tags[3]);
-  step(&tags[3]);
-  grpc::Status status;
-  call->Finish(&status, &tags[4]);
-  step(&tags[4]);
-  EXPECT_TRUE(status.ok()) << status.error_message();
-  std::vector<grpc::Slice> slices;
-  ASSERT_TRUE(response_buffer.Dump(&slices).ok());
-  std::string response;
-  for (const auto& s : slices) response.append(reinterpret_cast<const char*>(s.begin()), s.size());
-  EXPECT_NE(response.find("posefuse.v1.PoseFuse"), std::string::npos);
-  cq.Shutdown();
-  void* ignored_tag;
-  bool ignored_ok;
-  while (cq.Next(&ignored_tag, &ignored_ok)) {
+  grpc::reflection::v1alpha::ServerReflectionRequest request;
+  request.set_list_services("*");
+  grpc::reflection::v1alpha::ServerReflectionResponse response;
+  const grpc::Status status = test::ask_reflection(channel_, request, &response);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  std::vector<std::string> names;
+  for (const auto& service : response.list_services_response().service()) {
+    names.push_back(service.name());
   }
+  EXPECT_EQ(names, (std::vector<std::string>{"posefuse.v1.PoseFuse", "grpc.health.v1.Health",
+                                             "grpc.reflection.v1alpha.ServerReflection"}));
+}
+
+TEST_F(ServerTest, ReflectionServesTheFilesOfASymbolWithTheirImports) {
+  start();
+  grpc::reflection::v1alpha::ServerReflectionRequest request;
+  request.set_host("h");
+  request.set_file_containing_symbol("posefuse.v1.PoseFuse.Fit");
+  grpc::reflection::v1alpha::ServerReflectionResponse response;
+  ASSERT_TRUE(test::ask_reflection(channel_, request, &response).ok());
+  EXPECT_EQ(response.valid_host(), "h");
+  EXPECT_EQ(response.original_request().file_containing_symbol(), "posefuse.v1.PoseFuse.Fit");
+  std::vector<std::string> files;
+  for (const std::string& bytes : response.file_descriptor_response().file_descriptor_proto()) {
+    google::protobuf::FileDescriptorProto file;
+    ASSERT_TRUE(file.ParseFromString(bytes));
+    files.push_back(file.name());
+  }
+  ASSERT_FALSE(files.empty());
+  EXPECT_EQ(files[0], "posefuse/v1/service.proto");
+  for (const char* import : {"posefuse/v1/results.proto", "posefuse/v1/session.proto"}) {
+    EXPECT_NE(std::find(files.begin(), files.end(), import), files.end()) << import;
+  }
+  // The health service is described too, and an unknown name is an error in the answer.
+  request.set_file_containing_symbol("grpc.health.v1.Health");
+  ASSERT_TRUE(test::ask_reflection(channel_, request, &response).ok());
+  EXPECT_EQ(response.file_descriptor_response().file_descriptor_proto_size(), 1);
+  request.set_file_by_filename("no/such.proto");
+  ASSERT_TRUE(test::ask_reflection(channel_, request, &response).ok());
+  EXPECT_EQ(response.error_response().error_code(), static_cast<int>(grpc::StatusCode::NOT_FOUND));
 }
 
 TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   ServerOptions options;
   options.max_sessions = 3;
+  options.max_upload_mb = 2.0;
   start(options);
   grpc::ClientContext context;
   set_test_deadline(context);
@@ -358,6 +359,7 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   EXPECT_EQ(info.options(2).stage(), "forearm");
   EXPECT_EQ(info.limits().max_sessions(), 3u);
   EXPECT_EQ(info.limits().workers(), 2u);
+  EXPECT_EQ(info.limits().max_upload_bytes(), 2u << 20);
   EXPECT_FALSE(info.jobs_supported());
 }
 
@@ -417,15 +419,26 @@ TEST_F(ServerTest, MetricsEndpointCountsSessionsAndStageCalls) {
   EXPECT_EQ(http_get(server_->metrics_port(), "/other").rfind("HTTP/1.1 404", 0), 0u);
 }
 
+// The field of the error validate_options throws for `options` ("" when it accepts them).
+std::string rejected_flag(const ServerOptions& options) {
+  try {
+    validate_options(options);
+  } catch (const Error& e) {
+    return e.field();
+  }
+  return "";
+}
+
 TEST(ServerOptions, BadValuesNameTheFlag) {
   ServerOptions options;
   options.max_sessions = 0;
-  try {
-    validate_options(options);
-    FAIL() << "no error";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.field(), "--max-sessions");
+  EXPECT_EQ(rejected_flag(options), "--max-sessions");
+  for (const double mb : {0.0, -1.0, 2e6, std::nan("")}) {
+    options = ServerOptions{};
+    options.max_upload_mb = mb;
+    EXPECT_EQ(rejected_flag(options), "--max-upload-mb") << mb;
   }
+  EXPECT_EQ(rejected_flag(ServerOptions{}), "");
 }
 
 }  // namespace

@@ -1,0 +1,162 @@
+#include "server/submit_job_call.hpp"
+
+#include "server/job_calls.hpp"
+#include "server/log.hpp"
+#include "server/random_id.hpp"
+#include "server/status.hpp"
+#include "session/pipeline.hpp"
+
+namespace posefuse::server {
+
+SubmitJobCall* SubmitJobCall::start(const SubmitJobContext& context, v1::Job* response) {
+  auto call = std::make_shared<SubmitJobCall>(context, response);
+  call->self_ = call;
+  std::lock_guard lock(call->mu_);
+  call->start_read_locked();
+  return call.get();
+}
+
+SubmitJobCall::SubmitJobCall(const SubmitJobContext& context, v1::Job* response)
+    : context_(context), response_(response) {}
+
+void SubmitJobCall::start_read_locked() {
+  read_pending_ = true;
+  StartRead(&request_);
+}
+
+void SubmitJobCall::OnReadDone(bool ok) {
+  std::lock_guard lock(mu_);
+  read_pending_ = false;
+  last_read_at_ = Clock::now();
+  if (finished_) return;
+  if (!spool_) {
+    read_spec_locked(ok);
+    return;
+  }
+  // Past the spec: a worker adds the chunk (or commits at the end), then reads on.
+  context_.pool.submit([self = shared_from_this(), ok] { ok ? self->add_chunk() : self->commit(); });
+}
+
+void SubmitJobCall::read_spec_locked(bool ok) {
+  if (!ok || !request_.has_spec()) {
+    finish_locked(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
+                               "spec: the first SubmitJobRequest must be a JobSpec"));
+    return;
+  }
+  spec_ = request_.spec();
+  try {
+    if (spec_.source_case() == v1::JobSpec::kRecordingUri) {
+      const auto path = resolve_recording(spec_.recording_uri(), context_.recordings_root);
+      *response_ = context_.runner.submit(spec_, path.string());
+      finish_locked(grpc::Status::OK);
+      return;
+    }
+    if (!spec_.upload()) throw_invalid("spec.source", "neither recording_uri nor upload is set");
+  } catch (const Error& error) {
+    finish_locked(to_status(error));
+    return;
+  }
+  slot_ = context_.registry.try_admit();
+  if (!slot_) {
+    log_event("info", "upload_refused", {{"reason", "max_sessions"}});
+    finish_locked(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
+                               "server busy: " + std::to_string(context_.max_sessions) +
+                                   " sessions and uploads are running (--max-sessions); retry "
+                                   "later"));
+    return;
+  }
+  context_.registry.watch(*slot_, weak_from_this());
+  try {
+    spool_ = std::make_unique<UploadSpool>(
+        context_.spool_dir / (random_hex_id() + ".pfchunks"), context_.max_upload_bytes,
+        session::PipelineOptions{}.max_item_errors);
+  } catch (const Error& error) {
+    finish_locked(to_status(error));
+    return;
+  }
+  log_event("info", "upload_start", {{"session", std::to_string(*slot_)}});
+  start_read_locked();
+}
+
+void SubmitJobCall::add_chunk() {
+  // No read is pending while this runs, so request_ and spool_ are this thread's alone.
+  std::optional<grpc::Status> refused;
+  try {
+    if (!request_.has_chunk()) {
+      throw_invalid("chunk[" + std::to_string(spool_->chunks()) + "]",
+                    "after the JobSpec an upload holds only SessionChunk messages");
+    }
+    spool_->add(request_.chunk());
+  } catch (const Error& error) {
+    refused = to_status(error);
+  }
+  std::lock_guard lock(mu_);
+  if (finished_) return;
+  if (refused) {
+    finish_locked(std::move(*refused));
+    return;
+  }
+  request_.Clear();
+  start_read_locked();
+}
+
+void SubmitJobCall::commit() {
+  std::lock_guard lock(mu_);
+  if (finished_) return;
+  if (cancelled_) {
+    finish_locked(grpc::Status(grpc::StatusCode::CANCELLED, "upload cancelled"));
+    return;
+  }
+  try {
+    const std::filesystem::path& path = spool_->commit();
+    *response_ = context_.runner.submit(spec_, path.string());
+  } catch (const Error& error) {
+    finish_locked(to_status(error));
+    return;
+  }
+  log_event("info", "upload_end", {{"session", std::to_string(*slot_)},
+                                    {"job", response_->job_id()},
+                                    {"chunks", std::to_string(spool_->chunks())},
+                                    {"bytes", std::to_string(spool_->bytes())}});
+  finish_locked(grpc::Status::OK);
+}
+
+void SubmitJobCall::finish_locked(grpc::Status status) {
+  if (finished_) return;
+  finished_ = true;
+  if (spool_ && !status.ok()) {
+    log_event("info", "upload_refused", {{"session", std::to_string(*slot_)},
+                                         {"status", status_code_name(status.error_code())},
+                                         {"chunks", std::to_string(spool_->chunks())}});
+  }
+  spool_.reset();  // an upload that did not become a job leaves no file
+  Finish(std::move(status));
+}
+
+void SubmitJobCall::OnCancel() {
+  std::lock_guard lock(mu_);
+  cancelled_ = true;  // a pending read fails now; commit() sees the flag
+}
+
+void SubmitJobCall::check_idle(Clock::time_point now) {
+  std::lock_guard lock(mu_);
+  if (finished_ || !read_pending_ || now - last_read_at_ < context_.idle_timeout) return;
+  log_event("info", "upload_idle", {{"session", std::to_string(*slot_)}});
+  finish_locked(grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED,
+                             "no message from the client for " +
+                                 std::to_string(context_.idle_timeout.count()) +
+                                 " s (idle timeout)"));
+}
+
+void SubmitJobCall::OnDone() {
+  std::shared_ptr<SubmitJobCall> keep_until_return;
+  std::optional<std::uint64_t> slot;
+  {
+    std::lock_guard lock(mu_);
+    keep_until_return = std::move(self_);
+    slot = slot_;
+  }
+  if (slot) context_.registry.release(*slot);
+}
+
+}  // namespace posefuse::server

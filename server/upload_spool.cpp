@@ -1,0 +1,93 @@
+#include "server/upload_spool.hpp"
+
+#include <system_error>
+
+#include "common/error.hpp"
+
+namespace posefuse::server {
+
+namespace {
+
+constexpr const char* kPartialSuffix = ".partial";
+
+}  // namespace
+
+std::filesystem::path UploadSpool::partial_path(const std::filesystem::path& final_path) {
+  std::filesystem::path partial = final_path;
+  partial += kPartialSuffix;
+  return partial;
+}
+
+UploadSpool::UploadSpool(std::filesystem::path final_path, std::uint64_t max_bytes,
+                         std::uint64_t max_rejected_chunks)
+    : final_path_(std::move(final_path)),
+      partial_path_(partial_path(final_path_)),
+      max_bytes_(max_bytes),
+      max_rejected_(max_rejected_chunks),
+      writer_(std::make_unique<session::ChunkFileWriter>(partial_path_)) {}
+
+UploadSpool::~UploadSpool() {
+  writer_.reset();
+  if (!committed_) {
+    std::error_code ignored;
+    std::filesystem::remove(partial_path_, ignored);
+  }
+}
+
+void UploadSpool::add(const v1::SessionChunk& chunk) {
+  const std::string field = "chunk[" + std::to_string(chunks_) + "]";
+  if (ended_) throw_invalid(field, "chunk after the end marker (a session ends with exactly one)");
+  // The file's length prefix is at most 10 bytes; counting it keeps the bound exact enough.
+  const std::uint64_t size = chunk.ByteSizeLong() + 10;
+  if (bytes_ + size > max_bytes_) {
+    throw Error(ErrorCode::kResourceExhausted, "upload",
+                "larger than the server's limit of " + std::to_string(max_bytes_ >> 20) +
+                    " MiB (--max-upload-mb) at " + field);
+  }
+  try {
+    validator_.check(chunk);
+  } catch (const Error&) {
+    // Without a valid header nothing else can be interpreted (as in SessionPipeline::push).
+    if (!validator_.has_header()) throw;
+    if (++rejected_ > max_rejected_) {
+      throw Error(ErrorCode::kInvalidArgument, "chunks",
+                  std::to_string(rejected_) + " chunks rejected (limit " +
+                      std::to_string(max_rejected_) + "); the last at " + field);
+    }
+  }
+  if (chunk.has_end()) ended_ = true;
+  writer_->write(chunk);
+  ++chunks_;
+  bytes_ += size;
+}
+
+const std::filesystem::path& UploadSpool::commit() {
+  if (!ended_) {
+    throw_invalid("end", "the upload stopped after " + std::to_string(chunks_) +
+                             " chunks without the end marker (truncated upload)");
+  }
+  writer_->finish();
+  writer_.reset();
+  std::error_code error;
+  std::filesystem::rename(partial_path_, final_path_, error);
+  if (error) {
+    throw Error(ErrorCode::kInternal, "upload", "cannot move the spooled upload into place: " +
+                                                    error.message());
+  }
+  committed_ = true;
+  return final_path_;
+}
+
+std::size_t remove_partial_uploads(const std::filesystem::path& spool_dir) {
+  std::size_t removed = 0;
+  std::error_code error;
+  for (const auto& entry : std::filesystem::directory_iterator(spool_dir, error)) {
+    if (entry.path().extension() == kPartialSuffix) {
+      std::error_code ignored;
+      removed += std::filesystem::remove(entry.path(), ignored) ? 1 : 0;
+    }
+  }
+  return removed;
+}
+
+}  // namespace posefuse::server
