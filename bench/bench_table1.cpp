@@ -41,6 +41,7 @@ struct Sink : session::ResultSink {
 struct Named {
   std::string name;
   sim::BodyMotion motion;
+  bool sdk_joint_errors = true;
 };
 
 std::size_t gap_count(const std::vector<bool>& occluded) {
@@ -59,10 +60,19 @@ void print_row(const char* quantity, const std::vector<std::vector<double>>& col
   std::printf(" %s |\n", paper);
 }
 
-void run(const Named& session_motion, const fs::path& image_folder, double longest_s) {
+// One line of the closing summary: orientation RMS / max (SDK, fusion), position RMS / max (SDK,
+// paper recovery, smoother).
+struct Summary {
+  std::string name;
+  eval::ErrorSummary orientation[2], position[3];
+};
+
+Summary run(const Named& session_motion, const fs::path& image_folder, double longest_s, std::uint64_t seed) {
   bench::Table1SessionOptions options;
+  options.seed = seed;
   options.strap.F_from_A = geometry::quat_from_rotation_vector(geometry::Vec3(0.2, -0.1, 0.3));
   options.duration_s = longest_s;
+  options.sdk_joint_errors = session_motion.sdk_joint_errors;
   double hold_begin = 0.0, hold_end = 0.0;
   for (const sim::MotionPhase& p : session_motion.motion.phases) {
     if (p.name == "calibration_hold") {
@@ -87,9 +97,9 @@ void run(const Named& session_motion, const fs::path& image_folder, double longe
                                                      options.strap.strap_to_elbow_m, session.d_sw_m);
   std::size_t occluded = 0;
   for (const bool o : s.occluded) occluded += o;
-  std::printf("\n### %s: %.1f s, %zu frames, %zu occluded in %zu gaps; calibration hold %.1f-%.1f s; "
+  std::printf("\n### %s (seed %llu): %.1f s, %zu frames, %zu occluded in %zu gaps; calibration hold %.1f-%.1f s; "
               "CPU s: simulation %.1f, pipeline %.1f\n\n",
-              session_motion.name.c_str(), s.t_s.back(), s.t_s.size(), occluded, gap_count(s.occluded), hold_begin,
+              session_motion.name.c_str(), static_cast<unsigned long long>(seed), s.t_s.back(), s.t_s.size(), occluded, gap_count(s.occluded), hold_begin,
               hold_end, cpu1 - cpu0, cpu2 - cpu1);
   std::printf("| error (frames) | SDK | fusion, paper recovery | fusion, smoother | fusion, live | paper 1 SDK -> fusion |\n");
   std::printf("|---|---|---|---|---|---|\n");
@@ -106,6 +116,13 @@ void run(const Named& session_motion, const fs::path& image_folder, double longe
   print_row("in gaps: orientation max deg", orientation, s.occluded, true, 1.0, "");
   print_row("in gaps: position RMS m", position, s.occluded, false, 1.0, "");
   print_row("in gaps: position max m", position, s.occluded, true, 1.0, "");
+  std::size_t truth_visible = 0, accepted = 0;
+  for (std::size_t f = 0; f < s.t_s.size(); ++f) {
+    truth_visible += !s.occluded[f];
+    accepted += !s.occluded[f] && s.stage_visible[f];
+  }
+  std::printf("the stage accepted the strap (eq. 10, II-J tests) at %zu of the %zu frames where it is visible\n", accepted,
+              truth_visible);
   if (s.sdk_orientation_missing > 0) std::printf("(SDK gave no wrist orientation at %zu frames)\n", s.sdk_orientation_missing);
 
   const cv::Scalar red(40, 40, 220), blue(200, 90, 20), orange(20, 140, 240), black(0, 0, 0);
@@ -120,6 +137,10 @@ void run(const Named& session_motion, const fs::path& image_folder, double longe
         {{"truth", s.true_x_m, black}, {"SDK (eq. 16)", s.sdk_x_m, red}, {"paper recovery", s.paper_x_m, orange},
          {"smoother", s.smoother_x_m, blue}}}});
   std::printf("plot: %s%s\n", png.string().c_str(), written ? "" : " (NOT written)");
+  Summary summary{session_motion.name, {}, {}};
+  for (std::size_t i = 0; i < 2; ++i) summary.orientation[i] = eval::summarize_errors(orientation[i]);
+  for (std::size_t i = 0; i < 3; ++i) summary.position[i] = eval::summarize_errors(position[i]);
+  return summary;
 }
 
 }  // namespace
@@ -132,6 +153,8 @@ int main(int argc, char** argv) {
   sim::ExerciseOptions protocol;
   protocol.repetitions = 1;
   sessions.push_back({"protocol", sim::make_exercise("forearm_protocol", protocol)});
+  // Diagnostic: the same session with an error-free SDK skeleton.
+  sessions.push_back({"protocol_exact_sdk", sim::make_exercise("forearm_protocol", protocol), false});
   if (fs::is_directory(mocap)) {
     std::vector<fs::path> files;
     for (const auto& entry : fs::directory_iterator(mocap)) {
@@ -151,12 +174,26 @@ int main(int argc, char** argv) {
     std::printf("%s not found: the protocol only\n", mocap.string().c_str());
   }
   std::printf("paper 1 Table I on simulated sessions; sessions cut at %.0f s\n", longest_s);
+  std::vector<Summary> summaries;
+  std::uint64_t seed = 0;
   for (const Named& s : sessions) {
+    if (s.sdk_joint_errors) ++seed;  // every session draws its own SDK biases and noise; the diagnostic repeats its predecessor's
     try {
-      run(s, images, longest_s);
+      summaries.push_back(run(s, images, longest_s, seed));
     } catch (const Error& e) {
       std::printf("\n### %s: failed: %s\n", s.name.c_str(), e.what());
     }
+  }
+  std::printf("\n### summary (all frames; targets on the protocol: orientation RMS <= 5 deg, smoother position RMS <= "
+              "0.02 m and max <= 0.06 m)\n\n");
+  std::printf("| session | orient. RMS deg SDK / fusion | orient. max deg SDK / fusion | position RMS m SDK / paper / "
+              "smoother | position max m SDK / paper / smoother |\n|---|---|---|---|---|\n");
+  std::printf("| paper 1 | 84.25 / 11.34 | 179.79 / 17.43 | 0.0703 / 0.0407 / - | 0.2392 / 0.1410 / - |\n");
+  for (const Summary& u : summaries) {
+    std::printf("| %s | %.2f / %.2f | %.2f / %.2f | %.4f / %.4f / %.4f | %.4f / %.4f / %.4f |\n", u.name.c_str(),
+                u.orientation[0].rms, u.orientation[1].rms, u.orientation[0].max, u.orientation[1].max,
+                u.position[0].rms, u.position[1].rms, u.position[2].rms, u.position[0].max, u.position[1].max,
+                u.position[2].max);
   }
   return 0;
 }

@@ -103,6 +103,7 @@ Table1Series table1_series(const Table1Session& session, const std::vector<v1::F
     const sim::ForearmTruth& truth = session.forearm[f];
     s.t_s.push_back(static_cast<double>(session.frame_t_us[f]) * 1e-6);
     s.occluded.push_back(truth.occluded);
+    s.stage_visible.push_back(visual[f].allFinite());
     const bool has_sdk_orientation = sdk_K_from_wrist[f].norm() > 0.5;
     if (!has_sdk_orientation) ++s.sdk_orientation_missing;
     s.sdk_orientation_deg.push_back(

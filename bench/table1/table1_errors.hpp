@@ -24,6 +24,7 @@ struct Table1Series {
   // x_K of the IMU (paper 1, Fig. 6): truth, SDK, paper, smoother.
   std::vector<double> true_x_m, sdk_x_m, paper_x_m, smoother_x_m;
   std::size_t sdk_orientation_missing = 0;     // frames whose wrist had no SDK orientation
+  std::vector<bool> stage_visible;             // the stage gave an eq. 10 (VISUAL) position
 };
 
 // The SDK's wrist frame has the SDK's axis convention, not F's: its constant offset is taken as

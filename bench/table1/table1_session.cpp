@@ -86,6 +86,12 @@ Table1Session simulate_table1_session(const sim::BodyMotion& motion, const Table
   camera.intrinsics.cy = 106.0;
   camera.forearm_straps = {o.strap};
   camera.seed = o.seed;
+  if (!o.sdk_joint_errors) {
+    sim::CameraSkeletonOptions& k = camera.skeleton;
+    k.upper_limb_bias_min_m = k.upper_limb_bias_max_m = k.other_bias_min_m = k.other_bias_max_m = 0.0;
+    k.jitter_sigma_m = k.inferred_error_m = k.inferred_shoulder_drop_m = 0.0;
+    k.jump_probability = k.hand_flip_probability = 0.0;
+  }
   const sim::CameraSessionResult shot =
       sim::simulate_camera_session(camera, body::PoseLayout::all_joints(), motion.poses);
 

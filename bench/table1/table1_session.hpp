@@ -21,6 +21,9 @@ struct Table1SessionOptions {
   double duration_s = 0.0;            // <= the motion's; 0: the whole motion
   double calibration_end_s = 5.0;     // the stage's forearm.calibration_s (hold ends before it)
   sim::ForearmStrap strap;            // right forearm
+  // false: the SDK skeleton without its error model (no bias, jitter, jumps, flips, inferred
+  // offsets), to separate the SDK's joint errors from the rest.
+  bool sdk_joint_errors = true;
   std::uint64_t seed = 1;
 };
 

@@ -16,7 +16,7 @@ constexpr int kWidth = 1200, kPanelHeight = 240, kLeft = 70, kRight = 20, kTop =
 
 std::string tick_label(double v) {
   char text[32];
-  std::snprintf(text, sizeof text, std::abs(v) < 1.0 && v != 0.0 ? "%.2f" : "%.0f", v);
+  std::snprintf(text, sizeof text, "%.3g", v);
   return text;
 }
 
