@@ -11,6 +11,7 @@
 #include "body/pose_parameters.hpp"
 #include "forearm/synthetic_images.hpp"
 #include "session/image_codec.hpp"
+#include "session/sim_session_parts.hpp"
 #include "session/text_fields.hpp"
 #include "sim/body_imu.hpp"
 #include "sim/camera_session.hpp"
@@ -23,29 +24,10 @@ namespace posefuse::bench {
 
 namespace {
 
+using namespace session::testing;
+
 using geometry::Quat;
 using geometry::Vec3;
-
-struct Timed {
-  double key_s;
-  v1::SessionChunk chunk;
-};
-
-v1::CameraIntrinsics intrinsics(const geometry::PinholeCamera& c) {
-  v1::CameraIntrinsics k;
-  k.set_width(static_cast<std::uint32_t>(c.width));
-  k.set_height(static_cast<std::uint32_t>(c.height));
-  k.set_fx(c.fx);
-  k.set_fy(c.fy);
-  k.set_cx(c.cx);
-  k.set_cy(c.cy);
-  k.set_k1(c.k1);
-  k.set_k2(c.k2);
-  k.set_k3(c.k3);
-  k.set_p1(c.p1);
-  k.set_p2(c.p2);
-  return k;
-}
 
 // Noise only (no bias, scale or iron errors): the IMU orientation stage is not what Table I
 // measures, and paper 1 calibrates its IMUs beforehand (II-C).
@@ -108,46 +90,12 @@ Table1Session simulate_table1_session(const sim::BodyMotion& motion, const Table
       sim::SensorKinematics(sim::forearm_imu_trajectory(motion, rest, o.strap, W_from_R)), arm_device,
       imu_options(o.seed + 2), 0.0, duration_s);
 
-  std::vector<Timed> timed;
-  std::map<std::string, std::uint64_t> imu_counts;
-  for (const auto* device : {&base_imu, &arm_imu}) {
-    const sim::DeviceClock& clock = device == &base_imu ? base_device.clock : arm_device.clock;
-    for (const v1::ImuBatch& batch : device->batches) {
-      imu_counts[batch.device_id()] += static_cast<std::uint64_t>(batch.t_us_size());
-      v1::SessionChunk chunk;
-      *chunk.mutable_imu() = batch;
-      timed.push_back({clock.to_camera_s(batch.t_us(batch.t_us_size() - 1)), std::move(chunk)});
-    }
-  }
-
+  std::vector<TimedChunk> timed;
+  SimChunkCounts counts;
+  add_imu_chunks(base_imu, base_device.clock, timed, counts);
+  add_imu_chunks(arm_imu, arm_device.clock, timed, counts);
   // Sync (paper 1, II-G): the buzzer stops at 1.2 s camera time; BLE broadcasts from 0.5 s.
-  sim::BuzzerOptions buzzer;
-  buzzer.stop_device_us = base_device.clock.to_device_us(1.2);
-  sim::AudioOptions audio;
-  audio.duration_s = 2.5;
-  const sim::BuzzerResult sound = sim::buzzer_stop(base_device, buzzer, audio, o.seed + 3);
-  std::uint64_t audio_frames = 0;
-  for (const v1::AudioChunk& a : sound.audio) {
-    audio_frames += a.pcm_s16le().size() / 2;
-    v1::SessionChunk chunk;
-    *chunk.mutable_audio() = a;
-    timed.push_back({static_cast<double>(a.t_us()) * 1e-6, std::move(chunk)});
-  }
-  std::uint64_t sync_events = 1;
-  {
-    v1::SessionChunk chunk;
-    *chunk.mutable_sync_event() = sound.stop_event;
-    timed.push_back({1.2, std::move(chunk)});
-  }
-  const sim::BleBroadcastResult receipts =
-      sim::ble_broadcast_receipts({base_device, arm_device}, sim::BleBroadcastOptions{}, o.seed + 4);
-  for (const v1::SyncEvent& e : receipts.events) {
-    const sim::DeviceClock& clock = e.device_id() == "base" ? base_device.clock : arm_device.clock;
-    v1::SessionChunk chunk;
-    *chunk.mutable_sync_event() = e;
-    timed.push_back({clock.to_camera_s(e.t_us()), std::move(chunk)});
-    ++sync_events;
-  }
+  const std::uint32_t audio_rate_hz = add_sync_chunks(base_device, arm_device, 1.2, true, o.seed + 3, timed, counts);
 
   // Per frame: the SDK skeleton, and colour + depth of the forearm with the strap where visible.
   const forearm::StrapCameras cameras = forearm::testing::test_cameras();
@@ -182,47 +130,14 @@ Table1Session simulate_table1_session(const sim::BodyMotion& motion, const Table
     v1::SessionChunk skeleton = shot.chunks[3 * f + 2];
     timed.push_back({t_s + 2e-6, std::move(skeleton)});
   }
-  std::stable_sort(timed.begin(), timed.end(), [](const Timed& a, const Timed& b) { return a.key_s < b.key_s; });
-
   v1::SessionChunk header;
   v1::SessionHeader& h = *header.mutable_header();
   h = shot.header;
   h.set_subject_id("table1");
-  for (const auto& [id, role] : {std::pair{"arm_r", v1::ImuDevice::ARM_RIGHT}, std::pair{"base", v1::ImuDevice::BASE}}) {
-    v1::ImuDevice& d = *h.add_imu_devices();
-    d.set_device_id(id);
-    d.set_role(role);
-    d.set_nominal_rate_hz(80.0);
-  }
-  *h.mutable_depth_intrinsics() = intrinsics(cameras.depth);
-  *h.mutable_color_intrinsics() = intrinsics(cameras.color);
-  v1::Quaternion& r = *h.mutable_color_from_depth()->mutable_rotation();
-  r.set_w(cameras.color_from_depth.w());
-  r.set_x(cameras.color_from_depth.x());
-  r.set_y(cameras.color_from_depth.y());
-  r.set_z(cameras.color_from_depth.z());
-  v1::Vec3& tr = *h.mutable_color_from_depth()->mutable_translation_m();
-  tr.set_x(cameras.color_from_depth_m.x());
-  tr.set_y(cameras.color_from_depth_m.y());
-  tr.set_z(cameras.color_from_depth_m.z());
-  h.set_color_rate_hz(camera.rate_hz);
-  h.set_audio_sample_rate_hz(audio.sample_rate_hz);
-  h.set_audio_channels(1);
+  set_forearm_header(arm_device.device_id, base_device.device_id, cameras, audio_rate_hz, h);
   (*h.mutable_options())["forearm.K_from_B"] = quat_option(mount.K_from_B);
   (*h.mutable_options())["forearm.calibration_s"] = session::format_double(o.calibration_end_s);
-  session.chunks.push_back(std::move(header));
-  for (Timed& t : timed) session.chunks.push_back(std::move(t.chunk));
-
-  v1::SessionChunk end;
-  v1::EndOfSession& e = *end.mutable_end();
-  e.set_depth_frames(frames);
-  e.set_skeleton_frames(frames);
-  e.set_color_frames(frames);
-  for (const auto& [id, n] : imu_counts) (*e.mutable_imu_samples())[id] = n;
-  e.set_audio_chunks(sound.audio.size());
-  e.set_audio_frames(audio_frames);
-  e.set_sync_events(sync_events);
-  session.chunks.push_back(std::move(end));
+  session.chunks = assemble_session(std::move(header), std::move(timed), frames, counts);
   return session;
 }
 

@@ -86,7 +86,7 @@ bool write_time_plot(const std::string& png_path, const std::vector<double>& t_s
   }
   cv::putText(image, "time (s); grey: occluded frames", cv::Point(kLeft, image.rows - 4), cv::FONT_HERSHEY_SIMPLEX,
               0.45, cv::Scalar(0, 0, 0), 1, cv::LINE_AA);
-  return cv::imwrite(png_path, image);
+  return cv::imwrite(png_path, image, {cv::IMWRITE_PNG_COMPRESSION, 9});
 }
 
 }  // namespace posefuse::bench

@@ -92,7 +92,7 @@ TEST(ForearmModel, StillHoldFollowsTheImuWhileSdkJointsWander) {
   std::vector<CalibrationFrame> frames;
   for (int k = 0; k < 60; ++k) {
     const double t = k / 30.0;
-      const Vec3 wander = 0.02 * Vec3(std::cos(1.6 * t) - 1.0, std::sin(1.6 * t), 0.0);  // 3.2 cm/s, up to 4 cm
+    const Vec3 wander = 0.02 * Vec3(std::cos(1.6 * t) - 1.0, std::sin(1.6 * t), 0.0);  // 3.2 cm/s, up to 4 cm
     const Quat K_from_F = motion.K_from_F(0.3);
     CalibrationFrame f;
     f.t_us = k * 33'333;
