@@ -53,8 +53,8 @@ void check_frame(const CalibrationFrame& f, std::size_t i) {
 ForearmCalibration calibrate_forearm(const std::vector<CalibrationFrame>& frames, const Quat& K_from_W,
                                      const CalibrationOptions& options) {
   if (!K_from_W.coeffs().allFinite()) throw_invalid("K_from_W", "not finite");
-  if (options.min_still_frames < 2 || !(options.still_radius_m > 0.0)) {
-    throw_invalid("options", "min_still_frames must be >= 2 and still_radius_m > 0");
+  if (options.min_still_frames < 2 || !(options.still_radius_m > 0.0) || !(options.still_angle_rad > 0.0)) {
+    throw_invalid("options", "min_still_frames must be >= 2, still_radius_m and still_angle_rad > 0");
   }
   for (std::size_t i = 0; i < frames.size(); ++i) {
     check_frame(frames[i], i);
@@ -62,12 +62,14 @@ ForearmCalibration calibrate_forearm(const std::vector<CalibrationFrame>& frames
       throw_invalid("frames[" + std::to_string(i) + "].t_us", "not after the previous frame");
     }
   }
-  // Longest run of frames whose elbow and wrist stay within still_radius_m of the run's first
-  // frame (a radius, not a frame-to-frame speed: joint noise makes per-frame speeds unreliable).
+  // Longest run of frames whose arm IMU orientation and SDK elbow and wrist stay near the run's
+  // first frame's (a radius, not a frame-to-frame speed: joint noise makes per-frame speeds
+  // unreliable).
   std::size_t best_first = 0, best_count = 0;
   for (std::size_t first = 0; first < frames.size() && frames.size() - first > best_count; ++first) {
     std::size_t end = first + 1;
     while (end < frames.size() &&
+           geometry::angle_between(frames[end].W_from_A, frames[first].W_from_A) < options.still_angle_rad &&
            (frames[end].elbow_K - frames[first].elbow_K).norm() < options.still_radius_m &&
            (frames[end].wrist_K - frames[first].wrist_K).norm() < options.still_radius_m) {
       ++end;

@@ -15,6 +15,7 @@
 #include "sim/imu_device.hpp"
 #include "sim/scripted_motion.hpp"
 #include "sim/sync_signals.hpp"
+#include "sim_session_parts.hpp"
 
 namespace posefuse::session::testing {
 
@@ -60,32 +61,11 @@ CameraPose camera_pose() {
   return {geometry::quat_from_rotation_matrix(R), Vec3(2.0, -0.3, 1.2)};
 }
 
-v1::CameraIntrinsics intrinsics(const geometry::PinholeCamera& c) {
-  v1::CameraIntrinsics k;
-  k.set_width(static_cast<std::uint32_t>(c.width));
-  k.set_height(static_cast<std::uint32_t>(c.height));
-  k.set_fx(c.fx);
-  k.set_fy(c.fy);
-  k.set_cx(c.cx);
-  k.set_cy(c.cy);
-  k.set_k1(c.k1);
-  k.set_k2(c.k2);
-  k.set_k3(c.k3);
-  k.set_p1(c.p1);
-  k.set_p2(c.p2);
-  return k;
-}
-
 void set_vec(const Vec3& v, v1::Vec3* out) {
   out->set_x(v.x());
   out->set_y(v.y());
   out->set_z(v.z());
 }
-
-struct Timed {
-  double key_s;
-  v1::SessionChunk chunk;
-};
 
 sim::ImuDeviceOptions imu_options(std::uint64_t seed) {
   sim::ImuDeviceOptions o;
@@ -124,47 +104,12 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
       sim::SensorKinematics(sim::imu_trajectory(arm, motion)), arm_device, imu_options(o.seed + 2), 0.0,
       o.duration_s);
 
-  std::vector<Timed> timed;
-  std::map<std::string, std::uint64_t> imu_counts;
-  for (const auto* device : {&base_imu, &arm_imu}) {
-    const sim::DeviceClock& clock = device == &base_imu ? base_device.clock : arm_device.clock;
-    for (const v1::ImuBatch& batch : device->batches) {
-      v1::SessionChunk chunk;
-      *chunk.mutable_imu() = batch;
-      imu_counts[batch.device_id()] += static_cast<std::uint64_t>(batch.t_us_size());
-      timed.push_back({clock.to_camera_s(batch.t_us(batch.t_us_size() - 1)), chunk});
-    }
-  }
-
+  std::vector<TimedChunk> timed;
+  SimChunkCounts counts;
+  add_imu_chunks(base_imu, base_device.clock, timed, counts);
+  add_imu_chunks(arm_imu, arm_device.clock, timed, counts);
   // Sync: the buzzer stops at 1.2 s camera time; broadcasts from 0.5 s.
-  sim::BuzzerOptions buzzer;
-  buzzer.stop_device_us = base_device.clock.to_device_us(1.2);
-  sim::AudioOptions audio;
-  audio.duration_s = 2.5;
-  const sim::BuzzerResult sound = sim::buzzer_stop(base_device, buzzer, audio, o.seed + 3);
-  std::uint64_t audio_frames = 0;
-  for (const v1::AudioChunk& a : sound.audio) {
-    v1::SessionChunk chunk;
-    *chunk.mutable_audio() = a;
-    audio_frames += a.pcm_s16le().size() / 2;
-    timed.push_back({static_cast<double>(a.t_us()) * 1e-6, chunk});
-  }
-  std::uint64_t sync_events = 0;
-  if (o.buzzer) {
-    v1::SessionChunk chunk;
-    *chunk.mutable_sync_event() = sound.stop_event;
-    timed.push_back({1.2, chunk});
-    ++sync_events;
-  }
-  sim::BleBroadcastOptions ble;
-  const sim::BleBroadcastResult receipts = sim::ble_broadcast_receipts({base_device, arm_device}, ble, o.seed + 4);
-  for (const v1::SyncEvent& e : receipts.events) {
-    v1::SessionChunk chunk;
-    *chunk.mutable_sync_event() = e;
-    const sim::DeviceClock& clock = e.device_id() == "base" ? base_device.clock : arm_device.clock;
-    timed.push_back({clock.to_camera_s(e.t_us()), chunk});
-    ++sync_events;
-  }
+  const std::uint32_t audio_rate_hz = add_sync_chunks(base_device, arm_device, 1.2, o.buzzer, o.seed + 3, timed, counts);
 
   // Camera frames at 30 Hz.
   const forearm::StrapCameras cameras = [] {
@@ -236,31 +181,11 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
     timed.push_back({t + 2e-6, skeleton});
     ++frames;
   }
-  std::stable_sort(timed.begin(), timed.end(), [](const Timed& a, const Timed& b) { return a.key_s < b.key_s; });
-
-  std::vector<v1::SessionChunk> chunks;
   v1::SessionChunk header;
   v1::SessionHeader& h = *header.mutable_header();
   h.set_format_version(1);
   h.set_subject_id("forearm-test");
-  for (const auto& [id, role] : {std::pair{"arm_r", v1::ImuDevice::ARM_RIGHT}, std::pair{"base", v1::ImuDevice::BASE}}) {
-    v1::ImuDevice& d = *h.add_imu_devices();
-    d.set_device_id(id);
-    d.set_role(role);
-    d.set_nominal_rate_hz(80.0);
-  }
-  *h.mutable_depth_intrinsics() = intrinsics(cameras.depth);
-  *h.mutable_color_intrinsics() = intrinsics(cameras.color);
-  v1::Quaternion& r = *h.mutable_color_from_depth()->mutable_rotation();
-  r.set_w(cameras.color_from_depth.w());
-  r.set_x(cameras.color_from_depth.x());
-  r.set_y(cameras.color_from_depth.y());
-  r.set_z(cameras.color_from_depth.z());
-  set_vec(cameras.color_from_depth_m, h.mutable_color_from_depth()->mutable_translation_m());
-  h.set_depth_rate_hz(30.0);
-  h.set_color_rate_hz(30.0);
-  h.set_audio_sample_rate_hz(audio.sample_rate_hz);
-  h.set_audio_channels(1);
+  set_forearm_header("arm_r", "base", cameras, audio_rate_hz, h);
   if (o.camera_alignment) {
     std::ostringstream q;
     q.precision(17);
@@ -268,19 +193,7 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
     (*h.mutable_options())["forearm.K_from_B"] = q.str();
   }
   (*h.mutable_options())["forearm.calibration_s"] = format_double(o.calibration_s);
-  chunks.push_back(header);
-  for (Timed& t : timed) chunks.push_back(std::move(t.chunk));
-  v1::SessionChunk end;
-  v1::EndOfSession& e = *end.mutable_end();
-  e.set_depth_frames(frames);
-  e.set_skeleton_frames(frames);
-  e.set_color_frames(frames);
-  for (const auto& [id, n] : imu_counts) (*e.mutable_imu_samples())[id] = n;
-  e.set_audio_chunks(sound.audio.size());
-  e.set_audio_frames(audio_frames);
-  e.set_sync_events(sync_events);
-  chunks.push_back(end);
-  return chunks;
+  return assemble_session(std::move(header), std::move(timed), frames, counts);
 }
 
 namespace {

@@ -1,0 +1,64 @@
+#include "calibration_prefix.hpp"
+
+#include <algorithm>
+
+#include <Eigen/Geometry>
+
+#include "common/error.hpp"
+#include "geometry/quaternion.hpp"
+
+namespace posefuse::bench {
+
+namespace {
+
+double smootherstep(double x) {
+  x = std::clamp(x, 0.0, 1.0);
+  return x * x * x * (10.0 + x * (-15.0 + 6.0 * x));
+}
+
+// theta layout all_joints: translation, then one rotation vector per joint.
+Eigen::VectorXd blend(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double w) {
+  Eigen::VectorXd out(a.size());
+  out.head<3>() = (1.0 - w) * a.head<3>() + w * b.head<3>();
+  for (Eigen::Index i = 3; i + 2 < a.size(); i += 3) {
+    const geometry::Quat qa = geometry::quat_from_rotation_vector(a.segment<3>(i));
+    const geometry::Quat qb = geometry::same_hemisphere(geometry::quat_from_rotation_vector(b.segment<3>(i)), qa);
+    out.segment<3>(i) = geometry::rotation_vector_from_quat(qa.slerp(w, qb));
+  }
+  return out;
+}
+
+}  // namespace
+
+double calibration_hold_end_s(const sim::BodyMotion& motion) {
+  for (const sim::MotionPhase& phase : motion.phases) {
+    if (phase.name == "calibration_hold") return phase.end_s;
+  }
+  throw_invalid("motion.phases", "has no calibration_hold");
+}
+
+sim::BodyMotion with_calibration_prefix(const sim::BodyMotion& calibration, const sim::BodyMotion& clip,
+                                        double blend_s) {
+  const double hold_end = calibration_hold_end_s(calibration);
+  const double clip0 = hold_end + blend_s;
+  const Eigen::VectorXd held = calibration.poses(hold_end);
+  sim::BodyMotion out;
+  out.duration_s = clip0 + clip.duration_s;
+  const sim::PoseSequence calib = calibration.poses, moving = clip.poses;
+  out.poses = [=](double t) -> Eigen::VectorXd {
+    if (t <= hold_end) return calib(t);
+    if (t >= clip0) return moving(t - clip0);
+    return blend(held, moving(t - clip0), smootherstep((t - hold_end) / blend_s));
+  };
+  for (const sim::MotionPhase& p : calibration.phases) {
+    if (p.end_s <= hold_end) out.phases.push_back(p);
+  }
+  for (sim::MotionPhase p : clip.phases) {
+    p.begin_s += clip0;
+    p.end_s += clip0;
+    out.phases.push_back(p);
+  }
+  return out;
+}
+
+}  // namespace posefuse::bench
