@@ -1,10 +1,11 @@
 #pragma once
 // Writes a Fit call's results into an output directory as they arrive:
-//   imu_orientations/<device_id>.csv   t_us,w,x,y,z   (W_from_A per IMU sample, device clock)
-//   calibration.json                   the CalibrationReport (protobuf JSON, .proto names)
-//   summary.json                       the Summary
-//   warnings.txt                       one line per Warning or ItemError
-// Frame results and recovered segments are added here when the stages that make them land.
+//   imu_orientations/, smpl_joints.csv, camera_joints.csv, forearms.csv, imu_positions.csv,
+//   calibration.json    through session::ResultFiles (session/result_files.hpp), the same code
+//                       path that writes the simulator's ground truth (gt/)
+//   summary.json        the Summary
+//   warnings.txt        one line per Warning or ItemError
+// Recovered segments are added here when the stage that makes them lands.
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -12,7 +13,7 @@
 #include <string>
 
 #include "posefuse/v1/results.pb.h"
-#include "session/text_fields.hpp"
+#include "session/result_files.hpp"
 
 namespace posefuse::client {
 
@@ -29,22 +30,20 @@ class ResultWriter {
   const v1::Summary* summary() const { return have_summary_ ? &summary_ : nullptr; }
   std::uint64_t warnings() const { return warnings_; }
   std::uint64_t item_errors() const { return item_errors_; }
-  std::uint64_t orientation_samples() const { return orientation_samples_; }
+  std::uint64_t orientation_samples() const { return files_.orientation_samples(); }
   const std::filesystem::path& directory() const { return directory_; }
 
  private:
-  void write_orientations(const v1::ImuOrientationBatch& batch);
   void note(const std::string& kind, const std::string& code, const std::string& field,
             const std::string& message);
 
   std::filesystem::path directory_;
-  std::map<std::string, std::unique_ptr<session::CsvWriter>> orientations_;
+  session::ResultFiles files_;
   std::unique_ptr<std::ofstream> warnings_file_;
   v1::Summary summary_;
   bool have_summary_ = false;
   std::uint64_t warnings_ = 0;
   std::uint64_t item_errors_ = 0;
-  std::uint64_t orientation_samples_ = 0;
 };
 
 }  // namespace posefuse::client
