@@ -5,6 +5,7 @@
 #include <memory>
 #include <opencv2/core.hpp>
 #include <thread>
+#include <time.h>
 
 #include "body/body_evaluator.hpp"
 #include "common/error.hpp"
@@ -20,6 +21,27 @@ namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 using Mat3 = Eigen::Matrix3d;
+
+double thread_cpu_s() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) + 1e-9 * static_cast<double>(ts.tv_nsec);
+}
+
+// Adds the calling thread's CPU time since the last lap to `times[part]`.
+class CpuLap {
+ public:
+  explicit CpuLap(SimTimings& times) : times_(times), last_(thread_cpu_s()) {}
+  void operator()(const char* part) {
+    const double now = thread_cpu_s();
+    times_[part] += now - last_;
+    last_ = now;
+  }
+
+ private:
+  SimTimings& times_;
+  double last_;
+};
 
 const std::array<const char*, 2> kArmDeviceIds = {"imu_left", "imu_right"};
 const char* const kBaseDeviceId = "imu_base";
@@ -104,10 +126,11 @@ class FrameWorker {
         straps_(straps),
         K_from_Body_(K_from_Body),
         room_(room) {
-    if (options.color) color_ = std::make_unique<ColorRenderer>(options.color_camera, render, straps);
+    if (options.color) color_ = std::make_unique<ColorRenderer>(options.color_camera, render, straps, room, options.seed);
   }
 
   FrameOutput process(const FramePlan& plan, const SimMotion& motion) {
+    CpuLap lap(times_);
     const Eigen::VectorXd theta = motion.poses(plan.t_s);
     if (theta.size() != evaluator_.layout().size() || !theta.allFinite()) {
       throw_invalid("motion", "frame " + std::to_string(plan.index) + " gave a bad pose");
@@ -116,11 +139,14 @@ class FrameWorker {
     const Eigen::Matrix3Xd vertices_K = K_from_Body_ * evaluator_.vertices();
     scene_.update_vertices(vertices_K);
     scene_.render(camera_, 0, images_);
+    lap("depth: pose, skin, ray cast");
     FrameOutput out;
     out.truth = frame_truth(plan);  // from the clean render, before the room is added
+    lap("truth per frame");
     composite_room(camera_, room_, images_.depth_mm);
     const NoisyDepth noisy = apply_depth_noise(camera_, images_.depth_mm, images_.body_index,
                                                options_.depth_noise, options_.seed, plan.index);
+    lap("depth: room, sensor errors");
     const SmplJointsK joints = smpl_joints_in_camera(evaluator_, K_from_Body_);
     const cv::Mat depth(camera_.height(), camera_.width(), CV_16UC1, const_cast<std::uint16_t*>(noisy.depth_mm.data()));
     const cv::Mat body_index(camera_.height(), camera_.width(), CV_8UC1,
@@ -129,17 +155,24 @@ class FrameWorker {
         session::encode_depth(depth, v1::DepthFrame::ZSTD_U16_LE, plan.t_us));
     out.chunks.emplace_back().mutable_body_index()->CopyFrom(
         session::encode_body_index(body_index, v1::BodyIndexFrame::PNG8, plan.t_us));
+    lap("depth, body index: encode (zstd, PNG)");
     out.chunks.emplace_back().mutable_skeleton()->CopyFrom(
         skeleton_.simulate(joints, noisy.depth_mm, plan.index, plan.t_us, 0));
+    lap("skeleton");
     if (color_) {
-      const cv::Mat bgr = color_->render(vertices_K, room_, options_.seed, plan.index);
+      const cv::Mat bgr = color_->render(vertices_K, plan.index);
+      lap("color: ray cast, shade, noise");
       out.chunks.emplace_back().mutable_color()->CopyFrom(
           encode_color_frame(bgr, options_.color_camera.jpeg_quality, plan.t_us));
+      lap("color: encode (JPEG)");
     }
     out.truth.smpl_joints_K = joints.positions_K;
     out.truth.camera_joints_K = camera_joints_from_smpl(joints);
+    lap("truth per frame");
     return out;
   }
+
+  const SimTimings& times() const { return times_; }
 
  private:
   SimFrameTruth frame_truth(const FramePlan& plan) const {
@@ -201,6 +234,7 @@ class FrameWorker {
   std::vector<RoomPlane> room_;
   std::unique_ptr<ColorRenderer> color_;
   raycast::RenderImages images_;
+  SimTimings times_;
 };
 
 void set_intrinsics(const raycast::DepthIntrinsics& in, v1::CameraIntrinsics* k) {
@@ -259,12 +293,12 @@ void validate(const SimSessionOptions& options) {
 SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& sink,
                           const std::function<void(const SimProgress&)>& progress) {
   validate(options);
+  SimTruth truth;
+  CpuLap lap(truth.cpu_s);
   const body::PoseLayout layout = body::PoseLayout::full_body();
   const SimMotion motion = select_motion(options.motion, options.motion_options, layout);
   const auto fitted = body::make_template(options.sex);
   const RenderModel render = make_render_model(*fitted, options.betas, options.clothing, options.seed);
-
-  SimTruth truth;
   truth.options = options;
   {
     body::BodyEvaluator rest(render.model, layout);
@@ -377,6 +411,7 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
     kinematics.emplace_back(std::move(still));
   }
 
+  lap("setup: render model, IMU pose trajectories");
   std::vector<v1::SessionChunk> small;  // IMU, audio and sync chunks, merged in later
   for (std::size_t d = 0; d < devices.size(); ++d) {
     ImuDeviceOptions imu = options.imu;
@@ -398,6 +433,7 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
     truth.devices.push_back(std::move(device));
     for (const v1::ImuBatch& batch : result.batches) small.emplace_back().mutable_imu()->CopyFrom(batch);
   }
+  lap("IMU: signals, clocks, packet loss");
   {
     const double stop_s = std::min(options.buzzer_stop_s, 0.6 * options.duration_s);
     BuzzerOptions buzzer = options.buzzer;
@@ -416,6 +452,7 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
     for (const auto& event : ble.events) small.emplace_back().mutable_sync_event()->CopyFrom(event);
   }
 
+  lap("audio, buzzer, BLE");
   // Header.
   v1::SessionChunk header_chunk;
   v1::SessionHeader& header = *header_chunk.mutable_header();
@@ -513,6 +550,7 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
     for (std::int64_t i = 1; i < count; ++i) threads.emplace_back(run, i);
     run(0);
     for (auto& thread : threads) thread.join();
+    lap("frames (this thread, counted per part below)");
     for (const auto& error : errors) {
       if (error) std::rethrow_exception(error);
     }
@@ -529,13 +567,21 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
       }
       truth.frames.push_back(std::move(frame));
     }
+    lap("writing chunks, merging, IMU truth per frame");
     if (progress) progress(SimProgress{first + count, frames});
+    lap("progress callback");
   }
   emit_small_before(nullptr);
   v1::SessionChunk end;
   *end.mutable_end() = counts;
   sink.write(end);
   ++truth.chunks;
+  lap("writing chunks, merging, IMU truth per frame");
+  // The main thread's frame work is inside the workers' parts already.
+  truth.cpu_s.erase("frames (this thread, counted per part below)");
+  for (const auto& worker : workers) {
+    for (const auto& [part, seconds] : worker->times()) truth.cpu_s[part] += seconds;
+  }
   return truth;
 }
 

@@ -18,6 +18,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -119,6 +120,9 @@ struct SimFrameTruth {
   std::vector<Quat> K_from_imu;      // per device, at the frame instant
 };
 
+// Thread CPU seconds per part of the work, summed over threads (for bench_sim_session).
+using SimTimings = std::map<std::string, double>;
+
 struct SimTruth {
   SimSessionOptions options;
   Eigen::Isometry3d K_from_Body = Eigen::Isometry3d::Identity();
@@ -133,6 +137,7 @@ struct SimTruth {
   double buzzer_stop_camera_s = 0, buzzer_heard_camera_s = 0;
   std::vector<double> ble_broadcast_camera_s;
   std::uint64_t chunks = 0;
+  SimTimings cpu_s;
 };
 
 struct SimProgress {
