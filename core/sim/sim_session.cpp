@@ -486,6 +486,7 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
   (*header.mutable_options())["sim.seed"] = std::to_string(options.seed);
   (*header.mutable_options())["sim.motion"] = options.motion;
   sink.write(header_chunk);
+  ++truth.chunks;
 
   // Order the small chunks once; frames are merged in as they are rendered.
   std::vector<std::pair<session::ChunkOrderKey, std::size_t>> order;
