@@ -296,7 +296,6 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
   SimTruth truth;
   CpuLap lap(truth.cpu_s);
   const body::PoseLayout layout = body::PoseLayout::full_body();
-  const SimMotion motion = select_motion(options.motion, options.motion_options, layout);
   const auto fitted = body::make_template(options.sex);
   const RenderModel render = make_render_model(*fitted, options.betas, options.clothing, options.seed);
   truth.options = options;
@@ -315,11 +314,15 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
   truth.camera_p_W_m = W_from_Body * truth.K_from_Body.inverse().translation();
   const Eigen::Isometry3d& K_from_Body = truth.K_from_Body;
   const auto W_to_K = [&](const Vec3& p_W) -> Vec3 { return K_from_Body * (W_from_Body.transpose() * p_W); };
+  MotionContext context;
+  context.rest_joints = truth.rest_joints;
+  context.W_from_Body = W_from_Body;
+  context.heading_rad = options.heading_rad;
+  context.strap_to_elbow_m = options.strap_to_elbow_m;
+  const SimMotion motion = select_motion(options.motion, options.motion_options, layout, context);
 
-  // Arms: geometry of the scripted chain from the shaped body; the left arm mirrored.
+  // Arms: strap geometry and IMU mounting.
   SimRng mount_rng(options.seed, "imu_mount");
-  const Mat3 mirror_W = W_from_S * Eigen::Vector3d(1, -1, 1).asDiagonal() * W_from_S.transpose();
-  const Mat3 flip_z = Eigen::Vector3d(1, 1, -1).asDiagonal();
   StrapPlacement straps = {std::nan(""), std::nan("")};
   for (int arm = 0; arm < 2; ++arm) {
     const auto a = static_cast<std::size_t>(arm);
@@ -353,7 +356,7 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
     device.clock.drift = options.clock_drift_max * (2 * rng.uniform() - 1);
   }
 
-  // IMU trajectories at 1 kHz (the arm chain), then the devices.
+  // Arm IMU trajectories at 1 kHz from the motion's forearm poses: mounting, radius, slip.
   const double dt = 1e-3;
   std::vector<SensorKinematics> kinematics;
   const auto grid_size = static_cast<std::size_t>(std::ceil(options.duration_s / dt - 1e-9)) + 5;
@@ -361,14 +364,6 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
     const auto a = static_cast<std::size_t>(arm);
     const SimArmTruth& t = truth.arms[a];
     if (!t.has_imu) continue;
-    ArmGeometry geometry;
-    Vec3 shoulder_W = W_from_Body * truth.rest_joints.col(kShoulder[a]);
-    if (arm == 0) shoulder_W = mirror_W * shoulder_W;
-    geometry.shoulder_p_W_m = shoulder_W;
-    geometry.heading_rad = options.heading_rad;
-    geometry.upper_arm_m = t.d_ul_m;
-    geometry.strap_to_elbow_m = t.d_se_m;
-    geometry.strap_radius_m = t.r_m;
     SimRng slip_rng(options.seed, std::string("strap_slip/") + kArmDeviceIds[a]);
     const double slip_scale = options.strap_slip.enabled ? 1.0 : 0.0;
     const SlowWave slip_turn(slip_rng, slip_scale * options.strap_slip.max_rotation_rad, options.strap_slip.period_s);
@@ -378,13 +373,9 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
     trajectory.t0_s = -2 * dt;
     for (std::size_t k = 0; k < grid_size; ++k) {
       const double time = trajectory.t0_s + static_cast<double>(k) * dt;
-      const ArmPose pose = arm_pose(geometry, motion.arm_angles[a](time));
-      Mat3 W_from_F = pose.W_from_F.toRotationMatrix();
-      Vec3 strap_W = pose.strap_p_W_m;
-      if (arm == 0) {  // mirror the right-arm chain; flipping z keeps F right-handed
-        W_from_F = mirror_W * W_from_F * flip_z;
-        strap_W = mirror_W * strap_W;
-      }
+      const ForearmPose forearm = motion.forearm[a](time);
+      const Mat3& W_from_F = forearm.W_from_F;
+      const Vec3& strap_W = forearm.strap_p_W_m;
       const Mat3 slipped = W_from_F * Eigen::AngleAxisd(slip_turn(time), Vec3::UnitY()).toRotationMatrix();
       const Vec3 strap_slid = strap_W + W_from_F * Vec3(0, slip_slide(time), 0);
       trajectory.p_W_m.push_back(strap_slid + slipped * Vec3(t.r_m, 0, 0));
