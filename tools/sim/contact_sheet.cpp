@@ -171,7 +171,7 @@ cv::Mat ContactSheetRecorder::render() const {
 }
 
 void write_png(const cv::Mat& sheet, const std::filesystem::path& path) {
-  if (!cv::imwrite(path.string(), sheet)) {
+  if (!cv::imwrite(path.string(), sheet, {cv::IMWRITE_PNG_COMPRESSION, 9})) {
     throw Error(ErrorCode::kFailedPrecondition, path.string(), "cannot write the PNG");
   }
 }
