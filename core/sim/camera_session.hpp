@@ -50,6 +50,9 @@ struct CameraSessionResult {
   std::vector<Eigen::Matrix3Xd> true_camera_joints_K;  // error-free 25 joints per frame
 };
 
+// Copies intrinsics into a header's CameraIntrinsics (no tangential distortion).
+void set_camera_intrinsics(const raycast::DepthIntrinsics& in, v1::CameraIntrinsics* out);
+
 // Raises both arms sideways from hanging (-75 deg) to above the shoulders (+75 deg) and back,
 // once per period, with the pelvis standing at the origin of W. For PoseLayout::full_body().
 PoseSequence arm_raising_sequence(const body::PoseLayout& layout, double period_s);

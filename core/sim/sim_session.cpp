@@ -237,18 +237,6 @@ class FrameWorker {
   SimTimings times_;
 };
 
-void set_intrinsics(const raycast::DepthIntrinsics& in, v1::CameraIntrinsics* k) {
-  k->set_width(static_cast<std::uint32_t>(in.width));
-  k->set_height(static_cast<std::uint32_t>(in.height));
-  k->set_fx(in.fx);
-  k->set_fy(in.fy);
-  k->set_cx(in.cx);
-  k->set_cy(in.cy);
-  k->set_k1(in.k1);
-  k->set_k2(in.k2);
-  k->set_k3(in.k3);
-}
-
 }  // namespace
 
 void validate(const SimSessionOptions& options) {
@@ -456,10 +444,10 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
     d->set_role(device.role);
     d->set_nominal_rate_hz(options.imu.rate_hz);
   }
-  set_intrinsics(options.depth_intrinsics, header.mutable_depth_intrinsics());
+  set_camera_intrinsics(options.depth_intrinsics, header.mutable_depth_intrinsics());
   header.set_depth_rate_hz(options.depth_rate_hz);
   if (options.color) {
-    set_intrinsics(options.color_camera.intrinsics, header.mutable_color_intrinsics());
+    set_camera_intrinsics(options.color_camera.intrinsics, header.mutable_color_intrinsics());
     const Quat q(options.color_camera.color_from_depth.linear());
     auto* transform = header.mutable_color_from_depth();
     transform->mutable_rotation()->set_w(q.w());
