@@ -47,10 +47,10 @@ std::array<std::function<ForearmPose(double)>, 2> chain_forearms(
 // arm_raising_sequence (camera_session.hpp) turns each arm about the body's forward axis from
 // -75 deg (below the T-pose) to +75 deg and back. In the arm chain that is abduction from
 // 15 deg (hanging is 0) to 165 deg, in the same plane.
-SimMotion arm_raising_motion(const MotionOptions& options, const body::PoseLayout& layout,
-                             const MotionContext& context) {
+SimMotion arm_raising_motion(const MotionOptions& options, const MotionContext& context) {
   SimMotion motion;
-  motion.poses = arm_raising_sequence(layout, options.period_s);
+  motion.layout = body::PoseLayout::full_body();
+  motion.poses = arm_raising_sequence(motion.layout, options.period_s);
   const double period = options.period_s;
   const auto angles = [period](double t_s) {
     const double raise = 0.5 * (1.0 - std::cos(2 * kPi * t_s / period));
@@ -66,13 +66,12 @@ SimMotion arm_raising_motion(const MotionOptions& options, const body::PoseLayou
 
 std::vector<std::string> motion_names() { return {"arm_raising"}; }
 
-SimMotion select_motion(const std::string& name, const MotionOptions& options, const body::PoseLayout& layout,
-                        const MotionContext& context) {
+SimMotion select_motion(const std::string& name, const MotionOptions& options, const MotionContext& context) {
   require_positive(options.period_s, "motion_period_s");
   if (context.rest_joints.cols() != body::kNumJoints || !context.rest_joints.allFinite()) {
     throw_invalid("context.rest_joints", "must be 3 x 24 finite values");
   }
-  if (name == "arm_raising") return arm_raising_motion(options, layout, context);
+  if (name == "arm_raising") return arm_raising_motion(options, context);
   std::string known;
   for (const auto& n : motion_names()) known += (known.empty() ? "" : ", ") + n;
   throw_invalid("motion", "'" + name + "' is not a known motion (known: " + known + ")");

@@ -38,7 +38,9 @@ struct ForearmPose {
 };
 
 struct SimMotion {
-  PoseSequence poses;  // theta of PoseLayout::full_body() at camera time t (s)
+  // The body's DOFs; all_joints() when a motion rolls the forearm (full_body() has no roll).
+  body::PoseLayout layout = body::PoseLayout::full_body();
+  PoseSequence poses;  // theta of `layout` at camera time t (s)
   // Forearm pose of the left (0) and right (1) arm at camera time t; must agree with `poses`
   // (tests check that the IMU sits on the rendered strap) and be smooth (it is differentiated).
   std::array<std::function<ForearmPose(double t_s)>, 2> forearm;
@@ -48,7 +50,6 @@ struct SimMotion {
 std::vector<std::string> motion_names();
 
 // kInvalidArgument naming "motion" for an unknown name, or the option for a bad value.
-SimMotion select_motion(const std::string& name, const MotionOptions& options, const body::PoseLayout& layout,
-                        const MotionContext& context);
+SimMotion select_motion(const std::string& name, const MotionOptions& options, const MotionContext& context);
 
 }  // namespace posefuse::sim

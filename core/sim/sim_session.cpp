@@ -283,13 +283,14 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
   validate(options);
   SimTruth truth;
   CpuLap lap(truth.cpu_s);
-  const body::PoseLayout layout = body::PoseLayout::full_body();
+  // Rest joints do not depend on the layout's DOFs (all zero).
+  const body::PoseLayout rest_layout = body::PoseLayout::full_body();
   const auto fitted = body::make_template(options.sex);
   const RenderModel render = make_render_model(*fitted, options.betas, options.clothing, options.seed);
   truth.options = options;
   {
-    body::BodyEvaluator rest(render.model, layout);
-    rest.evaluate(options.betas, layout.zero(), body::Derivatives::kNone);
+    body::BodyEvaluator rest(render.model, rest_layout);
+    rest.evaluate(options.betas, rest_layout.zero(), body::Derivatives::kNone);
     truth.rest_joints = rest.rest_joints();
   }
   // Placement: the camera faces the subject (see camera_session.hpp); W shares Body's origin.
@@ -307,7 +308,7 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
   context.W_from_Body = W_from_Body;
   context.heading_rad = options.heading_rad;
   context.strap_to_elbow_m = options.strap_to_elbow_m;
-  const SimMotion motion = select_motion(options.motion, options.motion_options, layout, context);
+  const SimMotion motion = select_motion(options.motion, options.motion_options, context);
 
   // Arms: strap geometry and IMU mounting.
   SimRng mount_rng(options.seed, "imu_mount");
@@ -508,7 +509,7 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
                                        RoomPlane{Vec3::UnitZ(), options.wall_distance_m}};
   std::vector<std::unique_ptr<FrameWorker>> workers;
   for (int w = 0; w < options.threads; ++w) {
-    workers.push_back(std::make_unique<FrameWorker>(options, render, layout, camera, skeleton, straps, K_from_Body, room));
+    workers.push_back(std::make_unique<FrameWorker>(options, render, motion.layout, camera, skeleton, straps, K_from_Body, room));
   }
   const auto frames = static_cast<std::int64_t>(std::floor(options.duration_s * options.depth_rate_hz + 1e-9)) + 1;
   for (std::int64_t first = 0; first < frames; first += options.threads) {
