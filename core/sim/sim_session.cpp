@@ -132,7 +132,7 @@ class FrameWorker {
               const raycast::DepthCamera& camera, const CameraSkeletonSimulator& skeleton,
               const StrapPlacement& straps, const std::array<ForearmStrap, 2>& forearm_straps,
               const std::array<Quat, 2>& rest_R_from_F, const Eigen::Isometry3d& K_from_Body,
-              const std::vector<RoomPlane>& room)
+              const std::vector<RoomPlane>& room, const StaticBackground& background)
       : options_(options),
         render_(render),
         evaluator_(render.model, layout),
@@ -143,7 +143,7 @@ class FrameWorker {
         forearm_straps_(forearm_straps),
         rest_R_from_F_(rest_R_from_F),
         K_from_Body_(K_from_Body),
-        room_(room) {
+        background_(background) {
     if (options.color) color_ = std::make_unique<ColorRenderer>(options.color_camera, render, straps, room, options.seed);
   }
 
@@ -161,9 +161,9 @@ class FrameWorker {
     FrameOutput out;
     out.truth = frame_truth(plan);  // from the clean render, before the room is added
     lap("truth per frame");
-    composite_room(camera_, room_, images_.depth_mm);
+    background_.composite(images_.depth_mm);
     const NoisyDepth noisy = apply_depth_noise(camera_, images_.depth_mm, images_.body_index,
-                                               options_.depth_noise, options_.seed, plan.index);
+                                               options_.depth_noise, options_.seed, plan.index, &background_);
     lap("depth: room, sensor errors");
     const SmplJointsK joints = smpl_joints_in_camera(evaluator_, K_from_Body_);
     const cv::Mat depth(camera_.height(), camera_.width(), CV_16UC1, const_cast<std::uint16_t*>(noisy.depth_mm.data()));
@@ -246,7 +246,7 @@ class FrameWorker {
   std::array<ForearmStrap, 2> forearm_straps_;
   std::array<Quat, 2> rest_R_from_F_;
   Eigen::Isometry3d K_from_Body_;
-  std::vector<RoomPlane> room_;
+  const StaticBackground& background_;
   std::unique_ptr<ColorRenderer> color_;
   raycast::RenderImages images_;
   SimTimings times_;
@@ -547,10 +547,12 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
   const Vec3 floor_normal_K = K_from_Body.linear() * Vec3::UnitY();
   const std::vector<RoomPlane> room = {RoomPlane{floor_normal_K, floor_normal_K.dot(K_from_Body.translation())},
                                        RoomPlane{Vec3::UnitZ(), options.wall_distance_m}};
+  // The room's depth and incidence once; frames redo the error model's incidence near the body.
+  const StaticBackground background(camera, room, options.depth_noise);
   std::vector<std::unique_ptr<FrameWorker>> workers;
   for (int w = 0; w < options.threads; ++w) {
     workers.push_back(std::make_unique<FrameWorker>(options, render, layout, camera, skeleton, straps, forearm_straps,
-                                                    rest_R_from_F, K_from_Body, room));
+                                                    rest_R_from_F, K_from_Body, room, background));
   }
   const auto frames = static_cast<std::int64_t>(std::floor(options.duration_s * options.depth_rate_hz + 1e-9)) + 1;
   for (std::int64_t first = 0; first < frames; first += options.threads) {
