@@ -185,6 +185,12 @@ int command_fit(const Arguments& args) {
   std::printf("results: %s\n", writer.directory().string().c_str());
   std::printf("  %llu IMU orientations in imu_orientations/, calibration.json, summary.json\n",
               static_cast<unsigned long long>(writer.orientation_samples()));
+  if (writer.forearm_samples() + writer.imu_positions() + writer.recovered_segments() > 0) {
+    std::printf("  %llu forearm orientations in forearm_orientations/, %llu IMU positions, %llu recovered segments\n",
+                static_cast<unsigned long long>(writer.forearm_samples()),
+                static_cast<unsigned long long>(writer.imu_positions()),
+                static_cast<unsigned long long>(writer.recovered_segments()));
+  }
   if (summary != nullptr) {
     std::printf("  %llu chunks, %llu depth frames, %.1f s of recording processed in %.2f s\n",
                 static_cast<unsigned long long>(summary->chunks()),

@@ -4,8 +4,10 @@
 # and prints where the results are.
 #   scripts/demo.sh                      results in build/demo/results
 #   DEMO_DIR=/tmp/demo scripts/demo.sh   choose the folder
-# The demo session is synthetic, made in code (client/demo_session.cpp): a placeholder until the
-# simulator (issue 4) exists.
+# The demo session comes from the simulator (posefuse-sim, docs/simulator.md): a short take of
+# paper 1's forearm protocol (calibration pose, forearm behind the head, in front of the belly,
+# behind the back) on built-in defaults, with its ground truth in gt/ beside the results.
+#   DEMO_DURATION_S=25 scripts/demo.sh   session length in seconds (default 20)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build_dir=${BUILD_DIR:-$root/build}
@@ -17,8 +19,19 @@ client_bin="$build_dir/client/posefuse"
 
 rm -rf "$demo_dir"
 mkdir -p "$demo_dir"
+sim_bin="$build_dir/tools/sim/posefuse-sim"
+duration_s=${DEMO_DURATION_S:-20}
 session="$demo_dir/demo-session.pfchunks"
-"$client_bin" demo-session "$session"
+sim_options="$demo_dir/demo-sim.txt"
+cat >"$sim_options" <<OPTIONS
+# paper 1's protocol once, right arm (IMUs on both wrists, the left one hangs at rest)
+motion = forearm_protocol
+repetitions = 1
+arm = right
+duration_s = $duration_s
+OPTIONS
+echo "demo: simulating a ${duration_s} s session (posefuse-sim --options $sim_options)"
+"$sim_bin" --options "$sim_options" --chunk-file "$session" --gt "$demo_dir/gt"
 
 # Port 0: the server picks a free port and logs it (event=server_start ... port=N).
 server_log="$demo_dir/server.log"
@@ -55,8 +68,13 @@ stop_server
 trap - EXIT
 echo
 echo "demo: done. Results in $results"
-echo "  imu_orientations/*.csv  W_from_A per IMU sample (t_us,w,x,y,z)"
-echo "  calibration.json        gyro bias and field magnitude per IMU"
-echo "  summary.json            counts and durations"
-echo "  warnings.txt            warnings and per-chunk errors (empty when none)"
-echo "  server log: $server_log"
+ls "$results"
+echo "  imu_orientations/*.csv      W_from_A per IMU sample (t_us,w,x,y,z)"
+echo "  forearm_orientations/*.csv  K_from_F and pronation per arm IMU sample"
+echo "  imu_positions.csv           arm IMU position in K per camera frame"
+echo "  recovered_segments.csv      forearm trajectories recovered through occlusions"
+echo "  calibration.json            per IMU gyro bias and field; forearm model; clock offsets"
+echo "  summary.json                counts and durations"
+echo "  warnings.txt                warnings and per-chunk errors (empty when none)"
+echo "Ground truth of the simulated session (same files and columns): $demo_dir/gt"
+echo "  session: $session; server log: $server_log"

@@ -1,5 +1,8 @@
 #include "session/chunk_file.hpp"
 
+#include <google/protobuf/io/coded_stream.h>
+#include <google/protobuf/io/zero_copy_stream_impl_lite.h>
+
 #include "common/error.hpp"
 
 namespace posefuse::session {
@@ -87,7 +90,14 @@ void ChunkFileWriter::write(const SessionChunk& chunk) {
     prefix[n++] = static_cast<char>(group | (rest ? 0x80 : 0));
   } while (rest);
   buffer_.clear();
-  chunk.SerializeToString(&buffer_);
+  {
+    // Map fields (header options, end counts) would otherwise come out in a per-process random
+    // order, and the same session would not give the same bytes twice.
+    google::protobuf::io::StringOutputStream stream(&buffer_);
+    google::protobuf::io::CodedOutputStream coded(&stream);
+    coded.SetSerializationDeterministic(true);
+    chunk.SerializeToCodedStream(&coded);
+  }
   out_.write(prefix, n);
   out_.write(buffer_.data(), static_cast<std::streamsize>(buffer_.size()));
   if (!out_) throw Error(ErrorCode::kDataLoss, path_.string(), "write failed");

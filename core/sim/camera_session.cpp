@@ -21,22 +21,24 @@ v1::SessionHeader make_header(const CameraSessionOptions& options) {
   h.set_format_version(session::kFormatVersion);
   h.set_subject_id("sim");
   h.set_sex(options.sex == body::Sex::kMale ? v1::SessionHeader::MALE : v1::SessionHeader::FEMALE);
-  v1::CameraIntrinsics* k = h.mutable_depth_intrinsics();
-  const raycast::DepthIntrinsics& in = options.intrinsics;
-  k->set_width(static_cast<std::uint32_t>(in.width));
-  k->set_height(static_cast<std::uint32_t>(in.height));
-  k->set_fx(in.fx);
-  k->set_fy(in.fy);
-  k->set_cx(in.cx);
-  k->set_cy(in.cy);
-  k->set_k1(in.k1);
-  k->set_k2(in.k2);
-  k->set_k3(in.k3);
+  set_camera_intrinsics(options.intrinsics, h.mutable_depth_intrinsics());
   h.set_depth_rate_hz(options.rate_hz);
   return h;
 }
 
 }  // namespace
+
+void set_camera_intrinsics(const raycast::DepthIntrinsics& in, v1::CameraIntrinsics* out) {
+  out->set_width(static_cast<std::uint32_t>(in.width));
+  out->set_height(static_cast<std::uint32_t>(in.height));
+  out->set_fx(in.fx);
+  out->set_fy(in.fy);
+  out->set_cx(in.cx);
+  out->set_cy(in.cy);
+  out->set_k1(in.k1);
+  out->set_k2(in.k2);
+  out->set_k3(in.k3);
+}
 
 PoseSequence arm_raising_sequence(const body::PoseLayout& layout, double period_s) {
   require_positive(period_s, "period_s");

@@ -56,6 +56,9 @@ struct CameraSessionResult {
   std::vector<FrameTruth> truth;  // per frame: SMPL and camera joints, forearms of forearm_straps
 };
 
+// Copies intrinsics into a header's CameraIntrinsics (no tangential distortion).
+void set_camera_intrinsics(const raycast::DepthIntrinsics& in, v1::CameraIntrinsics* out);
+
 // Raises both arms sideways from hanging (-75 deg) to above the shoulders (+75 deg) and back,
 // once per period, with the pelvis standing at the origin of W. For PoseLayout::full_body().
 PoseSequence arm_raising_sequence(const body::PoseLayout& layout, double period_s);

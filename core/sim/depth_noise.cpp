@@ -104,60 +104,140 @@ void composite_room(const raycast::DepthCamera& camera, const std::vector<RoomPl
   }
 }
 
+namespace {
+
+// Cosine of the incidence angle per pixel (NaN where undefined); the noise model compares it
+// with cos(max_incidence) rather than taking acos of every pixel (a third of its time).
+class IncidenceCosines {
+ public:
+  IncidenceCosines(const raycast::DepthCamera& camera, const std::vector<uint16_t>& depth_mm,
+                   const DepthNoiseOptions& options)
+      : camera_(camera), depth_mm_(depth_mm), edges_(camera, options), width_(camera.width()),
+        height_(camera.height()) {}
+
+  // NaN where the pixel has no depth or no neighbour on its surface along a row or column.
+  float at(int col, int row) const {
+    if (z_at(col, row) <= 0) return std::numeric_limits<float>::quiet_NaN();
+    const Eigen::Vector3d normal = difference(col, row, 1, 0).cross(difference(col, row, 0, 1));
+    const double normal_norm = normal.norm();
+    if (normal_norm <= 0) return std::numeric_limits<float>::quiet_NaN();
+    const Eigen::Vector3d ray = camera_.pixel_ray(col, row).cast<double>();
+    const double cos_incidence = std::abs(normal.dot(ray)) / (normal_norm * ray.norm());
+    return static_cast<float>(std::min(1.0, cos_incidence));
+  }
+
+  std::vector<float> all() const {
+    std::vector<float> out(depth_mm_.size());
+    for (int row = 0; row < height_; ++row) {
+      for (int col = 0; col < width_; ++col) out[static_cast<std::size_t>(row) * width_ + col] = at(col, row);
+    }
+    return out;
+  }
+
+  // `cached` (the background's) everywhere the 5-pixel stencil of at() sees the background's
+  // depth; at() elsewhere.
+  std::vector<float> reusing(const StaticBackground& background) const {
+    const std::vector<uint16_t>& room = background.depth_mm();
+    std::vector<float> out = background.incidence_cosines();
+    std::vector<uint8_t> changed(depth_mm_.size(), 0);
+    for (int row = 0; row < height_; ++row) {
+      for (int col = 0; col < width_; ++col) {
+        const std::size_t i = static_cast<std::size_t>(row) * width_ + col;
+        if (depth_mm_[i] == room[i]) continue;
+        changed[i] = 1;
+        if (col > 0) changed[i - 1] = 1;
+        if (col + 1 < width_) changed[i + 1] = 1;
+        if (row > 0) changed[i - static_cast<std::size_t>(width_)] = 1;
+        if (row + 1 < height_) changed[i + static_cast<std::size_t>(width_)] = 1;
+      }
+    }
+    for (int row = 0; row < height_; ++row) {
+      for (int col = 0; col < width_; ++col) {
+        const std::size_t i = static_cast<std::size_t>(row) * width_ + col;
+        if (changed[i]) out[i] = at(col, row);
+      }
+    }
+    return out;
+  }
+
+ private:
+  double z_at(int col, int row) const { return depth_mm_[static_cast<std::size_t>(row) * width_ + col] * 1e-3; }
+  Eigen::Vector3d point(int col, int row) const { return camera_.pixel_ray(col, row).cast<double>() * z_at(col, row); }
+  bool usable(double z, int c, int r) const {
+    if (c < 0 || r < 0 || c >= width_ || r >= height_) return false;
+    const double zn = z_at(c, r);
+    return zn > 0 && edges_.continuous(z, zn);
+  }
+  // Difference of points across (col, row) along (dc, dr): central where both neighbours are
+  // on the surface, else one-sided; zero when neither is.
+  Eigen::Vector3d difference(int col, int row, int dc, int dr) const {
+    const double z = z_at(col, row);
+    const bool ahead = usable(z, col + dc, row + dr), behind = usable(z, col - dc, row - dr);
+    const Eigen::Vector3d a = ahead ? point(col + dc, row + dr) : point(col, row);
+    const Eigen::Vector3d b = behind ? point(col - dc, row - dr) : point(col, row);
+    return a - b;
+  }
+
+  const raycast::DepthCamera& camera_;
+  const std::vector<uint16_t>& depth_mm_;
+  EdgeTest edges_;
+  int width_, height_;
+};
+
+}  // namespace
+
 std::vector<float> incidence_angles_deg(const raycast::DepthCamera& camera,
                                         const std::vector<uint16_t>& depth_mm,
                                         const DepthNoiseOptions& options) {
   validate(options);
   check_image_size(camera, depth_mm.size(), "depth_mm");
-  const int width = camera.width(), height = camera.height();
-  const EdgeTest edges(camera, options);
-  std::vector<float> angles(depth_mm.size(), std::numeric_limits<float>::quiet_NaN());
-  auto z_at = [&](int col, int row) { return depth_mm[static_cast<std::size_t>(row) * width + col] * 1e-3; };
-  auto point = [&](int col, int row) -> Eigen::Vector3d {
-    return camera.pixel_ray(col, row).cast<double>() * z_at(col, row);
-  };
-  // Difference of points across (col, row) along (dc, dr): central where both neighbours are
-  // on the surface, else one-sided; zero when neither is.
-  auto difference = [&](int col, int row, int dc, int dr) -> Eigen::Vector3d {
-    const double z = z_at(col, row);
-    auto usable = [&](int c, int r) {
-      if (c < 0 || r < 0 || c >= width || r >= height) return false;
-      const double zn = z_at(c, r);
-      return zn > 0 && edges.continuous(z, zn);
-    };
-    const bool ahead = usable(col + dc, row + dr), behind = usable(col - dc, row - dr);
-    const Eigen::Vector3d a = ahead ? point(col + dc, row + dr) : point(col, row);
-    const Eigen::Vector3d b = behind ? point(col - dc, row - dr) : point(col, row);
-    return a - b;
-  };
-  for (int row = 0; row < height; ++row) {
-    for (int col = 0; col < width; ++col) {
-      if (z_at(col, row) <= 0) continue;
-      const Eigen::Vector3d normal = difference(col, row, 1, 0).cross(difference(col, row, 0, 1));
-      const double normal_norm = normal.norm();
-      if (normal_norm <= 0) continue;
-      const Eigen::Vector3d ray = camera.pixel_ray(col, row).cast<double>();
-      const double cos_incidence = std::abs(normal.dot(ray)) / (normal_norm * ray.norm());
-      angles[static_cast<std::size_t>(row) * width + col] =
-          static_cast<float>(std::acos(std::min(1.0, cos_incidence)) / kDegToRad);
-    }
+  std::vector<float> angles = IncidenceCosines(camera, depth_mm, options).all();
+  for (float& a : angles) {
+    if (!std::isnan(a)) a = static_cast<float>(std::acos(static_cast<double>(a)) / kDegToRad);
   }
   return angles;
+}
+
+StaticBackground::StaticBackground(const raycast::DepthCamera& camera, const std::vector<RoomPlane>& planes,
+                                   const DepthNoiseOptions& options)
+    : depth_mm_(static_cast<std::size_t>(camera.width()) * camera.height(), 0), options_(options) {
+  validate(options);
+  composite_room(camera, planes, depth_mm_);
+  incidence_cos_ = IncidenceCosines(camera, depth_mm_, options).all();
+}
+
+void StaticBackground::composite(std::vector<uint16_t>& depth_mm) const {
+  if (depth_mm.size() != depth_mm_.size()) {
+    throw_invalid("depth_mm", "has " + std::to_string(depth_mm.size()) + " pixels, the background " +
+                                  std::to_string(depth_mm_.size()));
+  }
+  for (std::size_t i = 0; i < depth_mm.size(); ++i) {
+    if (depth_mm_[i] != 0 && (depth_mm[i] == 0 || depth_mm[i] > depth_mm_[i])) depth_mm[i] = depth_mm_[i];
+  }
 }
 
 NoisyDepth apply_depth_noise(const raycast::DepthCamera& camera,
                              const std::vector<uint16_t>& clean_depth_mm,
                              const std::vector<uint8_t>& clean_body_index,
                              const DepthNoiseOptions& options, std::uint64_t seed,
-                             std::int64_t frame_index) {
+                             std::int64_t frame_index, const StaticBackground* background) {
   validate(options);
   check_image_size(camera, clean_depth_mm.size(), "clean_depth_mm");
   check_image_size(camera, clean_body_index.size(), "clean_body_index");
+  if (background) {
+    check_image_size(camera, background->depth_mm().size(), "background");
+    const DepthNoiseOptions& b = background->options();
+    if (b.edge_min_jump_m != options.edge_min_jump_m || b.edge_slope_deg != options.edge_slope_deg) {
+      throw_invalid("background", "was made with other edge options");
+    }
+  }
   const int width = camera.width(), height = camera.height();
   const std::size_t num_pixels = clean_depth_mm.size();
   SimRng rng(seed, "depth_noise/" + std::to_string(frame_index));
   const EdgeTest edges(camera, options);
-  const std::vector<float> incidence = incidence_angles_deg(camera, clean_depth_mm, options);
+  const IncidenceCosines incidence(camera, clean_depth_mm, options);
+  const std::vector<float> incidence_cos = background ? incidence.reusing(*background) : incidence.all();
+  const auto min_cos = static_cast<float>(std::cos(options.max_incidence_deg * kDegToRad));
   auto z_at = [&](int col, int row) {
     return clean_depth_mm[static_cast<std::size_t>(row) * width + col] * 1e-3;
   };
@@ -172,7 +252,7 @@ NoisyDepth apply_depth_noise(const raycast::DepthCamera& camera,
       if (z <= 0) continue;
       // NaN: no neighbour on the same surface along a row or column (a sliver one pixel wide,
       // or a surface steeper than edge_slope_deg), which the sensor does not resolve either.
-      if (!(incidence[i] <= options.max_incidence_deg)) continue;
+      if (!(incidence_cos[i] >= min_cos)) continue;
       // Flying pixel: mix with the farthest-off neighbour across a depth edge.
       double edge_z = 0, edge_jump = 0;
       for (int k = 0; k < 4; ++k) {

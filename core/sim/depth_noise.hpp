@@ -81,12 +81,38 @@ struct NoisyDepth {
   std::vector<uint8_t> body_index;
 };
 
+// The static room behind the person, rendered and its incidence measured once per session:
+// composite() puts it behind a body render, and apply_depth_noise(..., &background) then
+// recomputes the incidence only where the frame's depth or a 4-neighbour's differs from the
+// room's (the person and its rim); elsewhere the cached value is the one the full computation
+// would give, so the output is identical, only cheaper.
+class StaticBackground {
+ public:
+  // Throws posefuse::Error naming the field for bad planes or options.
+  StaticBackground(const raycast::DepthCamera& camera, const std::vector<RoomPlane>& planes,
+                   const DepthNoiseOptions& options);
+
+  // composite_room with the cached room depth: keeps nearer nonzero body pixels.
+  void composite(std::vector<uint16_t>& depth_mm) const;
+
+  const std::vector<uint16_t>& depth_mm() const { return depth_mm_; }
+  const std::vector<float>& incidence_cosines() const { return incidence_cos_; }
+  const DepthNoiseOptions& options() const { return options_; }
+
+ private:
+  std::vector<uint16_t> depth_mm_;
+  std::vector<float> incidence_cos_;
+  DepthNoiseOptions options_;
+};
+
 // Applies the model to a clean depth (already composited with the room, if any) and its body
-// index map (kNoBody where no person). Both sized width x height of the camera.
+// index map (kNoBody where no person). Both sized width x height of the camera. `background`
+// (optional, made with the same camera and options; kInvalidArgument otherwise): the room the
+// depth was composited with, whose cached incidence is reused away from the person.
 NoisyDepth apply_depth_noise(const raycast::DepthCamera& camera,
                              const std::vector<uint16_t>& clean_depth_mm,
                              const std::vector<uint8_t>& clean_body_index,
                              const DepthNoiseOptions& options, std::uint64_t seed,
-                             std::int64_t frame_index);
+                             std::int64_t frame_index, const StaticBackground* background = nullptr);
 
 }  // namespace posefuse::sim

@@ -35,6 +35,20 @@ TEST(ChunkFile, RoundTripsEveryChunkKind) {
   EXPECT_NO_THROW(validate_all(back));
 }
 
+TEST(ChunkFile, MapFieldsAreWrittenInKeyOrder) {
+  // Header options filled in opposite orders give the same bytes (a map's own iteration order
+  // is random per instance).
+  TempDir dir;
+  SessionChunk forwards, backwards;
+  for (int i = 0; i < 20; ++i) {
+    (*forwards.mutable_header()->mutable_options())["key" + std::to_string(i)] = std::to_string(i);
+    (*backwards.mutable_header()->mutable_options())["key" + std::to_string(19 - i)] = std::to_string(19 - i);
+  }
+  write_chunk_file(dir / "a.pfchunks", {forwards});
+  write_chunk_file(dir / "b.pfchunks", {backwards});
+  EXPECT_EQ(file_bytes(dir / "a.pfchunks"), file_bytes(dir / "b.pfchunks"));
+}
+
 TEST(ChunkFile, EmptyFileHasNoChunks) {
   TempDir dir;
   write_bytes(dir / "empty", "");

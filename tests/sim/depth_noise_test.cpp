@@ -229,3 +229,37 @@ TEST(DepthNoise, RejectsBadInput) {
   EXPECT_THROW(composite_room(camera, {RoomPlane{Eigen::Vector3d(0, 2, 0), 1.0}}, short_depth), Error);
   EXPECT_THROW(simple_room(-1.0, 3.0), Error);
 }
+
+TEST(DepthNoise, StaticBackgroundGivesTheSameFrames) {
+  // A "person" (a slanted box with a rounded top, nearer than the room) in front of the room:
+  // reusing the room's cached incidence must not change a single pixel.
+  const raycast::DepthCamera camera = small_camera();
+  const std::vector<RoomPlane> room = simple_room(0.8, 3.5);
+  const StaticBackground background(camera, room, DepthNoiseOptions{});
+  EXPECT_EQ(background.depth_mm(), render_planes(camera, room));
+  for (int frame = 0; frame < 3; ++frame) {
+    std::vector<uint16_t> body(static_cast<std::size_t>(camera.width()) * camera.height(), 0);
+    std::vector<uint8_t> mask = no_body(camera);
+    for (int row = 10; row < 90; ++row) {
+      for (int col = 30 + 5 * frame; col < 80 + 5 * frame; ++col) {
+        const std::size_t i = static_cast<std::size_t>(row) * camera.width() + col;
+        body[i] = static_cast<uint16_t>(2000 + 4 * col + (row < 20 ? (20 - row) * (20 - row) : 0));
+        mask[i] = 1;
+      }
+    }
+    std::vector<uint16_t> full = body, cached = body;
+    composite_room(camera, room, full);
+    background.composite(cached);
+    ASSERT_EQ(full, cached);
+    const NoisyDepth a = apply_depth_noise(camera, full, mask, DepthNoiseOptions{}, 5, frame);
+    const NoisyDepth b = apply_depth_noise(camera, cached, mask, DepthNoiseOptions{}, 5, frame, &background);
+    EXPECT_EQ(a.depth_mm, b.depth_mm) << frame;
+    EXPECT_EQ(a.body_index, b.body_index) << frame;
+  }
+  DepthNoiseOptions other;
+  other.edge_min_jump_m = 0.1;
+  std::vector<uint16_t> depth = background.depth_mm();
+  EXPECT_THROW(apply_depth_noise(camera, depth, no_body(camera), other, 1, 0, &background), Error);
+  std::vector<uint16_t> short_depth(10, 0);
+  EXPECT_THROW(background.composite(short_depth), Error);
+}

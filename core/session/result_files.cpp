@@ -1,0 +1,171 @@
+#include "session/result_files.hpp"
+
+#include "body/smpl_model.hpp"
+#include "common/error.hpp"
+#include "session/directory_layout.hpp"
+#include "session/file_bytes.hpp"
+#include "session/json_message.hpp"
+#include "session/session_validator.hpp"
+
+namespace posefuse::session {
+
+namespace {
+
+void require_device_id(const std::string& device_id, const std::string& field) {
+  // The id becomes a file name or a CSV field: accept only what the session format allows.
+  if (!is_valid_device_id(device_id)) {
+    throw Error(ErrorCode::kInvalidArgument, field,
+                "device id " + session::quoted(device_id) + " is not a safe file name");
+  }
+}
+
+std::vector<std::string> vec3_fields(const v1::Vec3& v) {
+  return {format_double(v.x()), format_double(v.y()), format_double(v.z())};
+}
+
+template <typename Joints>
+void write_joints(CsvWriter& csv, std::int64_t t_us, const Joints& joints, const char* const* names) {
+  for (int j = 0; j < joints.size(); ++j) {
+    const v1::JointEstimate& joint = joints[j];
+    csv.row({std::to_string(t_us), std::to_string(j), names[j], format_double(joint.position_m().x()),
+             format_double(joint.position_m().y()), format_double(joint.position_m().z()),
+             v1::Source_Name(joint.source()), format_double(joint.confidence())});
+  }
+}
+
+}  // namespace
+
+ResultFiles::ResultFiles(const std::filesystem::path& directory) : directory_(directory) {
+  std::error_code error;
+  std::filesystem::create_directories(directory_ / result_layout::kImuOrientationDir, error);
+  if (error) {
+    throw Error(ErrorCode::kFailedPrecondition, directory_.string(),
+                "cannot create the output directory: " + error.message());
+  }
+}
+
+ResultFiles::~ResultFiles() = default;
+
+void ResultFiles::write_orientations(const v1::ImuOrientationBatch& batch) {
+  require_device_id(batch.device_id(), "imu_orientations.device_id");
+  if (batch.w_from_a_size() != 4 * batch.t_us_size()) {
+    throw Error(ErrorCode::kInvalidArgument, "imu_orientations.W_from_A",
+                "has " + std::to_string(batch.w_from_a_size()) + " values for " +
+                    std::to_string(batch.t_us_size()) + " samples");
+  }
+  auto& csv = orientations_[batch.device_id()];
+  if (!csv) {
+    csv = std::make_unique<CsvWriter>(
+        directory_ / result_layout::kImuOrientationDir / (batch.device_id() + ".csv"),
+        result_layout::kOrientationColumns);
+  }
+  for (int i = 0; i < batch.t_us_size(); ++i) {
+    csv->row({std::to_string(batch.t_us(i)), format_double(batch.w_from_a(4 * i)),
+              format_double(batch.w_from_a(4 * i + 1)), format_double(batch.w_from_a(4 * i + 2)),
+              format_double(batch.w_from_a(4 * i + 3))});
+  }
+  orientation_samples_ += static_cast<std::uint64_t>(batch.t_us_size());
+}
+
+void ResultFiles::write_forearm_orientations(const v1::ForearmOrientationBatch& batch) {
+  require_device_id(batch.device_id(), "forearm_orientations.device_id");
+  if (batch.k_from_f_size() != 4 * batch.t_us_size() || batch.pronation_rad_size() != batch.t_us_size()) {
+    throw Error(ErrorCode::kInvalidArgument, "forearm_orientations.K_from_F",
+                "has " + std::to_string(batch.k_from_f_size()) + " values and " +
+                    std::to_string(batch.pronation_rad_size()) + " angles for " + std::to_string(batch.t_us_size()) +
+                    " samples");
+  }
+  auto& csv = forearm_orientations_[batch.device_id()];
+  if (!csv) {
+    const std::filesystem::path folder = directory_ / result_layout::kForearmOrientationDir;
+    std::error_code error;
+    std::filesystem::create_directories(folder, error);
+    if (error) {
+      throw Error(ErrorCode::kFailedPrecondition, folder.string(), "cannot create: " + error.message());
+    }
+    csv = std::make_unique<CsvWriter>(folder / (batch.device_id() + ".csv"),
+                                      result_layout::kForearmOrientationColumns);
+  }
+  for (int i = 0; i < batch.t_us_size(); ++i) {
+    csv->row({std::to_string(batch.t_us(i)), format_double(batch.k_from_f(4 * i)),
+              format_double(batch.k_from_f(4 * i + 1)), format_double(batch.k_from_f(4 * i + 2)),
+              format_double(batch.k_from_f(4 * i + 3)), format_double(batch.pronation_rad(i))});
+  }
+  forearm_samples_ += static_cast<std::uint64_t>(batch.t_us_size());
+}
+
+CsvWriter& ResultFiles::opened_file(std::optional<CsvWriter>& file, const char* name,
+                                   const std::vector<std::string>& columns) {
+  if (!file) file.emplace(directory_ / name, columns);
+  return *file;
+}
+
+void ResultFiles::write_frame(const v1::FrameResult& frame) {
+  if (frame.smpl_joints_size() > body::kNumJoints) {
+    throw Error(ErrorCode::kInvalidArgument, "frame.smpl_joints",
+                "has " + std::to_string(frame.smpl_joints_size()) + " joints, at most 24");
+  }
+  if (frame.camera_joints_size() > kSkeletonJointCount) {
+    throw Error(ErrorCode::kInvalidArgument, "frame.camera_joints",
+                "has " + std::to_string(frame.camera_joints_size()) + " joints, at most 25");
+  }
+  for (const auto& position : frame.imu_positions()) {
+    require_device_id(position.device_id(), "frame.imu_positions.device_id");
+  }
+  const std::int64_t t = frame.t_us();
+  if (frame.smpl_joints_size() > 0) {
+    write_joints(opened_file(smpl_joints_, result_layout::kSmplJointsCsv, result_layout::kJointColumns), t,
+                 frame.smpl_joints(), body::smpl_joint_names().data());
+  }
+  if (frame.camera_joints_size() > 0) {
+    write_joints(opened_file(camera_joints_, result_layout::kCameraJointsCsv, result_layout::kJointColumns),
+                 t, frame.camera_joints(), layout::kKinectJointNames.data());
+  }
+  for (const auto& forearm : frame.forearms()) {
+    const v1::Quaternion& q = forearm.k_from_f();
+    opened_file(forearms_, result_layout::kForearmsCsv, result_layout::kForearmColumns)
+        .row({std::to_string(t), v1::Arm_Name(forearm.arm()), format_double(q.w()), format_double(q.x()),
+              format_double(q.y()), format_double(q.z()), format_double(forearm.pronation_rad()),
+              v1::Source_Name(forearm.source()), format_double(forearm.confidence())});
+  }
+  for (const auto& position : frame.imu_positions()) {
+    std::vector<std::string> row{std::to_string(t), position.device_id()};
+    for (std::string& v : vec3_fields(position.position_m())) row.push_back(std::move(v));
+    row.push_back(v1::Source_Name(position.source()));
+    opened_file(imu_positions_, result_layout::kImuPositionsCsv, result_layout::kImuPositionColumns).row(row);
+    ++imu_positions_count_;
+  }
+  ++frames_;
+}
+
+void ResultFiles::write_segment(const v1::RecoveredSegment& segment) {
+  require_device_id(segment.device_id(), "recovered_segment.device_id");
+  CsvWriter& csv = opened_file(segments_, result_layout::kRecoveredSegmentsCsv, result_layout::kRecoveredSegmentColumns);
+  for (const v1::RecoveredSegment::Sample& s : segment.samples()) {
+    std::vector<std::string> row{segment.device_id(), v1::RecoveredSegment::Method_Name(segment.method()),
+                                 std::to_string(segment.t_start_us()), std::to_string(segment.t_end_us()),
+                                 std::to_string(s.t_us())};
+    for (const v1::Vec3* v : {&s.imu_m(), &s.elbow_m(), &s.wrist_m()}) {
+      for (std::string& f : vec3_fields(*v)) row.push_back(std::move(f));
+    }
+    for (const double q : {s.k_from_f().w(), s.k_from_f().x(), s.k_from_f().y(), s.k_from_f().z()}) {
+      row.push_back(format_double(q));
+    }
+    csv.row(row);
+  }
+  ++recovered_segments_;
+}
+
+void ResultFiles::write_calibration(const v1::CalibrationReport& report) {
+  write_file_bytes(directory_ / result_layout::kCalibrationJson, message_to_json(report));
+}
+
+void ResultFiles::close() {
+  for (auto& [device, csv] : orientations_) csv->close();
+  for (auto& [device, csv] : forearm_orientations_) csv->close();
+  for (auto* file : {&smpl_joints_, &camera_joints_, &forearms_, &imu_positions_, &segments_}) {
+    if (*file) (*file)->close();
+  }
+}
+
+}  // namespace posefuse::session

@@ -1,0 +1,95 @@
+#pragma once
+// The result files of a fitted session, written by one code path for the client (results
+// streamed back by the server) and for the simulator's ground truth (gt/), so that a result
+// directory can be scored against a gt/ directory file by file, column by column.
+//
+//   imu_orientations/<device_id>.csv  t_us,w,x,y,z            W_from_A per IMU sample (device clock)
+//   forearm_orientations/<device_id>.csv  t_us,w,x,y,z,pronation_rad  K_from_F per arm IMU sample
+//                                     (camera clock; pronation + / supination -)
+//   smpl_joints.csv                   t_us,joint,joint_name,x_m,y_m,z_m,source,confidence
+//                                     (24 rows per frame, SMPL order, p_K)
+//   camera_joints.csv                 the same columns, 25 rows per frame, Kinect v2 JointType order
+//   forearms.csv                      t_us,arm,qw,qx,qy,qz,pronation_rad,source,confidence  (K_from_F)
+//   imu_positions.csv                 t_us,device_id,x_m,y_m,z_m,source                   (p_K)
+//   recovered_segments.csv            device_id,method,t_start_us,t_end_us,t_us,imu_x_m,imu_y_m,
+//                                     imu_z_m,elbow_x_m,elbow_y_m,elbow_z_m,wrist_x_m,wrist_y_m,
+//                                     wrist_z_m,w,x,y,z  (one row per recovered sample; method
+//                                     PAPER or SMOOTHER; p_K and K_from_F as w x y z)
+//   calibration.json                  CalibrationReport (protobuf JSON, .proto field names)
+// t_us of frame files is the camera clock; enums are written by name (LEFT, FUSED, ...).
+// A frame, forearm or segment file is created when the first result that has such entries
+// arrives.
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "posefuse/v1/results.pb.h"
+#include "session/text_fields.hpp"
+
+namespace posefuse::session {
+
+namespace result_layout {
+inline const char* const kImuOrientationDir = "imu_orientations";
+inline const char* const kForearmOrientationDir = "forearm_orientations";
+inline const char* const kRecoveredSegmentsCsv = "recovered_segments.csv";
+inline const char* const kSmplJointsCsv = "smpl_joints.csv";
+inline const char* const kCameraJointsCsv = "camera_joints.csv";
+inline const char* const kForearmsCsv = "forearms.csv";
+inline const char* const kImuPositionsCsv = "imu_positions.csv";
+inline const char* const kCalibrationJson = "calibration.json";
+inline const std::vector<std::string> kOrientationColumns = {"t_us", "w", "x", "y", "z"};
+inline const std::vector<std::string> kForearmOrientationColumns = {"t_us", "w", "x", "y", "z", "pronation_rad"};
+inline const std::vector<std::string> kJointColumns = {"t_us", "joint", "joint_name", "x_m",
+                                                       "y_m",  "z_m",   "source",     "confidence"};
+inline const std::vector<std::string> kForearmColumns = {"t_us", "arm", "qw", "qx", "qy",
+                                                         "qz", "pronation_rad", "source", "confidence"};
+inline const std::vector<std::string> kImuPositionColumns = {"t_us", "device_id", "x_m", "y_m", "z_m",
+                                                             "source"};
+inline const std::vector<std::string> kRecoveredSegmentColumns = {
+    "device_id", "method",    "t_start_us", "t_end_us",  "t_us",      "imu_x_m", "imu_y_m", "imu_z_m", "elbow_x_m",
+    "elbow_y_m", "elbow_z_m", "wrist_x_m",  "wrist_y_m", "wrist_z_m", "w",       "x",       "y",       "z"};
+}  // namespace result_layout
+
+class ResultFiles {
+ public:
+  // Creates `directory` (and parents); kFailedPrecondition when that fails.
+  explicit ResultFiles(const std::filesystem::path& directory);
+  ~ResultFiles();
+
+  // kInvalidArgument naming the field for unsafe device ids or inconsistent array sizes.
+  void write_orientations(const v1::ImuOrientationBatch& batch);
+  void write_forearm_orientations(const v1::ForearmOrientationBatch& batch);
+  // kInvalidArgument for more than 24 SMPL or 25 camera joints, or an unsafe device id.
+  void write_frame(const v1::FrameResult& frame);
+  // kInvalidArgument for an unsafe device id.
+  void write_segment(const v1::RecoveredSegment& segment);
+  void write_calibration(const v1::CalibrationReport& report);
+  // Flushes and closes every file; kDataLoss when something could not be written.
+  void close();
+
+  std::uint64_t orientation_samples() const { return orientation_samples_; }
+  std::uint64_t forearm_samples() const { return forearm_samples_; }
+  std::uint64_t frames() const { return frames_; }
+  std::uint64_t imu_positions() const { return imu_positions_count_; }
+  std::uint64_t recovered_segments() const { return recovered_segments_; }
+  const std::filesystem::path& directory() const { return directory_; }
+
+ private:
+  CsvWriter& opened_file(std::optional<CsvWriter>& file, const char* name,
+                        const std::vector<std::string>& columns);
+
+  std::filesystem::path directory_;
+  std::map<std::string, std::unique_ptr<CsvWriter>> orientations_;
+  std::map<std::string, std::unique_ptr<CsvWriter>> forearm_orientations_;
+  std::optional<CsvWriter> smpl_joints_, camera_joints_, forearms_, imu_positions_, segments_;
+  std::uint64_t orientation_samples_ = 0;
+  std::uint64_t forearm_samples_ = 0;
+  std::uint64_t frames_ = 0;
+  std::uint64_t imu_positions_count_ = 0;
+  std::uint64_t recovered_segments_ = 0;
+};
+
+}  // namespace posefuse::session

@@ -1,0 +1,41 @@
+#pragma once
+// The motions posefuse-sim can play, selected by name: a whole-body motion (BodyMotion) that
+// drives the rendered body, the camera skeleton and, through the posed forearm
+// (forearm_strap.hpp), the arm IMUs. sim_session poses the skeleton at 1 kHz and puts each IMU
+// on its strap (mounting F_from_A, strap radius r and strap slip are applied there).
+//
+// select_motion() is the one place that maps a motion name to a BodyMotion: every scripted
+// exercise of exercises.hpp by its name, and "bvh" for a BVH clip (bvh_motion.hpp) retargeted
+// onto the subject. Both use PoseLayout::all_joints(), so forearm roll (pronation/supination)
+// reaches the rendered forearm, the strap and the IMU.
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "body/template_generator.hpp"
+#include "sim/body_motion.hpp"
+#include "sim/exercises.hpp"
+
+namespace posefuse::sim {
+
+struct MotionOptions {
+  ExerciseOptions exercise;  // arm, speed, repetitions, rest hold (exercises only)
+  std::string bvh_path;      // motion "bvh": the clip to play
+};
+
+// What a motion may need to know about the subject.
+struct MotionContext {
+  body::Sex sex = body::Sex::kMale;
+  Eigen::VectorXd betas = Eigen::VectorXd::Zero(body::kTemplateNumBetas);
+};
+
+// Names select_motion accepts: exercise_names() and "bvh".
+std::vector<std::string> motion_names();
+
+// The motion's poses (PoseLayout::all_joints()), its own duration and phases. kInvalidArgument
+// naming "motion" for an unknown name, "bvh_path" when a bvh motion has none, or the option
+// (speed, repetitions, ...) for a bad value; load_bvh's errors for unreadable or malformed files.
+BodyMotion select_motion(const std::string& name, const MotionOptions& options, const MotionContext& context);
+
+}  // namespace posefuse::sim

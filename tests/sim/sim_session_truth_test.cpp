@@ -1,0 +1,195 @@
+// The whole-session simulator's truth is consistent: the IMU (moved by the posed skeleton at
+// 1 kHz) sits on the strap of the rendered body's forearm for every motion, frames map as
+// documented, and the strap slip stays within its bounds.
+#include <gtest/gtest.h>
+
+#include <cstdio>
+
+#include "body/smpl_model.hpp"
+#include "sim/exercises.hpp"
+
+#include "common/error.hpp"
+#include "geometry/quaternion.hpp"
+#include "session/session_validator.hpp"
+#include "sim/sim_session.hpp"
+#include "test_camera.hpp"
+
+using namespace posefuse;
+using namespace posefuse::sim;
+
+namespace {
+
+class ValidatingSink : public session::ChunkSink {
+ public:
+  void write(const session::SessionChunk& chunk) override { validator.check(chunk); }
+  void finish() override {}
+  session::SessionValidator validator;
+};
+
+SimSessionOptions small(bool slip) {
+  SimSessionOptions o;
+  o.duration_s = 2.0;
+  o.depth_intrinsics = sim::testing::quarter_kinect_intrinsics();
+  o.color = false;
+  o.strap_slip.enabled = slip;
+  o.mount_sigma_rad = 0.0;
+  return o;
+}
+
+double angle_deg(const Quat& a, const Quat& b) { return geometry::angle_between(a, b) * 180.0 / 3.14159265358979; }
+
+}  // namespace
+
+TEST(SimSessionTruth, ImuSitsOnTheRenderedStrap) {
+  const SimSessionOptions o = small(false);
+  ValidatingSink sink;
+  const SimTruth truth = simulate_session(o, sink);
+  sink.validator.finish();
+  ASSERT_EQ(truth.frames.size(), 61u);
+  ASSERT_EQ(truth.devices.size(), 3u);
+  double worst_mm = 0, worst_deg = 0;
+  for (const SimFrameTruth& frame : truth.frames) {
+    for (int arm = 0; arm < 2; ++arm) {
+      const auto a = static_cast<std::size_t>(arm);
+      const Vec3 x_F = frame.K_from_F[a] * Vec3::UnitX();
+      const Vec3 expected_imu = frame.strap_p_K[a] + o.strap_radius_m * x_F;
+      worst_mm = std::max(worst_mm, 1e3 * (frame.imu_p_K[a] - expected_imu).norm());
+      worst_deg = std::max(worst_deg, angle_deg(frame.K_from_imu[a], frame.K_from_F[a]));  // F_from_A = I
+      EXPECT_NEAR(frame.pronation_rad[a], 0.0, 1e-9);  // arm raising does not roll the forearm
+      EXPECT_GE(frame.forearm_visible_fraction[a], 0.8) << frame.t_us;
+    }
+    // The base IMU is fixed on the camera.
+    EXPECT_LT(angle_deg(frame.K_from_imu[2], truth.K_from_B), 1e-6);
+  }
+  std::printf("IMU vs rendered strap: worst %.4f mm, %.5f deg\n", worst_mm, worst_deg);
+  EXPECT_LT(worst_mm, 1.0);
+  EXPECT_LT(worst_deg, 0.05);
+  // The camera is level: W's up is K's up.
+  EXPECT_LT((truth.K_from_W * Vec3::UnitZ() - Vec3::UnitY()).norm(), 1e-12);
+  // Devices: arm IMUs then the base, with their roles.
+  EXPECT_EQ(truth.devices[0].role, v1::ImuDevice::ARM_LEFT);
+  EXPECT_EQ(truth.devices[1].role, v1::ImuDevice::ARM_RIGHT);
+  EXPECT_EQ(truth.devices[2].role, v1::ImuDevice::BASE);
+  EXPECT_GT(truth.buzzer_heard_camera_s, truth.buzzer_stop_camera_s);
+
+  // Per IMU sample (gt/forearm_orientations): the forearm under the strap is the IMU's own
+  // orientation (F_from_A = I, no slip), at every sample's true camera time.
+  double worst_sample_deg = 0;
+  for (std::size_t d = 0; d < 2; ++d) {
+    const SimDeviceTruth& device = truth.devices[d];
+    ASSERT_EQ(device.K_from_F.size(), device.t_device_us.size());
+    ASSERT_EQ(device.pronation_rad.size(), device.t_device_us.size());
+    for (std::size_t i = 0; i < device.K_from_F.size(); ++i) {
+      worst_sample_deg = std::max(worst_sample_deg, angle_deg(truth.K_from_W * device.W_from_A[i], device.K_from_F[i]));
+      EXPECT_NEAR(device.pronation_rad[i], 0.0, 1e-9);
+    }
+  }
+  std::printf("IMU vs forearm per sample: worst %.5f deg\n", worst_sample_deg);
+  EXPECT_LT(worst_sample_deg, 0.05);
+  EXPECT_TRUE(truth.devices[2].K_from_F.empty());
+}
+
+TEST(SimSessionTruth, EveryExerciseGivesAValidSessionWithTheImuOnTheRenderedForearm) {
+  for (const std::string& name : exercise_names()) {
+    SimSessionOptions o = small(false);
+    o.motion = name;
+    o.motion_options.exercise.arm = ExerciseArm::kBoth;
+    o.motion_options.exercise.speed = 2.0;
+    o.motion_options.exercise.rest_hold_s = 0.0;
+    o.depth_rate_hz = 10.0;
+    o.clothing.subdivisions = 0;
+    ValidatingSink sink;
+    const SimTruth truth = simulate_session(o, sink);
+    sink.validator.finish();
+    ASSERT_EQ(truth.frames.size(), 21u) << name;
+    double worst_mm = 0, worst_deg = 0, worst_axis_mm = 0, largest_motion_mm = 0;
+    double pronation_min = 0, pronation_max = 0;
+    const std::array<int, 2> elbow = {body::kLeftElbow, body::kRightElbow};
+    const std::array<int, 2> wrist = {body::kLeftWrist, body::kRightWrist};
+    for (const SimFrameTruth& frame : truth.frames) {
+      for (std::size_t a = 0; a < 2; ++a) {
+        // The IMU on the strap of F...
+        const Vec3 expected_imu = frame.strap_p_K[a] + o.strap_radius_m * (frame.K_from_F[a] * Vec3::UnitX());
+        worst_mm = std::max(worst_mm, 1e3 * (frame.imu_p_K[a] - expected_imu).norm());
+        worst_deg = std::max(worst_deg, angle_deg(frame.K_from_imu[a], frame.K_from_F[a]));
+        // ...and F on the rendered forearm: origin d_se from the elbow joint, y towards the wrist.
+        const Vec3 e = frame.smpl_joints_K.col(elbow[a]), w = frame.smpl_joints_K.col(wrist[a]);
+        const Vec3 strap = e + o.strap_to_elbow_m * (w - e).normalized();
+        worst_axis_mm = std::max(worst_axis_mm, 1e3 * (frame.strap_p_K[a] - strap).norm());
+        EXPECT_GT((frame.K_from_F[a] * Vec3::UnitY()).dot((w - e).normalized()), 1.0 - 1e-9) << name;
+        largest_motion_mm = std::max(largest_motion_mm, 1e3 * (frame.imu_p_K[a] - truth.frames[0].imu_p_K[a]).norm());
+        pronation_min = std::min(pronation_min, frame.pronation_rad[a]);
+        pronation_max = std::max(pronation_max, frame.pronation_rad[a]);
+      }
+    }
+    std::printf("%-26s IMU vs strap %.4f mm %.5f deg, strap vs joints %.4f mm, IMU moved %.0f mm, pronation %.1f..%.1f deg\n",
+                name.c_str(), worst_mm, worst_deg, worst_axis_mm, largest_motion_mm, pronation_min * 180 / 3.14159265358979,
+                pronation_max * 180 / 3.14159265358979);
+    EXPECT_LT(worst_mm, 1.0) << name;
+    EXPECT_LT(worst_deg, 0.05) << name;
+    EXPECT_LT(worst_axis_mm, 1e-6) << name;
+    if (name == "forearm_rolling") {  // the roll reaches the rendered forearm and the IMU: +-60 deg
+      EXPECT_GT(pronation_max, 50.0 * 3.14159265358979 / 180) << name;
+      EXPECT_LT(pronation_min, -50.0 * 3.14159265358979 / 180) << name;
+    }
+    if (name != "torso_tilt" && name != "shoulder_lift") {
+      EXPECT_GT(largest_motion_mm, 50.0) << name;
+    }
+  }
+}
+
+TEST(SimSessionTruth, StrapSlipStaysWithinItsBounds) {
+  const SimSessionOptions o = small(true);
+  ValidatingSink sink;
+  const SimTruth truth = simulate_session(o, sink);
+  double worst_mm = 0, worst_deg = 0;
+  for (const SimFrameTruth& frame : truth.frames) {
+    for (std::size_t a = 0; a < 2; ++a) {
+      const Vec3 expected_imu = frame.strap_p_K[a] + o.strap_radius_m * (frame.K_from_F[a] * Vec3::UnitX());
+      worst_mm = std::max(worst_mm, 1e3 * (frame.imu_p_K[a] - expected_imu).norm());
+      worst_deg = std::max(worst_deg, angle_deg(frame.K_from_imu[a], frame.K_from_F[a]));
+    }
+  }
+  const double bound_mm = 1e3 * (o.strap_slip.max_slide_m + o.strap_radius_m * o.strap_slip.max_rotation_rad) + 1.0;
+  std::printf("with slip: worst %.3f mm (bound %.3f), %.3f deg\n", worst_mm, bound_mm, worst_deg);
+  EXPECT_GT(worst_mm, 0.2);  // it does slip
+  EXPECT_LT(worst_mm, bound_mm);
+  EXPECT_GT(worst_deg, 0.05);
+  EXPECT_LT(worst_deg, o.strap_slip.max_rotation_rad * 180 / 3.14159265358979 + 0.05);
+}
+
+TEST(SimSessionTruth, BadOptionsNameTheField) {
+  const auto field_of = [](SimSessionOptions o) {
+    ValidatingSink sink;
+    try {
+      simulate_session(o, sink);
+    } catch (const Error& e) {
+      return e.field();
+    }
+    return std::string("no error");
+  };
+  SimSessionOptions o = small(false);
+  o.duration_s = 0.5;
+  EXPECT_EQ(field_of(o), "duration_s");
+  o = small(false);
+  o.strap_to_elbow_m = 0.3;
+  EXPECT_EQ(field_of(o), "strap_to_elbow_m");
+  o = small(false);
+  o.wall_distance_m = 2.6;
+  EXPECT_EQ(field_of(o), "wall_distance_m");
+  o = small(false);
+  o.motion = "juggling";
+  EXPECT_EQ(field_of(o), "motion");
+  o = small(false);
+  o.motion = "bvh";
+  EXPECT_EQ(field_of(o), "bvh_path");
+  o = small(false);
+  o.motion_options.exercise.speed = -1;
+  EXPECT_EQ(field_of(o), "speed");
+  o = small(false);
+  o.threads = 0;
+  EXPECT_EQ(field_of(o), "threads");
+  o = small(false);
+  o.betas = Eigen::VectorXd::Constant(3, std::nan(""));
+  EXPECT_EQ(field_of(o), "betas");
+}

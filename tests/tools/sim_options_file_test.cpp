@@ -1,0 +1,130 @@
+// posefuse-sim's options file: every key is applied, every error names the file, line, key and
+// the value.
+#include <gtest/gtest.h>
+
+#include "common/error.hpp"
+#include "tools/sim/sim_options_file.hpp"
+
+using namespace posefuse;
+using posefuse::tools::apply_sim_options;
+
+namespace {
+
+// The error apply_sim_options throws for `text`, or a failure.
+Error error_of(const std::string& text) {
+  sim::SimSessionOptions options;
+  try {
+    apply_sim_options(text, "opts.txt", options);
+  } catch (const Error& e) {
+    return e;
+  }
+  ADD_FAILURE() << "no error for: " << text;
+  return Error(ErrorCode::kInternal, "", "");
+}
+
+}  // namespace
+
+TEST(SimOptionsFile, AppliesEveryKindOfValue) {
+  sim::SimSessionOptions options;
+  apply_sim_options(
+      "# a comment\n"
+      "seed = 42\n"
+      "duration_s = 12.5   # trailing comment\n"
+      "\n"
+      "  sex=female\n"
+      "betas = 0.5, -1, 2\n"
+      "heading_deg = 90\n"
+      "color = false\n"
+      "color_width = 480\n"
+      "imu_arms = left\r\n"
+      "strap_slip = off\n"
+      "clothing_subdivisions = 2\n"
+      "packet_loss_rate = 0.05\n"
+      "imu_errors = false\n"
+      "clock_drift_max_ppm = 20\n"
+      "motion = forearm_rolling\n"
+      "speed = 1.5\n"
+      "repetitions = 2\n"
+      "arm = both\n"
+      "bvh_path = /tmp/clip.bvh\n"
+      "threads = 3\n",
+      "opts.txt", options);
+  EXPECT_EQ(options.seed, 42u);
+  EXPECT_DOUBLE_EQ(options.duration_s, 12.5);
+  EXPECT_EQ(options.sex, body::Sex::kFemale);
+  ASSERT_EQ(options.betas.size(), 10);
+  EXPECT_DOUBLE_EQ(options.betas[0], 0.5);
+  EXPECT_DOUBLE_EQ(options.betas[1], -1.0);
+  EXPECT_DOUBLE_EQ(options.betas[2], 2.0);
+  EXPECT_DOUBLE_EQ(options.betas[3], 0.0);
+  EXPECT_NEAR(options.heading_rad, 3.14159265358979 / 2, 1e-12);
+  EXPECT_FALSE(options.color);
+  EXPECT_EQ(options.color_camera.intrinsics.width, 480);
+  EXPECT_EQ(options.color_camera.intrinsics.height, 270);
+  EXPECT_DOUBLE_EQ(options.color_camera.intrinsics.fx, 264.0);
+  EXPECT_TRUE(options.arm_imu[0]);
+  EXPECT_FALSE(options.arm_imu[1]);
+  EXPECT_FALSE(options.strap_slip.enabled);
+  EXPECT_EQ(options.clothing.subdivisions, 2);
+  EXPECT_DOUBLE_EQ(options.imu.packet_loss.loss_rate, 0.05);
+  EXPECT_EQ(options.imu.synth.error_model.gyr_bias_sigma_rad_s, 0.0);
+  EXPECT_DOUBLE_EQ(options.clock_drift_max, 20e-6);
+  EXPECT_EQ(options.motion, "forearm_rolling");
+  EXPECT_DOUBLE_EQ(options.motion_options.exercise.speed, 1.5);
+  EXPECT_EQ(options.motion_options.exercise.repetitions, 2);
+  EXPECT_EQ(options.motion_options.exercise.arm, sim::ExerciseArm::kBoth);
+  EXPECT_EQ(options.motion_options.bvh_path, "/tmp/clip.bvh");
+  EXPECT_EQ(options.threads, 3);
+  EXPECT_NO_THROW(sim::validate(options));
+}
+
+TEST(SimOptionsFile, ErrorsNameFileLineKeyAndValue) {
+  struct Case {
+    std::string text, field, message_part;
+  };
+  const std::vector<Case> cases = {
+      {"seed = 1\nfoo = 3\n", "opts.txt:2:foo", "unknown key 'foo'"},
+      {"duration_s = ten\n", "opts.txt:1:duration_s", "value 'ten' is not a finite number"},
+      {"duration_s = nan\n", "opts.txt:1:duration_s", "value 'nan'"},
+      {"duration_s = 0.5\n", "opts.txt:1:duration_s", "value '0.5' must be in 1..3600"},
+      {"seed = -3\n", "opts.txt:1:seed", "value '-3' is not an unsigned integer"},
+      {"sex = robot\n", "opts.txt:1:sex", "value 'robot' must be male or female"},
+      {"motion = dancing\n", "opts.txt:1:motion", "value 'dancing' is not a known motion"},
+      {"speed = 0\n", "opts.txt:1:speed", "value '0' must be > 0"},
+      {"repetitions = 0\n", "opts.txt:1:repetitions", "value '0' must be in 1..1000"},
+      {"arm = middle\n", "opts.txt:1:arm", "value 'middle' must be right, left or both"},
+      {"color = maybe\n", "opts.txt:1:color", "value 'maybe' is not a boolean"},
+      {"color_width = 12\n", "opts.txt:1:color_width", "value '12' must be in 64..1920"},
+      {"betas = 1,,2\n", "opts.txt:1:betas", "value '' is not a finite number"},
+      {"betas = 1,2,3,4,5,6,7,8,9,10,11\n", "opts.txt:1:betas", "has more than 10 values"},
+      {"packet_loss_rate = 1.5\n", "opts.txt:1:packet_loss_rate", "must be in [0, 1]"},
+      {"imu_arms = three\n", "opts.txt:1:imu_arms", "value 'three'"},
+      {"threads = 0\n", "opts.txt:1:threads", "value '0' must be in 1..64"},
+      {"seed = 1\nseed = 2\n", "opts.txt:2:seed", "is set twice"},
+      {"\n\njust words\n", "opts.txt:3", "expected 'key = value'"},
+      {"seed =\n", "opts.txt:1:seed", "has no value"},
+      {"= 4\n", "opts.txt:1", "empty key"},
+  };
+  for (const Case& c : cases) {
+    const Error e = error_of(c.text);
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument) << c.text;
+    EXPECT_EQ(e.field(), c.field) << c.text;
+    EXPECT_NE(std::string(e.what()).find(c.message_part), std::string::npos) << c.text << " -> " << e.what();
+  }
+}
+
+TEST(SimOptionsFile, EveryKeyIsListedWithItsMeaning) {
+  const auto& keys = tools::sim_option_keys();
+  EXPECT_GE(keys.size(), 30u);
+  for (const auto& key : keys) EXPECT_GT(std::string(key.meaning).size(), 5u) << key.key;
+}
+
+TEST(SimOptionsFile, MissingFileIsNotFound) {
+  sim::SimSessionOptions options;
+  try {
+    tools::apply_sim_options_file("/nonexistent/opts.txt", options);
+    FAIL();
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kNotFound);
+  }
+}

@@ -1,0 +1,44 @@
+#include "tools/sim/sim_run.hpp"
+
+#include <memory>
+
+#include "common/error.hpp"
+#include "session/chunk_file.hpp"
+#include "session/directory_writer.hpp"
+#include "sim/ground_truth_files.hpp"
+#include "tools/sim/contact_sheet.hpp"
+
+namespace posefuse::tools {
+
+SimRunResult run_simulation(const SimRunRequest& request, const std::function<void(const sim::SimProgress&)>& progress) {
+  if (request.out_directory.has_value() == request.chunk_file.has_value()) {
+    throw Error(ErrorCode::kInvalidArgument, "--out/--chunk-file", "give exactly one of the two");
+  }
+  sim::validate(request.options);
+  SimRunResult result;
+  result.gt_directory = request.gt_directory ? *request.gt_directory
+                        : request.out_directory ? *request.out_directory / "gt"
+                                                : std::filesystem::path(request.chunk_file->string() + ".gt");
+  if (std::filesystem::exists(result.gt_directory) && !std::filesystem::is_empty(result.gt_directory)) {
+    throw Error(ErrorCode::kFailedPrecondition, result.gt_directory.string(), "exists and is not empty");
+  }
+  std::unique_ptr<session::ChunkSink> sink;
+  if (request.out_directory) {
+    sink = std::make_unique<session::DirectoryWriter>(*request.out_directory);
+  } else {
+    sink = std::make_unique<session::ChunkFileWriter>(*request.chunk_file);
+  }
+  // The contact sheet shows the middle frame.
+  const auto middle_us = static_cast<std::int64_t>(0.5 * request.options.duration_s * 1e6);
+  ContactSheetRecorder recorder(*sink, middle_us);
+  session::ChunkSink& target = request.contact_sheet ? static_cast<session::ChunkSink&>(recorder) : *sink;
+  const sim::SimTruth truth = sim::simulate_session(request.options, target, progress);
+  target.finish();
+  sim::write_ground_truth(truth, result.gt_directory);
+  if (request.contact_sheet) write_png(recorder.render(), *request.contact_sheet);
+  result.chunks = truth.chunks;
+  result.frames = static_cast<std::int64_t>(truth.frames.size());
+  return result;
+}
+
+}  // namespace posefuse::tools

@@ -1,0 +1,33 @@
+#pragma once
+// What `posefuse-sim` does, as a function the tests call: simulate one session, write it as a
+// recording directory (with gt/ inside) or as a chunk file (with gt/ beside it), optionally a
+// contact sheet.
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+
+#include "sim/sim_session.hpp"
+
+namespace posefuse::tools {
+
+struct SimRunRequest {
+  sim::SimSessionOptions options;
+  std::optional<std::filesystem::path> out_directory;  // exactly one of these two
+  std::optional<std::filesystem::path> chunk_file;
+  std::optional<std::filesystem::path> gt_directory;   // default: <out>/gt or <chunk_file>.gt
+  std::optional<std::filesystem::path> contact_sheet;  // PNG
+};
+
+struct SimRunResult {
+  std::filesystem::path gt_directory;
+  std::uint64_t chunks = 0;
+  std::int64_t frames = 0;
+};
+
+// kInvalidArgument for a request without (or with both) outputs; errors of the simulator and
+// the writers pass through.
+SimRunResult run_simulation(const SimRunRequest& request,
+                            const std::function<void(const sim::SimProgress&)>& progress = {});
+
+}  // namespace posefuse::tools
