@@ -248,7 +248,9 @@ int main(int argc, char** argv) {
           ++total.elevation_n;
         }
       }
-      if (!overlay.empty() && !overlay_written && exercises[e] == "hair_combing" && occluded) {
+      // Hand over the head, half way through the combing exercise.
+      if (!overlay.empty() && !overlay_written && exercises[e] == "hair_combing" &&
+          static_cast<double>(sim.t_us[i]) * 1e-6 > kCalibrationS + 0.45 * motion.duration_s) {
         write_overlay(overlay, sim, i, fit->second);
         overlay_written = true;
       }
@@ -271,7 +273,7 @@ int main(int argc, char** argv) {
   }
   const double lower_all = 100 * (1 - total.fit.mean_all() / total.camera.mean_all());
   const double lower_occ = 100 * (1 - total.fit_occ.mean_all() / total.camera_occ.mean_all());
-  std::printf("fit vs camera skeleton: %.1f %% lower overall, %.1f %% lower under occlusion (mm means in mm)\n",
+  std::printf("fit vs camera skeleton: %.1f %% lower overall, %.1f %% lower under occlusion\n",
               lower_all, lower_occ);
   std::printf("dropping the imu term: wrists %+.1f %%, elbows %+.1f %% under occlusion\n",
               100 * (total.fit_no_imu_occ.mean(2) / total.fit_occ.mean(2) - 1),
