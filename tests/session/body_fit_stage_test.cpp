@@ -15,7 +15,10 @@
 
 #include "body/smpl_model.hpp"
 #include "common/error.hpp"
+#include "session/pipeline.hpp"
+#include "session/session_validator.hpp"
 #include "session/stages/body_fit_stage.hpp"
+#include "session/stages/default_stages.hpp"
 #include "sim/camera_session.hpp"
 
 namespace posefuse::session {
@@ -148,6 +151,34 @@ TEST(BodyFitStage, FitsEveryFrameCloseToTheTruth) {
   EXPECT_LT(mean_fit, 0.030);
   EXPECT_LT(worst, 0.060);
   EXPECT_LT(mean_fit, mean_camera);
+}
+
+TEST(BodyFitStage, RunsInTheDefaultPipelineWhenEnabled) {
+  std::vector<v1::SessionChunk> chunks(1);
+  *chunks[0].mutable_header() = header_with({});
+  chunks.insert(chunks.end(), session().chunks.begin(), session().chunks.end());
+  SessionValidator validator;
+  for (const auto& chunk : chunks) validator.check(chunk);
+  *chunks.emplace_back().mutable_end() = validator.counts();
+  struct Sink : ResultSink {
+    void emit(v1::FitResult&& result) override { results.push_back(std::move(result)); }
+    std::vector<v1::FitResult> results;
+  } sink;
+  {
+    SessionPipeline pipeline(make_default_stages(), sink);
+    for (const auto& chunk : chunks) pipeline.push(chunk);
+    pipeline.close();
+  }
+  size_t fitted = 0;
+  const v1::Summary* summary = nullptr;
+  for (const auto& r : sink.results) {
+    fitted += r.has_frame() && r.frame().smpl_joints_size() == body::kNumJoints;
+    if (r.has_summary()) summary = &r.summary();
+    EXPECT_FALSE(r.has_item_error()) << r.item_error().field() << ": " << r.item_error().message();
+  }
+  EXPECT_EQ(fitted, session().truth.size());
+  ASSERT_NE(summary, nullptr);
+  EXPECT_EQ(summary->frames_fitted(), session().truth.size());
 }
 
 TEST(BodyFitStage, ReportsThePersonalisedShape) {
