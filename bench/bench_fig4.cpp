@@ -12,7 +12,8 @@
 // K_from_F the forearm stage would give is the truth turned by a random 3 deg rotation per frame
 // (paper 1's filter + calibration error scale), fed to the stage as ForearmOrientationBatches.
 //
-// Usage: bench_fig4 [rate_hz] [overlay.png]. Times are thread CPU time of the stage's work per
+// Usage: bench_fig4 [rate_hz] [overlay.png] [mocap folder: adds the first 10 s of wipe.bvh and
+// box-1.bvh, retargeted by sim::bvh_motion; their first second is overridden by the controlled pose]. Times are thread CPU time of the stage's work per
 // frame (preprocessing, two LM fits, post-processing), one core.
 #include <algorithm>
 #include <cmath>
@@ -32,6 +33,8 @@
 #include "session/image_codec.hpp"
 #include "session/stages/body_fit_stage.hpp"
 #include "sim/camera_session.hpp"
+#include "sim/bvh.hpp"
+#include "sim/bvh_motion.hpp"
 #include "sim/exercises.hpp"
 
 using namespace posefuse;
@@ -180,18 +183,30 @@ void write_overlay(const std::string& path, const sim::CameraSessionResult& sim,
 int main(int argc, char** argv) {
   const double rate_hz = argc > 1 ? std::atof(argv[1]) : 5.0;
   const std::string overlay = argc > 2 ? argv[2] : "";
-  const std::vector<std::string> exercises = {"arm_raising", "shoulder_lift", "forearm_rolling",
-                                              "hair_combing", "torso_tilt", "air_punching"};
+  const std::string mocap_dir = argc > 3 ? argv[3] : "";
+  // Paper 2's exercises, then (with a mocap folder) the first kClipS seconds of two upper-body clips.
+  std::vector<std::string> exercises = {"arm_raising", "shoulder_lift", "forearm_rolling",
+                                        "hair_combing", "torso_tilt", "air_punching"};
+  std::vector<sim::BodyMotion> motions;
+  sim::ExerciseOptions exercise_options;
+  exercise_options.repetitions = 1;
+  exercise_options.rest_hold_s = 0.5;
+  for (const auto& name : exercises) motions.push_back(sim::make_exercise(name, exercise_options));
+  if (!mocap_dir.empty()) {
+    constexpr double kClipS = 10.0;
+    for (const char* clip : {"wipe", "box-1"}) {
+      exercises.push_back(std::string("mocap ") + clip);
+      motions.push_back(sim::bvh_motion(sim::load_bvh(mocap_dir + "/" + clip + ".bvh")));
+      motions.back().duration_s = std::min(motions.back().duration_s, kClipS);
+    }
+  }
   const body::PoseLayout layout = body::PoseLayout::all_joints();
   const int left_z = layout.index_of("left_shoulder_z"), right_z = layout.index_of("right_shoulder_z");
   Table total;
   std::printf("bench_fig4: %.1f Hz subsampling, 1 s controlled pose + each exercise (1 repetition)\n", rate_hz);
   bool overlay_written = false;
   for (size_t e = 0; e < exercises.size(); ++e) {
-    sim::ExerciseOptions exercise_options;
-    exercise_options.repetitions = 1;
-    exercise_options.rest_hold_s = 0.5;
-    const sim::BodyMotion motion = sim::make_exercise(exercises[e], exercise_options);
+    const sim::BodyMotion& motion = motions[e];
     Eigen::VectorXd controlled = motion.poses(0.0);
     controlled[left_z] = -45 * kDeg;
     controlled[right_z] = 45 * kDeg;
@@ -256,7 +271,7 @@ int main(int argc, char** argv) {
       }
     }
     total.frame_s.insert(total.frame_s.end(), table.frame_s.begin(), table.frame_s.end());
-    std::printf("%-16s frames %3d (occluded %3d)  camera %5.1f mm  fit %5.1f mm  fit w/o imu %5.1f mm\n",
+    std::printf("%-17s frames %3d (occluded %3d)  camera %5.1f mm  fit %5.1f mm  fit w/o imu %5.1f mm\n",
                 exercises[e].c_str(), table.frames, table.occluded, 1e3 * table.camera.mean_all(),
                 1e3 * table.fit.mean_all(), 1e3 * table.fit_no_imu.mean_all());
     total.frames += table.frames;

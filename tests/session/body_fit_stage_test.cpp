@@ -11,6 +11,7 @@
 #include <memory>
 #include <numbers>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "body/smpl_model.hpp"
@@ -60,6 +61,7 @@ sim::CameraSessionResult simulate(double duration_s, double first_angle_deg) {
   options.duration_s = duration_s;
   options.betas = Eigen::VectorXd::Zero(10);
   options.betas << 0.8, -0.5, 0.4, 0, 0, 0, 0, 0, 0, 0;  // not the template's shape
+  options.forearm_straps = {sim::ForearmStrap{sim::BodySide::kRight}, sim::ForearmStrap{sim::BodySide::kLeft}};
   const body::PoseLayout layout = body::PoseLayout::full_body();
   const int left = layout.index_of("left_shoulder_z"), right = layout.index_of("right_shoulder_z");
   return sim::simulate_camera_session(options, layout, [=](double t_s) {
@@ -179,6 +181,46 @@ TEST(BodyFitStage, RunsInTheDefaultPipelineWhenEnabled) {
   EXPECT_EQ(fitted, session().truth.size());
   ASSERT_NE(summary, nullptr);
   EXPECT_EQ(summary->frames_fitted(), session().truth.size());
+}
+
+TEST(BodyFitStage, ForearmOrientationsEnterTheFitAndTheResult) {
+  // The forearm stage's per-sample K_from_F, here the truth, one sample per frame.
+  v1::FitResult right, left;
+  for (auto [result, arm, strap] : {std::tuple{&right, v1::RIGHT, 0}, std::tuple{&left, v1::LEFT, 1}}) {
+    v1::ForearmOrientationBatch& batch = *result->mutable_forearm_orientations();
+    batch.set_arm(arm);
+    for (size_t i = 0; i < session().truth.size(); ++i) {
+      const Eigen::Quaterniond q = session().truth[i].forearms[static_cast<size_t>(strap)].K_from_F;
+      batch.add_t_us(session().t_us[i]);
+      for (const double c : {q.w(), q.x(), q.y(), q.z()}) batch.add_k_from_f(c);
+    }
+  }
+  Output out;
+  BodyFitStage stage;
+  stage.start(header_with({}), out);
+  stage.on_result(right, out);
+  stage.on_result(left, out);
+  for (const auto& chunk : session().chunks) stage.on_chunk(chunk, out);
+  stage.finish(out);
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), session().truth.size());
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const v1::FrameResult& f = *frames[i];
+    EXPECT_EQ(f.smpl_joints(body::kRightWrist).source(), v1::FUSED);
+    ASSERT_EQ(f.forearms_size(), 2);
+    for (const auto& forearm : f.forearms()) {
+      const bool is_left = forearm.arm() == v1::LEFT;
+      const Eigen::Quaterniond got(forearm.k_from_f().w(), forearm.k_from_f().x(), forearm.k_from_f().y(),
+                                   forearm.k_from_f().z());
+      const Eigen::Quaterniond& want = session().truth[i].forearms[is_left ? 1 : 0].K_from_F;
+      // The reported F's y lies on the fitted forearm; its roll is the IMU's.
+      const Eigen::Vector3d axis = (vec(f.smpl_joints(is_left ? body::kLeftWrist : body::kRightWrist).position_m()) -
+                                    vec(f.smpl_joints(is_left ? body::kLeftElbow : body::kRightElbow).position_m()))
+                                       .normalized();
+      EXPECT_LT(std::acos(std::min(1.0, (got * Eigen::Vector3d::UnitY()).dot(axis))), 1e-6);
+      EXPECT_LT(got.angularDistance(want), 10 * kDeg) << "frame " << i << (is_left ? " left" : " right");
+    }
+  }
 }
 
 TEST(BodyFitStage, ReportsThePersonalisedShape) {

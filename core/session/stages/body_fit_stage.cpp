@@ -233,6 +233,7 @@ void BodyFitStage::on_result(const v1::FitResult& result, StageOutput& out) {
 
 void BodyFitStage::add_frame(BodyFitFrame&& frame, StageOutput& out) {
   if (!first_t_us_) first_t_us_ = frame.t_us;
+  last_frame_t_us_ = frame.t_us;
   if (!personalised_) {
     if (static_cast<double>(frame.t_us - *first_t_us_) * 1e-6 < calibration_s_) {
       calibration_frames_.push_back(std::move(frame));
@@ -297,12 +298,15 @@ void BodyFitStage::fit_ready(bool all, StageOutput& out) {
     fit_frame(queue_.front(), out);
     queue_.pop_front();
   }
-  const std::int64_t oldest_needed = queue_.empty() ? 0 : queue_.front().t_us;
+  // Forearm orientations are looked up for queued frames and for fitted frames the smoother has
+  // not emitted yet; older ones are dropped.
   for (auto& [arm, samples] : K_from_F_) {
-    while (samples.size() > 1 && !fitted_.empty() && samples.front().first < fitted_.front().t_us - kForearmHistoryUs &&
-           (queue_.empty() || samples.front().first < oldest_needed - kForearmHistoryUs)) {
-      samples.pop_front();
-    }
+    if (samples.empty() || !last_frame_t_us_) continue;
+    std::int64_t oldest = *last_frame_t_us_;  // later frames may still come for later samples
+    if (!calibration_frames_.empty()) oldest = std::min(oldest, calibration_frames_.front().t_us);
+    if (!queue_.empty()) oldest = std::min(oldest, queue_.front().t_us);
+    if (!fitted_.empty()) oldest = std::min(oldest, fitted_.front().t_us);
+    while (samples.size() > 1 && samples.front().first < oldest - kForearmHistoryUs) samples.pop_front();
   }
 }
 

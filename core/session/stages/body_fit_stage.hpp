@@ -96,7 +96,7 @@ class BodyFitStage : public Stage {
   std::optional<std::pair<std::int64_t, std::vector<std::uint8_t>>> body_index_;
   std::uint64_t frames_without_skeleton_ = 0;
 
-  std::optional<std::int64_t> first_t_us_;
+  std::optional<std::int64_t> first_t_us_, last_frame_t_us_;
   std::vector<BodyFitFrame> calibration_frames_;
   bool personalised_ = false;
   std::deque<BodyFitFrame> queue_;  // personalised, waiting for forearm orientations
