@@ -14,6 +14,7 @@ class SessionPipeline::Output : public StageOutput {
     if (result.has_warning()) ++pipeline_.warnings_;
     if (result.has_item_error()) ++pipeline_.item_errors_;
     if (result.has_recovered_segment()) ++pipeline_.recovered_segments_;
+    if (result.has_frame() && result.frame().smpl_joints_size() > 0) ++pipeline_.frames_fitted_;
     const std::size_t emitter = pipeline_.current_stage_;
     if (emitter >= pipeline_.stages_.size() || emitter + 1 == pipeline_.stages_.size()) {
       pipeline_.sink_.emit(std::move(result));
@@ -152,7 +153,7 @@ void SessionPipeline::end_session() {
   v1::Summary& summary = *result.mutable_summary();
   summary.set_chunks(index_);
   summary.set_depth_frames(depth_frames_);
-  summary.set_frames_fitted(0);  // no body-fitting stage yet
+  summary.set_frames_fitted(frames_fitted_);  // FrameResults with body-model joints
   summary.set_recovered_segments(recovered_segments_);
   summary.set_warnings(warnings_);
   summary.set_item_errors(item_errors_);

@@ -78,6 +78,7 @@ class SessionPipeline {
   std::uint64_t warnings_ = 0;
   std::uint64_t depth_frames_ = 0;
   std::uint64_t recovered_segments_ = 0;
+  std::uint64_t frames_fitted_ = 0;
   // The stage being called; results it emits go to the stages after it (Stage::on_result).
   std::size_t current_stage_ = static_cast<std::size_t>(-1);
   std::optional<std::int64_t> first_camera_t_us_, last_camera_t_us_;

@@ -5,6 +5,7 @@
 #include <string>
 
 #include "common/error.hpp"
+#include "fit/camera_joints.hpp"
 #include "sim/option_checks.hpp"
 #include "sim/sim_rng.hpp"
 
@@ -14,14 +15,6 @@ namespace {
 using body::Joint;
 constexpr double kPi = 3.14159265358979323846;
 constexpr int kNone = -1;
-
-// SMPL joint at the camera joint's position (kNone where it is derived from several).
-constexpr std::array<int, kCameraJointCount> kSmplAtJoint = {
-    body::kPelvis, body::kSpine2, body::kNeck, kNone, body::kLeftShoulder, body::kLeftElbow,
-    body::kLeftWrist, body::kLeftHand, body::kRightShoulder, body::kRightElbow, body::kRightWrist,
-    body::kRightHand, body::kLeftHip, body::kLeftKnee, body::kLeftAnkle, body::kLeftFoot,
-    body::kRightHip, body::kRightKnee, body::kRightAnkle, body::kRightFoot, kNone, kNone, kNone,
-    kNone, kNone};
 
 // SMPL joint whose rotation carries the bone parent -> camera joint (kNone: end joints,
 // which report no orientation). SpineBase reports the pelvis rotation itself.
@@ -100,21 +93,14 @@ Eigen::Matrix3Xd camera_joints_from_smpl(const SmplJointsK& smpl) {
     throw_invalid("positions_K", "must hold 24 finite SMPL joints, got " +
                                      std::to_string(smpl.positions_K.cols()) + " columns");
   }
-  const auto p = [&](int smpl_joint) -> Eigen::Vector3d { return smpl.positions_K.col(smpl_joint); };
-  Eigen::Matrix3Xd out(3, kCameraJointCount);
-  for (int j = 0; j < kCameraJointCount; ++j) {
-    if (kSmplAtJoint[j] != kNone) out.col(j) = p(kSmplAtJoint[j]);
-  }
-  out.col(kHeadJoint) = p(body::kHead) + kHeadAboveSkullBase_m * smpl.K_from_joint[body::kHead].col(1);
-  out.col(kSpineShoulder) = 0.5 * (p(body::kLeftCollar) + p(body::kRightCollar));
-  const struct { int tip, thumb, wrist, hand; } hands[2] = {
-      {kHandTipLeft, kThumbLeft, body::kLeftWrist, body::kLeftHand},
-      {kHandTipRight, kThumbRight, body::kRightWrist, body::kRightHand}};
-  for (const auto& h : hands) {
-    out.col(h.tip) = 2.0 * p(h.hand) - p(h.wrist);
-    out.col(h.thumb) = 0.5 * (p(h.hand) + p(h.wrist)) + kThumbOffset_m * smpl.K_from_joint[h.hand].col(2);
-  }
-  return out;
+  // The same correspondence the fit reports its camera-compatible joints with.
+  fit::JointPose pose;
+  pose.positions_K = smpl.positions_K;
+  pose.K_from_joint = smpl.K_from_joint;
+  fit::CameraJointOptions options;
+  options.head_above_skull_base_m = kHeadAboveSkullBase_m;
+  options.thumb_offset_m = kThumbOffset_m;
+  return fit::camera_joints_from_pose(pose, options);
 }
 
 CameraSkeletonSimulator::CameraSkeletonSimulator(const raycast::DepthCamera& camera,

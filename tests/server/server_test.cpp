@@ -350,10 +350,13 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   v1::ServerInfo info;
   ASSERT_TRUE(stub_->GetServerInfo(&context, {}, &info).ok());
   EXPECT_EQ(info.api_version(), "posefuse.v1");
-  ASSERT_EQ(info.stages_size(), 2);
+  ASSERT_EQ(info.stages_size(), 3);
   EXPECT_EQ(info.stages(0).name(), "imu_orientation");
   EXPECT_EQ(info.stages(1).name(), "forearm");
-  ASSERT_EQ(info.options_size(), 6);
+  EXPECT_EQ(info.stages(2).name(), "body_fit");
+  ASSERT_EQ(info.options_size(), 13);
+  EXPECT_EQ(info.options(6).key(), "fit.enabled");
+  EXPECT_EQ(info.options(6).default_value(), "false");
   EXPECT_EQ(info.options(0).key(), "imu.tau_acc_s");
   EXPECT_EQ(info.options(2).key(), "forearm.K_from_B");
   EXPECT_EQ(info.options(2).stage(), "forearm");

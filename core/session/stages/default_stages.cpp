@@ -1,5 +1,6 @@
 #include "session/stages/default_stages.hpp"
 
+#include "session/stages/body_fit_stage.hpp"
 #include "session/stages/forearm_stage.hpp"
 #include "session/stages/imu_orientation_stage.hpp"
 
@@ -9,6 +10,8 @@ std::vector<std::unique_ptr<Stage>> make_default_stages() {
   std::vector<std::unique_ptr<Stage>> stages;
   stages.push_back(std::make_unique<ImuOrientationStage>());
   stages.push_back(std::make_unique<ForearmStage>());  // needs the IMU orientations first
+  // Needs the forearm orientations; off unless the header sets fit.enabled (speed, see its option).
+  stages.push_back(std::make_unique<BodyFitStage>());
   return stages;
 }
 

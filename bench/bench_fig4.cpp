@@ -1,0 +1,303 @@
+// Paper 2, Fig. 4 on simulated sessions (issue 7 "Measured"): mean position error of shoulders,
+// elbows and wrists for the camera skeleton, the body-model fit (BodyFitStage, with the imu term)
+// and the fit without the imu term, over all frames and over the frames where a forearm is
+// occluded; the shoulder elevation error on the shoulder-lift exercise; time per frame.
+//
+// Sessions: the six exercises of paper 2 (IV-B, core/sim/exercises.hpp), each preceded by 1 s of
+// the controlled pose (arms 45 deg from the trunk) for the personalisation, rendered by
+// simulate_camera_session with its depth noise and camera-skeleton error model, subsampled to
+// `rate_hz` frames per second (default 5) to keep the run short. Model mismatch: the subject's
+// shape differs from the template (betas drawn per exercise); the simulator has no clothing or
+// soft-tissue mismatch yet. IMU: the wrist IMUs are not simulated here; the forearm orientation
+// K_from_F the forearm stage would give is the truth turned by a random 3 deg rotation per frame
+// (paper 1's filter + calibration error scale), fed to the stage as ForearmOrientationBatches.
+//
+// Usage: bench_fig4 [rate_hz] [overlay.png] [mocap folder: adds the first 10 s of wipe.bvh and
+// box-1.bvh, retargeted by sim::bvh_motion; their first second is overridden by the controlled pose]. Times are thread CPU time of the stage's work per
+// frame (preprocessing, two LM fits, post-processing), one core.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <numbers>
+#include <random>
+#include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "bench_clock.hpp"
+#include "body/pose_parameters.hpp"
+#include "session/image_codec.hpp"
+#include "session/stages/body_fit_stage.hpp"
+#include "sim/camera_session.hpp"
+#include "sim/bvh.hpp"
+#include "sim/bvh_motion.hpp"
+#include "sim/exercises.hpp"
+
+using namespace posefuse;
+
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180;
+constexpr double kCalibrationS = 1.0;
+constexpr int kKinds = 3;  // shoulders, elbows, wrists
+const char* const kKindNames[kKinds] = {"shoulders", "elbows", "wrists"};
+// SMPL and camera joints of each kind, left then right.
+const int kSmplJoints[kKinds][2] = {{body::kLeftShoulder, body::kRightShoulder},
+                                    {body::kLeftElbow, body::kRightElbow},
+                                    {body::kLeftWrist, body::kRightWrist}};
+const int kCameraJoints[kKinds][2] = {{4, 8}, {5, 9}, {6, 10}};
+
+struct Output : session::StageOutput {
+  void emit(v1::FitResult&& result) override {
+    if (result.has_frame()) frames[result.frame().t_us()] = result.frame();
+  }
+  void warn(const std::string& code, const std::string& field, const std::string& message) override {
+    std::fprintf(stderr, "  warning %s %s: %s\n", code.c_str(), field.c_str(), message.c_str());
+  }
+  v1::CalibrationReport& calibration() override { return report; }
+  std::map<std::int64_t, v1::FrameResult> frames;
+  v1::CalibrationReport report;
+};
+
+struct Sums {
+  double error[kKinds] = {0, 0, 0};
+  int count[kKinds] = {0, 0, 0};
+  void add(int kind, double e) {
+    error[kind] += e;
+    ++count[kind];
+  }
+  double mean(int kind) const { return count[kind] ? error[kind] / count[kind] : NAN; }
+  double mean_all() const {
+    const int n = count[0] + count[1] + count[2];
+    return n ? (error[0] + error[1] + error[2]) / n : NAN;
+  }
+};
+
+struct Table {
+  Sums camera, fit, fit_no_imu;  // all frames
+  Sums camera_occ, fit_occ, fit_no_imu_occ;
+  std::vector<double> frame_s;
+  double elevation_fit = 0, elevation_camera = 0;
+  int elevation_n = 0;
+  int frames = 0, occluded = 0;
+};
+
+Eigen::Vector3d vec(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+Eigen::Quaterniond random_turn(std::mt19937_64& rng, double angle_rad) {
+  std::normal_distribution<double> normal;
+  const Eigen::Vector3d axis = Eigen::Vector3d(normal(rng), normal(rng), normal(rng)).normalized();
+  return Eigen::Quaterniond(Eigen::AngleAxisd(angle_rad, axis));
+}
+
+// Forearm orientations as the forearm stage would emit them: one batch per arm, one sample per frame.
+std::vector<v1::FitResult> forearm_batches(const sim::CameraSessionResult& sim, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::vector<v1::FitResult> out(2);
+  for (int a = 0; a < 2; ++a) {
+    v1::ForearmOrientationBatch& batch = *out[static_cast<size_t>(a)].mutable_forearm_orientations();
+    batch.set_arm(a == 0 ? v1::RIGHT : v1::LEFT);  // straps: right, left
+    for (size_t i = 0; i < sim.truth.size(); ++i) {
+      const Eigen::Quaterniond q = random_turn(rng, 3 * kDeg) * sim.truth[i].forearms[static_cast<size_t>(a)].K_from_F;
+      batch.add_t_us(sim.t_us[i]);
+      for (const double c : {q.w(), q.x(), q.y(), q.z()}) batch.add_k_from_f(c);
+    }
+  }
+  return out;
+}
+
+Output run_stage(const sim::CameraSessionResult& sim, const std::vector<v1::FitResult>& batches,
+                 std::vector<double>* frame_s) {
+  v1::SessionHeader header = sim.header;
+  (*header.mutable_options())["fit.enabled"] = "true";
+  (*header.mutable_options())["fit.calibration_s"] = std::to_string(kCalibrationS);
+  Output out;
+  session::BodyFitStage stage;
+  stage.start(header, out);
+  for (const auto& b : batches) stage.on_result(b, out);
+  for (const auto& chunk : sim.chunks) {
+    const bool timed = chunk.has_skeleton() && static_cast<double>(chunk.skeleton().t_us()) * 1e-6 > kCalibrationS + 0.01;
+    const double t0 = bench::thread_cpu_seconds();
+    stage.on_chunk(chunk, out);
+    if (timed && frame_s) frame_s->push_back(bench::thread_cpu_seconds() - t0);
+  }
+  stage.finish(out);
+  return out;
+}
+
+// Elevation of the shoulder above the line across the trunk: angle of neck -> shoulder against
+// the plane perpendicular to pelvis -> neck, degrees.
+double elevation_deg(const Eigen::Vector3d& pelvis, const Eigen::Vector3d& neck, const Eigen::Vector3d& shoulder) {
+  const Eigen::Vector3d up = (neck - pelvis).normalized();
+  const Eigen::Vector3d d = (shoulder - neck).normalized();
+  return std::asin(std::clamp(d.dot(up), -1.0, 1.0)) / kDeg;
+}
+
+double percentile(std::vector<double> v, double p) {
+  if (v.empty()) return NAN;
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<size_t>(p * static_cast<double>(v.size())))];
+}
+
+void write_overlay(const std::string& path, const sim::CameraSessionResult& sim, size_t i, const v1::FrameResult& fit) {
+  const raycast::DepthCamera camera{raycast::DepthIntrinsics{}};
+  cv::Mat depth;
+  for (const auto& c : sim.chunks) {
+    if (c.has_depth() && c.depth().t_us() == sim.t_us[i]) depth = session::decode_depth(c.depth());
+  }
+  cv::Mat gray(depth.rows, depth.cols, CV_8UC1);
+  for (int r = 0; r < depth.rows; ++r) {
+    for (int c = 0; c < depth.cols; ++c) {
+      const double z = depth.at<std::uint16_t>(r, c) * 1e-3;
+      gray.at<std::uint8_t>(r, c) = z <= 0 ? 0 : static_cast<std::uint8_t>(std::clamp(255 - (z - 1.5) * 100, 20.0, 255.0));
+    }
+  }
+  cv::Mat image;
+  cv::cvtColor(gray, image, cv::COLOR_GRAY2BGR);
+  cv::resize(image, image, cv::Size(), 2, 2, cv::INTER_NEAREST);
+  const auto draw = [&](const Eigen::Vector3d& p, const cv::Scalar& colour, int radius) {
+    if (const auto px = camera.project(p)) cv::circle(image, cv::Point2d(2 * px->x(), 2 * px->y()), radius, colour, 2);
+  };
+  const v1::SkeletonFrame* skeleton = nullptr;
+  for (const auto& c : sim.chunks) {
+    if (c.has_skeleton() && c.skeleton().t_us() == sim.t_us[i]) skeleton = &c.skeleton();
+  }
+  for (int k = 0; k < kKinds; ++k) {
+    for (int s = 0; s < 2; ++s) {
+      draw(sim.truth[i].smpl_joints_K.col(kSmplJoints[k][s]), cv::Scalar(255, 80, 0), 9);  // truth: blue
+      if (skeleton) draw(vec(skeleton->joints(kCameraJoints[k][s]).position_m()), cv::Scalar(0, 0, 255), 6);  // camera: red
+      draw(vec(fit.smpl_joints(kSmplJoints[k][s]).position_m()), cv::Scalar(0, 200, 0), 3);  // fit: green
+    }
+  }
+  cv::putText(image, "blue: truth  red: camera skeleton  green: fit", {10, 24}, cv::FONT_HERSHEY_SIMPLEX, 0.6,
+              cv::Scalar(255, 255, 255), 1);
+  cv::imwrite(path, image);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  const double rate_hz = argc > 1 ? std::atof(argv[1]) : 5.0;
+  const std::string overlay = argc > 2 ? argv[2] : "";
+  const std::string mocap_dir = argc > 3 ? argv[3] : "";
+  // Paper 2's exercises, then (with a mocap folder) the first kClipS seconds of two upper-body clips.
+  std::vector<std::string> exercises = {"arm_raising", "shoulder_lift", "forearm_rolling",
+                                        "hair_combing", "torso_tilt", "air_punching"};
+  std::vector<sim::BodyMotion> motions;
+  sim::ExerciseOptions exercise_options;
+  exercise_options.repetitions = 1;
+  exercise_options.rest_hold_s = 0.5;
+  for (const auto& name : exercises) motions.push_back(sim::make_exercise(name, exercise_options));
+  if (!mocap_dir.empty()) {
+    constexpr double kClipS = 10.0;
+    for (const char* clip : {"wipe", "box-1"}) {
+      exercises.push_back(std::string("mocap ") + clip);
+      motions.push_back(sim::bvh_motion(sim::load_bvh(mocap_dir + "/" + clip + ".bvh")));
+      motions.back().duration_s = std::min(motions.back().duration_s, kClipS);
+    }
+  }
+  const body::PoseLayout layout = body::PoseLayout::all_joints();
+  const int left_z = layout.index_of("left_shoulder_z"), right_z = layout.index_of("right_shoulder_z");
+  Table total;
+  std::printf("bench_fig4: %.1f Hz subsampling, 1 s controlled pose + each exercise (1 repetition)\n", rate_hz);
+  bool overlay_written = false;
+  for (size_t e = 0; e < exercises.size(); ++e) {
+    const sim::BodyMotion& motion = motions[e];
+    Eigen::VectorXd controlled = motion.poses(0.0);
+    controlled[left_z] = -45 * kDeg;
+    controlled[right_z] = 45 * kDeg;
+    sim::CameraSessionOptions options;
+    options.rate_hz = rate_hz;
+    options.duration_s = kCalibrationS + motion.duration_s;
+    options.seed = 100 + e;
+    std::mt19937_64 rng(200 + e);
+    std::uniform_real_distribution<double> beta(-1.5, 1.5);
+    for (int b = 0; b < 4; ++b) options.betas[b] = beta(rng);
+    options.forearm_straps = {sim::ForearmStrap{sim::BodySide::kRight}, sim::ForearmStrap{sim::BodySide::kLeft}};
+    const sim::CameraSessionResult sim = sim::simulate_camera_session(
+        options, layout, [&](double t) { return t < kCalibrationS ? controlled : motion.poses(t - kCalibrationS); });
+
+    Table table;
+    const Output with_imu = run_stage(sim, forearm_batches(sim, 300 + e), &table.frame_s);
+    const Output without_imu = run_stage(sim, {}, nullptr);
+    for (const auto& c : sim.chunks) {
+      if (!c.has_skeleton() || static_cast<double>(c.skeleton().t_us()) * 1e-6 < kCalibrationS) continue;
+      const size_t i = static_cast<size_t>(std::find(sim.t_us.begin(), sim.t_us.end(), c.skeleton().t_us()) - sim.t_us.begin());
+      const auto fit = with_imu.frames.find(sim.t_us[i]);
+      const auto fit_no_imu = without_imu.frames.find(sim.t_us[i]);
+      if (fit == with_imu.frames.end() || fit_no_imu == without_imu.frames.end()) continue;
+      const auto& truth = sim.truth[i];
+      const bool occluded = truth.forearms[0].occluded || truth.forearms[1].occluded;
+      ++table.frames;
+      table.occluded += occluded;
+      for (int k = 0; k < kKinds; ++k) {
+        for (int s = 0; s < 2; ++s) {
+          const Eigen::Vector3d t = truth.smpl_joints_K.col(kSmplJoints[k][s]);
+          const double camera = (vec(c.skeleton().joints(kCameraJoints[k][s]).position_m()) - t).norm();
+          const double f = (vec(fit->second.smpl_joints(kSmplJoints[k][s]).position_m()) - t).norm();
+          const double g = (vec(fit_no_imu->second.smpl_joints(kSmplJoints[k][s]).position_m()) - t).norm();
+          for (Table* tb : {&table, &total}) {
+            tb->camera.add(k, camera);
+            tb->fit.add(k, f);
+            tb->fit_no_imu.add(k, g);
+            if (occluded) {
+              tb->camera_occ.add(k, camera);
+              tb->fit_occ.add(k, f);
+              tb->fit_no_imu_occ.add(k, g);
+            }
+          }
+        }
+      }
+      if (exercises[e] == "shoulder_lift") {
+        for (int s = 0; s < 2; ++s) {
+          const auto p = [&](int j) { return vec(fit->second.smpl_joints(j).position_m()); };
+          const auto q = [&](int j) { return vec(c.skeleton().joints(j).position_m()); };
+          const double true_elevation = elevation_deg(truth.smpl_joints_K.col(body::kPelvis), truth.smpl_joints_K.col(body::kNeck),
+                                                      truth.smpl_joints_K.col(kSmplJoints[0][s]));
+          total.elevation_fit += std::abs(elevation_deg(p(body::kPelvis), p(body::kNeck), p(kSmplJoints[0][s])) - true_elevation);
+          total.elevation_camera += std::abs(elevation_deg(q(0), q(2), q(kCameraJoints[0][s])) - true_elevation);
+          ++total.elevation_n;
+        }
+      }
+      // Hand over the head, half way through the combing exercise.
+      if (!overlay.empty() && !overlay_written && exercises[e] == "hair_combing" &&
+          static_cast<double>(sim.t_us[i]) * 1e-6 > kCalibrationS + 0.45 * motion.duration_s) {
+        write_overlay(overlay, sim, i, fit->second);
+        overlay_written = true;
+      }
+    }
+    total.frame_s.insert(total.frame_s.end(), table.frame_s.begin(), table.frame_s.end());
+    std::printf("%-17s frames %3d (occluded %3d)  camera %5.1f mm  fit %5.1f mm  fit w/o imu %5.1f mm\n",
+                exercises[e].c_str(), table.frames, table.occluded, 1e3 * table.camera.mean_all(),
+                1e3 * table.fit.mean_all(), 1e3 * table.fit_no_imu.mean_all());
+    total.frames += table.frames;
+    total.occluded += table.occluded;
+  }
+  std::printf("\nFig. 4, all exercises: %d frames, %d with an occluded forearm\n", total.frames, total.occluded);
+  std::printf("| joints | camera all | fit all | fit w/o imu all | camera occl. | fit occl. | fit w/o imu occl. |\n");
+  std::printf("|---|---|---|---|---|---|---|\n");
+  for (int k = 0; k <= kKinds; ++k) {
+    const auto m = [&](const Sums& s) { return 1e3 * (k < kKinds ? s.mean(k) : s.mean_all()); };
+    std::printf("| %s | %.1f | %.1f | %.1f | %.1f | %.1f | %.1f |\n", k < kKinds ? kKindNames[k] : "all six",
+                m(total.camera), m(total.fit), m(total.fit_no_imu), m(total.camera_occ), m(total.fit_occ),
+                m(total.fit_no_imu_occ));
+  }
+  const double lower_all = 100 * (1 - total.fit.mean_all() / total.camera.mean_all());
+  const double lower_occ = 100 * (1 - total.fit_occ.mean_all() / total.camera_occ.mean_all());
+  std::printf("fit vs camera skeleton: %.1f %% lower overall, %.1f %% lower under occlusion\n",
+              lower_all, lower_occ);
+  std::printf("dropping the imu term: wrists %+.1f %%, elbows %+.1f %% under occlusion\n",
+              100 * (total.fit_no_imu_occ.mean(2) / total.fit_occ.mean(2) - 1),
+              100 * (total.fit_no_imu_occ.mean(1) / total.fit_occ.mean(1) - 1));
+  if (total.elevation_n > 0) {
+    std::printf("shoulder_lift: shoulder elevation error fit %.1f deg, camera skeleton %.1f deg (%d shoulder-frames)\n",
+                total.elevation_fit / total.elevation_n, total.elevation_camera / total.elevation_n, total.elevation_n);
+  }
+  std::printf("time per frame (thread CPU, stage work): median %.1f ms, p95 %.1f ms (%zu frames)\n",
+              1e3 * percentile(total.frame_s, 0.5), 1e3 * percentile(total.frame_s, 0.95), total.frame_s.size());
+  return 0;
+}

@@ -1,0 +1,443 @@
+#include "session/stages/body_fit_stage.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
+
+#include "body/template_generator.hpp"
+#include "common/error.hpp"
+#include "fit/arm_roll.hpp"
+#include "fit/camera_joints.hpp"
+#include "fit/frame_fitter.hpp"
+#include "fit/joint_kinematics.hpp"
+#include "fit/personalisation.hpp"
+#include "fit/pose_smoothing.hpp"
+#include "fit/silhouette_cleanup.hpp"
+#include "fit/skeleton_pose_init.hpp"
+#include "raycast/depth_camera.hpp"
+#include "session/image_codec.hpp"
+#include "session/stages/proto_values.hpp"
+#include "session/text_fields.hpp"
+
+namespace posefuse::session {
+
+namespace {
+
+constexpr const char* kEnabledKey = "fit.enabled";
+constexpr const char* kCalibrationSKey = "fit.calibration_s";
+constexpr const char* kBodyIdKey = "fit.body_id";
+constexpr const char* kSmoothingKey = "fit.smoothing_frames";
+constexpr const char* kImuWaitKey = "fit.imu_wait_s";
+constexpr const char* kLostEnergyKey = "fit.lost_energy";
+constexpr const char* kMaxIterationsKey = "fit.max_iterations";
+
+// Depth, body index and skeleton of one frame share the depth frame's t_us (1 ms tolerance).
+constexpr std::int64_t kSameFrameUs = 1000;
+// A forearm orientation further than this from the frame is not used.
+constexpr std::int64_t kForearmToleranceUs = 20'000;
+// Forearm orientations kept behind the oldest queued frame.
+constexpr std::int64_t kForearmHistoryUs = 1'000'000;
+constexpr double kUntrackedConfidence = 0.5;
+
+std::string option_field(const char* key) { return std::string("header.options[") + key + "]"; }
+
+const std::string* option(const v1::SessionHeader& header, const char* key) {
+  const auto it = header.options().find(key);
+  return it == header.options().end() ? nullptr : &it->second;
+}
+
+double positive_option(const v1::SessionHeader& header, const char* key, double fallback) {
+  const std::string* text = option(header, key);
+  if (!text) return fallback;
+  const double value = parse_double(*text, option_field(key));
+  if (!std::isfinite(value) || value <= 0.0) throw_invalid(option_field(key), "is '" + *text + "', must be positive");
+  return value;
+}
+
+bool bool_option(const v1::SessionHeader& header, const char* key, bool fallback) {
+  const std::string* text = option(header, key);
+  if (!text) return fallback;
+  if (*text == "true" || *text == "1") return true;
+  if (*text == "false" || *text == "0") return false;
+  throw_invalid(option_field(key), "is '" + *text + "', expected true or false");
+}
+
+raycast::DepthIntrinsics intrinsics_from(const v1::CameraIntrinsics& k) {
+  raycast::DepthIntrinsics in;
+  in.width = static_cast<int>(k.width());
+  in.height = static_cast<int>(k.height());
+  in.fx = k.fx();
+  in.fy = k.fy();
+  in.cx = k.cx();
+  in.cy = k.cy();
+  in.k1 = k.k1();
+  in.k2 = k.k2();
+  in.k3 = k.k3();
+  return in;
+}
+
+fit::JointTracking tracking_from(v1::SkeletonJoint::State state) {
+  switch (state) {
+    case v1::SkeletonJoint::TRACKED: return fit::JointTracking::kTracked;
+    case v1::SkeletonJoint::INFERRED: return fit::JointTracking::kInferred;
+    default: return fit::JointTracking::kNotTracked;
+  }
+}
+
+double confidence_of(const fit::TrackedSkeleton& skeleton, int camera_joint) {
+  return skeleton.tracking[static_cast<size_t>(camera_joint)] == fit::JointTracking::kTracked ? 1.0
+                                                                                           : kUntrackedConfidence;
+}
+
+void set_joint(v1::JointEstimate& joint, const Eigen::Vector3d& p_K, v1::Source source, double confidence) {
+  *joint.mutable_position_m() = to_proto(p_K);
+  joint.set_source(source);
+  joint.set_confidence(confidence);
+}
+
+}  // namespace
+
+fit::TrackedSkeleton tracked_skeleton_from_proto(const v1::SkeletonFrame& skeleton) {
+  if (skeleton.joints_size() != fit::kKinectJointCount) {
+    throw_invalid("skeleton.joints", "holds " + std::to_string(skeleton.joints_size()) + " joints, expected 25");
+  }
+  fit::TrackedSkeleton out;
+  for (int j = 0; j < fit::kKinectJointCount; ++j) {
+    const v1::SkeletonJoint& joint = skeleton.joints(j);
+    out.positions_K[static_cast<size_t>(j)] = {joint.position_m().x(), joint.position_m().y(), joint.position_m().z()};
+    out.tracking[static_cast<size_t>(j)] = tracking_from(joint.state());
+  }
+  return out;
+}
+
+struct BodyFitStage::Work {
+  std::shared_ptr<const body::SmplModel> model;
+  raycast::DepthCamera camera;
+  body::PoseLayout layout = body::PoseLayout::upper_body();
+  fit::FitOptions fit_options;
+  fit::FrameFitter fitter;
+  fit::PoseSmoother smoother;
+  Eigen::VectorXd beta;
+  std::optional<fit::Personalisation> personalisation;
+  std::optional<fit::SkeletonPoseInitializer> init;
+  Eigen::Matrix3Xd rest_joints;
+
+  Work(std::shared_ptr<const body::SmplModel> m, const raycast::DepthIntrinsics& intrinsics, const fit::FitOptions& options,
+       const fit::PoseSmoothingOptions& smoothing)
+      : model(std::move(m)),
+        camera(intrinsics),
+        fit_options(options),
+        fitter(model, layout, intrinsics, options),
+        smoother(layout, smoothing),
+        beta(Eigen::VectorXd::Zero(model->num_betas())) {}
+
+  void set_shape(const Eigen::VectorXd& shape) {
+    beta = shape;
+    init.emplace(model, layout, beta);
+    rest_joints = fit::rest_joints(*model, beta);
+  }
+};
+
+BodyFitStage::BodyFitStage() = default;
+BodyFitStage::~BodyFitStage() = default;
+
+std::string_view BodyFitStage::description() const {
+  return "body-model fit to every depth frame (paper 2): personalised shape, 24 SMPL joints, 25 camera joints, "
+         "forearm roll from the wrist IMUs";
+}
+
+std::vector<StageOption> BodyFitStage::options() const {
+  const fit::FitOptions defaults;
+  return {
+      {kEnabledKey, "false", "run the body-model fit (about 0.1-0.2 s per depth frame on one core: off by default)"},
+      {kCalibrationSKey, "1", "personalisation: the first seconds of depth frames (controlled pose), seconds"},
+      {kBodyIdKey, "", "the person to fit (body index / skeleton body_id); default the first skeleton's"},
+      {kSmoothingKey, "3", "moving average of the fitted poses over this many frames (odd; 1 = none)"},
+      {kImuWaitKey, "6", "how long a frame waits for its forearm orientations (imu term), seconds"},
+      {kLostEnergyKey, "100", "tracking is lost above this fit energy (eq. 4): restart from the skeleton"},
+      {kMaxIterationsKey, std::to_string(defaults.max_iterations), "LM iterations per start at most"},
+  };
+}
+
+void BodyFitStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) {
+  enabled_ = bool_option(header, kEnabledKey, false);
+  if (!enabled_) return;
+  calibration_s_ = positive_option(header, kCalibrationSKey, calibration_s_);
+  imu_wait_s_ = positive_option(header, kImuWaitKey, imu_wait_s_);
+  lost_energy_ = positive_option(header, kLostEnergyKey, lost_energy_);
+  if (const std::string* text = option(header, kBodyIdKey)) {
+    body_id_ = static_cast<std::uint32_t>(parse_uint64(*text, option_field(kBodyIdKey)));
+  }
+  fit::PoseSmoothingOptions smoothing;
+  if (const std::string* text = option(header, kSmoothingKey)) {
+    smoothing.window_frames = static_cast<int>(parse_int64(*text, option_field(kSmoothingKey)));
+  }
+  fit::FitOptions fit_options;
+  if (const std::string* text = option(header, kMaxIterationsKey)) {
+    fit_options.max_iterations = static_cast<int>(parse_int64(*text, option_field(kMaxIterationsKey)));
+  }
+  arm_imus_ = static_cast<int>(std::count_if(header.imu_devices().begin(), header.imu_devices().end(), [](const auto& d) {
+    return d.role() == v1::ImuDevice::ARM_LEFT || d.role() == v1::ImuDevice::ARM_RIGHT;
+  }));
+  const body::Sex sex = header.sex() == v1::SessionHeader::FEMALE ? body::Sex::kFemale : body::Sex::kMale;
+  work_ = std::make_unique<Work>(body::make_template(sex), intrinsics_from(header.depth_intrinsics()), fit_options,
+                                 smoothing);
+}
+
+void BodyFitStage::on_chunk(const v1::SessionChunk& chunk, StageOutput& out) {
+  if (!enabled_) return;
+  if (chunk.has_depth()) {
+    if (depth_) ++frames_without_skeleton_;  // the previous depth frame never got its skeleton
+    const cv::Mat depth = decode_depth(chunk.depth());
+    depth_.emplace(chunk.depth().t_us(), std::vector<std::uint16_t>(depth.begin<std::uint16_t>(), depth.end<std::uint16_t>()));
+  } else if (chunk.has_body_index()) {
+    const cv::Mat index = decode_body_index(chunk.body_index());
+    body_index_.emplace(chunk.body_index().t_us(),
+                        std::vector<std::uint8_t>(index.begin<std::uint8_t>(), index.end<std::uint8_t>()));
+  } else if (chunk.has_skeleton()) {
+    const v1::SkeletonFrame& skeleton = chunk.skeleton();
+    if (!body_id_) body_id_ = skeleton.body_id();
+    if (skeleton.body_id() != *body_id_ || !depth_ || std::llabs(depth_->first - skeleton.t_us()) > kSameFrameUs) return;
+    BodyFitFrame frame;
+    frame.t_us = depth_->first;
+    frame.frame.width = work_->camera.width();
+    frame.frame.height = work_->camera.height();
+    frame.frame.depth_mm = std::move(depth_->second);
+    depth_.reset();
+    frame.frame.body_index.assign(frame.frame.depth_mm.size(), fit::kNoBody);
+    if (body_index_ && std::llabs(body_index_->first - frame.t_us) <= kSameFrameUs &&
+        body_index_->second.size() == frame.frame.body_index.size()) {
+      for (size_t i = 0; i < body_index_->second.size(); ++i) {
+        if (body_index_->second[i] == *body_id_) frame.frame.body_index[i] = 0;
+      }
+    }
+    frame.skeleton = tracked_skeleton_from_proto(skeleton);
+    add_frame(std::move(frame), out);
+  }
+}
+
+void BodyFitStage::on_result(const v1::FitResult& result, StageOutput& out) {
+  if (!enabled_ || !result.has_forearm_orientations()) return;
+  const v1::ForearmOrientationBatch& batch = result.forearm_orientations();
+  auto& samples = K_from_F_[batch.arm()];
+  for (int i = 0; i < batch.t_us_size() && 4 * i + 3 < batch.k_from_f_size(); ++i) {
+    const Eigen::Quaterniond q(batch.k_from_f(4 * i), batch.k_from_f(4 * i + 1), batch.k_from_f(4 * i + 2),
+                               batch.k_from_f(4 * i + 3));
+    if (!q.coeffs().allFinite() || std::abs(q.norm() - 1.0) > 1e-3) continue;
+    if (!samples.empty() && batch.t_us(i) <= samples.back().first) continue;
+    samples.emplace_back(batch.t_us(i), q.normalized());
+  }
+  if (personalised_) fit_ready(false, out);
+}
+
+void BodyFitStage::add_frame(BodyFitFrame&& frame, StageOutput& out) {
+  if (!first_t_us_) first_t_us_ = frame.t_us;
+  last_frame_t_us_ = frame.t_us;
+  if (!personalised_) {
+    if (static_cast<double>(frame.t_us - *first_t_us_) * 1e-6 < calibration_s_) {
+      calibration_frames_.push_back(std::move(frame));
+      return;
+    }
+    personalise(out);
+  }
+  queue_.push_back(std::move(frame));
+  fit_ready(false, out);
+}
+
+void BodyFitStage::personalise(StageOutput& out) {
+  personalised_ = true;
+  // Frames in which the camera skeleton's errors break the controlled pose (a straight arm looks
+  // bent by up to ~50 deg with the simulator's biases) are left out; when none is left, all go in
+  // and the pose check says why.
+  std::vector<fit::TrackedSkeleton> all, in_pose;
+  for (const BodyFitFrame& f : calibration_frames_) {
+    if (!f.skeleton) continue;
+    all.push_back(*f.skeleton);
+    try {
+      fit::check_controlled_pose({*f.skeleton}, &work_->camera);
+      in_pose.push_back(*f.skeleton);
+    } catch (const Error&) {
+    }
+  }
+  const std::vector<fit::TrackedSkeleton>& skeletons = in_pose.empty() ? all : in_pose;
+  Eigen::VectorXd beta = Eigen::VectorXd::Zero(work_->model->num_betas());
+  try {
+    // The fine tuning of III-B (ShapePoseRefiner) is not wired yet: rough shape only.
+    work_->personalisation = fit::personalise(work_->model, skeletons, &work_->camera, fit::ShapePoseRefiner{});
+    beta = work_->personalisation->beta();
+  } catch (const Error& e) {
+    out.warn("FIT_PERSONALISATION", e.field(),
+             std::string(e.what()) + "; fitting the template shape (beta = 0)");
+  }
+  work_->set_shape(beta);
+  for (BodyFitFrame& f : calibration_frames_) queue_.push_back(std::move(f));
+  calibration_frames_.clear();
+}
+
+std::optional<Eigen::Quaterniond> BodyFitStage::K_from_F_at(int arm, std::int64_t t_us) const {
+  const auto it = K_from_F_.find(arm);
+  if (it == K_from_F_.end() || it->second.empty()) return std::nullopt;
+  const auto& samples = it->second;
+  const auto after = std::lower_bound(samples.begin(), samples.end(), t_us,
+                                      [](const auto& s, std::int64_t t) { return s.first < t; });
+  const std::pair<std::int64_t, Eigen::Quaterniond>* best = nullptr;
+  if (after != samples.end()) best = &*after;
+  if (after != samples.begin() && (!best || t_us - std::prev(after)->first < best->first - t_us)) best = &*std::prev(after);
+  if (!best || std::llabs(best->first - t_us) > kForearmToleranceUs) return std::nullopt;
+  return best->second;
+}
+
+void BodyFitStage::fit_ready(bool all, StageOutput& out) {
+  while (!queue_.empty()) {
+    const std::int64_t t = queue_.front().t_us;
+    int covered = 0;
+    for (const auto& [arm, samples] : K_from_F_) covered += !samples.empty() && samples.back().first >= t;
+    const bool waited = static_cast<double>(queue_.back().t_us - t) * 1e-6 >= imu_wait_s_;
+    if (!all && covered < arm_imus_ && !waited) return;
+    fit_frame(queue_.front(), out);
+    queue_.pop_front();
+  }
+  // Forearm orientations are looked up for queued frames and for fitted frames the smoother has
+  // not emitted yet; older ones are dropped.
+  for (auto& [arm, samples] : K_from_F_) {
+    if (samples.empty() || !last_frame_t_us_) continue;
+    std::int64_t oldest = *last_frame_t_us_;  // later frames may still come for later samples
+    if (!calibration_frames_.empty()) oldest = std::min(oldest, calibration_frames_.front().t_us);
+    if (!queue_.empty()) oldest = std::min(oldest, queue_.front().t_us);
+    if (!fitted_.empty()) oldest = std::min(oldest, fitted_.front().t_us);
+    while (samples.size() > 1 && samples.front().first < oldest - kForearmHistoryUs) samples.pop_front();
+  }
+}
+
+void BodyFitStage::fit_frame(BodyFitFrame& frame, StageOutput& out) {
+  Work& w = *work_;
+  try {
+    fit::ForearmDirections directions;
+    const auto left = K_from_F_at(v1::LEFT, frame.t_us), right = K_from_F_at(v1::RIGHT, frame.t_us);
+    if (left) directions.left_K = *left * Eigen::Vector3d::UnitY();  // F's y: elbow -> wrist
+    if (right) directions.right_K = *right * Eigen::Vector3d::UnitY();
+    std::optional<fit::KinectSkeleton> positions;
+    if (frame.skeleton) {
+      positions = frame.skeleton->positions_K;
+      fit::remove_off_body_depth(frame.frame, *frame.skeleton);  // body index / depth misalignment
+    }
+    const fit::FrameObservation observation =
+        fit::prepare_observation(frame.frame, w.camera, positions, w.fit_options, directions);
+
+    // II-G: from the skeleton-built pose and from the previous frame's; the lower energy wins.
+    const Eigen::VectorXd previous = previous_theta_.value_or(Eigen::VectorXd());
+    std::optional<fit::FitResult> best;
+    std::optional<Error> start_error;
+    try {
+      const fit::SkeletonInitResult start = w.init->initialise(*frame.skeleton, previous);
+      best = w.fitter.fit(observation, start.theta, w.beta);
+    } catch (const Error& e) {
+      if (previous.size() == 0) throw;
+      start_error = e;
+    }
+    if (previous.size() > 0) {
+      fit::FitResult from_previous = w.fitter.fit(observation, previous, w.beta);
+      if (!best || from_previous.energy.total() < best->energy.total()) best = std::move(from_previous);
+    }
+    const double energy = best->energy.total();
+    if (energy > lost_energy_) {
+      ++frames_lost_;
+      previous_theta_.reset();  // recovery: the next frame starts from the skeleton alone
+    } else {
+      previous_theta_ = best->theta;
+    }
+    fitted_.push_back({frame.t_us, *frame.skeleton, energy, directions.left_K || directions.right_K});
+    ++frames_fitted_;
+    if (const auto smoothed = w.smoother.push(best->theta)) emit_smoothed(*smoothed, out);
+  } catch (const Error& e) {
+    out.warn("FIT_FRAME", e.field(), "frame t_us=" + std::to_string(frame.t_us) + " not fitted: " + e.what());
+  }
+}
+
+void BodyFitStage::emit_smoothed(const Eigen::VectorXd& theta, StageOutput& out) {
+  Work& w = *work_;
+  const Fitted f = std::move(fitted_.front());
+  fitted_.pop_front();
+  const fit::JointPose pose = fit::pose_joints(w.rest_joints, w.layout, theta);
+  const Eigen::Matrix3Xd camera_joints = fit::camera_joints_from_pose(pose);
+  const v1::Source source = f.imu_used ? v1::FUSED : v1::VISUAL;
+
+  v1::FitResult result;
+  v1::FrameResult& frame = *result.mutable_frame();
+  frame.set_t_us(f.t_us);
+  frame.set_fit_energy(f.energy);
+  std::array<double, body::kNumJoints> smpl_confidence;
+  smpl_confidence.fill(1.0);
+  for (int j = 0; j < fit::kKinectJointCount; ++j) {
+    const int smpl = fit::smpl_joint_at_camera_joint(j);
+    if (smpl >= 0) smpl_confidence[static_cast<size_t>(smpl)] = confidence_of(f.skeleton, j);
+  }
+  for (int j = 0; j < body::kNumJoints; ++j) {
+    set_joint(*frame.add_smpl_joints(), pose.positions_K.col(j), source, smpl_confidence[static_cast<size_t>(j)]);
+  }
+  for (int j = 0; j < fit::kKinectJointCount; ++j) {
+    set_joint(*frame.add_camera_joints(), camera_joints.col(j), source, confidence_of(f.skeleton, j));
+  }
+
+  // II-B: the roll of each forearm from its IMU, the axis from the fit.
+  for (const v1::Arm arm : {v1::LEFT, v1::RIGHT}) {
+    const auto K_from_F = K_from_F_at(arm, f.t_us);
+    if (!K_from_F) continue;
+    const bool left = arm == v1::LEFT;
+    const int elbow = left ? body::kLeftElbow : body::kRightElbow, wrist = left ? body::kLeftWrist : body::kRightWrist;
+    const Eigen::Vector3d axis_K = (pose.positions_K.col(wrist) - pose.positions_K.col(elbow)).normalized();
+    const Eigen::Quaterniond onto_fit =
+        Eigen::Quaterniond::FromTwoVectors(*K_from_F * Eigen::Vector3d::UnitY(), axis_K);
+    v1::ForearmOrientation& forearm = *frame.add_forearms();
+    forearm.set_arm(arm);
+    *forearm.mutable_k_from_f() = to_proto((onto_fit * *K_from_F).normalized());
+    forearm.set_source(v1::FUSED);
+    const int camera_wrist = left ? fit::kWristLeft : fit::kWristRight;
+    forearm.set_confidence(confidence_of(f.skeleton, camera_wrist));
+    try {
+      fit::ArmRollOptions roll_options;
+      // Paper 1's F (x dorsal, y along the forearm): z is the thumb side on the right forearm and
+      // the little-finger side on the left (core/sim/forearm_strap.hpp).
+      roll_options.thumb_F = left ? Eigen::Vector3d(-Eigen::Vector3d::UnitZ()) : Eigen::Vector3d::UnitZ();
+      const fit::ForearmRoll roll = fit::forearm_roll(pose, left ? fit::ArmSide::kLeft : fit::ArmSide::kRight, *K_from_F,
+                                                      Eigen::Quaterniond::Identity(), roll_options);
+      if (roll.pronation_rad) forearm.set_pronation_rad(*roll.pronation_rad);
+    } catch (const Error&) {
+      forearm.set_confidence(0.0);  // roll undefined (IMU thumb axis along the fitted forearm)
+    }
+  }
+  out.emit(std::move(result));
+}
+
+void BodyFitStage::finish(StageOutput& out) {
+  if (!enabled_) return;
+  if (!personalised_ && !calibration_frames_.empty()) personalise(out);
+  fit_ready(true, out);
+  for (const Eigen::VectorXd& theta : work_->smoother.flush()) emit_smoothed(theta, out);
+  if (depth_) ++frames_without_skeleton_;
+  if (frames_without_skeleton_ > 0) {
+    out.warn("FIT_NO_SKELETON", "skeleton",
+             std::to_string(frames_without_skeleton_) + " depth frames had no skeleton of the fitted person: not fitted");
+  }
+  if (frames_lost_ > 0) {
+    out.warn("FIT_LOST", "fit", "tracking lost (energy above " + format_double(lost_energy_) + ") in " +
+                                    std::to_string(frames_lost_) + " of " + std::to_string(frames_fitted_) + " frames");
+  }
+  if (work_->init) {
+    v1::BodyShape& shape = *out.calibration().mutable_body_shape();
+    shape.clear_betas();
+    for (int i = 0; i < work_->beta.size(); ++i) shape.add_betas(work_->beta[i]);
+    const fit::JointPose rest = fit::pose_joints(work_->rest_joints, work_->layout, work_->layout.zero());
+    const auto length = [&](int a, int b) { return (rest.positions_K.col(a) - rest.positions_K.col(b)).norm(); };
+    shape.set_upper_arm_length_left_m(length(body::kLeftShoulder, body::kLeftElbow));
+    shape.set_upper_arm_length_right_m(length(body::kRightShoulder, body::kRightElbow));
+    shape.set_forearm_length_left_m(length(body::kLeftElbow, body::kLeftWrist));
+    shape.set_forearm_length_right_m(length(body::kRightElbow, body::kRightWrist));
+    shape.set_shoulder_width_m(length(body::kLeftShoulder, body::kRightShoulder));
+    shape.set_torso_length_m(length(body::kPelvis, body::kNeck));
+    shape.set_estimated(work_->personalisation.has_value());
+  }
+}
+
+}  // namespace posefuse::session

@@ -1,0 +1,119 @@
+#pragma once
+// Pipeline stage: the body-model fit of paper 2 for every depth frame (issue 7). Runs after the
+// forearm stage, whose per-sample forearm orientations K_from_F (ForearmOrientationBatch) it
+// receives through Stage::on_result and uses for the imu term (eq. 9-11) and the forearm roll
+// (II-B).
+//
+// Order of work:
+//  1. Frames: a depth frame, its body index map and the skeleton of the person `fit.body_id`
+//     (the first body seen by default) with the same t_us make one frame; its silhouette is that
+//     person's body index.
+//  2. Personalisation (III): the frames of the first `fit.calibration_s` seconds are the
+//     calibration frames; fit::personalise on their skeletons gives the shape (rough shape,
+//     III-A; the fine tuning III-B is not wired yet). When the subject is not in the controlled
+//     pose the stage warns FIT_PERSONALISATION and fits the template shape (beta = 0).
+//  3. Per frame (II-G, II-H): prepare_observation, the starting pose from the camera skeleton and
+//     the previous frame's pose, one LM fit from each, the lower energy wins. Tracking is lost
+//     when the winner's energy exceeds `fit.lost_energy`: the next frame starts from the skeleton
+//     only. Frames wait (up to `fit.imu_wait_s`) until the forearm orientations covering them have
+//     arrived, so that the imu term has them; then they are fitted without.
+//  4. Post-processing: moving average over `fit.smoothing_frames` frames (PoseSmoother), forearm
+//     roll from the IMU (fit::forearm_roll), and a FrameResult per frame: 24 SMPL joints, the 25
+//     camera-compatible joints, forearm orientations, per-joint source and confidence, energy.
+//
+// Which wins when the forearm stage and the fit disagree (docs/fitting.md, "Body-fit stage"):
+// both stages emit a FrameResult for the frame. Outside occlusions the fit's elbow and wrist win
+// (source FUSED, confidence 1): they use the whole silhouette and the IMU direction. While the
+// camera skeleton's elbow or wrist is not tracked (occlusion) the fit's arm joints carry
+// confidence 0.5 and the forearm stage's trajectory (PREDICTED live, RecoveredSegment once the gap
+// closes) wins for the forearm position; the forearm orientation of both comes from the same IMU
+// orientation, the fit's only rotated onto the fitted forearm axis.
+//
+// Problems that skip a frame are warnings (FIT_FRAME naming the field, e.g. "frame.body_index"
+// for an empty silhouette, "skeleton" for a missing one); the session goes on.
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+
+#include "fit/depth_frame.hpp"
+#include "fit/tracked_skeleton.hpp"
+#include "session/pipeline_stage.hpp"
+
+namespace posefuse::session {
+
+// One frame as the fit consumes it (the stage's input after decoding).
+struct BodyFitFrame {
+  std::int64_t t_us = 0;
+  fit::DepthFrame frame;
+  std::optional<fit::TrackedSkeleton> skeleton;
+};
+
+// SkeletonFrame -> TrackedSkeleton. Throws posefuse::Error "skeleton.joints" for a frame that
+// does not hold 25 joints.
+fit::TrackedSkeleton tracked_skeleton_from_proto(const v1::SkeletonFrame& skeleton);
+
+class BodyFitStage : public Stage {
+ public:
+  BodyFitStage();
+  ~BodyFitStage() override;
+  std::string_view name() const override { return "body_fit"; }
+  std::string_view description() const override;
+  std::vector<StageOption> options() const override;
+
+  void start(const v1::SessionHeader& header, StageOutput& out) override;
+  void on_chunk(const v1::SessionChunk& chunk, StageOutput& out) override;
+  void on_result(const v1::FitResult& result, StageOutput& out) override;
+  void finish(StageOutput& out) override;
+
+ private:
+  struct Work;  // models, fitter, smoother: built in start()
+
+  void add_frame(BodyFitFrame&& frame, StageOutput& out);
+  void personalise(StageOutput& out);
+  // Fits the queued frames whose forearm orientations are known (all when `all`).
+  void fit_ready(bool all, StageOutput& out);
+  void fit_frame(BodyFitFrame& frame, StageOutput& out);
+  void emit_smoothed(const Eigen::VectorXd& theta, StageOutput& out);
+  std::optional<Eigen::Quaterniond> K_from_F_at(int arm, std::int64_t t_us) const;
+
+  bool enabled_ = false;
+  std::unique_ptr<Work> work_;
+  double calibration_s_ = 1.0;
+  double imu_wait_s_ = 6.0;
+  double lost_energy_ = 100.0;
+  std::optional<std::uint32_t> body_id_;
+  int arm_imus_ = 0;  // arm IMUs in the header
+
+  // Frame assembly: the latest depth and body index images, by t_us.
+  std::optional<std::pair<std::int64_t, std::vector<std::uint16_t>>> depth_;
+  std::optional<std::pair<std::int64_t, std::vector<std::uint8_t>>> body_index_;
+  std::uint64_t frames_without_skeleton_ = 0;
+
+  std::optional<std::int64_t> first_t_us_, last_frame_t_us_;
+  std::vector<BodyFitFrame> calibration_frames_;
+  bool personalised_ = false;
+  std::deque<BodyFitFrame> queue_;  // personalised, waiting for forearm orientations
+
+  // Forearm orientations by arm (v1::Arm), camera clock.
+  std::map<int, std::deque<std::pair<std::int64_t, Eigen::Quaterniond>>> K_from_F_;
+
+  // Per fitted frame, what the emitted result needs beside the (smoothed) pose, in fit order.
+  struct Fitted {
+    std::int64_t t_us = 0;
+    fit::TrackedSkeleton skeleton;
+    double energy = 0;
+    bool imu_used = false;
+  };
+  std::deque<Fitted> fitted_;
+  std::optional<Eigen::VectorXd> previous_theta_;
+  std::uint64_t frames_fitted_ = 0, frames_lost_ = 0;
+};
+
+}  // namespace posefuse::session
