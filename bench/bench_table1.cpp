@@ -42,6 +42,7 @@ struct Named {
   std::string name;
   sim::BodyMotion motion;
   bool sdk_joint_errors = true;
+  std::string axis = "depth";  // the stage's forearm.axis: "sdk" is paper 1's method
 };
 
 std::size_t gap_count(const std::vector<bool>& occluded) {
@@ -87,7 +88,10 @@ Summary run(const Named& session_motion, const fs::path& image_folder, double lo
   const double cpu1 = bench::thread_cpu_seconds();
   Sink sink;
   session::SessionPipeline pipeline(session::make_default_stages(), sink);
-  for (const auto& chunk : session.chunks) pipeline.push(chunk);
+  for (v1::SessionChunk chunk : session.chunks) {
+    if (chunk.has_header()) (*chunk.mutable_header()->mutable_options())["forearm.axis"] = session_motion.axis;
+    pipeline.push(chunk);
+  }
   pipeline.close();
   const double cpu2 = bench::thread_cpu_seconds();
   for (const v1::FitResult& r : sink.results) {
@@ -153,6 +157,8 @@ int main(int argc, char** argv) {
   sim::ExerciseOptions protocol;
   protocol.repetitions = 1;
   sessions.push_back({"protocol", sim::make_exercise("forearm_protocol", protocol)});
+  // Paper 1's method: the forearm axis from the SDK's elbow and wrist (same SDK errors and seed).
+  sessions.push_back({"protocol_paper_axis", sim::make_exercise("forearm_protocol", protocol), true, "sdk"});
   // Diagnostic: the same session with an error-free SDK skeleton.
   sessions.push_back({"protocol_exact_sdk", sim::make_exercise("forearm_protocol", protocol), false});
   if (fs::is_directory(mocap)) {
@@ -177,7 +183,9 @@ int main(int argc, char** argv) {
   std::vector<Summary> summaries;
   std::uint64_t seed = 0;
   for (const Named& s : sessions) {
-    if (s.sdk_joint_errors) ++seed;  // every session draws its own SDK biases and noise; the diagnostic repeats its predecessor's
+    // Every session draws its own SDK biases and noise; the variants (paper axis, exact SDK) repeat
+    // their predecessor's.
+    if (s.sdk_joint_errors && s.axis == "depth") ++seed;
     try {
       summaries.push_back(run(s, images, longest_s, seed));
     } catch (const Error& e) {

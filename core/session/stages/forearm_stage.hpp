@@ -98,6 +98,7 @@ class ForearmStage : public Stage {
   std::optional<forearm::Quat> K_from_B_;
   double calibration_s_ = 5.0;
   bool pose_orientation_ = true;
+  bool axis_from_depth_ = true;  // forearm.axis
   std::optional<std::uint32_t> body_id_;
   std::optional<forearm::StrapCameras> cameras_;
   double color_tolerance_us_ = 0.0;
