@@ -42,7 +42,10 @@ struct Named {
   std::string name;
   sim::BodyMotion motion;
   bool sdk_joint_errors = true;
-  std::string axis = "depth";  // the stage's forearm.axis: "sdk" is paper 1's method
+  // The stage's forearm.axis and forearm.shoulder_sphere: "sdk" and "on" are the stage before the
+  // depth axis (paper 1's forearm axis from the SDK joints).
+  std::string axis = "depth";
+  std::string shoulder_sphere = "off";
 };
 
 std::size_t gap_count(const std::vector<bool>& occluded) {
@@ -89,7 +92,11 @@ Summary run(const Named& session_motion, const fs::path& image_folder, double lo
   Sink sink;
   session::SessionPipeline pipeline(session::make_default_stages(), sink);
   for (v1::SessionChunk chunk : session.chunks) {
-    if (chunk.has_header()) (*chunk.mutable_header()->mutable_options())["forearm.axis"] = session_motion.axis;
+    if (chunk.has_header()) {
+      auto& stage_options = *chunk.mutable_header()->mutable_options();
+      stage_options["forearm.axis"] = session_motion.axis;
+      stage_options["forearm.shoulder_sphere"] = session_motion.shoulder_sphere;
+    }
     pipeline.push(chunk);
   }
   pipeline.close();
@@ -158,7 +165,7 @@ int main(int argc, char** argv) {
   protocol.repetitions = 1;
   sessions.push_back({"protocol", sim::make_exercise("forearm_protocol", protocol)});
   // Paper 1's method: the forearm axis from the SDK's elbow and wrist (same SDK errors and seed).
-  sessions.push_back({"protocol_paper_axis", sim::make_exercise("forearm_protocol", protocol), true, "sdk"});
+  sessions.push_back({"protocol_paper_axis", sim::make_exercise("forearm_protocol", protocol), true, "sdk", "on"});
   // Diagnostic: the same session with an error-free SDK skeleton.
   sessions.push_back({"protocol_exact_sdk", sim::make_exercise("forearm_protocol", protocol), false});
   if (fs::is_directory(mocap)) {

@@ -23,6 +23,7 @@ constexpr const char* kCalibrationSKey = "forearm.calibration_s";
 constexpr const char* kCalibrationOrientationKey = "forearm.calibration_orientation";
 constexpr const char* kBodyIdKey = "forearm.body_id";
 constexpr const char* kAxisKey = "forearm.axis";
+constexpr const char* kShoulderSphereKey = "forearm.shoulder_sphere";
 // A depth frame belongs to a skeleton frame of the same t_us (same sensor); allow clock jitter.
 constexpr std::int64_t kDepthToleranceUs = 1000;
 // Frames waiting for their depth or colour image before they are processed without.
@@ -97,6 +98,9 @@ std::vector<StageOption> ForearmStage::options() const {
       {kAxisKey, "depth",
        "forearm axis (elbow, wrist) for the calibration frame, strap detection, II-J tests and eq. 10: 'depth' "
        "(fitted to the depth image around the SDK segment, forearm_axis_depth.hpp) or 'sdk' (the SDK joints, paper 1)"},
+      {kShoulderSphereKey, "off",
+       "'on': the gap smoother keeps the elbow on the sphere of radius d_ul around the SDK shoulder (eq. 13); "
+       "'off' (default): a real SDK's shoulder is off by 5-10 cm, which pulls the recovered trajectory away"},
   };
 }
 
@@ -128,6 +132,12 @@ void ForearmStage::start(const v1::SessionHeader& header, StageOutput& out) {
       throw_invalid(option_field(kAxisKey), "is '" + *text + "', expected 'depth' or 'sdk'");
     }
     axis_from_depth_ = *text == "depth";
+  }
+  if (const auto text = option(header, kShoulderSphereKey)) {
+    if (*text != "on" && *text != "off") {
+      throw_invalid(option_field(kShoulderSphereKey), "is '" + *text + "', expected 'on' or 'off'");
+    }
+    smoother_options_.use_shoulder_sphere = *text == "on";
   }
   if (const auto text = option(header, kBodyIdKey)) {
     body_id_ = static_cast<std::uint32_t>(parse_uint64(*text, option_field(kBodyIdKey)));
@@ -405,7 +415,7 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
     held.push_back(used[device.calibration->first_frame + i].K_from_F_sdk);
   }
   device.tracker = std::make_unique<ArmTracker>(device.id, *device.side, device.calibration->model, has_model,
-                                                *K_from_W_, mean_rotation(held));
+                                                *K_from_W_, mean_rotation(held), smoother_options_);
   for (const ArmFrame& f : device.frames) device.tracker->add_frame(f);
   device.frames.clear();
 }

@@ -84,6 +84,11 @@ class ForearmStage : public Stage {
     cv::Mat pixels;
   };
 
+  static forearm::GapSmootherOptions without_shoulder_sphere() {
+    forearm::GapSmootherOptions o;
+    o.use_shoulder_sphere = false;
+    return o;
+  }
   void add_imu(Device& device, const v1::ImuBatch& batch);
   void resolve_frames(bool all);
   void detect_arms(const PendingFrame& frame, const Image* depth, const Image* color);
@@ -99,6 +104,7 @@ class ForearmStage : public Stage {
   double calibration_s_ = 5.0;
   bool pose_orientation_ = true;
   bool axis_from_depth_ = true;  // forearm.axis
+  forearm::GapSmootherOptions smoother_options_ = without_shoulder_sphere();  // forearm.shoulder_sphere
   std::optional<std::uint32_t> body_id_;
   std::optional<forearm::StrapCameras> cameras_;
   double color_tolerance_us_ = 0.0;
