@@ -116,10 +116,17 @@ std::optional<MeasuredForearmAxis> measure_forearm_axis(const geometry::DepthIma
   const double variance = std::max(0.0, sum_sq / n - (sum / n) * (sum / n));
   if (along_max - along_min < options.min_length_m) return std::nullopt;
   MeasuredForearmAxis out;
-  out.radius_m = std::sqrt(3.0 * variance);
+  // Pixel centres a footprint h apart across a width 2R have variance about R^2 / 3 - h^2 / 12,
+  // not R^2 / 3; hence the h^2 / 4 below.
+  const double footprint_m = line.centroid.z() / depth_camera.fx;
+  out.radius_m = std::sqrt(3.0 * variance + 0.25 * footprint_m * footprint_m);
   const Vec3 axis_point = line.centroid + (std::numbers::pi / 4.0) * out.radius_m * away;
-  out.elbow_K = axis_point + along_min * line.direction;
-  out.wrist_K = axis_point + along_max * line.direction;
+  // The last pixel that sees the forearm lies on average half a pixel's footprint inside its end.
+  const auto half_pixel_m = [&](double along) {
+    return 0.5 * (axis_point + along * line.direction).z() / depth_camera.fx;
+  };
+  out.elbow_K = axis_point + (along_min - half_pixel_m(along_min)) * line.direction;
+  out.wrist_K = axis_point + (along_max + half_pixel_m(along_max)) * line.direction;
   out.points = static_cast<int>(points.size());
   return out;
 }

@@ -11,9 +11,11 @@
 //     that line are dropped and the line refitted (refinements times): a surface line.
 //  3. The visible half of a cylinder of radius R, sampled evenly across the image, has its mean
 //     (pi/4) R nearer the camera than the axis, and its lateral spread (perpendicular to the axis
-//     and to the viewing ray) is uniform in [-R, R], variance R^2 / 3. So R = sqrt(3 var) and the
-//     axis is the surface line moved (pi/4) R away from the camera.
-//  4. The extreme inliers along the axis are the elbow and the wrist (on the axis).
+//     and to the viewing ray) is uniform in [-R, R], variance R^2 / 3 (less h^2 / 12 for depth
+//     pixels a footprint h apart). So R = sqrt(3 var + h^2 / 4), and the axis is the surface line
+//     moved (pi/4) R away from the camera.
+//  4. The extreme inliers along the axis, moved out by half a depth pixel's footprint (the last
+//     pixel on the forearm lies on average that far inside its end), are the elbow and the wrist.
 #include <optional>
 
 #include "forearm/forearm_types.hpp"
