@@ -17,6 +17,10 @@
 //     skeleton: the shoulder-elbow-wrist plane with the palm towards the camera
 //     (forearm.calibration_orientation = pose, forearm_orientation.hpp), or from the SDK's
 //     wrist orientation (= sdk, the paper's K_from_F', whose axes must then be F's).
+//     With forearm.axis = depth (default) every frame's elbow and wrist are first replaced by
+//     the ends of the forearm axis fitted to the depth image (forearm_axis_depth.hpp), so the
+//     calibration, the strap search, the II-J tests and eq. 10 do not inherit the SDK's joint
+//     bias; = sdk keeps paper 1's SDK joints.
 //  3. Then in time order (arm_tracker.hpp): forearm orientation + pronation per IMU sample
 //     (ForearmOrientationBatch), per camera frame a FrameResult with the forearm orientation and
 //     the IMU position (VISUAL from the strap, or PREDICTED by the live estimator in a gap), and
