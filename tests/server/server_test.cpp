@@ -353,10 +353,12 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   ASSERT_EQ(info.stages_size(), 2);
   EXPECT_EQ(info.stages(0).name(), "imu_orientation");
   EXPECT_EQ(info.stages(1).name(), "forearm");
-  ASSERT_EQ(info.options_size(), 6);
+  ASSERT_EQ(info.options_size(), 8);
   EXPECT_EQ(info.options(0).key(), "imu.tau_acc_s");
   EXPECT_EQ(info.options(2).key(), "forearm.K_from_B");
   EXPECT_EQ(info.options(2).stage(), "forearm");
+  EXPECT_EQ(info.options(6).key(), "forearm.axis");
+  EXPECT_EQ(info.options(7).key(), "forearm.shoulder_sphere");
   EXPECT_EQ(info.limits().max_sessions(), 3u);
   EXPECT_EQ(info.limits().workers(), 2u);
   EXPECT_EQ(info.limits().max_upload_bytes(), 2u << 20);
