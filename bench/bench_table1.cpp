@@ -42,6 +42,10 @@ struct Named {
   std::string name;
   sim::BodyMotion motion;
   bool sdk_joint_errors = true;
+  // The stage's forearm.axis and forearm.shoulder_sphere: "sdk" and "on" are the stage before the
+  // depth axis (paper 1's forearm axis from the SDK joints).
+  std::string axis = "depth";
+  std::string shoulder_sphere = "off";
 };
 
 std::size_t gap_count(const std::vector<bool>& occluded) {
@@ -87,7 +91,14 @@ Summary run(const Named& session_motion, const fs::path& image_folder, double lo
   const double cpu1 = bench::thread_cpu_seconds();
   Sink sink;
   session::SessionPipeline pipeline(session::make_default_stages(), sink);
-  for (const auto& chunk : session.chunks) pipeline.push(chunk);
+  for (v1::SessionChunk chunk : session.chunks) {
+    if (chunk.has_header()) {
+      auto& stage_options = *chunk.mutable_header()->mutable_options();
+      stage_options["forearm.axis"] = session_motion.axis;
+      stage_options["forearm.shoulder_sphere"] = session_motion.shoulder_sphere;
+    }
+    pipeline.push(chunk);
+  }
   pipeline.close();
   const double cpu2 = bench::thread_cpu_seconds();
   for (const v1::FitResult& r : sink.results) {
@@ -153,6 +164,8 @@ int main(int argc, char** argv) {
   sim::ExerciseOptions protocol;
   protocol.repetitions = 1;
   sessions.push_back({"protocol", sim::make_exercise("forearm_protocol", protocol)});
+  // Paper 1's method: the forearm axis from the SDK's elbow and wrist (same SDK errors and seed).
+  sessions.push_back({"protocol_paper_axis", sim::make_exercise("forearm_protocol", protocol), true, "sdk", "on"});
   // Diagnostic: the same session with an error-free SDK skeleton.
   sessions.push_back({"protocol_exact_sdk", sim::make_exercise("forearm_protocol", protocol), false});
   if (fs::is_directory(mocap)) {
@@ -177,7 +190,9 @@ int main(int argc, char** argv) {
   std::vector<Summary> summaries;
   std::uint64_t seed = 0;
   for (const Named& s : sessions) {
-    if (s.sdk_joint_errors) ++seed;  // every session draws its own SDK biases and noise; the diagnostic repeats its predecessor's
+    // Every session draws its own SDK biases and noise; the variants (paper axis, exact SDK) repeat
+    // their predecessor's.
+    if (s.sdk_joint_errors && s.axis == "depth") ++seed;
     try {
       summaries.push_back(run(s, images, longest_s, seed));
     } catch (const Error& e) {

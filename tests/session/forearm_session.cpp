@@ -170,8 +170,8 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
       Vec3 p = shoulder_K + Vec3(0.3, -0.4, 0.0);  // joints the stage does not read
       auto state = v1::SkeletonJoint::TRACKED;
       if (j == 8) p = noisy(shoulder_K);
-      if (j == 9) p = noisy(elbow_K);
-      if (j == 10) p = noisy(wrist_K);
+      if (j == 9) p = noisy(elbow_K + o.elbow_bias_m);
+      if (j == 10) p = noisy(wrist_K + o.wrist_bias_m);
       if ((j == 9 || j == 10) && occluded) state = v1::SkeletonJoint::INFERRED;
       set_vec(p, joint.mutable_position_m());
       joint.set_state(state);
@@ -193,6 +193,7 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
     (*h.mutable_options())["forearm.K_from_B"] = q.str();
   }
   (*h.mutable_options())["forearm.calibration_s"] = format_double(o.calibration_s);
+  (*h.mutable_options())["forearm.axis"] = o.axis;
   return assemble_session(std::move(header), std::move(timed), frames, counts);
 }
 

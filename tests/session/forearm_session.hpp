@@ -28,6 +28,11 @@ struct ForearmSessionOptions {
   bool camera_alignment = true;     // false: no forearm.K_from_B option
   double joint_noise_m = 0.004;
   double calibration_s = 4.0;       // the stage option
+  // Constant SDK errors of the elbow and wrist joints (a real SDK's are 5-10 cm), and the
+  // stage's forearm.axis ("depth" or "sdk").
+  forearm::Vec3 elbow_bias_m = forearm::Vec3::Zero();
+  forearm::Vec3 wrist_bias_m = forearm::Vec3::Zero();
+  std::string axis = "depth";
   std::uint64_t seed = 7;
 };
 

@@ -42,13 +42,15 @@ Series slice(const Series& series, std::int64_t t0_us, std::int64_t t1_us) {
 }  // namespace
 
 ArmTracker::ArmTracker(std::string device_id, forearm::Side side, const forearm::ForearmModel& model,
-                       bool has_model, const Quat& K_from_W, const Quat& K_from_F_reference)
+                       bool has_model, const Quat& K_from_W, const Quat& K_from_F_reference,
+                       const forearm::GapSmootherOptions& smoother)
     : device_id_(std::move(device_id)),
       side_(side),
       model_(model),
       has_model_(has_model),
       K_from_W_(K_from_W),
-      K_from_F_reference_(K_from_F_reference) {}
+      K_from_F_reference_(K_from_F_reference),
+      smoother_options_(smoother) {}
 
 std::string ArmTracker::field() const { return "forearm[" + device_id_ + "]"; }
 
@@ -187,7 +189,7 @@ void ArmTracker::recover(std::int64_t t_start_us, std::int64_t t_end_us, StageOu
     const auto gap = std::find_if(gaps.begin(), gaps.end(), [&](const auto& g) { return g.t_start_us == t_start_us; });
     if (gap == gaps.end()) throw Error(ErrorCode::kInternal, where, "gap not found in its own track");
     const forearm::RecoveredGap paper = forearm::recover_gap_paper(input, *gap);
-    const forearm::RecoveredGap smoother = forearm::recover_gap_smoother(input, *gap);
+    const forearm::RecoveredGap smoother = forearm::recover_gap_smoother(input, *gap, smoother_options_);
     for (const auto& [method, recovered] :
          {std::pair{v1::RecoveredSegment::PAPER, &paper}, std::pair{v1::RecoveredSegment::SMOOTHER, &smoother}}) {
       v1::FitResult result;

@@ -17,6 +17,7 @@
 
 #include "forearm/forearm_orientation.hpp"
 #include "forearm/gap_input.hpp"
+#include "forearm/gap_smoother.hpp"
 #include "forearm/live_gap.hpp"
 #include "forearm/occlusion_tests.hpp"
 #include "session/pipeline_stage.hpp"
@@ -39,8 +40,10 @@ class ArmTracker {
  public:
   // `has_model` false: the strap was never seen in the calibration, so r and d_se are unknown
   // and only orientations are produced.
+  // `smoother` configures recover_gap_smoother (e.g. whether the SDK shoulder's sphere is used).
   ArmTracker(std::string device_id, forearm::Side side, const forearm::ForearmModel& model, bool has_model,
-             const forearm::Quat& K_from_W, const forearm::Quat& K_from_F_reference);
+             const forearm::Quat& K_from_W, const forearm::Quat& K_from_F_reference,
+             const forearm::GapSmootherOptions& smoother = {});
 
   // Arm IMU samples on the camera clock, in time order (earlier or equal times are dropped).
   void add_imu(const std::vector<std::int64_t>& t_us, const std::vector<forearm::Quat>& W_from_A,
@@ -68,6 +71,7 @@ class ArmTracker {
   bool has_model_;
   forearm::Quat K_from_W_;
   forearm::Quat K_from_F_reference_;
+  forearm::GapSmootherOptions smoother_options_;
 
   std::vector<forearm::ArmSample> arm_;
   std::vector<forearm::Quat> K_from_F_;

@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "common/error.hpp"
+#include "forearm/forearm_axis_depth.hpp"
 #include "forearm/forearm_orientation.hpp"
 #include "session/image_codec.hpp"
 #include "session/imu_batch.hpp"
@@ -21,6 +22,8 @@ constexpr const char* kKFromBKey = "forearm.K_from_B";
 constexpr const char* kCalibrationSKey = "forearm.calibration_s";
 constexpr const char* kCalibrationOrientationKey = "forearm.calibration_orientation";
 constexpr const char* kBodyIdKey = "forearm.body_id";
+constexpr const char* kAxisKey = "forearm.axis";
+constexpr const char* kShoulderSphereKey = "forearm.shoulder_sphere";
 // A depth frame belongs to a skeleton frame of the same t_us (same sensor); allow clock jitter.
 constexpr std::int64_t kDepthToleranceUs = 1000;
 // Frames waiting for their depth or colour image before they are processed without.
@@ -92,6 +95,12 @@ std::vector<StageOption> ForearmStage::options() const {
       {kCalibrationOrientationKey, "pose",
        "forearm orientation in the calibration pose: 'pose' (arm plane, palm to the camera) or 'sdk' (SDK wrist, eq. 9)"},
       {kBodyIdKey, "", "skeleton body id to follow; default: the first one in the stream"},
+      {kAxisKey, "depth",
+       "forearm axis (elbow, wrist) for the calibration frame, strap detection, II-J tests and eq. 10: 'depth' "
+       "(fitted to the depth image around the SDK segment, forearm_axis_depth.hpp) or 'sdk' (the SDK joints, paper 1)"},
+      {kShoulderSphereKey, "off",
+       "'on': the gap smoother keeps the elbow on the sphere of radius d_ul around the SDK shoulder (eq. 13); "
+       "'off' (default): a real SDK's shoulder is off by 5-10 cm, which pulls the recovered trajectory away"},
   };
 }
 
@@ -117,6 +126,18 @@ void ForearmStage::start(const v1::SessionHeader& header, StageOutput& out) {
       throw_invalid(option_field(kCalibrationOrientationKey), "is '" + *text + "', expected 'pose' or 'sdk'");
     }
     pose_orientation_ = *text == "pose";
+  }
+  if (const auto text = option(header, kAxisKey)) {
+    if (*text != "depth" && *text != "sdk") {
+      throw_invalid(option_field(kAxisKey), "is '" + *text + "', expected 'depth' or 'sdk'");
+    }
+    axis_from_depth_ = *text == "depth";
+  }
+  if (const auto text = option(header, kShoulderSphereKey)) {
+    if (*text != "on" && *text != "off") {
+      throw_invalid(option_field(kShoulderSphereKey), "is '" + *text + "', expected 'on' or 'off'");
+    }
+    smoother_options_.use_shoulder_sphere = *text == "on";
   }
   if (const auto text = option(header, kBodyIdKey)) {
     body_id_ = static_cast<std::uint32_t>(parse_uint64(*text, option_field(kBodyIdKey)));
@@ -255,6 +276,14 @@ void ForearmStage::detect_arms(const PendingFrame& frame, const Image* depth, co
                           joints[j.wrist].state() == v1::SkeletonJoint::TRACKED;
     const auto& q = joints[j.wrist].orientation();
     arm.K_from_wrist_sdk = Quat(q.w(), q.x(), q.y(), q.z());
+    if (arm.forearm_tracked && depth && cameras_ && axis_from_depth_) {
+      // The SDK's elbow and wrist only say where to look; the axis is the depth image's.
+      const forearm::DepthImageView mm{depth->pixels.cols, depth->pixels.rows, depth->pixels.ptr<std::uint16_t>()};
+      if (const auto axis = forearm::measure_forearm_axis(mm, cameras_->depth, arm.elbow_K, arm.wrist_K)) {
+        arm.elbow_K = axis->elbow_K;
+        arm.wrist_K = axis->wrist_K;
+      }
+    }
     if (arm.forearm_tracked && depth && color && cameras_) {
       const forearm::GrayImageView gray{color->pixels.cols, color->pixels.rows, color->pixels.ptr<std::uint8_t>()};
       const forearm::DepthImageView mm{depth->pixels.cols, depth->pixels.rows, depth->pixels.ptr<std::uint16_t>()};
@@ -386,7 +415,7 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
     held.push_back(used[device.calibration->first_frame + i].K_from_F_sdk);
   }
   device.tracker = std::make_unique<ArmTracker>(device.id, *device.side, device.calibration->model, has_model,
-                                                *K_from_W_, mean_rotation(held));
+                                                *K_from_W_, mean_rotation(held), smoother_options_);
   for (const ArmFrame& f : device.frames) device.tracker->add_frame(f);
   device.frames.clear();
 }

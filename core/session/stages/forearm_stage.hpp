@@ -17,6 +17,10 @@
 //     skeleton: the shoulder-elbow-wrist plane with the palm towards the camera
 //     (forearm.calibration_orientation = pose, forearm_orientation.hpp), or from the SDK's
 //     wrist orientation (= sdk, the paper's K_from_F', whose axes must then be F's).
+//     With forearm.axis = depth (default) every frame's elbow and wrist are first replaced by
+//     the ends of the forearm axis fitted to the depth image (forearm_axis_depth.hpp), so the
+//     calibration, the strap search, the II-J tests and eq. 10 do not inherit the SDK's joint
+//     bias; = sdk keeps paper 1's SDK joints.
 //  3. Then in time order (arm_tracker.hpp): forearm orientation + pronation per IMU sample
 //     (ForearmOrientationBatch), per camera frame a FrameResult with the forearm orientation and
 //     the IMU position (VISUAL from the strap, or PREDICTED by the live estimator in a gap), and
@@ -84,6 +88,11 @@ class ForearmStage : public Stage {
     cv::Mat pixels;
   };
 
+  static forearm::GapSmootherOptions without_shoulder_sphere() {
+    forearm::GapSmootherOptions o;
+    o.use_shoulder_sphere = false;
+    return o;
+  }
   void add_imu(Device& device, const v1::ImuBatch& batch);
   void resolve_frames(bool all);
   void detect_arms(const PendingFrame& frame, const Image* depth, const Image* color);
@@ -98,6 +107,8 @@ class ForearmStage : public Stage {
   std::optional<forearm::Quat> K_from_B_;
   double calibration_s_ = 5.0;
   bool pose_orientation_ = true;
+  bool axis_from_depth_ = true;  // forearm.axis
+  forearm::GapSmootherOptions smoother_options_ = without_shoulder_sphere();  // forearm.shoulder_sphere
   std::optional<std::uint32_t> body_id_;
   std::optional<forearm::StrapCameras> cameras_;
   double color_tolerance_us_ = 0.0;

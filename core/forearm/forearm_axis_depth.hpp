@@ -1,0 +1,51 @@
+#pragma once
+// The forearm's axis measured in the depth image, independent of the SDK's joint errors.
+//
+// Paper 1 takes the forearm axis from the SDK's elbow and wrist (II-H, II-J, eq. 10). A real
+// skeleton SDK biases each arm joint by several centimetres, which turns the calibration frame
+// by tens of degrees, rejects the strap at most frames (II-J) and moves the IMU position (eq. 10)
+// with the bias. The depth image sees the forearm's surface without that bias, so:
+//  1. Depth pixels around the projected SDK elbow-wrist segment are back-projected; those within
+//     search_radius_m of the segment (extended by end_margin_m at both ends) are candidates.
+//  2. A principal-axis (PCA) line fit through them; points further than inlier_radius_m from
+//     that line are dropped and the line refitted (refinements times): a surface line.
+//  3. The visible half of a cylinder of radius R, sampled evenly across the image, has its mean
+//     (pi/4) R nearer the camera than the axis, and its lateral spread (perpendicular to the axis
+//     and to the viewing ray) is uniform in [-R, R], variance R^2 / 3 (less h^2 / 12 for depth
+//     pixels a footprint h apart). So R = sqrt(3 var + h^2 / 4), and the axis is the surface line
+//     moved (pi/4) R away from the camera.
+//  4. The extreme inliers along the axis, moved out by half a depth pixel's footprint (the last
+//     pixel on the forearm lies on average that far inside its end), are the elbow and the wrist.
+#include <optional>
+
+#include "forearm/forearm_types.hpp"
+#include "geometry/image_view.hpp"
+#include "geometry/pinhole_camera.hpp"
+
+namespace posefuse::forearm {
+
+struct ForearmAxisOptions {
+  double search_radius_m = 0.15;  // SDK joints are off by 5-10 cm plus the forearm's radius
+  double end_margin_m = 0.15;     // along the segment, beyond the SDK elbow and wrist
+  double inlier_radius_m = 0.06;  // around the fitted surface line
+  int refinements = 2;
+  int min_points = 30;
+  double min_length_m = 0.08;  // elbow to wrist
+};
+
+struct MeasuredForearmAxis {
+  Vec3 elbow_K = Vec3::Zero();  // on the axis, the elbow end of the seen forearm
+  Vec3 wrist_K = Vec3::Zero();  // on the axis, the wrist end
+  double radius_m = 0.0;        // R of the fitted cylinder
+  int points = 0;               // inliers of the last fit
+};
+
+// Throws posefuse::Error kInvalidArgument naming "depth.pixels", "elbow_K", "wrist_K" or
+// "options" for unusable input. nullopt when the depth image does not show a forearm there
+// (too few points, too short).
+std::optional<MeasuredForearmAxis> measure_forearm_axis(const geometry::DepthImageView& depth,
+                                                        const geometry::PinholeCamera& depth_camera,
+                                                        const Vec3& elbow_K, const Vec3& wrist_K,
+                                                        const ForearmAxisOptions& options = {});
+
+}  // namespace posefuse::forearm

@@ -1,0 +1,94 @@
+#include "forearm/forearm_axis_depth.hpp"
+
+#include <gtest/gtest.h>
+
+#include "common/error.hpp"
+#include "synthetic_images.hpp"
+
+namespace posefuse::forearm {
+namespace {
+
+using testing::ForearmScene;
+using testing::render_forearm;
+using testing::test_cameras;
+
+// Distance of p from the infinite line through a and b.
+double distance_to_line(const Vec3& p, const Vec3& a, const Vec3& b) {
+  const Vec3 d = (b - a).normalized();
+  return ((p - a) - (p - a).dot(d) * d).norm();
+}
+
+// SDK-like joints: each moved by a few centimetres in different directions.
+struct BiasedJoints {
+  Vec3 elbow_K, wrist_K;
+};
+BiasedJoints biased(const ForearmScene& s) {
+  return {s.elbow_K + Vec3(0.06, -0.05, 0.04), s.wrist_K + Vec3(-0.05, 0.07, -0.06)};
+}
+
+TEST(ForearmAxisDepth, FindsTheTrueAxisFromBiasedJoints) {
+  const ForearmScene scene;  // forearm 26 cm long at 2 m, radius 3.5 cm
+  const StrapCameras cameras = test_cameras();
+  const auto images = render_forearm(scene, cameras);
+  const BiasedJoints sdk = biased(scene);
+  const auto axis = measure_forearm_axis(images.depth_view(cameras), cameras.depth, sdk.elbow_K, sdk.wrist_K);
+  ASSERT_TRUE(axis.has_value());
+  const Vec3 true_direction = (scene.wrist_K - scene.elbow_K).normalized();
+  const double angle_deg =
+      std::acos(std::clamp((axis->wrist_K - axis->elbow_K).normalized().dot(true_direction), -1.0, 1.0)) * 180.0 /
+      EIGEN_PI;
+  EXPECT_LT(angle_deg, 2.0);
+  // A depth pixel is ~11 mm wide at 2 m and depth is in whole millimetres.
+  EXPECT_LT(distance_to_line(axis->elbow_K, scene.elbow_K, scene.wrist_K), 0.006);
+  EXPECT_LT(distance_to_line(axis->wrist_K, scene.elbow_K, scene.wrist_K), 0.006);
+  EXPECT_NEAR((axis->elbow_K - scene.elbow_K).norm(), 0.0, 0.015);
+  EXPECT_NEAR((axis->wrist_K - scene.wrist_K).norm(), 0.0, 0.015);
+  EXPECT_NEAR(axis->radius_m, scene.radius_m, 0.006);
+  // The biased SDK segment itself is far off: the test means something.
+  EXPECT_GT(distance_to_line(sdk.elbow_K, scene.elbow_K, scene.wrist_K), 0.05);
+}
+
+TEST(ForearmAxisDepth, DepthNoiseOfTwoMillimetres) {
+  ForearmScene scene;
+  scene.elbow_K = Vec3(-0.15, 0.1, 1.8);
+  scene.wrist_K = Vec3(0.1, 0.0, 1.7);  // a horizontal forearm, tilted towards the camera
+  const StrapCameras cameras = test_cameras();
+  const auto images = render_forearm(scene, cameras, 0.0, 0.002, 7);
+  const BiasedJoints sdk = biased(scene);
+  const auto axis = measure_forearm_axis(images.depth_view(cameras), cameras.depth, sdk.elbow_K, sdk.wrist_K);
+  ASSERT_TRUE(axis.has_value());
+  const Vec3 true_direction = (scene.wrist_K - scene.elbow_K).normalized();
+  EXPECT_GT((axis->wrist_K - axis->elbow_K).normalized().dot(true_direction), std::cos(3.0 * EIGEN_PI / 180.0));
+  EXPECT_LT(distance_to_line(0.5 * (axis->elbow_K + axis->wrist_K), scene.elbow_K, scene.wrist_K), 0.008);
+}
+
+TEST(ForearmAxisDepth, NothingThereGivesNoAxis) {
+  ForearmScene scene;
+  const StrapCameras cameras = test_cameras();
+  const auto images = render_forearm(scene, cameras);
+  // Joints 60 cm beside the forearm: only the far wall lies in the search region.
+  const Vec3 elbow = scene.elbow_K + Vec3(0.6, 0.0, 0.0), wrist = scene.wrist_K + Vec3(0.6, 0.0, 0.0);
+  EXPECT_FALSE(measure_forearm_axis(images.depth_view(cameras), cameras.depth, elbow, wrist).has_value());
+}
+
+TEST(ForearmAxisDepth, BadInputNamesTheField) {
+  const ForearmScene scene;
+  const StrapCameras cameras = test_cameras();
+  const auto images = render_forearm(scene, cameras);
+  const auto field_of = [&](const DepthImageView& depth, const Vec3& elbow, const Vec3& wrist) {
+    try {
+      measure_forearm_axis(depth, cameras.depth, elbow, wrist);
+    } catch (const Error& e) {
+      return e.field();
+    }
+    return std::string("no error");
+  };
+  const DepthImageView good = images.depth_view(cameras);
+  EXPECT_EQ(field_of({good.width - 1, good.height, good.pixels}, scene.elbow_K, scene.wrist_K), "depth.pixels");
+  EXPECT_EQ(field_of(good, Vec3(NAN, 0, 1), scene.wrist_K), "elbow_K");
+  EXPECT_EQ(field_of(good, scene.elbow_K, Vec3(0, 0, -1)), "wrist_K");
+  EXPECT_EQ(field_of(good, scene.elbow_K, scene.elbow_K), "elbow_K/wrist_K");
+}
+
+}  // namespace
+}  // namespace posefuse::forearm
