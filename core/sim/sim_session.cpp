@@ -132,7 +132,8 @@ class FrameWorker {
               const raycast::DepthCamera& camera, const CameraSkeletonSimulator& skeleton,
               const StrapPlacement& straps, const std::array<ForearmStrap, 2>& forearm_straps,
               const std::array<Quat, 2>& rest_R_from_F, const Eigen::Isometry3d& K_from_Body,
-              const std::vector<RoomPlane>& room, const StaticBackground& background)
+              const std::vector<RoomPlane>& room, const StaticBackground& background,
+              const std::vector<Eigen::Matrix3Xd>& wobble)
       : options_(options),
         render_(render),
         evaluator_(render.model, layout),
@@ -143,7 +144,9 @@ class FrameWorker {
         forearm_straps_(forearm_straps),
         rest_R_from_F_(rest_R_from_F),
         K_from_Body_(K_from_Body),
-        background_(background) {
+        background_(background),
+        wobble_(wobble),
+        soft_tissue_(render.model->weights, render.surface_vertices) {
     if (options.color) color_ = std::make_unique<ColorRenderer>(options.color_camera, render, straps, room, options.seed);
   }
 
@@ -154,7 +157,8 @@ class FrameWorker {
       throw_invalid("motion", "frame " + std::to_string(plan.index) + " gave a bad pose");
     }
     evaluator_.evaluate(options_.betas, theta, body::Derivatives::kNone);
-    const Eigen::Matrix3Xd vertices_K = K_from_Body_ * evaluator_.vertices();
+    Eigen::Matrix3Xd vertices_K = K_from_Body_ * evaluator_.vertices();
+    soft_tissue_.apply(wobble_[static_cast<std::size_t>(plan.index)], K_from_Body_.linear(), vertices_K);
     scene_.update_vertices(vertices_K);
     scene_.render(camera_, 0, images_);
     lap("depth: pose, skin, ray cast");
@@ -247,6 +251,8 @@ class FrameWorker {
   std::array<Quat, 2> rest_R_from_F_;
   Eigen::Isometry3d K_from_Body_;
   const StaticBackground& background_;
+  const std::vector<Eigen::Matrix3Xd>& wobble_;  // per frame, Body frame (soft_tissue.hpp)
+  SoftTissueSkin soft_tissue_;
   std::unique_ptr<ColorRenderer> color_;
   raycast::RenderImages images_;
   SimTimings times_;
@@ -274,6 +280,7 @@ void validate(const SimSessionOptions& options) {
   validate(options.depth_noise);
   if (options.color) validate(options.color_camera);
   validate(options.clothing);
+  validate(options.soft_tissue);
   require_positive(options.strap_to_elbow_m, "strap_to_elbow_m");
   require_positive(options.strap_radius_m, "strap_radius_m");
   require_non_negative(options.mount_sigma_rad, "mount_sigma_rad");
@@ -549,12 +556,18 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
                                        RoomPlane{Vec3::UnitZ(), options.wall_distance_m}};
   // The room's depth and incidence once; frames redo the error model's incidence near the body.
   const StaticBackground background(camera, room, options.depth_noise);
+  const auto frames = static_cast<std::int64_t>(std::floor(options.duration_s * options.depth_rate_hz + 1e-9)) + 1;
+  std::vector<double> frame_times_s;
+  for (std::int64_t i = 0; i < frames; ++i) frame_times_s.push_back(static_cast<double>(i) / options.depth_rate_hz);
+  const std::vector<Eigen::Matrix3Xd> wobble = segment_wobble(
+      [&](double t) { return pose_skeleton(truth.rest_joints, layout, motion.poses(t)).joints; }, frame_times_s,
+      options.soft_tissue);
+  lap("soft-tissue wobble (segment springs)");
   std::vector<std::unique_ptr<FrameWorker>> workers;
   for (int w = 0; w < options.threads; ++w) {
     workers.push_back(std::make_unique<FrameWorker>(options, render, layout, camera, skeleton, straps, forearm_straps,
-                                                    rest_R_from_F, K_from_Body, room, background));
+                                                    rest_R_from_F, K_from_Body, room, background, wobble));
   }
-  const auto frames = static_cast<std::int64_t>(std::floor(options.duration_s * options.depth_rate_hz + 1e-9)) + 1;
   for (std::int64_t first = 0; first < frames; first += options.threads) {
     const std::int64_t count = std::min<std::int64_t>(options.threads, frames - first);
     std::vector<FrameOutput> outputs(static_cast<std::size_t>(count));

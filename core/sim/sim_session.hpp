@@ -37,6 +37,7 @@
 #include "sim/imu_device.hpp"
 #include "sim/motion_library.hpp"
 #include "sim/render_model.hpp"
+#include "sim/soft_tissue.hpp"
 
 namespace posefuse::sim {
 
@@ -69,6 +70,7 @@ struct SimSessionOptions {
   bool color = true;
   ColorCameraOptions color_camera;
   ClothingOptions clothing;
+  SoftTissueOptions soft_tissue;  // wobble of the rendered surface under fast motion
 
   // IMUs: one per listed arm (0 left, 1 right) and the base on the camera.
   std::array<bool, 2> arm_imu = {true, true};

@@ -176,6 +176,15 @@ const std::map<std::string, Setter>& setters() {
                                     o.clothing.skin_offset_m = non_negative(v, f);
                                     if (o.clothing.skin_offset_m > 0.1) bad(f, v, "must be at most 0.1");
                                   }}},
+      {"soft_tissue_wobble", {"soft-tissue wobble of the rendered surface under fast motion on (true/false)",
+                              [](Options& o, const std::string& v, const std::string& f) {
+                                o.soft_tissue.enabled = boolean(v, f);
+                              }}},
+      {"soft_tissue_max_m", {"largest soft-tissue wobble of any vertex, m (<= 0.1)",
+                             [](Options& o, const std::string& v, const std::string& f) {
+                               o.soft_tissue.max_displacement_m = non_negative(v, f);
+                               if (o.soft_tissue.max_displacement_m > 0.1) bad(f, v, "must be at most 0.1");
+                             }}},
       {"imu_arms", {"arms with an IMU: both, left, right or none", [](Options& o, const std::string& v, const std::string& f) {
                       if (v == "both") o.arm_imu = {true, true};
                       else if (v == "left") o.arm_imu = {true, false};
