@@ -27,7 +27,8 @@ void set_vec(const Vec3& v, v1::Vec3* out) {
 
 v1::Arm arm_enum(int arm) { return arm == 0 ? v1::LEFT : v1::RIGHT; }
 
-// Minimal JSON building: numbers in the shortest exact form.
+}  // namespace
+
 std::string json_vec(const Vec3& v) {
   return "[" + format_double(v.x()) + ", " + format_double(v.y()) + ", " + format_double(v.z()) + "]";
 }
@@ -35,6 +36,9 @@ std::string json_quat(const Quat& q) {
   return "[" + format_double(q.w()) + ", " + format_double(q.x()) + ", " + format_double(q.y()) + ", " +
          format_double(q.z()) + "]";
 }
+
+namespace {
+
 std::string json_mat(const Eigen::Matrix3d& m) {
   std::string out = "[";
   for (int r = 0; r < 3; ++r) out += (r ? ", " : "") + json_vec(m.row(r).transpose());

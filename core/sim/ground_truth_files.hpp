@@ -17,6 +17,10 @@
 namespace posefuse::sim {
 
 // Creates `directory` (kFailedPrecondition when it exists and is not empty).
+// Minimal JSON building (truth files): numbers in the shortest exact form; quaternions [w, x, y, z].
+std::string json_vec(const Vec3& v);
+std::string json_quat(const Quat& q);
+
 void write_ground_truth(const SimTruth& truth, const std::filesystem::path& directory);
 
 }  // namespace posefuse::sim

@@ -36,6 +36,7 @@
 #include "sim/depth_noise.hpp"
 #include "sim/imu_device.hpp"
 #include "sim/motion_library.hpp"
+#include "sim/panel_capture.hpp"
 #include "sim/render_model.hpp"
 #include "sim/soft_tissue.hpp"
 
@@ -87,6 +88,8 @@ struct SimSessionOptions {
   BuzzerOptions buzzer;             // stop_device_us is set from buzzer_stop_s
   AudioOptions audio;               // t_begin_s and duration_s are set to the session
   BleBroadcastOptions ble;
+
+  PanelCaptureOptions panel_capture;  // not simulated here: posefuse-sim writes it beside the session
 
   int threads = 2;                  // frames rendered in parallel (results do not depend on it)
 };

@@ -6,6 +6,8 @@
 #include <unistd.h>
 
 #include "common/error.hpp"
+#include "session/file_bytes.hpp"
+#include "tools/sim/calibration_capture_files.hpp"
 #include "tools/sim/sim_options_file.hpp"
 #include "tools/sim/sim_run.hpp"
 
@@ -15,6 +17,7 @@ const char* const kUsage =
     "usage: posefuse-sim (--out DIR | --chunk-file FILE) [--options FILE] [--seed N] [--duration S]\n"
     "                    [--gt DIR] [--contact-sheet PNG] [--threads N] [--quiet]\n"
     "       posefuse-sim --list-options\n"
+    "       posefuse-sim calibrate DIR   (frame calibration, paper 1 II-F, of a calibration_capture/ folder)\n"
     "Writes a simulated session (recording directory with gt/ inside, or a chunk file with\n"
     "FILE.gt/ beside it). Flags override the options file. See docs/simulator.md.\n";
 
@@ -28,6 +31,15 @@ int fail(const std::string& message) {
 int main(int argc, char** argv) {
   using namespace posefuse;
   try {
+    if (argc >= 2 && std::string(argv[1]) == "calibrate") {
+      if (argc != 3) return fail(std::string("calibrate takes one folder\n") + kUsage);
+      const std::string report = tools::calibration_report(tools::calibrate_capture_directory(argv[2]));
+      std::cout << report;
+      session::write_file_bytes(std::filesystem::path(argv[2]) / "calibration_result.txt", report);
+      std::cerr << "posefuse-sim: written " << (std::filesystem::path(argv[2]) / "calibration_result.txt").string()
+                << "; pass the last line as the session header option (header.json \"options\")\n";
+      return 0;
+    }
     tools::SimRunRequest request;
     std::optional<std::string> options_file, seed, duration, threads;
     bool quiet = false;

@@ -185,6 +185,21 @@ const std::map<std::string, Setter>& setters() {
                                o.soft_tissue.max_displacement_m = non_negative(v, f);
                                if (o.soft_tissue.max_displacement_m > 0.1) bad(f, v, "must be at most 0.1");
                              }}},
+      {"panel_capture", {"also write calibration_capture/: the calibration panel seen by mocap, IR/depth and IMUs (false)",
+                         [](Options& o, const std::string& v, const std::string& f) {
+                           o.panel_capture.enabled = boolean(v, f);
+                         }}},
+      {"panel_poses", {"calibration panel poses, 1..20 (4)", [](Options& o, const std::string& v, const std::string& f) {
+                         o.panel_capture.poses = static_cast<int>(integer(v, f, 1, 20));
+                       }}},
+      {"panel_marker_noise_m", {"mocap marker noise per axis, m (0.0003)",
+                                [](Options& o, const std::string& v, const std::string& f) {
+                                  o.panel_capture.marker_noise_m = non_negative(v, f);
+                                }}},
+      {"panel_imu_misalignment_deg", {"panel IMU's visual alignment on the panel, per-axis sigma, deg (0.5)",
+                                      [](Options& o, const std::string& v, const std::string& f) {
+                                        o.panel_capture.imu_misalignment_deg = non_negative(v, f);
+                                      }}},
       {"imu_arms", {"arms with an IMU: both, left, right or none", [](Options& o, const std::string& v, const std::string& f) {
                       if (v == "both") o.arm_imu = {true, true};
                       else if (v == "left") o.arm_imu = {true, false};

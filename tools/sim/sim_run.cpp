@@ -6,6 +6,7 @@
 #include "session/chunk_file.hpp"
 #include "session/directory_writer.hpp"
 #include "sim/ground_truth_files.hpp"
+#include "tools/sim/calibration_capture_files.hpp"
 #include "tools/sim/contact_sheet.hpp"
 
 namespace posefuse::tools {
@@ -15,6 +16,7 @@ SimRunResult run_simulation(const SimRunRequest& request, const std::function<vo
     throw Error(ErrorCode::kInvalidArgument, "--out/--chunk-file", "give exactly one of the two");
   }
   sim::validate(request.options);
+  if (request.options.panel_capture.enabled) sim::validate(request.options.panel_capture);
   SimRunResult result;
   result.gt_directory = request.gt_directory ? *request.gt_directory
                         : request.out_directory ? *request.out_directory / "gt"
@@ -36,6 +38,22 @@ SimRunResult run_simulation(const SimRunRequest& request, const std::function<vo
   target.finish();
   sim::write_ground_truth(truth, result.gt_directory);
   if (request.contact_sheet) write_png(recorder.render(), *request.contact_sheet);
+  if (request.options.panel_capture.enabled) {
+    // The same rig: camera, room, base IMU mounting, earth field and IMU model.
+    sim::PanelCaptureRig rig;
+    rig.depth_intrinsics = request.options.depth_intrinsics;
+    rig.K_from_W = truth.K_from_W;
+    rig.K_from_B = truth.K_from_B;
+    rig.camera_height_m = request.options.camera_height_m;
+    rig.wall_distance_m = request.options.wall_distance_m;
+    rig.depth_noise = request.options.depth_noise;
+    rig.imu_rate_hz = request.options.imu.rate_hz;
+    rig.imu = request.options.imu.synth;
+    rig.seed = request.options.seed;
+    result.calibration_capture = request.out_directory ? *request.out_directory / "calibration_capture"
+                                                       : std::filesystem::path(request.chunk_file->string() + ".calibration_capture");
+    write_calibration_capture(sim::simulate_panel_capture(request.options.panel_capture, rig), *result.calibration_capture);
+  }
   result.chunks = truth.chunks;
   result.frames = static_cast<std::int64_t>(truth.frames.size());
   return result;

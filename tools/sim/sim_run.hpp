@@ -1,7 +1,7 @@
 #pragma once
 // What `posefuse-sim` does, as a function the tests call: simulate one session, write it as a
 // recording directory (with gt/ inside) or as a chunk file (with gt/ beside it), optionally a
-// contact sheet.
+// contact sheet, and the calibration-panel capture (calibration_capture_files.hpp) when asked.
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -23,6 +23,8 @@ struct SimRunResult {
   std::filesystem::path gt_directory;
   std::uint64_t chunks = 0;
   std::int64_t frames = 0;
+  // options.panel_capture.enabled: <out>/calibration_capture or <chunk_file>.calibration_capture
+  std::optional<std::filesystem::path> calibration_capture;
 };
 
 // kInvalidArgument for a request without (or with both) outputs; errors of the simulator and

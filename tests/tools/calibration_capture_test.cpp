@@ -1,0 +1,78 @@
+// `posefuse-sim calibrate DIR`'s pieces: a simulated calibration-panel capture written as
+// calibration_capture/, read back and calibrated, gives exactly the in-memory calibration (PNG
+// and the CSVs' shortest exact numbers are lossless); refusals name the file.
+#include <gtest/gtest.h>
+
+#include <unistd.h>
+
+#include "../imu/expect_error.hpp"
+#include "session/file_bytes.hpp"
+#include "sim/room_frame.hpp"
+#include "tools/sim/calibration_capture_files.hpp"
+
+using namespace posefuse;
+using posefuse::testing::expect_error;
+namespace fs = std::filesystem;
+
+namespace {
+
+fs::path fresh_dir(const std::string& name) {
+  const fs::path dir = fs::temp_directory_path() / ("posefuse_calibration_capture_test_" + std::to_string(::getpid())) / name;
+  fs::remove_all(dir);
+  return dir;
+}
+
+sim::PanelCaptureRig rig() {
+  sim::PanelCaptureRig r;
+  const sim::Quat K_from_Body(Eigen::AngleAxisd(3.14159265358979323846, sim::Vec3::UnitY()));
+  r.K_from_W = (K_from_Body * sim::W_from_R(0.3).conjugate()).normalized();
+  sim::Mat3 K_from_B;
+  K_from_B << 0, 1, 0, 0, 0, 1, 1, 0, 0;
+  r.K_from_B = sim::Quat(K_from_B);
+  r.seed = 7;
+  return r;
+}
+
+TEST(CalibrationCaptureFiles, TheWrittenFolderCalibratesExactlyAsInMemory) {
+  const sim::PanelCaptureResult capture = sim::simulate_panel_capture({}, rig());
+  const fs::path dir = fresh_dir("good");
+  tools::write_calibration_capture(capture, dir);
+  for (const char* file : {"capture.txt", "markers.csv", "imu.csv", "truth.json", "pose_0_ir.png", "pose_3_depth.png"}) {
+    EXPECT_TRUE(fs::exists(dir / file)) << file;
+  }
+  const calib::CaptureCalibration in_memory = calib::calibrate_capture(capture.capture);
+  const calib::CaptureCalibration from_files = tools::calibrate_capture_directory(dir);
+  EXPECT_EQ(from_files.base.K_from_B.coeffs(), in_memory.base.K_from_B.coeffs());
+  EXPECT_EQ(from_files.mocap.K_from_E.coeffs(), in_memory.mocap.K_from_E.coeffs());
+  EXPECT_EQ(from_files.mocap.E_origin_K, in_memory.mocap.E_origin_K);
+  // Against the truth: the bounds of tests/sim/panel_capture_test.cpp (derived there).
+  EXPECT_LT(geometry::angle_between(from_files.mocap.K_from_E, capture.truth.K_from_E), 0.7 * 3.14159265358979 / 180);
+  const std::string report = tools::calibration_report(from_files);
+  std::printf("%s", report.c_str());
+  EXPECT_NE(report.find("forearm.K_from_B = "), std::string::npos);
+}
+
+TEST(CalibrationCaptureFiles, RefusalsNameTheFile) {
+  sim::PanelCaptureOptions options;
+  options.poses_K = sim::simulate_panel_capture(options, rig()).truth.K_from_P;
+  options.poses_K[1].origin_X += sim::Vec3(3.0, 0.0, 0.0);  // out of view
+  const fs::path dir = fresh_dir("away");
+  tools::write_calibration_capture(sim::simulate_panel_capture(options, rig()), dir);
+  expect_error([&] { tools::calibrate_capture_directory(dir); }, ErrorCode::kFailedPrecondition,
+               (dir / "pose_1_ir.png").string() + ": ir", "expected the panel's 4 markers");
+  // A truncated marker file and a missing image.
+  std::string markers = session::read_file_bytes(dir / "markers.csv", "markers.csv");
+  session::write_file_bytes(dir / "markers.csv", markers.substr(0, markers.size() - 20));
+  try {
+    tools::calibrate_capture_directory(dir);
+    ADD_FAILURE() << "a truncated markers.csv was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument) << e.what();
+    EXPECT_NE(e.field().find("markers.csv"), std::string::npos) << e.what();
+  }
+  session::write_file_bytes(dir / "markers.csv", markers);
+  fs::remove(dir / "pose_2_depth.png");
+  expect_error([&] { tools::calibrate_capture_directory(dir); }, ErrorCode::kNotFound, (dir / "pose_2_depth.png").string());
+}
+
+}  // namespace
