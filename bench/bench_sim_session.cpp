@@ -1,5 +1,5 @@
 // Speed of a whole simulated session (posefuse-sim's work without the file system):
-//   build/bench/bench_sim_session [seconds=60] [threads=2]
+//   build/bench/bench_sim_session [seconds=60] [threads=2] [motion=arm_raising]
 // Prints thread CPU seconds per part of the work (summed over threads) and the wall time.
 // Chunks are serialised (as a chunk file would) and counted, not written.
 #include <cstdio>
@@ -35,6 +35,7 @@ int main(int argc, char** argv) {
   sim::SimSessionOptions options;
   options.duration_s = argc > 1 ? std::atof(argv[1]) : 60.0;
   options.threads = argc > 2 ? std::atoi(argv[2]) : 2;
+  if (argc > 3) options.motion = argv[3];
   CountingSink sink;
   const auto start = bench::WallClock::now();
   const double cpu_start = bench::thread_cpu_seconds();

@@ -158,7 +158,9 @@ class FrameWorker {
     }
     evaluator_.evaluate(options_.betas, theta, body::Derivatives::kNone);
     Eigen::Matrix3Xd vertices_K = K_from_Body_ * evaluator_.vertices();
+    lap("depth: pose, skin, ray cast");
     soft_tissue_.apply(wobble_[static_cast<std::size_t>(plan.index)], K_from_Body_.linear(), vertices_K);
+    lap("depth: soft-tissue wobble");
     scene_.update_vertices(vertices_K);
     scene_.render(camera_, 0, images_);
     lap("depth: pose, skin, ray cast");

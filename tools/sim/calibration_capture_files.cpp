@@ -77,6 +77,26 @@ std::string quat_text(const Quat& q) {
   return format_double(q.w()) + " " + format_double(q.x()) + " " + format_double(q.y()) + " " + format_double(q.z());
 }
 
+// preview.png: per pose (columns) the IR image (gamma 0.4, markers white) above the depth
+// (near bright, no reading black, 4.5 m dark).
+void write_preview(const calib::CalibrationCapture& capture, const fs::path& path) {
+  const int w = capture.camera.width, h = capture.camera.height;
+  cv::Mat sheet(2 * h, w * static_cast<int>(capture.poses.size()), CV_8UC1, cv::Scalar(0));
+  for (std::size_t i = 0; i < capture.poses.size(); ++i) {
+    const calib::CapturePose& pose = capture.poses[i];
+    for (int row = 0; row < h; ++row) {
+      for (int col = 0; col < w; ++col) {
+        const std::size_t p = static_cast<std::size_t>(row) * static_cast<std::size_t>(w) + static_cast<std::size_t>(col);
+        const int x = static_cast<int>(i) * w + col;
+        sheet.at<std::uint8_t>(row, x) = cv::saturate_cast<std::uint8_t>(255.0 * std::pow(pose.ir[p] / 65535.0, 0.4));
+        const double z = pose.depth_mm[p];
+        sheet.at<std::uint8_t>(h + row, x) = z == 0 ? 0 : cv::saturate_cast<std::uint8_t>(40 + 215 * (1.0 - z / 4500.0));
+      }
+    }
+  }
+  if (!cv::imwrite(path.string(), sheet)) throw Error(ErrorCode::kInternal, path.string(), "could not write the PNG");
+}
+
 }  // namespace
 
 void write_calibration_capture(const sim::PanelCaptureResult& result, const fs::path& directory) {
@@ -110,6 +130,7 @@ void write_calibration_capture(const sim::PanelCaptureResult& result, const fs::
       }
     }
   }
+  write_preview(capture, directory / "preview.png");
   session::write_file_bytes(directory / "markers.csv", markers);
   session::write_file_bytes(directory / "imu.csv", imu);
   const sim::PanelCaptureTruth& t = result.truth;

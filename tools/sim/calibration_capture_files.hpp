@@ -8,6 +8,7 @@
 //   markers.csv            pose,marker,x_m,y_m,z_m: mocap marker centres M0..M3 in E
 //   imu.csv                pose,device,t_us,gx_rad_s,gy_rad_s,gz_rad_s,ax_m_s2,ay_m_s2,az_m_s2,mx_uT,my_uT,mz_uT
 //                          (device `panel`: the IMU on the panel, `base`: the base IMU on the camera)
+//   preview.png            8-bit picture: per pose the IR (gamma 0.4) above the depth (near bright)
 //   truth.json             the simulator's truth: K_from_E, E_origin_K, K_from_B, K_from_W, per pose K_from_P
 // The panel is calib::PanelGeometry's default (docs/forearm.md).
 #include <filesystem>
