@@ -125,19 +125,28 @@ double room_radiance(const std::vector<RoomPlane>& room, const Vec3& ray, double
   return out;
 }
 
-// IR counts before noise: the mean radiance over kSupersampling^2 rays of each pixel.
-std::vector<double> render_ir_radiance(const raycast::DepthIntrinsics& intrinsics, const raycast::MeshScene& scene,
-                                       const PanelMesh& mesh, const Eigen::Matrix3Xd& vertices_K,
-                                       const std::vector<RoomPlane>& room, double gain) {
+// The camera whose pixel centres are the IR sub-rays: kSupersampling^2 per pixel of `intrinsics`,
+// at col + (a - (s - 1) / 2) / s.
+raycast::DepthIntrinsics supersampled(const raycast::DepthIntrinsics& intrinsics) {
   raycast::DepthIntrinsics fine = intrinsics;
   const int s = kSupersampling;
   fine.width *= s;
   fine.height *= s;
   fine.fx *= s;
   fine.fy *= s;
-  fine.cx = s * intrinsics.cx + 0.5 * (s - 1);  // sub-ray centres at col + (a - (s-1)/2) / s
+  fine.cx = s * intrinsics.cx + 0.5 * (s - 1);
   fine.cy = s * intrinsics.cy + 0.5 * (s - 1);
-  const raycast::DepthCamera camera(fine);
+  return fine;
+}
+
+// IR counts before noise: the mean radiance over the sub-rays of each pixel (`camera` from
+// supersampled(intrinsics)).
+std::vector<double> render_ir_radiance(const raycast::DepthIntrinsics& intrinsics, const raycast::DepthCamera& camera,
+                                       const raycast::MeshScene& scene, const PanelMesh& mesh,
+                                       const Eigen::Matrix3Xd& vertices_K, const std::vector<RoomPlane>& room,
+                                       double gain) {
+  const int s = kSupersampling;
+  const raycast::DepthIntrinsics& fine = camera.intrinsics();
   raycast::RenderImages hits;
   scene.render(camera, 0, hits);
   std::vector<double> radiance(static_cast<std::size_t>(intrinsics.width) * static_cast<std::size_t>(intrinsics.height), 0.0);
@@ -238,7 +247,7 @@ PanelCaptureResult simulate_panel_capture(const PanelCaptureOptions& o, const Pa
   const Quat W_from_K = rig.K_from_W.conjugate();
   const Quat W_from_B = (W_from_K * rig.K_from_B).normalized();
 
-  const raycast::DepthCamera camera(rig.depth_intrinsics);
+  const raycast::DepthCamera camera(rig.depth_intrinsics), ir_camera(supersampled(rig.depth_intrinsics));
   const PanelMesh mesh = panel_mesh(capture.panel);
   raycast::MeshScene scene(raycast::EmbreeDevice::shared(), mesh.faces, static_cast<int>(mesh.vertices_P.cols()));
   const std::vector<RoomPlane> room = simple_room(rig.camera_height_m, rig.wall_distance_m);
@@ -251,7 +260,7 @@ PanelCaptureResult simulate_panel_capture(const PanelCaptureOptions& o, const Pa
     scene.update_vertices(vertices_K);
 
     // (b) IR, then depth with the sensor's errors; saturated pixels return no depth.
-    const std::vector<double> radiance = render_ir_radiance(rig.depth_intrinsics, scene, mesh, vertices_K, room, o.ir_gain);
+    const std::vector<double> radiance = render_ir_radiance(rig.depth_intrinsics, ir_camera, scene, mesh, vertices_K, room, o.ir_gain);
     SimRng ir_rng(rig.seed, "panel_capture/ir/" + std::to_string(i));
     seen.ir.resize(pixels);
     for (std::size_t p = 0; p < pixels; ++p) {

@@ -5,10 +5,13 @@
 
 #include <unistd.h>
 
+#include <algorithm>
+
 #include "../imu/expect_error.hpp"
 #include "session/file_bytes.hpp"
 #include "sim/room_frame.hpp"
 #include "tools/sim/calibration_capture_files.hpp"
+#include "tools/sim/sim_run.hpp"
 
 using namespace posefuse;
 using posefuse::testing::expect_error;
@@ -73,6 +76,37 @@ TEST(CalibrationCaptureFiles, RefusalsNameTheFile) {
   session::write_file_bytes(dir / "markers.csv", markers);
   fs::remove(dir / "pose_2_depth.png");
   expect_error([&] { tools::calibrate_capture_directory(dir); }, ErrorCode::kNotFound, (dir / "pose_2_depth.png").string());
+}
+
+TEST(CalibrationCaptureFiles, PosefuseSimWritesTheCaptureOfTheSessionsRig) {
+  tools::SimRunRequest request;
+  request.options.duration_s = 1.0;
+  request.options.color = false;
+  request.options.seed = 9;
+  request.options.panel_capture.enabled = true;
+  request.options.panel_capture.poses = 3;
+  request.out_directory = fresh_dir("session");
+  const tools::SimRunResult result = tools::run_simulation(request);
+  ASSERT_TRUE(result.calibration_capture.has_value());
+  EXPECT_EQ(*result.calibration_capture, *request.out_directory / "calibration_capture");
+  // The capture's truth is the session's rig: the header's K_from_B is the one in truth.json.
+  const std::string header = session::read_file_bytes(*request.out_directory / "header.json", "header.json");
+  const std::string truth = session::read_file_bytes(*result.calibration_capture / "truth.json", "truth.json");
+  const auto key = header.find("\"forearm.K_from_B\"");
+  ASSERT_NE(key, std::string::npos);
+  const auto begin = header.find('"', header.find(':', key)) + 1;
+  std::string w_x_y_z = header.substr(begin, header.find('"', begin) - begin);
+  std::replace(w_x_y_z.begin(), w_x_y_z.end(), ' ', ',');
+  std::string truth_K_from_B = truth.substr(truth.find("\"K_from_B\": [") + 13);
+  truth_K_from_B = truth_K_from_B.substr(0, truth_K_from_B.find(']'));
+  truth_K_from_B.erase(std::remove(truth_K_from_B.begin(), truth_K_from_B.end(), ' '), truth_K_from_B.end());
+  EXPECT_EQ(truth_K_from_B, w_x_y_z);
+  const calib::CaptureCalibration calibration = tools::calibrate_capture_directory(*result.calibration_capture);
+  EXPECT_EQ(calibration.base.readings, 3);
+  // A bad capture option is refused before the session is simulated.
+  request.options.panel_capture.poses = 0;
+  request.out_directory = fresh_dir("bad");
+  expect_error([&] { tools::run_simulation(request); }, ErrorCode::kInvalidArgument, "panel_capture.poses");
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "tools/sim/calibration_capture_files.hpp"
 
+#include <algorithm>
 #include <cstdio>
 #include <map>
 #include <sstream>
