@@ -102,14 +102,24 @@ std::map<std::string, std::vector<TimedOrientation>> read_orientation_folder(Res
   return by_device;
 }
 
-std::vector<JointRow> read_joints(ResultDirectory& out, const char* name, int joint_count,
-                                  const char* const* names) {
-  std::vector<JointRow> rows;
+// The rows of one optional file of the layout: none when it is absent; else it is recorded in
+// out.files and each row parsed by row_of(csv, rows so far).
+template <typename Row, typename RowOf>
+std::vector<Row> read_rows(ResultDirectory& out, const char* name, const std::vector<std::string>& columns,
+                           RowOf row_of) {
+  std::vector<Row> rows;
   if (!fs::exists(out.directory / name)) return rows;
   out.files.insert(name);
-  ResultCsv csv(out.directory / name, name, result_layout::kJointColumns);
+  ResultCsv csv(out.directory / name, name, columns);
+  while (csv.next()) rows.push_back(row_of(csv, rows));
+  return rows;
+}
+
+std::vector<JointRow> read_joints(ResultDirectory& out, const char* name, int joint_count,
+                                  const char* const* names) {
   std::int64_t previous = 0;
-  while (csv.next()) {
+  return read_rows<JointRow>(out, name, result_layout::kJointColumns,
+                             [&](const ResultCsv& csv, const std::vector<JointRow>& rows) {
     JointRow row;
     row.t_us = csv.time_after(0, previous, rows.empty());
     const std::int64_t joint = csv.int64(1);
@@ -118,25 +128,20 @@ std::vector<JointRow> read_joints(ResultDirectory& out, const char* name, int jo
     }
     row.joint = static_cast<int>(joint);
     if (csv.text(2) != names[row.joint]) {
-      throw_invalid(csv.field(2), session::quoted(csv.text(2)) + " is not joint " + std::to_string(joint) + "'s name " +
-                                      session::quoted(names[row.joint]));
+      throw_invalid(csv.field(2), session::quoted(csv.text(2)) + " is not joint " + std::to_string(joint) +
+                                      "'s name " + session::quoted(names[row.joint]));
     }
     row.p_K = csv.vec3(3);
     row.source = csv.source(6);
     row.confidence = csv.number(7);
-    rows.push_back(row);
-  }
-  return rows;
+    return row;
+  });
 }
 
 std::vector<ForearmRow> read_forearms(ResultDirectory& out) {
-  std::vector<ForearmRow> rows;
-  const char* name = result_layout::kForearmsCsv;
-  if (!fs::exists(out.directory / name)) return rows;
-  out.files.insert(name);
-  ResultCsv csv(out.directory / name, name, result_layout::kForearmColumns);
   std::map<v1::Arm, std::int64_t> previous;  // per arm: each arm's frames are written as they are ready
-  while (csv.next()) {
+  return read_rows<ForearmRow>(out, result_layout::kForearmsCsv, result_layout::kForearmColumns,
+                               [&](const ResultCsv& csv, const std::vector<ForearmRow>&) {
     ForearmRow row;
     row.arm = csv.arm(1);
     const bool first = !previous.count(row.arm);
@@ -145,38 +150,28 @@ std::vector<ForearmRow> read_forearms(ResultDirectory& out) {
     row.pronation_rad = csv.number(6);
     row.source = csv.source(7);
     row.confidence = csv.number(8);
-    rows.push_back(row);
-  }
-  return rows;
+    return row;
+  });
 }
 
 std::vector<ImuPositionRow> read_imu_positions(ResultDirectory& out) {
-  std::vector<ImuPositionRow> rows;
-  const char* name = result_layout::kImuPositionsCsv;
-  if (!fs::exists(out.directory / name)) return rows;
-  out.files.insert(name);
-  ResultCsv csv(out.directory / name, name, result_layout::kImuPositionColumns);
   std::map<std::string, std::int64_t> previous;  // per device
-  while (csv.next()) {
+  return read_rows<ImuPositionRow>(out, result_layout::kImuPositionsCsv, result_layout::kImuPositionColumns,
+                                   [&](const ResultCsv& csv, const std::vector<ImuPositionRow>&) {
     ImuPositionRow row;
     row.device_id = csv.device_id(1);
     const bool first = !previous.count(row.device_id);
     row.t_us = csv.time_after(0, previous[row.device_id], first);
     row.p_K = csv.vec3(2);
     row.source = csv.source(5);
-    rows.push_back(row);
-  }
-  return rows;
+    return row;
+  });
 }
 
 std::vector<RecoveredRow> read_recovered(ResultDirectory& out) {
-  std::vector<RecoveredRow> rows;
-  const char* name = result_layout::kRecoveredSegmentsCsv;
-  if (!fs::exists(out.directory / name)) return rows;
-  out.files.insert(name);
-  ResultCsv csv(out.directory / name, name, result_layout::kRecoveredSegmentColumns);
   std::int64_t previous = 0;
-  while (csv.next()) {
+  return read_rows<RecoveredRow>(out, result_layout::kRecoveredSegmentsCsv, result_layout::kRecoveredSegmentColumns,
+                                 [&](const ResultCsv& csv, const std::vector<RecoveredRow>& rows) {
     RecoveredRow row;
     row.device_id = csv.device_id(0);
     if (!v1::RecoveredSegment::Method_Parse(csv.text(1), &row.method) ||
@@ -198,9 +193,8 @@ std::vector<RecoveredRow> read_recovered(ResultDirectory& out) {
     row.elbow_K = csv.vec3(8);
     row.wrist_K = csv.vec3(11);
     row.K_from_F = csv.quat(14);
-    rows.push_back(row);
-  }
-  return rows;
+    return row;
+  });
 }
 
 }  // namespace

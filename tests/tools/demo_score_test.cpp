@@ -1,6 +1,6 @@
 // The demo path end to end, scored: a posefuse-sim session of paper 1's protocol (both arms)
-// goes through SessionPipeline(make_default_stages()) in process, the results are written with
-// session::ResultFiles (as the client writes them) beside the simulator's gt/, and
+// goes through SessionPipeline(make_default_stages()) in process, the results are written by the
+// client's ResultWriter beside the simulator's gt/, and
 // eval::score_directories (posefuse-score) compares the two. The bounds catch the frame
 // convention and calibration bugs the demo had (docs/forearm.md "Scored against the
 // simulator's truth").
@@ -12,9 +12,9 @@
 #include <iostream>
 #include <unistd.h>
 
+#include "client/result_writer.hpp"
 #include "eval/result_score.hpp"
 #include "session/pipeline.hpp"
-#include "session/result_files.hpp"
 #include "session/stages/default_stages.hpp"
 #include "sim/ground_truth_files.hpp"
 #include "sim/sim_session.hpp"
@@ -32,28 +32,15 @@ fs::path fresh_dir(const std::string& name) {
   return dir;
 }
 
-// Writes every result the pipeline emits, as the client does (client/result_writer.cpp).
-class ResultFilesSink : public session::ResultSink {
+// Hands every result the pipeline emits to the client's writer (what `posefuse fit` does with
+// the server's stream).
+class WriterSink : public session::ResultSink {
  public:
-  explicit ResultFilesSink(const fs::path& directory) : files_(directory) {}
-  void emit(v1::FitResult&& result) override {
-    switch (result.result_case()) {
-      case v1::FitResult::kImuOrientations: files_.write_orientations(result.imu_orientations()); break;
-      case v1::FitResult::kForearmOrientations: files_.write_forearm_orientations(result.forearm_orientations()); break;
-      case v1::FitResult::kFrame: files_.write_frame(result.frame()); break;
-      case v1::FitResult::kRecoveredSegment: files_.write_segment(result.recovered_segment()); break;
-      case v1::FitResult::kCalibration: files_.write_calibration(result.calibration()); break;
-      case v1::FitResult::kWarning:
-        std::cout << "warning " << result.warning().code() << " " << result.warning().field() << ": "
-                  << result.warning().message() << "\n";
-        break;
-      default: break;
-    }
-  }
-  void close() { files_.close(); }
+  explicit WriterSink(client::ResultWriter& writer) : writer_(writer) {}
+  void emit(v1::FitResult&& result) override { writer_.write(result); }
 
  private:
-  session::ResultFiles files_;
+  client::ResultWriter& writer_;
 };
 
 // The simulator's chunks straight into the pipeline.
@@ -81,12 +68,13 @@ ScoredRun simulate_run_and_score(const std::string& name, const std::string& opt
   run.results = dir / "results";
   run.gt = dir / "gt";
   {
-    ResultFilesSink results(run.results);
+    client::ResultWriter writer(run.results);
+    WriterSink results(writer);
     session::SessionPipeline pipeline(session::make_default_stages(), results);
     PipelineChunkSink chunks(pipeline);
     const sim::SimTruth truth = sim::simulate_session(options, chunks);
     chunks.finish();
-    results.close();
+    writer.finish();
     sim::write_ground_truth(truth, run.gt);
   }
   run.report = eval::score_directories(run.results, run.gt);
@@ -154,7 +142,7 @@ TEST(DemoScore, RestingArmIsNotCalibrated) {
                                                "motion = forearm_protocol\n"
                                                "repetitions = 1\n"
                                                "arm = right\n"
-                                               "duration_s = 7\n");
+                                               "duration_s = 6\n");
   const eval::ScoreReport& r = run.report;
   EXPECT_EQ(r.orientation("forearm_orientations/imu_left.csv", "imu_left"), nullptr);
   EXPECT_EQ(r.orientation("forearms.csv", "LEFT"), nullptr);
