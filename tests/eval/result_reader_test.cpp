@@ -4,6 +4,7 @@
 
 #include <fstream>
 
+#include "../imu/expect_error.hpp"
 #include "common/error.hpp"
 #include "result_fixture.hpp"
 #include "session/result_reader.hpp"
@@ -11,16 +12,6 @@
 using namespace posefuse;
 
 namespace {
-
-std::string error_field(const std::filesystem::path& dir) {
-  try {
-    session::read_result_files(dir);
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument) << e.what();
-    return e.field();
-  }
-  return "";
-}
 
 // Replaces the first occurrence of `from` in a file.
 void edit(const std::filesystem::path& file, const std::string& from, const std::string& to) {
@@ -65,39 +56,31 @@ TEST(ResultReader, ReadsBackWhatResultFilesWrote) {
 }
 
 TEST(ResultReader, NamesWhatIsWrong) {
+  struct Case {
+    const char* file;
+    const char* from;
+    const char* to;
+    const char* field;
+  };
+  const Case cases[] = {
+      {"imu_positions.csv", "t_us,device_id", "t,device_id", "imu_positions.csv:1"},
+      {"imu_positions.csv", ",VISUAL", ",SEEN", "imu_positions.csv:2:source"},
+      {"forearms.csv", "RIGHT", "MIDDLE", "forearms.csv:2:arm"},
+      {"camera_joints.csv", "SpineMid", "Spine", "camera_joints.csv:3:joint_name"},
+      {"forearm_orientations/imu_right.csv", "\n12500,", "\nnan,", "forearm_orientations/imu_right.csv:3:t_us"},
+      // earlier than the row before
+      {"forearm_orientations/imu_right.csv", "\n12500,", "\n-5,", "forearm_orientations/imu_right.csv:3:t_us"},
+      // one field too many
+      {"imu_orientations/imu_right.csv", "\n5012500,", "\n5012500,2,", "imu_orientations/imu_right.csv:3"},
+      {"calibration.json", "\"forearms\"", "\"forearm_models\"", "calibration.json"},
+  };
   const auto dir = result_fixture::fresh_result_dir("bad");
-  const auto fresh = [&] {
+  for (const Case& c : cases) {
     std::filesystem::remove_all(dir);
     result_fixture::write_fixture(dir, {});
-  };
-  fresh();
-  edit(dir / "imu_positions.csv", "t_us,device_id", "t,device_id");
-  EXPECT_EQ(error_field(dir), "imu_positions.csv:1");
-  fresh();
-  edit(dir / "imu_positions.csv", ",VISUAL", ",SEEN");
-  EXPECT_EQ(error_field(dir), "imu_positions.csv:2:source");
-  fresh();
-  edit(dir / "forearms.csv", "RIGHT", "MIDDLE");
-  EXPECT_EQ(error_field(dir), "forearms.csv:2:arm");
-  fresh();
-  edit(dir / "camera_joints.csv", "SpineMid", "Spine");
-  EXPECT_EQ(error_field(dir), "camera_joints.csv:3:joint_name");
-  fresh();
-  edit(dir / "forearm_orientations/imu_right.csv", "\n12500,", "\nnan,");
-  EXPECT_EQ(error_field(dir), "forearm_orientations/imu_right.csv:3:t_us");
-  fresh();
-  edit(dir / "forearm_orientations/imu_right.csv", "\n12500,", "\n-5,");  // earlier than the row before
-  EXPECT_EQ(error_field(dir), "forearm_orientations/imu_right.csv:3:t_us");
-  fresh();
-  edit(dir / "imu_orientations/imu_right.csv", "\n5012500,", "\n5012500,2,");  // one field too many
-  EXPECT_EQ(error_field(dir), "imu_orientations/imu_right.csv:3");
-  fresh();
-  edit(dir / "calibration.json", "\"forearms\"", "\"forearm_models\"");
-  EXPECT_EQ(error_field(dir), "calibration.json");
-  try {
-    session::read_result_files(dir / "absent");
-    FAIL();
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::kNotFound);
+    edit(dir / c.file, c.from, c.to);
+    posefuse::testing::expect_error([&] { session::read_result_files(dir); }, ErrorCode::kInvalidArgument, c.field);
   }
+  posefuse::testing::expect_error([&] { session::read_result_files(dir / "absent"); }, ErrorCode::kNotFound,
+                        (dir / "absent").string());
 }

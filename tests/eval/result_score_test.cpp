@@ -5,9 +5,9 @@
 
 #include <cmath>
 #include <fstream>
-#include <functional>
 
 #include "common/error.hpp"
+#include "../imu/expect_error.hpp"
 #include "eval/result_score.hpp"
 #include "result_fixture.hpp"
 
@@ -27,16 +27,6 @@ Pair write_pair(const std::string& name, const FixtureSpec& result, const Fixtur
   result_fixture::write_fixture(p.result, result);
   result_fixture::write_fixture(p.truth, truth);
   return p;
-}
-
-// The code of the posefuse::Error `f` throws; kInternal when it throws none.
-ErrorCode code_of(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.code();
-  }
-  return ErrorCode::kInternal;
 }
 
 }  // namespace
@@ -112,13 +102,8 @@ TEST(ResultScore, RowsWithoutNearTruthAreCountedNotScored) {
   result.t0_us = 3000;  // camera-clock rows 3 ms late: beyond the 2 ms tolerance
   result.device_t0_us = truth.device_t0_us;
   const Pair p = write_pair("late", result, truth);
-  EXPECT_EQ(code_of([&] { eval::score_directories(p.result, p.truth); }), ErrorCode::kInvalidArgument);
-  try {
-    eval::score_directories(p.result, p.truth);
-  } catch (const Error& e) {
-    EXPECT_EQ(e.field(), "forearm_orientations/imu_right.csv (imu_right)");
-    EXPECT_NE(std::string(e.what()).find("no t_us within 2000 us"), std::string::npos) << e.what();
-  }
+  posefuse::testing::expect_error([&] { eval::score_directories(p.result, p.truth); }, ErrorCode::kInvalidArgument,
+                        "forearm_orientations/imu_right.csv (imu_right)", "no t_us within 2000 us");
   eval::ScoreOptions wide;
   wide.tolerance_us = 5000;
   const eval::ScoreReport r = eval::score_directories(p.result, p.truth, wide);
@@ -130,21 +115,19 @@ TEST(ResultScore, MissingFilesAreClearErrors) {
   truth.with_segment = false;
   truth.with_joints = false;
   const Pair p = write_pair("missing", {}, truth);
-  try {
-    eval::score_directories(p.result, p.truth);
-    FAIL() << "a result stream without truth was scored";
-  } catch (const Error& e) {
-    EXPECT_EQ(e.code(), ErrorCode::kNotFound);
-    EXPECT_NE(e.field().find("camera_joints.csv"), std::string::npos) << e.field();
-  }
+  // A result stream without truth cannot be scored.
+  posefuse::testing::expect_error([&] { eval::score_directories(p.result, p.truth); }, ErrorCode::kNotFound,
+                        (p.truth / "camera_joints.csv").string(), "missing in the truth directory");
   // The other way round a truth stream without results is a note.
   const eval::ScoreReport r = eval::score_directories(p.truth, p.result);
   ASSERT_FALSE(r.notes.empty());
   EXPECT_NE(r.notes.front().find("camera_joints.csv: not in the results"), std::string::npos) << r.notes.front();
-  EXPECT_EQ(code_of([&] { eval::score_directories(p.result / "nowhere", p.truth); }), ErrorCode::kNotFound);
+  posefuse::testing::expect_error([&] { eval::score_directories(p.result / "nowhere", p.truth); }, ErrorCode::kNotFound,
+                        (p.result / "nowhere").string(), "not a directory");
   const auto empty = result_fixture::fresh_result_dir("empty");
   std::filesystem::create_directories(empty);
-  EXPECT_EQ(code_of([&] { eval::score_directories(empty, p.truth); }), ErrorCode::kNotFound);
+  posefuse::testing::expect_error([&] { eval::score_directories(empty, p.truth); }, ErrorCode::kNotFound, empty.string(),
+                        "none of the result files");
 }
 
 TEST(ResultScore, OccludedFramesFromTheTruthsOcclusionFile) {
@@ -167,5 +150,6 @@ TEST(ResultScore, OccludedFramesFromTheTruthsOcclusionFile) {
     std::ofstream bad(p.truth / "occlusion.csv", std::ios::app);
     bad << "0,RIGHT,0.5,yes,1\n";
   }
-  EXPECT_EQ(code_of([&] { eval::score_directories(p.result, p.truth); }), ErrorCode::kInvalidArgument);
+  posefuse::testing::expect_error([&] { eval::score_directories(p.result, p.truth); }, ErrorCode::kInvalidArgument,
+                        "occlusion.csv:12:forearm_occluded", "not 0 or 1");
 }
