@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The README's first command: builds posefuse, makes the demo session, starts the real
 # posefuse-server on a free loopback port, runs the posefuse client against it, stops the server
-# and prints where the results are.
+# prints where the results are and scores them against the simulated ground truth (posefuse-score).
 #   scripts/demo.sh                      results in build/demo/results
 #   DEMO_DIR=/tmp/demo scripts/demo.sh   choose the folder
 # The demo session comes from the simulator (posefuse-sim, docs/simulator.md): a short take of
@@ -24,7 +24,8 @@ duration_s=${DEMO_DURATION_S:-20}
 session="$demo_dir/demo-session.pfchunks"
 sim_options="$demo_dir/demo-sim.txt"
 cat >"$sim_options" <<OPTIONS
-# paper 1's protocol once, right arm (IMUs on both wrists, the left one hangs at rest)
+# paper 1's protocol once, right arm (IMUs on both wrists, the left one hangs at rest, so it
+# never takes the calibration pose and gets no forearm results: FOREARM_CALIBRATION)
 motion = forearm_protocol
 repetitions = 1
 arm = right
@@ -78,3 +79,7 @@ echo "  summary.json                counts and durations"
 echo "  warnings.txt                warnings and per-chunk errors (empty when none)"
 echo "Ground truth of the simulated session (same files and columns): $demo_dir/gt"
 echo "  session: $session; server log: $server_log"
+echo
+score_bin="$build_dir/tools/score/posefuse-score"
+echo "demo: the results scored against the ground truth ($score_bin $results $demo_dir/gt):"
+"$score_bin" "$results" "$demo_dir/gt"

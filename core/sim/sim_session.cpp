@@ -12,10 +12,12 @@
 #include "raycast/mesh_scene.hpp"
 #include "session/chunk_order.hpp"
 #include "session/image_codec.hpp"
+#include "session/mag_calibration_option.hpp"
 #include "session/session_validator.hpp"
 #include "session/text_fields.hpp"
 #include "sim/option_checks.hpp"
 #include "sim/forearm_strap.hpp"
+#include "sim/mag_precalibration.hpp"
 #include "sim/room_frame.hpp"
 #include "sim/sim_rng.hpp"
 #include "sim/skeleton_pose.hpp"
@@ -514,6 +516,16 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
   (*header.mutable_options())["forearm.K_from_B"] =
       session::format_double(truth.K_from_B.w()) + " " + session::format_double(truth.K_from_B.x()) + " " +
       session::format_double(truth.K_from_B.y()) + " " + session::format_double(truth.K_from_B.z());
+  // Each IMU's magnetometer calibration from before the session (paper 1, II-E-1), which the
+  // IMU stage applies (eq. 3); without it hard iron turns the headings, and through eq. 7 K_from_W.
+  for (const SimDeviceTruth& device : truth.devices) {
+    const imu::MagCalibration calibration =
+        simulate_mag_precalibration(device.errors, options.imu.synth.earth_field,
+                                    options.imu.synth.error_model.mag_noise_uT, options.seed,
+                                    "mag_precalibration/" + device.device_id);
+    (*header.mutable_options())[session::mag_calibration_option_key(device.device_id)] =
+        session::format_mag_calibration(calibration);
+  }
   sink.write(header_chunk);
   ++truth.chunks;
 

@@ -12,6 +12,8 @@
 #include "client/demo_session.hpp"
 #include "common/error.hpp"
 #include "geometry/quaternion.hpp"
+#include "session/imu_batch.hpp"
+#include "session/mag_calibration_option.hpp"
 #include "session/pipeline.hpp"
 #include "session/stages/default_stages.hpp"
 
@@ -278,6 +280,71 @@ TEST(SessionPipeline, BadStageOptionEndsTheSession) {
   } catch (const Error& e) {
     EXPECT_EQ(e.field(), "header.options[imu.tau_acc_s]");
   }
+}
+
+// A magnetometer calibration in the header (paper 1 eq. 3) is applied before the filter: hard
+// iron added to the arm IMU's readings and the same offset given as its calibration leave the
+// orientations as they were; without the calibration the heading is off.
+TEST(SessionPipeline, MagCalibrationFromTheHeaderUndoesHardIron) {
+  const auto clean = demo::make_demo_session();
+  const imu::Vec3 hard_iron_uT(12.0, -8.0, 5.0);
+  auto with_iron = clean;
+  for (auto& chunk : with_iron) {
+    if (!chunk.has_imu() || chunk.imu().device_id() != demo::kArmDevice) continue;
+    auto samples = samples_from_batch(chunk.imu());
+    for (auto& sample : samples) sample.mag_uT += hard_iron_uT;
+    *chunk.mutable_imu() = batch_from_samples(demo::kArmDevice, samples);
+  }
+  auto calibrated = with_iron;
+  imu::MagCalibration calibration;
+  calibration.center_uT = hard_iron_uT;
+  (*calibrated[0].mutable_header()->mutable_options())[mag_calibration_option_key(demo::kArmDevice)] =
+      format_mag_calibration(calibration);
+  CollectingSink reference, uncorrected, corrected;
+  run(clean, reference);
+  run(with_iron, uncorrected);
+  run(calibrated, corrected);
+  const auto expected = reference.orientations().at(demo::kArmDevice);
+  const auto off = uncorrected.orientations().at(demo::kArmDevice);
+  const auto fixed = corrected.orientations().at(demo::kArmDevice);
+  ASSERT_EQ(fixed.size(), expected.size());
+  double off_max = 0.0, fixed_max = 0.0;
+  for (std::size_t i = 0; i < expected.size(); ++i) {
+    off_max = std::max(off_max, geometry::angle_between(off[i].second, expected[i].second));
+    fixed_max = std::max(fixed_max, geometry::angle_between(fixed[i].second, expected[i].second));
+  }
+  EXPECT_GT(off_max * 180.0 / kPi, 5.0);
+  EXPECT_LT(fixed_max * 180.0 / kPi, 0.01);  // the wire's float readings round differently
+  const auto calibrations = corrected.of(v1::FitResult::kCalibration);
+  ASSERT_EQ(calibrations.size(), 1u);
+  for (const auto& imu : calibrations[0].calibration().imus()) {
+    EXPECT_EQ(imu.calibrated(), imu.device_id() == demo::kArmDevice) << imu.device_id();
+  }
+}
+
+TEST(SessionPipeline, BadMagCalibrationOptionEndsTheSession) {
+  const std::string key = mag_calibration_option_key(demo::kArmDevice);
+  for (const std::string bad : {"1 2 3", "0 0 0 1 0 0 0 1 0 0 0 nan", "0 0 0 1 0 0 1 0 0 0 0 1"}) {
+    auto chunks = demo::make_demo_session();
+    (*chunks[0].mutable_header()->mutable_options())[key] = bad;
+    CollectingSink sink;
+    SessionPipeline pipeline(make_default_stages(), sink);
+    try {
+      pipeline.push(chunks[0]);
+      FAIL() << "no error for '" << bad << "'";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.field(), "header.options[" + key + "]") << bad;
+    }
+  }
+}
+
+TEST(MagCalibrationOption, RoundTripIsExact) {
+  imu::MagCalibration c;
+  c.center_uT = imu::Vec3(-10.681608086968694, 7.1, 1e-3);
+  c.correction << 1.01, -0.0187, 0.1, -0.0187, 0.99, 0.013, 0.1, 0.013, 1.0 / 3.0;
+  const imu::MagCalibration back = parse_mag_calibration(format_mag_calibration(c), "f");
+  EXPECT_EQ(back.center_uT, c.center_uT);
+  EXPECT_EQ(back.correction, c.correction);
 }
 
 TEST(SessionPipeline, TooManyBadChunksEndTheSession) {

@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "common/error.hpp"
+#include "forearm/calibration_pose_check.hpp"
 #include "forearm/forearm_axis_depth.hpp"
 #include "forearm/forearm_orientation.hpp"
 #include "session/image_codec.hpp"
@@ -361,9 +362,15 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
   const std::string field = "forearm[" + device.id + "]";
   const std::int64_t window_end_us = *first_frame_us_ + static_cast<std::int64_t>(std::llround(calibration_s_ * 1e6));
   std::vector<forearm::CalibrationFrame> with_strap, without_strap;
+  const Vec3 up_K = *K_from_W_ * Vec3::UnitZ();
+  std::size_t not_raised = 0;
   for (const ArmFrame& f : device.frames) {
     if (f.t_us > window_end_us) break;
     if (!f.forearm_tracked || !f.shoulder_tracked) continue;
+    if (!forearm::forearm_raised_for_calibration(f.elbow_K, f.wrist_K, up_K)) {
+      ++not_raised;  // not the calibration pose (e.g. an arm resting at the side)
+      continue;
+    }
     const std::optional<Quat> W_from_A = W_from_A_at(device, f.t_us);
     if (!W_from_A) continue;
     forearm::CalibrationFrame c;
@@ -404,7 +411,8 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
       device.frames.clear();
       out.warn("FOREARM_CALIBRATION", field + ".calibration",
                std::string("no usable calibration pose (paper 1, II-H) in the first ") + format_double(calibration_s_) +
-                   " s: " + error.what() + "; no results for this arm");
+                   " s: " + error.what() + " (" + std::to_string(not_raised) +
+                   " tracked frames skipped: forearm not raised, paper 1 Fig. 3b); no results for this arm");
       return;
     }
   }

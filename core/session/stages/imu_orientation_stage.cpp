@@ -6,6 +6,7 @@
 #include "common/error.hpp"
 #include "geometry/quaternion.hpp"
 #include "session/imu_batch.hpp"
+#include "session/mag_calibration_option.hpp"
 #include "session/stages/proto_values.hpp"
 #include "session/text_fields.hpp"
 
@@ -41,6 +42,9 @@ std::vector<StageOption> ImuOrientationStage::options() const {
        "inclination: time constant of the accelerometer low-pass, seconds"},
       {kTauMagKey, format_double(defaults.tau_mag_s),
        "heading: time constant of the magnetometer correction, seconds"},
+      {"imu.mag_calibration.<device_id>", "",
+       "magnetometer calibration made before the session (paper 1 eq. 3): 'o_x o_y o_z' (uT) and the 3x3 "
+       "correction row by row; applied to the device's readings before the filter"},
   };
 }
 
@@ -50,7 +54,12 @@ void ImuOrientationStage::start(const v1::SessionHeader& header, StageOutput& /*
   params.tau_mag_s = time_constant_option(header, kTauMagKey, params.tau_mag_s);
   for (const v1::ImuDevice& device : header.imu_devices()) {
     device_order_.push_back(device.device_id());
-    devices_.emplace(device.device_id(), Device{imu::RobustOrientationFilter(params)});
+    Device state{imu::RobustOrientationFilter(params)};
+    const std::string key = mag_calibration_option_key(device.device_id());
+    if (const auto it = header.options().find(key); it != header.options().end()) {
+      state.mag_calibration = parse_mag_calibration(it->second, "header.options[" + key + "]");
+    }
+    devices_.emplace(device.device_id(), std::move(state));
   }
 }
 
@@ -64,7 +73,10 @@ void ImuOrientationStage::on_chunk(const v1::SessionChunk& chunk, StageOutput& o
                 "'" + batch.device_id() + "' has no filter");
   }
   Device& device = it->second;
-  const std::vector<imu::ImuSample> samples = samples_from_batch(batch);
+  std::vector<imu::ImuSample> samples = samples_from_batch(batch);
+  if (device.mag_calibration) {
+    for (imu::ImuSample& sample : samples) sample.mag_uT = device.mag_calibration->apply(sample.mag_uT);  // eq. 3
+  }
 
   v1::FitResult result;
   v1::ImuOrientationBatch& orientations = *result.mutable_imu_orientations();
@@ -90,7 +102,7 @@ void ImuOrientationStage::finish(StageOutput& out) {
     calibration.set_device_id(id);
     calibration.set_mag_fit_residual(std::numeric_limits<double>::quiet_NaN());
     calibration.set_mag_coverage(0.0);
-    calibration.set_calibrated(false);
+    calibration.set_calibrated(device.mag_calibration.has_value());
     if (device.samples == 0) {
       calibration.set_mag_field_ut(std::numeric_limits<double>::quiet_NaN());
       out.warn("IMU_NO_SAMPLES", "header.imu_devices[" + std::to_string(i) + "]",

@@ -6,13 +6,18 @@
 // and one W_from_A per sample; the quaternion sign is kept continuous from sample to sample.
 // K_from_A stays empty until the camera alignment stage exists. At the end every device gets an
 // ImuCalibration entry: the gyro bias the filter estimated and the magnetic field magnitude it
-// learned. `calibrated` stays false: the paper's magnetometer calibration (ellipsoid fit, paper 1
-// section III) is not run by this stage, so mag_fit_residual is NaN and mag_coverage 0.
+// learned. The paper's magnetometer calibration (ellipsoid fit, paper 1 II-E-1) is not run by
+// this stage (mag_fit_residual is NaN, mag_coverage 0); a calibration made before the session
+// can come in the header (mag_calibration_option.hpp, "imu.mag_calibration.<device_id>") and is
+// then applied to every reading before the filter (eq. 3), and `calibrated` is true.
 //
-// Options (SessionHeader.options): "imu.tau_acc_s", "imu.tau_mag_s" (see options()).
+// Options (SessionHeader.options): "imu.tau_acc_s", "imu.tau_mag_s" (see options()),
+// "imu.mag_calibration.<device_id>".
 #include <map>
+#include <optional>
 #include <string>
 
+#include "imu/mag_calibration.hpp"
 #include "imu/robust_orientation_filter.hpp"
 #include "session/pipeline_stage.hpp"
 
@@ -33,6 +38,7 @@ class ImuOrientationStage : public Stage {
     imu::RobustOrientationFilter filter;
     std::uint64_t samples = 0;
     imu::Quat last_W_from_A = imu::Quat::Identity();
+    std::optional<imu::MagCalibration> mag_calibration = std::nullopt;  // from the header, applied by eq. 3
   };
   // In header order, so the calibration report lists devices as the header does.
   std::vector<std::string> device_order_;

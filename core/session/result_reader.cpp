@@ -1,0 +1,227 @@
+#include "session/result_reader.hpp"
+
+#include <cmath>
+
+#include "body/smpl_model.hpp"
+#include "common/error.hpp"
+#include "session/directory_layout.hpp"
+#include "session/file_bytes.hpp"
+#include "session/json_message.hpp"
+#include "session/result_files.hpp"
+#include "session/session_validator.hpp"
+#include "session/text_fields.hpp"
+
+namespace posefuse::session {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+// One opened result file: the CsvReader plus typed, checked field access.
+class ResultCsv {
+ public:
+  ResultCsv(const fs::path& path, const std::string& name, const std::vector<std::string>& columns)
+      : csv_(path, name, columns) {}
+  bool next() { return csv_.next(); }
+  std::string text(std::size_t c) const { return std::string(csv_.at(c)); }
+  std::int64_t int64(std::size_t c) const { return parse_int64(csv_.at(c), csv_.field(c)); }
+  double number(std::size_t c) const {
+    const double v = parse_double(csv_.at(c), csv_.field(c));
+    if (!std::isfinite(v)) throw_invalid(csv_.field(c), "is " + session::quoted(csv_.at(c)) + ", not a finite number");
+    return v;
+  }
+  geometry::Vec3 vec3(std::size_t c) const { return {number(c), number(c + 1), number(c + 2)}; }
+  // A unit quaternion w x y z in columns c..c+3.
+  geometry::Quat quat(std::size_t c) const {
+    const geometry::Quat q(number(c), number(c + 1), number(c + 2), number(c + 3));
+    if (std::abs(q.norm() - 1.0) > 1e-3) {
+      throw_invalid(csv_.field(c), "quaternion has norm " + format_double(q.norm()) + ", not 1");
+    }
+    return q.normalized();
+  }
+  v1::Source source(std::size_t c) const {
+    v1::Source s{};
+    if (!v1::Source_Parse(text(c), &s)) throw_invalid(csv_.field(c), session::quoted(csv_.at(c)) + " is not a Source name");
+    return s;
+  }
+  v1::Arm arm(std::size_t c) const {
+    v1::Arm a{};
+    if (!v1::Arm_Parse(text(c), &a) || a == v1::ARM_UNSPECIFIED) {
+      throw_invalid(csv_.field(c), session::quoted(csv_.at(c)) + " is not LEFT or RIGHT");
+    }
+    return a;
+  }
+  std::string device_id(std::size_t c) const {
+    if (!is_valid_device_id(text(c))) throw_invalid(csv_.field(c), session::quoted(csv_.at(c)) + " is not a device id");
+    return text(c);
+  }
+  // t_us of column c, which must not be earlier than `previous` (then updated).
+  std::int64_t time_after(std::size_t c, std::int64_t& previous, bool first) const {
+    const std::int64_t t = int64(c);
+    if (!first && t < previous) {
+      throw_invalid(csv_.field(c), std::to_string(t) + " is earlier than the previous " + std::to_string(previous));
+    }
+    previous = t;
+    return t;
+  }
+  std::string field(std::size_t c) const { return csv_.field(c); }
+
+ private:
+  CsvReader csv_;
+};
+
+std::vector<TimedOrientation> read_orientations(const fs::path& path, const std::string& name, bool forearm) {
+  ResultCsv csv(path, name,
+                forearm ? result_layout::kForearmOrientationColumns : result_layout::kOrientationColumns);
+  std::vector<TimedOrientation> rows;
+  std::int64_t previous = 0;
+  while (csv.next()) {
+    TimedOrientation row;
+    row.t_us = csv.time_after(0, previous, rows.empty());
+    row.q = csv.quat(1);
+    if (forearm) row.pronation_rad = csv.number(5);
+    rows.push_back(row);
+  }
+  return rows;
+}
+
+// imu_orientations/<id>.csv or forearm_orientations/<id>.csv, keyed by id.
+std::map<std::string, std::vector<TimedOrientation>> read_orientation_folder(ResultDirectory& out, const char* folder,
+                                                                            bool forearm) {
+  std::map<std::string, std::vector<TimedOrientation>> by_device;
+  const fs::path dir = out.directory / folder;
+  if (!fs::is_directory(dir)) return by_device;
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir)) {
+    if (!entry.is_regular_file() || entry.path().extension() != ".csv") continue;
+    const std::string device = entry.path().stem().string();
+    const std::string name = std::string(folder) + "/" + entry.path().filename().string();
+    if (!is_valid_device_id(device)) throw_invalid(name, "file name is not a device id");
+    by_device[device] = read_orientations(entry.path(), name, forearm);
+    out.files.insert(name);
+  }
+  return by_device;
+}
+
+// The rows of one optional file of the layout: none when it is absent; else it is recorded in
+// out.files and each row parsed by row_of(csv, rows so far).
+template <typename Row, typename RowOf>
+std::vector<Row> read_rows(ResultDirectory& out, const char* name, const std::vector<std::string>& columns,
+                           RowOf row_of) {
+  std::vector<Row> rows;
+  if (!fs::exists(out.directory / name)) return rows;
+  out.files.insert(name);
+  ResultCsv csv(out.directory / name, name, columns);
+  while (csv.next()) rows.push_back(row_of(csv, rows));
+  return rows;
+}
+
+std::vector<JointRow> read_joints(ResultDirectory& out, const char* name, int joint_count,
+                                  const char* const* names) {
+  std::int64_t previous = 0;
+  return read_rows<JointRow>(out, name, result_layout::kJointColumns,
+                             [&](const ResultCsv& csv, const std::vector<JointRow>& rows) {
+    JointRow row;
+    row.t_us = csv.time_after(0, previous, rows.empty());
+    const std::int64_t joint = csv.int64(1);
+    if (joint < 0 || joint >= joint_count) {
+      throw_invalid(csv.field(1), std::to_string(joint) + " is not in 0.." + std::to_string(joint_count - 1));
+    }
+    row.joint = static_cast<int>(joint);
+    if (csv.text(2) != names[row.joint]) {
+      throw_invalid(csv.field(2), session::quoted(csv.text(2)) + " is not joint " + std::to_string(joint) +
+                                      "'s name " + session::quoted(names[row.joint]));
+    }
+    row.p_K = csv.vec3(3);
+    row.source = csv.source(6);
+    row.confidence = csv.number(7);
+    return row;
+  });
+}
+
+std::vector<ForearmRow> read_forearms(ResultDirectory& out) {
+  std::map<v1::Arm, std::int64_t> previous;  // per arm: each arm's frames are written as they are ready
+  return read_rows<ForearmRow>(out, result_layout::kForearmsCsv, result_layout::kForearmColumns,
+                               [&](const ResultCsv& csv, const std::vector<ForearmRow>&) {
+    ForearmRow row;
+    row.arm = csv.arm(1);
+    const bool first = !previous.count(row.arm);
+    row.t_us = csv.time_after(0, previous[row.arm], first);
+    row.K_from_F = csv.quat(2);
+    row.pronation_rad = csv.number(6);
+    row.source = csv.source(7);
+    row.confidence = csv.number(8);
+    return row;
+  });
+}
+
+std::vector<ImuPositionRow> read_imu_positions(ResultDirectory& out) {
+  std::map<std::string, std::int64_t> previous;  // per device
+  return read_rows<ImuPositionRow>(out, result_layout::kImuPositionsCsv, result_layout::kImuPositionColumns,
+                                   [&](const ResultCsv& csv, const std::vector<ImuPositionRow>&) {
+    ImuPositionRow row;
+    row.device_id = csv.device_id(1);
+    const bool first = !previous.count(row.device_id);
+    row.t_us = csv.time_after(0, previous[row.device_id], first);
+    row.p_K = csv.vec3(2);
+    row.source = csv.source(5);
+    return row;
+  });
+}
+
+std::vector<RecoveredRow> read_recovered(ResultDirectory& out) {
+  std::int64_t previous = 0;
+  return read_rows<RecoveredRow>(out, result_layout::kRecoveredSegmentsCsv, result_layout::kRecoveredSegmentColumns,
+                                 [&](const ResultCsv& csv, const std::vector<RecoveredRow>& rows) {
+    RecoveredRow row;
+    row.device_id = csv.device_id(0);
+    if (!v1::RecoveredSegment::Method_Parse(csv.text(1), &row.method) ||
+        row.method == v1::RecoveredSegment::METHOD_UNSPECIFIED) {
+      throw_invalid(csv.field(1), session::quoted(csv.text(1)) + " is not PAPER or SMOOTHER");
+    }
+    row.t_start_us = csv.int64(2);
+    row.t_end_us = csv.int64(3);
+    if (row.t_end_us < row.t_start_us) {
+      throw_invalid(csv.field(3), std::to_string(row.t_end_us) + " is before t_start_us " +
+                                      std::to_string(row.t_start_us));
+    }
+    // Rows of one segment are consecutive; a new segment may start earlier than the last one.
+    const bool same_segment = !rows.empty() && rows.back().device_id == row.device_id &&
+                              rows.back().method == row.method && rows.back().t_start_us == row.t_start_us &&
+                              rows.back().t_end_us == row.t_end_us;
+    row.t_us = csv.time_after(4, previous, !same_segment);
+    row.imu_K = csv.vec3(5);
+    row.elbow_K = csv.vec3(8);
+    row.wrist_K = csv.vec3(11);
+    row.K_from_F = csv.quat(14);
+    return row;
+  });
+}
+
+}  // namespace
+
+ResultDirectory read_result_files(const fs::path& directory) {
+  if (!fs::is_directory(directory)) {
+    throw Error(ErrorCode::kNotFound, directory.string(), "is not a directory of result files");
+  }
+  ResultDirectory out;
+  out.directory = directory;
+  out.imu_orientations = read_orientation_folder(out, result_layout::kImuOrientationDir, false);
+  out.forearm_orientations = read_orientation_folder(out, result_layout::kForearmOrientationDir, true);
+  out.smpl_joints = read_joints(out, result_layout::kSmplJointsCsv, body::kNumJoints, body::smpl_joint_names().data());
+  out.camera_joints = read_joints(out, result_layout::kCameraJointsCsv, static_cast<int>(layout::kKinectJointNames.size()),
+                                  layout::kKinectJointNames.data());
+  out.forearms = read_forearms(out);
+  out.imu_positions = read_imu_positions(out);
+  out.recovered = read_recovered(out);
+  if (fs::exists(directory / result_layout::kCalibrationJson)) {
+    out.files.insert(result_layout::kCalibrationJson);
+    v1::CalibrationReport report;
+    message_from_json(read_file_bytes(directory / result_layout::kCalibrationJson, result_layout::kCalibrationJson),
+                      result_layout::kCalibrationJson,
+                      report);
+    out.calibration = std::move(report);
+  }
+  return out;
+}
+
+}  // namespace posefuse::session

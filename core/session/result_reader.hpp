@@ -1,0 +1,84 @@
+#pragma once
+// Reads a result directory in the ResultFiles layout (result_files.hpp lists the files and
+// columns) back into rows: the client's results of `posefuse fit` and the simulator's gt/ both
+// go through this one reader, as both were written by one writer, so scoring compares like
+// with like (eval/result_score.hpp).
+//
+// Every file is optional (the writer creates a file only when such results arrived); the
+// directory itself must exist. Each file present is checked the way the writer wrote it: the
+// header row, the number of fields, numbers that parse and are finite, unit quaternions
+// (within 1e-3), joint indices and names in SMPL / Kinect v2 order, enum names (source, arm,
+// method), device ids that are safe file names, and t_us that never goes back in a file (per
+// arm in forearms.csv and per device in imu_positions.csv, whose arms are written as each is
+// ready; per segment in recovered_segments.csv). A violation throws
+// posefuse::Error (kInvalidArgument) whose field is "<file>:<line>:<column>".
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "geometry/quaternion.hpp"
+#include "posefuse/v1/results.pb.h"
+
+namespace posefuse::session {
+
+struct TimedOrientation {
+  std::int64_t t_us = 0;
+  geometry::Quat q = geometry::Quat::Identity();  // W_from_A (imu_orientations) or K_from_F
+  double pronation_rad = 0.0;                     // forearm_orientations only
+};
+
+struct JointRow {
+  std::int64_t t_us = 0;
+  int joint = 0;
+  geometry::Vec3 p_K = geometry::Vec3::Zero();
+  v1::Source source = v1::SOURCE_UNSPECIFIED;
+  double confidence = 0.0;
+};
+
+struct ForearmRow {
+  std::int64_t t_us = 0;
+  v1::Arm arm = v1::ARM_UNSPECIFIED;
+  geometry::Quat K_from_F = geometry::Quat::Identity();
+  double pronation_rad = 0.0;
+  v1::Source source = v1::SOURCE_UNSPECIFIED;
+  double confidence = 0.0;
+};
+
+struct ImuPositionRow {
+  std::int64_t t_us = 0;
+  std::string device_id;
+  geometry::Vec3 p_K = geometry::Vec3::Zero();
+  v1::Source source = v1::SOURCE_UNSPECIFIED;
+};
+
+struct RecoveredRow {
+  std::string device_id;
+  v1::RecoveredSegment::Method method = v1::RecoveredSegment::METHOD_UNSPECIFIED;
+  std::int64_t t_start_us = 0, t_end_us = 0, t_us = 0;
+  geometry::Vec3 imu_K = geometry::Vec3::Zero(), elbow_K = geometry::Vec3::Zero(), wrist_K = geometry::Vec3::Zero();
+  geometry::Quat K_from_F = geometry::Quat::Identity();
+};
+
+struct ResultDirectory {
+  std::filesystem::path directory;
+  std::set<std::string> files;  // the layout's files that were present, e.g. "imu_positions.csv",
+                                // "imu_orientations/imu_left.csv"
+  std::map<std::string, std::vector<TimedOrientation>> imu_orientations;      // by device id, device clock
+  std::map<std::string, std::vector<TimedOrientation>> forearm_orientations;  // by device id, camera clock
+  std::vector<JointRow> smpl_joints, camera_joints;
+  std::vector<ForearmRow> forearms;
+  std::vector<ImuPositionRow> imu_positions;
+  std::vector<RecoveredRow> recovered;
+  std::optional<v1::CalibrationReport> calibration;
+
+  bool has(const std::string& file) const { return files.count(file) > 0; }
+};
+
+// kNotFound when `directory` is not a directory; kInvalidArgument as above.
+ResultDirectory read_result_files(const std::filesystem::path& directory);
+
+}  // namespace posefuse::session

@@ -1,0 +1,117 @@
+#pragma once
+// Small result directories written in code through session::ResultFiles (the writer the client
+// and the simulator's gt/ use), for the reader and score tests.
+#include <filesystem>
+#include <string>
+#include <unistd.h>
+
+#include "geometry/quaternion.hpp"
+#include "session/result_files.hpp"
+#include "session/stages/proto_values.hpp"
+
+namespace posefuse::result_fixture {
+
+inline std::filesystem::path fresh_result_dir(const std::string& name) {
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("posefuse_result_fixture_" + std::to_string(::getpid())) / name;
+  std::filesystem::remove_all(dir);
+  return dir;
+}
+
+// What one fixture directory holds; every stream is a simple function of time plus the
+// offsets given, so the errors between two such directories are known exactly.
+struct FixtureSpec {
+  std::int64_t t0_us = 0;                 // added to every camera-clock time
+  std::int64_t device_t0_us = 5'000'000;  // first device-clock time of imu_orientations
+  double forearm_angle_rad = 0.0;         // K_from_F turned by this about x_F
+  double position_offset_m = 0.0;         // IMU positions and joints moved along +z_K
+  double r_m = 0.035;
+  double K_from_W_angle_rad = 0.0;        // about z
+  std::int64_t clock_offset_us = -1'000'000;
+  bool with_joints = true;
+  bool with_segment = true;
+  v1::Source source = v1::GROUND_TRUTH;
+  int frames = 10;  // camera frames at 30 Hz; forearm samples at 80 Hz over the same span
+};
+
+inline geometry::Quat fixture_K_from_F(double t_s) {
+  return geometry::quat_from_rotation_vector(geometry::Vec3(0.3 * t_s, 0.1, -0.2));
+}
+inline geometry::Vec3 fixture_imu_K(double t_s) { return {0.1 * t_s, 0.2, 2.0 - 0.05 * t_s}; }
+
+inline void write_fixture(const std::filesystem::path& dir, const FixtureSpec& spec) {
+  using session::to_proto;
+  session::ResultFiles files(dir);
+  const geometry::Quat turn = geometry::quat_from_rotation_vector(geometry::Vec3(spec.forearm_angle_rad, 0, 0));
+  const geometry::Vec3 shift(0, 0, spec.position_offset_m);
+  const double span_s = static_cast<double>(spec.frames) / 30.0;
+  {  // IMU orientations (device clock) and forearm orientations (camera clock) at 80 Hz
+    v1::ImuOrientationBatch orientations;
+    orientations.set_device_id("imu_right");
+    v1::ForearmOrientationBatch forearm;
+    forearm.set_device_id("imu_right");
+    for (int i = 0; i * 0.0125 < span_s; ++i) {
+      const double t = i * 0.0125;
+      const auto dt_us = static_cast<std::int64_t>(t * 1e6);
+      orientations.add_t_us(spec.device_t0_us + dt_us);
+      for (const double c : geometry::to_wxyz(fixture_K_from_F(t) * turn)) orientations.add_w_from_a(c);
+      forearm.add_t_us(spec.t0_us + dt_us);
+      for (const double c : geometry::to_wxyz(fixture_K_from_F(t) * turn)) forearm.add_k_from_f(c);
+      forearm.add_pronation_rad(0.1);
+    }
+    files.write_orientations(orientations);
+    files.write_forearm_orientations(forearm);
+  }
+  for (int f = 0; f < spec.frames; ++f) {
+    const double t = f / 30.0;
+    v1::FrameResult frame;
+    frame.set_t_us(spec.t0_us + static_cast<std::int64_t>(t * 1e6));
+    if (spec.with_joints) {
+      for (int j = 0; j < 25; ++j) {
+        v1::JointEstimate& joint = *frame.add_camera_joints();
+        *joint.mutable_position_m() = to_proto(geometry::Vec3(0.01 * j, 0.1 * t, 2.0) + shift);
+        joint.set_source(spec.source);
+        joint.set_confidence(1.0);
+      }
+    }
+    v1::ForearmOrientation& forearm = *frame.add_forearms();
+    forearm.set_arm(v1::RIGHT);
+    *forearm.mutable_k_from_f() = to_proto(fixture_K_from_F(t) * turn);
+    forearm.set_source(spec.source);
+    v1::ImuPosition& position = *frame.add_imu_positions();
+    position.set_device_id("imu_right");
+    *position.mutable_position_m() = to_proto(fixture_imu_K(t) + shift);
+    position.set_source(f < spec.frames / 2 ? v1::VISUAL : v1::PREDICTED);
+    files.write_frame(frame);
+  }
+  if (spec.with_segment) {  // frames 5..9 recovered, samples every 12.5 ms
+    v1::RecoveredSegment segment;
+    segment.set_device_id("imu_right");
+    segment.set_method(v1::RecoveredSegment::SMOOTHER);
+    segment.set_t_start_us(spec.t0_us + static_cast<std::int64_t>(5 / 30.0 * 1e6));
+    segment.set_t_end_us(spec.t0_us + static_cast<std::int64_t>(9 / 30.0 * 1e6));
+    for (double t = 5 / 30.0; t < 9 / 30.0 + 0.0125; t += 0.0125) {
+      v1::RecoveredSegment::Sample& s = *segment.add_samples();
+      s.set_t_us(std::min(segment.t_end_us(), spec.t0_us + static_cast<std::int64_t>(t * 1e6)));
+      *s.mutable_imu_m() = to_proto(fixture_imu_K(std::min(t, 9 / 30.0)) + shift);
+      *s.mutable_k_from_f() = to_proto(fixture_K_from_F(t));
+    }
+    files.write_segment(segment);
+  }
+  v1::CalibrationReport report;
+  v1::ForearmModel& model = *report.add_forearms();
+  model.set_arm(v1::RIGHT);
+  model.set_device_id("imu_right");
+  model.set_r_m(spec.r_m);
+  model.set_d_se_m(0.15);
+  model.set_d_sw_m(0.10);
+  model.set_d_ul_m(0.28);
+  *model.mutable_a_from_f() = to_proto(geometry::Quat::Identity());
+  *report.mutable_k_from_w() =
+      to_proto(geometry::quat_from_rotation_vector(geometry::Vec3(0, 0, spec.K_from_W_angle_rad)));
+  (*report.mutable_clock_offset_us())["imu_right"] = spec.clock_offset_us;
+  files.write_calibration(report);
+  files.close();
+}
+
+}  // namespace posefuse::result_fixture

@@ -1,0 +1,86 @@
+// session::read_result_files reads back what session::ResultFiles wrote, and names the file,
+// line and column of whatever does not read as the writer would have written it.
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "../imu/expect_error.hpp"
+#include "common/error.hpp"
+#include "result_fixture.hpp"
+#include "session/result_reader.hpp"
+
+using namespace posefuse;
+
+namespace {
+
+// Replaces the first occurrence of `from` in a file.
+void edit(const std::filesystem::path& file, const std::string& from, const std::string& to) {
+  std::ifstream in(file);
+  std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const auto at = text.find(from);
+  ASSERT_NE(at, std::string::npos) << from;
+  text.replace(at, from.size(), to);
+  std::ofstream(file) << text;
+}
+
+}  // namespace
+
+TEST(ResultReader, ReadsBackWhatResultFilesWrote) {
+  const auto dir = result_fixture::fresh_result_dir("read_back");
+  result_fixture::FixtureSpec spec;
+  spec.t0_us = 1000;
+  result_fixture::write_fixture(dir, spec);
+  const session::ResultDirectory r = session::read_result_files(dir);
+  EXPECT_TRUE(r.has("imu_orientations/imu_right.csv"));
+  EXPECT_TRUE(r.has("forearm_orientations/imu_right.csv"));
+  EXPECT_TRUE(r.has("camera_joints.csv"));
+  EXPECT_FALSE(r.has("smpl_joints.csv"));
+  ASSERT_EQ(r.forearm_orientations.at("imu_right").size(), 27u);
+  const auto& first = r.forearm_orientations.at("imu_right").front();
+  EXPECT_EQ(first.t_us, 1000);
+  EXPECT_NEAR(geometry::angle_between(first.q, result_fixture::fixture_K_from_F(0.0)), 0.0, 1e-12);
+  EXPECT_DOUBLE_EQ(first.pronation_rad, 0.1);
+  EXPECT_EQ(r.imu_orientations.at("imu_right").front().t_us, spec.device_t0_us);
+  ASSERT_EQ(r.camera_joints.size(), 250u);
+  EXPECT_EQ(r.camera_joints[24].joint, 24);
+  EXPECT_EQ(r.camera_joints[24].source, v1::GROUND_TRUTH);
+  ASSERT_EQ(r.forearms.size(), 10u);
+  EXPECT_EQ(r.forearms[3].arm, v1::RIGHT);
+  ASSERT_EQ(r.imu_positions.size(), 10u);
+  EXPECT_TRUE(r.imu_positions[9].p_K.isApprox(result_fixture::fixture_imu_K(9 / 30.0), 1e-12));
+  EXPECT_EQ(r.imu_positions[9].source, v1::PREDICTED);
+  ASSERT_FALSE(r.recovered.empty());
+  EXPECT_EQ(r.recovered.front().method, v1::RecoveredSegment::SMOOTHER);
+  ASSERT_TRUE(r.calibration.has_value());
+  EXPECT_DOUBLE_EQ(r.calibration->forearms(0).r_m(), 0.035);
+}
+
+TEST(ResultReader, NamesWhatIsWrong) {
+  struct Case {
+    const char* file;
+    const char* from;
+    const char* to;
+    const char* field;
+  };
+  const Case cases[] = {
+      {"imu_positions.csv", "t_us,device_id", "t,device_id", "imu_positions.csv:1"},
+      {"imu_positions.csv", ",VISUAL", ",SEEN", "imu_positions.csv:2:source"},
+      {"forearms.csv", "RIGHT", "MIDDLE", "forearms.csv:2:arm"},
+      {"camera_joints.csv", "SpineMid", "Spine", "camera_joints.csv:3:joint_name"},
+      {"forearm_orientations/imu_right.csv", "\n12500,", "\nnan,", "forearm_orientations/imu_right.csv:3:t_us"},
+      // earlier than the row before
+      {"forearm_orientations/imu_right.csv", "\n12500,", "\n-5,", "forearm_orientations/imu_right.csv:3:t_us"},
+      // one field too many
+      {"imu_orientations/imu_right.csv", "\n5012500,", "\n5012500,2,", "imu_orientations/imu_right.csv:3"},
+      {"calibration.json", "\"forearms\"", "\"forearm_models\"", "calibration.json"},
+  };
+  const auto dir = result_fixture::fresh_result_dir("bad");
+  for (const Case& c : cases) {
+    std::filesystem::remove_all(dir);
+    result_fixture::write_fixture(dir, {});
+    edit(dir / c.file, c.from, c.to);
+    posefuse::testing::expect_error([&] { session::read_result_files(dir); }, ErrorCode::kInvalidArgument, c.field);
+  }
+  posefuse::testing::expect_error([&] { session::read_result_files(dir / "absent"); }, ErrorCode::kNotFound,
+                        (dir / "absent").string());
+}
