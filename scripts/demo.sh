@@ -24,11 +24,10 @@ duration_s=${DEMO_DURATION_S:-20}
 session="$demo_dir/demo-session.pfchunks"
 sim_options="$demo_dir/demo-sim.txt"
 cat >"$sim_options" <<OPTIONS
-# paper 1's protocol once, right arm (IMUs on both wrists, the left one hangs at rest, so it
-# never takes the calibration pose and gets no forearm results: FOREARM_CALIBRATION)
+# paper 1's protocol once, both arms together (IMUs on both wrists)
 motion = forearm_protocol
 repetitions = 1
-arm = right
+arm = both
 duration_s = $duration_s
 OPTIONS
 echo "demo: simulating a ${duration_s} s session (posefuse-sim --options $sim_options)"
