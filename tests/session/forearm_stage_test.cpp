@@ -45,7 +45,9 @@ const StageRun& run_session(const ForearmSessionOptions& options) {
   static std::map<std::string, std::unique_ptr<StageRun>> cache;
   const std::string key = std::to_string(options.strap_drawn) + std::to_string(options.buzzer) +
                           std::to_string(options.camera_alignment) + std::to_string(options.hold_s) +
-                          std::to_string(options.elbow_bias_m.norm()) + options.axis;
+                          std::to_string(options.elbow_bias_m.norm()) + options.axis +
+                          std::to_string(options.shoulder_bias_m.norm()) + std::to_string(options.upper_arm_drawn) +
+                          options.upper_arm;
   auto& slot = cache[key];
   if (!slot) {
     slot = std::make_unique<StageRun>();
