@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "common/error.hpp"
+#include "geometry/point_pca.hpp"
 #include "geometry/segment_distance.hpp"
 #include "forearm/forearm_axis_depth.hpp"
 
@@ -30,6 +31,7 @@ std::optional<MeasuredUpperArm> measure_upper_arm_axis(const geometry::DepthImag
   check_joint(wrist_K, "wrist_K");
   if ((wrist_K - elbow_K).norm() < 1e-3) throw_invalid("elbow_K/wrist_K", "elbow and wrist coincide");
   if (!(options.search_radius_m > 0.0) || !(options.inlier_radius_m > 0.0) || !(options.forearm_clearance_m >= 0.0) ||
+      !(options.elbow_clearance_m >= 0.0) ||
       !(options.shoulder_skip_fraction >= 0.0 && options.shoulder_skip_fraction < 1.0) || options.min_points < 3 ||
       options.refinements < 0) {
     throw_invalid("options", "radii must be positive, shoulder_skip_fraction in [0, 1), min_points >= 3, "
@@ -37,12 +39,12 @@ std::optional<MeasuredUpperArm> measure_upper_arm_axis(const geometry::DepthImag
   }
   const Vec3 upper = elbow_K - shoulder_K;
   // Too short to hold a piece of arm, e.g. a straight arm's forearm end found up the upper arm.
-  if (upper.norm() < options.min_length_m + options.forearm_clearance_m) return std::nullopt;
+  if (upper.norm() < options.min_length_m + options.elbow_clearance_m) return std::nullopt;
   const Vec3 start = shoulder_K + options.shoulder_skip_fraction * upper;
   const std::vector<Vec3> near =
       depth_points_near_segment(depth, depth_camera, start, elbow_K, options.search_radius_m);
   // Points beside the arm between the cuts across it: from shoulder_skip_fraction of the way from
-  // the shoulder to forearm_clearance_m short of the elbow, measured along `direction` (through
+  // the shoulder to elbow_clearance_m short of the elbow, measured along `direction` (through
   // `point`). A cut across the arm keeps the points symmetric about its axis (distance to the
   // forearm alone would remove more of the side facing the forearm and shift the centroid
   // line); the cuts follow the fitted direction in the second pass, because cuts across the SDK's
@@ -53,7 +55,7 @@ std::optional<MeasuredUpperArm> measure_upper_arm_axis(const geometry::DepthImag
     for (const Vec3& p : near) {
       const Vec3 d = p - point;
       const double along = d.dot(direction);
-      if (along < a0 + options.shoulder_skip_fraction * (a1 - a0) || along > a1 - options.forearm_clearance_m) continue;
+      if (along < a0 + options.shoulder_skip_fraction * (a1 - a0) || along > a1 - options.elbow_clearance_m) continue;
       if ((d - along * direction).norm() > max_distance_m) continue;
       if (geometry::distance_to_segment(p, elbow_K, wrist_K) <= options.forearm_clearance_m) continue;
       kept.push_back(p);
@@ -75,11 +77,35 @@ std::optional<MeasuredUpperArm> measure_upper_arm_axis(const geometry::DepthImag
     along_max = i == 0 ? along : std::max(along_max, along);
   }
   if (along_max - along_min < options.min_length_m) return std::nullopt;
-  const std::optional<CylinderAxis> axis = cylinder_axis(*line, depth_camera.fx);
+  // A piece cut across a direction other than its own leans towards that direction in a PCA (its
+  // scatter is a parallelogram), and the cuts follow a fitted direction: so the direction is
+  // taken from the centroids of slices across it instead (each slice of a cylinder's visible
+  // surface has its centroid on the surface line, whatever the slice's tilt), the partial end
+  // slices left out.
+  const int slices = static_cast<int>(std::floor((along_max - along_min) / options.slice_m));
+  std::vector<Vec3> slice_sum(static_cast<std::size_t>(std::max(slices, 0)), Vec3::Zero());
+  std::vector<int> slice_count(slice_sum.size(), 0);
+  for (const Vec3& p : line->inliers) {
+    const int k = static_cast<int>(((p - line->centroid).dot(direction) - along_min) / options.slice_m);
+    if (k >= 1 && k + 1 < slices) {
+      slice_sum[static_cast<std::size_t>(k)] += p;
+      ++slice_count[static_cast<std::size_t>(k)];
+    }
+  }
+  std::vector<Vec3> slice_centroids;
+  for (std::size_t k = 0; k < slice_sum.size(); ++k) {
+    if (slice_count[k] >= 3) slice_centroids.push_back(slice_sum[k] / slice_count[k]);
+  }
+  if (slice_centroids.size() < 3) return std::nullopt;
+  const geometry::PointPca slice_line = geometry::point_pca(slice_centroids);
+  DepthLine centred = *line;
+  centred.direction = slice_line.direction().dot(upper) < 0.0 ? Vec3(-slice_line.direction()) : slice_line.direction();
+  centred.centroid = slice_line.centroid;
+  const std::optional<CylinderAxis> axis = cylinder_axis(centred, depth_camera.fx);
   if (!axis) return std::nullopt;  // along the viewing ray
   MeasuredUpperArm out;
-  out.direction_K = direction;
-  out.centroid_K = line->centroid;
+  out.direction_K = centred.direction;
+  out.centroid_K = centred.centroid;
   out.axis_point_K = axis->point;
   out.radius_m = axis->radius_m;
   out.points = static_cast<int>(line->inliers.size());
@@ -92,13 +118,22 @@ std::optional<MeasuredArm> measure_arm_axes(const geometry::DepthImageView& dept
                                             const ForearmAxisOptions& forearm_options,
                                             const UpperArmAxisOptions& upper_arm_options, double min_bend_rad,
                                             double max_elbow_shift_m) {
-  std::optional<SurfaceLine> excluded;
-  if (const auto near_sdk = measure_upper_arm_axis(depth, depth_camera, shoulder_K, elbow_K, wrist_K, upper_arm_options)) {
-    const double bend = std::acos(std::clamp(near_sdk->direction_K.dot((wrist_K - elbow_K).normalized()), -1.0, 1.0));
-    if (bend > min_bend_rad) excluded = SurfaceLine{near_sdk->centroid_K, near_sdk->direction_K};
-  }
-  const auto forearm = measure_forearm_axis(depth, depth_camera, elbow_K, wrist_K, forearm_options, excluded);
+  // The forearm alone first: its direction (even with some upper arm points in it) tells a bent
+  // arm from a straight one better than the SDK's joints. The upper arm is first looked for with
+  // the SDK's elbow and wrist for the clearance (that forearm's elbow end may lie up the upper arm).
+  std::optional<MeasuredForearmAxis> forearm =
+      measure_forearm_axis(depth, depth_camera, elbow_K, wrist_K, forearm_options);
   if (!forearm) return std::nullopt;
+  bool excluded = false;
+  if (const auto near = measure_upper_arm_axis(depth, depth_camera, shoulder_K, elbow_K, wrist_K, upper_arm_options)) {
+    const Vec3 forearm_direction = (forearm->wrist_K - forearm->elbow_K).normalized();
+    if (std::acos(std::clamp(near->direction_K.dot(forearm_direction), -1.0, 1.0)) > min_bend_rad) {
+      forearm = measure_forearm_axis(depth, depth_camera, elbow_K, wrist_K, forearm_options,
+                                     SurfaceLine{near->centroid_K, near->direction_K});
+      if (!forearm) return std::nullopt;
+      excluded = true;
+    }
+  }
   MeasuredArm out;
   out.forearm = *forearm;
   out.upper_arm =

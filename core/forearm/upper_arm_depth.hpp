@@ -12,13 +12,16 @@
 //  1. Depth pixels within search_radius_m of the line from the SDK shoulder to the (measured)
 //     elbow are candidates if their position along it is in [shoulder_skip_fraction, 1] (the
 //     part next to the SDK shoulder is skipped: the torso is there, and the shoulder's bias is
-//     largest relative to the arm there), at least forearm_clearance_m short of the elbow along
-//     it, and more than forearm_clearance_m from the measured forearm axis (the forearm and the
-//     elbow's bulk; the cut across the arm keeps the kept points symmetric about its axis).
+//     largest relative to the arm there), at least elbow_clearance_m short of the elbow along it,
+//     and more than forearm_clearance_m from the forearm axis (a forearm folded back over the
+//     upper arm). The cut across the arm keeps the kept points symmetric about its axis.
 //  2. A principal-axis line through them, refitted on the points within inlier_radius_m of it
 //     (forearm_axis_depth.hpp fit_depth_line). A cylinder's visible half sampled along its
 //     length has its centroid line parallel to the axis, so the line's direction is the upper
-//     arm's; no radius or end is needed.
+//     arm's; no radius or end is needed. The cuts of step 1 are then redone across the fitted
+//     line and the line refitted.
+//  3. The direction is the line through the centroids of 2 cm slices across it (the end slices
+//     left out): a PCA of a piece cut across another direction leans towards it.
 // Only the SDK shoulder's role as "where to look" remains; the direction does not follow its bias.
 #include <optional>
 
@@ -31,12 +34,14 @@ namespace posefuse::forearm {
 
 struct UpperArmAxisOptions {
   double search_radius_m = 0.15;         // the SDK shoulder is 5-10 cm off, plus the arm's radius
-  double shoulder_skip_fraction = 0.2;   // of the SDK shoulder -> elbow length
-  double forearm_clearance_m = 0.09;     // from the elbow along the arm and from the forearm's axis
+  double shoulder_skip_fraction = 0.1;   // of the SDK shoulder -> elbow length
+  double elbow_clearance_m = 0.07;       // along the arm from the elbow (the forearm's radius + margin)
+  double forearm_clearance_m = 0.05;     // from the forearm's axis (its surface lies R = 3-4 cm from it)
   double inlier_radius_m = 0.07;         // around the fitted surface line
   int refinements = 2;
   int min_points = 30;
   double min_length_m = 0.08;            // extent of the inliers along the line
+  double slice_m = 0.02;                 // slices across the line for the direction (step 3)
 };
 
 struct MeasuredUpperArm {
@@ -59,12 +64,12 @@ std::optional<MeasuredUpperArm> measure_upper_arm_axis(const geometry::DepthImag
 // Both limbs of one arm, each without the other's points. The forearm fit alone
 // (measure_forearm_axis) takes the upper arm's points next to the elbow for the forearm's
 // (measured on the calibration pose: the direction 15-20 degrees off, the elbow 9-10 cm), so:
-//  1. the upper arm is found beside the SDK's shoulder -> elbow (measure_upper_arm_axis with the
-//     SDK's forearm for the clearance);
-//  2. if it is bent more than min_bend_rad from the SDK's forearm, its points (within
+//  1. the forearm axis alone, and the upper arm beside the SDK's shoulder -> elbow
+//     (measure_upper_arm_axis with the SDK's forearm for the clearance);
+//  2. if the two are bent by more than min_bend_rad, the upper arm's points (within
 //     forearm.excluded_radius_m of its surface line) are removed from the forearm's candidates
 //     (a straight arm is one cylinder: nothing tells the limbs apart, so nothing is removed);
-//  3. the forearm axis is fitted (measure_forearm_axis);
+//  3. the forearm axis is fitted again (measure_forearm_axis);
 //  4. the upper arm is fitted again with the measured forearm as the clearance;
 //  5. after step 2 the forearm's inliers stop short of the elbow (its points near the upper arm
 //     went with the upper arm's), so the elbow is put where the two axes pass closest (a hinge:
