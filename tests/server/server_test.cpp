@@ -354,14 +354,15 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   EXPECT_EQ(info.stages(0).name(), "imu_orientation");
   EXPECT_EQ(info.stages(1).name(), "forearm");
   EXPECT_EQ(info.stages(2).name(), "body_fit");
-  ASSERT_EQ(info.options_size(), 15);
-  EXPECT_EQ(info.options(8).key(), "fit.enabled");
-  EXPECT_EQ(info.options(8).default_value(), "false");
+  ASSERT_EQ(info.options_size(), 16);
+  EXPECT_EQ(info.options(9).key(), "fit.enabled");
+  EXPECT_EQ(info.options(9).default_value(), "false");
   EXPECT_EQ(info.options(0).key(), "imu.tau_acc_s");
   EXPECT_EQ(info.options(2).key(), "forearm.K_from_B");
   EXPECT_EQ(info.options(2).stage(), "forearm");
   EXPECT_EQ(info.options(6).key(), "forearm.axis");
   EXPECT_EQ(info.options(7).key(), "forearm.shoulder_sphere");
+  EXPECT_EQ(info.options(8).key(), "forearm.upper_arm");
   EXPECT_EQ(info.limits().max_sessions(), 3u);
   EXPECT_EQ(info.limits().workers(), 2u);
   EXPECT_EQ(info.limits().max_upload_bytes(), 2u << 20);

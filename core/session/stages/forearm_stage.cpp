@@ -100,13 +100,13 @@ std::vector<StageOption> ForearmStage::options() const {
       {kAxisKey, "depth",
        "forearm axis (elbow, wrist) for the calibration frame, strap detection, II-J tests and eq. 10: 'depth' "
        "(fitted to the depth image around the SDK segment, forearm_axis_depth.hpp) or 'sdk' (the SDK joints, paper 1)"},
+      {kShoulderSphereKey, "off",
+       "'on': the gap smoother keeps the elbow on the sphere of radius d_ul around the SDK shoulder (eq. 13); "
+       "'off' (default): a real SDK's shoulder is off by 5-10 cm, which pulls the recovered trajectory away"},
       {kUpperArmKey, "depth",
        "upper arm direction for the calibration pose's arm plane (the roll of A_from_F about the forearm, eq. 9): "
        "'depth' (fitted to the depth image, upper_arm_depth.hpp; the SDK shoulder if the depth never shows it) or "
        "'sdk' (the SDK shoulder)"},
-      {kShoulderSphereKey, "off",
-       "'on': the gap smoother keeps the elbow on the sphere of radius d_ul around the SDK shoulder (eq. 13); "
-       "'off' (default): a real SDK's shoulder is off by 5-10 cm, which pulls the recovered trajectory away"},
   };
 }
 
