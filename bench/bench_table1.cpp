@@ -46,6 +46,9 @@ struct Named {
   // depth axis (paper 1's forearm axis from the SDK joints).
   std::string axis = "depth";
   std::string shoulder_sphere = "off";
+  // The stage's forearm.upper_arm: "sdk" takes the calibration pose's arm plane (the roll about the
+  // forearm) from the SDK shoulder, as paper 1 does.
+  std::string upper_arm = "depth";
 };
 
 std::size_t gap_count(const std::vector<bool>& occluded) {
@@ -96,6 +99,7 @@ Summary run(const Named& session_motion, const fs::path& image_folder, double lo
       auto& stage_options = *chunk.mutable_header()->mutable_options();
       stage_options["forearm.axis"] = session_motion.axis;
       stage_options["forearm.shoulder_sphere"] = session_motion.shoulder_sphere;
+      stage_options["forearm.upper_arm"] = session_motion.upper_arm;
     }
     pipeline.push(chunk);
   }
@@ -165,7 +169,11 @@ int main(int argc, char** argv) {
   protocol.repetitions = 1;
   sessions.push_back({"protocol", sim::make_exercise("forearm_protocol", protocol)});
   // Paper 1's method: the forearm axis from the SDK's elbow and wrist (same SDK errors and seed).
-  sessions.push_back({"protocol_paper_axis", sim::make_exercise("forearm_protocol", protocol), true, "sdk", "on"});
+  sessions.push_back(
+      {"protocol_paper_axis", sim::make_exercise("forearm_protocol", protocol), true, "sdk", "on", "sdk"});
+  // The depth forearm axis with the roll from the SDK shoulder (the stage before forearm.upper_arm).
+  sessions.push_back(
+      {"protocol_sdk_upper_arm", sim::make_exercise("forearm_protocol", protocol), true, "depth", "off", "sdk"});
   // Diagnostic: the same session with an error-free SDK skeleton.
   sessions.push_back({"protocol_exact_sdk", sim::make_exercise("forearm_protocol", protocol), false});
   if (fs::is_directory(mocap)) {
@@ -192,7 +200,7 @@ int main(int argc, char** argv) {
   for (const Named& s : sessions) {
     // Every session draws its own SDK biases and noise; the variants (paper axis, exact SDK) repeat
     // their predecessor's.
-    if (s.sdk_joint_errors && s.axis == "depth") ++seed;
+    if (s.sdk_joint_errors && s.axis == "depth" && s.upper_arm == "depth") ++seed;
     try {
       summaries.push_back(run(s, images, longest_s, seed));
     } catch (const Error& e) {

@@ -9,6 +9,7 @@
 #include <opencv2/core.hpp>
 
 #include "body/pose_parameters.hpp"
+#include "body/smpl_model.hpp"
 #include "forearm/synthetic_images.hpp"
 #include "session/image_codec.hpp"
 #include "session/sim_session_parts.hpp"
@@ -116,6 +117,9 @@ Table1Session simulate_table1_session(const sim::BodyMotion& motion, const Table
     scene.strap_to_elbow_m = o.strap.strap_to_elbow_m;
     scene.strap_visible = !truth.occluded;
     scene.wall_z_m = camera.wall_distance_m;
+    // The upper arm is in the depth image too (a cylinder from the SMPL shoulder to the elbow).
+    scene.shoulder_K = shot.truth[f].smpl_joints_K.col(truth.side == sim::BodySide::kRight ? body::kRightShoulder
+                                                                                          : body::kLeftShoulder);
     const forearm::testing::ForearmImages images =
         forearm::testing::render_forearm(scene, cameras, 6.0, 0.002, o.seed * 100000 + f);
     v1::SessionChunk depth, color;

@@ -5,8 +5,8 @@
 // own clocks with noise, the buzzer stop is in the camera audio and BLE receipts are stamped.
 // Colour and depth near the forearm come from the strap-test renderer
 // (tests/forearm/synthetic_images.hpp: the forearm as a cylinder with the black strap, drawn only
-// while the simulator's Embree test says the strap is visible), because the simulator has no
-// RGB yet. Kept in this one function so that the posefuse-sim CLI can replace it.
+// while the simulator's Embree test says the strap is visible, and the upper arm as a cylinder
+// from the shoulder to the elbow), because the simulator has no RGB yet. Kept in this one function so that the posefuse-sim CLI can replace it.
 #include <cstdint>
 #include <vector>
 

@@ -17,6 +17,7 @@
 //  4. The extreme inliers along the axis, moved out by half a depth pixel's footprint (the last
 //     pixel on the forearm lies on average that far inside its end), are the elbow and the wrist.
 #include <optional>
+#include <vector>
 
 #include "forearm/forearm_types.hpp"
 #include "geometry/image_view.hpp"
@@ -31,6 +32,15 @@ struct ForearmAxisOptions {
   int refinements = 2;
   int min_points = 30;
   double min_length_m = 0.08;  // elbow to wrist
+  // Candidates within this of `excluded` (another limb's surface line, e.g. the upper arm's next
+  // to the elbow) are not the forearm's: a cylinder's visible points lie within ~1.3 R of its
+  // surface line.
+  double excluded_radius_m = 0.06;
+};
+
+struct SurfaceLine {
+  Vec3 point = Vec3::Zero();
+  Vec3 direction = Vec3::UnitX();  // unit
 };
 
 struct MeasuredForearmAxis {
@@ -40,12 +50,41 @@ struct MeasuredForearmAxis {
   int points = 0;               // inliers of the last fit
 };
 
+// Depth pixels back-projected into K that lie within radius_m of the segment a-b (the pieces
+// below are shared with upper_arm_depth.hpp). The caller checks the image and the points.
+std::vector<Vec3> depth_points_near_segment(const geometry::DepthImageView& depth,
+                                            const geometry::PinholeCamera& depth_camera, const Vec3& a, const Vec3& b,
+                                            double radius_m);
+
+// A principal-axis line through `points`, refitted `refinements` times on the points within
+// inlier_radius_m of it; `inliers` are the last fit's points. nullopt when fewer than min_points
+// are left.
+struct DepthLine {
+  Vec3 centroid = Vec3::Zero();
+  Vec3 direction = Vec3::UnitX();  // unit, sign arbitrary
+  std::vector<Vec3> inliers;
+};
+std::optional<DepthLine> fit_depth_line(std::vector<Vec3> points, double inlier_radius_m, int refinements,
+                                        int min_points);
+
+// Step 3 above for a fitted surface line: the cylinder's axis (point on it level with the
+// line's centroid, the line's direction), radius R and the inliers' extent along it (from the
+// centroid). nullopt when the line lies along the viewing ray (no width is seen).
+struct CylinderAxis {
+  Vec3 point = Vec3::Zero();
+  Vec3 direction = Vec3::UnitX();
+  double radius_m = 0.0;
+  double along_min = 0.0, along_max = 0.0;
+};
+std::optional<CylinderAxis> cylinder_axis(const DepthLine& line, double depth_fx);
+
 // Throws posefuse::Error kInvalidArgument naming "depth.pixels", "elbow_K", "wrist_K" or
 // "options" for unusable input. nullopt when the depth image does not show a forearm there
 // (too few points, too short).
 std::optional<MeasuredForearmAxis> measure_forearm_axis(const geometry::DepthImageView& depth,
                                                         const geometry::PinholeCamera& depth_camera,
                                                         const Vec3& elbow_K, const Vec3& wrist_K,
-                                                        const ForearmAxisOptions& options = {});
+                                                        const ForearmAxisOptions& options = {},
+                                                        const std::optional<SurfaceLine>& excluded = std::nullopt);
 
 }  // namespace posefuse::forearm

@@ -3,7 +3,8 @@
 // a cylinder of radius r around the elbow -> wrist segment, skin grey except a black band
 // (the strap) centred d_se from the elbow, in front of a grey wall. Rendered by exact
 // ray-cylinder intersection per pixel centre, then optional Gaussian noise (inside the
-// forearm's bounding box only, where the strap search looks).
+// forearm's bounding box only, where the strap search looks). Optionally the upper arm too: a
+// skin cylinder from the shoulder to the elbow (what the depth camera sees beside the forearm).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -24,6 +25,8 @@ struct ForearmScene {
   bool strap_visible = true;    // false: skin all along (the strap never seen)
   double skin_level = 170.0, strap_level = 25.0, wall_level = 120.0;
   double wall_z_m = 3.0;
+  std::optional<Vec3> shoulder_K;  // set: the upper arm is drawn, shoulder -> elbow
+  double upper_arm_radius_m = 0.045;
 };
 
 // Small cameras with mild distortion; the colour camera sits 5 cm to the side, turned 1 degree.
@@ -36,21 +39,37 @@ inline StrapCameras test_cameras() {
   return c;
 }
 
-// Nearest hit of the ray origin + t dir (t > 0) with the finite cylinder; axial position out.
-inline std::optional<double> hit_cylinder(const ForearmScene& s, const Vec3& origin, const Vec3& dir,
-                                          double* axial_m) {
-  const Vec3 axis = (s.wrist_K - s.elbow_K).normalized();
-  const double length = (s.wrist_K - s.elbow_K).norm();
-  const Vec3 w = origin - s.elbow_K;
+// Nearest hit of the ray origin + t dir (t > 0) with the finite cylinder of radius `radius_m`
+// around a -> b; axial position from a out.
+inline std::optional<double> hit_cylinder(const Vec3& a, const Vec3& b, double radius_m, const Vec3& origin,
+                                          const Vec3& dir, double* axial_m) {
+  const Vec3 axis = (b - a).normalized();
+  const double length = (b - a).norm();
+  const Vec3 w = origin - a;
   const Vec3 v_perp = dir - dir.dot(axis) * axis, w_perp = w - w.dot(axis) * axis;
-  const double a = v_perp.squaredNorm(), b = 2.0 * w_perp.dot(v_perp),
-               c = w_perp.squaredNorm() - s.radius_m * s.radius_m;
-  const double disc = b * b - 4.0 * a * c;
-  if (a < 1e-12 || disc < 0.0) return std::nullopt;
-  const double t = (-b - std::sqrt(disc)) / (2.0 * a);
+  const double qa = v_perp.squaredNorm(), qb = 2.0 * w_perp.dot(v_perp), qc = w_perp.squaredNorm() - radius_m * radius_m;
+  const double disc = qb * qb - 4.0 * qa * qc;
+  if (qa < 1e-12 || disc < 0.0) return std::nullopt;
+  const double t = (-qb - std::sqrt(disc)) / (2.0 * qa);
   const double along = (w + t * dir).dot(axis);
   if (t <= 0.0 || along < 0.0 || along > length) return std::nullopt;
   *axial_m = along;
+  return t;
+}
+
+// The forearm's hit (axial position from the elbow out), or the upper arm's when it is drawn
+// and nearer (axial set to -1: never on the strap).
+inline std::optional<double> hit_cylinder(const ForearmScene& s, const Vec3& origin, const Vec3& dir,
+                                          double* axial_m) {
+  std::optional<double> t = hit_cylinder(s.elbow_K, s.wrist_K, s.radius_m, origin, dir, axial_m);
+  if (s.shoulder_K) {
+    double upper_axial = 0.0;
+    const auto upper = hit_cylinder(*s.shoulder_K, s.elbow_K, s.upper_arm_radius_m, origin, dir, &upper_axial);
+    if (upper && (!t || *upper < *t)) {
+      t = upper;
+      *axial_m = -1.0;
+    }
+  }
   return t;
 }
 
@@ -72,11 +91,14 @@ struct PixelBox {
 inline PixelBox cylinder_box(const ForearmScene& s, const PinholeCamera& camera, const Quat& cam_from_K,
                              const Vec3& cam_from_K_m) {
   PixelBox box{camera.width, -1, camera.height, -1};
-  for (const Vec3& end : {s.elbow_K, s.wrist_K}) {
+  std::vector<Vec3> ends = {s.elbow_K, s.wrist_K};
+  if (s.shoulder_K) ends.push_back(*s.shoulder_K);
+  const double radius_m = s.shoulder_K ? std::max(s.radius_m, s.upper_arm_radius_m) : s.radius_m;
+  for (const Vec3& end : ends) {
     const Vec3 p = cam_from_K * end + cam_from_K_m;
     const auto uv = geometry::project(camera, p);
     if (!uv) return {0, camera.width - 1, 0, camera.height - 1};
-    const int margin = 4 + static_cast<int>(std::ceil(1.5 * camera.fx * s.radius_m / p.z()));
+    const int margin = 4 + static_cast<int>(std::ceil(1.5 * camera.fx * radius_m / p.z()));
     box.col0 = std::min(box.col0, static_cast<int>(uv->x()) - margin);
     box.col1 = std::max(box.col1, static_cast<int>(uv->x()) + margin);
     box.row0 = std::min(box.row0, static_cast<int>(uv->y()) - margin);

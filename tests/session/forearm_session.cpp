@@ -152,6 +152,7 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
     scene.radius_m = arm.strap_radius_m;
     scene.strap_to_elbow_m = arm.strap_to_elbow_m;
     scene.strap_visible = o.strap_drawn && !occluded;
+    if (o.upper_arm_drawn) scene.shoulder_K = shoulder_K;
     const forearm::testing::ForearmImages images =
         forearm::testing::render_forearm(scene, cameras, 6.0, 0.002, o.seed * 1000 + static_cast<std::uint64_t>(k));
     v1::SessionChunk depth;
@@ -169,7 +170,7 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
       v1::SkeletonJoint& joint = *s.add_joints();
       Vec3 p = shoulder_K + Vec3(0.3, -0.4, 0.0);  // joints the stage does not read
       auto state = v1::SkeletonJoint::TRACKED;
-      if (j == 8) p = noisy(shoulder_K);
+      if (j == 8) p = noisy(shoulder_K + o.shoulder_bias_m);
       if (j == 9) p = noisy(elbow_K + o.elbow_bias_m);
       if (j == 10) p = noisy(wrist_K + o.wrist_bias_m);
       if ((j == 9 || j == 10) && occluded) state = v1::SkeletonJoint::INFERRED;
@@ -194,6 +195,7 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
   }
   (*h.mutable_options())["forearm.calibration_s"] = format_double(o.calibration_s);
   (*h.mutable_options())["forearm.axis"] = o.axis;
+  (*h.mutable_options())["forearm.upper_arm"] = o.upper_arm;
   return assemble_session(std::move(header), std::move(timed), frames, counts);
 }
 

@@ -5,8 +5,8 @@
 // on the camera are simulated on their own clocks (sim/imu_device.hpp) with the buzzer stop in the
 // camera audio and BLE broadcast receipts (sim/sync_signals.hpp). The camera frames are drawn
 // here: a skeleton (shoulder, elbow, wrist with joint noise; INFERRED while occluded), and
-// colour + depth images of the forearm as a cylinder with the black strap
-// (tests/forearm/synthetic_images.hpp); during the occlusion the strap is not drawn.
+// colour + depth images of the forearm as a cylinder with the black strap and of the upper arm
+// as a cylinder (tests/forearm/synthetic_images.hpp); during the occlusion the strap is not drawn.
 #include <cstdint>
 #include <map>
 #include <string>
@@ -33,6 +33,11 @@ struct ForearmSessionOptions {
   forearm::Vec3 elbow_bias_m = forearm::Vec3::Zero();
   forearm::Vec3 wrist_bias_m = forearm::Vec3::Zero();
   std::string axis = "depth";
+  // The SDK shoulder's constant error, whether the upper arm is in the depth image (a cylinder
+  // from the shoulder to the elbow), and the stage's forearm.upper_arm ("depth" or "sdk").
+  forearm::Vec3 shoulder_bias_m = forearm::Vec3::Zero();
+  bool upper_arm_drawn = true;
+  std::string upper_arm = "depth";
   std::uint64_t seed = 7;
 };
 

@@ -45,7 +45,9 @@ const StageRun& run_session(const ForearmSessionOptions& options) {
   static std::map<std::string, std::unique_ptr<StageRun>> cache;
   const std::string key = std::to_string(options.strap_drawn) + std::to_string(options.buzzer) +
                           std::to_string(options.camera_alignment) + std::to_string(options.hold_s) +
-                          std::to_string(options.elbow_bias_m.norm()) + options.axis;
+                          std::to_string(options.elbow_bias_m.norm()) + options.axis +
+                          std::to_string(options.shoulder_bias_m.norm()) + std::to_string(options.upper_arm_drawn) +
+                          options.upper_arm;
   auto& slot = cache[key];
   if (!slot) {
     slot = std::make_unique<StageRun>();
@@ -239,6 +241,45 @@ TEST(ForearmStage, SdkAxisSuffersFromBiasedSdkJoints) {
   std::printf("biased SDK joints, SDK axis (paper 1): orientation RMS %.2f deg, %zu visible frames\n",
               e.orientation_rms_rad / kDeg, e.visible_frames);
   EXPECT_GT(e.orientation_rms_rad, 10.0 * kDeg);
+}
+
+// The SDK shoulder 9 cm off (mostly in depth, which turns the arm plane most): with the upper arm
+// measured in depth (forearm.upper_arm = depth, the default) the calibration frame's roll does not
+// follow it; with the SDK shoulder (= sdk, paper 1's arm plane) it does.
+ForearmSessionOptions biased_shoulder(const std::string& upper_arm) {
+  ForearmSessionOptions options = biased_joints("depth");
+  options.shoulder_bias_m = Vec3(0.02, -0.03, 0.08);
+  options.upper_arm = upper_arm;
+  return options;
+}
+
+TEST(ForearmStage, UpperArmFromDepthUndoesBiasedShoulder) {
+  const StageRun& r = run_session(biased_shoulder("depth"));
+  for (const auto& w : r.sink.warnings()) ADD_FAILURE() << w.code() << " " << w.field() << ": " << w.message();
+  const v1::ForearmModel& model = calibrated_model(r);
+  const double A_from_F_deg = geometry::angle_between(quat(model.a_from_f()), r.truth.model.F_from_A.conjugate()) / kDeg;
+  const testing::ForearmSessionErrors e = testing::evaluate_forearm_results(r.truth, r.sink.results);
+  std::printf("SDK shoulder 9 cm off, upper arm from depth: A_from_F %.2f deg, orientation RMS %.2f deg\n",
+              A_from_F_deg, e.orientation_rms_rad / kDeg);
+  EXPECT_LT(A_from_F_deg, 2.0);
+  EXPECT_LT(e.orientation_rms_rad, 2.0 * kDeg);
+  EXPECT_NEAR(model.d_se_m(), r.truth.model.d_se_m, 0.006);
+}
+
+TEST(ForearmStage, UpperArmFromSdkShoulderFollowsItsBias) {
+  const StageRun& r = run_session(biased_shoulder("sdk"));
+  const testing::ForearmSessionErrors e = testing::evaluate_forearm_results(r.truth, r.sink.results);
+  std::printf("SDK shoulder 9 cm off, upper arm from the SDK: orientation RMS %.2f deg\n", e.orientation_rms_rad / kDeg);
+  EXPECT_GT(e.orientation_rms_rad, 8.0 * kDeg);
+}
+
+TEST(ForearmStage, UpperArmNotInDepthFallsBackToTheSdkShoulder) {
+  ForearmSessionOptions options;
+  options.upper_arm_drawn = false;
+  const StageRun& r = run_session(options);
+  EXPECT_TRUE(has_warning(r, "FOREARM_UPPER_ARM_NOT_SEEN", "forearm[arm_r].upper_arm", "at 0 calibration frames"));
+  const v1::ForearmModel& model = calibrated_model(r);
+  EXPECT_LT(geometry::angle_between(quat(model.a_from_f()), r.truth.model.F_from_A.conjugate()), 2.0 * kDeg);
 }
 
 }  // namespace

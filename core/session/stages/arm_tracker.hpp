@@ -34,6 +34,9 @@ struct ArmFrame {
   bool forearm_tracked = false;  // elbow and wrist TRACKED
   forearm::Quat K_from_wrist_sdk = forearm::Quat(0, 0, 0, 0);  // zero when the SDK gave none
   std::optional<forearm::Vec3> strap_K;  // strap seen (II-I)
+  // Upper arm direction (shoulder -> elbow) measured in depth, calibration frames only
+  // (upper_arm_depth.hpp).
+  std::optional<forearm::Vec3> upper_arm_direction_K;
 };
 
 class ArmTracker {

@@ -7,6 +7,7 @@
 #include "forearm/calibration_pose_check.hpp"
 #include "forearm/forearm_axis_depth.hpp"
 #include "forearm/forearm_orientation.hpp"
+#include "forearm/upper_arm_depth.hpp"
 #include "session/image_codec.hpp"
 #include "session/imu_batch.hpp"
 #include "session/stages/proto_values.hpp"
@@ -24,6 +25,7 @@ constexpr const char* kCalibrationSKey = "forearm.calibration_s";
 constexpr const char* kCalibrationOrientationKey = "forearm.calibration_orientation";
 constexpr const char* kBodyIdKey = "forearm.body_id";
 constexpr const char* kAxisKey = "forearm.axis";
+constexpr const char* kUpperArmKey = "forearm.upper_arm";
 constexpr const char* kShoulderSphereKey = "forearm.shoulder_sphere";
 // A depth frame belongs to a skeleton frame of the same t_us (same sensor); allow clock jitter.
 constexpr std::int64_t kDepthToleranceUs = 1000;
@@ -102,6 +104,10 @@ std::vector<StageOption> ForearmStage::options() const {
       {kShoulderSphereKey, "off",
        "'on': the gap smoother keeps the elbow on the sphere of radius d_ul around the SDK shoulder (eq. 13); "
        "'off' (default): a real SDK's shoulder is off by 5-10 cm, which pulls the recovered trajectory away"},
+      {kUpperArmKey, "depth",
+       "upper arm direction for the calibration pose's arm plane (the roll of A_from_F about the forearm, eq. 9): "
+       "'depth' (fitted to the depth image, upper_arm_depth.hpp; the SDK shoulder if the depth never shows it) or "
+       "'sdk' (the SDK shoulder)"},
   };
 }
 
@@ -133,6 +139,12 @@ void ForearmStage::start(const v1::SessionHeader& header, StageOutput& out) {
       throw_invalid(option_field(kAxisKey), "is '" + *text + "', expected 'depth' or 'sdk'");
     }
     axis_from_depth_ = *text == "depth";
+  }
+  if (const auto text = option(header, kUpperArmKey)) {
+    if (*text != "depth" && *text != "sdk") {
+      throw_invalid(option_field(kUpperArmKey), "is '" + *text + "', expected 'depth' or 'sdk'");
+    }
+    upper_arm_from_depth_ = *text == "depth";
   }
   if (const auto text = option(header, kShoulderSphereKey)) {
     if (*text != "on" && *text != "off") {
@@ -277,12 +289,28 @@ void ForearmStage::detect_arms(const PendingFrame& frame, const Image* depth, co
                           joints[j.wrist].state() == v1::SkeletonJoint::TRACKED;
     const auto& q = joints[j.wrist].orientation();
     arm.K_from_wrist_sdk = Quat(q.w(), q.x(), q.y(), q.z());
-    if (arm.forearm_tracked && depth && cameras_ && axis_from_depth_) {
-      // The SDK's elbow and wrist only say where to look; the axis is the depth image's.
+    if (arm.forearm_tracked && depth && cameras_ && (axis_from_depth_ || upper_arm_from_depth_)) {
+      // The SDK's joints only say where to look; the axes are the depth image's.
       const forearm::DepthImageView mm{depth->pixels.cols, depth->pixels.rows, depth->pixels.ptr<std::uint16_t>()};
-      if (const auto axis = forearm::measure_forearm_axis(mm, cameras_->depth, arm.elbow_K, arm.wrist_K)) {
-        arm.elbow_K = axis->elbow_K;
-        arm.wrist_K = axis->wrist_K;
+      std::optional<forearm::MeasuredUpperArm> upper_arm;
+      if (axis_from_depth_ && arm.shoulder_tracked) {
+        // Both limbs, so that the upper arm's points next to the elbow are not taken for the forearm's.
+        if (const auto axes = forearm::measure_arm_axes(mm, cameras_->depth, arm.shoulder_K, arm.elbow_K, arm.wrist_K)) {
+          arm.elbow_K = axes->forearm.elbow_K;
+          arm.wrist_K = axes->forearm.wrist_K;
+          upper_arm = axes->upper_arm;
+        }
+      } else if (axis_from_depth_) {
+        if (const auto axis = forearm::measure_forearm_axis(mm, cameras_->depth, arm.elbow_K, arm.wrist_K)) {
+          arm.elbow_K = axis->elbow_K;
+          arm.wrist_K = axis->wrist_K;
+        }
+      } else if (!device.tracker && arm.shoulder_tracked) {
+        upper_arm = forearm::measure_upper_arm_axis(mm, cameras_->depth, arm.shoulder_K, arm.elbow_K, arm.wrist_K);
+      }
+      // Used by the calibration only (the arm plane's upper arm, forearm.upper_arm = depth).
+      if (upper_arm && upper_arm_from_depth_ && !device.tracker) {
+        arm.upper_arm_direction_K = upper_arm->direction_K;
       }
     }
     if (arm.forearm_tracked && depth && color && cameras_) {
@@ -364,6 +392,17 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
   std::vector<forearm::CalibrationFrame> with_strap, without_strap;
   const Vec3 up_K = *K_from_W_ * Vec3::UnitZ();
   std::size_t not_raised = 0;
+  // The arm plane's upper arm from depth when the depth showed it at enough frames to make a hold.
+  std::size_t upper_arm_frames = 0;
+  for (const ArmFrame& f : device.frames) upper_arm_frames += f.t_us <= window_end_us && f.upper_arm_direction_K;
+  const bool depth_upper_arm = pose_orientation_ && upper_arm_from_depth_ &&
+                               upper_arm_frames >= static_cast<std::size_t>(calibration_options_.min_still_frames);
+  if (pose_orientation_ && upper_arm_from_depth_ && !depth_upper_arm) {
+    out.warn("FOREARM_UPPER_ARM_NOT_SEEN", field + ".upper_arm",
+             "the upper arm was measured in the depth image at " + std::to_string(upper_arm_frames) +
+                 " calibration frames (need " + std::to_string(calibration_options_.min_still_frames) +
+                 "): the calibration pose's roll comes from the SDK shoulder");
+  }
   for (const ArmFrame& f : device.frames) {
     if (f.t_us > window_end_us) break;
     if (!f.forearm_tracked || !f.shoulder_tracked) continue;
@@ -381,7 +420,13 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
     c.W_from_A = *W_from_A;
     if (pose_orientation_) {
       try {
-        c.K_from_F_sdk = forearm::K_from_F_calibration_pose(f.shoulder_K, f.elbow_K, f.wrist_K);
+        Vec3 plane_shoulder_K = f.shoulder_K;
+        if (depth_upper_arm) {
+          if (!f.upper_arm_direction_K) continue;
+          // Only the direction matters for the plane: the SDK shoulder moved onto the measured line.
+          plane_shoulder_K = f.elbow_K - (f.shoulder_K - f.elbow_K).norm() * *f.upper_arm_direction_K;
+        }
+        c.K_from_F_sdk = forearm::K_from_F_calibration_pose(plane_shoulder_K, f.elbow_K, f.wrist_K);
       } catch (const Error&) {
         continue;  // a straight arm or one seen edge-on: not the calibration pose
       }

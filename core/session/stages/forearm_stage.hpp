@@ -20,7 +20,9 @@
 //     With forearm.axis = depth (default) every frame's elbow and wrist are first replaced by
 //     the ends of the forearm axis fitted to the depth image (forearm_axis_depth.hpp), so the
 //     calibration, the strap search, the II-J tests and eq. 10 do not inherit the SDK's joint
-//     bias; = sdk keeps paper 1's SDK joints.
+//     bias; = sdk keeps paper 1's SDK joints. With forearm.upper_arm = depth (default) the arm
+//     plane's upper arm (and so the calibration frame's roll about the forearm) is measured in
+//     the depth image too (upper_arm_depth.hpp); = sdk takes it from the SDK shoulder.
 //  3. Then in time order (arm_tracker.hpp): forearm orientation + pronation per IMU sample
 //     (ForearmOrientationBatch), per camera frame a FrameResult with the forearm orientation and
 //     the IMU position (VISUAL from the strap, or PREDICTED by the live estimator in a gap), and
@@ -108,6 +110,7 @@ class ForearmStage : public Stage {
   double calibration_s_ = 5.0;
   bool pose_orientation_ = true;
   bool axis_from_depth_ = true;  // forearm.axis
+  bool upper_arm_from_depth_ = true;  // forearm.upper_arm
   forearm::GapSmootherOptions smoother_options_ = without_shoulder_sphere();  // forearm.shoulder_sphere
   std::optional<std::uint32_t> body_id_;
   std::optional<forearm::StrapCameras> cameras_;
