@@ -33,6 +33,8 @@
 
 #include "bench_clock.hpp"
 #include "body/pose_parameters.hpp"
+#include "body/template_generator.hpp"
+#include "fit/joint_kinematics.hpp"
 #include "session/image_codec.hpp"
 #include "session/stages/body_fit_stage.hpp"
 #include "sim/camera_session.hpp"
@@ -311,7 +313,24 @@ int main(int argc, char** argv) {
     for (int b = 0; b < 4; ++b) std::printf(" %+.2f", options.betas[b]);
     std::printf(", fitted");
     for (int b = 0; b < std::min(10, shape.betas_size()); ++b) std::printf(" %+.2f", shape.betas(b));
-    std::printf(" (%s)\n", shape.estimated() ? "personalised" : "template");
+    // What the shape does to the skeleton: the six upper-limb rest joints relative to the pelvis,
+    // fitted shape and template shape against the subject's.
+    const auto model = body::make_template(body::Sex::kMale);
+    Eigen::VectorXd fitted_beta = Eigen::VectorXd::Zero(model->num_betas());
+    for (int b = 0; b < std::min<int>(model->num_betas(), shape.betas_size()); ++b) fitted_beta[b] = shape.betas(b);
+    const auto rest_error_mm = [&](const Eigen::VectorXd& beta) {
+      const Eigen::Matrix3Xd a = fit::rest_joints(*model, beta), t = fit::rest_joints(*model, options.betas);
+      double sum = 0;
+      for (int k = 0; k < kKinds; ++k)
+        for (int side = 0; side < 2; ++side) {
+          const int j = kSmplJoints[k][side];
+          sum += ((a.col(j) - a.col(body::kPelvis)) - (t.col(j) - t.col(body::kPelvis))).norm();
+        }
+      return 1e3 * sum / (2 * kKinds);
+    };
+    std::printf(" (%s); upper-limb rest joints off by %.1f mm (template shape %.1f mm)\n",
+                shape.estimated() ? "personalised" : "template", rest_error_mm(fitted_beta),
+                rest_error_mm(Eigen::VectorXd::Zero(model->num_betas())));
     std::printf("%-17s frames %3d (occluded %3d)  camera %5.1f mm  fit %5.1f mm  fit w/o imu %5.1f mm\n",
                 exercises[e].c_str(), table.frames, table.occluded, 1e3 * table.camera.mean_all(),
                 1e3 * table.fit.mean_all(), 1e3 * table.fit_no_imu.mean_all());

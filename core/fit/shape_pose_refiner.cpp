@@ -1,5 +1,6 @@
 #include "fit/shape_pose_refiner.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 #include <utility>
@@ -9,6 +10,34 @@
 #include "fit/segment_measurements.hpp"
 
 namespace posefuse::fit {
+
+namespace {
+
+// The refiner's priors as ShapeFreedom's linear prior, rows stacked: the 7 segment residuals
+// (L(beta) - K) / (s sqrt 7) ~ (L(beta0) + G (beta - beta0) - K) / (s sqrt 7), then beta / (sigma sqrt B).
+void add_shape_priors(const ShapeRefinerOptions& options, const SegmentLengths& measured,
+                      const ModelSegmentLengths& segment_model, const Eigen::VectorXd& beta0, ShapeFreedom& freedom) {
+  const int nb = segment_model.num_betas();
+  Eigen::VectorXd start = Eigen::VectorXd::Zero(nb);
+  start.head(std::min<Eigen::Index>(nb, beta0.size())) = beta0.head(std::min<Eigen::Index>(nb, beta0.size()));
+  const int segments = options.segment_sigma_m > 0 ? kBodySegmentCount : 0;
+  const int betas = options.beta_sigma > 0 ? nb : 0;
+  freedom.prior_matrix.setZero(segments + betas, nb);
+  freedom.prior_target.setZero(segments + betas);
+  if (segments > 0) {
+    Eigen::MatrixXd gradient;
+    const SegmentLengths at_start = segment_model.lengths(start, &gradient);
+    const double scale = 1 / (options.segment_sigma_m * std::sqrt(static_cast<double>(kBodySegmentCount)));
+    freedom.prior_matrix.topRows(segments) = scale * gradient;
+    for (int l = 0; l < segments; ++l)
+      freedom.prior_target[l] = scale * (measured[static_cast<size_t>(l)] - at_start[static_cast<size_t>(l)]) +
+                                freedom.prior_matrix.row(l).dot(start);
+  }
+  if (betas > 0)
+    freedom.prior_matrix.bottomRows(betas).diagonal().setConstant(1 / (options.beta_sigma * std::sqrt(static_cast<double>(nb))));
+}
+
+}  // namespace
 
 std::size_t silhouette_pixels_at_border(const DepthFrame& frame, int border_px) {
   std::size_t count = 0;
@@ -53,17 +82,7 @@ ShapePoseRefiner make_depth_shape_refiner(std::shared_ptr<const body::SmplModel>
     const FrameObservation observation =
         prepare_observation(calibration.frame, camera, calibration.skeleton.positions_K, fit_options);
     ShapeFreedom freedom = options.freedom;
-    if (options.segment_sigma_m > 0) {
-      // (L(beta) - K) / s ~ (L(beta0) + G (beta - beta0) - K) / s = A beta - t.
-      Eigen::MatrixXd gradient;
-      const SegmentLengths at_beta0 = segment_model.lengths(beta0, &gradient);
-      const double scale = 1 / (options.segment_sigma_m * std::sqrt(static_cast<double>(kBodySegmentCount)));
-      freedom.prior_matrix = scale * gradient;
-      freedom.prior_target.resize(kBodySegmentCount);
-      for (int l = 0; l < kBodySegmentCount; ++l)
-        freedom.prior_target[l] = scale * (measured[static_cast<size_t>(l)] - at_beta0[static_cast<size_t>(l)]) +
-                                  freedom.prior_matrix.row(l).dot(beta0);
-    }
+    add_shape_priors(options, measured, segment_model, beta0, freedom);
     FrameFitter fitter(model, body::PoseLayout::full_body(), camera.intrinsics(), fit_options);
     const FitResult fit = fitter.fit_shape_and_pose(observation, theta0, beta0, freedom);
     const double energy = fit.energy.total();

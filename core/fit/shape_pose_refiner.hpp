@@ -6,8 +6,8 @@
 // that frame's camera skeleton. Terms as the paper: data, bg, bgJoint and limit (float and imu
 // off), plus a soft bound on the betas (ShapeBoundResidual, ours).
 //
-// Beside the paper: a prior keeping the 7 segment measurements near the camera skeleton's (see
-// ShapeRefinerOptions::segment_sigma_m).
+// Beside the paper: priors keeping the 7 segment measurements near the camera skeleton's and the
+// betas near the population mean (ShapeRefinerOptions::segment_sigma_m, beta_sigma).
 //
 // Refusals (posefuse::Error, FAILED_PRECONDITION):
 //  - "calibration_frames[i].body_index": the silhouette touches the image border (the subject is
@@ -53,7 +53,14 @@ struct ShapeRefinerOptions {
   // correct skeleton biases (tests/fit/shape_fit_test.cpp: a 4 cm arm bias is halved; with 0.02 m
   // it stayed). <= 0: no prior (the paper's III-B).
   double segment_sigma_m = 0.04;
-  double head_above_skull_base_m = 0.09;  // the model's Head for ankleToHead (as RoughShapeOptions)
+  double head_above_skull_base_m = 0.09;
+  // Shape prior (ours): beta ~ N(0, beta_sigma^2) per beta, as the residuals beta / (beta_sigma
+  // sqrt(B)); the template's betas, like SMPL's, describe the population around beta = 0. With the
+  // simulator's noisy frames (clothing, depth noise, biased skeleton) one frame let stature, torso
+  // and legs run to the bound of 3 against each other; bench_fig4 (docs/benchmarks.md) chose 1.0
+  // with segment_sigma_m = 0.04 over either alone. It costs accuracy on an exact, noise-free
+  // frame (tests/fit/shape_fit_test.cpp). <= 0: no prior.
+  double beta_sigma = 1.0;  // the model's Head for ankleToHead (as RoughShapeOptions)
   // Silhouette pixels allowed within border_px of the image edge before "not fully in view".
   int border_px = 2;
   std::size_t max_border_pixels = 10;

@@ -209,43 +209,49 @@ TEST(FrameFitterShape, BadShapeFreedomNamesTheField) {
 
 // Tolerances: one frame at 3 m (a pixel is ~8 mm there) with straight arms pins where the elbow
 // lies along the arm only to a few millimetres, and the data and bg terms of a rendered frame are
-// not exactly minimal at the truth (depth in mm, PCA normals, pixel silhouette): the upper-arm and
-// forearm betas (one unit ~ 1.5 cm of bone) end up to 0.41 off (measured), the segment lengths
-// within 6 mm; the betas the camera skeleton cannot see (hip width, torso and limb girth) come
-// from the depth alone to within 0.08. The rest-pose joints of the fitted shape are within 2 mm
-// (mean) of the truth's.
+// not exactly minimal at the truth (depth in mm, PCA normals, pixel silhouette). Without the
+// population prior (beta_sigma = 0): the upper-arm and forearm betas (one unit ~ 1.5 cm of bone)
+// end up to 0.41 off (measured), the segment lengths within 6 mm, the betas the camera skeleton
+// cannot see (hip width, torso and limb girth) within 0.08 from the depth alone, the rest-pose
+// joints within 2 mm (mean) of the truth's. With the default prior (beta_sigma = 1, chosen on the
+// simulator's noisy frames) the betas are drawn towards 0: worst 0.62, rest joints 2.5 mm.
 TEST(FitPersonalisation, FineTuningRecoversKnownBetasFromARenderedFrame) {
   CalibrationScene s;
-  const ShapePoseRefiner refiner = make_depth_shape_refiner(s.model, kinect(), {{s.rendered.frame, s.subject.skeleton}});
-  const Personalisation p = personalise(s.model, {s.subject.skeleton}, &kinect(), refiner);
-  ASSERT_TRUE(p.fine_tuned);
-  const Eigen::VectorXd truth = true_shape();
-  std::printf("beta (truth / rough / fine), fine E %.4f:\n", p.fine.energy);
-  for (int b = 0; b < 10; ++b) std::printf("  %d: %+.3f %+.3f %+.3f\n", b, truth[b], p.rough.beta[b], p.beta()[b]);
-  const SegmentLengths lengths = ModelSegmentLengths(*s.model, 0.09).lengths(truth);
-  for (int k = 0; k < kBodySegmentCount; ++k) {
-    std::printf("  %s: truth %.4f m, fine %.4f m\n", body_segment_name(BodySegment(k)), lengths[k], p.segment_lengths[k]);
-    EXPECT_NEAR(p.segment_lengths[k], lengths[k], 0.007) << body_segment_name(BodySegment(k));
+  for (const double beta_sigma : {0.0, 1.0}) {
+    ShapeRefinerOptions options;
+    options.beta_sigma = beta_sigma;
+    const ShapePoseRefiner refiner =
+        make_depth_shape_refiner(s.model, kinect(), {{s.rendered.frame, s.subject.skeleton}}, options);
+    const Personalisation p = personalise(s.model, {s.subject.skeleton}, &kinect(), refiner);
+    ASSERT_TRUE(p.fine_tuned);
+    const Eigen::VectorXd truth = true_shape();
+    std::printf("beta_sigma %.1f: beta (truth / rough / fine), fine E %.4f:\n", beta_sigma, p.fine.energy);
+    for (int b = 0; b < 10; ++b) std::printf("  %d: %+.3f %+.3f %+.3f\n", b, truth[b], p.rough.beta[b], p.beta()[b]);
+    const SegmentLengths lengths = ModelSegmentLengths(*s.model, 0.09).lengths(truth);
+    for (int k = 0; k < kBodySegmentCount; ++k) {
+      std::printf("  %s: truth %.4f m, fine %.4f m\n", body_segment_name(BodySegment(k)), lengths[k], p.segment_lengths[k]);
+      EXPECT_NEAR(p.segment_lengths[k], lengths[k], beta_sigma > 0 ? 0.012 : 0.007) << body_segment_name(BodySegment(k));
+    }
+    for (int b : {6, 7, 8}) {
+      EXPECT_NEAR(p.rough.beta[b], 0.0, 1e-9) << "beta " << b << " is invisible to the rough shape";
+      EXPECT_NEAR(p.beta()[b], truth[b], beta_sigma > 0 ? 0.1 : 0.08) << "beta " << b;
+    }
+    EXPECT_LT((p.beta() - truth).cwiseAbs().maxCoeff(), beta_sigma > 0 ? 0.65 : 0.45);
+    const double rest_fine = mean_rest_joint_distance_m(*s.model, p.beta(), truth);
+    std::printf("  rest joints from the truth: rough %.2f mm, fine %.2f mm\n",
+                1e3 * mean_rest_joint_distance_m(*s.model, p.rough.beta, truth), 1e3 * rest_fine);
+    EXPECT_LT(rest_fine, beta_sigma > 0 ? 0.003 : 0.002);
+    // And the pose of that frame.
+    body::BodyEvaluator eval(s.model, s.layout);
+    eval.evaluate(p.fine.beta, p.fine.theta, body::Derivatives::kNone);
+    EXPECT_LT(worst_joint_error_m(eval.joints(), s.rendered.joints_K), beta_sigma > 0 ? 0.015 : 0.01);
   }
-  for (int b : {6, 7, 8}) {
-    EXPECT_NEAR(p.rough.beta[b], 0.0, 1e-9) << "beta " << b << " is invisible to the rough shape";
-    EXPECT_NEAR(p.beta()[b], truth[b], 0.1) << "beta " << b;
-  }
-  EXPECT_LT((p.beta() - truth).cwiseAbs().maxCoeff(), 0.45);
-  const double rest_fine = mean_rest_joint_distance_m(*s.model, p.beta(), truth);
-  std::printf("  rest joints from the truth: rough %.2f mm, fine %.2f mm\n",
-              1e3 * mean_rest_joint_distance_m(*s.model, p.rough.beta, truth), 1e3 * rest_fine);
-  EXPECT_LT(rest_fine, 0.003);
-  // And the pose of that frame.
-  body::BodyEvaluator eval(s.model, s.layout);
-  eval.evaluate(p.fine.beta, p.fine.theta, body::Derivatives::kNone);
-  EXPECT_LT(worst_joint_error_m(eval.joints(), s.rendered.joints_K), 0.01);
 }
 
 // The camera skeleton's biases reach the rough shape (the simulator's are 5-10 cm on the arms);
-// the depth frame corrects part of it: with a 4 cm bias of both upper arms, the whole arm comes
-// half way back (measured 4.0 -> 2.1 cm) and the rest-pose joints from 11.1 to 9.7 mm (mean); where
-// the elbow lies along the straight arm stays as the skeleton says.
+// the depth frame corrects part of it: with a 4 cm bias of both upper arms (default options), the
+// whole arm comes most of the way back (measured 4.0 -> 0.9 cm) and the rest-pose joints from 11.1
+// to 7.7 mm (mean); where the elbow lies along the straight arm stays closer to the skeleton's.
 TEST(FitPersonalisation, FineTuningCorrectsABiasedSkeletonsArmLength) {
   CalibrationScene s;
   TrackedSkeleton biased = s.subject.skeleton;
@@ -262,9 +268,9 @@ TEST(FitPersonalisation, FineTuningCorrectsABiasedSkeletonsArmLength) {
               truth[upper], p.rough.model[upper], p.segment_lengths[upper], truth[whole], p.rough.model[whole],
               p.segment_lengths[whole], 1e3 * mean_rest_joint_distance_m(*s.model, p.rough.beta, true_shape()),
               1e3 * mean_rest_joint_distance_m(*s.model, p.beta(), true_shape()));
-  EXPECT_LT(std::abs(p.segment_lengths[whole] - truth[whole]), 0.6 * std::abs(p.rough.model[whole] - truth[whole]));
+  EXPECT_LT(std::abs(p.segment_lengths[whole] - truth[whole]), 0.35 * std::abs(p.rough.model[whole] - truth[whole]));
   EXPECT_LT(mean_rest_joint_distance_m(*s.model, p.beta(), true_shape()),
-            0.95 * mean_rest_joint_distance_m(*s.model, p.rough.beta, true_shape()));
+            0.8 * mean_rest_joint_distance_m(*s.model, p.rough.beta, true_shape()));
 }
 
 TEST(FitPersonalisation, RefinerRefusesASubjectNotFullyInView) {
