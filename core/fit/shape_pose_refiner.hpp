@@ -34,7 +34,8 @@ struct ShapeRefinerOptions {
   // Fit parameters (paper 2 IV-C defaults); lambda_float and lambda_imu are ignored (set to 0:
   // III-B uses data, bg, bgJoint and limit only). The shape needs more iterations than a
   // tracked frame (ours: 60), and the tracking's stopping rules (1 mm joint motion, 1e-5
-  // relative decrease) ended shape fits after 7 iterations with joints 2 cm off: ours 0.1 mm and 1e-6.
+  // relative decrease) ended shape fits after 7 iterations, before the shape had settled (E 1.04
+  // instead of 0.93 after 17): ours 0.1 mm and 1e-6.
   FitOptions fit = [] {
     FitOptions o;
     o.max_iterations = 60;
@@ -50,17 +51,17 @@ struct ShapeRefinerOptions {
   // arm; stature against torso and legs), and the data and bg terms of a real frame are not
   // exactly minimal at the true shape: without it the fit of a rendered frame from a shape 0.3 off
   // ended with stature 1.2 and legs 1.5 off. 0.04 m keeps that in check while letting the depth
-  // correct skeleton biases (tests/fit/shape_fit_test.cpp: a 4 cm arm bias is halved; with 0.02 m
-  // it stayed). <= 0: no prior (the paper's III-B).
+  // correct skeleton biases (tests/fit/shape_fit_test.cpp, population prior off: a 4 cm arm bias
+  // was halved; with 0.02 m it stayed). <= 0: no prior (the paper's III-B).
   double segment_sigma_m = 0.04;
-  double head_above_skull_base_m = 0.09;
+  double head_above_skull_base_m = 0.09;  // the model's Head for ankleToHead (as RoughShapeOptions)
   // Shape prior (ours): beta ~ N(0, beta_sigma^2) per beta, as the residuals beta / (beta_sigma
   // sqrt(B)); the template's betas, like SMPL's, describe the population around beta = 0. With the
-  // simulator's noisy frames (clothing, depth noise, biased skeleton) one frame let stature, torso
+  // simulator's noisy frames (depth noise, body-index shift, biased skeleton) one frame let stature, torso
   // and legs run to the bound of 3 against each other; bench_fig4 (docs/benchmarks.md) chose 1.0
   // with segment_sigma_m = 0.04 over either alone. It costs accuracy on an exact, noise-free
   // frame (tests/fit/shape_fit_test.cpp). <= 0: no prior.
-  double beta_sigma = 1.0;  // the model's Head for ankleToHead (as RoughShapeOptions)
+  double beta_sigma = 1.0;
   // Silhouette pixels allowed within border_px of the image edge before "not fully in view".
   int border_px = 2;
   std::size_t max_border_pixels = 10;
