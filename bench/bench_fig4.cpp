@@ -16,7 +16,7 @@
 // wipe.bvh and box-1.bvh, retargeted by sim::bvh_motion; their first second is overridden by the
 // controlled pose]. Options: --no-fine-shape (rough shape only, fit.fine_shape = false),
 // --exercises=a,b (a subset of the six), --max-seconds=S (each exercise cut after S seconds, for
-// full-rate runs). Times are thread CPU time of the stage's work per
+// full-rate runs), --lambda-imu=X (the imu term's weight, fit.lambda_imu). Times are thread CPU time of the stage's work per
 // frame (preprocessing, two LM fits, post-processing), one core.
 #include <algorithm>
 #include <cmath>
@@ -116,12 +116,14 @@ std::vector<v1::FitResult> forearm_batches(const sim::CameraSessionResult& sim, 
 }
 
 bool g_fine_shape = true;
+std::string g_lambda_imu;  // empty: the stage's default
 
 Output run_stage(const sim::CameraSessionResult& sim, const std::vector<v1::FitResult>& batches,
                  std::vector<double>* frame_s) {
   v1::SessionHeader header = sim.header;
   (*header.mutable_options())["fit.enabled"] = "true";
   (*header.mutable_options())["fit.fine_shape"] = g_fine_shape ? "true" : "false";
+  if (!g_lambda_imu.empty()) (*header.mutable_options())["fit.lambda_imu"] = g_lambda_imu;
   (*header.mutable_options())["fit.calibration_s"] = std::to_string(kCalibrationS);
   Output out;
   session::BodyFitStage stage;
@@ -205,6 +207,8 @@ int main(int argc, char** argv) {
         exercises.push_back(list.substr(start, comma - start));
         start = comma + 1;
       }
+    } else if (arg.rfind("--lambda-imu=", 0) == 0) {
+      g_lambda_imu = arg.substr(13);
     } else if (arg.rfind("--max-seconds=", 0) == 0) {
       max_seconds = std::atof(arg.c_str() + 14);
     } else {

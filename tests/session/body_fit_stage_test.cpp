@@ -295,6 +295,8 @@ TEST(BodyFitStage, BadOptionsAreErrors) {
   EXPECT_THROW(third.start(header_with({{"fit.smoothing_frames", "2"}}), out), Error);
   BodyFitStage fourth;
   EXPECT_THROW(fourth.start(header_with({{"fit.fine_shape", "maybe"}}), out), Error);
+  BodyFitStage fifth;
+  EXPECT_THROW(fifth.start(header_with({{"fit.lambda_imu", "-1"}}), out), Error);
 }
 
 TEST(BodyFitStage, SkeletonConversionChecksTheJointCount) {

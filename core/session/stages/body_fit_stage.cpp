@@ -33,6 +33,7 @@ constexpr const char* kImuWaitKey = "fit.imu_wait_s";
 constexpr const char* kLostEnergyKey = "fit.lost_energy";
 constexpr const char* kMaxIterationsKey = "fit.max_iterations";
 constexpr const char* kFineShapeKey = "fit.fine_shape";
+constexpr const char* kLambdaImuKey = "fit.lambda_imu";
 
 // Depth, body index and skeleton of one frame share the depth frame's t_us (1 ms tolerance).
 constexpr std::int64_t kSameFrameUs = 1000;
@@ -160,6 +161,7 @@ std::vector<StageOption> BodyFitStage::options() const {
       {kLostEnergyKey, "100", "tracking is lost above this fit energy (eq. 4): restart from the skeleton"},
       {kMaxIterationsKey, std::to_string(defaults.max_iterations), "LM iterations per start at most"},
       {kFineShapeKey, "true", "personalisation: fine shape tuning on a calibration depth frame (paper 2 III-B)"},
+      {kLambdaImuKey, format_double(defaults.lambda_imu), "weight of the imu term (eq. 9), >= 0"},
   };
 }
 
@@ -180,6 +182,11 @@ void BodyFitStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) 
   fit::FitOptions fit_options;
   if (const std::string* text = option(header, kMaxIterationsKey)) {
     fit_options.max_iterations = static_cast<int>(parse_int64(*text, option_field(kMaxIterationsKey)));
+  }
+  if (const std::string* text = option(header, kLambdaImuKey)) {
+    fit_options.lambda_imu = parse_double(*text, option_field(kLambdaImuKey));
+    if (!std::isfinite(fit_options.lambda_imu) || fit_options.lambda_imu < 0)
+      throw_invalid(option_field(kLambdaImuKey), "is '" + *text + "', must be >= 0");
   }
   arm_imus_ = static_cast<int>(std::count_if(header.imu_devices().begin(), header.imu_devices().end(), [](const auto& d) {
     return d.role() == v1::ImuDevice::ARM_LEFT || d.role() == v1::ImuDevice::ARM_RIGHT;
