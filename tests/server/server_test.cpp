@@ -354,7 +354,9 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   EXPECT_EQ(info.stages(0).name(), "imu_orientation");
   EXPECT_EQ(info.stages(1).name(), "forearm");
   EXPECT_EQ(info.stages(2).name(), "body_fit");
-  ASSERT_EQ(info.options_size(), 15);
+  ASSERT_EQ(info.options_size(), 17);
+  EXPECT_EQ(info.options(15).key(), "fit.fine_shape");
+  EXPECT_EQ(info.options(16).key(), "fit.lambda_imu");
   EXPECT_EQ(info.options(8).key(), "fit.enabled");
   EXPECT_EQ(info.options(8).default_value(), "false");
   EXPECT_EQ(info.options(0).key(), "imu.tau_acc_s");
