@@ -12,8 +12,11 @@
 // K_from_F the forearm stage would give is the truth turned by a random 3 deg rotation per frame
 // (paper 1's filter + calibration error scale), fed to the stage as ForearmOrientationBatches.
 //
-// Usage: bench_fig4 [rate_hz] [overlay.png] [mocap folder: adds the first 10 s of wipe.bvh and
-// box-1.bvh, retargeted by sim::bvh_motion; their first second is overridden by the controlled pose]. Times are thread CPU time of the stage's work per
+// Usage: bench_fig4 [options] [rate_hz] [overlay.png] [mocap folder: adds the first 10 s of
+// wipe.bvh and box-1.bvh, retargeted by sim::bvh_motion; their first second is overridden by the
+// controlled pose]. Options: --no-fine-shape (rough shape only, fit.fine_shape = false),
+// --exercises=a,b (a subset of the six), --max-seconds=S (each exercise cut after S seconds, for
+// full-rate runs), --lambda-imu=X (the imu term's weight, fit.lambda_imu). Times are thread CPU time of the stage's work per
 // frame (preprocessing, two LM fits, post-processing), one core.
 #include <algorithm>
 #include <cmath>
@@ -30,6 +33,8 @@
 
 #include "bench_clock.hpp"
 #include "body/pose_parameters.hpp"
+#include "body/template_generator.hpp"
+#include "fit/joint_kinematics.hpp"
 #include "session/image_codec.hpp"
 #include "session/stages/body_fit_stage.hpp"
 #include "sim/camera_session.hpp"
@@ -110,10 +115,15 @@ std::vector<v1::FitResult> forearm_batches(const sim::CameraSessionResult& sim, 
   return out;
 }
 
+bool g_fine_shape = true;
+std::string g_lambda_imu;  // empty: the stage's default
+
 Output run_stage(const sim::CameraSessionResult& sim, const std::vector<v1::FitResult>& batches,
                  std::vector<double>* frame_s) {
   v1::SessionHeader header = sim.header;
   (*header.mutable_options())["fit.enabled"] = "true";
+  (*header.mutable_options())["fit.fine_shape"] = g_fine_shape ? "true" : "false";
+  if (!g_lambda_imu.empty()) (*header.mutable_options())["fit.lambda_imu"] = g_lambda_imu;
   (*header.mutable_options())["fit.calibration_s"] = std::to_string(kCalibrationS);
   Output out;
   session::BodyFitStage stage;
@@ -181,17 +191,42 @@ void write_overlay(const std::string& path, const sim::CameraSessionResult& sim,
 }  // namespace
 
 int main(int argc, char** argv) {
-  const double rate_hz = argc > 1 ? std::atof(argv[1]) : 5.0;
-  const std::string overlay = argc > 2 ? argv[2] : "";
-  const std::string mocap_dir = argc > 3 ? argv[3] : "";
-  // Paper 2's exercises, then (with a mocap folder) the first kClipS seconds of two upper-body clips.
+  std::vector<std::string> positional;
   std::vector<std::string> exercises = {"arm_raising", "shoulder_lift", "forearm_rolling",
                                         "hair_combing", "torso_tilt", "air_punching"};
+  double max_seconds = 1e9;
+  for (int a = 1; a < argc; ++a) {
+    const std::string arg = argv[a];
+    if (arg == "--no-fine-shape") {
+      g_fine_shape = false;
+    } else if (arg.rfind("--exercises=", 0) == 0) {
+      exercises.clear();
+      std::string list = arg.substr(12);
+      for (size_t start = 0; start <= list.size();) {
+        const size_t comma = std::min(list.find(',', start), list.size());
+        exercises.push_back(list.substr(start, comma - start));
+        start = comma + 1;
+      }
+    } else if (arg.rfind("--lambda-imu=", 0) == 0) {
+      g_lambda_imu = arg.substr(13);
+    } else if (arg.rfind("--max-seconds=", 0) == 0) {
+      max_seconds = std::atof(arg.c_str() + 14);
+    } else {
+      positional.push_back(arg);
+    }
+  }
+  const double rate_hz = positional.size() > 0 ? std::atof(positional[0].c_str()) : 5.0;
+  const std::string overlay = positional.size() > 1 ? positional[1] : "";
+  const std::string mocap_dir = positional.size() > 2 ? positional[2] : "";
+  // Paper 2's exercises, then (with a mocap folder) the first kClipS seconds of two upper-body clips.
   std::vector<sim::BodyMotion> motions;
   sim::ExerciseOptions exercise_options;
   exercise_options.repetitions = 1;
   exercise_options.rest_hold_s = 0.5;
-  for (const auto& name : exercises) motions.push_back(sim::make_exercise(name, exercise_options));
+  for (const auto& name : exercises) {
+    motions.push_back(sim::make_exercise(name, exercise_options));
+    motions.back().duration_s = std::min(motions.back().duration_s, max_seconds);
+  }
   if (!mocap_dir.empty()) {
     constexpr double kClipS = 10.0;
     for (const char* clip : {"wipe", "box-1"}) {
@@ -203,18 +238,24 @@ int main(int argc, char** argv) {
   const body::PoseLayout layout = body::PoseLayout::all_joints();
   const int left_z = layout.index_of("left_shoulder_z"), right_z = layout.index_of("right_shoulder_z");
   Table total;
-  std::printf("bench_fig4: %.1f Hz subsampling, 1 s controlled pose + each exercise (1 repetition)\n", rate_hz);
+  std::printf("bench_fig4: %.1f Hz subsampling, 1 s controlled pose + each exercise (1 repetition, at most %.1f s), fine shape %s\n",
+              rate_hz, std::min(max_seconds, 999.0), g_fine_shape ? "on" : "off");
   bool overlay_written = false;
+  const std::vector<std::string> all_exercises = {"arm_raising", "shoulder_lift", "forearm_rolling",
+                                                  "hair_combing", "torso_tilt", "air_punching", "mocap wipe", "mocap box-1"};
   for (size_t e = 0; e < exercises.size(); ++e) {
     const sim::BodyMotion& motion = motions[e];
+    // Seeds by the exercise's place in the full list, so that a subset sees the same sessions.
+    const size_t seed_index = static_cast<size_t>(
+        std::find(all_exercises.begin(), all_exercises.end(), exercises[e]) - all_exercises.begin());
     Eigen::VectorXd controlled = motion.poses(0.0);
     controlled[left_z] = -45 * kDeg;
     controlled[right_z] = 45 * kDeg;
     sim::CameraSessionOptions options;
     options.rate_hz = rate_hz;
     options.duration_s = kCalibrationS + motion.duration_s;
-    options.seed = 100 + e;
-    std::mt19937_64 rng(200 + e);
+    options.seed = 100 + seed_index;
+    std::mt19937_64 rng(200 + seed_index);
     std::uniform_real_distribution<double> beta(-1.5, 1.5);
     for (int b = 0; b < 4; ++b) options.betas[b] = beta(rng);
     options.forearm_straps = {sim::ForearmStrap{sim::BodySide::kRight}, sim::ForearmStrap{sim::BodySide::kLeft}};
@@ -222,7 +263,7 @@ int main(int argc, char** argv) {
         options, layout, [&](double t) { return t < kCalibrationS ? controlled : motion.poses(t - kCalibrationS); });
 
     Table table;
-    const Output with_imu = run_stage(sim, forearm_batches(sim, 300 + e), &table.frame_s);
+    const Output with_imu = run_stage(sim, forearm_batches(sim, 300 + seed_index), &table.frame_s);
     const Output without_imu = run_stage(sim, {}, nullptr);
     for (const auto& c : sim.chunks) {
       if (!c.has_skeleton() || static_cast<double>(c.skeleton().t_us()) * 1e-6 < kCalibrationS) continue;
@@ -271,6 +312,29 @@ int main(int argc, char** argv) {
       }
     }
     total.frame_s.insert(total.frame_s.end(), table.frame_s.begin(), table.frame_s.end());
+    const auto& shape = with_imu.report.body_shape();
+    std::printf("%-17s shape betas 0-3 true", exercises[e].c_str());
+    for (int b = 0; b < 4; ++b) std::printf(" %+.2f", options.betas[b]);
+    std::printf(", fitted");
+    for (int b = 0; b < std::min(10, shape.betas_size()); ++b) std::printf(" %+.2f", shape.betas(b));
+    // What the shape does to the skeleton: the six upper-limb rest joints relative to the pelvis,
+    // fitted shape and template shape against the subject's.
+    const auto model = body::make_template(body::Sex::kMale);
+    Eigen::VectorXd fitted_beta = Eigen::VectorXd::Zero(model->num_betas());
+    for (int b = 0; b < std::min<int>(model->num_betas(), shape.betas_size()); ++b) fitted_beta[b] = shape.betas(b);
+    const auto rest_error_mm = [&](const Eigen::VectorXd& beta) {
+      const Eigen::Matrix3Xd a = fit::rest_joints(*model, beta), t = fit::rest_joints(*model, options.betas);
+      double sum = 0;
+      for (int k = 0; k < kKinds; ++k)
+        for (int side = 0; side < 2; ++side) {
+          const int j = kSmplJoints[k][side];
+          sum += ((a.col(j) - a.col(body::kPelvis)) - (t.col(j) - t.col(body::kPelvis))).norm();
+        }
+      return 1e3 * sum / (2 * kKinds);
+    };
+    std::printf(" (%s); upper-limb rest joints off by %.1f mm (template shape %.1f mm)\n",
+                shape.estimated() ? "personalised" : "template", rest_error_mm(fitted_beta),
+                rest_error_mm(Eigen::VectorXd::Zero(model->num_betas())));
     std::printf("%-17s frames %3d (occluded %3d)  camera %5.1f mm  fit %5.1f mm  fit w/o imu %5.1f mm\n",
                 exercises[e].c_str(), table.frames, table.occluded, 1e3 * table.camera.mean_all(),
                 1e3 * table.fit.mean_all(), 1e3 * table.fit_no_imu.mean_all());

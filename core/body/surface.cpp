@@ -79,12 +79,18 @@ void BodySurface::position_pose_jacobian(const SurfacePoint& s, const BodyEvalua
   for (int k = 0; k < 3; ++k) eval.add_vertex_pose_jacobian(faces_(k, s.face), w[k], out);
 }
 
-void BodySurface::normal_pose_jacobian(const SurfacePoint& s, const BodyEvaluator& eval,
-                                       Eigen::Ref<Eigen::Matrix3Xd> out) const {
+void BodySurface::position_shape_jacobian(const SurfacePoint& s, const BodyEvaluator& eval,
+                                          Eigen::Ref<Eigen::Matrix3Xd> out) const {
+  const Eigen::Vector3d w = weights_of(s);
+  for (int k = 0; k < 3; ++k) out += w[k] * eval.vertex_shape_jacobian(faces_(k, s.face));
+}
+
+template <typename AddVertex>
+void BodySurface::normal_vertex_factors(const SurfacePoint& s, AddVertex&& add) const {
   // S_n = Pi(m), m = sum_k w_k n_k, n_k = N_k / |N_k|, N_k = sum over faces (b - a) x (c - a);
   // d N_k = sum over faces ([c - b]x J_a + [a - c]x J_b + [b - a]x J_c).
   // The 3 x 3 factors are summed per vertex first, so that each vertex of the corners' 1-rings
-  // costs one product with its pose Jacobian (about 12 instead of 54).
+  // costs one product with its Jacobian (about 12 instead of 54).
   const Eigen::Vector3d w = weights_of(s);
   Eigen::Vector3d m = Eigen::Vector3d::Zero();
   for (int k = 0; k < 3; ++k) m += w[k] * vertex_normals_.col(faces_(k, s.face));
@@ -101,7 +107,7 @@ void BodySurface::normal_pose_jacobian(const SurfacePoint& s, const BodyEvaluato
         return;
       }
     if (ring_size == kMaxRing) {  // an unusually high valence: flush into the output directly
-      eval.add_vertex_pose_jacobian(vertex, factor, out);
+      add(vertex, factor);
       return;
     }
     ring_vertex[ring_size] = vertex;
@@ -119,7 +125,21 @@ void BodySurface::normal_pose_jacobian(const SurfacePoint& s, const BodyEvaluato
       accumulate(faces_(2, f), chain * skew(b - a));
     }
   }
-  for (int r = 0; r < ring_size; ++r) eval.add_vertex_pose_jacobian(ring_vertex[r], ring_factor[r], out);
+  for (int r = 0; r < ring_size; ++r) add(ring_vertex[r], ring_factor[r]);
+}
+
+void BodySurface::normal_pose_jacobian(const SurfacePoint& s, const BodyEvaluator& eval,
+                                       Eigen::Ref<Eigen::Matrix3Xd> out) const {
+  normal_vertex_factors(s, [&](int vertex, const Eigen::Matrix3d& factor) {
+    eval.add_vertex_pose_jacobian(vertex, factor, out);
+  });
+}
+
+void BodySurface::normal_shape_jacobian(const SurfacePoint& s, const BodyEvaluator& eval,
+                                        Eigen::Ref<Eigen::Matrix3Xd> out) const {
+  normal_vertex_factors(s, [&](int vertex, const Eigen::Matrix3d& factor) {
+    out.noalias() += factor * eval.vertex_shape_jacobian(vertex);
+  });
 }
 
 WalkResult BodySurface::walk(const SurfacePoint& start, double du, double dv) const {

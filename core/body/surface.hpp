@@ -48,6 +48,10 @@ class BodySurface {
   // passed to update() (evaluated with Derivatives::kPose or more).
   void position_pose_jacobian(const SurfacePoint& s, const BodyEvaluator& eval, Eigen::Ref<Eigen::Matrix3Xd> out) const;
   void normal_pose_jacobian(const SurfacePoint& s, const BodyEvaluator& eval, Eigen::Ref<Eigen::Matrix3Xd> out) const;
+  // d S_p / d beta and d S_n / d beta (3 x B, added into `out`), from an evaluator run with
+  // Derivatives::kPoseAndShape (paper 2, III-B: shape and pose fitted together).
+  void position_shape_jacobian(const SurfacePoint& s, const BodyEvaluator& eval, Eigen::Ref<Eigen::Matrix3Xd> out) const;
+  void normal_shape_jacobian(const SurfacePoint& s, const BodyEvaluator& eval, Eigen::Ref<Eigen::Matrix3Xd> out) const;
 
   // Moves s by (du, dv) in its face's barycentrics, i.e. by du (p0 - p2) + dv (p1 - p2), and
   // keeps going across edges: the remaining step is rotated about each crossed edge into the
@@ -57,6 +61,10 @@ class BodySurface {
 
  private:
   Eigen::Vector3d corner(int face, int k) const { return vertices_.col(faces_(k, face)); }
+  // d S_n = sum over the corners' 1-ring vertices q of F_q d vertex(q): calls add(q, F_q) once per
+  // vertex q (the pose and shape Jacobians differ only in d vertex(q)).
+  template <typename AddVertex>
+  void normal_vertex_factors(const SurfacePoint& s, AddVertex&& add) const;
 
   Eigen::Matrix3Xi faces_;
   Eigen::Matrix3Xi adjacency_;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <string>
 
 #include "common/error.hpp"
 #include "fit/camera_projection.hpp"
@@ -54,6 +55,33 @@ FrameFitter::FrameFitter(std::shared_ptr<const body::SmplModel> model, body::Pos
       discrete_(*model_, options_) {
   point_jacobian_.setZero(3, layout_.size());
   data_jacobian_.setZero(6, layout_.size());
+  data_shape_jacobian_.setZero(6, model_->num_betas());
+}
+
+void FrameFitter::split(const Eigen::VectorXd& x, Eigen::VectorXd& theta, Eigen::VectorXd& beta) const {
+  const int n = layout_.size();
+  theta = x.head(n);
+  for (size_t b = 0; b < free_betas_.size(); ++b) beta[free_betas_[b]] = x[n + static_cast<Eigen::Index>(b)];
+}
+
+const Eigen::MatrixXd& FrameFitter::joint_jacobian() const {
+  return free_betas_.empty() ? eval_.joint_pose_jacobian() : joint_jacobian_;
+}
+
+void FrameFitter::vertex_jacobian(int i, Eigen::Ref<Eigen::Matrix3Xd> out) const {
+  out.setZero();
+  eval_.add_vertex_pose_jacobian(i, 1.0, out.leftCols(layout_.size()));
+  if (free_betas_.empty()) return;
+  const auto shape = eval_.vertex_shape_jacobian(i);
+  for (size_t b = 0; b < free_betas_.size(); ++b) out.col(layout_.size() + static_cast<Eigen::Index>(b)) = shape.col(free_betas_[b]);
+}
+
+double FrameFitter::shape_bound_energy(const Eigen::VectorXd& beta) const {
+  if (free_betas_.empty()) return 0.0;
+  Eigen::VectorXd free(static_cast<Eigen::Index>(free_betas_.size()));
+  for (size_t b = 0; b < free_betas_.size(); ++b) free[static_cast<Eigen::Index>(b)] = beta[free_betas_[b]];
+  const double prior = prior_matrix_.rows() > 0 ? (prior_matrix_ * beta - prior_target_).squaredNorm() : 0.0;
+  return shape_bound_.energy(free) + prior;
 }
 
 void FrameFitter::set_up_blocks(const FrameObservation& o) {
@@ -68,17 +96,29 @@ void FrameFitter::set_up_blocks(const FrameObservation& o) {
   if (o.forearm.right_K) imu_.push_back({body::kRightElbow, body::kRightWrist, *o.forearm.right_K, imu_weight});
   const int limited = LimitResidual::size(layout_);
   limit_.weight = limited > 0 ? std::sqrt(options_.lambda_limit / limited) : 0.0;
+  const int free = static_cast<int>(free_betas_.size());
+  shape_bound_.weight = free > 0 ? std::sqrt(options_.lambda_limit / free) : 0.0;
   // Largest residual count: every set at its cap (data rows live in the residual vector only).
-  const int max_rows = 6 * static_cast<int>(n) + 5 * options_.max_bg_points + 2 * kBgJointCount + limited + 6;
-  if (jacobian_.rows() < max_rows || jacobian_.cols() != layout_.size()) jacobian_.resize(max_rows, layout_.size());
+  const int max_rows = 6 * static_cast<int>(n) + 5 * options_.max_bg_points + 2 * kBgJointCount + limited + free +
+                       static_cast<int>(prior_matrix_.rows()) + 6;
+  const int p = num_parameters();
+  if (jacobian_.rows() < max_rows || jacobian_.cols() != p) jacobian_.resize(max_rows, p);
   if (residual_.size() < max_rows) residual_.resize(max_rows);
+  if (point_jacobian_.cols() != p) point_jacobian_.setZero(3, p);
+  if (data_jacobian_.cols() != p) data_jacobian_.setZero(6, p);
   uv_jacobian_.resize(n);
 }
 
 void FrameFitter::pose_model(const Eigen::VectorXd& theta, const Eigen::VectorXd& beta) {
-  eval_.evaluate(beta, theta, body::Derivatives::kPose);
+  eval_.evaluate(beta, theta, free_betas_.empty() ? body::Derivatives::kPose : body::Derivatives::kPoseAndShape);
   surface_.update(eval_.vertices());
   scene_.update_vertices(eval_.vertices());
+  if (free_betas_.empty()) return;
+  const int n = layout_.size();
+  joint_jacobian_.resize(3 * body::kNumJoints, num_parameters());
+  joint_jacobian_.leftCols(n) = eval_.joint_pose_jacobian();
+  for (size_t b = 0; b < free_betas_.size(); ++b)
+    joint_jacobian_.col(n + static_cast<Eigen::Index>(b)) = eval_.joint_shape_jacobian().col(free_betas_[b]);
 }
 
 void FrameFitter::init_correspondences(const FrameObservation& o) {
@@ -162,12 +202,13 @@ void FrameFitter::build_blocks(const body::BodyEvaluator& eval, const FrameObser
   }
 }
 
-EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::VectorXd& theta) {
+EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::VectorXd& theta, const Eigen::VectorXd& beta) {
   build_blocks(eval_, o);
   const int n = static_cast<int>(data_.size());
   const int N = layout_.size();
+  const int free = static_cast<int>(free_betas_.size());
   EnergyTerms e;
-  system_.reset(N, n);
+  system_.reset(num_parameters(), n);
   int row = 0;
   auto take = [&](int count, double& energy) {
     energy += residual_.segment(row, count).squaredNorm();
@@ -175,27 +216,29 @@ EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::Vecto
   };
   for (int i = 0; i < n; ++i) {
     // The data rows go straight into the normal equations (only their non-zero columns).
-    data_[i].evaluate(surface_, eval_, correspondences_[i], residual_.segment<6>(row), data_jacobian_,
+    data_[i].evaluate(surface_, eval_, correspondences_[i], residual_.segment<6>(row), data_jacobian_.leftCols(N),
                       uv_jacobian_[i]);
+    if (free > 0) {
+      data_[i].evaluate_shape(surface_, eval_, correspondences_[i], data_shape_jacobian_);
+      for (int b = 0; b < free; ++b) data_jacobian_.col(N + b) = data_shape_jacobian_.col(free_betas_[static_cast<size_t>(b)]);
+    }
     system_.add_block(i, data_jacobian_, uv_jacobian_[i], residual_.segment<6>(row));
     take(6, e.data);
   }
   const int pose_rows_begin = row;
   for (const SilhouettePoint& s : bg_) {
-    point_jacobian_.setZero();
-    eval_.add_vertex_pose_jacobian(s.index, 1.0, point_jacobian_);
+    vertex_jacobian(s.index, point_jacobian_);
     s.block.evaluate(intrinsics_, eval_.vertices().col(s.index), point_jacobian_, residual_.segment<2>(row),
                      jacobian_.middleRows(row, 2));
     take(2, e.bg);
   }
   for (const SilhouettePoint& s : bg_joint_) {
-    s.block.evaluate(intrinsics_, eval_.joints().col(s.index), eval_.joint_pose_jacobian().middleRows<3>(3 * s.index),
+    s.block.evaluate(intrinsics_, eval_.joints().col(s.index), joint_jacobian().middleRows<3>(3 * s.index),
                      residual_.segment<2>(row), jacobian_.middleRows(row, 2));
     take(2, e.bg_joint);
   }
   for (const BehindPoint& f : float_) {
-    point_jacobian_.setZero();
-    eval_.add_vertex_pose_jacobian(f.vertex, 1.0, point_jacobian_);
+    vertex_jacobian(f.vertex, point_jacobian_);
     f.block.evaluate(eval_.vertices().col(f.vertex), point_jacobian_, residual_.segment<3>(row),
                      jacobian_.middleRows(row, 3));
     take(3, e.float_term);
@@ -203,8 +246,22 @@ EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::Vecto
   const int limited = LimitResidual::size(layout_);
   limit_.evaluate(layout_, theta, residual_.segment(row, limited), jacobian_.middleRows(row, limited));
   take(limited, e.limit);
+  if (free > 0) {
+    free_beta_values_.resize(free);
+    for (int b = 0; b < free; ++b) free_beta_values_[b] = beta[free_betas_[static_cast<size_t>(b)]];
+    jacobian_.middleRows(row, free).leftCols(N).setZero();
+    shape_bound_.evaluate(free_beta_values_, residual_.segment(row, free), jacobian_.middleRows(row, free).rightCols(free));
+    take(free, e.shape);
+    const int k = static_cast<int>(prior_matrix_.rows());
+    if (k > 0) {
+      residual_.segment(row, k) = prior_matrix_ * beta - prior_target_;
+      jacobian_.middleRows(row, k).leftCols(N).setZero();
+      for (int b = 0; b < free; ++b) jacobian_.middleRows(row, k).col(N + b) = prior_matrix_.col(free_betas_[static_cast<size_t>(b)]);
+      take(k, e.shape);
+    }
+  }
   for (const ForearmDirectionResidual& f : imu_) {
-    f.evaluate(eval_.joints(), eval_.joint_pose_jacobian(), residual_.segment<3>(row), jacobian_.middleRows(row, 3));
+    f.evaluate(eval_.joints(), joint_jacobian(), residual_.segment<3>(row), jacobian_.middleRows(row, 3));
     take(3, e.imu);
   }
   system_.add_pose_rows(jacobian_.middleRows(pose_rows_begin, row - pose_rows_begin),
@@ -214,7 +271,8 @@ EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::Vecto
 
 EnergyTerms FrameFitter::energy_at(const FrameObservation& o, const body::BodyEvaluator& eval,
                                    const body::BodySurface& surface,
-                                   const std::vector<body::SurfacePoint>& correspondences, const Eigen::VectorXd& theta) {
+                                   const std::vector<body::SurfacePoint>& correspondences, const Eigen::VectorXd& theta,
+                                   const Eigen::VectorXd& beta) {
   build_blocks(eval, o);
   EnergyTerms e;
   for (size_t i = 0; i < data_.size(); ++i) e.data += data_[i].residual(surface, correspondences[i]).squaredNorm();
@@ -223,39 +281,93 @@ EnergyTerms FrameFitter::energy_at(const FrameObservation& o, const body::BodyEv
     e.bg_joint += s.block.residual(intrinsics_, eval.joints().col(s.index)).squaredNorm();
   for (const BehindPoint& f : float_) e.float_term += f.block.residual(eval.vertices().col(f.vertex)).squaredNorm();
   e.limit = limit_.energy(layout_, theta);
+  e.shape = shape_bound_energy(beta);
   for (const ForearmDirectionResidual& f : imu_) e.imu += f.residual(eval.joints()).squaredNorm();
   return e;
 }
 
 FitResult FrameFitter::fit(const FrameObservation& observation, const Eigen::VectorXd& theta0,
                            const Eigen::VectorXd& beta) {
+  clear_shape_freedom();
+  return run(observation, theta0, beta);
+}
+
+FitResult FrameFitter::fit_shape_and_pose(const FrameObservation& observation, const Eigen::VectorXd& theta0,
+                                          const Eigen::VectorXd& beta0, const ShapeFreedom& freedom) {
+  const int num_betas = model_->num_betas();
+  if (!(freedom.max_abs_beta > 0) || !std::isfinite(freedom.max_abs_beta))
+    throw_invalid("shape_freedom.max_abs_beta", std::to_string(freedom.max_abs_beta) + " is not a positive number");
+  std::vector<int> free = freedom.free_betas;
+  if (free.empty())
+    for (int b = 0; b < num_betas; ++b) free.push_back(b);
+  std::vector<bool> seen(static_cast<size_t>(num_betas), false);
+  for (int b : free) {
+    if (b < 0 || b >= num_betas || seen[static_cast<size_t>(b)])
+      throw_invalid("shape_freedom.free_betas", "index " + std::to_string(b) + " is out of range [0, " +
+                                                    std::to_string(num_betas) + ") or repeated");
+    seen[static_cast<size_t>(b)] = true;
+  }
+  if (layout_.size() + static_cast<int>(free.size()) > SchurSystem::kMaxPose)
+    throw_invalid("shape_freedom.free_betas", "too many parameters for the solver");
+  const Eigen::Index k = freedom.prior_matrix.rows();
+  if ((k > 0 && freedom.prior_matrix.cols() != num_betas) || freedom.prior_target.size() != k ||
+      !freedom.prior_matrix.allFinite() || !freedom.prior_target.allFinite())
+    throw_invalid("shape_freedom.prior_matrix", std::to_string(k) + " x " + std::to_string(freedom.prior_matrix.cols()) +
+                                                    " with a target of " + std::to_string(freedom.prior_target.size()) +
+                                                    ", expected k x " + std::to_string(num_betas) + " and k, finite");
+  free_betas_ = std::move(free);
+  shape_bound_.bound = freedom.max_abs_beta;
+  prior_matrix_ = freedom.prior_matrix;
+  prior_target_ = freedom.prior_target;
+  try {
+    FitResult result = run(observation, theta0, beta0);
+    clear_shape_freedom();
+    return result;
+  } catch (...) {
+    clear_shape_freedom();  // the next fit() must not inherit the shape columns
+    throw;
+  }
+}
+
+FitResult FrameFitter::run(const FrameObservation& observation, const Eigen::VectorXd& theta0,
+                           const Eigen::VectorXd& beta0) {
   validate(observation);
   FitResult result;
   set_up_blocks(observation);
   Eigen::VectorXd theta = theta0;
-  pose_model(theta, beta);  // checks theta and beta
+  pose_model(theta, beta0);  // checks theta and beta
+  // The full beta (padded to the model's size) and the LM parameters x = (theta, beta_free).
+  Eigen::VectorXd beta = Eigen::VectorXd::Zero(model_->num_betas());
+  beta.head(beta0.size()) = beta0;
+  const int n = layout_.size();
+  Eigen::VectorXd x(num_parameters());
+  x.head(n) = theta;
+  for (size_t b = 0; b < free_betas_.size(); ++b) x[n + static_cast<Eigen::Index>(b)] = beta[free_betas_[b]];
+  trial_beta_ = beta;
   init_correspondences(observation);
   select_point_sets(observation);
-  result.initial_energy = energy_at(observation, eval_, surface_, correspondences_, theta);
+  result.initial_energy = energy_at(observation, eval_, surface_, correspondences_, theta, beta);
 
   double gamma = options_.initial_damping;
   double raise = options_.damping_increase;
   for (int iteration = 0; iteration < options_.max_iterations; ++iteration) {
     if (iteration > 0) select_point_sets(observation);
-    const double energy_before = linearise(observation, theta).total();
+    const double energy_before = linearise(observation, theta, beta).total();
     ++result.iterations;
     double energy_after = energy_before, joint_step = 0;
     bool accepted = false;
     while (gamma <= options_.max_damping) {
       if (system_.solve(gamma, step_, uv_step_)) {
-        trial_theta_ = theta + step_;
-        trial_eval_.evaluate(beta, trial_theta_, body::Derivatives::kNone);
+        trial_x_ = x + step_;
+        split(trial_x_, trial_theta_, trial_beta_);
+        trial_eval_.evaluate(trial_beta_, trial_theta_, body::Derivatives::kNone);
         trial_surface_.update(trial_eval_.vertices());
         trial_correspondences_.resize(correspondences_.size());
         // II-I: the correspondences follow their (du, dv) over face borders.
         for (size_t i = 0; i < correspondences_.size(); ++i)
           trial_correspondences_[i] = trial_surface_.walk(correspondences_[i], uv_step_[i].x(), uv_step_[i].y()).end;
-        energy_after = energy_at(observation, trial_eval_, trial_surface_, trial_correspondences_, trial_theta_).total();
+        energy_after = energy_at(observation, trial_eval_, trial_surface_, trial_correspondences_, trial_theta_,
+                                 trial_beta_).total();
         joint_step = 0;
         for (int j : kBgJoints)
           joint_step = std::max(joint_step, (trial_eval_.joints().col(j) - eval_.joints().col(j)).norm());
@@ -281,7 +393,9 @@ FitResult FrameFitter::fit(const FrameObservation& observation, const Eigen::Vec
     const double rho = predicted > 0 ? (energy_before - energy_after) / predicted : 0.0;
     gamma = std::max(gamma * std::max(options_.damping_decrease, 1 - std::pow(2 * rho - 1, 3)), 1e-12);
     raise = options_.damping_increase;
+    x = trial_x_;
     theta = trial_theta_;
+    beta = trial_beta_;
     std::swap(correspondences_, trial_correspondences_);
     pose_model(theta, beta);
     update_correspondences(observation, iteration + 1);
@@ -292,8 +406,9 @@ FitResult FrameFitter::fit(const FrameObservation& observation, const Eigen::Vec
     }
   }
   select_point_sets(observation);
-  result.energy = energy_at(observation, eval_, surface_, correspondences_, theta);
+  result.energy = energy_at(observation, eval_, surface_, correspondences_, theta, beta);
   result.theta = theta;
+  result.beta = beta;
   result.correspondences = correspondences_;
   return result;
 }
@@ -301,11 +416,12 @@ FitResult FrameFitter::fit(const FrameObservation& observation, const Eigen::Vec
 EnergyTerms FrameFitter::energy(const FrameObservation& observation, const Eigen::VectorXd& theta,
                                 const Eigen::VectorXd& beta) {
   validate(observation);
+  clear_shape_freedom();
   set_up_blocks(observation);
   pose_model(theta, beta);
   init_correspondences(observation);
   select_point_sets(observation);
-  return energy_at(observation, eval_, surface_, correspondences_, theta);
+  return energy_at(observation, eval_, surface_, correspondences_, theta, beta);
 }
 
 }  // namespace posefuse::fit

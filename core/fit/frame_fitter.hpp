@@ -11,7 +11,10 @@
 //
 // Energy (eq. 4): data + lambda_bg bg + lambda_bgJoint bgJoint + lambda_float float
 // + lambda_limit limit + lambda_imu imu, each term a residual block of fit/residual_blocks.hpp.
-// The shape beta is fixed during the fit (personalised beforehand, paper 2 III).
+// The shape beta is fixed during the per-frame fit (personalised beforehand, paper 2 III);
+// fit_shape_and_pose() frees it for the fine shape tuning of III-B: the LM parameters are then
+// (theta, beta_free, U), every residual block gets shape columns d r / d beta_free (analytic,
+// BodyEvaluator's vertex and joint shape Jacobians) and the free betas a soft bound.
 //
 // A FrameFitter owns its evaluators, Embree scene and work buffers: one per worker thread; fit()
 // reuses them, so after the first frame the loop allocates little (see docs/fitting.md).
@@ -41,7 +44,8 @@ inline constexpr int kBgJoints[kBgJointCount] = {
 // Energy of each term of eq. 4, weights included (E = sum of all).
 struct EnergyTerms {
   double data = 0, bg = 0, bg_joint = 0, float_term = 0, limit = 0, imu = 0;
-  double total() const { return data + bg + bg_joint + float_term + limit + imu; }
+  double shape = 0;  // fit_shape_and_pose only: the betas' bound and prior (ShapeFreedom)
+  double total() const { return data + bg + bg_joint + float_term + limit + imu + shape; }
 };
 
 enum class FitStatus {
@@ -52,6 +56,7 @@ const char* fit_status_name(FitStatus status);
 
 struct FitResult {
   Eigen::VectorXd theta;
+  Eigen::VectorXd beta;        // the shape: as given to fit(), or fitted by fit_shape_and_pose()
   std::vector<body::SurfacePoint> correspondences;  // nu_i, one per observation sample
   EnergyTerms energy;          // at theta (point sets selected at theta)
   EnergyTerms initial_energy;  // at the start pose, after the first correspondence update
@@ -59,6 +64,20 @@ struct FitResult {
   int accepted_steps = 0;
   int rejected_steps = 0;      // trial steps that raised the energy (gamma was raised)
   FitStatus status = FitStatus::kMaxIterations;
+};
+
+// Which shape parameters fit_shape_and_pose() frees (paper 2, III-B).
+struct ShapeFreedom {
+  std::vector<int> free_betas;  // indices into beta; empty: all of the model's betas
+  // Soft bound |beta_b| <= max_abs_beta (ShapeBoundResidual, weight lambda_limit / B_free; its
+  // energy is counted in EnergyTerms::shape). The rough shape keeps the same range.
+  double max_abs_beta = 3.0;
+  // Optional linear prior on the whole beta (B = the model's betas), counted in EnergyTerms::shape:
+  // r = prior_matrix * beta - prior_target (k x B and k; empty: none). One frame of a straight-armed
+  // pose does not pin every shape direction (where the elbow lies along a straight arm); the
+  // personalisation's refiner puts the camera skeleton's segment lengths here.
+  Eigen::MatrixXd prior_matrix;
+  Eigen::VectorXd prior_target;
 };
 
 class FrameFitter {
@@ -71,6 +90,12 @@ class FrameFitter {
   // observation (see validate(FrameObservation)), a theta0 of the wrong size or not finite
   // ("theta"), or a beta that does not fit the model ("beta").
   FitResult fit(const FrameObservation& observation, const Eigen::VectorXd& theta0, const Eigen::VectorXd& beta);
+
+  // Paper 2, III-B: fits theta, the free betas and the correspondences together from (theta0,
+  // beta0). The other betas stay at beta0's values. Errors as fit(), plus "shape_freedom.free_betas"
+  // (an index out of range or repeated) and "shape_freedom.max_abs_beta" (not positive).
+  FitResult fit_shape_and_pose(const FrameObservation& observation, const Eigen::VectorXd& theta0,
+                               const Eigen::VectorXd& beta0, const ShapeFreedom& freedom = {});
 
   // Energy of eq. 4 at theta with correspondences found by the discrete update from scratch (the
   // fit's starting energy; lets a caller compare poses without fitting).
@@ -89,8 +114,21 @@ class FrameFitter {
     BehindResidual block;
   };
 
+  void clear_shape_freedom() {
+    free_betas_.clear();
+    prior_matrix_.resize(0, 0);
+    prior_target_.resize(0);
+  }
+  FitResult run(const FrameObservation& observation, const Eigen::VectorXd& theta0, const Eigen::VectorXd& beta0);
   void set_up_blocks(const FrameObservation& observation);
   void pose_model(const Eigen::VectorXd& theta, const Eigen::VectorXd& beta);
+  // The LM parameters x = (theta, beta_free) and back.
+  int num_parameters() const { return layout_.size() + static_cast<int>(free_betas_.size()); }
+  void split(const Eigen::VectorXd& x, Eigen::VectorXd& theta, Eigen::VectorXd& beta) const;
+  // d joints / d x (72 x P): the pose Jacobian alone when the shape is fixed.
+  const Eigen::MatrixXd& joint_jacobian() const;
+  // d vertex(i) / d x into the 3 x P block `out` (zeroed first).
+  void vertex_jacobian(int i, Eigen::Ref<Eigen::Matrix3Xd> out) const;
   void init_correspondences(const FrameObservation& observation);
   void update_correspondences(const FrameObservation& observation, int iteration);
   // Chooses U_bg (H, the bg weight) and counts Q (the float weight) at the current pose.
@@ -98,10 +136,11 @@ class FrameFitter {
   // The bg, float and bgJoint blocks of the chosen sets at the pose of `eval`.
   void build_blocks(const body::BodyEvaluator& eval, const FrameObservation& observation);
   // Fills the residual vector and pose / uv Jacobians at the current state; returns per-term energy.
-  EnergyTerms linearise(const FrameObservation& observation, const Eigen::VectorXd& theta);
+  EnergyTerms linearise(const FrameObservation& observation, const Eigen::VectorXd& theta, const Eigen::VectorXd& beta);
   EnergyTerms energy_at(const FrameObservation& observation, const body::BodyEvaluator& eval,
                         const body::BodySurface& surface, const std::vector<body::SurfacePoint>& correspondences,
-                        const Eigen::VectorXd& theta);
+                        const Eigen::VectorXd& theta, const Eigen::VectorXd& beta);
+  double shape_bound_energy(const Eigen::VectorXd& beta) const;
 
   std::shared_ptr<const body::SmplModel> model_;
   body::PoseLayout layout_;
@@ -117,6 +156,11 @@ class FrameFitter {
   std::vector<DataResidual> data_;
   std::vector<ForearmDirectionResidual> imu_;
   LimitResidual limit_;
+  // Shape fit (III-B): the free betas (empty: shape fixed) and their bound.
+  std::vector<int> free_betas_;
+  ShapeBoundResidual shape_bound_;
+  Eigen::MatrixXd prior_matrix_;  // k x B, k = 0 without a prior
+  Eigen::VectorXd prior_target_;
   std::vector<SilhouettePoint> bg_, bg_joint_;
   std::vector<BehindPoint> float_;
   std::vector<body::SurfacePoint> correspondences_, trial_correspondences_;
@@ -132,7 +176,10 @@ class FrameFitter {
   std::vector<int> contour_vertices_, selected_;
   std::vector<raycast::ClosestPoint> hits_;
   std::vector<body::SurfacePoint> hit_points_;
-  Eigen::VectorXd step_, trial_theta_;
+  Eigen::MatrixXd joint_jacobian_;  // 72 x P, shape fit only
+  Eigen::MatrixXd data_shape_jacobian_;  // 6 x B
+  Eigen::VectorXd free_beta_values_;
+  Eigen::VectorXd step_, trial_x_, trial_theta_, trial_beta_;
   std::vector<Eigen::Vector2d> uv_step_;
 };
 

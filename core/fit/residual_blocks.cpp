@@ -1,6 +1,7 @@
 #include "fit/residual_blocks.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "fit/camera_projection.hpp"
 
@@ -25,6 +26,15 @@ void DataResidual::evaluate(const body::BodySurface& surface, const body::BodyEv
   d_r_d_theta.bottomRows<3>() *= normal_weight;
   d_r_d_uv.topRows<3>() = position_weight * surface.position_uv_jacobian(nu);
   d_r_d_uv.bottomRows<3>() = normal_weight * surface.normal_uv_jacobian(nu);
+}
+
+void DataResidual::evaluate_shape(const body::BodySurface& surface, const body::BodyEvaluator& eval,
+                                  const body::SurfacePoint& nu, Eigen::Ref<Eigen::MatrixXd> d_r_d_beta) const {
+  d_r_d_beta.setZero();
+  surface.position_shape_jacobian(nu, eval, d_r_d_beta.topRows<3>());
+  surface.normal_shape_jacobian(nu, eval, d_r_d_beta.bottomRows<3>());
+  d_r_d_beta.topRows<3>() *= position_weight;
+  d_r_d_beta.bottomRows<3>() *= normal_weight;
 }
 
 Eigen::Vector2d SilhouetteResidual::residual(const raycast::DepthIntrinsics& intrinsics,
@@ -78,6 +88,31 @@ double LimitResidual::energy(const body::PoseLayout& layout, const Eigen::Ref<co
     const body::Dof& dof = layout.dof(d);
     if (!dof.limited) continue;
     const double excess = std::max(0.0, dof.min_rad - theta[d]) + std::max(0.0, theta[d] - dof.max_rad);
+    sum += excess * excess;
+  }
+  return weight * weight * sum;
+}
+
+void ShapeBoundResidual::evaluate(const Eigen::Ref<const Eigen::VectorXd>& beta_free, Eigen::Ref<Eigen::VectorXd> r,
+                                  Eigen::Ref<Eigen::MatrixXd> d_r_d_beta_free) const {
+  d_r_d_beta_free.setZero();
+  for (Eigen::Index b = 0; b < beta_free.size(); ++b) {
+    if (beta_free[b] < -bound) {
+      r[b] = weight * (-bound - beta_free[b]);
+      d_r_d_beta_free(b, b) = -weight;
+    } else if (beta_free[b] > bound) {
+      r[b] = weight * (beta_free[b] - bound);
+      d_r_d_beta_free(b, b) = weight;
+    } else {
+      r[b] = 0;
+    }
+  }
+}
+
+double ShapeBoundResidual::energy(const Eigen::Ref<const Eigen::VectorXd>& beta_free) const {
+  double sum = 0;
+  for (Eigen::Index b = 0; b < beta_free.size(); ++b) {
+    const double excess = std::max(0.0, std::abs(beta_free[b]) - bound);
     sum += excess * excess;
   }
   return weight * weight * sum;

@@ -31,6 +31,10 @@ struct DataResidual {
   void evaluate(const body::BodySurface& surface, const body::BodyEvaluator& eval, const body::SurfacePoint& nu,
                 Eigen::Ref<Vector6d> r, Eigen::Ref<Eigen::MatrixXd> d_r_d_theta,
                 Eigen::Ref<Eigen::Matrix<double, 6, 2>> d_r_d_uv) const;
+  // d r / d beta (6 x B, overwritten); `eval` produced the vertices of `surface` with
+  // Derivatives::kPoseAndShape (paper 2, III-B).
+  void evaluate_shape(const body::BodySurface& surface, const body::BodyEvaluator& eval, const body::SurfacePoint& nu,
+                      Eigen::Ref<Eigen::MatrixXd> d_r_d_beta) const;
 };
 
 // bg (eq. 6) and bgJoint (eq. 7), one point x(theta): r = weight (Pi(x) - q), where q is
@@ -73,6 +77,21 @@ struct LimitResidual {
   void evaluate(const body::PoseLayout& layout, const Eigen::Ref<const Eigen::VectorXd>& theta,
                 Eigen::Ref<Eigen::VectorXd> r, Eigen::Ref<Eigen::MatrixXd> d_r_d_theta) const;
   double energy(const body::PoseLayout& layout, const Eigen::Ref<const Eigen::VectorXd>& theta) const;
+};
+
+// Bound on the free shape parameters while shape and pose are fitted together (III-B; ours: the
+// paper fits beta without a stated bound). The same soft form as eq. 8, one residual per free beta:
+// r_b = weight (max(0, -bound - beta_b) + max(0, beta_b - bound)), bound = the range the rough
+// shape keeps (RoughShapeOptions::max_abs_beta), weight = sqrt(lambda_limit / B_free). Beyond
+// about 3 the template's shape directions leave the range of human bodies.
+struct ShapeBoundResidual {
+  double bound = 3.0;
+  double weight = 1;
+
+  // r (free.size()) and d r / d beta_free (free.size() x free.size(), overwritten).
+  void evaluate(const Eigen::Ref<const Eigen::VectorXd>& beta_free, Eigen::Ref<Eigen::VectorXd> r,
+                Eigen::Ref<Eigen::MatrixXd> d_r_d_beta_free) const;
+  double energy(const Eigen::Ref<const Eigen::VectorXd>& beta_free) const;
 };
 
 // imu (eq. 9-11), one forearm: r = weight (Pi(J_wrist - J_elbow) - e), e the forearm direction

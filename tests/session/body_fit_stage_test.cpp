@@ -231,6 +231,20 @@ TEST(BodyFitStage, ReportsThePersonalisedShape) {
   EXPECT_LT(shape.upper_arm_length_left_m(), 0.4);
 }
 
+// The fine tuning (III-B) sets the betas no skeleton measurement sees (hip width, torso and limb
+// girth: 6, 7, 8); the rough shape alone leaves them at 0.
+TEST(BodyFitStage, FineShapeTuningSetsWhatTheSkeletonCannotSeeAndCanBeTurnedOff) {
+  const v1::BodyShape& fine = full_run().report.body_shape();
+  ASSERT_EQ(fine.betas_size(), 10);
+  EXPECT_GT(std::abs(fine.betas(6)) + std::abs(fine.betas(7)) + std::abs(fine.betas(8)), 0.05);
+  const Output rough = run(header_with({{"fit.fine_shape", "false"}}), [](const v1::SessionChunk&) { return true; });
+  for (const auto& w : rough.warnings) ADD_FAILURE() << w.code() << " " << w.field() << ": " << w.message();
+  const v1::BodyShape& shape = rough.report.body_shape();
+  EXPECT_TRUE(shape.estimated());
+  ASSERT_EQ(shape.betas_size(), 10);
+  for (int b : {6, 7, 8}) EXPECT_NEAR(shape.betas(b), 0.0, 1e-9) << "beta " << b;
+}
+
 TEST(BodyFitStage, OffUnlessEnabled) {
   v1::SessionHeader header = session().header;
   const Output out = run(header, [](const v1::SessionChunk&) { return true; });
@@ -279,6 +293,10 @@ TEST(BodyFitStage, BadOptionsAreErrors) {
   EXPECT_THROW(other.start(header_with({{"fit.enabled", "yes"}}), out), Error);
   BodyFitStage third;
   EXPECT_THROW(third.start(header_with({{"fit.smoothing_frames", "2"}}), out), Error);
+  BodyFitStage fourth;
+  EXPECT_THROW(fourth.start(header_with({{"fit.fine_shape", "maybe"}}), out), Error);
+  BodyFitStage fifth;
+  EXPECT_THROW(fifth.start(header_with({{"fit.lambda_imu", "-1"}}), out), Error);
 }
 
 TEST(BodyFitStage, SkeletonConversionChecksTheJointCount) {

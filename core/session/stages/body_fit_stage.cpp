@@ -13,6 +13,7 @@
 #include "fit/joint_kinematics.hpp"
 #include "fit/personalisation.hpp"
 #include "fit/pose_smoothing.hpp"
+#include "fit/shape_pose_refiner.hpp"
 #include "fit/silhouette_cleanup.hpp"
 #include "fit/skeleton_pose_init.hpp"
 #include "raycast/depth_camera.hpp"
@@ -31,6 +32,8 @@ constexpr const char* kSmoothingKey = "fit.smoothing_frames";
 constexpr const char* kImuWaitKey = "fit.imu_wait_s";
 constexpr const char* kLostEnergyKey = "fit.lost_energy";
 constexpr const char* kMaxIterationsKey = "fit.max_iterations";
+constexpr const char* kFineShapeKey = "fit.fine_shape";
+constexpr const char* kLambdaImuKey = "fit.lambda_imu";
 
 // Depth, body index and skeleton of one frame share the depth frame's t_us (1 ms tolerance).
 constexpr std::int64_t kSameFrameUs = 1000;
@@ -157,6 +160,8 @@ std::vector<StageOption> BodyFitStage::options() const {
       {kImuWaitKey, "6", "how long a frame waits for its forearm orientations (imu term), seconds"},
       {kLostEnergyKey, "100", "tracking is lost above this fit energy (eq. 4): restart from the skeleton"},
       {kMaxIterationsKey, std::to_string(defaults.max_iterations), "LM iterations per start at most"},
+      {kFineShapeKey, "true", "personalisation: fine shape tuning on a calibration depth frame (paper 2 III-B)"},
+      {kLambdaImuKey, format_double(defaults.lambda_imu), "weight of the imu term (eq. 9), >= 0"},
   };
 }
 
@@ -166,6 +171,7 @@ void BodyFitStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) 
   calibration_s_ = positive_option(header, kCalibrationSKey, calibration_s_);
   imu_wait_s_ = positive_option(header, kImuWaitKey, imu_wait_s_);
   lost_energy_ = positive_option(header, kLostEnergyKey, lost_energy_);
+  fine_shape_ = bool_option(header, kFineShapeKey, true);
   if (const std::string* text = option(header, kBodyIdKey)) {
     body_id_ = static_cast<std::uint32_t>(parse_uint64(*text, option_field(kBodyIdKey)));
   }
@@ -176,6 +182,11 @@ void BodyFitStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) 
   fit::FitOptions fit_options;
   if (const std::string* text = option(header, kMaxIterationsKey)) {
     fit_options.max_iterations = static_cast<int>(parse_int64(*text, option_field(kMaxIterationsKey)));
+  }
+  if (const std::string* text = option(header, kLambdaImuKey)) {
+    fit_options.lambda_imu = parse_double(*text, option_field(kLambdaImuKey));
+    if (!std::isfinite(fit_options.lambda_imu) || fit_options.lambda_imu < 0)
+      throw_invalid(option_field(kLambdaImuKey), "is '" + *text + "', must be >= 0");
   }
   arm_imus_ = static_cast<int>(std::count_if(header.imu_devices().begin(), header.imu_devices().end(), [](const auto& d) {
     return d.role() == v1::ImuDevice::ARM_LEFT || d.role() == v1::ImuDevice::ARM_RIGHT;
@@ -251,20 +262,46 @@ void BodyFitStage::personalise(StageOutput& out) {
   // bent by up to ~50 deg with the simulator's biases) are left out; when none is left, all go in
   // and the pose check says why.
   std::vector<fit::TrackedSkeleton> all, in_pose;
+  std::vector<const BodyFitFrame*> all_frames, in_pose_frames;
   for (const BodyFitFrame& f : calibration_frames_) {
     if (!f.skeleton) continue;
     all.push_back(*f.skeleton);
+    all_frames.push_back(&f);
     try {
       fit::check_controlled_pose({*f.skeleton}, &work_->camera);
       in_pose.push_back(*f.skeleton);
+      in_pose_frames.push_back(&f);
     } catch (const Error&) {
     }
   }
   const std::vector<fit::TrackedSkeleton>& skeletons = in_pose.empty() ? all : in_pose;
   Eigen::VectorXd beta = Eigen::VectorXd::Zero(work_->model->num_betas());
+  // III-B on the same frames' depth (cleaned as every fitted frame). A refusal of the fine tuning
+  // keeps the rough shape (III-A): the refiner's error is caught here, not in personalise().
+  fit::ShapePoseRefiner refiner;
+  std::optional<Error> fine_error;
+  if (fine_shape_) {
+    std::vector<fit::CalibrationFrame> depth_frames;
+    for (const BodyFitFrame* f : in_pose.empty() ? all_frames : in_pose_frames) {
+      depth_frames.push_back({f->frame, *f->skeleton});
+      fit::remove_off_body_depth(depth_frames.back().frame, depth_frames.back().skeleton);
+    }
+    refiner = [&, depth = fit::make_depth_shape_refiner(work_->model, work_->camera, std::move(depth_frames))](
+                  std::size_t frame_index, const Eigen::VectorXd& beta0, const Eigen::VectorXd& theta0) {
+      try {
+        return depth(frame_index, beta0, theta0);
+      } catch (const Error& e) {
+        fine_error = e;
+        return fit::ShapePoseFit{beta0, theta0, 0.0};
+      }
+    };
+  }
   try {
-    // The fine tuning of III-B (ShapePoseRefiner) is not wired yet: rough shape only.
-    work_->personalisation = fit::personalise(work_->model, skeletons, &work_->camera, fit::ShapePoseRefiner{});
+    work_->personalisation = fit::personalise(work_->model, skeletons, &work_->camera, refiner);
+    if (fine_error) {
+      work_->personalisation->fine_tuned = false;
+      out.warn("FIT_FINE_SHAPE", fine_error->field(), std::string(fine_error->what()) + "; using the rough shape (III-A)");
+    }
     beta = work_->personalisation->beta();
   } catch (const Error& e) {
     out.warn("FIT_PERSONALISATION", e.field(),

@@ -9,9 +9,11 @@
 //     (the first body seen by default) with the same t_us make one frame; its silhouette is that
 //     person's body index.
 //  2. Personalisation (III): the frames of the first `fit.calibration_s` seconds are the
-//     calibration frames; fit::personalise on their skeletons gives the shape (rough shape,
-//     III-A; the fine tuning III-B is not wired yet). When the subject is not in the controlled
-//     pose the stage warns FIT_PERSONALISATION and fits the template shape (beta = 0).
+//     calibration frames; fit::personalise on their skeletons gives the shape: the rough shape
+//     (III-A), then the fine tuning of shape and pose on the middle frame's depth (III-B,
+//     fit::make_depth_shape_refiner; `fit.fine_shape`, default on). When the fine tuning refuses
+//     (FIT_FINE_SHAPE) the rough shape is used; when the subject is not in the controlled pose the
+//     stage warns FIT_PERSONALISATION and fits the template shape (beta = 0).
 //  3. Per frame (II-G, II-H): prepare_observation, the starting pose from the camera skeleton and
 //     the previous frame's pose, one LM fit from each, the lower energy wins. Tracking is lost
 //     when the winner's energy exceeds `fit.lost_energy`: the next frame starts from the skeleton
@@ -88,6 +90,7 @@ class BodyFitStage : public Stage {
   double calibration_s_ = 1.0;
   double imu_wait_s_ = 6.0;
   double lost_energy_ = 100.0;
+  bool fine_shape_ = true;
   std::optional<std::uint32_t> body_id_;
   int arm_imus_ = 0;  // arm IMUs in the header
 
