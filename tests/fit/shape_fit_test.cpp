@@ -8,6 +8,8 @@
 #include <cstdio>
 #include <numbers>
 #include <random>
+#include <utility>
+#include <vector>
 
 #include "body/template_generator.hpp"
 #include "common/error.hpp"
@@ -161,6 +163,14 @@ double mean_rest_joint_distance_m(const body::SmplModel& model, const Eigen::Vec
   return (ja - jb).colwise().norm().mean();
 }
 
+// A ShapeFreedom without a prior: the free betas and the bound only.
+ShapeFreedom freedom_of(std::vector<int> free_betas, double max_abs_beta) {
+  ShapeFreedom freedom;
+  freedom.free_betas = std::move(free_betas);
+  freedom.max_abs_beta = max_abs_beta;
+  return freedom;
+}
+
 TEST(FrameFitterShape, PoseOnlyFitAfterAShapeFitKeepsTheShapeFixed) {
   CalibrationScene s;
   FitOptions options;
@@ -168,7 +178,7 @@ TEST(FrameFitterShape, PoseOnlyFitAfterAShapeFitKeepsTheShapeFixed) {
   FrameFitter fitter(s.model, s.layout, kinect().intrinsics(), options);
   const FrameObservation observation = prepare_observation(s.rendered.frame, kinect(), s.rendered.skeleton_K, options);
   const Eigen::VectorXd beta0 = Eigen::VectorXd::Zero(10);
-  const FitResult shaped = fitter.fit_shape_and_pose(observation, s.theta, beta0, {{3, 4}, 3.0});
+  const FitResult shaped = fitter.fit_shape_and_pose(observation, s.theta, beta0, freedom_of({3, 4}, 3.0));
   for (int b = 0; b < 10; ++b) {
     if (b == 3 || b == 4) continue;
     EXPECT_EQ(shaped.beta[b], 0.0) << "beta " << b << " is not free";
@@ -192,11 +202,11 @@ TEST(FrameFitterShape, BadShapeFreedomNamesTheField) {
     }
     return std::string("no error");
   };
-  EXPECT_EQ(field_of({{10}, 3.0}), "shape_freedom.free_betas");
-  EXPECT_EQ(field_of({{2, 2}, 3.0}), "shape_freedom.free_betas");
-  EXPECT_EQ(field_of({{-1}, 3.0}), "shape_freedom.free_betas");
-  EXPECT_EQ(field_of({{}, 0.0}), "shape_freedom.max_abs_beta");
-  EXPECT_EQ(field_of({{}, std::nan("")}), "shape_freedom.max_abs_beta");
+  EXPECT_EQ(field_of(freedom_of({10}, 3.0)), "shape_freedom.free_betas");
+  EXPECT_EQ(field_of(freedom_of({2, 2}, 3.0)), "shape_freedom.free_betas");
+  EXPECT_EQ(field_of(freedom_of({-1}, 3.0)), "shape_freedom.free_betas");
+  EXPECT_EQ(field_of(freedom_of({}, 0.0)), "shape_freedom.max_abs_beta");
+  EXPECT_EQ(field_of(freedom_of({}, std::nan(""))), "shape_freedom.max_abs_beta");
   Eigen::VectorXd bad_beta = beta0;
   bad_beta[4] = std::nan("");
   try {
