@@ -12,8 +12,10 @@
 //     calibration frames; fit::personalise on their skeletons gives the shape (rough shape,
 //     III-A; the fine tuning III-B is not wired yet). When the subject is not in the controlled
 //     pose the stage warns FIT_PERSONALISATION and fits the template shape (beta = 0).
-//  3. Per frame (II-G, II-H): prepare_observation, the starting pose from the camera skeleton and
-//     the previous frame's pose, one LM fit from each, the lower energy wins. Tracking is lost
+//  3. Per frame (II-G, II-H): prepare_observation, an LM fit from the previous frame's pose and
+//     one from the starting pose built from the camera skeleton, the lower energy wins; the
+//     skeleton start is fitted only when the previous-frame fit is missing or ends at
+//     `fit.skeleton_start_energy` or above (0: both always, on two threads). Tracking is lost
 //     when the winner's energy exceeds `fit.lost_energy`: the next frame starts from the skeleton
 //     only. Frames wait (up to `fit.imu_wait_s`) until the forearm orientations covering them have
 //     arrived, so that the imu term has them; then they are fitted without.
