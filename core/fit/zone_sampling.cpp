@@ -156,11 +156,18 @@ const char* body_zone_name(BodyZone zone) {
   return "unknown";
 }
 
-std::vector<int8_t> assign_zones(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
-                                 const raycast::DepthCamera& camera) {
+namespace {
+
+void check_size(const PointCloud& cloud, const raycast::DepthCamera& camera) {
   if (cloud.width != camera.width() || cloud.height != camera.height() ||
       cloud.valid.size() != static_cast<size_t>(cloud.width) * cloud.height)
     throw_invalid("cloud.width", "cloud size does not match the camera");
+}
+
+// assign_zones over the cloud's pixel box `box` (no cloud pixel lies outside it); the cloud's
+// size is checked.
+std::vector<int8_t> assign_zones_in(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
+                                    const raycast::DepthCamera& camera, const PixelRect& box) {
   std::array<std::optional<Eigen::Vector2d>, kKinectJointCount> joint_px;
   for (int j = 0; j < kKinectJointCount; ++j) {
     if (!skeleton_K[j].allFinite()) throw_invalid("skeleton[" + std::to_string(j) + "]", "not finite");
@@ -175,7 +182,6 @@ std::vector<int8_t> assign_zones(const PointCloud& cloud, const KinectSkeleton& 
   if (segments.empty()) throw_precondition("skeleton", "no bone projects into the depth image");
 
   std::vector<int8_t> zone(cloud.valid.size(), -1);
-  const PixelRect box = bounding_box(cloud);  // no cloud pixel outside it
   for (int row = box.row0; row <= box.row1; ++row)
     for (int col = box.col0; col <= box.col1; ++col) {
       if (!cloud.has(col, row)) continue;
@@ -192,16 +198,25 @@ std::vector<int8_t> assign_zones(const PointCloud& cloud, const KinectSkeleton& 
   return zone;
 }
 
+}  // namespace
+
+std::vector<int8_t> assign_zones(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
+                                 const raycast::DepthCamera& camera) {
+  check_size(cloud, camera);
+  return assign_zones_in(cloud, skeleton_K, camera, bounding_box(cloud));
+}
+
 std::vector<DepthSample> sample_depth_pixels(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
                                              const raycast::DepthCamera& camera, const ZoneSamplingParams& params) {
   validate(params);
-  const std::vector<int8_t> zone = assign_zones(cloud, skeleton_K, camera);
+  check_size(cloud, camera);
+  const PixelRect box = bounding_box(cloud);
+  const std::vector<int8_t> zone = assign_zones_in(cloud, skeleton_K, camera, box);
 
   // Distance of each cloud pixel to the nearest pixel outside the cloud, needed only up to the
   // edge band: computed in the cloud's bounding box grown by the band (and a pixel), which holds
   // every outside pixel within the band of a cloud pixel; beyond it the map stays infinite,
   // which is as far from the band as the exact distance. The cloud may fill the image.
-  const PixelRect box = bounding_box(cloud);
   const int grow = static_cast<int>(std::ceil(std::min<double>(params.edge_band_px, cloud.width + cloud.height))) + 1;
   const PixelRect band_region{std::max(0, box.col0 - grow), std::max(0, box.row0 - grow),
                               std::min(cloud.width - 1, box.col1 + grow), std::min(cloud.height - 1, box.row1 + grow)};
