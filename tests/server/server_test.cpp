@@ -354,9 +354,11 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   EXPECT_EQ(info.stages(0).name(), "imu_orientation");
   EXPECT_EQ(info.stages(1).name(), "forearm");
   EXPECT_EQ(info.stages(2).name(), "body_fit");
-  ASSERT_EQ(info.options_size(), 15);
+  ASSERT_EQ(info.options_size(), 16);
   EXPECT_EQ(info.options(8).key(), "fit.enabled");
   EXPECT_EQ(info.options(8).default_value(), "false");
+  EXPECT_EQ(info.options(15).key(), "fit.skeleton_start_energy");
+  EXPECT_EQ(info.options(15).default_value(), "45");
   EXPECT_EQ(info.options(0).key(), "imu.tau_acc_s");
   EXPECT_EQ(info.options(2).key(), "forearm.K_from_B");
   EXPECT_EQ(info.options(2).stage(), "forearm");
