@@ -124,6 +124,7 @@ Output run_stage(const sim::CameraSessionResult& sim, const std::vector<v1::FitR
     (*header.mutable_options())["fit.skeleton_start_energy"] = energy;
   Output out;
   session::BodyFitStage stage;
+  stage.record_frame_stats(stats != nullptr);
   stage.start(header, out);
   for (const auto& b : batches) stage.on_result(b, out);
   for (const auto& chunk : sim.chunks) {

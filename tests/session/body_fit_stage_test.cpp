@@ -97,12 +97,16 @@ Output run(const v1::SessionHeader& header, Keep keep, const sim::CameraSessionR
            std::vector<BodyFitFrameStats>* stats = nullptr) {
   Output out;
   BodyFitStage stage;
+  stage.record_frame_stats(stats != nullptr);
   stage.start(header, out);
   for (const auto& chunk : from.chunks) {
     if (keep(chunk)) stage.on_chunk(chunk, out);
   }
   stage.finish(out);
   if (stats) *stats = stage.frame_stats();
+  if (!stats) {
+    EXPECT_TRUE(stage.frame_stats().empty());  // not recorded unless asked
+  }
   return out;
 }
 

@@ -435,7 +435,7 @@ void BodyFitStage::fit_frame(BodyFitFrame& frame, StageOutput& out) {
     ++frames_fitted_;
     if (const auto smoothed = w.smoother.push(best->theta)) emit_smoothed(*smoothed, out);
     take(stats.post_s);
-    stats_.push_back(stats);
+    if (record_stats_) stats_.push_back(stats);
   } catch (const Error& e) {
     out.warn("FIT_FRAME", e.field(), "frame t_us=" + std::to_string(frame.t_us) + " not fitted: " + e.what());
   }

@@ -105,7 +105,10 @@ class BodyFitStage : public Stage {
   void on_result(const v1::FitResult& result, StageOutput& out) override;
   void finish(StageOutput& out) override;
 
-  // One entry per fitted frame, in fit order.
+  // With `on`, every fitted frame from then on appends a BodyFitFrameStats (off by default: a
+  // long session would grow the list without bound).
+  void record_frame_stats(bool on) { record_stats_ = on; }
+  // One entry per fitted frame while recording, in fit order.
   const std::vector<BodyFitFrameStats>& frame_stats() const { return stats_; }
 
  private:
@@ -150,6 +153,7 @@ class BodyFitStage : public Stage {
   };
   std::deque<Fitted> fitted_;
   std::optional<Eigen::VectorXd> previous_theta_;
+  bool record_stats_ = false;
   std::vector<BodyFitFrameStats> stats_;
   std::uint64_t frames_fitted_ = 0, frames_lost_ = 0;
 };
