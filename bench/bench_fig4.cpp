@@ -16,11 +16,15 @@
 // wipe.bvh and box-1.bvh, retargeted by sim::bvh_motion; their first second is overridden by the
 // controlled pose]. Options: --no-fine-shape (rough shape only, fit.fine_shape = false),
 // --exercises=a,b (a subset of the six), --max-seconds=S (each exercise cut after S seconds, for
-// full-rate runs), --lambda-imu=X (the imu term's weight, fit.lambda_imu). Times are thread CPU time of the stage's work per
-// frame (preprocessing, two LM fits, post-processing), one core.
+// full-rate runs), --lambda-imu=X (the imu term's weight, fit.lambda_imu).
+// Environment: FIT_SKELETON_START_ENERGY sets the stage's fit.skeleton_start_energy (II-G start
+// policy; 0 = both starts on two threads); FIG4_STATS_CSV=path writes the per-frame phase times.
+// Times are thread CPU time of the stage's work per frame (preprocessing, LM fits,
+// post-processing), summed over the threads that did it, and the calling thread's alone.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <numbers>
 #include <random>
@@ -85,7 +89,8 @@ struct Sums {
 struct Table {
   Sums camera, fit, fit_no_imu;  // all frames
   Sums camera_occ, fit_occ, fit_no_imu_occ;
-  std::vector<double> frame_s;
+  std::vector<double> frame_s;  // calling thread's CPU time per skeleton chunk (the first measure)
+  std::vector<session::BodyFitFrameStats> stats;  // the stage's per-frame phases (all threads)
   double elevation_fit = 0, elevation_camera = 0;
   int elevation_n = 0;
   int frames = 0, occluded = 0;
@@ -119,14 +124,17 @@ bool g_fine_shape = true;
 std::string g_lambda_imu;  // empty: the stage's default
 
 Output run_stage(const sim::CameraSessionResult& sim, const std::vector<v1::FitResult>& batches,
-                 std::vector<double>* frame_s) {
+                 std::vector<double>* frame_s, std::vector<session::BodyFitFrameStats>* stats) {
   v1::SessionHeader header = sim.header;
   (*header.mutable_options())["fit.enabled"] = "true";
   (*header.mutable_options())["fit.fine_shape"] = g_fine_shape ? "true" : "false";
   if (!g_lambda_imu.empty()) (*header.mutable_options())["fit.lambda_imu"] = g_lambda_imu;
   (*header.mutable_options())["fit.calibration_s"] = std::to_string(kCalibrationS);
+  if (const char* energy = std::getenv("FIT_SKELETON_START_ENERGY"))
+    (*header.mutable_options())["fit.skeleton_start_energy"] = energy;
   Output out;
   session::BodyFitStage stage;
+  stage.record_frame_stats(stats != nullptr);
   stage.start(header, out);
   for (const auto& b : batches) stage.on_result(b, out);
   for (const auto& chunk : sim.chunks) {
@@ -136,6 +144,10 @@ Output run_stage(const sim::CameraSessionResult& sim, const std::vector<v1::FitR
     if (timed && frame_s) frame_s->push_back(bench::thread_cpu_seconds() - t0);
   }
   stage.finish(out);
+  if (stats) {
+    for (const auto& f : stage.frame_stats())
+      if (static_cast<double>(f.t_us) * 1e-6 > kCalibrationS + 0.01) stats->push_back(f);
+  }
   return out;
 }
 
@@ -151,6 +163,59 @@ double percentile(std::vector<double> v, double p) {
   if (v.empty()) return NAN;
   std::sort(v.begin(), v.end());
   return v[std::min(v.size() - 1, static_cast<size_t>(p * static_cast<double>(v.size())))];
+}
+
+// The stage's CPU time per frame by phase (thread CPU of whichever thread did the work, summed).
+void print_phases(const std::vector<session::BodyFitFrameStats>& stats) {
+  using Stats = session::BodyFitFrameStats;
+  const std::vector<std::pair<const char*, double (*)(const Stats&)>> phases = {
+      {"assemble frame", [](const Stats& f) { return f.assemble_s; }},
+      {"silhouette cleanup", [](const Stats& f) { return f.cleanup_s; }},
+      {"point cloud", [](const Stats& f) { return f.observation.cloud_s; }},
+      {"zone sampling", [](const Stats& f) { return f.observation.sampling_s; }},
+      {"sample normals", [](const Stats& f) { return f.observation.normals_s; }},
+      {"D_2D", [](const Stats& f) { return f.observation.d2d_s; }},
+      {"D_3D construction", [](const Stats& f) { return f.observation.d3d_s; }},
+      {"skeleton start pose", [](const Stats& f) { return f.start_pose_s; }},
+      {"LM from previous frame", [](const Stats& f) { return f.fit_previous_s; }},
+      {"LM from skeleton pose", [](const Stats& f) { return f.fit_skeleton_s; }},
+      {"post-processing", [](const Stats& f) { return f.post_s; }},
+      {"total (all threads)", [](const Stats& f) { return f.total_s(); }},
+  };
+  std::printf("\nstage CPU per frame by phase (%zu frames; ms)\n", stats.size());
+  std::printf("| phase | median | mean | p95 |\n|---|---|---|---|\n");
+  for (const auto& [name, get] : phases) {
+    std::vector<double> v;
+    double sum = 0;
+    for (const Stats& f : stats) {
+      v.push_back(get(f));
+      sum += v.back();
+    }
+    std::printf("| %s | %.2f | %.2f | %.2f |\n", name, 1e3 * percentile(v, 0.5),
+                v.empty() ? NAN : 1e3 * sum / static_cast<double>(v.size()), 1e3 * percentile(v, 0.95));
+  }
+  int previous_run = 0, skeleton_run = 0, previous_won = 0, iterations_previous = 0, iterations_skeleton = 0;
+  for (const Stats& f : stats) {
+    previous_run += f.iterations_previous > 0;
+    skeleton_run += f.iterations_skeleton > 0;
+    previous_won += f.previous_won;
+    iterations_previous += f.iterations_previous;
+    iterations_skeleton += f.iterations_skeleton;
+  }
+  std::printf("starts: previous frame %d (mean %.1f iterations), skeleton %d (mean %.1f iterations); previous won %d\n",
+              previous_run, previous_run ? static_cast<double>(iterations_previous) / previous_run : 0.0, skeleton_run,
+              skeleton_run ? static_cast<double>(iterations_skeleton) / skeleton_run : 0.0, previous_won);
+}
+
+void write_stats_csv(const char* path, const std::vector<session::BodyFitFrameStats>& stats) {
+  std::FILE* f = std::fopen(path, "w");
+  if (!f) return;
+  std::fprintf(f, "t_us,total_ms,observation_ms,fit_previous_ms,fit_skeleton_ms,it_previous,it_skeleton,E_previous,E_skeleton,previous_won\n");
+  for (const auto& s : stats)
+    std::fprintf(f, "%lld,%.3f,%.3f,%.3f,%.3f,%d,%d,%.4g,%.4g,%d\n", static_cast<long long>(s.t_us), 1e3 * s.total_s(),
+                 1e3 * s.observation.total_s(), 1e3 * s.fit_previous_s, 1e3 * s.fit_skeleton_s, s.iterations_previous,
+                 s.iterations_skeleton, s.energy_previous, s.energy_skeleton, s.previous_won ? 1 : 0);
+  std::fclose(f);
 }
 
 void write_overlay(const std::string& path, const sim::CameraSessionResult& sim, size_t i, const v1::FrameResult& fit) {
@@ -263,8 +328,8 @@ int main(int argc, char** argv) {
         options, layout, [&](double t) { return t < kCalibrationS ? controlled : motion.poses(t - kCalibrationS); });
 
     Table table;
-    const Output with_imu = run_stage(sim, forearm_batches(sim, 300 + seed_index), &table.frame_s);
-    const Output without_imu = run_stage(sim, {}, nullptr);
+    const Output with_imu = run_stage(sim, forearm_batches(sim, 300 + seed_index), &table.frame_s, &table.stats);
+    const Output without_imu = run_stage(sim, {}, nullptr, nullptr);
     for (const auto& c : sim.chunks) {
       if (!c.has_skeleton() || static_cast<double>(c.skeleton().t_us()) * 1e-6 < kCalibrationS) continue;
       const size_t i = static_cast<size_t>(std::find(sim.t_us.begin(), sim.t_us.end(), c.skeleton().t_us()) - sim.t_us.begin());
@@ -335,6 +400,7 @@ int main(int argc, char** argv) {
     std::printf(" (%s); upper-limb rest joints off by %.1f mm (template shape %.1f mm)\n",
                 shape.estimated() ? "personalised" : "template", rest_error_mm(fitted_beta),
                 rest_error_mm(Eigen::VectorXd::Zero(model->num_betas())));
+    total.stats.insert(total.stats.end(), table.stats.begin(), table.stats.end());
     std::printf("%-17s frames %3d (occluded %3d)  camera %5.1f mm  fit %5.1f mm  fit w/o imu %5.1f mm\n",
                 exercises[e].c_str(), table.frames, table.occluded, 1e3 * table.camera.mean_all(),
                 1e3 * table.fit.mean_all(), 1e3 * table.fit_no_imu.mean_all());
@@ -361,7 +427,9 @@ int main(int argc, char** argv) {
     std::printf("shoulder_lift: shoulder elevation error fit %.1f deg, camera skeleton %.1f deg (%d shoulder-frames)\n",
                 total.elevation_fit / total.elevation_n, total.elevation_camera / total.elevation_n, total.elevation_n);
   }
-  std::printf("time per frame (thread CPU, stage work): median %.1f ms, p95 %.1f ms (%zu frames)\n",
+  std::printf("time per frame (thread CPU of the calling thread per skeleton chunk): median %.1f ms, p95 %.1f ms (%zu frames)\n",
               1e3 * percentile(total.frame_s, 0.5), 1e3 * percentile(total.frame_s, 0.95), total.frame_s.size());
+  print_phases(total.stats);
+  if (const char* csv = std::getenv("FIG4_STATS_CSV")) write_stats_csv(csv, total.stats);
   return 0;
 }

@@ -38,10 +38,11 @@ std::pair<double, double> radial_factor_range(const raycast::DepthIntrinsics& c,
   return {lo, hi};
 }
 
-// FNV-1a style hash of what voxel classifications depend on: 64-bit words of the depth image,
-// the grid and the camera's intrinsics.
+// FNV-1a style hash of what voxel classifications depend on: the depth inside `box` (all depth
+// lies there) in 64-bit words, the box, the grid and the camera's intrinsics.
 uint64_t classification_stamp(const raycast::DepthCamera& camera, const std::vector<uint16_t>& depth_mm,
-                              const Eigen::Vector3d& origin, const Eigen::Vector3i& size, double voxel_size) {
+                              const PixelRect& box, const Eigen::Vector3d& origin, const Eigen::Vector3i& size,
+                              double voxel_size) {
   uint64_t h = 1469598103934665603ull;
   auto mix = [&](uint64_t word) {
     h ^= word;
@@ -53,14 +54,18 @@ uint64_t classification_stamp(const raycast::DepthCamera& camera, const std::vec
     std::memcpy(&word, &v, sizeof word);
     mix(word);
   };
-  for (size_t i = 0; i < depth_mm.size(); i += 4) {
-    uint64_t word = 0;
-    for (size_t k = 0; k < 4 && i + k < depth_mm.size(); ++k) word |= uint64_t(depth_mm[i + k]) << (16 * k);
-    mix(word);
+  for (int row = box.row0; row <= box.row1; ++row) {
+    const uint16_t* depth = depth_mm.data() + static_cast<size_t>(row) * camera.width();
+    for (int col = box.col0; col <= box.col1; col += 4) {
+      uint64_t word = 0;
+      for (int k = 0; k < 4 && col + k <= box.col1; ++k) word |= uint64_t(depth[col + k]) << (16 * k);
+      mix(word);
+    }
   }
   const raycast::DepthIntrinsics& c = camera.intrinsics();
   for (double v : {origin.x(), origin.y(), origin.z(), voxel_size, c.fx, c.fy, c.cx, c.cy, c.k1, c.k2, c.k3}) mix_double(v);
-  for (int v : {size.x(), size.y(), size.z(), c.width, c.height}) mix(static_cast<uint64_t>(v));
+  for (int v : {size.x(), size.y(), size.z(), c.width, c.height, box.col0, box.row0, box.col1, box.row1})
+    mix(static_cast<uint64_t>(v));
   return h | 1;  // never 0, the empty cache's stamp
 }
 
@@ -73,21 +78,38 @@ std::pair<double, double> product_range(double a0, double a1, double b0, double 
 
 BehindSurfaceMap::BehindSurfaceMap(const DepthFrame& frame, const raycast::DepthCamera& camera,
                                    const BehindSurfaceParams& params)
+    : BehindSurfaceMap(build_point_cloud(frame, camera), camera, params) {}
+
+BehindSurfaceMap::BehindSurfaceMap(const PointCloud& cloud, const raycast::DepthCamera& camera,
+                                   const BehindSurfaceParams& params)
     : camera_(&camera), voxel_size_m_(params.voxel_size_m) {
   if (!std::isfinite(params.voxel_size_m) || params.voxel_size_m <= 0)
     throw_invalid("behind_params.voxel_size_m", "must be positive and finite, got " + std::to_string(params.voxel_size_m));
   if (!std::isfinite(params.margin_m) || params.margin_m < 0)
     throw_invalid("behind_params.margin_m", "must be non-negative and finite, got " + std::to_string(params.margin_m));
-  const PointCloud cloud = build_point_cloud(frame, camera);
+  const size_t pixels = static_cast<size_t>(camera.width()) * camera.height();
+  if (cloud.width != camera.width() || cloud.height != camera.height() || cloud.valid.size() != pixels ||
+      cloud.value_K.size() != pixels)
+    throw_invalid("cloud.width", "cloud size does not match the camera");
+  if (cloud.count == 0) throw_precondition("frame.body_index", "the silhouette holds no pixel with a depth reading");
 
-  depth_mm_.assign(cloud.valid.size(), kNoDepth);
+  // Depth (z in mm, as the frame stored it) inside the silhouette; the pixel bounding box of the
+  // cloud bounds every loop below (nothing outside it has depth).
+  depth_mm_.assign(pixels, kNoDepth);
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(kInf), hi = Eigen::Vector3d::Constant(-kInf);
-  for (size_t i = 0; i < cloud.valid.size(); ++i) {
-    if (!cloud.valid[i]) continue;
-    depth_mm_[i] = frame.depth_mm[i];
-    lo = lo.cwiseMin(cloud.value_K[i].cast<double>());
-    hi = hi.cwiseMax(cloud.value_K[i].cast<double>());
-  }
+  int col0 = camera.width(), col1 = -1, row0 = camera.height(), row1 = -1;
+  for (int row = 0; row < camera.height(); ++row)
+    for (int col = 0; col < camera.width(); ++col) {
+      const size_t i = static_cast<size_t>(row) * camera.width() + col;
+      if (!cloud.valid[i]) continue;
+      const Eigen::Vector3d p = cloud.value_K[i].cast<double>();
+      // The cloud holds z = depth_mm * 1e-3 (float); rounding recovers the integer millimetres.
+      depth_mm_[i] = static_cast<uint16_t>(std::lround(p.z() * 1e3));
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+      col0 = std::min(col0, col), col1 = std::max(col1, col);
+      row0 = std::min(row0, row), row1 = std::max(row1, row);
+    }
   lo -= Eigen::Vector3d::Constant(params.margin_m);
   hi += Eigen::Vector3d::Constant(params.margin_m);
   origin_K_ = lo;
@@ -98,23 +120,27 @@ BehindSurfaceMap::BehindSurfaceMap(const DepthFrame& frame, const raycast::Depth
                 "the cloud's bounding box needs " + std::to_string(voxels) + " voxels, limit " +
                     std::to_string(params.max_voxels));
 
-  stamp_ = classification_stamp(camera, depth_mm_, origin_K_, size_, voxel_size_m_);
+  stamp_ = classification_stamp(camera, depth_mm_, {col0, row0, col1, row1}, origin_K_, size_, voxel_size_m_);
 
   level_size_.push_back({camera.width(), camera.height()});
-  min_depth_mm_.push_back(depth_mm_);
-  for (uint16_t& d : min_depth_mm_.back())
-    if (d == kNoDepth) d = kNoReading;
-  while (level_size_.back().x() > 1 || level_size_.back().y() > 1) {
+  min_depth_mm_.emplace_back(pixels, kNoReading);
+  for (int row = row0; row <= row1; ++row)
+    for (int col = col0; col <= col1; ++col) {
+      const size_t i = static_cast<size_t>(row) * camera.width() + col;
+      if (depth_mm_[i] != kNoDepth) min_depth_mm_.back()[i] = depth_mm_[i];
+    }
+  for (int level = 0; level_size_.back().x() > 1 || level_size_.back().y() > 1; ++level) {
     const Eigen::Vector2i fine = level_size_.back();
     const Eigen::Vector2i coarse((fine.x() + 1) / 2, (fine.y() + 1) / 2);
-    std::vector<uint16_t> level(static_cast<size_t>(coarse.x()) * coarse.y(), kNoReading);
+    std::vector<uint16_t> next(static_cast<size_t>(coarse.x()) * coarse.y(), kNoReading);
     const std::vector<uint16_t>& below = min_depth_mm_.back();
-    for (int row = 0; row < fine.y(); ++row)
-      for (int col = 0; col < fine.x(); ++col) {
-        uint16_t& m = level[static_cast<size_t>(row / 2) * coarse.x() + col / 2];
+    // Blocks outside the cloud's box (at this level) hold no reading.
+    for (int row = row0 >> level; row <= row1 >> level; ++row)
+      for (int col = col0 >> level; col <= col1 >> level; ++col) {
+        uint16_t& m = next[static_cast<size_t>(row / 2) * coarse.x() + col / 2];
         m = std::min(m, below[static_cast<size_t>(row) * fine.x() + col]);
       }
-    min_depth_mm_.push_back(std::move(level));
+    min_depth_mm_.push_back(std::move(next));
     level_size_.push_back(coarse);
   }
 }

@@ -56,6 +56,9 @@ class BehindSurfaceMap {
   // Throws posefuse::Error for a frame that does not match the camera ("frame.*"), an empty
   // silhouette ("frame.body_index"), bad params ("behind_params.*"), or a grid over max_voxels.
   BehindSurfaceMap(const DepthFrame& frame, const raycast::DepthCamera& camera, const BehindSurfaceParams& params = {});
+  // The same from the frame's point cloud (build_point_cloud), when the caller has it already.
+  // Throws "cloud.width" for a cloud that does not match the camera.
+  BehindSurfaceMap(const PointCloud& cloud, const raycast::DepthCamera& camera, const BehindSurfaceParams& params = {});
 
   // Whether p_K lies behind the observed surface (exact test, no grid).
   bool is_behind(const Eigen::Vector3d& p_K) const;

@@ -12,6 +12,11 @@ namespace posefuse::fit {
 inline constexpr uint16_t kNoDepth = 0;       // depth pixel without a reading
 inline constexpr uint8_t kNoBody = 255;       // body-index pixel outside every body
 
+// A rectangle of pixels, bounds inclusive (empty when col0 > col1 or row0 > row1).
+struct PixelRect {
+  int col0 = 0, row0 = 0, col1 = -1, row1 = -1;
+};
+
 struct DepthFrame {
   int width = 0;
   int height = 0;

@@ -187,7 +187,7 @@ void FrameFitter::build_blocks(const body::BodyEvaluator& eval, const FrameObser
       bg_.push_back({v, {*target, bg_weight_}});
     } else if (!o.behind->is_behind(p)) {
       // U_float (eq. 12) is the part of U_bg inside the silhouette but in front of the surface.
-      float_.push_back({v, {o.behind->closest_behind(p), float_weight_}});
+      float_.push_back({v, {o.behind->closest_behind(p, behind_cache_), float_weight_}});
     }
   }
   // bgJoint (eq. 7): joints that project outside the silhouette.

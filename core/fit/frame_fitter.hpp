@@ -151,6 +151,9 @@ class FrameFitter {
   raycast::MeshScene scene_;
   DiscreteCorrespondenceUpdate discrete_;
   SchurSystem system_;
+  // D_3D voxel classifications of the current observation: float points of successive trial
+  // poses and iterations query neighbouring voxels (about 3x cheaper than uncached queries).
+  BehindSurfaceCache behind_cache_;
 
   // Per-frame state.
   std::vector<DataResidual> data_;

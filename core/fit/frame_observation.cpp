@@ -4,6 +4,7 @@
 #include <string>
 
 #include "common/error.hpp"
+#include "common/thread_cpu_time.hpp"
 #include "fit/point_normals.hpp"
 
 namespace posefuse::fit {
@@ -40,15 +41,26 @@ void validate(const FrameObservation& o) {
 
 FrameObservation prepare_observation(const DepthFrame& frame, const raycast::DepthCamera& camera,
                                      const std::optional<KinectSkeleton>& skeleton_K, const FitOptions& options,
-                                     const ForearmDirections& forearm) {
+                                     const ForearmDirections& forearm, ObservationTimes* times) {
   validate(options);
   validate(frame, camera);
   if (!skeleton_K) throw_precondition("skeleton", "missing: depth sampling needs the camera skeleton (paper 2, II-H)");
+  ObservationTimes unused;
+  ObservationTimes& t = times ? *times : unused;
+  double lap = thread_cpu_seconds();
+  // Adds the CPU time since the last lap to `part`.
+  const auto take = [&lap](double& part) {
+    const double now = thread_cpu_seconds();
+    part += now - lap;
+    lap = now;
+  };
   const PointCloud cloud = build_point_cloud(frame, camera);
+  take(t.cloud_s);
   ZoneSamplingParams zones;
   zones.num_samples = options.num_samples;
   zones.seed = options.seed;
   const std::vector<DepthSample> samples = sample_depth_pixels(cloud, *skeleton_K, camera, zones);
+  take(t.sampling_s);
   FrameObservation o;
   o.points_K.reserve(samples.size());
   o.normals_K.reserve(samples.size());
@@ -62,8 +74,11 @@ FrameObservation prepare_observation(const DepthFrame& frame, const raycast::Dep
     throw_precondition("frame.depth_mm", std::to_string(o.points_K.size()) +
                                              " depth samples with a surface normal; the fit needs at least " +
                                              std::to_string(kMinSamples));
+  take(t.normals_s);
   o.silhouette = silhouette_distance_map(silhouette_of(frame), frame.width, frame.height);
-  o.behind.emplace(frame, camera);
+  take(t.d2d_s);
+  o.behind.emplace(cloud, camera);
+  take(t.d3d_s);
   o.forearm = forearm;
   validate(o);
   return o;

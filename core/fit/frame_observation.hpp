@@ -37,6 +37,16 @@ struct FrameObservation {
 // direction that is not a unit vector ("observation.forearm.left_K").
 void validate(const FrameObservation& observation);
 
+// Thread CPU seconds of each part of prepare_observation (for the per-phase benchmark tables).
+struct ObservationTimes {
+  double cloud_s = 0;     // point cloud
+  double sampling_s = 0;  // zone sampling (zones, edge band, draw)
+  double normals_s = 0;   // PCA normals of the samples
+  double d2d_s = 0;       // D_2D
+  double d3d_s = 0;       // D_3D map construction (queries happen in the fit)
+  double total_s() const { return cloud_s + sampling_s + normals_s + d2d_s + d3d_s; }
+};
+
 // II-H preprocessing: point cloud, zone sampling of options.num_samples pixels by the camera
 // skeleton, PCA normals (samples without a normal are dropped), D_2D, D_3D. Throws
 // posefuse::Error for a frame that does not match the camera ("frame.*"), an empty silhouette
@@ -44,6 +54,6 @@ void validate(const FrameObservation& observation);
 // non-finite joint ("skeleton[i]"), or too few samples with a normal ("frame.depth_mm").
 FrameObservation prepare_observation(const DepthFrame& frame, const raycast::DepthCamera& camera,
                                      const std::optional<KinectSkeleton>& skeleton_K, const FitOptions& options,
-                                     const ForearmDirections& forearm = {});
+                                     const ForearmDirections& forearm = {}, ObservationTimes* times = nullptr);
 
 }  // namespace posefuse::fit

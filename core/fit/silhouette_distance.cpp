@@ -31,53 +31,94 @@ std::vector<uint8_t> silhouette_of(const DepthFrame& frame) {
   return silhouette;
 }
 
-// Two-pass chamfer (Rosenfeld-Pfaltz) carrying the closest seed along: the 8-neighbour path metric
-// with steps 1 and sqrt(2) is exactly the quasi-Euclidean distance, and the seed handed along a
-// shortest path is one that attains it.
+namespace {
+
+// Two-pass chamfer (Rosenfeld-Pfaltz) carrying the closest seed along, over the pixels of
+// `region` only: the 8-neighbour path metric with steps 1 and sqrt(2) is exactly the
+// quasi-Euclidean distance, and the seed handed along a shortest path is one that attains it.
+// Shortest 8-neighbour paths between two pixels of a rectangle stay inside it, so every distance
+// in the region is exact with respect to the seeds inside the region.
+void chamfer(SilhouetteDistanceMap& map, const PixelRect& region) {
+  const int width = map.width;
+  float* distance = map.distance_px.data();
+  int32_t* closest = map.closest_pixel.data();
+  const auto relax = [&](size_t to, size_t from, float step) {
+    const float candidate = distance[from] + step;
+    if (candidate < distance[to]) {
+      distance[to] = candidate;
+      closest[to] = closest[from];
+    }
+  };
+  // Rows above the first seed stay infinite in the forward pass: skip them.
+  int first_row = region.row1 + 1;
+  for (int row = region.row0; row <= region.row1 && first_row > region.row1; ++row)
+    for (int col = region.col0; col <= region.col1; ++col)
+      if (distance[static_cast<size_t>(row) * width + col] == 0) {
+        first_row = row;
+        break;
+      }
+  for (int row = first_row; row <= region.row1; ++row) {
+    const bool up = row > region.row0;
+    for (int col = region.col0; col <= region.col1; ++col) {
+      const size_t i = static_cast<size_t>(row) * width + col;
+      const bool left = col > region.col0, right = col < region.col1;
+      if (left) relax(i, i - 1, 1.0f);
+      if (up) {
+        if (left) relax(i, i - width - 1, kDiagonalStep);
+        relax(i, i - width, 1.0f);
+        if (right) relax(i, i - width + 1, kDiagonalStep);
+      }
+    }
+  }
+  for (int row = region.row1; row >= region.row0; --row) {
+    const bool down = row < region.row1;
+    for (int col = region.col1; col >= region.col0; --col) {
+      const size_t i = static_cast<size_t>(row) * width + col;
+      const bool left = col > region.col0, right = col < region.col1;
+      if (right) relax(i, i + 1, 1.0f);
+      if (down) {
+        if (right) relax(i, i + width + 1, kDiagonalStep);
+        relax(i, i + width, 1.0f);
+        if (left) relax(i, i + width - 1, kDiagonalStep);
+      }
+    }
+  }
+}
+
+}  // namespace
+
 SilhouetteDistanceMap silhouette_distance_map(const std::vector<uint8_t>& silhouette, int width, int height) {
+  return silhouette_distance_map(silhouette, width, height, PixelRect{0, 0, width - 1, height - 1});
+}
+
+SilhouetteDistanceMap silhouette_distance_map(const std::vector<uint8_t>& silhouette, int width, int height,
+                                              const PixelRect& region) {
   if (width <= 0 || height <= 0)
     throw_invalid("silhouette", "size " + std::to_string(width) + "x" + std::to_string(height) + " is not valid");
   const size_t pixels = static_cast<size_t>(width) * height;
   if (silhouette.size() != pixels)
     throw_invalid("silhouette", "has " + std::to_string(silhouette.size()) + " values, expected " + std::to_string(pixels));
+  if (region.col0 < 0 || region.row0 < 0 || region.col1 >= width || region.row1 >= height || region.col0 > region.col1 ||
+      region.row0 > region.row1)
+    throw_invalid("region", "[" + std::to_string(region.col0) + ", " + std::to_string(region.col1) + "] x [" +
+                                std::to_string(region.row0) + ", " + std::to_string(region.row1) +
+                                "] is empty or leaves the image");
   SilhouetteDistanceMap map;
   map.width = width;
   map.height = height;
   map.distance_px.assign(pixels, std::numeric_limits<float>::infinity());
   map.closest_pixel.assign(pixels, -1);
   bool any = false;
-  for (size_t i = 0; i < pixels; ++i)
-    if (silhouette[i]) {
+  for (int row = region.row0; row <= region.row1; ++row)
+    for (int col = region.col0; col <= region.col1; ++col) {
+      const size_t i = static_cast<size_t>(row) * width + col;
+      if (!silhouette[i]) continue;
       map.distance_px[i] = 0;
       map.closest_pixel[i] = static_cast<int32_t>(i);
       any = true;
     }
   if (!any) throw_precondition("silhouette", "is empty");
-
-  auto relax = [&](int col, int row, int dc, int dr, float step) {
-    const int nc = col + dc, nr = row + dr;
-    if (nc < 0 || nr < 0 || nc >= width || nr >= height) return;
-    const size_t from = static_cast<size_t>(nr) * width + nc, to = static_cast<size_t>(row) * width + col;
-    const float candidate = map.distance_px[from] + step;
-    if (candidate < map.distance_px[to]) {
-      map.distance_px[to] = candidate;
-      map.closest_pixel[to] = map.closest_pixel[from];
-    }
-  };
-  for (int row = 0; row < height; ++row)
-    for (int col = 0; col < width; ++col) {
-      relax(col, row, -1, 0, 1.0f);
-      relax(col, row, -1, -1, kDiagonalStep);
-      relax(col, row, 0, -1, 1.0f);
-      relax(col, row, 1, -1, kDiagonalStep);
-    }
-  for (int row = height - 1; row >= 0; --row)
-    for (int col = width - 1; col >= 0; --col) {
-      relax(col, row, 1, 0, 1.0f);
-      relax(col, row, 1, 1, kDiagonalStep);
-      relax(col, row, 0, 1, 1.0f);
-      relax(col, row, -1, 1, kDiagonalStep);
-    }
+  chamfer(map, region);
   return map;
 }
 

@@ -28,6 +28,14 @@ float quasi_euclidean_distance(int dx, int dy);
 // a wrong size or an empty silhouette.
 SilhouetteDistanceMap silhouette_distance_map(const std::vector<uint8_t>& silhouette, int width, int height);
 
+// The same over the pixels of `region` only, from the silhouette pixels inside it: exact there
+// for every pixel whose closest silhouette pixel lies in the region; pixels outside the region
+// stay at infinity / -1. For tests that need only short distances (the zone sampling's edge
+// band). Throws "region" for a region that is empty or leaves the image, "silhouette" as above
+// (also when the region holds no silhouette pixel).
+SilhouetteDistanceMap silhouette_distance_map(const std::vector<uint8_t>& silhouette, int width, int height,
+                                              const PixelRect& region);
+
 // Silhouette of a frame: body index != kNoBody (depth is not required).
 std::vector<uint8_t> silhouette_of(const DepthFrame& frame);
 

@@ -39,11 +39,32 @@ constexpr Bone kBones[] = {
     {kAnkleRight, kFootRight, BodyZone::kRightLeg},
 };
 
-double point_segment_distance2(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b) {
-  const Eigen::Vector2d ab = b - a;
-  const double len2 = ab.squaredNorm();
-  const double t = len2 > 0 ? std::clamp((p - a).dot(ab) / len2, 0.0, 1.0) : 0.0;
-  return (a + t * ab - p).squaredNorm();
+// A projected bone with what the point-segment distance needs precomputed.
+struct Segment {
+  Eigen::Vector2d a, ab;
+  double len2;
+  BodyZone zone;
+};
+
+double point_segment_distance2(const Eigen::Vector2d& p, const Segment& s) {
+  const double t = s.len2 > 0 ? std::clamp((p - s.a).dot(s.ab) / s.len2, 0.0, 1.0) : 0.0;
+  return (s.a + t * s.ab - p).squaredNorm();
+}
+
+// Smallest rectangle holding every valid pixel of the cloud (empty for an empty cloud).
+PixelRect bounding_box(const PointCloud& cloud) {
+  PixelRect box{cloud.width, cloud.height, -1, -1};
+  for (int row = 0; row < cloud.height; ++row) {
+    const uint8_t* valid = cloud.valid.data() + static_cast<size_t>(row) * cloud.width;
+    for (int col = 0; col < cloud.width; ++col) {
+      if (!valid[col]) continue;
+      box.col0 = std::min(box.col0, col);
+      box.col1 = std::max(box.col1, col);
+      box.row0 = std::min(box.row0, row);
+      box.row1 = std::max(box.row1, row);
+    }
+  }
+  return box;
 }
 
 void validate(const ZoneSamplingParams& params) {
@@ -135,53 +156,80 @@ const char* body_zone_name(BodyZone zone) {
   return "unknown";
 }
 
-std::vector<int8_t> assign_zones(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
-                                 const raycast::DepthCamera& camera) {
+namespace {
+
+void check_size(const PointCloud& cloud, const raycast::DepthCamera& camera) {
   if (cloud.width != camera.width() || cloud.height != camera.height() ||
       cloud.valid.size() != static_cast<size_t>(cloud.width) * cloud.height)
     throw_invalid("cloud.width", "cloud size does not match the camera");
+}
+
+// assign_zones over the cloud's pixel box `box` (no cloud pixel lies outside it); the cloud's
+// size is checked.
+std::vector<int8_t> assign_zones_in(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
+                                    const raycast::DepthCamera& camera, const PixelRect& box) {
   std::array<std::optional<Eigen::Vector2d>, kKinectJointCount> joint_px;
   for (int j = 0; j < kKinectJointCount; ++j) {
     if (!skeleton_K[j].allFinite()) throw_invalid("skeleton[" + std::to_string(j) + "]", "not finite");
     joint_px[j] = camera.project(skeleton_K[j]);
   }
-  std::vector<std::pair<Eigen::Vector2d, Eigen::Vector2d>> segments;
-  std::vector<BodyZone> segment_zone;
+  std::vector<Segment> segments;
   for (const Bone& bone : kBones)
     if (joint_px[bone.from] && joint_px[bone.to]) {
-      segments.emplace_back(*joint_px[bone.from], *joint_px[bone.to]);
-      segment_zone.push_back(bone.zone);
+      const Eigen::Vector2d ab = *joint_px[bone.to] - *joint_px[bone.from];
+      segments.push_back({*joint_px[bone.from], ab, ab.squaredNorm(), bone.zone});
     }
   if (segments.empty()) throw_precondition("skeleton", "no bone projects into the depth image");
 
   std::vector<int8_t> zone(cloud.valid.size(), -1);
-  for (int row = 0; row < cloud.height; ++row)
-    for (int col = 0; col < cloud.width; ++col) {
+  for (int row = box.row0; row <= box.row1; ++row)
+    for (int col = box.col0; col <= box.col1; ++col) {
       if (!cloud.has(col, row)) continue;
       const Eigen::Vector2d p(col, row);
       double best = std::numeric_limits<double>::infinity();
-      for (size_t s = 0; s < segments.size(); ++s) {
-        const double d2 = point_segment_distance2(p, segments[s].first, segments[s].second);
+      for (const Segment& segment : segments) {
+        const double d2 = point_segment_distance2(p, segment);
         if (d2 < best) {
           best = d2;
-          zone[static_cast<size_t>(row) * cloud.width + col] = static_cast<int8_t>(segment_zone[s]);
+          zone[static_cast<size_t>(row) * cloud.width + col] = static_cast<int8_t>(segment.zone);
         }
       }
     }
   return zone;
 }
 
+}  // namespace
+
+std::vector<int8_t> assign_zones(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
+                                 const raycast::DepthCamera& camera) {
+  check_size(cloud, camera);
+  return assign_zones_in(cloud, skeleton_K, camera, bounding_box(cloud));
+}
+
 std::vector<DepthSample> sample_depth_pixels(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
                                              const raycast::DepthCamera& camera, const ZoneSamplingParams& params) {
   validate(params);
-  const std::vector<int8_t> zone = assign_zones(cloud, skeleton_K, camera);
+  check_size(cloud, camera);
+  const PixelRect box = bounding_box(cloud);
+  const std::vector<int8_t> zone = assign_zones_in(cloud, skeleton_K, camera, box);
 
-  // Distance of each pixel to the nearest pixel outside the cloud; the cloud may fill the image.
-  std::vector<uint8_t> outside(cloud.valid.size());
+  // Distance of each cloud pixel to the nearest pixel outside the cloud, needed only up to the
+  // edge band: computed in the cloud's bounding box grown by the band (and a pixel), which holds
+  // every outside pixel within the band of a cloud pixel; beyond it the map stays infinite,
+  // which is as far from the band as the exact distance. The cloud may fill the image.
+  const int grow = static_cast<int>(std::ceil(std::min<double>(params.edge_band_px, cloud.width + cloud.height))) + 1;
+  const PixelRect band_region{std::max(0, box.col0 - grow), std::max(0, box.row0 - grow),
+                              std::min(cloud.width - 1, box.col1 + grow), std::min(cloud.height - 1, box.row1 + grow)};
+  std::vector<uint8_t> outside(cloud.valid.size(), 0);
   bool any_outside = false;
-  for (size_t i = 0; i < outside.size(); ++i) any_outside |= (outside[i] = !cloud.valid[i]) != 0;
+  for (int row = band_region.row0; row <= band_region.row1; ++row)
+    for (int col = band_region.col0; col <= band_region.col1; ++col) {
+      const size_t i = static_cast<size_t>(row) * cloud.width + col;
+      any_outside |= (outside[i] = !cloud.valid[i]) != 0;
+    }
   std::vector<float> to_outside_px(outside.size(), std::numeric_limits<float>::infinity());
-  if (any_outside) to_outside_px = silhouette_distance_map(outside, cloud.width, cloud.height).distance_px;
+  if (any_outside)
+    to_outside_px = silhouette_distance_map(outside, cloud.width, cloud.height, band_region).distance_px;
 
   std::array<std::vector<int>, kBodyZoneCount> edge_pixels, inner_pixels;
   for (size_t i = 0; i < zone.size(); ++i) {

@@ -184,6 +184,38 @@ TEST(FitBehindSurface, QuerySearchEqualsDenseTransformOnRandomFrames) {
   EXPECT_GT(compared_in_front, 2000);
 }
 
+// The map keeps the frame's depth inside the silhouette (recovered from the point cloud): a
+// point at a pixel's depth is behind, one half a millimetre nearer is not; pixels without a
+// reading or outside the silhouette are never behind.
+TEST(FitBehindSurface, KeepsTheFramesDepthExactly) {
+  const raycast::DepthCamera camera{testing::small_intrinsics(64, 53)};
+  std::mt19937_64 rng(11);
+  for (int scene = 0; scene < 3; ++scene) {
+    const DepthFrame frame = random_scene(camera, rng);
+    const PointCloud cloud = build_point_cloud(frame, camera);
+    const BehindSurfaceMap map(cloud, camera);
+    const BehindSurfaceMap from_frame(frame, camera);
+    EXPECT_EQ(map.grid_size(), from_frame.grid_size());
+    EXPECT_EQ(map.grid_origin_K(), from_frame.grid_origin_K());
+    int with_depth = 0;
+    for (int row = 0; row < camera.height(); ++row)
+      for (int col = 0; col < camera.width(); ++col) {
+        const size_t i = static_cast<size_t>(row) * camera.width() + col;
+        const Eigen::Vector3d ray = camera.pixel_ray(col, row).cast<double>();
+        if (frame.body_index[i] == kNoBody || frame.depth_mm[i] == kNoDepth) {
+          EXPECT_FALSE(map.is_behind(ray * 10.0)) << col << ", " << row;
+          continue;
+        }
+        const double z = frame.depth_mm[i] * 1e-3;
+        EXPECT_TRUE(map.is_behind(ray * z)) << col << ", " << row;
+        EXPECT_FALSE(map.is_behind(ray * (z - 0.0005))) << col << ", " << row;
+        ++with_depth;
+      }
+    EXPECT_GT(with_depth, 100);
+  }
+  EXPECT_EQ(testing::error_field([&] { BehindSurfaceMap(PointCloud::empty(3, 3), camera); }), "cloud.width");
+}
+
 // A cache used with a new frame's map (which may sit at the old map's address) starts afresh.
 TEST(FitBehindSurface, CacheFollowsTheFrameNotTheAddress) {
   const raycast::DepthCamera camera{testing::small_intrinsics(64, 53)};

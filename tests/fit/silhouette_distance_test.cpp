@@ -52,6 +52,49 @@ TEST(FitSilhouetteDistance, EqualsBruteForceOnASinglePixelAndADisk) {
   expect_equals_brute_force(disk, 40, 30);
 }
 
+// Restricted to a region that holds every silhouette pixel, the map equals the full-image map
+// inside the region (distances exactly; the closest pixel attains the same distance) and is
+// empty outside it.
+TEST(FitSilhouetteDistance, RegionMapEqualsTheFullMapInsideTheRegion) {
+  std::mt19937_64 rng(5);
+  for (int trial = 0; trial < 20; ++trial) {
+    const int width = 40 + trial, height = 30 + trial / 2;
+    std::vector<uint8_t> silhouette(static_cast<size_t>(width) * height, 0);
+    std::uniform_int_distribution<int> col(8, width - 9), row(6, height - 7), size(1, 6);
+    PixelRect box{width, height, -1, -1};
+    for (int blob = 0; blob < 1 + trial % 4; ++blob) {
+      const int c = col(rng), r = row(rng), half = size(rng);
+      for (int y = r - half / 2; y <= r + half; ++y)
+        for (int x = c - half; x <= c + half / 2; ++x) {
+          silhouette[static_cast<size_t>(y) * width + x] = 1;
+          box = {std::min(box.col0, x), std::min(box.row0, y), std::max(box.col1, x), std::max(box.row1, y)};
+        }
+    }
+    const int grow = trial % 5;
+    const PixelRect region{std::max(0, box.col0 - grow), std::max(0, box.row0 - grow),
+                           std::min(width - 1, box.col1 + grow), std::min(height - 1, box.row1 + grow)};
+    const SilhouetteDistanceMap full = silhouette_distance_map(silhouette, width, height);
+    const SilhouetteDistanceMap part = silhouette_distance_map(silhouette, width, height, region);
+    for (int r = 0; r < height; ++r)
+      for (int c = 0; c < width; ++c) {
+        const size_t i = static_cast<size_t>(r) * width + c;
+        const bool inside = c >= region.col0 && c <= region.col1 && r >= region.row0 && r <= region.row1;
+        if (!inside) {
+          EXPECT_EQ(part.closest_pixel[i], -1);
+          EXPECT_EQ(part.distance_px[i], std::numeric_limits<float>::infinity());
+          continue;
+        }
+        ASSERT_EQ(part.distance_px[i], full.distance_px[i]) << "trial " << trial << " pixel " << c << ", " << r;
+        const int32_t k = part.closest_pixel[i];
+        ASSERT_TRUE(silhouette[static_cast<size_t>(k)]);
+        EXPECT_NEAR(quasi_euclidean_distance(k % width - c, k / width - r), full.distance_px[i], 1e-4);
+      }
+  }
+  const std::vector<uint8_t> one(12, 1);
+  EXPECT_EQ(testing::error_field([&] { silhouette_distance_map(one, 4, 3, PixelRect{0, 0, 4, 2}); }), "region");
+  EXPECT_EQ(testing::error_field([&] { silhouette_distance_map(one, 4, 3, PixelRect{2, 0, 1, 2}); }), "region");
+}
+
 TEST(FitSilhouetteDistance, InsideIsIdentityAndOutsideImageIsClamped) {
   const raycast::DepthCamera camera{testing::small_intrinsics(64, 53)};
   const DepthFrame frame = testing::render_sphere(camera, {0, 0, 1}, 0.2);

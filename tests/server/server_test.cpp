@@ -354,11 +354,13 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   EXPECT_EQ(info.stages(0).name(), "imu_orientation");
   EXPECT_EQ(info.stages(1).name(), "forearm");
   EXPECT_EQ(info.stages(2).name(), "body_fit");
-  ASSERT_EQ(info.options_size(), 19);
+  ASSERT_EQ(info.options_size(), 20);
   EXPECT_EQ(info.options(10).key(), "fit.enabled");
   EXPECT_EQ(info.options(10).default_value(), "false");
   EXPECT_EQ(info.options(17).key(), "fit.fine_shape");
   EXPECT_EQ(info.options(18).key(), "fit.lambda_imu");
+  EXPECT_EQ(info.options(19).key(), "fit.skeleton_start_energy");
+  EXPECT_EQ(info.options(19).default_value(), "45");
   EXPECT_EQ(info.options(0).key(), "imu.tau_acc_s");
   EXPECT_EQ(info.options(2).key(), "imu.mag_calibration.<device_id>");
   EXPECT_EQ(info.options(3).key(), "forearm.K_from_B");

@@ -90,18 +90,27 @@ v1::SessionHeader header_with(std::map<std::string, std::string> options,
   return header;
 }
 
-// Runs the stage over the session's chunks, keeping those `keep` accepts.
+// Runs the stage over the session's chunks, keeping those `keep` accepts; `stats` receives the
+// stage's per-frame statistics.
 template <class Keep>
-Output run(const v1::SessionHeader& header, Keep keep, const sim::CameraSessionResult& from = session()) {
+Output run(const v1::SessionHeader& header, Keep keep, const sim::CameraSessionResult& from = session(),
+           std::vector<BodyFitFrameStats>* stats = nullptr) {
   Output out;
   BodyFitStage stage;
+  stage.record_frame_stats(stats != nullptr);
   stage.start(header, out);
   for (const auto& chunk : from.chunks) {
     if (keep(chunk)) stage.on_chunk(chunk, out);
   }
   stage.finish(out);
+  if (stats) *stats = stage.frame_stats();
+  if (!stats) {
+    EXPECT_TRUE(stage.frame_stats().empty());  // not recorded unless asked
+  }
   return out;
 }
+
+const auto kAllChunks = [](const v1::SessionChunk&) { return true; };
 
 const Output& full_run() {
   static const Output out = run(header_with({}), [](const v1::SessionChunk&) { return true; });
@@ -297,6 +306,67 @@ TEST(BodyFitStage, BadOptionsAreErrors) {
   EXPECT_THROW(fourth.start(header_with({{"fit.fine_shape", "maybe"}}), out), Error);
   BodyFitStage fifth;
   EXPECT_THROW(fifth.start(header_with({{"fit.lambda_imu", "-1"}}), out), Error);
+  for (const char* energy : {"-1", "nan", "inf", "x"}) {
+    BodyFitStage stage_with;
+    EXPECT_THROW(stage_with.start(header_with({{"fit.skeleton_start_energy", energy}}), out), Error) << energy;
+  }
+}
+
+TEST(BodyFitStage, SkeletonStartPolicyDecision) {
+  EXPECT_TRUE(needs_skeleton_start(std::nullopt, 45));  // no previous frame: the skeleton start alone
+  EXPECT_TRUE(needs_skeleton_start(45, 45));
+  EXPECT_TRUE(needs_skeleton_start(1e6, 45));
+  EXPECT_TRUE(needs_skeleton_start(std::nan(""), 45));
+  EXPECT_FALSE(needs_skeleton_start(44.9, 45));
+  EXPECT_TRUE(needs_skeleton_start(1.0, 0));  // policy off: always both
+}
+
+// Default policy: the skeleton start runs exactly where the policy asks for it, and the reported
+// energy is the lower of the starts that ran.
+TEST(BodyFitStage, SkeletonStartRunsOnlyWhenThePreviousFitIsNotGood) {
+  for (const char* threshold : {"45", "5"}) {  // 5: below the session's energies, so both starts run
+    std::vector<BodyFitFrameStats> stats;
+    const Output out = run(header_with({{"fit.skeleton_start_energy", threshold}}), kAllChunks, session(), &stats);
+    const auto frames = out.frames();
+    ASSERT_EQ(stats.size(), frames.size());
+    int skipped = 0;
+    for (size_t i = 0; i < stats.size(); ++i) {
+      const BodyFitFrameStats& f = stats[i];
+      const bool had_previous = f.iterations_previous > 0;
+      EXPECT_EQ(had_previous, i > 0) << "frame " << i;  // this session never loses tracking
+      const bool expected = needs_skeleton_start(had_previous ? std::optional<double>(f.energy_previous) : std::nullopt,
+                                                 std::stod(threshold));
+      EXPECT_EQ(f.iterations_skeleton > 0, expected) << "frame " << i;
+      skipped += !expected;
+      const double lower = std::min(had_previous ? f.energy_previous : INFINITY,
+                                    expected ? f.energy_skeleton : INFINITY);
+      EXPECT_EQ(f.previous_won, had_previous && f.energy_previous == lower);
+      EXPECT_GT(f.total_s(), 0.0);
+    }
+    std::printf("threshold %s: skeleton start skipped in %d of %zu frames\n", threshold, skipped, stats.size());
+    if (std::string(threshold) == "5") {
+      EXPECT_EQ(skipped, 0);
+    }
+  }
+}
+
+// Policy off: both starts on every frame, the skeleton start on a second thread; the lower
+// energy is kept and each start's CPU time is reported.
+TEST(BodyFitStage, BothStartsRunOnTwoThreadsWhenThePolicyIsOff) {
+  std::vector<BodyFitFrameStats> stats;
+  const Output out = run(header_with({{"fit.skeleton_start_energy", "0"}}), kAllChunks, session(), &stats);
+  for (const auto& w : out.warnings) ADD_FAILURE() << w.code() << " " << w.field() << ": " << w.message();
+  ASSERT_EQ(stats.size(), out.frames().size());
+  for (size_t i = 0; i < stats.size(); ++i) {
+    const BodyFitFrameStats& f = stats[i];
+    EXPECT_GT(f.iterations_skeleton, 0) << "frame " << i;
+    EXPECT_GT(f.fit_skeleton_s, 0.0) << "frame " << i;
+    if (i == 0) continue;
+    EXPECT_GT(f.iterations_previous, 0) << "frame " << i;
+    EXPECT_GT(f.fit_previous_s, 0.0) << "frame " << i;
+    EXPECT_EQ(f.previous_won, f.energy_previous <= f.energy_skeleton) << "frame " << i;
+    EXPECT_DOUBLE_EQ(out.frames()[i]->fit_energy(), std::min(f.energy_previous, f.energy_skeleton));
+  }
 }
 
 TEST(BodyFitStage, SkeletonConversionChecksTheJointCount) {

@@ -2,11 +2,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <future>
 #include <string>
 #include <utility>
 
 #include "body/template_generator.hpp"
 #include "common/error.hpp"
+#include "common/thread_cpu_time.hpp"
 #include "fit/arm_roll.hpp"
 #include "fit/camera_joints.hpp"
 #include "fit/frame_fitter.hpp"
@@ -34,6 +36,7 @@ constexpr const char* kLostEnergyKey = "fit.lost_energy";
 constexpr const char* kMaxIterationsKey = "fit.max_iterations";
 constexpr const char* kFineShapeKey = "fit.fine_shape";
 constexpr const char* kLambdaImuKey = "fit.lambda_imu";
+constexpr const char* kSkeletonStartEnergyKey = "fit.skeleton_start_energy";
 
 // Depth, body index and skeleton of one frame share the depth frame's t_us (1 ms tolerance).
 constexpr std::int64_t kSameFrameUs = 1000;
@@ -101,6 +104,10 @@ void set_joint(v1::JointEstimate& joint, const Eigen::Vector3d& p_K, v1::Source 
 
 }  // namespace
 
+bool needs_skeleton_start(std::optional<double> previous_energy, double skeleton_start_energy) {
+  return !previous_energy || skeleton_start_energy <= 0.0 || !(*previous_energy < skeleton_start_energy);
+}
+
 fit::TrackedSkeleton tracked_skeleton_from_proto(const v1::SkeletonFrame& skeleton) {
   if (skeleton.joints_size() != fit::kKinectJointCount) {
     throw_invalid("skeleton.joints", "holds " + std::to_string(skeleton.joints_size()) + " joints, expected 25");
@@ -120,6 +127,7 @@ struct BodyFitStage::Work {
   body::PoseLayout layout = body::PoseLayout::upper_body();
   fit::FitOptions fit_options;
   fit::FrameFitter fitter;
+  std::optional<fit::FrameFitter> second_fitter;  // the skeleton start's, when both run on two threads
   fit::PoseSmoother smoother;
   Eigen::VectorXd beta;
   std::optional<fit::Personalisation> personalisation;
@@ -134,6 +142,11 @@ struct BodyFitStage::Work {
         fitter(model, layout, intrinsics, options),
         smoother(layout, smoothing),
         beta(Eigen::VectorXd::Zero(model->num_betas())) {}
+
+  fit::FrameFitter& fitter_for_second_thread() {
+    if (!second_fitter) second_fitter.emplace(model, layout, camera.intrinsics(), fit_options);
+    return *second_fitter;
+  }
 
   void set_shape(const Eigen::VectorXd& shape) {
     beta = shape;
@@ -153,7 +166,7 @@ std::string_view BodyFitStage::description() const {
 std::vector<StageOption> BodyFitStage::options() const {
   const fit::FitOptions defaults;
   return {
-      {kEnabledKey, "false", "run the body-model fit (about 0.1-0.2 s per depth frame on one core: off by default)"},
+      {kEnabledKey, "false", "run the body-model fit (about 25 ms per depth frame on one core: off by default)"},
       {kCalibrationSKey, "1", "personalisation: the first seconds of depth frames (controlled pose), seconds"},
       {kBodyIdKey, "", "the person to fit (body index / skeleton body_id); default the first skeleton's"},
       {kSmoothingKey, "3", "moving average of the fitted poses over this many frames (odd; 1 = none)"},
@@ -162,6 +175,9 @@ std::vector<StageOption> BodyFitStage::options() const {
       {kMaxIterationsKey, std::to_string(defaults.max_iterations), "LM iterations per start at most"},
       {kFineShapeKey, "true", "personalisation: fine shape tuning on a calibration depth frame (paper 2 III-B)"},
       {kLambdaImuKey, format_double(defaults.lambda_imu), "weight of the imu term (eq. 9), >= 0"},
+      {kSkeletonStartEnergyKey, format_double(kDefaultSkeletonStartEnergy),
+       "II-G: fit the skeleton-built start only when the previous-frame fit ends at this energy or above (0 = "
+       "always both starts, on two threads)"},
   };
 }
 
@@ -172,6 +188,11 @@ void BodyFitStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) 
   imu_wait_s_ = positive_option(header, kImuWaitKey, imu_wait_s_);
   lost_energy_ = positive_option(header, kLostEnergyKey, lost_energy_);
   fine_shape_ = bool_option(header, kFineShapeKey, true);
+  if (const std::string* text = option(header, kSkeletonStartEnergyKey)) {
+    skeleton_start_energy_ = parse_double(*text, option_field(kSkeletonStartEnergyKey));
+    if (!std::isfinite(skeleton_start_energy_) || skeleton_start_energy_ < 0.0)
+      throw_invalid(option_field(kSkeletonStartEnergyKey), "is '" + *text + "', must be finite and not negative");
+  }
   if (const std::string* text = option(header, kBodyIdKey)) {
     body_id_ = static_cast<std::uint32_t>(parse_uint64(*text, option_field(kBodyIdKey)));
   }
@@ -210,6 +231,7 @@ void BodyFitStage::on_chunk(const v1::SessionChunk& chunk, StageOutput& out) {
     const v1::SkeletonFrame& skeleton = chunk.skeleton();
     if (!body_id_) body_id_ = skeleton.body_id();
     if (skeleton.body_id() != *body_id_ || !depth_ || std::llabs(depth_->first - skeleton.t_us()) > kSameFrameUs) return;
+    const double assemble_start = thread_cpu_seconds();
     BodyFitFrame frame;
     frame.t_us = depth_->first;
     frame.frame.width = work_->camera.width();
@@ -224,6 +246,7 @@ void BodyFitStage::on_chunk(const v1::SessionChunk& chunk, StageOutput& out) {
       }
     }
     frame.skeleton = tracked_skeleton_from_proto(skeleton);
+    frame.assemble_s = thread_cpu_seconds() - assemble_start;
     add_frame(std::move(frame), out);
   }
 }
@@ -349,6 +372,16 @@ void BodyFitStage::fit_ready(bool all, StageOutput& out) {
 
 void BodyFitStage::fit_frame(BodyFitFrame& frame, StageOutput& out) {
   Work& w = *work_;
+  BodyFitFrameStats stats;
+  stats.t_us = frame.t_us;
+  stats.assemble_s = frame.assemble_s;
+  double lap = thread_cpu_seconds();
+  // Adds the CPU time since the last lap to `part`.
+  const auto take = [&lap](double& part) {
+    const double now = thread_cpu_seconds();
+    part += now - lap;
+    lap = now;
+  };
   try {
     fit::ForearmDirections directions;
     const auto left = K_from_F_at(v1::LEFT, frame.t_us), right = K_from_F_at(v1::RIGHT, frame.t_us);
@@ -359,23 +392,74 @@ void BodyFitStage::fit_frame(BodyFitFrame& frame, StageOutput& out) {
       positions = frame.skeleton->positions_K;
       fit::remove_off_body_depth(frame.frame, *frame.skeleton);  // body index / depth misalignment
     }
+    take(stats.cleanup_s);
     const fit::FrameObservation observation =
-        fit::prepare_observation(frame.frame, w.camera, positions, w.fit_options, directions);
+        fit::prepare_observation(frame.frame, w.camera, positions, w.fit_options, directions, &stats.observation);
+    lap = thread_cpu_seconds();
 
-    // II-G: from the skeleton-built pose and from the previous frame's; the lower energy wins.
+    // II-G: from the previous frame's pose and from the skeleton-built pose; the lower energy
+    // wins. The skeleton start is fitted only when the previous one is missing or ends at
+    // skeleton_start_energy_ or above (docs/fitting.md, "Start policy"); with the policy off
+    // both always run, the skeleton start on a second thread.
     const Eigen::VectorXd previous = previous_theta_.value_or(Eigen::VectorXd());
     std::optional<fit::FitResult> best;
-    std::optional<Error> start_error;
-    try {
-      const fit::SkeletonInitResult start = w.init->initialise(*frame.skeleton, previous);
-      best = w.fitter.fit(observation, start.theta, w.beta);
-    } catch (const Error& e) {
-      if (previous.size() == 0) throw;
-      start_error = e;
-    }
-    if (previous.size() > 0) {
-      fit::FitResult from_previous = w.fitter.fit(observation, previous, w.beta);
-      if (!best || from_previous.energy.total() < best->energy.total()) best = std::move(from_previous);
+    const auto keep_lower = [&](fit::FitResult&& result, bool from_previous) {
+      if (from_previous) {
+        stats.iterations_previous = result.iterations;
+        stats.energy_previous = result.energy.total();
+      } else {
+        stats.iterations_skeleton = result.iterations;
+        stats.energy_skeleton = result.energy.total();
+      }
+      if (!best || result.energy.total() < best->energy.total()) {
+        best = std::move(result);
+        stats.previous_won = from_previous;
+      }
+    };
+    // The skeleton-built start; without a previous pose its errors are the frame's.
+    const auto skeleton_start = [&]() -> std::optional<Eigen::VectorXd> {
+      try {
+        Eigen::VectorXd theta = w.init->initialise(*frame.skeleton, previous).theta;
+        take(stats.start_pose_s);
+        return theta;
+      } catch (const Error&) {
+        if (previous.size() == 0) throw;
+        take(stats.start_pose_s);
+        return std::nullopt;
+      }
+    };
+    if (previous.size() > 0 && skeleton_start_energy_ == 0.0) {
+      if (const auto start = skeleton_start()) {
+        fit::FrameFitter& second = w.fitter_for_second_thread();
+        auto job = std::async(std::launch::async, [&] {
+          const double cpu_start = thread_cpu_seconds();
+          fit::FitResult result = second.fit(observation, *start, w.beta);
+          return std::make_pair(std::move(result), thread_cpu_seconds() - cpu_start);
+        });
+        lap = thread_cpu_seconds();
+        fit::FitResult from_previous = w.fitter.fit(observation, previous, w.beta);
+        take(stats.fit_previous_s);
+        auto [from_skeleton, skeleton_cpu_s] = job.get();
+        lap = thread_cpu_seconds();  // waiting is not work
+        stats.fit_skeleton_s = skeleton_cpu_s;
+        keep_lower(std::move(from_previous), true);
+        keep_lower(std::move(from_skeleton), false);
+      } else {
+        keep_lower(w.fitter.fit(observation, previous, w.beta), true);
+        take(stats.fit_previous_s);
+      }
+    } else {
+      if (previous.size() > 0) {
+        keep_lower(w.fitter.fit(observation, previous, w.beta), true);
+        take(stats.fit_previous_s);
+      }
+      if (needs_skeleton_start(best ? std::optional<double>(best->energy.total()) : std::nullopt,
+                               skeleton_start_energy_)) {
+        if (const auto start = skeleton_start()) {
+          keep_lower(w.fitter.fit(observation, *start, w.beta), false);
+          take(stats.fit_skeleton_s);
+        }
+      }
     }
     const double energy = best->energy.total();
     if (energy > lost_energy_) {
@@ -387,6 +471,8 @@ void BodyFitStage::fit_frame(BodyFitFrame& frame, StageOutput& out) {
     fitted_.push_back({frame.t_us, *frame.skeleton, energy, directions.left_K || directions.right_K});
     ++frames_fitted_;
     if (const auto smoothed = w.smoother.push(best->theta)) emit_smoothed(*smoothed, out);
+    take(stats.post_s);
+    if (record_stats_) stats_.push_back(stats);
   } catch (const Error& e) {
     out.warn("FIT_FRAME", e.field(), "frame t_us=" + std::to_string(frame.t_us) + " not fitted: " + e.what());
   }

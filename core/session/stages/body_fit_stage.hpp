@@ -14,8 +14,10 @@
 //     fit::make_depth_shape_refiner; `fit.fine_shape`, default on). When the fine tuning refuses
 //     (FIT_FINE_SHAPE) the rough shape is used; when the subject is not in the controlled pose the
 //     stage warns FIT_PERSONALISATION and fits the template shape (beta = 0).
-//  3. Per frame (II-G, II-H): prepare_observation, the starting pose from the camera skeleton and
-//     the previous frame's pose, one LM fit from each, the lower energy wins. Tracking is lost
+//  3. Per frame (II-G, II-H): prepare_observation, an LM fit from the previous frame's pose and
+//     one from the starting pose built from the camera skeleton, the lower energy wins; the
+//     skeleton start is fitted only when the previous-frame fit is missing or ends at
+//     `fit.skeleton_start_energy` or above (0: both always, on two threads). Tracking is lost
 //     when the winner's energy exceeds `fit.lost_energy`: the next frame starts from the skeleton
 //     only. Frames wait (up to `fit.imu_wait_s`) until the forearm orientations covering them have
 //     arrived, so that the imu term has them; then they are fitted without.
@@ -35,6 +37,7 @@
 // for an empty silhouette, "skeleton" for a missing one); the session goes on.
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <map>
 #include <memory>
 #include <optional>
@@ -45,6 +48,7 @@
 #include <Eigen/Geometry>
 
 #include "fit/depth_frame.hpp"
+#include "fit/frame_observation.hpp"
 #include "fit/tracked_skeleton.hpp"
 #include "session/pipeline_stage.hpp"
 
@@ -55,7 +59,36 @@ struct BodyFitFrame {
   std::int64_t t_us = 0;
   fit::DepthFrame frame;
   std::optional<fit::TrackedSkeleton> skeleton;
+  double assemble_s = 0;  // thread CPU seconds spent assembling it (BodyFitFrameStats)
 };
+
+// Per fitted frame: where the stage's CPU time went and what the two starts of II-G did (for the
+// per-phase benchmark tables and the tests of the start policy). Times are CPU seconds of the
+// thread that did the work; a start that was not run has 0 iterations and a NaN energy.
+struct BodyFitFrameStats {
+  std::int64_t t_us = 0;
+  double assemble_s = 0;  // depth, body index and skeleton into one frame (decoding not counted)
+  double cleanup_s = 0;   // fit::remove_off_body_depth
+  fit::ObservationTimes observation;  // fit::prepare_observation by part
+  double start_pose_s = 0;     // the skeleton-built starting pose (SkeletonPoseInitializer)
+  double fit_previous_s = 0;   // LM from the previous frame's pose
+  double fit_skeleton_s = 0;   // LM from the skeleton-built pose
+  double post_s = 0;           // smoothing, joints, forearm roll, the emitted result
+  int iterations_previous = 0, iterations_skeleton = 0;
+  double energy_previous = std::numeric_limits<double>::quiet_NaN();
+  double energy_skeleton = std::numeric_limits<double>::quiet_NaN();
+  bool previous_won = false;
+  double total_s() const {
+    return assemble_s + cleanup_s + observation.total_s() + start_pose_s + fit_previous_s + fit_skeleton_s + post_s;
+  }
+};
+
+// Paper 2 II-G start policy (docs/fitting.md, "Start policy"): the skeleton-built start is fitted
+// when there is no previous-frame fit (`previous_energy` empty), when the policy is off
+// (`skeleton_start_energy` <= 0: both starts always) or when the previous-frame fit ended at
+// `skeleton_start_energy` or above (or at a NaN energy).
+inline constexpr double kDefaultSkeletonStartEnergy = 45.0;
+bool needs_skeleton_start(std::optional<double> previous_energy, double skeleton_start_energy);
 
 // SkeletonFrame -> TrackedSkeleton. Throws posefuse::Error "skeleton.joints" for a frame that
 // does not hold 25 joints.
@@ -74,6 +107,12 @@ class BodyFitStage : public Stage {
   void on_result(const v1::FitResult& result, StageOutput& out) override;
   void finish(StageOutput& out) override;
 
+  // With `on`, every fitted frame from then on appends a BodyFitFrameStats (off by default: a
+  // long session would grow the list without bound).
+  void record_frame_stats(bool on) { record_stats_ = on; }
+  // One entry per fitted frame while recording, in fit order.
+  const std::vector<BodyFitFrameStats>& frame_stats() const { return stats_; }
+
  private:
   struct Work;  // models, fitter, smoother: built in start()
 
@@ -91,6 +130,7 @@ class BodyFitStage : public Stage {
   double imu_wait_s_ = 6.0;
   double lost_energy_ = 100.0;
   bool fine_shape_ = true;
+  double skeleton_start_energy_ = kDefaultSkeletonStartEnergy;
   std::optional<std::uint32_t> body_id_;
   int arm_imus_ = 0;  // arm IMUs in the header
 
@@ -116,6 +156,8 @@ class BodyFitStage : public Stage {
   };
   std::deque<Fitted> fitted_;
   std::optional<Eigen::VectorXd> previous_theta_;
+  bool record_stats_ = false;
+  std::vector<BodyFitFrameStats> stats_;
   std::uint64_t frames_fitted_ = 0, frames_lost_ = 0;
 };
 
