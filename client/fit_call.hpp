@@ -5,6 +5,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -32,11 +33,13 @@ struct FitOutcome {
 };
 
 // Streams `recording` over `channel` and writes results with `writer`. `on_progress` is called
-// from the receiving thread now and then (at most every 200 ms). Never throws for server-side
-// problems: look at the outcome.
+// from the receiving thread now and then (at most every 200 ms). `header_options` replace the
+// recording's SessionHeader.options of the same keys (see Recording). Never throws for
+// server-side problems: look at the outcome.
 FitOutcome run_fit(const std::shared_ptr<grpc::Channel>& channel,
                    const std::filesystem::path& recording, ResultWriter& writer,
-                   const std::function<void(const FitProgress&)>& on_progress = {});
+                   const std::function<void(const FitProgress&)>& on_progress = {},
+                   const std::map<std::string, std::string>& header_options = {});
 
 // A channel to `address` (host:port) with the client's message size limits, secured as
 // `security` says (plaintext, no token by default).

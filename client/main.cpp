@@ -32,6 +32,9 @@ namespace client = posefuse::client;
 constexpr const char* kUsage =
     "usage:\n"
     "  posefuse fit RECORDING --server HOST:PORT --out DIR   stream a recording, write results\n"
+    "      [--option KEY=VALUE ...]        set a stage option in the recording's header for this\n"
+    "                                      call (e.g. --option fit.enabled=true; posefuse info\n"
+    "                                      lists them); fit and upload take it\n"
     "  posefuse convert IN OUT             recording directory <-> chunk file (.pfchunks)\n"
     "  posefuse health --server HOST:PORT  exit 0 when the server is SERVING\n"
     "  posefuse info --server HOST:PORT    versions, stages, options and limits\n"
@@ -40,7 +43,8 @@ constexpr const char* kUsage =
     "batch jobs (server started with --data-dir):\n"
     "  posefuse submit RECORDING_URI [--label TEXT]  a recording under the server's\n"
     "                                      --recordings-root; prints the job id\n"
-    "  posefuse upload RECORDING [--label TEXT]  stream a local recording into the server's\n"
+    "  posefuse upload RECORDING [--label TEXT] [--option KEY=VALUE ...]\n"
+    "                                      stream a local recording into the server's\n"
     "                                      job store; prints the job id\n"
     "  posefuse jobs                       list jobs, newest first\n"
     "  posefuse watch JOB_ID               follow a job until it has finished\n"
@@ -58,6 +62,7 @@ constexpr int kExitUsage = 2;
 struct Arguments {
   std::vector<std::string> positional;
   std::map<std::string, std::string> flags;
+  std::map<std::string, std::string> header_options;  // --option KEY=VALUE; a later same KEY wins
 
   std::string flag(const std::string& name, const std::string& fallback) const {
     const auto it = flags.find(name);
@@ -73,7 +78,11 @@ Arguments parse_arguments(int argc, char** argv, int first) {
       args.positional.push_back(text);
       continue;
     }
-    if (const auto eq = text.find('='); eq != std::string::npos) {
+    if (text == "--option" || text.rfind("--option=", 0) == 0) {  // repeatable: one stage option each
+      if (text == "--option" && i + 1 >= argc) throw posefuse::Error(posefuse::ErrorCode::kInvalidArgument, text, "needs KEY=VALUE");
+      const auto [key, value] = client::parse_header_option(text == "--option" ? argv[++i] : text.substr(9));
+      args.header_options[key] = value;
+    } else if (const auto eq = text.find('='); eq != std::string::npos) {
       args.flags[text.substr(0, eq)] = text.substr(eq + 1);
     } else if (i + 1 < argc) {
       args.flags[text] = argv[++i];
@@ -89,6 +98,11 @@ void require(bool ok, const std::string& what) {
 }
 
 void check_flags(const Arguments& args, const std::vector<std::string>& known) {
+  if (!args.header_options.empty()) {
+    bool takes_options = false;
+    for (const auto& k : known) takes_options = takes_options || k == "--option";
+    require(takes_options, "unknown option --option (only fit and upload set stage options)");
+  }
   for (const auto& [name, value] : args.flags) {
     bool found = false;
     for (const auto& k : known) found = found || k == name;
@@ -158,7 +172,7 @@ class ProgressLine {
 };
 
 int command_fit(const Arguments& args) {
-  check_server_flags(args, {"--out"});
+  check_server_flags(args, {"--out", "--option"});
   require(args.positional.size() == 1, "fit takes one RECORDING (see posefuse --help)");
   require(args.flags.count("--out") == 1, "fit needs --out DIR");
   const std::string server = args.flag("--server", "127.0.0.1:50051");
@@ -166,7 +180,7 @@ int command_fit(const Arguments& args) {
   ProgressLine progress;
   const client::FitOutcome outcome = client::run_fit(
       connect(args), args.positional[0], writer,
-      [&](const client::FitProgress& p) { progress.show(p, false); });
+      [&](const client::FitProgress& p) { progress.show(p, false); }, args.header_options);
   if (outcome.local_error) {
     progress.interrupt();
     throw *outcome.local_error;
@@ -298,8 +312,10 @@ std::string job_line(const posefuse::v1::Job& job) {
 }
 
 std::unique_ptr<posefuse::v1::PoseFuse::Stub> job_stub(const Arguments& args,
-                                                       std::size_t positional) {
-  check_server_flags(args, {"--label", "--out"});
+                                                       std::size_t positional, bool takes_header_options = false) {
+  std::vector<std::string> known{"--label", "--out"};
+  if (takes_header_options) known.emplace_back("--option");
+  check_server_flags(args, known);
   require(args.positional.size() == positional, "wrong number of arguments (see --help)");
   return posefuse::v1::PoseFuse::NewStub(connect(args));
 }
@@ -330,8 +346,8 @@ int command_submit(const Arguments& args) {
 // Streams a local recording into the server's job store (SubmitJob by upload): the server
 // spools it to disk and runs it like a job by reference.
 int command_upload(const Arguments& args) {
-  auto stub = job_stub(args, 1);
-  client::Recording recording(args.positional[0]);
+  auto stub = job_stub(args, 1, true);
+  client::Recording recording(args.positional[0], args.header_options);
   grpc::ClientContext context;  // no deadline: a long recording takes as long as it takes
   posefuse::v1::Job job;
   auto writer = stub->SubmitJob(&context, &job);

@@ -1,5 +1,7 @@
 #include "client/recording.hpp"
 
+#include <utility>
+
 #include "common/error.hpp"
 #include "session/directory_layout.hpp"
 #include "session/directory_reader.hpp"
@@ -30,7 +32,8 @@ std::uint64_t expected_directory_chunks(const std::filesystem::path& directory) 
 
 }  // namespace
 
-Recording::Recording(const std::filesystem::path& path) {
+Recording::Recording(const std::filesystem::path& path, std::map<std::string, std::string> header_options)
+    : header_options_(std::move(header_options)) {
   if (!std::filesystem::exists(path)) {
     throw Error(ErrorCode::kNotFound, path.string(), "no such file or directory");
   }
@@ -50,6 +53,9 @@ Recording::~Recording() = default;
 bool Recording::next(session::SessionChunk& chunk) {
   if (!reader_->next(chunk)) return false;
   ++chunks_read_;
+  if (chunk.has_header()) {
+    for (const auto& [key, value] : header_options_) (*chunk.mutable_header()->mutable_options())[key] = value;
+  }
   return true;
 }
 
@@ -61,6 +67,19 @@ double Recording::fraction_read() const {
   }
   if (expected_chunks_ == 0) return -1.0;
   return std::min(1.0, static_cast<double>(chunks_read_) / static_cast<double>(expected_chunks_));
+}
+
+std::pair<std::string, std::string> parse_header_option(const std::string& text) {
+  const auto eq = text.find('=');
+  if (eq == std::string::npos || eq == 0) {
+    throw Error(ErrorCode::kInvalidArgument, "--option", "is '" + text + "', expected KEY=VALUE (e.g. fit.enabled=true)");
+  }
+  for (const unsigned char c : text) {
+    if (c <= ' ' || c == 0x7f) {
+      throw Error(ErrorCode::kInvalidArgument, "--option", "'" + text + "' has whitespace or a control character");
+    }
+  }
+  return {text.substr(0, eq), text.substr(eq + 1)};
 }
 
 }  // namespace posefuse::client

@@ -1,6 +1,8 @@
 #include "session/result_reader.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <utility>
 
 #include "body/smpl_model.hpp"
 #include "common/error.hpp"
@@ -138,20 +140,25 @@ std::vector<JointRow> read_joints(ResultDirectory& out, const char* name, int jo
   });
 }
 
+// Not in time order, even per arm: the forearm stage and, with `fit.enabled`, the body-fit stage
+// both report each frame's forearms, the body fit up to `fit.imu_wait_s` later. Sorted by
+// (arm, t_us) here, the rows of one frame kept in file order.
 std::vector<ForearmRow> read_forearms(ResultDirectory& out) {
-  std::map<v1::Arm, std::int64_t> previous;  // per arm: each arm's frames are written as they are ready
-  return read_rows<ForearmRow>(out, result_layout::kForearmsCsv, result_layout::kForearmColumns,
+  std::vector<ForearmRow> rows = read_rows<ForearmRow>(out, result_layout::kForearmsCsv, result_layout::kForearmColumns,
                                [&](const ResultCsv& csv, const std::vector<ForearmRow>&) {
     ForearmRow row;
     row.arm = csv.arm(1);
-    const bool first = !previous.count(row.arm);
-    row.t_us = csv.time_after(0, previous[row.arm], first);
+    row.t_us = csv.int64(0);
     row.K_from_F = csv.quat(2);
     row.pronation_rad = csv.number(6);
     row.source = csv.source(7);
     row.confidence = csv.number(8);
     return row;
   });
+  std::stable_sort(rows.begin(), rows.end(), [](const ForearmRow& a, const ForearmRow& b) {
+    return std::make_pair(static_cast<int>(a.arm), a.t_us) < std::make_pair(static_cast<int>(b.arm), b.t_us);
+  });
+  return rows;
 }
 
 std::vector<ImuPositionRow> read_imu_positions(ResultDirectory& out) {

@@ -9,8 +9,10 @@
 // header row, the number of fields, numbers that parse and are finite, unit quaternions
 // (within 1e-3), joint indices and names in SMPL / Kinect v2 order, enum names (source, arm,
 // method), device ids that are safe file names, and t_us that never goes back in a file (per
-// arm in forearms.csv and per device in imu_positions.csv, whose arms are written as each is
-// ready; per segment in recovered_segments.csv). A violation throws
+// device in imu_positions.csv, whose devices are written as each is ready; per segment in
+// recovered_segments.csv). forearms.csv is the exception: two stages write it (the forearm
+// stage and, with fit.enabled, the body fit a few seconds later), so its rows are sorted by arm
+// and time instead. A violation throws
 // posefuse::Error (kInvalidArgument) whose field is "<file>:<line>:<column>".
 #include <cstdint>
 #include <filesystem>

@@ -3,6 +3,7 @@
 #include <filesystem>
 #include <fstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -51,6 +52,52 @@ TEST_F(ClientTest, RecordingReadsBothFormsWithProgress) {
     EXPECT_EQ(n, written);
     EXPECT_DOUBLE_EQ(recording.fraction_read(), 1.0);
   }
+}
+
+TEST_F(ClientTest, RecordingPutsCommandLineOptionsIntoTheHeader) {
+  demo::write_demo_session(dir_ / "demo.pfchunks");
+  Recording recording(dir_ / "demo.pfchunks", {{"fit.enabled", "true"}, {"imu.tau_acc_s", "2.5"}});
+  session::SessionChunk chunk;
+  std::uint64_t headers = 0;
+  while (recording.next(chunk)) {
+    if (!chunk.has_header()) continue;
+    ++headers;
+    EXPECT_EQ(chunk.header().options().at("fit.enabled"), "true");
+    EXPECT_EQ(chunk.header().options().at("imu.tau_acc_s"), "2.5");
+  }
+  EXPECT_EQ(headers, 1u);
+}
+
+TEST_F(ClientTest, HeaderOptionTextIsKeyEqualsValue) {
+  EXPECT_EQ(parse_header_option("fit.enabled=true"), std::make_pair(std::string("fit.enabled"), std::string("true")));
+  EXPECT_EQ(parse_header_option("forearm.K_from_B=1,0,0,0"),
+            std::make_pair(std::string("forearm.K_from_B"), std::string("1,0,0,0")));
+  EXPECT_EQ(parse_header_option("a="), std::make_pair(std::string("a"), std::string()));
+  for (const char* bad : {"fit.enabled", "=true", "fit.enabled = true", "fit.enabled=tr\tue", ""}) {
+    try {
+      parse_header_option(bad);
+      ADD_FAILURE() << "no error for '" << bad << "'";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.field(), "--option") << bad;
+    }
+  }
+}
+
+// The option reaches the server's stages: a value the body-fit stage refuses ends the call with
+// an error naming that option.
+TEST_F(ClientTest, FitSendsHeaderOptionsToTheServer) {
+  server::ServerOptions options;
+  options.listen = "127.0.0.1:0";
+  options.workers = 1;
+  server::PoseFuseServer server(options);
+  demo::write_demo_session(dir_ / "demo.pfchunks");
+  ResultWriter writer(dir_ / "out");
+  const FitOutcome outcome = run_fit(make_channel("127.0.0.1:" + std::to_string(server.port())),
+                                     dir_ / "demo.pfchunks", writer, {}, {{"fit.enabled", "yes"}});
+  ASSERT_FALSE(outcome.local_error);
+  EXPECT_FALSE(outcome.status.ok());
+  EXPECT_NE(outcome.status.error_message().find("fit.enabled"), std::string::npos)
+      << outcome.status.error_message();
 }
 
 TEST_F(ClientTest, MissingRecordingIsNotFound) {

@@ -84,3 +84,33 @@ TEST(ResultReader, NamesWhatIsWrong) {
   posefuse::testing::expect_error([&] { session::read_result_files(dir / "absent"); }, ErrorCode::kNotFound,
                         (dir / "absent").string());
 }
+
+// Two stages write forearms.csv (the body fit reports its frames seconds after the forearm
+// stage): rows of one arm that go back in time are read, sorted by arm and time.
+TEST(ResultReader, ForearmRowsOfTwoStagesAreSortedByArmAndTime) {
+  const auto dir = result_fixture::fresh_result_dir("two_stages");
+  result_fixture::write_fixture(dir, {});
+  const session::ResultDirectory before = session::read_result_files(dir);
+  ASSERT_GE(before.forearms.size(), 2u);
+  const std::filesystem::path file = dir / "forearms.csv";
+  std::ifstream in(file);
+  std::string header, first_row, rest, line;
+  std::getline(in, header);
+  std::getline(in, first_row);
+  while (std::getline(in, line)) rest += line + "\n";
+  in.close();
+  // The first frame's row again at the end, as the second stage would append it, but VISUAL.
+  std::string late_row = first_row;
+  late_row.replace(late_row.find("GROUND_TRUTH"), 12, "VISUAL");
+  std::ofstream(file) << header << "\n" << first_row << "\n" << rest << late_row << "\n";
+  const session::ResultDirectory r = session::read_result_files(dir);
+  ASSERT_EQ(r.forearms.size(), before.forearms.size() + 1);
+  for (std::size_t i = 1; i < r.forearms.size(); ++i) {
+    const auto& a = r.forearms[i - 1];
+    const auto& b = r.forearms[i];
+    EXPECT_TRUE(a.arm < b.arm || (a.arm == b.arm && a.t_us <= b.t_us)) << "row " << i;
+  }
+  EXPECT_EQ(r.forearms[0].t_us, r.forearms[1].t_us);
+  EXPECT_EQ(r.forearms[0].source, before.forearms[0].source);  // file order kept within a frame
+  EXPECT_EQ(r.forearms[1].source, v1::VISUAL);
+}
