@@ -4,7 +4,6 @@
 #include <cmath>
 #include <memory>
 #include <opencv2/core.hpp>
-#include <thread>
 #include <time.h>
 
 #include "body/body_evaluator.hpp"
@@ -15,6 +14,7 @@
 #include "session/session_validator.hpp"
 #include "session/text_fields.hpp"
 #include "sim/option_checks.hpp"
+#include "sim/ordered_workers.hpp"
 #include "sim/forearm_strap.hpp"
 #include "sim/room_frame.hpp"
 #include "sim/sim_rng.hpp"
@@ -24,6 +24,7 @@ namespace posefuse::sim {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+constexpr int kFramesAheadPerWorker = 2;  // frames a worker may finish before they are written
 using Mat3 = Eigen::Matrix3d;
 
 double thread_cpu_s() {
@@ -541,7 +542,7 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
     }
   };
 
-  // Frames, rendered `threads` at a time; each frame's numbers depend only on its index.
+  // Frames on `threads` workers; each frame's numbers depend only on its index.
   const raycast::DepthCamera camera(options.depth_intrinsics);
   const CameraSkeletonSimulator skeleton(camera, options.skeleton, options.seed);
   const Vec3 floor_normal_K = K_from_Body.linear() * Vec3::UnitY();
@@ -555,54 +556,41 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
                                                     rest_R_from_F, K_from_Body, room, background));
   }
   const auto frames = static_cast<std::int64_t>(std::floor(options.duration_s * options.depth_rate_hz + 1e-9)) + 1;
-  for (std::int64_t first = 0; first < frames; first += options.threads) {
-    const std::int64_t count = std::min<std::int64_t>(options.threads, frames - first);
-    std::vector<FrameOutput> outputs(static_cast<std::size_t>(count));
-    std::vector<std::exception_ptr> errors(static_cast<std::size_t>(count));
-    const auto run = [&](std::int64_t i) {
-      try {
-        FramePlan plan;
-        plan.index = first + i;
-        plan.t_s = static_cast<double>(plan.index) / options.depth_rate_hz;
-        plan.t_us = std::llround(plan.t_s * 1e6);
-        outputs[static_cast<std::size_t>(i)] = workers[static_cast<std::size_t>(i)]->process(plan, motion);
-      } catch (...) {
-        errors[static_cast<std::size_t>(i)] = std::current_exception();
-      }
-    };
-    std::vector<std::thread> threads;
-    for (std::int64_t i = 1; i < count; ++i) threads.emplace_back(run, i);
-    run(0);
-    for (auto& thread : threads) thread.join();
-    lap("frames (this thread, counted per part below)");
-    for (const auto& error : errors) {
-      if (error) std::rethrow_exception(error);
+  // Workers render frames while this thread writes the earlier ones (the sink may encode files).
+  const auto render_frame = [&](int worker, std::int64_t index) {
+    FramePlan plan;
+    plan.index = index;
+    plan.t_s = static_cast<double>(plan.index) / options.depth_rate_hz;
+    plan.t_us = std::llround(plan.t_s * 1e6);
+    return workers[static_cast<std::size_t>(worker)]->process(plan, motion);
+  };
+  const auto write_frame = [&](std::int64_t index, FrameOutput& output) {
+    lap("waiting for frames");
+    const session::ChunkOrderKey key = session::chunk_order_key(output.chunks.front(), header);
+    emit_small_before(&key);
+    for (const auto& chunk : output.chunks) emit(chunk);
+    SimFrameTruth& frame = output.truth;
+    const double t_s = static_cast<double>(frame.t_us) * 1e-6;
+    for (const SensorKinematics& kin : kinematics) {
+      const SensorMotion m = kin.at(std::clamp(t_s, kin.t_begin_s(), kin.t_end_s()));
+      frame.imu_p_K.push_back(W_to_K(m.p_W_m));
+      frame.K_from_imu.push_back((truth.K_from_W * m.W_from_A).normalized());
     }
-    for (FrameOutput& output : outputs) {
-      const session::ChunkOrderKey key = session::chunk_order_key(output.chunks.front(), header);
-      emit_small_before(&key);
-      for (const auto& chunk : output.chunks) emit(chunk);
-      SimFrameTruth& frame = output.truth;
-      const double t_s = static_cast<double>(frame.t_us) * 1e-6;
-      for (const SensorKinematics& kin : kinematics) {
-        const SensorMotion m = kin.at(std::clamp(t_s, kin.t_begin_s(), kin.t_end_s()));
-        frame.imu_p_K.push_back(W_to_K(m.p_W_m));
-        frame.K_from_imu.push_back((truth.K_from_W * m.W_from_A).normalized());
-      }
-      truth.frames.push_back(std::move(frame));
-    }
+    truth.frames.push_back(std::move(frame));
     lap("writing chunks, merging, IMU truth per frame");
-    if (progress) progress(SimProgress{first + count, frames});
+    if (progress) progress(SimProgress{index + 1, frames});
     lap("progress callback");
-  }
+  };
+  lap("setup: header, room, frame workers");
+  run_ordered<FrameOutput>(options.threads, frames, kFramesAheadPerWorker, render_frame, write_frame);
   emit_small_before(nullptr);
   v1::SessionChunk end;
   *end.mutable_end() = counts;
   sink.write(end);
   ++truth.chunks;
   lap("writing chunks, merging, IMU truth per frame");
-  // The main thread's frame work is inside the workers' parts already.
-  truth.cpu_s.erase("frames (this thread, counted per part below)");
+  // Blocked waiting costs no CPU; the lap only separates it from the writing.
+  truth.cpu_s.erase("waiting for frames");
   for (const auto& worker : workers) {
     for (const auto& [part, seconds] : worker->times()) truth.cpu_s[part] += seconds;
   }
