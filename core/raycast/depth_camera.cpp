@@ -1,5 +1,6 @@
 #include "raycast/depth_camera.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -44,6 +45,28 @@ DepthCamera::DepthCamera(const DepthIntrinsics& intrinsics) : intrinsics_(intrin
       const Eigen::Vector3d d = ray_direction(col, row);
       pixel_rays_[row * width() + col] = (d / d.z()).cast<float>();
     }
+  row_bounds_.resize(static_cast<size_t>(height()));
+  for (int row = 0; row < height(); ++row) {
+    RowBounds& bounds = row_bounds_[static_cast<size_t>(row)];
+    bounds = {pixel_ray(0, row).y(), pixel_ray(0, row).y(), true};
+    for (int col = 1; col < width(); ++col) {
+      bounds.min_y = std::min(bounds.min_y, pixel_ray(col, row).y());
+      bounds.max_y = std::max(bounds.max_y, pixel_ray(col, row).y());
+      if (pixel_ray(col, row).x() > pixel_ray(col - 1, row).x()) bounds.x_falls = false;
+    }
+  }
+}
+
+std::pair<int, int> DepthCamera::columns_within(int row, float min_x, float max_x, float min_y, float max_y) const {
+  const RowBounds& bounds = row_bounds_[static_cast<size_t>(row)];
+  if (bounds.max_y < min_y || bounds.min_y > max_y) return {0, 0};
+  if (!bounds.x_falls) return {0, width()};
+  // x falls along the row: the columns with x <= max_x follow those with x > max_x, and so on.
+  const Eigen::Vector3f* begin = &pixel_rays_[static_cast<size_t>(row) * width()];
+  const Eigen::Vector3f* end = begin + width();
+  const Eigen::Vector3f* first = std::partition_point(begin, end, [&](const Eigen::Vector3f& d) { return d.x() > max_x; });
+  const Eigen::Vector3f* last = std::partition_point(first, end, [&](const Eigen::Vector3f& d) { return d.x() >= min_x; });
+  return {static_cast<int>(first - begin), static_cast<int>(last - begin)};
 }
 
 double DepthCamera::distort_radius(double r) const { return r * radial_factor(r * r); }

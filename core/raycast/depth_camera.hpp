@@ -13,6 +13,7 @@
 // ray length) in millimetres, 0 where nothing was seen.
 #include <Eigen/Core>
 #include <optional>
+#include <utility>
 #include <vector>
 
 namespace posefuse::raycast {
@@ -55,6 +56,12 @@ class DepthCamera {
   // Direction in K with z = 1 through the centre of pixel (col, row), from a table.
   const Eigen::Vector3f& pixel_ray(int col, int row) const { return pixel_rays_[row * width() + col]; }
 
+  // Columns [first, second) of `row` outside which no pixel_ray has x in [min_x, max_x] and y in
+  // [min_y, max_y]; pixels inside still need their own test. Lets a renderer skip the rows and
+  // columns a bounding box cannot reach without testing every pixel (exact: from each row's
+  // ray bounds, and a binary search where the row's x falls monotonically with the column).
+  std::pair<int, int> columns_within(int row, float min_x, float max_x, float min_y, float max_y) const;
+
   // L(r^2) = 1 + k1 r^2 + k2 r^4 + k3 r^6.
   double radial_factor(double r2) const {
     return 1 + r2 * (intrinsics_.k1 + r2 * (intrinsics_.k2 + r2 * intrinsics_.k3));
@@ -66,6 +73,11 @@ class DepthCamera {
  private:
   DepthIntrinsics intrinsics_;
   std::vector<Eigen::Vector3f> pixel_rays_;  // z = 1 rays per pixel
+  struct RowBounds {
+    float min_y, max_y;
+    bool x_falls;  // x never increases along the row (binary search allowed)
+  };
+  std::vector<RowBounds> row_bounds_;
   double max_undistorted_radius_ = 0;
 };
 
