@@ -5,6 +5,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "common/error.hpp"
+#include "geometry/rounding.hpp"
 #include "sim/option_checks.hpp"
 #include "sim/sim_rng.hpp"
 
@@ -128,6 +129,13 @@ cv::Mat ColorRenderer::render(const Eigen::Matrix3Xd& vertices_K, std::int64_t f
     }
   }
   const Eigen::Matrix3Xi& faces = model_.model->faces;
+  // Face normals once per frame rather than once per pixel (the same expression, the same values).
+  face_normals_.resize(3, faces.cols());
+  for (Eigen::Index f = 0; f < faces.cols(); ++f) {
+    const Eigen::Vector3i c = faces.col(f);
+    face_normals_.col(f) =
+        (vertices_C.col(c[1]) - vertices_C.col(c[0])).cross(vertices_C.col(c[2]) - vertices_C.col(c[0])).normalized();
+  }
   for (int row = images_.hit_row_begin; row < images_.hit_row_end; ++row) {
     const short* noise = noise_row(row);
     std::uint8_t* out = bgr.ptr<std::uint8_t>(row);
@@ -142,12 +150,10 @@ cv::Mat ColorRenderer::render(const Eigen::Matrix3Xd& vertices_K, std::int64_t f
       const Eigen::Vector3d albedo = is_strap(model_, straps_, options_.strap_width_m, face, w[0], w[1])
                                          ? kStrapAlbedo
                                          : kAlbedo[static_cast<std::size_t>(material)];
-      const Eigen::Vector3d normal =
-          (vertices_C.col(c[1]) - vertices_C.col(c[0])).cross(vertices_C.col(c[2]) - vertices_C.col(c[0])).normalized();
       const Eigen::Vector3d ray = camera_.pixel_ray(col, row).cast<double>().normalized();
-      const Eigen::Vector3d colour = 255.0 * albedo * (0.35 + 0.65 * std::max(0.0, -normal.dot(ray)));
+      const Eigen::Vector3d colour = 255.0 * albedo * (0.35 + 0.65 * std::max(0.0, -face_normals_.col(face).dot(ray)));
       for (int k = 0; k < 3; ++k) {
-        const auto shaded = static_cast<short>(std::lround(colour[k]));
+        const auto shaded = static_cast<short>(geometry::round_half_up(colour[k]));  // colour >= 0
         out[3 * col + k] = cv::saturate_cast<std::uint8_t>(noisy ? shaded + noise[3 * col + k] : shaded);
       }
     }

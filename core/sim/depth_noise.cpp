@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 
 #include "common/error.hpp"
+#include "geometry/rounding.hpp"
 #include "raycast/mesh_scene.hpp"
 #include "sim/option_checks.hpp"
 #include "sim/sim_rng.hpp"
@@ -74,13 +75,6 @@ std::vector<uint8_t> stencil_changed(const std::vector<uint16_t>& depth_mm, cons
     }
   }
   return changed;
-}
-
-// std::lround for 0 <= x < 2^31 without the library call: x - trunc(x) is exact there, and
-// halves round up as lround's do.
-long round_half_up(double x) {
-  const auto whole = static_cast<long>(x);
-  return x - static_cast<double>(whole) >= 0.5 ? whole + 1 : whole;
 }
 
 void check_image_size(const raycast::DepthCamera& camera, std::size_t size, const std::string& field) {
@@ -307,7 +301,7 @@ NoisyDepth apply_depth_noise(const raycast::DepthCamera& camera,
       }
       z += axial_sigma_m(options, z) * rng.normal();
       if (z < options.min_range_m || z > options.max_range_m) continue;
-      out.depth_mm[i] = static_cast<uint16_t>(round_half_up(z * 1000.0));
+      out.depth_mm[i] = static_cast<uint16_t>(geometry::round_half_up(z * 1000.0));
     }
   }
 
