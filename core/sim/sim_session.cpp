@@ -171,10 +171,10 @@ class FrameWorker {
     const cv::Mat body_index(camera_.height(), camera_.width(), CV_8UC1,
                              const_cast<std::uint8_t*>(noisy.body_index.data()));
     out.chunks.emplace_back().mutable_depth()->CopyFrom(
-        session::encode_depth(depth, v1::DepthFrame::ZSTD_U16_LE, plan.t_us));
+        session::encode_depth(depth, options_.depth_encoding, plan.t_us));
     out.chunks.emplace_back().mutable_body_index()->CopyFrom(
         session::encode_body_index(body_index, v1::BodyIndexFrame::PNG8, plan.t_us));
-    lap("depth, body index: encode (zstd, PNG)");
+    lap("depth, body index: encode (zstd or PNG, PNG)");
     out.chunks.emplace_back().mutable_skeleton()->CopyFrom(
         skeleton_.simulate(joints, noisy.depth_mm, plan.index, plan.t_us, 0));
     lap("skeleton");
@@ -289,6 +289,9 @@ void validate(const SimSessionOptions& options) {
     throw_invalid("clock_drift_max", "must be in [0, 1e-3)");
   }
   require_positive(options.buzzer_stop_s, "buzzer_stop_s");
+  if (options.depth_encoding != v1::DepthFrame::ZSTD_U16_LE && options.depth_encoding != v1::DepthFrame::PNG16) {
+    throw_invalid("depth_encoding", "is " + std::to_string(options.depth_encoding) + ", must be ZSTD_U16_LE or PNG16");
+  }
   if (options.threads < 1 || options.threads > 64) {
     throw_invalid("threads", "is " + std::to_string(options.threads) + ", must be 1..64");
   }
