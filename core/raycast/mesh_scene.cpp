@@ -120,8 +120,9 @@ void MeshScene::render(const DepthCamera& camera, uint8_t body_index, RenderImag
     }
     lanes = 0;
   };
+  const auto [col_begin, col_end] = camera.columns_within(ray_min_x, ray_max_x);
   for (int row = 0; row < h; ++row) {
-    const auto [col_begin, col_end] = camera.columns_within(row, ray_min_x, ray_max_x, ray_min_y, ray_max_y);
+    if (!camera.row_within(row, ray_min_y, ray_max_y)) continue;
     for (int col = col_begin; col < col_end; ++col) {
       const Eigen::Vector3f& d = camera.pixel_ray(col, row);
       if (d.x() < ray_min_x || d.x() > ray_max_x || d.y() < ray_min_y || d.y() > ray_max_y) continue;

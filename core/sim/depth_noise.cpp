@@ -12,6 +12,7 @@
 #include "raycast/mesh_scene.hpp"
 #include "sim/option_checks.hpp"
 #include "sim/sim_rng.hpp"
+#include "sim/ziggurat_normal.hpp"
 
 namespace posefuse::sim {
 namespace {
@@ -299,7 +300,7 @@ NoisyDepth apply_depth_noise(const raycast::DepthCamera& camera,
         const double t = rng.uniform();
         z = t * z + (1.0 - t) * (edge_mm * 1e-3);
       }
-      z += axial_sigma_m(options, z) * rng.normal();
+      z += axial_sigma_m(options, z) * ziggurat_normal(rng);
       if (z < options.min_range_m || z > options.max_range_m) continue;
       out.depth_mm[i] = static_cast<uint16_t>(geometry::round_half_up(z * 1000.0));
     }
