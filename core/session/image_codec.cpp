@@ -143,7 +143,7 @@ ZSTD_CCtx* thread_compression_context() {
 }  // namespace
 
 v1::DepthFrame encode_depth(const cv::Mat& depth_mm, v1::DepthFrame::Encoding encoding,
-                            std::int64_t t_us) {
+                            std::int64_t t_us, int zstd_level) {
   if (depth_mm.type() != CV_16UC1) throw_invalid("depth_mm", "expected a CV_16UC1 image");
   v1::DepthFrame frame;
   frame.set_t_us(t_us);
@@ -161,7 +161,7 @@ v1::DepthFrame encode_depth(const cv::Mat& depth_mm, v1::DepthFrame::Encoding en
       const std::string raw = mat_bytes(depth_mm);
       std::string packed(ZSTD_compressBound(raw.size()), '\0');
       const std::size_t size =
-          ZSTD_compressCCtx(thread_compression_context(), packed.data(), packed.size(), raw.data(), raw.size(), 3);
+          ZSTD_compressCCtx(thread_compression_context(), packed.data(), packed.size(), raw.data(), raw.size(), zstd_level);
       if (ZSTD_isError(size)) {
         throw Error(ErrorCode::kInternal, "depth", std::string("zstd: ") + ZSTD_getErrorName(size));
       }
