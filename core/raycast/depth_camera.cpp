@@ -1,5 +1,6 @@
 #include "raycast/depth_camera.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -44,6 +45,29 @@ DepthCamera::DepthCamera(const DepthIntrinsics& intrinsics) : intrinsics_(intrin
       const Eigen::Vector3d d = ray_direction(col, row);
       pixel_rays_[row * width() + col] = (d / d.z()).cast<float>();
     }
+  row_y_.assign(static_cast<size_t>(height()), AxisBounds{HUGE_VALF, -HUGE_VALF});
+  column_x_.assign(static_cast<size_t>(width()), AxisBounds{HUGE_VALF, -HUGE_VALF});
+  for (int row = 0; row < height(); ++row)
+    for (int col = 0; col < width(); ++col) {
+      const Eigen::Vector3f& d = pixel_ray(col, row);
+      AxisBounds& y = row_y_[static_cast<size_t>(row)];
+      AxisBounds& x = column_x_[static_cast<size_t>(col)];
+      y = {std::min(y.min, d.y()), std::max(y.max, d.y())};
+      x = {std::min(x.min, d.x()), std::max(x.max, d.x())};
+    }
+  for (int col = 1; col < width(); ++col) {
+    const AxisBounds &a = column_x_[static_cast<size_t>(col - 1)], &b = column_x_[static_cast<size_t>(col)];
+    if (b.min > a.min || b.max > a.max) columns_fall_ = false;
+  }
+}
+
+std::pair<int, int> DepthCamera::columns_within(float min_x, float max_x) const {
+  if (!columns_fall_) return {0, width()};
+  // Columns whose smallest x exceeds max_x come first, those whose largest x is below min_x last.
+  const auto first = std::partition_point(column_x_.begin(), column_x_.end(),
+                                          [&](const AxisBounds& x) { return x.min > max_x; });
+  const auto last = std::partition_point(first, column_x_.end(), [&](const AxisBounds& x) { return x.max >= min_x; });
+  return {static_cast<int>(first - column_x_.begin()), static_cast<int>(last - column_x_.begin())};
 }
 
 double DepthCamera::distort_radius(double r) const { return r * radial_factor(r * r); }

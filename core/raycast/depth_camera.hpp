@@ -13,6 +13,7 @@
 // ray length) in millimetres, 0 where nothing was seen.
 #include <Eigen/Core>
 #include <optional>
+#include <utility>
 #include <vector>
 
 namespace posefuse::raycast {
@@ -55,6 +56,16 @@ class DepthCamera {
   // Direction in K with z = 1 through the centre of pixel (col, row), from a table.
   const Eigen::Vector3f& pixel_ray(int col, int row) const { return pixel_rays_[row * width() + col]; }
 
+  // For renderers that skip what a bounding box of rays cannot reach (exact: pixels inside
+  // still need their own test). Columns [first, second) outside which no pixel ray of any row
+  // has x in [min_x, max_x] (from each column's ray bounds; x falls with the column), and
+  // whether some ray of `row` has y in [min_y, max_y].
+  std::pair<int, int> columns_within(float min_x, float max_x) const;
+  bool row_within(int row, float min_y, float max_y) const {
+    const AxisBounds& b = row_y_[static_cast<size_t>(row)];
+    return b.max >= min_y && b.min <= max_y;
+  }
+
   // L(r^2) = 1 + k1 r^2 + k2 r^4 + k3 r^6.
   double radial_factor(double r2) const {
     return 1 + r2 * (intrinsics_.k1 + r2 * (intrinsics_.k2 + r2 * intrinsics_.k3));
@@ -66,6 +77,12 @@ class DepthCamera {
  private:
   DepthIntrinsics intrinsics_;
   std::vector<Eigen::Vector3f> pixel_rays_;  // z = 1 rays per pixel
+  struct AxisBounds {
+    float min, max;
+  };
+  std::vector<AxisBounds> row_y_;     // per row, the range of its rays' y
+  std::vector<AxisBounds> column_x_;  // per column, the range of its rays' x
+  bool columns_fall_ = true;          // both bounds of column_x_ never increase with the column
   double max_undistorted_radius_ = 0;
 };
 

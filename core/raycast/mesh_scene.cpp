@@ -18,6 +18,7 @@ void RenderImages::resize(int w, int h) {
   face.assign(n, -1);
   u.assign(n, 0.f);
   v.assign(n, 0.f);
+  hit_col_begin = hit_col_end = hit_row_begin = hit_row_end = 0;
 }
 
 MeshScene::MeshScene(std::shared_ptr<EmbreeDevice> device, const Eigen::Matrix3Xi& faces, int num_vertices)
@@ -107,11 +108,22 @@ void MeshScene::render(const DepthCamera& camera, uint8_t body_index, RenderImag
       out.face[pixel] = static_cast<int32_t>(packet.hit.primID[l]);
       out.u[pixel] = 1.f - packet.hit.u[l] - packet.hit.v[l];
       out.v[pixel] = packet.hit.u[l];
+      const int row = pixel / w, col = pixel % w;
+      if (out.hit_col_end == 0) {
+        out.hit_col_begin = col;
+        out.hit_row_begin = row;
+      }
+      out.hit_col_begin = std::min(out.hit_col_begin, col);
+      out.hit_col_end = std::max(out.hit_col_end, col + 1);
+      out.hit_row_begin = std::min(out.hit_row_begin, row);
+      out.hit_row_end = std::max(out.hit_row_end, row + 1);
     }
     lanes = 0;
   };
-  for (int row = 0; row < h; ++row)
-    for (int col = 0; col < w; ++col) {
+  const auto [col_begin, col_end] = camera.columns_within(ray_min_x, ray_max_x);
+  for (int row = 0; row < h; ++row) {
+    if (!camera.row_within(row, ray_min_y, ray_max_y)) continue;
+    for (int col = col_begin; col < col_end; ++col) {
       const Eigen::Vector3f& d = camera.pixel_ray(col, row);
       if (d.x() < ray_min_x || d.x() > ray_max_x || d.y() < ray_min_y || d.y() > ray_max_y) continue;
       packet.ray.org_x[lanes] = packet.ray.org_y[lanes] = packet.ray.org_z[lanes] = 0.f;
@@ -130,6 +142,7 @@ void MeshScene::render(const DepthCamera& camera, uint8_t body_index, RenderImag
       pixel_of_lane[lanes] = row * w + col;
       if (++lanes == 8) flush();
     }
+  }
   if (lanes > 0) flush();
 }
 

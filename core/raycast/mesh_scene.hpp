@@ -28,7 +28,9 @@ struct RenderImages {
   std::vector<uint8_t> body_index;  // body_index where hit, kNoBody elsewhere
   std::vector<int32_t> face;        // face id, -1 where nothing was hit
   std::vector<float> u, v;          // barycentrics of the hit (see the header comment)
-  void resize(int w, int h);
+  // The smallest pixel rectangle [begin, end) holding every hit (empty: none); render() sets it.
+  int hit_col_begin = 0, hit_col_end = 0, hit_row_begin = 0, hit_row_end = 0;
+  void resize(int w, int h);  // and clears: no hits
 };
 
 struct ClosestPoint {

@@ -126,8 +126,24 @@ cv::Mat decode_depth(const v1::DepthFrame& frame, const std::string& field) {
   }
 }
 
+namespace {
+
+// One zstd compression context per thread, reused across frames (the bytes are the same as
+// ZSTD_compress's, without allocating and clearing a context per frame).
+ZSTD_CCtx* thread_compression_context() {
+  struct Owner {
+    ZSTD_CCtx* context = ZSTD_createCCtx();
+    ~Owner() { ZSTD_freeCCtx(context); }
+  };
+  thread_local Owner owner;
+  if (owner.context == nullptr) throw Error(ErrorCode::kInternal, "depth", "zstd: cannot create a context");
+  return owner.context;
+}
+
+}  // namespace
+
 v1::DepthFrame encode_depth(const cv::Mat& depth_mm, v1::DepthFrame::Encoding encoding,
-                            std::int64_t t_us) {
+                            std::int64_t t_us, int zstd_level) {
   if (depth_mm.type() != CV_16UC1) throw_invalid("depth_mm", "expected a CV_16UC1 image");
   v1::DepthFrame frame;
   frame.set_t_us(t_us);
@@ -144,7 +160,8 @@ v1::DepthFrame encode_depth(const cv::Mat& depth_mm, v1::DepthFrame::Encoding en
     case v1::DepthFrame::ZSTD_U16_LE: {
       const std::string raw = mat_bytes(depth_mm);
       std::string packed(ZSTD_compressBound(raw.size()), '\0');
-      const std::size_t size = ZSTD_compress(packed.data(), packed.size(), raw.data(), raw.size(), 3);
+      const std::size_t size =
+          ZSTD_compressCCtx(thread_compression_context(), packed.data(), packed.size(), raw.data(), raw.size(), zstd_level);
       if (ZSTD_isError(size)) {
         throw Error(ErrorCode::kInternal, "depth", std::string("zstd: ") + ZSTD_getErrorName(size));
       }

@@ -19,8 +19,9 @@ inline constexpr std::uint32_t kMaxImageSide = 8192;
 
 // Depth frame -> CV_16UC1 (mm, 0 = no reading), from any encoding.
 cv::Mat decode_depth(const v1::DepthFrame& frame, const std::string& field = "depth");
+// zstd_level: ZSTD_U16_LE only (1 is ~2.5 times faster than 3 on noisy depth, 14 % larger).
 v1::DepthFrame encode_depth(const cv::Mat& depth_mm, v1::DepthFrame::Encoding encoding,
-                            std::int64_t t_us);
+                            std::int64_t t_us, int zstd_level = 3);
 
 // Body index frame -> CV_8UC1 (255 = background, else body id 0..5).
 cv::Mat decode_body_index(const v1::BodyIndexFrame& frame, const std::string& field = "body_index");

@@ -5,6 +5,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "common/error.hpp"
+#include "geometry/rounding.hpp"
 #include "sim/option_checks.hpp"
 #include "sim/sim_rng.hpp"
 
@@ -104,11 +105,41 @@ cv::Mat ColorRenderer::render(const Eigen::Matrix3Xd& vertices_K, std::int64_t f
   const Eigen::Matrix3Xd vertices_C = options_.color_from_depth * vertices_K;
   scene_.update_vertices(vertices_C);
   scene_.render(camera_, 0, images_);
-  const Eigen::Matrix3Xi& faces = model_.model->faces;
-  cv::Mat image = background_.clone();
+  // The noise window of this frame (zero noise: none).
+  int dx = 0, dy = 0;
+  const bool noisy = options_.noise_sigma > 0;
+  if (noisy) {
+    SimRng rng(seed_, "color_noise/" + std::to_string(frame));
+    dx = std::min(2 * kNoiseMargin, static_cast<int>(rng.uniform() * (2 * kNoiseMargin + 1)));
+    dy = std::min(2 * kNoiseMargin, static_cast<int>(rng.uniform() * (2 * kNoiseMargin + 1)));
+  }
+  // One pass writes room + noise saturated to 8 bits (as adding 16-bit images and converting
+  // would); a second overwrites the person's pixels, only inside the render's hit rectangle.
+  const int channels = 3 * camera_.width();
+  cv::Mat bgr(camera_.height(), camera_.width(), CV_8UC3);
+  const auto noise_row = [&](int row) { return noise_.ptr<short>(row + dy) + 3 * dx; };
   for (int row = 0; row < camera_.height(); ++row) {
-    auto* out = image.ptr<cv::Vec3s>(row);
-    for (int col = 0; col < camera_.width(); ++col) {
+    const short* room = background_.ptr<short>(row);
+    const short* noise = noise_row(row);
+    std::uint8_t* out = bgr.ptr<std::uint8_t>(row);
+    if (noisy) {
+      for (int k = 0; k < channels; ++k) out[k] = cv::saturate_cast<std::uint8_t>(room[k] + noise[k]);
+    } else {
+      for (int k = 0; k < channels; ++k) out[k] = cv::saturate_cast<std::uint8_t>(room[k]);
+    }
+  }
+  const Eigen::Matrix3Xi& faces = model_.model->faces;
+  // Face normals once per frame rather than once per pixel (the same expression, the same values).
+  face_normals_.resize(3, faces.cols());
+  for (Eigen::Index f = 0; f < faces.cols(); ++f) {
+    const Eigen::Vector3i c = faces.col(f);
+    face_normals_.col(f) =
+        (vertices_C.col(c[1]) - vertices_C.col(c[0])).cross(vertices_C.col(c[2]) - vertices_C.col(c[0])).normalized();
+  }
+  for (int row = images_.hit_row_begin; row < images_.hit_row_end; ++row) {
+    const short* noise = noise_row(row);
+    std::uint8_t* out = bgr.ptr<std::uint8_t>(row);
+    for (int col = images_.hit_col_begin; col < images_.hit_col_end; ++col) {
       const std::size_t i = static_cast<std::size_t>(row) * camera_.width() + col;
       const int face = images_.face[i];
       if (face < 0) continue;
@@ -119,22 +150,14 @@ cv::Mat ColorRenderer::render(const Eigen::Matrix3Xd& vertices_K, std::int64_t f
       const Eigen::Vector3d albedo = is_strap(model_, straps_, options_.strap_width_m, face, w[0], w[1])
                                          ? kStrapAlbedo
                                          : kAlbedo[static_cast<std::size_t>(material)];
-      const Eigen::Vector3d normal =
-          (vertices_C.col(c[1]) - vertices_C.col(c[0])).cross(vertices_C.col(c[2]) - vertices_C.col(c[0])).normalized();
       const Eigen::Vector3d ray = camera_.pixel_ray(col, row).cast<double>().normalized();
-      const Eigen::Vector3d colour = 255.0 * albedo * (0.35 + 0.65 * std::max(0.0, -normal.dot(ray)));
-      out[col] = cv::Vec3s(static_cast<short>(std::lround(colour[0])), static_cast<short>(std::lround(colour[1])),
-                           static_cast<short>(std::lround(colour[2])));
+      const Eigen::Vector3d colour = 255.0 * albedo * (0.35 + 0.65 * std::max(0.0, -face_normals_.col(face).dot(ray)));
+      for (int k = 0; k < 3; ++k) {
+        const auto shaded = static_cast<short>(geometry::round_half_up(colour[k]));  // colour >= 0
+        out[3 * col + k] = cv::saturate_cast<std::uint8_t>(noisy ? shaded + noise[3 * col + k] : shaded);
+      }
     }
   }
-  if (options_.noise_sigma > 0) {
-    SimRng rng(seed_, "color_noise/" + std::to_string(frame));
-    const int dx = std::min(2 * kNoiseMargin, static_cast<int>(rng.uniform() * (2 * kNoiseMargin + 1)));
-    const int dy = std::min(2 * kNoiseMargin, static_cast<int>(rng.uniform() * (2 * kNoiseMargin + 1)));
-    image += noise_(cv::Rect(dx, dy, camera_.width(), camera_.height()));
-  }
-  cv::Mat bgr;
-  image.convertTo(bgr, CV_8UC3);  // saturates to 0..255
   return bgr;
 }
 

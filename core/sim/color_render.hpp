@@ -73,6 +73,7 @@ class ColorRenderer {
   cv::Mat background_;  // CV_16SC3, the room
   cv::Mat noise_;       // CV_16SC3, image size plus kNoiseMargin each way
   raycast::RenderImages images_;
+  Eigen::Matrix3Xd face_normals_;  // of the current frame, in C
 };
 
 // JPEG bytes of a BGR image as a ColorFrame.

@@ -8,15 +8,19 @@
 #include <Eigen/Geometry>
 
 #include "common/error.hpp"
+#include "geometry/rounding.hpp"
 #include "raycast/mesh_scene.hpp"
 #include "sim/option_checks.hpp"
 #include "sim/sim_rng.hpp"
+#include "sim/ziggurat_normal.hpp"
 
 namespace posefuse::sim {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
 constexpr double kDegToRad = kPi / 180.0;
+// 4-neighbours in the order the error model visits them.
+constexpr int kNeighbourDc[4] = {1, -1, 0, 0}, kNeighbourDr[4] = {0, 0, 1, -1};
 
 // Decides whether two neighbouring depths (metres, both > 0) lie on one surface.
 class EdgeTest {
@@ -33,6 +37,46 @@ class EdgeTest {
   double min_jump_m_;
   double slope_per_m_;
 };
+
+// The 4-neighbour across a depth edge whose depth differs most from (col, row)'s, in mm, or 0
+// where there is none (the first of equal ones in the order +col, -col, +row, -row).
+uint16_t flying_neighbour_of(const std::vector<uint16_t>& depth_mm, int width, int height, const EdgeTest& edges,
+                             int col, int row) {
+  const double z = depth_mm[static_cast<std::size_t>(row) * width + col] * 1e-3;
+  uint16_t edge_mm = 0;
+  double edge_jump = 0;
+  for (int k = 0; k < 4; ++k) {
+    const int c = col + kNeighbourDc[k], r = row + kNeighbourDr[k];
+    if (c < 0 || r < 0 || c >= width || r >= height) continue;
+    const uint16_t neighbour_mm = depth_mm[static_cast<std::size_t>(r) * width + c];
+    const double zn = neighbour_mm * 1e-3;
+    if (zn <= 0 || edges.continuous(z, zn)) continue;
+    if (std::abs(zn - z) > edge_jump) {
+      edge_jump = std::abs(zn - z);
+      edge_mm = neighbour_mm;
+    }
+  }
+  return edge_mm;
+}
+
+// 1 where a pixel's depth or a 4-neighbour's differs from the background's: the pixels whose
+// incidence and flying-pixel neighbour must be computed afresh.
+std::vector<uint8_t> stencil_changed(const std::vector<uint16_t>& depth_mm, const std::vector<uint16_t>& room_mm,
+                                     int width, int height) {
+  std::vector<uint8_t> changed(depth_mm.size(), 0);
+  for (int row = 0; row < height; ++row) {
+    for (int col = 0; col < width; ++col) {
+      const std::size_t i = static_cast<std::size_t>(row) * width + col;
+      if (depth_mm[i] == room_mm[i]) continue;
+      changed[i] = 1;
+      if (col > 0) changed[i - 1] = 1;
+      if (col + 1 < width) changed[i + 1] = 1;
+      if (row > 0) changed[i - static_cast<std::size_t>(width)] = 1;
+      if (row + 1 < height) changed[i + static_cast<std::size_t>(width)] = 1;
+    }
+  }
+  return changed;
+}
 
 void check_image_size(const raycast::DepthCamera& camera, std::size_t size, const std::string& field) {
   const std::size_t expected = static_cast<std::size_t>(camera.width()) * camera.height();
@@ -134,23 +178,9 @@ class IncidenceCosines {
     return out;
   }
 
-  // `cached` (the background's) everywhere the 5-pixel stencil of at() sees the background's
-  // depth; at() elsewhere.
-  std::vector<float> reusing(const StaticBackground& background) const {
-    const std::vector<uint16_t>& room = background.depth_mm();
+  // The background's cached cosines, recomputed where `changed` (a stencil_changed mask) is set.
+  std::vector<float> reusing(const StaticBackground& background, const std::vector<uint8_t>& changed) const {
     std::vector<float> out = background.incidence_cosines();
-    std::vector<uint8_t> changed(depth_mm_.size(), 0);
-    for (int row = 0; row < height_; ++row) {
-      for (int col = 0; col < width_; ++col) {
-        const std::size_t i = static_cast<std::size_t>(row) * width_ + col;
-        if (depth_mm_[i] == room[i]) continue;
-        changed[i] = 1;
-        if (col > 0) changed[i - 1] = 1;
-        if (col + 1 < width_) changed[i + 1] = 1;
-        if (row > 0) changed[i - static_cast<std::size_t>(width_)] = 1;
-        if (row + 1 < height_) changed[i + static_cast<std::size_t>(width_)] = 1;
-      }
-    }
     for (int row = 0; row < height_; ++row) {
       for (int col = 0; col < width_; ++col) {
         const std::size_t i = static_cast<std::size_t>(row) * width_ + col;
@@ -204,6 +234,14 @@ StaticBackground::StaticBackground(const raycast::DepthCamera& camera, const std
   validate(options);
   composite_room(camera, planes, depth_mm_);
   incidence_cos_ = IncidenceCosines(camera, depth_mm_, options).all();
+  const EdgeTest edges(camera, options);
+  flying_neighbour_mm_.assign(depth_mm_.size(), 0);
+  for (int row = 0; row < camera.height(); ++row) {
+    for (int col = 0; col < camera.width(); ++col) {
+      flying_neighbour_mm_[static_cast<std::size_t>(row) * camera.width() + col] =
+          flying_neighbour_of(depth_mm_, camera.width(), camera.height(), edges, col, row);
+    }
+  }
 }
 
 void StaticBackground::composite(std::vector<uint16_t>& depth_mm) const {
@@ -236,42 +274,35 @@ NoisyDepth apply_depth_noise(const raycast::DepthCamera& camera,
   SimRng rng(seed, "depth_noise/" + std::to_string(frame_index));
   const EdgeTest edges(camera, options);
   const IncidenceCosines incidence(camera, clean_depth_mm, options);
-  const std::vector<float> incidence_cos = background ? incidence.reusing(*background) : incidence.all();
+  // With a background, pixels whose stencil shows only the room take its cached incidence and
+  // flying-pixel neighbour; everything else is computed here.
+  const std::vector<uint8_t> changed = background
+                                           ? stencil_changed(clean_depth_mm, background->depth_mm(), width, height)
+                                           : std::vector<uint8_t>(num_pixels, 1);
+  const std::vector<float> incidence_cos = background ? incidence.reusing(*background, changed) : incidence.all();
   const auto min_cos = static_cast<float>(std::cos(options.max_incidence_deg * kDegToRad));
-  auto z_at = [&](int col, int row) {
-    return clean_depth_mm[static_cast<std::size_t>(row) * width + col] * 1e-3;
-  };
-  const int neighbour_dc[4] = {1, -1, 0, 0}, neighbour_dr[4] = {0, 0, 1, -1};
 
   NoisyDepth out;
   out.depth_mm.assign(num_pixels, 0);
   for (int row = 0; row < height; ++row) {
     for (int col = 0; col < width; ++col) {
       const std::size_t i = static_cast<std::size_t>(row) * width + col;
-      double z = z_at(col, row);
-      if (z <= 0) continue;
+      const uint16_t clean_mm = clean_depth_mm[i];
+      if (clean_mm == 0) continue;
       // NaN: no neighbour on the same surface along a row or column (a sliver one pixel wide,
       // or a surface steeper than edge_slope_deg), which the sensor does not resolve either.
       if (!(incidence_cos[i] >= min_cos)) continue;
+      double z = clean_mm * 1e-3;
       // Flying pixel: mix with the farthest-off neighbour across a depth edge.
-      double edge_z = 0, edge_jump = 0;
-      for (int k = 0; k < 4; ++k) {
-        const int c = col + neighbour_dc[k], r = row + neighbour_dr[k];
-        if (c < 0 || r < 0 || c >= width || r >= height) continue;
-        const double zn = z_at(c, r);
-        if (zn <= 0 || edges.continuous(z, zn)) continue;
-        if (std::abs(zn - z) > edge_jump) {
-          edge_jump = std::abs(zn - z);
-          edge_z = zn;
-        }
-      }
-      if (edge_jump > 0 && rng.uniform() < options.flying_pixel_probability) {
+      const uint16_t edge_mm = changed[i] ? flying_neighbour_of(clean_depth_mm, width, height, edges, col, row)
+                                          : background->flying_neighbour_mm()[i];
+      if (edge_mm != 0 && rng.uniform() < options.flying_pixel_probability) {
         const double t = rng.uniform();
-        z = t * z + (1.0 - t) * edge_z;
+        z = t * z + (1.0 - t) * (edge_mm * 1e-3);
       }
-      z += axial_sigma_m(options, z) * rng.normal();
+      z += axial_sigma_m(options, z) * ziggurat_normal(rng);
       if (z < options.min_range_m || z > options.max_range_m) continue;
-      out.depth_mm[i] = static_cast<uint16_t>(std::lround(z * 1000.0));
+      out.depth_mm[i] = static_cast<uint16_t>(geometry::round_half_up(z * 1000.0));
     }
   }
 
@@ -285,7 +316,7 @@ NoisyDepth apply_depth_noise(const raycast::DepthCamera& camera,
       if (!is_body(col, row)) continue;
       bool boundary = false;
       for (int k = 0; k < 4; ++k) {
-        const int c = col + neighbour_dc[k], r = row + neighbour_dr[k];
+        const int c = col + kNeighbourDc[k], r = row + kNeighbourDr[k];
         if (c >= 0 && r >= 0 && c < width && r < height && !is_body(c, r)) boundary = true;
       }
       if (!boundary) continue;

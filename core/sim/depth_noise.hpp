@@ -97,11 +97,14 @@ class StaticBackground {
 
   const std::vector<uint16_t>& depth_mm() const { return depth_mm_; }
   const std::vector<float>& incidence_cosines() const { return incidence_cos_; }
+  // Per pixel of the room, the depth (mm) of the neighbour it would fly towards, 0 for none.
+  const std::vector<uint16_t>& flying_neighbour_mm() const { return flying_neighbour_mm_; }
   const DepthNoiseOptions& options() const { return options_; }
 
  private:
   std::vector<uint16_t> depth_mm_;
   std::vector<float> incidence_cos_;
+  std::vector<uint16_t> flying_neighbour_mm_;
   DepthNoiseOptions options_;
 };
 

@@ -21,6 +21,9 @@ class SimRng {
   // Uniform in [0, 1), 53 random bits.
   double uniform() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }
 
+  // 64 random bits (for samplers that split one draw, see ziggurat_normal.hpp).
+  std::uint64_t bits() { return engine_(); }
+
   // Standard normal by Box-Muller (both values used).
   double normal() {
     if (has_spare_) {

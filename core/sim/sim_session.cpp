@@ -4,7 +4,6 @@
 #include <cmath>
 #include <memory>
 #include <opencv2/core.hpp>
-#include <thread>
 #include <time.h>
 
 #include "body/body_evaluator.hpp"
@@ -16,6 +15,7 @@
 #include "session/session_validator.hpp"
 #include "session/text_fields.hpp"
 #include "sim/option_checks.hpp"
+#include "sim/ordered_workers.hpp"
 #include "sim/forearm_strap.hpp"
 #include "sim/mag_precalibration.hpp"
 #include "sim/room_frame.hpp"
@@ -26,6 +26,11 @@ namespace posefuse::sim {
 namespace {
 
 constexpr double kPi = 3.14159265358979323846;
+constexpr int kFramesAheadPerWorker = 2;  // frames a worker may finish before they are written
+// zstd level of depth chunks: level 3 took a fifth of a frame's CPU on noisy depth; level 1 is
+// ~2.5 times faster for 14 % larger depth payloads, 11 % larger sessions (docs/benchmarks.md,
+// "Faster frames").
+constexpr int kDepthZstdLevel = 1;
 using Mat3 = Eigen::Matrix3d;
 
 double thread_cpu_s() {
@@ -178,10 +183,10 @@ class FrameWorker {
     const cv::Mat body_index(camera_.height(), camera_.width(), CV_8UC1,
                              const_cast<std::uint8_t*>(noisy.body_index.data()));
     out.chunks.emplace_back().mutable_depth()->CopyFrom(
-        session::encode_depth(depth, v1::DepthFrame::ZSTD_U16_LE, plan.t_us));
+        session::encode_depth(depth, options_.depth_encoding, plan.t_us, kDepthZstdLevel));
     out.chunks.emplace_back().mutable_body_index()->CopyFrom(
         session::encode_body_index(body_index, v1::BodyIndexFrame::PNG8, plan.t_us));
-    lap("depth, body index: encode (zstd, PNG)");
+    lap("depth, body index: encode (zstd or PNG, PNG)");
     out.chunks.emplace_back().mutable_skeleton()->CopyFrom(
         skeleton_.simulate(joints, noisy.depth_mm, plan.index, plan.t_us, 0));
     lap("skeleton");
@@ -299,6 +304,9 @@ void validate(const SimSessionOptions& options) {
     throw_invalid("clock_drift_max", "must be in [0, 1e-3)");
   }
   require_positive(options.buzzer_stop_s, "buzzer_stop_s");
+  if (options.depth_encoding != v1::DepthFrame::ZSTD_U16_LE && options.depth_encoding != v1::DepthFrame::PNG16) {
+    throw_invalid("depth_encoding", "is " + std::to_string(options.depth_encoding) + ", must be ZSTD_U16_LE or PNG16");
+  }
   if (options.threads < 1 || options.threads > 64) {
     throw_invalid("threads", "is " + std::to_string(options.threads) + ", must be 1..64");
   }
@@ -562,7 +570,7 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
     }
   };
 
-  // Frames, rendered `threads` at a time; each frame's numbers depend only on its index.
+  // Frames on `threads` workers; each frame's numbers depend only on its index.
   const raycast::DepthCamera camera(options.depth_intrinsics);
   const CameraSkeletonSimulator skeleton(camera, options.skeleton, options.seed);
   const Vec3 floor_normal_K = K_from_Body.linear() * Vec3::UnitY();
@@ -582,54 +590,41 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
     workers.push_back(std::make_unique<FrameWorker>(options, render, layout, camera, skeleton, straps, forearm_straps,
                                                     rest_R_from_F, K_from_Body, room, background, wobble));
   }
-  for (std::int64_t first = 0; first < frames; first += options.threads) {
-    const std::int64_t count = std::min<std::int64_t>(options.threads, frames - first);
-    std::vector<FrameOutput> outputs(static_cast<std::size_t>(count));
-    std::vector<std::exception_ptr> errors(static_cast<std::size_t>(count));
-    const auto run = [&](std::int64_t i) {
-      try {
-        FramePlan plan;
-        plan.index = first + i;
-        plan.t_s = static_cast<double>(plan.index) / options.depth_rate_hz;
-        plan.t_us = std::llround(plan.t_s * 1e6);
-        outputs[static_cast<std::size_t>(i)] = workers[static_cast<std::size_t>(i)]->process(plan, motion);
-      } catch (...) {
-        errors[static_cast<std::size_t>(i)] = std::current_exception();
-      }
-    };
-    std::vector<std::thread> threads;
-    for (std::int64_t i = 1; i < count; ++i) threads.emplace_back(run, i);
-    run(0);
-    for (auto& thread : threads) thread.join();
-    lap("frames (this thread, counted per part below)");
-    for (const auto& error : errors) {
-      if (error) std::rethrow_exception(error);
+  // Workers render frames while this thread writes the earlier ones (the sink may encode files).
+  const auto render_frame = [&](int worker, std::int64_t index) {
+    FramePlan plan;
+    plan.index = index;
+    plan.t_s = static_cast<double>(plan.index) / options.depth_rate_hz;
+    plan.t_us = std::llround(plan.t_s * 1e6);
+    return workers[static_cast<std::size_t>(worker)]->process(plan, motion);
+  };
+  const auto write_frame = [&](std::int64_t index, FrameOutput& output) {
+    lap("waiting for frames");
+    const session::ChunkOrderKey key = session::chunk_order_key(output.chunks.front(), header);
+    emit_small_before(&key);
+    for (const auto& chunk : output.chunks) emit(chunk);
+    SimFrameTruth& frame = output.truth;
+    const double t_s = static_cast<double>(frame.t_us) * 1e-6;
+    for (const SensorKinematics& kin : kinematics) {
+      const SensorMotion m = kin.at(std::clamp(t_s, kin.t_begin_s(), kin.t_end_s()));
+      frame.imu_p_K.push_back(W_to_K(m.p_W_m));
+      frame.K_from_imu.push_back((truth.K_from_W * m.W_from_A).normalized());
     }
-    for (FrameOutput& output : outputs) {
-      const session::ChunkOrderKey key = session::chunk_order_key(output.chunks.front(), header);
-      emit_small_before(&key);
-      for (const auto& chunk : output.chunks) emit(chunk);
-      SimFrameTruth& frame = output.truth;
-      const double t_s = static_cast<double>(frame.t_us) * 1e-6;
-      for (const SensorKinematics& kin : kinematics) {
-        const SensorMotion m = kin.at(std::clamp(t_s, kin.t_begin_s(), kin.t_end_s()));
-        frame.imu_p_K.push_back(W_to_K(m.p_W_m));
-        frame.K_from_imu.push_back((truth.K_from_W * m.W_from_A).normalized());
-      }
-      truth.frames.push_back(std::move(frame));
-    }
+    truth.frames.push_back(std::move(frame));
     lap("writing chunks, merging, IMU truth per frame");
-    if (progress) progress(SimProgress{first + count, frames});
+    if (progress) progress(SimProgress{index + 1, frames});
     lap("progress callback");
-  }
+  };
+  lap("setup: header, room, frame workers");
+  run_ordered<FrameOutput>(options.threads, frames, kFramesAheadPerWorker, render_frame, write_frame);
   emit_small_before(nullptr);
   v1::SessionChunk end;
   *end.mutable_end() = counts;
   sink.write(end);
   ++truth.chunks;
   lap("writing chunks, merging, IMU truth per frame");
-  // The main thread's frame work is inside the workers' parts already.
-  truth.cpu_s.erase("frames (this thread, counted per part below)");
+  // Blocked waiting costs no CPU; the lap only separates it from the writing.
+  truth.cpu_s.erase("waiting for frames");
   for (const auto& worker : workers) {
     for (const auto& [part, seconds] : worker->times()) truth.cpu_s[part] += seconds;
   }

@@ -92,6 +92,9 @@ struct SimSessionOptions {
   PanelCaptureOptions panel_capture;  // not simulated here: posefuse-sim writes it beside the session
 
   int threads = 2;                  // frames rendered in parallel (results do not depend on it)
+  // How depth chunks are encoded: ZSTD_U16_LE (chunk files) or PNG16, which a recording
+  // directory stores as is (its depth files), sparing the writer a decode and re-encode.
+  v1::DepthFrame::Encoding depth_encoding = v1::DepthFrame::ZSTD_U16_LE;
 };
 
 // kInvalidArgument naming the field.

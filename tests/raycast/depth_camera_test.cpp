@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "common/error.hpp"
 
 namespace posefuse::raycast {
@@ -55,6 +57,37 @@ TEST(DepthCamera, RejectsBadIntrinsics) {
   bad = {};
   bad.cy = std::nan("");
   EXPECT_THROW(DepthCamera{bad}, Error);
+}
+
+
+// columns_within / row_within may only drop pixels whose ray lies outside the box: checked
+// against the per-pixel test for boxes all over the (distorted) image.
+TEST(DepthCamera, ColumnsAndRowsWithinKeepEveryPixelInsideTheBox) {
+  const DepthCamera camera(DepthIntrinsics{});  // Kinect v2 distortion
+  int boxes = 0, kept_columns = 0;
+  for (float cx = -0.7f; cx <= 0.7f; cx += 0.23f)
+    for (float cy = -0.55f; cy <= 0.55f; cy += 0.19f)
+      for (const float half : {0.01f, 0.08f, 0.3f}) {
+        const float min_x = cx - half, max_x = cx + half, min_y = cy - 0.5f * half, max_y = cy + 0.5f * half;
+        const auto [first, last] = camera.columns_within(min_x, max_x);
+        ASSERT_LE(0, first);
+        ASSERT_LE(first, std::max(first, last));
+        ASSERT_LE(last, camera.width());
+        for (int row = 0; row < camera.height(); ++row)
+          for (int col = 0; col < camera.width(); ++col) {
+            const Eigen::Vector3f& d = camera.pixel_ray(col, row);
+            if (d.x() < min_x || d.x() > max_x || d.y() < min_y || d.y() > max_y) continue;
+            ASSERT_TRUE(col >= first && col < last) << col << " " << row;
+            ASSERT_TRUE(camera.row_within(row, min_y, max_y)) << col << " " << row;
+          }
+        kept_columns += last - first;
+        ++boxes;
+      }
+  // And it does skip: the boxes keep a small part of the columns.
+  EXPECT_LT(kept_columns, boxes * camera.width() / 2);
+  const auto all = camera.columns_within(-1e30f, 1e30f);
+  EXPECT_EQ(all.first, 0);
+  EXPECT_EQ(all.second, camera.width());
 }
 
 }  // namespace

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <algorithm>
 #include <map>
 #include <numbers>
 #include <random>
@@ -108,6 +109,20 @@ TEST(MeshScene, SphereDepthMatchesAnalyticWithinOneMillimetre) {
     }
   EXPECT_GT(compared, 5000);
   EXPECT_GT(hits, compared);
+  // The hit rectangle is the tightest one around every hit.
+  int col_begin = camera.width(), col_end = 0, row_begin = camera.height(), row_end = 0;
+  for (int row = 0; row < camera.height(); ++row)
+    for (int col = 0; col < camera.width(); ++col) {
+      if (images.face[static_cast<size_t>(row) * camera.width() + col] < 0) continue;
+      col_begin = std::min(col_begin, col);
+      col_end = std::max(col_end, col + 1);
+      row_begin = std::min(row_begin, row);
+      row_end = std::max(row_end, row + 1);
+    }
+  EXPECT_EQ(images.hit_col_begin, col_begin);
+  EXPECT_EQ(images.hit_col_end, col_end);
+  EXPECT_EQ(images.hit_row_begin, row_begin);
+  EXPECT_EQ(images.hit_row_end, row_end);
 }
 
 TEST(MeshScene, RotatedBoxDepthMatchesAnalyticWithinOneMillimetre) {

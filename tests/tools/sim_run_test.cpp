@@ -16,6 +16,7 @@
 #include "session/chunk_file.hpp"
 #include "session/directory_reader.hpp"
 #include "session/file_bytes.hpp"
+#include "session/image_codec.hpp"
 #include "session/json_message.hpp"
 #include "session/result_files.hpp"
 #include "session/session_validator.hpp"
@@ -139,17 +140,20 @@ TEST(SimRun, SameSeedSameBytesWhateverTheThreads) {
   a.options = small_options();
   a.options.threads = 1;
   a.out_directory = fresh_dir("same_a");
-  tools::SimRunRequest b = a;
-  b.options.threads = 3;
-  b.out_directory = fresh_dir("same_b");
   tools::run_simulation(a);
-  tools::run_simulation(b);
-  const auto tree_a = tree(*a.out_directory), tree_b = tree(*b.out_directory);
+  const auto tree_a = tree(*a.out_directory);
   EXPECT_GT(tree_a.size(), 100u);  // 31 frames x 3 image streams, CSVs, gt/
-  ASSERT_EQ(tree_a.size(), tree_b.size());
-  for (const auto& [name, bytes] : tree_a) {
-    ASSERT_TRUE(tree_b.count(name)) << name;
-    EXPECT_TRUE(bytes == tree_b.at(name)) << name << " differs";
+  for (const int threads : {2, 3}) {
+    tools::SimRunRequest b = a;
+    b.options.threads = threads;
+    b.out_directory = fresh_dir("same_b" + std::to_string(threads));
+    tools::run_simulation(b);
+    const auto tree_b = tree(*b.out_directory);
+    ASSERT_EQ(tree_a.size(), tree_b.size()) << threads << " threads";
+    for (const auto& [name, bytes] : tree_a) {
+      ASSERT_TRUE(tree_b.count(name)) << name;
+      EXPECT_TRUE(bytes == tree_b.at(name)) << name << " differs with " << threads << " threads";
+    }
   }
 
   tools::SimRunRequest c = a;
@@ -160,6 +164,34 @@ TEST(SimRun, SameSeedSameBytesWhateverTheThreads) {
   EXPECT_NE(tree_a.at("depth/500000.png"), tree_c.at("depth/500000.png"));
   EXPECT_NE(tree_a.at("imu/imu_right.csv"), tree_c.at("imu/imu_right.csv"));
   EXPECT_NE(tree_a.at("gt/truth.json"), tree_c.at("gt/truth.json"));
+}
+
+// The directory's depth PNGs come straight from the frame threads, the chunk file's depth is
+// zstd: both must hold the same frames.
+TEST(SimRun, DirectoryAndChunkFileHoldTheSameDepth) {
+  tools::SimRunRequest dir;
+  dir.options = small_options();
+  dir.options.color = false;
+  dir.out_directory = fresh_dir("depth_dir");
+  tools::SimRunRequest file = dir;
+  file.out_directory.reset();
+  file.chunk_file = fresh_dir("depth.pfchunks");
+  tools::run_simulation(dir);
+  tools::run_simulation(file);
+  session::ChunkFileReader reader(*file.chunk_file);
+  session::SessionChunk chunk;
+  int frames = 0;
+  while (reader.next(chunk)) {
+    if (!chunk.has_depth()) continue;
+    ASSERT_EQ(chunk.depth().encoding(), v1::DepthFrame::ZSTD_U16_LE);
+    const cv::Mat from_file = session::decode_depth(chunk.depth(), "depth");
+    const fs::path png = *dir.out_directory / "depth" / (std::to_string(chunk.depth().t_us()) + ".png");
+    const cv::Mat from_dir = cv::imread(png.string(), cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(from_dir.type(), CV_16UC1) << png;
+    EXPECT_EQ(cv::countNonZero(from_file != from_dir), 0) << png;
+    ++frames;
+  }
+  EXPECT_EQ(frames, 31);
 }
 
 TEST(SimRun, GtHasTheClientResultFilesColumns) {

@@ -34,7 +34,11 @@ SimRunResult run_simulation(const SimRunRequest& request, const std::function<vo
   const auto middle_us = static_cast<std::int64_t>(0.5 * request.options.duration_s * 1e6);
   ContactSheetRecorder recorder(*sink, middle_us);
   session::ChunkSink& target = request.contact_sheet ? static_cast<session::ChunkSink&>(recorder) : *sink;
-  const sim::SimTruth truth = sim::simulate_session(request.options, target, progress);
+  sim::SimSessionOptions options = request.options;
+  // A directory stores depth as PNG: encoding it so on the frame threads spares the writer
+  // (this thread) decoding zstd and encoding PNG per frame; the files are the same.
+  if (request.out_directory) options.depth_encoding = v1::DepthFrame::PNG16;
+  const sim::SimTruth truth = sim::simulate_session(options, target, progress);
   target.finish();
   sim::write_ground_truth(truth, result.gt_directory);
   if (request.contact_sheet) write_png(recorder.render(), *request.contact_sheet);
