@@ -177,7 +177,7 @@ std::optional<MeasuredForearmAxis> measure_forearm_axis(const geometry::DepthIma
   if (!(options.search_radius_m > 0.0) || !(options.inlier_radius_m > 0.0) || !(options.end_margin_m >= 0.0) ||
       options.min_points < 3 || options.refinements < 0 || !(options.slice_m > 0.0) ||
       !(options.hand_min_m >= 0.0 && options.hand_min_m < options.hand_max_m) || !(options.width_tolerance_m >= 0.0) ||
-      !(options.hand_widening_m >= 0.0)) {
+      !(options.hand_widening_m >= 0.0) || !(options.max_width_pixel_m > 0.0)) {
     throw_invalid("options", "radii and slice_m must be positive, min_points >= 3, refinements >= 0, "
                              "0 <= hand_min_m < hand_max_m, width_tolerance_m and hand_widening_m >= 0");
   }
@@ -212,7 +212,9 @@ std::optional<MeasuredForearmAxis> measure_forearm_axis(const geometry::DepthIma
   out.elbow_K = axis->point + (axis->along_min - half_pixel_m(axis->along_min)) * axis->direction;
   out.wrist_K = axis->point + (axis->along_max + half_pixel_m(axis->along_max)) * axis->direction;
   out.points = static_cast<int>(line.inliers.size());
-  if (options.wrist_from_width) {
+  // The width profile needs the wrist's narrowing resolved: 1-2 cm on a 5 cm wrist are 1-2
+  // pixels at max_width_pixel_m; coarser pixels alias whole centimetres into the slices' widths.
+  if (options.wrist_from_width && axis->point.z() / depth_camera.fx <= options.max_width_pixel_m) {
     const Vec3 ray = axis->point.normalized();
     const Vec3 lateral_direction = axis->direction.cross(ray).normalized();
     std::vector<double> along, lateral;

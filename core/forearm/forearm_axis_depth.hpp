@@ -46,6 +46,9 @@ struct ForearmAxisOptions {
   double hand_max_m = 0.16;         // and at most this far (a hand with fingers, ~0.18 m)
   double width_tolerance_m = 0.001; // slices within this of the narrowest count as the wrist's
   double hand_widening_m = 0.008;   // the hand beyond the wrist is at least this much wider somewhere
+  // Only where a depth pixel's footprint at the forearm is at most this (Kinect v2: 6.8 mm at
+  // 2.5 m); coarser images keep the distal end.
+  double max_width_pixel_m = 0.008;
 };
 
 struct SurfaceLine {

@@ -55,7 +55,9 @@ TEST(ForearmAxisDepth, WristWhereTheHandBeginsWhateverTheSdkWristBias) {
   ForearmScene scene;  // forearm 26 cm long at 2 m, radius 3.5 cm
   scene.hand_length_m = 0.10;
   scene.hand_radius_m = 0.045;
-  const StrapCameras cameras = test_cameras();
+  // A Kinect v2-like depth camera (6 mm pixels at 2 m): the width profile needs the resolution.
+  StrapCameras cameras = test_cameras();
+  cameras.depth = {512, 424, 366.0, 366.0, 256.0, 212.0, 0.02, -0.05, 0.0, 0.0, 0.0};
   const auto images = render_forearm(scene, cameras, 0.0, 0.001, 3);
   const Vec3 along = (scene.wrist_K - scene.elbow_K).normalized();
   ForearmAxisOptions distal_end;
