@@ -43,22 +43,13 @@ namespace fs = std::filesystem;
 using geometry::Quat;
 using geometry::Vec3;
 
-class WriterSink : public session::ResultSink {
- public:
-  explicit WriterSink(client::ResultWriter& writer) : writer_(writer) {}
-  void emit(v1::FitResult&& result) override { writer_.write(result); }
-
- private:
-  client::ResultWriter& writer_;
-};
-
 int replay(const fs::path& chunks, const fs::path& gt, const fs::path& out) {
   const double cpu0 = bench::thread_cpu_seconds();
   const auto wall0 = bench::WallClock::now();
   fs::remove_all(out);
   {
     client::ResultWriter writer(out);
-    WriterSink results(writer);
+    client::ResultWriterSink results(writer);
     session::SessionPipeline pipeline(session::make_default_stages(), results);
     session::ChunkFileReader reader(chunks);
     v1::SessionChunk chunk;

@@ -32,17 +32,6 @@ fs::path fresh_dir(const std::string& name) {
   return dir;
 }
 
-// Hands every result the pipeline emits to the client's writer (what `posefuse fit` does with
-// the server's stream).
-class WriterSink : public session::ResultSink {
- public:
-  explicit WriterSink(client::ResultWriter& writer) : writer_(writer) {}
-  void emit(v1::FitResult&& result) override { writer_.write(result); }
-
- private:
-  client::ResultWriter& writer_;
-};
-
 // The simulator's chunks straight into the pipeline.
 class PipelineChunkSink : public session::ChunkSink {
  public:
@@ -69,7 +58,7 @@ ScoredRun simulate_run_and_score(const std::string& name, const std::string& opt
   run.gt = dir / "gt";
   {
     client::ResultWriter writer(run.results);
-    WriterSink results(writer);
+    client::ResultWriterSink results(writer);
     session::SessionPipeline pipeline(session::make_default_stages(), results);
     PipelineChunkSink chunks(pipeline);
     const sim::SimTruth truth = sim::simulate_session(options, chunks);
