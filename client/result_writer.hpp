@@ -13,6 +13,7 @@
 #include <string>
 
 #include "posefuse/v1/results.pb.h"
+#include "session/pipeline_stage.hpp"
 #include "session/result_files.hpp"
 
 namespace posefuse::client {
@@ -47,6 +48,17 @@ class ResultWriter {
   bool have_summary_ = false;
   std::uint64_t warnings_ = 0;
   std::uint64_t item_errors_ = 0;
+};
+
+// Hands every result a SessionPipeline emits to a ResultWriter (what `posefuse fit` does with
+// the server's stream), for running the pipeline in process (tests, benchmarks).
+class ResultWriterSink : public session::ResultSink {
+ public:
+  explicit ResultWriterSink(ResultWriter& writer) : writer_(writer) {}
+  void emit(v1::FitResult&& result) override { writer_.write(result); }
+
+ private:
+  ResultWriter& writer_;
 };
 
 }  // namespace posefuse::client

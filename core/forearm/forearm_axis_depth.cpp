@@ -110,6 +110,59 @@ std::optional<CylinderAxis> cylinder_axis(const DepthLine& line, double depth_fx
   return out;
 }
 
+std::optional<double> wrist_from_width_profile(const std::vector<double>& along, const std::vector<double>& lateral,
+                                               double along_max, const ForearmAxisOptions& options) {
+  const double start = along_max - options.hand_max_m - 2.0 * options.slice_m;
+  const int slices = static_cast<int>(std::ceil((along_max - start) / options.slice_m));
+  if (slices < 5) return std::nullopt;
+  std::vector<double> sum(static_cast<std::size_t>(slices), 0.0), sum_sq(sum.size(), 0.0), count(sum.size(), 0.0);
+  for (std::size_t i = 0; i < along.size(); ++i) {
+    const int k = static_cast<int>(std::floor((along[i] - start) / options.slice_m));
+    if (k < 0 || k >= slices) continue;
+    sum[static_cast<std::size_t>(k)] += lateral[i];
+    sum_sq[static_cast<std::size_t>(k)] += lateral[i] * lateral[i];
+    count[static_cast<std::size_t>(k)] += 1.0;
+  }
+  std::vector<double> width(sum.size(), -1.0);
+  for (std::size_t k = 0; k < sum.size(); ++k) {
+    if (count[k] < 3.0) continue;
+    const double mean = sum[k] / count[k];
+    width[k] = std::sqrt(12.0 * std::max(0.0, sum_sq[k] / count[k] - mean * mean));
+  }
+  // Three-slice average where all three are seen.
+  std::vector<double> smooth(width.size(), -1.0);
+  for (std::size_t k = 1; k + 1 < width.size(); ++k) {
+    if (width[k - 1] >= 0.0 && width[k] >= 0.0 && width[k + 1] >= 0.0) {
+      smooth[k] = (width[k - 1] + width[k] + width[k + 1]) / 3.0;
+    }
+  }
+  const auto centre = [&](std::size_t k) { return start + (static_cast<double>(k) + 0.5) * options.slice_m; };
+  double narrowest = INFINITY;
+  for (std::size_t k = 0; k < smooth.size(); ++k) {
+    const double c = centre(k);
+    if (smooth[k] >= 0.0 && c >= along_max - options.hand_max_m && c <= along_max - options.hand_min_m) {
+      narrowest = std::min(narrowest, smooth[k]);
+    }
+  }
+  if (!std::isfinite(narrowest)) return std::nullopt;
+  std::optional<double> wrist;
+  for (std::size_t k = 0; k < smooth.size(); ++k) {
+    const double c = centre(k);
+    if (smooth[k] >= 0.0 && c >= along_max - options.hand_max_m && c <= along_max - options.hand_min_m &&
+        smooth[k] <= narrowest + options.width_tolerance_m) {
+      wrist = c + 0.5 * options.slice_m;  // the slice's distal edge
+    }
+  }
+  // A hand must be seen beyond: some slice there wider than the wrist by hand_widening_m (a bare
+  // cylinder, or a hand seen end-on, has none; then the distal end stands).
+  double widest_beyond = -1.0;
+  for (std::size_t k = 0; wrist && k < smooth.size(); ++k) {
+    if (centre(k) > *wrist) widest_beyond = std::max(widest_beyond, smooth[k]);
+  }
+  if (!wrist || widest_beyond < narrowest + options.hand_widening_m) return std::nullopt;
+  return wrist;
+}
+
 std::optional<MeasuredForearmAxis> measure_forearm_axis(const geometry::DepthImageView& depth,
                                                         const geometry::PinholeCamera& depth_camera,
                                                         const Vec3& elbow_K, const Vec3& wrist_K,
@@ -122,8 +175,11 @@ std::optional<MeasuredForearmAxis> measure_forearm_axis(const geometry::DepthIma
   if (!wrist_K.allFinite() || wrist_K.z() <= 0.0) throw_invalid("wrist_K", "not finite or not in front of the camera");
   if ((wrist_K - elbow_K).norm() < 1e-3) throw_invalid("elbow_K/wrist_K", "elbow and wrist coincide");
   if (!(options.search_radius_m > 0.0) || !(options.inlier_radius_m > 0.0) || !(options.end_margin_m >= 0.0) ||
-      options.min_points < 3 || options.refinements < 0) {
-    throw_invalid("options", "radii must be positive, min_points >= 3, refinements >= 0");
+      options.min_points < 3 || options.refinements < 0 || !(options.slice_m > 0.0) ||
+      !(options.hand_min_m >= 0.0 && options.hand_min_m < options.hand_max_m) || !(options.width_tolerance_m >= 0.0) ||
+      !(options.hand_widening_m >= 0.0) || !(options.max_width_pixel_m > 0.0)) {
+    throw_invalid("options", "radii and slice_m must be positive, min_points >= 3, refinements >= 0, "
+                             "0 <= hand_min_m < hand_max_m, width_tolerance_m and hand_widening_m >= 0");
   }
   if (excluded && (!excluded->point.allFinite() || !excluded->direction.allFinite() ||
                    std::abs(excluded->direction.norm() - 1.0) > 1e-6)) {
@@ -156,6 +212,20 @@ std::optional<MeasuredForearmAxis> measure_forearm_axis(const geometry::DepthIma
   out.elbow_K = axis->point + (axis->along_min - half_pixel_m(axis->along_min)) * axis->direction;
   out.wrist_K = axis->point + (axis->along_max + half_pixel_m(axis->along_max)) * axis->direction;
   out.points = static_cast<int>(line.inliers.size());
+  // The width profile needs the wrist's narrowing resolved: 1-2 cm on a 5 cm wrist are 1-2
+  // pixels at max_width_pixel_m; coarser pixels alias whole centimetres into the slices' widths.
+  if (options.wrist_from_width && axis->point.z() / depth_camera.fx <= options.max_width_pixel_m) {
+    const Vec3 ray = axis->point.normalized();
+    const Vec3 lateral_direction = axis->direction.cross(ray).normalized();
+    std::vector<double> along, lateral;
+    for (const Vec3& p : line.inliers) {
+      along.push_back((p - axis->point).dot(axis->direction));
+      lateral.push_back((p - axis->point).dot(lateral_direction));
+    }
+    if (const auto wrist = wrist_from_width_profile(along, lateral, axis->along_max, options)) {
+      if (*wrist - axis->along_min >= options.min_length_m) out.wrist_K = axis->point + *wrist * axis->direction;
+    }
+  }
   return out;
 }
 

@@ -15,7 +15,10 @@
 //     pixels a footprint h apart). So R = sqrt(3 var + h^2 / 4), and the axis is the surface line
 //     moved (pi/4) R away from the camera.
 //  4. The extreme inliers along the axis, moved out by half a depth pixel's footprint (the last
-//     pixel on the forearm lies on average that far inside its end), are the elbow and the wrist.
+//     pixel on the forearm lies on average that far inside its end), are the elbow and the
+//     distal end of what was seen. The hand continues the forearm's cylinder, so that end is the
+//     fingertips, not the wrist (on the body render 10-12 cm beyond it), and the wrist is found
+//     in the width profile (wrist_from_width_profile below).
 #include <optional>
 #include <vector>
 
@@ -36,6 +39,16 @@ struct ForearmAxisOptions {
   // to the elbow) are not the forearm's: a cylinder's visible points lie within ~1.3 R of its
   // surface line.
   double excluded_radius_m = 0.06;
+  // Wrist from the width profile (wrist_from_width_profile); false: the distal end of the inliers.
+  bool wrist_from_width = true;
+  double slice_m = 0.01;            // slices across the axis for the width profile
+  double hand_min_m = 0.04;         // the wrist lies at least this far before the distal end
+  double hand_max_m = 0.16;         // and at most this far (a hand with fingers, ~0.18 m)
+  double width_tolerance_m = 0.001; // slices within this of the narrowest count as the wrist's
+  double hand_widening_m = 0.008;   // the hand beyond the wrist is at least this much wider somewhere
+  // Only where a depth pixel's footprint at the forearm is at most this (Kinect v2: 6.8 mm at
+  // 2.5 m); coarser images keep the distal end.
+  double max_width_pixel_m = 0.008;
 };
 
 struct SurfaceLine {
@@ -77,6 +90,21 @@ struct CylinderAxis {
   double along_min = 0.0, along_max = 0.0;
 };
 std::optional<CylinderAxis> cylinder_axis(const DepthLine& line, double depth_fx);
+
+// The wrist along a seen forearm with its hand: a forearm narrows from the elbow to the wrist,
+// and the hand beyond is at least as wide as the wrist in every view (the palm is wider, seen
+// edge-on it is about as thick as the wrist, but then the fingers' spread and the thumb widen it),
+// so the wrist is the narrow part between the two. `along` and `lateral` are the inliers'
+// coordinates along the axis (elbow -> distal end) and across it (perpendicular to the axis and
+// the viewing ray). The visible width of each slice_m slice is sqrt(12 var(lateral)) (a
+// uniform spread across the width, less quantised than the extreme pixels), smoothed over three
+// slices; among the slices from hand_max_m to hand_min_m before the distal end, those within
+// width_tolerance_m of the narrowest are the wrist's narrow part, and its distal edge (the
+// last such slice from the elbow) is the wrist: the hand begins there. Some slice beyond it must
+// be hand_widening_m wider, else no hand is seen (a bare forearm, a hand end-on or cut off).
+// Returns the position along the axis, or nullopt when too few slices are seen or no hand.
+std::optional<double> wrist_from_width_profile(const std::vector<double>& along, const std::vector<double>& lateral,
+                                               double along_max, const ForearmAxisOptions& options);
 
 // Throws posefuse::Error kInvalidArgument naming "depth.pixels", "elbow_K", "wrist_K" or
 // "options" for unusable input. nullopt when the depth image does not show a forearm there

@@ -110,6 +110,17 @@ Vec3 LiveGapEstimator::update(const ArmSample& sample, const Vec3& shoulder_K) {
   return p_K_;
 }
 
+void LiveGapEstimator::correct(const Vec3& p_K, double gain) {
+  if (!active_) throw_precondition("gap", "correct() before begin()");
+  if (!p_K.allFinite()) throw_invalid("p_K", "not finite");
+  if (!(gain >= 0.0 && gain <= 1.0)) throw_invalid("gain", "not in [0, 1]");
+  p_K_ += gain * (p_K - p_K_);
+}
+
+Vec3 imu_position_from_elbow(const Vec3& elbow_K, const Quat& K_from_F, const ForearmModel& model) {
+  return elbow_K + K_from_F.normalized() * Vec3(model.r_m, model.d_se_m, 0.0);
+}
+
 RecoveredGap recover_gap_live(const GapRecoveryInput& input, const GapSpan& gap,
                               const LiveGapOptions& options) {
   const ArmTimeline arm = checked_gap_timeline(input, gap);

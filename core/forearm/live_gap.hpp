@@ -38,6 +38,13 @@ class LiveGapEstimator {
   // kFailedPrecondition "gap" before begin(), kInvalidArgument "sample.*" on bad input.
   Vec3 update(const ArmSample& sample, const Vec3& shoulder_K);
 
+  // Pulls the estimate towards an independent, drift-free but biased position of the IMU (e.g.
+  // the SDK's elbow carried along the IMU's forearm axis, imu_position_from_elbow) by `gain` in
+  // [0, 1]: a complementary filter, so that over a long gap the integration's drift is bounded by
+  // that position's bias (5-10 cm for a skeleton SDK) instead of growing. The velocity is left as
+  // it is. Throws kFailedPrecondition "gap" before begin(), kInvalidArgument "p_K" / "gain".
+  void correct(const Vec3& p_K, double gain);
+
   bool active() const { return active_; }
   const Vec3& position_K() const { return p_K_; }
   const Vec3& velocity_K() const { return v_K_; }
@@ -52,6 +59,10 @@ class LiveGapEstimator {
   Vec3 v_K_ = Vec3::Zero();
   Vec3 a_K_ = Vec3::Zero();  // net acceleration at t_us_
 };
+
+// The IMU where the forearm model puts it for an elbow position and K_from_F: F's origin lies
+// d_se from the elbow along y_F, the IMU r along x_F (eq. 10 from the elbow's side).
+Vec3 imu_position_from_elbow(const Vec3& elbow_K, const Quat& K_from_F, const ForearmModel& model);
 
 // Runs LiveGapEstimator over `gap` as it would run live (each estimate uses only data up to its
 // time), at the same times as recover_gap_paper. Same errors as recover_gap_paper.

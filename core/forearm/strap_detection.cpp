@@ -52,7 +52,8 @@ void check_inputs(const GrayImageView& color, const DepthImageView& depth, const
                             o.search_end_fraction <= 1.0;
   if (o.min_samples < 4 || !(o.window_fraction > 0.0 && o.window_fraction < 0.5) || !fractions_ok ||
       !(o.match_radius_px > 0.0) || o.depth_search_radius_px < 1 || !(o.max_depth_spread_m > 0.0) ||
-      o.min_depth_samples < 1 || !std::isfinite(o.min_contrast) || !std::isfinite(o.max_strap_level)) {
+      o.min_depth_samples < 1 || !std::isfinite(o.min_contrast) || !std::isfinite(o.max_strap_level) ||
+      !(o.side_offset_windows >= 1.0) || !std::isfinite(o.min_side_contrast)) {
     throw_invalid("options", "strap detection options out of range");
   }
 }
@@ -139,6 +140,23 @@ StrapDetection detect_strap(const GrayImageView& color, const DepthImageView& de
   out.band_level = best_level;
   out.contrast = median(profile) - best_level;
   if (out.contrast < options.min_contrast || best_level > options.max_strap_level) {
+    out.miss = StrapMiss::kNoDarkBand;
+    return out;
+  }
+  // A band, not an edge: brighter on both sides. Windows of the same length centred
+  // side_offset_windows windows away from the band's centre, both inside the profile.
+  const int window = 2 * half + 1;
+  const int offset = static_cast<int>(std::lround(options.side_offset_windows * window));
+  const auto window_level = [&](int centre) {
+    return (prefix[static_cast<std::size_t>(centre + half + 1)] - prefix[static_cast<std::size_t>(centre - half)]) /
+           window;
+  };
+  // Moved inwards where the profile ends, as long as they stay clear of the band's window.
+  const int before = std::max(best - offset, half), after = std::min(best + offset, n - 1 - half);
+  out.side_contrast = best - before >= window && after - best >= window
+                          ? std::min(window_level(before), window_level(after)) - best_level
+                          : 0.0;
+  if (out.side_contrast < options.min_side_contrast) {
     out.miss = StrapMiss::kNoDarkBand;
     return out;
   }

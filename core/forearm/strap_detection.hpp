@@ -8,7 +8,12 @@
 // 2. A moving average over window_fraction of the segment; its darkest position inside
 //    [search_begin_fraction, search_end_fraction] is the strap. The band must be darker than
 //    the profile's median by min_contrast grey levels and no brighter than max_strap_level,
-//    otherwise the strap is not seen (skin, a sleeve or the background is not a strap).
+//    otherwise the strap is not seen (skin, a sleeve or the background is not a strap). And it
+//    must be a band across the forearm, not an edge: the windows side_offset_windows window
+//    lengths before and after it (moved inwards at the profile's ends, but never onto the band's
+//    window) must each be brighter than it by
+//    min_side_contrast. On the body render the segment also crosses the sleeve at the elbow, the
+//    hair behind the head, the trousers beyond a hanging hand: each is dark on one side only.
 // 3. Colour pixel -> depth -> 3D (the job of the SDK's CoordinateMapper): the colour ray through
 //    the strap pixel meets the elbow-wrist segment (closest point) near the strap; around that
 //    point's depth pixel, every depth pixel whose 3D point projects within match_radius_px (at
@@ -48,6 +53,8 @@ struct StrapDetectionOptions {
   double search_end_fraction = 0.95;
   double min_contrast = 40.0;           // grey levels below the profile's median
   double max_strap_level = 100.0;       // grey level; a black strap is darker than this
+  double side_offset_windows = 1.5;     // band centre to each side window's centre, in windows
+  double min_side_contrast = 20.0;      // grey levels, each side window above the band
   double match_radius_px = 1.5;         // colour pixels
   int depth_search_radius_px = 8;       // depth pixels around the predicted strap pixel
   double max_depth_spread_m = 0.03;
@@ -69,6 +76,7 @@ struct StrapDetection {
   double fraction = 0.0;          // where along the projected segment (elbow 0, wrist 1)
   double band_level = 0.0;        // moving-average grey level at the band
   double contrast = 0.0;          // profile median - band_level
+  double side_contrast = 0.0;     // the darker side window - band_level (0 when one is outside)
   Vec3 strap_K = Vec3::Zero();    // strap surface point in K (when found)
   int depth_samples = 0;
 };

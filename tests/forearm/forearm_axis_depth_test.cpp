@@ -48,6 +48,34 @@ TEST(ForearmAxisDepth, FindsTheTrueAxisFromBiasedJoints) {
   EXPECT_GT(distance_to_line(sdk.elbow_K, scene.elbow_K, scene.wrist_K), 0.05);
 }
 
+// The hand continues the forearm's cylinder: the distal end of the seen points is the hand's
+// end, 10 cm beyond the wrist. The wrist comes from the width profile, wherever the SDK's wrist
+// lies along the arm (5 cm short of the true wrist or 5 cm beyond it, i.e. on the hand).
+TEST(ForearmAxisDepth, WristWhereTheHandBeginsWhateverTheSdkWristBias) {
+  ForearmScene scene;  // forearm 26 cm long at 2 m, radius 3.5 cm
+  scene.hand_length_m = 0.10;
+  scene.hand_radius_m = 0.045;
+  // A Kinect v2-like depth camera (6 mm pixels at 2 m): the width profile needs the resolution.
+  StrapCameras cameras = test_cameras();
+  cameras.depth = {512, 424, 366.0, 366.0, 256.0, 212.0, 0.02, -0.05, 0.0, 0.0, 0.0};
+  const auto images = render_forearm(scene, cameras, 0.0, 0.001, 3);
+  const Vec3 along = (scene.wrist_K - scene.elbow_K).normalized();
+  ForearmAxisOptions distal_end;
+  distal_end.wrist_from_width = false;
+  for (const double bias_m : {-0.05, 0.0, 0.05}) {
+    const BiasedJoints sdk = biased(scene);
+    const Vec3 sdk_wrist = scene.wrist_K + bias_m * along + Vec3(-0.02, 0.0, 0.03);
+    const auto axis = measure_forearm_axis(images.depth_view(cameras), cameras.depth, sdk.elbow_K, sdk_wrist);
+    ASSERT_TRUE(axis.has_value()) << bias_m;
+    EXPECT_LT(std::abs((axis->wrist_K - scene.wrist_K).dot(along)), 0.015) << bias_m;
+    EXPECT_LT(distance_to_line(axis->wrist_K, scene.elbow_K, scene.wrist_K), 0.008) << bias_m;
+    // The distal end alone runs on over the hand (the failure this replaces).
+    const auto end = measure_forearm_axis(images.depth_view(cameras), cameras.depth, sdk.elbow_K, sdk_wrist, distal_end);
+    ASSERT_TRUE(end.has_value()) << bias_m;
+    EXPECT_GT((end->wrist_K - scene.wrist_K).dot(along), 0.07) << bias_m;
+  }
+}
+
 TEST(ForearmAxisDepth, DepthNoiseOfTwoMillimetres) {
   ForearmScene scene;
   scene.elbow_K = Vec3(-0.15, 0.1, 1.8);

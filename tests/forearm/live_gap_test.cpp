@@ -54,6 +54,57 @@ TEST(LiveGap, EntryVelocityIsNotUnderestimated) {
   EXPECT_LT((live.position_K() - motion.imu_position(t0)).norm(), 0.01);
 }
 
+// The forearm model's IMU from the elbow is the synthetic arm's IMU (eq. 10 from the elbow side).
+TEST(LiveGap, ImuPositionFromElbowFollowsTheModel) {
+  const ArmMotion motion;
+  for (const double t : {0.5, 1.7, 2.9}) {
+    EXPECT_LT((imu_position_from_elbow(motion.elbow(t), motion.K_from_F(t), motion.model) - motion.imu_position(t)).norm(),
+              1e-12);
+  }
+}
+
+// A 2 s gap with the estimate pulled towards the true elbow's IMU position moved by a fixed
+// 8 cm bias (a skeleton SDK's elbow) every 33 ms: the error ends near the bias, not at the
+// integration's drift; and gain 0 changes nothing, gain 1 takes the anchor.
+TEST(LiveGap, CorrectionBoundsTheDriftByTheAnchorsBias) {
+  ArmMotion motion;
+  motion.azimuth_amp = 1.0;
+  SensorNoise noise;
+  noise.attitude_drift_deg = 5.0;  // a drifting attitude: gravity leaks into eq. 12
+  const GapRecoveryInput in = make_gap_input(motion, noise, 6.0, 2.0, 4.0);
+  const GapSpan span = find_gaps(in.track).at(0);
+  const Vec3 bias(0.05, -0.04, 0.048);  // 8.1 cm
+  LiveGapEstimator free(in.model, in.K_from_W), anchored(in.model, in.K_from_W);
+  free.begin(in.track, in.arm, span.t_start_us);
+  anchored.begin(in.track, in.arm, span.t_start_us);
+  std::int64_t last_frame_us = span.t_start_us;
+  double free_error = 0.0, anchored_error = 0.0;
+  for (const ArmSample& s : in.arm) {
+    if (s.t_us <= span.t_start_us || s.t_us >= span.t_end_us) continue;
+    const Vec3 shoulder = motion.shoulder(seconds(s.t_us));
+    free.update(s, shoulder);
+    anchored.update(s, shoulder);
+    if (s.t_us - last_frame_us >= 33'333) {
+      anchored.correct(motion.imu_position(seconds(s.t_us)) + bias, 1.0 - std::exp(-0.0333 / 0.05));
+      last_frame_us = s.t_us;
+    }
+    free_error = (free.position_K() - motion.imu_position(seconds(s.t_us))).norm();
+    anchored_error = (anchored.position_K() - motion.imu_position(seconds(s.t_us))).norm();
+  }
+  // Measured: free 0.25 m at the end, anchored 0.074 m.
+  EXPECT_LT(anchored_error, 0.1);
+  EXPECT_GT(free_error, 0.15);
+  const Vec3 before = anchored.position_K();
+  anchored.correct(Vec3(1, 2, 3), 0.0);
+  EXPECT_EQ(anchored.position_K(), before);
+  anchored.correct(Vec3(1, 2, 3), 1.0);
+  EXPECT_EQ(anchored.position_K(), Vec3(1, 2, 3));
+  expect_error([&] { anchored.correct(Vec3(1, 2, 3), 1.5); }, ErrorCode::kInvalidArgument, "gain");
+  expect_error([&] { anchored.correct(Vec3(NAN, 2, 3), 0.5); }, ErrorCode::kInvalidArgument, "p_K");
+  LiveGapEstimator idle(in.model, in.K_from_W);
+  expect_error([&] { idle.correct(Vec3(1, 2, 3), 0.5); }, ErrorCode::kFailedPrecondition, "gap");
+}
+
 TEST(LiveGap, RefusesBadUse) {
   const ArmMotion motion;
   const GapRecoveryInput in = make_gap_input(motion, SensorNoise{}, 3.0, 1.0, 2.0);

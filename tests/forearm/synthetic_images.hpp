@@ -4,7 +4,9 @@
 // (the strap) centred d_se from the elbow, in front of a grey wall. Rendered by exact
 // ray-cylinder intersection per pixel centre, then optional Gaussian noise (inside the
 // forearm's bounding box only, where the strap search looks). Optionally the upper arm too: a
-// skin cylinder from the shoulder to the elbow (what the depth camera sees beside the forearm).
+// skin cylinder from the shoulder to the elbow (what the depth camera sees beside the forearm),
+// and a hand: a wider skin cylinder continuing the forearm beyond the wrist (the forearm's axis
+// fit runs on over it; the wrist is where it widens).
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -27,6 +29,9 @@ struct ForearmScene {
   double wall_z_m = 3.0;
   std::optional<Vec3> shoulder_K;  // set: the upper arm is drawn, shoulder -> elbow
   double upper_arm_radius_m = 0.045;
+  double hand_length_m = 0.0;  // > 0: the hand is drawn, wrist -> wrist + hand_length_m
+  double hand_radius_m = 0.045;
+  Vec3 hand_end_K() const { return wrist_K + hand_length_m * (wrist_K - elbow_K).normalized(); }
 };
 
 // Small cameras with mild distortion; the colour camera sits 5 cm to the side, turned 1 degree.
@@ -62,6 +67,14 @@ inline std::optional<double> hit_cylinder(const Vec3& a, const Vec3& b, double r
 inline std::optional<double> hit_cylinder(const ForearmScene& s, const Vec3& origin, const Vec3& dir,
                                           double* axial_m) {
   std::optional<double> t = hit_cylinder(s.elbow_K, s.wrist_K, s.radius_m, origin, dir, axial_m);
+  if (s.hand_length_m > 0.0) {
+    double hand_axial = 0.0;
+    const auto hand = hit_cylinder(s.wrist_K, s.hand_end_K(), s.hand_radius_m, origin, dir, &hand_axial);
+    if (hand && (!t || *hand < *t)) {
+      t = hand;
+      *axial_m = (s.wrist_K - s.elbow_K).norm() + hand_axial;
+    }
+  }
   if (s.shoulder_K) {
     double upper_axial = 0.0;
     const auto upper = hit_cylinder(*s.shoulder_K, s.elbow_K, s.upper_arm_radius_m, origin, dir, &upper_axial);
@@ -93,7 +106,9 @@ inline PixelBox cylinder_box(const ForearmScene& s, const PinholeCamera& camera,
   PixelBox box{camera.width, -1, camera.height, -1};
   std::vector<Vec3> ends = {s.elbow_K, s.wrist_K};
   if (s.shoulder_K) ends.push_back(*s.shoulder_K);
-  const double radius_m = s.shoulder_K ? std::max(s.radius_m, s.upper_arm_radius_m) : s.radius_m;
+  if (s.hand_length_m > 0.0) ends.push_back(s.hand_end_K());
+  const double radius_m = std::max({s.radius_m, s.shoulder_K ? s.upper_arm_radius_m : 0.0,
+                                    s.hand_length_m > 0.0 ? s.hand_radius_m : 0.0});
   for (const Vec3& end : ends) {
     const Vec3 p = cam_from_K * end + cam_from_K_m;
     const auto uv = geometry::project(camera, p);

@@ -43,14 +43,15 @@ Series slice(const Series& series, std::int64_t t0_us, std::int64_t t1_us) {
 
 ArmTracker::ArmTracker(std::string device_id, forearm::Side side, const forearm::ForearmModel& model,
                        bool has_model, const Quat& K_from_W, const Quat& K_from_F_reference,
-                       const forearm::GapSmootherOptions& smoother)
+                       const forearm::GapSmootherOptions& smoother, double live_elbow_time_constant_s)
     : device_id_(std::move(device_id)),
       side_(side),
       model_(model),
       has_model_(has_model),
       K_from_W_(K_from_W),
       K_from_F_reference_(K_from_F_reference),
-      smoother_options_(smoother) {}
+      smoother_options_(smoother),
+      live_elbow_time_constant_s_(live_elbow_time_constant_s) {}
 
 std::string ArmTracker::field() const { return "forearm[" + device_id_ + "]"; }
 
@@ -144,6 +145,7 @@ void ArmTracker::process_frame(const ArmFrame& frame, StageOutput& out) {
       ++gaps_;
       gap_start_us_ = *last_visible_us_;
       live_.emplace(model_, K_from_W_);
+      last_live_frame_us_ = gap_start_us_;
       try {
         live_->begin(track_, arm_, gap_start_us_);
         live_next_arm_ = index_at_or_before(arm_, gap_start_us_) + 1;
@@ -159,6 +161,13 @@ void ArmTracker::process_frame(const ArmFrame& frame, StageOutput& out) {
         live_->update(arm_[live_next_arm_], shoulder);
         ++live_next_arm_;
       }
+      // The SDK's elbow with the IMU's forearm axis bounds the integration's drift (live_gap.hpp).
+      if (frame.sdk_elbow_seen && live_elbow_time_constant_s_ > 0.0 && last_live_frame_us_) {
+        const double dt_s = 1e-6 * static_cast<double>(frame.t_us - *last_live_frame_us_);
+        live_->correct(forearm::imu_position_from_elbow(frame.sdk_elbow_K, K_from_F, model_),
+                       1.0 - std::exp(-std::max(0.0, dt_s) / live_elbow_time_constant_s_));
+      }
+      last_live_frame_us_ = frame.t_us;
       if (live_next_arm_ > 0 && arm_[live_next_arm_ - 1].t_us > gap_start_us_) {
         position = live_->position_K();
         source = v1::PREDICTED;

@@ -32,6 +32,10 @@ struct ArmFrame {
   forearm::Vec3 wrist_K = forearm::Vec3::Zero();
   bool shoulder_tracked = false;
   bool forearm_tracked = false;  // elbow and wrist TRACKED
+  // The SDK's own elbow (elbow_K may be the depth axis's) and whether the SDK gave one
+  // (TRACKED or INFERRED): the live estimate's anchor in a gap.
+  forearm::Vec3 sdk_elbow_K = forearm::Vec3::Zero();
+  bool sdk_elbow_seen = false;
   forearm::Quat K_from_wrist_sdk = forearm::Quat(0, 0, 0, 0);  // zero when the SDK gave none
   std::optional<forearm::Vec3> strap_K;  // strap seen (II-I)
   // Upper arm direction (shoulder -> elbow) measured in depth, calibration frames only
@@ -44,9 +48,14 @@ class ArmTracker {
   // `has_model` false: the strap was never seen in the calibration, so r and d_se are unknown
   // and only orientations are produced.
   // `smoother` configures recover_gap_smoother (e.g. whether the SDK shoulder's sphere is used).
+  // `live_elbow_time_constant_s`: in a gap the live estimate is pulled towards the SDK's elbow
+  // carried along the IMU's forearm axis (LiveGapEstimator::correct) with this time constant;
+  // 0 turns it off. On posefuse-sim's protocol (docs/forearm.md) 0.5 / 0.15 / 0.1 / 0.05 s gave
+  // PREDICTED RMS 0.09-0.23 / 0.07-0.11 / 0.07-0.09 / 0.065-0.08 m: over gaps of 2-4 s the
+  // SDK's 5-10 cm bias is smaller than the integration's drift, so the anchor is followed closely.
   ArmTracker(std::string device_id, forearm::Side side, const forearm::ForearmModel& model, bool has_model,
              const forearm::Quat& K_from_W, const forearm::Quat& K_from_F_reference,
-             const forearm::GapSmootherOptions& smoother = {});
+             const forearm::GapSmootherOptions& smoother = {}, double live_elbow_time_constant_s = 0.05);
 
   // Arm IMU samples on the camera clock, in time order (earlier or equal times are dropped).
   void add_imu(const std::vector<std::int64_t>& t_us, const std::vector<forearm::Quat>& W_from_A,
@@ -75,6 +84,7 @@ class ArmTracker {
   forearm::Quat K_from_W_;
   forearm::Quat K_from_F_reference_;
   forearm::GapSmootherOptions smoother_options_;
+  double live_elbow_time_constant_s_;
 
   std::vector<forearm::ArmSample> arm_;
   std::vector<forearm::Quat> K_from_F_;
@@ -88,6 +98,7 @@ class ArmTracker {
   std::int64_t gap_start_us_ = 0;
   std::optional<forearm::LiveGapEstimator> live_;
   std::size_t live_next_arm_ = 0;
+  std::optional<std::int64_t> last_live_frame_us_;
   struct PendingGap {
     std::int64_t t_start_us, t_end_us;
   };

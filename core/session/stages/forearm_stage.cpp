@@ -287,6 +287,8 @@ void ForearmStage::detect_arms(const PendingFrame& frame, const Image* depth, co
     arm.shoulder_tracked = joints[j.shoulder].state() == v1::SkeletonJoint::TRACKED;
     arm.forearm_tracked = joints[j.elbow].state() == v1::SkeletonJoint::TRACKED &&
                           joints[j.wrist].state() == v1::SkeletonJoint::TRACKED;
+    arm.sdk_elbow_K = arm.elbow_K;
+    arm.sdk_elbow_seen = joints[j.elbow].state() != v1::SkeletonJoint::NOT_TRACKED;
     const auto& q = joints[j.wrist].orientation();
     arm.K_from_wrist_sdk = Quat(q.w(), q.x(), q.y(), q.z());
     if (arm.forearm_tracked && depth && cameras_ && (axis_from_depth_ || upper_arm_from_depth_)) {
