@@ -18,7 +18,8 @@
 // --exercises=a,b (a subset of the six), --max-seconds=S (each exercise cut after S seconds, for
 // full-rate runs), --lambda-imu=X (the imu term's weight, fit.lambda_imu).
 // Environment: FIT_SKELETON_START_ENERGY sets the stage's fit.skeleton_start_energy (II-G start
-// policy; 0 = both starts on two threads); FIG4_STATS_CSV=path writes the per-frame phase times.
+// policy; 0 = both starts on two threads); FIG4_STATS_CSV=path writes the per-frame phase times;
+// FIG4_OPTIONS="key=value,..." sets further stage options (fit.freeze_contour_after, fit.start_velocity_gain).
 // Times are thread CPU time of the stage's work per frame (preprocessing, LM fits,
 // post-processing), summed over the threads that did it, and the calling thread's alone.
 #include <algorithm>
@@ -132,6 +133,17 @@ Output run_stage(const sim::CameraSessionResult& sim, const std::vector<v1::FitR
   (*header.mutable_options())["fit.calibration_s"] = std::to_string(kCalibrationS);
   if (const char* energy = std::getenv("FIT_SKELETON_START_ENERGY"))
     (*header.mutable_options())["fit.skeleton_start_energy"] = energy;
+  // FIG4_OPTIONS="fit.a=1,fit.b=2": further stage options (e.g. fit.freeze_contour_after=0).
+  if (const char* extra = std::getenv("FIG4_OPTIONS")) {
+    std::string list = extra;
+    for (size_t begin = 0; begin < list.size();) {
+      const size_t end = std::min(list.find(',', begin), list.size());
+      const std::string item = list.substr(begin, end - begin);
+      const size_t eq = item.find('=');
+      if (eq != std::string::npos) (*header.mutable_options())[item.substr(0, eq)] = item.substr(eq + 1);
+      begin = end + 1;
+    }
+  }
   Output out;
   session::BodyFitStage stage;
   stage.record_frame_stats(stats != nullptr);
@@ -194,17 +206,20 @@ void print_phases(const std::vector<session::BodyFitFrameStats>& stats) {
     std::printf("| %s | %.2f | %.2f | %.2f |\n", name, 1e3 * percentile(v, 0.5),
                 v.empty() ? NAN : 1e3 * sum / static_cast<double>(v.size()), 1e3 * percentile(v, 0.95));
   }
-  int previous_run = 0, skeleton_run = 0, previous_won = 0, iterations_previous = 0, iterations_skeleton = 0;
+  int previous_run = 0, skeleton_run = 0, previous_won = 0, iterations_previous = 0, iterations_skeleton = 0,
+      extrapolated = 0;
   for (const Stats& f : stats) {
     previous_run += f.iterations_previous > 0;
     skeleton_run += f.iterations_skeleton > 0;
     previous_won += f.previous_won;
+    extrapolated += f.extrapolated;
     iterations_previous += f.iterations_previous;
     iterations_skeleton += f.iterations_skeleton;
   }
-  std::printf("starts: previous frame %d (mean %.1f iterations), skeleton %d (mean %.1f iterations); previous won %d\n",
+  std::printf("starts: previous frame %d (mean %.1f iterations), skeleton %d (mean %.1f iterations); previous won %d; constant-velocity start %d\n",
               previous_run, previous_run ? static_cast<double>(iterations_previous) / previous_run : 0.0, skeleton_run,
-              skeleton_run ? static_cast<double>(iterations_skeleton) / skeleton_run : 0.0, previous_won);
+              skeleton_run ? static_cast<double>(iterations_skeleton) / skeleton_run : 0.0, previous_won,
+              extrapolated);
 }
 
 void write_stats_csv(const char* path, const std::vector<session::BodyFitFrameStats>& stats) {

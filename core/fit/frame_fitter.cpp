@@ -350,8 +350,13 @@ FitResult FrameFitter::run(const FrameObservation& observation, const Eigen::Vec
 
   double gamma = options_.initial_damping;
   double raise = options_.damping_increase;
+  // From freeze_contour_after on U_bg stays as selected then (FitOptions::freeze_contour_after);
+  // the shape fit (III-B, once per session, far from its start) keeps re-selecting it.
+  const auto frozen = [&](int iteration) {
+    return free_betas_.empty() && options_.freeze_contour_after > 0 && iteration >= options_.freeze_contour_after;
+  };
   for (int iteration = 0; iteration < options_.max_iterations; ++iteration) {
-    if (iteration > 0) select_point_sets(observation);
+    if (iteration > 0 && !frozen(iteration)) select_point_sets(observation);
     const double energy_before = linearise(observation, theta, beta).total();
     ++result.iterations;
     double energy_after = energy_before, joint_step = 0;

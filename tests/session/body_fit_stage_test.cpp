@@ -310,6 +310,16 @@ TEST(BodyFitStage, BadOptionsAreErrors) {
     BodyFitStage stage_with;
     EXPECT_THROW(stage_with.start(header_with({{"fit.skeleton_start_energy", energy}}), out), Error) << energy;
   }
+  for (const char* gain : {"-1", "nan", "x"}) {
+    BodyFitStage stage_with;
+    EXPECT_THROW(stage_with.start(header_with({{"fit.start_velocity_gain", gain}}), out), Error) << gain;
+  }
+  for (const char* after : {"-1", "x"}) {
+    BodyFitStage stage_with;
+    EXPECT_THROW(stage_with.start(header_with({{"fit.freeze_contour_after", after}}), out), Error) << after;
+  }
+  BodyFitStage valid;
+  EXPECT_NO_THROW(valid.start(header_with({{"fit.start_velocity_gain", "1"}, {"fit.freeze_contour_after", "0"}}), out));
 }
 
 TEST(BodyFitStage, SkeletonStartPolicyDecision) {

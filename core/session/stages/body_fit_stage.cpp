@@ -18,6 +18,7 @@
 #include "fit/shape_pose_refiner.hpp"
 #include "fit/silhouette_cleanup.hpp"
 #include "fit/skeleton_pose_init.hpp"
+#include "fit/start_extrapolation.hpp"
 #include "raycast/depth_camera.hpp"
 #include "session/image_codec.hpp"
 #include "session/stages/proto_values.hpp"
@@ -37,6 +38,8 @@ constexpr const char* kMaxIterationsKey = "fit.max_iterations";
 constexpr const char* kFineShapeKey = "fit.fine_shape";
 constexpr const char* kLambdaImuKey = "fit.lambda_imu";
 constexpr const char* kSkeletonStartEnergyKey = "fit.skeleton_start_energy";
+constexpr const char* kStartVelocityGainKey = "fit.start_velocity_gain";
+constexpr const char* kFreezeContourAfterKey = "fit.freeze_contour_after";
 
 // Depth, body index and skeleton of one frame share the depth frame's t_us (1 ms tolerance).
 constexpr std::int64_t kSameFrameUs = 1000;
@@ -178,6 +181,10 @@ std::vector<StageOption> BodyFitStage::options() const {
       {kSkeletonStartEnergyKey, format_double(kDefaultSkeletonStartEnergy),
        "II-G: fit the skeleton-built start only when the previous-frame fit ends at this energy or above (0 = "
        "always both starts, on two threads)"},
+      {kFreezeContourAfterKey, std::to_string(defaults.freeze_contour_after),
+       "LM: U_bg (bg / float points) is re-selected in the first this many iterations only (0 = always)"},
+      {kStartVelocityGainKey, "0",
+       "previous-frame start moved on by this share of the last frames' velocity (0 = off, 1 = constant velocity)"},
   };
 }
 
@@ -204,10 +211,23 @@ void BodyFitStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) 
   if (const std::string* text = option(header, kMaxIterationsKey)) {
     fit_options.max_iterations = static_cast<int>(parse_int64(*text, option_field(kMaxIterationsKey)));
   }
+  if (const std::string* text = option(header, kFreezeContourAfterKey)) {
+    fit_options.freeze_contour_after = static_cast<int>(parse_int64(*text, option_field(kFreezeContourAfterKey)));
+    if (fit_options.freeze_contour_after < 0)
+      throw_invalid(option_field(kFreezeContourAfterKey), "is '" + *text + "', must not be negative");
+  }
   if (const std::string* text = option(header, kLambdaImuKey)) {
     fit_options.lambda_imu = parse_double(*text, option_field(kLambdaImuKey));
     if (!std::isfinite(fit_options.lambda_imu) || fit_options.lambda_imu < 0)
       throw_invalid(option_field(kLambdaImuKey), "is '" + *text + "', must be >= 0");
+  }
+  if (const std::string* text = option(header, kStartVelocityGainKey)) {
+    extrapolation_.velocity_gain = parse_double(*text, option_field(kStartVelocityGainKey));
+    try {
+      fit::validate(extrapolation_);
+    } catch (const Error&) {
+      throw_invalid(option_field(kStartVelocityGainKey), "is '" + *text + "', must be finite and not negative");
+    }
   }
   arm_imus_ = static_cast<int>(std::count_if(header.imu_devices().begin(), header.imu_devices().end(), [](const auto& d) {
     return d.role() == v1::ImuDevice::ARM_LEFT || d.role() == v1::ImuDevice::ARM_RIGHT;
@@ -402,6 +422,15 @@ void BodyFitStage::fit_frame(BodyFitFrame& frame, StageOutput& out) {
     // skeleton_start_energy_ or above (docs/fitting.md, "Start policy"); with the policy off
     // both always run, the skeleton start on a second thread.
     const Eigen::VectorXd previous = previous_theta_.value_or(Eigen::VectorXd());
+    // The previous-frame start, moved on by the last frames' velocity where that is trusted.
+    Eigen::VectorXd previous_start = previous;
+    if (previous.size() > 0 && before_last_fit_ && extrapolation_.velocity_gain > 0) {
+      if (auto moved = fit::extrapolate_start(w.layout, *before_last_fit_, {previous, previous_t_us_}, frame.t_us,
+                                              extrapolation_)) {
+        previous_start = std::move(*moved);
+        stats.extrapolated = true;
+      }
+    }
     std::optional<fit::FitResult> best;
     const auto keep_lower = [&](fit::FitResult&& result, bool from_previous) {
       if (from_previous) {
@@ -437,7 +466,7 @@ void BodyFitStage::fit_frame(BodyFitFrame& frame, StageOutput& out) {
           return std::make_pair(std::move(result), thread_cpu_seconds() - cpu_start);
         });
         lap = thread_cpu_seconds();
-        fit::FitResult from_previous = w.fitter.fit(observation, previous, w.beta);
+        fit::FitResult from_previous = w.fitter.fit(observation, previous_start, w.beta);
         take(stats.fit_previous_s);
         auto [from_skeleton, skeleton_cpu_s] = job.get();
         lap = thread_cpu_seconds();  // waiting is not work
@@ -445,12 +474,12 @@ void BodyFitStage::fit_frame(BodyFitFrame& frame, StageOutput& out) {
         keep_lower(std::move(from_previous), true);
         keep_lower(std::move(from_skeleton), false);
       } else {
-        keep_lower(w.fitter.fit(observation, previous, w.beta), true);
+        keep_lower(w.fitter.fit(observation, previous_start, w.beta), true);
         take(stats.fit_previous_s);
       }
     } else {
       if (previous.size() > 0) {
-        keep_lower(w.fitter.fit(observation, previous, w.beta), true);
+        keep_lower(w.fitter.fit(observation, previous_start, w.beta), true);
         take(stats.fit_previous_s);
       }
       if (needs_skeleton_start(best ? std::optional<double>(best->energy.total()) : std::nullopt,
@@ -462,11 +491,18 @@ void BodyFitStage::fit_frame(BodyFitFrame& frame, StageOutput& out) {
       }
     }
     const double energy = best->energy.total();
+    // A velocity holds between two fits of the same track: the winner continued the previous pose.
+    if (previous.size() > 0 && stats.previous_won)
+      before_last_fit_ = fit::FittedPose{previous, previous_t_us_};
+    else
+      before_last_fit_.reset();
     if (energy > lost_energy_) {
       ++frames_lost_;
       previous_theta_.reset();  // recovery: the next frame starts from the skeleton alone
+      before_last_fit_.reset();
     } else {
       previous_theta_ = best->theta;
+      previous_t_us_ = frame.t_us;
     }
     fitted_.push_back({frame.t_us, *frame.skeleton, energy, directions.left_K || directions.right_K});
     ++frames_fitted_;

@@ -49,6 +49,7 @@
 
 #include "fit/depth_frame.hpp"
 #include "fit/frame_observation.hpp"
+#include "fit/start_extrapolation.hpp"
 #include "fit/tracked_skeleton.hpp"
 #include "session/pipeline_stage.hpp"
 
@@ -78,6 +79,7 @@ struct BodyFitFrameStats {
   double energy_previous = std::numeric_limits<double>::quiet_NaN();
   double energy_skeleton = std::numeric_limits<double>::quiet_NaN();
   bool previous_won = false;
+  bool extrapolated = false;  // the previous-frame fit started from the constant-velocity pose
   double total_s() const {
     return assemble_s + cleanup_s + observation.total_s() + start_pose_s + fit_previous_s + fit_skeleton_s + post_s;
   }
@@ -156,6 +158,12 @@ class BodyFitStage : public Stage {
   };
   std::deque<Fitted> fitted_;
   std::optional<Eigen::VectorXd> previous_theta_;
+  std::int64_t previous_t_us_ = 0;
+  // The fit before previous_theta_, while both belong to one track (the constant-velocity start).
+  std::optional<fit::FittedPose> before_last_fit_;
+  // Off by default (fit.start_velocity_gain = 0): measured, it did not lower the iterations and
+  // raised the occluded error (docs/benchmarks.md, "Fewer LM iterations").
+  fit::StartExtrapolationOptions extrapolation_{.velocity_gain = 0.0};
   bool record_stats_ = false;
   std::vector<BodyFitFrameStats> stats_;
   std::uint64_t frames_fitted_ = 0, frames_lost_ = 0;
