@@ -52,6 +52,11 @@ class BodySurface {
   // Derivatives::kPoseAndShape (paper 2, III-B: shape and pose fitted together).
   void position_shape_jacobian(const SurfacePoint& s, const BodyEvaluator& eval, Eigen::Ref<Eigen::Matrix3Xd> out) const;
   void normal_shape_jacobian(const SurfacePoint& s, const BodyEvaluator& eval, Eigen::Ref<Eigen::Matrix3Xd> out) const;
+  // d n_v / d theta of the unit vertex normal n_v (3 x N, added into `out`); samples that share a
+  // vertex can share this (SurfacePoseJacobians): d S_n = normal_projection(s) sum_k w_k d n_k.
+  void vertex_normal_pose_jacobian(int vertex, const BodyEvaluator& eval, Eigen::Ref<Eigen::Matrix3Xd> out) const;
+  // d S_n / d m = (I - S_n S_n^T) / |m| at s, m = sum_k w_k n_k the unnormalised blend of eq. 3.
+  Eigen::Matrix3d normal_projection(const SurfacePoint& s) const;
 
   // Moves s by (du, dv) in its face's barycentrics, i.e. by du (p0 - p2) + dv (p1 - p2), and
   // keeps going across edges: the remaining step is rotated about each crossed edge into the
@@ -65,6 +70,9 @@ class BodySurface {
   // vertex q (the pose and shape Jacobians differ only in d vertex(q)).
   template <typename AddVertex>
   void normal_vertex_factors(const SurfacePoint& s, AddVertex&& add) const;
+  // The same for the unit vertex normal n_v: d n_v = sum over v's 1-ring q of F_q d vertex(q).
+  template <typename AddVertex>
+  void unit_normal_factors(int vertex, AddVertex&& add) const;
 
   Eigen::Matrix3Xi faces_;
   Eigen::Matrix3Xi adjacency_;
