@@ -156,9 +156,11 @@ void BodySurface::normal_vertex_factors(const SurfacePoint& s, AddVertex&& add) 
   for (int r = 0; r < ring_size; ++r) add(ring_vertex[r], ring_factor[r]);
 }
 
-void BodySurface::vertex_normal_pose_jacobian(int vertex, const BodyEvaluator& eval,
-                                              Eigen::Ref<Eigen::Matrix3Xd> out) const {
-  unit_normal_factors(vertex, [&](int q, const Eigen::Matrix3d& factor) { eval.add_vertex_pose_jacobian(q, factor, out); });
+void BodySurface::vertex_normal_pose_jacobian(int vertex, const BodyEvaluator& eval, Eigen::Ref<Eigen::Matrix3Xd> out,
+                                              std::uint32_t skip_joints) const {
+  unit_normal_factors(vertex, [&](int q, const Eigen::Matrix3d& factor) {
+    eval.add_vertex_pose_jacobian(q, factor, out, skip_joints);
+  });
 }
 
 void BodySurface::normal_pose_jacobian(const SurfacePoint& s, const BodyEvaluator& eval,

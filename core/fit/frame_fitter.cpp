@@ -209,7 +209,7 @@ EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::Vecto
   const int free = static_cast<int>(free_betas_.size());
   EnergyTerms e;
   system_.reset(num_parameters(), n);
-  surface_jacobians_.reset(model_->num_vertices(), N);
+  surface_jacobians_.reset(surface_, eval_);
   int row = 0;
   auto take = [&](int count, double& energy) {
     energy += residual_.segment(row, count).squaredNorm();

@@ -79,7 +79,7 @@ TEST(SurfacePoseJacobians, EqualTheDirectJacobiansForSamplesSharingVertices) {
   SurfacePoseJacobians cached;
   const int n = layout.size();
   for (int round = 0; round < 2; ++round) {  // the second round checks that reset() forgets
-    cached.reset(model->num_vertices(), n);
+    cached.reset(surface, eval);
     for (int trial = 0; trial < 60; ++trial) {
       // Neighbouring faces (shared corners) and repeats of one face at different (u, v).
       const int face = trial < 30 ? 100 + trial % 12 : static_cast<int>(rng() % model->num_faces());
