@@ -262,10 +262,12 @@ void BodyEvaluator::add_vertex_pose_jacobian(int i, double scale,
   for (size_t c = 0; c < dofs.size(); ++c) out.col(dofs[c]) += scale * block.col(static_cast<Eigen::Index>(c));
 }
 
-void BodyEvaluator::add_vertex_pose_jacobian(int i, const Eigen::Matrix3d& m, Eigen::Ref<Eigen::Matrix3Xd> out) const {
+void BodyEvaluator::add_vertex_pose_jacobian(int i, const Eigen::Matrix3d& m, Eigen::Ref<Eigen::Matrix3Xd> out,
+                                             std::uint32_t skip_joints) const {
   const auto dofs = vertex_dofs(i);
   const auto block = vertex_pose_jacobian(i);
-  for (size_t c = 0; c < dofs.size(); ++c) out.col(dofs[c]) += m * block.col(static_cast<Eigen::Index>(c));
+  for (size_t c = 0; c < dofs.size(); ++c)
+    if (!((skip_joints >> layout_.dof(dofs[c]).joint) & 1u)) out.col(dofs[c]) += m * block.col(static_cast<Eigen::Index>(c));
 }
 
 }  // namespace posefuse::body

@@ -14,6 +14,7 @@
 // pose Jacobian is stored as a dense 3 x n block over exactly those n DOFs (n <= 30 for the
 // upper-body layout), computed without allocation after construction.
 #include <Eigen/Core>
+#include <cstdint>
 #include <memory>
 #include <span>
 #include <vector>
@@ -63,8 +64,12 @@ class BodyEvaluator {
 
   // Adds scale * d vertex(i) / d theta into the dense 3 x N block `out`.
   void add_vertex_pose_jacobian(int i, double scale, Eigen::Ref<Eigen::Matrix3Xd> out) const;
-  // Adds m * d vertex(i) / d theta into `out` (m: 3 x 3).
-  void add_vertex_pose_jacobian(int i, const Eigen::Matrix3d& m, Eigen::Ref<Eigen::Matrix3Xd> out) const;
+  // Adds m * d vertex(i) / d theta into `out` (m: 3 x 3), leaving out the DOFs of the joints in
+  // the bit mask skip_joints (bit j: joint j).
+  void add_vertex_pose_jacobian(int i, const Eigen::Matrix3d& m, Eigen::Ref<Eigen::Matrix3Xd> out,
+                                std::uint32_t skip_joints = 0) const;
+  // World angular rate W_d of rotational DOF d (see above); valid after any evaluate().
+  const Eigen::Vector3d& dof_rate(int d) const { return dof_rate_[d]; }
 
  private:
   void update_shape(const Eigen::Ref<const Eigen::VectorXd>& beta);

@@ -61,12 +61,9 @@ Eigen::Matrix<double, 3, 2> BodySurface::position_uv_jacobian(const SurfacePoint
 }
 
 Eigen::Matrix<double, 3, 2> BodySurface::normal_uv_jacobian(const SurfacePoint& s) const {
-  const Eigen::Vector3d w = weights_of(s);
   const Eigen::Vector3d n0 = vertex_normals_.col(faces_(0, s.face)), n1 = vertex_normals_.col(faces_(1, s.face)),
                         n2 = vertex_normals_.col(faces_(2, s.face));
-  const Eigen::Vector3d m = w[0] * n0 + w[1] * n1 + w[2] * n2;
-  const Eigen::Vector3d unit = m.normalized();
-  const Eigen::Matrix3d project = (Eigen::Matrix3d::Identity() - unit * unit.transpose()) / m.norm();
+  const Eigen::Matrix3d project = normal_projection(s);
   Eigen::Matrix<double, 3, 2> j;
   j.col(0) = project * (n0 - n2);
   j.col(1) = project * (n1 - n2);
@@ -86,16 +83,55 @@ void BodySurface::position_shape_jacobian(const SurfacePoint& s, const BodyEvalu
 }
 
 template <typename AddVertex>
-void BodySurface::normal_vertex_factors(const SurfacePoint& s, AddVertex&& add) const {
-  // S_n = Pi(m), m = sum_k w_k n_k, n_k = N_k / |N_k|, N_k = sum over faces (b - a) x (c - a);
-  // d N_k = sum over faces ([c - b]x J_a + [a - c]x J_b + [b - a]x J_c).
-  // The 3 x 3 factors are summed per vertex first, so that each vertex of the corners' 1-rings
-  // costs one product with its Jacobian (about 12 instead of 54).
+void BodySurface::unit_normal_factors(int vertex, AddVertex&& add) const {
+  // n = N / |N|, N = sum over the vertex's faces (b - a) x (c - a), so
+  // d N = sum over faces ([c - b]x J_a + [a - c]x J_b + [b - a]x J_c). The cross-product factors
+  // are linear in the edge, so each 1-ring vertex's edges are summed first: one 3 x 3 factor
+  // P [e_q]x per ring vertex q, P = (I - n n^T) / |N|.
+  constexpr int kMaxRing = 32;
+  std::array<int, kMaxRing> ring_vertex;
+  std::array<Eigen::Vector3d, kMaxRing> ring_edge;
+  int ring_size = 0;
+  const Eigen::Vector3d n = vertex_normals_.col(vertex);
+  const Eigen::Matrix3d project =
+      (Eigen::Matrix3d::Identity() - n * n.transpose()) / vertex_normal_sums_.col(vertex).norm();
+  const auto accumulate = [&](int q, const Eigen::Vector3d& edge) {
+    for (int r = 0; r < ring_size; ++r)
+      if (ring_vertex[r] == q) {
+        ring_edge[r] += edge;
+        return;
+      }
+    if (ring_size == kMaxRing) {  // an unusually high valence: flush into the output directly
+      add(q, Eigen::Matrix3d(project * skew(edge)));
+      return;
+    }
+    ring_vertex[ring_size] = q;
+    ring_edge[ring_size++] = edge;
+  };
+  for (int f : faces_of_vertex_[vertex]) {
+    const Eigen::Vector3d a = corner(f, 0), b = corner(f, 1), c = corner(f, 2);
+    accumulate(faces_(0, f), c - b);
+    accumulate(faces_(1, f), a - c);
+    accumulate(faces_(2, f), b - a);
+  }
+  for (int r = 0; r < ring_size; ++r) add(ring_vertex[r], Eigen::Matrix3d(project * skew(ring_edge[r])));
+}
+
+Eigen::Matrix3d BodySurface::normal_projection(const SurfacePoint& s) const {
   const Eigen::Vector3d w = weights_of(s);
   Eigen::Vector3d m = Eigen::Vector3d::Zero();
   for (int k = 0; k < 3; ++k) m += w[k] * vertex_normals_.col(faces_(k, s.face));
   const Eigen::Vector3d unit = m.normalized();
-  const Eigen::Matrix3d outer = (Eigen::Matrix3d::Identity() - unit * unit.transpose()) / m.norm();
+  return (Eigen::Matrix3d::Identity() - unit * unit.transpose()) / m.norm();
+}
+
+template <typename AddVertex>
+void BodySurface::normal_vertex_factors(const SurfacePoint& s, AddVertex&& add) const {
+  // S_n = Pi(m), m = sum_k w_k n_k: d S_n = outer sum_k w_k d n_k, outer = (I - S_n S_n^T) / |m|.
+  // The 3 x 3 factors are summed per vertex first, so that each vertex of the corners' 1-rings
+  // costs one product with its Jacobian (about 12 instead of 21).
+  const Eigen::Vector3d w = weights_of(s);
+  const Eigen::Matrix3d outer = normal_projection(s);
   constexpr int kMaxRing = 96;
   std::array<int, kMaxRing> ring_vertex;
   std::array<Eigen::Matrix3d, kMaxRing> ring_factor;
@@ -114,18 +150,17 @@ void BodySurface::normal_vertex_factors(const SurfacePoint& s, AddVertex&& add) 
     ring_factor[ring_size++] = factor;
   };
   for (int k = 0; k < 3; ++k) {
-    const int vertex = faces_(k, s.face);
-    const Eigen::Vector3d n = vertex_normals_.col(vertex);
-    const Eigen::Matrix3d chain =
-        w[k] * outer * (Eigen::Matrix3d::Identity() - n * n.transpose()) / vertex_normal_sums_.col(vertex).norm();
-    for (int f : faces_of_vertex_[vertex]) {
-      const Eigen::Vector3d a = corner(f, 0), b = corner(f, 1), c = corner(f, 2);
-      accumulate(faces_(0, f), chain * skew(c - b));
-      accumulate(faces_(1, f), chain * skew(a - c));
-      accumulate(faces_(2, f), chain * skew(b - a));
-    }
+    const Eigen::Matrix3d chain = w[k] * outer;
+    unit_normal_factors(faces_(k, s.face), [&](int q, const Eigen::Matrix3d& factor) { accumulate(q, chain * factor); });
   }
   for (int r = 0; r < ring_size; ++r) add(ring_vertex[r], ring_factor[r]);
+}
+
+void BodySurface::vertex_normal_pose_jacobian(int vertex, const BodyEvaluator& eval, Eigen::Ref<Eigen::Matrix3Xd> out,
+                                              std::uint32_t skip_joints) const {
+  unit_normal_factors(vertex, [&](int q, const Eigen::Matrix3d& factor) {
+    eval.add_vertex_pose_jacobian(q, factor, out, skip_joints);
+  });
 }
 
 void BodySurface::normal_pose_jacobian(const SurfacePoint& s, const BodyEvaluator& eval,

@@ -9,6 +9,7 @@
 // vertex), so that the normal varies smoothly across a face and has a useful gradient in u, v.
 // The same convention is used for the barycentrics of the renderer (raycast/mesh_scene.hpp).
 #include <Eigen/Core>
+#include <cstdint>
 #include <vector>
 
 #include "body/body_evaluator.hpp"
@@ -37,6 +38,7 @@ class BodySurface {
   const Eigen::Matrix3Xi& faces() const { return faces_; }
   // neighbour(k, f): face across the edge from corner k to corner (k+1)%3 of f.
   const Eigen::Matrix3Xi& adjacency() const { return adjacency_; }
+  const std::vector<int>& faces_of_vertex(int v) const { return faces_of_vertex_[v]; }
   const Eigen::Matrix3Xd& vertex_normals() const { return vertex_normals_; }
 
   Eigen::Vector3d position(const SurfacePoint& s) const;
@@ -52,6 +54,13 @@ class BodySurface {
   // Derivatives::kPoseAndShape (paper 2, III-B: shape and pose fitted together).
   void position_shape_jacobian(const SurfacePoint& s, const BodyEvaluator& eval, Eigen::Ref<Eigen::Matrix3Xd> out) const;
   void normal_shape_jacobian(const SurfacePoint& s, const BodyEvaluator& eval, Eigen::Ref<Eigen::Matrix3Xd> out) const;
+  // d n_v / d theta of the unit vertex normal n_v (3 x N, added into `out`); samples that share a
+  // vertex can share this (SurfacePoseJacobians): d S_n = normal_projection(s) sum_k w_k d n_k.
+  // The DOFs of the joints in the bit mask skip_joints are left out.
+  void vertex_normal_pose_jacobian(int vertex, const BodyEvaluator& eval, Eigen::Ref<Eigen::Matrix3Xd> out,
+                                   std::uint32_t skip_joints = 0) const;
+  // d S_n / d m = (I - S_n S_n^T) / |m| at s, m = sum_k w_k n_k the unnormalised blend of eq. 3.
+  Eigen::Matrix3d normal_projection(const SurfacePoint& s) const;
 
   // Moves s by (du, dv) in its face's barycentrics, i.e. by du (p0 - p2) + dv (p1 - p2), and
   // keeps going across edges: the remaining step is rotated about each crossed edge into the
@@ -65,6 +74,9 @@ class BodySurface {
   // vertex q (the pose and shape Jacobians differ only in d vertex(q)).
   template <typename AddVertex>
   void normal_vertex_factors(const SurfacePoint& s, AddVertex&& add) const;
+  // The same for the unit vertex normal n_v: d n_v = sum over v's 1-ring q of F_q d vertex(q).
+  template <typename AddVertex>
+  void unit_normal_factors(int vertex, AddVertex&& add) const;
 
   Eigen::Matrix3Xi faces_;
   Eigen::Matrix3Xi adjacency_;

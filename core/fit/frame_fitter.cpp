@@ -209,6 +209,7 @@ EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::Vecto
   const int free = static_cast<int>(free_betas_.size());
   EnergyTerms e;
   system_.reset(num_parameters(), n);
+  surface_jacobians_.reset(surface_, eval_);
   int row = 0;
   auto take = [&](int count, double& energy) {
     energy += residual_.segment(row, count).squaredNorm();
@@ -216,8 +217,8 @@ EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::Vecto
   };
   for (int i = 0; i < n; ++i) {
     // The data rows go straight into the normal equations (only their non-zero columns).
-    data_[i].evaluate(surface_, eval_, correspondences_[i], residual_.segment<6>(row), data_jacobian_.leftCols(N),
-                      uv_jacobian_[i]);
+    data_[i].evaluate(surface_, eval_, surface_jacobians_, correspondences_[i], residual_.segment<6>(row),
+                      data_jacobian_.leftCols(N), uv_jacobian_[i]);
     if (free > 0) {
       data_[i].evaluate_shape(surface_, eval_, correspondences_[i], data_shape_jacobian_);
       for (int b = 0; b < free; ++b) data_jacobian_.col(N + b) = data_shape_jacobian_.col(free_betas_[static_cast<size_t>(b)]);

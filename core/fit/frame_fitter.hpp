@@ -24,6 +24,7 @@
 
 #include "body/body_evaluator.hpp"
 #include "body/surface.hpp"
+#include "body/surface_pose_jacobians.hpp"
 #include "fit/correspondence_update.hpp"
 #include "fit/fit_options.hpp"
 #include "fit/frame_observation.hpp"
@@ -151,6 +152,7 @@ class FrameFitter {
   raycast::MeshScene scene_;
   DiscreteCorrespondenceUpdate discrete_;
   SchurSystem system_;
+  body::SurfacePoseJacobians surface_jacobians_;  // of eval_ / surface_, reset at each linearisation
   // D_3D voxel classifications of the current observation: float points of successive trial
   // poses and iterations query neighbouring voxels (about 3x cheaper than uncached queries).
   BehindSurfaceCache behind_cache_;

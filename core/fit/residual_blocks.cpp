@@ -18,10 +18,24 @@ void DataResidual::evaluate(const body::BodySurface& surface, const body::BodyEv
                             const body::SurfacePoint& nu, Eigen::Ref<Vector6d> r,
                             Eigen::Ref<Eigen::MatrixXd> d_r_d_theta,
                             Eigen::Ref<Eigen::Matrix<double, 6, 2>> d_r_d_uv) const {
-  r = residual(surface, nu);
   d_r_d_theta.setZero();
   surface.position_pose_jacobian(nu, eval, d_r_d_theta.topRows<3>());
   surface.normal_pose_jacobian(nu, eval, d_r_d_theta.bottomRows<3>());
+  finish(surface, nu, r, d_r_d_theta, d_r_d_uv);
+}
+
+void DataResidual::evaluate(const body::BodySurface& surface, const body::BodyEvaluator& eval,
+                            body::SurfacePoseJacobians& jacobians, const body::SurfacePoint& nu, Eigen::Ref<Vector6d> r,
+                            Eigen::Ref<Eigen::MatrixXd> d_r_d_theta,
+                            Eigen::Ref<Eigen::Matrix<double, 6, 2>> d_r_d_uv) const {
+  jacobians.evaluate(surface, eval, nu, d_r_d_theta.topRows<3>(), d_r_d_theta.bottomRows<3>());
+  finish(surface, nu, r, d_r_d_theta, d_r_d_uv);
+}
+
+void DataResidual::finish(const body::BodySurface& surface, const body::SurfacePoint& nu, Eigen::Ref<Vector6d> r,
+                          Eigen::Ref<Eigen::MatrixXd> d_r_d_theta,
+                          Eigen::Ref<Eigen::Matrix<double, 6, 2>> d_r_d_uv) const {
+  r = residual(surface, nu);
   d_r_d_theta.topRows<3>() *= position_weight;
   d_r_d_theta.bottomRows<3>() *= normal_weight;
   d_r_d_uv.topRows<3>() = position_weight * surface.position_uv_jacobian(nu);

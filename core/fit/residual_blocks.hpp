@@ -11,6 +11,7 @@
 
 #include "body/body_evaluator.hpp"
 #include "body/surface.hpp"
+#include "body/surface_pose_jacobians.hpp"
 #include "raycast/depth_camera.hpp"
 
 namespace posefuse::fit {
@@ -31,10 +32,19 @@ struct DataResidual {
   void evaluate(const body::BodySurface& surface, const body::BodyEvaluator& eval, const body::SurfacePoint& nu,
                 Eigen::Ref<Vector6d> r, Eigen::Ref<Eigen::MatrixXd> d_r_d_theta,
                 Eigen::Ref<Eigen::Matrix<double, 6, 2>> d_r_d_uv) const;
+  // The same, with the pose Jacobians from `jacobians` (shared per-vertex work; the fitter's path).
+  void evaluate(const body::BodySurface& surface, const body::BodyEvaluator& eval, body::SurfacePoseJacobians& jacobians,
+                const body::SurfacePoint& nu, Eigen::Ref<Vector6d> r, Eigen::Ref<Eigen::MatrixXd> d_r_d_theta,
+                Eigen::Ref<Eigen::Matrix<double, 6, 2>> d_r_d_uv) const;
   // d r / d beta (6 x B, overwritten); `eval` produced the vertices of `surface` with
   // Derivatives::kPoseAndShape (paper 2, III-B).
   void evaluate_shape(const body::BodySurface& surface, const body::BodyEvaluator& eval, const body::SurfacePoint& nu,
                       Eigen::Ref<Eigen::MatrixXd> d_r_d_beta) const;
+
+ private:
+  // r, the weights applied to the unweighted S_p / S_n rows of d_r_d_theta, and d r / d (u, v).
+  void finish(const body::BodySurface& surface, const body::SurfacePoint& nu, Eigen::Ref<Vector6d> r,
+              Eigen::Ref<Eigen::MatrixXd> d_r_d_theta, Eigen::Ref<Eigen::Matrix<double, 6, 2>> d_r_d_uv) const;
 };
 
 // bg (eq. 6) and bgJoint (eq. 7), one point x(theta): r = weight (Pi(x) - q), where q is

@@ -7,6 +7,7 @@
 #include <random>
 
 #include "body/mesh_topology.hpp"
+#include "body/surface_pose_jacobians.hpp"
 #include "body/template_generator.hpp"
 
 namespace posefuse::body {
@@ -61,6 +62,38 @@ TEST(BodySurface, PoseJacobiansOfPositionAndNormalMatchFiniteDifferences) {
       EXPECT_LT(((surface.position(a) - surface.position(b)) / (2 * h) - ju.col(c)).norm(), 1e-7);
       EXPECT_LT(((surface.normal(a) - surface.normal(b)) / (2 * h) - jnu.col(c)).norm(), 1e-6);
     }
+  }
+}
+
+TEST(SurfacePoseJacobians, EqualTheDirectJacobiansForSamplesSharingVertices) {
+  const auto model = make_template(Sex::kMale);
+  const PoseLayout layout = PoseLayout::upper_body();
+  BodyEvaluator eval(model, layout);
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> uni(-0.5, 0.5);
+  Eigen::VectorXd theta(layout.size());
+  for (int d = 0; d < layout.size(); ++d) theta[d] = uni(rng);
+  eval.evaluate(Eigen::VectorXd::Constant(10, 0.3), theta, Derivatives::kPose);
+  BodySurface surface(model->faces, model->num_vertices());
+  surface.update(eval.vertices());
+  SurfacePoseJacobians cached;
+  const int n = layout.size();
+  for (int round = 0; round < 2; ++round) {  // the second round checks that reset() forgets
+    cached.reset(surface, eval);
+    for (int trial = 0; trial < 60; ++trial) {
+      // Neighbouring faces (shared corners) and repeats of one face at different (u, v).
+      const int face = trial < 30 ? 100 + trial % 12 : static_cast<int>(rng() % model->num_faces());
+      const SurfacePoint s{face, 0.1 + 0.4 * (uni(rng) + 0.5), 0.1 + 0.4 * (uni(rng) + 0.5)};
+      Eigen::Matrix3Xd jp = Eigen::Matrix3Xd::Zero(3, n), jn = jp, cp(3, n), cn(3, n);
+      surface.position_pose_jacobian(s, eval, jp);
+      surface.normal_pose_jacobian(s, eval, jn);
+      cached.evaluate(surface, eval, s, cp, cn);
+      ASSERT_LT((cp - jp).cwiseAbs().maxCoeff(), 1e-12 * (1 + jp.cwiseAbs().maxCoeff())) << "face " << face;
+      ASSERT_LT((cn - jn).cwiseAbs().maxCoeff(), 1e-12 * (1 + jn.cwiseAbs().maxCoeff())) << "face " << face;
+    }
+    theta[7] += 0.2;  // a new pose for the next round
+    eval.evaluate(Eigen::VectorXd::Constant(10, 0.3), theta, Derivatives::kPose);
+    surface.update(eval.vertices());
   }
 }
 
