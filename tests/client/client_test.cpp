@@ -23,6 +23,13 @@ namespace fs = std::filesystem;
 
 class ClientTest : public ::testing::Test {
  protected:
+  static server::ServerOptions one_worker_on_a_free_port() {
+    server::ServerOptions options;
+    options.listen = "127.0.0.1:0";
+    options.workers = 1;
+    return options;
+  }
+
   static std::size_t line_count(const fs::path& path) {
     std::ifstream in(path);
     std::size_t n = 0;
@@ -86,10 +93,7 @@ TEST_F(ClientTest, HeaderOptionTextIsKeyEqualsValue) {
 // The option reaches the server's stages: a value the body-fit stage refuses ends the call with
 // an error naming that option.
 TEST_F(ClientTest, FitSendsHeaderOptionsToTheServer) {
-  server::ServerOptions options;
-  options.listen = "127.0.0.1:0";
-  options.workers = 1;
-  server::PoseFuseServer server(options);
+  server::PoseFuseServer server(one_worker_on_a_free_port());
   demo::write_demo_session(dir_ / "demo.pfchunks");
   ResultWriter writer(dir_ / "out");
   const FitOutcome outcome = run_fit(make_channel("127.0.0.1:" + std::to_string(server.port())),
@@ -110,10 +114,7 @@ TEST_F(ClientTest, MissingRecordingIsNotFound) {
 }
 
 TEST_F(ClientTest, FitWritesResultFiles) {
-  server::ServerOptions options;
-  options.listen = "127.0.0.1:0";
-  options.workers = 1;
-  server::PoseFuseServer server(options);
+  server::PoseFuseServer server(one_worker_on_a_free_port());
   demo::write_demo_session(dir_ / "demo");
 
   ResultWriter writer(dir_ / "out");
