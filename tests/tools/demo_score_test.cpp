@@ -138,7 +138,7 @@ TEST(DemoScore, ProtocolWithBothArmsAgreesWithTheTruth) {
   }
 }
 
-// The demo's session: the protocol with the right arm, the left one resting at the side. The
+// The demo's former session: the protocol with the right arm, the left one resting at the side. The
 // resting left arm is never in the calibration pose, so it gets no forearm results (it used to
 // be calibrated from the resting pose and came out 133 deg off), and the right arm is scored.
 TEST(DemoScore, RestingArmIsNotCalibrated) {
