@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <numbers>
 #include <random>
 
 #include <opencv2/core.hpp>
@@ -23,7 +24,7 @@ namespace {
 using geometry::Quat;
 using geometry::Vec3;
 
-constexpr double kPi = 3.14159265358979323846;
+using std::numbers::pi;
 constexpr double kGravity_m_s2 = 9.81;
 constexpr double kRestS = 1.5;  // the arm rests this long first, so the filter can settle
 
@@ -33,7 +34,7 @@ Quat axis_rotation(const Vec3& axis, double angle_rad) {
 
 // Earth-like field in W (x north, z up): 49 uT, pointing 60 degrees below the horizon.
 Vec3 earth_field_W_uT() {
-  const double dip_rad = 60.0 * kPi / 180.0;
+  const double dip_rad = 60.0 * pi / 180.0;
   return {49.0 * std::cos(dip_rad), 0.0, -49.0 * std::sin(dip_rad)};
 }
 
@@ -158,7 +159,7 @@ void add_camera_streams(const DemoSessionOptions& options, const v1::CameraIntri
     const double t_s = i / options.camera_rate_hz;
     const auto t_us =
         kCameraClockStartUs + static_cast<std::int64_t>(std::llround(t_s * 1e6));
-    const double sway_m = 0.05 * std::sin(2.0 * kPi * 0.2 * t_s);
+    const double sway_m = 0.05 * std::sin(2.0 * pi * 0.2 * t_s);
     cv::Mat depth_mm, body_index;
     camera_images(k, sway_m, depth_mm, body_index);
     *chunks.emplace_back().mutable_depth() =
@@ -192,9 +193,9 @@ v1::SessionHeader demo_header(const DemoSessionOptions& options) {
 
 Quat demo_arm_W_from_A(double t_s) {
   const double a = motion_ramp(t_s);
-  const double yaw = 0.3 + a * 0.8 * std::sin(2.0 * kPi * 0.15 * t_s);
-  const double pitch = a * 0.5 * std::sin(2.0 * kPi * 0.23 * t_s + 0.4);
-  const double roll = a * 0.9 * std::sin(2.0 * kPi * 0.31 * t_s + 1.0);
+  const double yaw = 0.3 + a * 0.8 * std::sin(2.0 * pi * 0.15 * t_s);
+  const double pitch = a * 0.5 * std::sin(2.0 * pi * 0.23 * t_s + 0.4);
+  const double roll = a * 0.9 * std::sin(2.0 * pi * 0.31 * t_s + 1.0);
   return axis_rotation(Vec3::UnitZ(), yaw) * axis_rotation(Vec3::UnitY(), pitch) *
          axis_rotation(Vec3::UnitX(), roll);
 }

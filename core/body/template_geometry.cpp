@@ -16,7 +16,7 @@ namespace posefuse::body {
 namespace {
 
 using Eigen::Vector3d;
-constexpr double kPi = std::numbers::pi;
+using std::numbers::pi;
 
 struct MeshBuilder {
   std::vector<Vector3d> vertices;
@@ -34,7 +34,7 @@ struct MeshBuilder {
                         double r2, int n, double psi0) {
     std::vector<int> ids(n);
     for (int m = 0; m < n; ++m) {
-      const double psi = psi0 + 2 * kPi * m / n;
+      const double psi = psi0 + 2 * pi * m / n;
       ids[m] = add(c + r1 * std::cos(psi) * e1 + r2 * std::sin(psi) * e2);
     }
     return ids;
@@ -205,7 +205,7 @@ LabelledTemplateGeometry build_template_geometry_with_parts(const BodyDimensions
     if (s >= 6) half_width += d.shoulder_extra_width;
     rings[s].resize(kTorsoRing);
     for (int k = 0; k < kTorsoRing; ++k) {
-      const double psi = 2 * kPi * k / kTorsoRing;
+      const double psi = 2 * pi * k / kTorsoRing;
       const double depth = d.torso_girth * (std::cos(psi) >= 0 ? torso[s].front : torso[s].back);
       rings[s][k] = b.add(Vector3d(0, station_y[s], 0) + depth * std::cos(psi) * ez +
                           half_width * std::sin(psi) * ex);
@@ -235,7 +235,7 @@ LabelledTemplateGeometry build_template_geometry_with_parts(const BodyDimensions
     const Vector3d root = shoulder - side * 0.02 * ex;
     const double root_r1 = male ? 0.068 : 0.060, root_r2 = male ? 0.062 : 0.055;
     for (int m = 0; m < kLimbRing; ++m) {
-      const double psi = 2 * kPi * m / kLimbRing;
+      const double psi = 2 * pi * m / kLimbRing;
       b.vertices[opening[m]] = root + root_r1 * std::cos(psi) * e1 + root_r2 * std::sin(psi) * e2;
       b.parts[opening[m]] = b.part;
     }
@@ -275,7 +275,7 @@ LabelledTemplateGeometry build_template_geometry_with_parts(const BodyDimensions
       for (int k = 20; k >= 10; --k) previous.push_back(bottom[k % kTorsoRing]);
     // e1 = x, e2 = z, u = -y; the crotch vertex lies on the inner side of each leg.
     const Vector3d e1 = ex, e2 = ez;
-    const double psi0 = left ? kPi : 0.0;
+    const double psi0 = left ? pi : 0.0;
     auto limb = [&](const Vector3d& from, const Vector3d& to, std::span<const LimbRing> table,
                     const Vector3d& offset) {
       for (const LimbRing& r : table) {

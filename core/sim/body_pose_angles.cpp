@@ -1,6 +1,7 @@
 #include "sim/body_pose_angles.hpp"
 
 #include <cmath>
+#include <numbers>
 
 #include "body/smpl_model.hpp"
 #include "common/error.hpp"
@@ -8,7 +9,7 @@
 namespace posefuse::sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using std::numbers::pi;
 
 // R_from_S: the scripted arm's subject frame S (x forward, y left, z up) in R (x left, y up,
 // z front).
@@ -22,7 +23,7 @@ Quat R_from_S() {
 
 ArmAngles t_pose() {
   ArmAngles a;
-  a.shoulder_abduction_rad = kPi / 2;
+  a.shoulder_abduction_rad = pi / 2;
   return a;
 }
 

@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <opencv2/core.hpp>
+#include <numbers>
 #include <string>
 
 #include "body/body_evaluator.hpp"
@@ -14,7 +15,7 @@
 namespace posefuse::sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using std::numbers::pi;
 
 v1::SessionHeader make_header(const CameraSessionOptions& options) {
   v1::SessionHeader h;
@@ -48,8 +49,8 @@ PoseSequence arm_raising_sequence(const body::PoseLayout& layout, double period_
   return [=](double t_s) {
     Eigen::VectorXd theta = Eigen::VectorXd::Zero(size);
     // In the T-pose the left arm points along +x; about z, negative turns it down.
-    const double raise = 0.5 * (1.0 - std::cos(2 * kPi * t_s / period_s));  // 0 -> 1 -> 0
-    const double angle = (-75.0 + 150.0 * raise) * kPi / 180.0;
+    const double raise = 0.5 * (1.0 - std::cos(2 * pi * t_s / period_s));  // 0 -> 1 -> 0
+    const double angle = (-75.0 + 150.0 * raise) * pi / 180.0;
     theta[left] = angle;
     theta[right] = -angle;
     return theta;

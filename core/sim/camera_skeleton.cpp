@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include "common/error.hpp"
@@ -13,7 +14,7 @@ namespace posefuse::sim {
 namespace {
 
 using body::Joint;
-constexpr double kPi = 3.14159265358979323846;
+using std::numbers::pi;
 constexpr int kNone = -1;
 
 // SMPL joint whose rotation carries the bone parent -> camera joint (kNone: end joints,
@@ -116,7 +117,7 @@ CameraSkeletonSimulator::CameraSkeletonSimulator(const raycast::DepthCamera& cam
     bias_v_[j] = bias_u_[j].cross(random_unit(rng));
     if (bias_v_[j].norm() < 1e-6) bias_v_[j] = bias_u_[j].unitOrthogonal();
     bias_v_[j].normalize();
-    bias_phase_[j] = 2 * kPi * rng.uniform();
+    bias_phase_[j] = 2 * pi * rng.uniform();
     inferred_direction_[j] = random_unit(rng);
   }
 }
@@ -169,7 +170,7 @@ v1::SkeletonFrame CameraSkeletonSimulator::simulate(const SmplJointsK& smpl, con
       if (j == kShoulderLeft || j == kShoulderRight) error += options_.inferred_shoulder_drop_m * options_.down_K;
     }
     // 3. Slow bias and jitter.
-    const double angle = 2 * kPi * t_s / options_.bias_period_s + bias_phase_[j];
+    const double angle = 2 * pi * t_s / options_.bias_period_s + bias_phase_[j];
     error += bias_length_m_[j] * (std::cos(angle) * bias_u_[j] + std::sin(angle) * bias_v_[j]);
     error += options_.jitter_sigma_m * Eigen::Vector3d(jitter_rng.normal(), jitter_rng.normal(), jitter_rng.normal());
     reported.col(j) = p + error;
@@ -214,7 +215,7 @@ v1::SkeletonFrame CameraSkeletonSimulator::simulate(const SmplJointsK& smpl, con
     Eigen::Quaterniond q(K_from_joint);
     // 5. Hand flips about the bone.
     if ((j == kHandLeft || j == kHandRight) && flip_rng.uniform() < options_.hand_flip_probability) {
-      q = q * Eigen::Quaterniond(Eigen::AngleAxisd(kPi, Eigen::Vector3d::UnitY()));
+      q = q * Eigen::Quaterniond(Eigen::AngleAxisd(pi, Eigen::Vector3d::UnitY()));
     }
     q.normalize();
     set_quaternion(q, joint->mutable_orientation());

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <string>
 
 #include <Eigen/Geometry>
@@ -17,8 +18,8 @@
 namespace posefuse::sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDegToRad = kPi / 180.0;
+using std::numbers::pi;
+constexpr double kDegToRad = pi / 180.0;
 // 4-neighbours in the order the error model visits them.
 constexpr int kNeighbourDc[4] = {1, -1, 0, 0}, kNeighbourDr[4] = {0, 0, 1, -1};
 

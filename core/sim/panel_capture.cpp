@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include "common/error.hpp"
@@ -14,8 +15,8 @@ namespace posefuse::sim {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDeg = kPi / 180.0;
+using std::numbers::pi;
+constexpr double kDeg = pi / 180.0;
 constexpr int kSupersampling = 3;           // IR rays per pixel along each axis
 constexpr double kRetroRadiance = 8.0 * 65535.0;  // markers: a 1/8 covered pixel saturates
 constexpr double kBoardReflectivity = 0.6, kWallReflectivity = 0.5, kFloorReflectivity = 0.3;
@@ -90,7 +91,7 @@ double uniform_in(SimRng& rng, double low, double high) { return low + (high - l
 std::vector<calib::PanelPose> random_poses(const PanelCaptureOptions& o, const calib::PanelGeometry& panel,
                                            std::uint64_t seed) {
   SimRng rng(seed, "panel_capture/poses");
-  const Quat facing(Eigen::AngleAxisd(kPi, Vec3::UnitY()));  // z_P towards the camera, y_P up
+  const Quat facing(Eigen::AngleAxisd(pi, Vec3::UnitY()));  // z_P towards the camera, y_P up
   const Vec3 board_centre_P(0.5 * (panel.board_x_min_m + panel.board_x_max_m),
                             0.5 * (panel.board_y_min_m + panel.board_y_max_m), 0.0);
   std::vector<calib::PanelPose> out;
@@ -230,7 +231,7 @@ PanelCaptureResult simulate_panel_capture(const PanelCaptureOptions& o, const Pa
 
   // The mocap frame E: z up like W, turned about it, origin on the floor in front of the camera.
   SimRng mocap_rng(rig.seed, "panel_capture/mocap");
-  const Quat W_from_E(Eigen::AngleAxisd(2 * kPi * mocap_rng.uniform(), Vec3::UnitZ()));
+  const Quat W_from_E(Eigen::AngleAxisd(2 * pi * mocap_rng.uniform(), Vec3::UnitZ()));
   truth.K_from_E = (rig.K_from_W * W_from_E).normalized();
   truth.E_origin_K = Vec3(uniform_in(mocap_rng, -1, 1), -rig.camera_height_m, uniform_in(mocap_rng, 2.0, 3.0));
 

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include "common/error.hpp"
@@ -10,7 +11,7 @@
 namespace posefuse::sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using std::numbers::pi;
 
 Quat rotation(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, axis)); }
 
@@ -105,7 +106,7 @@ ScriptedMotion forearm_rolling(const ForearmRollingOptions& o) {
     // Fade in over the first half cycle and out over the last (never more than half the motion).
     const double fade = std::min(0.5, cycles / 2.0);
     const double envelope = smootherstep(std::min(u, cycles - u) / fade);
-    a.supination_rad = o.amplitude_rad * envelope * std::sin(2.0 * kPi * u);
+    a.supination_rad = o.amplitude_rad * envelope * std::sin(2.0 * pi * u);
     return a;
   };
   return m;
@@ -148,9 +149,9 @@ ScriptedMotion arm_raising(const ArmRaisingOptions& o) {
 
 ArmAngles calibration_pose_angles() {
   ArmAngles a;
-  a.shoulder_abduction_rad = kPi / 2;
-  a.humeral_rotation_rad = kPi / 2;
-  a.elbow_flexion_rad = kPi / 2;
+  a.shoulder_abduction_rad = pi / 2;
+  a.humeral_rotation_rad = pi / 2;
+  a.elbow_flexion_rad = pi / 2;
   return a;
 }
 
@@ -165,7 +166,7 @@ ScriptedMotion calibration_hold(const CalibrationHoldOptions& o) {
     // Sway faded in and out so that the hold starts and ends at rest; incommensurate phases
     // per joint so that the joints do not move in lockstep.
     const double fade = smootherstep(std::min(t, o.duration_s - t) / std::min(1.0, o.duration_s / 2));
-    const double w = 2.0 * kPi * o.sway_hz;
+    const double w = 2.0 * pi * o.sway_hz;
     a.shoulder_abduction_rad += o.sway_rad * fade * std::sin(w * t);
     a.shoulder_flexion_rad += o.sway_rad * fade * std::sin(1.37 * w * t + 0.5);
     a.humeral_rotation_rad += o.sway_rad * fade * std::sin(0.81 * w * t + 1.1);

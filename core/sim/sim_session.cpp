@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <memory>
+#include <numbers>
 #include <opencv2/core.hpp>
 #include <time.h>
 
@@ -25,7 +26,7 @@
 namespace posefuse::sim {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using std::numbers::pi;
 constexpr int kFramesAheadPerWorker = 2;  // frames a worker may finish before they are written
 // zstd level of depth chunks: level 3 took a fifth of a frame's CPU on noisy depth; level 1 is
 // ~2.5 times faster for 14 % larger depth payloads, 11 % larger sessions (docs/benchmarks.md,
@@ -70,7 +71,7 @@ double pronation_rad(const SkeletonPose& pose, int arm, const Quat& rest_R_from_
   const Mat3& R_shoulder = pose.rotation[static_cast<std::size_t>(kShoulder[a])];
   const Mat3 rest_F = rest_R_from_F.toRotationMatrix();
   const Quat local(rest_F.transpose() * R_shoulder.transpose() * R_elbow * rest_F);
-  const double wrapped = std::remainder(2.0 * std::atan2(local.y(), local.w()), 2 * kPi);
+  const double wrapped = std::remainder(2.0 * std::atan2(local.y(), local.w()), 2 * pi);
   return arm == 1 ? -wrapped : wrapped;  // + about y_F supinates the right arm
 }
 
@@ -105,8 +106,8 @@ class SlowWave {
     for (int k = 0; k < 3; ++k) {
       weight_[k] = 0.2 + rng.uniform();
       total += weight_[k];
-      phase_[k] = 2 * kPi * rng.uniform();
-      omega_[k] = 2 * kPi * (k + 1) / period_s;
+      phase_[k] = 2 * pi * rng.uniform();
+      omega_[k] = 2 * pi * (k + 1) / period_s;
     }
     for (double& w : weight_) w /= total;
   }
@@ -329,7 +330,7 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
   }
   // Placement: the camera faces the subject (see camera_session.hpp); W shares Body's origin.
   truth.K_from_Body = Eigen::Translation3d(0, -options.camera_height_m, options.subject_distance_m) *
-                      Eigen::AngleAxisd(kPi, Eigen::Vector3d::UnitY());
+                      Eigen::AngleAxisd(pi, Eigen::Vector3d::UnitY());
   truth.W_from_Body = W_from_R(options.heading_rad);
   const Mat3 W_from_Body = truth.W_from_Body.toRotationMatrix();
   truth.K_from_W = Quat(truth.K_from_Body.linear() * W_from_Body.transpose()).normalized();

@@ -1,6 +1,7 @@
 #include "sim/soft_tissue.hpp"
 
 #include <cmath>
+#include <numbers>
 #include <string>
 
 #include "body/smpl_model.hpp"
@@ -11,7 +12,7 @@ namespace posefuse::sim {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using std::numbers::pi;
 constexpr double kStepS = 1e-3;
 
 // Centre of each joint's segment: the joint and its children averaged (the joint alone at a leaf).
@@ -81,7 +82,7 @@ std::vector<Eigen::Matrix3Xd> segment_wobble(const std::function<Eigen::Matrix3X
   }
   std::vector<Eigen::Matrix3Xd> out(times_s.size(), Eigen::Matrix3Xd::Zero(3, body::kNumJoints));
   if (!o.enabled || times_s.empty() || o.gain == 0.0 || o.max_displacement_m == 0.0) return out;
-  const double omega = 2 * kPi * o.frequency_hz, two_zeta_omega = 2 * o.damping_ratio * omega;
+  const double omega = 2 * pi * o.frequency_hz, two_zeta_omega = 2 * o.damping_ratio * omega;
   Eigen::Matrix3Xd x = Eigen::Matrix3Xd::Zero(3, body::kNumJoints), v = x;
   const double t0 = times_s.front();
   // Centres at the step before, at and after the current one (second differences).

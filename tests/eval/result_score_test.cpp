@@ -5,6 +5,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <numbers>
 
 #include "common/error.hpp"
 #include "../imu/expect_error.hpp"
@@ -16,7 +17,7 @@ using posefuse::result_fixture::FixtureSpec;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using std::numbers::pi;
 
 struct Pair {
   std::filesystem::path result, truth;
@@ -33,10 +34,10 @@ Pair write_pair(const std::string& name, const FixtureSpec& result, const Fixtur
 
 TEST(ResultScore, KnownOffsetsComeBackAsErrors) {
   FixtureSpec result, truth;
-  result.forearm_angle_rad = 10.0 * kPi / 180.0;
+  result.forearm_angle_rad = 10.0 * pi / 180.0;
   result.position_offset_m = 0.02;
   result.r_m = 0.051;
-  result.K_from_W_angle_rad = 20.0 * kPi / 180.0;
+  result.K_from_W_angle_rad = 20.0 * pi / 180.0;
   result.clock_offset_us = -1'000'150;
   result.source = v1::FUSED;
   // Results 400 us late: still matched (tolerance 2 ms), and never to a neighbour.

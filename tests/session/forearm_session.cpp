@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <random>
 #include <sstream>
 
@@ -23,7 +24,7 @@ namespace {
 
 using forearm::Quat;
 using forearm::Vec3;
-constexpr double kPi = 3.14159265358979323846;
+using std::numbers::pi;
 
 double smooth_ramp(double x) {
   x = std::clamp(x, 0.0, 1.0);
@@ -39,10 +40,10 @@ sim::ScriptedMotion arm_motion(const ForearmSessionOptions& o) {
     sim::ArmAngles a = sim::calibration_pose_angles();
     const double u = t - hold;
     const double s = smooth_ramp(u / 1.0);
-    a.shoulder_abduction_rad += s * -0.5 * std::sin(2 * kPi * 0.35 * u);
-    a.shoulder_flexion_rad += s * 0.4 * std::sin(2 * kPi * 0.3 * u);
-    a.elbow_flexion_rad += s * 0.6 * std::sin(2 * kPi * 0.45 * u);
-    a.supination_rad += s * 0.8 * std::sin(2 * kPi * 0.5 * u);
+    a.shoulder_abduction_rad += s * -0.5 * std::sin(2 * pi * 0.35 * u);
+    a.shoulder_flexion_rad += s * 0.4 * std::sin(2 * pi * 0.3 * u);
+    a.elbow_flexion_rad += s * 0.6 * std::sin(2 * pi * 0.45 * u);
+    a.supination_rad += s * 0.8 * std::sin(2 * pi * 0.5 * u);
     return a;
   };
   return m;
@@ -116,7 +117,7 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
     forearm::StrapCameras c;
     c.depth = {200, 166, 143.0, 143.0, 100.0, 83.0, 0.02, -0.05, 0.0, 0.0, 0.0};
     c.color = {480, 270, 400.0, 400.0, 240.0, 135.0, 0.03, -0.04, 0.0, 0.0, 0.0};
-    c.color_from_depth = Quat(Eigen::AngleAxisd(1.0 * kPi / 180.0, Vec3::UnitY()));
+    c.color_from_depth = Quat(Eigen::AngleAxisd(1.0 * pi / 180.0, Vec3::UnitY()));
     c.color_from_depth_m = Vec3(-0.052, 0.0, 0.0);
     return c;
   }();

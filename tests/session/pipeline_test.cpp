@@ -2,6 +2,7 @@
 // FitResults out.
 #include <cmath>
 #include <map>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -20,7 +21,7 @@
 namespace posefuse::session {
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using std::numbers::pi;
 
 class CollectingSink : public ResultSink {
  public:
@@ -147,7 +148,7 @@ TEST(SessionPipeline, ArmOrientationFollowsTheDemoTruth) {
     const double t_s = static_cast<double>(t_us - demo::kArmClockStartUs) * 1e-6;
     if (t_s < 1.0) continue;  // start-up
     const double error_deg =
-        geometry::angle_between(W_from_A, demo::demo_arm_W_from_A(t_s)) * 180.0 / kPi;
+        geometry::angle_between(W_from_A, demo::demo_arm_W_from_A(t_s)) * 180.0 / pi;
     sum_deg += error_deg;
     max_deg = std::max(max_deg, error_deg);
     ++n;
@@ -313,8 +314,8 @@ TEST(SessionPipeline, MagCalibrationFromTheHeaderUndoesHardIron) {
     off_max = std::max(off_max, geometry::angle_between(off[i].second, expected[i].second));
     fixed_max = std::max(fixed_max, geometry::angle_between(fixed[i].second, expected[i].second));
   }
-  EXPECT_GT(off_max * 180.0 / kPi, 5.0);
-  EXPECT_LT(fixed_max * 180.0 / kPi, 0.01);  // the wire's float readings round differently
+  EXPECT_GT(off_max * 180.0 / pi, 5.0);
+  EXPECT_LT(fixed_max * 180.0 / pi, 0.01);  // the wire's float readings round differently
   const auto calibrations = corrected.of(v1::FitResult::kCalibration);
   ASSERT_EQ(calibrations.size(), 1u);
   for (const auto& imu : calibrations[0].calibration().imus()) {

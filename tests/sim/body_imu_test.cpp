@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 #include <random>
 
 #include "body/body_evaluator.hpp"
@@ -23,7 +24,7 @@ using posefuse::sim::testing::integrate_gyro;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using std::numbers::pi;
 
 const Eigen::Matrix3Xd& rest_joints() {
   static const Eigen::Matrix3Xd rest = template_rest_joints(body::Sex::kMale, Eigen::VectorXd::Zero(10));
@@ -73,7 +74,7 @@ TEST(BodyImu, RoomFrameInTheWorld) {
   EXPECT_LT((north * Vec3::UnitY() - Vec3::UnitZ()).norm(), 1e-12);  // up is up
   EXPECT_LT((north * Vec3::UnitZ() - Vec3::UnitX()).norm(), 1e-12);  // front faces north
   EXPECT_LT((north * Vec3::UnitX() - Vec3::UnitY()).norm(), 1e-12);  // left is west
-  EXPECT_LT((W_from_R(kPi / 2) * Vec3::UnitZ() - Vec3::UnitY()).norm(), 1e-12);  // turned to the west
+  EXPECT_LT((W_from_R(pi / 2) * Vec3::UnitZ() - Vec3::UnitY()).norm(), 1e-12);  // turned to the west
   EXPECT_THROW(W_from_R(std::nan("")), Error);
 }
 
@@ -91,7 +92,7 @@ TEST(BodyImu, GyroFromTheBodyIntegratesBackToTheTruth) {
   EXPECT_NEAR(kinematics.t_end_s(), motion.duration_s, 1e-9);
   const ImuSynthResult ideal = ideal_imu(kinematics);
   const Quat end = integrate_gyro(ideal.samples, ideal.W_from_A.front());
-  const double ideal_error_deg = posefuse::geometry::angle_between(end, ideal.W_from_A.back()) * 180 / kPi;
+  const double ideal_error_deg = posefuse::geometry::angle_between(end, ideal.W_from_A.back()) * 180 / pi;
   EXPECT_LT(ideal_error_deg, 0.01);
   EXPECT_NEAR(ideal.samples.front().acc_m_s2.norm(), 9.81, 1e-6);
   const double largest = largest_acceleration(ideal);
@@ -145,9 +146,9 @@ TEST(BodyImu, MocapNoiseIsSmoothedBeforeDifferentiation) {
                                             static_cast<std::size_t>(c)];
       if (rig[static_cast<std::size_t>(j)].root) return c < 3 ? (c == 1 ? 95.0 : 0.0) + 0.1 * n : 0.15 * n;
       double value = 0.15 * n;
-      if (rig[static_cast<std::size_t>(j)].name == "RightArm" && c == 0) value += 60.0 * std::sin(2 * kPi * 0.5 * t);
-      if (rig[static_cast<std::size_t>(j)].name == "RightForeArm" && c == 1) value += 50.0 + 40.0 * std::sin(2 * kPi * 0.8 * t);
-      if (rig[static_cast<std::size_t>(j)].name == "RightForeArm" && c == 2) value += 60.0 * std::sin(2 * kPi * 0.6 * t);
+      if (rig[static_cast<std::size_t>(j)].name == "RightArm" && c == 0) value += 60.0 * std::sin(2 * pi * 0.5 * t);
+      if (rig[static_cast<std::size_t>(j)].name == "RightForeArm" && c == 1) value += 50.0 + 40.0 * std::sin(2 * pi * 0.8 * t);
+      if (rig[static_cast<std::size_t>(j)].name == "RightForeArm" && c == 2) value += 60.0 * std::sin(2 * pi * 0.6 * t);
       return value;
     });
   };
@@ -170,7 +171,7 @@ TEST(BodyImu, MocapNoiseIsSmoothedBeforeDifferentiation) {
 
 TEST(BodyImu, BaseImuOnTheCameraIsStill) {
   const Eigen::Isometry3d K_from_R =
-      Eigen::Translation3d(0, -1.0, 2.5) * Eigen::AngleAxisd(kPi, Eigen::Vector3d::UnitY());
+      Eigen::Translation3d(0, -1.0, 2.5) * Eigen::AngleAxisd(pi, Eigen::Vector3d::UnitY());
   const BaseImuMount mount;
   const SensorKinematics base(base_imu_trajectory(K_from_R, W_from_R(0.3), mount, 0.0, 5.0));
   EXPECT_LE(base.t_begin_s(), 0.0);

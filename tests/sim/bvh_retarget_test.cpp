@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 #include <random>
 
 #include "common/error.hpp"
@@ -21,7 +22,7 @@ namespace body = posefuse::body;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using std::numbers::pi;
 constexpr double kFrameTime = 1.0 / 60;
 
 // Random poses: every rotation channel within +-35 deg, the root turned anywhere about the
@@ -46,7 +47,7 @@ std::string random_clip(const std::vector<RigJointSpec>& rig, int frames, unsign
 }
 
 double angle_deg(const Vec3& a, const Vec3& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / kPi;
+  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / pi;
 }
 
 // Largest angle over every frame and every mapped SMPL bone between the retargeted model's bone
@@ -166,7 +167,7 @@ TEST(BvhRetarget, ForearmRollComesFromTheBvh) {
   EXPECT_LT((before.elbow_R_m - after.elbow_R_m).norm(), 1e-9);
   EXPECT_LT((before.wrist_R_m - after.wrist_R_m).norm(), 1e-9);
   const Eigen::AngleAxisd turn(before.R_from_F.conjugate() * after.R_from_F);
-  EXPECT_NEAR(turn.angle() * 180.0 / kPi, roll_deg, 1e-6);
+  EXPECT_NEAR(turn.angle() * 180.0 / pi, roll_deg, 1e-6);
   EXPECT_NEAR(std::abs(turn.axis().y()), 1.0, 1e-9);  // about F's y: the forearm axis
   EXPECT_GT((before.imu_R_m - after.imu_R_m).norm(), 0.02);  // the IMU on the strap rolls along
 }

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <functional>
+#include <numbers>
 #include <random>
 #include <sstream>
 
@@ -15,7 +16,7 @@ using namespace posefuse::sim;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using std::numbers::pi;
 
 // Root with 6 channels, Mid and Tip with 3 each, an End Site on Tip. Lengths in cm.
 std::string chain_text(const std::string& mid_channels, const std::vector<std::string>& frames) {
@@ -103,8 +104,8 @@ TEST(Bvh, ForwardKinematicsMatchesHandComputation) {
   expect_near(bent.p_W_m[2], to_W(90, 0, 20));
   expect_near(*bent.end_site_p_W_m[2], to_W(90, 0, 25));
   // The Tip's world rotation is W_from_M * Rz(90) * Rx(90).
-  const Quat expected = W_from_bvh_world() * Quat(Eigen::AngleAxisd(kPi / 2, Vec3::UnitZ())) *
-                        Quat(Eigen::AngleAxisd(kPi / 2, Vec3::UnitX()));
+  const Quat expected = W_from_bvh_world() * Quat(Eigen::AngleAxisd(pi / 2, Vec3::UnitZ())) *
+                        Quat(Eigen::AngleAxisd(pi / 2, Vec3::UnitX()));
   EXPECT_LT(posefuse::geometry::angle_between(bent.W_from_joint[2], expected), 1e-12);
 }
 
@@ -244,7 +245,7 @@ TEST(Bvh, CmuLike31JointRig) {
   const int left_arm = clip.skeleton.find("LeftArm");
   const BvhJoint& joint = clip.skeleton.joints[static_cast<std::size_t>(left_arm)];
   const auto& v = values[2];
-  auto rad = [&](int k) { return v[static_cast<std::size_t>(joint.first_channel + k)] * kPi / 180.0; };
+  auto rad = [&](int k) { return v[static_cast<std::size_t>(joint.first_channel + k)] * pi / 180.0; };
   const Quat expected = Quat(Eigen::AngleAxisd(rad(0), Vec3::UnitZ())) *
                         Quat(Eigen::AngleAxisd(rad(1), Vec3::UnitX())) *
                         Quat(Eigen::AngleAxisd(rad(2), Vec3::UnitY()));
@@ -287,7 +288,7 @@ TEST(Bvh, ResampleSlerpsRotationsAndInterpolatesPositions) {
     const double u = k / 4.0;
     const BvhLocalPose& f = up.frames[static_cast<std::size_t>(k)];
     EXPECT_NEAR(f.translation[0].x(), 100.0 * u, 1e-9);
-    const Quat expected(Eigen::AngleAxisd(u * kPi / 2, Vec3::UnitZ()));
+    const Quat expected(Eigen::AngleAxisd(u * pi / 2, Vec3::UnitZ()));
     EXPECT_LT(posefuse::geometry::angle_between(f.parent_from_joint[1], expected), 1e-12);
   }
   // Downsampling keeps frames within the duration only.
@@ -302,7 +303,7 @@ TEST(Bvh, ResampleTakesShortestArc) {
       "Zrotation Yrotation Xrotation", {"0 0 0 0 0 0 170 0 0 0 0 0", "0 0 0 0 0 0 -170 0 0 0 0 0"}));
   const BvhClip mid = resample(clip, 4.0);  // 0, 0.25, 0.5 s
   ASSERT_EQ(mid.frame_count(), 3);
-  const Quat half_turn(Eigen::AngleAxisd(kPi, Vec3::UnitZ()));
+  const Quat half_turn(Eigen::AngleAxisd(pi, Vec3::UnitZ()));
   EXPECT_LT(posefuse::geometry::angle_between(mid.frames[1].parent_from_joint[1], half_turn), 1e-12);
 }
 

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 
 #include "body/template_generator.hpp"
 #include "common/error.hpp"
@@ -20,8 +21,8 @@ using posefuse::sim::testing::small_camera;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kDeg = kPi / 180.0;
+using std::numbers::pi;
+constexpr double kDeg = pi / 180.0;
 
 // The template facing the camera 2.5 m away, arms lowered 40 deg, spine bent by `spine_deg`
 // per spine joint; the body frame is K itself.
@@ -35,7 +36,7 @@ PosedScene posed_scene(double spine_deg = 0.0, double yaw_deg = 0.0) {
   const body::PoseLayout layout = body::PoseLayout::all_joints();
   body::BodyEvaluator eval(model, layout);
   Eigen::VectorXd theta = layout.zero();
-  theta[layout.index_of("pelvis_y")] = kPi + yaw_deg * kDeg;
+  theta[layout.index_of("pelvis_y")] = pi + yaw_deg * kDeg;
   theta[layout.index_of("translation_y")] = -0.95;
   theta[layout.index_of("translation_z")] = 2.5;
   theta[layout.index_of("left_shoulder_z")] = -40 * kDeg;
@@ -238,7 +239,7 @@ TEST(CameraSkeleton, HandOrientationSometimesFlipped) {
       const double angle = qa.angularDistance(qb);
       if (angle < 1e-9) continue;
       ++flipped;
-      EXPECT_NEAR(angle, kPi, 1e-6);
+      EXPECT_NEAR(angle, pi, 1e-6);
       // About the bone: the y axis stays.
       EXPECT_LT((qa.toRotationMatrix().col(1) - qb.toRotationMatrix().col(1)).norm(), 1e-9);
     }

@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdlib>
+#include <numbers>
 
 #include "common/error.hpp"
 #include "raycast/mesh_scene.hpp"
@@ -17,7 +18,7 @@ using posefuse::sim::testing::small_camera;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using std::numbers::pi;
 
 std::vector<uint16_t> render_planes(const raycast::DepthCamera& camera, const std::vector<RoomPlane>& planes) {
   std::vector<uint16_t> depth(static_cast<std::size_t>(camera.width()) * camera.height(), 0);
@@ -80,7 +81,7 @@ TEST(DepthNoise, GrazingFloorPixelsAreDropped) {
       const std::size_t i = static_cast<std::size_t>(row) * camera.width() + col;
       if (clean[i] == 0) continue;
       const Eigen::Vector3d ray = camera.pixel_ray(col, row).cast<double>().normalized();
-      const double incidence_deg = std::acos(std::abs(ray.y())) * 180.0 / kPi;
+      const double incidence_deg = std::acos(std::abs(ray.y())) * 180.0 / pi;
       if (incidence_deg > options.max_incidence_deg + 3.0) {
         ++grazing;
         grazing_kept += noisy.depth_mm[i] != 0;
@@ -107,7 +108,7 @@ TEST(DepthNoise, IncidenceOfTiltedPlaneFromGradients) {
   for (int row = 2; row < camera.height() - 2; ++row) {
     for (int col = 2; col < camera.width() - 2; ++col) {
       const Eigen::Vector3d ray = camera.pixel_ray(col, row).cast<double>().normalized();
-      const double truth_deg = std::acos(std::abs(ray.dot(normal))) * 180.0 / kPi;
+      const double truth_deg = std::acos(std::abs(ray.dot(normal))) * 180.0 / pi;
       worst_deg = std::max(worst_deg, std::abs(truth_deg - incidence[static_cast<std::size_t>(row) * camera.width() + col]));
     }
   }

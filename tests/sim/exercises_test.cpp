@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <numbers>
 
 #include "body/pose_parameters.hpp"
 #include "common/error.hpp"
@@ -16,7 +17,7 @@ namespace body = posefuse::body;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using std::numbers::pi;
 
 const Eigen::Matrix3Xd& rest_joints() {
   static const Eigen::Matrix3Xd rest = template_rest_joints(body::Sex::kMale, Eigen::VectorXd::Zero(10));
@@ -36,7 +37,7 @@ const MotionPhase& phase(const BodyMotion& motion, const std::string& name) {
 
 double middle(const MotionPhase& p) { return 0.5 * (p.begin_s + p.end_s); }
 
-double elevation_deg(const Vec3& v) { return std::asin(v.normalized().y()) * 180.0 / kPi; }
+double elevation_deg(const Vec3& v) { return std::asin(v.normalized().y()) * 180.0 / pi; }
 
 Vec3 joint(const SkeletonPose& p, int j) { return p.joints.col(j); }
 
@@ -147,7 +148,7 @@ TEST(Exercises, CalibrationPoseGeometry) {
     const ForearmStrap strap{side};
     const ForearmPose f = forearm_pose(p, forearm_rest_R_from_F(rest_joints(), side), strap);
     const Vec3 dorsal = f.R_from_F * Vec3::UnitX();
-    EXPECT_LT(std::acos(std::clamp(-dorsal.z(), -1.0, 1.0)) * 180 / kPi, 2.0) << "palm faces +z";
+    EXPECT_LT(std::acos(std::clamp(-dorsal.z(), -1.0, 1.0)) * 180 / pi, 2.0) << "palm faces +z";
     const Vec3 thumb = (right ? 1.0 : -1.0) * (f.R_from_F * Vec3::UnitZ());
     EXPECT_NEAR(thumb.x(), right ? 1.0 : -1.0, 1e-3) << "thumb points medially";
     EXPECT_NEAR(std::abs(f.R_from_F.toRotationMatrix().determinant()), 1.0, 1e-12);
@@ -225,7 +226,7 @@ TEST(Exercises, ForearmRollingTurnsTheForearmAboutItsAxis) {
     if (turn.angle() > 1e-6) {
       EXPECT_NEAR(std::abs(turn.axis().y()), 1.0, 1e-9) << t;
     }
-    largest_deg = std::max(largest_deg, turn.angle() * 180 / kPi);
+    largest_deg = std::max(largest_deg, turn.angle() * 180 / pi);
   }
   EXPECT_NEAR(largest_deg, 60.0, 0.5);
   // The forearm points forwards (elbow at 90 deg), horizontal.

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <numbers>
+
 #include "body/template_generator.hpp"
 #include "common/error.hpp"
 #include "sim/camera_session.hpp"
@@ -15,11 +17,11 @@ namespace raycast = posefuse::raycast;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using std::numbers::pi;
 
 // The camera of CameraSessionOptions: 1 m up, 2.5 m in front of the subject, facing it.
 Eigen::Isometry3d camera_in_front() {
-  return Eigen::Translation3d(0, -1.0, 2.5) * Eigen::AngleAxisd(kPi, Eigen::Vector3d::UnitY());
+  return Eigen::Translation3d(0, -1.0, 2.5) * Eigen::AngleAxisd(pi, Eigen::Vector3d::UnitY());
 }
 
 class PosedBody {

@@ -16,7 +16,7 @@ using namespace posefuse::sim::testing;
 
 namespace {
 
-constexpr double kDeg = kPi / 180.0;
+constexpr double kDeg = pi / 180.0;
 
 ImuSynthOptions ideal_options() {
   ImuSynthOptions o;
@@ -258,7 +258,7 @@ TEST(ImuSynth, RejectsBadInput) {
   o.error_model.mag_noise_uT = -1;
   EXPECT_THROW(synthesize_imu(motion, {0.5}, o), Error);
   o = ImuSynthOptions();
-  o.earth_field.dip_rad = kPi / 2;
+  o.earth_field.dip_rad = pi / 2;
   EXPECT_THROW(synthesize_imu(motion, {0.5}, o), Error);
   o = ImuSynthOptions();
   ImuErrors e;

@@ -15,7 +15,7 @@ using namespace posefuse::sim::testing;
 
 namespace {
 
-constexpr double kDeg = kPi / 180.0;
+constexpr double kDeg = pi / 180.0;
 
 void expect_near(const Vec3& a, const Vec3& b, double tol) {
   EXPECT_LT((a - b).norm(), tol) << "got " << a.transpose() << " want " << b.transpose();

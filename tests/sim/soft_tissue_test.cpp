@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 
 #include "body/smpl_model.hpp"
 #include "body/template_generator.hpp"
@@ -19,7 +20,7 @@ using namespace posefuse::sim;
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
+using std::numbers::pi;
 
 Eigen::Matrix3Xd rest_joints() {
   Eigen::Matrix3Xd joints(3, body::kNumJoints);
@@ -54,7 +55,7 @@ TEST(SoftTissue, BoundedAndRingingDownAfterAStop) {
   SoftTissueOptions options;
   // A punch-like shake: 15 cm at 3 Hz (peak acceleration 53 m/s^2) for 2 s, then an abrupt stop.
   const auto shake = [](double t) -> Eigen::Matrix3Xd {
-    const double x = t < 2.0 ? 0.15 * std::sin(2 * kPi * 3.0 * t) : 0.0;
+    const double x = t < 2.0 ? 0.15 * std::sin(2 * pi * 3.0 * t) : 0.0;
     return rest_joints().colwise() + Eigen::Vector3d(x, 0.0, 0.0);
   };
   const std::vector<double> times = frame_times(5.0);

@@ -3,6 +3,7 @@
 #include <cmath>
 #include <algorithm>
 #include <functional>
+#include <numbers>
 #include <vector>
 
 #include "imu/imu_sample.hpp"
@@ -11,22 +12,22 @@
 
 namespace posefuse::sim::testing {
 
-constexpr double kPi = 3.14159265358979323846;
+using std::numbers::pi;
 
 inline Quat rot(double angle, const Vec3& axis) { return Quat(Eigen::AngleAxisd(angle, axis)); }
 
 // A "complex" motion: three incommensurate oscillations about z, y, x plus a slow yaw drift,
 // rates up to about 8 rad/s, and a position wandering by tens of cm.
 inline Quat complex_orientation(double t) {
-  const double a = 1.2 * std::sin(2 * kPi * 0.7 * t) + 0.5 * t;
-  const double b = 0.6 * std::sin(2 * kPi * 0.45 * t + 1.0);
-  const double c = 1.5 * std::sin(2 * kPi * 0.9 * t + 0.3);
+  const double a = 1.2 * std::sin(2 * pi * 0.7 * t) + 0.5 * t;
+  const double b = 0.6 * std::sin(2 * pi * 0.45 * t + 1.0);
+  const double c = 1.5 * std::sin(2 * pi * 0.9 * t + 0.3);
   return rot(a, Vec3::UnitZ()) * rot(b, Vec3::UnitY()) * rot(c, Vec3::UnitX());
 }
 
 inline Vec3 complex_position(double t) {
-  return {0.3 * std::sin(2 * kPi * 0.5 * t), 0.2 * std::cos(2 * kPi * 0.8 * t),
-          1.2 + 0.1 * std::sin(2 * kPi * 1.1 * t)};
+  return {0.3 * std::sin(2 * pi * 0.5 * t), 0.2 * std::cos(2 * pi * 0.8 * t),
+          1.2 + 0.1 * std::sin(2 * pi * 1.1 * t)};
 }
 
 // Samples the functions at t0 + k dt for t in [t0, t1].
