@@ -483,7 +483,9 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
     truth.buzzer_heard_camera_s = result.stop_heard_camera_s;
     small.emplace_back().mutable_sync_event()->CopyFrom(result.stop_event);
     for (const auto& chunk : result.audio) small.emplace_back().mutable_audio()->CopyFrom(chunk);
-    const BleBroadcastResult ble = ble_broadcast_receipts(devices, options.ble, options.seed);
+    BleBroadcastOptions ble_options = options.ble;
+    ble_options.repeat_until_s = options.duration_s;  // repeated bursts, if any, through the session
+    const BleBroadcastResult ble = ble_broadcast_receipts(devices, ble_options, options.seed);
     truth.ble_broadcast_camera_s = ble.broadcast_t_camera_s;
     for (const auto& event : ble.events) small.emplace_back().mutable_sync_event()->CopyFrom(event);
   }

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "common/error.hpp"
 #include "sim/option_checks.hpp"
@@ -59,30 +60,44 @@ BleBroadcastResult ble_broadcast_receipts(const std::vector<SimDevice>& devices,
   if (options.max_rounds < 1 || options.max_rounds > 100000) throw_invalid("ble.max_rounds", "must be in 1..100000");
   require_non_negative(options.receipt_jitter_s, "ble.receipt_jitter_s");
 
+  require_non_negative(options.repeat_every_s, "ble.repeat_every_s");
+  require_finite(options.repeat_until_s, "ble.repeat_until_s");
+  if (options.repeat_every_s > 0 && options.repeat_every_s < options.interval_s) {
+    throw_invalid("ble.repeat_every_s", "must be 0 (one burst) or at least ble.interval_s");
+  }
+
   SimRng rng(seed, "ble_broadcast");
   BleBroadcastResult result;
-  int complete_rounds = 0;
-  for (int round = 0; round < options.max_rounds && complete_rounds < options.rounds_received_by_all; ++round) {
-    const double t_camera = options.first_broadcast_s + round * options.interval_s;
-    result.broadcast_t_camera_s.push_back(t_camera);
-    bool all = true;
-    for (const SimDevice& device : devices) {
-      const bool received = rng.uniform() < options.receive_probability;
-      const double jitter = options.receipt_jitter_s * rng.normal();
-      if (!received) {
-        all = false;
-        continue;
+  for (int burst = 0;; ++burst) {
+    const double burst_start = options.first_broadcast_s + burst * options.repeat_every_s;
+    if (burst > 0 && (options.repeat_every_s <= 0 || burst_start >= options.repeat_until_s)) break;
+    const double next_burst = options.repeat_every_s > 0 ? burst_start + options.repeat_every_s
+                                                         : std::numeric_limits<double>::infinity();
+    int complete_rounds = 0;
+    for (int round = 0; round < options.max_rounds && complete_rounds < options.rounds_received_by_all; ++round) {
+      const double t_camera = burst_start + round * options.interval_s;
+      if (t_camera >= next_burst) break;
+      const auto sequence = static_cast<std::uint32_t>(result.broadcast_t_camera_s.size());
+      result.broadcast_t_camera_s.push_back(t_camera);
+      bool all = true;
+      for (const SimDevice& device : devices) {
+        const bool received = rng.uniform() < options.receive_probability;
+        const double jitter = options.receipt_jitter_s * rng.normal();
+        if (!received) {
+          all = false;
+          continue;
+        }
+        const double device_s = 1e-6 * static_cast<double>(device.clock.to_device_us(t_camera + jitter));
+        const double quantised_s = std::floor(device_s / options.clock_resolution_s) * options.clock_resolution_s;
+        v1::SyncEvent event;
+        event.set_t_us(std::llround(quantised_s * 1e6));
+        event.set_device_id(device.device_id);
+        event.set_kind(v1::SyncEvent::BLE_BROADCAST_RECEIPT);
+        event.set_payload(ble_sequence_payload(sequence));
+        result.events.push_back(std::move(event));
       }
-      const double device_s = 1e-6 * static_cast<double>(device.clock.to_device_us(t_camera + jitter));
-      const double quantised_s = std::floor(device_s / options.clock_resolution_s) * options.clock_resolution_s;
-      v1::SyncEvent event;
-      event.set_t_us(std::llround(quantised_s * 1e6));
-      event.set_device_id(device.device_id);
-      event.set_kind(v1::SyncEvent::BLE_BROADCAST_RECEIPT);
-      event.set_payload(ble_sequence_payload(static_cast<std::uint32_t>(round)));
-      result.events.push_back(std::move(event));
+      if (all) ++complete_rounds;
     }
-    if (all) ++complete_rounds;
   }
   return result;
 }

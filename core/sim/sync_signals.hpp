@@ -35,11 +35,17 @@ struct BleBroadcastOptions {
   int max_rounds = 200;             // ... or after this many broadcasts
   double clock_resolution_s = 312.5e-6;  // BLE clock tick; timestamps are floored to it
   double receipt_jitter_s = 0.0;    // per device and receipt, standard deviation
+  // Paper 1 broadcasts once, at the start. With repeat_every_s > 0 the PC starts another burst
+  // (same stopping rule, sequence numbers counting on) every repeat_every_s after the first one
+  // while the burst's start is before repeat_until_s: receipts spread over the session are what
+  // makes the clocks' drift observable. A burst ends early where the next one begins.
+  double repeat_every_s = 0.0;      // 0: one burst; otherwise >= interval_s
+  double repeat_until_s = 0.0;      // camera clock
 };
 
 struct BleBroadcastResult {
   std::vector<v1::SyncEvent> events;  // in camera-time order
-  std::vector<double> broadcast_t_camera_s;  // ground truth, one per broadcast sent
+  std::vector<double> broadcast_t_camera_s;  // ground truth, one per broadcast sent (= sequence number)
 };
 
 BleBroadcastResult ble_broadcast_receipts(const std::vector<SimDevice>& devices,

@@ -110,7 +110,11 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
   add_imu_chunks(base_imu, base_device.clock, timed, counts);
   add_imu_chunks(arm_imu, arm_device.clock, timed, counts);
   // Sync: the buzzer stops at 1.2 s camera time; broadcasts from 0.5 s.
-  const std::uint32_t audio_rate_hz = add_sync_chunks(base_device, arm_device, 1.2, o.buzzer, o.seed + 3, timed, counts);
+  sim::BleBroadcastOptions ble;
+  ble.repeat_every_s = o.ble_repeat_s;
+  ble.repeat_until_s = o.duration_s;
+  const std::uint32_t audio_rate_hz =
+      add_sync_chunks(base_device, arm_device, 1.2, o.buzzer, o.seed + 3, timed, counts, ble);
 
   // Camera frames at 30 Hz.
   const forearm::StrapCameras cameras = [] {
@@ -130,6 +134,7 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
   truth->K_from_W = camera.K_from_W;
   truth->device_us_at_camera_zero = {{arm_device.device_id, arm_device.clock.to_device_us(0.0)},
                                      {base_device.device_id, base_device.clock.to_device_us(0.0)}};
+  truth->device_drift = {{arm_device.device_id, arm_device.clock.drift}, {base_device.device_id, base_device.clock.drift}};
   truth->model = {arm.strap_radius_m, arm.strap_to_elbow_m, d_sw, arm.upper_arm_m, arm.F_from_A};
   truth->K_from_F_calibration = camera.K_from_W * sim::arm_pose(arm, sim::calibration_pose_angles()).W_from_F;
   for (int k = 0;; ++k) {

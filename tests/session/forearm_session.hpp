@@ -38,6 +38,7 @@ struct ForearmSessionOptions {
   forearm::Vec3 shoulder_bias_m = forearm::Vec3::Zero();
   bool upper_arm_drawn = true;
   std::string upper_arm = "depth";
+  double ble_repeat_s = 0.0;         // BLE bursts every this many s (0: one, at 0.5 s)
   std::uint64_t seed = 7;
 };
 
@@ -52,6 +53,7 @@ struct ForearmSessionTruth {
   // Each IMU's clock reading at camera time 0, when both take their first sample: the true
   // camera_t - device_t there is minus this.
   std::map<std::string, std::int64_t> device_us_at_camera_zero;
+  std::map<std::string, double> device_drift;  // t_device = offset + (1 + drift) t_camera
 };
 
 // Header, data chunks in approximate camera-time order, end marker.

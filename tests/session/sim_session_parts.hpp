@@ -39,11 +39,11 @@ inline void add_imu_chunks(const sim::ImuDeviceResult& imu, const sim::DeviceClo
 }
 
 // Paper 1, II-G: the base IMU's buzzer stops at stop_camera_s in 2.5 s of camera audio (the
-// BUZZER_STOP event only when `buzzer_event`), and BLE broadcasts from 0.5 s received by both.
-// Returns the audio sample rate.
+// BUZZER_STOP event only when `buzzer_event`), and BLE broadcasts from 0.5 s received by both
+// (`ble`: one burst by default, paper 1). Returns the audio sample rate.
 inline std::uint32_t add_sync_chunks(const sim::SimDevice& base, const sim::SimDevice& arm, double stop_camera_s,
                                      bool buzzer_event, std::uint64_t seed, std::vector<TimedChunk>& timed,
-                                     SimChunkCounts& counts) {
+                                     SimChunkCounts& counts, const sim::BleBroadcastOptions& ble = {}) {
   sim::BuzzerOptions buzzer;
   buzzer.stop_device_us = base.clock.to_device_us(stop_camera_s);
   sim::AudioOptions audio;
@@ -62,7 +62,7 @@ inline std::uint32_t add_sync_chunks(const sim::SimDevice& base, const sim::SimD
     timed.push_back({stop_camera_s, std::move(chunk)});
     ++counts.sync_events;
   }
-  const sim::BleBroadcastResult receipts = sim::ble_broadcast_receipts({base, arm}, sim::BleBroadcastOptions{}, seed + 1);
+  const sim::BleBroadcastResult receipts = sim::ble_broadcast_receipts({base, arm}, ble, seed + 1);
   for (const v1::SyncEvent& e : receipts.events) {
     const sim::DeviceClock& clock = e.device_id() == base.device_id ? base.clock : arm.clock;
     v1::SessionChunk chunk;

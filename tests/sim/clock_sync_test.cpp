@@ -161,6 +161,38 @@ TEST(BleBroadcast, ReceiptsMapThroughEachClock) {
   EXPECT_THROW(ble_sequence_from_payload("abc"), Error);
 }
 
+TEST(BleBroadcast, RepeatedBurstsSpreadReceiptsOverTheSession) {
+  const std::vector<SimDevice> devices = {{"base", {5.0, 20e-6}}, {"arm_right", {-17.25, -35e-6}}};
+  BleBroadcastOptions once;
+  const BleBroadcastResult first = ble_broadcast_receipts(devices, once, 5);
+  BleBroadcastOptions options;
+  options.repeat_every_s = 10.0;
+  options.repeat_until_s = 60.0;
+  const BleBroadcastResult r = ble_broadcast_receipts(devices, options, 5);
+  // The first burst is the paper's single burst, unchanged.
+  ASSERT_GT(r.events.size(), first.events.size());
+  for (std::size_t k = 0; k < first.events.size(); ++k) {
+    EXPECT_EQ(r.events[k].SerializeAsString(), first.events[k].SerializeAsString());
+  }
+  // Bursts start at 0.5, 10.5, ..., 50.5 s; each ends with rounds_received_by_all complete rounds;
+  // sequence numbers index broadcast_t_camera_s and count on across bursts.
+  std::map<int, int> complete_by_burst;
+  std::map<std::uint32_t, int> receipts_by_round;
+  for (const auto& e : r.events) ++receipts_by_round[ble_sequence_from_payload(e.payload())];
+  for (const auto& [round, receipts] : receipts_by_round) {
+    ASSERT_LT(round, r.broadcast_t_camera_s.size());
+    const int burst = static_cast<int>(std::floor((r.broadcast_t_camera_s[round] - 0.5) / 10.0 + 1e-9));
+    complete_by_burst[burst] += receipts == 2 ? 1 : 0;
+  }
+  ASSERT_EQ(complete_by_burst.size(), 6u);
+  for (const auto& [burst, complete] : complete_by_burst) EXPECT_EQ(complete, options.rounds_received_by_all) << burst;
+  EXPECT_NEAR(r.broadcast_t_camera_s.back(), 50.5, 2.0);
+  options.repeat_every_s = 0.05;  // shorter than the broadcast interval
+  EXPECT_THROW(ble_broadcast_receipts(devices, options, 1), Error);
+  options.repeat_every_s = -1.0;
+  EXPECT_THROW(ble_broadcast_receipts(devices, options, 1), Error);
+}
+
 TEST(BleBroadcast, SeedsAndBadOptions) {
   const std::vector<SimDevice> devices = {{"base", {}}, {"arm", {1.0, 0.0}}};
   BleBroadcastOptions options;

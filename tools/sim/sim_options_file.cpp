@@ -247,6 +247,11 @@ const std::map<std::string, Setter>& setters() {
                                  if (ppm >= 1000) bad(f, v, "must be below 1000");
                                  o.clock_drift_max = ppm * 1e-6;
                                }}},
+      {"ble_repeat_s", {"BLE broadcast bursts every this many s through the session (0: one at the start, paper 1)",
+                        [](Options& o, const std::string& v, const std::string& f) {
+                          o.ble.repeat_every_s = non_negative(v, f);
+                          if (o.ble.repeat_every_s > 0 && o.ble.repeat_every_s < 1) bad(f, v, "must be 0 or >= 1");
+                        }}},
       {"skeleton_jump_probability", {"camera skeleton jumps per frame, [0, 1]",
                                      [](Options& o, const std::string& v, const std::string& f) {
                                        o.skeleton.jump_probability = probability(v, f);

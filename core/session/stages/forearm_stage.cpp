@@ -337,7 +337,11 @@ void ForearmStage::try_calibrate(bool finishing, StageOutput& out) {
   for (const Device& d : devices_) {
     if (d.side) arm_ids.push_back(d.id);
   }
-  if (!clock_map_) clock_map_ = clocks_->try_build(arm_ids);
+  if (!clock_map_) {
+    clock_map_ = clocks_->try_build(arm_ids);
+    receipts_in_clock_map_ = clocks_->receipt_count();
+    clock_map_frame_us_ = last_frame_us_;
+  }
   if (!clock_map_) {
     if (finishing) {
       const StreamClocks::Missing missing = clocks_->why_not(arm_ids);
@@ -475,14 +479,36 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
   device.frames.clear();
 }
 
+void ForearmStage::refit_clocks(bool finishing) {
+  // BLE receipts after the calibration (repeated bursts) make the drift between the IMUs
+  // observable; refit at most once per second of camera time, and once more at the end so the
+  // reported offsets and drifts use the whole session.
+  constexpr std::int64_t kRefitEveryUs = 1'000'000;
+  if (!clock_map_ || clocks_->receipt_count() == receipts_in_clock_map_) return;
+  if (!finishing && last_frame_us_ < clock_map_frame_us_ + kRefitEveryUs) return;
+  std::vector<std::string> arm_ids;
+  for (const Device& d : devices_) {
+    if (d.side) arm_ids.push_back(d.id);
+  }
+  if (std::optional<sync::ClockMap> refit = clocks_->try_build(arm_ids)) clock_map_ = std::move(refit);
+  receipts_in_clock_map_ = clocks_->receipt_count();
+  clock_map_frame_us_ = last_frame_us_;
+}
+
 void ForearmStage::feed_trackers(bool all, StageOutput& out) {
+  refit_clocks(all);
   for (Device& device : devices_) {
     if (!device.tracker) continue;
     std::vector<std::int64_t> t_us;
     std::vector<Quat> W_from_A;
     std::vector<Vec3> force;
     for (const ImuRecord& r : device.imu) {
-      t_us.push_back(std::llround(clock_map_->to_camera_us(device.id, static_cast<double>(r.t_device_us))));
+      std::int64_t t = std::llround(clock_map_->to_camera_us(device.id, static_cast<double>(r.t_device_us)));
+      // A refitted clock may map a sample a little before the last one handed over (a fraction
+      // of a millisecond): keep the order rather than drop the sample.
+      if (device.last_camera_us && t <= *device.last_camera_us) t = *device.last_camera_us + 1;
+      device.last_camera_us = t;
+      t_us.push_back(t);
       W_from_A.push_back(r.W_from_A);
       force.push_back(r.specific_force_A);
     }

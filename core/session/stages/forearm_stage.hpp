@@ -74,6 +74,7 @@ class ForearmStage : public Stage {
     std::vector<std::pair<std::int64_t, forearm::Quat>> pending_orientations;
     std::vector<ImuRecord> imu;  // device clock, as received
     std::optional<std::int64_t> first_device_us;  // first sample handed to the tracker
+    std::optional<std::int64_t> last_camera_us;   // last sample handed to the tracker, camera clock
     std::vector<ArmFrame> frames;  // camera frames until calibration
     std::optional<forearm::ForearmCalibration> calibration;
     bool calibration_failed = false;
@@ -100,6 +101,7 @@ class ForearmStage : public Stage {
   void detect_arms(const PendingFrame& frame, const Image* depth, const Image* color);
   void try_calibrate(bool finishing, StageOutput& out);
   void calibrate_arm(Device& device, StageOutput& out);
+  void refit_clocks(bool finishing);
   void feed_trackers(bool all, StageOutput& out);
   std::optional<forearm::Quat> W_from_A_at(const Device& device, std::int64_t t_camera_us) const;
 
@@ -118,6 +120,8 @@ class ForearmStage : public Stage {
   forearm::CalibrationOptions calibration_options_;
   std::unique_ptr<StreamClocks> clocks_;
   std::optional<sync::ClockMap> clock_map_;
+  std::size_t receipts_in_clock_map_ = 0;
+  std::int64_t clock_map_frame_us_ = 0;  // camera time of the last frame when the map was fitted
   std::optional<forearm::Quat> K_from_W_;
   std::optional<std::int64_t> first_frame_us_;
   std::int64_t last_frame_us_ = 0;

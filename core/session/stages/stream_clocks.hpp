@@ -39,6 +39,9 @@ class StreamClocks {
   Missing why_not(const std::vector<std::string>& devices) const;
 
   const std::optional<sync::BuzzerStop>& buzzer() const { return buzzer_; }
+  // BLE receipts collected so far: a later try_build() with more of them refits every IMU's
+  // offset and drift against the base over all of them.
+  std::size_t receipt_count() const { return receipts_.size(); }
 
  private:
   std::string base_;
