@@ -89,7 +89,7 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
   const sim::ScriptedMotion motion = arm_motion(o);
 
   // Devices on their own clocks; the base IMU sits still on the camera.
-  const sim::SimDevice arm_device{"arm_r", sim::DeviceClock{3.2, 30e-6}};
+  const sim::SimDevice arm_device{"arm_r", sim::DeviceClock{3.2, o.arm_clock_drift}};
   const sim::SimDevice base_device{"base", sim::DeviceClock{-1.7, -20e-6}};
   const Quat K_from_B = geometry::quat_from_rotation_vector(Vec3(0.1, 2.0, -0.2));
   const Quat W_from_B = camera.K_from_W.conjugate() * K_from_B;

@@ -39,6 +39,7 @@ struct ForearmSessionOptions {
   bool upper_arm_drawn = true;
   std::string upper_arm = "depth";
   double ble_repeat_s = 0.0;         // BLE bursts every this many s (0: one, at 0.5 s)
+  double arm_clock_drift = 30e-6;    // the arm IMU's clock rate error (the base's is -20 ppm)
   std::uint64_t seed = 7;
 };
 

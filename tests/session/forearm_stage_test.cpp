@@ -47,7 +47,8 @@ const StageRun& run_session(const ForearmSessionOptions& options) {
                           std::to_string(options.camera_alignment) + std::to_string(options.hold_s) +
                           std::to_string(options.elbow_bias_m.norm()) + options.axis +
                           std::to_string(options.shoulder_bias_m.norm()) + std::to_string(options.upper_arm_drawn) +
-                          options.upper_arm + "/" + std::to_string(options.ble_repeat_s);
+                          options.upper_arm + "/" + std::to_string(options.ble_repeat_s) + "/" +
+                          std::to_string(options.arm_clock_drift);
   auto& slot = cache[key];
   if (!slot) {
     slot = std::make_unique<StageRun>();
@@ -100,10 +101,14 @@ TEST(ForearmStage, CalibratesTheForearmModel) {
 // Paper 1 broadcasts once, at the start: the IMUs' relative drift is then only the fit's prior.
 // With a burst every 2 s the stage refits the clocks as receipts arrive and reports the drift
 // between the arm IMU and the base over the whole session (base -> camera has one buzzer stop:
-// its drift stays unobserved, so only the difference is checked).
+// its drift stays unobserved, so only the difference is checked). Receipts are floored to the
+// 312.5 us BLE tick, so 9 s of receipts see a crystal's 50 ppm as one tick; the arm IMU here has
+// a cheap RC-trimmed clock, 250 ppm fast (StreamClocks.LaterReceiptsRefitTheDriftOverTheSession
+// has crystal drifts over ten minutes).
 TEST(ForearmStage, RepeatedBroadcastsGiveTheDriftBetweenTheImus) {
   ForearmSessionOptions options;
   options.ble_repeat_s = 2.0;
+  options.arm_clock_drift = 250e-6;
   const StageRun& r = run_session(options);
   for (const auto& w : r.sink.warnings()) ADD_FAILURE() << w.code() << " " << w.field() << ": " << w.message();
   const auto calibration = std::find_if(r.sink.results.begin(), r.sink.results.end(),
@@ -115,16 +120,17 @@ TEST(ForearmStage, RepeatedBroadcastsGiveTheDriftBetweenTheImus) {
   const auto rate_error_ppm = [&](const std::string& device) { return 1e6 * (1.0 / (1.0 + r.truth.device_drift.at(device)) - 1.0); };
   const double true_relative_ppm = rate_error_ppm("arm_r") - rate_error_ppm("base");
   const double relative_ppm = drift_ppm.at("arm_r") - drift_ppm.at("base");
-  const StageRun& once = run_session({});
+  ForearmSessionOptions one_burst = options;
+  one_burst.ble_repeat_s = 0.0;
+  const StageRun& once = run_session(one_burst);
   const auto& once_ppm = std::find_if(once.sink.results.begin(), once.sink.results.end(),
                                       [](const v1::FitResult& x) { return x.has_calibration(); })
                              ->calibration()
                              .clock_drift_ppm();
   std::printf("arm - base drift: truth %.1f ppm, one burst %.1f ppm, a burst every 2 s %.1f ppm\n", true_relative_ppm,
               once_ppm.at("arm_r") - once_ppm.at("base"), relative_ppm);
-  // Receipts are floored to the 312.5 us BLE tick on both clocks (about 130 us RMS per pair);
-  // five bursts over 8 s give the slope to a few ppm.
-  EXPECT_NEAR(relative_ppm, true_relative_ppm, 10.0);
+  // Stamps floored to the tick on both clocks (about 130 us RMS per pair), five bursts over 8 s.
+  EXPECT_NEAR(relative_ppm, true_relative_ppm, 25.0);
   // The refits keep the samples in order and the orientations as good as with one burst.
   const testing::ForearmSessionErrors e = testing::evaluate_forearm_results(r.truth, r.sink.results);
   ASSERT_GT(e.orientation_samples, 50u);
@@ -134,7 +140,9 @@ TEST(ForearmStage, RepeatedBroadcastsGiveTheDriftBetweenTheImus) {
     if (!result.has_forearm_orientations()) continue;
     const auto& batch = result.forearm_orientations();
     for (const std::int64_t t : batch.t_us()) {
-      if (last_t.contains(batch.device_id())) EXPECT_GT(t, last_t[batch.device_id()]);
+      if (last_t.contains(batch.device_id())) {
+        EXPECT_GT(t, last_t[batch.device_id()]);
+      }
       last_t[batch.device_id()] = t;
     }
   }
