@@ -128,7 +128,11 @@ std::string truth_json(const SimTruth& truth) {
   }
   s << "\n  ],\n  \"buzzer_stop_camera_s\": " << format_double(truth.buzzer_stop_camera_s)
     << ",\n  \"buzzer_heard_camera_s\": " << format_double(truth.buzzer_heard_camera_s)
-    << ",\n  \"ble_broadcast_camera_s\": [";
+    << ",\n  \"buzzer_later_stops_camera_s\": [";
+  for (std::size_t i = 0; i < truth.buzzer_later_stops_camera_s.size(); ++i) {
+    s << (i ? ", " : "") << format_double(truth.buzzer_later_stops_camera_s[i]);
+  }
+  s << "],\n  \"ble_broadcast_camera_s\": [";
   for (std::size_t i = 0; i < truth.ble_broadcast_camera_s.size(); ++i) {
     s << (i ? ", " : "") << format_double(truth.ble_broadcast_camera_s[i]);
   }

@@ -305,6 +305,8 @@ void validate(const SimSessionOptions& options) {
     throw_invalid("clock_drift_max", "must be in [0, 1e-3)");
   }
   require_positive(options.buzzer_stop_s, "buzzer_stop_s");
+  require_non_negative(options.buzzer_repeat_s, "buzzer_repeat_s");
+  if (options.buzzer_repeat_s > 0 && options.buzzer_repeat_s < 2) throw_invalid("buzzer_repeat_s", "must be 0 or >= 2");
   if (options.depth_encoding != v1::DepthFrame::ZSTD_U16_LE && options.depth_encoding != v1::DepthFrame::PNG16) {
     throw_invalid("depth_encoding", "is " + std::to_string(options.depth_encoding) + ", must be ZSTD_U16_LE or PNG16");
   }
@@ -475,6 +477,11 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
     BuzzerOptions buzzer = options.buzzer;
     buzzer.duration_s = std::min(buzzer.duration_s, 0.5 * stop_s);
     buzzer.stop_device_us = devices.back().clock.to_device_us(stop_s);
+    // Later stops while the microphone still hears each one with silence after it.
+    for (double t = stop_s + options.buzzer_repeat_s; options.buzzer_repeat_s > 0 && t < options.duration_s - 0.5;
+         t += options.buzzer_repeat_s) {
+      buzzer.later_stops_device_us.push_back(devices.back().clock.to_device_us(t));
+    }
     AudioOptions audio = options.audio;
     audio.t_begin_s = 0.0;
     audio.duration_s = options.duration_s;
@@ -482,6 +489,8 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
     truth.buzzer_stop_camera_s = result.stop_camera_s;
     truth.buzzer_heard_camera_s = result.stop_heard_camera_s;
     small.emplace_back().mutable_sync_event()->CopyFrom(result.stop_event);
+    for (const v1::SyncEvent& stop : result.later_stop_events) small.emplace_back().mutable_sync_event()->CopyFrom(stop);
+    truth.buzzer_later_stops_camera_s = result.later_stops_camera_s;
     for (const auto& chunk : result.audio) small.emplace_back().mutable_audio()->CopyFrom(chunk);
     BleBroadcastOptions ble_options = options.ble;
     ble_options.repeat_until_s = options.duration_s;  // repeated bursts, if any, through the session

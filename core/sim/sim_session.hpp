@@ -85,6 +85,7 @@ struct SimSessionOptions {
 
   // Sync signals: the buzzer stops at buzzer_stop_s (camera clock, clamped into the session).
   double buzzer_stop_s = 1.5;
+  double buzzer_repeat_s = 0.0;     // > 0: the buzzer stops again every this many s (0: once, paper 1)
   BuzzerOptions buzzer;             // stop_device_us is set from buzzer_stop_s
   AudioOptions audio;               // t_begin_s and duration_s are set to the session
   BleBroadcastOptions ble;
@@ -152,6 +153,7 @@ struct SimTruth {
   Eigen::Matrix3Xd rest_joints;         // 3 x 24, Body frame, shaped
   std::vector<SimFrameTruth> frames;
   double buzzer_stop_camera_s = 0, buzzer_heard_camera_s = 0;
+  std::vector<double> buzzer_later_stops_camera_s;  // SimSessionOptions::buzzer_repeat_s
   std::vector<double> ble_broadcast_camera_s;
   std::uint64_t chunks = 0;
   SimTimings cpu_s;

@@ -133,6 +133,26 @@ BuzzerResult buzzer_stop(const SimDevice& base, const BuzzerOptions& buzzer, con
   result.stop_event.set_t_us(buzzer.stop_device_us);
   result.stop_event.set_device_id(base.device_id);
   result.stop_event.set_kind(v1::SyncEvent::BUZZER_STOP);
+  // Every stop as [tone starts, microphone hears the stop) on the camera clock.
+  std::vector<std::pair<double, double>> tones = {{heard_start_s, result.stop_heard_camera_s}};
+  std::int64_t previous_us = buzzer.stop_device_us;
+  for (std::size_t k = 0; k < buzzer.later_stops_device_us.size(); ++k) {
+    const std::int64_t stop_us = buzzer.later_stops_device_us[k];
+    const std::string field = "buzzer.later_stops_device_us[" + std::to_string(k) + "]";
+    if (1e-6 * static_cast<double>(stop_us - previous_us) < buzzer.duration_s + 1.0) {
+      throw_invalid(field, "must be at least duration_s + 1 s after the previous stop (a second of silence)");
+    }
+    const double stop_camera_s = base.clock.to_camera_s(stop_us);
+    const double heard_s = stop_camera_s + buzzer.distance_m / buzzer.speed_of_sound_m_s;
+    if (!(heard_s > audio.t_begin_s && heard_s < audio_end_s)) {
+      throw_invalid(field, "the stop is heard at " + std::to_string(heard_s) + " s camera time, outside the audio span");
+    }
+    tones.emplace_back(heard_s - buzzer.duration_s, heard_s);
+    result.later_stops_camera_s.push_back(stop_camera_s);
+    v1::SyncEvent& event = result.later_stop_events.emplace_back(result.stop_event);
+    event.set_t_us(stop_us);
+    previous_us = stop_us;
+  }
 
   const auto total = static_cast<std::size_t>(std::llround(audio.duration_s * rate));
   const auto per_chunk = std::max<std::size_t>(1, static_cast<std::size_t>(std::llround(audio.chunk_s * rate)));
@@ -144,8 +164,8 @@ BuzzerResult buzzer_stop(const SimDevice& base, const BuzzerOptions& buzzer, con
     for (std::size_t i = first; i < end; ++i) {
       const double t = audio.t_begin_s + static_cast<double>(i) / rate;
       double x = audio.noise_rms * rng.normal();
-      if (t >= heard_start_s && t < result.stop_heard_camera_s) {
-        x += buzzer.amplitude * std::sin(2.0 * EIGEN_PI * buzzer.tone_hz * (t - heard_start_s));
+      for (const auto& [start_s, stop_s] : tones) {
+        if (t >= start_s && t < stop_s) x += buzzer.amplitude * std::sin(2.0 * EIGEN_PI * buzzer.tone_hz * (t - start_s));
       }
       const auto v = static_cast<std::uint16_t>(to_s16(x));
       pcm.push_back(static_cast<char>(v & 0xffu));

@@ -58,6 +58,10 @@ struct BuzzerOptions {
   double amplitude = 0.3;                   // of full scale, at the microphone
   double distance_m = 0.05;                 // buzzer to microphone
   double speed_of_sound_m_s = 343.0;
+  // Paper 1 buzzes once. Later stops (base clock, increasing, each after its own duration_s of
+  // tone and after at least a second of silence) make the base clock's drift against the camera
+  // observable, e.g. one at the end of the session.
+  std::vector<std::int64_t> later_stops_device_us;
 };
 
 struct AudioOptions {
@@ -73,6 +77,8 @@ struct BuzzerResult {
   std::vector<v1::AudioChunk> audio;  // mono PCM s16le on the camera clock
   double stop_camera_s = 0.0;         // truth: the stop on the camera clock
   double stop_heard_camera_s = 0.0;   // truth: when the microphone hears it
+  std::vector<v1::SyncEvent> later_stop_events;  // one per BuzzerOptions::later_stops_device_us
+  std::vector<double> later_stops_camera_s;      // truth
 };
 
 // kInvalidArgument naming the field for bad options (rate outside 8 kHz..384 kHz, tone above

@@ -211,6 +211,36 @@ TEST(BleBroadcast, SeedsAndBadOptions) {
   EXPECT_THROW(ble_broadcast_receipts({{"x", {}}, {"x", {}}}, options, 1), Error);
 }
 
+TEST(Buzzer, LaterStopsEachWithTheirToneAndEvent) {
+  const SimDevice base{"base", {5.0, 20e-6}};
+  BuzzerOptions buzzer;
+  buzzer.stop_device_us = base.clock.to_device_us(1.5);
+  buzzer.later_stops_device_us = {base.clock.to_device_us(4.0), base.clock.to_device_us(7.25)};
+  AudioOptions audio;
+  audio.duration_s = 8.0;
+  const BuzzerResult r = buzzer_stop(base, buzzer, audio, 2);
+  ASSERT_EQ(r.later_stop_events.size(), 2u);
+  ASSERT_EQ(r.later_stops_camera_s.size(), 2u);
+  for (std::size_t k = 0; k < 2; ++k) {
+    EXPECT_EQ(r.later_stop_events[k].t_us(), buzzer.later_stops_device_us[k]);
+    EXPECT_EQ(r.later_stop_events[k].kind(), posefuse::v1::SyncEvent::BUZZER_STOP);
+    EXPECT_NEAR(r.later_stops_camera_s[k], k == 0 ? 4.0 : 7.25, 1e-6);
+  }
+  // Each stop is heard where the simple detector finds the last stop of the audio up to it.
+  const std::vector<double> x = decode_pcm(r.audio);
+  const double rate = audio.sample_rate_hz;
+  for (const double stop : {1.5, 4.0, 7.25}) {
+    const auto n = static_cast<std::size_t>((stop + 0.5) * rate);
+    const std::vector<double> upto(x.begin(), x.begin() + static_cast<std::ptrdiff_t>(n));
+    EXPECT_NEAR(detect_stop_s(upto, rate, 0.0, buzzer.amplitude), stop + buzzer.distance_m / buzzer.speed_of_sound_m_s,
+                1.0 / buzzer.tone_hz + 1.0 / rate);
+  }
+  buzzer.later_stops_device_us = {base.clock.to_device_us(2.8)};  // less than a second of silence
+  EXPECT_THROW(buzzer_stop(base, buzzer, audio, 2), Error);
+  buzzer.later_stops_device_us = {base.clock.to_device_us(9.0)};  // after the audio
+  EXPECT_THROW(buzzer_stop(base, buzzer, audio, 2), Error);
+}
+
 // The stop heard in the audio, by a simple envelope detector, within a few sample periods; and
 // with it the base clock's offset, as paper 1 II-G1 uses it.
 TEST(Buzzer, StopRecoveredFromAudio) {

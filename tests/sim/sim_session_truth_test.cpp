@@ -192,4 +192,36 @@ TEST(SimSessionTruth, BadOptionsNameTheField) {
   o = small(false);
   o.betas = Eigen::VectorXd::Constant(3, std::nan(""));
   EXPECT_EQ(field_of(o), "betas");
+  o = small(false);
+  o.buzzer_repeat_s = 1.0;
+  EXPECT_EQ(field_of(o), "buzzer_repeat_s");
+  o = small(false);
+  o.ble.repeat_every_s = 0.05;
+  EXPECT_EQ(field_of(o), "ble.repeat_every_s");
+}
+
+// Beyond paper 1's single buzzer stop and BLE burst: both repeat through the session when asked.
+TEST(SimSessionTruth, RepeatedSyncSignalsThroughTheSession) {
+  SimSessionOptions o = small(false);
+  o.duration_s = 6.0;
+  o.buzzer_repeat_s = 2.0;
+  o.ble.repeat_every_s = 2.0;
+  struct Events : session::ChunkSink {
+    void write(const session::SessionChunk& chunk) override {
+      if (chunk.has_sync_event()) events.push_back(chunk.sync_event());
+    }
+    void finish() override {}
+    std::vector<v1::SyncEvent> events;
+  } sink;
+  const SimTruth truth = simulate_session(o, sink);
+  int stops = 0;
+  for (const auto& e : sink.events) stops += e.kind() == v1::SyncEvent::BUZZER_STOP;
+  // First stop at 1.5 s, a later one at 3.5 s (5.5 s would leave no half second of silence).
+  EXPECT_EQ(stops, 2);
+  ASSERT_EQ(truth.buzzer_later_stops_camera_s.size(), 1u);
+  EXPECT_NEAR(truth.buzzer_later_stops_camera_s[0], 3.5, 1e-4);
+  // Bursts at 0.5, 2.5 and 4.5 s.
+  ASSERT_FALSE(truth.ble_broadcast_camera_s.empty());
+  EXPECT_LT(truth.ble_broadcast_camera_s.front(), 1.0);
+  EXPECT_GE(truth.ble_broadcast_camera_s.back(), 4.5);
 }

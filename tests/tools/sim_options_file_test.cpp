@@ -101,6 +101,7 @@ TEST(SimOptionsFile, ErrorsNameFileLineKeyAndValue) {
       {"imu_arms = three\n", "opts.txt:1:imu_arms", "value 'three'"},
       {"threads = 0\n", "opts.txt:1:threads", "value '0' must be in 1..64"},
       {"ble_repeat_s = 0.5\n", "opts.txt:1:ble_repeat_s", "must be 0 or >= 1"},
+      {"buzzer_repeat_s = 1\n", "opts.txt:1:buzzer_repeat_s", "must be 0 or >= 2"},
       {"seed = 1\nseed = 2\n", "opts.txt:2:seed", "is set twice"},
       {"\n\njust words\n", "opts.txt:3", "expected 'key = value'"},
       {"seed =\n", "opts.txt:1:seed", "has no value"},

@@ -252,6 +252,11 @@ const std::map<std::string, Setter>& setters() {
                           o.ble.repeat_every_s = non_negative(v, f);
                           if (o.ble.repeat_every_s > 0 && o.ble.repeat_every_s < 1) bad(f, v, "must be 0 or >= 1");
                         }}},
+      {"buzzer_repeat_s", {"the buzzer stops again every this many s through the session (0: once, paper 1)",
+                           [](Options& o, const std::string& v, const std::string& f) {
+                             o.buzzer_repeat_s = non_negative(v, f);
+                             if (o.buzzer_repeat_s > 0 && o.buzzer_repeat_s < 2) bad(f, v, "must be 0 or >= 2");
+                           }}},
       {"skeleton_jump_probability", {"camera skeleton jumps per frame, [0, 1]",
                                      [](Options& o, const std::string& v, const std::string& f) {
                                        o.skeleton.jump_probability = probability(v, f);

@@ -339,7 +339,7 @@ void ForearmStage::try_calibrate(bool finishing, StageOutput& out) {
   }
   if (!clock_map_) {
     clock_map_ = clocks_->try_build(arm_ids);
-    receipts_in_clock_map_ = clocks_->receipt_count();
+    sync_inputs_in_clock_map_ = clocks_->sync_input_count();
     clock_map_frame_us_ = last_frame_us_;
   }
   if (!clock_map_) {
@@ -481,17 +481,18 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
 
 void ForearmStage::refit_clocks(bool finishing) {
   // BLE receipts after the calibration (repeated bursts) make the drift between the IMUs
-  // observable; refit at most once per second of camera time, and once more at the end so the
-  // reported offsets and drifts use the whole session.
+  // observable, later buzzer stops the base's against the camera; refit at most once per second
+  // of camera time, and once more at the end so the reported offsets and drifts use the whole
+  // session.
   constexpr std::int64_t kRefitEveryUs = 1'000'000;
-  if (!clock_map_ || clocks_->receipt_count() == receipts_in_clock_map_) return;
+  if (!clock_map_ || clocks_->sync_input_count() == sync_inputs_in_clock_map_) return;
   if (!finishing && last_frame_us_ < clock_map_frame_us_ + kRefitEveryUs) return;
   std::vector<std::string> arm_ids;
   for (const Device& d : devices_) {
     if (d.side) arm_ids.push_back(d.id);
   }
   if (std::optional<sync::ClockMap> refit = clocks_->try_build(arm_ids)) clock_map_ = std::move(refit);
-  receipts_in_clock_map_ = clocks_->receipt_count();
+  sync_inputs_in_clock_map_ = clocks_->sync_input_count();
   clock_map_frame_us_ = last_frame_us_;
 }
 

@@ -120,7 +120,7 @@ class ForearmStage : public Stage {
   forearm::CalibrationOptions calibration_options_;
   std::unique_ptr<StreamClocks> clocks_;
   std::optional<sync::ClockMap> clock_map_;
-  std::size_t receipts_in_clock_map_ = 0;
+  std::size_t sync_inputs_in_clock_map_ = 0;
   std::int64_t clock_map_frame_us_ = 0;  // camera time of the last frame when the map was fitted
   std::optional<forearm::Quat> K_from_W_;
   std::optional<std::int64_t> first_frame_us_;

@@ -1,5 +1,6 @@
 #include "session/stages/stream_clocks.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
@@ -10,36 +11,37 @@ namespace posefuse::session {
 namespace {
 // The base IMU's stamp of its own stop command and the buzzer's electro-acoustic delay.
 constexpr double kBaseStopSigmaUs = 200.0;
+
+// A later stop is paired with the heard stop nearest to where the first stop's map puts it,
+// within this plus the drift prior's spread since the first stop.
+constexpr double kPairToleranceUs = 500'000.0;
+constexpr double kPairDriftBound = 300e-6;
+
+// A header without a usable audio rate: the scanner gets a placeholder and no audio is fed.
+double scanner_rate(double audio_sample_rate_hz) {
+  return std::isfinite(audio_sample_rate_hz) && audio_sample_rate_hz > 0.0 ? audio_sample_rate_hz : 1.0;
+}
 }  // namespace
 
-StreamClocks::StreamClocks(std::string base_device, double audio_sample_rate_hz, unsigned audio_channels,
-                           double max_audio_s)
-    : base_(std::move(base_device)), channels_(audio_channels), max_audio_s_(max_audio_s) {
-  audio_.sample_rate_hz = audio_sample_rate_hz;
-}
+StreamClocks::StreamClocks(std::string base_device, double audio_sample_rate_hz, unsigned audio_channels)
+    : base_(std::move(base_device)),
+      audio_rate_hz_(audio_sample_rate_hz),
+      channels_(audio_channels),
+      tone_stops_(scanner_rate(audio_sample_rate_hz)) {}
 
 void StreamClocks::add(const v1::SessionChunk& chunk) {
-  if (chunk.has_audio() && channels_ > 0 && !buzzer_) {
+  if (chunk.has_audio() && channels_ > 0 && audio_rate_hz_ > 0.0) {
     const v1::AudioChunk& a = chunk.audio();
     const std::size_t frames = a.pcm_s16le().size() / (2u * channels_);
-    if (audio_.samples.empty()) audio_.t0_camera_us = static_cast<double>(a.t_us());
-    // Chunks are contiguous in a recording; a gap is filled with silence so times stay right.
-    const double expected_us = audio_.t0_camera_us + 1e6 * static_cast<double>(audio_.samples.size()) / audio_.sample_rate_hz;
-    const double gap_frames = std::round((static_cast<double>(a.t_us()) - expected_us) * 1e-6 * audio_.sample_rate_hz);
-    const double limit = max_audio_s_ * audio_.sample_rate_hz;
-    if (gap_frames > 0 && static_cast<double>(audio_.samples.size()) + gap_frames < limit) {
-      audio_.samples.resize(audio_.samples.size() + static_cast<std::size_t>(gap_frames), 0);
-    }
-    for (std::size_t i = 0; i < frames && static_cast<double>(audio_.samples.size()) < limit; ++i) {
-      std::int16_t value = 0;
-      std::memcpy(&value, a.pcm_s16le().data() + 2 * channels_ * i, 2);
-      audio_.samples.push_back(value);
-    }
+    std::vector<std::int16_t> mono(frames);
+    for (std::size_t i = 0; i < frames; ++i) std::memcpy(&mono[i], a.pcm_s16le().data() + 2 * channels_ * i, 2);
+    tone_stops_.add(static_cast<double>(a.t_us()), mono);
+    audio_seen_ = true;
   }
   if (!chunk.has_sync_event()) return;
   const v1::SyncEvent& e = chunk.sync_event();
-  if (e.kind() == v1::SyncEvent::BUZZER_STOP && e.device_id() == base_ && !base_stop_us_) {
-    base_stop_us_ = e.t_us();
+  if (e.kind() == v1::SyncEvent::BUZZER_STOP && e.device_id() == base_) {
+    base_stops_us_.insert(std::upper_bound(base_stops_us_.begin(), base_stops_us_.end(), e.t_us()), e.t_us());
   } else if (e.kind() == v1::SyncEvent::BLE_BROADCAST_RECEIPT) {
     if (e.payload().size() != 4) {
       throw_invalid("sync_event.payload", "a BLE receipt carries a 4-byte sequence number, got " +
@@ -51,21 +53,49 @@ void StreamClocks::add(const v1::SessionChunk& chunk) {
   }
 }
 
+std::vector<sync::ClockObservation> StreamClocks::paired_stops(std::size_t first_heard) const {
+  const std::vector<sync::BuzzerStop>& heard = tone_stops_.stops();
+  const std::int64_t first_us = base_stops_us_.front();
+  const sync::ClockObservation first =
+      sync::buzzer_observation(heard[first_heard], static_cast<double>(first_us), kBaseStopSigmaUs);
+  const sync::LinearClock first_only = sync::fit_linear_clock({first}).clock;
+  std::vector<sync::ClockObservation> stops = {first};
+  std::vector<bool> used(heard.size(), false);
+  used[first_heard] = true;
+  for (std::size_t e = 1; e < base_stops_us_.size(); ++e) {
+    const double predicted_us = first_only.to_reference_us(static_cast<double>(base_stops_us_[e]));
+    const double tolerance_us =
+        kPairToleranceUs + kPairDriftBound * static_cast<double>(base_stops_us_[e] - first_us);
+    std::optional<std::size_t> best;
+    for (std::size_t k = first_heard + 1; k < heard.size(); ++k) {
+      const double distance = std::abs(heard[k].t_camera_us - predicted_us);
+      if (!used[k] && distance <= tolerance_us &&
+          (!best || distance < std::abs(heard[*best].t_camera_us - predicted_us))) {
+        best = k;
+      }
+    }
+    if (!best) continue;  // not heard (yet)
+    used[*best] = true;
+    stops.push_back(sync::buzzer_observation(heard[*best], static_cast<double>(base_stops_us_[e]), kBaseStopSigmaUs));
+  }
+  return stops;
+}
+
 std::optional<sync::ClockMap> StreamClocks::try_build(const std::vector<std::string>& devices) {
-  if (!buzzer_ && base_stop_us_ && audio_.samples.size() >= samples_at_last_attempt_ + static_cast<std::size_t>(audio_.sample_rate_hz)) {
-    samples_at_last_attempt_ = audio_.samples.size();
-    try {
-      buzzer_ = sync::detect_buzzer_stop(audio_);
-      buzzer_error_.clear();
-    } catch (const Error& error) {
-      buzzer_error_ = error.what();
+  if (base_stops_us_.empty() || tone_stops_.stops().empty()) return std::nullopt;
+  // Which heard stop is the first event's: the one with which the most later events find their
+  // own stop where it predicts them; ties go to the earliest (with one event: the first heard).
+  std::vector<sync::ClockObservation> stops;
+  for (std::size_t first_heard = 0; first_heard < tone_stops_.stops().size(); ++first_heard) {
+    std::vector<sync::ClockObservation> candidate = paired_stops(first_heard);
+    if (candidate.size() > stops.size()) {
+      stops = std::move(candidate);
+      buzzer_ = tone_stops_.stops()[first_heard];
     }
   }
-  if (!buzzer_) return std::nullopt;
+  later_stops_used_ = stops.size() - 1;
   sync::ClockMap clocks;
-  const sync::ClockObservation stop =
-      sync::buzzer_observation(*buzzer_, static_cast<double>(*base_stop_us_), kBaseStopSigmaUs);
-  clocks.add_direct(base_, sync::fit_linear_clock({stop}).clock);
+  clocks.add_direct(base_, sync::fit_linear_clock(stops).clock);
   for (const std::string& device : devices) {
     if (device == base_) continue;
     std::vector<sync::ClockObservation> observations;
@@ -80,12 +110,16 @@ std::optional<sync::ClockMap> StreamClocks::try_build(const std::vector<std::str
 }
 
 StreamClocks::Missing StreamClocks::why_not(const std::vector<std::string>& devices) const {
-  if (!base_stop_us_) {
+  if (base_stops_us_.empty()) {
     return {"sync_event", "no BUZZER_STOP event from the base IMU '" + base_ + "': its clock cannot be mapped "
                           "onto the camera's (paper 1, II-G.1)"};
   }
-  if (audio_.samples.empty()) return {"audio", "no camera audio: the buzzer stop cannot be heard"};
-  if (!buzzer_) return {"audio", "the buzzer stop was not found in the audio: " + buzzer_error_};
+  if (!audio_seen_) return {"audio", "no camera audio: the buzzer stop cannot be heard"};
+  if (tone_stops_.stops().empty()) {
+    return {"audio", "the buzzer stop was not found in the audio (a " +
+                         std::to_string(static_cast<int>(sync::BuzzerStopOptions().tone_hz)) +
+                         " Hz tone that stops and stays silent for 0.7 s)"};
+  }
   for (const std::string& device : devices) {
     if (device == base_) continue;
     try {

@@ -3,11 +3,19 @@
 // II-G): the camera audio and the base IMU's BUZZER_STOP event give base -> camera (sound-based
 // sync), BLE_BROADCAST_RECEIPT events give every other IMU -> base (broadcast-based sync).
 //
-// Collects audio (mono: the first channel; at most max_audio_s seconds from the first chunk, a
-// stop is expected near the start) and sync events as they stream in; try_build() returns the
-// map once the buzzer stop is found in the audio and every listed device shares at least one
-// broadcast with the base. BLE payload: the broadcast's sequence number, 4 bytes uint32
-// little-endian (docs/simulator.md).
+// Scans the audio (mono: the first channel) for tone stops as it streams in
+// (sync/tone_stop_scanner.hpp, bounded memory) and collects the sync events; try_build() returns
+// the map once the base's first BUZZER_STOP is paired with a heard stop and every listed device
+// shares at least one broadcast with the base. BLE payload: the broadcast's sequence number,
+// 4 bytes uint32 little-endian (docs/simulator.md).
+//
+// Beyond paper 1: the buzzer may stop again later. The base's stop events (in the order of its
+// clock) are paired with the heard stops: the first event with the heard stop that lets the
+// most later events find a heard stop where it predicts them (0.5 s + 300 ppm of the time
+// between), ties to the earliest; so a stop event that reaches the stream after several stops
+// were heard (the base's clock can run far ahead of the camera's) is still paired right. All
+// pairs join the base -> camera fit, which then has a drift; later BLE receipts join each IMU's
+// fit. try_build() again after more of them came in gives the refined map.
 #include <optional>
 #include <string>
 #include <vector>
@@ -16,20 +24,20 @@
 #include "sync/broadcast_offsets.hpp"
 #include "sync/clock_map.hpp"
 #include "sync/linear_clock.hpp"
+#include "sync/tone_stop_scanner.hpp"
 
 namespace posefuse::session {
 
 class StreamClocks {
  public:
-  StreamClocks(std::string base_device, double audio_sample_rate_hz, unsigned audio_channels,
-               double max_audio_s = 60.0);
+  StreamClocks(std::string base_device, double audio_sample_rate_hz, unsigned audio_channels);
 
   // Audio chunks and sync events; other chunks are ignored. Throws posefuse::Error
   // kInvalidArgument for a broadcast payload that is not 4 bytes.
   void add(const v1::SessionChunk& chunk);
 
   // The map base and `devices` -> camera, or nullopt while something is missing (why_not()
-  // says what). Runs the buzzer detector at most once per second of new audio.
+  // says what).
   std::optional<sync::ClockMap> try_build(const std::vector<std::string>& devices);
   // What is missing, as a warning would say it: field and message.
   struct Missing {
@@ -39,20 +47,28 @@ class StreamClocks {
   Missing why_not(const std::vector<std::string>& devices) const;
 
   const std::optional<sync::BuzzerStop>& buzzer() const { return buzzer_; }
-  // BLE receipts collected so far: a later try_build() with more of them refits every IMU's
-  // offset and drift against the base over all of them.
+  // Sync inputs so far (BLE receipts, later buzzer stops and tone stops heard): when it grows,
+  // a later try_build() refits offsets and drifts over everything.
+  std::size_t sync_input_count() const {
+    return receipts_.size() + base_stops_us_.size() + tone_stops_.stops().size();
+  }
   std::size_t receipt_count() const { return receipts_.size(); }
+  // Buzzer stops after the first paired with a heard stop in the last try_build().
+  std::size_t later_stops_used() const { return later_stops_used_; }
 
  private:
+  // The base's stop events paired with heard stops, the first event with heard stop first_heard.
+  std::vector<sync::ClockObservation> paired_stops(std::size_t first_heard) const;
+
   std::string base_;
-  sync::AudioPcm audio_;
+  double audio_rate_hz_ = 0.0;
   unsigned channels_ = 0;
-  double max_audio_s_ = 0.0;
-  std::size_t samples_at_last_attempt_ = 0;
-  std::optional<std::int64_t> base_stop_us_;
-  std::string buzzer_error_;
-  std::optional<sync::BuzzerStop> buzzer_;
+  bool audio_seen_ = false;
+  std::vector<std::int64_t> base_stops_us_;  // BUZZER_STOP events of the base, base clock, sorted
+  std::optional<sync::BuzzerStop> buzzer_;   // the heard stop paired with the first event
   std::vector<sync::BroadcastReceipt> receipts_;
+  sync::ToneStopScanner tone_stops_;
+  std::size_t later_stops_used_ = 0;
 };
 
 }  // namespace posefuse::session
