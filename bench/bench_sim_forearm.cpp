@@ -9,6 +9,13 @@
 //     strap (detect_strap) against the simulator's truth (gt/camera_joints.csv, the strap centre
 //     from gt/imu_positions.csv and gt/forearms.csv), and the II-J verdict with the truth's
 //     K_from_F. A diagnostic: the truth only scores here, the methods never see it.
+//   build/bench/bench_sim_forearm pose SESSION.pfchunks GT_DIR T0_S T1_S
+//     per camera frame in [T0_S, T1_S] and arm: the calibration pose's forearm frame
+//     (K_from_F_calibration_pose) from the axes measured in depth against the truth's K_from_F,
+//     as a rotation vector in F (y: the roll about the forearm), with the measured upper arm's
+//     and forearm's direction errors, split into the part towards the camera and the rest;
+//     `slices`: also the upper arm's visible width and surface offset in 2 cm slices along the
+//     true axis (its taper).
 //
 // SESSION and GT_DIR come from posefuse-sim (e.g. --options with motion = forearm_protocol,
 // arm = both; --chunk-file SESSION --gt GT_DIR).
@@ -27,6 +34,7 @@
 #include "bench_clock.hpp"
 #include "client/result_writer.hpp"
 #include "eval/result_score.hpp"
+#include "forearm/forearm_orientation.hpp"
 #include "forearm/occlusion_tests.hpp"
 #include "forearm/strap_detection.hpp"
 #include "forearm/upper_arm_depth.hpp"
@@ -226,6 +234,90 @@ int frames(const fs::path& chunks, const fs::path& gt, std::optional<double> pro
   return 0;
 }
 
+
+// Angle of `measured` from `truth` (unit directions), in degrees: towards the camera (the
+// component of the difference along the viewing ray made perpendicular to the truth) and the rest.
+std::pair<double, double> direction_error_deg(const Vec3& measured, const Vec3& truth, const Vec3& ray) {
+  const Vec3 depth_axis = (ray - ray.dot(truth) * truth).normalized();
+  const Vec3 side_axis = truth.cross(depth_axis);
+  const double to_deg = 180.0 / 3.14159265358979323846;
+  return {to_deg * std::atan2(measured.dot(depth_axis), measured.dot(truth)),
+          to_deg * std::atan2(measured.dot(side_axis), measured.dot(truth))};
+}
+
+int pose_frames(const fs::path& chunks, const fs::path& gt, double t0_s, double t1_s, bool print_slices) {
+  const Truth truth = read_truth(gt);
+  session::ChunkFileReader reader(chunks);
+  v1::SessionChunk chunk;
+  geometry::PinholeCamera depth_camera;
+  std::map<std::int64_t, cv::Mat> depth;
+  std::printf("t_s arm | upper_arm_err_deg depth side | forearm_err_deg depth side | pose_frame_err_F_deg x y z | "
+              "upper_arm_R upper_arm_points\n");
+  const auto vec = [](const v1::SkeletonJoint& j) {
+    return Vec3(j.position_m().x(), j.position_m().y(), j.position_m().z());
+  };
+  while (reader.next(chunk)) {
+    if (chunk.chunk_case() == v1::SessionChunk::kHeader) depth_camera = pinhole(chunk.header().depth_intrinsics());
+    if (chunk.chunk_case() == v1::SessionChunk::kDepth) depth[chunk.depth().t_us()] = session::decode_depth(chunk.depth());
+    if (chunk.chunk_case() != v1::SessionChunk::kSkeleton) continue;
+    const v1::SkeletonFrame& s = chunk.skeleton();
+    if (1e-6 * s.t_us() < t0_s || 1e-6 * s.t_us() > t1_s) continue;
+    const auto jt = truth.joints.find(s.t_us());
+    const auto d = depth.find(s.t_us());
+    if (jt == truth.joints.end() || d == depth.end()) continue;
+    const forearm::DepthImageView mm{d->second.cols, d->second.rows, d->second.ptr<std::uint16_t>()};
+    for (int arm = 0; arm < 2; ++arm) {
+      const int js = arm == 0 ? 4 : 8;
+      const auto q = truth.K_from_F.find({s.t_us(), arm});
+      if (q == truth.K_from_F.end()) continue;
+      const Vec3 sh = vec(s.joints(js)), el = vec(s.joints(js + 1)), wr = vec(s.joints(js + 2));
+      const Vec3 t_sh = jt->second.at(js), t_el = jt->second.at(js + 1), t_wr = jt->second.at(js + 2);
+      const auto axes = forearm::measure_arm_axes(mm, depth_camera, sh, el, wr);
+      std::printf("%.3f %c | ", 1e-6 * s.t_us(), arm == 0 ? 'L' : 'R');
+      if (!axes || !axes->upper_arm) {
+        std::printf("%s\n", axes ? "no upper arm" : "no forearm");
+        continue;
+      }
+      const Vec3 m_el = axes->forearm.elbow_K, m_wr = axes->forearm.wrist_K;
+      const auto [ua_depth, ua_side] =
+          direction_error_deg(axes->upper_arm->direction_K, (t_el - t_sh).normalized(), t_el.normalized());
+      const auto [fa_depth, fa_side] =
+          direction_error_deg((m_wr - m_el).normalized(), (t_wr - t_el).normalized(), t_el.normalized());
+      std::printf("%+6.2f %+6.2f | %+6.2f %+6.2f | ", ua_depth, ua_side, fa_depth, fa_side);
+      try {
+        const Vec3 plane_shoulder = m_el - (sh - m_el).norm() * axes->upper_arm->direction_K;
+        const Quat K_from_F = forearm::K_from_F_calibration_pose(plane_shoulder, m_el, m_wr);
+        const Vec3 e = (180.0 / 3.14159265358979323846) *
+                       geometry::rotation_vector_from_quat(q->second.conjugate() * K_from_F);
+        std::printf("%+6.2f %+6.2f %+6.2f | ", e.x(), e.y(), e.z());
+      } catch (const Error& error) {
+        std::printf("(%s) | ", error.what());
+      }
+      std::printf("%.3f %d\n", axes->upper_arm->radius_m, axes->upper_arm->points);
+      if (print_slices) {
+        // The upper arm's visible surface in 2 cm slices along the true axis: visible width and
+        // the surface's mean offset from the true axis towards the camera.
+        const Vec3 dir = (t_el - t_sh).normalized();
+        const Vec3 to_camera = -(t_el - t_el.dot(dir) * dir).normalized();
+        const Vec3 lat = dir.cross(to_camera);
+        std::map<int, std::vector<std::pair<double, double>>> slices;
+        for (const Vec3& p : forearm::depth_points_near_segment(mm, depth_camera, t_sh, t_el, 0.09)) {
+          const double a = (p - t_sh).dot(dir);
+          slices[static_cast<int>(std::floor(a / 0.02))].push_back({(p - t_sh).dot(lat), (p - t_sh).dot(to_camera)});
+        }
+        for (const auto& [k, v] : slices) {
+          double m = 0, m2 = 0, dz = 0;
+          for (const auto& [l, z] : v) m += l / v.size(), m2 += l * l / v.size(), dz += z / v.size();
+          std::printf("    slice %+3d cm n=%3zu width=%.3f lat_mean=%+.3f toward_camera=%+.3f\n", 2 * k, v.size(),
+                      std::sqrt(12 * (m2 - m * m)), m, dz);
+        }
+      }
+    }
+    std::erase_if(depth, [&](const auto& e) { return e.first < s.t_us() - 100000; });
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -235,9 +327,13 @@ int main(int argc, char** argv) {
     if (mode == "frames" && (argc == 4 || argc == 5)) {
       return frames(argv[2], argv[3], argc == 5 ? std::optional<double>(std::stod(argv[4])) : std::nullopt);
     }
+    if (mode == "pose" && (argc == 6 || (argc == 7 && std::string(argv[6]) == "slices"))) {
+      return pose_frames(argv[2], argv[3], std::stod(argv[4]), std::stod(argv[5]), argc == 7);
+    }
     std::fprintf(stderr,
                  "usage: bench_sim_forearm replay SESSION.pfchunks GT_DIR OUT_DIR\n"
-                 "       bench_sim_forearm frames SESSION.pfchunks GT_DIR\n");
+                 "       bench_sim_forearm frames SESSION.pfchunks GT_DIR\n"
+                 "       bench_sim_forearm pose SESSION.pfchunks GT_DIR T0_S T1_S [slices]\n");
     return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_sim_forearm: %s\n", e.what());
