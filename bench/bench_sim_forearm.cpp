@@ -123,7 +123,7 @@ int frames(const fs::path& chunks, const fs::path& gt, std::optional<double> pro
   std::map<std::int64_t, cv::Mat> depth, color;
   std::deque<v1::SkeletonFrame> skeletons;
   std::printf("t_s arm occl | sdk_wrist_err axis_elbow_along axis_wrist_along axis_lat_err R | strap: miss frac "
-              "along_err lat_err | d_se d_sw | check\n");
+              "along_err lat_err | d_se d_sw | strap_front_of_axis strap_axis_distance | check\n");
   const auto process = [&](const v1::SkeletonFrame& s) {
     const auto jt = truth.joints.find(s.t_us());
     if (jt == truth.joints.end()) return;
@@ -195,6 +195,20 @@ int frames(const fs::path& chunks, const fs::path& gt, std::optional<double> pro
         const Vec3 e = strap.strap_K - t_strap;
         std::printf("%+.3f %.3f ", e.dot(dir), (e - e.dot(dir) * dir).norm());
         std::printf("| %.3f %.3f ", along(strap.strap_K, m_el, m_wr), (m_wr - m_el).norm() - along(strap.strap_K, m_el, m_wr));
+        {
+          // The strap's offset from the measured axis towards the camera, and its distance from it.
+          const Vec3 axis = (m_wr - m_el).normalized();
+          const Vec3 off = strap.strap_K - m_el - (strap.strap_K - m_el).dot(axis) * axis;
+          const Vec3 ray = strap.strap_K.normalized();
+          const Vec3 to_camera = -(ray - ray.dot(axis) * axis).normalized();
+          std::printf("| front %+.3f dist %.3f ", off.dot(to_camera), off.norm());
+          // The same against the line from the measured elbow along the truth's forearm axis (the
+          // IMU's, in the pipeline).
+          const Vec3 imu_axis = q->second * Vec3::UnitY();
+          const Vec3 imu_off = strap.strap_K - m_el - (strap.strap_K - m_el).dot(imu_axis) * imu_axis;
+          const Vec3 imu_to_camera = -(ray - ray.dot(imu_axis) * imu_axis).normalized();
+          std::printf("imu_front %+.3f imu_dist %.3f ", imu_off.dot(imu_to_camera), imu_off.norm());
+        }
         const forearm::VisualCheck check = forearm::check_visual_forearm(m_el, m_wr, strap.strap_K, q->second);
         std::printf("| %s\n", forearm::visual_rejection_name(check.rejection));
       } else {
