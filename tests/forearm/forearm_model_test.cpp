@@ -111,6 +111,31 @@ TEST(ForearmModel, StillHoldFollowsTheImuWhileSdkJointsWander) {
   EXPECT_EQ(calibrate_forearm(frames, motion.K_from_W).frame_count, 30u);
 }
 
+// A wrist measured in depth jumps along the forearm (~11 cm: the hand's widening seen in some
+// frames, the fingertips taken in others): the hold stays one run. A wrist 6 cm off the line
+// sideways still ends it.
+TEST(ForearmModel, StillHoldKeepsTheRunWhenTheWristMovesAlongTheForearm) {
+  const ArmMotion motion;
+  std::vector<CalibrationFrame> frames;
+  for (int k = 0; k < 40; ++k) {
+    const Quat K_from_F = motion.K_from_F(0.3);
+    const Vec3 along = (motion.wrist(0.3) - motion.elbow(0.3)).normalized();
+    CalibrationFrame f;
+    f.t_us = k * 33'333;
+    f.shoulder_K = motion.shoulder(0.3);
+    f.elbow_K = motion.elbow(0.3);
+    f.wrist_K = motion.wrist(0.3) + ((k % 3 == 1) ? 0.11 : 0.0) * along;
+    f.strap_K = motion.imu_position(0.3);
+    f.K_from_F_sdk = K_from_F;
+    f.W_from_A = motion.K_from_W.conjugate() * K_from_F * motion.model.F_from_A;
+    frames.push_back(f);
+  }
+  EXPECT_EQ(calibrate_forearm(frames, motion.K_from_W).frame_count, 40u);
+  const Vec3 sideways = (motion.wrist(0.3) - motion.elbow(0.3)).unitOrthogonal();
+  frames[20].wrist_K += 0.06 * sideways;
+  EXPECT_EQ(calibrate_forearm(frames, motion.K_from_W).frame_count, 20u);
+}
+
 TEST(OcclusionTests, ForearmDirectionWithin30Degrees) {
   const Quat K_from_F = Quat::Identity();  // IMU forearm axis = K's y
   const Vec3 elbow(0.0, 0.0, 2.0);
