@@ -168,6 +168,19 @@ TEST(OcclusionTests, GrazingViewIsRejected) {
   }
 }
 
+// Beyond the paper: eq. 10 from the strap against eq. 10 from the SDK elbow (13 cm).
+TEST(OcclusionTests, StrapAgainstTheSdkElbowsEstimate) {
+  const Vec3 imu(0.1, 0.2, 2.0);
+  EXPECT_EQ(check_strap_against_elbow(imu, imu + Vec3(0.08, 0.0, 0.03)), VisualRejection::kNone);  // the SDK's bias
+  // The other arm's strap 20 cm further along the segment.
+  EXPECT_EQ(check_strap_against_elbow(imu + Vec3(0.2, 0.0, 0.0), imu), VisualRejection::kStrapFarFromElbow);
+  OcclusionTestOptions loose;
+  loose.max_elbow_disagreement_m = 0.25;
+  EXPECT_EQ(check_strap_against_elbow(imu + Vec3(0.2, 0.0, 0.0), imu, loose), VisualRejection::kNone);
+  EXPECT_EQ(check_strap_against_elbow(Vec3::Constant(NAN), imu), VisualRejection::kDegenerate);
+  EXPECT_STREQ(visual_rejection_name(VisualRejection::kStrapFarFromElbow), "strap far from the SDK elbow's estimate");
+}
+
 TEST(OcclusionTests, StrapWithin5cmAndNearerTheWrist) {
   const Vec3 elbow(0.0, 0.0, 2.0), wrist(0.0, 0.26, 2.0);
   const Quat K_from_F = Quat::Identity();
