@@ -58,8 +58,9 @@ VisualCheck check_visual_forearm(const Vec3& elbow_K, const Vec3& wrist_K, const
 // carried along the IMU's forearm axis (live_gap.hpp imu_position_from_elbow). II-J tests the
 // strap against the segment it was searched on, so a dark band found on another body part far
 // along a segment that itself runs on past the hand passes them: on the body render the other
-// arm's strap with the hands together in front of the belly, and a hanging arm's trousers (seeds
-// 2 and 3: 14-27 cm from the truth, 14-27 cm from the elbow's estimate). Good straps lie within
+// arm's strap with the hands together in front of the belly, and a dark band near a hanging
+// arm's hand (seeds 2 and 3: 12-24 cm from the truth, 14-27 cm from the elbow's estimate; one at
+// 10 cm from the truth, 8 cm from the elbow's estimate, passes). Good straps lie within
 // 10-11 cm of the elbow's estimate (p99 on the same sessions; its median, 8 cm, is the SDK
 // elbow's bias). kStrapFarFromElbow beyond options.max_elbow_disagreement_m, kDegenerate for
 // non-finite input, else kNone.
