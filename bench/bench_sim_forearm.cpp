@@ -16,6 +16,12 @@
 //     and forearm's direction errors, split into the part towards the camera and the rest;
 //     `slices`: also the upper arm's visible width and surface offset in 2 cm slices along the
 //     true axis (its taper).
+//   build/bench/bench_sim_forearm split RESULT_DIR GT_DIR DEVICE HOLD_T0_S HOLD_T1_S
+//     one arm's K_from_F error (eq. 11: K_from_W * W_from_A * A_from_F) split into its factors:
+//     the RMS with each factor replaced by the truth in turn, the calibration's error against the
+//     truth over the hold [HOLD_T0_S, HOLD_T1_S] (mounting and strap slip then) with the part of
+//     the calibration pose's frame, and bounds (slip only; the best constant A_from_F). RESULT_DIR
+//     from `replay`; the truth only scores.
 //
 // SESSION and GT_DIR come from posefuse-sim (e.g. --options with motion = forearm_protocol,
 // arm = both; --chunk-file SESSION --gt GT_DIR).
@@ -26,6 +32,7 @@
 #include <filesystem>
 #include <map>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -332,6 +339,121 @@ int pose_frames(const fs::path& chunks, const fs::path& gt, double t0_s, double 
   return 0;
 }
 
+Quat quat_of(const v1::Quaternion& q) { return Quat(q.w(), q.x(), q.y(), q.z()).normalized(); }
+
+// Chordal mean of hemisphere-aligned unit quaternions.
+Quat mean_of(const std::vector<Quat>& qs) {
+  Eigen::Vector4d sum = Eigen::Vector4d::Zero();
+  for (const Quat& q : qs) sum += geometry::to_wxyz(geometry::same_hemisphere(q, qs.front()));
+  return geometry::from_wxyz(sum.normalized());
+}
+
+double deg_between(const Quat& a, const Quat& b) { return geometry::angle_between(a, b) * 180.0 / 3.14159265358979323846; }
+
+int split(const fs::path& result_dir, const fs::path& gt_dir, const std::string& device, double hold_t0_s,
+          double hold_t1_s) {
+  const session::ResultDirectory result = session::read_result_files(result_dir);
+  const session::ResultDirectory truth = session::read_result_files(gt_dir);
+  if (!result.calibration || !truth.calibration) throw std::runtime_error("calibration.json missing");
+  const v1::Arm arm = device == "imu_left" ? v1::LEFT : v1::RIGHT;
+  const auto A_from_F_of = [&](const v1::CalibrationReport& c) -> std::optional<Quat> {
+    for (const v1::ForearmModel& f : c.forearms()) {
+      if (f.arm() == arm) return quat_of(f.a_from_f());
+    }
+    return std::nullopt;
+  };
+  const Quat KW_e = quat_of(result.calibration->k_from_w()), KW_t = quat_of(truth.calibration->k_from_w());
+  const std::optional<Quat> AF_e = A_from_F_of(*result.calibration), AF_mount = A_from_F_of(*truth.calibration);
+  if (!AF_e || !AF_mount) throw std::runtime_error("no forearm calibration for " + device);
+  const auto by_time = [](const std::vector<session::TimedOrientation>& rows) {
+    std::map<std::int64_t, Quat> m;
+    for (const auto& r : rows) m[r.t_us] = r.q;
+    return m;
+  };
+  const auto WA_e = by_time(result.imu_orientations.at(device)), WA_t = by_time(truth.imu_orientations.at(device));
+  const auto KF_e = by_time(result.forearm_orientations.at(device)), KF_t = by_time(truth.forearm_orientations.at(device));
+  const auto nearest = [](const std::map<std::int64_t, Quat>& m, std::int64_t t, std::int64_t tolerance) -> const Quat* {
+    const Quat* best = nullptr;
+    std::int64_t best_dt = tolerance + 1;
+    auto it = m.lower_bound(t);
+    for (int k = 0; k < 2; ++k) {
+      if (it != m.end() && std::abs(it->first - t) < best_dt) best = &it->second, best_dt = std::abs(it->first - t);
+      if (it == m.begin()) break;
+      --it;
+    }
+    return best;
+  };
+  // gt/imu_samples/<device>.csv: t_device_us,t_camera_us,lost,... (each sample's true camera time).
+  struct Row {
+    std::int64_t t_camera_us;
+    Quat WA_t, WA_e, KF_t, KF_e;
+  };
+  std::vector<Row> rows;
+  FILE* f = std::fopen((gt_dir / "imu_samples" / (device + ".csv")).c_str(), "r");
+  if (!f) throw std::runtime_error("no gt imu_samples for " + device);
+  char line[512];
+  std::fgets(line, sizeof line, f);
+  while (std::fgets(line, sizeof line, f)) {
+    long long t_device = 0, t_camera = 0;
+    int lost = 0;
+    if (std::sscanf(line, "%lld,%lld,%d", &t_device, &t_camera, &lost) != 3 || lost) continue;
+    const auto wt = WA_t.find(t_device), we = WA_e.find(t_device);
+    const Quat* kt = nearest(KF_t, t_camera, 1);
+    const Quat* ke = nearest(KF_e, t_camera, 2000);
+    if (wt == WA_t.end() || we == WA_e.end() || !kt || !ke) continue;
+    rows.push_back({t_camera, wt->second, we->second, *kt, *ke});
+  }
+  std::fclose(f);
+  if (rows.empty()) throw std::runtime_error("no samples matched");
+  std::vector<Quat> hold_truth, hold_true_pose;
+  for (const Row& r : rows) {
+    if (r.t_camera_us < hold_t0_s * 1e6 || r.t_camera_us > hold_t1_s * 1e6) continue;
+    hold_truth.push_back((KW_t * r.WA_t).conjugate() * r.KF_t);     // mounting and slip then
+    hold_true_pose.push_back((KW_e * r.WA_e).conjugate() * r.KF_t);  // eq. 9 with the true pose frame
+  }
+  if (hold_truth.empty()) throw std::runtime_error("no samples in the hold");
+  const Quat AF_hold = mean_of(hold_truth), AF_true_pose = mean_of(hold_true_pose);
+  std::vector<Quat> all_true_pose;
+  for (const Row& r : rows) all_true_pose.push_back((KW_e * r.WA_e).conjugate() * r.KF_t);
+  const Quat AF_best = mean_of(all_true_pose);
+  std::printf("%s: %zu samples, %zu in the hold %.2f-%.2f s\n", device.c_str(), rows.size(), hold_truth.size(),
+              hold_t0_s, hold_t1_s);
+  std::printf("K_from_W error %.2f deg; A_from_F: %.2f deg from the mounting, %.2f from the truth over the hold "
+              "(the hold's truth %.2f from the mounting);\n",
+              deg_between(KW_e, KW_t), deg_between(*AF_e, *AF_mount), deg_between(*AF_e, AF_hold),
+              deg_between(AF_hold, *AF_mount));
+  const Vec3 pose_part = (180.0 / 3.14159265358979323846) * geometry::rotation_vector_from_quat(AF_true_pose.conjugate() * *AF_e);
+  std::printf("  of which the calibration pose's frame %.2f deg (in F: x %+.2f, y (roll) %+.2f, z %+.2f), "
+              "K_from_A in the hold %.2f deg\n",
+              pose_part.norm(), pose_part.x(), pose_part.y(), pose_part.z(), deg_between(AF_true_pose, AF_hold));
+  const auto score = [&](const char* name, const auto& K_from_F_of) {
+    double sum_sq = 0.0, max_deg = 0.0;
+    Vec3 mean = Vec3::Zero();
+    for (const Row& r : rows) {
+      const Quat q = K_from_F_of(r);
+      const double e = deg_between(r.KF_t, q);
+      sum_sq += e * e;
+      max_deg = std::max(max_deg, e);
+      mean += (180.0 / 3.14159265358979323846) * geometry::rotation_vector_from_quat(r.KF_t.conjugate() * q);
+    }
+    mean /= static_cast<double>(rows.size());
+    std::printf("  %-62s RMS %5.2f  max %5.2f  mean in F %+5.2f %+5.2f %+5.2f\n", name,
+                std::sqrt(sum_sq / rows.size()), max_deg, mean.x(), mean.y(), mean.z());
+  };
+  std::printf("K_from_F error (deg), eq. 11 with:\n");
+  score("the result file's K_from_F", [](const Row& r) { return r.KF_e; });
+  score("all estimated", [&](const Row& r) { return Quat(KW_e * r.WA_e * *AF_e); });
+  score("the true K_from_W", [&](const Row& r) { return Quat(KW_t * r.WA_e * *AF_e); });
+  score("the true W_from_A", [&](const Row& r) { return Quat(KW_e * r.WA_t * *AF_e); });
+  score("the true A_from_F (mounting, no slip)", [&](const Row& r) { return Quat(KW_e * r.WA_e * *AF_mount); });
+  score("the truth's A_from_F over the hold", [&](const Row& r) { return Quat(KW_e * r.WA_e * AF_hold); });
+  score("eq. 9 with the true pose frame", [&](const Row& r) { return Quat(KW_e * r.WA_e * AF_true_pose); });
+  score("all true, A_from_F over the hold (the slip since)", [&](const Row& r) { return Quat(KW_t * r.WA_t * AF_hold); });
+  score("all true, the mounting (the slip)", [&](const Row& r) { return Quat(KW_t * r.WA_t * *AF_mount); });
+  score("the best constant A_from_F (a bound)", [&](const Row& r) { return Quat(KW_e * r.WA_e * AF_best); });
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -341,13 +463,15 @@ int main(int argc, char** argv) {
     if (mode == "frames" && (argc == 4 || argc == 5)) {
       return frames(argv[2], argv[3], argc == 5 ? std::optional<double>(std::stod(argv[4])) : std::nullopt);
     }
+    if (mode == "split" && argc == 7) return split(argv[2], argv[3], argv[4], std::stod(argv[5]), std::stod(argv[6]));
     if (mode == "pose" && (argc == 6 || (argc == 7 && std::string(argv[6]) == "slices"))) {
       return pose_frames(argv[2], argv[3], std::stod(argv[4]), std::stod(argv[5]), argc == 7);
     }
     std::fprintf(stderr,
                  "usage: bench_sim_forearm replay SESSION.pfchunks GT_DIR OUT_DIR\n"
                  "       bench_sim_forearm frames SESSION.pfchunks GT_DIR\n"
-                 "       bench_sim_forearm pose SESSION.pfchunks GT_DIR T0_S T1_S [slices]\n");
+                 "       bench_sim_forearm pose SESSION.pfchunks GT_DIR T0_S T1_S [slices]\n"
+                 "       bench_sim_forearm split RESULT_DIR GT_DIR DEVICE HOLD_T0_S HOLD_T1_S\n");
     return 2;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_sim_forearm: %s\n", e.what());
