@@ -62,16 +62,25 @@ ForearmCalibration calibrate_forearm(const std::vector<CalibrationFrame>& frames
       throw_invalid("frames[" + std::to_string(i) + "].t_us", "not after the previous frame");
     }
   }
-  // Longest run of frames whose arm IMU orientation and SDK elbow and wrist stay near the run's
+  // Longest run of frames whose arm IMU orientation and elbow and wrist stay near the run's
   // first frame's (a radius, not a frame-to-frame speed: joint noise makes per-frame speeds
-  // unreliable).
+  // unreliable). The wrist is held to the first frame's elbow -> wrist line, not its point: a
+  // wrist measured in depth (forearm_axis_depth.hpp) moves along the forearm by ~11 cm between
+  // frames where the hand's widening is seen and frames where the fingertips are taken, which
+  // broke seed 3's left calibration hold into runs of at most 9 frames on the body render.
+  const auto off_line = [](const Vec3& p, const Vec3& a, const Vec3& b) {
+    const Vec3 axis = (b - a).normalized();
+    const Vec3 d = p - a;
+    return (d - d.dot(axis) * axis).norm();
+  };
   std::size_t best_first = 0, best_count = 0;
   for (std::size_t first = 0; first < frames.size() && frames.size() - first > best_count; ++first) {
+    const CalibrationFrame& f0 = frames[first];
     std::size_t end = first + 1;
     while (end < frames.size() &&
-           geometry::angle_between(frames[end].W_from_A, frames[first].W_from_A) < options.still_angle_rad &&
-           (frames[end].elbow_K - frames[first].elbow_K).norm() < options.still_radius_m &&
-           (frames[end].wrist_K - frames[first].wrist_K).norm() < options.still_radius_m) {
+           geometry::angle_between(frames[end].W_from_A, f0.W_from_A) < options.still_angle_rad &&
+           (frames[end].elbow_K - f0.elbow_K).norm() < options.still_radius_m &&
+           off_line(frames[end].wrist_K, f0.elbow_K, f0.wrist_K) < options.still_radius_m) {
       ++end;
     }
     if (end - first > best_count) {

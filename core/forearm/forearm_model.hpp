@@ -33,8 +33,9 @@ struct CalibrationFrame {
 };
 
 struct CalibrationOptions {
-  // A still hold: the arm IMU's orientation within still_angle_rad of the hold's first frame and
-  // the SDK's elbow and wrist within still_radius_m of theirs. The IMU is the precise cue; the
+  // A still hold: the arm IMU's orientation within still_angle_rad of the hold's first frame, the
+  // elbow within still_radius_m of its elbow and the wrist within still_radius_m of its
+  // elbow -> wrist line (a depth-measured wrist moves along the forearm between frames). The IMU is the precise cue; the
   // radius is loose because the SDK's joints wander by several cm/s with the arm at rest
   // (sim/camera_skeleton.hpp's slowly turning bias; 2 cm broke 3 s holds into 14-frame runs).
   double still_angle_rad = 3.0 * 3.14159265358979323846 / 180.0;

@@ -38,6 +38,7 @@ const char* visual_rejection_name(VisualRejection r) {
     case VisualRejection::kGrazingView: return "forearm along the camera ray";
     case VisualRejection::kStrapOffSegment: return "strap off the elbow-wrist segment";
     case VisualRejection::kStrapNearerElbow: return "strap nearer the elbow";
+    case VisualRejection::kStrapFarFromElbow: return "strap far from the SDK elbow's estimate";
   }
   return "unknown";
 }
@@ -64,6 +65,13 @@ VisualCheck check_visual_forearm(const Vec3& elbow_K, const Vec3& wrist_K, const
     c.rejection = VisualRejection::kStrapNearerElbow;
   }
   return c;
+}
+
+VisualRejection check_strap_against_elbow(const Vec3& imu_from_strap_K, const Vec3& imu_from_elbow_K,
+                                          const OcclusionTestOptions& o) {
+  if (!imu_from_strap_K.allFinite() || !imu_from_elbow_K.allFinite()) return VisualRejection::kDegenerate;
+  return (imu_from_strap_K - imu_from_elbow_K).norm() > o.max_elbow_disagreement_m ? VisualRejection::kStrapFarFromElbow
+                                                                                     : VisualRejection::kNone;
 }
 
 }  // namespace posefuse::forearm

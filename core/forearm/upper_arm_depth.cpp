@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <vector>
 
 #include "common/error.hpp"
@@ -83,24 +84,79 @@ std::optional<MeasuredUpperArm> measure_upper_arm_axis(const geometry::DepthImag
   // surface has its centroid on the surface line, whatever the slice's tilt), the partial end
   // slices left out.
   const int slices = static_cast<int>(std::floor((along_max - along_min) / options.slice_m));
+  // Per slice: the points' sum and their lateral coordinate's sum and sum of squares (across the
+  // line and the viewing ray), for the slice's own radius below.
+  const Vec3 ray = line->centroid.normalized();
+  const Vec3 away = (ray - ray.dot(direction) * direction).normalized();
+  const Vec3 lateral = direction.cross(away);
   std::vector<Vec3> slice_sum(static_cast<std::size_t>(std::max(slices, 0)), Vec3::Zero());
+  std::vector<double> slice_lateral(slice_sum.size(), 0.0), slice_lateral_sq(slice_sum.size(), 0.0);
   std::vector<int> slice_count(slice_sum.size(), 0);
   for (const Vec3& p : line->inliers) {
     const int k = static_cast<int>(((p - line->centroid).dot(direction) - along_min) / options.slice_m);
     if (k >= 1 && k + 1 < slices) {
-      slice_sum[static_cast<std::size_t>(k)] += p;
-      ++slice_count[static_cast<std::size_t>(k)];
+      const auto i = static_cast<std::size_t>(k);
+      slice_sum[i] += p;
+      const double x = (p - line->centroid).dot(lateral);
+      slice_lateral[i] += x;
+      slice_lateral_sq[i] += x * x;
+      ++slice_count[i];
     }
   }
-  std::vector<Vec3> slice_centroids;
+  // A real upper arm tapers (deltoid and sleeve: its visible width goes from ~10 to ~7.5 cm on
+  // the body render), so its surface line leans towards the camera at the thick end by about the
+  // taper, 2-3 degrees, which the arm plane turns into the calibration's roll. With
+  // taper_correction each slice's centroid is moved (pi/4) R(s) away from the camera
+  // (cylinder_axis' relation per slice), R(s) a straight line fitted by weighted least squares
+  // to the slices' radii sqrt(3 var + h^2 / 4): one slice's radius alone is too noisy (a 2 cm
+  // slice holds two or three pixel columns at 11 mm pixels).
+  struct Slice {
+    Vec3 centroid;
+    double along, radius_m, weight;
+  };
+  std::vector<Slice> seen;
   for (std::size_t k = 0; k < slice_sum.size(); ++k) {
-    if (slice_count[k] >= 3) slice_centroids.push_back(slice_sum[k] / slice_count[k]);
+    if (slice_count[k] < 3) continue;
+    const double n = slice_count[k];
+    const Vec3 centroid = slice_sum[k] / n;
+    const double mean = slice_lateral[k] / n;
+    const double variance = std::max(0.0, slice_lateral_sq[k] / n - mean * mean);
+    const double footprint_m = centroid.z() / depth_camera.fx;
+    seen.push_back({centroid, (centroid - line->centroid).dot(direction),
+                    std::sqrt(3.0 * variance + 0.25 * footprint_m * footprint_m), n});
+  }
+  double w_sum = 0.0, s_mean = 0.0, r_mean = 0.0;
+  for (const Slice& slice : seen) {
+    w_sum += slice.weight;
+    s_mean += slice.weight * slice.along;
+    r_mean += slice.weight * slice.radius_m;
+  }
+  double taper = 0.0;  // dR / d(along), towards the elbow
+  if (seen.size() >= 3) {
+    s_mean /= w_sum;
+    r_mean /= w_sum;
+    double s_var = 0.0, sr_cov = 0.0;
+    for (const Slice& slice : seen) {
+      s_var += slice.weight * (slice.along - s_mean) * (slice.along - s_mean);
+      sr_cov += slice.weight * (slice.along - s_mean) * (slice.radius_m - r_mean);
+    }
+    if (s_var > 0.0) taper = sr_cov / s_var;
+  }
+  const bool correct_taper =
+      options.taper_correction && line->centroid.z() / depth_camera.fx <= options.max_taper_pixel_m;
+  std::vector<Vec3> slice_centroids;
+  Vec3 surface_centroid = Vec3::Zero();  // of the slices' centroids, on the surface
+  for (const Slice& slice : seen) {
+    surface_centroid += slice.centroid;
+    const double offset_m = correct_taper ? (std::numbers::pi / 4.0) * taper * (slice.along - s_mean) : 0.0;
+    slice_centroids.push_back(slice.centroid + offset_m * away);
   }
   if (slice_centroids.size() < 3) return std::nullopt;
+  surface_centroid /= static_cast<double>(slice_centroids.size());
   const geometry::PointPca slice_line = geometry::point_pca(slice_centroids);
   DepthLine centred = *line;
   centred.direction = slice_line.direction().dot(upper) < 0.0 ? Vec3(-slice_line.direction()) : slice_line.direction();
-  centred.centroid = slice_line.centroid;
+  centred.centroid = surface_centroid;
   const std::optional<CylinderAxis> axis = cylinder_axis(centred, depth_camera.fx);
   if (!axis) return std::nullopt;  // along the viewing ray
   MeasuredUpperArm out;

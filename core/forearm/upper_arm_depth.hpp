@@ -21,7 +21,11 @@
 //     arm's; no radius or end is needed. The cuts of step 1 are then redone across the fitted
 //     line and the line refitted.
 //  3. The direction is the line through the centroids of 2 cm slices across it (the end slices
-//     left out): a PCA of a piece cut across another direction leans towards it.
+//     left out): a PCA of a piece cut across another direction leans towards it. Each slice's
+//     centroid is moved (pi/4) R(s) away from the camera, R(s) a line fitted to the slices'
+//     radii (their lateral spread, as in cylinder_axis), because an upper arm tapers towards the
+//     elbow: the surface line of a cone leans towards the camera at its thick end
+//     (taper_correction).
 // Only the SDK shoulder's role as "where to look" remains; the direction does not follow its bias.
 #include <optional>
 
@@ -42,6 +46,11 @@ struct UpperArmAxisOptions {
   int min_points = 30;
   double min_length_m = 0.08;            // extent of the inliers along the line
   double slice_m = 0.02;                 // slices across the line for the direction (step 3)
+  // Each slice's centroid moved onto the axis by the fitted radius profile (step 3), only where a
+  // depth pixel's footprint at the arm is at most max_taper_pixel_m: at the strap tests' 11 mm
+  // pixels the slices' radii are too noisy (a plain cylinder's roll went from < 1.5 to 2.8 deg).
+  bool taper_correction = true;
+  double max_taper_pixel_m = 0.008;
 };
 
 struct MeasuredUpperArm {

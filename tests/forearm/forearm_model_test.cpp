@@ -111,6 +111,31 @@ TEST(ForearmModel, StillHoldFollowsTheImuWhileSdkJointsWander) {
   EXPECT_EQ(calibrate_forearm(frames, motion.K_from_W).frame_count, 30u);
 }
 
+// A wrist measured in depth jumps along the forearm (~11 cm: the hand's widening seen in some
+// frames, the fingertips taken in others): the hold stays one run. A wrist 6 cm off the line
+// sideways still ends it.
+TEST(ForearmModel, StillHoldKeepsTheRunWhenTheWristMovesAlongTheForearm) {
+  const ArmMotion motion;
+  std::vector<CalibrationFrame> frames;
+  for (int k = 0; k < 40; ++k) {
+    const Quat K_from_F = motion.K_from_F(0.3);
+    const Vec3 along = (motion.wrist(0.3) - motion.elbow(0.3)).normalized();
+    CalibrationFrame f;
+    f.t_us = k * 33'333;
+    f.shoulder_K = motion.shoulder(0.3);
+    f.elbow_K = motion.elbow(0.3);
+    f.wrist_K = motion.wrist(0.3) + ((k % 3 == 1) ? 0.11 : 0.0) * along;
+    f.strap_K = motion.imu_position(0.3);
+    f.K_from_F_sdk = K_from_F;
+    f.W_from_A = motion.K_from_W.conjugate() * K_from_F * motion.model.F_from_A;
+    frames.push_back(f);
+  }
+  EXPECT_EQ(calibrate_forearm(frames, motion.K_from_W).frame_count, 40u);
+  const Vec3 sideways = (motion.wrist(0.3) - motion.elbow(0.3)).unitOrthogonal();
+  frames[20].wrist_K += 0.06 * sideways;
+  EXPECT_EQ(calibrate_forearm(frames, motion.K_from_W).frame_count, 20u);
+}
+
 TEST(OcclusionTests, ForearmDirectionWithin30Degrees) {
   const Quat K_from_F = Quat::Identity();  // IMU forearm axis = K's y
   const Vec3 elbow(0.0, 0.0, 2.0);
@@ -141,6 +166,19 @@ TEST(OcclusionTests, GrazingViewIsRejected) {
     const VisualCheck c = check_visual_forearm(elbow, w, elbow + 0.85 * (w - elbow), q);
     EXPECT_EQ(c.accepted(), deg > 20.0) << deg << " ray angle " << c.ray_angle_rad / kDeg;
   }
+}
+
+// Beyond the paper: eq. 10 from the strap against eq. 10 from the SDK elbow (13 cm).
+TEST(OcclusionTests, StrapAgainstTheSdkElbowsEstimate) {
+  const Vec3 imu(0.1, 0.2, 2.0);
+  EXPECT_EQ(check_strap_against_elbow(imu, imu + Vec3(0.08, 0.0, 0.03)), VisualRejection::kNone);  // the SDK's bias
+  // The other arm's strap 20 cm further along the segment.
+  EXPECT_EQ(check_strap_against_elbow(imu + Vec3(0.2, 0.0, 0.0), imu), VisualRejection::kStrapFarFromElbow);
+  OcclusionTestOptions loose;
+  loose.max_elbow_disagreement_m = 0.25;
+  EXPECT_EQ(check_strap_against_elbow(imu + Vec3(0.2, 0.0, 0.0), imu, loose), VisualRejection::kNone);
+  EXPECT_EQ(check_strap_against_elbow(Vec3::Constant(NAN), imu), VisualRejection::kDegenerate);
+  EXPECT_STREQ(visual_rejection_name(VisualRejection::kStrapFarFromElbow), "strap far from the SDK elbow's estimate");
 }
 
 TEST(OcclusionTests, StrapWithin5cmAndNearerTheWrist) {

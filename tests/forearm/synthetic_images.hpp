@@ -29,6 +29,9 @@ struct ForearmScene {
   double wall_z_m = 3.0;
   std::optional<Vec3> shoulder_K;  // set: the upper arm is drawn, shoulder -> elbow
   double upper_arm_radius_m = 0.045;
+  // > 0: the upper arm tapers, this radius at the shoulder to upper_arm_radius_m at the elbow
+  // (drawn as kTaperSteps cylinders of stepped radius, like a deltoid and sleeve thinning).
+  double upper_arm_shoulder_radius_m = 0.0;
   double hand_length_m = 0.0;  // > 0: the hand is drawn, wrist -> wrist + hand_length_m
   double hand_radius_m = 0.045;
   Vec3 hand_end_K() const { return wrist_K + hand_length_m * (wrist_K - elbow_K).normalized(); }
@@ -76,11 +79,21 @@ inline std::optional<double> hit_cylinder(const ForearmScene& s, const Vec3& ori
     }
   }
   if (s.shoulder_K) {
-    double upper_axial = 0.0;
-    const auto upper = hit_cylinder(*s.shoulder_K, s.elbow_K, s.upper_arm_radius_m, origin, dir, &upper_axial);
-    if (upper && (!t || *upper < *t)) {
-      t = upper;
-      *axial_m = -1.0;
+    constexpr int kTaperSteps = 30;
+    const int steps = s.upper_arm_shoulder_radius_m > 0.0 ? kTaperSteps : 1;
+    for (int i = 0; i < steps; ++i) {
+      const double f0 = static_cast<double>(i) / steps, f1 = static_cast<double>(i + 1) / steps;
+      const double radius_m = steps == 1 ? s.upper_arm_radius_m
+                                         : s.upper_arm_shoulder_radius_m +
+                                               (0.5 * (f0 + f1)) * (s.upper_arm_radius_m - s.upper_arm_shoulder_radius_m);
+      double upper_axial = 0.0;
+      const auto upper = hit_cylinder(*s.shoulder_K + f0 * (s.elbow_K - *s.shoulder_K),
+                                      *s.shoulder_K + f1 * (s.elbow_K - *s.shoulder_K), radius_m, origin, dir,
+                                      &upper_axial);
+      if (upper && (!t || *upper < *t)) {
+        t = upper;
+        *axial_m = -1.0;
+      }
     }
   }
   return t;
@@ -108,6 +121,7 @@ inline PixelBox cylinder_box(const ForearmScene& s, const PinholeCamera& camera,
   if (s.shoulder_K) ends.push_back(*s.shoulder_K);
   if (s.hand_length_m > 0.0) ends.push_back(s.hand_end_K());
   const double radius_m = std::max({s.radius_m, s.shoulder_K ? s.upper_arm_radius_m : 0.0,
+                                    s.shoulder_K ? s.upper_arm_shoulder_radius_m : 0.0,
                                     s.hand_length_m > 0.0 ? s.hand_radius_m : 0.0});
   for (const Vec3& end : ends) {
     const Vec3 p = cam_from_K * end + cam_from_K_m;

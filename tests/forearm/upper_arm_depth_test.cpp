@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <vector>
 
@@ -82,6 +83,64 @@ TEST(UpperArmDepth, CalibrationFrameDoesNotFollowTheSdkShoulderBias) {
   for (const Quat& q : frames) EXPECT_LT(geometry::angle_between(q, frames.front()), 1.0 * kDeg);
   // With the SDK shoulder (even with the true elbow and wrist) the roll is far off: the test means something.
   EXPECT_GT(worst_sdk_deg, 10.0);
+}
+
+// An upper arm that tapers from 5.5 cm at the shoulder to 3.8 cm at the elbow (the body
+// render's deltoid and sleeve: visible width ~10 -> ~7.5 cm). Its surface line leans towards the
+// camera at the shoulder by atan(dR / length) ~ 3 degrees; the arm plane turns that into the roll.
+// Per-slice radii undo it (taper_correction); without them the roll follows the taper.
+// Kinect v2 depth pixels (6 mm at 2 m): the correction is applied at most 8 mm.
+StrapCameras kinect_depth_cameras() {
+  StrapCameras cameras = test_cameras();
+  cameras.depth = {512, 424, 366.0, 366.0, 256.0, 212.0, 0.02, -0.05, 0.0, 0.0, 0.0};
+  return cameras;
+}
+
+TEST(UpperArmDepth, TaperedUpperArmKeepsTheRoll) {
+  ForearmScene scene = calibration_scene();
+  scene.upper_arm_shoulder_radius_m = 0.055;
+  scene.upper_arm_radius_m = 0.038;
+  const StrapCameras cameras = kinect_depth_cameras();
+  const auto images = render_forearm(scene, cameras);
+  const Quat true_frame = K_from_F_calibration_pose(*scene.shoulder_K, scene.elbow_K, scene.wrist_K);
+  UpperArmAxisOptions plain;
+  plain.taper_correction = false;
+  double worst_roll_deg = 0.0, worst_plain_roll_deg = 180.0;
+  for (const Vec3& bias : shoulder_biases()) {
+    const Vec3 sdk_shoulder = *scene.shoulder_K + bias;
+    const Vec3 sdk_elbow = scene.elbow_K + kElbowBias, sdk_wrist = scene.wrist_K + kWristBias;
+    const auto arm = measure_arm_axes(images.depth_view(cameras), cameras.depth, sdk_shoulder, sdk_elbow, sdk_wrist);
+    const auto plain_arm = measure_arm_axes(images.depth_view(cameras), cameras.depth, sdk_shoulder, sdk_elbow,
+                                            sdk_wrist, {}, plain);
+    ASSERT_TRUE(arm && arm->upper_arm && plain_arm && plain_arm->upper_arm);
+    const double roll_deg = twist_about_y(true_frame.conjugate() * frame_from(*arm, sdk_shoulder)) / kDeg;
+    const double plain_roll_deg = twist_about_y(true_frame.conjugate() * frame_from(*plain_arm, sdk_shoulder)) / kDeg;
+    worst_roll_deg = std::max(worst_roll_deg, std::abs(roll_deg));
+    worst_plain_roll_deg = std::min(worst_plain_roll_deg, std::abs(plain_roll_deg));
+  }
+  std::printf("tapered upper arm: worst |roll| %.2f deg with taper_correction, best %.2f deg without\n",
+              worst_roll_deg, worst_plain_roll_deg);
+  EXPECT_LT(worst_roll_deg, 1.5);
+  EXPECT_GT(worst_plain_roll_deg, 2.0);  // the test means something: the taper turns the plain roll
+}
+
+// The correction leaves a plain cylinder's roll alone at the same pixels.
+TEST(UpperArmDepth, TaperCorrectionOnACylinder) {
+  const ForearmScene scene = calibration_scene();
+  const StrapCameras cameras = kinect_depth_cameras();
+  const auto images = render_forearm(scene, cameras);
+  const Quat true_frame = K_from_F_calibration_pose(*scene.shoulder_K, scene.elbow_K, scene.wrist_K);
+  double worst_roll_deg = 0.0;
+  for (const Vec3& bias : shoulder_biases()) {
+    const Vec3 sdk_shoulder = *scene.shoulder_K + bias;
+    const auto arm = measure_arm_axes(images.depth_view(cameras), cameras.depth, sdk_shoulder,
+                                      scene.elbow_K + kElbowBias, scene.wrist_K + kWristBias);
+    ASSERT_TRUE(arm && arm->upper_arm);
+    worst_roll_deg = std::max(
+        worst_roll_deg, std::abs(twist_about_y(true_frame.conjugate() * frame_from(*arm, sdk_shoulder))) / kDeg);
+  }
+  std::printf("cylinder at Kinect pixels: worst |roll| %.2f deg\n", worst_roll_deg);
+  EXPECT_LT(worst_roll_deg, 1.0);
 }
 
 TEST(UpperArmDepth, DepthNoiseOfTwoMillimetres) {

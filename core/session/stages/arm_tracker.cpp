@@ -109,7 +109,10 @@ void ArmTracker::process_frame(const ArmFrame& frame, StageOutput& out) {
     const forearm::VisualCheck check = forearm::check_visual_forearm(frame.elbow_K, frame.wrist_K, *frame.strap_K, K_from_F);
     if (check.accepted()) {
       sample.p_K = forearm::imu_position_from_strap(*frame.strap_K, frame.elbow_K, frame.wrist_K, K_from_F, model_.r_m);
-      sample.visible = true;
+      // The SDK's elbow is tracked here (forearm_tracked): a strap on another body part lies far from it.
+      sample.visible = forearm::check_strap_against_elbow(sample.p_K, forearm::imu_position_from_elbow(
+                                                                          frame.sdk_elbow_K, K_from_F, model_)) ==
+                       forearm::VisualRejection::kNone;
     }
   }
   if (track_.empty() || frame.t_us > track_.back().t_us) track_.push_back(sample);
