@@ -4,6 +4,7 @@
 //   build/bench/bench_sim_forearm replay SESSION.pfchunks GT_DIR OUT_DIR
 //     the chunk file through SessionPipeline(make_default_stages()), results written to OUT_DIR
 //     by the client's ResultWriter, then scored against GT_DIR (posefuse-score's table).
+//     `--option KEY=VALUE` (repeatable) sets a header option, e.g. --option fit.enabled=true.
 //   build/bench/bench_sim_forearm frames SESSION.pfchunks GT_DIR
 //     per camera frame and arm: the forearm axis measured in depth (measure_arm_axes) and the
 //     strap (detect_strap) against the simulator's truth (gt/camera_joints.csv, the strap centre
@@ -19,6 +20,7 @@
 #include <filesystem>
 #include <map>
 #include <optional>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -43,7 +45,8 @@ namespace fs = std::filesystem;
 using geometry::Quat;
 using geometry::Vec3;
 
-int replay(const fs::path& chunks, const fs::path& gt, const fs::path& out) {
+// `options`: KEY=VALUE pairs set in the session header (e.g. fit.enabled=true), over the file's.
+int replay(const fs::path& chunks, const fs::path& gt, const fs::path& out, const std::vector<std::string>& options) {
   const double cpu0 = bench::thread_cpu_seconds();
   const auto wall0 = bench::WallClock::now();
   fs::remove_all(out);
@@ -53,7 +56,16 @@ int replay(const fs::path& chunks, const fs::path& gt, const fs::path& out) {
     session::SessionPipeline pipeline(session::make_default_stages(), results);
     session::ChunkFileReader reader(chunks);
     v1::SessionChunk chunk;
-    while (reader.next(chunk)) pipeline.push(chunk);
+    while (reader.next(chunk)) {
+      if (chunk.has_header()) {
+        for (const std::string& kv : options) {
+          const auto eq = kv.find('=');
+          if (eq == std::string::npos) throw std::invalid_argument("--option '" + kv + "': expected KEY=VALUE");
+          (*chunk.mutable_header()->mutable_options())[kv.substr(0, eq)] = kv.substr(eq + 1);
+        }
+      }
+      pipeline.push(chunk);
+    }
     pipeline.close();
     writer.finish();
   }
@@ -231,12 +243,16 @@ int frames(const fs::path& chunks, const fs::path& gt, std::optional<double> pro
 int main(int argc, char** argv) {
   try {
     const std::string mode = argc > 1 ? argv[1] : "";
-    if (mode == "replay" && argc == 5) return replay(argv[2], argv[3], argv[4]);
+    if (mode == "replay" && argc >= 5) {
+      std::vector<std::string> options;
+      for (int i = 5; i + 1 < argc && std::string(argv[i]) == "--option"; i += 2) options.push_back(argv[i + 1]);
+      if (argc == 5 + 2 * static_cast<int>(options.size())) return replay(argv[2], argv[3], argv[4], options);
+    }
     if (mode == "frames" && (argc == 4 || argc == 5)) {
       return frames(argv[2], argv[3], argc == 5 ? std::optional<double>(std::stod(argv[4])) : std::nullopt);
     }
     std::fprintf(stderr,
-                 "usage: bench_sim_forearm replay SESSION.pfchunks GT_DIR OUT_DIR\n"
+                 "usage: bench_sim_forearm replay SESSION.pfchunks GT_DIR OUT_DIR [--option KEY=VALUE]...\n"
                  "       bench_sim_forearm frames SESSION.pfchunks GT_DIR\n");
     return 2;
   } catch (const std::exception& e) {
