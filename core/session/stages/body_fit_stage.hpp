@@ -49,6 +49,7 @@
 
 #include "fit/depth_frame.hpp"
 #include "fit/frame_observation.hpp"
+#include "fit/packed_body_frame.hpp"
 #include "fit/start_extrapolation.hpp"
 #include "fit/tracked_skeleton.hpp"
 #include "session/pipeline_stage.hpp"
@@ -61,6 +62,16 @@ struct BodyFitFrame {
   fit::DepthFrame frame;
   std::optional<fit::TrackedSkeleton> skeleton;
   double assemble_s = 0;  // thread CPU seconds spent assembling it (BodyFitFrameStats)
+};
+
+// A frame waiting for its forearm orientations: the silhouette and its depth only (the fit reads
+// nothing else), ~40 kB instead of 651 kB, so that `fit.imu_wait_s` can cover IMU data that a
+// stream delivers long after the camera frames (docs/fitting.md, "Body-fit stage").
+struct QueuedBodyFitFrame {
+  std::int64_t t_us = 0;
+  fit::PackedBodyFrame frame;
+  std::optional<fit::TrackedSkeleton> skeleton;
+  double assemble_s = 0;
 };
 
 // Per fitted frame: where the stage's CPU time went and what the two starts of II-G did (for the
@@ -90,6 +101,12 @@ struct BodyFitFrameStats {
 // (`skeleton_start_energy` <= 0: both starts always) or when the previous-frame fit ended at
 // `skeleton_start_energy` or above (or at a NaN energy).
 inline constexpr double kDefaultSkeletonStartEnergy = 45.0;
+
+// How long (camera time) a frame waits for the forearm orientations of its time, `fit.imu_wait_s`.
+// posefuse-sim's chunk files order IMU batches by the device clock, whose offset (1-100 s) puts
+// them after the camera frames of a short session: with the former 6 s, 70 % of the demo's
+// frames were fitted without the imu term (docs/fitting.md, "Protocol sessions").
+inline constexpr double kDefaultImuWaitS = 30.0;
 bool needs_skeleton_start(std::optional<double> previous_energy, double skeleton_start_energy);
 
 // SkeletonFrame -> TrackedSkeleton. Throws posefuse::Error "skeleton.joints" for a frame that
@@ -119,6 +136,7 @@ class BodyFitStage : public Stage {
   struct Work;  // models, fitter, smoother: built in start()
 
   void add_frame(BodyFitFrame&& frame, StageOutput& out);
+  void enqueue(BodyFitFrame&& frame);  // packed into queue_
   void personalise(StageOutput& out);
   // Fits the queued frames whose forearm orientations are known (all when `all`).
   void fit_ready(bool all, StageOutput& out);
@@ -129,7 +147,7 @@ class BodyFitStage : public Stage {
   bool enabled_ = false;
   std::unique_ptr<Work> work_;
   double calibration_s_ = 1.0;
-  double imu_wait_s_ = 6.0;
+  double imu_wait_s_ = kDefaultImuWaitS;
   double lost_energy_ = 100.0;
   bool fine_shape_ = true;
   double skeleton_start_energy_ = kDefaultSkeletonStartEnergy;
@@ -144,7 +162,7 @@ class BodyFitStage : public Stage {
   std::optional<std::int64_t> first_t_us_, last_frame_t_us_;
   std::vector<BodyFitFrame> calibration_frames_;
   bool personalised_ = false;
-  std::deque<BodyFitFrame> queue_;  // personalised, waiting for forearm orientations
+  std::deque<QueuedBodyFitFrame> queue_;  // personalised, waiting for forearm orientations
 
   // Forearm orientations by arm (v1::Arm), camera clock.
   std::map<int, std::deque<std::pair<std::int64_t, Eigen::Quaterniond>>> K_from_F_;
@@ -167,6 +185,7 @@ class BodyFitStage : public Stage {
   bool record_stats_ = false;
   std::vector<BodyFitFrameStats> stats_;
   std::uint64_t frames_fitted_ = 0, frames_lost_ = 0;
+  std::uint64_t frames_without_imu_ = 0;  // fitted while an arm IMU's orientation was missing
 };
 
 }  // namespace posefuse::session
