@@ -21,6 +21,7 @@
 #include "session/session_validator.hpp"
 #include "session/stages/body_fit_stage.hpp"
 #include "session/stages/default_stages.hpp"
+#include "session/text_fields.hpp"
 #include "sim/camera_session.hpp"
 
 namespace posefuse::session {
@@ -412,6 +413,39 @@ TEST(BodyFitStage, SkeletonStartRunsOnlyWhenThePreviousFitIsNotGood) {
 
 // Policy off: both starts on every frame, the skeleton start on a second thread; the lower
 // energy is kept and each start's CPU time is reported.
+// Lost tracking (energy above fit.lost_energy) is counted, and the next frame still starts from the
+// lost frame's pose (the start policy adds the skeleton start after a poor fit). The threshold is
+// set just below the session's highest frame energy, so that frame is lost: the fits are the same
+// as without any lost frame.
+TEST(BodyFitStage, LostTrackingIsCountedAndTheNextFrameStillStartsFromTheFittedPose) {
+  std::vector<BodyFitFrameStats> first;
+  run(header_with({}), kAllChunks, session(), &first);
+  ASSERT_GE(first.size(), 3u);
+  // A frame's energy is its winner's (a start that did not run has a NaN energy).
+  const auto energy_of = [](const BodyFitFrameStats& f) { return f.previous_won ? f.energy_previous : f.energy_skeleton; };
+  double highest = 0;
+  for (const auto& f : first) highest = std::max(highest, energy_of(f));
+  std::vector<BodyFitFrameStats> stats;
+  const Output out =
+      run(header_with({{"fit.lost_energy", format_double(0.999 * highest)}}), kAllChunks, session(), &stats);
+  ASSERT_EQ(stats.size(), first.size());
+  int lost = 0;
+  for (size_t i = 0; i < stats.size(); ++i) {
+    lost += energy_of(stats[i]) > 0.999 * highest;
+    EXPECT_EQ(stats[i].iterations_previous > 0, i > 0) << "frame " << i;
+    EXPECT_EQ(energy_of(stats[i]), energy_of(first[i])) << "frame " << i;
+  }
+  EXPECT_GE(lost, 1);
+  ASSERT_TRUE(out.warned("FIT_LOST", "fit"));
+  for (const auto& w : out.warnings) {
+    if (w.code() == "FIT_LOST") {
+      EXPECT_NE(w.message().find(" in " + std::to_string(lost) + " of " + std::to_string(stats.size()) + " frames"),
+                std::string::npos)
+          << w.message();
+    }
+  }
+}
+
 TEST(BodyFitStage, BothStartsRunOnTwoThreadsWhenThePolicyIsOff) {
   std::vector<BodyFitFrameStats> stats;
   const Output out = run(header_with({{"fit.skeleton_start_energy", "0"}}), kAllChunks, session(), &stats);

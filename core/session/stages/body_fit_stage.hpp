@@ -18,9 +18,10 @@
 //     one from the starting pose built from the camera skeleton, the lower energy wins; the
 //     skeleton start is fitted only when the previous-frame fit is missing or ends at
 //     `fit.skeleton_start_energy` or above (0: both always, on two threads). Tracking is lost
-//     when the winner's energy exceeds `fit.lost_energy`: the next frame starts from the skeleton
-//     only. Frames wait (up to `fit.imu_wait_s`) until the forearm orientations covering them have
-//     arrived, so that the imu term has them; then they are fitted without.
+//     when the winner's energy exceeds `fit.lost_energy`: counted (FIT_LOST); the next frame still
+//     starts from it, and the start policy adds the skeleton start. Frames wait (up to
+//     `fit.imu_wait_s`) until the forearm orientations covering them have arrived, so that the imu
+//     term has them; then they are fitted without.
 //  4. Post-processing: moving average over `fit.smoothing_frames` frames (PoseSmoother), forearm
 //     roll from the IMU (fit::forearm_roll), and a FrameResult per frame: 24 SMPL joints, the 25
 //     camera-compatible joints, forearm orientations, per-joint source and confidence, energy.
