@@ -2,7 +2,7 @@
 // where the forearms hide behind the head and the back):
 //
 //   build/bench/bench_fit_protocol SIM_OPTIONS SESSION.pfchunks GT_DIR OUT_DIR [--option KEY=VALUE]...
-//                                  [--frames-csv PATH]
+//                                  [--frames-csv PATH] [--score-existing]
 //
 // SIM_OPTIONS is the options file posefuse-sim made SESSION and GT_DIR from (it gives the motion's
 // phases); the session goes through SessionPipeline(make_default_stages()) with fit.enabled=true
@@ -13,6 +13,9 @@
 // strap (the true d_se along the fitted forearm against the same point on the true forearm: the
 // truth only scores here). A frame belongs to the phase whose hold it is in or moves towards;
 // frames after the last hold are "rest". --frames-csv writes every frame's numbers.
+// --score-existing: OUT_DIR already holds the results of a run (e.g. `bench_sim_forearm replay ...
+// --option fit.enabled=true` built from another commit); the pipeline is not run, and the energies
+// and lost frames, which the result files do not hold, are printed as nan and -1.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -120,8 +123,31 @@ double median(std::vector<double> v) {
   return v[v.size() / 2];
 }
 
+// The frame results and IMU positions of a result directory written earlier (no fit energies).
+void read_existing(const fs::path& dir, Sink& sink) {
+  const session::ResultDirectory d = session::read_result_files(dir);
+  for (const auto& j : d.smpl_joints) {
+    v1::FrameResult& f = sink.fit[j.t_us];
+    f.set_t_us(j.t_us);
+    f.set_fit_energy(NAN);
+    while (f.smpl_joints_size() <= j.joint) f.add_smpl_joints();
+    v1::Vec3& p = *f.mutable_smpl_joints(j.joint)->mutable_position_m();
+    p.set_x(j.p_K.x());
+    p.set_y(j.p_K.y());
+    p.set_z(j.p_K.z());
+  }
+  for (const auto& row : d.imu_positions) {
+    v1::ImuPosition& p = sink.imu[{row.t_us, row.device_id}];
+    p.set_device_id(row.device_id);
+    p.mutable_position_m()->set_x(row.p_K.x());
+    p.mutable_position_m()->set_y(row.p_K.y());
+    p.mutable_position_m()->set_z(row.p_K.z());
+    p.set_source(row.source);
+  }
+}
+
 int run(const fs::path& sim_options_path, const fs::path& chunks, const fs::path& gt, const fs::path& out,
-        const std::vector<std::string>& options, const std::string& frames_csv) {
+        const std::vector<std::string>& options, const std::string& frames_csv, bool score_existing) {
   sim::SimSessionOptions sim_options;
   tools::apply_sim_options_file(sim_options_path, sim_options);
   const sim::BodyMotion motion =
@@ -133,10 +159,20 @@ int run(const fs::path& sim_options_path, const fs::path& chunks, const fs::path
   std::vector<session::BodyFitFrameStats> stats;
   const double cpu0 = bench::thread_cpu_seconds();
   const auto wall0 = bench::WallClock::now();
-  fs::remove_all(out);
-  client::ResultWriter writer(out);
+  if (!score_existing) fs::remove_all(out);
+  client::ResultWriter writer(score_existing ? fs::temp_directory_path() / "bench_fit_protocol_unused" : out);
   Sink sink(writer);
-  {
+  if (score_existing) {
+    read_existing(out, sink);
+    session::ChunkFileReader reader(chunks);
+    v1::SessionChunk chunk;
+    std::optional<std::uint32_t> body;
+    while (reader.next(chunk)) {
+      if (!chunk.has_skeleton()) continue;
+      if (!body) body = chunk.skeleton().body_id();
+      if (chunk.skeleton().body_id() == *body) skeletons[chunk.skeleton().t_us()] = chunk.skeleton();
+    }
+  } else {
     std::vector<std::unique_ptr<session::Stage>> stages = session::make_default_stages();
     session::BodyFitStage* fit_stage = nullptr;
     for (auto& s : stages)
@@ -193,7 +229,7 @@ int run(const fs::path& sim_options_path, const fs::path& chunks, const fs::path
     PhaseSums& p = sums[phase];
     const auto st = stats_at.find(t_us);
     const double energy = frame.fit_energy();
-    const bool lost = energy > lost_energy;
+    const bool lost = energy > lost_energy;  // false for a NaN energy (--score-existing)
     double fit_e[kKinds][kSides], cam_e[kKinds][kSides], strap_e[kSides], imu_e[kSides];
     std::string imu_src[kSides];
     for (int s = 0; s < kSides; ++s) {
@@ -283,7 +319,7 @@ int run(const fs::path& sim_options_path, const fs::path& chunks, const fs::path
     std::snprintf(predicted, sizeof predicted, "%.0f (%d) / %.0f (%d)", 1e3 * p.predicted[0].value(), p.predicted_n[0],
                   1e3 * p.predicted[1].value(), p.predicted_n[1]);
     std::printf("| %s | %d | %d | %.1f | %s | %s | %s | %.1f | %s | %s | %.1f | %s | %s | %s |\n", name.c_str(), p.frames,
-                p.lost, median(p.energy), lr(p.fit[0]).c_str(), lr(p.fit[1]).c_str(), lr(p.fit[2]).c_str(), six(p.fit),
+                score_existing ? -1 : p.lost, median(p.energy), lr(p.fit[0]).c_str(), lr(p.fit[1]).c_str(), lr(p.fit[2]).c_str(), six(p.fit),
                 lr(p.camera[1]).c_str(), lr(p.camera[2]).c_str(), six(p.camera), lr(p.fit_strap).c_str(), visual,
                 predicted);
   };
@@ -299,10 +335,13 @@ int main(int argc, char** argv) {
   try {
     std::vector<std::string> positional, options;
     std::string frames_csv;
+    bool score_existing = false;
     for (int a = 1; a < argc; ++a) {
       const std::string arg = argv[a];
       if (arg == "--option" && a + 1 < argc) {
         options.push_back(argv[++a]);
+      } else if (arg == "--score-existing") {
+        score_existing = true;
       } else if (arg == "--frames-csv" && a + 1 < argc) {
         frames_csv = argv[++a];
       } else {
@@ -312,10 +351,10 @@ int main(int argc, char** argv) {
     if (positional.size() != 4) {
       std::fprintf(stderr,
                    "usage: bench_fit_protocol SIM_OPTIONS SESSION.pfchunks GT_DIR OUT_DIR [--option KEY=VALUE]... "
-                   "[--frames-csv PATH]\n");
+                   "[--frames-csv PATH] [--score-existing]\n");
       return 2;
     }
-    return run(positional[0], positional[1], positional[2], positional[3], options, frames_csv);
+    return run(positional[0], positional[1], positional[2], positional[3], options, frames_csv, score_existing);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "bench_fit_protocol: %s\n", e.what());
     return 1;
