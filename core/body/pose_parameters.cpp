@@ -55,7 +55,7 @@ constexpr LimitRow kLimits[] = {
 // protocol were out of reach: the calibration pose (upper arm sideways, forearm vertical: z = 90 deg),
 // the forearm behind the head (external rotation beyond 90 deg) and behind the back (internal
 // rotation beyond 90 deg), and the fit paid for them with 13-40 cm wrist errors
-// (docs/fitting.md, "Protocol sessions"). z covers rotation up to +-90 deg at 150 deg of flexion;
+// (docs/fitting.md, "Paper 1's protocol"). z covers rotation up to +-90 deg at 150 deg of flexion;
 // the extension side of y reaches 60 deg, the swing of flexion ~120 deg with the humerus turned
 // ~120 deg (chosen on paper 1's protocol among 10, 30, 45, 60 and 90 deg).
 constexpr LimitRow kNoRollElbowLimits[] = {

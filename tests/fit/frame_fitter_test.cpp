@@ -245,7 +245,7 @@ TEST(FrameFitterEnergy, ImuTermPullsTheForearmTowardsTheImuDirection) {
 // rendered from the upper-body model and fitted back from a perturbed start with the true IMU
 // directions. With the anatomical elbow range (z within +-30 deg, body::kLimits) the true poses
 // cost a limit energy of 645 and 224 and the fit ended 77-86 and 116-119 mm off at the wrists
-// (docs/fitting.md, "Protocol sessions").
+// (docs/fitting.md, "Paper 1's protocol").
 namespace protocol {
 
 Eigen::VectorXd calibration_pose(const body::PoseLayout& layout) {

@@ -174,7 +174,7 @@ std::vector<StageOption> BodyFitStage::options() const {
       {kBodyIdKey, "", "the person to fit (body index / skeleton body_id); default the first skeleton's"},
       {kSmoothingKey, "3", "moving average of the fitted poses over this many frames (odd; 1 = none)"},
       {kImuWaitKey, "30", "how long a frame waits for its forearm orientations (imu term), seconds of camera time; waiting frames keep only their silhouette's depth (~40 kB each)"},
-      {kLostEnergyKey, "100", "tracking is lost above this fit energy (eq. 4): restart from the skeleton"},
+      {kLostEnergyKey, "100", "frames fitted above this energy (eq. 4) are counted as lost tracking (FIT_LOST)"},
       {kMaxIterationsKey, std::to_string(defaults.max_iterations), "LM iterations per start at most"},
       {kFineShapeKey, "true", "personalisation: fine shape tuning on a calibration depth frame (paper 2 III-B)"},
       {kLambdaImuKey, format_double(defaults.lambda_imu), "weight of the imu term (eq. 9), >= 0"},
@@ -508,7 +508,7 @@ void BodyFitStage::fit_frame(BodyFitFrame& frame, StageOutput& out) {
     // frame's energy jumped (single-frame depth or sampling outliers, and behind the back the
     // camera skeleton's wrists are 12-15 cm off). On paper 1's protocol (seeds 1 / 2) the arms' six
     // joints went from 21.2 / 22.8 to 18.8 / 18.2 mm; restarting from the last pose below the
-    // threshold plus the skeleton start gave 20.2 / 18.3 mm (docs/fitting.md, "Protocol sessions").
+    // threshold plus the skeleton start gave 20.2 / 18.3 mm (docs/fitting.md, "Paper 1's protocol").
     if (energy > lost_energy_) ++frames_lost_;
     previous_theta_ = best->theta;
     previous_t_us_ = frame.t_us;
