@@ -4,6 +4,7 @@
 //   build/bench/bench_sim_forearm replay SESSION.pfchunks GT_DIR OUT_DIR
 //     the chunk file through SessionPipeline(make_default_stages()), results written to OUT_DIR
 //     by the client's ResultWriter, then scored against GT_DIR (posefuse-score's table).
+//     `--option KEY=VALUE` (repeatable) sets a header option, e.g. --option fit.enabled=true.
 //   build/bench/bench_sim_forearm frames SESSION.pfchunks GT_DIR
 //     per camera frame and arm: the forearm axis measured in depth (measure_arm_axes) and the
 //     strap (detect_strap) against the simulator's truth (gt/camera_joints.csv, the strap centre
@@ -58,7 +59,8 @@ namespace fs = std::filesystem;
 using geometry::Quat;
 using geometry::Vec3;
 
-int replay(const fs::path& chunks, const fs::path& gt, const fs::path& out) {
+// `options`: KEY=VALUE pairs set in the session header (e.g. fit.enabled=true), over the file's.
+int replay(const fs::path& chunks, const fs::path& gt, const fs::path& out, const std::vector<std::string>& options) {
   const double cpu0 = bench::thread_cpu_seconds();
   const auto wall0 = bench::WallClock::now();
   fs::remove_all(out);
@@ -68,7 +70,16 @@ int replay(const fs::path& chunks, const fs::path& gt, const fs::path& out) {
     session::SessionPipeline pipeline(session::make_default_stages(), results);
     session::ChunkFileReader reader(chunks);
     v1::SessionChunk chunk;
-    while (reader.next(chunk)) pipeline.push(chunk);
+    while (reader.next(chunk)) {
+      if (chunk.has_header()) {
+        for (const std::string& kv : options) {
+          const auto eq = kv.find('=');
+          if (eq == std::string::npos) throw std::invalid_argument("--option '" + kv + "': expected KEY=VALUE");
+          (*chunk.mutable_header()->mutable_options())[kv.substr(0, eq)] = kv.substr(eq + 1);
+        }
+      }
+      pipeline.push(chunk);
+    }
     pipeline.close();
     writer.finish();
   }
@@ -459,7 +470,11 @@ int split(const fs::path& result_dir, const fs::path& gt_dir, const std::string&
 int main(int argc, char** argv) {
   try {
     const std::string mode = argc > 1 ? argv[1] : "";
-    if (mode == "replay" && argc == 5) return replay(argv[2], argv[3], argv[4]);
+    if (mode == "replay" && argc >= 5) {
+      std::vector<std::string> options;
+      for (int i = 5; i + 1 < argc && std::string(argv[i]) == "--option"; i += 2) options.push_back(argv[i + 1]);
+      if (argc == 5 + 2 * static_cast<int>(options.size())) return replay(argv[2], argv[3], argv[4], options);
+    }
     if (mode == "frames" && (argc == 4 || argc == 5)) {
       return frames(argv[2], argv[3], argc == 5 ? std::optional<double>(std::stod(argv[4])) : std::nullopt);
     }
@@ -468,7 +483,7 @@ int main(int argc, char** argv) {
       return pose_frames(argv[2], argv[3], std::stod(argv[4]), std::stod(argv[5]), argc == 7);
     }
     std::fprintf(stderr,
-                 "usage: bench_sim_forearm replay SESSION.pfchunks GT_DIR OUT_DIR\n"
+                 "usage: bench_sim_forearm replay SESSION.pfchunks GT_DIR OUT_DIR [--option KEY=VALUE]...\n"
                  "       bench_sim_forearm frames SESSION.pfchunks GT_DIR\n"
                  "       bench_sim_forearm pose SESSION.pfchunks GT_DIR T0_S T1_S [slices]\n"
                  "       bench_sim_forearm split RESULT_DIR GT_DIR DEVICE HOLD_T0_S HOLD_T1_S\n");

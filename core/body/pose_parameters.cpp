@@ -47,6 +47,22 @@ constexpr LimitRow kLimits[] = {
     {kRightAnkle, 0, -45, 30}, {kRightAnkle, 2, -25, 25},
 };
 
+// The elbows of the layouts without arm roll (upper_body, full_body). Paper 2 (II-B) drops the
+// roll DOF of the arm joints, so the upper arm cannot turn about itself (humeral rotation), and
+// the elbow's swing has to carry it: flexion phi with the humerus turned by alpha from the T-pose's
+// palms-down reference is the swing phi (-cos alpha, sin alpha) about (y, z) on the left arm
+// (mirrored on the right). With kLimits' anatomical ranges (z +-30 deg) the poses of paper 1's
+// protocol were out of reach: the calibration pose (upper arm sideways, forearm vertical: z = 90 deg),
+// the forearm behind the head (external rotation beyond 90 deg) and behind the back (internal
+// rotation beyond 90 deg), and the fit paid for them with 13-40 cm wrist errors
+// (docs/fitting.md, "Paper 1's protocol"). z covers rotation up to +-90 deg at 150 deg of flexion;
+// the extension side of y reaches 60 deg, the swing of flexion ~120 deg with the humerus turned
+// ~120 deg (chosen on paper 1's protocol among 10, 30, 45, 60 and 90 deg).
+constexpr LimitRow kNoRollElbowLimits[] = {
+    {kLeftElbow, 1, -155, 60},  {kLeftElbow, 2, -150, 150},
+    {kRightElbow, 1, -60, 155}, {kRightElbow, 2, -150, 150},
+};
+
 Dof rotation_dof(int joint, int axis) {
   Dof d;
   d.kind = DofKind::kRotation;
@@ -89,6 +105,12 @@ void add_upper_body(std::vector<Dof>& dofs) {
   for (int j : {kLeftCollar, kRightCollar, kLeftShoulder, kRightShoulder, kLeftElbow,
                 kRightElbow, kLeftWrist, kRightWrist})
     add_joint(dofs, j, {1, 2});
+  for (Dof& d : dofs)
+    for (const LimitRow& row : kNoRollElbowLimits)
+      if (d.kind == DofKind::kRotation && d.joint == row.joint && d.axis == Eigen::Vector3d::Unit(row.axis)) {
+        d.min_rad = row.min_deg * kDeg;
+        d.max_rad = row.max_deg * kDeg;
+      }
 }
 
 }  // namespace

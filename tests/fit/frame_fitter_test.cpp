@@ -131,8 +131,6 @@ TEST(FrameFitter, FrozenContourStopsAConvergedFitEarlyOnlyOnceTheJointsAreClose)
   EXPECT_LT(frozen_iterations, reselect_iterations);
 }
 
-}  // namespace
-}  // namespace posefuse::fit
 
 namespace posefuse::fit {
 namespace {
@@ -235,6 +233,112 @@ TEST(FrameFitterEnergy, ImuTermPullsTheForearmTowardsTheImuDirection) {
     }
   }
   EXPECT_LT(angle_to_imu[1], angle_to_imu[0] - 2 * kDeg);
+}
+
+}  // namespace
+}  // namespace posefuse::fit
+
+// Paper 1's protocol (issue 7) turns the upper arm about itself by ~90 deg or more, which the
+// layout without arm roll (paper 2, II-B) can only express through the elbow's swing: the
+// calibration pose (upper arm sideways, forearm vertical) and the forearm behind the back, where
+// the depth image shows nothing of it and only the IMU direction and the elbow place it. Both
+// rendered from the upper-body model and fitted back from a perturbed start with the true IMU
+// directions. With the anatomical elbow range (z within +-30 deg, body::kLimits) the true poses
+// cost a limit energy of 645 and 224 and the fit ended 77-86 and 116-119 mm off at the wrists
+// (docs/fitting.md, "Paper 1's protocol").
+namespace protocol {
+
+Eigen::VectorXd calibration_pose(const body::PoseLayout& layout) {
+  Eigen::VectorXd theta = testing::facing_pose(layout, 2.2, 0);
+  for (const char* dof : {"left_shoulder_y", "left_shoulder_z", "right_shoulder_y", "right_shoulder_z", "left_elbow_y",
+                          "right_elbow_y"})
+    theta[layout.index_of(dof)] = 0;
+  theta[layout.index_of("left_elbow_z")] = 90 * kDeg;  // forearms up, palms to the camera
+  theta[layout.index_of("right_elbow_z")] = -90 * kDeg;
+  return theta;
+}
+
+// The left forearm across the lower back (as the fits of paper 1's protocol find it); the right
+// arm as in facing_pose.
+Eigen::VectorXd left_forearm_behind_back(const body::PoseLayout& layout) {
+  Eigen::VectorXd theta = testing::facing_pose(layout, 2.2, 0);
+  theta[layout.index_of("left_shoulder_y")] = 37 * kDeg;
+  theta[layout.index_of("left_shoulder_z")] = -57 * kDeg;
+  theta[layout.index_of("left_elbow_y")] = 40 * kDeg;
+  theta[layout.index_of("left_elbow_z")] = -70 * kDeg;
+  return theta;
+}
+
+struct ProtocolFit {
+  double limit_energy_at_truth = 0;
+  double wrist_error_m[2] = {0, 0};  // left, right
+  double elbow_error_m[2] = {0, 0};
+};
+
+// From a tracking-like start (every DOF moved by up to 1 deg / 5 mm, as between frames at 30 Hz):
+// from 3 deg / 2 cm about one start in ten ends in a local minimum with a visible arm 2 cm off
+// (docs/fitting.md, "Not done yet"), which is not what these tests are about.
+ProtocolFit fit_protocol_pose(const Scene& s, const Eigen::VectorXd& truth, unsigned seed,
+                              const testing::ModelFrame& rendered) {
+  FrameFitter fitter(s.model, s.layout, s.camera.intrinsics(), FitOptions{});
+  const FrameObservation observation = prepare_observation(
+      rendered.frame, s.camera, rendered.skeleton_K, fitter.options(),
+      ForearmDirections{testing::forearm_direction(rendered.joints_K, true), testing::forearm_direction(rendered.joints_K, false)});
+  ProtocolFit out;
+  out.limit_energy_at_truth = fitter.energy(observation, truth, s.beta).limit;
+  const FitResult result = fitter.fit(observation, perturbed(s.layout, truth, 1 * kDeg, 0.005, seed), s.beta);
+  body::BodyEvaluator eval(s.model, s.layout);
+  eval.evaluate(s.beta, result.theta, body::Derivatives::kNone);
+  for (int side = 0; side < 2; ++side) {
+    const int wrist = side == 0 ? body::kLeftWrist : body::kRightWrist, elbow = side == 0 ? body::kLeftElbow : body::kRightElbow;
+    out.wrist_error_m[side] = (eval.joints().col(wrist) - rendered.joints_K.col(wrist)).norm();
+    out.elbow_error_m[side] = (eval.joints().col(elbow) - rendered.joints_K.col(elbow)).norm();
+  }
+  std::printf("limit energy at the truth %.3g; wrists %.1f / %.1f mm, elbows %.1f / %.1f mm; E %.4g, %d iterations\n",
+              out.limit_energy_at_truth, 1e3 * out.wrist_error_m[0], 1e3 * out.wrist_error_m[1],
+              1e3 * out.elbow_error_m[0], 1e3 * out.elbow_error_m[1], result.energy.total(), result.iterations);
+  return out;
+}
+
+}  // namespace protocol
+
+TEST(FrameFitterProtocol, CalibrationPoseWithTheForearmsUpIsFittedBack) {
+  Scene s;
+  const Eigen::VectorXd truth = protocol::calibration_pose(s.layout);
+  const testing::ModelFrame rendered = testing::render_model_frame(s.model, s.layout, s.beta, truth, s.camera);
+  // The forearms really point up (K's y) with the upper arms sideways.
+  for (const bool left : {true, false}) EXPECT_GT(testing::forearm_direction(rendered.joints_K, left).y(), 0.95);
+  for (unsigned seed : {301u, 302u}) {
+    const protocol::ProtocolFit fit = protocol::fit_protocol_pose(s, truth, seed, rendered);
+    EXPECT_EQ(fit.limit_energy_at_truth, 0.0);
+    for (int side = 0; side < 2; ++side) {
+      EXPECT_LT(fit.wrist_error_m[side], 0.01) << "seed " << seed << " side " << side;
+      EXPECT_LT(fit.elbow_error_m[side], 0.01) << "seed " << seed << " side " << side;
+    }
+  }
+}
+
+TEST(FrameFitterProtocol, HiddenForearmBehindTheBackIsFittedBackFromItsImuDirection) {
+  Scene s;
+  const Eigen::VectorXd truth = protocol::left_forearm_behind_back(s.layout);
+  const testing::ModelFrame rendered = testing::render_model_frame(s.model, s.layout, s.beta, truth, s.camera);
+  // The left wrist and the forearm's middle are hidden: the depth there is the torso, in front.
+  for (const double along : {0.75, 1.0}) {
+    const Eigen::Vector3d p = rendered.joints_K.col(body::kLeftElbow) +
+                              along * (rendered.joints_K.col(body::kLeftWrist) - rendered.joints_K.col(body::kLeftElbow));
+    const auto px = s.camera.project(p);
+    ASSERT_TRUE(px);
+    const size_t i = static_cast<size_t>(std::lround(px->y())) * s.camera.width() + static_cast<size_t>(std::lround(px->x()));
+    ASSERT_NE(rendered.frame.body_index[i], kNoBody);
+    EXPECT_LT(rendered.frame.depth_mm[i] * 1e-3, p.z() - 0.05) << "at " << along << " of the forearm";
+  }
+  for (unsigned seed : {311u, 312u}) {
+    const protocol::ProtocolFit fit = protocol::fit_protocol_pose(s, truth, seed, rendered);
+    EXPECT_EQ(fit.limit_energy_at_truth, 0.0);
+    EXPECT_LT(fit.elbow_error_m[0], 0.01) << "seed " << seed;
+    EXPECT_LT(fit.wrist_error_m[0], 0.01) << "seed " << seed;
+    EXPECT_LT(fit.wrist_error_m[1], 0.01) << "seed " << seed;
+  }
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <cstdio>
@@ -20,6 +21,7 @@
 #include "session/session_validator.hpp"
 #include "session/stages/body_fit_stage.hpp"
 #include "session/stages/default_stages.hpp"
+#include "session/text_fields.hpp"
 #include "sim/camera_session.hpp"
 
 namespace posefuse::session {
@@ -192,23 +194,26 @@ TEST(BodyFitStage, RunsInTheDefaultPipelineWhenEnabled) {
   EXPECT_EQ(summary->frames_fitted(), session().truth.size());
 }
 
-TEST(BodyFitStage, ForearmOrientationsEnterTheFitAndTheResult) {
-  // The forearm stage's per-sample K_from_F, here the truth, one sample per frame.
-  v1::FitResult right, left;
-  for (auto [result, arm, strap] : {std::tuple{&right, v1::RIGHT, 0}, std::tuple{&left, v1::LEFT, 1}}) {
-    v1::ForearmOrientationBatch& batch = *result->mutable_forearm_orientations();
-    batch.set_arm(arm);
+// The forearm stage's per-sample K_from_F, here the truth, one sample per frame: right, left.
+std::array<v1::FitResult, 2> truth_forearm_batches() {
+  std::array<v1::FitResult, 2> batches;
+  for (int strap = 0; strap < 2; ++strap) {
+    v1::ForearmOrientationBatch& batch = *batches[static_cast<size_t>(strap)].mutable_forearm_orientations();
+    batch.set_arm(strap == 0 ? v1::RIGHT : v1::LEFT);
     for (size_t i = 0; i < session().truth.size(); ++i) {
       const Eigen::Quaterniond q = session().truth[i].forearms[static_cast<size_t>(strap)].K_from_F;
       batch.add_t_us(session().t_us[i]);
       for (const double c : {q.w(), q.x(), q.y(), q.z()}) batch.add_k_from_f(c);
     }
   }
+  return batches;
+}
+
+TEST(BodyFitStage, ForearmOrientationsEnterTheFitAndTheResult) {
   Output out;
   BodyFitStage stage;
   stage.start(header_with({}), out);
-  stage.on_result(right, out);
-  stage.on_result(left, out);
+  for (const auto& batch : truth_forearm_batches()) stage.on_result(batch, out);
   for (const auto& chunk : session().chunks) stage.on_chunk(chunk, out);
   stage.finish(out);
   const auto frames = out.frames();
@@ -228,6 +233,52 @@ TEST(BodyFitStage, ForearmOrientationsEnterTheFitAndTheResult) {
                                        .normalized();
       EXPECT_LT(std::acos(std::min(1.0, (got * Eigen::Vector3d::UnitY()).dot(axis))), 1e-6);
       EXPECT_LT(got.angularDistance(want), 10 * kDeg) << "frame " << i << (is_left ? " left" : " right");
+    }
+  }
+}
+
+// posefuse-sim's chunk files order IMU batches by the device clock, 1-100 s ahead of the camera's,
+// so in a short session every forearm orientation reaches the stage after the last camera frame.
+// Frames wait for them up to fit.imu_wait_s (camera time); those that waited longer are fitted
+// without the imu term, counted in FIT_NO_IMU.
+TEST(BodyFitStage, FramesWaitForForearmOrientationsThatComeAfterThem) {
+  v1::SessionHeader header = header_with({});
+  for (const auto role : {v1::ImuDevice::ARM_LEFT, v1::ImuDevice::ARM_RIGHT}) {
+    v1::ImuDevice& device = *header.add_imu_devices();
+    device.set_device_id(role == v1::ImuDevice::ARM_LEFT ? "imu_left" : "imu_right");
+    device.set_role(role);
+    device.set_nominal_rate_hz(80);
+  }
+  for (const char* wait_s : {"30", "0.05"}) {
+    SCOPED_TRACE(std::string("fit.imu_wait_s = ") + wait_s);
+    (*header.mutable_options())["fit.imu_wait_s"] = wait_s;
+    Output out;
+    BodyFitStage stage;
+    stage.start(header, out);
+    for (const auto& chunk : session().chunks) stage.on_chunk(chunk, out);
+    const size_t emitted_before_imu = out.frames().size();
+    for (const auto& batch : truth_forearm_batches()) stage.on_result(batch, out);
+    stage.finish(out);
+    const auto frames = out.frames();
+    ASSERT_EQ(frames.size(), session().truth.size());
+    size_t fused = 0;
+    for (const v1::FrameResult* f : frames) fused += f->smpl_joints(body::kRightWrist).source() == v1::FUSED;
+    if (std::string(wait_s) == "30") {
+      EXPECT_EQ(emitted_before_imu, 0u);  // every frame waited
+      EXPECT_EQ(fused, frames.size());
+      EXPECT_FALSE(out.warned("FIT_NO_IMU", "fit"));
+    } else {
+      EXPECT_GT(emitted_before_imu, 0u);
+      EXPECT_GT(fused, 0u);  // the frames still waiting when the orientations came
+      ASSERT_LT(fused, frames.size());
+      ASSERT_TRUE(out.warned("FIT_NO_IMU", "fit"));
+      for (const auto& w : out.warnings) {
+        if (w.code() == "FIT_NO_IMU") {
+          EXPECT_EQ(w.message().rfind(std::to_string(frames.size() - fused) + " of " + std::to_string(frames.size()), 0),
+                    0u)
+              << w.message();
+        }
+      }
     }
   }
 }
@@ -362,6 +413,39 @@ TEST(BodyFitStage, SkeletonStartRunsOnlyWhenThePreviousFitIsNotGood) {
 
 // Policy off: both starts on every frame, the skeleton start on a second thread; the lower
 // energy is kept and each start's CPU time is reported.
+// Lost tracking (energy above fit.lost_energy) is counted, and the next frame still starts from the
+// lost frame's pose (the start policy adds the skeleton start after a poor fit). The threshold is
+// set just below the session's highest frame energy, so that frame is lost: the fits are the same
+// as without any lost frame.
+TEST(BodyFitStage, LostTrackingIsCountedAndTheNextFrameStillStartsFromTheFittedPose) {
+  std::vector<BodyFitFrameStats> first;
+  run(header_with({}), kAllChunks, session(), &first);
+  ASSERT_GE(first.size(), 3u);
+  // A frame's energy is its winner's (a start that did not run has a NaN energy).
+  const auto energy_of = [](const BodyFitFrameStats& f) { return f.previous_won ? f.energy_previous : f.energy_skeleton; };
+  double highest = 0;
+  for (const auto& f : first) highest = std::max(highest, energy_of(f));
+  std::vector<BodyFitFrameStats> stats;
+  const Output out =
+      run(header_with({{"fit.lost_energy", format_double(0.999 * highest)}}), kAllChunks, session(), &stats);
+  ASSERT_EQ(stats.size(), first.size());
+  int lost = 0;
+  for (size_t i = 0; i < stats.size(); ++i) {
+    lost += energy_of(stats[i]) > 0.999 * highest;
+    EXPECT_EQ(stats[i].iterations_previous > 0, i > 0) << "frame " << i;
+    EXPECT_EQ(energy_of(stats[i]), energy_of(first[i])) << "frame " << i;
+  }
+  EXPECT_GE(lost, 1);
+  ASSERT_TRUE(out.warned("FIT_LOST", "fit"));
+  for (const auto& w : out.warnings) {
+    if (w.code() == "FIT_LOST") {
+      EXPECT_NE(w.message().find(" in " + std::to_string(lost) + " of " + std::to_string(stats.size()) + " frames"),
+                std::string::npos)
+          << w.message();
+    }
+  }
+}
+
 TEST(BodyFitStage, BothStartsRunOnTwoThreadsWhenThePolicyIsOff) {
   std::vector<BodyFitFrameStats> stats;
   const Output out = run(header_with({{"fit.skeleton_start_energy", "0"}}), kAllChunks, session(), &stats);

@@ -173,8 +173,8 @@ std::vector<StageOption> BodyFitStage::options() const {
       {kCalibrationSKey, "1", "personalisation: the first seconds of depth frames (controlled pose), seconds"},
       {kBodyIdKey, "", "the person to fit (body index / skeleton body_id); default the first skeleton's"},
       {kSmoothingKey, "3", "moving average of the fitted poses over this many frames (odd; 1 = none)"},
-      {kImuWaitKey, "6", "how long a frame waits for its forearm orientations (imu term), seconds"},
-      {kLostEnergyKey, "100", "tracking is lost above this fit energy (eq. 4): restart from the skeleton"},
+      {kImuWaitKey, "30", "how long a frame waits for its forearm orientations (imu term), seconds of camera time; waiting frames keep only their silhouette's depth (~40 kB each)"},
+      {kLostEnergyKey, "100", "frames fitted above this energy (eq. 4) are counted as lost tracking (FIT_LOST)"},
       {kMaxIterationsKey, std::to_string(defaults.max_iterations), "LM iterations per start at most"},
       {kFineShapeKey, "true", "personalisation: fine shape tuning on a calibration depth frame (paper 2 III-B)"},
       {kLambdaImuKey, format_double(defaults.lambda_imu), "weight of the imu term (eq. 9), >= 0"},
@@ -295,8 +295,12 @@ void BodyFitStage::add_frame(BodyFitFrame&& frame, StageOutput& out) {
     }
     personalise(out);
   }
-  queue_.push_back(std::move(frame));
+  enqueue(std::move(frame));
   fit_ready(false, out);
+}
+
+void BodyFitStage::enqueue(BodyFitFrame&& frame) {
+  queue_.push_back({frame.t_us, fit::pack_body_pixels(frame.frame), std::move(frame.skeleton), frame.assemble_s});
 }
 
 void BodyFitStage::personalise(StageOutput& out) {
@@ -351,7 +355,7 @@ void BodyFitStage::personalise(StageOutput& out) {
              std::string(e.what()) + "; fitting the template shape (beta = 0)");
   }
   work_->set_shape(beta);
-  for (BodyFitFrame& f : calibration_frames_) queue_.push_back(std::move(f));
+  for (BodyFitFrame& f : calibration_frames_) enqueue(std::move(f));
   calibration_frames_.clear();
 }
 
@@ -375,8 +379,10 @@ void BodyFitStage::fit_ready(bool all, StageOutput& out) {
     for (const auto& [arm, samples] : K_from_F_) covered += !samples.empty() && samples.back().first >= t;
     const bool waited = static_cast<double>(queue_.back().t_us - t) * 1e-6 >= imu_wait_s_;
     if (!all && covered < arm_imus_ && !waited) return;
-    fit_frame(queue_.front(), out);
+    QueuedBodyFitFrame& queued = queue_.front();
+    BodyFitFrame frame{queued.t_us, fit::unpack_body_pixels(queued.frame), std::move(queued.skeleton), queued.assemble_s};
     queue_.pop_front();
+    fit_frame(frame, out);
   }
   // Forearm orientations are looked up for queued frames and for fitted frames the smoother has
   // not emitted yet; older ones are dropped.
@@ -496,16 +502,19 @@ void BodyFitStage::fit_frame(BodyFitFrame& frame, StageOutput& out) {
       before_last_fit_ = fit::FittedPose{previous, previous_t_us_};
     else
       before_last_fit_.reset();
-    if (energy > lost_energy_) {
-      ++frames_lost_;
-      previous_theta_.reset();  // recovery: the next frame starts from the skeleton alone
-      before_last_fit_.reset();
-    } else {
-      previous_theta_ = best->theta;
-      previous_t_us_ = frame.t_us;
-    }
+    // Lost tracking: reported, and no longer a restart from the skeleton alone (ours). The start
+    // policy already fits the skeleton start after a fit at fit.skeleton_start_energy or above,
+    // and the lower energy wins; dropping the previous pose threw away a good one whenever one
+    // frame's energy jumped (single-frame depth or sampling outliers, and behind the back the
+    // camera skeleton's wrists are 12-15 cm off). On paper 1's protocol (seeds 1 / 2) the arms' six
+    // joints went from 21.2 / 22.8 to 18.8 / 18.2 mm; restarting from the last pose below the
+    // threshold plus the skeleton start gave 20.2 / 18.3 mm (docs/fitting.md, "Paper 1's protocol").
+    if (energy > lost_energy_) ++frames_lost_;
+    previous_theta_ = best->theta;
+    previous_t_us_ = frame.t_us;
     fitted_.push_back({frame.t_us, *frame.skeleton, energy, directions.left_K || directions.right_K});
     ++frames_fitted_;
+    if ((left ? 1 : 0) + (right ? 1 : 0) < arm_imus_) ++frames_without_imu_;
     if (const auto smoothed = w.smoother.push(best->theta)) emit_smoothed(*smoothed, out);
     take(stats.post_s);
     if (record_stats_) stats_.push_back(stats);
@@ -578,6 +587,11 @@ void BodyFitStage::finish(StageOutput& out) {
   if (frames_without_skeleton_ > 0) {
     out.warn("FIT_NO_SKELETON", "skeleton",
              std::to_string(frames_without_skeleton_) + " depth frames had no skeleton of the fitted person: not fitted");
+  }
+  if (frames_without_imu_ > 0) {
+    out.warn("FIT_NO_IMU", "fit", std::to_string(frames_without_imu_) + " of " + std::to_string(frames_fitted_) +
+                                      " frames fitted without the forearm orientation of every arm IMU (none within " +
+                                      format_double(imu_wait_s_) + " s of camera time, fit.imu_wait_s)");
   }
   if (frames_lost_ > 0) {
     out.warn("FIT_LOST", "fit", "tracking lost (energy above " + format_double(lost_energy_) + ") in " +
