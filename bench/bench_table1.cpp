@@ -14,8 +14,12 @@
 //     diagnostic variants, each clip. Plots table1_<session>.png.
 // Plots: Figs. 4-6, errors and x_K over time, occluded frames grey.
 //
-//   build/bench/bench_table1 [--render body|cylinder] [mocap folder=../shared/data/mocap]
+//   build/bench/bench_table1 [--render body|cylinder] [--gaps] [--imu-noise-only]
+//                            [mocap folder=../shared/data/mocap]
 //                            [image folder=docs/images] [longest clip s=20]
+// --gaps (body render): per recovered gap, the boundary fits and the errors against the truth
+// (table1/gap_report.hpp). --imu-noise-only (body render, diagnostic): the IMUs without their
+// bias, scale, misalignment and iron errors (white noise only, as the cylinder render's IMUs).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -33,6 +37,7 @@
 #include "sim/exercises.hpp"
 #include "sim/motion_library.hpp"
 #include "table1/body_render_session.hpp"
+#include "table1/gap_report.hpp"
 #include "table1/table1_errors.hpp"
 #include "table1/table1_session.hpp"
 #include "table1/time_plot.hpp"
@@ -232,7 +237,8 @@ std::vector<Summary> cylinder_sessions(const fs::path& mocap, const fs::path& im
 }
 
 // One posefuse-sim session (both arms exercising, an IMU on each), scored per arm.
-std::vector<Summary> run_body(const std::string& name, const sim::SimSessionOptions& options, const fs::path& images) {
+std::vector<Summary> run_body(const std::string& name, const sim::SimSessionOptions& options, const fs::path& images,
+                              bool print_gaps) {
   const sim::BodyMotion motion = sim::select_motion(options.motion, options.motion_options, {options.sex, options.betas});
   const double hold_begin = hold_bound_s(motion, false), hold_end = hold_bound_s(motion, true);
   const bench::BodyRenderRun run = bench::run_body_render_session(options);
@@ -248,21 +254,30 @@ std::vector<Summary> run_body(const std::string& name, const sim::SimSessionOpti
     const bench::Table1Series s = bench::table1_series(bench::body_render_truth(run, arm), run.results,
                                                        bench::body_render_arm(run, arm), hold_begin, hold_end);
     print_title(arm_name, options.seed, s, hold_begin, hold_end, sim_cpu_s, run.pipeline_cpu_s);
+    if (print_gaps) bench::print_gap_report(bench::body_render_truth(run, arm), run.results, bench::body_render_arm(run, arm));
     summaries.push_back(report(arm_name, s, images / ("table1_body_" + arm_name + ".png")));
   }
   return summaries;
 }
 
-std::vector<Summary> body_sessions(const fs::path& mocap, const fs::path& images, double longest_s) {
+std::vector<Summary> body_sessions(const fs::path& mocap, const fs::path& images, double longest_s, bool print_gaps,
+                                   bool imu_noise_only) {
   sim::SimSessionOptions options;
   options.motion = "forearm_protocol";
   options.motion_options.exercise.repetitions = 1;
   options.motion_options.exercise.arm = sim::ExerciseArm::kBoth;
   options.duration_s = longest_s;
+  if (imu_noise_only) {
+    const sim::ImuErrorModel typical;
+    options.imu.synth.error_model = sim::ImuErrorModel::none();
+    options.imu.synth.error_model.gyr_noise_density_rad_s_sqrt_hz = typical.gyr_noise_density_rad_s_sqrt_hz;
+    options.imu.synth.error_model.acc_noise_density_m_s2_sqrt_hz = typical.acc_noise_density_m_s2_sqrt_hz;
+    options.imu.synth.error_model.mag_noise_uT = typical.mag_noise_uT;
+  }
   std::vector<Summary> summaries;
   const auto add = [&](const std::string& name) {
     try {
-      for (Summary& s : run_body(name, options, images)) summaries.push_back(std::move(s));
+      for (Summary& s : run_body(name, options, images, print_gaps)) summaries.push_back(std::move(s));
     } catch (const Error& e) {
       std::printf("\n### %s: failed: %s\n", name.c_str(), e.what());
     }
@@ -293,9 +308,18 @@ std::vector<Summary> body_sessions(const fs::path& mocap, const fs::path& images
 int main(int argc, char** argv) {
   std::vector<std::string> args(argv + 1, argv + argc);
   std::string render = "cylinder";
-  if (args.size() >= 2 && args[0] == "--render") {
-    render = args[1];
-    args.erase(args.begin(), args.begin() + 2);
+  bool print_gaps = false, imu_noise_only = false;
+  while (!args.empty() && args[0].starts_with("--")) {
+    if (args[0] == "--gaps" || args[0] == "--imu-noise-only") {
+      (args[0] == "--gaps" ? print_gaps : imu_noise_only) = true;
+      args.erase(args.begin());
+    } else if (args[0] == "--render" && args.size() >= 2) {
+      render = args[1];
+      args.erase(args.begin(), args.begin() + 2);
+    } else {
+      std::fprintf(stderr, "bench_table1: unknown option '%s'\n", args[0].c_str());
+      return 2;
+    }
   }
   if (render != "cylinder" && render != "body") {
     std::fprintf(stderr, "bench_table1: --render must be body or cylinder, not '%s'\n", render.c_str());
@@ -307,7 +331,7 @@ int main(int argc, char** argv) {
   std::printf("paper 1 Table I on simulated sessions, %s render; sessions cut at %.0f s\n", render.c_str(), longest_s);
   const double cpu0 = bench::thread_cpu_seconds();
   const std::vector<Summary> summaries =
-      render == "body" ? body_sessions(mocap, images, longest_s) : cylinder_sessions(mocap, images, longest_s);
+      render == "body" ? body_sessions(mocap, images, longest_s, print_gaps, imu_noise_only) : cylinder_sessions(mocap, images, longest_s);
   std::printf("\n### summary (%s render; all frames, and inside gaps; targets on the protocol: orientation RMS <= 5 "
               "deg, smoother position RMS <= 0.02 m and max <= 0.06 m)\n\n",
               render.c_str());

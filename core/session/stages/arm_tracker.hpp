@@ -91,6 +91,7 @@ class ArmTracker {
   std::vector<double> pronation_;
   std::vector<forearm::TrackSample> track_;
   std::vector<forearm::ShoulderSample> shoulder_;
+  std::vector<forearm::ElbowAnchorSample> elbow_anchor_;
   std::deque<ArmFrame> frames_;  // queued, not yet processed
 
   std::optional<std::int64_t> last_visible_us_;
