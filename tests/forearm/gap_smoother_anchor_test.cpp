@@ -14,12 +14,6 @@ namespace {
 using namespace posefuse::forearm::testing;
 using posefuse::testing::expect_error;
 
-GapSpan only_gap(const GapRecoveryInput& in) {
-  const std::vector<GapSpan> gaps = find_gaps(in.track);
-  EXPECT_EQ(gaps.size(), 1u);
-  return gaps.at(0);
-}
-
 GapSmootherOptions without_anchor() {
   GapSmootherOptions o;
   o.use_elbow_anchor = false;

@@ -10,6 +10,9 @@
 #include <cstdint>
 #include <numbers>
 #include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "forearm/gap_input.hpp"
 #include "geometry/quaternion.hpp"
@@ -134,6 +137,13 @@ inline void add_elbow_anchor(GapRecoveryInput& in, const ArmMotion& motion, cons
     if (u01(rng) < error.jump_probability) e += error.jump_m * Vec3(n01(rng), n01(rng), n01(rng)).normalized();
     in.elbow_anchor.push_back({s.t_us, motion.imu_position(t) + e});
   }
+}
+
+// The one gap of a track (std::runtime_error when there is not exactly one).
+inline GapSpan only_gap(const GapRecoveryInput& in) {
+  const std::vector<GapSpan> gaps = find_gaps(in.track);
+  if (gaps.size() != 1) throw std::runtime_error("expected one gap, found " + std::to_string(gaps.size()));
+  return gaps.front();
 }
 
 struct GapErrors {
