@@ -152,6 +152,9 @@ void ArmTracker::process_frame(const ArmFrame& frame, StageOutput& out) {
     if (in_gap_) {
       pending_gaps_.push_back({gap_start_us_, frame.t_us});
       in_gap_ = false;
+      // Kept in case this is a lone detection and the gap goes on (the next begin() then has too
+      // few samples before it).
+      paused_live_ = std::move(live_);
       live_.reset();
     }
     position = sample.p_K;
@@ -168,9 +171,16 @@ void ArmTracker::process_frame(const ArmFrame& frame, StageOutput& out) {
         live_next_arm_ = index_at_or_before(arm_, gap_start_us_) + 1;
       } catch (const Error& error) {
         live_.reset();
-        out.warn("FOREARM_NO_LIVE_ESTIMATE", field(), std::string("gap from t_us ") + std::to_string(gap_start_us_) +
-                                                          ": " + error.what());
+        if (paused_live_) {
+          // Seen at too few frames to start afresh: the previous gap's estimate goes on (its
+          // live_next_arm_ is still where it stopped).
+          live_ = std::move(paused_live_);
+        } else {
+          out.warn("FOREARM_NO_LIVE_ESTIMATE", field(),
+                   std::string("gap from t_us ") + std::to_string(gap_start_us_) + ": " + error.what());
+        }
       }
+      paused_live_.reset();
     }
     if (in_gap_ && live_) {
       const Vec3 shoulder = shoulder_.empty() ? frame.shoulder_K : shoulder_.back().p_K;
