@@ -1,14 +1,25 @@
 // Paper 1's Table I (III, IV) on simulated sessions: the paper's protocol (calibration pose,
 // forearm behind the head, in front of the belly, behind the back) and each mocap clip behind a
-// calibration hold, simulated with the body-driven right-forearm IMU (noise, own clocks, buzzer,
-// BLE), run through SessionPipeline(make_default_stages()) and scored against the simulator's
-// truth: forearm orientation error (eqs. 14-15) of the camera SDK vs the fusion, IMU position
-// error of the SDK (eq. 16) vs the fusion with the paper's recovery and with the smoother (and the
-// causal live estimate), RMS and maximum over all frames and inside gaps only. Writes
-// table1_<session>.png (Figs. 4-6: errors and x_K over time, occluded frames grey).
+// calibration hold, run through SessionPipeline(make_default_stages()) and scored against the
+// simulator's truth: forearm orientation error (eqs. 14-15) of the camera SDK vs the fusion, IMU
+// position error of the SDK (eq. 16) vs the fusion with the paper's recovery and with the
+// smoother (and the causal live estimate), RMS and maximum over all frames and inside gaps only.
+// Two renders:
+//   --render body (the simulator's session generator, core/sim/sim_session.hpp, as posefuse-sim
+//     makes it: the rendered body with clothing, RGB with the strap, both arms exercising with an
+//     IMU each, scored per arm): the protocol with seeds 1 and 2, each clip with seed 3, 4, ...
+//     Plots table1_body_<session>_<L|R>.png.
+//   --render cylinder (the default; table1/table1_session.hpp: the right forearm IMU, colour and
+//     depth of the forearm and upper arm as cylinders): the protocol, paper 1's method and
+//     diagnostic variants, each clip. Plots table1_<session>.png.
+// Plots: Figs. 4-6, errors and x_K over time, occluded frames grey.
 //
-//   build/bench/bench_table1 [mocap folder=../shared/data/mocap] [image folder=docs/images]
-//                            [longest clip s=20]
+//   build/bench/bench_table1 [--render body|cylinder] [--gaps] [--imu-noise-only]
+//                            [mocap folder=../shared/data/mocap]
+//                            [image folder=docs/images] [longest clip s=20]
+// --gaps (body render): per recovered gap, the boundary fits and the errors against the truth
+// (table1/gap_report.hpp). --imu-noise-only (body render, diagnostic): the IMUs without their
+// bias, scale, misalignment and iron errors (white noise only, as the cylinder render's IMUs).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -22,8 +33,11 @@
 #include "session/stages/default_stages.hpp"
 #include "sim/bvh.hpp"
 #include "sim/bvh_motion.hpp"
+#include "sim/calibration_prefix.hpp"
 #include "sim/exercises.hpp"
-#include "table1/calibration_prefix.hpp"
+#include "sim/motion_library.hpp"
+#include "table1/body_render_session.hpp"
+#include "table1/gap_report.hpp"
 #include "table1/table1_errors.hpp"
 #include "table1/table1_session.hpp"
 #include "table1/time_plot.hpp"
@@ -68,54 +82,21 @@ void print_row(const char* quantity, const std::vector<std::vector<double>>& col
 }
 
 // One line of the closing summary: orientation RMS / max (SDK, fusion), position RMS / max (SDK,
-// paper recovery, smoother).
+// paper recovery, smoother, live), all frames and inside gaps.
 struct Summary {
   std::string name;
-  eval::ErrorSummary orientation[2], position[3];
+  eval::ErrorSummary orientation[2], position[4], gap_position[4];
 };
 
-Summary run(const Named& session_motion, const fs::path& image_folder, double longest_s, std::uint64_t seed) {
-  bench::Table1SessionOptions options;
-  options.seed = seed;
-  options.strap.F_from_A = geometry::quat_from_rotation_vector(geometry::Vec3(0.2, -0.1, 0.3));
-  options.duration_s = longest_s;
-  options.sdk_joint_errors = session_motion.sdk_joint_errors;
-  double hold_begin = 0.0, hold_end = 0.0;
-  for (const sim::MotionPhase& p : session_motion.motion.phases) {
-    if (p.name == "calibration_hold") {
-      hold_begin = p.begin_s;
-      hold_end = p.end_s;
-      break;
-    }
+double hold_bound_s(const sim::BodyMotion& motion, bool end) {
+  for (const sim::MotionPhase& p : motion.phases) {
+    if (p.name == "calibration_hold") return end ? p.end_s : p.begin_s;
   }
-  options.calibration_end_s = hold_end;
-  const double cpu0 = bench::thread_cpu_seconds();
-  const bench::Table1Session session = bench::simulate_table1_session(session_motion.motion, options);
-  const double cpu1 = bench::thread_cpu_seconds();
-  Sink sink;
-  session::SessionPipeline pipeline(session::make_default_stages(), sink);
-  for (v1::SessionChunk chunk : session.chunks) {
-    if (chunk.has_header()) {
-      auto& stage_options = *chunk.mutable_header()->mutable_options();
-      stage_options["forearm.axis"] = session_motion.axis;
-      stage_options["forearm.shoulder_sphere"] = session_motion.shoulder_sphere;
-      stage_options["forearm.upper_arm"] = session_motion.upper_arm;
-    }
-    pipeline.push(chunk);
-  }
-  pipeline.close();
-  const double cpu2 = bench::thread_cpu_seconds();
-  for (const v1::FitResult& r : sink.results) {
-    if (r.has_warning()) std::printf("warning: %s\n", r.warning().ShortDebugString().c_str());
-  }
-  const bench::Table1Series s = bench::table1_series(session, sink.results, hold_begin, hold_end,
-                                                     options.strap.strap_to_elbow_m, session.d_sw_m);
-  std::size_t occluded = 0;
-  for (const bool o : s.occluded) occluded += o;
-  std::printf("\n### %s (seed %llu): %.1f s, %zu frames, %zu occluded in %zu gaps; calibration hold %.1f-%.1f s; "
-              "CPU s: simulation %.1f, pipeline %.1f\n\n",
-              session_motion.name.c_str(), static_cast<unsigned long long>(seed), s.t_s.back(), s.t_s.size(), occluded, gap_count(s.occluded), hold_begin,
-              hold_end, cpu1 - cpu0, cpu2 - cpu1);
+  return 0.0;
+}
+
+// Prints one session's Table I (title already printed) and writes its plot.
+Summary report(const std::string& name, const bench::Table1Series& s, const fs::path& png) {
   std::printf("| error (frames) | SDK | fusion, paper recovery | fusion, smoother | fusion, live | paper 1 SDK -> fusion |\n");
   std::printf("|---|---|---|---|---|---|\n");
   const std::vector<std::vector<double>> orientation = {s.sdk_orientation_deg, s.fusion_orientation_deg,
@@ -141,7 +122,6 @@ Summary run(const Named& session_motion, const fs::path& image_folder, double lo
   if (s.sdk_orientation_missing > 0) std::printf("(SDK gave no wrist orientation at %zu frames)\n", s.sdk_orientation_missing);
 
   const cv::Scalar red(40, 40, 220), blue(200, 90, 20), orange(20, 140, 240), black(0, 0, 0);
-  const fs::path png = image_folder / ("table1_" + session_motion.name + ".png");
   const bool written = bench::write_time_plot(
       png.string(), s.t_s, s.occluded,
       {{"orientation error, deg (eqs. 14-15; Fig. 4)", {{"SDK", s.sdk_orientation_deg, red}, {"fusion", s.fusion_orientation_deg, blue}}},
@@ -152,18 +132,74 @@ Summary run(const Named& session_motion, const fs::path& image_folder, double lo
         {{"truth", s.true_x_m, black}, {"SDK (eq. 16)", s.sdk_x_m, red}, {"paper recovery", s.paper_x_m, orange},
          {"smoother", s.smoother_x_m, blue}}}});
   std::printf("plot: %s%s\n", png.string().c_str(), written ? "" : " (NOT written)");
-  Summary summary{session_motion.name, {}, {}};
+  Summary summary{name, {}, {}, {}};
   for (std::size_t i = 0; i < 2; ++i) summary.orientation[i] = eval::summarize_errors(orientation[i]);
-  for (std::size_t i = 0; i < 3; ++i) summary.position[i] = eval::summarize_errors(position[i]);
+  for (std::size_t i = 0; i < 4; ++i) {
+    summary.position[i] = eval::summarize_errors(position[i]);
+    summary.gap_position[i] = eval::summarize_errors(position[i], s.occluded);
+  }
   return summary;
 }
 
-}  // namespace
+void print_title(const std::string& name, std::uint64_t seed, const bench::Table1Series& s, double hold_begin,
+                 double hold_end, double sim_cpu_s, double pipeline_cpu_s) {
+  std::size_t occluded = 0;
+  for (const bool o : s.occluded) occluded += o;
+  std::printf("\n### %s (seed %llu): %.1f s, %zu frames, %zu occluded in %zu gaps; calibration hold %.1f-%.1f s; "
+              "CPU s: simulation %.1f, pipeline %.1f\n\n",
+              name.c_str(), static_cast<unsigned long long>(seed), s.t_s.back(), s.t_s.size(), occluded,
+              gap_count(s.occluded), hold_begin, hold_end, sim_cpu_s, pipeline_cpu_s);
+}
 
-int main(int argc, char** argv) {
-  const fs::path mocap = argc > 1 ? fs::path(argv[1]) : fs::path("../shared/data/mocap");
-  const fs::path images = argc > 2 ? fs::path(argv[2]) : fs::path("docs/images");
-  const double longest_s = argc > 3 ? std::stod(argv[3]) : 20.0;
+Summary run_cylinder(const Named& session_motion, const fs::path& image_folder, double longest_s, std::uint64_t seed) {
+  bench::Table1SessionOptions options;
+  options.seed = seed;
+  options.strap.F_from_A = geometry::quat_from_rotation_vector(geometry::Vec3(0.2, -0.1, 0.3));
+  options.duration_s = longest_s;
+  options.sdk_joint_errors = session_motion.sdk_joint_errors;
+  const double hold_begin = hold_bound_s(session_motion.motion, false), hold_end = hold_bound_s(session_motion.motion, true);
+  options.calibration_end_s = hold_end;
+  const double cpu0 = bench::thread_cpu_seconds();
+  const bench::Table1Session session = bench::simulate_table1_session(session_motion.motion, options);
+  const double cpu1 = bench::thread_cpu_seconds();
+  Sink sink;
+  session::SessionPipeline pipeline(session::make_default_stages(), sink);
+  bench::Table1Truth truth{session.frame_t_us, session.forearm, {}};
+  for (v1::SessionChunk chunk : session.chunks) {
+    if (chunk.has_header()) {
+      auto& stage_options = *chunk.mutable_header()->mutable_options();
+      stage_options["forearm.axis"] = session_motion.axis;
+      stage_options["forearm.shoulder_sphere"] = session_motion.shoulder_sphere;
+      stage_options["forearm.upper_arm"] = session_motion.upper_arm;
+    }
+    if (chunk.has_skeleton()) truth.sdk.push_back(chunk.skeleton());
+    pipeline.push(chunk);
+  }
+  pipeline.close();
+  const double cpu2 = bench::thread_cpu_seconds();
+  for (const v1::FitResult& r : sink.results) {
+    if (r.has_warning()) std::printf("warning: %s\n", r.warning().ShortDebugString().c_str());
+  }
+  const bench::Table1Series s = bench::table1_series(
+      truth, sink.results, {v1::RIGHT, "arm_r", options.strap.strap_to_elbow_m, session.d_sw_m}, hold_begin, hold_end);
+  print_title(session_motion.name, seed, s, hold_begin, hold_end, cpu1 - cpu0, cpu2 - cpu1);
+  return report(session_motion.name, s, image_folder / ("table1_" + session_motion.name + ".png"));
+}
+
+std::vector<fs::path> mocap_clips(const fs::path& mocap) {
+  std::vector<fs::path> files;
+  if (!fs::is_directory(mocap)) {
+    std::printf("%s not found: the protocol only\n", mocap.string().c_str());
+    return files;
+  }
+  for (const auto& entry : fs::directory_iterator(mocap)) {
+    if (entry.is_regular_file() && entry.path().extension() == ".bvh") files.push_back(entry.path());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+std::vector<Summary> cylinder_sessions(const fs::path& mocap, const fs::path& images, double longest_s) {
   std::vector<Named> sessions;
   sim::ExerciseOptions protocol;
   protocol.repetitions = 1;
@@ -176,25 +212,15 @@ int main(int argc, char** argv) {
       {"protocol_sdk_upper_arm", sim::make_exercise("forearm_protocol", protocol), true, "depth", "off", "sdk"});
   // Diagnostic: the same session with an error-free SDK skeleton.
   sessions.push_back({"protocol_exact_sdk", sim::make_exercise("forearm_protocol", protocol), false});
-  if (fs::is_directory(mocap)) {
-    std::vector<fs::path> files;
-    for (const auto& entry : fs::directory_iterator(mocap)) {
-      if (entry.is_regular_file() && entry.path().extension() == ".bvh") files.push_back(entry.path());
+  const sim::BodyMotion calibration = sim::make_exercise("calibration_pose", protocol);
+  for (const fs::path& file : mocap_clips(mocap)) {
+    try {
+      sessions.push_back(
+          {file.stem().string(), sim::with_calibration_prefix(calibration, sim::bvh_motion(sim::load_bvh(file)))});
+    } catch (const Error& e) {
+      std::printf("%s: skipped (%s)\n", file.string().c_str(), e.what());
     }
-    std::sort(files.begin(), files.end());
-    const sim::BodyMotion calibration = sim::make_exercise("calibration_pose", protocol);
-    for (const fs::path& file : files) {
-      try {
-        sessions.push_back({file.stem().string(), bench::with_calibration_prefix(
-                                                      calibration, sim::bvh_motion(sim::load_bvh(file)))});
-      } catch (const Error& e) {
-        std::printf("%s: skipped (%s)\n", file.string().c_str(), e.what());
-      }
-    }
-  } else {
-    std::printf("%s not found: the protocol only\n", mocap.string().c_str());
   }
-  std::printf("paper 1 Table I on simulated sessions; sessions cut at %.0f s\n", longest_s);
   std::vector<Summary> summaries;
   std::uint64_t seed = 0;
   for (const Named& s : sessions) {
@@ -202,21 +228,127 @@ int main(int argc, char** argv) {
     // their predecessor's.
     if (s.sdk_joint_errors && s.axis == "depth" && s.upper_arm == "depth") ++seed;
     try {
-      summaries.push_back(run(s, images, longest_s, seed));
+      summaries.push_back(run_cylinder(s, images, longest_s, seed));
     } catch (const Error& e) {
       std::printf("\n### %s: failed: %s\n", s.name.c_str(), e.what());
     }
   }
-  std::printf("\n### summary (all frames; targets on the protocol: orientation RMS <= 5 deg, smoother position RMS <= "
-              "0.02 m and max <= 0.06 m)\n\n");
-  std::printf("| session | orient. RMS deg SDK / fusion | orient. max deg SDK / fusion | position RMS m SDK / paper / "
-              "smoother | position max m SDK / paper / smoother |\n|---|---|---|---|---|\n");
-  std::printf("| paper 1 | 84.25 / 11.34 | 179.79 / 17.43 | 0.0703 / 0.0407 / - | 0.2392 / 0.1410 / - |\n");
-  for (const Summary& u : summaries) {
-    std::printf("| %s | %.2f / %.2f | %.2f / %.2f | %.4f / %.4f / %.4f | %.4f / %.4f / %.4f |\n", u.name.c_str(),
-                u.orientation[0].rms, u.orientation[1].rms, u.orientation[0].max, u.orientation[1].max,
-                u.position[0].rms, u.position[1].rms, u.position[2].rms, u.position[0].max, u.position[1].max,
-                u.position[2].max);
+  return summaries;
+}
+
+// One posefuse-sim session (both arms exercising, an IMU on each), scored per arm.
+std::vector<Summary> run_body(const std::string& name, const sim::SimSessionOptions& options, const fs::path& images,
+                              bool print_gaps) {
+  const sim::BodyMotion motion = sim::select_motion(options.motion, options.motion_options, {options.sex, options.betas});
+  const double hold_begin = hold_bound_s(motion, false), hold_end = hold_bound_s(motion, true);
+  const bench::BodyRenderRun run = bench::run_body_render_session(options);
+  double sim_cpu_s = 0.0;
+  for (const auto& [part, seconds] : run.truth.cpu_s) sim_cpu_s += seconds;
+  for (const v1::FitResult& r : run.results) {
+    if (r.has_warning()) std::printf("warning: %s\n", r.warning().ShortDebugString().c_str());
   }
+  std::vector<Summary> summaries;
+  for (int arm = 0; arm < 2; ++arm) {
+    if (!bench::has_arm(run, arm)) continue;
+    const std::string arm_name = name + (arm == 0 ? "_L" : "_R");
+    const bench::Table1Series s = bench::table1_series(bench::body_render_truth(run, arm), run.results,
+                                                       bench::body_render_arm(run, arm), hold_begin, hold_end);
+    print_title(arm_name, options.seed, s, hold_begin, hold_end, sim_cpu_s, run.pipeline_cpu_s);
+    if (print_gaps) bench::print_gap_report(bench::body_render_truth(run, arm), run.results, bench::body_render_arm(run, arm));
+    summaries.push_back(report(arm_name, s, images / ("table1_body_" + arm_name + ".png")));
+  }
+  return summaries;
+}
+
+std::vector<Summary> body_sessions(const fs::path& mocap, const fs::path& images, double longest_s, bool print_gaps,
+                                   bool imu_noise_only) {
+  sim::SimSessionOptions options;
+  options.motion = "forearm_protocol";
+  options.motion_options.exercise.repetitions = 1;
+  options.motion_options.exercise.arm = sim::ExerciseArm::kBoth;
+  options.duration_s = longest_s;
+  if (imu_noise_only) {
+    const sim::ImuErrorModel typical;
+    options.imu.synth.error_model = sim::ImuErrorModel::none();
+    options.imu.synth.error_model.gyr_noise_density_rad_s_sqrt_hz = typical.gyr_noise_density_rad_s_sqrt_hz;
+    options.imu.synth.error_model.acc_noise_density_m_s2_sqrt_hz = typical.acc_noise_density_m_s2_sqrt_hz;
+    options.imu.synth.error_model.mag_noise_uT = typical.mag_noise_uT;
+  }
+  std::vector<Summary> summaries;
+  const auto add = [&](const std::string& name) {
+    try {
+      for (Summary& s : run_body(name, options, images, print_gaps)) summaries.push_back(std::move(s));
+    } catch (const Error& e) {
+      std::printf("\n### %s: failed: %s\n", name.c_str(), e.what());
+    }
+  };
+  for (const std::uint64_t seed : {1, 2}) {
+    options.seed = seed;
+    add("protocol_seed" + std::to_string(seed));
+  }
+  options.motion = "bvh";
+  options.motion_options.calibration_prefix = true;
+  for (const fs::path& file : mocap_clips(mocap)) {
+    ++options.seed;
+    options.motion_options.bvh_path = file.string();
+    try {
+      const double clip_s = sim::select_motion("bvh", options.motion_options, {options.sex, options.betas}).duration_s;
+      options.duration_s = std::min(longest_s, clip_s);
+    } catch (const Error& e) {
+      std::printf("%s: skipped (%s)\n", file.string().c_str(), e.what());
+      continue;
+    }
+    add(file.stem().string());
+  }
+  return summaries;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::vector<std::string> args(argv + 1, argv + argc);
+  std::string render = "cylinder";
+  bool print_gaps = false, imu_noise_only = false;
+  while (!args.empty() && args[0].starts_with("--")) {
+    if (args[0] == "--gaps" || args[0] == "--imu-noise-only") {
+      (args[0] == "--gaps" ? print_gaps : imu_noise_only) = true;
+      args.erase(args.begin());
+    } else if (args[0] == "--render" && args.size() >= 2) {
+      render = args[1];
+      args.erase(args.begin(), args.begin() + 2);
+    } else {
+      std::fprintf(stderr, "bench_table1: unknown option '%s'\n", args[0].c_str());
+      return 2;
+    }
+  }
+  if (render != "cylinder" && render != "body") {
+    std::fprintf(stderr, "bench_table1: --render must be body or cylinder, not '%s'\n", render.c_str());
+    return 2;
+  }
+  const fs::path mocap = args.size() > 0 ? fs::path(args[0]) : fs::path("../shared/data/mocap");
+  const fs::path images = args.size() > 1 ? fs::path(args[1]) : fs::path("docs/images");
+  const double longest_s = args.size() > 2 ? std::stod(args[2]) : 20.0;
+  std::printf("paper 1 Table I on simulated sessions, %s render; sessions cut at %.0f s\n", render.c_str(), longest_s);
+  const double cpu0 = bench::thread_cpu_seconds();
+  const std::vector<Summary> summaries =
+      render == "body" ? body_sessions(mocap, images, longest_s, print_gaps, imu_noise_only) : cylinder_sessions(mocap, images, longest_s);
+  std::printf("\n### summary (%s render; all frames, and inside gaps; targets on the protocol: orientation RMS <= 5 "
+              "deg, smoother position RMS <= 0.02 m and max <= 0.06 m)\n\n",
+              render.c_str());
+  std::printf("| session | orient. RMS deg SDK / fusion | orient. max deg SDK / fusion | position RMS m SDK / paper / "
+              "smoother / live | position max m SDK / paper / smoother / live | in gaps: position RMS m SDK / paper / "
+              "smoother / live | in gaps: position max m SDK / paper / smoother / live |\n|---|---|---|---|---|---|---|\n");
+  std::printf("| paper 1 | 84.25 / 11.34 | 179.79 / 17.43 | 0.0703 / 0.0407 / - / - | 0.2392 / 0.1410 / - / - | | |\n");
+  for (const Summary& u : summaries) {
+    std::printf("| %s | %.2f / %.2f | %.2f / %.2f |", u.name.c_str(), u.orientation[0].rms, u.orientation[1].rms,
+                u.orientation[0].max, u.orientation[1].max);
+    for (const eval::ErrorSummary* p : {u.position, u.gap_position}) {
+      std::printf(" %.4f / %.4f / %.4f / %.4f | %.4f / %.4f / %.4f / %.4f |", p[0].rms, p[1].rms, p[2].rms, p[3].rms,
+                  p[0].max, p[1].max, p[2].max, p[3].max);
+    }
+    std::printf("\n");
+  }
+  std::printf("\nCPU s, this thread: %.1f (the body render's frame workers are counted in 'simulation' per session)\n",
+              bench::thread_cpu_seconds() - cpu0);
   return 0;
 }

@@ -12,7 +12,8 @@ namespace {
 using geometry::Quat;
 using geometry::Vec3;
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
-constexpr int kElbowRight = 9, kWristRight = 10;
+// Kinect v2 JointType: ElbowLeft 5, WristLeft 6, ElbowRight 9, WristRight 10.
+int sdk_elbow(v1::Arm arm) { return arm == v1::LEFT ? 5 : 9; }
 
 Vec3 vec(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 Quat quat(const v1::Quaternion& q) { return {q.w(), q.x(), q.y(), q.z()}; }
@@ -46,22 +47,22 @@ void fill_from_segments(const std::vector<const v1::RecoveredSegment*>& segments
 
 }  // namespace
 
-Table1Series table1_series(const Table1Session& session, const std::vector<v1::FitResult>& results,
-                           double hold_begin_s, double hold_end_s, double d_se_m, double d_sw_m) {
+Table1Series table1_series(const Table1Truth& session, const std::vector<v1::FitResult>& results, const Table1Arm& arm,
+                           double hold_begin_s, double hold_end_s) {
   const std::size_t n = session.frame_t_us.size();
   const Vec3 nan3 = Vec3::Constant(kNaN);
+  const int elbow_joint = sdk_elbow(arm.arm), wrist_joint = elbow_joint + 1;
 
-  // SDK per frame, from the skeleton chunks of the session itself.
+  // SDK per frame.
   std::vector<Vec3> sdk_position(n, nan3);
   std::vector<Quat> sdk_K_from_wrist(n, Quat(0, 0, 0, 0));
-  for (const v1::SessionChunk& chunk : session.chunks) {
-    if (!chunk.has_skeleton()) continue;
-    const long f = frame_index(session.frame_t_us, chunk.skeleton().t_us());
-    if (f < 0 || chunk.skeleton().joints_size() <= kWristRight) continue;
-    const v1::SkeletonJoint& elbow = chunk.skeleton().joints(kElbowRight);
-    const v1::SkeletonJoint& wrist = chunk.skeleton().joints(kWristRight);
+  for (const v1::SkeletonFrame& skeleton : session.sdk) {
+    const long f = frame_index(session.frame_t_us, skeleton.t_us());
+    if (f < 0 || skeleton.joints_size() <= wrist_joint) continue;
+    const v1::SkeletonJoint& elbow = skeleton.joints(elbow_joint);
+    const v1::SkeletonJoint& wrist = skeleton.joints(wrist_joint);
     sdk_position[static_cast<std::size_t>(f)] =
-        eval::sdk_imu_position(vec(elbow.position_m()), vec(wrist.position_m()), d_se_m, d_sw_m);
+        eval::sdk_imu_position(vec(elbow.position_m()), vec(wrist.position_m()), arm.d_se_m, arm.d_sw_m);
     sdk_K_from_wrist[static_cast<std::size_t>(f)] = quat(wrist.orientation());
   }
   Eigen::Vector4d sum = Eigen::Vector4d::Zero();
@@ -80,15 +81,17 @@ Table1Series table1_series(const Table1Session& session, const std::vector<v1::F
   std::vector<bool> paper_filled(n, false), smoother_filled(n, false);
   std::map<int, std::vector<const v1::RecoveredSegment*>> segments;
   for (const v1::FitResult& r : results) {
-    if (r.has_recovered_segment()) segments[r.recovered_segment().method()].push_back(&r.recovered_segment());
+    if (r.has_recovered_segment() && r.recovered_segment().arm() == arm.arm) {
+      segments[r.recovered_segment().method()].push_back(&r.recovered_segment());
+    }
     if (!r.has_frame()) continue;
     const long f = frame_index(session.frame_t_us, r.frame().t_us());
     if (f < 0) continue;
     for (const v1::ForearmOrientation& o : r.frame().forearms()) {
-      if (o.arm() == v1::RIGHT) fusion_K_from_F[static_cast<std::size_t>(f)] = quat(o.k_from_f());
+      if (o.arm() == arm.arm) fusion_K_from_F[static_cast<std::size_t>(f)] = quat(o.k_from_f());
     }
     for (const v1::ImuPosition& p : r.frame().imu_positions()) {
-      if (p.device_id() != "arm_r") continue;
+      if (p.device_id() != arm.device_id) continue;
       (p.source() == v1::VISUAL ? visual : live)[static_cast<std::size_t>(f)] = vec(p.position_m());
     }
   }

@@ -7,7 +7,8 @@
 
 #include "eval/forearm_errors.hpp"
 #include "posefuse/v1/results.pb.h"
-#include "table1_session.hpp"
+#include "posefuse/v1/session.pb.h"
+#include "sim/frame_truth.hpp"
 
 namespace posefuse::bench {
 
@@ -27,11 +28,26 @@ struct Table1Series {
   std::vector<bool> stage_visible;             // the stage gave an eq. 10 (VISUAL) position
 };
 
+// The arm scored: the stage's results for it (ForearmOrientation and RecoveredSegment by arm,
+// ImuPosition by device_id) and the SDK's elbow and wrist of that side.
+struct Table1Arm {
+  v1::Arm arm = v1::RIGHT;
+  std::string device_id;
+  double d_se_m = 0.0, d_sw_m = 0.0;  // eq. 16's lengths
+};
+
+// What the session gives per camera frame: its times, the scored arm's truth (the "mocap"; its
+// `occluded` selects the gap frames) and the SDK skeletons (matched to frames by t_us).
+struct Table1Truth {
+  std::vector<std::int64_t> frame_t_us;
+  std::vector<sim::ForearmTruth> forearm;
+  std::vector<v1::SkeletonFrame> sdk;
+};
+
 // The SDK's wrist frame has the SDK's axis convention, not F's: its constant offset is taken as
 // the chordal mean of SDK^-1 * truth over the calibration hold [hold_begin_s, hold_end_s]
 // (a favour to the SDK: paper 1 uses the SDK orientation there as K_from_F', eq. 9).
-// d_se_m, d_sw_m: eq. 16's lengths.
-Table1Series table1_series(const Table1Session& session, const std::vector<v1::FitResult>& results,
-                           double hold_begin_s, double hold_end_s, double d_se_m, double d_sw_m);
+Table1Series table1_series(const Table1Truth& truth, const std::vector<v1::FitResult>& results, const Table1Arm& arm,
+                           double hold_begin_s, double hold_end_s);
 
 }  // namespace posefuse::bench

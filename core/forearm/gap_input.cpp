@@ -38,6 +38,7 @@ void validate(const GapRecoveryInput& in) {
   check_times(in.track, "track");
   check_times(in.arm, "arm");
   check_times(in.shoulder, "shoulder");
+  if (!in.elbow_anchor.empty()) check_times(in.elbow_anchor, "elbow_anchor");
   for (std::size_t i = 0; i < in.track.size(); ++i) {
     if (in.track[i].visible && !in.track[i].p_K.allFinite()) {
       throw_invalid(at("track", i, "p_K"), "visible sample is not finite");
@@ -49,6 +50,9 @@ void validate(const GapRecoveryInput& in) {
   }
   for (std::size_t i = 0; i < in.shoulder.size(); ++i) {
     if (!in.shoulder[i].p_K.allFinite()) throw_invalid(at("shoulder", i, "p_K"), "not finite");
+  }
+  for (std::size_t i = 0; i < in.elbow_anchor.size(); ++i) {
+    if (!in.elbow_anchor[i].p_K.allFinite()) throw_invalid(at("elbow_anchor", i, "p_K"), "not finite");
   }
   const ForearmModel& m = in.model;
   if (!std::isfinite(m.r_m) || m.r_m < 0.0) throw_invalid("model.r_m", "must be finite and >= 0");
@@ -73,6 +77,19 @@ std::vector<GapSpan> find_gaps(const std::vector<TrackSample>& track) {
     gaps.push_back(g);
   }
   return gaps;
+}
+
+int visible_samples_after(const std::vector<TrackSample>& track, std::int64_t t_us, double window_s) {
+  const auto window_us = static_cast<std::int64_t>(std::llround(window_s * 1e6));
+  int count = 0;
+  for (const TrackSample& s : track) count += s.visible && s.t_us >= t_us && s.t_us <= t_us + window_us;
+  return count;
+}
+
+void occlude_inside(std::vector<TrackSample>& track, std::int64_t t_start_us, std::int64_t t_end_us) {
+  for (TrackSample& s : track) {
+    if (s.t_us > t_start_us && s.t_us < t_end_us) s.visible = false;
+  }
 }
 
 BoundaryState fit_boundary_line(const std::vector<TrackSample>& track, std::int64_t t_at_us,

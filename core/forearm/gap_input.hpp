@@ -8,10 +8,19 @@
 
 namespace posefuse::forearm {
 
+// The IMU position the camera skeleton implies at a depth frame: the SDK's elbow carried along the
+// IMU's forearm axis (imu_position_from_elbow, live_gap.hpp). Unlike the strap it is there in most
+// gaps, but with the SDK's elbow error: a bias of several cm that turns slowly, occasional jumps.
+struct ElbowAnchorSample {
+  std::int64_t t_us = 0;
+  Vec3 p_K = Vec3::Zero();
+};
+
 struct GapRecoveryInput {
   std::vector<TrackSample> track;        // ~30 Hz, strictly increasing t_us
   std::vector<ArmSample> arm;            // ~80 Hz, strictly increasing t_us
   std::vector<ShoulderSample> shoulder;  // strictly increasing t_us; interpolated (II-K.4)
+  std::vector<ElbowAnchorSample> elbow_anchor;  // optional (smoother only); strictly increasing t_us
   ForearmModel model;
   Quat K_from_W = Quat::Identity();      // eq. 7
 };
@@ -29,6 +38,17 @@ struct GapSpan {
   std::int64_t t_end_us = -1;
 };
 std::vector<GapSpan> find_gaps(const std::vector<TrackSample>& track);
+
+// Visible samples of `track` in [t_us, t_us + window_s]. A gap closes only where there are
+// enough of them for its exit boundary fit (2, fit_boundary_line): a strap seen once inside a
+// long occlusion is mostly a false detection (on the body render: 0.22 m off, behind the back,
+// docs/forearm.md), and the gap goes on through it rather than becoming two gaps that neither
+// recovery can close.
+int visible_samples_after(const std::vector<TrackSample>& track, std::int64_t t_us, double window_s);
+
+// Marks every sample strictly inside (t_start_us, t_end_us) occluded: one gap across the lone
+// detections within it.
+void occlude_inside(std::vector<TrackSample>& track, std::int64_t t_start_us, std::int64_t t_end_us);
 
 // Position and velocity at `t_at_us` from a least-squares line through the visible track
 // samples in [t_at - window, t_at] (side < 0) or [t_at, t_at + window] (side > 0) (II-K.1).

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <tuple>
 
@@ -16,7 +17,19 @@ namespace {
 
 using Triplets = std::vector<Eigen::Triplet<double>>;
 
-// Rows of J and r for one linearisation point; columns 3i..3i+2 are p_i, then b_A, e0_K, e1_K.
+// The elbow anchor's error over the window, a polynomial in tau with this many terms: a line, as
+// the boundary windows (strap and anchor both seen) determine it. Tried a cubic (value and slope
+// at both ends, for the SDK's bias turning with a period of seconds): worse, since a cubic also
+// fits the smooth inertial drift inside the gap that the anchor is there to correct (synthetic
+// 4 s gap, sigma 0.03 m: 46 against 40 mm RMS). Also tried: the attitude leak e(t) linear between
+// knots 0.5 s apart with a random-walk prior (0.1 m/s^2 per knot) instead of e0 + tau e1: better
+// on the synthetic arm (4 s gap 28 against 85 mm RMS without the anchor), worse on the body render
+// (4.4 s gaps 290 / 78 / 131 / 116 mm without the anchor, 57 / 42 / 53 / 46 with it, against
+// 47 / 40 / 39 / 45 mm here): the knots let the leak wander where nothing inside the gap pins it.
+constexpr int kAnchorTerms = 2;
+
+// Rows of J and r for one linearisation point; columns 3i..3i+2 are p_i, then b_A, e0_K, e1_K,
+// and the elbow anchor's error c0_K, c1_K.
 struct LinearSystem {
   Triplets jacobian;
   std::vector<double> residual;
@@ -34,16 +47,22 @@ struct Problem {
   std::vector<Vec3> sphere_centre;     // eq. 13 at each node
   struct Fix { std::size_t node; double u; Vec3 z; };
   std::vector<Fix> fixes;              // visible track samples
+  std::vector<Fix> anchors;            // elbow anchor samples (Fix::z the anchor position)
   GapSmootherOptions options;
 
   int bias_column() const { return 3 * static_cast<int>(t_s.size()); }
   int drift0_column() const { return bias_column() + 3; }
   int drift1_column() const { return bias_column() + 6; }
-  // Time in the window scaled to [-1, 1] for the linear-in-time attitude-leak term.
-  double tau(std::size_t i) const {
+  // The anchor's error c(tau) = sum_k c_k tau^k, k < kAnchorTerms.
+  int anchor_column(int k) const { return bias_column() + 9 + 3 * k; }
+  int columns() const { return anchor_column(kAnchorTerms); }
+  // Time in the window scaled to [-1, 1] for the linear-in-time attitude-leak and anchor terms.
+  double tau_at(double t) const {
     const double mid = 0.5 * (t_s.front() + t_s.back()), half = 0.5 * (t_s.back() - t_s.front());
-    return (t_s[i] - mid) / half;
+    return (t - mid) / half;
   }
+  double tau(std::size_t i) const { return tau_at(t_s[i]); }
+  double tau(const Fix& f) const { return tau_at((1.0 - f.u) * t_s[f.node] + f.u * t_s[f.node + 1]); }
 
   LinearSystem linearise(const Eigen::VectorXd& x) const {
     LinearSystem sys;
@@ -86,6 +105,27 @@ struct Problem {
         if (f.u > 0.0) sys.jacobian.emplace_back(row, a + 3 + k, f.u / sp);
       }
     }
+    // The elbow anchor, robust: a residual of norm |r| > k (in sigmas) is weighted by k / |r|, so
+    // it costs k |r| instead of |r|^2 (iteratively reweighted at each linearisation).
+    const double sc = options.anchor_sigma_m, k = options.anchor_huber_k;
+    for (const Fix& f : anchors) {
+      const int a = 3 * static_cast<int>(f.node);
+      double power[kAnchorTerms];
+      power[0] = 1.0;
+      for (int j = 1; j < kAnchorTerms; ++j) power[j] = power[j - 1] * tau(f);
+      Vec3 anchor_error = Vec3::Zero();
+      for (int j = 0; j < kAnchorTerms; ++j) anchor_error += power[j] * x.segment<3>(anchor_column(j));
+      const Vec3 p = (1.0 - f.u) * x.segment<3>(a) + f.u * x.segment<3>(a + 3);
+      const Vec3 r = (p + anchor_error - f.z) / sc;
+      const double w = std::sqrt(r.norm() > k ? k / r.norm() : 1.0) / sc;
+      for (int c = 0; c < 3; ++c) {
+        const int row = sys.add_row();
+        sys.residual[static_cast<std::size_t>(row)] = w * sc * r[c];
+        sys.jacobian.emplace_back(row, a + c, w * (1.0 - f.u));
+        if (f.u > 0.0) sys.jacobian.emplace_back(row, a + 3 + c, w * f.u);
+        for (int j = 0; j < kAnchorTerms; ++j) sys.jacobian.emplace_back(row, anchor_column(j) + c, w * power[j]);
+      }
+    }
     if (options.use_shoulder_sphere) {
       const double ss = options.sphere_sigma_m;
       for (std::size_t i = 0; i < n; ++i) {
@@ -100,13 +140,19 @@ struct Problem {
       }
     }
     const double sb = options.bias_prior_sigma_m_s2, se = options.leak_prior_sigma_m_s2;
-    for (int k = 0; k < 3; ++k) {
-      for (const auto& [column, value, sigma] : {std::tuple{bias_column(), b[k], sb},
-                                                  std::tuple{drift0_column(), e0[k], se},
-                                                  std::tuple{drift1_column(), e1[k], se}}) {
+    const double s_anchor = options.anchor_bias_prior_sigma_m;
+    for (int c = 0; c < 3; ++c) {
+      for (const auto& [column, value, sigma] : {std::tuple{bias_column(), b[c], sb},
+                                                  std::tuple{drift0_column(), e0[c], se},
+                                                  std::tuple{drift1_column(), e1[c], se}}) {
         const int row = sys.add_row();
         sys.residual[static_cast<std::size_t>(row)] = value / sigma;
-        sys.jacobian.emplace_back(row, column + k, 1.0 / sigma);
+        sys.jacobian.emplace_back(row, column + c, 1.0 / sigma);
+      }
+      for (int j = 0; j < kAnchorTerms; ++j) {
+        const int row = sys.add_row();
+        sys.residual[static_cast<std::size_t>(row)] = x[anchor_column(j) + c] / s_anchor;
+        sys.jacobian.emplace_back(row, anchor_column(j) + c, 1.0 / s_anchor);
       }
     }
     return sys;
@@ -122,9 +168,11 @@ double cost_of(const LinearSystem& sys) {
 void check_options(const GapSmootherOptions& o) {
   if (!(o.boundary_window_s > 0.0)) throw_invalid("options.boundary_window_s", "must be > 0");
   if (!(o.acc_sigma_m_s2 > 0.0) || !(o.position_sigma_m > 0.0) || !(o.sphere_sigma_m > 0.0) ||
-      !(o.bias_prior_sigma_m_s2 > 0.0) || !(o.leak_prior_sigma_m_s2 > 0.0)) {
+      !(o.bias_prior_sigma_m_s2 > 0.0) || !(o.leak_prior_sigma_m_s2 > 0.0) || !(o.anchor_sigma_m > 0.0) ||
+      !(o.anchor_bias_prior_sigma_m > 0.0)) {
     throw_invalid("options", "every sigma must be > 0");
   }
+  if (!(o.anchor_huber_k > 0.0)) throw_invalid("options.anchor_huber_k", "must be > 0");
 }
 
 }  // namespace
@@ -151,7 +199,7 @@ RecoveredGap recover_gap_smoother(const GapRecoveryInput& input, const GapSpan& 
     problem.t_s.push_back(static_cast<double>(t) * 1e-6);
   }
   const std::size_t n = problem.t_s.size();  // >= 2: the arm covers [t_start, t_end]
-  Eigen::VectorXd x = Eigen::VectorXd::Zero(3 * static_cast<int>(n) + 9);
+  Eigen::VectorXd x = Eigen::VectorXd::Zero(problem.columns());
   for (std::size_t i = 0; i < n; ++i) {
     const std::int64_t t = input.arm[problem.arm_index[i]].t_us;
     const double ts = static_cast<double>(t) * 1e-6;
@@ -167,16 +215,25 @@ RecoveredGap recover_gap_smoother(const GapRecoveryInput& input, const GapSpan& 
     problem.sphere_centre.push_back(arm.sphere_centre_K(static_cast<double>(t)));
   }
   const double t_first = problem.t_s.front(), t_last = problem.t_s.back();
-  for (const TrackSample& s : input.track) {
-    const double ts = static_cast<double>(s.t_us) * 1e-6;
-    if (!s.visible || ts < t_first || ts > t_last) continue;
+  const auto fix_at = [&](std::int64_t t_us, const Vec3& z) -> std::optional<Problem::Fix> {
+    const double ts = static_cast<double>(t_us) * 1e-6;
+    if (ts < t_first || ts > t_last) return std::nullopt;
     const auto it = std::upper_bound(problem.t_s.begin(), problem.t_s.end(), ts);
     const std::size_t k = std::min(static_cast<std::size_t>(it - problem.t_s.begin()) - 1, n - 2);
-    problem.fixes.push_back({k, (ts - problem.t_s[k]) / (problem.t_s[k + 1] - problem.t_s[k]), s.p_K});
+    return Problem::Fix{k, (ts - problem.t_s[k]) / (problem.t_s[k + 1] - problem.t_s[k]), z};
+  };
+  for (const TrackSample& s : input.track) {
+    if (!s.visible) continue;
+    if (const auto fix = fix_at(s.t_us, s.p_K)) problem.fixes.push_back(*fix);
+  }
+  if (options.use_elbow_anchor) {
+    for (const ElbowAnchorSample& a : input.elbow_anchor) {
+      if (const auto fix = fix_at(a.t_us, a.p_K)) problem.anchors.push_back(*fix);
+    }
   }
 
   // Gauss-Newton with step halving; the normal equations are banded (plus the bias columns).
-  const int columns = static_cast<int>(x.size());
+  const int columns = problem.columns();
   LinearSystem sys = problem.linearise(x);
   double cost = cost_of(sys);
   for (int iteration = 0; iteration < options.max_iterations; ++iteration) {

@@ -16,8 +16,21 @@
 //                 (eq. 12 with the error terms)
 //   position      visible track sample z_j - p(t_j) (linear between the two nearest p_i)
 //   sphere        |p_i - C_i| - d_ul, C_i from eq. 13 (soft: the shoulder is itself measured)
-//   priors        b_A, e0, e1 (zero mean)
-// solved by Gauss-Newton on the sparse normal equations (only the sphere term is nonlinear).
+//   elbow anchor  p(t_k) + c0 + tau_k c1 - a_k for each ElbowAnchorSample a_k (the SDK elbow
+//                 carried along the forearm): the kinematic chain inside the gap, where the
+//                 strap is hidden but the elbow mostly is not. c0 + tau c1 is the anchor's own
+//                 error (the SDK's slowly turning elbow bias), learnt where the strap is seen on
+//                 both sides; residuals beyond anchor_huber_k sigma count linearly (the SDK's
+//                 jumps and inferred elbows), by reweighting each iteration
+//   priors        b_A, e0, e1, c0, c1 (zero mean)
+// solved by Gauss-Newton on the sparse normal equations (the sphere and the robust anchor are the
+// nonlinear terms).
+//
+// Why the anchor: on the simulator's body render (bench_table1 --render body --gaps) the 4.4 s
+// gap behind the back drifts by 10-20 cm mid-gap although both ends are within 2 cm: the
+// accelerations' remaining error after b_A, e0 and e1 is 0.05-0.15 m/s^2 in 0.5 s bins (IMU
+// scale and misalignment, attitude), and double integration over T = 4.4 s turns e into up to
+// e T^2 / 8. Inertial data alone cannot do better on gaps that long.
 #include "forearm/gap_input.hpp"
 
 namespace posefuse::forearm {
@@ -30,6 +43,12 @@ struct GapSmootherOptions {
   double bias_prior_sigma_m_s2 = 0.3;
   double leak_prior_sigma_m_s2 = 0.3;  // e0, e1: ~2 degrees of attitude error times g
   bool use_shoulder_sphere = true;
+  // The elbow anchor (GapRecoveryInput::elbow_anchor; unused when that is empty). Per sample
+  // sigma: the SDK's jitter plus what c0 + tau c1 leaves of its turning bias.
+  bool use_elbow_anchor = true;
+  double anchor_sigma_m = 0.12;
+  double anchor_bias_prior_sigma_m = 0.15;  // c0, c1: the SDK's elbow bias is 5-10 cm
+  double anchor_huber_k = 2.0;
   int max_iterations = 15;
 };
 

@@ -5,6 +5,7 @@
 #include "common/error.hpp"
 #include "sim/bvh.hpp"
 #include "sim/bvh_motion.hpp"
+#include "sim/calibration_prefix.hpp"
 
 namespace posefuse::sim {
 
@@ -24,7 +25,9 @@ BodyMotion select_motion(const std::string& name, const MotionOptions& options, 
     BvhMotionOptions bvh;
     bvh.sex = context.sex;
     bvh.betas = context.betas;
-    return bvh_motion(load_bvh(options.bvh_path), bvh);
+    BodyMotion clip = bvh_motion(load_bvh(options.bvh_path), bvh);
+    if (!options.calibration_prefix) return clip;
+    return with_calibration_prefix(make_exercise("calibration_pose", options.exercise), clip);
   }
   const std::vector<std::string> exercises = exercise_names();
   if (std::find(exercises.begin(), exercises.end(), name) == exercises.end()) {

@@ -22,6 +22,10 @@ namespace posefuse::sim {
 struct MotionOptions {
   ExerciseOptions exercise;  // arm, speed, repetitions, rest hold (exercises only)
   std::string bvh_path;      // motion "bvh": the clip to play
+  // Motion "bvh": play the calibration_pose exercise (with exercise.arm) up to the end of its
+  // hold first and blend into the clip (calibration_prefix.hpp): the forearm stage needs paper
+  // 1's calibration pose (II-H), which a mocap clip does not start in.
+  bool calibration_prefix = false;
 };
 
 // What a motion may need to know about the subject.

@@ -14,12 +14,6 @@ namespace {
 using namespace posefuse::forearm::testing;
 using posefuse::testing::expect_error;
 
-GapSpan only_gap(const GapRecoveryInput& in) {
-  const std::vector<GapSpan> gaps = find_gaps(in.track);
-  EXPECT_EQ(gaps.size(), 1u);
-  return gaps.at(0);
-}
-
 double gap_seconds(const GapSpan& g) { return static_cast<double>(g.t_end_us - g.t_start_us) * 1e-6; }
 
 // A rest-to-rest move inside the gap (smooth, zero velocity and acceleration at both ends) with

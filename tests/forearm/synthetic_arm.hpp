@@ -10,6 +10,9 @@
 #include <cstdint>
 #include <numbers>
 #include <random>
+#include <stdexcept>
+#include <string>
+#include <vector>
 
 #include "forearm/gap_input.hpp"
 #include "geometry/quaternion.hpp"
@@ -108,6 +111,39 @@ inline GapRecoveryInput make_gap_input(const ArmMotion& motion, const SensorNois
                       motion.specific_force_A(ts) + noise.acc_bias_A + gauss3(noise.acc_sigma_m_s2)});
   }
   return in;
+}
+
+// The camera skeleton's elbow anchor (GapRecoveryInput::elbow_anchor) at every track frame: the
+// true IMU position plus the SDK's elbow error as the simulator makes it (camera_skeleton.hpp):
+// a bias of bias_m turning in a plane with period bias_period_s, jitter, and with probability
+// jump_probability per frame a jump of jump_m.
+struct AnchorError {
+  double bias_m = 0.08;
+  double bias_period_s = 10.0;
+  double jitter_sigma_m = 0.004;
+  double jump_probability = 0.03;
+  double jump_m = 0.25;
+  unsigned seed = 7;
+};
+inline void add_elbow_anchor(GapRecoveryInput& in, const ArmMotion& motion, const AnchorError& error) {
+  std::mt19937 rng(error.seed);
+  std::normal_distribution<double> n01(0.0, 1.0);
+  std::uniform_real_distribution<double> u01(0.0, 1.0);
+  const Vec3 u = Vec3(1.0, 0.3, -0.2).normalized(), v = u.cross(Vec3::UnitY()).normalized();
+  for (const TrackSample& s : in.track) {
+    const double t = seconds(s.t_us), w = 2.0 * std::numbers::pi / error.bias_period_s;
+    Vec3 e = error.bias_m * (std::cos(w * t) * u + std::sin(w * t) * v) +
+             error.jitter_sigma_m * Vec3(n01(rng), n01(rng), n01(rng));
+    if (u01(rng) < error.jump_probability) e += error.jump_m * Vec3(n01(rng), n01(rng), n01(rng)).normalized();
+    in.elbow_anchor.push_back({s.t_us, motion.imu_position(t) + e});
+  }
+}
+
+// The one gap of a track (std::runtime_error when there is not exactly one).
+inline GapSpan only_gap(const GapRecoveryInput& in) {
+  const std::vector<GapSpan> gaps = find_gaps(in.track);
+  if (gaps.size() != 1) throw std::runtime_error("expected one gap, found " + std::to_string(gaps.size()));
+  return gaps.front();
 }
 
 struct GapErrors {

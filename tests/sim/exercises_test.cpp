@@ -2,12 +2,15 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
 #include "body/pose_parameters.hpp"
+#include "body/smpl_model.hpp"
 #include "common/error.hpp"
 #include "sim/body_pose_angles.hpp"
+#include "sim/calibration_prefix.hpp"
 #include "sim/forearm_strap.hpp"
 #include "sim/skeleton_pose.hpp"
 
@@ -245,4 +248,30 @@ TEST(Exercises, SpeedAndRepetitions) {
   EXPECT_NEAR(b.duration_s, a.duration_s / 2, 1e-9);
   EXPECT_NEAR(c.duration_s, 2 * a.duration_s, 1e-9);
   for (double t = 0; t <= b.duration_s; t += 0.1) EXPECT_LT((b.poses(t) - a.poses(2 * t)).norm(), 1e-9);
+}
+
+// A clip played behind the calibration pose (calibration_prefix.hpp): the calibration exercise up
+// to the end of its hold, the clip shifted by hold end + blend afterwards, phases from both.
+TEST(CalibrationPrefix, CalibrationHoldThenTheClipShifted) {
+  ExerciseOptions both;
+  both.arm = ExerciseArm::kBoth;
+  const BodyMotion calibration = make_exercise("calibration_pose", both);
+  const BodyMotion clip = make_exercise("arm_raising", both);
+  const double blend_s = 1.5;
+  const BodyMotion out = with_calibration_prefix(calibration, clip, blend_s);
+  const double hold_end = calibration_hold_end_s(calibration);
+  EXPECT_DOUBLE_EQ(calibration_hold_end_s(out), hold_end);
+  EXPECT_NEAR(out.duration_s, hold_end + blend_s + clip.duration_s, 1e-12);
+  for (const double t : {0.0, 1.0, hold_end}) EXPECT_LT((out.poses(t) - calibration.poses(t)).norm(), 1e-12) << t;
+  for (const double t : {0.0, 1.0, clip.duration_s}) {
+    EXPECT_LT((out.poses(hold_end + blend_s + t) - clip.poses(t)).norm(), 1e-12) << t;
+  }
+  // Inside the blend the pose lies between the two ends (the forearm between raised and hanging).
+  const double mid_y = pose_at(out, hold_end + 0.5 * blend_s).joints.col(body::kRightWrist).y();
+  const double held_y = pose_at(calibration, hold_end).joints.col(body::kRightWrist).y();
+  const double clip_y = pose_at(clip, 0.0).joints.col(body::kRightWrist).y();
+  EXPECT_LT(mid_y, std::max(held_y, clip_y));
+  EXPECT_GT(mid_y, std::min(held_y, clip_y));
+  EXPECT_NEAR(phase(out, "raised").begin_s, phase(clip, "raised").begin_s + hold_end + blend_s, 1e-12);
+  EXPECT_THROW(calibration_hold_end_s(clip), Error);
 }

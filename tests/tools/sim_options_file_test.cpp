@@ -47,6 +47,7 @@ TEST(SimOptionsFile, AppliesEveryKindOfValue) {
       "repetitions = 2\n"
       "arm = both\n"
       "bvh_path = /tmp/clip.bvh\n"
+      "calibration_prefix = true\n"
       "threads = 3\n",
       "opts.txt", options);
   EXPECT_EQ(options.seed, 42u);
@@ -74,6 +75,7 @@ TEST(SimOptionsFile, AppliesEveryKindOfValue) {
   EXPECT_EQ(options.motion_options.exercise.repetitions, 2);
   EXPECT_EQ(options.motion_options.exercise.arm, sim::ExerciseArm::kBoth);
   EXPECT_EQ(options.motion_options.bvh_path, "/tmp/clip.bvh");
+  EXPECT_TRUE(options.motion_options.calibration_prefix);
   EXPECT_EQ(options.threads, 3);
   EXPECT_NO_THROW(sim::validate(options));
 }

@@ -83,6 +83,10 @@ const std::map<std::string, Setter>& setters() {
                   }}},
       {"bvh_path", {"motion bvh: the BVH file to play (relative to the working directory)",
                     [](Options& o, const std::string& v, const std::string&) { o.motion_options.bvh_path = v; }}},
+      {"calibration_prefix", {"motion bvh: paper 1's calibration pose (with arm) before the clip, blended in (false)",
+                              [](Options& o, const std::string& v, const std::string& f) {
+                                o.motion_options.calibration_prefix = boolean(v, f);
+                              }}},
       {"speed", {"exercise speed factor, > 0; 2 halves every movement and hold (1)",
                  [](Options& o, const std::string& v, const std::string& f) {
                    o.motion_options.exercise.speed = positive(v, f);

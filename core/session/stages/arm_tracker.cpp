@@ -98,6 +98,19 @@ void ArmTracker::process(bool all, StageOutput& out) {
          (all || track_.back().t_us >= pending_gaps_.front().t_end_us + window_us)) {
     const PendingGap gap = pending_gaps_.front();
     pending_gaps_.erase(pending_gaps_.begin());
+    // Seen too briefly after the gap to close it (a lone, mostly false, detection): the gap goes
+    // on into the next one (forearm::visible_samples_after).
+    const bool window_complete = track_.back().t_us >= gap.t_end_us + window_us;
+    if (window_complete && forearm::visible_samples_after(track_, gap.t_end_us, kBoundaryWindowS) < 2) {
+      if (!pending_gaps_.empty()) {
+        pending_gaps_.front().t_start_us = gap.t_start_us;
+        continue;
+      }
+      if (in_gap_) {
+        gap_start_us_ = gap.t_start_us;
+        continue;
+      }
+    }
     recover(gap.t_start_us, gap.t_end_us, out);
   }
 }
@@ -119,6 +132,10 @@ void ArmTracker::process_frame(const ArmFrame& frame, StageOutput& out) {
   if (frame.shoulder_tracked && (shoulder_.empty() || frame.t_us > shoulder_.back().t_us)) {
     shoulder_.push_back({frame.t_us, frame.shoulder_K});
   }
+  // The smoother's elbow anchor (gap_smoother.hpp): the SDK elbow carried along the forearm.
+  if (has_model_ && frame.sdk_elbow_seen && (elbow_anchor_.empty() || frame.t_us > elbow_anchor_.back().t_us)) {
+    elbow_anchor_.push_back({frame.t_us, forearm::imu_position_from_elbow(frame.sdk_elbow_K, K_from_F, model_)});
+  }
 
   v1::FitResult result;
   v1::FrameResult& out_frame = *result.mutable_frame();
@@ -138,6 +155,9 @@ void ArmTracker::process_frame(const ArmFrame& frame, StageOutput& out) {
     if (in_gap_) {
       pending_gaps_.push_back({gap_start_us_, frame.t_us});
       in_gap_ = false;
+      // Kept in case this is a lone detection and the gap goes on (the next begin() then has too
+      // few samples before it).
+      paused_live_ = std::move(live_);
       live_.reset();
     }
     position = sample.p_K;
@@ -154,9 +174,16 @@ void ArmTracker::process_frame(const ArmFrame& frame, StageOutput& out) {
         live_next_arm_ = index_at_or_before(arm_, gap_start_us_) + 1;
       } catch (const Error& error) {
         live_.reset();
-        out.warn("FOREARM_NO_LIVE_ESTIMATE", field(), std::string("gap from t_us ") + std::to_string(gap_start_us_) +
-                                                          ": " + error.what());
+        if (paused_live_) {
+          // Seen at too few frames to start afresh: the previous gap's estimate goes on (its
+          // live_next_arm_ is still where it stopped).
+          live_ = std::move(paused_live_);
+        } else {
+          out.warn("FOREARM_NO_LIVE_ESTIMATE", field(),
+                   std::string("gap from t_us ") + std::to_string(gap_start_us_) + ": " + error.what());
+        }
       }
+      paused_live_.reset();
     }
     if (in_gap_ && live_) {
       const Vec3 shoulder = shoulder_.empty() ? frame.shoulder_K : shoulder_.back().p_K;
@@ -192,8 +219,10 @@ void ArmTracker::recover(std::int64_t t_start_us, std::int64_t t_end_us, StageOu
   const std::int64_t margin_us = 1'500'000;
   forearm::GapRecoveryInput input;
   input.track = slice(track_, t_start_us - margin_us, t_end_us + margin_us);
+  forearm::occlude_inside(input.track, t_start_us, t_end_us);  // lone detections inside (process)
   input.arm = slice(arm_, t_start_us - margin_us, t_end_us + margin_us);
   input.shoulder = slice(shoulder_, t_start_us - 2 * margin_us, t_end_us + 2 * margin_us);
+  input.elbow_anchor = slice(elbow_anchor_, t_start_us - margin_us, t_end_us + margin_us);
   input.model = model_;
   input.K_from_W = K_from_W_;
   try {

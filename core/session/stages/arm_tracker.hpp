@@ -91,12 +91,14 @@ class ArmTracker {
   std::vector<double> pronation_;
   std::vector<forearm::TrackSample> track_;
   std::vector<forearm::ShoulderSample> shoulder_;
+  std::vector<forearm::ElbowAnchorSample> elbow_anchor_;
   std::deque<ArmFrame> frames_;  // queued, not yet processed
 
   std::optional<std::int64_t> last_visible_us_;
   bool in_gap_ = false;
   std::int64_t gap_start_us_ = 0;
   std::optional<forearm::LiveGapEstimator> live_;
+  std::optional<forearm::LiveGapEstimator> paused_live_;  // the last gap's, until the next gap starts
   std::size_t live_next_arm_ = 0;
   std::optional<std::int64_t> last_live_frame_us_;
   struct PendingGap {

@@ -1,4 +1,4 @@
-#include "calibration_prefix.hpp"
+#include "sim/calibration_prefix.hpp"
 
 #include <algorithm>
 
@@ -7,7 +7,7 @@
 #include "common/error.hpp"
 #include "geometry/quaternion.hpp"
 
-namespace posefuse::bench {
+namespace posefuse::sim {
 
 namespace {
 
@@ -30,19 +30,19 @@ Eigen::VectorXd blend(const Eigen::VectorXd& a, const Eigen::VectorXd& b, double
 
 }  // namespace
 
-double calibration_hold_end_s(const sim::BodyMotion& motion) {
-  for (const sim::MotionPhase& phase : motion.phases) {
+double calibration_hold_end_s(const BodyMotion& motion) {
+  for (const MotionPhase& phase : motion.phases) {
     if (phase.name == "calibration_hold") return phase.end_s;
   }
   throw_invalid("motion.phases", "has no calibration_hold");
 }
 
-sim::BodyMotion with_calibration_prefix(const sim::BodyMotion& calibration, const sim::BodyMotion& clip,
+BodyMotion with_calibration_prefix(const BodyMotion& calibration, const BodyMotion& clip,
                                         double blend_s) {
   const double hold_end = calibration_hold_end_s(calibration);
   const double clip0 = hold_end + blend_s;
   const Eigen::VectorXd held = calibration.poses(hold_end);
-  sim::BodyMotion out;
+  BodyMotion out;
   out.duration_s = clip0 + clip.duration_s;
   const sim::PoseSequence calib = calibration.poses, moving = clip.poses;
   out.poses = [=](double t) -> Eigen::VectorXd {
@@ -50,10 +50,10 @@ sim::BodyMotion with_calibration_prefix(const sim::BodyMotion& calibration, cons
     if (t >= clip0) return moving(t - clip0);
     return blend(held, moving(t - clip0), smootherstep((t - hold_end) / blend_s));
   };
-  for (const sim::MotionPhase& p : calibration.phases) {
+  for (const MotionPhase& p : calibration.phases) {
     if (p.end_s <= hold_end) out.phases.push_back(p);
   }
-  for (sim::MotionPhase p : clip.phases) {
+  for (MotionPhase p : clip.phases) {
     p.begin_s += clip0;
     p.end_s += clip0;
     out.phases.push_back(p);
@@ -61,4 +61,4 @@ sim::BodyMotion with_calibration_prefix(const sim::BodyMotion& calibration, cons
   return out;
 }
 
-}  // namespace posefuse::bench
+}  // namespace posefuse::sim

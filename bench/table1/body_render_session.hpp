@@ -1,0 +1,31 @@
+#pragma once
+// A Table I session on the simulator's body render (bench_table1 --render body): posefuse-sim's
+// session generator (core/sim/sim_session.hpp: the rendered body with clothing, hands, head and
+// torso near the arms, RGB with the strap, both arm IMUs) streamed in-process through
+// SessionPipeline(make_default_stages()) as it is rendered, so no session sits in memory; the
+// truth per arm is what gt/ would hold.
+#include <array>
+#include <vector>
+
+#include "posefuse/v1/results.pb.h"
+#include "sim/sim_session.hpp"
+#include "table1_errors.hpp"
+
+namespace posefuse::bench {
+
+struct BodyRenderRun {
+  sim::SimTruth truth;
+  std::vector<v1::FitResult> results;
+  std::vector<v1::SkeletonFrame> sdk;  // the session's skeleton chunks
+  double pipeline_cpu_s = 0.0;         // this thread's CPU inside the pipeline
+};
+
+BodyRenderRun run_body_render_session(const sim::SimSessionOptions& options);
+
+// Per arm with an IMU (0 left, 1 right): the frames' truth as Table1Truth (occluded as
+// gt/occlusion.csv reads: most of the forearm hidden, or the strap) and the arm as Table1Arm.
+bool has_arm(const BodyRenderRun& run, int arm);
+Table1Truth body_render_truth(const BodyRenderRun& run, int arm);
+Table1Arm body_render_arm(const BodyRenderRun& run, int arm);
+
+}  // namespace posefuse::bench
