@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <span>
 #include <string>
 
 #include "common/error.hpp"
@@ -55,6 +56,7 @@ FrameFitter::FrameFitter(std::shared_ptr<const body::SmplModel> model, body::Pos
       discrete_(*model_, options_) {
   point_jacobian_.setZero(3, layout_.size());
   data_jacobian_.setZero(6, layout_.size());
+  packed_data_jacobian_.setZero(6, layout_.size());
   data_shape_jacobian_.setZero(6, model_->num_betas());
 }
 
@@ -216,14 +218,21 @@ EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::Vecto
     row += count;
   };
   for (int i = 0; i < n; ++i) {
-    // The data rows go straight into the normal equations (only their non-zero columns).
-    data_[i].evaluate(surface_, eval_, surface_jacobians_, correspondences_[i], residual_.segment<6>(row),
-                      data_jacobian_.leftCols(N), uv_jacobian_[i]);
-    if (free > 0) {
+    // The data rows go straight into the normal equations, packed over the DOFs that move the
+    // sample's face (SurfacePoseJacobians::face_columns).
+    const std::span<const int> columns = surface_jacobians_.face_columns(correspondences_[i].face);
+    const int m = static_cast<int>(columns.size());
+    data_[i].evaluate_packed(surface_, eval_, surface_jacobians_, correspondences_[i], residual_.segment<6>(row),
+                             packed_data_jacobian_.leftCols(m), uv_jacobian_[i]);
+    if (free == 0) {
+      system_.add_block(i, columns, packed_data_jacobian_.leftCols(m), uv_jacobian_[i], residual_.segment<6>(row));
+    } else {  // III-B: the shape columns are dense
+      data_jacobian_.setZero();
+      for (int c = 0; c < m; ++c) data_jacobian_.col(columns[static_cast<size_t>(c)]) = packed_data_jacobian_.col(c);
       data_[i].evaluate_shape(surface_, eval_, correspondences_[i], data_shape_jacobian_);
       for (int b = 0; b < free; ++b) data_jacobian_.col(N + b) = data_shape_jacobian_.col(free_betas_[static_cast<size_t>(b)]);
+      system_.add_block(i, data_jacobian_, uv_jacobian_[i], residual_.segment<6>(row));
     }
-    system_.add_block(i, data_jacobian_, uv_jacobian_[i], residual_.segment<6>(row));
     take(6, e.data);
   }
   const int pose_rows_begin = row;

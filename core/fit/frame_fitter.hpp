@@ -176,7 +176,8 @@ class FrameFitter {
   Eigen::VectorXd residual_;
   std::vector<UvJacobian> uv_jacobian_;
   Eigen::Matrix3Xd point_jacobian_;
-  Eigen::MatrixXd data_jacobian_;  // 6 x N
+  Eigen::MatrixXd data_jacobian_;  // 6 x N (+ free betas)
+  Eigen::MatrixXd packed_data_jacobian_;  // 6 x N, the first face_columns().size() used
   Eigen::Matrix3Xd contour_points_;
   std::vector<int> contour_vertices_, selected_;
   std::vector<raycast::ClosestPoint> hits_;

@@ -11,6 +11,8 @@
 // min_diagonal so that a DOF no residual sees still gets a finite, tiny step.
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <array>
+#include <span>
 #include <vector>
 
 namespace posefuse::fit {
@@ -29,6 +31,11 @@ class SchurSystem {
   // non-zero columns of A enter J^T J, which is why the blocks are added one by one.
   void add_block(int i, const Eigen::Ref<const Eigen::MatrixXd>& A, const UvJacobian& B,
                  const Eigen::Ref<const Eigen::Matrix<double, 6, 1>>& r);
+  // The same with A given by its columns `columns` only (ascending DOF indices, all others zero):
+  // packed is 6 x columns.size(), column c holding A's column columns[c]. Same result as the dense
+  // form, without its scan for zero columns.
+  void add_block(int i, std::span<const int> columns, const Eigen::Ref<const Eigen::MatrixXd>& packed,
+                 const UvJacobian& B, const Eigen::Ref<const Eigen::Matrix<double, 6, 1>>& r);
   // Residual rows that depend on the pose only: J (k x N) and r (k).
   void add_pose_rows(const Eigen::Ref<const Eigen::MatrixXd>& J, const Eigen::Ref<const Eigen::VectorXd>& r);
 
@@ -48,15 +55,17 @@ class SchurSystem {
   int num_pose_ = 0, num_blocks_ = 0;
   Eigen::MatrixXd hessian_;  // H = J_pose^T J_pose (lower triangle filled)
   Eigen::VectorXd gradient_;  // g = J_pose^T r
-  // E_i = A_i^T B_i, stored packed: rows block_columns_[block_begin_[i] ..] of E_i.
+  // E_i = A_i^T B_i, stored packed: rows block_columns_[block_begin_[i] ..] of E_i, its two
+  // columns apart (contiguous for the Schur products).
   std::vector<int> block_begin_, block_columns_;
-  std::vector<Eigen::Vector2d> block_coupling_;
+  std::vector<double> coupling_u_, coupling_v_;
   std::vector<Eigen::Matrix2d> block_hessian_;   // C_i = B_i^T B_i
   std::vector<Eigen::Vector2d> block_gradient_;  // g_i = B_i^T r_i
   // Work space.
   Eigen::MatrixXd reduced_;
   Eigen::VectorXd rhs_;
   std::vector<Eigen::Matrix2d> damped_inverse_;
+  std::array<double, kMaxPose> products_;
   Eigen::LDLT<Eigen::MatrixXd, Eigen::Lower> ldlt_;
 };
 
