@@ -112,7 +112,8 @@ void FrameFitter::set_up_blocks(const FrameObservation& o) {
 }
 
 void FrameFitter::pose_model(const Eigen::VectorXd& theta, const Eigen::VectorXd& beta) {
-  eval_.evaluate(beta, theta, free_betas_.empty() ? body::Derivatives::kPose : body::Derivatives::kPoseAndShape);
+  // The vertices' pose Jacobians follow in linearise(), for the vertices the residuals use.
+  eval_.evaluate(beta, theta, free_betas_.empty() ? body::Derivatives::kPoseOnRequest : body::Derivatives::kPoseAndShape);
   surface_.update(eval_.vertices());
   scene_.update_vertices(eval_.vertices());
   if (free_betas_.empty()) return;
@@ -204,8 +205,29 @@ void FrameFitter::build_blocks(const body::BodyEvaluator& eval, const FrameObser
   }
 }
 
+void FrameFitter::compute_used_vertex_jacobians() {
+  if (!free_betas_.empty()) return;  // pose_model evaluated them all (kPoseAndShape)
+  const auto& faces = surface_.faces();
+  used_.resize(static_cast<size_t>(model_->num_vertices()), 0);
+  used_vertices_.clear();
+  const auto use = [&](int v) {
+    if (used_[static_cast<size_t>(v)]) return;
+    used_[static_cast<size_t>(v)] = 1;
+    used_vertices_.push_back(v);
+  };
+  // The data term: each correspondence's corners and their 1-rings (the vertex normals' Jacobians).
+  for (const body::SurfacePoint& c : correspondences_)
+    for (int k = 0; k < 3; ++k)
+      for (int f : surface_.faces_of_vertex(faces(k, c.face)))
+        for (int corner = 0; corner < 3; ++corner) use(faces(corner, f));
+  for (int v : selected_) use(v);  // bg and float points
+  eval_.compute_vertex_pose_jacobians(used_vertices_);
+  for (int v : used_vertices_) used_[static_cast<size_t>(v)] = 0;
+}
+
 EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::VectorXd& theta, const Eigen::VectorXd& beta) {
   build_blocks(eval_, o);
+  compute_used_vertex_jacobians();
   const int n = static_cast<int>(data_.size());
   const int N = layout_.size();
   const int free = static_cast<int>(free_betas_.size());
