@@ -263,9 +263,11 @@ std::vector<DepthSample> sample_depth_pixels(const PointCloud& cloud, const Kine
       const size_t i = static_cast<size_t>(row) * cloud.width + col;
       any_outside |= (outside[i] = !cloud.valid[i]) != 0;
     }
-  std::vector<float> to_outside_px(outside.size(), std::numeric_limits<float>::infinity());
+  std::vector<float> to_outside_px;  // filled only once: these are full-image arrays
   if (any_outside)
-    to_outside_px = silhouette_distance_map(outside, cloud.width, cloud.height, band_region).distance_px;
+    to_outside_px = std::move(silhouette_distance_map(outside, cloud.width, cloud.height, band_region).distance_px);
+  else
+    to_outside_px.assign(outside.size(), std::numeric_limits<float>::infinity());
 
   std::array<std::vector<int>, kBodyZoneCount> edge_pixels, inner_pixels;
   for (size_t i = 0; i < zone.size(); ++i) {
