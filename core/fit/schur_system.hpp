@@ -11,7 +11,6 @@
 // min_diagonal so that a DOF no residual sees still gets a finite, tiny step.
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
-#include <array>
 #include <span>
 #include <vector>
 
@@ -52,12 +51,19 @@ class SchurSystem {
   double predicted_decrease(double gamma, const Eigen::VectorXd& d_pose, const std::vector<Eigen::Vector2d>& d_uv) const;
 
  private:
+  // diag(J_pose^T J_pose), entry d.
+  double diagonal(int d) const { return hessian_(d, d) + data_diagonal_[d]; }
+
   int num_pose_ = 0, num_blocks_ = 0;
-  Eigen::MatrixXd hessian_;  // H = J_pose^T J_pose (lower triangle filled)
+  // J_pose^T J_pose = hessian_ + sum_i A_i^T A_i: the pose rows' part (lower triangle filled);
+  // the blocks' part is formed in solve() with their Schur terms, its diagonal kept here.
+  Eigen::MatrixXd hessian_;
+  Eigen::VectorXd data_diagonal_;
   Eigen::VectorXd gradient_;  // g = J_pose^T r
   // E_i = A_i^T B_i, stored packed: rows block_columns_[block_begin_[i] ..] of E_i, its two
   // columns apart (contiguous for the Schur products).
   std::vector<int> block_begin_, block_columns_;
+  std::vector<double> block_jacobian_;  // A_i's column for each entry of block_columns_ (6 each)
   std::vector<double> coupling_u_, coupling_v_;
   std::vector<Eigen::Matrix2d> block_hessian_;   // C_i = B_i^T B_i
   std::vector<Eigen::Vector2d> block_gradient_;  // g_i = B_i^T r_i
@@ -65,7 +71,6 @@ class SchurSystem {
   Eigen::MatrixXd reduced_;
   Eigen::VectorXd rhs_;
   std::vector<Eigen::Matrix2d> damped_inverse_;
-  std::array<double, kMaxPose> products_;
   Eigen::LDLT<Eigen::MatrixXd, Eigen::Lower> ldlt_;
 };
 
