@@ -278,10 +278,21 @@ void BodyEvaluator::add_vertex_pose_jacobian(int i, double scale,
 
 void BodyEvaluator::add_vertex_pose_jacobian(int i, const Eigen::Matrix3d& m, Eigen::Ref<Eigen::Matrix3Xd> out,
                                              std::uint32_t skip_joints) const {
-  const auto dofs = vertex_dofs(i);
-  const auto block = vertex_pose_jacobian(i);
-  for (size_t c = 0; c < dofs.size(); ++c)
-    if (!((skip_joints >> layout_.dof(dofs[c]).joint) & 1u)) out.col(dofs[c]) += m * block.col(static_cast<Eigen::Index>(c));
+  // The columns come joint by joint (influence joints in order, each with its DOFs): a skipped
+  // joint's columns are passed over at once.
+  const double* column = pose_columns_.data() + 3 * dof_begin_[i];
+  for (int e = influence_begin_[i]; e < influence_begin_[i + 1]; ++e) {
+    const int j = influence_joint_[e];
+    const std::vector<int>& dofs = layout_.dofs_of_joint(j);
+    if ((skip_joints >> j) & 1u) {
+      column += 3 * dofs.size();
+      continue;
+    }
+    for (int d : dofs) {
+      out.col(d) += m * Eigen::Map<const Eigen::Vector3d>(column);
+      column += 3;
+    }
+  }
 }
 
 }  // namespace posefuse::body
