@@ -277,7 +277,16 @@ EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::Vecto
   }
   const int limited = LimitResidual::size(layout_);
   limit_.evaluate(layout_, theta, residual_.segment(row, limited), jacobian_.middleRows(row, limited));
-  take(limited, e.limit);
+  // Only DOFs beyond their limits have a residual (and a Jacobian row): drop the zero rows, they
+  // add nothing to the normal equations but their share of its rank update.
+  int active = 0;
+  for (int k = 0; k < limited; ++k)
+    if (residual_[row + k] != 0) {
+      residual_[row + active] = residual_[row + k];
+      jacobian_.row(row + active) = jacobian_.row(row + k);
+      ++active;
+    }
+  take(active, e.limit);
   if (free > 0) {
     free_beta_values_.resize(free);
     for (int b = 0; b < free; ++b) free_beta_values_[b] = beta[free_betas_[static_cast<size_t>(b)]];
