@@ -156,14 +156,7 @@ SilhouetteDistanceMap silhouette_distance_map_near(const std::vector<uint8_t>& s
   if (width <= 0 || height <= 0 || silhouette.size() != static_cast<size_t>(width) * height)
     throw_invalid("silhouette", "has " + std::to_string(silhouette.size()) + " values for a " + std::to_string(width) +
                                     "x" + std::to_string(height) + " image");
-  PixelRect box{width, height, -1, -1};
-  for (int row = 0; row < height; ++row) {
-    const uint8_t* line = silhouette.data() + static_cast<size_t>(row) * width;
-    for (int col = 0; col < width; ++col)
-      if (line[col]) {
-        box = {std::min(box.col0, col), std::min(box.row0, row), std::max(box.col1, col), std::max(box.row1, row)};
-      }
-  }
+  const PixelRect box = nonzero_box(silhouette, width, height);
   if (box.col1 < 0) throw_precondition("silhouette", "is empty");
   const int margin = std::max(0, margin_px);
   return distance_map_in(silhouette, width, height,

@@ -52,20 +52,7 @@ double point_segment_distance2(const Eigen::Vector2d& p, const Segment& s) {
 }
 
 // Smallest rectangle holding every valid pixel of the cloud (empty for an empty cloud).
-PixelRect bounding_box(const PointCloud& cloud) {
-  PixelRect box{cloud.width, cloud.height, -1, -1};
-  for (int row = 0; row < cloud.height; ++row) {
-    const uint8_t* valid = cloud.valid.data() + static_cast<size_t>(row) * cloud.width;
-    for (int col = 0; col < cloud.width; ++col) {
-      if (!valid[col]) continue;
-      box.col0 = std::min(box.col0, col);
-      box.col1 = std::max(box.col1, col);
-      box.row0 = std::min(box.row0, row);
-      box.row1 = std::max(box.row1, row);
-    }
-  }
-  return box;
-}
+PixelRect bounding_box(const PointCloud& cloud) { return nonzero_box(cloud.valid, cloud.width, cloud.height); }
 
 void validate(const ZoneSamplingParams& params) {
   if (params.num_samples < 1 || params.num_samples > 1'000'000)
