@@ -65,14 +65,21 @@ TEST(BodySurface, PoseJacobiansOfPositionAndNormalMatchFiniteDifferences) {
   }
 }
 
+// A pose with every DOF uniform in [-0.5, 0.5].
+Eigen::VectorXd random_pose(const PoseLayout& layout, std::mt19937& rng) {
+  std::uniform_real_distribution<double> uni(-0.5, 0.5);
+  Eigen::VectorXd theta(layout.size());
+  for (int d = 0; d < layout.size(); ++d) theta[d] = uni(rng);
+  return theta;
+}
+
 TEST(SurfacePoseJacobians, EqualTheDirectJacobiansForSamplesSharingVertices) {
   const auto model = make_template(Sex::kMale);
   const PoseLayout layout = PoseLayout::upper_body();
   BodyEvaluator eval(model, layout);
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> uni(-0.5, 0.5);
-  Eigen::VectorXd theta(layout.size());
-  for (int d = 0; d < layout.size(); ++d) theta[d] = uni(rng);
+  Eigen::VectorXd theta = random_pose(layout, rng);
   eval.evaluate(Eigen::VectorXd::Constant(10, 0.3), theta, Derivatives::kPose);
   BodySurface surface(model->faces, model->num_vertices());
   surface.update(eval.vertices());
@@ -104,10 +111,7 @@ TEST(SurfacePoseJacobians, PackedColumnsHoldEveryNonZeroColumn) {
   const PoseLayout layout = PoseLayout::upper_body();
   BodyEvaluator eval(model, layout);
   std::mt19937 rng(6);
-  std::uniform_real_distribution<double> uni(-0.5, 0.5);
-  Eigen::VectorXd theta(layout.size());
-  for (int d = 0; d < layout.size(); ++d) theta[d] = uni(rng);
-  eval.evaluate(Eigen::VectorXd::Constant(10, -0.2), theta, Derivatives::kPose);
+  eval.evaluate(Eigen::VectorXd::Constant(10, -0.2), random_pose(layout, rng), Derivatives::kPose);
   BodySurface surface(model->faces, model->num_vertices());
   surface.update(eval.vertices());
   SurfacePoseJacobians cached;
