@@ -153,14 +153,13 @@ void BodyEvaluator::evaluate(const Eigen::Ref<const Eigen::VectorXd>& beta,
   }
 
   // Per joint: x -> R(k) x + (c(k) - R(k) J(k)).
-  std::array<Eigen::Vector3d, kNumJoints> offsets;
   for (int k = 0; k < kNumJoints; ++k)
-    offsets[k] = joints_.col(k) - rotations_[k] * rest_joints_.col(k);
+    offsets_[k] = joints_.col(k) - rotations_[k] * rest_joints_.col(k);
 
   const bool pose_derivatives = what != Derivatives::kNone;
+  const bool vertex_pose_derivatives = what == Derivatives::kPose || what == Derivatives::kPoseAndShape;
   const bool shape_derivatives = what == Derivatives::kPoseAndShape;
   const auto& parents = m.parents;
-  const bool posedirs = m.has_posedirs();
 
   // d c(k) / d beta (72 x B), needed for the shape Jacobian.
   if (shape_derivatives) {
@@ -176,55 +175,15 @@ void BodyEvaluator::evaluate(const Eigen::Ref<const Eigen::VectorXd>& beta,
     }
   }
 
-  std::array<Eigen::Vector3d, kNumJoints> sum_below;  // sum_k w_k p_k over joints k below j
-  std::array<double, kNumJoints> weight_below;
   for (int i = 0; i < num_vertices_; ++i) {
     const Eigen::Vector3d rest = v_posed_.segment<3>(3 * i);
     Eigen::Vector3d v = Eigen::Vector3d::Zero();
-    for (int e = influence_begin_[i]; e < influence_begin_[i + 1]; ++e) {
-      sum_below[influence_joint_[e]].setZero();
-      weight_below[influence_joint_[e]] = 0;
-    }
-    Eigen::Matrix3d blended_rotation = Eigen::Matrix3d::Zero();
     for (int e = weight_begin_[i]; e < weight_begin_[i + 1]; ++e) {
       const int k = weight_joint_[e];
-      const double w = weight_value_[e];
-      const Eigen::Vector3d p = rotations_[k] * rest + offsets[k];
-      v += w * p;
-      if (!pose_derivatives) continue;
-      if (posedirs) blended_rotation += w * rotations_[k];
-      for (int j = k; j >= 0; j = parents[j]) {
-        sum_below[j] += w * p;
-        weight_below[j] += w;
-      }
+      v += weight_value_[e] * (rotations_[k] * rest + offsets_[k]);
     }
     vertices_.col(i) = v;
-    if (pose_derivatives) {
-      double* column = pose_columns_.data() + 3 * dof_begin_[i];
-      for (int e = influence_begin_[i]; e < influence_begin_[i + 1]; ++e) {
-        const int j = influence_joint_[e];
-        const Eigen::Vector3d lever = sum_below[j] - weight_below[j] * joints_.col(j);
-        for (int d : layout_.dofs_of_joint(j)) {
-          Eigen::Vector3d col;
-          if (dof_is_translation_[d]) {
-            col = weight_below[j] * layout_.dof(d).axis;
-          } else {
-            col = dof_rate_[d].cross(lever);
-            if (posedirs && j > 0) {
-              const Eigen::Matrix3d& dr = dof_local_rotation_derivative_[d];
-              Eigen::Vector3d offset_rate = Eigen::Vector3d::Zero();
-              for (int r = 0; r < 3; ++r)
-                for (int c = 0; c < 3; ++c)
-                  offset_rate += m.posedirs.block<3, 1>(3 * i, 9 * (j - 1) + 3 * r + c) * dr(r, c);
-              col += blended_rotation * offset_rate;
-            }
-          }
-          Eigen::Map<Eigen::Vector3d> destination(column);
-          destination = col;
-          column += 3;
-        }
-      }
-    }
+    if (vertex_pose_derivatives) compute_vertex_pose_jacobian(i);
     if (shape_derivatives) {
       Eigen::Map<Eigen::Matrix3Xd> out(shape_columns_.data() + 3 * num_betas_ * i, 3, num_betas_);
       out.setZero();
@@ -255,6 +214,61 @@ void BodyEvaluator::evaluate(const Eigen::Ref<const Eigen::VectorXd>& beta,
   }
 }
 
+void BodyEvaluator::compute_vertex_pose_jacobians(std::span<const int> vertices) {
+  for (int i : vertices) {
+    if (i < 0 || i >= num_vertices_) throw_invalid("vertices", "index " + std::to_string(i) + " out of range");
+    compute_vertex_pose_jacobian(i);
+  }
+}
+
+void BodyEvaluator::compute_vertex_pose_jacobian(int i) {
+  const SmplModel& m = *model_;
+  const auto& parents = m.parents;
+  const bool posedirs = m.has_posedirs();
+  const Eigen::Vector3d rest = v_posed_.segment<3>(3 * i);
+  std::array<Eigen::Vector3d, kNumJoints> sum_below;  // sum_k w_k p_k over joints k below j
+  std::array<double, kNumJoints> weight_below;
+  for (int e = influence_begin_[i]; e < influence_begin_[i + 1]; ++e) {
+    sum_below[influence_joint_[e]].setZero();
+    weight_below[influence_joint_[e]] = 0;
+  }
+  Eigen::Matrix3d blended_rotation = Eigen::Matrix3d::Zero();
+  for (int e = weight_begin_[i]; e < weight_begin_[i + 1]; ++e) {
+    const int k = weight_joint_[e];
+    const double w = weight_value_[e];
+    const Eigen::Vector3d p = rotations_[k] * rest + offsets_[k];
+    if (posedirs) blended_rotation += w * rotations_[k];
+    for (int j = k; j >= 0; j = parents[j]) {
+      sum_below[j] += w * p;
+      weight_below[j] += w;
+    }
+  }
+  double* column = pose_columns_.data() + 3 * dof_begin_[i];
+  for (int e = influence_begin_[i]; e < influence_begin_[i + 1]; ++e) {
+    const int j = influence_joint_[e];
+    const Eigen::Vector3d lever = sum_below[j] - weight_below[j] * joints_.col(j);
+    for (int d : layout_.dofs_of_joint(j)) {
+      Eigen::Vector3d col;
+      if (dof_is_translation_[d]) {
+        col = weight_below[j] * layout_.dof(d).axis;
+      } else {
+        col = dof_rate_[d].cross(lever);
+        if (posedirs && j > 0) {
+          const Eigen::Matrix3d& dr = dof_local_rotation_derivative_[d];
+          Eigen::Vector3d offset_rate = Eigen::Vector3d::Zero();
+          for (int r = 0; r < 3; ++r)
+            for (int c = 0; c < 3; ++c)
+              offset_rate += m.posedirs.block<3, 1>(3 * i, 9 * (j - 1) + 3 * r + c) * dr(r, c);
+          col += blended_rotation * offset_rate;
+        }
+      }
+      Eigen::Map<Eigen::Vector3d> destination(column);
+      destination = col;
+      column += 3;
+    }
+  }
+}
+
 void BodyEvaluator::add_vertex_pose_jacobian(int i, double scale,
                                              Eigen::Ref<Eigen::Matrix3Xd> out) const {
   const auto dofs = vertex_dofs(i);
@@ -264,10 +278,21 @@ void BodyEvaluator::add_vertex_pose_jacobian(int i, double scale,
 
 void BodyEvaluator::add_vertex_pose_jacobian(int i, const Eigen::Matrix3d& m, Eigen::Ref<Eigen::Matrix3Xd> out,
                                              std::uint32_t skip_joints) const {
-  const auto dofs = vertex_dofs(i);
-  const auto block = vertex_pose_jacobian(i);
-  for (size_t c = 0; c < dofs.size(); ++c)
-    if (!((skip_joints >> layout_.dof(dofs[c]).joint) & 1u)) out.col(dofs[c]) += m * block.col(static_cast<Eigen::Index>(c));
+  // The columns come joint by joint (influence joints in order, each with its DOFs): a skipped
+  // joint's columns are passed over at once.
+  const double* column = pose_columns_.data() + 3 * dof_begin_[i];
+  for (int e = influence_begin_[i]; e < influence_begin_[i + 1]; ++e) {
+    const int j = influence_joint_[e];
+    const std::vector<int>& dofs = layout_.dofs_of_joint(j);
+    if ((skip_joints >> j) & 1u) {
+      column += 3 * dofs.size();
+      continue;
+    }
+    for (int d : dofs) {
+      out.col(d) += m * Eigen::Map<const Eigen::Vector3d>(column);
+      column += 3;
+    }
+  }
 }
 
 }  // namespace posefuse::body

@@ -14,6 +14,7 @@
 // pose Jacobian is stored as a dense 3 x n block over exactly those n DOFs (n <= 30 for the
 // upper-body layout), computed without allocation after construction.
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
 #include <memory>
 #include <span>
@@ -24,7 +25,9 @@
 
 namespace posefuse::body {
 
-enum class Derivatives { kNone, kPose, kPoseAndShape };
+// kPoseOnRequest: the joints' pose Jacobian now, the vertices' pose Jacobians only for the
+// vertices later passed to compute_vertex_pose_jacobians() (a fit that uses a part of the mesh).
+enum class Derivatives { kNone, kPose, kPoseAndShape, kPoseOnRequest };
 
 class BodyEvaluator {
  public:
@@ -62,6 +65,10 @@ class BodyEvaluator {
   // d joint / d beta, 72 x B.
   const Eigen::MatrixXd& joint_shape_jacobian() const { return joint_shape_jacobian_; }
 
+  // After evaluate(..., kPoseOnRequest): the pose Jacobians of these vertices (the others stay
+  // stale), the same values evaluate(..., kPose) gives. Does not allocate.
+  void compute_vertex_pose_jacobians(std::span<const int> vertices);
+
   // Adds scale * d vertex(i) / d theta into the dense 3 x N block `out`.
   void add_vertex_pose_jacobian(int i, double scale, Eigen::Ref<Eigen::Matrix3Xd> out) const;
   // Adds m * d vertex(i) / d theta into `out` (m: 3 x 3), leaving out the DOFs of the joints in
@@ -74,6 +81,8 @@ class BodyEvaluator {
  private:
   void update_shape(const Eigen::Ref<const Eigen::VectorXd>& beta);
   void update_transforms(const Eigen::Ref<const Eigen::VectorXd>& theta);
+  // Vertex i's pose Jacobian columns (from the current transforms and v_posed_).
+  void compute_vertex_pose_jacobian(int i);
 
   std::shared_ptr<const SmplModel> model_;
   PoseLayout layout_;
@@ -105,6 +114,7 @@ class BodyEvaluator {
   std::vector<Eigen::Vector3d> dof_rate_;           // W_d per DOF (world frame)
   std::vector<Eigen::Matrix3d> dof_local_rotation_derivative_;  // d R_loc / d theta_d
   Eigen::Matrix3Xd joints_;
+  std::array<Eigen::Vector3d, kNumJoints> offsets_;  // x -> R(k) x + offsets_[k], offsets_[k] = c(k) - R(k) J(k)
 
   // Outputs.
   Eigen::Matrix3Xd vertices_;

@@ -6,14 +6,17 @@ namespace posefuse::body {
 
 void SurfacePoseJacobians::reset(const BodySurface& surface, const BodyEvaluator& eval) {
   const int num_vertices = eval.model().num_vertices(), num_pose = eval.layout().size();
-  if (model_ != &eval.model() || static_cast<int>(slot_of_vertex_.size()) != num_vertices || num_pose != num_pose_) {
+  if (model_ != &eval.model() || layout_ != &eval.layout() || static_cast<int>(slot_of_vertex_.size()) != num_vertices ||
+      num_pose != num_pose_) {
     model_ = &eval.model();
+    layout_ = &eval.layout();
     slot_of_vertex_.assign(static_cast<size_t>(num_vertices), -1);
     cached_vertices_.clear();
     num_pose_ = num_pose;
     // Room for every vertex up front: evaluate() never allocates after the first reset().
     store_.resize(3, 2 * static_cast<Eigen::Index>(num_pose) * num_vertices);
     find_rigid_joints(surface, eval);
+    find_face_columns(surface, eval);
     return;
   }
   for (int v : cached_vertices_) slot_of_vertex_[static_cast<size_t>(v)] = -1;
@@ -43,6 +46,29 @@ void SurfacePoseJacobians::find_rigid_joints(const BodySurface& surface, const B
   }
 }
 
+void SurfacePoseJacobians::find_face_columns(const BodySurface& surface, const BodyEvaluator& eval) {
+  const PoseLayout& layout = eval.layout();
+  const int num_vertices = eval.model().num_vertices();
+  // Joints whose DOFs move each vertex (BodyEvaluator::vertex_dofs), then over each 1-ring: the
+  // unit normal of v depends on the positions of its ring.
+  std::vector<std::uint32_t> moving(static_cast<size_t>(num_vertices), 0u), ring(moving.size(), 0u);
+  for (int v = 0; v < num_vertices; ++v)
+    for (int d : eval.vertex_dofs(v)) moving[static_cast<size_t>(v)] |= 1u << layout.dof(d).joint;
+  for (int v = 0; v < num_vertices; ++v)
+    for (int f : surface.faces_of_vertex(v))
+      for (int k = 0; k < 3; ++k) ring[static_cast<size_t>(v)] |= moving[static_cast<size_t>(surface.faces()(k, f))];
+  const Eigen::Index num_faces = surface.faces().cols();
+  face_column_begin_.assign(1, 0);
+  face_columns_.clear();
+  for (Eigen::Index f = 0; f < num_faces; ++f) {
+    std::uint32_t joints = 0;
+    for (int k = 0; k < 3; ++k) joints |= ring[static_cast<size_t>(surface.faces()(k, f))];
+    for (int d = 0; d < layout.size(); ++d)
+      if ((joints >> layout.dof(d).joint) & 1u) face_columns_.push_back(d);
+    face_column_begin_.push_back(static_cast<int>(face_columns_.size()));
+  }
+}
+
 Eigen::Index SurfacePoseJacobians::slot(const BodySurface& surface, const BodyEvaluator& eval, int v) {
   int& slot = slot_of_vertex_[static_cast<size_t>(v)];
   const Eigen::Index n = num_pose_;
@@ -65,16 +91,31 @@ Eigen::Index SurfacePoseJacobians::slot(const BodySurface& surface, const BodyEv
 
 void SurfacePoseJacobians::evaluate(const BodySurface& surface, const BodyEvaluator& eval, const SurfacePoint& s,
                                     Eigen::Ref<Eigen::Matrix3Xd> d_position, Eigen::Ref<Eigen::Matrix3Xd> d_normal) {
+  d_position.setZero();
+  d_normal.setZero();
+  write_columns(surface, eval, s, false, d_position, d_normal);
+}
+
+void SurfacePoseJacobians::evaluate_packed(const BodySurface& surface, const BodyEvaluator& eval, const SurfacePoint& s,
+                                           Eigen::Ref<Eigen::Matrix3Xd> d_position, Eigen::Ref<Eigen::Matrix3Xd> d_normal) {
+  write_columns(surface, eval, s, true, d_position, d_normal);
+}
+
+void SurfacePoseJacobians::write_columns(const BodySurface& surface, const BodyEvaluator& eval, const SurfacePoint& s,
+                                         bool packed, Eigen::Ref<Eigen::Matrix3Xd> d_position,
+                                         Eigen::Ref<Eigen::Matrix3Xd> d_normal) {
   const Eigen::Index n = num_pose_;
   const double w[3] = {s.u, s.v, 1 - s.u - s.v};
   Eigen::Index begin[3];
   for (int k = 0; k < 3; ++k) begin[k] = slot(surface, eval, surface.faces()(k, s.face));
   const Eigen::Matrix3d outer = surface.normal_projection(s);
+  const std::span<const int> columns = face_columns(s.face);
   // Column by column: fixed-size arithmetic, no temporaries.
-  for (Eigen::Index c = 0; c < n; ++c) {
-    d_position.col(c) = w[0] * store_.col(begin[0] + c) + w[1] * store_.col(begin[1] + c) + w[2] * store_.col(begin[2] + c);
-    d_normal.col(c) = outer * (w[0] * store_.col(begin[0] + n + c) + w[1] * store_.col(begin[1] + n + c) +
-                               w[2] * store_.col(begin[2] + n + c));
+  for (size_t k = 0; k < columns.size(); ++k) {
+    const Eigen::Index c = columns[k], out = packed ? static_cast<Eigen::Index>(k) : c;
+    d_position.col(out) = w[0] * store_.col(begin[0] + c) + w[1] * store_.col(begin[1] + c) + w[2] * store_.col(begin[2] + c);
+    d_normal.col(out) = outer * (w[0] * store_.col(begin[0] + n + c) + w[1] * store_.col(begin[1] + n + c) +
+                                 w[2] * store_.col(begin[2] + n + c));
   }
 }
 

@@ -15,8 +15,14 @@
 // the ring's edges cancels the lever), and a translation leaves n_v unchanged: the 1-ring sum is
 // needed only for the DOFs of joints at the skinning seams. Off for models with pose correctives
 // (they deform the ring under every joint's rotation).
+//
+// Sparsity: a surface point on face f moves only with the DOFs of the joints that skin some
+// vertex of its corners' 1-rings (and their ancestors); face_columns(f) lists them, ascending,
+// and evaluate_packed() writes only those columns, so that the normal equations need not scan
+// the N columns for zeros.
 #include <Eigen/Core>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "body/body_evaluator.hpp"
@@ -33,6 +39,16 @@ class SurfacePoseJacobians {
   // Derivatives::kPose or more) produced the vertices of `surface`; both unchanged since reset().
   void evaluate(const BodySurface& surface, const BodyEvaluator& eval, const SurfacePoint& s,
                 Eigen::Ref<Eigen::Matrix3Xd> d_position, Eigen::Ref<Eigen::Matrix3Xd> d_normal);
+  // The same over the columns face_columns(s.face) only: column c of d_position / d_normal (3 x m,
+  // m = face_columns(s.face).size()) is the derivative by DOF face_columns(s.face)[c]. Every
+  // other column of the dense Jacobian is zero.
+  void evaluate_packed(const BodySurface& surface, const BodyEvaluator& eval, const SurfacePoint& s,
+                       Eigen::Ref<Eigen::Matrix3Xd> d_position, Eigen::Ref<Eigen::Matrix3Xd> d_normal);
+  // The DOFs that can move a point of face f or turn its normal, ascending (valid after reset()).
+  std::span<const int> face_columns(int face) const {
+    return {face_columns_.data() + face_column_begin_[static_cast<size_t>(face)],
+            static_cast<size_t>(face_column_begin_[static_cast<size_t>(face) + 1] - face_column_begin_[static_cast<size_t>(face)])};
+  }
 
  private:
   // Column offset of vertex v's [d p_v, d n_v] (3 x 2N) in store_, computed on first use.
@@ -40,9 +56,17 @@ class SurfacePoseJacobians {
 
   // Per vertex, bit j set: every vertex of its 1-ring is skinned only to joints at or below j.
   void find_rigid_joints(const BodySurface& surface, const BodyEvaluator& eval);
+  // face_columns() of every face.
+  void find_face_columns(const BodySurface& surface, const BodyEvaluator& eval);
+  // The columns face_columns(s.face) of both Jacobians, into column k of the list (packed) or
+  // into the DOF's own column.
+  void write_columns(const BodySurface& surface, const BodyEvaluator& eval, const SurfacePoint& s, bool packed,
+                     Eigen::Ref<Eigen::Matrix3Xd> d_position, Eigen::Ref<Eigen::Matrix3Xd> d_normal);
 
   const SmplModel* model_ = nullptr;
+  const PoseLayout* layout_ = nullptr;
   int num_pose_ = 0;
+  std::vector<int> face_column_begin_, face_columns_;
   std::vector<std::uint32_t> rigid_joints_;
   std::vector<int> slot_of_vertex_;  // -1: not computed since reset()
   std::vector<int> cached_vertices_;

@@ -91,8 +91,10 @@ int DiscreteCorrespondenceUpdate::update(const body::BodySurface& surface, const
       }
     }
     for (size_t k = 0; k < candidates.size(); ++k) {
-      const double c = (candidate_p_[k] - points[i]).squaredNorm() * targets.inv_sigma_p2 +
-                       (candidate_n_[k] - normals[i]).squaredNorm() * targets.inv_sigma_n2;
+      // The position part alone decides most candidates (the normal part only adds).
+      const double position_cost = (candidate_p_[k] - points[i]).squaredNorm() * targets.inv_sigma_p2;
+      if (!(position_cost < best_cost)) continue;
+      const double c = position_cost + (candidate_n_[k] - normals[i]).squaredNorm() * targets.inv_sigma_n2;
       if (c < best_cost) {
         best_cost = c;
         best = candidates[k];

@@ -17,6 +17,10 @@ struct PixelRect {
   int col0 = 0, row0 = 0, col1 = -1, row1 = -1;
 };
 
+// Smallest rectangle holding every non-zero pixel of a row-major width x height mask (empty when
+// there is none). The caller checks mask.size() == width * height.
+PixelRect nonzero_box(const std::vector<uint8_t>& mask, int width, int height);
+
 struct DepthFrame {
   int width = 0;
   int height = 0;

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <optional>
+#include <span>
 #include <string>
 
 #include "common/error.hpp"
@@ -55,6 +56,7 @@ FrameFitter::FrameFitter(std::shared_ptr<const body::SmplModel> model, body::Pos
       discrete_(*model_, options_) {
   point_jacobian_.setZero(3, layout_.size());
   data_jacobian_.setZero(6, layout_.size());
+  packed_data_jacobian_.setZero(6, layout_.size());
   data_shape_jacobian_.setZero(6, model_->num_betas());
 }
 
@@ -110,7 +112,8 @@ void FrameFitter::set_up_blocks(const FrameObservation& o) {
 }
 
 void FrameFitter::pose_model(const Eigen::VectorXd& theta, const Eigen::VectorXd& beta) {
-  eval_.evaluate(beta, theta, free_betas_.empty() ? body::Derivatives::kPose : body::Derivatives::kPoseAndShape);
+  // The vertices' pose Jacobians follow in linearise(), for the vertices the residuals use.
+  eval_.evaluate(beta, theta, free_betas_.empty() ? body::Derivatives::kPoseOnRequest : body::Derivatives::kPoseAndShape);
   surface_.update(eval_.vertices());
   scene_.update_vertices(eval_.vertices());
   if (free_betas_.empty()) return;
@@ -202,8 +205,29 @@ void FrameFitter::build_blocks(const body::BodyEvaluator& eval, const FrameObser
   }
 }
 
+void FrameFitter::compute_used_vertex_jacobians() {
+  if (!free_betas_.empty()) return;  // pose_model evaluated them all (kPoseAndShape)
+  const auto& faces = surface_.faces();
+  used_.resize(static_cast<size_t>(model_->num_vertices()), 0);
+  used_vertices_.clear();
+  const auto use = [&](int v) {
+    if (used_[static_cast<size_t>(v)]) return;
+    used_[static_cast<size_t>(v)] = 1;
+    used_vertices_.push_back(v);
+  };
+  // The data term: each correspondence's corners and their 1-rings (the vertex normals' Jacobians).
+  for (const body::SurfacePoint& c : correspondences_)
+    for (int k = 0; k < 3; ++k)
+      for (int f : surface_.faces_of_vertex(faces(k, c.face)))
+        for (int corner = 0; corner < 3; ++corner) use(faces(corner, f));
+  for (int v : selected_) use(v);  // bg and float points
+  eval_.compute_vertex_pose_jacobians(used_vertices_);
+  for (int v : used_vertices_) used_[static_cast<size_t>(v)] = 0;
+}
+
 EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::VectorXd& theta, const Eigen::VectorXd& beta) {
   build_blocks(eval_, o);
+  compute_used_vertex_jacobians();
   const int n = static_cast<int>(data_.size());
   const int N = layout_.size();
   const int free = static_cast<int>(free_betas_.size());
@@ -216,14 +240,21 @@ EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::Vecto
     row += count;
   };
   for (int i = 0; i < n; ++i) {
-    // The data rows go straight into the normal equations (only their non-zero columns).
-    data_[i].evaluate(surface_, eval_, surface_jacobians_, correspondences_[i], residual_.segment<6>(row),
-                      data_jacobian_.leftCols(N), uv_jacobian_[i]);
-    if (free > 0) {
+    // The data rows go straight into the normal equations, packed over the DOFs that move the
+    // sample's face (SurfacePoseJacobians::face_columns).
+    const std::span<const int> columns = surface_jacobians_.face_columns(correspondences_[i].face);
+    const int m = static_cast<int>(columns.size());
+    data_[i].evaluate_packed(surface_, eval_, surface_jacobians_, correspondences_[i], residual_.segment<6>(row),
+                             packed_data_jacobian_.leftCols(m), uv_jacobian_[i]);
+    if (free == 0) {
+      system_.add_block(i, columns, packed_data_jacobian_.leftCols(m), uv_jacobian_[i], residual_.segment<6>(row));
+    } else {  // III-B: the shape columns are dense
+      data_jacobian_.setZero();
+      for (int c = 0; c < m; ++c) data_jacobian_.col(columns[static_cast<size_t>(c)]) = packed_data_jacobian_.col(c);
       data_[i].evaluate_shape(surface_, eval_, correspondences_[i], data_shape_jacobian_);
       for (int b = 0; b < free; ++b) data_jacobian_.col(N + b) = data_shape_jacobian_.col(free_betas_[static_cast<size_t>(b)]);
+      system_.add_block(i, data_jacobian_, uv_jacobian_[i], residual_.segment<6>(row));
     }
-    system_.add_block(i, data_jacobian_, uv_jacobian_[i], residual_.segment<6>(row));
     take(6, e.data);
   }
   const int pose_rows_begin = row;
@@ -246,7 +277,16 @@ EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::Vecto
   }
   const int limited = LimitResidual::size(layout_);
   limit_.evaluate(layout_, theta, residual_.segment(row, limited), jacobian_.middleRows(row, limited));
-  take(limited, e.limit);
+  // Only DOFs beyond their limits have a residual (and a Jacobian row): drop the zero rows, they
+  // add nothing to the normal equations but their share of its rank update.
+  int active = 0;
+  for (int k = 0; k < limited; ++k)
+    if (residual_[row + k] != 0) {
+      residual_[row + active] = residual_[row + k];
+      jacobian_.row(row + active) = jacobian_.row(row + k);
+      ++active;
+    }
+  take(active, e.limit);
   if (free > 0) {
     free_beta_values_.resize(free);
     for (int b = 0; b < free; ++b) free_beta_values_[b] = beta[free_betas_[static_cast<size_t>(b)]];

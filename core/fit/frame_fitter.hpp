@@ -136,6 +136,9 @@ class FrameFitter {
   void select_point_sets(const FrameObservation& observation);
   // The bg, float and bgJoint blocks of the chosen sets at the pose of `eval`.
   void build_blocks(const body::BodyEvaluator& eval, const FrameObservation& observation);
+  // eval_'s vertex pose Jacobians for the vertices linearise() uses: the 1-rings of the
+  // correspondences' corners and U_bg (pose_model evaluates with kPoseOnRequest).
+  void compute_used_vertex_jacobians();
   // Fills the residual vector and pose / uv Jacobians at the current state; returns per-term energy.
   EnergyTerms linearise(const FrameObservation& observation, const Eigen::VectorXd& theta, const Eigen::VectorXd& beta);
   EnergyTerms energy_at(const FrameObservation& observation, const body::BodyEvaluator& eval,
@@ -176,9 +179,12 @@ class FrameFitter {
   Eigen::VectorXd residual_;
   std::vector<UvJacobian> uv_jacobian_;
   Eigen::Matrix3Xd point_jacobian_;
-  Eigen::MatrixXd data_jacobian_;  // 6 x N
+  Eigen::MatrixXd data_jacobian_;  // 6 x N (+ free betas)
+  Eigen::MatrixXd packed_data_jacobian_;  // 6 x N, the first face_columns().size() used
   Eigen::Matrix3Xd contour_points_;
   std::vector<int> contour_vertices_, selected_;
+  std::vector<char> used_;         // per vertex, within compute_used_vertex_jacobians()
+  std::vector<int> used_vertices_;
   std::vector<raycast::ClosestPoint> hits_;
   std::vector<body::SurfacePoint> hit_points_;
   Eigen::MatrixXd joint_jacobian_;  // 72 x P, shape fit only

@@ -75,7 +75,7 @@ FrameObservation prepare_observation(const DepthFrame& frame, const raycast::Dep
                                              " depth samples with a surface normal; the fit needs at least " +
                                              std::to_string(kMinSamples));
   take(t.normals_s);
-  o.silhouette = silhouette_distance_map(silhouette_of(frame), frame.width, frame.height);
+  o.silhouette = silhouette_distance_map_near(silhouette_of(frame), frame.width, frame.height);
   take(t.d2d_s);
   o.behind.emplace(cloud, camera);
   take(t.d3d_s);

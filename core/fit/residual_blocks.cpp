@@ -24,11 +24,11 @@ void DataResidual::evaluate(const body::BodySurface& surface, const body::BodyEv
   finish(surface, nu, r, d_r_d_theta, d_r_d_uv);
 }
 
-void DataResidual::evaluate(const body::BodySurface& surface, const body::BodyEvaluator& eval,
-                            body::SurfacePoseJacobians& jacobians, const body::SurfacePoint& nu, Eigen::Ref<Vector6d> r,
-                            Eigen::Ref<Eigen::MatrixXd> d_r_d_theta,
-                            Eigen::Ref<Eigen::Matrix<double, 6, 2>> d_r_d_uv) const {
-  jacobians.evaluate(surface, eval, nu, d_r_d_theta.topRows<3>(), d_r_d_theta.bottomRows<3>());
+void DataResidual::evaluate_packed(const body::BodySurface& surface, const body::BodyEvaluator& eval,
+                                   body::SurfacePoseJacobians& jacobians, const body::SurfacePoint& nu,
+                                   Eigen::Ref<Vector6d> r, Eigen::Ref<Eigen::MatrixXd> d_r_d_theta,
+                                   Eigen::Ref<Eigen::Matrix<double, 6, 2>> d_r_d_uv) const {
+  jacobians.evaluate_packed(surface, eval, nu, d_r_d_theta.topRows<3>(), d_r_d_theta.bottomRows<3>());
   finish(surface, nu, r, d_r_d_theta, d_r_d_uv);
 }
 

@@ -32,10 +32,12 @@ struct DataResidual {
   void evaluate(const body::BodySurface& surface, const body::BodyEvaluator& eval, const body::SurfacePoint& nu,
                 Eigen::Ref<Vector6d> r, Eigen::Ref<Eigen::MatrixXd> d_r_d_theta,
                 Eigen::Ref<Eigen::Matrix<double, 6, 2>> d_r_d_uv) const;
-  // The same, with the pose Jacobians from `jacobians` (shared per-vertex work; the fitter's path).
-  void evaluate(const body::BodySurface& surface, const body::BodyEvaluator& eval, body::SurfacePoseJacobians& jacobians,
-                const body::SurfacePoint& nu, Eigen::Ref<Vector6d> r, Eigen::Ref<Eigen::MatrixXd> d_r_d_theta,
-                Eigen::Ref<Eigen::Matrix<double, 6, 2>> d_r_d_uv) const;
+  // The same, with the pose Jacobians from `jacobians` (shared per-vertex work; the fitter's path)
+  // and packed: d_r_d_theta is 6 x m, column c the derivative by DOF
+  // jacobians.face_columns(nu.face)[c] (m that list's size; all other DOFs give zero).
+  void evaluate_packed(const body::BodySurface& surface, const body::BodyEvaluator& eval,
+                       body::SurfacePoseJacobians& jacobians, const body::SurfacePoint& nu, Eigen::Ref<Vector6d> r,
+                       Eigen::Ref<Eigen::MatrixXd> d_r_d_theta, Eigen::Ref<Eigen::Matrix<double, 6, 2>> d_r_d_uv) const;
   // d r / d beta (6 x B, overwritten); `eval` produced the vertices of `surface` with
   // Derivatives::kPoseAndShape (paper 2, III-B).
   void evaluate_shape(const body::BodySurface& surface, const body::BodyEvaluator& eval, const body::SurfacePoint& nu,

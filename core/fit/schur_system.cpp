@@ -17,16 +17,18 @@ void SchurSystem::reset(int num_pose, int num_blocks) {
   gradient_.setZero(num_pose_);
   block_begin_.assign(static_cast<size_t>(num_blocks) + 1, 0);
   block_columns_.clear();
-  block_coupling_.clear();
+  coupling_u_.clear();
+  coupling_v_.clear();
+  block_jacobian_.clear();
+  data_diagonal_.setZero(num_pose_);
   block_hessian_.resize(num_blocks);
   block_gradient_.resize(num_blocks);
 }
 
 void SchurSystem::add_block(int i, const Eigen::Ref<const Eigen::MatrixXd>& A, const UvJacobian& B,
                             const Eigen::Ref<const Eigen::Matrix<double, 6, 1>>& r) {
-  if (i < 0 || i >= num_blocks_ || A.rows() != 6 || A.cols() != num_pose_ ||
-      block_begin_[i] != static_cast<int>(block_columns_.size()))
-    throw Error(ErrorCode::kInternal, "schur_system", "blocks out of order or Jacobian of the wrong size");
+  if (A.rows() != 6 || A.cols() != num_pose_)
+    throw Error(ErrorCode::kInternal, "schur_system", "Jacobian of the wrong size");
   // Gather the non-zero columns; fixed-capacity matrices keep this free of allocation.
   std::array<int, kMaxPose> columns;
   int m = 0;
@@ -34,12 +36,30 @@ void SchurSystem::add_block(int i, const Eigen::Ref<const Eigen::MatrixXd>& A, c
     if (!A.col(c).isZero(0.0)) columns[m++] = c;
   Eigen::Matrix<double, 6, Eigen::Dynamic, 0, 6, kMaxPose> packed(6, m);
   for (int k = 0; k < m; ++k) packed.col(k) = A.col(columns[k]);
+  add_block(i, std::span<const int>(columns.data(), static_cast<size_t>(m)), packed, B, r);
+}
+
+void SchurSystem::add_block(int i, std::span<const int> columns, const Eigen::Ref<const Eigen::MatrixXd>& A,
+                            const UvJacobian& B, const Eigen::Ref<const Eigen::Matrix<double, 6, 1>>& r) {
+  const int m = static_cast<int>(columns.size());
+  if (i < 0 || i >= num_blocks_ || A.rows() != 6 || A.cols() != m || m > num_pose_ ||
+      block_begin_[i] != static_cast<int>(block_columns_.size()))
+    throw Error(ErrorCode::kInternal, "schur_system", "blocks out of order or Jacobian of the wrong size");
+  for (int k = 0; k < m; ++k)
+    if (columns[k] < (k > 0 ? columns[k - 1] + 1 : 0) || columns[k] >= num_pose_)
+      throw Error(ErrorCode::kInternal, "schur_system", "block columns not ascending or out of range");
+  // A_i^T A_i enters the reduced system in solve(), together with the Schur term (one pass over
+  // the pairs of columns); here only its diagonal (for the damping) and the packed columns.
   for (int a = 0; a < m; ++a) {
     const int row = columns[a];
-    gradient_[row] += packed.col(a).dot(r);
+    const Eigen::Matrix<double, 6, 1> column = A.col(a);
+    gradient_[row] += column.dot(r);
+    data_diagonal_[row] += column.squaredNorm();
     block_columns_.push_back(row);
-    block_coupling_.emplace_back(B.transpose() * packed.col(a));
-    for (int b = 0; b <= a; ++b) hessian_(row, columns[b]) += packed.col(a).dot(packed.col(b));  // lower triangle
+    block_jacobian_.insert(block_jacobian_.end(), column.data(), column.data() + 6);
+    const Eigen::Vector2d coupling = B.transpose() * column;
+    coupling_u_.push_back(coupling.x());
+    coupling_v_.push_back(coupling.y());
   }
   block_begin_[i + 1] = static_cast<int>(block_columns_.size());
   block_hessian_[i].noalias() = B.transpose() * B;
@@ -66,7 +86,7 @@ void SchurSystem::linearise(const Eigen::Ref<const Eigen::MatrixXd>& J_pose, con
 
 bool SchurSystem::solve(double gamma, Eigen::VectorXd& d_pose, std::vector<Eigen::Vector2d>& d_uv) {
   reduced_ = hessian_;
-  for (int d = 0; d < num_pose_; ++d) reduced_(d, d) += gamma * std::max(hessian_(d, d), kMinDiagonal);
+  for (int d = 0; d < num_pose_; ++d) reduced_(d, d) += gamma * std::max(diagonal(d), kMinDiagonal);
   rhs_ = -gradient_;
   damped_inverse_.resize(num_blocks_);
   for (int i = 0; i < num_blocks_; ++i) {
@@ -76,12 +96,22 @@ bool SchurSystem::solve(double gamma, Eigen::VectorXd& d_pose, std::vector<Eigen
     if (!(det > 0) || !(c(0, 0) > 0)) return false;
     Eigen::Matrix2d& inverse = damped_inverse_[i];
     inverse << c(1, 1) / det, -c(0, 1) / det, -c(1, 0) / det, c(0, 0) / det;
-    // Schur term E_i C_i'^-1 E_i^T and right-hand side E_i C_i'^-1 g_i over E_i's non-zero rows.
+    // A_i^T A_i - E_i C_i'^-1 E_i^T and the right-hand side's E_i C_i'^-1 g_i over the block's
+    // columns (lower triangle).
     const Eigen::Vector2d scaled_gradient = inverse * block_gradient_[i];
-    for (int a = block_begin_[i]; a < block_begin_[i + 1]; ++a) {
-      const Eigen::Vector2d ea = inverse * block_coupling_[a];
-      rhs_[block_columns_[a]] += block_coupling_[a].dot(scaled_gradient);
-      for (int b = block_begin_[i]; b <= a; ++b) reduced_(block_columns_[a], block_columns_[b]) -= ea.dot(block_coupling_[b]);
+    const int begin = block_begin_[i], end = block_begin_[i + 1];
+    const double* u = coupling_u_.data() + begin;
+    const double* v = coupling_v_.data() + begin;
+    const double* jacobian = block_jacobian_.data() + 6 * static_cast<size_t>(begin);
+    const int* columns = block_columns_.data() + begin;
+    for (int a = 0; a < end - begin; ++a) {
+      const double ea_u = inverse(0, 0) * u[a] + inverse(0, 1) * v[a], ea_v = inverse(1, 0) * u[a] + inverse(1, 1) * v[a];
+      rhs_[columns[a]] += u[a] * scaled_gradient.x() + v[a] * scaled_gradient.y();
+      const Eigen::Map<const Eigen::Matrix<double, 6, 1>> column_a(jacobian + 6 * a);
+      for (int b = 0; b <= a; ++b) {
+        const Eigen::Map<const Eigen::Matrix<double, 6, 1>> column_b(jacobian + 6 * b);
+        reduced_(columns[a], columns[b]) += column_a.dot(column_b) - (ea_u * u[b] + ea_v * v[b]);
+      }
     }
   }
   ldlt_.compute(reduced_);  // reuses its storage from the previous solve
@@ -91,7 +121,8 @@ bool SchurSystem::solve(double gamma, Eigen::VectorXd& d_pose, std::vector<Eigen
   d_uv.resize(num_blocks_);
   for (int i = 0; i < num_blocks_; ++i) {
     Eigen::Vector2d coupled = block_gradient_[i];
-    for (int a = block_begin_[i]; a < block_begin_[i + 1]; ++a) coupled += block_coupling_[a] * d_pose[block_columns_[a]];
+    for (int a = block_begin_[i]; a < block_begin_[i + 1]; ++a)
+      coupled += Eigen::Vector2d(coupling_u_[a], coupling_v_[a]) * d_pose[block_columns_[a]];
     d_uv[i] = -damped_inverse_[i] * coupled;
     if (!d_uv[i].allFinite()) return false;
   }
@@ -101,7 +132,7 @@ bool SchurSystem::solve(double gamma, Eigen::VectorXd& d_pose, std::vector<Eigen
 double SchurSystem::predicted_decrease(double gamma, const Eigen::VectorXd& d_pose,
                                       const std::vector<Eigen::Vector2d>& d_uv) const {
   double damped = 0, linear = gradient_.dot(d_pose);
-  for (int d = 0; d < num_pose_; ++d) damped += std::max(hessian_(d, d), kMinDiagonal) * d_pose[d] * d_pose[d];
+  for (int d = 0; d < num_pose_; ++d) damped += std::max(diagonal(d), kMinDiagonal) * d_pose[d] * d_pose[d];
   for (int i = 0; i < num_blocks_; ++i) {
     linear += block_gradient_[i].dot(d_uv[i]);
     for (int k = 0; k < 2; ++k) damped += std::max(block_hessian_[i](k, k), kMinDiagonal) * d_uv[i][k] * d_uv[i][k];

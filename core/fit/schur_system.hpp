@@ -11,6 +11,7 @@
 // min_diagonal so that a DOF no residual sees still gets a finite, tiny step.
 #include <Eigen/Cholesky>
 #include <Eigen/Core>
+#include <span>
 #include <vector>
 
 namespace posefuse::fit {
@@ -29,6 +30,11 @@ class SchurSystem {
   // non-zero columns of A enter J^T J, which is why the blocks are added one by one.
   void add_block(int i, const Eigen::Ref<const Eigen::MatrixXd>& A, const UvJacobian& B,
                  const Eigen::Ref<const Eigen::Matrix<double, 6, 1>>& r);
+  // The same with A given by its columns `columns` only (ascending DOF indices, all others zero):
+  // packed is 6 x columns.size(), column c holding A's column columns[c]. Same result as the dense
+  // form, without its scan for zero columns.
+  void add_block(int i, std::span<const int> columns, const Eigen::Ref<const Eigen::MatrixXd>& packed,
+                 const UvJacobian& B, const Eigen::Ref<const Eigen::Matrix<double, 6, 1>>& r);
   // Residual rows that depend on the pose only: J (k x N) and r (k).
   void add_pose_rows(const Eigen::Ref<const Eigen::MatrixXd>& J, const Eigen::Ref<const Eigen::VectorXd>& r);
 
@@ -45,12 +51,20 @@ class SchurSystem {
   double predicted_decrease(double gamma, const Eigen::VectorXd& d_pose, const std::vector<Eigen::Vector2d>& d_uv) const;
 
  private:
+  // diag(J_pose^T J_pose), entry d.
+  double diagonal(int d) const { return hessian_(d, d) + data_diagonal_[d]; }
+
   int num_pose_ = 0, num_blocks_ = 0;
-  Eigen::MatrixXd hessian_;  // H = J_pose^T J_pose (lower triangle filled)
+  // J_pose^T J_pose = hessian_ + sum_i A_i^T A_i: the pose rows' part (lower triangle filled);
+  // the blocks' part is formed in solve() with their Schur terms, its diagonal kept here.
+  Eigen::MatrixXd hessian_;
+  Eigen::VectorXd data_diagonal_;
   Eigen::VectorXd gradient_;  // g = J_pose^T r
-  // E_i = A_i^T B_i, stored packed: rows block_columns_[block_begin_[i] ..] of E_i.
+  // E_i = A_i^T B_i, stored packed: rows block_columns_[block_begin_[i] ..] of E_i, its two
+  // columns apart (contiguous for the Schur products).
   std::vector<int> block_begin_, block_columns_;
-  std::vector<Eigen::Vector2d> block_coupling_;
+  std::vector<double> block_jacobian_;  // A_i's column for each entry of block_columns_ (6 each)
+  std::vector<double> coupling_u_, coupling_v_;
   std::vector<Eigen::Matrix2d> block_hessian_;   // C_i = B_i^T B_i
   std::vector<Eigen::Vector2d> block_gradient_;  // g_i = B_i^T r_i
   // Work space.

@@ -21,7 +21,19 @@ float quasi_euclidean_distance(int dx, int dy) {
 Eigen::Vector2d SilhouetteDistanceMap::closest(double u, double v) const {
   const int col = std::clamp(static_cast<int>(std::lround(std::isfinite(u) ? u : 0.0)), 0, width - 1);
   const int row = std::clamp(static_cast<int>(std::lround(std::isfinite(v) ? v : 0.0)), 0, height - 1);
-  const int32_t index = closest_pixel[static_cast<size_t>(row) * width + col];
+  int32_t index = -1;
+  if (col >= region.col0 && col <= region.col1 && row >= region.row0 && row <= region.row1) {
+    index = closest_pixel[static_cast<size_t>(row) * width + col];
+  } else {
+    float best = std::numeric_limits<float>::infinity();
+    for (int32_t candidate : border_pixels) {
+      const float d = quasi_euclidean_distance(candidate % width - col, candidate / width - row);
+      if (d < best) {
+        best = d;
+        index = candidate;
+      }
+    }
+  }
   return {static_cast<double>(index % width), static_cast<double>(index / width)};
 }
 
@@ -91,8 +103,12 @@ SilhouetteDistanceMap silhouette_distance_map(const std::vector<uint8_t>& silhou
   return silhouette_distance_map(silhouette, width, height, PixelRect{0, 0, width - 1, height - 1});
 }
 
-SilhouetteDistanceMap silhouette_distance_map(const std::vector<uint8_t>& silhouette, int width, int height,
-                                              const PixelRect& region) {
+namespace {
+
+// silhouette_distance_map over `region`; with_border: also the border pixels (closest() outside
+// the region).
+SilhouetteDistanceMap distance_map_in(const std::vector<uint8_t>& silhouette, int width, int height,
+                                      const PixelRect& region, bool with_border) {
   if (width <= 0 || height <= 0)
     throw_invalid("silhouette", "size " + std::to_string(width) + "x" + std::to_string(height) + " is not valid");
   const size_t pixels = static_cast<size_t>(width) * height;
@@ -106,6 +122,7 @@ SilhouetteDistanceMap silhouette_distance_map(const std::vector<uint8_t>& silhou
   SilhouetteDistanceMap map;
   map.width = width;
   map.height = height;
+  map.region = region;
   map.distance_px.assign(pixels, std::numeric_limits<float>::infinity());
   map.closest_pixel.assign(pixels, -1);
   bool any = false;
@@ -116,10 +133,36 @@ SilhouetteDistanceMap silhouette_distance_map(const std::vector<uint8_t>& silhou
       map.distance_px[i] = 0;
       map.closest_pixel[i] = static_cast<int32_t>(i);
       any = true;
+      if (!with_border) continue;
+      bool border = row == region.row0 || row == region.row1 || col == region.col0 || col == region.col1;
+      for (int dr = -1; dr <= 1 && !border; ++dr)
+        for (int dc = -1; dc <= 1 && !border; ++dc) border = !silhouette[i + static_cast<size_t>(dr * width + dc)];
+      if (border) map.border_pixels.push_back(static_cast<int32_t>(i));
     }
   if (!any) throw_precondition("silhouette", "is empty");
   chamfer(map, region);
   return map;
+}
+
+}  // namespace
+
+SilhouetteDistanceMap silhouette_distance_map(const std::vector<uint8_t>& silhouette, int width, int height,
+                                              const PixelRect& region) {
+  return distance_map_in(silhouette, width, height, region, false);
+}
+
+SilhouetteDistanceMap silhouette_distance_map_near(const std::vector<uint8_t>& silhouette, int width, int height,
+                                                   int margin_px) {
+  if (width <= 0 || height <= 0 || silhouette.size() != static_cast<size_t>(width) * height)
+    throw_invalid("silhouette", "has " + std::to_string(silhouette.size()) + " values for a " + std::to_string(width) +
+                                    "x" + std::to_string(height) + " image");
+  const PixelRect box = nonzero_box(silhouette, width, height);
+  if (box.col1 < 0) throw_precondition("silhouette", "is empty");
+  const int margin = std::max(0, margin_px);
+  return distance_map_in(silhouette, width, height,
+                         PixelRect{std::max(0, box.col0 - margin), std::max(0, box.row0 - margin),
+                                   std::min(width - 1, box.col1 + margin), std::min(height - 1, box.row1 + margin)},
+                         true);
 }
 
 }  // namespace posefuse::fit

@@ -15,9 +15,17 @@ struct SilhouetteDistanceMap {
   int height = 0;
   std::vector<float> distance_px;      // quasi-Euclidean distance to the silhouette
   std::vector<int32_t> closest_pixel;  // row-major index of the closest silhouette pixel
+  // The pixels the two arrays hold (the whole image unless computed over a region); outside it
+  // they hold infinity / -1.
+  PixelRect region;
+  // The region's silhouette pixels that have an 8-neighbour outside the silhouette or lie on the
+  // region's edge (row-major indices, ascending): the only candidates for the closest silhouette
+  // pixel of a point outside the region (a step towards the point from any other one is closer).
+  std::vector<int32_t> border_pixels;
 
   // D_2D at image coordinates (u, v): the closest silhouette pixel's (col, row). Coordinates
-  // outside the image are clamped to the border pixel first.
+  // outside the image are clamped to the border pixel first; outside `region` the closest pixel
+  // is searched among border_pixels (first of equally close ones).
   Eigen::Vector2d closest(double u, double v) const;
 };
 
@@ -35,6 +43,13 @@ SilhouetteDistanceMap silhouette_distance_map(const std::vector<uint8_t>& silhou
 // (also when the region holds no silhouette pixel).
 SilhouetteDistanceMap silhouette_distance_map(const std::vector<uint8_t>& silhouette, int width, int height,
                                               const PixelRect& region);
+
+// D_2D for the fitter: the same closest pixels (up to ties) as silhouette_distance_map over the
+// whole image, the chamfer run only over the silhouette's bounding box grown by margin_px (so that
+// points near the silhouette are looked up) and points outside that searched among the border
+// pixels. Errors as silhouette_distance_map.
+SilhouetteDistanceMap silhouette_distance_map_near(const std::vector<uint8_t>& silhouette, int width, int height,
+                                                   int margin_px = 16);
 
 // Silhouette of a frame: body index != kNoBody (depth is not required).
 std::vector<uint8_t> silhouette_of(const DepthFrame& frame);

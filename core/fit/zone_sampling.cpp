@@ -52,20 +52,7 @@ double point_segment_distance2(const Eigen::Vector2d& p, const Segment& s) {
 }
 
 // Smallest rectangle holding every valid pixel of the cloud (empty for an empty cloud).
-PixelRect bounding_box(const PointCloud& cloud) {
-  PixelRect box{cloud.width, cloud.height, -1, -1};
-  for (int row = 0; row < cloud.height; ++row) {
-    const uint8_t* valid = cloud.valid.data() + static_cast<size_t>(row) * cloud.width;
-    for (int col = 0; col < cloud.width; ++col) {
-      if (!valid[col]) continue;
-      box.col0 = std::min(box.col0, col);
-      box.col1 = std::max(box.col1, col);
-      box.row0 = std::min(box.row0, row);
-      box.row1 = std::max(box.row1, row);
-    }
-  }
-  return box;
-}
+PixelRect bounding_box(const PointCloud& cloud) { return nonzero_box(cloud.valid, cloud.width, cloud.height); }
 
 void validate(const ZoneSamplingParams& params) {
   if (params.num_samples < 1 || params.num_samples > 1'000'000)
@@ -164,10 +151,8 @@ void check_size(const PointCloud& cloud, const raycast::DepthCamera& camera) {
     throw_invalid("cloud.width", "cloud size does not match the camera");
 }
 
-// assign_zones over the cloud's pixel box `box` (no cloud pixel lies outside it); the cloud's
-// size is checked.
-std::vector<int8_t> assign_zones_in(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
-                                    const raycast::DepthCamera& camera, const PixelRect& box) {
+// The bones that project into the image; throws for a non-finite joint or no bone.
+std::vector<Segment> projected_bones(const KinectSkeleton& skeleton_K, const raycast::DepthCamera& camera) {
   std::array<std::optional<Eigen::Vector2d>, kKinectJointCount> joint_px;
   for (int j = 0; j < kKinectJointCount; ++j) {
     if (!skeleton_K[j].allFinite()) throw_invalid("skeleton[" + std::to_string(j) + "]", "not finite");
@@ -180,25 +165,63 @@ std::vector<int8_t> assign_zones_in(const PointCloud& cloud, const KinectSkeleto
       segments.push_back({*joint_px[bone.from], ab, ab.squaredNorm(), bone.zone});
     }
   if (segments.empty()) throw_precondition("skeleton", "no bone projects into the depth image");
+  return segments;
+}
 
+// assign_zones over the cloud's pixel box `box` (no cloud pixel lies outside it); the cloud's
+// size is checked.
+std::vector<int8_t> assign_zones_in(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
+                                    const raycast::DepthCamera& camera, const PixelRect& box) {
+  const std::vector<Segment> segments = projected_bones(skeleton_K, camera);
   std::vector<int8_t> zone(cloud.valid.size(), -1);
-  for (int row = box.row0; row <= box.row1; ++row)
-    for (int col = box.col0; col <= box.col1; ++col) {
-      if (!cloud.has(col, row)) continue;
-      const Eigen::Vector2d p(col, row);
-      double best = std::numeric_limits<double>::infinity();
-      for (const Segment& segment : segments) {
-        const double d2 = point_segment_distance2(p, segment);
-        if (d2 < best) {
-          best = d2;
-          zone[static_cast<size_t>(row) * cloud.width + col] = static_cast<int8_t>(segment.zone);
+  // Tiles of kTile x kTile pixels: a segment whose distance from the tile's centre, less the
+  // tile's radius, exceeds the smallest (distance + radius) over the segments is farther from
+  // every pixel of the tile than that one and can never be the nearest (nor tie): only the others
+  // are tested per pixel, in the same order, so the zones are those of testing all.
+  constexpr int kTile = 8;
+  const double radius = std::sqrt(2.0) * (kTile - 1) / 2;
+  std::vector<const Segment*> near;
+  for (int tile_row = box.row0; tile_row <= box.row1; tile_row += kTile)
+    for (int tile_col = box.col0; tile_col <= box.col1; tile_col += kTile) {
+      const Eigen::Vector2d centre(tile_col + (kTile - 1) / 2.0, tile_row + (kTile - 1) / 2.0);
+      double bound = std::numeric_limits<double>::infinity();
+      for (const Segment& segment : segments)
+        bound = std::min(bound, std::sqrt(point_segment_distance2(centre, segment)) + radius);
+      near.clear();
+      for (const Segment& segment : segments)
+        if (std::sqrt(point_segment_distance2(centre, segment)) - radius <= bound + 1e-6) near.push_back(&segment);
+      for (int row = tile_row; row <= std::min(box.row1, tile_row + kTile - 1); ++row)
+        for (int col = tile_col; col <= std::min(box.col1, tile_col + kTile - 1); ++col) {
+          if (!cloud.has(col, row)) continue;
+          const Eigen::Vector2d p(col, row);
+          double best = std::numeric_limits<double>::infinity();
+          for (const Segment* segment : near) {
+            const double d2 = point_segment_distance2(p, *segment);
+            if (d2 < best) {
+              best = d2;
+              zone[static_cast<size_t>(row) * cloud.width + col] = static_cast<int8_t>(segment->zone);
+            }
+          }
         }
-      }
     }
   return zone;
 }
 
 }  // namespace
+
+BodyZone nearest_bone_zone(const Eigen::Vector2d& pixel, const KinectSkeleton& skeleton_K,
+                           const raycast::DepthCamera& camera) {
+  BodyZone zone = BodyZone::kTorso;
+  double best = std::numeric_limits<double>::infinity();
+  for (const Segment& segment : projected_bones(skeleton_K, camera)) {
+    const double d2 = point_segment_distance2(pixel, segment);
+    if (d2 < best) {
+      best = d2;
+      zone = segment.zone;
+    }
+  }
+  return zone;
+}
 
 std::vector<int8_t> assign_zones(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
                                  const raycast::DepthCamera& camera) {
@@ -227,9 +250,11 @@ std::vector<DepthSample> sample_depth_pixels(const PointCloud& cloud, const Kine
       const size_t i = static_cast<size_t>(row) * cloud.width + col;
       any_outside |= (outside[i] = !cloud.valid[i]) != 0;
     }
-  std::vector<float> to_outside_px(outside.size(), std::numeric_limits<float>::infinity());
+  std::vector<float> to_outside_px;  // filled only once: these are full-image arrays
   if (any_outside)
-    to_outside_px = silhouette_distance_map(outside, cloud.width, cloud.height, band_region).distance_px;
+    to_outside_px = std::move(silhouette_distance_map(outside, cloud.width, cloud.height, band_region).distance_px);
+  else
+    to_outside_px.assign(outside.size(), std::numeric_limits<float>::infinity());
 
   std::array<std::vector<int>, kBodyZoneCount> edge_pixels, inner_pixels;
   for (size_t i = 0; i < zone.size(); ++i) {

@@ -48,9 +48,14 @@ struct DepthSample {
   Eigen::Vector3f p_K = Eigen::Vector3f::Zero();
 };
 
-// Zone of every cloud pixel (-1 outside the cloud), by the nearest projected bone segment.
+// Zone of every cloud pixel (-1 outside the cloud), by the nearest projected bone segment (the
+// first of equally near ones in the bone order), as nearest_bone_zone gives per pixel.
 std::vector<int8_t> assign_zones(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
                                  const raycast::DepthCamera& camera);
+// The zone of the projected bone nearest to one pixel, testing every bone (the reference for
+// assign_zones, which skips bones that cannot be nearest).
+BodyZone nearest_bone_zone(const Eigen::Vector2d& pixel, const KinectSkeleton& skeleton_K,
+                           const raycast::DepthCamera& camera);
 
 // Deterministic for a given seed. Zones with fewer pixels than their quota give all they have and
 // the shortfall goes to the other zones in proportion to their shares; the result holds

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <limits>
 #include <random>
 
@@ -78,6 +79,31 @@ TEST(BodyEvaluator, PoseJacobianMatchesFiniteDifferencesWithPosedirs) {
 TEST(BodyEvaluator, PoseJacobianMatchesFiniteDifferencesUpperAndFullBody) {
   check_pose_jacobian(testing::random_model(3, 10, false, 3), PoseLayout::upper_body(), 30);
   check_pose_jacobian(testing::random_model(3, 10, false, 4), PoseLayout::full_body(), 40);
+}
+
+TEST(BodyEvaluator, PoseJacobiansOnRequestEqualTheFullEvaluation) {
+  for (bool posedirs : {false, true}) {
+    auto model = testing::random_model(3, 10, posedirs, 7);
+    const PoseLayout layout = PoseLayout::upper_body();
+    BodyEvaluator full(model, layout), on_request(model, layout);
+    const Eigen::VectorXd beta = random_vector(10, 1.0, 70);
+    Eigen::VectorXd theta = random_vector(layout.size(), 0.8, 71);
+    on_request.evaluate(beta, theta, Derivatives::kPose);  // stale values from another pose
+    theta[7] += 0.3;
+    full.evaluate(beta, theta, Derivatives::kPose);
+    on_request.evaluate(beta, theta, Derivatives::kPoseOnRequest);
+    EXPECT_EQ(on_request.vertices(), full.vertices());
+    EXPECT_EQ(on_request.joint_pose_jacobian(), full.joint_pose_jacobian());
+    std::vector<int> some;
+    for (int i = 1; i < model->num_vertices(); i += 3) some.push_back(i);
+    on_request.compute_vertex_pose_jacobians(some);
+    for (int i : some) {
+      ASSERT_TRUE(std::ranges::equal(on_request.vertex_dofs(i), full.vertex_dofs(i)));
+      ASSERT_EQ(on_request.vertex_pose_jacobian(i), full.vertex_pose_jacobian(i)) << "vertex " << i;
+    }
+    const std::vector<int> out_of_range = {model->num_vertices()};
+    EXPECT_THROW(on_request.compute_vertex_pose_jacobians(out_of_range), Error);
+  }
 }
 
 TEST(BodyEvaluator, ShapeJacobianMatchesFiniteDifferences) {

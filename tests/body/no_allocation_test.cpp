@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <vector>
 
 #include "body/body_evaluator.hpp"
 #include "body/template_generator.hpp"
@@ -39,6 +40,11 @@ TEST(BodyEvaluator, EvaluateDoesNotAllocateAfterTheFirstCall) {
     }
     EXPECT_EQ(g_malloc_calls - before, 0) << static_cast<int>(what);
   }
+  const std::vector<int> vertices = {0, 5, 17};
+  const long before = g_malloc_calls;
+  eval.evaluate(beta, theta, Derivatives::kPoseOnRequest);
+  eval.compute_vertex_pose_jacobians(vertices);
+  EXPECT_EQ(g_malloc_calls - before, 0);
 #endif
 }
 

@@ -65,14 +65,21 @@ TEST(BodySurface, PoseJacobiansOfPositionAndNormalMatchFiniteDifferences) {
   }
 }
 
+// A pose with every DOF uniform in [-0.5, 0.5].
+Eigen::VectorXd random_pose(const PoseLayout& layout, std::mt19937& rng) {
+  std::uniform_real_distribution<double> uni(-0.5, 0.5);
+  Eigen::VectorXd theta(layout.size());
+  for (int d = 0; d < layout.size(); ++d) theta[d] = uni(rng);
+  return theta;
+}
+
 TEST(SurfacePoseJacobians, EqualTheDirectJacobiansForSamplesSharingVertices) {
   const auto model = make_template(Sex::kMale);
   const PoseLayout layout = PoseLayout::upper_body();
   BodyEvaluator eval(model, layout);
   std::mt19937 rng(5);
   std::uniform_real_distribution<double> uni(-0.5, 0.5);
-  Eigen::VectorXd theta(layout.size());
-  for (int d = 0; d < layout.size(); ++d) theta[d] = uni(rng);
+  Eigen::VectorXd theta = random_pose(layout, rng);
   eval.evaluate(Eigen::VectorXd::Constant(10, 0.3), theta, Derivatives::kPose);
   BodySurface surface(model->faces, model->num_vertices());
   surface.update(eval.vertices());
@@ -95,6 +102,46 @@ TEST(SurfacePoseJacobians, EqualTheDirectJacobiansForSamplesSharingVertices) {
     eval.evaluate(Eigen::VectorXd::Constant(10, 0.3), theta, Derivatives::kPose);
     surface.update(eval.vertices());
   }
+}
+
+TEST(SurfacePoseJacobians, PackedColumnsHoldEveryNonZeroColumn) {
+  // face_columns(f) lists every DOF whose column of the direct Jacobians is non-zero on face f;
+  // evaluate_packed gives those columns (to 1e-12), in order.
+  const auto model = make_template(Sex::kMale);
+  const PoseLayout layout = PoseLayout::upper_body();
+  BodyEvaluator eval(model, layout);
+  std::mt19937 rng(6);
+  eval.evaluate(Eigen::VectorXd::Constant(10, -0.2), random_pose(layout, rng), Derivatives::kPose);
+  BodySurface surface(model->faces, model->num_vertices());
+  surface.update(eval.vertices());
+  SurfacePoseJacobians cached;
+  cached.reset(surface, eval);
+  const int n = layout.size();
+  int fewer = 0;
+  for (int face = 0; face < model->num_faces(); face += 7) {
+    const SurfacePoint s{face, 0.2, 0.5};
+    Eigen::Matrix3Xd jp = Eigen::Matrix3Xd::Zero(3, n), jn = jp;
+    surface.position_pose_jacobian(s, eval, jp);
+    surface.normal_pose_jacobian(s, eval, jn);
+    const auto columns = cached.face_columns(face);
+    const Eigen::Index m = static_cast<Eigen::Index>(columns.size());
+    Eigen::Matrix3Xd pp(3, m), pn(3, m);
+    cached.evaluate_packed(surface, eval, s, pp, pn);
+    std::vector<bool> listed(static_cast<size_t>(n), false);
+    for (Eigen::Index c = 0; c < m; ++c) {
+      const int d = columns[static_cast<size_t>(c)];
+      ASSERT_TRUE(c == 0 || d > columns[static_cast<size_t>(c) - 1]) << "face " << face;
+      listed[static_cast<size_t>(d)] = true;
+      ASSERT_LT((pp.col(c) - jp.col(d)).cwiseAbs().maxCoeff(), 1e-12 * (1 + jp.cwiseAbs().maxCoeff())) << "face " << face;
+      ASSERT_LT((pn.col(c) - jn.col(d)).cwiseAbs().maxCoeff(), 1e-12 * (1 + jn.cwiseAbs().maxCoeff())) << "face " << face;
+    }
+    for (int d = 0; d < n; ++d)
+      if (!listed[static_cast<size_t>(d)]) {
+        ASSERT_TRUE(jp.col(d).isZero(0.0) && jn.col(d).isZero(0.0)) << "face " << face << " DOF " << d;
+      }
+    fewer += m < n;
+  }
+  EXPECT_GT(fewer, 0);  // the lists are sparse somewhere (else the test would prove little)
 }
 
 TEST(BodySurface, AdjacencyOfTheTemplateIsSymmetricAndComplete) {

@@ -2,8 +2,10 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
 
 #include "common/error.hpp"
 #include "synthetic_frames.hpp"
@@ -43,6 +45,28 @@ TEST(FitPointCloud, KeepsOnlySilhouettePixelsWithDepth) {
   EXPECT_GT(cloud.at(0, 0).x(), 0);
   EXPECT_GT(cloud.at(0, 0).y(), 0);
   EXPECT_FLOAT_EQ(cloud.at(0, 0).z(), 2.0f);
+}
+
+TEST(FitPixelRect, NonzeroBoxEqualsTheScanOfEveryPixel) {
+  std::mt19937 rng(3);
+  for (int trial = 0; trial < 200; ++trial) {
+    const int width = 1 + static_cast<int>(rng() % 40), height = 1 + static_cast<int>(rng() % 12);
+    std::vector<uint8_t> mask(static_cast<size_t>(width) * height, 0);
+    const int set = static_cast<int>(rng() % 4);  // 0 to 3 pixels (often none or one)
+    for (int k = 0; k < set; ++k) mask[rng() % mask.size()] = static_cast<uint8_t>(1 + rng() % 255);
+    PixelRect expected{width, height, -1, -1};
+    for (int row = 0; row < height; ++row)
+      for (int col = 0; col < width; ++col)
+        if (mask[static_cast<size_t>(row) * width + col]) {
+          expected = {std::min(expected.col0, col), std::min(expected.row0, row), std::max(expected.col1, col),
+                      std::max(expected.row1, row)};
+        }
+    const PixelRect box = nonzero_box(mask, width, height);
+    ASSERT_EQ(box.col0, expected.col0) << "trial " << trial;
+    ASSERT_EQ(box.col1, expected.col1) << "trial " << trial;
+    ASSERT_EQ(box.row0, expected.row0) << "trial " << trial;
+    ASSERT_EQ(box.row1, expected.row1) << "trial " << trial;
+  }
 }
 
 TEST(FitPointCloud, BadInputNamesTheField) {

@@ -1,6 +1,8 @@
 // The Schur-complement LM solve equals the dense solve of the full damped normal equations.
 #include "fit/schur_system.hpp"
 
+#include "common/error.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -41,6 +43,63 @@ TEST(FitSchurSystem, EqualsDenseSolveOfTheFullDampedSystem) {
     for (int i = 0; i < n; ++i)
       EXPECT_LT((d_uv[i] - expected.segment<2>(N + 2 * i)).norm(), 1e-9 * (1 + expected.norm())) << "block " << i;
   }
+}
+
+TEST(FitSchurSystem, PackedBlocksEqualDenseBlocks) {
+  // Blocks whose pose Jacobian has zero columns, given densely (the system finds the non-zero
+  // columns) and packed over a column list that also names some zero columns (as
+  // SurfacePoseJacobians::face_columns may): the same normal equations and steps.
+  std::mt19937 rng(12);
+  std::normal_distribution<double> normal;
+  const int N = 40, n = 30;
+  SchurSystem dense, packed;
+  dense.reset(N, n);
+  packed.reset(N, n);
+  for (int i = 0; i < n; ++i) {
+    Eigen::MatrixXd A = Eigen::MatrixXd::Zero(6, N);
+    std::vector<int> columns;
+    for (int c = 0; c < N; ++c) {
+      const unsigned kind = rng() % 3;  // 0: not listed, 1: listed and zero, 2: listed, non-zero
+      if (kind == 0) continue;
+      columns.push_back(c);
+      if (kind == 2)
+        for (int k = 0; k < 6; ++k) A(k, c) = normal(rng);
+    }
+    Eigen::MatrixXd A_packed(6, static_cast<Eigen::Index>(columns.size()));
+    for (size_t c = 0; c < columns.size(); ++c) A_packed.col(static_cast<Eigen::Index>(c)) = A.col(columns[c]);
+    UvJacobian B;
+    Eigen::Matrix<double, 6, 1> r;
+    for (int k = 0; k < 6; ++k) {
+      B(k, 0) = normal(rng);
+      B(k, 1) = normal(rng);
+      r[k] = normal(rng);
+    }
+    dense.add_block(i, A, B, r);
+    packed.add_block(i, columns, A_packed, B, r);
+  }
+  Eigen::MatrixXd J_rows(5, N);
+  for (int k = 0; k < J_rows.size(); ++k) J_rows.data()[k] = normal(rng);
+  const Eigen::VectorXd r_rows = Eigen::VectorXd::Constant(5, 0.5);
+  dense.add_pose_rows(J_rows, r_rows);
+  packed.add_pose_rows(J_rows, r_rows);
+  for (double gamma : {1e-3, 1.0}) {
+    Eigen::VectorXd d_dense, d_packed;
+    std::vector<Eigen::Vector2d> uv_dense, uv_packed;
+    ASSERT_TRUE(dense.solve(gamma, d_dense, uv_dense));
+    ASSERT_TRUE(packed.solve(gamma, d_packed, uv_packed));
+    EXPECT_LT((d_packed - d_dense).norm(), 1e-12 * (1 + d_dense.norm())) << "gamma " << gamma;
+    for (int i = 0; i < n; ++i) EXPECT_LT((uv_packed[i] - uv_dense[i]).norm(), 1e-12 * (1 + uv_dense[i].norm()));
+    EXPECT_NEAR(packed.predicted_decrease(gamma, d_packed, uv_packed), dense.predicted_decrease(gamma, d_dense, uv_dense),
+                1e-12 * std::abs(dense.predicted_decrease(gamma, d_dense, uv_dense)));
+  }
+}
+
+TEST(FitSchurSystem, RejectsPackedColumnsThatAreNotAscending) {
+  SchurSystem system;
+  system.reset(10, 1);
+  const std::vector<int> columns = {3, 2};
+  EXPECT_THROW(system.add_block(0, columns, Eigen::MatrixXd::Ones(6, 2), UvJacobian::Ones(), Eigen::Matrix<double, 6, 1>::Ones()),
+               Error);
 }
 
 }  // namespace

@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <limits>
 #include <random>
 
@@ -103,6 +104,41 @@ TEST(FitSilhouetteDistance, InsideIsIdentityAndOutsideImageIsClamped) {
   EXPECT_EQ(map.closest(-100, 26), map.closest(0, 26));
   EXPECT_EQ(map.closest(32, 1e9), map.closest(32, 52));
   EXPECT_EQ(map.closest(std::nan(""), 26), map.closest(0, 26));
+}
+
+// The fitter's map (chamfer near the silhouette's box, border search beyond it): every pixel of
+// the image and points far outside it get a closest silhouette pixel as close as the full map's.
+TEST(FitSilhouetteDistance, NearMapFindsPixelsAsCloseAsTheFullMapEverywhere) {
+  const int width = 60, height = 45;
+  std::mt19937_64 rng(8);
+  for (int trial = 0; trial < 10; ++trial) {
+    // A blob of random pixels in a random sub-rectangle (so that much of the image lies outside).
+    std::vector<uint8_t> silhouette(static_cast<size_t>(width) * height, 0);
+    const int c0 = static_cast<int>(rng() % 30), r0 = static_cast<int>(rng() % 20);
+    const int c1 = c0 + 3 + static_cast<int>(rng() % 20), r1 = r0 + 3 + static_cast<int>(rng() % 15);
+    for (int r = r0; r <= r1; ++r)
+      for (int c = c0; c <= c1; ++c) silhouette[static_cast<size_t>(r) * width + c] = rng() % 3 != 0;
+    silhouette[static_cast<size_t>(r0) * width + c0] = 1;
+    const SilhouetteDistanceMap full = silhouette_distance_map(silhouette, width, height);
+    const int margin = static_cast<int>(trial % 3) * 2;  // 0, 2, 4
+    const SilhouetteDistanceMap near = silhouette_distance_map_near(silhouette, width, height, margin);
+    EXPECT_LT((near.region.col1 - near.region.col0 + 1) * (near.region.row1 - near.region.row0 + 1), width * height);
+    for (int row = -20; row < height + 20; row += 1)
+      for (int col = -20; col < width + 20; col += 1) {
+        const Eigen::Vector2d expected = full.closest(col, row), got = near.closest(col, row);
+        ASSERT_TRUE(silhouette[static_cast<size_t>(got.y()) * width + static_cast<size_t>(got.x())]);
+        // Distances from the clamped query pixel, as closest() looks up.
+        const int qc = std::clamp(col, 0, width - 1), qr = std::clamp(row, 0, height - 1);
+        const auto distance = [&](const Eigen::Vector2d& p) {
+          return quasi_euclidean_distance(static_cast<int>(p.x()) - qc, static_cast<int>(p.y()) - qr);
+        };
+        ASSERT_NEAR(distance(got), distance(expected), 1e-4) << "trial " << trial << " at " << col << ", " << row;
+        const size_t i = static_cast<size_t>(qr) * width + qc;
+        ASSERT_EQ(near.distance_px[i] == 0, full.distance_px[i] == 0);  // the fitter's inside test
+      }
+  }
+  EXPECT_EQ(testing::error_field([] { silhouette_distance_map_near(std::vector<uint8_t>(12, 0), 4, 3); }), "silhouette");
+  EXPECT_EQ(testing::error_field([] { silhouette_distance_map_near(std::vector<uint8_t>(11, 1), 4, 3); }), "silhouette");
 }
 
 TEST(FitSilhouetteDistance, BadInputNamesTheField) {

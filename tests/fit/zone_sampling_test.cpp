@@ -4,6 +4,7 @@
 
 #include <array>
 #include <limits>
+#include <random>
 #include <set>
 
 #include "fit/silhouette_distance.hpp"
@@ -44,6 +45,33 @@ TEST(FitZoneSampling, ZonesFollowTheNearestBone) {
   EXPECT_EQ(zone_at((s[9] + s[10]) / 2), BodyZone::kRightForearm);
   EXPECT_EQ(zone_at(s[13]), BodyZone::kLeftLeg);
   EXPECT_EQ(zone_at(s[17]), BodyZone::kRightLeg);
+}
+
+TEST(FitZoneSampling, ZonesEqualTheNearestOfAllBonesPerPixel) {
+  // assign_zones skips bones per 8 x 8 tile; every pixel must still get the nearest of all bones,
+  // also for skeletons bent so that bones cross and come close (many ties and near-ties).
+  StickFigure figure(true);
+  std::mt19937 rng(9);
+  std::uniform_real_distribution<double> offset(-0.15, 0.15);
+  for (int trial = 0; trial < 3; ++trial) {
+    KinectSkeleton skeleton = figure.skeleton;
+    if (trial > 0)
+      for (auto& joint : skeleton) joint += Eigen::Vector3d(offset(rng), offset(rng), 0);
+    const std::vector<int8_t> zone = assign_zones(figure.cloud, skeleton, figure.camera);
+    int tested = 0;
+    for (int row = 0; row < figure.cloud.height; ++row)
+      for (int col = 0; col < figure.cloud.width; ++col) {
+        const int8_t got = zone[static_cast<size_t>(row) * figure.cloud.width + col];
+        if (!figure.cloud.has(col, row)) {
+          ASSERT_EQ(got, -1);
+          continue;
+        }
+        ASSERT_EQ(BodyZone(got), nearest_bone_zone(Eigen::Vector2d(col, row), skeleton, figure.camera))
+            << "trial " << trial << " pixel " << col << ", " << row;
+        ++tested;
+      }
+    EXPECT_GT(tested, 1000);
+  }
 }
 
 TEST(FitZoneSampling, QuotasHonouredWithNearEdgeShare) {
