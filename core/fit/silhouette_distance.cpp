@@ -54,11 +54,13 @@ void chamfer(SilhouetteDistanceMap& map, const PixelRect& region) {
   const int width = map.width;
   float* distance = map.distance_px.data();
   int32_t* closest = map.closest_pixel.data();
-  const auto relax = [&](size_t to, size_t from, float step) {
+  // Pixel `to` takes from pixel `from` when that is shorter; (d, c) hold `to`'s distance and
+  // closest pixel while its neighbours are visited (from != to).
+  const auto relax = [&](float& d, int32_t& c, size_t from, float step) {
     const float candidate = distance[from] + step;
-    if (candidate < distance[to]) {
-      distance[to] = candidate;
-      closest[to] = closest[from];
+    if (candidate < d) {
+      d = candidate;
+      c = closest[from];
     }
   };
   // Rows above the first seed stay infinite in the forward pass: skip them.
@@ -69,31 +71,58 @@ void chamfer(SilhouetteDistanceMap& map, const PixelRect& region) {
         first_row = row;
         break;
       }
+  // Each pixel's neighbours in a fixed order (ties keep the first seed found); the region's first
+  // and last columns apart, so that the inner loop runs without the edge tests.
+  // A silhouette pixel (distance 0) keeps itself: its neighbours' candidates are all longer.
+  const auto forward = [&](size_t i, bool up, bool left, bool right) {
+    float d = distance[i];
+    if (d == 0) return;
+    int32_t c = closest[i];
+    if (left) relax(d, c, i - 1, 1.0f);
+    if (up) {
+      if (left) relax(d, c, i - width - 1, kDiagonalStep);
+      relax(d, c, i - width, 1.0f);
+      if (right) relax(d, c, i - width + 1, kDiagonalStep);
+    }
+    distance[i] = d;
+    closest[i] = c;
+  };
+  const auto backward = [&](size_t i, bool down, bool left, bool right) {
+    float d = distance[i];
+    if (d == 0) return;
+    int32_t c = closest[i];
+    if (right) relax(d, c, i + 1, 1.0f);
+    if (down) {
+      if (right) relax(d, c, i + width + 1, kDiagonalStep);
+      relax(d, c, i + width, 1.0f);
+      if (left) relax(d, c, i + width - 1, kDiagonalStep);
+    }
+    distance[i] = d;
+    closest[i] = c;
+  };
+  const bool wide = region.col1 > region.col0;
   for (int row = first_row; row <= region.row1; ++row) {
     const bool up = row > region.row0;
-    for (int col = region.col0; col <= region.col1; ++col) {
-      const size_t i = static_cast<size_t>(row) * width + col;
-      const bool left = col > region.col0, right = col < region.col1;
-      if (left) relax(i, i - 1, 1.0f);
-      if (up) {
-        if (left) relax(i, i - width - 1, kDiagonalStep);
-        relax(i, i - width, 1.0f);
-        if (right) relax(i, i - width + 1, kDiagonalStep);
-      }
+    const size_t begin = static_cast<size_t>(row) * width + region.col0, last = static_cast<size_t>(row) * width + region.col1;
+    forward(begin, up, false, wide);
+    if (up) {
+      for (size_t i = begin + 1; i < last; ++i) forward(i, true, true, true);
+    } else {
+      for (size_t i = begin + 1; i < last; ++i) forward(i, false, true, true);
     }
+    if (wide) forward(last, up, true, false);
   }
   for (int row = region.row1; row >= region.row0; --row) {
     const bool down = row < region.row1;
-    for (int col = region.col1; col >= region.col0; --col) {
-      const size_t i = static_cast<size_t>(row) * width + col;
-      const bool left = col > region.col0, right = col < region.col1;
-      if (right) relax(i, i + 1, 1.0f);
-      if (down) {
-        if (right) relax(i, i + width + 1, kDiagonalStep);
-        relax(i, i + width, 1.0f);
-        if (left) relax(i, i + width - 1, kDiagonalStep);
-      }
+    const size_t begin = static_cast<size_t>(row) * width + region.col0, last = static_cast<size_t>(row) * width + region.col1;
+    backward(last, down, wide, false);
+    if (!wide) continue;  // one column: last == begin (and i = last - 1 could wrap at pixel 0)
+    if (down) {
+      for (size_t i = last - 1; i > begin; --i) backward(i, true, true, true);
+    } else {
+      for (size_t i = last - 1; i > begin; --i) backward(i, false, true, true);
     }
+    backward(begin, down, false, true);
   }
 }
 

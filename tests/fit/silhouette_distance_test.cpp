@@ -96,6 +96,63 @@ TEST(FitSilhouetteDistance, RegionMapEqualsTheFullMapInsideTheRegion) {
   EXPECT_EQ(testing::error_field([&] { silhouette_distance_map(one, 4, 3, PixelRect{2, 0, 1, 2}); }), "region");
 }
 
+// The two-pass chamfer written plainly (every pixel tests the region's edges): the map must match
+// it exactly, closest pixels included (the same neighbour order breaks ties the same way).
+void plain_chamfer(const std::vector<uint8_t>& silhouette, int width, const PixelRect& region,
+                   std::vector<float>& distance, std::vector<int32_t>& closest) {
+  const auto relax = [&](size_t to, size_t from, float step) {
+    if (distance[from] + step < distance[to]) {
+      distance[to] = distance[from] + step;
+      closest[to] = closest[from];
+    }
+  };
+  const float diagonal = 1.41421356f;
+  for (int row = region.row0; row <= region.row1; ++row)
+    for (int col = region.col0; col <= region.col1; ++col) {
+      const size_t i = static_cast<size_t>(row) * width + col;
+      if (silhouette[i]) {
+        distance[i] = 0;
+        closest[i] = static_cast<int32_t>(i);
+      }
+    }
+  for (int row = region.row0; row <= region.row1; ++row)
+    for (int col = region.col0; col <= region.col1; ++col) {
+      const size_t i = static_cast<size_t>(row) * width + col;
+      const bool up = row > region.row0, left = col > region.col0, right = col < region.col1;
+      if (left) relax(i, i - 1, 1.0f);
+      if (up && left) relax(i, i - width - 1, diagonal);
+      if (up) relax(i, i - width, 1.0f);
+      if (up && right) relax(i, i - width + 1, diagonal);
+    }
+  for (int row = region.row1; row >= region.row0; --row)
+    for (int col = region.col1; col >= region.col0; --col) {
+      const size_t i = static_cast<size_t>(row) * width + col;
+      const bool down = row < region.row1, left = col > region.col0, right = col < region.col1;
+      if (right) relax(i, i + 1, 1.0f);
+      if (down && right) relax(i, i + width + 1, diagonal);
+      if (down) relax(i, i + width, 1.0f);
+      if (down && left) relax(i, i + width - 1, diagonal);
+    }
+}
+
+TEST(FitSilhouetteDistance, ChamferEqualsThePlainTwoPassChamferExactly) {
+  const int width = 31, height = 19;
+  const std::vector<PixelRect> regions = {{0, 0, width - 1, height - 1}, {0, 0, 0, 0},   {0, 0, 0, height - 1},
+                                          {0, 0, width - 1, 0},          {5, 3, 5, 12},  {4, 2, 20, 2},
+                                          {3, 4, 17, 15},                {29, 17, 30, 18}};
+  for (int trial = 0; trial < 6; ++trial)
+    for (const PixelRect& region : regions) {
+      std::vector<uint8_t> silhouette = random_silhouette(width, height, 0.03 + 0.1 * trial, 40 + static_cast<uint64_t>(trial));
+      silhouette[static_cast<size_t>(region.row0) * width + region.col0] = 1;  // at least one seed inside
+      const SilhouetteDistanceMap map = silhouette_distance_map(silhouette, width, height, region);
+      std::vector<float> distance(static_cast<size_t>(width) * height, std::numeric_limits<float>::infinity());
+      std::vector<int32_t> closest(distance.size(), -1);
+      plain_chamfer(silhouette, width, region, distance, closest);
+      ASSERT_EQ(map.distance_px, distance) << "trial " << trial << " region " << region.col0 << ".." << region.col1;
+      ASSERT_EQ(map.closest_pixel, closest) << "trial " << trial << " region " << region.col0 << ".." << region.col1;
+    }
+}
+
 TEST(FitSilhouetteDistance, InsideIsIdentityAndOutsideImageIsClamped) {
   const raycast::DepthCamera camera{testing::small_intrinsics(64, 53)};
   const DepthFrame frame = testing::render_sphere(camera, {0, 0, 1}, 0.2);
