@@ -257,10 +257,13 @@ std::vector<DepthSample> sample_depth_pixels(const PointCloud& cloud, const Kine
     to_outside_px.assign(outside.size(), std::numeric_limits<float>::infinity());
 
   std::array<std::vector<int>, kBodyZoneCount> edge_pixels, inner_pixels;
-  for (size_t i = 0; i < zone.size(); ++i) {
-    if (zone[i] < 0) continue;
-    (to_outside_px[i] <= params.edge_band_px ? edge_pixels : inner_pixels)[zone[i]].push_back(static_cast<int>(i));
-  }
+  // Zones are assigned inside the box only; row by row it is the same ascending pixel order.
+  for (int row = box.row0; row <= box.row1; ++row)
+    for (int col = box.col0; col <= box.col1; ++col) {
+      const size_t i = static_cast<size_t>(row) * cloud.width + col;
+      if (zone[i] < 0) continue;
+      (to_outside_px[i] <= params.edge_band_px ? edge_pixels : inner_pixels)[zone[i]].push_back(static_cast<int>(i));
+    }
   std::array<int, kBodyZoneCount> available{};
   for (int z = 0; z < kBodyZoneCount; ++z) available[z] = static_cast<int>(edge_pixels[z].size() + inner_pixels[z].size());
   const int total = std::min(params.num_samples, cloud.count);

@@ -146,6 +146,30 @@ TEST(FitZoneSampling, SmallCloudGivesEveryPixel) {
   EXPECT_EQ(static_cast<int>(samples.size()), figure.cloud.count);
 }
 
+TEST(FitZoneSampling, EveryPixelSampledCarriesItsZoneAndEdgeFlag) {
+  // Drawing more samples than pixels takes every pixel with a zone (the pixel lists are built over
+  // the cloud's box only): the same pixels as a scan of the whole image, each with the zone of
+  // assign_zones and the edge flag of the full-image distance to the outside.
+  const StickFigure figure(true);
+  ZoneSamplingParams params;
+  params.num_samples = figure.cloud.count + 100;
+  const auto samples = sample_depth_pixels(figure.cloud, figure.skeleton, figure.camera, params);
+  const std::vector<int8_t> zone = assign_zones(figure.cloud, figure.skeleton, figure.camera);
+  std::vector<uint8_t> outside(figure.cloud.valid.size());
+  for (size_t i = 0; i < outside.size(); ++i) outside[i] = !figure.cloud.valid[i];
+  const auto to_outside = silhouette_distance_map(outside, figure.cloud.width, figure.cloud.height);
+  std::set<size_t> expected, seen;
+  for (size_t i = 0; i < zone.size(); ++i)
+    if (zone[i] >= 0) expected.insert(i);
+  for (const auto& s : samples) {
+    const size_t i = static_cast<size_t>(s.row) * figure.cloud.width + s.col;
+    EXPECT_TRUE(seen.insert(i).second);
+    EXPECT_EQ(static_cast<int>(s.zone), zone[i]);
+    EXPECT_EQ(s.near_edge, to_outside.distance_px[i] <= params.edge_band_px);
+  }
+  EXPECT_EQ(seen, expected);
+}
+
 TEST(FitZoneSampling, BadInputNamesTheField) {
   const StickFigure figure(true);
   ZoneSamplingParams params;
