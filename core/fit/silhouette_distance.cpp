@@ -39,7 +39,12 @@ Eigen::Vector2d SilhouetteDistanceMap::closest(double u, double v) const {
 
 std::vector<uint8_t> silhouette_of(const DepthFrame& frame) {
   std::vector<uint8_t> silhouette(frame.body_index.size());
-  for (size_t i = 0; i < silhouette.size(); ++i) silhouette[i] = frame.body_index[i] != kNoBody;
+  // Plain pointers: through the vectors, each uint8_t store might alias the other vector's
+  // members (a char type), which keeps the compiler from vectorising the loop.
+  const uint8_t* body_index = frame.body_index.data();
+  uint8_t* out = silhouette.data();
+  const size_t n = silhouette.size();
+  for (size_t i = 0; i < n; ++i) out[i] = body_index[i] != kNoBody;
   return silhouette;
 }
 

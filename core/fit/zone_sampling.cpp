@@ -245,11 +245,17 @@ std::vector<DepthSample> sample_depth_pixels(const PointCloud& cloud, const Kine
                               std::min(cloud.width - 1, box.col1 + grow), std::min(cloud.height - 1, box.row1 + grow)};
   std::vector<uint8_t> outside(cloud.valid.size(), 0);
   bool any_outside = false;
-  for (int row = band_region.row0; row <= band_region.row1; ++row)
-    for (int col = band_region.col0; col <= band_region.col1; ++col) {
-      const size_t i = static_cast<size_t>(row) * cloud.width + col;
-      any_outside |= (outside[i] = !cloud.valid[i]) != 0;
-    }
+  // Plain pointers, so that the uint8_t stores (a char type) cannot alias the vectors' members
+  // and the inner loop vectorises.
+  const uint8_t* valid = cloud.valid.data();
+  uint8_t* outside_pixels = outside.data();
+  for (int row = band_region.row0; row <= band_region.row1; ++row) {
+    const size_t begin = static_cast<size_t>(row) * cloud.width + band_region.col0;
+    const size_t end = static_cast<size_t>(row) * cloud.width + band_region.col1 + 1;
+    uint8_t any_in_row = 0;
+    for (size_t i = begin; i < end; ++i) any_in_row |= outside_pixels[i] = !valid[i];
+    any_outside |= any_in_row != 0;
+  }
   std::vector<float> to_outside_px;  // filled only once: these are full-image arrays
   if (any_outside)
     to_outside_px = std::move(silhouette_distance_map(outside, cloud.width, cloud.height, band_region).distance_px);

@@ -153,6 +153,20 @@ TEST(FitSilhouetteDistance, ChamferEqualsThePlainTwoPassChamferExactly) {
     }
 }
 
+TEST(FitSilhouetteDistance, SilhouetteOfMarksEveryBodyIndexButNoBody) {
+  // Odd length (the vectorised loop's tail) and every body-index value, kNoBody among them.
+  DepthFrame frame;
+  frame.width = 37;
+  frame.height = 9;
+  frame.body_index.resize(37 * 9);
+  std::mt19937 rng(7);
+  for (auto& b : frame.body_index) b = rng() % 3 == 0 ? kNoBody : static_cast<uint8_t>(rng() % 256);
+  const std::vector<uint8_t> silhouette = silhouette_of(frame);
+  ASSERT_EQ(silhouette.size(), frame.body_index.size());
+  for (size_t i = 0; i < silhouette.size(); ++i)
+    EXPECT_EQ(silhouette[i], frame.body_index[i] != kNoBody ? 1 : 0) << "pixel " << i;
+}
+
 TEST(FitSilhouetteDistance, InsideIsIdentityAndOutsideImageIsClamped) {
   const raycast::DepthCamera camera{testing::small_intrinsics(64, 53)};
   const DepthFrame frame = testing::render_sphere(camera, {0, 0, 1}, 0.2);
