@@ -47,6 +47,31 @@ TEST(FitPointCloud, KeepsOnlySilhouettePixelsWithDepth) {
   EXPECT_FLOAT_EQ(cloud.at(0, 0).z(), 2.0f);
 }
 
+TEST(FitPointCloud, EqualsThePerPixelUnprojectionOnASparseSilhouette) {
+  // A width that is no multiple of 8 and background runs of every length (the background is
+  // passed over 8 pixels at a time): the same points as unprojecting pixel by pixel.
+  const raycast::DepthCamera camera{testing::small_intrinsics(53, 17)};
+  DepthFrame frame = testing::render_plane(camera, {0, 0, 2}, {0.2, 0.1, -1});
+  std::mt19937 rng(3);
+  for (size_t i = 0; i < frame.body_index.size(); ++i) {
+    if (rng() % 4 != 0) frame.body_index[i] = kNoBody;
+    if (rng() % 10 == 0) frame.depth_mm[i] = kNoDepth;
+  }
+  const PointCloud cloud = build_point_cloud(frame, camera);
+  int expected_count = 0;
+  for (int row = 0; row < 17; ++row)
+    for (int col = 0; col < 53; ++col) {
+      const size_t i = static_cast<size_t>(row) * 53 + col;
+      const bool valid = frame.body_index[i] != kNoBody && frame.depth_mm[i] != kNoDepth;
+      expected_count += valid;
+      ASSERT_EQ(cloud.has(col, row), valid) << "pixel " << col << ", " << row;
+      if (valid) {
+        EXPECT_EQ(cloud.at(col, row), (camera.pixel_ray(col, row) * (frame.depth_mm[i] * 1e-3f)).eval());
+      }
+    }
+  EXPECT_EQ(cloud.count, expected_count);
+}
+
 TEST(FitPixelRect, NonzeroBoxEqualsTheScanOfEveryPixel) {
   std::mt19937 rng(3);
   for (int trial = 0; trial < 200; ++trial) {
