@@ -169,7 +169,7 @@ std::string_view BodyFitStage::description() const {
 std::vector<StageOption> BodyFitStage::options() const {
   const fit::FitOptions defaults;
   return {
-      {kEnabledKey, "false", "run the body-model fit (about 12-14 ms per depth frame on one core: off by default)"},
+      {kEnabledKey, "false", "run the body-model fit (about 9-12 ms per depth frame on one core: off by default)"},
       {kCalibrationSKey, "1", "personalisation: the first seconds of depth frames (controlled pose), seconds"},
       {kBodyIdKey, "", "the person to fit (body index / skeleton body_id); default the first skeleton's"},
       {kSmoothingKey, "3", "moving average of the fitted poses over this many frames (odd; 1 = none)"},
