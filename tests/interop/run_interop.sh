@@ -70,10 +70,12 @@ stop_server() {
 }
 trap 'kill -TERM "$server_pid" 2>/dev/null || true' EXIT
 
-# The bound port is in the structured start line: "... event=server_start ... port=N ...".
+# The bound port is in the structured start line: "... event=server_start ... port=N workers=...".
+# The space after N is required: the log may be read while the line is still being written, and
+# a cut line would give a prefix of the port.
 port=""
 for _ in $(seq 1 600); do
-  port=$(sed -n 's/.* event=server_start .*port=\([0-9]*\).*/\1/p' "$run/server.log")
+  port=$(sed -n 's/.* event=server_start .*port=\([0-9][0-9]*\) .*/\1/p' "$run/server.log")
   [ -n "$port" ] && break
   kill -0 "$server_pid" 2>/dev/null || { cat "$run/server.log" >&2; fail "the server did not start"; }
   sleep 0.1
