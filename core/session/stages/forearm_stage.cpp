@@ -333,10 +333,7 @@ void ForearmStage::try_calibrate(bool finishing, StageOutput& out) {
   const std::int64_t window_end_us =
       first_frame_us_ ? *first_frame_us_ + static_cast<std::int64_t>(std::llround(calibration_s_ * 1e6)) : 0;
   if (!finishing && (!first_frame_us_ || last_frame_us_ < window_end_us)) return;
-  std::vector<std::string> arm_ids;
-  for (const Device& d : devices_) {
-    if (d.side) arm_ids.push_back(d.id);
-  }
+  const std::vector<std::string> arm_ids = arm_device_ids();
   if (!clock_map_) {
     clock_map_ = clocks_->try_build(arm_ids);
     sync_inputs_in_clock_map_ = clocks_->sync_input_count();
@@ -479,6 +476,14 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
   device.frames.clear();
 }
 
+std::vector<std::string> ForearmStage::arm_device_ids() const {
+  std::vector<std::string> ids;
+  for (const Device& d : devices_) {
+    if (d.side) ids.push_back(d.id);
+  }
+  return ids;
+}
+
 void ForearmStage::refit_clocks(bool finishing) {
   // BLE receipts after the calibration (repeated bursts) make the drift between the IMUs
   // observable, later buzzer stops the base's against the camera; refit at most once per second
@@ -487,10 +492,7 @@ void ForearmStage::refit_clocks(bool finishing) {
   constexpr std::int64_t kRefitEveryUs = 1'000'000;
   if (!clock_map_ || clocks_->sync_input_count() == sync_inputs_in_clock_map_) return;
   if (!finishing && last_frame_us_ < clock_map_frame_us_ + kRefitEveryUs) return;
-  std::vector<std::string> arm_ids;
-  for (const Device& d : devices_) {
-    if (d.side) arm_ids.push_back(d.id);
-  }
+  const std::vector<std::string> arm_ids = arm_device_ids();
   if (std::optional<sync::ClockMap> refit = clocks_->try_build(arm_ids)) clock_map_ = std::move(refit);
   sync_inputs_in_clock_map_ = clocks_->sync_input_count();
   clock_map_frame_us_ = last_frame_us_;

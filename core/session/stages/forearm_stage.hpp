@@ -101,6 +101,7 @@ class ForearmStage : public Stage {
   void detect_arms(const PendingFrame& frame, const Image* depth, const Image* color);
   void try_calibrate(bool finishing, StageOutput& out);
   void calibrate_arm(Device& device, StageOutput& out);
+  std::vector<std::string> arm_device_ids() const;  // the arm IMUs, header order
   void refit_clocks(bool finishing);
   void feed_trackers(bool all, StageOutput& out);
   std::optional<forearm::Quat> W_from_A_at(const Device& device, std::int64_t t_camera_us) const;

@@ -16,26 +16,26 @@ constexpr double kBaseStopSigmaUs = 200.0;
 // within this plus the drift prior's spread since the first stop.
 constexpr double kPairToleranceUs = 500'000.0;
 constexpr double kPairDriftBound = 300e-6;
-
-// A header without a usable audio rate: the scanner gets a placeholder and no audio is fed.
-double scanner_rate(double audio_sample_rate_hz) {
-  return std::isfinite(audio_sample_rate_hz) && audio_sample_rate_hz > 0.0 ? audio_sample_rate_hz : 1.0;
-}
 }  // namespace
 
 StreamClocks::StreamClocks(std::string base_device, double audio_sample_rate_hz, unsigned audio_channels)
-    : base_(std::move(base_device)),
-      audio_rate_hz_(audio_sample_rate_hz),
-      channels_(audio_channels),
-      tone_stops_(scanner_rate(audio_sample_rate_hz)) {}
+    : base_(std::move(base_device)), channels_(audio_channels) {
+  // A header without a usable audio rate has no audio to scan.
+  if (std::isfinite(audio_sample_rate_hz) && audio_sample_rate_hz > 0.0) tone_stops_.emplace(audio_sample_rate_hz);
+}
+
+const std::vector<sync::BuzzerStop>& StreamClocks::heard_stops() const {
+  static const std::vector<sync::BuzzerStop> none;
+  return tone_stops_ ? tone_stops_->stops() : none;
+}
 
 void StreamClocks::add(const v1::SessionChunk& chunk) {
-  if (chunk.has_audio() && channels_ > 0 && audio_rate_hz_ > 0.0) {
+  if (chunk.has_audio() && channels_ > 0 && tone_stops_) {
     const v1::AudioChunk& a = chunk.audio();
     const std::size_t frames = a.pcm_s16le().size() / (2u * channels_);
     std::vector<std::int16_t> mono(frames);
     for (std::size_t i = 0; i < frames; ++i) std::memcpy(&mono[i], a.pcm_s16le().data() + 2 * channels_ * i, 2);
-    tone_stops_.add(static_cast<double>(a.t_us()), mono);
+    tone_stops_->add(static_cast<double>(a.t_us()), mono);
     audio_seen_ = true;
   }
   if (!chunk.has_sync_event()) return;
@@ -54,7 +54,7 @@ void StreamClocks::add(const v1::SessionChunk& chunk) {
 }
 
 std::vector<sync::ClockObservation> StreamClocks::paired_stops(std::size_t first_heard) const {
-  const std::vector<sync::BuzzerStop>& heard = tone_stops_.stops();
+  const std::vector<sync::BuzzerStop>& heard = heard_stops();
   const std::int64_t first_us = base_stops_us_.front();
   const sync::ClockObservation first =
       sync::buzzer_observation(heard[first_heard], static_cast<double>(first_us), kBaseStopSigmaUs);
@@ -82,15 +82,15 @@ std::vector<sync::ClockObservation> StreamClocks::paired_stops(std::size_t first
 }
 
 std::optional<sync::ClockMap> StreamClocks::try_build(const std::vector<std::string>& devices) {
-  if (base_stops_us_.empty() || tone_stops_.stops().empty()) return std::nullopt;
+  if (base_stops_us_.empty() || heard_stops().empty()) return std::nullopt;
   // Which heard stop is the first event's: the one with which the most later events find their
   // own stop where it predicts them; ties go to the earliest (with one event: the first heard).
   std::vector<sync::ClockObservation> stops;
-  for (std::size_t first_heard = 0; first_heard < tone_stops_.stops().size(); ++first_heard) {
+  for (std::size_t first_heard = 0; first_heard < heard_stops().size(); ++first_heard) {
     std::vector<sync::ClockObservation> candidate = paired_stops(first_heard);
     if (candidate.size() > stops.size()) {
       stops = std::move(candidate);
-      buzzer_ = tone_stops_.stops()[first_heard];
+      buzzer_ = heard_stops()[first_heard];
     }
   }
   later_stops_used_ = stops.size() - 1;
@@ -115,7 +115,7 @@ StreamClocks::Missing StreamClocks::why_not(const std::vector<std::string>& devi
                           "onto the camera's (paper 1, II-G.1)"};
   }
   if (!audio_seen_) return {"audio", "no camera audio: the buzzer stop cannot be heard"};
-  if (tone_stops_.stops().empty()) {
+  if (heard_stops().empty()) {
     return {"audio", "the buzzer stop was not found in the audio (a " +
                          std::to_string(static_cast<int>(sync::BuzzerStopOptions().tone_hz)) +
                          " Hz tone that stops and stays silent for 0.7 s)"};

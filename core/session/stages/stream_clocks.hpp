@@ -50,24 +50,24 @@ class StreamClocks {
   // Sync inputs so far (BLE receipts, later buzzer stops and tone stops heard): when it grows,
   // a later try_build() refits offsets and drifts over everything.
   std::size_t sync_input_count() const {
-    return receipts_.size() + base_stops_us_.size() + tone_stops_.stops().size();
+    return receipts_.size() + base_stops_us_.size() + heard_stops().size();
   }
   std::size_t receipt_count() const { return receipts_.size(); }
   // Buzzer stops after the first paired with a heard stop in the last try_build().
   std::size_t later_stops_used() const { return later_stops_used_; }
 
  private:
+  const std::vector<sync::BuzzerStop>& heard_stops() const;  // tone stops found in the audio so far
   // The base's stop events paired with heard stops, the first event with heard stop first_heard.
   std::vector<sync::ClockObservation> paired_stops(std::size_t first_heard) const;
 
   std::string base_;
-  double audio_rate_hz_ = 0.0;
   unsigned channels_ = 0;
   bool audio_seen_ = false;
   std::vector<std::int64_t> base_stops_us_;  // BUZZER_STOP events of the base, base clock, sorted
   std::optional<sync::BuzzerStop> buzzer_;   // the heard stop paired with the first event
   std::vector<sync::BroadcastReceipt> receipts_;
-  sync::ToneStopScanner tone_stops_;
+  std::optional<sync::ToneStopScanner> tone_stops_;  // none without an audio rate
   std::size_t later_stops_used_ = 0;
 };
 
