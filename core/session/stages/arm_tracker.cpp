@@ -89,11 +89,20 @@ double ArmTracker::pronation_at(std::int64_t t_us) const {
 }
 
 void ArmTracker::process(bool all, StageOutput& out) {
+  const std::int64_t window_us = static_cast<std::int64_t>(std::llround(1e6 * kBoundaryWindowS));
   while (!frames_.empty() && !arm_.empty() && (all || frames_.front().t_us <= arm_.back().t_us)) {
-    process_frame(frames_.front(), out);
+    forearm::TrackSample sample = visual_sample(frames_.front());
+    if (sample.visible && (track_.empty() || !track_.back().visible)) {
+      const Confirmation confirmation = confirm_detection(all, window_us);
+      if (confirmation == Confirmation::kWait) break;
+      if (confirmation == Confirmation::kLone) {
+        sample.visible = false;
+        ++lone_detections_;
+      }
+    }
+    process_frame(frames_.front(), sample, out);
     frames_.pop_front();
   }
-  const std::int64_t window_us = static_cast<std::int64_t>(std::llround(1e6 * kBoundaryWindowS));
   while (!pending_gaps_.empty() && !track_.empty() &&
          (all || track_.back().t_us >= pending_gaps_.front().t_end_us + window_us)) {
     const PendingGap gap = pending_gaps_.front();
@@ -115,10 +124,10 @@ void ArmTracker::process(bool all, StageOutput& out) {
   }
 }
 
-void ArmTracker::process_frame(const ArmFrame& frame, StageOutput& out) {
-  const Quat K_from_F = K_from_F_at(frame.t_us);
+forearm::TrackSample ArmTracker::visual_sample(const ArmFrame& frame) const {
   forearm::TrackSample sample{frame.t_us, Vec3::Zero(), false};
   if (has_model_ && frame.forearm_tracked && frame.strap_K) {
+    const Quat K_from_F = K_from_F_at(frame.t_us);
     const forearm::VisualCheck check = forearm::check_visual_forearm(frame.elbow_K, frame.wrist_K, *frame.strap_K, K_from_F);
     if (check.accepted()) {
       sample.p_K = forearm::imu_position_from_strap(*frame.strap_K, frame.elbow_K, frame.wrist_K, K_from_F, model_.r_m);
@@ -128,6 +137,22 @@ void ArmTracker::process_frame(const ArmFrame& frame, StageOutput& out) {
                        forearm::VisualRejection::kNone;
     }
   }
+  return sample;
+}
+
+ArmTracker::Confirmation ArmTracker::confirm_detection(bool all, std::int64_t window_us) const {
+  const std::int64_t window_end_us = frames_.front().t_us + window_us;
+  for (std::size_t k = 1; k < frames_.size(); ++k) {
+    const ArmFrame& frame = frames_[k];
+    if (frame.t_us > window_end_us) return Confirmation::kLone;
+    if (!all && frame.t_us > arm_.back().t_us) return Confirmation::kWait;  // its K_from_F is not known yet
+    if (visual_sample(frame).visible) return Confirmation::kConfirmed;
+  }
+  return all ? Confirmation::kLone : Confirmation::kWait;
+}
+
+void ArmTracker::process_frame(const ArmFrame& frame, const forearm::TrackSample& sample, StageOutput& out) {
+  const Quat K_from_F = K_from_F_at(frame.t_us);
   if (track_.empty() || frame.t_us > track_.back().t_us) track_.push_back(sample);
   if (frame.shoulder_tracked && (shoulder_.empty() || frame.t_us > shoulder_.back().t_us)) {
     shoulder_.push_back({frame.t_us, frame.shoulder_K});

@@ -69,9 +69,18 @@ class ArmTracker {
 
   std::uint64_t visible_frames() const { return visible_frames_; }
   std::uint64_t gaps() const { return gaps_; }
+  // Detections not confirmed by another within 500 ms (after occluded frames or at the start):
+  // counted, and treated as occluded.
+  std::uint64_t lone_detections() const { return lone_detections_; }
 
  private:
-  void process_frame(const ArmFrame& frame, StageOutput& out);
+  // The frame's IMU position from the strap (eq. 10) and whether the II-J and elbow tests accept it.
+  forearm::TrackSample visual_sample(const ArmFrame& frame) const;
+  // A detection that would start a visible run (the first after occluded frames, or the first
+  // ever) is used only once another queued frame within the boundary window is accepted too.
+  enum class Confirmation { kConfirmed, kLone, kWait };
+  Confirmation confirm_detection(bool all, std::int64_t window_us) const;
+  void process_frame(const ArmFrame& frame, const forearm::TrackSample& sample, StageOutput& out);
   void recover(std::int64_t t_start_us, std::int64_t t_end_us, StageOutput& out);
   forearm::Quat K_from_F_at(std::int64_t t_us) const;
   double pronation_at(std::int64_t t_us) const;
@@ -107,6 +116,7 @@ class ArmTracker {
   std::vector<PendingGap> pending_gaps_;
   std::uint64_t visible_frames_ = 0;
   std::uint64_t gaps_ = 0;
+  std::uint64_t lone_detections_ = 0;
 };
 
 }  // namespace posefuse::session
