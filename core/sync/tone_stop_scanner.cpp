@@ -1,5 +1,6 @@
 #include "sync/tone_stop_scanner.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
@@ -18,6 +19,17 @@ ToneStopScanner::ToneStopScanner(double sample_rate_hz, const ToneStopScannerOpt
                              "scan_every_s + margin_s + detector.min_on_s");
   }
   window_.sample_rate_hz = sample_rate_hz;
+  if (o.find_tone) {
+    find_stopping_tone(AudioPcm{0.0, sample_rate_hz, {}}, o.tone_search);  // throws for bad search options
+  } else if (!(o.detector.tone_hz > 0.0) || !(o.detector.tone_hz < sample_rate_hz / 2.0)) {
+    throw_invalid("options.detector.tone_hz", "must be in (0, " + std::to_string(sample_rate_hz / 2.0) +
+                                                  ") Hz (the Nyquist frequency), got " + std::to_string(o.detector.tone_hz));
+  }
+}
+
+std::optional<double> ToneStopScanner::tone_hz() const {
+  if (options_.find_tone && !tone_found_) return std::nullopt;
+  return options_.detector.tone_hz;
 }
 
 void ToneStopScanner::add(double t0_camera_us, const std::vector<std::int16_t>& samples) {
@@ -42,6 +54,19 @@ void ToneStopScanner::add(double t0_camera_us, const std::vector<std::int16_t>& 
 
 void ToneStopScanner::scan() {
   new_samples_ = 0;
+  if (options_.find_tone && !tone_found_) {
+    const std::optional<FoundTone> tone = find_stopping_tone(window_, options_.tone_search);
+    if (!tone) {
+      // For the error message: a tone that stops outside the band searched (a buzzer other than
+      // the one configured).
+      ToneSearchOptions everywhere;
+      everywhere.max_hz = std::min(everywhere.max_hz, window_.sample_rate_hz / 2.0);
+      if (const std::optional<FoundTone> other = find_stopping_tone(window_, everywhere)) heard_outside_hz_ = other->hz;
+      return;
+    }
+    options_.detector.tone_hz = tone->hz;
+    tone_found_ = true;
+  }
   BuzzerStop stop;
   try {
     stop = detect_buzzer_stop(window_, options_.detector);

@@ -114,7 +114,7 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
   ble.repeat_every_s = o.ble_repeat_s;
   ble.repeat_until_s = o.duration_s;
   const std::uint32_t audio_rate_hz =
-      add_sync_chunks(base_device, arm_device, 1.2, o.buzzer, o.seed + 3, timed, counts, ble);
+      add_sync_chunks(base_device, arm_device, 1.2, o.buzzer, o.seed + 3, timed, counts, ble, o.buzzer_tone_hz);
 
   // Camera frames at 30 Hz.
   const forearm::StrapCameras cameras = [] {
@@ -202,6 +202,7 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
   (*h.mutable_options())["forearm.calibration_s"] = format_double(o.calibration_s);
   (*h.mutable_options())["forearm.axis"] = o.axis;
   (*h.mutable_options())["forearm.upper_arm"] = o.upper_arm;
+  if (!o.buzzer_hz_option.empty()) (*h.mutable_options())["forearm.buzzer_hz"] = o.buzzer_hz_option;
   return assemble_session(std::move(header), std::move(timed), frames, counts);
 }
 

@@ -40,6 +40,8 @@ struct ForearmSessionOptions {
   std::string upper_arm = "depth";
   double ble_repeat_s = 0.0;         // BLE bursts every this many s (0: one, at 0.5 s)
   double arm_clock_drift = 30e-6;    // the arm IMU's clock rate error (the base's is -20 ppm)
+  double buzzer_tone_hz = 2700.0;    // the base IMU's buzzer
+  std::string buzzer_hz_option;      // the stage's forearm.buzzer_hz; empty: not set (2700)
   std::uint64_t seed = 7;
 };
 

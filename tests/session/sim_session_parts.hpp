@@ -40,12 +40,15 @@ inline void add_imu_chunks(const sim::ImuDeviceResult& imu, const sim::DeviceClo
 
 // Paper 1, II-G: the base IMU's buzzer stops at stop_camera_s in 2.5 s of camera audio (the
 // BUZZER_STOP event only when `buzzer_event`), and BLE broadcasts from 0.5 s received by both
-// (`ble`: one burst by default, paper 1). Returns the audio sample rate.
+// (`ble`: one burst by default, paper 1), the buzzer sounding at tone_hz. Returns the audio sample
+// rate.
 inline std::uint32_t add_sync_chunks(const sim::SimDevice& base, const sim::SimDevice& arm, double stop_camera_s,
                                      bool buzzer_event, std::uint64_t seed, std::vector<TimedChunk>& timed,
-                                     SimChunkCounts& counts, const sim::BleBroadcastOptions& ble = {}) {
+                                     SimChunkCounts& counts, const sim::BleBroadcastOptions& ble = {},
+                                     double tone_hz = sim::BuzzerOptions().tone_hz) {
   sim::BuzzerOptions buzzer;
   buzzer.stop_device_us = base.clock.to_device_us(stop_camera_s);
+  buzzer.tone_hz = tone_hz;
   sim::AudioOptions audio;
   audio.duration_s = 2.5;
   const sim::BuzzerResult sound = sim::buzzer_stop(base, buzzer, audio, seed);

@@ -16,8 +16,9 @@ namespace {
 
 constexpr double kRateHz = 16000.0;
 
-// Noise everywhere, a 2.7 kHz tone in the second before each stop.
-std::vector<std::int16_t> recording(double duration_s, const std::vector<double>& stops_s, unsigned seed) {
+// Noise everywhere, a tone (2.7 kHz unless said) in the second before each stop.
+std::vector<std::int16_t> recording(double duration_s, const std::vector<double>& stops_s, unsigned seed,
+                                    double tone_hz = 2700.0) {
   std::mt19937 rng(seed);
   std::normal_distribution<double> noise(0.0, 300.0);
   std::vector<std::int16_t> samples(static_cast<std::size_t>(duration_s * kRateHz));
@@ -25,7 +26,7 @@ std::vector<std::int16_t> recording(double duration_s, const std::vector<double>
     const double t = static_cast<double>(k) / kRateHz;
     double x = noise(rng);
     for (const double stop : stops_s) {
-      if (t >= stop - 1.0 && t < stop) x += 8000.0 * std::sin(2.0 * std::numbers::pi * 2700.0 * t);
+      if (t >= stop - 1.0 && t < stop) x += 8000.0 * std::sin(2.0 * std::numbers::pi * tone_hz * t);
     }
     samples[k] = static_cast<std::int16_t>(std::clamp(x, -32768.0, 32767.0));
   }
@@ -70,12 +71,44 @@ TEST(ToneStopScanner, ABreakInTheAudioRestartsTheWindow) {
   EXPECT_NEAR(scanner.stops()[0].t_camera_us, 24e6, 300.0);
 }
 
+// A buzzer at 3.41 kHz, not the default: with find_tone the scanner finds the tone in the first
+// window that holds a stop and then hears the same stops as a scanner told the frequency.
+TEST(ToneStopScanner, FindsAnUnknownToneAndTheSameStops) {
+  const double tone_hz = 3410.0;
+  const std::vector<double> stops_s = {4.20013, 13.77771, 25.5};
+  const std::vector<std::int16_t> audio = recording(30.0, stops_s, 7, tone_hz);
+  ToneStopScannerOptions told;
+  told.detector.tone_hz = tone_hz;
+  ToneStopScanner known(kRateHz, told);
+  ToneStopScannerOptions searching;
+  searching.find_tone = true;
+  ToneStopScanner unknown(kRateHz, searching);
+  EXPECT_FALSE(unknown.tone_hz().has_value());
+  feed(known, audio, 0.0, 1600);
+  feed(unknown, audio, 0.0, 1600);
+  ASSERT_TRUE(unknown.tone_hz().has_value());
+  EXPECT_NEAR(*unknown.tone_hz(), tone_hz, 5.0);
+  ASSERT_EQ(known.stops().size(), stops_s.size());
+  ASSERT_EQ(unknown.stops().size(), stops_s.size());
+  for (std::size_t k = 0; k < stops_s.size(); ++k) {
+    EXPECT_NEAR(unknown.stops()[k].t_camera_us, 1e6 * stops_s[k], 300.0) << k;
+    EXPECT_NEAR(unknown.stops()[k].t_camera_us, known.stops()[k].t_camera_us, 50.0) << k;
+  }
+}
+
 TEST(ToneStopScanner, BadRateOrOptionsAreRejected) {
   EXPECT_THROW(ToneStopScanner(0.0), Error);
   EXPECT_THROW(ToneStopScanner(std::nan("")), Error);
   ToneStopScannerOptions options;
   options.window_s = 0.6;  // cannot hold a scan interval plus the margin and the tone
   EXPECT_THROW(ToneStopScanner(kRateHz, options), Error);
+  ToneStopScannerOptions above_nyquist;
+  above_nyquist.detector.tone_hz = 9000.0;  // 16 kHz audio
+  EXPECT_THROW(ToneStopScanner(kRateHz, above_nyquist), Error);
+  ToneStopScannerOptions bad_search;
+  bad_search.find_tone = true;
+  bad_search.tone_search.min_hz = 9000.0;
+  EXPECT_THROW(ToneStopScanner(kRateHz, bad_search), Error);
   ToneStopScanner scanner(kRateHz);
   EXPECT_THROW(scanner.add(std::nan(""), {1, 2, 3}), Error);
 }

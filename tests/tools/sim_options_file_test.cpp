@@ -37,6 +37,7 @@ TEST(SimOptionsFile, AppliesEveryKindOfValue) {
       "color = false\n"
       "color_width = 480\n"
       "imu_arms = left\r\n"
+      "buzzer_tone_hz = 3400\n"
       "strap_slip = off\n"
       "clothing_subdivisions = 2\n"
       "packet_loss_rate = 0.05\n"
@@ -77,6 +78,7 @@ TEST(SimOptionsFile, AppliesEveryKindOfValue) {
   EXPECT_EQ(options.motion_options.bvh_path, "/tmp/clip.bvh");
   EXPECT_TRUE(options.motion_options.calibration_prefix);
   EXPECT_EQ(options.threads, 3);
+  EXPECT_DOUBLE_EQ(options.buzzer.tone_hz, 3400.0);
   EXPECT_NO_THROW(sim::validate(options));
 }
 
@@ -104,6 +106,7 @@ TEST(SimOptionsFile, ErrorsNameFileLineKeyAndValue) {
       {"threads = 0\n", "opts.txt:1:threads", "value '0' must be in 1..64"},
       {"ble_repeat_s = 0.5\n", "opts.txt:1:ble_repeat_s", "must be 0 or >= 1"},
       {"buzzer_repeat_s = 1\n", "opts.txt:1:buzzer_repeat_s", "must be 0 or >= 2"},
+      {"buzzer_tone_hz = 9000\n", "opts.txt:1:buzzer_tone_hz", "must be in [200, 7900] Hz"},
       {"seed = 1\nseed = 2\n", "opts.txt:2:seed", "is set twice"},
       {"\n\njust words\n", "opts.txt:3", "expected 'key = value'"},
       {"seed =\n", "opts.txt:1:seed", "has no value"},

@@ -265,6 +265,11 @@ const std::map<std::string, Setter>& setters() {
                                      [](Options& o, const std::string& v, const std::string& f) {
                                        o.skeleton.jump_probability = probability(v, f);
                                      }}},
+      {"buzzer_tone_hz", {"the buzzer's frequency, Hz, 200..7900 (2700; the server's forearm.buzzer_hz must match it, or be auto)",
+                          [](Options& o, const std::string& v, const std::string& f) {
+                            o.buzzer.tone_hz = positive(v, f);
+                            if (o.buzzer.tone_hz < 200 || o.buzzer.tone_hz > 7900) bad(f, v, "must be in [200, 7900] Hz");
+                          }}},
       {"buzzer_stop_s", {"buzzer stop on the camera clock, s (clamped to 0.6 x duration)",
                          [](Options& o, const std::string& v, const std::string& f) { o.buzzer_stop_s = positive(v, f); }}},
       {"audio_rate_hz", {"microphone rate, 16000 or 48000", [](Options& o, const std::string& v, const std::string& f) {

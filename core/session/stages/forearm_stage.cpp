@@ -27,6 +27,7 @@ constexpr const char* kBodyIdKey = "forearm.body_id";
 constexpr const char* kAxisKey = "forearm.axis";
 constexpr const char* kUpperArmKey = "forearm.upper_arm";
 constexpr const char* kShoulderSphereKey = "forearm.shoulder_sphere";
+constexpr const char* kBuzzerHzKey = "forearm.buzzer_hz";
 // A depth frame belongs to a skeleton frame of the same t_us (same sensor); allow clock jitter.
 constexpr std::int64_t kDepthToleranceUs = 1000;
 // Frames waiting for their depth or colour image before they are processed without.
@@ -108,6 +109,10 @@ std::vector<StageOption> ForearmStage::options() const {
        "upper arm direction for the calibration pose's arm plane (the roll of A_from_F about the forearm, eq. 9): "
        "'depth' (fitted to the depth image, upper_arm_depth.hpp; the SDK shoulder if the depth never shows it) or "
        "'sdk' (the SDK shoulder)"},
+      {kBuzzerHzKey, "2700",
+       "the base IMU's buzzer frequency in Hz (sound-based sync, paper 1 II-G.1): its tone is measured in the audio "
+       "within 10 % of it; or 'auto': the loudest tone between 500 and 8000 Hz that sounds and stops "
+       "(sync/tone_search.hpp). Demodulated 100 Hz off, a stop is found 0.9 ms late (docs/forearm.md)"},
   };
 }
 
@@ -184,7 +189,21 @@ void ForearmStage::start(const v1::SessionHeader& header, StageOutput& out) {
     out.warn("FOREARM_NO_COLOR", "header.color_intrinsics",
              "no colour stream: the strap (paper 1, II-I) cannot be seen, so only forearm orientations are produced");
   }
-  clocks_ = std::make_unique<StreamClocks>(base_id_, header.audio_sample_rate_hz(), header.audio_channels());
+  std::optional<double> buzzer_tone_hz = sync::BuzzerStopOptions().tone_hz;
+  if (const auto text = option(header, kBuzzerHzKey)) {
+    if (*text == "auto") {
+      buzzer_tone_hz.reset();
+    } else {
+      buzzer_tone_hz = parse_double(*text, option_field(kBuzzerHzKey));
+      const double nyquist_hz = header.audio_sample_rate_hz() / 2.0;
+      if (!(*buzzer_tone_hz > 0.0) || (nyquist_hz > 0.0 && !(*buzzer_tone_hz < nyquist_hz))) {
+        throw_invalid(option_field(kBuzzerHzKey),
+                      "is '" + *text + "', expected 'auto' or a frequency in Hz above 0" +
+                          (nyquist_hz > 0.0 ? " and below " + format_double(nyquist_hz) + " (half the audio rate)" : ""));
+      }
+    }
+  }
+  clocks_ = std::make_unique<StreamClocks>(base_id_, header.audio_sample_rate_hz(), header.audio_channels(), buzzer_tone_hz);
   active_ = true;
 }
 
@@ -535,6 +554,7 @@ void ForearmStage::finish(StageOutput& out) {
     }
   }
   v1::CalibrationReport& report = out.calibration();
+  if (const std::optional<double> tone_hz = clocks_->buzzer_tone_hz()) report.set_buzzer_tone_hz(*tone_hz);
   for (const Device& device : devices_) {
     if (clock_map_ && clock_map_->has(device.id)) {
       const double first_us = static_cast<double>(

@@ -16,12 +16,39 @@ constexpr double kBaseStopSigmaUs = 200.0;
 // within this plus the drift prior's spread since the first stop.
 constexpr double kPairToleranceUs = 500'000.0;
 constexpr double kPairDriftBound = 300e-6;
+
+// A buzzer's tone is searched this far (relative) either side of its nominal frequency: piezo
+// buzzers are specified to a few percent.
+constexpr double kToneTolerance = 0.1;
 }  // namespace
 
-StreamClocks::StreamClocks(std::string base_device, double audio_sample_rate_hz, unsigned audio_channels)
-    : base_(std::move(base_device)), channels_(audio_channels) {
+StreamClocks::StreamClocks(std::string base_device, double audio_sample_rate_hz, unsigned audio_channels,
+                           std::optional<double> buzzer_tone_hz)
+    : base_(std::move(base_device)), channels_(audio_channels), auto_tone_(!buzzer_tone_hz), nominal_tone_hz_(buzzer_tone_hz.value_or(0.0)) {
   // A header without a usable audio rate has no audio to scan.
-  if (std::isfinite(audio_sample_rate_hz) && audio_sample_rate_hz > 0.0) tone_stops_.emplace(audio_sample_rate_hz);
+  if (!std::isfinite(audio_sample_rate_hz) || audio_sample_rate_hz <= 0.0) return;
+  // The tone is always measured (sync/tone_stop_scanner.hpp, find_tone): within kToneTolerance
+  // of the nominal frequency, or anywhere in 500-8000 Hz for auto.
+  sync::ToneStopScannerOptions options;
+  options.find_tone = true;
+  const double nyquist_hz = audio_sample_rate_hz / 2.0;
+  if (buzzer_tone_hz) {
+    if (!(*buzzer_tone_hz > 0.0) || !(*buzzer_tone_hz < nyquist_hz)) {
+      throw_invalid("buzzer_tone_hz", "is " + std::to_string(*buzzer_tone_hz) + " Hz; the audio's " +
+                                          std::to_string(audio_sample_rate_hz) + " Hz rate needs a tone below " +
+                                          std::to_string(nyquist_hz) + " Hz");
+    }
+    options.tone_search.min_hz = (1.0 - kToneTolerance) * *buzzer_tone_hz;
+    options.tone_search.max_hz = std::min((1.0 + kToneTolerance) * *buzzer_tone_hz, nyquist_hz);
+  } else {
+    options.tone_search.max_hz = std::min(options.tone_search.max_hz, nyquist_hz);
+  }
+  tone_band_ = options.tone_search;
+  tone_stops_.emplace(audio_sample_rate_hz, options);
+}
+
+std::optional<double> StreamClocks::buzzer_tone_hz() const {
+  return tone_stops_ ? tone_stops_->tone_hz() : std::nullopt;
 }
 
 const std::vector<sync::BuzzerStop>& StreamClocks::heard_stops() const {
@@ -116,9 +143,19 @@ StreamClocks::Missing StreamClocks::why_not(const std::vector<std::string>& devi
   }
   if (!audio_seen_) return {"audio", "no camera audio: the buzzer stop cannot be heard"};
   if (heard_stops().empty()) {
-    return {"audio", "the buzzer stop was not found in the audio (a " +
-                         std::to_string(static_cast<int>(sync::BuzzerStopOptions().tone_hz)) +
-                         " Hz tone that stops and stays silent for 0.7 s)"};
+    const auto hz = [](double f) { return std::to_string(static_cast<int>(std::lround(f))) + " Hz"; };
+    if (!buzzer_tone_hz()) {
+      const sync::ToneSearchOptions& band = tone_band_;
+      std::string message = "no buzzer tone found in the audio: no tone between " + hz(band.min_hz) + " and " +
+                            hz(band.max_hz) + " sounds and stops (forearm.buzzer_hz = " +
+                            (auto_tone_ ? std::string("auto") : hz(nominal_tone_hz_)) + ")";
+      if (const std::optional<double>& other = tone_stops_->heard_outside_hz()) {
+        message += "; a tone that stops was heard at " + hz(*other) + ": set forearm.buzzer_hz to it or to 'auto'";
+      }
+      return {"audio", message};
+    }
+    return {"audio", "the buzzer stop was not found in the audio (a " + hz(*buzzer_tone_hz()) +
+                         " tone, found there, that stops and stays silent for 0.7 s)"};
   }
   for (const std::string& device : devices) {
     if (device == base_) continue;

@@ -30,7 +30,11 @@ namespace posefuse::session {
 
 class StreamClocks {
  public:
-  StreamClocks(std::string base_device, double audio_sample_rate_hz, unsigned audio_channels);
+  // buzzer_tone_hz: the buzzer's nominal frequency (the tone is measured within 10 % of it), or
+  // nullopt to find it anywhere in 500-8000 Hz (sync/tone_search.hpp). Throws posefuse::Error
+  // kInvalidArgument "buzzer_tone_hz" when it is not below the audio's Nyquist frequency.
+  StreamClocks(std::string base_device, double audio_sample_rate_hz, unsigned audio_channels,
+               std::optional<double> buzzer_tone_hz = sync::BuzzerStopOptions().tone_hz);
 
   // Audio chunks and sync events; other chunks are ignored. Throws posefuse::Error
   // kInvalidArgument for a broadcast payload that is not 4 bytes.
@@ -47,6 +51,8 @@ class StreamClocks {
   Missing why_not(const std::vector<std::string>& devices) const;
 
   const std::optional<sync::BuzzerStop>& buzzer() const { return buzzer_; }
+  // The buzzer tone measured in the audio (nullopt before it is found, and without audio).
+  std::optional<double> buzzer_tone_hz() const;
   // Sync inputs so far (BLE receipts, later buzzer stops and tone stops heard): when it grows,
   // a later try_build() refits offsets and drifts over everything.
   std::size_t sync_input_count() const {
@@ -63,6 +69,9 @@ class StreamClocks {
 
   std::string base_;
   unsigned channels_ = 0;
+  bool auto_tone_ = false;         // forearm.buzzer_hz = auto
+  double nominal_tone_hz_ = 0.0;   // else the frequency given
+  sync::ToneSearchOptions tone_band_;  // where the tone is searched
   bool audio_seen_ = false;
   std::vector<std::int64_t> base_stops_us_;  // BUZZER_STOP events of the base, base clock, sorted
   std::optional<sync::BuzzerStop> buzzer_;   // the heard stop paired with the first event
