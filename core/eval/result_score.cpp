@@ -312,6 +312,10 @@ void score_calibration(const session::ResultDirectory& result, const session::Re
     add(arm + "d_ul", "m", f.d_ul_m(), t->d_ul_m());
     add_angle(arm + "A_from_F", f.a_from_f(), t->a_from_f());
   }
+  // 0 means none measured (no audio) or, in gt/, no buzzer.
+  if (mine.buzzer_tone_hz() > 0.0 && theirs.buzzer_tone_hz() > 0.0) {
+    add("buzzer_tone", "Hz", mine.buzzer_tone_hz(), theirs.buzzer_tone_hz());
+  }
   for (const auto& [device, offset_us] : mine.clock_offset_us()) {
     const auto t = theirs.clock_offset_us().find(device);
     if (t != theirs.clock_offset_us().end()) {

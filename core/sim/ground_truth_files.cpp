@@ -59,6 +59,7 @@ v1::CalibrationReport calibration_report(const SimTruth& truth) {
     // camera_t_us = device_t_us + offset_us at camera time 0 (drift in truth.json).
     (*report.mutable_clock_offset_us())[device.device_id] = -std::llround(device.clock.offset_s * 1e6);
   }
+  report.set_buzzer_tone_hz(truth.options.buzzer.tone_hz);  // every session has its buzzer
   for (const SimArmTruth& arm : truth.arms) {
     if (!arm.has_imu) continue;
     auto* forearm = report.add_forearms();

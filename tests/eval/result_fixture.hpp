@@ -28,6 +28,7 @@ struct FixtureSpec {
   double r_m = 0.035;
   double K_from_W_angle_rad = 0.0;        // about z
   std::int64_t clock_offset_us = -1'000'000;
+  double buzzer_tone_hz = 2700.0;
   bool with_joints = true;
   bool with_segment = true;
   v1::Source source = v1::GROUND_TRUTH;
@@ -110,6 +111,7 @@ inline void write_fixture(const std::filesystem::path& dir, const FixtureSpec& s
   *report.mutable_k_from_w() =
       to_proto(geometry::quat_from_rotation_vector(geometry::Vec3(0, 0, spec.K_from_W_angle_rad)));
   (*report.mutable_clock_offset_us())["imu_right"] = spec.clock_offset_us;
+  report.set_buzzer_tone_hz(spec.buzzer_tone_hz);
   files.write_calibration(report);
   files.close();
 }

@@ -39,6 +39,7 @@ TEST(ResultScore, KnownOffsetsComeBackAsErrors) {
   result.r_m = 0.051;
   result.K_from_W_angle_rad = 20.0 * pi / 180.0;
   result.clock_offset_us = -1'000'150;
+  result.buzzer_tone_hz = 2702.5;
   result.source = v1::FUSED;
   // Results 400 us late: still matched (tolerance 2 ms), and never to a neighbour.
   result.t0_us = 400;
@@ -84,6 +85,7 @@ TEST(ResultScore, KnownOffsetsComeBackAsErrors) {
   EXPECT_NEAR(r.calibration_value("RIGHT r")->error, 0.016, 1e-12);
   EXPECT_NEAR(r.calibration_value("RIGHT A_from_F")->error, 0.0, 1e-9);
   EXPECT_NEAR(r.calibration_value("clock_offset imu_right")->error, -150.0, 1e-9);
+  EXPECT_NEAR(r.calibration_value("buzzer_tone")->error, 2.5, 1e-9);
 
   const std::string table = eval::format_score_report(r);
   EXPECT_NE(table.find("forearm_orientations/imu_right.csv  imu_right  27  10.00  10.00"), std::string::npos) << table;

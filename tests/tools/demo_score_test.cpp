@@ -138,6 +138,8 @@ TEST(DemoScore, ProtocolWithBothArmsAgreesWithTheTruth) {
     ASSERT_NE(clock, nullptr) << device;
     EXPECT_LT(std::abs(clock->error), 1000.0) << device;  // measured 117-344 us
   }
+  ASSERT_NE(r.calibration_value("buzzer_tone"), nullptr);
+  EXPECT_LT(std::abs(r.calibration_value("buzzer_tone")->error), 5.0);  // the tone measured in the audio
 }
 
 // The demo's former session: the protocol with the right arm, the left one resting at the side. The
