@@ -168,5 +168,25 @@ TEST(ArmTracker, DetectionAfterAGapWaitsOnlyForTheNextFrame) {
   EXPECT_GE(seen_at_end, 29u);
 }
 
+// A short break in a visible run (the strap missed at 6 frames, 0.2 s): the detection after it has
+// one within 500 ms before it, so it is neither held nor dropped, even when it is seen alone
+// (one frame, then hidden again for a second).
+TEST(ArmTracker, DetectionAfterAShortBreakIsUsedAtOnce) {
+  const double break_begin_s = 1.0, alone_until_s = 2.2, duration_s = 3.0;
+  const double return_s = seconds(36 * 33'333);  // the frame at 1.2 s
+  const TrackerRun run = run_tracker(
+      duration_s,
+      [&](double ts) { return ts < break_begin_s || std::abs(ts - return_s) < 1e-6 || ts >= alone_until_s; }, true);
+  EXPECT_EQ(run.lone_detections, 0u);
+  std::size_t held = 0;
+  for (std::size_t k = 0; k < run.frames_out_after_frame.size(); ++k) held += run.frames_out_after_frame[k] < k + 1;
+  EXPECT_EQ(held, 2u);  // the session's first frame, and the first after the second, longer gap
+  std::size_t visual_at_return = 0;
+  for (const auto& [ts, source] : positions(run)) {
+    visual_at_return += source == v1::VISUAL && std::abs(ts - return_s) < 1e-6;
+  }
+  EXPECT_EQ(visual_at_return, 1u);
+}
+
 }  // namespace
 }  // namespace posefuse::session

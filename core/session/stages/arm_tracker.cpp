@@ -92,7 +92,9 @@ void ArmTracker::process(bool all, StageOutput& out) {
   const std::int64_t window_us = static_cast<std::int64_t>(std::llround(1e6 * kBoundaryWindowS));
   while (!frames_.empty() && !arm_.empty() && (all || frames_.front().t_us <= arm_.back().t_us)) {
     forearm::TrackSample sample = visual_sample(frames_.front());
-    if (sample.visible && (track_.empty() || !track_.back().visible)) {
+    // Support before it (a detection within the window): a short break in a visible run.
+    const bool seen_just_before = last_visible_us_ && sample.t_us - *last_visible_us_ <= window_us;
+    if (sample.visible && (track_.empty() || !track_.back().visible) && !seen_just_before) {
       const Confirmation confirmation = confirm_detection(all, window_us);
       if (confirmation == Confirmation::kWait) break;
       if (confirmation == Confirmation::kLone) {

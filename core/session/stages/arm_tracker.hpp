@@ -69,15 +69,16 @@ class ArmTracker {
 
   std::uint64_t visible_frames() const { return visible_frames_; }
   std::uint64_t gaps() const { return gaps_; }
-  // Detections not confirmed by another within 500 ms (after occluded frames or at the start):
-  // counted, and treated as occluded.
+  // Detections with no other within 500 ms before or after them: counted, and treated as
+  // occluded.
   std::uint64_t lone_detections() const { return lone_detections_; }
 
  private:
   // The frame's IMU position from the strap (eq. 10) and whether the II-J and elbow tests accept it.
   forearm::TrackSample visual_sample(const ArmFrame& frame) const;
   // A detection that would start a visible run (the first after occluded frames, or the first
-  // ever) is used only once another queued frame within the boundary window is accepted too.
+  // ever) with no accepted detection in the boundary window before it is used only once another
+  // queued frame within the window after it is accepted too.
   enum class Confirmation { kConfirmed, kLone, kWait };
   Confirmation confirm_detection(bool all, std::int64_t window_us) const;
   void process_frame(const ArmFrame& frame, const forearm::TrackSample& sample, StageOutput& out);
