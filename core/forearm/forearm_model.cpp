@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 #include <string>
 
 #include "common/error.hpp"
@@ -46,6 +47,37 @@ void check_frame(const CalibrationFrame& f, std::size_t i) {
     throw_invalid(at + "W_from_A", "not a finite quaternion");
   }
   if ((f.wrist_K - f.elbow_K).norm() < 1e-4) throw_invalid(at + "wrist_K", "coincides with the elbow");
+}
+
+}  // namespace
+
+namespace {
+
+// d_sw over a still hold: the mean, unless the values form two groups more than
+// kWristGroupGapM apart. A wrist measured in depth (forearm_axis_depth.hpp) is the hand's widening
+// in some frames and the fingertips, 10-13 cm further, in others (seed 3's left arm on the body
+// render: the mean came out 25 mm long); the fingertips lie beyond the wrist, never before it, so
+// the nearer group is the wrist, if it holds at least kWristGroupMinFrames frames (fewer are too
+// few to trust, and the farther group is used).
+constexpr double kWristGroupGapM = 0.04;
+constexpr std::size_t kWristGroupMinFrames = 3;
+
+double hold_wrist_distance(std::vector<double> d) {
+  std::sort(d.begin(), d.end());
+  std::size_t split = 0;
+  double widest = 0.0;
+  for (std::size_t i = 1; i < d.size(); ++i) {
+    if (d[i] - d[i - 1] > widest) {
+      widest = d[i] - d[i - 1];
+      split = i;
+    }
+  }
+  const auto mean = [&](std::size_t from, std::size_t to) {
+    return std::accumulate(d.begin() + static_cast<std::ptrdiff_t>(from), d.begin() + static_cast<std::ptrdiff_t>(to), 0.0) /
+           static_cast<double>(to - from);
+  };
+  if (widest <= kWristGroupGapM) return mean(0, d.size());
+  return split >= kWristGroupMinFrames ? mean(0, split) : mean(split, d.size());
 }
 
 }  // namespace
@@ -98,6 +130,7 @@ ForearmCalibration calibrate_forearm(const std::vector<CalibrationFrame>& frames
   out.frame_count = best_count;
   Eigen::Vector4d quat_sum = Eigen::Vector4d::Zero();
   std::vector<Quat> per_frame;
+  std::vector<double> wrist_distances;
   const double n = static_cast<double>(best_count);
   for (std::size_t i = best_first; i < best_first + best_count; ++i) {
     const CalibrationFrame& f = frames[i];
@@ -106,12 +139,13 @@ ForearmCalibration calibrate_forearm(const std::vector<CalibrationFrame>& frames
     const Vec3 core_point = f.elbow_K + along * axis;
     out.model.r_m += (f.strap_K - core_point).norm() / n;
     out.model.d_se_m += along / n;
-    out.model.d_sw_m += (f.wrist_K - core_point).norm() / n;
+    wrist_distances.push_back((f.wrist_K - core_point).norm());
     out.model.d_ul_m += (f.elbow_K - f.shoulder_K).norm() / n;
     const Quat q = F_from_A_calibration(f.K_from_F_sdk.normalized(), K_from_W, f.W_from_A.normalized());
     per_frame.push_back(per_frame.empty() ? q : geometry::same_hemisphere(q, per_frame.front()));
     quat_sum += geometry::to_wxyz(per_frame.back());
   }
+  out.model.d_sw_m = hold_wrist_distance(std::move(wrist_distances));
   // Normalised mean of hemisphere-aligned quaternions: the chordal mean, fine for the small
   // spread of a held pose.
   out.model.F_from_A = geometry::from_wxyz(quat_sum.normalized());

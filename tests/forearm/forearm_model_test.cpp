@@ -130,10 +130,45 @@ TEST(ForearmModel, StillHoldKeepsTheRunWhenTheWristMovesAlongTheForearm) {
     f.W_from_A = motion.K_from_W.conjugate() * K_from_F * motion.model.F_from_A;
     frames.push_back(f);
   }
-  EXPECT_EQ(calibrate_forearm(frames, motion.K_from_W).frame_count, 40u);
+  const ForearmCalibration c = calibrate_forearm(frames, motion.K_from_W);
+  EXPECT_EQ(c.frame_count, 40u);
+  // d_sw from the nearer group (the hand's widening), not the mean (3.7 cm long here).
+  EXPECT_NEAR(c.model.d_sw_m, motion.model.d_sw_m, 0.002);
   const Vec3 sideways = (motion.wrist(0.3) - motion.elbow(0.3)).unitOrthogonal();
   frames[20].wrist_K += 0.06 * sideways;
   EXPECT_EQ(calibrate_forearm(frames, motion.K_from_W).frame_count, 20u);
+}
+
+// d_sw of a hold: one frame with the fingertips 8 cm beyond the wrist is left out, two frames
+// nearer than the rest are too few to be the wrist (the farther group is used), and one group with
+// 1.5 cm of noise is averaged.
+TEST(ForearmModel, WristDistanceOfAHoldUsesTheNearerGroup) {
+  const ArmMotion motion;
+  const Vec3 along = (motion.wrist(0.3) - motion.elbow(0.3)).normalized();
+  const auto frames_with = [&](auto wrist_offset_m) {
+    std::vector<CalibrationFrame> frames;
+    for (int k = 0; k < 40; ++k) {
+      const Quat K_from_F = motion.K_from_F(0.3);
+      CalibrationFrame f;
+      f.t_us = k * 33'333;
+      f.shoulder_K = motion.shoulder(0.3);
+      f.elbow_K = motion.elbow(0.3);
+      f.wrist_K = motion.wrist(0.3) + wrist_offset_m(k) * along;
+      f.strap_K = motion.imu_position(0.3);
+      f.K_from_F_sdk = K_from_F;
+      f.W_from_A = motion.K_from_W.conjugate() * K_from_F * motion.model.F_from_A;
+      frames.push_back(f);
+    }
+    return frames;
+  };
+  const auto one_far = frames_with([](int k) { return k == 17 ? 0.08 : 0.0; });
+  EXPECT_NEAR(calibrate_forearm(one_far, motion.K_from_W).model.d_sw_m, motion.model.d_sw_m, 1e-9);
+  const auto two_near = frames_with([](int k) { return k == 5 || k == 6 ? 0.0 : 0.09; });
+  EXPECT_NEAR(calibrate_forearm(two_near, motion.K_from_W).model.d_sw_m, motion.model.d_sw_m + 0.09, 1e-9);
+  const auto noisy = frames_with([](int k) { return 0.015 * std::sin(1.7 * k); });
+  double mean_offset = 0.0;
+  for (int k = 0; k < 40; ++k) mean_offset += 0.015 * std::sin(1.7 * k) / 40.0;
+  EXPECT_NEAR(calibrate_forearm(noisy, motion.K_from_W).model.d_sw_m, motion.model.d_sw_m + mean_offset, 1e-9);
 }
 
 TEST(OcclusionTests, ForearmDirectionWithin30Degrees) {
