@@ -8,6 +8,10 @@
 
 namespace posefuse::sync {
 
+namespace {
+constexpr double kOutsideEveryScanS = 30.0;
+}  // namespace
+
 ToneStopScanner::ToneStopScanner(double sample_rate_hz, const ToneStopScannerOptions& options) : options_(options) {
   if (!std::isfinite(sample_rate_hz) || sample_rate_hz <= 0.0) {
     throw_invalid("sample_rate_hz", "must be > 0, got " + std::to_string(sample_rate_hz));
@@ -58,10 +62,17 @@ void ToneStopScanner::scan() {
     const std::optional<FoundTone> tone = find_stopping_tone(window_, options_.tone_search);
     if (!tone) {
       // For the error message: a tone that stops outside the band searched (a buzzer other than
-      // the one configured).
-      ToneSearchOptions everywhere;
-      everywhere.max_hz = std::min(everywhere.max_hz, window_.sample_rate_hz / 2.0);
-      if (const std::optional<FoundTone> other = find_stopping_tone(window_, everywhere)) heard_outside_hz_ = other->hz;
+      // the one configured), until one is heard. The whole band costs as much as the scan
+      // itself, so at every scan only in the first kOutsideEveryScanS of audio (the buzzer sounds
+      // near the start, paper 1 II-G.1), then once per window's length.
+      ++scans_without_tone_;
+      const auto scans_per_window = static_cast<std::size_t>(std::max(1.0, options_.window_s / options_.scan_every_s));
+      const bool early = static_cast<double>(scans_without_tone_) * options_.scan_every_s <= kOutsideEveryScanS;
+      if (!heard_outside_hz_ && (early || scans_without_tone_ % scans_per_window == 0)) {
+        ToneSearchOptions everywhere;
+        everywhere.max_hz = std::min(everywhere.max_hz, window_.sample_rate_hz / 2.0);
+        if (const std::optional<FoundTone> other = find_stopping_tone(window_, everywhere)) heard_outside_hz_ = other->hz;
+      }
       return;
     }
     options_.detector.tone_hz = tone->hz;

@@ -60,6 +60,7 @@ class ToneStopScanner {
   std::vector<BuzzerStop> stops_;
   bool tone_found_ = false;
   std::optional<double> heard_outside_hz_;
+  std::size_t scans_without_tone_ = 0;
 };
 
 }  // namespace posefuse::sync
