@@ -7,6 +7,7 @@
 #include "common/error.hpp"
 #include "sim/option_checks.hpp"
 #include "sim/sim_rng.hpp"
+#include "sync/broadcast_offsets.hpp"
 
 namespace posefuse::sim {
 namespace {
@@ -29,23 +30,6 @@ std::int16_t to_s16(double x) {
 }
 
 }  // namespace
-
-std::string ble_sequence_payload(std::uint32_t sequence) {
-  std::string out(4, '\0');
-  for (int b = 0; b < 4; ++b) out[static_cast<std::size_t>(b)] = static_cast<char>((sequence >> (8 * b)) & 0xffu);
-  return out;
-}
-
-std::uint32_t ble_sequence_from_payload(const std::string& payload) {
-  if (payload.size() != 4) {
-    throw_invalid("sync_event.payload", "BLE receipt payload must be 4 bytes, got " + std::to_string(payload.size()));
-  }
-  std::uint32_t sequence = 0;
-  for (int b = 0; b < 4; ++b) {
-    sequence |= static_cast<std::uint32_t>(static_cast<unsigned char>(payload[static_cast<std::size_t>(b)])) << (8 * b);
-  }
-  return sequence;
-}
 
 BleBroadcastResult ble_broadcast_receipts(const std::vector<SimDevice>& devices,
                                           const BleBroadcastOptions& options, std::uint64_t seed) {
@@ -93,7 +77,7 @@ BleBroadcastResult ble_broadcast_receipts(const std::vector<SimDevice>& devices,
         event.set_t_us(std::llround(quantised_s * 1e6));
         event.set_device_id(device.device_id);
         event.set_kind(v1::SyncEvent::BLE_BROADCAST_RECEIPT);
-        event.set_payload(ble_sequence_payload(sequence));
+        event.set_payload(sync::ble_sequence_payload(sequence));
         result.events.push_back(std::move(event));
       }
       if (all) ++complete_rounds;

@@ -22,11 +22,6 @@ struct SimDevice {
   DeviceClock clock;
 };
 
-// Payload of a BLE_BROADCAST_RECEIPT event: the broadcast's sequence number, 4 bytes uint32
-// little-endian.
-std::string ble_sequence_payload(std::uint32_t sequence);
-std::uint32_t ble_sequence_from_payload(const std::string& payload);  // kInvalidArgument unless 4 bytes
-
 struct BleBroadcastOptions {
   double first_broadcast_s = 0.5;   // camera clock
   double interval_s = 0.1;          // between broadcasts, > 0

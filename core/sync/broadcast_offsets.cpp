@@ -2,10 +2,29 @@
 
 #include <cmath>
 #include <map>
+#include <string>
 
 #include "common/error.hpp"
 
 namespace posefuse::sync {
+
+std::string ble_sequence_payload(std::uint32_t sequence) {
+  std::string out(4, '\0');
+  for (int b = 0; b < 4; ++b) out[static_cast<std::size_t>(b)] = static_cast<char>((sequence >> (8 * b)) & 0xffu);
+  return out;
+}
+
+std::uint32_t ble_sequence_from_payload(const std::string& payload) {
+  if (payload.size() != 4) {
+    throw_invalid("sync_event.payload",
+                  "a BLE receipt carries a 4-byte sequence number, got " + std::to_string(payload.size()) + " bytes");
+  }
+  std::uint32_t sequence = 0;
+  for (int b = 0; b < 4; ++b) {
+    sequence |= static_cast<std::uint32_t>(static_cast<unsigned char>(payload[static_cast<std::size_t>(b)])) << (8 * b);
+  }
+  return sequence;
+}
 
 std::vector<ClockObservation> broadcast_observations(const std::vector<BroadcastReceipt>& receipts,
                                                      const std::string& device,

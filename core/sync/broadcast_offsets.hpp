@@ -14,6 +14,12 @@ namespace posefuse::sync {
 
 inline constexpr double kBleClockTickUs = 312.5;  // BLE clock resolution (II-G.2)
 
+// Payload of a BLE_BROADCAST_RECEIPT sync event (docs/simulator.md): the broadcast's
+// sequence number, 4 bytes uint32 little-endian. The decoder throws posefuse::Error
+// kInvalidArgument "sync_event.payload" unless the payload is 4 bytes.
+std::string ble_sequence_payload(std::uint32_t sequence);
+std::uint32_t ble_sequence_from_payload(const std::string& payload);
+
 struct BroadcastReceipt {
   std::int64_t broadcast_id = 0;  // which advertisement
   std::string device;             // who heard it

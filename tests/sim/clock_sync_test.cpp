@@ -8,6 +8,7 @@
 #include "common/error.hpp"
 #include "sim/device_clock.hpp"
 #include "sim/sync_signals.hpp"
+#include "sync/broadcast_offsets.hpp"
 
 using posefuse::Error;
 using namespace posefuse::sim;
@@ -141,7 +142,7 @@ TEST(BleBroadcast, ReceiptsMapThroughEachClock) {
   std::map<std::string, std::int64_t> last_t;
   for (const auto& e : r.events) {
     EXPECT_EQ(e.kind(), posefuse::v1::SyncEvent::BLE_BROADCAST_RECEIPT);
-    const std::uint32_t round = ble_sequence_from_payload(e.payload());
+    const std::uint32_t round = posefuse::sync::ble_sequence_from_payload(e.payload());
     by_round[round][e.device_id()] = e.t_us();
     if (last_t.count(e.device_id())) {
       EXPECT_GE(e.t_us(), last_t[e.device_id()]);
@@ -157,8 +158,8 @@ TEST(BleBroadcast, ReceiptsMapThroughEachClock) {
   int complete = 0;
   for (const auto& [round, receipts] : by_round) complete += receipts.size() == 2 ? 1 : 0;
   EXPECT_EQ(complete, options.rounds_received_by_all);  // the PC stopped then
-  EXPECT_EQ(ble_sequence_from_payload(ble_sequence_payload(0x01020304u)), 0x01020304u);
-  EXPECT_THROW(ble_sequence_from_payload("abc"), Error);
+  EXPECT_EQ(posefuse::sync::ble_sequence_from_payload(posefuse::sync::ble_sequence_payload(0x01020304u)), 0x01020304u);
+  EXPECT_THROW(posefuse::sync::ble_sequence_from_payload("abc"), Error);
 }
 
 TEST(BleBroadcast, RepeatedBurstsSpreadReceiptsOverTheSession) {
@@ -178,7 +179,7 @@ TEST(BleBroadcast, RepeatedBurstsSpreadReceiptsOverTheSession) {
   // sequence numbers index broadcast_t_camera_s and count on across bursts.
   std::map<int, int> complete_by_burst;
   std::map<std::uint32_t, int> receipts_by_round;
-  for (const auto& e : r.events) ++receipts_by_round[ble_sequence_from_payload(e.payload())];
+  for (const auto& e : r.events) ++receipts_by_round[posefuse::sync::ble_sequence_from_payload(e.payload())];
   for (const auto& [round, receipts] : receipts_by_round) {
     ASSERT_LT(round, r.broadcast_t_camera_s.size());
     const int burst = static_cast<int>(std::floor((r.broadcast_t_camera_s[round] - 0.5) / 10.0 + 1e-9));

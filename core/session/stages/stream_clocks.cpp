@@ -70,12 +70,7 @@ void StreamClocks::add(const v1::SessionChunk& chunk) {
   if (e.kind() == v1::SyncEvent::BUZZER_STOP && e.device_id() == base_) {
     base_stops_us_.insert(std::upper_bound(base_stops_us_.begin(), base_stops_us_.end(), e.t_us()), e.t_us());
   } else if (e.kind() == v1::SyncEvent::BLE_BROADCAST_RECEIPT) {
-    if (e.payload().size() != 4) {
-      throw_invalid("sync_event.payload", "a BLE receipt carries a 4-byte sequence number, got " +
-                                              std::to_string(e.payload().size()) + " bytes");
-    }
-    std::uint32_t sequence = 0;
-    for (int i = 3; i >= 0; --i) sequence = (sequence << 8) | static_cast<unsigned char>(e.payload()[static_cast<std::size_t>(i)]);
+    const std::uint32_t sequence = sync::ble_sequence_from_payload(e.payload());
     receipts_.push_back({static_cast<std::int64_t>(sequence), e.device_id(), static_cast<double>(e.t_us())});
   }
 }
