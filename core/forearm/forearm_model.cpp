@@ -49,10 +49,6 @@ void check_frame(const CalibrationFrame& f, std::size_t i) {
   if ((f.wrist_K - f.elbow_K).norm() < 1e-4) throw_invalid(at + "wrist_K", "coincides with the elbow");
 }
 
-}  // namespace
-
-namespace {
-
 // d_sw over a still hold: the mean, unless the values form two groups more than
 // kWristGroupGapM apart. A wrist measured in depth (forearm_axis_depth.hpp) is the hand's widening
 // in some frames and the fingertips, 10-13 cm further, in others (seed 3's left arm on the body

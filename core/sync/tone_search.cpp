@@ -49,10 +49,8 @@ constexpr std::size_t kLoudRank = 3;                 // the on-level is the thir
 
 }  // namespace
 
-std::optional<FoundTone> find_stopping_tone(const AudioPcm& audio, const ToneSearchOptions& options) {
-  const double rate = audio.sample_rate_hz;
+void validate_tone_search(const ToneSearchOptions& o, double rate) {
   if (!std::isfinite(rate) || rate <= 0.0) throw_invalid("audio.sample_rate_hz", "must be > 0");
-  const ToneSearchOptions& o = options;
   if (!(o.min_hz > 0.0) || !(o.max_hz > o.min_hz) || !(o.min_hz < rate / 2.0)) {
     throw_invalid("options", "need 0 < min_hz < max_hz and min_hz below the Nyquist frequency " +
                                  std::to_string(rate / 2.0) + " Hz");
@@ -60,6 +58,12 @@ std::optional<FoundTone> find_stopping_tone(const AudioPcm& audio, const ToneSea
   if (!(o.frame_s > 0.0) || !(o.min_on_to_off_ratio > 1.0) || !(o.min_peak_to_band_ratio > 1.0)) {
     throw_invalid("options", "need frame_s > 0 and both ratios > 1");
   }
+}
+
+std::optional<FoundTone> find_stopping_tone(const AudioPcm& audio, const ToneSearchOptions& options) {
+  const double rate = audio.sample_rate_hz;
+  validate_tone_search(options, rate);
+  const ToneSearchOptions& o = options;
   std::size_t n = 64;
   while (static_cast<double>(n) < o.frame_s * rate) n <<= 1;
   const std::size_t frames = audio.samples.size() / n;

@@ -32,9 +32,12 @@ struct FoundTone {
   double peak_to_band_ratio = 0.0;  // amplitude
 };
 
+// Throws posefuse::Error kInvalidArgument "audio.sample_rate_hz" or "options" for a bad rate or
+// options (min_hz >= max_hz, min_hz at or above the Nyquist frequency, frame_s or a ratio).
+void validate_tone_search(const ToneSearchOptions& options, double sample_rate_hz);
+
 // nullopt when no tone in [min_hz, max_hz] both sounds and stops in the audio (or the audio is
-// shorter than four frames). Throws posefuse::Error kInvalidArgument "audio.sample_rate_hz" or
-// "options.*" for a bad rate or options (min_hz >= max_hz, min_hz at or above the Nyquist frequency).
+// shorter than four frames). Throws as validate_tone_search.
 std::optional<FoundTone> find_stopping_tone(const AudioPcm& audio, const ToneSearchOptions& options = {});
 
 }  // namespace posefuse::sync

@@ -24,7 +24,7 @@ ToneStopScanner::ToneStopScanner(double sample_rate_hz, const ToneStopScannerOpt
   }
   window_.sample_rate_hz = sample_rate_hz;
   if (o.find_tone) {
-    find_stopping_tone(AudioPcm{0.0, sample_rate_hz, {}}, o.tone_search);  // throws for bad search options
+    validate_tone_search(o.tone_search, sample_rate_hz);
   } else if (!(o.detector.tone_hz > 0.0) || !(o.detector.tone_hz < sample_rate_hz / 2.0)) {
     throw_invalid("options.detector.tone_hz", "must be in (0, " + std::to_string(sample_rate_hz / 2.0) +
                                                   ") Hz (the Nyquist frequency), got " + std::to_string(o.detector.tone_hz));

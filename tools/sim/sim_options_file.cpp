@@ -265,7 +265,7 @@ const std::map<std::string, Setter>& setters() {
                                      [](Options& o, const std::string& v, const std::string& f) {
                                        o.skeleton.jump_probability = probability(v, f);
                                      }}},
-      {"buzzer_tone_hz", {"the buzzer's frequency, Hz, 200..7900 (2700; the server's forearm.buzzer_hz must match it, or be auto)",
+      {"buzzer_tone_hz", {"the buzzer's frequency, Hz, 200..7900 (2700; the server measures it within 10 % of forearm.buzzer_hz, or anywhere with auto)",
                           [](Options& o, const std::string& v, const std::string& f) {
                             o.buzzer.tone_hz = positive(v, f);
                             if (o.buzzer.tone_hz < 200 || o.buzzer.tone_hz > 7900) bad(f, v, "must be in [200, 7900] Hz");
