@@ -53,6 +53,9 @@ void validate(const GapRecoveryInput& in) {
   }
   for (std::size_t i = 0; i < in.elbow_anchor.size(); ++i) {
     if (!in.elbow_anchor[i].p_K.allFinite()) throw_invalid(at("elbow_anchor", i, "p_K"), "not finite");
+    if (!(in.elbow_anchor[i].sigma_scale >= 1.0) || !std::isfinite(in.elbow_anchor[i].sigma_scale)) {
+      throw_invalid(at("elbow_anchor", i, "sigma_scale"), "must be finite and >= 1");
+    }
   }
   const ForearmModel& m = in.model;
   if (!std::isfinite(m.r_m) || m.r_m < 0.0) throw_invalid("model.r_m", "must be finite and >= 0");

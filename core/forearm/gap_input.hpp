@@ -8,12 +8,17 @@
 
 namespace posefuse::forearm {
 
-// The IMU position the camera skeleton implies at a depth frame: the SDK's elbow carried along the
-// IMU's forearm axis (imu_position_from_elbow, live_gap.hpp). Unlike the strap it is there in most
-// gaps, but with the SDK's elbow error: a bias of several cm that turns slowly, occasional jumps.
+// The IMU position an elbow estimate implies at a depth frame: the elbow carried along the IMU's
+// forearm axis (imu_position_from_elbow, live_gap.hpp). The elbow is the camera skeleton's (the
+// SDK's elbow error: a bias of several cm that turns slowly, occasional jumps) or the body fit's
+// (paper 2; nearer the truth, worse on the frames it fits badly). Unlike the strap it is there in
+// most gaps.
 struct ElbowAnchorSample {
   std::int64_t t_us = 0;
   Vec3 p_K = Vec3::Zero();
+  // This sample's sigma is GapSmootherOptions::anchor_sigma_m times this (finite, >= 1): the body
+  // fit's anchor is trusted less on frames whose fit energy is high.
+  double sigma_scale = 1.0;
 };
 
 struct GapRecoveryInput {

@@ -45,7 +45,7 @@ struct Problem {
   std::vector<std::size_t> arm_index;  // node i is arm sample arm_index[i]
   std::vector<double> t_s;             // node times, s
   std::vector<Vec3> sphere_centre;     // eq. 13 at each node
-  struct Fix { std::size_t node; double u; Vec3 z; };
+  struct Fix { std::size_t node; double u; Vec3 z; double sigma_scale = 1.0; };
   std::vector<Fix> fixes;              // visible track samples
   std::vector<Fix> anchors;            // elbow anchor samples (Fix::z the anchor position)
   GapSmootherOptions options;
@@ -107,8 +107,9 @@ struct Problem {
     }
     // The elbow anchor, robust: a residual of norm |r| > k (in sigmas) is weighted by k / |r|, so
     // it costs k |r| instead of |r|^2 (iteratively reweighted at each linearisation).
-    const double sc = options.anchor_sigma_m, k = options.anchor_huber_k;
+    const double k = options.anchor_huber_k;
     for (const Fix& f : anchors) {
+      const double sc = options.anchor_sigma_m * f.sigma_scale;
       const int a = 3 * static_cast<int>(f.node);
       double power[kAnchorTerms];
       power[0] = 1.0;
@@ -228,7 +229,10 @@ RecoveredGap recover_gap_smoother(const GapRecoveryInput& input, const GapSpan& 
   }
   if (options.use_elbow_anchor) {
     for (const ElbowAnchorSample& a : input.elbow_anchor) {
-      if (const auto fix = fix_at(a.t_us, a.p_K)) problem.anchors.push_back(*fix);
+      if (auto fix = fix_at(a.t_us, a.p_K)) {
+        fix->sigma_scale = a.sigma_scale;
+        problem.anchors.push_back(*fix);
+      }
     }
   }
 
