@@ -10,13 +10,16 @@
 //    marker, input that stops without an end marker (close), more than max_item_errors bad
 //    chunks (the recording is not worth going on with).
 // Accepted data chunks go to every stage in order; a posefuse::Error from a stage is an ItemError
-// for that chunk. Progress results are emitted every progress_every_chunks chunks. After the end
-// marker the stages finish, then the pipeline sends one CalibrationReport, a last Progress and
-// the Summary.
+// for that chunk. A stage's results go to the stages after it at once (Stage::on_result) and, queued
+// until the current stage call returns, to the stages before it that ask for them
+// (Stage::on_later_result). Progress results are emitted every progress_every_chunks chunks. After
+// the end marker the stages finish in order, then finish_late() on the stages that take later
+// results, then the pipeline sends one CalibrationReport, a last Progress and the Summary.
 //
 // Not thread-safe: one session is processed in order on one thread (DESIGN.md "Threads").
 #include <chrono>
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -62,6 +65,10 @@ class SessionPipeline {
   void process_data_chunk(const v1::SessionChunk& chunk);
   void end_session();
   void emit_progress();
+  // Hands the queued results to the earlier stages that want them (Stage::on_later_result); what
+  // those emit goes on to the stages after them as usual and may queue more.
+  void deliver_later_results();
+  bool wanted_by_a_stage_before(std::size_t emitter) const;
   void note_camera_time(const v1::SessionChunk& chunk);
   // Runs `call` on `stage`, reporting its duration to options_.on_stage_time.
   template <class Call>
@@ -81,6 +88,10 @@ class SessionPipeline {
   std::uint64_t frames_fitted_ = 0;
   // The stage being called; results it emits go to the stages after it (Stage::on_result).
   std::size_t current_stage_ = static_cast<std::size_t>(-1);
+  // Stage::wants_later_results() of each stage, and the results queued for them with the index of
+  // the stage that emitted each.
+  std::vector<bool> wants_later_;
+  std::deque<std::pair<std::size_t, v1::FitResult>> later_;
   std::optional<std::int64_t> first_camera_t_us_, last_camera_t_us_;
   std::chrono::steady_clock::time_point started_at_;
 };

@@ -63,6 +63,16 @@ class Stage {
   // stage sees an earlier stage's results for a chunk before its own on_chunk for that chunk.
   // Errors thrown here are item errors, as from on_chunk.
   virtual void on_result(const v1::FitResult& /*result*/, StageOutput& /*out*/) {}
+
+  // Results of the stages after this one, for a stage that refines its own output with them (the
+  // forearm stage's gap recovery with the body fit's elbows). Asked once after start(). They are
+  // queued and delivered in emission order after the stage call that caused them returns, never
+  // from inside this stage's own emit, so a stage is not re-entered. The last of them come after
+  // this stage's finish(): finish_late() is then called, after every stage has finished and every
+  // later result has been delivered, for what waited on them. Errors are item errors there too.
+  virtual bool wants_later_results() const { return false; }
+  virtual void on_later_result(const v1::FitResult& /*result*/, StageOutput& /*out*/) {}
+  virtual void finish_late(StageOutput& /*out*/) {}
 };
 
 }  // namespace posefuse::session

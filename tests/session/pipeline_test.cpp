@@ -425,5 +425,118 @@ TEST(SessionPipeline, PluggedStageSeesChunksInOrderAndStageErrorsAreItemErrors) 
   EXPECT_EQ(sink.results.back().summary().item_errors(), 1u);
 }
 
+// Results flowing back: a stage that asks for later stages' results gets them after its own call
+// returns (never inside its emit), in order, the last ones after every finish(), and then
+// finish_late(). The later stage answers each frame of the earlier one a frame later (as the body
+// fit waits for data), so its last answer comes from its finish().
+class EarlyStage : public Stage {
+ public:
+  EarlyStage(std::vector<std::string>& log, bool wants) : log_(log), wants_(wants) {}
+  std::string_view name() const override { return "early"; }
+  std::string_view description() const override { return "test stage"; }
+  void start(const v1::SessionHeader&, StageOutput&) override {}
+  void on_chunk(const v1::SessionChunk& chunk, StageOutput& out) override {
+    if (!chunk.has_depth() || !wants_) return;  // the stage that does not ask only records
+    log_.push_back("early " + std::to_string(chunk.depth().t_us()));
+    v1::FitResult frame;
+    frame.mutable_frame()->set_t_us(chunk.depth().t_us());
+    inside_emit_ = true;
+    out.emit(std::move(frame));
+    inside_emit_ = false;
+  }
+  void finish(StageOutput&) override { log_.push_back("early finish"); }
+  bool wants_later_results() const override { return wants_; }
+  void on_later_result(const v1::FitResult& result, StageOutput&) override {
+    if (inside_emit_) log_.push_back("re-entered");
+    if (!result.has_frame() || result.frame().fit_energy() == 0.0) return;  // not the late stage's
+    log_.push_back("later " + std::to_string(result.frame().t_us()));
+    if (result.frame().t_us() == throw_at_us) throw_invalid("later", "rejected by the test");
+  }
+  void finish_late(StageOutput& out) override {
+    log_.push_back("early finish_late");
+    out.warn("LATE", "early", "emitted in finish_late");
+  }
+  std::int64_t throw_at_us = -1;
+
+ private:
+  std::vector<std::string>& log_;
+  bool wants_;
+  bool inside_emit_ = false;
+};
+
+class LateStage : public Stage {
+ public:
+  explicit LateStage(std::vector<std::string>& log) : log_(log) {}
+  std::string_view name() const override { return "late"; }
+  std::string_view description() const override { return "test stage"; }
+  void start(const v1::SessionHeader&, StageOutput&) override {}
+  void on_chunk(const v1::SessionChunk&, StageOutput&) override {}
+  void on_result(const v1::FitResult& result, StageOutput& out) override {
+    if (!result.has_frame()) return;
+    if (held_) answer(*held_, out);
+    held_ = result.frame().t_us();
+  }
+  void finish(StageOutput& out) override {
+    log_.push_back("late finish");
+    if (held_) answer(*held_, out);
+    held_.reset();
+  }
+
+ private:
+  void answer(std::int64_t t_us, StageOutput& out) {
+    v1::FitResult frame;
+    frame.mutable_frame()->set_t_us(t_us);
+    frame.mutable_frame()->set_fit_energy(1.0);
+    out.emit(std::move(frame));
+  }
+  std::vector<std::string>& log_;
+  std::optional<std::int64_t> held_;
+};
+
+TEST(SessionPipeline, LaterStagesResultsReachAnEarlierStageThatAsksAfterItsCallAndBeforeFinishLate) {
+  const auto chunks = demo::make_demo_session();
+  std::vector<std::int64_t> depth_t_us;
+  for (const auto& chunk : chunks) {
+    if (chunk.has_depth()) depth_t_us.push_back(chunk.depth().t_us());
+  }
+  ASSERT_GE(depth_t_us.size(), 3u);
+  std::vector<std::string> log, unused_log;
+  std::vector<std::unique_ptr<Stage>> stages;
+  auto early = std::make_unique<EarlyStage>(log, true);
+  early->throw_at_us = depth_t_us[1];
+  stages.push_back(std::move(early));
+  stages.push_back(std::make_unique<EarlyStage>(unused_log, false));  // does not ask: gets none
+  stages.push_back(std::make_unique<LateStage>(log));
+  CollectingSink sink;
+  SessionPipeline pipeline(std::move(stages), sink);
+  for (const auto& chunk : chunks) pipeline.push(chunk);
+  pipeline.close();
+
+  // Frame k's answer comes in the call for frame k + 1, after the early stage's part of it.
+  std::vector<std::string> expected;
+  for (std::size_t k = 0; k < depth_t_us.size(); ++k) {
+    expected.push_back("early " + std::to_string(depth_t_us[k]));
+    if (k > 0) expected.push_back("later " + std::to_string(depth_t_us[k - 1]));
+  }
+  expected.insert(expected.end(), {"early finish", "late finish", "later " + std::to_string(depth_t_us.back()),
+                                   "early finish_late"});
+  EXPECT_EQ(log, expected);
+  EXPECT_EQ(std::count(unused_log.begin(), unused_log.end(), "early finish_late"), 0);
+  EXPECT_EQ(std::count_if(unused_log.begin(), unused_log.end(), [](const std::string& l) { return l.rfind("later", 0) == 0; }),
+            0);
+  // The error thrown in on_later_result is an item error naming its field; the session went on.
+  const auto errors = sink.item_errors();
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_EQ(errors[0].field(), "later");
+  // finish_late's warning is in the stream before the calibration report and the summary.
+  const auto late = std::find_if(sink.results.begin(), sink.results.end(),
+                                 [](const v1::FitResult& r) { return r.has_warning() && r.warning().code() == "LATE"; });
+  const auto report = std::find_if(sink.results.begin(), sink.results.end(),
+                                   [](const v1::FitResult& r) { return r.has_calibration(); });
+  ASSERT_NE(late, sink.results.end());
+  EXPECT_LT(late, report);
+  EXPECT_EQ(sink.results.back().summary().warnings(), 1u);
+}
+
 }  // namespace
 }  // namespace posefuse::session
