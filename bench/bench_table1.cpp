@@ -14,16 +14,20 @@
 //     diagnostic variants, each clip. Plots table1_<session>.png.
 // Plots: Figs. 4-6, errors and x_K over time, occluded frames grey.
 //
-//   build/bench/bench_table1 [--render body|cylinder] [--gaps] [--imu-noise-only]
-//                            [mocap folder=../shared/data/mocap]
+//   build/bench/bench_table1 [--render body|cylinder] [--fit] [--protocol-only] [--gaps]
+//                            [--imu-noise-only] [mocap folder=../shared/data/mocap]
 //                            [image folder=docs/images] [longest clip s=20]
-// --gaps (body render): per recovered gap, the boundary fits and the errors against the truth
-// (table1/gap_report.hpp). --imu-noise-only (body render, diagnostic): the IMUs without their
-// bias, scale, misalignment and iron errors (white noise only, as the cylinder render's IMUs).
+// Body render only: --fit runs the body fit too (fit.enabled = true), so the forearm smoother is
+// anchored to the fit's elbows (forearm.gap_anchor = auto) instead of the camera skeleton's.
+// --protocol-only: the two protocol sessions, not the clips. --gaps: per recovered gap, the
+// boundary fits and the errors against the truth (table1/gap_report.hpp). --imu-noise-only
+// (diagnostic): the IMUs without their bias, scale, misalignment and iron errors (white noise
+// only, as the cylinder render's IMUs).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -237,11 +241,18 @@ std::vector<Summary> cylinder_sessions(const fs::path& mocap, const fs::path& im
 }
 
 // One posefuse-sim session (both arms exercising, an IMU on each), scored per arm.
+// The body render's command-line switches.
+struct BodyFlags {
+  bool print_gaps = false, imu_noise_only = false, fit = false, protocol_only = false;
+};
+
 std::vector<Summary> run_body(const std::string& name, const sim::SimSessionOptions& options, const fs::path& images,
-                              bool print_gaps) {
+                              const BodyFlags& flags) {
   const sim::BodyMotion motion = sim::select_motion(options.motion, options.motion_options, {options.sex, options.betas});
   const double hold_begin = hold_bound_s(motion, false), hold_end = hold_bound_s(motion, true);
-  const bench::BodyRenderRun run = bench::run_body_render_session(options);
+  std::map<std::string, std::string> header_options;
+  if (flags.fit) header_options["fit.enabled"] = "true";
+  const bench::BodyRenderRun run = bench::run_body_render_session(options, header_options);
   double sim_cpu_s = 0.0;
   for (const auto& [part, seconds] : run.truth.cpu_s) sim_cpu_s += seconds;
   for (const v1::FitResult& r : run.results) {
@@ -254,20 +265,20 @@ std::vector<Summary> run_body(const std::string& name, const sim::SimSessionOpti
     const bench::Table1Series s = bench::table1_series(bench::body_render_truth(run, arm), run.results,
                                                        bench::body_render_arm(run, arm), hold_begin, hold_end);
     print_title(arm_name, options.seed, s, hold_begin, hold_end, sim_cpu_s, run.pipeline_cpu_s);
-    if (print_gaps) bench::print_gap_report(bench::body_render_truth(run, arm), run.results, bench::body_render_arm(run, arm));
+    if (flags.print_gaps) bench::print_gap_report(bench::body_render_truth(run, arm), run.results, bench::body_render_arm(run, arm));
     summaries.push_back(report(arm_name, s, images / ("table1_body_" + arm_name + ".png")));
   }
   return summaries;
 }
 
-std::vector<Summary> body_sessions(const fs::path& mocap, const fs::path& images, double longest_s, bool print_gaps,
-                                   bool imu_noise_only) {
+std::vector<Summary> body_sessions(const fs::path& mocap, const fs::path& images, double longest_s,
+                                   const BodyFlags& flags) {
   sim::SimSessionOptions options;
   options.motion = "forearm_protocol";
   options.motion_options.exercise.repetitions = 1;
   options.motion_options.exercise.arm = sim::ExerciseArm::kBoth;
   options.duration_s = longest_s;
-  if (imu_noise_only) {
+  if (flags.imu_noise_only) {
     const sim::ImuErrorModel typical;
     options.imu.synth.error_model = sim::ImuErrorModel::none();
     options.imu.synth.error_model.gyr_noise_density_rad_s_sqrt_hz = typical.gyr_noise_density_rad_s_sqrt_hz;
@@ -277,7 +288,7 @@ std::vector<Summary> body_sessions(const fs::path& mocap, const fs::path& images
   std::vector<Summary> summaries;
   const auto add = [&](const std::string& name) {
     try {
-      for (Summary& s : run_body(name, options, images, print_gaps)) summaries.push_back(std::move(s));
+      for (Summary& s : run_body(name, options, images, flags)) summaries.push_back(std::move(s));
     } catch (const Error& e) {
       std::printf("\n### %s: failed: %s\n", name.c_str(), e.what());
     }
@@ -286,6 +297,7 @@ std::vector<Summary> body_sessions(const fs::path& mocap, const fs::path& images
     options.seed = seed;
     add("protocol_seed" + std::to_string(seed));
   }
+  if (flags.protocol_only) return summaries;
   options.motion = "bvh";
   options.motion_options.calibration_prefix = true;
   for (const fs::path& file : mocap_clips(mocap)) {
@@ -308,10 +320,14 @@ std::vector<Summary> body_sessions(const fs::path& mocap, const fs::path& images
 int main(int argc, char** argv) {
   std::vector<std::string> args(argv + 1, argv + argc);
   std::string render = "cylinder";
-  bool print_gaps = false, imu_noise_only = false;
+  BodyFlags flags;
+  const std::map<std::string, bool BodyFlags::*> switches = {{"--gaps", &BodyFlags::print_gaps},
+                                                             {"--imu-noise-only", &BodyFlags::imu_noise_only},
+                                                             {"--fit", &BodyFlags::fit},
+                                                             {"--protocol-only", &BodyFlags::protocol_only}};
   while (!args.empty() && args[0].starts_with("--")) {
-    if (args[0] == "--gaps" || args[0] == "--imu-noise-only") {
-      (args[0] == "--gaps" ? print_gaps : imu_noise_only) = true;
+    if (const auto it = switches.find(args[0]); it != switches.end()) {
+      flags.*(it->second) = true;
       args.erase(args.begin());
     } else if (args[0] == "--render" && args.size() >= 2) {
       render = args[1];
@@ -328,10 +344,15 @@ int main(int argc, char** argv) {
   const fs::path mocap = args.size() > 0 ? fs::path(args[0]) : fs::path("../shared/data/mocap");
   const fs::path images = args.size() > 1 ? fs::path(args[1]) : fs::path("docs/images");
   const double longest_s = args.size() > 2 ? std::stod(args[2]) : 20.0;
-  std::printf("paper 1 Table I on simulated sessions, %s render; sessions cut at %.0f s\n", render.c_str(), longest_s);
+  if (render != "body" && (flags.fit || flags.protocol_only || flags.print_gaps || flags.imu_noise_only)) {
+    std::fprintf(stderr, "bench_table1: --fit, --protocol-only, --gaps and --imu-noise-only need --render body\n");
+    return 2;
+  }
+  std::printf("paper 1 Table I on simulated sessions, %s render%s; sessions cut at %.0f s\n", render.c_str(),
+              flags.fit ? " with the body fit (the smoother anchored to the fit's elbows)" : "", longest_s);
   const double cpu0 = bench::thread_cpu_seconds();
   const std::vector<Summary> summaries =
-      render == "body" ? body_sessions(mocap, images, longest_s, print_gaps, imu_noise_only) : cylinder_sessions(mocap, images, longest_s);
+      render == "body" ? body_sessions(mocap, images, longest_s, flags) : cylinder_sessions(mocap, images, longest_s);
   std::printf("\n### summary (%s render; all frames, and inside gaps; targets on the protocol: orientation RMS <= 5 "
               "deg, smoother position RMS <= 0.02 m and max <= 0.06 m)\n\n",
               render.c_str());

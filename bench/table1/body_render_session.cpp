@@ -19,12 +19,18 @@ struct ResultCollector : session::ResultSink {
 // The simulator's chunks go straight into the pipeline on the writer's thread.
 class PipelineChunkSink : public session::ChunkSink {
  public:
-  PipelineChunkSink(ResultCollector& results, BodyRenderRun& run)
-      : pipeline_(session::make_default_stages(), results), run_(run) {}
+  PipelineChunkSink(ResultCollector& results, BodyRenderRun& run, const std::map<std::string, std::string>& header_options)
+      : pipeline_(session::make_default_stages(), results), run_(run), header_options_(header_options) {}
   void write(const v1::SessionChunk& chunk) override {
     if (chunk.has_skeleton()) run_.sdk.push_back(chunk.skeleton());
     const double cpu0 = thread_cpu_seconds();
-    pipeline_.push(chunk);
+    if (chunk.has_header()) {
+      v1::SessionChunk with_options = chunk;
+      for (const auto& [key, value] : header_options_) (*with_options.mutable_header()->mutable_options())[key] = value;
+      pipeline_.push(with_options);
+    } else {
+      pipeline_.push(chunk);
+    }
     run_.pipeline_cpu_s += thread_cpu_seconds() - cpu0;
   }
   void finish() override {
@@ -36,6 +42,7 @@ class PipelineChunkSink : public session::ChunkSink {
  private:
   session::SessionPipeline pipeline_;
   BodyRenderRun& run_;
+  std::map<std::string, std::string> header_options_;
 };
 
 // Index of the arm's IMU in SimTruth::devices (arm IMUs first, left before right).
@@ -48,11 +55,12 @@ std::size_t device_index(const sim::SimTruth& truth, int arm) {
 
 }  // namespace
 
-BodyRenderRun run_body_render_session(const sim::SimSessionOptions& options) {
+BodyRenderRun run_body_render_session(const sim::SimSessionOptions& options,
+                                      const std::map<std::string, std::string>& header_options) {
   BodyRenderRun run;
   ResultCollector results;
   {
-    PipelineChunkSink sink(results, run);
+    PipelineChunkSink sink(results, run, header_options);
     run.truth = sim::simulate_session(options, sink);
     sink.finish();
   }

@@ -5,6 +5,8 @@
 // SessionPipeline(make_default_stages()) as it is rendered, so no session sits in memory; the
 // truth per arm is what gt/ would hold.
 #include <array>
+#include <map>
+#include <string>
 #include <vector>
 
 #include "posefuse/v1/results.pb.h"
@@ -20,7 +22,9 @@ struct BodyRenderRun {
   double pipeline_cpu_s = 0.0;         // this thread's CPU inside the pipeline
 };
 
-BodyRenderRun run_body_render_session(const sim::SimSessionOptions& options);
+// header_options are added to the session header's options (e.g. fit.enabled = true).
+BodyRenderRun run_body_render_session(const sim::SimSessionOptions& options,
+                                      const std::map<std::string, std::string>& header_options = {});
 
 // Per arm with an IMU (0 left, 1 right): the frames' truth as Table1Truth (occluded as
 // gt/occlusion.csv reads: most of the forearm hidden, or the strap) and the arm as Table1Arm.

@@ -9,6 +9,7 @@
 #include <map>
 #include <numbers>
 
+#include "body/smpl_model.hpp"
 #include "forearm/forearm_orientation.hpp"
 #include "forearm_session.hpp"
 #include "session/pipeline.hpp"
@@ -286,7 +287,8 @@ TEST(ForearmStage, BadOptionsAreErrorsNamingTheOption) {
                         Case{"forearm.body_id", "-2"}, Case{"forearm.K_from_B", "1 0 0"},
                         Case{"forearm.buzzer_hz", "loud"}, Case{"forearm.buzzer_hz", "0"},
                         Case{"forearm.buzzer_hz", "-2700"}, Case{"forearm.buzzer_hz", "9000"},
-                        Case{"forearm.buzzer_hz", "nan"}}) {
+                        Case{"forearm.buzzer_hz", "nan"}, Case{"forearm.gap_anchor", "fit"},
+                        Case{"fit.enabled", "maybe"}}) {
     v1::SessionHeader bad = header;
     (*bad.mutable_options())[c.key] = c.value;
     Sink sink;
@@ -298,6 +300,81 @@ TEST(ForearmStage, BadOptionsAreErrorsNamingTheOption) {
       ADD_FAILURE() << c.key << " = " << c.value << ": accepted";
     } catch (const Error& e) {
       EXPECT_EQ(e.field(), std::string("header.options[") + c.key + "]") << c.value << ": " << e.what();
+    }
+  }
+}
+
+// A stand-in for the body fit after the forearm stage: it answers every skeleton frame with SMPL
+// joints whose right elbow is the true one, all at its finish() (as a fit waiting for data would).
+class TruthFitStage : public Stage {
+ public:
+  explicit TruthFitStage(const ForearmSessionTruth& truth) : truth_(truth) {}
+  std::string_view name() const override { return "truth_fit"; }
+  std::string_view description() const override { return "test stage"; }
+  void start(const v1::SessionHeader&, StageOutput&) override {}
+  void on_chunk(const v1::SessionChunk&, StageOutput&) override {}
+  void finish(StageOutput& out) override {
+    const forearm::ForearmModel& m = truth_.model;
+    for (std::size_t f = 0; f < truth_.frame_t_us.size(); ++f) {
+      const Vec3 strap_centre = truth_.imu_K[f] - truth_.K_from_F[f] * Vec3(m.r_m, 0.0, 0.0);
+      const Vec3 elbow = strap_centre - truth_.K_from_F[f] * Vec3(0.0, m.d_se_m, 0.0);
+      v1::FitResult r;
+      v1::FrameResult& frame = *r.mutable_frame();
+      frame.set_t_us(truth_.frame_t_us[f]);
+      frame.set_fit_energy(5.0);
+      for (int j = 0; j < body::kNumJoints; ++j) {
+        v1::Vec3& p = *frame.add_smpl_joints()->mutable_position_m();
+        const Vec3 at = j == body::kRightElbow ? elbow : Vec3::Zero();
+        p.set_x(at.x());
+        p.set_y(at.y());
+        p.set_z(at.z());
+      }
+      out.emit(std::move(r));
+    }
+  }
+
+ private:
+  const ForearmSessionTruth& truth_;
+};
+
+// With fit.enabled the stage anchors its gaps to the fit's elbows: the gap waits for the fit's
+// frames (here all at the fit's finish), then is recovered in finish_late, after them in the
+// stream; with forearm.gap_anchor = sdk it is recovered before them, as without the fit.
+TEST(ForearmStage, WithTheBodyFitTheGapWaitsForItsElbows) {
+  for (const std::string anchor : {"auto", "sdk"}) {
+    ForearmSessionTruth truth;
+    std::vector<v1::SessionChunk> chunks = testing::make_forearm_session({}, &truth);
+    (*chunks.front().mutable_header()->mutable_options())["fit.enabled"] = "true";
+    (*chunks.front().mutable_header()->mutable_options())["forearm.gap_anchor"] = anchor;
+    std::vector<std::unique_ptr<Stage>> stages = make_default_stages();
+    stages.pop_back();  // the real body fit: this session has no depth silhouettes to fit
+    stages.push_back(std::make_unique<TruthFitStage>(truth));
+    Sink sink;
+    SessionPipeline pipeline(std::move(stages), sink);
+    for (const auto& chunk : chunks) pipeline.push(chunk);
+    pipeline.close();
+
+    std::size_t first_fit_frame = sink.results.size(), first_segment = sink.results.size();
+    for (std::size_t i = 0; i < sink.results.size(); ++i) {
+      const v1::FitResult& x = sink.results[i];
+      if (x.has_frame() && x.frame().smpl_joints_size() > 0) first_fit_frame = std::min(first_fit_frame, i);
+      if (x.has_recovered_segment()) first_segment = std::min(first_segment, i);
+    }
+    ASSERT_LT(first_fit_frame, sink.results.size()) << anchor;
+    ASSERT_LT(first_segment, sink.results.size()) << anchor;
+    if (anchor == "auto") {
+      EXPECT_GT(first_segment, first_fit_frame);
+    } else {
+      EXPECT_LT(first_segment, first_fit_frame);
+    }
+    const testing::ForearmSessionErrors e = testing::evaluate_forearm_results(truth, sink.results);
+    EXPECT_EQ(e.segments, 2u) << anchor;
+    ASSERT_EQ(e.recovered.count(v1::RecoveredSegment::SMOOTHER), 1u) << anchor;
+    const double max_m = e.recovered.at(v1::RecoveredSegment::SMOOTHER).max_m;
+    std::printf("gap anchor %s: smoother max %.1f mm\n", anchor.c_str(), 1e3 * max_m);
+    EXPECT_LT(max_m, 0.04) << anchor;  // as ImuPositionsVisibleThenPredictedThenRecovered
+    for (const v1::Warning& w : sink.warnings()) {
+      EXPECT_NE(w.code(), "FOREARM_GAP_NOT_RECOVERED") << w.message();
     }
   }
 }

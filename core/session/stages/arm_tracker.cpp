@@ -106,7 +106,8 @@ void ArmTracker::process(bool all, StageOutput& out) {
     frames_.pop_front();
   }
   while (!pending_gaps_.empty() && !track_.empty() &&
-         (all || track_.back().t_us >= pending_gaps_.front().t_end_us + window_us)) {
+         (all || track_.back().t_us >= pending_gaps_.front().t_end_us + window_us) &&
+         fit_has_come_up_to(pending_gaps_.front().t_end_us + window_us)) {
     const PendingGap gap = pending_gaps_.front();
     pending_gaps_.erase(pending_gaps_.begin());
     // Seen too briefly after the gap to close it (a lone, mostly false, detection): the gap goes
@@ -249,7 +250,11 @@ void ArmTracker::recover(std::int64_t t_start_us, std::int64_t t_end_us, StageOu
   forearm::occlude_inside(input.track, t_start_us, t_end_us);  // lone detections inside (process)
   input.arm = slice(arm_, t_start_us - margin_us, t_end_us + margin_us);
   input.shoulder = slice(shoulder_, t_start_us - 2 * margin_us, t_end_us + 2 * margin_us);
-  input.elbow_anchor = slice(elbow_anchor_, t_start_us - margin_us, t_end_us + margin_us);
+  input.elbow_anchor = fit_anchor_between(t_start_us - margin_us, t_end_us + margin_us);
+  const bool from_fit = !input.elbow_anchor.empty();
+  if (!from_fit) input.elbow_anchor = slice(elbow_anchor_, t_start_us - margin_us, t_end_us + margin_us);
+  forearm::GapSmootherOptions smoother_options = smoother_options_;
+  if (from_fit) smoother_options.anchor_sigma_m = fit_anchor_->sigma_m;
   input.model = model_;
   input.K_from_W = K_from_W_;
   try {
@@ -257,7 +262,7 @@ void ArmTracker::recover(std::int64_t t_start_us, std::int64_t t_end_us, StageOu
     const auto gap = std::find_if(gaps.begin(), gaps.end(), [&](const auto& g) { return g.t_start_us == t_start_us; });
     if (gap == gaps.end()) throw Error(ErrorCode::kInternal, where, "gap not found in its own track");
     const forearm::RecoveredGap paper = forearm::recover_gap_paper(input, *gap);
-    const forearm::RecoveredGap smoother = forearm::recover_gap_smoother(input, *gap, smoother_options_);
+    const forearm::RecoveredGap smoother = forearm::recover_gap_smoother(input, *gap, smoother_options);
     for (const auto& [method, recovered] :
          {std::pair{v1::RecoveredSegment::PAPER, &paper}, std::pair{v1::RecoveredSegment::SMOOTHER, &smoother}}) {
       v1::FitResult result;
@@ -282,6 +287,46 @@ void ArmTracker::recover(std::int64_t t_start_us, std::int64_t t_end_us, StageOu
   } catch (const Error& error) {
     out.warn("FOREARM_GAP_NOT_RECOVERED", where, error.what());
   }
+}
+
+void ArmTracker::use_fit_anchor(const FitAnchorOptions& options) {
+  if (!(options.sigma_m > 0.0) || !(options.reference_energy > 0.0) || !(options.max_wait_s >= 0.0) ||
+      !std::isfinite(options.sigma_m + options.reference_energy + options.max_wait_s)) {
+    throw_invalid(field() + ".fit_anchor", "sigma_m and reference_energy must be positive, max_wait_s >= 0");
+  }
+  fit_anchor_ = options;
+}
+
+void ArmTracker::add_fit_elbow(std::int64_t t_us, const Vec3& elbow_K, double fit_energy) {
+  if (!fit_elbows_.empty() && t_us <= fit_elbows_.back().t_us) return;
+  fit_elbows_.push_back({t_us, elbow_K, fit_energy});
+}
+
+bool ArmTracker::fit_has_come_up_to(std::int64_t t_us) const {
+  if (!fit_anchor_ || fit_finished_) return true;
+  if (!fit_elbows_.empty() && fit_elbows_.back().t_us >= t_us) return true;
+  // The fit may skip frames (FIT_FRAME) or stop; live results must not wait for ever.
+  const auto max_wait_us = static_cast<std::int64_t>(std::llround(1e6 * fit_anchor_->max_wait_s));
+  return !track_.empty() && track_.back().t_us > t_us + max_wait_us;
+}
+
+std::vector<forearm::ElbowAnchorSample> ArmTracker::fit_anchor_between(std::int64_t from_us, std::int64_t to_us) const {
+  std::vector<forearm::ElbowAnchorSample> anchor;
+  if (!fit_anchor_ || arm_.empty()) return anchor;
+  const auto first = std::lower_bound(fit_elbows_.begin(), fit_elbows_.end(), std::max(from_us, arm_.front().t_us),
+                                      [](const FitElbow& e, std::int64_t t) { return e.t_us < t; });
+  for (auto e = first; e != fit_elbows_.end() && e->t_us <= std::min(to_us, arm_.back().t_us); ++e) {
+    // A frame fitted with energy E is trusted as one with sqrt(E / reference) times the sigma.
+    const double scale = std::sqrt(std::max(1.0, e->energy / fit_anchor_->reference_energy));
+    if (!e->elbow_K.allFinite() || !std::isfinite(scale)) continue;
+    anchor.push_back({e->t_us, forearm::imu_position_from_elbow(e->elbow_K, K_from_F_at(e->t_us), model_), scale});
+  }
+  return anchor;
+}
+
+void ArmTracker::finish_late(StageOutput& out) {
+  fit_finished_ = true;
+  process(true, out);
 }
 
 void ArmTracker::finish(StageOutput& out) {

@@ -7,8 +7,9 @@
 //  - every camera frame: the IMU position from the strap by eq. 10 when the II-J tests accept
 //    the visual forearm (VISUAL), else, inside a gap, the causal live estimate (PREDICTED)
 //    -> one FrameResult;
-//  - every gap, once the boundary window after it has been seen: recover_gap_paper and
-//    recover_gap_smoother -> two RecoveredSegments.
+//  - every gap, once the boundary window after it has been seen (and, with the body fit's anchor,
+//    once the fit's frames up to there have come): recover_gap_paper and recover_gap_smoother
+//    -> two RecoveredSegments.
 #include <cstdint>
 #include <deque>
 #include <optional>
@@ -23,6 +24,16 @@
 #include "session/pipeline_stage.hpp"
 
 namespace posefuse::session {
+
+// The body fit's elbows (paper 2, BodyFitStage) as the gap smoother's elbow anchor instead of the
+// camera skeleton's. Measured on the body render's protocol (docs/forearm.md "The body fit's elbow
+// as the anchor"): behind the back the fit's elbows are 2-5 cm off where the SDK's are 8 cm off,
+// but on frames the fit gets wrong (high energy) they can be 10-20 cm off for a second.
+struct FitAnchorOptions {
+  double sigma_m = 0.03;           // a well-fitted frame's anchor sample (the SDK's: 0.12 m)
+  double reference_energy = 10.0;  // above it a sample's sigma grows as sqrt(energy / this)
+  double max_wait_s = 10.0;        // a gap waits at most this long (camera time) for the fit
+};
 
 // What the stage saw of one arm in one camera frame.
 struct ArmFrame {
@@ -64,8 +75,18 @@ class ArmTracker {
   // with `all` every queued frame (end of session). Then the gaps whose after-window is complete.
   void add_frame(const ArmFrame& frame) { frames_.push_back(frame); }
   void process(bool all, StageOutput& out);
-  // End of session: a gap still open is reported, pending gaps are recovered with what exists.
+  // End of session: a gap still open is reported, pending gaps are recovered with what exists
+  // (except those waiting for the body fit's frames: finish_late).
   void finish(StageOutput& out);
+
+  // Use the body fit's elbows as the gap smoother's anchor (before the first gap). Each gap then
+  // waits for the fit's frames up to the end of its boundary window after it, at most
+  // max_wait_s of camera time; a gap with no fit frame in its window uses the SDK's anchor.
+  void use_fit_anchor(const FitAnchorOptions& options);
+  // One fitted frame's elbow for this arm and the fit's energy (in time order; others dropped).
+  void add_fit_elbow(std::int64_t t_us, const forearm::Vec3& elbow_K, double fit_energy);
+  // The body fit has finished: the gaps that waited for it are recovered.
+  void finish_late(StageOutput& out);
 
   std::uint64_t visible_frames() const { return visible_frames_; }
   std::uint64_t gaps() const { return gaps_; }
@@ -83,6 +104,10 @@ class ArmTracker {
   Confirmation confirm_detection(bool all, std::int64_t window_us) const;
   void process_frame(const ArmFrame& frame, const forearm::TrackSample& sample, StageOutput& out);
   void recover(std::int64_t t_start_us, std::int64_t t_end_us, StageOutput& out);
+  // The anchor samples for a gap's window: the fit's elbows when it has some there, else the SDK's.
+  std::vector<forearm::ElbowAnchorSample> fit_anchor_between(std::int64_t from_us, std::int64_t to_us) const;
+  // Whether the body fit's frames up to t_us have come (always true without the fit's anchor).
+  bool fit_has_come_up_to(std::int64_t t_us) const;
   forearm::Quat K_from_F_at(std::int64_t t_us) const;
   double pronation_at(std::int64_t t_us) const;
   std::string field() const;
@@ -101,7 +126,15 @@ class ArmTracker {
   std::vector<double> pronation_;
   std::vector<forearm::TrackSample> track_;
   std::vector<forearm::ShoulderSample> shoulder_;
-  std::vector<forearm::ElbowAnchorSample> elbow_anchor_;
+  std::vector<forearm::ElbowAnchorSample> elbow_anchor_;  // the SDK's
+  struct FitElbow {
+    std::int64_t t_us;
+    forearm::Vec3 elbow_K;
+    double energy;
+  };
+  std::optional<FitAnchorOptions> fit_anchor_;
+  std::vector<FitElbow> fit_elbows_;
+  bool fit_finished_ = false;
   std::deque<ArmFrame> frames_;  // queued, not yet processed
 
   std::optional<std::int64_t> last_visible_us_;

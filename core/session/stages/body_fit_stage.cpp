@@ -107,6 +107,8 @@ void set_joint(v1::JointEstimate& joint, const Eigen::Vector3d& p_K, v1::Source 
 
 }  // namespace
 
+bool body_fit_enabled(const v1::SessionHeader& header) { return bool_option(header, kEnabledKey, false); }
+
 bool needs_skeleton_start(std::optional<double> previous_energy, double skeleton_start_energy) {
   return !previous_energy || skeleton_start_energy <= 0.0 || !(*previous_energy < skeleton_start_energy);
 }
@@ -189,7 +191,7 @@ std::vector<StageOption> BodyFitStage::options() const {
 }
 
 void BodyFitStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) {
-  enabled_ = bool_option(header, kEnabledKey, false);
+  enabled_ = body_fit_enabled(header);
   if (!enabled_) return;
   calibration_s_ = positive_option(header, kCalibrationSKey, calibration_s_);
   imu_wait_s_ = positive_option(header, kImuWaitKey, imu_wait_s_);

@@ -115,6 +115,10 @@ bool needs_skeleton_start(std::optional<double> previous_energy, double skeleton
 // does not hold 25 joints.
 fit::TrackedSkeleton tracked_skeleton_from_proto(const v1::SkeletonFrame& skeleton);
 
+// Whether the header turns the body fit on (fit.enabled; false when absent). Throws
+// posefuse::Error naming the option for a value other than true/false/1/0.
+bool body_fit_enabled(const v1::SessionHeader& header);
+
 class BodyFitStage : public Stage {
  public:
   BodyFitStage();

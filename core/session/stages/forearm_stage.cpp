@@ -3,6 +3,7 @@
 #include <cmath>
 #include <sstream>
 
+#include "body/smpl_model.hpp"
 #include "common/error.hpp"
 #include "forearm/calibration_pose_check.hpp"
 #include "forearm/forearm_axis_depth.hpp"
@@ -10,6 +11,7 @@
 #include "forearm/upper_arm_depth.hpp"
 #include "session/image_codec.hpp"
 #include "session/imu_batch.hpp"
+#include "session/stages/body_fit_stage.hpp"
 #include "session/stages/proto_values.hpp"
 #include "session/text_fields.hpp"
 
@@ -28,6 +30,7 @@ constexpr const char* kAxisKey = "forearm.axis";
 constexpr const char* kUpperArmKey = "forearm.upper_arm";
 constexpr const char* kShoulderSphereKey = "forearm.shoulder_sphere";
 constexpr const char* kBuzzerHzKey = "forearm.buzzer_hz";
+constexpr const char* kGapAnchorKey = "forearm.gap_anchor";
 // A depth frame belongs to a skeleton frame of the same t_us (same sensor); allow clock jitter.
 constexpr std::int64_t kDepthToleranceUs = 1000;
 // Frames waiting for their depth or colour image before they are processed without.
@@ -113,6 +116,10 @@ std::vector<StageOption> ForearmStage::options() const {
        "the base IMU's buzzer frequency in Hz (sound-based sync, paper 1 II-G.1): its tone is measured in the audio "
        "within 10 % of it; or 'auto': the loudest tone between 500 and 8000 Hz that sounds and stops "
        "(sync/tone_search.hpp). Demodulated 100 Hz off, a stop is found 0.9 ms late (docs/forearm.md)"},
+      {kGapAnchorKey, "auto",
+       "what the gap smoother's elbow anchor follows inside a gap: 'auto' (the body fit's elbows when fit.enabled is "
+       "true, each gap then waits for the fit's frames; else the camera skeleton's) or 'sdk' (the camera skeleton's "
+       "elbow)"},
   };
 }
 
@@ -156,6 +163,13 @@ void ForearmStage::start(const v1::SessionHeader& header, StageOutput& out) {
       throw_invalid(option_field(kShoulderSphereKey), "is '" + *text + "', expected 'on' or 'off'");
     }
     smoother_options_.use_shoulder_sphere = *text == "on";
+  }
+  fit_anchor_ = body_fit_enabled(header);
+  if (const auto text = option(header, kGapAnchorKey)) {
+    if (*text != "auto" && *text != "sdk") {
+      throw_invalid(option_field(kGapAnchorKey), "is '" + *text + "', expected 'auto' or 'sdk'");
+    }
+    if (*text == "sdk") fit_anchor_ = false;
   }
   if (const auto text = option(header, kBodyIdKey)) {
     body_id_ = static_cast<std::uint32_t>(parse_uint64(*text, option_field(kBodyIdKey)));
@@ -493,6 +507,34 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
                                                 *K_from_W_, mean_rotation(held), smoother_options_);
   for (const ArmFrame& f : device.frames) device.tracker->add_frame(f);
   device.frames.clear();
+  if (fit_anchor_) {
+    device.tracker->use_fit_anchor(FitAnchorOptions{});
+    for (const auto& [t_us, elbow_K, energy] : device.early_fit_elbows) device.tracker->add_fit_elbow(t_us, elbow_K, energy);
+    device.early_fit_elbows.clear();
+  }
+}
+
+void ForearmStage::on_later_result(const v1::FitResult& result, StageOutput& out) {
+  if (!result.has_frame() || result.frame().smpl_joints_size() != body::kNumJoints) return;
+  const v1::FrameResult& frame = result.frame();
+  for (Device& device : devices_) {
+    if (!device.side) continue;
+    const v1::Vec3& p = frame.smpl_joints(*device.side == forearm::Side::kLeft ? body::kLeftElbow : body::kRightElbow)
+                            .position_m();
+    const Vec3 elbow_K(p.x(), p.y(), p.z());
+    if (device.tracker) {
+      device.tracker->add_fit_elbow(frame.t_us(), elbow_K, frame.fit_energy());
+      device.tracker->process(false, out);  // a gap that waited for these frames
+    } else {
+      device.early_fit_elbows.emplace_back(frame.t_us(), elbow_K, frame.fit_energy());
+    }
+  }
+}
+
+void ForearmStage::finish_late(StageOutput& out) {
+  for (Device& device : devices_) {
+    if (device.tracker) device.tracker->finish_late(out);
+  }
 }
 
 std::vector<std::string> ForearmStage::arm_device_ids() const {

@@ -26,7 +26,9 @@
 //  3. Then in time order (arm_tracker.hpp): forearm orientation + pronation per IMU sample
 //     (ForearmOrientationBatch), per camera frame a FrameResult with the forearm orientation and
 //     the IMU position (VISUAL from the strap, or PREDICTED by the live estimator in a gap), and
-//     two RecoveredSegments (PAPER, SMOOTHER) per gap 0.5 s after it closes.
+//     two RecoveredSegments (PAPER, SMOOTHER) per gap 0.5 s after it closes. With the body fit
+//     on (fit.enabled) and forearm.gap_anchor = auto, the smoother is anchored to the fit's
+//     elbows (Stage::on_later_result), so a gap waits for the fit's frames up to there too.
 // Problems that stop an arm are warnings naming them (the rest of the session goes on):
 // FOREARM_NO_BASE_IMU, FOREARM_NO_CAMERA_ALIGNMENT, FOREARM_NO_SYNC (no buzzer event, the stop
 // not heard, no shared BLE broadcast), FOREARM_CALIBRATION (too short or no calibration hold),
@@ -36,6 +38,7 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <tuple>
 #include <string>
 #include <vector>
 
@@ -61,6 +64,9 @@ class ForearmStage : public Stage {
   void on_chunk(const v1::SessionChunk& chunk, StageOutput& out) override;
   void on_result(const v1::FitResult& result, StageOutput& out) override;
   void finish(StageOutput& out) override;
+  bool wants_later_results() const override { return active_ && fit_anchor_; }
+  void on_later_result(const v1::FitResult& result, StageOutput& out) override;
+  void finish_late(StageOutput& out) override;
 
  private:
   struct ImuRecord {
@@ -81,6 +87,8 @@ class ForearmStage : public Stage {
     std::uint32_t strap_frames = 0;
     bool has_model = false;
     std::unique_ptr<ArmTracker> tracker;
+    // The body fit's elbows for this arm that came before the tracker existed: t_us, elbow, energy.
+    std::vector<std::tuple<std::int64_t, forearm::Vec3, double>> early_fit_elbows;
   };
   struct PendingFrame {
     std::int64_t t_us = 0;
@@ -115,6 +123,7 @@ class ForearmStage : public Stage {
   bool axis_from_depth_ = true;  // forearm.axis
   bool upper_arm_from_depth_ = true;  // forearm.upper_arm
   forearm::GapSmootherOptions smoother_options_ = without_shoulder_sphere();  // forearm.shoulder_sphere
+  bool fit_anchor_ = false;  // forearm.gap_anchor: auto with fit.enabled
   std::optional<std::uint32_t> body_id_;
   std::optional<forearm::StrapCameras> cameras_;
   double color_tolerance_us_ = 0.0;

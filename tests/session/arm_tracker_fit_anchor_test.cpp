@@ -1,0 +1,219 @@
+// The arm tracker with the body fit's elbows as the gap smoother's anchor
+// (ArmTracker::use_fit_anchor): which anchor a gap uses, and when its segments come out.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+#include <numbers>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "../forearm/synthetic_arm.hpp"
+#include "../imu/expect_error.hpp"
+#include "session/stages/arm_tracker.hpp"
+
+namespace posefuse::session {
+namespace {
+
+using forearm::Quat;
+using forearm::Vec3;
+using namespace forearm::testing;
+
+struct Output : StageOutput {
+  void emit(v1::FitResult&& result) override { results.push_back(std::move(result)); }
+  void warn(const std::string& code, const std::string& field, const std::string& message) override {
+    warnings.push_back(code + " " + field + ": " + message);
+  }
+  v1::CalibrationReport& calibration() override { return report; }
+  std::size_t smoother_segments() const {
+    std::size_t n = 0;
+    for (const v1::FitResult& r : results) {
+      n += r.has_recovered_segment() && r.recovered_segment().method() == v1::RecoveredSegment::SMOOTHER;
+    }
+    return n;
+  }
+  std::vector<v1::FitResult> results;
+  std::vector<std::string> warnings;
+  v1::CalibrationReport report;
+};
+
+constexpr double kDurationS = 7.0, kGapBeginS = 1.5, kGapEndS = 5.5;
+constexpr double kFrameS = 0.033333;
+// The gap's end (the first frame seen after it: 166 frames of 33.333 ms) and its boundary window's.
+const double kFirstSeenS = seconds(166 * 33'333), kWindowEndS = kFirstSeenS + 0.5;
+
+// The SDK's elbow error as the simulator makes it (8 cm, turning with a 10 s period).
+Vec3 sdk_elbow_error(double t_s) {
+  const double w = 2.0 * std::numbers::pi / 10.0;
+  return 0.08 * Vec3(std::cos(w * t_s), std::sin(w * t_s), 0.3).normalized();
+}
+
+// A synthetic arm with the IMU errors of make_gap_input (bias, a wandering 3-degree attitude
+// error, noise) hidden from kGapBeginS to kGapEndS, through a tracker. fit_elbow(t_s) is what the
+// body fit says of the elbow at that frame (none: no fit frame); fit elbows are handed over
+// fit_lag_s of camera time after their frame, as a lagging fit stage would. After every frame the
+// tracker runs process(false) and `after_frame` sees the output.
+struct Scenario {
+  std::optional<FitAnchorOptions> fit_anchor;
+  std::function<std::optional<Vec3>(double)> fit_elbow = [](double) { return std::nullopt; };
+  double fit_energy = 5.0;
+  double fit_lag_s = 0.0;
+  bool finish_late = true;
+  unsigned seed = 1;
+  std::function<void(double, const Output&)> after_frame = [](double, const Output&) {};
+};
+
+Output run(const Scenario& r) {
+  const ArmMotion motion;
+  SensorNoise noise;
+  noise.seed = r.seed;
+  noise.attitude_drift_deg = 3.0;
+  const forearm::GapRecoveryInput in = make_gap_input(motion, noise, kDurationS, kGapBeginS, kGapEndS);
+  ArmTracker tracker("arm_r", forearm::Side::kRight, motion.model, true, motion.K_from_W, motion.K_from_F(0.0));
+  if (r.fit_anchor) tracker.use_fit_anchor(*r.fit_anchor);
+  Output out;
+  std::vector<std::int64_t> t_us;
+  std::vector<Quat> W_from_A;
+  std::vector<Vec3> force;
+  for (const forearm::ArmSample& s : in.arm) {
+    t_us.push_back(s.t_us);
+    W_from_A.push_back(motion.K_from_W.conjugate() * s.K_from_A);
+    force.push_back(s.specific_force_A);
+  }
+  tracker.add_imu(t_us, W_from_A, force, out);
+  std::vector<std::int64_t> fit_queue;
+  for (const forearm::TrackSample& s : in.track) {
+    const double ts = seconds(s.t_us);
+    ArmFrame frame;
+    frame.t_us = s.t_us;
+    frame.shoulder_K = motion.shoulder(ts);
+    frame.elbow_K = motion.elbow(ts);
+    frame.wrist_K = motion.wrist(ts);
+    frame.shoulder_tracked = frame.forearm_tracked = true;
+    frame.sdk_elbow_K = motion.elbow(ts) + sdk_elbow_error(ts);
+    frame.sdk_elbow_seen = true;
+    if (s.visible) frame.strap_K = s.p_K + motion.K_from_F(ts) * Vec3(-motion.model.r_m, 0.0, 0.0);
+    tracker.add_frame(frame);
+    fit_queue.push_back(s.t_us);
+    while (!fit_queue.empty() && seconds(fit_queue.front()) <= ts - r.fit_lag_s) {
+      if (const auto elbow = r.fit_elbow(seconds(fit_queue.front()))) {
+        tracker.add_fit_elbow(fit_queue.front(), *elbow, r.fit_energy);
+      }
+      fit_queue.erase(fit_queue.begin());
+    }
+    tracker.process(false, out);
+    r.after_frame(ts, out);
+  }
+  tracker.finish(out);
+  r.after_frame(kDurationS + 1.0, out);
+  if (r.finish_late) {
+    for (const std::int64_t t : fit_queue) {
+      if (const auto elbow = r.fit_elbow(seconds(t))) tracker.add_fit_elbow(t, *elbow, r.fit_energy);
+    }
+    tracker.finish_late(out);
+  }
+  return out;
+}
+
+// RMS error of the smoother's segment(s) against the true IMU position, metres.
+double smoother_rms_m(const Output& out) {
+  const ArmMotion motion;
+  double sum = 0.0;
+  std::size_t n = 0;
+  for (const v1::FitResult& r : out.results) {
+    if (!r.has_recovered_segment() || r.recovered_segment().method() != v1::RecoveredSegment::SMOOTHER) continue;
+    for (const auto& s : r.recovered_segment().samples()) {
+      const Vec3 p(s.imu_m().x(), s.imu_m().y(), s.imu_m().z());
+      sum += (p - motion.imu_position(seconds(s.t_us()))).squaredNorm();
+      ++n;
+    }
+  }
+  return n ? std::sqrt(sum / static_cast<double>(n)) : NAN;
+}
+
+// A 4 s gap: the SDK's turning 8 cm elbow error against a fit 1 cm off. The fit's anchor is
+// trusted 4 times more (sigma 0.03 against 0.12 m), so the recovered gap follows it.
+TEST(ArmTrackerFitAnchor, ALongGapFollowsTheFitsElbowInsteadOfTheSdks) {
+  const ArmMotion motion;
+  for (const unsigned seed : {1u, 2u, 3u}) {
+    Scenario sdk;
+    sdk.seed = seed;
+    Scenario fit = sdk;
+    fit.fit_anchor = FitAnchorOptions{};
+    fit.fit_elbow = [&](double t_s) { return std::optional<Vec3>(motion.elbow(t_s) + Vec3(0.0, 0.01, 0.0)); };
+    const Output with_sdk = run(sdk), with_fit = run(fit);
+    for (const std::string& w : with_fit.warnings) ADD_FAILURE() << w;
+    ASSERT_EQ(with_sdk.smoother_segments(), 1u);
+    ASSERT_EQ(with_fit.smoother_segments(), 1u);
+    const double e_sdk = smoother_rms_m(with_sdk), e_fit = smoother_rms_m(with_fit);
+    std::printf("seed %u: smoother RMS with the SDK's elbow %.1f mm, with the fit's %.1f mm\n", seed, 1e3 * e_sdk,
+                1e3 * e_fit);
+    EXPECT_LT(e_fit, 0.6 * e_sdk) << seed;
+  }
+}
+
+// Fit frames 0.7 s late: the gap waits for them (its boundary window ends at 6.03 s), and its
+// segments come out with the first fit frame at or after 6.03 s, 0.7 s later, not before.
+TEST(ArmTrackerFitAnchor, AGapWaitsForTheFitsFramesUpToTheEndOfItsWindow) {
+  const ArmMotion motion;
+  Scenario r;
+  r.fit_anchor = FitAnchorOptions{};
+  r.fit_elbow = [&](double t_s) { return std::optional<Vec3>(motion.elbow(t_s)); };
+  r.fit_lag_s = 0.7;
+  double first_out_s = NAN;
+  r.after_frame = [&](double ts, const Output& out) {
+    if (std::isnan(first_out_s) && out.smoother_segments() > 0) first_out_s = ts;
+  };
+  const Output out = run(r);
+  EXPECT_EQ(out.smoother_segments(), 1u);
+  // Handed over at the frame 0.7 s after it, or the next one (the frame times are not exact).
+  EXPECT_GE(first_out_s, kWindowEndS + 0.7 - 1e-6);
+  EXPECT_LE(first_out_s, kWindowEndS + 0.7 + 2 * kFrameS);
+}
+
+// The fit never reaches the gap's window in the session: finish() leaves the gap to
+// finish_late(), which recovers it after the fit has finished.
+TEST(ArmTrackerFitAnchor, AGapTheFitHasNotReachedIsRecoveredInFinishLate) {
+  const ArmMotion motion;
+  Scenario r;
+  r.fit_anchor = FitAnchorOptions{};
+  r.fit_elbow = [&](double t_s) { return std::optional<Vec3>(motion.elbow(t_s)); };
+  r.fit_lag_s = 5.0;
+  std::size_t after_finish = 99;
+  r.after_frame = [&](double ts, const Output& out) {
+    if (ts > kDurationS) after_finish = out.smoother_segments();
+  };
+  const Output out = run(r);
+  EXPECT_EQ(after_finish, 0u);
+  EXPECT_EQ(out.smoother_segments(), 1u);
+}
+
+// No fit frame ever: a gap waits max_wait_s of camera time past its window, then uses the SDK's
+// anchor (the same segment as without the option).
+TEST(ArmTrackerFitAnchor, WithoutFitFramesAGapWaitsAtMostMaxWaitThenUsesTheSdk) {
+  Scenario r;
+  r.fit_anchor = FitAnchorOptions{.max_wait_s = 0.5};
+  double first_out_s = NAN;
+  r.after_frame = [&](double ts, const Output& out) {
+    if (std::isnan(first_out_s) && out.smoother_segments() > 0) first_out_s = ts;
+  };
+  const Output out = run(r);
+  EXPECT_GT(first_out_s, kWindowEndS + 0.5);
+  EXPECT_LE(first_out_s, kWindowEndS + 0.5 + kFrameS + 1e-6);
+  const Output sdk = run(Scenario{});
+  EXPECT_DOUBLE_EQ(smoother_rms_m(out), smoother_rms_m(sdk));
+}
+
+TEST(ArmTrackerFitAnchor, RefusesBadOptions) {
+  const ArmMotion motion;
+  ArmTracker tracker("arm_r", forearm::Side::kRight, motion.model, true, motion.K_from_W, motion.K_from_F(0.0));
+  for (const FitAnchorOptions bad : {FitAnchorOptions{.sigma_m = 0.0}, FitAnchorOptions{.reference_energy = -1.0},
+                                     FitAnchorOptions{.max_wait_s = NAN}, FitAnchorOptions{.sigma_m = INFINITY}}) {
+    posefuse::testing::expect_error([&] { tracker.use_fit_anchor(bad); }, ErrorCode::kInvalidArgument,
+                                    "forearm[arm_r].fit_anchor");
+  }
+}
+
+}  // namespace
+}  // namespace posefuse::session
