@@ -14,12 +14,13 @@
 //     diagnostic variants, each clip. Plots table1_<session>.png.
 // Plots: Figs. 4-6, errors and x_K over time, occluded frames grey.
 //
-//   build/bench/bench_table1 [--render body|cylinder] [--fit] [--protocol-only] [--gaps]
-//                            [--imu-noise-only] [mocap folder=../shared/data/mocap]
+//   build/bench/bench_table1 [--render body|cylinder] [--fit] [--protocol-only] [--only NAME]
+//                            [--gaps] [--imu-noise-only] [mocap folder=../shared/data/mocap]
 //                            [image folder=docs/images] [longest clip s=20]
 // Body render only: --fit runs the body fit too (fit.enabled = true), so the forearm smoother is
 // anchored to the fit's elbows (forearm.gap_anchor = auto) instead of the camera skeleton's.
-// --protocol-only: the two protocol sessions, not the clips. --gaps: per recovered gap, the
+// --protocol-only: the two protocol sessions, not the clips. --only NAME: the sessions whose name
+// contains NAME (each with the seed it has in the whole run). --gaps: per recovered gap, the
 // boundary fits and the errors against the truth (table1/gap_report.hpp). --imu-noise-only
 // (diagnostic): the IMUs without their bias, scale, misalignment and iron errors (white noise
 // only, as the cylinder render's IMUs).
@@ -244,6 +245,7 @@ std::vector<Summary> cylinder_sessions(const fs::path& mocap, const fs::path& im
 // The body render's command-line switches.
 struct BodyFlags {
   bool print_gaps = false, imu_noise_only = false, fit = false, protocol_only = false;
+  std::string only;  // --only: the sessions whose name contains this
 };
 
 std::vector<Summary> run_body(const std::string& name, const sim::SimSessionOptions& options, const fs::path& images,
@@ -287,6 +289,7 @@ std::vector<Summary> body_sessions(const fs::path& mocap, const fs::path& images
   }
   std::vector<Summary> summaries;
   const auto add = [&](const std::string& name) {
+    if (name.find(flags.only) == std::string::npos) return;  // seeds stay those of the whole run
     try {
       for (Summary& s : run_body(name, options, images, flags)) summaries.push_back(std::move(s));
     } catch (const Error& e) {
@@ -329,6 +332,9 @@ int main(int argc, char** argv) {
     if (const auto it = switches.find(args[0]); it != switches.end()) {
       flags.*(it->second) = true;
       args.erase(args.begin());
+    } else if (args[0] == "--only" && args.size() >= 2) {
+      flags.only = args[1];
+      args.erase(args.begin(), args.begin() + 2);
     } else if (args[0] == "--render" && args.size() >= 2) {
       render = args[1];
       args.erase(args.begin(), args.begin() + 2);
@@ -344,8 +350,9 @@ int main(int argc, char** argv) {
   const fs::path mocap = args.size() > 0 ? fs::path(args[0]) : fs::path("../shared/data/mocap");
   const fs::path images = args.size() > 1 ? fs::path(args[1]) : fs::path("docs/images");
   const double longest_s = args.size() > 2 ? std::stod(args[2]) : 20.0;
-  if (render != "body" && (flags.fit || flags.protocol_only || flags.print_gaps || flags.imu_noise_only)) {
-    std::fprintf(stderr, "bench_table1: --fit, --protocol-only, --gaps and --imu-noise-only need --render body\n");
+  if (render != "body" &&
+      (flags.fit || flags.protocol_only || flags.print_gaps || flags.imu_noise_only || !flags.only.empty())) {
+    std::fprintf(stderr, "bench_table1: --fit, --protocol-only, --only, --gaps and --imu-noise-only need --render body\n");
     return 2;
   }
   std::printf("paper 1 Table I on simulated sessions, %s render%s; sessions cut at %.0f s\n", render.c_str(),

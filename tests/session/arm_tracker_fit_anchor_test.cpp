@@ -209,6 +209,7 @@ TEST(ArmTrackerFitAnchor, RefusesBadOptions) {
   const ArmMotion motion;
   ArmTracker tracker("arm_r", forearm::Side::kRight, motion.model, true, motion.K_from_W, motion.K_from_F(0.0));
   for (const FitAnchorOptions bad : {FitAnchorOptions{.sigma_m = 0.0}, FitAnchorOptions{.reference_energy = -1.0},
+                                     FitAnchorOptions{.bias_prior_sigma_m = 0.0},
                                      FitAnchorOptions{.max_wait_s = NAN}, FitAnchorOptions{.sigma_m = INFINITY}}) {
     posefuse::testing::expect_error([&] { tracker.use_fit_anchor(bad); }, ErrorCode::kInvalidArgument,
                                     "forearm[arm_r].fit_anchor");

@@ -254,7 +254,10 @@ void ArmTracker::recover(std::int64_t t_start_us, std::int64_t t_end_us, StageOu
   const bool from_fit = !input.elbow_anchor.empty();
   if (!from_fit) input.elbow_anchor = slice(elbow_anchor_, t_start_us - margin_us, t_end_us + margin_us);
   forearm::GapSmootherOptions smoother_options = smoother_options_;
-  if (from_fit) smoother_options.anchor_sigma_m = fit_anchor_->sigma_m;
+  if (from_fit) {
+    smoother_options.anchor_sigma_m = fit_anchor_->sigma_m;
+    smoother_options.anchor_bias_prior_sigma_m = fit_anchor_->bias_prior_sigma_m;
+  }
   input.model = model_;
   input.K_from_W = K_from_W_;
   try {
@@ -290,9 +293,11 @@ void ArmTracker::recover(std::int64_t t_start_us, std::int64_t t_end_us, StageOu
 }
 
 void ArmTracker::use_fit_anchor(const FitAnchorOptions& options) {
-  if (!(options.sigma_m > 0.0) || !(options.reference_energy > 0.0) || !(options.max_wait_s >= 0.0) ||
-      !std::isfinite(options.sigma_m + options.reference_energy + options.max_wait_s)) {
-    throw_invalid(field() + ".fit_anchor", "sigma_m and reference_energy must be positive, max_wait_s >= 0");
+  if (!(options.sigma_m > 0.0) || !(options.reference_energy > 0.0) || !(options.bias_prior_sigma_m > 0.0) ||
+      !(options.max_wait_s >= 0.0) ||
+      !std::isfinite(options.sigma_m + options.reference_energy + options.bias_prior_sigma_m + options.max_wait_s)) {
+    throw_invalid(field() + ".fit_anchor",
+                  "sigma_m, reference_energy and bias_prior_sigma_m must be positive and finite, max_wait_s >= 0");
   }
   fit_anchor_ = options;
 }
