@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "../forearm/synthetic_arm.hpp"
+#include "collecting_output.hpp"
 
 namespace posefuse::session {
 namespace {
@@ -18,16 +19,7 @@ using forearm::Quat;
 using forearm::Vec3;
 using namespace forearm::testing;
 
-struct CollectingOutput : StageOutput {
-  void emit(v1::FitResult&& result) override { results.push_back(std::move(result)); }
-  void warn(const std::string& code, const std::string& field, const std::string& message) override {
-    warnings.push_back(code + " " + field + ": " + message);
-  }
-  v1::CalibrationReport& calibration() override { return report; }
-  std::vector<v1::FitResult> results;
-  std::vector<std::string> warnings;
-  v1::CalibrationReport report;
-};
+using testing::CollectingOutput;
 
 // The synthetic arm through a tracker: IMU samples at 80 Hz, camera frames at 30 Hz, the strap
 // seen where strap_seen(t_s) says. After each frame `streaming` runs process(false) and records
