@@ -198,6 +198,22 @@ TEST(ArmTrackerFitAnchor, WithoutFitFramesAGapWaitsAtMostMaxWaitThenUsesTheSdk) 
   EXPECT_DOUBLE_EQ(smoother_rms_m(out), smoother_rms_m(sdk));
 }
 
+// Fit frames without a finite energy (or elbow) are not used: with only such frames the gap falls
+// back to the SDK's anchor, as without the fit.
+TEST(ArmTrackerFitAnchor, FitFramesWithoutAFiniteEnergyOrElbowAreNotUsed) {
+  const ArmMotion motion;
+  const double with_sdk = smoother_rms_m(run(Scenario{}));
+  Scenario no_energy;
+  no_energy.fit_anchor = FitAnchorOptions{};
+  no_energy.fit_elbow = [&](double t_s) { return std::optional<Vec3>(motion.elbow(t_s)); };
+  no_energy.fit_energy = NAN;
+  EXPECT_DOUBLE_EQ(smoother_rms_m(run(no_energy)), with_sdk);
+  Scenario no_elbow;
+  no_elbow.fit_anchor = FitAnchorOptions{};
+  no_elbow.fit_elbow = [](double) { return std::optional<Vec3>(Vec3::Constant(NAN)); };
+  EXPECT_DOUBLE_EQ(smoother_rms_m(run(no_elbow)), with_sdk);
+}
+
 TEST(ArmTrackerFitAnchor, RefusesBadOptions) {
   const ArmMotion motion;
   ArmTracker tracker("arm_r", forearm::Side::kRight, motion.model, true, motion.K_from_W, motion.K_from_F(0.0));

@@ -321,9 +321,10 @@ std::vector<forearm::ElbowAnchorSample> ArmTracker::fit_anchor_between(std::int6
   const auto first = std::lower_bound(fit_elbows_.begin(), fit_elbows_.end(), std::max(from_us, arm_.front().t_us),
                                       [](const FitElbow& e, std::int64_t t) { return e.t_us < t; });
   for (auto e = first; e != fit_elbows_.end() && e->t_us <= std::min(to_us, arm_.back().t_us); ++e) {
-    // A frame fitted with energy E is trusted as one with sqrt(E / reference) times the sigma.
+    // A frame fitted with energy E is trusted as one with sqrt(E / reference) times the sigma; one
+    // without a finite energy or elbow not at all.
+    if (!e->elbow_K.allFinite() || !std::isfinite(e->energy)) continue;
     const double scale = std::sqrt(std::max(1.0, e->energy / fit_anchor_->reference_energy));
-    if (!e->elbow_K.allFinite() || !std::isfinite(scale)) continue;
     anchor.push_back({e->t_us, forearm::imu_position_from_elbow(e->elbow_K, K_from_F_at(e->t_us), model_), scale});
   }
   return anchor;
