@@ -303,6 +303,7 @@ void ArmTracker::use_fit_anchor(const FitAnchorOptions& options) {
 }
 
 void ArmTracker::add_fit_elbow(std::int64_t t_us, const Vec3& elbow_K, double fit_energy) {
+  if (!has_model_ || !fit_anchor_) return;  // no gaps to recover, or the SDK's anchor
   if (!fit_elbows_.empty() && t_us <= fit_elbows_.back().t_us) return;
   fit_elbows_.push_back({t_us, elbow_K, fit_energy});
 }

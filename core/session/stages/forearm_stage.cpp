@@ -518,7 +518,8 @@ void ForearmStage::on_later_result(const v1::FitResult& result, StageOutput& out
   if (!result.has_frame() || result.frame().smpl_joints_size() != body::kNumJoints) return;
   const v1::FrameResult& frame = result.frame();
   for (Device& device : devices_) {
-    if (!device.side) continue;
+    // Kept until the arm's tracker exists, not for an arm that will have none.
+    if (!device.side || device.calibration_failed || (calibrated_ && !device.tracker)) continue;
     const v1::Vec3& p = frame.smpl_joints(*device.side == forearm::Side::kLeft ? body::kLeftElbow : body::kRightElbow)
                             .position_m();
     const Vec3 elbow_K(p.x(), p.y(), p.z());
