@@ -214,6 +214,19 @@ TEST(ArmTrackerFitAnchor, FitFramesWithoutAFiniteEnergyOrElbowAreNotUsed) {
   EXPECT_DOUBLE_EQ(smoother_rms_m(run(no_elbow)), with_sdk);
 }
 
+// A fit that stops 1 s into the 4 s gap (a quarter of its frames): the gap uses the SDK's anchor
+// rather than a few fit samples at its start.
+TEST(ArmTrackerFitAnchor, AFitThatStopsEarlyInTheGapLeavesItToTheSdk) {
+  const ArmMotion motion;
+  const double with_sdk = smoother_rms_m(run(Scenario{}));
+  Scenario stopped;
+  stopped.fit_anchor = FitAnchorOptions{.max_wait_s = 0.5};
+  stopped.fit_elbow = [&](double t_s) {
+    return t_s < kGapBeginS + 1.0 ? std::optional<Vec3>(motion.elbow(t_s)) : std::nullopt;
+  };
+  EXPECT_DOUBLE_EQ(smoother_rms_m(run(stopped)), with_sdk);
+}
+
 TEST(ArmTrackerFitAnchor, RefusesBadOptions) {
   const ArmMotion motion;
   ArmTracker tracker("arm_r", forearm::Side::kRight, motion.model, true, motion.K_from_W, motion.K_from_F(0.0));

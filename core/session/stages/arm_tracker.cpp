@@ -250,9 +250,16 @@ void ArmTracker::recover(std::int64_t t_start_us, std::int64_t t_end_us, StageOu
   forearm::occlude_inside(input.track, t_start_us, t_end_us);  // lone detections inside (process)
   input.arm = slice(arm_, t_start_us - margin_us, t_end_us + margin_us);
   input.shoulder = slice(shoulder_, t_start_us - 2 * margin_us, t_end_us + 2 * margin_us);
-  input.elbow_anchor = fit_anchor_between(t_start_us - margin_us, t_end_us + margin_us);
-  const bool from_fit = !input.elbow_anchor.empty();
-  if (!from_fit) input.elbow_anchor = slice(elbow_anchor_, t_start_us - margin_us, t_end_us + margin_us);
+  // The fit's anchor where it covers at least half as many frames inside the gap as the SDK's (a
+  // fit that stopped or skipped most of them leaves the gap to the SDK's).
+  std::vector<forearm::ElbowAnchorSample> from_sdk = slice(elbow_anchor_, t_start_us - margin_us, t_end_us + margin_us);
+  std::vector<forearm::ElbowAnchorSample> from_fit_elbows = fit_anchor_between(t_start_us - margin_us, t_end_us + margin_us);
+  const auto inside_gap = [&](const std::vector<forearm::ElbowAnchorSample>& samples) {
+    return std::count_if(samples.begin(), samples.end(),
+                         [&](const auto& a) { return a.t_us > t_start_us && a.t_us < t_end_us; });
+  };
+  const bool from_fit = !from_fit_elbows.empty() && 2 * inside_gap(from_fit_elbows) >= inside_gap(from_sdk);
+  input.elbow_anchor = from_fit ? std::move(from_fit_elbows) : std::move(from_sdk);
   forearm::GapSmootherOptions smoother_options = smoother_options_;
   if (from_fit) {
     smoother_options.anchor_sigma_m = fit_anchor_->sigma_m;

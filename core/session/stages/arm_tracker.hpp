@@ -86,7 +86,8 @@ class ArmTracker {
 
   // Use the body fit's elbows as the gap smoother's anchor (before the first gap). Each gap then
   // waits for the fit's frames up to the end of its boundary window after it, at most
-  // max_wait_s of camera time; a gap with no fit frame in its window uses the SDK's anchor.
+  // max_wait_s of camera time. A gap where the fit has fewer than half as many frames inside it as
+  // the camera skeleton uses the SDK's anchor.
   void use_fit_anchor(const FitAnchorOptions& options);
   // One fitted frame's elbow for this arm and the fit's energy (in time order; others dropped).
   void add_fit_elbow(std::int64_t t_us, const forearm::Vec3& elbow_K, double fit_energy);
