@@ -14,12 +14,15 @@
 //     diagnostic variants, each clip. Plots table1_<session>.png.
 // Plots: Figs. 4-6, errors and x_K over time, occluded frames grey.
 //
-//   build/bench/bench_table1 [--render body|cylinder] [--fit] [--protocol-only] [--only NAME]
-//                            [--gaps] [--imu-noise-only] [mocap folder=../shared/data/mocap]
+//   build/bench/bench_table1 [--render body|cylinder] [--fit] [--live-order] [--protocol-only]
+//                            [--only NAME] [--gaps] [--imu-noise-only]
+//                            [mocap folder=../shared/data/mocap]
 //                            [image folder=docs/images] [longest clip s=20]
 // Body render only: --fit runs the body fit too (fit.enabled = true), so the forearm smoother is
 // anchored to the fit's elbows (forearm.gap_anchor = auto) instead of the camera skeleton's.
-// --protocol-only: the two protocol sessions, not the clips. --only NAME: the sessions whose name
+// --live-order: each session's chunks sent by camera time, as a live recording interleaves them
+// (table1/body_render_session.hpp), not in posefuse-sim's order. --protocol-only: the two protocol
+// sessions, not the clips. --only NAME: the sessions whose name
 // contains NAME (each with the seed it has in the whole run). --gaps: per recovered gap, the
 // boundary fits and the errors against the truth (table1/gap_report.hpp). --imu-noise-only
 // (diagnostic): the IMUs without their bias, scale, misalignment and iron errors (white noise
@@ -244,7 +247,7 @@ std::vector<Summary> cylinder_sessions(const fs::path& mocap, const fs::path& im
 // One posefuse-sim session (both arms exercising, an IMU on each), scored per arm.
 // The body render's command-line switches.
 struct BodyFlags {
-  bool print_gaps = false, imu_noise_only = false, fit = false, protocol_only = false;
+  bool print_gaps = false, imu_noise_only = false, fit = false, protocol_only = false, live_order = false;
   std::string only;  // --only: the sessions whose name contains this
 };
 
@@ -254,7 +257,7 @@ std::vector<Summary> run_body(const std::string& name, const sim::SimSessionOpti
   const double hold_begin = hold_bound_s(motion, false), hold_end = hold_bound_s(motion, true);
   std::map<std::string, std::string> header_options;
   if (flags.fit) header_options["fit.enabled"] = "true";
-  const bench::BodyRenderRun run = bench::run_body_render_session(options, header_options);
+  const bench::BodyRenderRun run = bench::run_body_render_session(options, header_options, flags.live_order);
   double sim_cpu_s = 0.0;
   for (const auto& [part, seconds] : run.truth.cpu_s) sim_cpu_s += seconds;
   for (const v1::FitResult& r : run.results) {
@@ -327,7 +330,8 @@ int main(int argc, char** argv) {
   const std::map<std::string, bool BodyFlags::*> switches = {{"--gaps", &BodyFlags::print_gaps},
                                                              {"--imu-noise-only", &BodyFlags::imu_noise_only},
                                                              {"--fit", &BodyFlags::fit},
-                                                             {"--protocol-only", &BodyFlags::protocol_only}};
+                                                             {"--protocol-only", &BodyFlags::protocol_only},
+                                                             {"--live-order", &BodyFlags::live_order}};
   while (!args.empty() && args[0].starts_with("--")) {
     if (const auto it = switches.find(args[0]); it != switches.end()) {
       flags.*(it->second) = true;
@@ -351,8 +355,10 @@ int main(int argc, char** argv) {
   const fs::path images = args.size() > 1 ? fs::path(args[1]) : fs::path("docs/images");
   const double longest_s = args.size() > 2 ? std::stod(args[2]) : 20.0;
   if (render != "body" &&
-      (flags.fit || flags.protocol_only || flags.print_gaps || flags.imu_noise_only || !flags.only.empty())) {
-    std::fprintf(stderr, "bench_table1: --fit, --protocol-only, --only, --gaps and --imu-noise-only need --render body\n");
+      (flags.fit || flags.live_order || flags.protocol_only || flags.print_gaps || flags.imu_noise_only ||
+       !flags.only.empty())) {
+    std::fprintf(stderr, "bench_table1: --fit, --live-order, --protocol-only, --only, --gaps and --imu-noise-only need "
+                         "--render body\n");
     return 2;
   }
   std::printf("paper 1 Table I on simulated sessions, %s render%s; sessions cut at %.0f s\n", render.c_str(),

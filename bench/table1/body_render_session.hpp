@@ -22,9 +22,14 @@ struct BodyRenderRun {
   double pipeline_cpu_s = 0.0;         // this thread's CPU inside the pipeline
 };
 
-// header_options are added to the session header's options (e.g. fit.enabled = true).
+// header_options are added to the session header's options (e.g. fit.enabled = true). With
+// live_order the chunks are held until the session is simulated and then sent in the order a live
+// recording would send them: by camera time, an IMU batch or sync event at the true camera time
+// of its (last) sample, instead of posefuse-sim's order (each device's batches at its own clock's
+// time, which puts them before or after every camera frame).
 BodyRenderRun run_body_render_session(const sim::SimSessionOptions& options,
-                                      const std::map<std::string, std::string>& header_options = {});
+                                      const std::map<std::string, std::string>& header_options = {},
+                                      bool live_order = false);
 
 // Per arm with an IMU (0 left, 1 right): the frames' truth as Table1Truth (occluded as
 // gt/occlusion.csv reads: most of the forearm hidden, or the strap) and the arm as Table1Arm.
