@@ -219,10 +219,12 @@ void ArmTracker::process_frame(const ArmFrame& frame, const forearm::TrackSample
         live_->update(arm_[live_next_arm_], shoulder);
         ++live_next_arm_;
       }
-      // The SDK's elbow with the IMU's forearm axis bounds the integration's drift (live_gap.hpp).
+      // The SDK's elbow with the IMU's forearm axis bounds the integration's drift (live_gap.hpp),
+      // less its bias where the fit's recent frames measure it (sdk_anchor_bias_from_fit).
       if (frame.sdk_elbow_seen && live_elbow_time_constant_s_ > 0.0 && last_live_frame_us_) {
         const double dt_s = 1e-6 * static_cast<double>(frame.t_us - *last_live_frame_us_);
-        live_->correct(forearm::imu_position_from_elbow(frame.sdk_elbow_K, K_from_F, model_),
+        const Vec3 sdk_anchor = forearm::imu_position_from_elbow(frame.sdk_elbow_K, K_from_F, model_);
+        live_->correct(sdk_anchor - sdk_anchor_bias_from_fit(frame.t_us).value_or(Vec3::Zero()),
                        1.0 - std::exp(-std::max(0.0, dt_s) / live_elbow_time_constant_s_));
       }
       last_live_frame_us_ = frame.t_us;
@@ -301,10 +303,12 @@ void ArmTracker::recover(std::int64_t t_start_us, std::int64_t t_end_us, StageOu
 
 void ArmTracker::use_fit_anchor(const FitAnchorOptions& options) {
   if (!(options.sigma_m > 0.0) || !(options.reference_energy > 0.0) || !(options.bias_prior_sigma_m > 0.0) ||
-      !(options.max_wait_s >= 0.0) ||
-      !std::isfinite(options.sigma_m + options.reference_energy + options.bias_prior_sigma_m + options.max_wait_s)) {
+      !(options.max_wait_s >= 0.0) || !(options.live_max_age_s >= 0.0) || !(options.live_bias_window_s >= 0.0) ||
+      !std::isfinite(options.sigma_m + options.reference_energy + options.bias_prior_sigma_m + options.max_wait_s +
+                     options.live_max_age_s + options.live_bias_window_s)) {
     throw_invalid(field() + ".fit_anchor",
-                  "sigma_m, reference_energy and bias_prior_sigma_m must be positive and finite, max_wait_s >= 0");
+                  "sigma_m, reference_energy and bias_prior_sigma_m must be positive and finite, max_wait_s, "
+                  "live_max_age_s and live_bias_window_s >= 0");
   }
   fit_anchor_ = options;
 }
@@ -336,6 +340,29 @@ std::vector<forearm::ElbowAnchorSample> ArmTracker::fit_anchor_between(std::int6
     anchor.push_back({e->t_us, forearm::imu_position_from_elbow(e->elbow_K, K_from_F_at(e->t_us), model_), scale});
   }
   return anchor;
+}
+
+std::optional<Vec3> ArmTracker::sdk_anchor_bias_from_fit(std::int64_t t_us) const {
+  if (!fit_anchor_ || fit_elbows_.empty()) return std::nullopt;
+  const auto max_age_us = static_cast<std::int64_t>(std::llround(1e6 * fit_anchor_->live_max_age_s));
+  const std::int64_t newest_us = fit_elbows_.back().t_us;
+  if (t_us - newest_us > max_age_us) return std::nullopt;
+  const auto window_us = static_cast<std::int64_t>(std::llround(1e6 * fit_anchor_->live_bias_window_s));
+  // The SDK's anchor minus the fit's at the fit's recent frames, weighted down where the fit's
+  // energy is high (variance ratio E / reference).
+  Vec3 sum = Vec3::Zero();
+  double weights = 0.0;
+  for (auto fit = fit_elbows_.rbegin(); fit != fit_elbows_.rend() && fit->t_us >= newest_us - window_us; ++fit) {
+    if (!fit->elbow_K.allFinite() || !std::isfinite(fit->energy)) continue;
+    const auto sdk = std::lower_bound(elbow_anchor_.begin(), elbow_anchor_.end(), fit->t_us,
+                                      [](const forearm::ElbowAnchorSample& a, std::int64_t t) { return a.t_us < t; });
+    if (sdk == elbow_anchor_.end() || sdk->t_us != fit->t_us) continue;
+    const double w = 1.0 / std::max(1.0, fit->energy / fit_anchor_->reference_energy);
+    sum += w * (sdk->p_K - forearm::imu_position_from_elbow(fit->elbow_K, K_from_F_at(fit->t_us), model_));
+    weights += w;
+  }
+  if (weights <= 0.0) return std::nullopt;
+  return sum / weights;
 }
 
 void ArmTracker::finish_late(StageOutput& out) {

@@ -12,8 +12,10 @@
 //    -> two RecoveredSegments.
 #include <cstdint>
 #include <deque>
+#include <limits>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "forearm/forearm_orientation.hpp"
@@ -38,6 +40,12 @@ struct FitAnchorOptions {
   // protocol within 0.4 mm either way.
   double bias_prior_sigma_m = 0.03;
   double max_wait_s = 10.0;  // a gap waits at most this long (camera time) for the fit
+  // The live estimate in a gap is pulled towards the SDK's elbow of each frame (the fit's comes
+  // later); the SDK's bias (it turns with a period of seconds) is taken out as measured against
+  // the fit's frames of the last live_bias_window_s before its newest, while that is at most
+  // live_max_age_s old.
+  double live_max_age_s = 1.0;
+  double live_bias_window_s = 0.5;
 };
 
 // What the stage saw of one arm in one camera frame.
@@ -114,6 +122,9 @@ class ArmTracker {
   std::vector<forearm::ElbowAnchorSample> fit_anchor_between(std::int64_t from_us, std::int64_t to_us) const;
   // Whether the body fit's frames up to t_us have come (always true without the fit's anchor).
   bool fit_has_come_up_to(std::int64_t t_us) const;
+  // The SDK's anchor minus the fit's over the fit's recent frames (FitAnchorOptions::live_*), or
+  // none without a recent fit frame.
+  std::optional<forearm::Vec3> sdk_anchor_bias_from_fit(std::int64_t t_us) const;
   forearm::Quat K_from_F_at(std::int64_t t_us) const;
   double pronation_at(std::int64_t t_us) const;
   std::string field() const;
