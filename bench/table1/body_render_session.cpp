@@ -57,8 +57,8 @@ class PipelineChunkSink : public session::ChunkSink {
         t = camera_us(c.imu().device_id(), c.imu().t_us(c.imu().t_us_size() - 1)).value_or(0);
       } else if (c.has_sync_event()) {
         t = camera_us(c.sync_event().device_id(), c.sync_event().t_us()).value_or(c.sync_event().t_us());
-      } else if (!c.has_imu()) {
-        t = session::chunk_order_key(c, held_.front().header()).t_us;
+      } else {
+        t = session::chunk_order_key(c, held_.front().header()).t_us;  // the camera's own clock
       }
       order.emplace_back(t, i);
     }

@@ -2,8 +2,8 @@
 // A Table I session on the simulator's body render (bench_table1 --render body): posefuse-sim's
 // session generator (core/sim/sim_session.hpp: the rendered body with clothing, hands, head and
 // torso near the arms, RGB with the strap, both arm IMUs) streamed in-process through
-// SessionPipeline(make_default_stages()) as it is rendered, so no session sits in memory; the
-// truth per arm is what gt/ would hold.
+// SessionPipeline(make_default_stages()) as it is rendered, so no session sits in memory (except
+// with live_order, below); the truth per arm is what gt/ would hold.
 #include <array>
 #include <map>
 #include <string>

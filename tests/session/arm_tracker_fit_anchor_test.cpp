@@ -7,6 +7,7 @@
 #include <numbers>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "../forearm/synthetic_arm.hpp"
@@ -109,20 +110,36 @@ Output run(const Scenario& r) {
   return out;
 }
 
-// RMS error of the smoother's segment(s) against the true IMU position, metres.
-double smoother_rms_m(const Output& out) {
+// RMS error of IMU positions (camera time, p_K) against the truth, metres.
+double rms_against_truth_m(const std::vector<std::pair<std::int64_t, Vec3>>& positions) {
   const ArmMotion motion;
   double sum = 0.0;
-  std::size_t n = 0;
+  for (const auto& [t_us, p_K] : positions) sum += (p_K - motion.imu_position(seconds(t_us))).squaredNorm();
+  return positions.empty() ? NAN : std::sqrt(sum / static_cast<double>(positions.size()));
+}
+
+Vec3 vec(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
+
+// RMS error of the smoother's segment(s).
+double smoother_rms_m(const Output& out) {
+  std::vector<std::pair<std::int64_t, Vec3>> positions;
   for (const v1::FitResult& r : out.results) {
     if (!r.has_recovered_segment() || r.recovered_segment().method() != v1::RecoveredSegment::SMOOTHER) continue;
-    for (const auto& s : r.recovered_segment().samples()) {
-      const Vec3 p(s.imu_m().x(), s.imu_m().y(), s.imu_m().z());
-      sum += (p - motion.imu_position(seconds(s.t_us()))).squaredNorm();
-      ++n;
+    for (const auto& s : r.recovered_segment().samples()) positions.emplace_back(s.t_us(), vec(s.imu_m()));
+  }
+  return rms_against_truth_m(positions);
+}
+
+// RMS error of the PREDICTED positions (the live estimate in the gap).
+double predicted_rms_m(const Output& out) {
+  std::vector<std::pair<std::int64_t, Vec3>> positions;
+  for (const v1::FitResult& r : out.results) {
+    if (!r.has_frame()) continue;
+    for (const v1::ImuPosition& p : r.frame().imu_positions()) {
+      if (p.source() == v1::PREDICTED) positions.emplace_back(r.frame().t_us(), vec(p.position_m()));
     }
   }
-  return n ? std::sqrt(sum / static_cast<double>(n)) : NAN;
+  return rms_against_truth_m(positions);
 }
 
 // A 4 s gap: the SDK's turning 8 cm elbow error against a fit 1 cm off. The fit's anchor is
@@ -225,23 +242,6 @@ TEST(ArmTrackerFitAnchor, AFitThatStopsEarlyInTheGapLeavesItToTheSdk) {
     return t_s < kGapBeginS + 1.0 ? std::optional<Vec3>(motion.elbow(t_s)) : std::nullopt;
   };
   EXPECT_DOUBLE_EQ(smoother_rms_m(run(stopped)), with_sdk);
-}
-
-// RMS error of the PREDICTED positions (the live estimate in the gap) against the truth, metres.
-double predicted_rms_m(const Output& out) {
-  const ArmMotion motion;
-  double sum = 0.0;
-  std::size_t n = 0;
-  for (const v1::FitResult& r : out.results) {
-    if (!r.has_frame()) continue;
-    for (const v1::ImuPosition& p : r.frame().imu_positions()) {
-      if (p.source() != v1::PREDICTED) continue;
-      const Vec3 at(p.position_m().x(), p.position_m().y(), p.position_m().z());
-      sum += (at - motion.imu_position(seconds(r.frame().t_us()))).squaredNorm();
-      ++n;
-    }
-  }
-  return n ? std::sqrt(sum / static_cast<double>(n)) : NAN;
 }
 
 // The live estimate follows the SDK's elbow of each frame; with the fit's frames 0.25 s late (as

@@ -333,13 +333,16 @@ std::vector<forearm::ElbowAnchorSample> ArmTracker::fit_anchor_between(std::int6
   const auto first = std::lower_bound(fit_elbows_.begin(), fit_elbows_.end(), std::max(from_us, arm_.front().t_us),
                                       [](const FitElbow& e, std::int64_t t) { return e.t_us < t; });
   for (auto e = first; e != fit_elbows_.end() && e->t_us <= std::min(to_us, arm_.back().t_us); ++e) {
-    // A frame fitted with energy E is trusted as one with sqrt(E / reference) times the sigma; one
-    // without a finite energy or elbow not at all.
-    if (!e->elbow_K.allFinite() || !std::isfinite(e->energy)) continue;
-    const double scale = std::sqrt(std::max(1.0, e->energy / fit_anchor_->reference_energy));
-    anchor.push_back({e->t_us, forearm::imu_position_from_elbow(e->elbow_K, K_from_F_at(e->t_us), model_), scale});
+    // A frame fitted with energy E is trusted as one with sqrt(E / reference) times the sigma.
+    if (const auto a = fit_anchor_at(*e)) anchor.push_back({e->t_us, a->p_K, std::sqrt(a->variance_ratio)});
   }
   return anchor;
+}
+
+std::optional<ArmTracker::FitAnchorSample> ArmTracker::fit_anchor_at(const FitElbow& fit) const {
+  if (!fit.elbow_K.allFinite() || !std::isfinite(fit.energy)) return std::nullopt;
+  return FitAnchorSample{forearm::imu_position_from_elbow(fit.elbow_K, K_from_F_at(fit.t_us), model_),
+                         std::max(1.0, fit.energy / fit_anchor_->reference_energy)};
 }
 
 std::optional<Vec3> ArmTracker::sdk_anchor_bias_from_fit(std::int64_t t_us) const {
@@ -353,13 +356,13 @@ std::optional<Vec3> ArmTracker::sdk_anchor_bias_from_fit(std::int64_t t_us) cons
   Vec3 sum = Vec3::Zero();
   double weights = 0.0;
   for (auto fit = fit_elbows_.rbegin(); fit != fit_elbows_.rend() && fit->t_us >= newest_us - window_us; ++fit) {
-    if (!fit->elbow_K.allFinite() || !std::isfinite(fit->energy)) continue;
     const auto sdk = std::lower_bound(elbow_anchor_.begin(), elbow_anchor_.end(), fit->t_us,
                                       [](const forearm::ElbowAnchorSample& a, std::int64_t t) { return a.t_us < t; });
     if (sdk == elbow_anchor_.end() || sdk->t_us != fit->t_us) continue;
-    const double w = 1.0 / std::max(1.0, fit->energy / fit_anchor_->reference_energy);
-    sum += w * (sdk->p_K - forearm::imu_position_from_elbow(fit->elbow_K, K_from_F_at(fit->t_us), model_));
-    weights += w;
+    const auto a = fit_anchor_at(*fit);
+    if (!a) continue;
+    sum += (sdk->p_K - a->p_K) / a->variance_ratio;
+    weights += 1.0 / a->variance_ratio;
   }
   if (weights <= 0.0) return std::nullopt;
   return sum / weights;

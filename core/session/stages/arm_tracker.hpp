@@ -12,10 +12,8 @@
 //    -> two RecoveredSegments.
 #include <cstdint>
 #include <deque>
-#include <limits>
 #include <optional>
 #include <string>
-#include <utility>
 #include <vector>
 
 #include "forearm/forearm_orientation.hpp"
@@ -28,9 +26,10 @@
 namespace posefuse::session {
 
 // The body fit's elbows (paper 2, BodyFitStage) as the gap smoother's elbow anchor instead of the
-// camera skeleton's. Measured on the body render's protocol (docs/forearm.md "The body fit's elbow
-// as the anchor"): behind the back the fit's elbows are 2-5 cm off where the SDK's are 8 cm off,
-// but on frames the fit gets wrong (high energy) they can be 10-20 cm off for a second.
+// camera skeleton's. Measured on the body render (docs/forearm.md "The body fit's elbow as the
+// anchor"): behind the back the fit's elbows are 22-40 mm off where the SDK's are 77-79 mm off; on
+// frames the fit loses the arm they can be 0.5-1.4 m off (energies up to 2400), and in live order
+// one ran 41-61 mm off for 1.2 s at normal energies.
 struct FitAnchorOptions {
   double sigma_m = 0.03;           // a well-fitted frame's anchor sample (the SDK's: 0.12 m)
   double reference_energy = 10.0;  // above it a sample's sigma grows as sqrt(energy / this)
@@ -46,6 +45,13 @@ struct FitAnchorOptions {
   // live_max_age_s old.
   double live_max_age_s = 1.0;
   double live_bias_window_s = 0.5;
+};
+
+// One body-fit frame's elbow for one arm (SMPL joint, camera frame K) and the fit's energy there.
+struct FitElbow {
+  std::int64_t t_us = 0;
+  forearm::Vec3 elbow_K = forearm::Vec3::Zero();
+  double energy = 0.0;
 };
 
 // What the stage saw of one arm in one camera frame.
@@ -99,6 +105,7 @@ class ArmTracker {
   void use_fit_anchor(const FitAnchorOptions& options);
   // One fitted frame's elbow for this arm and the fit's energy (in time order; others dropped).
   void add_fit_elbow(std::int64_t t_us, const forearm::Vec3& elbow_K, double fit_energy);
+  void add_fit_elbow(const FitElbow& fit) { add_fit_elbow(fit.t_us, fit.elbow_K, fit.energy); }
   // The body fit has finished: the gaps that waited for it are recovered.
   void finish_late(StageOutput& out);
 
@@ -125,6 +132,13 @@ class ArmTracker {
   // The SDK's anchor minus the fit's over the fit's recent frames (FitAnchorOptions::live_*), or
   // none without a recent fit frame.
   std::optional<forearm::Vec3> sdk_anchor_bias_from_fit(std::int64_t t_us) const;
+  // A fit frame's anchor: its elbow carried along the IMU's forearm axis, and its variance ratio
+  // max(1, E / reference_energy); none without a finite elbow and energy.
+  struct FitAnchorSample {
+    forearm::Vec3 p_K;
+    double variance_ratio;
+  };
+  std::optional<FitAnchorSample> fit_anchor_at(const FitElbow& fit) const;
   forearm::Quat K_from_F_at(std::int64_t t_us) const;
   double pronation_at(std::int64_t t_us) const;
   std::string field() const;
@@ -144,11 +158,6 @@ class ArmTracker {
   std::vector<forearm::TrackSample> track_;
   std::vector<forearm::ShoulderSample> shoulder_;
   std::vector<forearm::ElbowAnchorSample> elbow_anchor_;  // the SDK's
-  struct FitElbow {
-    std::int64_t t_us;
-    forearm::Vec3 elbow_K;
-    double energy;
-  };
   std::optional<FitAnchorOptions> fit_anchor_;
   std::vector<FitElbow> fit_elbows_;
   bool fit_finished_ = false;

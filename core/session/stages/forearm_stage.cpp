@@ -509,7 +509,7 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
   device.frames.clear();
   if (fit_anchor_) {
     device.tracker->use_fit_anchor(FitAnchorOptions{});
-    for (const auto& [t_us, elbow_K, energy] : device.early_fit_elbows) device.tracker->add_fit_elbow(t_us, elbow_K, energy);
+    for (const FitElbow& fit : device.early_fit_elbows) device.tracker->add_fit_elbow(fit);
     device.early_fit_elbows.clear();
   }
 }
@@ -522,12 +522,12 @@ void ForearmStage::on_later_result(const v1::FitResult& result, StageOutput& out
     if (!device.side || device.calibration_failed || (calibrated_ && !device.tracker)) continue;
     const v1::Vec3& p = frame.smpl_joints(*device.side == forearm::Side::kLeft ? body::kLeftElbow : body::kRightElbow)
                             .position_m();
-    const Vec3 elbow_K(p.x(), p.y(), p.z());
+    const FitElbow fit{frame.t_us(), Vec3(p.x(), p.y(), p.z()), frame.fit_energy()};
     if (device.tracker) {
-      device.tracker->add_fit_elbow(frame.t_us(), elbow_K, frame.fit_energy());
+      device.tracker->add_fit_elbow(fit);
       device.tracker->process(false, out);  // a gap that waited for these frames
     } else {
-      device.early_fit_elbows.emplace_back(frame.t_us(), elbow_K, frame.fit_energy());
+      device.early_fit_elbows.push_back(fit);
     }
   }
 }

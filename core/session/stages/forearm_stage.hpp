@@ -38,7 +38,6 @@
 #include <map>
 #include <memory>
 #include <optional>
-#include <tuple>
 #include <string>
 #include <vector>
 
@@ -87,8 +86,7 @@ class ForearmStage : public Stage {
     std::uint32_t strap_frames = 0;
     bool has_model = false;
     std::unique_ptr<ArmTracker> tracker;
-    // The body fit's elbows for this arm that came before the tracker existed: t_us, elbow, energy.
-    std::vector<std::tuple<std::int64_t, forearm::Vec3, double>> early_fit_elbows;
+    std::vector<FitElbow> early_fit_elbows;  // the body fit's, before the tracker existed
   };
   struct PendingFrame {
     std::int64_t t_us = 0;
