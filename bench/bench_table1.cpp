@@ -15,14 +15,15 @@
 // Plots: Figs. 4-6, errors and x_K over time, occluded frames grey.
 //
 //   build/bench/bench_table1 [--render body|cylinder] [--fit] [--live-order] [--protocol-only]
-//                            [--only NAME] [--gaps] [--imu-noise-only]
+//                            [--protocol-seeds N] [--only NAME] [--gaps] [--imu-noise-only]
 //                            [mocap folder=../shared/data/mocap]
 //                            [image folder=docs/images] [longest clip s=20]
 // Body render only: --fit runs the body fit too (fit.enabled = true), so the forearm smoother is
 // anchored to the fit's elbows (forearm.gap_anchor = auto) instead of the camera skeleton's.
 // --live-order: each session's chunks sent by camera time, as a live recording interleaves them
 // (table1/body_render_session.hpp), not in posefuse-sim's order. --protocol-only: the two protocol
-// sessions, not the clips. --only NAME: the sessions whose name
+// sessions, not the clips. --protocol-seeds N: the protocol with seeds 1 .. N (default 2; the clips
+// keep seeds 3, 4, ...). --only NAME: the sessions whose name
 // contains NAME (each with the seed it has in the whole run). --gaps: per recovered gap, the
 // boundary fits and the errors against the truth (table1/gap_report.hpp). --imu-noise-only
 // (diagnostic): the IMUs without their bias, scale, misalignment and iron errors (white noise
@@ -248,7 +249,8 @@ std::vector<Summary> cylinder_sessions(const fs::path& mocap, const fs::path& im
 // The body render's command-line switches.
 struct BodyFlags {
   bool print_gaps = false, imu_noise_only = false, fit = false, protocol_only = false, live_order = false;
-  std::string only;  // --only: the sessions whose name contains this
+  std::string only;        // --only: the sessions whose name contains this
+  int protocol_seeds = 2;  // --protocol-seeds: the protocol with seeds 1 .. this
 };
 
 std::vector<Summary> run_body(const std::string& name, const sim::SimSessionOptions& options, const fs::path& images,
@@ -299,11 +301,12 @@ std::vector<Summary> body_sessions(const fs::path& mocap, const fs::path& images
       std::printf("\n### %s: failed: %s\n", name.c_str(), e.what());
     }
   };
-  for (const std::uint64_t seed : {1, 2}) {
-    options.seed = seed;
+  for (int seed = 1; seed <= flags.protocol_seeds; ++seed) {
+    options.seed = static_cast<std::uint64_t>(seed);
     add("protocol_seed" + std::to_string(seed));
   }
   if (flags.protocol_only) return summaries;
+  options.seed = 2;  // the clips keep seeds 3, 4, ... whatever the number of protocol seeds
   options.motion = "bvh";
   options.motion_options.calibration_prefix = true;
   for (const fs::path& file : mocap_clips(mocap)) {
@@ -319,6 +322,37 @@ std::vector<Summary> body_sessions(const fs::path& mocap, const fs::path& images
     add(file.stem().string());
   }
   return summaries;
+}
+
+// The protocol's arms together against the targets: how many arms meet each, and the errors
+// pooled over all their frames (RMS over every frame, the largest maximum).
+void print_protocol_pool(const std::vector<Summary>& summaries) {
+  struct Pool {
+    double sum_sq = 0.0, max = 0.0;
+    std::size_t count = 0;
+    int arms_meeting = 0;
+    void add(const eval::ErrorSummary& e, bool meets) {
+      sum_sq += e.rms * e.rms * static_cast<double>(e.count);
+      count += e.count;
+      max = std::max(max, e.max);
+      arms_meeting += meets ? 1 : 0;
+    }
+    double rms() const { return count > 0 ? std::sqrt(sum_sq / static_cast<double>(count)) : 0.0; }
+  };
+  Pool orientation, smoother;
+  int arms = 0, smoother_max_meeting = 0;
+  for (const Summary& u : summaries) {
+    if (!u.name.starts_with("protocol_")) continue;
+    ++arms;
+    orientation.add(u.orientation[1], u.orientation[1].rms <= 5.0);
+    smoother.add(u.position[2], u.position[2].rms <= 0.02);
+    smoother_max_meeting += u.position[2].max <= 0.06 ? 1 : 0;
+  }
+  if (arms == 0) return;
+  std::printf("\nprotocol, %d arms pooled: orientation RMS %.2f deg (max %.2f; %d of %d arms <= 5 deg), smoother "
+              "position RMS %.4f m (max %.4f; %d of %d arms <= 0.02 m RMS, %d of %d <= 0.06 m max)\n",
+              arms, orientation.rms(), orientation.max, orientation.arms_meeting, arms, smoother.rms(), smoother.max,
+              smoother.arms_meeting, arms, smoother_max_meeting, arms);
 }
 
 }  // namespace
@@ -339,6 +373,18 @@ int main(int argc, char** argv) {
     } else if (args[0] == "--only" && args.size() >= 2) {
       flags.only = args[1];
       args.erase(args.begin(), args.begin() + 2);
+    } else if (args[0] == "--protocol-seeds" && args.size() >= 2) {
+      try {
+        flags.protocol_seeds = std::stoi(args[1]);
+      } catch (const std::exception&) {
+        flags.protocol_seeds = 0;
+      }
+      if (flags.protocol_seeds < 1 || flags.protocol_seeds > 100) {
+        std::fprintf(stderr, "bench_table1: --protocol-seeds must be a whole number from 1 to 100, not '%s'\n",
+                     args[1].c_str());
+        return 2;
+      }
+      args.erase(args.begin(), args.begin() + 2);
     } else if (args[0] == "--render" && args.size() >= 2) {
       render = args[1];
       args.erase(args.begin(), args.begin() + 2);
@@ -356,9 +402,9 @@ int main(int argc, char** argv) {
   const double longest_s = args.size() > 2 ? std::stod(args[2]) : 20.0;
   if (render != "body" &&
       (flags.fit || flags.live_order || flags.protocol_only || flags.print_gaps || flags.imu_noise_only ||
-       !flags.only.empty())) {
-    std::fprintf(stderr, "bench_table1: --fit, --live-order, --protocol-only, --only, --gaps and --imu-noise-only need "
-                         "--render body\n");
+       !flags.only.empty() || flags.protocol_seeds != 2)) {
+    std::fprintf(stderr, "bench_table1: --fit, --live-order, --protocol-only, --protocol-seeds, --only, --gaps and "
+                         "--imu-noise-only need --render body\n");
     return 2;
   }
   std::printf("paper 1 Table I on simulated sessions, %s render%s; sessions cut at %.0f s\n", render.c_str(),
@@ -382,6 +428,7 @@ int main(int argc, char** argv) {
     }
     std::printf("\n");
   }
+  print_protocol_pool(summaries);
   std::printf("\nCPU s, this thread: %.1f (the body render's frame workers are counted in 'simulation' per session)\n",
               bench::thread_cpu_seconds() - cpu0);
   return 0;
