@@ -121,6 +121,10 @@ Vec3 imu_position_from_elbow(const Vec3& elbow_K, const Quat& K_from_F, const Fo
   return elbow_K + K_from_F.normalized() * Vec3(model.r_m, model.d_se_m, 0.0);
 }
 
+Vec3 elbow_from_imu_position(const Vec3& imu_K, const Quat& K_from_F, const ForearmModel& model) {
+  return imu_K - K_from_F.normalized() * Vec3(model.r_m, model.d_se_m, 0.0);
+}
+
 RecoveredGap recover_gap_live(const GapRecoveryInput& input, const GapSpan& gap,
                               const LiveGapOptions& options) {
   const ArmTimeline arm = checked_gap_timeline(input, gap);

@@ -63,6 +63,8 @@ class LiveGapEstimator {
 // The IMU where the forearm model puts it for an elbow position and K_from_F: F's origin lies
 // d_se from the elbow along y_F, the IMU r along x_F (eq. 10 from the elbow's side).
 Vec3 imu_position_from_elbow(const Vec3& elbow_K, const Quat& K_from_F, const ForearmModel& model);
+// Its inverse: the elbow the model puts behind an IMU position.
+Vec3 elbow_from_imu_position(const Vec3& imu_K, const Quat& K_from_F, const ForearmModel& model);
 
 // Runs LiveGapEstimator over `gap` as it would run live (each estimate uses only data up to its
 // time), at the same times as recover_gap_paper. Same errors as recover_gap_paper.

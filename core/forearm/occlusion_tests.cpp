@@ -39,6 +39,7 @@ const char* visual_rejection_name(VisualRejection r) {
     case VisualRejection::kStrapOffSegment: return "strap off the elbow-wrist segment";
     case VisualRejection::kStrapNearerElbow: return "strap nearer the elbow";
     case VisualRejection::kStrapFarFromElbow: return "strap far from the SDK elbow's estimate";
+    case VisualRejection::kStrapJumped: return "strap's elbow jumped since the last visible frame";
   }
   return "unknown";
 }
@@ -72,6 +73,18 @@ VisualRejection check_strap_against_elbow(const Vec3& imu_from_strap_K, const Ve
   if (!imu_from_strap_K.allFinite() || !imu_from_elbow_K.allFinite()) return VisualRejection::kDegenerate;
   return (imu_from_strap_K - imu_from_elbow_K).norm() > o.max_elbow_disagreement_m ? VisualRejection::kStrapFarFromElbow
                                                                                      : VisualRejection::kNone;
+}
+
+VisualRejection check_strap_continuity(const Vec3& implied_elbow_K, std::int64_t t_us,
+                                       const Vec3& previous_implied_elbow_K, std::int64_t previous_t_us,
+                                       const OcclusionTestOptions& o) {
+  if (!implied_elbow_K.allFinite() || !previous_implied_elbow_K.allFinite() || t_us <= previous_t_us)
+    return VisualRejection::kDegenerate;
+  const double dt_s = 1e-6 * static_cast<double>(t_us - previous_t_us);
+  if (dt_s > o.max_continuity_gap_s) return VisualRejection::kNone;
+  return (implied_elbow_K - previous_implied_elbow_K).norm() > o.max_elbow_jump_m + o.max_elbow_speed_m_s * dt_s
+             ? VisualRejection::kStrapJumped
+             : VisualRejection::kNone;
 }
 
 }  // namespace posefuse::forearm

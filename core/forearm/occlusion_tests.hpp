@@ -1,5 +1,6 @@
 #pragma once
 // Is this frame's visual forearm usable? (paper 1, II-J). Pure functions of one frame.
+#include <cstdint>
 #include <numbers>
 
 #include "forearm/forearm_types.hpp"
@@ -14,6 +15,12 @@ struct OcclusionTestOptions {
   double max_strap_distance_m = 0.05;  // II-J.2
   // Beyond the paper (check_strap_against_elbow): the SDK elbow's bias (5-10 cm) plus 3 cm.
   double max_elbow_disagreement_m = 0.13;
+  // Beyond the paper (check_strap_continuity): how far the elbow a strap implies may move from the
+  // one the last visible frame implied, max_elbow_jump_m + max_elbow_speed_m_s * dt, tested while
+  // that frame is at most max_continuity_gap_s old.
+  double max_elbow_jump_m = 0.04;
+  double max_elbow_speed_m_s = 2.0;
+  double max_continuity_gap_s = 0.1;
 };
 
 // Angle between the visual elbow->wrist direction and the IMU's rot(K_from_F, [0, 1, 0]).
@@ -38,6 +45,7 @@ enum class VisualRejection {
   kStrapOffSegment,     // II-J.2: strap more than 5 cm from the segment
   kStrapNearerElbow,    // II-J.2: strap must be nearer the wrist
   kStrapFarFromElbow,   // beyond the paper: eq. 10 from the strap far from eq. 10 from the SDK elbow
+  kStrapJumped,         // beyond the paper: the elbow the strap implies jumped since the last visible frame
 };
 const char* visual_rejection_name(VisualRejection r);
 
@@ -66,5 +74,17 @@ VisualCheck check_visual_forearm(const Vec3& elbow_K, const Vec3& wrist_K, const
 // non-finite input, else kNone.
 VisualRejection check_strap_against_elbow(const Vec3& imu_from_strap_K, const Vec3& imu_from_elbow_K,
                                           const OcclusionTestOptions& options = {});
+
+// Beyond the paper: the elbow each accepted strap implies (eq. 10's IMU position less the IMU's
+// offset from the elbow, turned by that frame's K_from_F: implied_elbow) moves like an elbow
+// between two nearby frames. A dark band found on something else for one frame (the sleeve's
+// edge on a straightening arm whose segment runs up the upper arm, or the other arm) makes it
+// jump. kStrapJumped when the previous visible frame is at most options.max_continuity_gap_s
+// before this one and the implied elbows lie more than max_elbow_jump_m + max_elbow_speed_m_s * dt
+// apart; kNone when it is older (nothing to compare with) or within; kDegenerate for non-finite
+// input or a time not after the previous one.
+VisualRejection check_strap_continuity(const Vec3& implied_elbow_K, std::int64_t t_us,
+                                       const Vec3& previous_implied_elbow_K, std::int64_t previous_t_us,
+                                       const OcclusionTestOptions& options = {});
 
 }  // namespace posefuse::forearm

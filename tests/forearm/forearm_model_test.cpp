@@ -216,6 +216,27 @@ TEST(OcclusionTests, StrapAgainstTheSdkElbowsEstimate) {
   EXPECT_STREQ(visual_rejection_name(VisualRejection::kStrapFarFromElbow), "strap far from the SDK elbow's estimate");
 }
 
+TEST(OcclusionTests, StrapWhoseElbowJumpsIsRejected) {
+  const Vec3 elbow(0.3, 0.4, 2.4);
+  const std::int64_t t0 = 15'500'000, one_frame = 33'333;
+  // Allowed: 4 cm + 2 m/s * dt, so 10.7 cm one frame later.
+  EXPECT_EQ(check_strap_continuity(elbow + Vec3(0.0, -0.10, 0.0), t0 + one_frame, elbow, t0), VisualRejection::kNone);
+  // A band on the sleeve 18 cm up the arm, one frame after a good strap (posefuse-sim seed 8).
+  EXPECT_EQ(check_strap_continuity(elbow + Vec3(0.14, -0.12, 0.05), t0 + one_frame, elbow, t0),
+            VisualRejection::kStrapJumped);
+  // Two frames: 17.3 cm allowed.
+  EXPECT_EQ(check_strap_continuity(elbow + Vec3(0.0, -0.17, 0.0), t0 + 2 * one_frame, elbow, t0), VisualRejection::kNone);
+  // Older than 0.1 s: nothing to compare with.
+  EXPECT_EQ(check_strap_continuity(elbow + Vec3(0.5, 0.0, 0.0), t0 + 100'001, elbow, t0), VisualRejection::kNone);
+  OcclusionTestOptions strict;
+  strict.max_elbow_speed_m_s = 0.5;
+  EXPECT_EQ(check_strap_continuity(elbow + Vec3(0.0, -0.10, 0.0), t0 + one_frame, elbow, t0, strict),
+            VisualRejection::kStrapJumped);
+  EXPECT_EQ(check_strap_continuity(Vec3::Constant(NAN), t0 + one_frame, elbow, t0), VisualRejection::kDegenerate);
+  EXPECT_EQ(check_strap_continuity(elbow, t0, elbow, t0), VisualRejection::kDegenerate);  // not after it
+  EXPECT_STREQ(visual_rejection_name(VisualRejection::kStrapJumped), "strap's elbow jumped since the last visible frame");
+}
+
 TEST(OcclusionTests, StrapWithin5cmAndNearerTheWrist) {
   const Vec3 elbow(0.0, 0.0, 2.0), wrist(0.0, 0.26, 2.0);
   const Quat K_from_F = Quat::Identity();

@@ -54,11 +54,14 @@ TEST(LiveGap, EntryVelocityIsNotUnderestimated) {
   EXPECT_LT((live.position_K() - motion.imu_position(t0)).norm(), 0.01);
 }
 
-// The forearm model's IMU from the elbow is the synthetic arm's IMU (eq. 10 from the elbow side).
+// The forearm model's IMU from the elbow is the synthetic arm's IMU (eq. 10 from the elbow side),
+// and back.
 TEST(LiveGap, ImuPositionFromElbowFollowsTheModel) {
   const ArmMotion motion;
   for (const double t : {0.5, 1.7, 2.9}) {
     EXPECT_LT((imu_position_from_elbow(motion.elbow(t), motion.K_from_F(t), motion.model) - motion.imu_position(t)).norm(),
+              1e-12);
+    EXPECT_LT((elbow_from_imu_position(motion.imu_position(t), motion.K_from_F(t), motion.model) - motion.elbow(t)).norm(),
               1e-12);
   }
 }

@@ -138,9 +138,24 @@ forearm::TrackSample ArmTracker::visual_sample(const ArmFrame& frame) const {
       sample.visible = forearm::check_strap_against_elbow(sample.p_K, forearm::imu_position_from_elbow(
                                                                           frame.sdk_elbow_K, K_from_F, model_)) ==
                        forearm::VisualRejection::kNone;
+      if (sample.visible) sample.visible = continues_track(sample.p_K, frame.t_us, K_from_F);
     }
   }
   return sample;
+}
+
+bool ArmTracker::continues_track(const Vec3& imu_K, std::int64_t t_us, const Quat& K_from_F) const {
+  const forearm::OcclusionTestOptions options;
+  const auto max_gap_us = static_cast<std::int64_t>(std::llround(1e6 * options.max_continuity_gap_s));
+  // The last visible sample within the test's reach (a few frames back at most).
+  for (auto previous = track_.rbegin(); previous != track_.rend() && t_us - previous->t_us <= max_gap_us; ++previous) {
+    if (!previous->visible || previous->t_us >= t_us) continue;
+    const Vec3 elbow = forearm::elbow_from_imu_position(imu_K, K_from_F, model_);
+    const Vec3 previous_elbow = forearm::elbow_from_imu_position(previous->p_K, K_from_F_at(previous->t_us), model_);
+    return forearm::check_strap_continuity(elbow, t_us, previous_elbow, previous->t_us, options) ==
+           forearm::VisualRejection::kNone;
+  }
+  return true;
 }
 
 ArmTracker::Confirmation ArmTracker::confirm_detection(bool all, std::int64_t window_us) const {

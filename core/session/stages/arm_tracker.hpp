@@ -116,8 +116,11 @@ class ArmTracker {
   std::uint64_t lone_detections() const { return lone_detections_; }
 
  private:
-  // The frame's IMU position from the strap (eq. 10) and whether the II-J and elbow tests accept it.
+  // The frame's IMU position from the strap (eq. 10) and whether the II-J, elbow and continuity
+  // tests accept it.
   forearm::TrackSample visual_sample(const ArmFrame& frame) const;
+  // forearm::check_strap_continuity against the last visible sample of the track.
+  bool continues_track(const geometry::Vec3& imu_K, std::int64_t t_us, const geometry::Quat& K_from_F) const;
   // A detection that would start a visible run (the first after occluded frames, or the first
   // ever) with no accepted detection in the boundary window before it is used only once another
   // queued frame within the window after it is accepted too.
