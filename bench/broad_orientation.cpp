@@ -7,6 +7,7 @@
 // movement = 1 samples with ground truth) and the filter's speed (single thread, filter time
 // only, measured as this thread's CPU time), then the mean over trials. The ground truth is read only to score.
 #include <algorithm>
+#include <cstdlib>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
@@ -44,6 +45,12 @@ void run_causal(const std::vector<ImuSample>& samples, std::vector<Quat>& W_from
   for (std::size_t i = 0; i < samples.size(); ++i) W_from_A[i] = filter.update(samples[i]);
 }
 
+// The robust filter's parameters for the robust mode (--tau-acc changes them).
+posefuse::imu::RobustOrientationFilter::Params& robust_params() {
+  static posefuse::imu::RobustOrientationFilter::Params params;
+  return params;
+}
+
 // Add new filters here.
 const std::vector<Mode>& modes() {
   static const std::vector<Mode> table = {
@@ -56,8 +63,11 @@ const std::vector<Mode>& modes() {
          posefuse::imu::KalmanOrientationFilter filter(params);
          for (std::size_t i = 0; i < s.size(); ++i) W_from_A[i] = filter.update(s[i]);
        }},
-      {"robust", "RobustOrientationFilter, causal (default parameters)",
-       run_causal<posefuse::imu::RobustOrientationFilter>},
+      {"robust", "RobustOrientationFilter, causal (default parameters but --tau-acc)",
+       [](const std::vector<ImuSample>& s, std::vector<Quat>& W_from_A) {
+         posefuse::imu::RobustOrientationFilter filter(robust_params());
+         for (std::size_t i = 0; i < s.size(); ++i) W_from_A[i] = filter.update(s[i]);
+       }},
       {"robust-offline", "robust filter, forward+backward passes over the whole recording (non-causal)",
        [](const std::vector<ImuSample>& s, std::vector<Quat>& W_from_A) {
          W_from_A = posefuse::imu::robust_orientation_offline(s);
@@ -67,7 +77,9 @@ const std::vector<Mode>& modes() {
 }
 
 void print_usage(std::FILE* to) {
-  std::fprintf(to, "usage: bench_broad_orientation [--mode NAME] [--csv-out DIR] FOLDER\nmodes:\n");
+  std::fprintf(to, "usage: bench_broad_orientation [--mode NAME] [--csv-out DIR] [--tau-acc S] FOLDER\n"
+                  "  --tau-acc S: the robust mode's accelerometer time constant (default %.1f s)\nmodes:\n",
+               posefuse::imu::RobustOrientationFilter::Params().tau_acc_s);
   for (const Mode& m : modes()) std::fprintf(to, "  %-16s %s\n", m.name, m.summary);
 }
 
@@ -92,6 +104,14 @@ int run(int argc, char** argv) {
     if (arg == "--help" || arg == "-h") {
       print_usage(stdout);
       return 0;
+    } else if (arg == "--tau-acc" && i + 1 < argc) {
+      char* end = nullptr;
+      const double tau = std::strtod(argv[++i], &end);
+      if (end == argv[i] || *end != '\0' || !(tau > 0.0)) {
+        std::fprintf(stderr, "bench_broad_orientation: --tau-acc must be a number of seconds > 0, not '%s'\n", argv[i]);
+        return 2;
+      }
+      robust_params().tau_acc_s = tau;
     } else if ((arg == "--mode" || arg == "--csv-out") && i + 1 < argc) {
       (arg == "--mode" ? mode_name : csv_dir) = argv[++i];
     } else if (!arg.empty() && arg[0] != '-' && folder.empty()) {
