@@ -15,7 +15,8 @@
 // Plots: Figs. 4-6, errors and x_K over time, occluded frames grey.
 //
 //   build/bench/bench_table1 [--render body|cylinder] [--fit] [--live-order] [--protocol-only]
-//                            [--protocol-seeds N] [--only NAME] [--gaps] [--imu-noise-only]
+//                            [--protocol-seeds N] [--only NAME] [--option KEY=VALUE]... [--gaps]
+//                            [--imu-noise-only]
 //                            [mocap folder=../shared/data/mocap]
 //                            [image folder=docs/images] [longest clip s=20]
 // Body render only: --fit runs the body fit too (fit.enabled = true), so the forearm smoother is
@@ -23,7 +24,8 @@
 // --live-order: each session's chunks sent by camera time, as a live recording interleaves them
 // (table1/body_render_session.hpp), not in posefuse-sim's order. --protocol-only: the two protocol
 // sessions, not the clips. --protocol-seeds N: the protocol with seeds 1 .. N (default 2; the clips
-// keep seeds 3, 4, ...). --only NAME: the sessions whose name
+// keep seeds 3, 4, ...). --option KEY=VALUE: a session header option (a stage's, e.g.
+// fit.skeleton_start_energy=0), repeatable. --only NAME: the sessions whose name
 // contains NAME (each with the seed it has in the whole run). --gaps: per recovered gap, the
 // boundary fits and the errors against the truth (table1/gap_report.hpp). --imu-noise-only
 // (diagnostic): the IMUs without their bias, scale, misalignment and iron errors (white noise
@@ -251,6 +253,7 @@ struct BodyFlags {
   bool print_gaps = false, imu_noise_only = false, fit = false, protocol_only = false, live_order = false;
   std::string only;        // --only: the sessions whose name contains this
   int protocol_seeds = 2;  // --protocol-seeds: the protocol with seeds 1 .. this
+  std::map<std::string, std::string> header_options;  // --option KEY=VALUE (after --fit's)
 };
 
 std::vector<Summary> run_body(const std::string& name, const sim::SimSessionOptions& options, const fs::path& images,
@@ -259,6 +262,7 @@ std::vector<Summary> run_body(const std::string& name, const sim::SimSessionOpti
   const double hold_begin = hold_bound_s(motion, false), hold_end = hold_bound_s(motion, true);
   std::map<std::string, std::string> header_options;
   if (flags.fit) header_options["fit.enabled"] = "true";
+  for (const auto& [key, value] : flags.header_options) header_options[key] = value;
   const bench::BodyRenderRun run = bench::run_body_render_session(options, header_options, flags.live_order);
   double sim_cpu_s = 0.0;
   for (const auto& [part, seconds] : run.truth.cpu_s) sim_cpu_s += seconds;
@@ -373,6 +377,14 @@ int main(int argc, char** argv) {
     } else if (args[0] == "--only" && args.size() >= 2) {
       flags.only = args[1];
       args.erase(args.begin(), args.begin() + 2);
+    } else if (args[0] == "--option" && args.size() >= 2) {
+      const std::size_t equals = args[1].find('=');
+      if (equals == std::string::npos || equals == 0) {
+        std::fprintf(stderr, "bench_table1: --option needs KEY=VALUE, not '%s'\n", args[1].c_str());
+        return 2;
+      }
+      flags.header_options[args[1].substr(0, equals)] = args[1].substr(equals + 1);
+      args.erase(args.begin(), args.begin() + 2);
     } else if (args[0] == "--protocol-seeds" && args.size() >= 2) {
       try {
         flags.protocol_seeds = std::stoi(args[1]);
@@ -402,9 +414,9 @@ int main(int argc, char** argv) {
   const double longest_s = args.size() > 2 ? std::stod(args[2]) : 20.0;
   if (render != "body" &&
       (flags.fit || flags.live_order || flags.protocol_only || flags.print_gaps || flags.imu_noise_only ||
-       !flags.only.empty() || flags.protocol_seeds != 2)) {
-    std::fprintf(stderr, "bench_table1: --fit, --live-order, --protocol-only, --protocol-seeds, --only, --gaps and "
-                         "--imu-noise-only need --render body\n");
+       !flags.only.empty() || flags.protocol_seeds != 2 || !flags.header_options.empty())) {
+    std::fprintf(stderr, "bench_table1: --fit, --live-order, --protocol-only, --protocol-seeds, --only, --option, --gaps "
+                         "and --imu-noise-only need --render body\n");
     return 2;
   }
   std::printf("paper 1 Table I on simulated sessions, %s render%s; sessions cut at %.0f s\n", render.c_str(),
