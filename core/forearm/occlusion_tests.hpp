@@ -77,8 +77,8 @@ VisualRejection check_strap_against_elbow(const Vec3& imu_from_strap_K, const Ve
 
 // Beyond the paper: the elbow each accepted strap implies (eq. 10's IMU position less the IMU's
 // offset from the elbow, turned by that frame's K_from_F: implied_elbow) moves like an elbow
-// between two nearby frames. A dark band found on something else for one frame (the sleeve's
-// edge on a straightening arm whose segment runs up the upper arm, or the other arm) makes it
+// between two nearby frames. A dark band found somewhere else for one frame (on the body render:
+// 16-18 cm towards the elbow on a straightening arm whose segment runs up the upper arm) makes it
 // jump. kStrapJumped when the previous visible frame is at most options.max_continuity_gap_s
 // before this one and the implied elbows lie more than max_elbow_jump_m + max_elbow_speed_m_s * dt
 // apart; kNone when it is older (nothing to compare with) or within; kDegenerate for non-finite
