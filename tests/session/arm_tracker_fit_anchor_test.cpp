@@ -142,16 +142,27 @@ double predicted_rms_m(const Output& out) {
   return rms_against_truth_m(positions);
 }
 
+// The SDK's elbow alone, and the same with the fit anchor on and the fit's elbows 1 cm off the truth.
+Scenario sdk_scenario(unsigned seed) {
+  Scenario sdk;
+  sdk.seed = seed;
+  return sdk;
+}
+Scenario fit_one_cm_off(unsigned seed) {
+  Scenario fit = sdk_scenario(seed);
+  fit.fit_anchor = FitAnchorOptions{};
+  fit.fit_elbow = [motion = ArmMotion()](double t_s) {
+    return std::optional<Vec3>(motion.elbow(t_s) + Vec3(0.0, 0.01, 0.0));
+  };
+  return fit;
+}
+
 // A 4 s gap: the SDK's turning 8 cm elbow error against a fit 1 cm off. The fit's anchor is
 // trusted 4 times more (sigma 0.03 against 0.12 m), so the recovered gap follows it.
 TEST(ArmTrackerFitAnchor, ALongGapFollowsTheFitsElbowInsteadOfTheSdks) {
-  const ArmMotion motion;
   for (const unsigned seed : {1u, 2u, 3u}) {
-    Scenario sdk;
-    sdk.seed = seed;
-    Scenario fit = sdk;
-    fit.fit_anchor = FitAnchorOptions{};
-    fit.fit_elbow = [&](double t_s) { return std::optional<Vec3>(motion.elbow(t_s) + Vec3(0.0, 0.01, 0.0)); };
+    const Scenario sdk = sdk_scenario(seed);
+    Scenario fit = fit_one_cm_off(seed);
     const Output with_sdk = run(sdk), with_fit = run(fit);
     for (const std::string& w : with_fit.warnings) ADD_FAILURE() << w;
     ASSERT_EQ(smoother_segments(with_sdk), 1u);
@@ -248,13 +259,9 @@ TEST(ArmTrackerFitAnchor, AFitThatStopsEarlyInTheGapLeavesItToTheSdk) {
 // in a live stream, docs/benchmarks.md) the SDK's turning 8 cm bias is measured against them and
 // taken out, so the PREDICTED positions carry the fit's 1 cm error instead of the SDK's 8 cm.
 TEST(ArmTrackerFitAnchor, TheLiveEstimateTakesTheSdksBiasOutWithTheFitsLateFrames) {
-  const ArmMotion motion;
   for (const unsigned seed : {1u, 2u, 3u}) {
-    Scenario sdk;
-    sdk.seed = seed;
-    Scenario fit = sdk;
-    fit.fit_anchor = FitAnchorOptions{};
-    fit.fit_elbow = [&](double t_s) { return std::optional<Vec3>(motion.elbow(t_s) + Vec3(0.0, 0.01, 0.0)); };
+    const Scenario sdk = sdk_scenario(seed);
+    Scenario fit = fit_one_cm_off(seed);
     fit.fit_lag_s = 0.25;
     Scenario stale = fit;  // the fit's frames too old for the live estimate: the SDK's alone
     stale.fit_anchor->live_max_age_s = 0.1;
