@@ -142,18 +142,16 @@ double predicted_rms_m(const Output& out) {
   return rms_against_truth_m(positions);
 }
 
-// The SDK's elbow alone, and the same with the fit anchor on and the fit's elbows 1 cm off the truth.
+// The SDK's elbow alone, and the same with the fit anchor on and the fit's elbows `off` from the truth.
 Scenario sdk_scenario(unsigned seed) {
   Scenario sdk;
   sdk.seed = seed;
   return sdk;
 }
-Scenario fit_one_cm_off(unsigned seed) {
+Scenario fit_scenario(unsigned seed, const Vec3& off = Vec3::Zero()) {
   Scenario fit = sdk_scenario(seed);
   fit.fit_anchor = FitAnchorOptions{};
-  fit.fit_elbow = [motion = ArmMotion()](double t_s) {
-    return std::optional<Vec3>(motion.elbow(t_s) + Vec3(0.0, 0.01, 0.0));
-  };
+  fit.fit_elbow = [motion = ArmMotion(), off](double t_s) { return std::optional<Vec3>(motion.elbow(t_s) + off); };
   return fit;
 }
 
@@ -162,7 +160,7 @@ Scenario fit_one_cm_off(unsigned seed) {
 TEST(ArmTrackerFitAnchor, ALongGapFollowsTheFitsElbowInsteadOfTheSdks) {
   for (const unsigned seed : {1u, 2u, 3u}) {
     const Scenario sdk = sdk_scenario(seed);
-    Scenario fit = fit_one_cm_off(seed);
+    Scenario fit = fit_scenario(seed, Vec3(0.0, 0.01, 0.0));
     const Output with_sdk = run(sdk), with_fit = run(fit);
     for (const std::string& w : with_fit.warnings) ADD_FAILURE() << w;
     ASSERT_EQ(smoother_segments(with_sdk), 1u);
@@ -177,10 +175,7 @@ TEST(ArmTrackerFitAnchor, ALongGapFollowsTheFitsElbowInsteadOfTheSdks) {
 // Fit frames 0.7 s late: the gap waits for them (its boundary window ends at 6.03 s), and its
 // segments come out with the first fit frame at or after 6.03 s, 0.7 s later, not before.
 TEST(ArmTrackerFitAnchor, AGapWaitsForTheFitsFramesUpToTheEndOfItsWindow) {
-  const ArmMotion motion;
-  Scenario r;
-  r.fit_anchor = FitAnchorOptions{};
-  r.fit_elbow = [&](double t_s) { return std::optional<Vec3>(motion.elbow(t_s)); };
+  Scenario r = fit_scenario(1);
   r.fit_lag_s = 0.7;
   double first_out_s = NAN;
   r.after_frame = [&](double ts, const Output& out) {
@@ -196,10 +191,7 @@ TEST(ArmTrackerFitAnchor, AGapWaitsForTheFitsFramesUpToTheEndOfItsWindow) {
 // The fit never reaches the gap's window in the session: finish() leaves the gap to
 // finish_late(), which recovers it after the fit has finished.
 TEST(ArmTrackerFitAnchor, AGapTheFitHasNotReachedIsRecoveredInFinishLate) {
-  const ArmMotion motion;
-  Scenario r;
-  r.fit_anchor = FitAnchorOptions{};
-  r.fit_elbow = [&](double t_s) { return std::optional<Vec3>(motion.elbow(t_s)); };
+  Scenario r = fit_scenario(1);
   r.fit_lag_s = 5.0;
   std::size_t after_finish = 99;
   r.after_frame = [&](double ts, const Output& out) {
@@ -261,7 +253,7 @@ TEST(ArmTrackerFitAnchor, AFitThatStopsEarlyInTheGapLeavesItToTheSdk) {
 TEST(ArmTrackerFitAnchor, TheLiveEstimateTakesTheSdksBiasOutWithTheFitsLateFrames) {
   for (const unsigned seed : {1u, 2u, 3u}) {
     const Scenario sdk = sdk_scenario(seed);
-    Scenario fit = fit_one_cm_off(seed);
+    Scenario fit = fit_scenario(seed, Vec3(0.0, 0.01, 0.0));
     fit.fit_lag_s = 0.25;
     Scenario stale = fit;  // the fit's frames too old for the live estimate: the SDK's alone
     stale.fit_anchor->live_max_age_s = 0.1;
