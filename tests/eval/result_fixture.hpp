@@ -3,8 +3,8 @@
 // and the simulator's gt/ use), for the reader and score tests.
 #include <filesystem>
 #include <string>
-#include <unistd.h>
 
+#include "../scratch_dir.hpp"
 #include "geometry/quaternion.hpp"
 #include "session/result_files.hpp"
 #include "session/stages/proto_values.hpp"
@@ -12,10 +12,7 @@
 namespace posefuse::result_fixture {
 
 inline std::filesystem::path fresh_result_dir(const std::string& name) {
-  const std::filesystem::path dir =
-      std::filesystem::temp_directory_path() / ("posefuse_result_fixture_" + std::to_string(::getpid())) / name;
-  std::filesystem::remove_all(dir);
-  return dir;
+  return posefuse::testing::fresh_scratch_dir("posefuse_result_fixture", name);
 }
 
 // What one fixture directory holds; every stream is a simple function of time plus the

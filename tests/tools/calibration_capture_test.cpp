@@ -3,11 +3,10 @@
 // and the CSVs' shortest exact numbers are lossless); refusals name the file.
 #include <gtest/gtest.h>
 
-#include <unistd.h>
-
 #include <algorithm>
 
 #include "../imu/expect_error.hpp"
+#include "../scratch_dir.hpp"
 #include "session/file_bytes.hpp"
 #include "sim/room_frame.hpp"
 #include "tools/sim/calibration_capture_files.hpp"
@@ -19,11 +18,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("posefuse_calibration_capture_test_" + std::to_string(::getpid())) / name;
-  fs::remove_all(dir);
-  return dir;
-}
+fs::path fresh_dir(const std::string& name) { return posefuse::testing::fresh_scratch_dir("posefuse_calibration_capture_test", name); }
 
 sim::PanelCaptureRig rig() {
   sim::PanelCaptureRig r;

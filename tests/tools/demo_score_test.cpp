@@ -10,8 +10,8 @@
 #include <cmath>
 #include <filesystem>
 #include <iostream>
-#include <unistd.h>
 
+#include "../scratch_dir.hpp"
 #include "client/result_writer.hpp"
 #include "eval/result_score.hpp"
 #include "session/pipeline.hpp"
@@ -25,12 +25,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("posefuse_demo_score_test_" + std::to_string(::getpid())) / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir.parent_path());
-  return dir;
-}
+fs::path fresh_dir(const std::string& name) { return posefuse::testing::fresh_scratch_dir("posefuse_demo_score_test", name); }
 
 // The simulator's chunks straight into the pipeline.
 class PipelineChunkSink : public session::ChunkSink {

@@ -7,9 +7,9 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
-#include <unistd.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include "../scratch_dir.hpp"
 #include "client/result_writer.hpp"
 #include "common/error.hpp"
 #include "raycast/depth_camera.hpp"
@@ -28,12 +28,7 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path fresh_dir(const std::string& name) {
-  const fs::path dir = fs::temp_directory_path() / ("posefuse_sim_run_test_" + std::to_string(::getpid())) / name;
-  fs::remove_all(dir);
-  fs::create_directories(dir.parent_path());
-  return dir;
-}
+fs::path fresh_dir(const std::string& name) { return posefuse::testing::fresh_scratch_dir("posefuse_sim_run_test", name); }
 
 // A small, fast session: quarter-resolution depth, small colour.
 sim::SimSessionOptions small_options() {
@@ -350,15 +345,3 @@ TEST(SimRun, BadRequestsAreRejected) {
   }
   EXPECT_FALSE(fs::exists(*busy.out_directory));  // nothing written before the check
 }
-
-namespace {
-// Removes this process's scratch directories after the last test.
-class ScratchCleanup : public ::testing::Environment {
- public:
-  void TearDown() override {
-    std::error_code ignored;
-    fs::remove_all(fs::temp_directory_path() / ("posefuse_sim_run_test_" + std::to_string(::getpid())), ignored);
-  }
-};
-const auto* const kCleanup = ::testing::AddGlobalTestEnvironment(new ScratchCleanup);
-}  // namespace
