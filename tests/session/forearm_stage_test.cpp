@@ -288,7 +288,10 @@ TEST(ForearmStage, BadOptionsAreErrorsNamingTheOption) {
                         Case{"forearm.buzzer_hz", "loud"}, Case{"forearm.buzzer_hz", "0"},
                         Case{"forearm.buzzer_hz", "-2700"}, Case{"forearm.buzzer_hz", "9000"},
                         Case{"forearm.buzzer_hz", "nan"}, Case{"forearm.gap_anchor", "fit"},
-                        Case{"fit.enabled", "maybe"}}) {
+                        Case{"forearm.axis_correction", "on"}, Case{"forearm.axis_correction_gain", "0"},
+                        Case{"forearm.axis_correction_gain", "1.5"}, Case{"forearm.axis_correction_gain", "fast"},
+                        Case{"forearm.axis_correction_max_deg", "-8"}, Case{"forearm.axis_correction_max_deg", "91"},
+                        Case{"forearm.axis_correction_max_deg", "nan"}, Case{"fit.enabled", "maybe"}}) {
     v1::SessionHeader bad = header;
     (*bad.mutable_options())[c.key] = c.value;
     Sink sink;
@@ -376,6 +379,39 @@ TEST(ForearmStage, WithTheBodyFitTheGapWaitsForItsElbows) {
     for (const v1::Warning& w : sink.warnings()) {
       EXPECT_NE(w.code(), "FOREARM_GAP_NOT_RECOVERED") << w.message();
     }
+  }
+}
+
+// forearm.axis_correction reaches the trackers: 'off' gives eq. 11 as it is, 'auto' turns it
+// towards the depth image's forearm axes (exact cylinders here), and both emit every sample once.
+TEST(ForearmStage, AxisCorrectionCanBeTurnedOff) {
+  std::map<std::string, testing::ForearmSessionErrors> errors;
+  std::map<std::string, std::vector<std::int64_t>> sample_times;
+  for (const std::string correction : {"auto", "off"}) {
+    ForearmSessionTruth truth;
+    std::vector<v1::SessionChunk> chunks = testing::make_forearm_session({}, &truth);
+    (*chunks.front().mutable_header()->mutable_options())["forearm.axis_correction"] = correction;
+    Sink sink;
+    SessionPipeline pipeline(make_default_stages(), sink);
+    for (const auto& chunk : chunks) pipeline.push(chunk);
+    pipeline.close();
+    errors[correction] = testing::evaluate_forearm_results(truth, sink.results);
+    for (const v1::FitResult& r : sink.results) {
+      if (!r.has_forearm_orientations()) continue;
+      for (const std::int64_t t : r.forearm_orientations().t_us()) sample_times[correction].push_back(t);
+    }
+    std::printf("axis correction %s: orientation RMS %.3f deg, max %.3f deg over %zu samples\n", correction.c_str(),
+                errors[correction].orientation_rms_rad / kDeg, errors[correction].orientation_max_rad / kDeg,
+                sample_times[correction].size());
+  }
+  EXPECT_EQ(sample_times["auto"], sample_times["off"]);
+  EXPECT_TRUE(std::is_sorted(sample_times["auto"].begin(), sample_times["auto"].end()));
+  EXPECT_GT(sample_times["auto"].size(), 500u);
+  EXPECT_NE(errors["auto"].orientation_rms_rad, errors["off"].orientation_rms_rad);
+  // The same bounds as OrientationAndPronationForEveryImuSample either way.
+  for (const auto& [correction, e] : errors) {
+    EXPECT_LT(e.orientation_rms_rad, 3.0 * kDeg) << correction;
+    EXPECT_LT(e.orientation_max_rad, 6.0 * kDeg) << correction;
   }
 }
 

@@ -18,6 +18,8 @@ using forearm::Vec3;
 
 // II-K.1: the boundary fits use 500 ms either side (the recoveries' default window).
 constexpr double kBoundaryWindowS = 0.5;
+// With the axis correction, how long (IMU time) an orientation waits for camera frames.
+constexpr double kMaxOrientationWaitS = 1.0;
 
 v1::Arm arm_enum(forearm::Side side) { return side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT; }
 
@@ -57,31 +59,80 @@ std::string ArmTracker::field() const { return "forearm[" + device_id_ + "]"; }
 
 void ArmTracker::add_imu(const std::vector<std::int64_t>& t_us, const std::vector<Quat>& W_from_A,
                          const std::vector<Vec3>& specific_force_A, StageOutput& out) {
-  v1::FitResult result;
-  v1::ForearmOrientationBatch& batch = *result.mutable_forearm_orientations();
-  batch.set_device_id(device_id_);
-  batch.set_arm(arm_enum(side_));
   for (std::size_t i = 0; i < t_us.size(); ++i) {
     if (!arm_.empty() && t_us[i] <= arm_.back().t_us) continue;  // clock mapping kept monotonic
     const forearm::ForearmSample s =
         forearm::forearm_sample(K_from_W_, W_from_A[i], model_.F_from_A, K_from_F_reference_, side_);
-    const Quat K_from_F = K_from_F_.empty() ? s.K_from_F : geometry::same_hemisphere(s.K_from_F, K_from_F_.back());
     arm_.push_back({t_us[i], s.K_from_A, specific_force_A[i]});
-    K_from_F_.push_back(K_from_F);
-    pronation_.push_back(s.pronation_rad);
-    batch.add_t_us(t_us[i]);
+    K_from_F_imu_.push_back(K_from_F_imu_.empty() ? s.K_from_F
+                                                  : geometry::same_hemisphere(s.K_from_F, K_from_F_imu_.back()));
+  }
+  // Without the axis correction nothing waits for the frames.
+  if (!axis_correction_ && !arm_.empty()) emit_orientations_up_to(arm_.back().t_us, out);
+}
+
+void ArmTracker::emit_orientations_up_to(std::int64_t t_us, StageOutput& out) {
+  v1::FitResult result;
+  v1::ForearmOrientationBatch& batch = *result.mutable_forearm_orientations();
+  batch.set_device_id(device_id_);
+  batch.set_arm(arm_enum(side_));
+  const Quat correction = axis_correction();
+  for (std::size_t i = K_correction_.size(); i < arm_.size() && arm_[i].t_us <= t_us; ++i) {
+    K_correction_.push_back(correction);
+    arm_[i].K_from_A = (correction * arm_[i].K_from_A).normalized();
+    const Quat K_from_F = K_from_F_sample(i);
+    batch.add_t_us(arm_[i].t_us);
     for (const double v : geometry::to_wxyz(K_from_F)) batch.add_k_from_f(v);
-    batch.add_pronation_rad(s.pronation_rad);
+    batch.add_pronation_rad(forearm::pronation_angle(K_from_F_reference_, K_from_F, side_));
   }
   if (batch.t_us_size() > 0) out.emit(std::move(result));
 }
 
-Quat ArmTracker::K_from_F_at(std::int64_t t_us) const {
+Quat ArmTracker::K_from_F_sample(std::size_t i) const {
+  const Quat correction = i < K_correction_.size() ? K_correction_[i] : axis_correction();
+  return geometry::same_hemisphere((correction * K_from_F_imu_[i]).normalized(), K_from_F_imu_[i]);
+}
+
+std::vector<forearm::ArmSample> ArmTracker::arm_between(std::int64_t t0_us, std::int64_t t1_us) const {
+  std::vector<forearm::ArmSample> samples = slice(arm_, t0_us, t1_us);
+  const Quat correction = axis_correction();
+  for (forearm::ArmSample& sample : samples) {
+    // Samples not emitted yet still hold eq. 11's K_from_A: corrected as they will be.
+    if (index_at_or_before(arm_, sample.t_us) >= K_correction_.size()) {
+      sample.K_from_A = (correction * sample.K_from_A).normalized();
+    }
+  }
+  return samples;
+}
+
+template <class SampleAt>
+Quat ArmTracker::slerp_at(std::int64_t t_us, const SampleAt& sample_at) const {
   const std::size_t i = index_at_or_before(arm_, t_us);
-  if (i == static_cast<std::size_t>(-1)) return K_from_F_.front();
-  if (i + 1 >= arm_.size()) return K_from_F_.back();
+  if (i == static_cast<std::size_t>(-1)) return sample_at(0);
+  if (i + 1 >= arm_.size()) return sample_at(i);
   const double f = static_cast<double>(t_us - arm_[i].t_us) / static_cast<double>(arm_[i + 1].t_us - arm_[i].t_us);
-  return K_from_F_[i].slerp(f, K_from_F_[i + 1]).normalized();
+  return sample_at(i).slerp(f, sample_at(i + 1)).normalized();
+}
+
+Quat ArmTracker::K_from_F_at(std::int64_t t_us) const {
+  return slerp_at(t_us, [this](std::size_t i) { return K_from_F_sample(i); });
+}
+
+Quat ArmTracker::K_from_F_imu_at(std::int64_t t_us) const {
+  return slerp_at(t_us, [this](std::size_t i) { return K_from_F_imu_[i]; });
+}
+
+void ArmTracker::use_axis_correction(const forearm::VisualAxisCorrectionOptions& options) {
+  if (!arm_.empty()) throw_invalid(field(), "the axis correction must be set before the first IMU sample");
+  axis_correction_.emplace(options);
+}
+
+Quat ArmTracker::axis_correction() const {
+  return axis_correction_ ? axis_correction_->K_correction() : Quat::Identity();
+}
+
+std::uint64_t ArmTracker::axis_correction_frames() const {
+  return axis_correction_ ? axis_correction_->frames_used() : 0;
 }
 
 double ArmTracker::pronation_at(std::int64_t t_us) const {
@@ -91,6 +142,8 @@ double ArmTracker::pronation_at(std::int64_t t_us) const {
 void ArmTracker::process(bool all, StageOutput& out) {
   const std::int64_t window_us = static_cast<std::int64_t>(std::llround(1e6 * kBoundaryWindowS));
   while (!frames_.empty() && !arm_.empty() && (all || frames_.front().t_us <= arm_.back().t_us)) {
+    // The orientations up to this frame get the axis correction as it is before the frame.
+    emit_orientations_up_to(frames_.front().t_us, out);
     forearm::TrackSample sample = visual_sample(frames_.front());
     // Support before it (a detection within the window): a short break in a visible run.
     const bool seen_just_before = last_visible_us_ && sample.t_us - *last_visible_us_ <= window_us;
@@ -104,6 +157,18 @@ void ArmTracker::process(bool all, StageOutput& out) {
     }
     process_frame(frames_.front(), sample, out);
     frames_.pop_front();
+  }
+  // Orientations before the next queued frame have seen every frame before them; without a
+  // queued frame they wait for one at most max_frame_wait_s (IMU time), at the end not at all.
+  if (!arm_.empty()) {
+    const auto max_wait_us = static_cast<std::int64_t>(std::llround(1e6 * kMaxOrientationWaitS));
+    if (all) {
+      emit_orientations_up_to(arm_.back().t_us, out);
+    } else if (!frames_.empty()) {
+      emit_orientations_up_to(frames_.front().t_us - 1, out);
+    } else {
+      emit_orientations_up_to(arm_.back().t_us - max_wait_us, out);
+    }
   }
   while (!pending_gaps_.empty() && !track_.empty() &&
          (all || track_.back().t_us >= pending_gaps_.front().t_end_us + window_us) &&
@@ -195,6 +260,7 @@ void ArmTracker::process_frame(const ArmFrame& frame, const forearm::TrackSample
   if (sample.visible) {
     ++visible_frames_;
     last_visible_us_ = frame.t_us;
+    if (axis_correction_) axis_correction_->observe(K_from_F_imu_at(frame.t_us), frame.elbow_K, frame.wrist_K);
     if (in_gap_) {
       pending_gaps_.push_back({gap_start_us_, frame.t_us});
       in_gap_ = false;
@@ -213,7 +279,7 @@ void ArmTracker::process_frame(const ArmFrame& frame, const forearm::TrackSample
       live_.emplace(model_, K_from_W_);
       last_live_frame_us_ = gap_start_us_;
       try {
-        live_->begin(track_, arm_, gap_start_us_);
+        live_->begin(track_, arm_, gap_start_us_);  // emitted up to this frame: corrected
         live_next_arm_ = index_at_or_before(arm_, gap_start_us_) + 1;
       } catch (const Error& error) {
         live_.reset();
@@ -265,7 +331,7 @@ void ArmTracker::recover(std::int64_t t_start_us, std::int64_t t_end_us, StageOu
   forearm::GapRecoveryInput input;
   input.track = slice(track_, t_start_us - margin_us, t_end_us + margin_us);
   forearm::occlude_inside(input.track, t_start_us, t_end_us);  // lone detections inside (process)
-  input.arm = slice(arm_, t_start_us - margin_us, t_end_us + margin_us);
+  input.arm = arm_between(t_start_us - margin_us, t_end_us + margin_us);
   input.shoulder = slice(shoulder_, t_start_us - 2 * margin_us, t_end_us + 2 * margin_us);
   // The fit's anchor where it covers at least half as many frames inside the gap as the SDK's (a
   // fit that stopped or skipped most of them leaves the gap to the SDK's).

@@ -21,6 +21,7 @@
 #include "forearm/gap_smoother.hpp"
 #include "forearm/live_gap.hpp"
 #include "forearm/occlusion_tests.hpp"
+#include "forearm/visual_axis_correction.hpp"
 #include "session/pipeline_stage.hpp"
 
 namespace posefuse::session {
@@ -109,6 +110,17 @@ class ArmTracker {
   // The body fit has finished: the gaps that waited for it are recovered.
   void finish_late(StageOutput& out);
 
+  // Turn every K_from_F (and the K_from_A the gaps integrate with) towards the depth-measured
+  // forearm axis of the VISUAL frames (forearm/visual_axis_correction.hpp); call before the
+  // first IMU sample. The frames' elbow_K -> wrist_K must then be the depth axis's ends. The
+  // orientations then wait for the camera frames up to their time (at most 1 s of IMU time when
+  // no frame is queued), so each gets the correction of the frames before it whatever order
+  // the streams arrive in; without it every add_imu emits its samples at once.
+  void use_axis_correction(const forearm::VisualAxisCorrectionOptions& options);
+  // The correction now (identity without it), and the frames it used so far.
+  forearm::Quat axis_correction() const;
+  std::uint64_t axis_correction_frames() const;
+
   std::uint64_t visible_frames() const { return visible_frames_; }
   std::uint64_t gaps() const { return gaps_; }
   // Detections with no other within 500 ms before or after them: counted, and treated as
@@ -142,7 +154,18 @@ class ArmTracker {
     double variance_ratio;
   };
   std::optional<FitAnchorSample> fit_anchor_at(const FitElbow& fit) const;
+  // Sample i's K_from_F as emitted (with the axis correction of its time; not emitted yet: the
+  // correction now), and slerped between samples at t_us; K_from_F_imu_at: eq. 11's, uncorrected.
+  forearm::Quat K_from_F_sample(std::size_t i) const;
   forearm::Quat K_from_F_at(std::int64_t t_us) const;
+  forearm::Quat K_from_F_imu_at(std::int64_t t_us) const;
+  template <class SampleAt>
+  forearm::Quat slerp_at(std::int64_t t_us, const SampleAt& sample_at) const;
+  // The ForearmOrientationBatch of the samples up to t_us not emitted yet, with the axis
+  // correction as it is now (which from then on also turns their K_from_A).
+  void emit_orientations_up_to(std::int64_t t_us, StageOutput& out);
+  // The arm samples in [t0, t1] with K_from_A as the gaps integrate it (corrected).
+  std::vector<forearm::ArmSample> arm_between(std::int64_t t0_us, std::int64_t t1_us) const;
   double pronation_at(std::int64_t t_us) const;
   std::string field() const;
 
@@ -155,9 +178,11 @@ class ArmTracker {
   forearm::GapSmootherOptions smoother_options_;
   double live_elbow_time_constant_s_;
 
+  // Every IMU sample; K_from_A is eq. 11's until the sample is emitted, then corrected.
   std::vector<forearm::ArmSample> arm_;
-  std::vector<forearm::Quat> K_from_F_;
-  std::vector<double> pronation_;
+  std::vector<forearm::Quat> K_from_F_imu_;  // eq. 11, before the axis correction
+  std::vector<forearm::Quat> K_correction_;  // the axis correction each emitted sample got
+  std::optional<forearm::VisualAxisCorrection> axis_correction_;
   std::vector<forearm::TrackSample> track_;
   std::vector<forearm::ShoulderSample> shoulder_;
   std::vector<forearm::ElbowAnchorSample> elbow_anchor_;  // the SDK's

@@ -31,6 +31,9 @@ constexpr const char* kUpperArmKey = "forearm.upper_arm";
 constexpr const char* kShoulderSphereKey = "forearm.shoulder_sphere";
 constexpr const char* kBuzzerHzKey = "forearm.buzzer_hz";
 constexpr const char* kGapAnchorKey = "forearm.gap_anchor";
+constexpr const char* kAxisCorrectionKey = "forearm.axis_correction";
+constexpr const char* kAxisCorrectionGainKey = "forearm.axis_correction_gain";
+constexpr const char* kAxisCorrectionMaxDegKey = "forearm.axis_correction_max_deg";
 // A depth frame belongs to a skeleton frame of the same t_us (same sensor); allow clock jitter.
 constexpr std::int64_t kDepthToleranceUs = 1000;
 // Frames waiting for their depth or colour image before they are processed without.
@@ -120,6 +123,13 @@ std::vector<StageOption> ForearmStage::options() const {
        "what the gap smoother's elbow anchor follows inside a gap: 'auto' (the body fit's elbows when fit.enabled is "
        "true, each gap then waits for the fit's frames; else the camera skeleton's) or 'sdk' (the camera skeleton's "
        "elbow)"},
+      {kAxisCorrectionKey, "auto",
+       "'auto': with forearm.axis = depth, every K_from_F (and the K_from_A a gap integrates) is turned slowly towards "
+       "the depth-fitted forearm axis of the VISUAL frames, which takes out most of the IMU filter's tilt "
+       "(visual_axis_correction.hpp); 'off': eq. 11 as it is (paper 1)"},
+      {kAxisCorrectionGainKey, "0.02", "the axis correction's step per VISUAL frame, a fraction of the angle, in (0, 1]"},
+      {kAxisCorrectionMaxDegKey, "8",
+       "VISUAL frames whose depth axis is further than this many degrees from the corrected IMU axis are not used"},
   };
 }
 
@@ -170,6 +180,26 @@ void ForearmStage::start(const v1::SessionHeader& header, StageOutput& out) {
       throw_invalid(option_field(kGapAnchorKey), "is '" + *text + "', expected 'auto' or 'sdk'");
     }
     if (*text == "sdk") fit_anchor_ = false;
+  }
+  if (const auto text = option(header, kAxisCorrectionKey)) {
+    if (*text != "auto" && *text != "off") {
+      throw_invalid(option_field(kAxisCorrectionKey), "is '" + *text + "', expected 'auto' or 'off'");
+    }
+    axis_correction_on_ = *text == "auto";
+  }
+  if (const auto text = option(header, kAxisCorrectionGainKey)) {
+    const double gain = parse_double(*text, option_field(kAxisCorrectionGainKey));
+    if (!(gain > 0.0 && gain <= 1.0)) {
+      throw_invalid(option_field(kAxisCorrectionGainKey), "is '" + *text + "', must be in (0, 1]");
+    }
+    axis_correction_options_.gain = gain;
+  }
+  if (const auto text = option(header, kAxisCorrectionMaxDegKey)) {
+    const double max_deg = parse_double(*text, option_field(kAxisCorrectionMaxDegKey));
+    if (!(max_deg > 0.0 && max_deg <= 90.0)) {
+      throw_invalid(option_field(kAxisCorrectionMaxDegKey), "is '" + *text + "', must be in (0, 90] degrees");
+    }
+    axis_correction_options_.max_angle_rad = max_deg * 3.14159265358979323846 / 180.0;
   }
   if (const auto text = option(header, kBodyIdKey)) {
     body_id_ = static_cast<std::uint32_t>(parse_uint64(*text, option_field(kBodyIdKey)));
@@ -505,6 +535,9 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
   }
   device.tracker = std::make_unique<ArmTracker>(device.id, *device.side, device.calibration->model, has_model,
                                                 *K_from_W_, mean_rotation(held), smoother_options_);
+  if (axis_correction_on_ && axis_from_depth_ && has_model) {
+    device.tracker->use_axis_correction(axis_correction_options_);
+  }
   for (const ArmFrame& f : device.frames) device.tracker->add_frame(f);
   device.frames.clear();
   if (fit_anchor_) {

@@ -24,7 +24,9 @@
 //     plane's upper arm (and so the calibration frame's roll about the forearm) is measured in
 //     the depth image too (upper_arm_depth.hpp); = sdk takes it from the SDK shoulder.
 //  3. Then in time order (arm_tracker.hpp): forearm orientation + pronation per IMU sample
-//     (ForearmOrientationBatch), per camera frame a FrameResult with the forearm orientation and
+//     (ForearmOrientationBatch; with forearm.axis_correction = auto and the depth axis, turned
+//     slowly onto the forearm axes of the VISUAL frames before it, visual_axis_correction.hpp,
+//     so it waits for the frames up to its time), per camera frame a FrameResult with the forearm orientation and
 //     the IMU position (VISUAL from the strap, or PREDICTED by the live estimator in a gap), and
 //     two RecoveredSegments (PAPER, SMOOTHER) per gap 0.5 s after it closes. With the body fit
 //     on (fit.enabled) and forearm.gap_anchor = auto, the smoother is anchored to the fit's
@@ -122,6 +124,8 @@ class ForearmStage : public Stage {
   bool upper_arm_from_depth_ = true;  // forearm.upper_arm
   forearm::GapSmootherOptions smoother_options_ = without_shoulder_sphere();  // forearm.shoulder_sphere
   bool fit_anchor_ = false;  // forearm.gap_anchor: auto with fit.enabled
+  bool axis_correction_on_ = true;  // forearm.axis_correction: auto (with axis_from_depth_)
+  forearm::VisualAxisCorrectionOptions axis_correction_options_;
   std::optional<std::uint32_t> body_id_;
   std::optional<forearm::StrapCameras> cameras_;
   double color_tolerance_us_ = 0.0;
