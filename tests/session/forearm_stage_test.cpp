@@ -288,8 +288,9 @@ TEST(ForearmStage, BadOptionsAreErrorsNamingTheOption) {
                         Case{"forearm.buzzer_hz", "loud"}, Case{"forearm.buzzer_hz", "0"},
                         Case{"forearm.buzzer_hz", "-2700"}, Case{"forearm.buzzer_hz", "9000"},
                         Case{"forearm.buzzer_hz", "nan"}, Case{"forearm.gap_anchor", "fit"},
-                        Case{"forearm.axis_correction", "on"}, Case{"forearm.axis_correction_gain", "0"},
-                        Case{"forearm.axis_correction_gain", "1.5"}, Case{"forearm.axis_correction_gain", "fast"},
+                        Case{"forearm.axis_correction", "on"}, Case{"forearm.axis_correction_gain_K", "-0.1"},
+                        Case{"forearm.axis_correction_gain_K", "1.5"}, Case{"forearm.axis_correction_gain_F", "fast"},
+                        Case{"forearm.axis_correction_gain_F", "0.99"},
                         Case{"forearm.axis_correction_max_deg", "-8"}, Case{"forearm.axis_correction_max_deg", "91"},
                         Case{"forearm.axis_correction_max_deg", "nan"}, Case{"fit.enabled", "maybe"}}) {
     v1::SessionHeader bad = header;

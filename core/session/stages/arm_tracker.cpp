@@ -76,11 +76,11 @@ void ArmTracker::emit_orientations_up_to(std::int64_t t_us, StageOutput& out) {
   v1::ForearmOrientationBatch& batch = *result.mutable_forearm_orientations();
   batch.set_device_id(device_id_);
   batch.set_arm(arm_enum(side_));
-  const Quat correction = axis_correction();
-  for (std::size_t i = K_correction_.size(); i < arm_.size() && arm_[i].t_us <= t_us; ++i) {
-    K_correction_.push_back(correction);
-    arm_[i].K_from_A = (correction * arm_[i].K_from_A).normalized();
+  const forearm::AxisCorrection correction = axis_correction();
+  for (std::size_t i = K_from_F_.size(); i < arm_.size() && arm_[i].t_us <= t_us; ++i) {
     const Quat K_from_F = K_from_F_sample(i);
+    K_from_F_.push_back(K_from_F);
+    arm_[i].K_from_A = correction.K_from_A(arm_[i].K_from_A);
     batch.add_t_us(arm_[i].t_us);
     for (const double v : geometry::to_wxyz(K_from_F)) batch.add_k_from_f(v);
     batch.add_pronation_rad(forearm::pronation_angle(K_from_F_reference_, K_from_F, side_));
@@ -89,18 +89,16 @@ void ArmTracker::emit_orientations_up_to(std::int64_t t_us, StageOutput& out) {
 }
 
 Quat ArmTracker::K_from_F_sample(std::size_t i) const {
-  const Quat correction = i < K_correction_.size() ? K_correction_[i] : axis_correction();
-  return geometry::same_hemisphere((correction * K_from_F_imu_[i]).normalized(), K_from_F_imu_[i]);
+  if (i < K_from_F_.size()) return K_from_F_[i];
+  return geometry::same_hemisphere(axis_correction().K_from_F(K_from_F_imu_[i]), K_from_F_imu_[i]);
 }
 
 std::vector<forearm::ArmSample> ArmTracker::arm_between(std::int64_t t0_us, std::int64_t t1_us) const {
   std::vector<forearm::ArmSample> samples = slice(arm_, t0_us, t1_us);
-  const Quat correction = axis_correction();
+  const forearm::AxisCorrection correction = axis_correction();
   for (forearm::ArmSample& sample : samples) {
     // Samples not emitted yet still hold eq. 11's K_from_A: corrected as they will be.
-    if (index_at_or_before(arm_, sample.t_us) >= K_correction_.size()) {
-      sample.K_from_A = (correction * sample.K_from_A).normalized();
-    }
+    if (index_at_or_before(arm_, sample.t_us) >= K_from_F_.size()) sample.K_from_A = correction.K_from_A(sample.K_from_A);
   }
   return samples;
 }
@@ -127,8 +125,8 @@ void ArmTracker::use_axis_correction(const forearm::VisualAxisCorrectionOptions&
   axis_correction_.emplace(options);
 }
 
-Quat ArmTracker::axis_correction() const {
-  return axis_correction_ ? axis_correction_->K_correction() : Quat::Identity();
+forearm::AxisCorrection ArmTracker::axis_correction() const {
+  return axis_correction_ ? axis_correction_->correction() : forearm::AxisCorrection{};
 }
 
 std::uint64_t ArmTracker::axis_correction_frames() const {

@@ -118,7 +118,7 @@ class ArmTracker {
   // the streams arrive in; without it every add_imu emits its samples at once.
   void use_axis_correction(const forearm::VisualAxisCorrectionOptions& options);
   // The correction now (identity without it), and the frames it used so far.
-  forearm::Quat axis_correction() const;
+  forearm::AxisCorrection axis_correction() const;
   std::uint64_t axis_correction_frames() const;
 
   std::uint64_t visible_frames() const { return visible_frames_; }
@@ -154,8 +154,8 @@ class ArmTracker {
     double variance_ratio;
   };
   std::optional<FitAnchorSample> fit_anchor_at(const FitElbow& fit) const;
-  // Sample i's K_from_F as emitted (with the axis correction of its time; not emitted yet: the
-  // correction now), and slerped between samples at t_us; K_from_F_imu_at: eq. 11's, uncorrected.
+  // Sample i's K_from_F as emitted (with the axis correction of its time; not emitted yet: with
+  // the correction now), and slerped between samples at t_us; K_from_F_imu_at: eq. 11's, uncorrected.
   forearm::Quat K_from_F_sample(std::size_t i) const;
   forearm::Quat K_from_F_at(std::int64_t t_us) const;
   forearm::Quat K_from_F_imu_at(std::int64_t t_us) const;
@@ -181,7 +181,7 @@ class ArmTracker {
   // Every IMU sample; K_from_A is eq. 11's until the sample is emitted, then corrected.
   std::vector<forearm::ArmSample> arm_;
   std::vector<forearm::Quat> K_from_F_imu_;  // eq. 11, before the axis correction
-  std::vector<forearm::Quat> K_correction_;  // the axis correction each emitted sample got
+  std::vector<forearm::Quat> K_from_F_;      // as emitted (corrected), one per emitted sample
   std::optional<forearm::VisualAxisCorrection> axis_correction_;
   std::vector<forearm::TrackSample> track_;
   std::vector<forearm::ShoulderSample> shoulder_;

@@ -32,7 +32,8 @@ constexpr const char* kShoulderSphereKey = "forearm.shoulder_sphere";
 constexpr const char* kBuzzerHzKey = "forearm.buzzer_hz";
 constexpr const char* kGapAnchorKey = "forearm.gap_anchor";
 constexpr const char* kAxisCorrectionKey = "forearm.axis_correction";
-constexpr const char* kAxisCorrectionGainKey = "forearm.axis_correction_gain";
+constexpr const char* kAxisCorrectionGainKKey = "forearm.axis_correction_gain_K";
+constexpr const char* kAxisCorrectionGainFKey = "forearm.axis_correction_gain_F";
 constexpr const char* kAxisCorrectionMaxDegKey = "forearm.axis_correction_max_deg";
 // A depth frame belongs to a skeleton frame of the same t_us (same sensor); allow clock jitter.
 constexpr std::int64_t kDepthToleranceUs = 1000;
@@ -124,10 +125,16 @@ std::vector<StageOption> ForearmStage::options() const {
        "true, each gap then waits for the fit's frames; else the camera skeleton's) or 'sdk' (the camera skeleton's "
        "elbow)"},
       {kAxisCorrectionKey, "auto",
-       "'auto': with forearm.axis = depth, every K_from_F (and the K_from_A a gap integrates) is turned slowly towards "
-       "the depth-fitted forearm axis of the VISUAL frames, which takes out most of the IMU filter's tilt "
-       "(visual_axis_correction.hpp); 'off': eq. 11 as it is (paper 1)"},
-      {kAxisCorrectionGainKey, "0.02", "the axis correction's step per VISUAL frame, a fraction of the angle, in (0, 1]"},
+       "'auto': with forearm.axis = depth, every K_from_F is turned slowly towards the depth-fitted forearm axis of "
+       "the VISUAL frames, through a rotation of K (the IMU filter's tilt, also applied to the K_from_A a gap "
+       "integrates) and one of F (the mounting's tilt; the roll about the forearm stays as calibrated), "
+       "visual_axis_correction.hpp; orientations then wait for the camera frames up to their time (at most 1 s); "
+       "'off': eq. 11 as it is (paper 1)"},
+      {kAxisCorrectionGainKKey, "0.02",
+       "the axis correction's step per VISUAL frame through K, a fraction of the angle, in [0, 1]"},
+      {kAxisCorrectionGainFKey, "0.02",
+       "the axis correction's step per VISUAL frame through F, a fraction of the angle, in [0, 1]; the two gains "
+       "sum to at most 1 and more than 0"},
       {kAxisCorrectionMaxDegKey, "8",
        "VISUAL frames whose depth axis is further than this many degrees from the corrected IMU axis are not used"},
   };
@@ -187,12 +194,19 @@ void ForearmStage::start(const v1::SessionHeader& header, StageOutput& out) {
     }
     axis_correction_on_ = *text == "auto";
   }
-  if (const auto text = option(header, kAxisCorrectionGainKey)) {
-    const double gain = parse_double(*text, option_field(kAxisCorrectionGainKey));
-    if (!(gain > 0.0 && gain <= 1.0)) {
-      throw_invalid(option_field(kAxisCorrectionGainKey), "is '" + *text + "', must be in (0, 1]");
+  for (const auto& [key, gain] : {std::pair{kAxisCorrectionGainKKey, &axis_correction_options_.gain_K},
+                                   std::pair{kAxisCorrectionGainFKey, &axis_correction_options_.gain_F}}) {
+    if (const auto text = option(header, key)) {
+      *gain = parse_double(*text, option_field(key));
+      if (!(*gain >= 0.0 && *gain <= 1.0)) throw_invalid(option_field(key), "is '" + *text + "', must be in [0, 1]");
     }
-    axis_correction_options_.gain = gain;
+  }
+  if (const double sum = axis_correction_options_.gain_K + axis_correction_options_.gain_F; !(sum > 0.0 && sum <= 1.0)) {
+    // Named after the gain the header set (gain_F when only it was).
+    const bool only_F_given = option(header, kAxisCorrectionGainFKey) && !option(header, kAxisCorrectionGainKKey);
+    throw_invalid(option_field(only_F_given ? kAxisCorrectionGainFKey : kAxisCorrectionGainKKey),
+                  std::string("the sum of ") + kAxisCorrectionGainKKey + " and " + kAxisCorrectionGainFKey + " is " +
+                      format_double(sum) + ", must be in (0, 1]");
   }
   if (const auto text = option(header, kAxisCorrectionMaxDegKey)) {
     const double max_deg = parse_double(*text, option_field(kAxisCorrectionMaxDegKey));
