@@ -1,7 +1,8 @@
 // The forearm stage's per-arm tracker with the axis correction (ArmTracker::use_axis_correction,
 // forearm/visual_axis_correction.hpp) on the synthetic arm (tests/forearm/synthetic_arm.hpp) whose
 // IMU filter is tilted: the emitted K_from_F converges onto the truth, every IMU sample is emitted
-// once, and orientations wait for the camera frames up to their time (at most 1 s without frames).
+// once, in one batch per call at most, and orientations wait for the camera frames up to their time
+// (at most 1 s without frames).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -81,11 +82,18 @@ CollectingOutput stream_tilted_arm(bool axis_correction, double frames_stop_s = 
       W_from_A.push_back(tilted_W_from_A(motion, seconds(next_imu_us)));
       force.push_back(motion.specific_force_A(seconds(next_imu_us)));
     }
+    const std::size_t results_before = out.results.size();
     tracker.add_imu(t_us, W_from_A, force, out);
     for (; next_frame_us < batch_end_us; next_frame_us += kFramePeriodUs) {
       if (seconds(next_frame_us) < frames_stop_s) tracker.add_frame(visible_frame(motion, next_frame_us));
     }
     tracker.process(false, out);
+    // One orientation batch per batch of IMU samples at most, however many frames came with it.
+    std::size_t orientation_batches = 0;
+    for (std::size_t r = results_before; r < out.results.size(); ++r) {
+      orientation_batches += out.results[r].has_forearm_orientations();
+    }
+    EXPECT_LE(orientation_batches, 1u) << "after the batch ending at " << batch_end_us;
     if (axis_correction) {
       // Nothing is emitted past the newest frame processed, or 1 s before the newest sample.
       const std::vector<EmittedOrientation> emitted = orientations(out);

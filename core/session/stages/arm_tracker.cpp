@@ -68,24 +68,33 @@ void ArmTracker::add_imu(const std::vector<std::int64_t>& t_us, const std::vecto
                                                   : geometry::same_hemisphere(s.K_from_F, K_from_F_imu_.back()));
   }
   // Without the axis correction nothing waits for the frames.
-  if (!axis_correction_ && !arm_.empty()) emit_orientations_up_to(arm_.back().t_us, out);
+  if (!axis_correction_ && !arm_.empty()) {
+    settle_orientations_up_to(arm_.back().t_us);
+    emit_settled_orientations(out);
+  }
 }
 
-void ArmTracker::emit_orientations_up_to(std::int64_t t_us, StageOutput& out) {
+void ArmTracker::settle_orientations_up_to(std::int64_t t_us) {
+  const forearm::AxisCorrection correction = axis_correction();
+  for (std::size_t i = K_from_F_.size(); i < arm_.size() && arm_[i].t_us <= t_us; ++i) {
+    K_from_F_.push_back(K_from_F_sample(i));
+    arm_[i].K_from_A = correction.K_from_A(arm_[i].K_from_A);
+  }
+}
+
+void ArmTracker::emit_settled_orientations(StageOutput& out) {
+  if (orientations_emitted_ == K_from_F_.size()) return;
   v1::FitResult result;
   v1::ForearmOrientationBatch& batch = *result.mutable_forearm_orientations();
   batch.set_device_id(device_id_);
   batch.set_arm(arm_enum(side_));
-  const forearm::AxisCorrection correction = axis_correction();
-  for (std::size_t i = K_from_F_.size(); i < arm_.size() && arm_[i].t_us <= t_us; ++i) {
-    const Quat K_from_F = K_from_F_sample(i);
-    K_from_F_.push_back(K_from_F);
-    arm_[i].K_from_A = correction.K_from_A(arm_[i].K_from_A);
-    batch.add_t_us(arm_[i].t_us);
+  for (; orientations_emitted_ < K_from_F_.size(); ++orientations_emitted_) {
+    const Quat& K_from_F = K_from_F_[orientations_emitted_];
+    batch.add_t_us(arm_[orientations_emitted_].t_us);
     for (const double v : geometry::to_wxyz(K_from_F)) batch.add_k_from_f(v);
     batch.add_pronation_rad(forearm::pronation_angle(K_from_F_reference_, K_from_F, side_));
   }
-  if (batch.t_us_size() > 0) out.emit(std::move(result));
+  out.emit(std::move(result));
 }
 
 Quat ArmTracker::K_from_F_sample(std::size_t i) const {
@@ -97,7 +106,7 @@ std::vector<forearm::ArmSample> ArmTracker::arm_between(std::int64_t t0_us, std:
   std::vector<forearm::ArmSample> samples = slice(arm_, t0_us, t1_us);
   const forearm::AxisCorrection correction = axis_correction();
   for (forearm::ArmSample& sample : samples) {
-    // Samples not emitted yet still hold eq. 11's K_from_A: corrected as they will be.
+    // Samples not settled yet still hold eq. 11's K_from_A: corrected as they will be.
     if (index_at_or_before(arm_, sample.t_us) >= K_from_F_.size()) sample.K_from_A = correction.K_from_A(sample.K_from_A);
   }
   return samples;
@@ -141,7 +150,7 @@ void ArmTracker::process(bool all, StageOutput& out) {
   const std::int64_t window_us = static_cast<std::int64_t>(std::llround(1e6 * kBoundaryWindowS));
   while (!frames_.empty() && !arm_.empty() && (all || frames_.front().t_us <= arm_.back().t_us)) {
     // The orientations up to this frame get the axis correction as it is before the frame.
-    emit_orientations_up_to(frames_.front().t_us, out);
+    settle_orientations_up_to(frames_.front().t_us);
     forearm::TrackSample sample = visual_sample(frames_.front());
     // Support before it (a detection within the window): a short break in a visible run.
     const bool seen_just_before = last_visible_us_ && sample.t_us - *last_visible_us_ <= window_us;
@@ -161,12 +170,13 @@ void ArmTracker::process(bool all, StageOutput& out) {
   if (!arm_.empty()) {
     const auto max_wait_us = static_cast<std::int64_t>(std::llround(1e6 * kMaxOrientationWaitS));
     if (all) {
-      emit_orientations_up_to(arm_.back().t_us, out);
+      settle_orientations_up_to(arm_.back().t_us);
     } else if (!frames_.empty()) {
-      emit_orientations_up_to(frames_.front().t_us - 1, out);
+      settle_orientations_up_to(frames_.front().t_us - 1);
     } else {
-      emit_orientations_up_to(arm_.back().t_us - max_wait_us, out);
+      settle_orientations_up_to(arm_.back().t_us - max_wait_us);
     }
+    emit_settled_orientations(out);  // one batch per call
   }
   while (!pending_gaps_.empty() && !track_.empty() &&
          (all || track_.back().t_us >= pending_gaps_.front().t_end_us + window_us) &&
@@ -277,7 +287,7 @@ void ArmTracker::process_frame(const ArmFrame& frame, const forearm::TrackSample
       live_.emplace(model_, K_from_W_);
       last_live_frame_us_ = gap_start_us_;
       try {
-        live_->begin(track_, arm_, gap_start_us_);  // emitted up to this frame: corrected
+        live_->begin(track_, arm_, gap_start_us_);  // settled up to this frame: corrected
         live_next_arm_ = index_at_or_before(arm_, gap_start_us_) + 1;
       } catch (const Error& error) {
         live_.reset();

@@ -154,16 +154,18 @@ class ArmTracker {
     double variance_ratio;
   };
   std::optional<FitAnchorSample> fit_anchor_at(const FitElbow& fit) const;
-  // Sample i's K_from_F as emitted (with the axis correction of its time; not emitted yet: with
+  // Sample i's K_from_F as settled (with the axis correction of its time; not settled yet: with
   // the correction now), and slerped between samples at t_us; K_from_F_imu_at: eq. 11's, uncorrected.
   forearm::Quat K_from_F_sample(std::size_t i) const;
   forearm::Quat K_from_F_at(std::int64_t t_us) const;
   forearm::Quat K_from_F_imu_at(std::int64_t t_us) const;
   template <class SampleAt>
   forearm::Quat slerp_at(std::int64_t t_us, const SampleAt& sample_at) const;
-  // The ForearmOrientationBatch of the samples up to t_us not emitted yet, with the axis
-  // correction as it is now (which from then on also turns their K_from_A).
-  void emit_orientations_up_to(std::int64_t t_us, StageOutput& out);
+  // Fixes the K_from_F of the samples up to t_us not settled yet with the axis correction as it
+  // is now (which from then on also turns their K_from_A); emit_settled_orientations sends the
+  // settled ones not sent yet as one ForearmOrientationBatch.
+  void settle_orientations_up_to(std::int64_t t_us);
+  void emit_settled_orientations(StageOutput& out);
   // The arm samples in [t0, t1] with K_from_A as the gaps integrate it (corrected).
   std::vector<forearm::ArmSample> arm_between(std::int64_t t0_us, std::int64_t t1_us) const;
   double pronation_at(std::int64_t t_us) const;
@@ -178,10 +180,11 @@ class ArmTracker {
   forearm::GapSmootherOptions smoother_options_;
   double live_elbow_time_constant_s_;
 
-  // Every IMU sample; K_from_A is eq. 11's until the sample is emitted, then corrected.
+  // Every IMU sample; K_from_A is eq. 11's until the sample is settled, then corrected.
   std::vector<forearm::ArmSample> arm_;
   std::vector<forearm::Quat> K_from_F_imu_;  // eq. 11, before the axis correction
-  std::vector<forearm::Quat> K_from_F_;      // as emitted (corrected), one per emitted sample
+  std::vector<forearm::Quat> K_from_F_;      // as emitted (corrected), one per settled sample
+  std::size_t orientations_emitted_ = 0;     // of K_from_F_
   std::optional<forearm::VisualAxisCorrection> axis_correction_;
   std::vector<forearm::TrackSample> track_;
   std::vector<forearm::ShoulderSample> shoulder_;
