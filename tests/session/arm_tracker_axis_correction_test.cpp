@@ -33,13 +33,14 @@ Quat tilted_W_from_A(const ArmMotion& motion, double t) {
   return W_tilt * motion.K_from_W.conjugate() * motion.K_from_A(t);
 }
 
-ArmFrame visible_frame(const ArmMotion& motion, std::int64_t t_us) {
+ArmFrame visible_frame(const ArmMotion& motion, std::int64_t t_us, bool axis_from_depth) {
   const double t = seconds(t_us);
   ArmFrame frame;
   frame.t_us = t_us;
   frame.shoulder_K = motion.shoulder(t);
   frame.elbow_K = motion.elbow(t);  // the depth axis's ends: exact here
   frame.wrist_K = motion.wrist(t);
+  frame.axis_from_depth = axis_from_depth;
   frame.shoulder_tracked = frame.forearm_tracked = true;
   frame.sdk_elbow_K = frame.elbow_K;
   frame.sdk_elbow_seen = true;
@@ -67,7 +68,8 @@ std::vector<EmittedOrientation> orientations(const CollectingOutput& out) {
 
 // 30 s streamed as it would be live: 100 ms IMU batches, each followed by the frames up to its
 // end, the tracker processing after each batch. Returns the tracker's results.
-CollectingOutput stream_tilted_arm(bool axis_correction, double frames_stop_s = 1e9) {
+// `axis_from_depth` false: the frames' elbow and wrist are marked as the SDK's.
+CollectingOutput stream_tilted_arm(bool axis_correction, double frames_stop_s = 1e9, bool axis_from_depth = true) {
   const ArmMotion motion;
   ArmTracker tracker("arm_r", forearm::Side::kRight, motion.model, true, motion.K_from_W, motion.K_from_F(0.0));
   if (axis_correction) tracker.use_axis_correction({});
@@ -85,7 +87,7 @@ CollectingOutput stream_tilted_arm(bool axis_correction, double frames_stop_s = 
     const std::size_t results_before = out.results.size();
     tracker.add_imu(t_us, W_from_A, force, out);
     for (; next_frame_us < batch_end_us; next_frame_us += kFramePeriodUs) {
-      if (seconds(next_frame_us) < frames_stop_s) tracker.add_frame(visible_frame(motion, next_frame_us));
+      if (seconds(next_frame_us) < frames_stop_s) tracker.add_frame(visible_frame(motion, next_frame_us, axis_from_depth));
     }
     tracker.process(false, out);
     // One orientation batch per batch of IMU samples at most, however many frames came with it.
@@ -106,7 +108,7 @@ CollectingOutput stream_tilted_arm(bool axis_correction, double frames_stop_s = 
     }
   }
   tracker.finish(out);
-  if (axis_correction && frames_stop_s > 30.0) {
+  if (axis_correction && frames_stop_s > 30.0 && axis_from_depth) {
     EXPECT_GT(tracker.axis_correction_frames(), 500u);
   }
   return out;
@@ -136,6 +138,14 @@ TEST(ArmTrackerAxisCorrection, TheImuTiltIsTakenOutOfTheEmittedOrientations) {
   EXPECT_NEAR(error_deg(with.front()), 5.0, 0.01);  // nothing seen yet
   EXPECT_GT(last_without, 4.9);
   EXPECT_LT(last_with, 0.5);
+}
+
+TEST(ArmTrackerAxisCorrection, FramesWithTheSdksJointsDoNotCorrect) {
+  // Where the depth fit failed the stage keeps the SDK's elbow and wrist (biased by centimetres):
+  // such frames are not used, so the tilt stays.
+  const std::vector<EmittedOrientation> emitted = orientations(stream_tilted_arm(true, 1e9, false));
+  ASSERT_EQ(emitted.size(), 2400u);
+  EXPECT_NEAR(error_deg(emitted.back()), 5.0, 1e-6);
 }
 
 TEST(ArmTrackerAxisCorrection, WithoutFramesOrientationsWaitAtMostOneSecond) {

@@ -268,7 +268,9 @@ void ArmTracker::process_frame(const ArmFrame& frame, const forearm::TrackSample
   if (sample.visible) {
     ++visible_frames_;
     last_visible_us_ = frame.t_us;
-    if (axis_correction_) axis_correction_->observe(K_from_F_imu_at(frame.t_us), frame.elbow_K, frame.wrist_K);
+    if (axis_correction_ && frame.axis_from_depth) {
+      axis_correction_->observe(K_from_F_imu_at(frame.t_us), frame.elbow_K, frame.wrist_K);
+    }
     if (in_gap_) {
       pending_gaps_.push_back({gap_start_us_, frame.t_us});
       in_gap_ = false;

@@ -61,6 +61,9 @@ struct ArmFrame {
   forearm::Vec3 shoulder_K = forearm::Vec3::Zero();
   forearm::Vec3 elbow_K = forearm::Vec3::Zero();
   forearm::Vec3 wrist_K = forearm::Vec3::Zero();
+  // elbow_K and wrist_K are the ends of the depth-fitted forearm axis (forearm_axis_depth.hpp),
+  // not the SDK's joints: only such frames feed the axis correction.
+  bool axis_from_depth = false;
   bool shoulder_tracked = false;
   bool forearm_tracked = false;  // elbow and wrist TRACKED
   // The SDK's own elbow (elbow_K may be the depth axis's) and whether the SDK gave one
@@ -112,7 +115,7 @@ class ArmTracker {
 
   // Turn every K_from_F (and the K_from_A the gaps integrate with) towards the depth-measured
   // forearm axis of the VISUAL frames (forearm/visual_axis_correction.hpp); call before the
-  // first IMU sample. The frames' elbow_K -> wrist_K must then be the depth axis's ends. The
+  // first IMU sample. Only frames with axis_from_depth are used. The
   // orientations then wait for the camera frames up to their time (at most 1 s of IMU time when
   // no frame is queued), so each gets the correction of the frames before it whatever order
   // the streams arrive in; without it every add_imu emits its samples at once.

@@ -377,12 +377,14 @@ void ForearmStage::detect_arms(const PendingFrame& frame, const Image* depth, co
         if (const auto axes = forearm::measure_arm_axes(mm, cameras_->depth, arm.shoulder_K, arm.elbow_K, arm.wrist_K)) {
           arm.elbow_K = axes->forearm.elbow_K;
           arm.wrist_K = axes->forearm.wrist_K;
+          arm.axis_from_depth = true;
           upper_arm = axes->upper_arm;
         }
       } else if (axis_from_depth_) {
         if (const auto axis = forearm::measure_forearm_axis(mm, cameras_->depth, arm.elbow_K, arm.wrist_K)) {
           arm.elbow_K = axis->elbow_K;
           arm.wrist_K = axis->wrist_K;
+          arm.axis_from_depth = true;
         }
       } else if (!device.tracker && arm.shoulder_tracked) {
         upper_arm = forearm::measure_upper_arm_axis(mm, cameras_->depth, arm.shoulder_K, arm.elbow_K, arm.wrist_K);
