@@ -104,10 +104,13 @@ Quat ArmTracker::K_from_F_sample(std::size_t i) const {
 
 std::vector<forearm::ArmSample> ArmTracker::arm_between(std::int64_t t0_us, std::int64_t t1_us) const {
   std::vector<forearm::ArmSample> samples = slice(arm_, t0_us, t1_us);
+  // The settled samples are arm_'s first K_from_F_.size(); the later ones still hold eq. 11's
+  // K_from_A: corrected as they will be.
   const forearm::AxisCorrection correction = axis_correction();
   for (forearm::ArmSample& sample : samples) {
-    // Samples not settled yet still hold eq. 11's K_from_A: corrected as they will be.
-    if (index_at_or_before(arm_, sample.t_us) >= K_from_F_.size()) sample.K_from_A = correction.K_from_A(sample.K_from_A);
+    if (K_from_F_.empty() || sample.t_us > arm_[K_from_F_.size() - 1].t_us) {
+      sample.K_from_A = correction.K_from_A(sample.K_from_A);
+    }
   }
   return samples;
 }
@@ -166,7 +169,7 @@ void ArmTracker::process(bool all, StageOutput& out) {
     frames_.pop_front();
   }
   // Orientations before the next queued frame have seen every frame before them; without a
-  // queued frame they wait for one at most max_frame_wait_s (IMU time), at the end not at all.
+  // queued frame they wait for one at most kMaxOrientationWaitS (IMU time), at the end not at all.
   if (!arm_.empty()) {
     const auto max_wait_us = static_cast<std::int64_t>(std::llround(1e6 * kMaxOrientationWaitS));
     if (all) {
