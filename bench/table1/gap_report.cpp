@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "body/smpl_model.hpp"
 #include "common/error.hpp"
 #include "forearm/gap_input.hpp"
 
@@ -88,6 +89,62 @@ void print_acceleration_error(const v1::RecoveredSegment& s, const TruthTrack& t
   std::printf("\n");
 }
 
+// The elbows the smoother's anchor can follow, against the truth's elbow, mean distance per 0.5 s
+// bin from the gap's start: the body fit's (SMPL joint, with its mean energy) and the camera
+// skeleton's. Where the anchor pulls the recovery off.
+void print_elbow_error(const v1::RecoveredSegment& s, const Table1Truth& truth,
+                       const std::vector<v1::FitResult>& results, v1::Arm arm) {
+  const int smpl_elbow = arm == v1::LEFT ? body::kLeftElbow : body::kRightElbow, sdk_elbow = arm == v1::LEFT ? 5 : 9;
+  const int smpl_wrist = smpl_elbow + 2;
+  const auto truth_at = [&](std::int64_t t_us) -> const sim::ForearmTruth* {
+    const auto f = std::lower_bound(truth.frame_t_us.begin(), truth.frame_t_us.end(), t_us);
+    if (f == truth.frame_t_us.end() || *f != t_us) return nullptr;
+    return &truth.forearm[static_cast<std::size_t>(f - truth.frame_t_us.begin())];
+  };
+  const auto truth_elbow = [&](std::int64_t t_us) -> const Vec3* {
+    const sim::ForearmTruth* f = truth_at(t_us);
+    return f ? &f->elbow_K_m : nullptr;
+  };
+  const std::int64_t bin = 500000;
+  const auto bins = static_cast<std::size_t>((s.t_end_us() - s.t_start_us()) / bin + 1);
+  std::vector<double> fit_sum(bins, 0.0), energy_sum(bins, 0.0), sdk_sum(bins, 0.0), angle_sum(bins, 0.0);
+  std::vector<int> fit_n(bins, 0), sdk_n(bins, 0);
+  const auto bin_of = [&](std::int64_t t_us) -> long {
+    if (t_us < s.t_start_us() || t_us > s.t_end_us()) return -1;
+    return static_cast<long>((t_us - s.t_start_us()) / bin);
+  };
+  for (const v1::FitResult& r : results) {
+    if (!r.has_frame() || r.frame().smpl_joints_size() <= smpl_elbow) continue;
+    const long b = bin_of(r.frame().t_us());
+    const Vec3* e = truth_elbow(r.frame().t_us());
+    if (b < 0 || !e) continue;
+    fit_sum[static_cast<std::size_t>(b)] += (vec(r.frame().smpl_joints(smpl_elbow).position_m()) - *e).norm();
+    energy_sum[static_cast<std::size_t>(b)] += r.frame().fit_energy();
+    const Vec3 fit_axis = vec(r.frame().smpl_joints(smpl_wrist).position_m()) - vec(r.frame().smpl_joints(smpl_elbow).position_m());
+    const Vec3 true_axis = truth_at(r.frame().t_us())->K_from_F * Vec3::UnitY();
+    angle_sum[static_cast<std::size_t>(b)] += std::acos(std::clamp(fit_axis.normalized().dot(true_axis), -1.0, 1.0)) * 180.0 / 3.14159265358979;
+    ++fit_n[static_cast<std::size_t>(b)];
+  }
+  for (const v1::SkeletonFrame& k : truth.sdk) {
+    const long b = bin_of(k.t_us());
+    const Vec3* e = truth_elbow(k.t_us());
+    if (b < 0 || !e || k.joints_size() <= sdk_elbow) continue;
+    sdk_sum[static_cast<std::size_t>(b)] += (vec(k.joints(sdk_elbow).position_m()) - *e).norm();
+    ++sdk_n[static_cast<std::size_t>(b)];
+  }
+  std::printf("    elbow error, mm, mean per 0.5 s bin from the start, fit (energy, forearm axis error deg) / SDK:");
+  for (std::size_t b = 0; b < bins; ++b) {
+    if (fit_n[b] > 0) {
+      std::printf(" %.0f (%.0f, %.0f)", 1e3 * fit_sum[b] / fit_n[b], energy_sum[b] / fit_n[b], angle_sum[b] / fit_n[b]);
+    } else {
+      std::printf(" -");
+    }
+    if (sdk_n[b] > 0) std::printf(" / %.0f", 1e3 * sdk_sum[b] / sdk_n[b]);
+    std::printf(";");
+  }
+  std::printf("\n");
+}
+
 }  // namespace
 
 void print_gap_report(const Table1Truth& truth, const std::vector<v1::FitResult>& results, const Table1Arm& arm) {
@@ -135,7 +192,10 @@ void print_gap_report(const Table1Truth& truth, const std::vector<v1::FitResult>
                        truth_track.position(s.samples(s.samples_size() - 1).t_us()))
                           .norm());
     if (s.method() != v1::RecoveredSegment::SMOOTHER) continue;
-    if (length_s > 1.0) print_acceleration_error(s, truth_track);
+    if (length_s > 1.0) {
+      print_acceleration_error(s, truth_track);
+      print_elbow_error(s, truth, results, arm.arm);
+    }
     std::printf("   ");
     print_boundary("entry", track, truth_track, s.t_start_us(), -1);
     print_boundary("exit", track, truth_track, s.t_end_us(), +1);

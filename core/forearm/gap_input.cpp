@@ -39,6 +39,7 @@ void validate(const GapRecoveryInput& in) {
   check_times(in.arm, "arm");
   check_times(in.shoulder, "shoulder");
   if (!in.elbow_anchor.empty()) check_times(in.elbow_anchor, "elbow_anchor");
+  if (!in.second_elbow_anchor.empty()) check_times(in.second_elbow_anchor, "second_elbow_anchor");
   for (std::size_t i = 0; i < in.track.size(); ++i) {
     if (in.track[i].visible && !in.track[i].p_K.allFinite()) {
       throw_invalid(at("track", i, "p_K"), "visible sample is not finite");
@@ -51,10 +52,13 @@ void validate(const GapRecoveryInput& in) {
   for (std::size_t i = 0; i < in.shoulder.size(); ++i) {
     if (!in.shoulder[i].p_K.allFinite()) throw_invalid(at("shoulder", i, "p_K"), "not finite");
   }
-  for (std::size_t i = 0; i < in.elbow_anchor.size(); ++i) {
-    if (!in.elbow_anchor[i].p_K.allFinite()) throw_invalid(at("elbow_anchor", i, "p_K"), "not finite");
-    if (!(in.elbow_anchor[i].sigma_scale >= 1.0) || !std::isfinite(in.elbow_anchor[i].sigma_scale)) {
-      throw_invalid(at("elbow_anchor", i, "sigma_scale"), "must be finite and >= 1");
+  for (const auto& [anchor, name] : {std::pair{&in.elbow_anchor, "elbow_anchor"},
+                                      std::pair{&in.second_elbow_anchor, "second_elbow_anchor"}}) {
+    for (std::size_t i = 0; i < anchor->size(); ++i) {
+      if (!(*anchor)[i].p_K.allFinite()) throw_invalid(at(name, i, "p_K"), "not finite");
+      if (!((*anchor)[i].sigma_scale >= 1.0) || !std::isfinite((*anchor)[i].sigma_scale)) {
+        throw_invalid(at(name, i, "sigma_scale"), "must be finite and >= 1");
+      }
     }
   }
   const ForearmModel& m = in.model;

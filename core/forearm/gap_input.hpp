@@ -26,6 +26,10 @@ struct GapRecoveryInput {
   std::vector<ArmSample> arm;            // ~80 Hz, strictly increasing t_us
   std::vector<ShoulderSample> shoulder;  // strictly increasing t_us; interpolated (II-K.4)
   std::vector<ElbowAnchorSample> elbow_anchor;  // optional (smoother only); strictly increasing t_us
+  // A second, independent anchor (optional, smoother only), with its own error c0 + tau c1 and
+  // GapSmootherOptions::second_anchor_*: the camera skeleton's elbow alongside the body fit's,
+  // whose errors come from different places.
+  std::vector<ElbowAnchorSample> second_elbow_anchor;
   ForearmModel model;
   Quat K_from_W = Quat::Identity();      // eq. 7
 };

@@ -1,6 +1,7 @@
 #include "forearm/gap_smoother.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <optional>
 #include <string>
@@ -29,7 +30,7 @@ using Triplets = std::vector<Eigen::Triplet<double>>;
 constexpr int kAnchorTerms = 2;
 
 // Rows of J and r for one linearisation point; columns 3i..3i+2 are p_i, then b_A, e0_K, e1_K,
-// and the elbow anchor's error c0_K, c1_K.
+// and each elbow anchor's error c0_K, c1_K (the first anchor's, then the second's).
 struct LinearSystem {
   Triplets jacobian;
   std::vector<double> residual;
@@ -47,15 +48,19 @@ struct Problem {
   std::vector<Vec3> sphere_centre;     // eq. 13 at each node
   struct Fix { std::size_t node; double u; Vec3 z; double sigma_scale = 1.0; };
   std::vector<Fix> fixes;              // visible track samples
-  std::vector<Fix> anchors;            // elbow anchor samples (Fix::z the anchor position)
+  // An elbow anchor's samples (Fix::z the anchor position) and its sigmas.
+  struct Anchor { std::vector<Fix> samples; double sigma_m; double bias_prior_sigma_m; };
+  std::array<Anchor, 2> anchors;
   GapSmootherOptions options;
 
   int bias_column() const { return 3 * static_cast<int>(t_s.size()); }
   int drift0_column() const { return bias_column() + 3; }
   int drift1_column() const { return bias_column() + 6; }
-  // The anchor's error c(tau) = sum_k c_k tau^k, k < kAnchorTerms.
-  int anchor_column(int k) const { return bias_column() + 9 + 3 * k; }
-  int columns() const { return anchor_column(kAnchorTerms); }
+  // Anchor a's error c(tau) = sum_k c_k tau^k, k < kAnchorTerms.
+  int anchor_column(std::size_t a, int k) const {
+    return bias_column() + 9 + 3 * (static_cast<int>(a) * kAnchorTerms + k);
+  }
+  int columns() const { return anchor_column(anchors.size(), 0); }
   // Time in the window scaled to [-1, 1] for the linear-in-time attitude-leak and anchor terms.
   double tau_at(double t) const {
     const double mid = 0.5 * (t_s.front() + t_s.back()), half = 0.5 * (t_s.back() - t_s.front());
@@ -105,26 +110,28 @@ struct Problem {
         if (f.u > 0.0) sys.jacobian.emplace_back(row, a + 3 + k, f.u / sp);
       }
     }
-    // The elbow anchor, robust: a residual of norm |r| > k (in sigmas) is weighted by k / |r|, so
+    // The elbow anchors, robust: a residual of norm |r| > k (in sigmas) is weighted by k / |r|, so
     // it costs k |r| instead of |r|^2 (iteratively reweighted at each linearisation).
     const double k = options.anchor_huber_k;
-    for (const Fix& f : anchors) {
-      const double sc = options.anchor_sigma_m * f.sigma_scale;
-      const int a = 3 * static_cast<int>(f.node);
-      double power[kAnchorTerms];
-      power[0] = 1.0;
-      for (int j = 1; j < kAnchorTerms; ++j) power[j] = power[j - 1] * tau(f);
-      Vec3 anchor_error = Vec3::Zero();
-      for (int j = 0; j < kAnchorTerms; ++j) anchor_error += power[j] * x.segment<3>(anchor_column(j));
-      const Vec3 p = (1.0 - f.u) * x.segment<3>(a) + f.u * x.segment<3>(a + 3);
-      const Vec3 r = (p + anchor_error - f.z) / sc;
-      const double w = std::sqrt(r.norm() > k ? k / r.norm() : 1.0) / sc;
-      for (int c = 0; c < 3; ++c) {
-        const int row = sys.add_row();
-        sys.residual[static_cast<std::size_t>(row)] = w * sc * r[c];
-        sys.jacobian.emplace_back(row, a + c, w * (1.0 - f.u));
-        if (f.u > 0.0) sys.jacobian.emplace_back(row, a + 3 + c, w * f.u);
-        for (int j = 0; j < kAnchorTerms; ++j) sys.jacobian.emplace_back(row, anchor_column(j) + c, w * power[j]);
+    for (std::size_t a = 0; a < anchors.size(); ++a) {
+      for (const Fix& f : anchors[a].samples) {
+        const double sc = anchors[a].sigma_m * f.sigma_scale;
+        const int node = 3 * static_cast<int>(f.node);
+        double power[kAnchorTerms];
+        power[0] = 1.0;
+        for (int j = 1; j < kAnchorTerms; ++j) power[j] = power[j - 1] * tau(f);
+        Vec3 anchor_error = Vec3::Zero();
+        for (int j = 0; j < kAnchorTerms; ++j) anchor_error += power[j] * x.segment<3>(anchor_column(a, j));
+        const Vec3 p = (1.0 - f.u) * x.segment<3>(node) + f.u * x.segment<3>(node + 3);
+        const Vec3 r = (p + anchor_error - f.z) / sc;
+        const double w = std::sqrt(r.norm() > k ? k / r.norm() : 1.0) / sc;
+        for (int c = 0; c < 3; ++c) {
+          const int row = sys.add_row();
+          sys.residual[static_cast<std::size_t>(row)] = w * sc * r[c];
+          sys.jacobian.emplace_back(row, node + c, w * (1.0 - f.u));
+          if (f.u > 0.0) sys.jacobian.emplace_back(row, node + 3 + c, w * f.u);
+          for (int j = 0; j < kAnchorTerms; ++j) sys.jacobian.emplace_back(row, anchor_column(a, j) + c, w * power[j]);
+        }
       }
     }
     if (options.use_shoulder_sphere) {
@@ -141,7 +148,6 @@ struct Problem {
       }
     }
     const double sb = options.bias_prior_sigma_m_s2, se = options.leak_prior_sigma_m_s2;
-    const double s_anchor = options.anchor_bias_prior_sigma_m;
     for (int c = 0; c < 3; ++c) {
       for (const auto& [column, value, sigma] : {std::tuple{bias_column(), b[c], sb},
                                                   std::tuple{drift0_column(), e0[c], se},
@@ -150,10 +156,13 @@ struct Problem {
         sys.residual[static_cast<std::size_t>(row)] = value / sigma;
         sys.jacobian.emplace_back(row, column + c, 1.0 / sigma);
       }
-      for (int j = 0; j < kAnchorTerms; ++j) {
-        const int row = sys.add_row();
-        sys.residual[static_cast<std::size_t>(row)] = x[anchor_column(j) + c] / s_anchor;
-        sys.jacobian.emplace_back(row, anchor_column(j) + c, 1.0 / s_anchor);
+      for (std::size_t a = 0; a < anchors.size(); ++a) {
+        const double s_anchor = anchors[a].bias_prior_sigma_m;
+        for (int j = 0; j < kAnchorTerms; ++j) {
+          const int row = sys.add_row();
+          sys.residual[static_cast<std::size_t>(row)] = x[anchor_column(a, j) + c] / s_anchor;
+          sys.jacobian.emplace_back(row, anchor_column(a, j) + c, 1.0 / s_anchor);
+        }
       }
     }
     return sys;
@@ -170,7 +179,8 @@ void check_options(const GapSmootherOptions& o) {
   if (!(o.boundary_window_s > 0.0)) throw_invalid("options.boundary_window_s", "must be > 0");
   if (!(o.acc_sigma_m_s2 > 0.0) || !(o.position_sigma_m > 0.0) || !(o.sphere_sigma_m > 0.0) ||
       !(o.bias_prior_sigma_m_s2 > 0.0) || !(o.leak_prior_sigma_m_s2 > 0.0) || !(o.anchor_sigma_m > 0.0) ||
-      !(o.anchor_bias_prior_sigma_m > 0.0)) {
+      !(o.anchor_bias_prior_sigma_m > 0.0) || !(o.second_anchor_sigma_m > 0.0) ||
+      !(o.second_anchor_bias_prior_sigma_m > 0.0)) {
     throw_invalid("options", "every sigma must be > 0");
   }
   if (!(o.anchor_huber_k > 0.0)) throw_invalid("options.anchor_huber_k", "must be > 0");
@@ -227,11 +237,16 @@ RecoveredGap recover_gap_smoother(const GapRecoveryInput& input, const GapSpan& 
     if (!s.visible) continue;
     if (const auto fix = fix_at(s.t_us, s.p_K)) problem.fixes.push_back(*fix);
   }
+  problem.anchors[0] = {{}, options.anchor_sigma_m, options.anchor_bias_prior_sigma_m};
+  problem.anchors[1] = {{}, options.second_anchor_sigma_m, options.second_anchor_bias_prior_sigma_m};
   if (options.use_elbow_anchor) {
-    for (const ElbowAnchorSample& a : input.elbow_anchor) {
-      if (auto fix = fix_at(a.t_us, a.p_K)) {
-        fix->sigma_scale = a.sigma_scale;
-        problem.anchors.push_back(*fix);
+    for (const auto& [samples, anchor] : {std::pair{&input.elbow_anchor, &problem.anchors[0]},
+                                          std::pair{&input.second_elbow_anchor, &problem.anchors[1]}}) {
+      for (const ElbowAnchorSample& a : *samples) {
+        if (auto fix = fix_at(a.t_us, a.p_K)) {
+          fix->sigma_scale = a.sigma_scale;
+          anchor->samples.push_back(*fix);
+        }
       }
     }
   }

@@ -49,6 +49,10 @@ struct GapSmootherOptions {
   double anchor_sigma_m = 0.12;
   double anchor_bias_prior_sigma_m = 0.15;  // c0, c1: the SDK's elbow bias is 5-10 cm
   double anchor_huber_k = 2.0;
+  // GapRecoveryInput::second_elbow_anchor (unused when empty), with its own error c0 + tau c1;
+  // the same Huber k. Defaults: the camera skeleton's elbow, as anchor_sigma_m above.
+  double second_anchor_sigma_m = 0.12;
+  double second_anchor_bias_prior_sigma_m = 0.15;
   int max_iterations = 15;
 };
 

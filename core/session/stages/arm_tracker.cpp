@@ -355,8 +355,19 @@ void ArmTracker::recover(std::int64_t t_start_us, std::int64_t t_end_us, StageOu
                          [&](const auto& a) { return a.t_us > t_start_us && a.t_us < t_end_us; });
   };
   const bool from_fit = !from_fit_elbows.empty() && 2 * inside_gap(from_fit_elbows) >= inside_gap(from_sdk);
-  input.elbow_anchor = from_fit ? std::move(from_fit_elbows) : std::move(from_sdk);
   forearm::GapSmootherOptions smoother_options = smoother_options_;
+  if (from_fit) {
+    input.elbow_anchor = std::move(from_fit_elbows);
+    // The SDK's elbow alongside, with the SDK's sigmas and its own error line: where the fit goes
+    // wrong behind the back, the two disagree (FitAnchorOptions::sdk_as_second_anchor).
+    if (fit_anchor_->sdk_as_second_anchor) {
+      input.second_elbow_anchor = std::move(from_sdk);
+      smoother_options.second_anchor_sigma_m = smoother_options_.anchor_sigma_m;
+      smoother_options.second_anchor_bias_prior_sigma_m = smoother_options_.anchor_bias_prior_sigma_m;
+    }
+  } else {
+    input.elbow_anchor = std::move(from_sdk);
+  }
   if (from_fit) {
     smoother_options.anchor_sigma_m = fit_anchor_->sigma_m;
     smoother_options.anchor_bias_prior_sigma_m = fit_anchor_->bias_prior_sigma_m;

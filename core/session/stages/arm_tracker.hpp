@@ -39,6 +39,10 @@ struct FitAnchorOptions {
   // than with the SDK's anchor (34.5 against 25.7 mm RMS), with 0.03 m better (22.8 mm); the
   // protocol within 0.4 mm either way.
   double bias_prior_sigma_m = 0.03;
+  // The SDK's elbow as the smoother's second anchor (GapRecoveryInput::second_elbow_anchor), with
+  // the SDK anchor's sigmas: behind the back the fit's elbow goes 50-140 mm off for about 2 s
+  // (docs/forearm.md "Two anchors"). Measured on protocol seeds 1-10: see there.
+  bool sdk_as_second_anchor = true;
   double max_wait_s = 10.0;  // a gap waits at most this long (camera time) for the fit
   // The live estimate in a gap is pulled towards the SDK's elbow of each frame (the fit's comes
   // later); the SDK's bias (it turns with a period of seconds) is taken out as measured against
