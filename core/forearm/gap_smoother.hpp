@@ -21,8 +21,9 @@
 //                 strap is hidden but the elbow mostly is not. c0 + tau c1 is the anchor's own
 //                 error (the SDK's slowly turning elbow bias), learnt where the strap is seen on
 //                 both sides; residuals beyond anchor_huber_k sigma count linearly (the SDK's
-//                 jumps and inferred elbows), by reweighting each iteration
-//   priors        b_A, e0, e1, c0, c1 (zero mean)
+//                 jumps and inferred elbows), by reweighting each iteration; a second anchor
+//                 (GapRecoveryInput::second_elbow_anchor) the same with its own c0' + tau c1'
+//   priors        b_A, e0, e1, c0, c1, c0', c1' (zero mean)
 // solved by Gauss-Newton on the sparse normal equations (the sphere and the robust anchor are the
 // nonlinear terms).
 //
