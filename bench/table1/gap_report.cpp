@@ -3,10 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <numbers>
 
 #include "body/smpl_model.hpp"
 #include "common/error.hpp"
 #include "forearm/gap_input.hpp"
+#include "forearm/occlusion_tests.hpp"
+#include "sim/camera_skeleton.hpp"
 
 namespace posefuse::bench {
 
@@ -94,16 +97,13 @@ void print_acceleration_error(const v1::RecoveredSegment& s, const TruthTrack& t
 // skeleton's. Where the anchor pulls the recovery off.
 void print_elbow_error(const v1::RecoveredSegment& s, const Table1Truth& truth,
                        const std::vector<v1::FitResult>& results, v1::Arm arm) {
-  const int smpl_elbow = arm == v1::LEFT ? body::kLeftElbow : body::kRightElbow, sdk_elbow = arm == v1::LEFT ? 5 : 9;
-  const int smpl_wrist = smpl_elbow + 2;
+  const bool left = arm == v1::LEFT;
+  const int smpl_elbow = left ? body::kLeftElbow : body::kRightElbow, smpl_wrist = left ? body::kLeftWrist : body::kRightWrist;
+  const int sdk_elbow = left ? sim::kElbowLeft : sim::kElbowRight;
   const auto truth_at = [&](std::int64_t t_us) -> const sim::ForearmTruth* {
     const auto f = std::lower_bound(truth.frame_t_us.begin(), truth.frame_t_us.end(), t_us);
     if (f == truth.frame_t_us.end() || *f != t_us) return nullptr;
     return &truth.forearm[static_cast<std::size_t>(f - truth.frame_t_us.begin())];
-  };
-  const auto truth_elbow = [&](std::int64_t t_us) -> const Vec3* {
-    const sim::ForearmTruth* f = truth_at(t_us);
-    return f ? &f->elbow_K_m : nullptr;
   };
   const std::int64_t bin = 500000;
   const auto bins = static_cast<std::size_t>((s.t_end_us() - s.t_start_us()) / bin + 1);
@@ -114,22 +114,22 @@ void print_elbow_error(const v1::RecoveredSegment& s, const Table1Truth& truth,
     return static_cast<long>((t_us - s.t_start_us()) / bin);
   };
   for (const v1::FitResult& r : results) {
-    if (!r.has_frame() || r.frame().smpl_joints_size() <= smpl_elbow) continue;
+    if (!r.has_frame() || r.frame().smpl_joints_size() <= smpl_wrist) continue;
     const long b = bin_of(r.frame().t_us());
-    const Vec3* e = truth_elbow(r.frame().t_us());
-    if (b < 0 || !e) continue;
-    fit_sum[static_cast<std::size_t>(b)] += (vec(r.frame().smpl_joints(smpl_elbow).position_m()) - *e).norm();
+    const sim::ForearmTruth* t = truth_at(r.frame().t_us());
+    if (b < 0 || !t) continue;
+    const Vec3 elbow = vec(r.frame().smpl_joints(smpl_elbow).position_m());
+    const Vec3 wrist = vec(r.frame().smpl_joints(smpl_wrist).position_m());
+    fit_sum[static_cast<std::size_t>(b)] += (elbow - t->elbow_K_m).norm();
     energy_sum[static_cast<std::size_t>(b)] += r.frame().fit_energy();
-    const Vec3 fit_axis = vec(r.frame().smpl_joints(smpl_wrist).position_m()) - vec(r.frame().smpl_joints(smpl_elbow).position_m());
-    const Vec3 true_axis = truth_at(r.frame().t_us())->K_from_F * Vec3::UnitY();
-    angle_sum[static_cast<std::size_t>(b)] += std::acos(std::clamp(fit_axis.normalized().dot(true_axis), -1.0, 1.0)) * 180.0 / 3.14159265358979;
+    angle_sum[static_cast<std::size_t>(b)] += forearm::forearm_direction_angle(elbow, wrist, t->K_from_F) * 180.0 / std::numbers::pi;
     ++fit_n[static_cast<std::size_t>(b)];
   }
   for (const v1::SkeletonFrame& k : truth.sdk) {
     const long b = bin_of(k.t_us());
-    const Vec3* e = truth_elbow(k.t_us());
-    if (b < 0 || !e || k.joints_size() <= sdk_elbow) continue;
-    sdk_sum[static_cast<std::size_t>(b)] += (vec(k.joints(sdk_elbow).position_m()) - *e).norm();
+    const sim::ForearmTruth* t = truth_at(k.t_us());
+    if (b < 0 || !t || k.joints_size() <= sdk_elbow) continue;
+    sdk_sum[static_cast<std::size_t>(b)] += (vec(k.joints(sdk_elbow).position_m()) - t->elbow_K_m).norm();
     ++sdk_n[static_cast<std::size_t>(b)];
   }
   std::printf("    elbow error, mm, mean per 0.5 s bin from the start, fit (energy, forearm axis error deg) / SDK:");

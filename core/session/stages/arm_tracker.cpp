@@ -365,12 +365,10 @@ void ArmTracker::recover(std::int64_t t_start_us, std::int64_t t_end_us, StageOu
       smoother_options.second_anchor_sigma_m = smoother_options_.anchor_sigma_m;
       smoother_options.second_anchor_bias_prior_sigma_m = smoother_options_.anchor_bias_prior_sigma_m;
     }
-  } else {
-    input.elbow_anchor = std::move(from_sdk);
-  }
-  if (from_fit) {
     smoother_options.anchor_sigma_m = fit_anchor_->sigma_m;
     smoother_options.anchor_bias_prior_sigma_m = fit_anchor_->bias_prior_sigma_m;
+  } else {
+    input.elbow_anchor = std::move(from_sdk);
   }
   input.model = model_;
   input.K_from_W = K_from_W_;
