@@ -434,6 +434,9 @@ FitResult FrameFitter::run(const FrameObservation& observation, const Eigen::Vec
       break;
     }
     ++result.accepted_steps;
+    // The joint-step stop below asks whether the body still moves; a step shrunk by damping raised
+    // above joint_step_stop_max_damping says nothing about that (FitOptions).
+    const bool step_undamped = gamma <= options_.joint_step_stop_max_damping;
     // Gain ratio (Nielsen): how well the quadratic model predicted the decrease.
     const double predicted = system_.predicted_decrease(gamma, step_, uv_step_);
     const double rho = predicted > 0 ? (energy_before - energy_after) / predicted : 0.0;
@@ -446,7 +449,7 @@ FitResult FrameFitter::run(const FrameObservation& observation, const Eigen::Vec
     pose_model(theta, beta);
     update_correspondences(observation, iteration + 1);
     if (energy_before - energy_after < options_.min_relative_decrease * energy_before ||
-        joint_step < options_.min_joint_step_m) {
+        (joint_step < options_.min_joint_step_m && step_undamped)) {
       result.status = FitStatus::kConverged;
       break;
     }

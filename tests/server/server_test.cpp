@@ -354,13 +354,15 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   EXPECT_EQ(info.stages(0).name(), "imu_orientation");
   EXPECT_EQ(info.stages(1).name(), "forearm");
   EXPECT_EQ(info.stages(2).name(), "body_fit");
-  ASSERT_EQ(info.options_size(), 28);
+  ASSERT_EQ(info.options_size(), 29);
   EXPECT_EQ(info.options(16).key(), "fit.enabled");
   EXPECT_EQ(info.options(16).default_value(), "false");
   EXPECT_EQ(info.options(23).key(), "fit.fine_shape");
   EXPECT_EQ(info.options(24).key(), "fit.lambda_imu");
   EXPECT_EQ(info.options(25).key(), "fit.skeleton_start_energy");
   EXPECT_EQ(info.options(25).default_value(), "45");
+  EXPECT_EQ(info.options(27).key(), "fit.joint_step_stop_max_damping");
+  EXPECT_EQ(info.options(27).default_value(), "30");
   EXPECT_EQ(info.options(0).key(), "imu.tau_acc_s");
   EXPECT_EQ(info.options(2).key(), "imu.mag_calibration.<device_id>");
   EXPECT_EQ(info.options(3).key(), "forearm.K_from_B");

@@ -369,8 +369,14 @@ TEST(BodyFitStage, BadOptionsAreErrors) {
     BodyFitStage stage_with;
     EXPECT_THROW(stage_with.start(header_with({{"fit.freeze_contour_after", after}}), out), Error) << after;
   }
+  for (const char* damping : {"0", "-1", "nan", "inf", "x"}) {
+    BodyFitStage stage_with;
+    EXPECT_THROW(stage_with.start(header_with({{"fit.joint_step_stop_max_damping", damping}}), out), Error) << damping;
+  }
   BodyFitStage valid;
-  EXPECT_NO_THROW(valid.start(header_with({{"fit.start_velocity_gain", "1"}, {"fit.freeze_contour_after", "0"}}), out));
+  EXPECT_NO_THROW(valid.start(header_with({{"fit.start_velocity_gain", "1"}, {"fit.freeze_contour_after", "0"},
+                                           {"fit.joint_step_stop_max_damping", "1e8"}}),
+                              out));
 }
 
 TEST(BodyFitStage, SkeletonStartPolicyDecision) {

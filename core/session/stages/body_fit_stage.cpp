@@ -40,6 +40,7 @@ constexpr const char* kLambdaImuKey = "fit.lambda_imu";
 constexpr const char* kSkeletonStartEnergyKey = "fit.skeleton_start_energy";
 constexpr const char* kStartVelocityGainKey = "fit.start_velocity_gain";
 constexpr const char* kFreezeContourAfterKey = "fit.freeze_contour_after";
+constexpr const char* kJointStepStopDampingKey = "fit.joint_step_stop_max_damping";
 
 // Depth, body index and skeleton of one frame share the depth frame's t_us (1 ms tolerance).
 constexpr std::int64_t kSameFrameUs = 1000;
@@ -185,6 +186,8 @@ std::vector<StageOption> BodyFitStage::options() const {
        "always both starts, on two threads)"},
       {kFreezeContourAfterKey, std::to_string(defaults.freeze_contour_after),
        "LM: U_bg (bg / float points) is re-selected in the first this many iterations only (0 = always)"},
+      {kJointStepStopDampingKey, format_double(defaults.joint_step_stop_max_damping),
+       "LM: stop on a joint step under 1 mm only after a step damped by at most this (1e8 = after any step)"},
       {kStartVelocityGainKey, "0",
        "previous-frame start moved on by this share of the last frames' velocity (0 = off, 1 = constant velocity)"},
   };
@@ -217,6 +220,11 @@ void BodyFitStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) 
     fit_options.freeze_contour_after = static_cast<int>(parse_int64(*text, option_field(kFreezeContourAfterKey)));
     if (fit_options.freeze_contour_after < 0)
       throw_invalid(option_field(kFreezeContourAfterKey), "is '" + *text + "', must not be negative");
+  }
+  if (const std::string* text = option(header, kJointStepStopDampingKey)) {
+    fit_options.joint_step_stop_max_damping = parse_double(*text, option_field(kJointStepStopDampingKey));
+    if (!std::isfinite(fit_options.joint_step_stop_max_damping) || fit_options.joint_step_stop_max_damping <= 0)
+      throw_invalid(option_field(kJointStepStopDampingKey), "is '" + *text + "', must be finite and positive");
   }
   if (const std::string* text = option(header, kLambdaImuKey)) {
     fit_options.lambda_imu = parse_double(*text, option_field(kLambdaImuKey));
