@@ -50,7 +50,7 @@ struct FitOptions {
   // ... but only after a step taken at a damping gamma of at most this (ours). Where the undamped
   // step raises the energy (behind the back on paper 1's protocol: 4 rejected trials, gamma 0.01
   // -> 164, in most frames), the accepted step is tiny because of the damping, not because the
-  // body has arrived; stopping there froze the arm for a second at a time (elbows 74 / 89 mm off on
+  // body has arrived; stopping there stalled the arm for a second at a time (elbows 74 / 89 mm off on
   // protocol seed 4 behind the back). The gain ratio lowers gamma over the next steps, and the
   // stop applies again once it is down here. max_damping or more: the stop after any step (before).
   // 30 was chosen over 1, 10 and 100 (docs/fitting.md, "The joint-step stop after damped steps").
