@@ -36,6 +36,8 @@ void validate(const FitOptions& o) {
   require(o.max_damping > o.initial_damping, "max_damping", o.max_damping, "must exceed initial_damping");
   require(o.min_relative_decrease >= 0, "min_relative_decrease", o.min_relative_decrease, "must not be negative");
   require(o.min_joint_step_m >= 0, "min_joint_step_m", o.min_joint_step_m, "must not be negative");
+  require(o.limit_projection_margin_rad >= 0, "limit_projection_margin_rad", o.limit_projection_margin_rad,
+          "must not be negative");
   require(o.joint_step_stop_max_damping > 0, "joint_step_stop_max_damping", o.joint_step_stop_max_damping,
           "must be positive");
   require(o.freeze_contour_after >= 0, "freeze_contour_after", o.freeze_contour_after, "must not be negative");

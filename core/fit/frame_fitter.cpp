@@ -370,6 +370,19 @@ FitResult FrameFitter::fit_shape_and_pose(const FrameObservation& observation, c
   }
 }
 
+void FrameFitter::project_onto_limits(const Eigen::VectorXd& x, Eigen::VectorXd& trial_x) const {
+  // The limit term is zero inside the range, so the Gauss-Newton model does not see it: a DOF the
+  // data hardly constrain (an arm hidden behind the back) gets a step of radians across its limit,
+  // where eq. 8's penalty then dominates the trial's energy. A DOF inside its range stays inside;
+  // one already outside may move but not further out.
+  for (int d = 0; d < layout_.size(); ++d) {
+    const body::Dof& dof = layout_.dof(d);
+    if (!dof.limited) continue;
+    const double m = options_.limit_projection_margin_rad;
+    trial_x[d] = std::clamp(trial_x[d], std::min(dof.min_rad - m, x[d]), std::max(dof.max_rad + m, x[d]));
+  }
+}
+
 FitResult FrameFitter::run(const FrameObservation& observation, const Eigen::VectorXd& theta0,
                            const Eigen::VectorXd& beta0) {
   validate(observation);
@@ -405,6 +418,10 @@ FitResult FrameFitter::run(const FrameObservation& observation, const Eigen::Vec
     while (gamma <= options_.max_damping) {
       if (system_.solve(gamma, step_, uv_step_)) {
         trial_x_ = x + step_;
+        if (options_.project_steps_onto_limits) {
+          project_onto_limits(x, trial_x_);
+          step_ = trial_x_ - x;
+        }
         split(trial_x_, trial_theta_, trial_beta_);
         trial_eval_.evaluate(trial_beta_, trial_theta_, body::Derivatives::kNone);
         trial_surface_.update(trial_eval_.vertices());

@@ -126,6 +126,9 @@ class FrameFitter {
   // The LM parameters x = (theta, beta_free) and back.
   int num_parameters() const { return layout_.size() + static_cast<int>(free_betas_.size()); }
   void split(const Eigen::VectorXd& x, Eigen::VectorXd& theta, Eigen::VectorXd& beta) const;
+  // FitOptions::project_steps_onto_limits: the trial's limited pose DOFs clamped to their range
+  // (or, for a DOF outside it at x, to no further out than x).
+  void project_onto_limits(const Eigen::VectorXd& x, Eigen::VectorXd& trial_x) const;
   // d joints / d x (72 x P): the pose Jacobian alone when the shape is fixed.
   const Eigen::MatrixXd& joint_jacobian() const;
   // d vertex(i) / d x into the 3 x P block `out` (zeroed first).

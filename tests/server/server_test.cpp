@@ -354,7 +354,7 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   EXPECT_EQ(info.stages(0).name(), "imu_orientation");
   EXPECT_EQ(info.stages(1).name(), "forearm");
   EXPECT_EQ(info.stages(2).name(), "body_fit");
-  ASSERT_EQ(info.options_size(), 29);
+  ASSERT_EQ(info.options_size(), 30);
   EXPECT_EQ(info.options(16).key(), "fit.enabled");
   EXPECT_EQ(info.options(16).default_value(), "false");
   EXPECT_EQ(info.options(23).key(), "fit.fine_shape");

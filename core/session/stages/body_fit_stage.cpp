@@ -41,6 +41,7 @@ constexpr const char* kSkeletonStartEnergyKey = "fit.skeleton_start_energy";
 constexpr const char* kStartVelocityGainKey = "fit.start_velocity_gain";
 constexpr const char* kFreezeContourAfterKey = "fit.freeze_contour_after";
 constexpr const char* kJointStepStopDampingKey = "fit.joint_step_stop_max_damping";
+constexpr const char* kProjectStepsKey = "fit.project_steps_onto_limits";
 
 // Depth, body index and skeleton of one frame share the depth frame's t_us (1 ms tolerance).
 constexpr std::int64_t kSameFrameUs = 1000;
@@ -188,6 +189,8 @@ std::vector<StageOption> BodyFitStage::options() const {
        "LM: U_bg (bg / float points) is re-selected in the first this many iterations only (0 = always)"},
       {kJointStepStopDampingKey, format_double(defaults.joint_step_stop_max_damping),
        "LM: stop on a joint step under 1 mm only after a step damped by at most this (1e8 = after any step)"},
+      {kProjectStepsKey, defaults.project_steps_onto_limits ? "true" : "false",
+       "LM: each trial step clamped to the pose limits (false = paper 2's soft limits alone)"},
       {kStartVelocityGainKey, "0",
        "previous-frame start moved on by this share of the last frames' velocity (0 = off, 1 = constant velocity)"},
   };
@@ -226,6 +229,7 @@ void BodyFitStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) 
     if (!std::isfinite(fit_options.joint_step_stop_max_damping) || fit_options.joint_step_stop_max_damping <= 0)
       throw_invalid(option_field(kJointStepStopDampingKey), "is '" + *text + "', must be finite and positive");
   }
+  fit_options.project_steps_onto_limits = bool_option(header, kProjectStepsKey, fit_options.project_steps_onto_limits);
   if (const std::string* text = option(header, kLambdaImuKey)) {
     fit_options.lambda_imu = parse_double(*text, option_field(kLambdaImuKey));
     if (!std::isfinite(fit_options.lambda_imu) || fit_options.lambda_imu < 0)
