@@ -373,12 +373,12 @@ FitResult FrameFitter::fit_shape_and_pose(const FrameObservation& observation, c
 void FrameFitter::project_onto_limits(const Eigen::VectorXd& x, Eigen::VectorXd& trial_x) const {
   // The limit term is zero inside the range, so the Gauss-Newton model does not see it: a DOF the
   // data hardly constrain (an arm hidden behind the back) gets a step of radians across its limit,
-  // where eq. 8's penalty then dominates the trial's energy. A DOF inside its range stays inside;
-  // one already outside may move but not further out.
+  // where eq. 8's penalty then dominates the trial's energy. A DOF within the margin of its range
+  // stays within it; one already further out may move but not further out.
+  const double m = options_.limit_projection_margin_rad;
   for (int d = 0; d < layout_.size(); ++d) {
     const body::Dof& dof = layout_.dof(d);
     if (!dof.limited) continue;
-    const double m = options_.limit_projection_margin_rad;
     trial_x[d] = std::clamp(trial_x[d], std::min(dof.min_rad - m, x[d]), std::max(dof.max_rad + m, x[d]));
   }
 }

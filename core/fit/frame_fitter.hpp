@@ -127,7 +127,7 @@ class FrameFitter {
   int num_parameters() const { return layout_.size() + static_cast<int>(free_betas_.size()); }
   void split(const Eigen::VectorXd& x, Eigen::VectorXd& theta, Eigen::VectorXd& beta) const;
   // FitOptions::project_steps_onto_limits: the trial's limited pose DOFs clamped to their range
-  // (or, for a DOF outside it at x, to no further out than x).
+  // widened by limit_projection_margin_rad (or, for a DOF further out at x, to no further than x).
   void project_onto_limits(const Eigen::VectorXd& x, Eigen::VectorXd& trial_x) const;
   // d joints / d x (72 x P): the pose Jacobian alone when the shape is fixed.
   const Eigen::MatrixXd& joint_jacobian() const;

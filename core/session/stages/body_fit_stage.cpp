@@ -190,7 +190,7 @@ std::vector<StageOption> BodyFitStage::options() const {
       {kJointStepStopDampingKey, format_double(defaults.joint_step_stop_max_damping),
        "LM: stop on a joint step under 1 mm only after a step damped by at most this (1e8 = after any step)"},
       {kProjectStepsKey, defaults.project_steps_onto_limits ? "true" : "false",
-       "LM: each trial step clamped to the pose limits (false = paper 2's soft limits alone)"},
+       "LM: each trial step clamped to the pose limits widened by 0.1 rad (false = paper 2's soft limits alone)"},
       {kStartVelocityGainKey, "0",
        "previous-frame start moved on by this share of the last frames' velocity (0 = off, 1 = constant velocity)"},
   };
@@ -224,11 +224,8 @@ void BodyFitStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) 
     if (fit_options.freeze_contour_after < 0)
       throw_invalid(option_field(kFreezeContourAfterKey), "is '" + *text + "', must not be negative");
   }
-  if (const std::string* text = option(header, kJointStepStopDampingKey)) {
-    fit_options.joint_step_stop_max_damping = parse_double(*text, option_field(kJointStepStopDampingKey));
-    if (!std::isfinite(fit_options.joint_step_stop_max_damping) || fit_options.joint_step_stop_max_damping <= 0)
-      throw_invalid(option_field(kJointStepStopDampingKey), "is '" + *text + "', must be finite and positive");
-  }
+  fit_options.joint_step_stop_max_damping =
+      positive_option(header, kJointStepStopDampingKey, fit_options.joint_step_stop_max_damping);
   fit_options.project_steps_onto_limits = bool_option(header, kProjectStepsKey, fit_options.project_steps_onto_limits);
   if (const std::string* text = option(header, kLambdaImuKey)) {
     fit_options.lambda_imu = parse_double(*text, option_field(kLambdaImuKey));
