@@ -1,21 +1,30 @@
 // Orientation accuracy and speed on BROAD trials (../shared/data/broad/README.md).
 //
 //   bench_broad_orientation [--mode NAME] [--csv-out DIR] FOLDER
+//   bench_broad_orientation --loto [--mode robust|robust-offline] [--threads N] FOLDER
 //
 // Runs every *.hdf5 trial in FOLDER (sorted by name) through one filter mode with one parameter
 // set, and prints per trial the RMSE of the total / heading / inclination error (degrees, over
 // movement = 1 samples with ground truth) and the filter's speed (single thread, filter time
 // only, measured as this thread's CPU time), then the mean over trials. The ground truth is read only to score.
+//
+// --loto: leave-one-trial-out validation of the robust filter's tuned parameters (broad_loto.hpp):
+// every trial scored (mean total RMSE) at every point of the grid of tuned parameters, then per
+// fold the point best on the other trials scored on the held-out one.
 #include <algorithm>
+#include <atomic>
+#include <cmath>
 #include <cstdlib>
 #include <cstdio>
 #include <ctime>
 #include <filesystem>
 #include <functional>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include "bench_clock.hpp"
+#include "broad_loto.hpp"
 #include "broad_trial.hpp"
 #include "common/error.hpp"
 #include "eval/orientation_error.hpp"
@@ -78,7 +87,9 @@ const std::vector<Mode>& modes() {
 
 void print_usage(std::FILE* to) {
   std::fprintf(to, "usage: bench_broad_orientation [--mode NAME] [--csv-out DIR] [--tau-acc S] FOLDER\n"
-                  "  --tau-acc S: the robust mode's accelerometer time constant (default %.1f s)\nmodes:\n",
+                  "       bench_broad_orientation --loto [--mode robust|robust-offline] [--threads N] FOLDER\n"
+                  "  --tau-acc S: the robust mode's accelerometer time constant (default %.1f s)\n"
+                  "  --loto: leave-one-trial-out validation of the robust filter's tuned parameters\nmodes:\n",
                posefuse::imu::RobustOrientationFilter::Params().tau_acc_s);
   for (const Mode& m : modes()) std::fprintf(to, "  %-16s %s\n", m.name, m.summary);
 }
@@ -95,10 +106,100 @@ void write_csv(const fs::path& file, const std::vector<ImuSample>& imu, const st
   if (std::fclose(f) != 0) throw posefuse::Error(posefuse::ErrorCode::kDataLoss, file.string(), "write failed");
 }
 
+// Total RMSE (degrees) of one trial's W_from_A against its ground truth.
+double total_rmse_deg(const posefuse::bench::BroadTrial& trial, const std::vector<Quat>& W_from_A) {
+  std::vector<Quat> ENU_from_A(W_from_A.size());
+  const Quat ENU_from_W = posefuse::geometry::ENU_from_W();
+  for (std::size_t i = 0; i < W_from_A.size(); ++i) ENU_from_A[i] = ENU_from_W * W_from_A[i];
+  return posefuse::eval::orientation_rmse(ENU_from_A, trial.ENU_from_sensor_gt, trial.movement).total_rad * 180.0 /
+         EIGEN_PI;
+}
+
+// Leave-one-trial-out over the grid of tuned parameters (broad_loto.hpp), for the robust filter
+// causal or offline. Scoring runs on `threads` threads, each taking whole grid points.
+int run_loto(const std::vector<posefuse::bench::BroadTrial>& trials, bool offline, unsigned threads) {
+  using posefuse::bench::RobustParams;
+  const std::vector<posefuse::bench::GridAxis> axes = posefuse::bench::robust_tuned_axes();
+  const std::size_t points = posefuse::bench::grid_size(axes);
+  std::printf("leave-one-trial-out: robust filter %s, %zu trials, %zu grid points over %zu tuned parameters:\n",
+              offline ? "offline" : "causal", trials.size(), points, axes.size());
+  for (const auto& axis : axes) {
+    std::printf("  %-22s", axis.name);
+    for (double v : axis.values) std::printf(" %g", v * axis.display_scale);
+    std::printf(" %s\n", axis.display_unit);
+  }
+  std::fflush(stdout);
+
+  std::vector<std::vector<double>> score(trials.size(), std::vector<double>(points, 0.0));
+  std::atomic<std::size_t> next{0}, done{0};
+  const auto worker = [&] {
+    for (std::size_t point = next++; point < points; point = next++) {
+      const RobustParams params = posefuse::bench::grid_point(axes, point, RobustParams{});
+      for (std::size_t t = 0; t < trials.size(); ++t) {
+        std::vector<Quat> W_from_A;
+        if (offline) {
+          W_from_A = posefuse::imu::robust_orientation_offline(trials[t].imu, params);
+        } else {
+          posefuse::imu::RobustOrientationFilter filter(params);
+          W_from_A.reserve(trials[t].imu.size());
+          for (const ImuSample& s : trials[t].imu) W_from_A.push_back(filter.update(s));
+        }
+        score[t][point] = total_rmse_deg(trials[t], W_from_A);
+      }
+      const std::size_t n = ++done;
+      if (n % 50 == 0 || n == points) std::fprintf(stderr, "  scored %zu / %zu grid points\n", n, points);
+    }
+  };
+  std::vector<std::thread> pool;
+  for (unsigned i = 1; i < threads; ++i) pool.emplace_back(worker);
+  worker();
+  for (std::thread& t : pool) t.join();
+
+  // The defaults are a grid point (every axis holds its default value); find it for the table.
+  std::size_t default_point = points;
+  for (std::size_t point = 0; point < points; ++point) {
+    const RobustParams p = posefuse::bench::grid_point(axes, point, RobustParams{});
+    bool same = true;
+    for (const auto& axis : axes) {
+      const double d = RobustParams{}.*axis.member;
+      same = same && std::abs(p.*axis.member - d) <= 1e-9 * std::abs(d);  // defaults spell pi shorter
+    }
+    if (same) default_point = point;
+  }
+  if (default_point == points) throw posefuse::Error(posefuse::ErrorCode::kInternal, "grid", "lacks the defaults");
+
+  const auto folds = posefuse::bench::leave_one_trial_out(score);
+  std::printf("%-46s %9s %9s %9s  %s\n", "held-out trial", "held-out", "defaults", "training", "chosen on the other trials");
+  double sum_held = 0.0, sum_default = 0.0, max_held = 0.0;
+  std::size_t worst = 0;
+  for (const auto& f : folds) {
+    const double d = score[f.held_out][default_point];
+    std::printf("%-46s %9.3f %9.3f %9.3f  %s\n", trials[f.held_out].name.c_str(), f.held_out_score, d,
+                f.training_mean, posefuse::bench::describe_grid_point(axes, f.chosen).c_str());
+    sum_held += f.held_out_score;
+    sum_default += d;
+    if (f.held_out_score > max_held) {
+      max_held = f.held_out_score;
+      worst = f.held_out;
+    }
+  }
+  const double n = static_cast<double>(trials.size());
+  double best_mean = 0.0;
+  const std::size_t best = posefuse::bench::best_in_sample(score, &best_mean);
+  std::printf("leave-one-trial-out mean total RMSE: %.3f deg (held-out max %.3f, %s)\n", sum_held / n, max_held,
+              trials[worst].name.c_str());
+  std::printf("in-sample mean, defaults:            %.3f deg\n", sum_default / n);
+  std::printf("in-sample mean, best grid point:     %.3f deg (%s)\n", best_mean,
+              posefuse::bench::describe_grid_point(axes, best).c_str());
+  return 0;
+}
+
 int run(int argc, char** argv) {
   std::string mode_name = "robust";
   std::string csv_dir;
   std::string folder;
+  bool loto = false;
+  unsigned threads = std::max(1u, std::thread::hardware_concurrency());
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--help" || arg == "-h") {
@@ -112,6 +213,16 @@ int run(int argc, char** argv) {
         return 2;
       }
       robust_params().tau_acc_s = tau;
+    } else if (arg == "--loto") {
+      loto = true;
+    } else if (arg == "--threads" && i + 1 < argc) {
+      char* end = nullptr;
+      const long n = std::strtol(argv[++i], &end, 10);
+      if (end == argv[i] || *end != '\0' || n < 1 || n > 64) {
+        std::fprintf(stderr, "bench_broad_orientation: --threads must be 1..64, not '%s'\n", argv[i]);
+        return 2;
+      }
+      threads = static_cast<unsigned>(n);
     } else if ((arg == "--mode" || arg == "--csv-out") && i + 1 < argc) {
       (arg == "--mode" ? mode_name : csv_dir) = argv[++i];
     } else if (!arg.empty() && arg[0] != '-' && folder.empty()) {
@@ -139,6 +250,18 @@ int run(int argc, char** argv) {
   }
   std::sort(files.begin(), files.end());
   if (files.empty()) throw posefuse::Error(posefuse::ErrorCode::kNotFound, folder, "no *.hdf5 trials");
+  if (loto) {
+    if (mode_name != "robust" && mode_name != "robust-offline") {
+      std::fprintf(stderr, "bench_broad_orientation: --loto needs --mode robust or robust-offline\n");
+      return 2;
+    }
+    std::vector<posefuse::bench::BroadTrial> trials;
+    for (const fs::path& file : files) {
+      trials.push_back(posefuse::bench::read_broad_trial(file.string()));
+      posefuse::imu::validate_imu_stream(trials.back().imu, trials.back().name.c_str());
+    }
+    return run_loto(trials, mode_name == "robust-offline", threads);
+  }
   if (!csv_dir.empty()) fs::create_directories(csv_dir);
 
   constexpr double kDeg = 180.0 / EIGEN_PI;
