@@ -25,6 +25,9 @@ void renormalize(Quat& q) { q.coeffs() *= 0.5 * (3.0 - q.squaredNorm()); }
 // Time constant of the candidate-field averages: only needs to smooth sensor noise.
 constexpr double kCandidateTau_s = 1.0;
 
+// The earth's rotation rate (sidereal day): what a gyro at rest still senses.
+constexpr double kEarthRate_rad_s = 7.2921e-5;
+
 // Rotates v by the unit quaternion q without building a matrix (v' = v + 2 w (u x v) + 2 u x (u x v)).
 Vec3 rotate(const Quat& q, const Vec3& v) {
   const Vec3 u(q.x(), q.y(), q.z());
@@ -64,7 +67,6 @@ RobustOrientationFilter::RobustOrientationFilter(const Params& params) : params_
   positive(params.rest_acc_threshold_m_s2, "rest_acc_threshold_m_s2");
   positive(params.bias_sigma_init_rad_s, "bias_sigma_init_rad_s");
   positive(params.bias_drift_rad_s_per_sqrt_s, "bias_drift_rad_s_per_sqrt_s");
-  positive(params.bias_sigma_rest_rad_s, "bias_sigma_rest_rad_s");
   positive(params.bias_motion_tau_s, "bias_motion_tau_s");
   positive(params.bias_limit_rad_s, "bias_limit_rad_s");
   positive(params.mag_norm_threshold, "mag_norm_threshold");
@@ -77,7 +79,6 @@ RobustOrientationFilter::RobustOrientationFilter(const Params& params) : params_
   positive(params.mag_hard_iron_max_rms, "mag_hard_iron_max_rms");
   positive(params.mag_accept_after_s, "mag_accept_after_s");
   positive(params.mag_hard_iron_min_s, "mag_hard_iron_min_s");
-  positive(params.mag_hard_iron_min_change, "mag_hard_iron_min_change");
   positive(params.mag_hard_iron_return_s, "mag_hard_iron_return_s");
   positive(params.mag_recover_tau_s, "mag_recover_tau_s");
   positive(params.mag_recover_s, "mag_recover_s");
@@ -135,10 +136,10 @@ Quat RobustOrientationFilter::update(const ImuSample& s) {
   }
 
   const Quat E_from_A_q = E_from_I_ * I_from_A_;
+  E_from_A_m_ = E_from_A_q.toRotationMatrix();
   if (s.mag_uT.allFinite()) correct_heading(s.mag_uT, E_from_A_q, dt_s, (s.gyr_rad_s - bias_).squaredNorm());
   if (dt_s > 0.0) {
-    const Eigen::Matrix3d E_from_A = E_from_A_q.toRotationMatrix();
-    E_from_A_lp1_acc_ += gains_.acc_stage * (E_from_A - E_from_A_lp1_acc_);
+    E_from_A_lp1_acc_ += gains_.acc_stage * (E_from_A_m_ - E_from_A_lp1_acc_);
     E_from_A_lp_acc_ += gains_.acc_stage * (E_from_A_lp1_acc_ - E_from_A_lp_acc_);
   }
   if (dt_s > 0.0 && time_s_ > params_.init_s) {
@@ -206,18 +207,47 @@ void RobustOrientationFilter::update_rest_detection(const ImuSample& s, double d
   const bool steady = (s.gyr_rad_s - gyr_lp_).squaredNorm() < gyr_th * gyr_th &&
                       (s.acc_m_s2 - acc_lp_A_).squaredNorm() < acc_th * acc_th &&
                       gyr_lp_.squaredNorm() < params_.bias_limit_rad_s * params_.bias_limit_rad_s;
-  rest_s_ = steady ? rest_s_ + dt_s : 0.0;
+  if (!steady) {
+    rest_s_ = 0.0;
+    return;
+  }
+  if (rest_s_ == 0.0) {
+    // A steady stretch begins: what the bias filter knew before it is the prior for the rest
+    // measurement, which is the plain mean of the raw gyro over the whole stretch.
+    rest_prior_bias_ = bias_;
+    rest_prior_var_ = bias_var_;
+    rest_gyr_sum_.setZero();
+    rest_gyr_sq_sum_ = 0.0;
+    rest_count_ = 0.0;
+  }
+  rest_s_ += dt_s;
+  rest_gyr_sum_ += s.gyr_rad_s;
+  rest_gyr_sq_sum_ += s.gyr_rad_s.squaredNorm();
+  rest_count_ += 1.0;
 }
 
 void RobustOrientationFilter::update_rest_bias(double dt_s) {
   const double drift = params_.bias_drift_rad_s_per_sqrt_s;
   bias_var_ += drift * drift * dt_s;
   if (!at_rest()) return;
-  // At rest the low-passed gyro measures the bias directly (scalar Kalman update per axis).
-  const double r = params_.bias_sigma_rest_rad_s * params_.bias_sigma_rest_rad_s;
-  const double gain = bias_var_ / (bias_var_ + r);
-  bias_ += gain * (gyr_lp_ - bias_);
-  bias_var_ *= 1.0 - gain;
+  // At rest the mean gyro over the steady stretch measures the bias; its variance per axis is
+  // the stretch's own sample variance over the count, floored at the earth's rotation rate
+  // squared (a still gyro senses that rotation too, so no rest measurement is better). One
+  // Kalman update of the prior from the stretch's start, per axis alike.
+  const double n = rest_count_;
+  const Vec3 mean = rest_gyr_sum_ / n;
+  const double sample_var = std::max(0.0, rest_gyr_sq_sum_ / n - mean.squaredNorm()) / 3.0;
+  const double r = std::max(sample_var / n, kEarthRate_rad_s * kEarthRate_rad_s);
+  double prior_var = rest_prior_var_;
+  // A bias that stepped while the sensor moved (temperature, a power cycle) shows as a rest
+  // mean far outside what the prior and the measurement allow together: 3 sigma over the 3
+  // axes (chi-square, 3 degrees of freedom, 99.7 %: 14.2). Then the prior is widened to the
+  // step, so the rest measurement takes over at once instead of being averaged in slowly.
+  const double d2 = (mean - rest_prior_bias_).squaredNorm();
+  if (d2 > 14.2 * (prior_var + r)) prior_var = std::max(prior_var, d2 / 3.0);
+  const double gain = prior_var / (prior_var + r);
+  bias_ = rest_prior_bias_ + gain * (mean - rest_prior_bias_);
+  bias_var_ = prior_var * (1.0 - gain);
 }
 
 void RobustOrientationFilter::correct_inclination(const Vec3& acc_m_s2, double dt_s) {
@@ -261,12 +291,32 @@ bool RobustOrientationFilter::fits_field(double norm_uT, double sin_dip, double 
   return d_norm * d_norm < max_norm * max_norm && d_sin * d_sin < max_dip * max_dip * (1.0 - ref_sin_dip * ref_sin_dip);
 }
 
+bool RobustOrientationFilter::heading_error(const Vec3& m_E, double& error_rad) const {
+  // The angle that turns the horizontal field, seen through Rz(heading), onto +x (magnetic
+  // north). Rz(heading) as a 2D rotation: cos = w^2 - z^2, sin = 2 w z.
+  const double hc = heading_qw_ * heading_qw_ - heading_qz_ * heading_qz_;
+  const double hs = 2.0 * heading_qw_ * heading_qz_;
+  const double north = hc * m_E.x() - hs * m_E.y();
+  const double west = hs * m_E.x() + hc * m_E.y();
+  if (north * north + west * west < 1e-12) return false;
+  if (north > 0.0 && std::abs(west) < 0.2 * north) {
+    // Small error (the usual case): atan series, |x| < 0.2 keeps it within 1e-7 rad.
+    const double x = west / north, x2 = x * x;
+    error_rad = -x * (1.0 - x2 * (1.0 / 3.0 - x2 * (1.0 / 5.0 - x2 / 7.0)));
+  } else {
+    error_rad = -std::atan2(west, north);
+  }
+  return true;
+}
+
 void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_from_A, double dt_s,
                                               double gyr_sq_rad2_s2) {
   const Vec3 m_E = rotate(E_from_A, mag_uT - hard_iron_uT_);
   const double norm = m_E.norm();
   if (norm < 1e-6) return;
   const double sin_dip = -m_E.z() / norm;  // positive when the field points down
+  double error_rad = 0.0;
+  if (!heading_error(m_E, error_rad)) return;  // field vertical: no heading information
 
   double k = dt_s > 0.0 ? gains_.mag : 1.0;
   if (time_s_ < params_.init_s && !mag_ref_valid_) {
@@ -304,7 +354,7 @@ void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
         cand_sin_dip_ = sin_dip;
         cand_s_ = 0.0;
       }
-      update_hard_iron_fit(mag_uT, E_from_A, dt_s);
+      update_hard_iron_fit(mag_uT, dt_s);
       if (cand_s_ >= params_.mag_new_field_s) {
         mag_ref_norm_ = cand_norm_;
         mag_ref_sin_dip_ = cand_sin_dip_;
@@ -314,6 +364,9 @@ void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
       return;
     }
     cand_valid_ = false;
+    // Undisturbed samples refine the offset too: a residual of the prior calibration, or a
+    // magnet too weak to fail the norm and dip test, shows as a better-fitting offset.
+    update_hard_iron_fit(mag_uT, dt_s);
     // Undisturbed: the reference follows slowly (sensor warm-up, slow changes of place).
     const double kr = gains_.mag_ref;
     mag_ref_norm_ += kr * (norm - mag_ref_norm_);
@@ -324,21 +377,6 @@ void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
     }
   }
 
-  // Heading error: the angle that turns the horizontal field, seen through Rz(heading), onto
-  // +x (magnetic north). Rz(heading) as a 2D rotation: cos = w^2 - z^2, sin = 2 w z.
-  const double hc = heading_qw_ * heading_qw_ - heading_qz_ * heading_qz_;
-  const double hs = 2.0 * heading_qw_ * heading_qz_;
-  const double north = hc * m_E.x() - hs * m_E.y();
-  const double west = hs * m_E.x() + hc * m_E.y();
-  if (north * north + west * west < 1e-12) return;  // field vertical: no heading information
-  double error_rad;
-  if (north > 0.0 && std::abs(west) < 0.2 * north) {
-    // Small error (the usual case): atan series, |x| < 0.2 keeps it within 1e-7 rad.
-    const double x = west / north, x2 = x * x;
-    error_rad = -x * (1.0 - x2 * (1.0 / 3.0 - x2 * (1.0 / 5.0 - x2 / 7.0)));
-  } else {
-    error_rad = -std::atan2(west, north);
-  }
   const double step_rad = k * error_rad;
   double c, s;
   half_angle_cos_sin(step_rad, c, s);
@@ -349,15 +387,15 @@ void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
   heading_qz_ = qz * renorm;
 }
 
-void RobustOrientationFilter::update_hard_iron_fit(const Vec3& mag_uT, const Quat& E_from_A, double dt_s) {
-  // Model while a new sensor-fixed offset is present: m_A = A_from_E * b_E + h_A, with b_E the
-  // (constant) field in E. Linear in x = [b_E; h_A]: J = [A_from_E, I].
+void RobustOrientationFilter::update_hard_iron_fit(const Vec3& mag_uT, double dt_s) {
+  // Model of a sensor-fixed offset: m_A = A_from_E * b_E + h_A, with b_E the (constant) field in
+  // E. Linear in x = [b_E; h_A] with J = [A_from_E, I], so J^T J = [I, E_from_A; A_from_E, I]:
+  // the normal equations need only the forgetting sums of A_from_E, of m_E = E_from_A m, of m
+  // and of |m|^2 (a few dozen flops per sample; the 6x6 system is formed at the checks).
   const double forget = 1.0 - gains_.hard_iron;
-  const Eigen::Matrix3d A_from_E = E_from_A.conjugate().toRotationMatrix();
-  Eigen::Matrix<double, 3, 6> J;
-  J << A_from_E, Eigen::Matrix3d::Identity();
-  hi_normal_ = forget * hi_normal_ + J.transpose() * J;
-  hi_rhs_ = forget * hi_rhs_ + J.transpose() * mag_uT;
+  hi_A_from_E_sum_ = forget * hi_A_from_E_sum_ + E_from_A_m_.transpose();
+  hi_m_E_sum_ = forget * hi_m_E_sum_ + E_from_A_m_ * mag_uT;
+  hi_m_A_sum_ = forget * hi_m_A_sum_ + mag_uT;
   hi_sum_sq_ = forget * hi_sum_sq_ + mag_uT.squaredNorm();
   hi_weight_ = forget * hi_weight_ + 1.0;
   hi_check_s_ += dt_s;
@@ -365,33 +403,38 @@ void RobustOrientationFilter::update_hard_iron_fit(const Vec3& mag_uT, const Qua
   if (hi_check_s_ < 0.5 || hi_duration_s_ < params_.mag_hard_iron_min_s) return;
   hi_check_s_ = 0.0;
 
+  Eigen::Matrix<double, 6, 6> normal;
+  normal << hi_weight_ * Eigen::Matrix3d::Identity(), hi_A_from_E_sum_.transpose(), hi_A_from_E_sum_,
+      hi_weight_ * Eigen::Matrix3d::Identity();
+  Eigen::Matrix<double, 6, 1> rhs;
+  rhs << hi_m_E_sum_, hi_m_A_sum_;
   // Excitation: all six directions must be seen; the smallest eigenvalue of the averaged normal
   // matrix is 0 without rotation and up to 1 (per sample) with rotations spread evenly.
-  const Eigen::Matrix<double, 6, 6> averaged = hi_normal_ / hi_weight_;
+  const Eigen::Matrix<double, 6, 6> averaged = normal / hi_weight_;
   const Eigen::SelfAdjointEigenSolver<Eigen::Matrix<double, 6, 6>> eig(averaged, Eigen::EigenvaluesOnly);
   if (eig.eigenvalues()(0) < params_.mag_hard_iron_min_excitation) return;
-  const Eigen::Matrix<double, 6, 1> x = hi_normal_.ldlt().solve(hi_rhs_);
+  const Eigen::Matrix<double, 6, 1> x = normal.ldlt().solve(rhs);
   const Vec3 b_E = x.head<3>();
   const double norm = b_E.norm();
   if (!x.allFinite() || norm < 1e-6 || !fits_reference(norm, -b_E.z() / norm)) return;
   // RMS of |J x - m| over the (weighted) samples, from the accumulated sums.
   const auto rms_uT = [&](const Eigen::Matrix<double, 6, 1>& v) {
-    const double residual_sq = hi_sum_sq_ - 2.0 * v.dot(hi_rhs_) + v.dot(hi_normal_ * v);
+    const double residual_sq = hi_sum_sq_ - 2.0 * v.dot(rhs) + v.dot(normal * v);
     return std::sqrt(std::max(0.0, residual_sq) / (3.0 * hi_weight_));
   };
-  // The best field for the current offset, for comparison: b = N_bb^-1 (r_b - N_bh h).
+  // The best field for the current offset, for comparison: b = (r_b - sum(E_from_A) h) / W.
   Eigen::Matrix<double, 6, 1> x_current;
-  x_current.tail<3>() = hard_iron_uT_;
-  x_current.head<3>() = hi_normal_.topLeftCorner<3, 3>().ldlt().solve(
-      hi_rhs_.head<3>() - hi_normal_.topRightCorner<3, 3>() * hard_iron_uT_);
-  // Accept only a clear, well-explained change: a field disturbance that is not a sensor-fixed
-  // offset (a magnet beside the path) must not leave a wrong offset behind.
+  x_current << (hi_m_E_sum_ - hi_A_from_E_sum_.transpose() * hard_iron_uT_) / hi_weight_, hard_iron_uT_;
+  // Accept only a clear, well-explained offset: the fit must explain the samples (a field
+  // disturbance that is not a sensor-fixed offset, a magnet beside the path, does not) and
+  // halve the residual of the current offset (a change within the noise does not).
   const double rms_new = rms_uT(x);
-  if (rms_new > params_.mag_hard_iron_max_rms * mag_ref_norm_ || rms_new > 0.5 * rms_uT(x_current) ||
-      (x.tail<3>() - hard_iron_uT_).norm() < params_.mag_hard_iron_min_change * mag_ref_norm_) {
-    return;
+  if (rms_new > params_.mag_hard_iron_max_rms * mag_ref_norm_ || rms_new > 0.5 * rms_uT(x_current)) return;
+  if (mag_disturbed_) {
+    hard_iron_prev_uT_ = hard_iron_uT_;  // a magnet attached: remember the offset without it
+  } else if (hard_iron_prev_uT_ == hard_iron_uT_) {
+    hard_iron_prev_uT_ = x.tail<3>();  // a refinement with no magnet episode open
   }
-  hard_iron_prev_uT_ = hard_iron_uT_;
   hard_iron_uT_ = x.tail<3>();
   mag_ref_norm_ = norm;
   mag_ref_sin_dip_ = -b_E.z() / norm;
@@ -419,8 +462,9 @@ bool RobustOrientationFilter::check_previous_hard_iron(const Vec3& mag_uT, const
 }
 
 void RobustOrientationFilter::reset_hard_iron_fit() {
-  hi_normal_.setZero();
-  hi_rhs_.setZero();
+  hi_A_from_E_sum_.setZero();
+  hi_m_E_sum_.setZero();
+  hi_m_A_sum_.setZero();
   hi_weight_ = 0.0;
   hi_sum_sq_ = 0.0;
   hi_check_s_ = 0.0;

@@ -14,8 +14,9 @@
 // and, slowly, by the corrections the accelerometer and magnetometer make during motion.
 // Magnetic disturbances: the field's norm and dip are compared with a reference learned online;
 // a disturbed sample is not used. A new field that stays consistent while the sensor rotates is
-// adopted after a while (moving to another room); a new sensor-fixed offset (a magnet attached to
-// the sensor: hard iron) is estimated by least squares from the rotation and then removed.
+// adopted after a while (moving to another room); the sensor-fixed offset (hard iron: what the
+// prior calibration left, or a magnet attached to the sensor) is estimated all the time by least
+// squares from the rotation, and a clearly better offset replaces the current one.
 // Details and parameter guidance: docs/imu-robust.md.
 #include <cmath>
 #include <vector>
@@ -41,11 +42,11 @@ class RobustOrientationFilter {
     double rest_gyr_threshold_rad_s = 2.0 * 3.14159265358979 / 180.0;
     double rest_acc_threshold_m_s2 = 0.5;
 
-    // Gyro bias Kalman filter (per axis, rad/s). Initial uncertainty, random-walk drift of the
-    // bias, and the noise of one rest measurement (the low-passed gyro).
+    // Gyro bias Kalman filter (per axis, rad/s): initial uncertainty and random-walk drift of
+    // the bias. A rest measurement (the mean gyro over a steady stretch) carries its own
+    // variance, from the stretch's samples.
     double bias_sigma_init_rad_s = 0.5 * 3.14159265358979 / 180.0;
     double bias_drift_rad_s_per_sqrt_s = 0.002 * 3.14159265358979 / 180.0;
-    double bias_sigma_rest_rad_s = 0.3 * 3.14159265358979 / 180.0;
     // During motion the bias follows the rate of the accelerometer/magnetometer corrections
     // with this time constant (slow: those corrections are noisy and lag by ~tau_acc_s).
     double bias_motion_tau_s = 60.0;
@@ -66,19 +67,17 @@ class RobustOrientationFilter {
     // mag_new_field_min_gyr_rad_s (a sensor-fixed magnet would not stay consistent then).
     double mag_new_field_s = 10.0;
     double mag_new_field_min_gyr_rad_s = 20.0 * 3.14159265358979 / 180.0;
-    // Hard-iron re-learning: while disturbed, fit m_A = A_from_E * b_E + h_A by exponentially
-    // forgetting least squares (time constant mag_hard_iron_tau_s); accept h_A once the
-    // rotation excites all directions (smallest normalised eigenvalue above
-    // mag_hard_iron_min_excitation), the fitted field b_E matches the reference and the fit
-    // explains the samples (RMS residual below mag_hard_iron_max_rms times the reference norm).
+    // Hard-iron re-learning, always on: fit m_A = A_from_E * b_E + h_A by exponentially
+    // forgetting least squares (time constant mag_hard_iron_tau_s; restarted when a disturbance
+    // begins); accept h_A once the rotation excites all directions (smallest normalised
+    // eigenvalue above mag_hard_iron_min_excitation), the fitted field b_E matches the reference,
+    // the fit explains the samples (RMS residual below mag_hard_iron_max_rms times the reference
+    // norm) and halves the RMS residual of the current offset, after at least
+    // mag_hard_iron_min_s of samples.
     double mag_hard_iron_tau_s = 20.0;
     double mag_hard_iron_min_excitation = 0.05;
     double mag_hard_iron_max_rms = 0.05;
-    // ... and only after mag_hard_iron_min_s of disturbed samples, when the new offset differs
-    // from the current one by more than mag_hard_iron_min_change times the reference norm and
-    // halves the RMS residual of the current one.
     double mag_hard_iron_min_s = 10.0;
-    double mag_hard_iron_min_change = 0.15;
     // The previous offset comes back (magnet taken off) once the field fits the reference
     // with it for mag_hard_iron_return_s without a break.
     double mag_hard_iron_return_s = 2.0;
@@ -129,10 +128,12 @@ class RobustOrientationFilter {
   void correct_heading(const Vec3& mag_uT, const Quat& E_from_A, double dt_s, double gyr_sq_rad2_s2);
   void update_gains(std::int64_t dt_us);
   void update_rest_bias(double dt_s);
-  void update_hard_iron_fit(const Vec3& mag_uT, const Quat& E_from_A, double dt_s);
+  void update_hard_iron_fit(const Vec3& mag_uT, double dt_s);
   void reset_hard_iron_fit();
   // Switches back to the previous hard iron when the field fits with it again; returns whether it did.
   bool check_previous_hard_iron(const Vec3& mag_uT, const Quat& E_from_A, double dt_s);
+  // The heading correction that turns m_E's horizontal part north; false when it has none.
+  bool heading_error(const Vec3& m_E, double& error_rad) const;
   bool fits_field(double norm_uT, double sin_dip, double ref_norm_uT, double ref_sin_dip) const;
   bool fits_reference(double norm_uT, double sin_dip) const {
     return fits_field(norm_uT, sin_dip, mag_ref_norm_, mag_ref_sin_dip_);
@@ -168,10 +169,17 @@ class RobustOrientationFilter {
   Vec3 gyr_lp_ = Vec3::Zero();
   Vec3 acc_lp_A_ = Vec3::Zero();
   double rest_s_ = 0.0;
+  // The current steady stretch: sums of the raw gyro, and the bias filter's state at its start.
+  Vec3 rest_gyr_sum_ = Vec3::Zero();
+  double rest_gyr_sq_sum_ = 0.0;
+  double rest_count_ = 0.0;
+  Vec3 rest_prior_bias_ = Vec3::Zero();
+  double rest_prior_var_ = 0.0;
   Vec3 bias_ = Vec3::Zero();
   double bias_var_ = 0.0;
   // E_from_A low-passed like the accelerometer (two stages), for the motion bias update.
   Eigen::Matrix3d E_from_A_lp1_acc_ = Eigen::Matrix3d::Zero();
+  Eigen::Matrix3d E_from_A_m_ = Eigen::Matrix3d::Identity();  // this sample's E_from_A as a matrix
   Eigen::Matrix3d E_from_A_lp_acc_ = Eigen::Matrix3d::Zero();
 
   // Heading and magnetic reference.
@@ -189,8 +197,9 @@ class RobustOrientationFilter {
   Vec3 hard_iron_uT_ = Vec3::Zero();
   Vec3 hard_iron_prev_uT_ = Vec3::Zero();
   double prev_fit_s_ = 0.0;
-  Eigen::Matrix<double, 6, 6> hi_normal_ = Eigen::Matrix<double, 6, 6>::Zero();
-  Eigen::Matrix<double, 6, 1> hi_rhs_ = Eigen::Matrix<double, 6, 1>::Zero();
+  Eigen::Matrix3d hi_A_from_E_sum_ = Eigen::Matrix3d::Zero();
+  Vec3 hi_m_E_sum_ = Vec3::Zero();
+  Vec3 hi_m_A_sum_ = Vec3::Zero();
   double hi_weight_ = 0.0;
   double hi_sum_sq_ = 0.0;
   double hi_check_s_ = 0.0;
