@@ -64,7 +64,6 @@ RobustOrientationFilter::RobustOrientationFilter(const Params& params) : params_
   positive(params.rest_tau_s, "rest_tau_s");
   positive(params.rest_min_s, "rest_min_s");
   positive(params.rest_gyr_threshold_rad_s, "rest_gyr_threshold_rad_s");
-  positive(params.rest_acc_threshold_m_s2, "rest_acc_threshold_m_s2");
   positive(params.bias_sigma_init_rad_s, "bias_sigma_init_rad_s");
   positive(params.bias_drift_rad_s_per_sqrt_s, "bias_drift_rad_s_per_sqrt_s");
   positive(params.bias_motion_tau_s, "bias_motion_tau_s");
@@ -124,7 +123,6 @@ Quat RobustOrientationFilter::update(const ImuSample& s) {
     acc_lp1_I_ = s.acc_m_s2;
     acc_lp_I_ = s.acc_m_s2;
     gyr_lp_ = s.gyr_rad_s;
-    acc_lp_A_ = s.acc_m_s2;
     init_weight_count_ = 1.0;
     correct_inclination(s.acc_m_s2, 0.0);
   } else {
@@ -197,15 +195,11 @@ void RobustOrientationFilter::integrate_gyro(const Vec3& gyr_rad_s, double dt_s)
 }
 
 void RobustOrientationFilter::update_rest_detection(const ImuSample& s, double dt_s) {
-  const double k = gains_.rest;
-  gyr_lp_ += k * (s.gyr_rad_s - gyr_lp_);
-  acc_lp_A_ += k * (s.acc_m_s2 - acc_lp_A_);
+  gyr_lp_ += gains_.rest * (s.gyr_rad_s - gyr_lp_);
   const double gyr_th = params_.rest_gyr_threshold_rad_s;
-  const double acc_th = params_.rest_acc_threshold_m_s2;
   // Besides being steady, the rate must be small in absolute terms: a slow constant turn about
   // the vertical is steady too, but no bias is that large.
   const bool steady = (s.gyr_rad_s - gyr_lp_).squaredNorm() < gyr_th * gyr_th &&
-                      (s.acc_m_s2 - acc_lp_A_).squaredNorm() < acc_th * acc_th &&
                       gyr_lp_.squaredNorm() < params_.bias_limit_rad_s * params_.bias_limit_rad_s;
   if (!steady) {
     rest_s_ = 0.0;

@@ -34,13 +34,13 @@ class RobustOrientationFilter {
     // Heading: time constant with which the magnetometer pulls the heading.
     double tau_mag_s = 20.0;
 
-    // Rest detection: gyro and accelerometer are low-passed with rest_tau_s; the sensor is at
-    // rest when both deviate from their low-pass by less than the thresholds for at least
-    // rest_min_s.
+    // Rest detection (for the gyro bias, rest means "not rotating"): the gyro is low-passed with
+    // rest_tau_s; the sensor is at rest when the gyro deviates from its low-pass by less than
+    // the threshold for at least rest_min_s. The accelerometer is not asked: vibration and
+    // translation do not turn the sensor, and the mean gyro still measures the bias then.
     double rest_tau_s = 0.5;
     double rest_min_s = 1.5;
     double rest_gyr_threshold_rad_s = 2.0 * 3.14159265358979 / 180.0;
-    double rest_acc_threshold_m_s2 = 0.5;
 
     // Gyro bias Kalman filter (per axis, rad/s): initial uncertainty and random-walk drift of
     // the bias. A rest measurement (the mean gyro over a steady stretch) carries its own
@@ -167,7 +167,6 @@ class RobustOrientationFilter {
 
   // Rest detection and bias.
   Vec3 gyr_lp_ = Vec3::Zero();
-  Vec3 acc_lp_A_ = Vec3::Zero();
   double rest_s_ = 0.0;
   // The current steady stretch: sums of the raw gyro, and the bias filter's state at its start.
   Vec3 rest_gyr_sum_ = Vec3::Zero();
