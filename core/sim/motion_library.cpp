@@ -57,6 +57,7 @@ BodyMotion select_motion(const std::string& name, const MotionOptions& options, 
     BvhMotionOptions bvh;
     bvh.sex = context.sex;
     bvh.betas = context.betas;
+    bvh.smoothing = options.bvh_smoothing;
     require_positive(options.exercise.speed, "speed");
     const BodyMotion clip = played_at(clip_motion(options.bvh_path, bvh), options.exercise.speed);
     if (!options.calibration_prefix) return clip;

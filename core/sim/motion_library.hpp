@@ -15,6 +15,7 @@
 
 #include "body/template_generator.hpp"
 #include "sim/body_motion.hpp"
+#include "sim/bvh_motion.hpp"
 #include "sim/exercises.hpp"
 
 namespace posefuse::sim {
@@ -26,6 +27,7 @@ struct MotionOptions {
   // hold first and blend into the clip (calibration_prefix.hpp): the forearm stage needs paper
   // 1's calibration pose (II-H), which a mocap clip does not start in.
   bool calibration_prefix = false;
+  BvhSmoothing bvh_smoothing = BvhSmoothing::kGaussian;  // motion "bvh" (bvh_motion.hpp)
 };
 
 // What a motion may need to know about the subject.

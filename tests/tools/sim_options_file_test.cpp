@@ -51,6 +51,7 @@ TEST(SimOptionsFile, AppliesEveryKindOfValue) {
       "bvh_path = /tmp/clip.bvh\n"
       "calibration_prefix = true\n"
       "gyro_range_dps = 1000\n"
+      "bvh_smoothing = noise_level\n"
       "acc_range_g = 8\n"
       "threads = 3\n",
       "opts.txt", options);
@@ -85,6 +86,7 @@ TEST(SimOptionsFile, AppliesEveryKindOfValue) {
   EXPECT_DOUBLE_EQ(options.imu.synth.gyr_range_rad_s, 1000 * 3.14159265358979323846 / 180);
   EXPECT_DOUBLE_EQ(options.imu.synth.acc_range_m_s2, 8 * 9.80665);
   EXPECT_FALSE(options.duration_from_motion);
+  EXPECT_EQ(options.motion_options.bvh_smoothing, sim::BvhSmoothing::kNoiseLevel);
   EXPECT_NO_THROW(sim::validate(options));
 }
 
@@ -130,6 +132,7 @@ TEST(SimOptionsFile, ErrorsNameFileLineKeyAndValue) {
       {"duration_s = clips\n", "opts.txt:1:duration_s", "value 'clips' is not a finite number"},
       {"gyro_range_dps = 100\n", "opts.txt:1:gyro_range_dps", "value '100' must be in 125..4000"},
       {"acc_range_g = 64\n", "opts.txt:1:acc_range_g", "value '64' must be in 2..32"},
+      {"bvh_smoothing = median\n", "opts.txt:1:bvh_smoothing", "value 'median' must be gaussian or noise_level"},
       {"ble_repeat_s = 0.5\n", "opts.txt:1:ble_repeat_s", "must be 0 or >= 1"},
       {"buzzer_repeat_s = 1\n", "opts.txt:1:buzzer_repeat_s", "must be 0 or >= 2"},
       {"buzzer_tone_hz = 9000\n", "opts.txt:1:buzzer_tone_hz", "must be in [200, 7900] Hz"},

@@ -86,6 +86,12 @@ const std::map<std::string, Setter>& setters() {
                   }}},
       {"bvh_path", {"motion bvh: the BVH file to play (relative to the working directory)",
                     [](Options& o, const std::string& v, const std::string&) { o.motion_options.bvh_path = v; }}},
+      {"bvh_smoothing", {"motion bvh: gaussian (0.03 s) or noise_level (a smoothing spline per channel matched to its own noise) (gaussian)",
+                         [](Options& o, const std::string& v, const std::string& f) {
+                           if (v == "gaussian") o.motion_options.bvh_smoothing = sim::BvhSmoothing::kGaussian;
+                           else if (v == "noise_level") o.motion_options.bvh_smoothing = sim::BvhSmoothing::kNoiseLevel;
+                           else bad(f, v, "must be gaussian or noise_level");
+                         }}},
       {"calibration_prefix", {"motion bvh: paper 1's calibration pose (with arm) before the clip, blended in (false)",
                               [](Options& o, const std::string& v, const std::string& f) {
                                 o.motion_options.calibration_prefix = boolean(v, f);
