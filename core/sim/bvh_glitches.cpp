@@ -117,6 +117,7 @@ void repair_arm_swaps(const BvhSkeleton& skeleton, const BvhGlitchOptions& optio
               skeleton.joints[static_cast<std::size_t>(arms->right[0])].name;
     g.reason = "left and right arms swapped (the wrists jump " + number(run_jump) +
                " file units, exchanged and mirrored they continue the previous frame)";
+    g.repair = "exchanging and mirroring the arms back";
     glitches.push_back(g);
   };
   for (std::size_t k = 1; k < frames.size(); ++k) {
@@ -155,11 +156,17 @@ void repair_flips(const BvhSkeleton& skeleton, double frame_time_s, const BvhGli
       // Frames a..b are the glitch when the step into b+1 jumps back: a-1 joins b+1 at a
       // possible rate and far closer than either jump. A glitch may also run to the last frame.
       int b = a;
+      bool first_frame_is_the_glitch = false;
       while (b + 1 < n) {
         const double back = geometry::angle_between(q(b), q(b + 1));
         const double bridge = geometry::angle_between(q(a - 1), q(b + 1));
         if (back > max_step && bridge <= max_step * (b - a + 2) && bridge < 0.5 * std::min(jump, back)) break;
         if (b - a + 1 >= options.max_glitch_frames) {
+          // A jump out of frame 0 that never comes back: frame 0 is the odd one.
+          if (a == 1) {
+            first_frame_is_the_glitch = true;
+            break;
+          }
           throw_invalid(frame_range(a, b), "joint " + skeleton.joints[j].name + " turns " + number(jump) +
                                                " rad in one frame (" + number(jump / frame_time_s) +
                                                " rad/s, limit max_joint_rate_rad_s " +
@@ -174,7 +181,16 @@ void repair_flips(const BvhSkeleton& skeleton, double frame_time_s, const BvhGli
       g.last_frame = b;
       g.joint = skeleton.joints[j].name;
       g.reason = "rotation jumps " + number(jump) + " rad in one frame (" + number(jump / frame_time_s) +
-                 " rad/s) and back";
+                 (b + 1 < n ? " rad/s) and back" : " rad/s) up to the last frame");
+      if (first_frame_is_the_glitch) {
+        g.first_frame = g.last_frame = 0;
+        g.reason = "rotation of the first frame is " + number(jump) + " rad from the next, which the clip continues";
+        g.repair = "holding frame 1";
+        glitches.push_back(g);
+        q(0) = q(1);
+        continue;
+      }
+      g.repair = b + 1 < n ? "slerp across the frames" : "holding frame " + std::to_string(a - 1);
       glitches.push_back(g);
       const Quat before = q(a - 1);
       const Quat after = b + 1 < n ? q(b + 1) : before;
@@ -237,6 +253,8 @@ void repair_bone_lengths(const BvhSkeleton& skeleton, const BvhGlitchOptions& op
       g.last_frame = b;
       g.joint = skeleton.joints[j].name;
       g.reason = "bone length jumps to " + number(worst) + " file units (median " + number(medians[j]) + ")";
+      g.repair = a > 0 && b + 1 < n ? "interpolating the joint's translation across the frames"
+                                    : "holding the joint's translation of frame " + std::to_string(a > 0 ? a - 1 : b + 1);
       glitches.push_back(g);
       const Vec3 before = frames[static_cast<std::size_t>(a > 0 ? a - 1 : b + 1)].translation[j];
       const Vec3 after = frames[static_cast<std::size_t>(b + 1 < n ? b + 1 : a - 1)].translation[j];
@@ -249,21 +267,12 @@ void repair_bone_lengths(const BvhSkeleton& skeleton, const BvhGlitchOptions& op
   }
 }
 
-const char* repaired_by(BvhGlitchKind kind) {
-  switch (kind) {
-    case BvhGlitchKind::kArmSwap: return "exchanging and mirroring the arms back";
-    case BvhGlitchKind::kFlip: return "slerp across the frames";
-    case BvhGlitchKind::kBoneLength: return "interpolating the joint's translation across the frames";
-  }
-  return "";
-}
-
 }  // namespace
 
 std::string describe(const BvhGlitch& glitch, double frame_time_s) {
   return "bvh frames " + std::to_string(glitch.first_frame) + ".." + std::to_string(glitch.last_frame) + " (" +
          number(glitch.first_frame * frame_time_s, "%.3f") + ".." + number(glitch.last_frame * frame_time_s, "%.3f") +
-         " s), " + glitch.joint + ": " + glitch.reason + "; repaired by " + repaired_by(glitch.kind);
+         " s), " + glitch.joint + ": " + glitch.reason + "; repaired by " + glitch.repair;
 }
 
 BvhRepair repair_bvh_glitches(const BvhClip& clip, const BvhGlitchOptions& options) {

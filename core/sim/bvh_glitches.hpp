@@ -21,7 +21,8 @@
 //                 bone_length_tolerance of that median (of the rig's median bone for zero-length
 //                 bones): runs of such frames, at most max_glitch_frames long, get the joint's
 //                 translation interpolated linearly between the good frames around them.
-// A glitch that reaches the clip's first or last frame is held at the good frame next to it.
+// A glitch that reaches the clip's first or last frame is held at the good frame next to it (a
+// flip of frame 0 shows as a jump out of it that never comes back).
 // A flip that does not come back within max_glitch_frames, or a bone-length run longer than
 // that, is not a glitch that interpolation can repair: kInvalidArgument naming the frame range,
 // the joint and why.
@@ -50,6 +51,7 @@ struct BvhGlitch {
   int last_frame = 0;   // inclusive
   std::string joint;    // the BVH joint (arm swaps: the two arm roots, "LeftShoulder/RightShoulder")
   std::string reason;   // what was seen, with the numbers
+  std::string repair;   // what was done about it
 };
 
 // One line: "bvh frames 377..379 (6.283..6.317 s), RightForeArm: <reason>; repaired by <how>".

@@ -121,6 +121,23 @@ TEST(BvhGlitches, FlippedFramesAreNamedAndInterpolated) {
   EXPECT_LT(worst, 0.0116);
 }
 
+TEST(BvhGlitches, FlippedFirstAndLastFramesAreHeld) {
+  const BvhClip clean = smooth_clip(rigs::rig21());
+  BvhClip glitched = clean;
+  flip_forearm(glitched, 0, 0);
+  flip_forearm(glitched, kFrames - 2, kFrames - 1);
+  const BvhRepair repair = repair_bvh_glitches(glitched);
+  ASSERT_EQ(repair.glitches.size(), 2u);
+  EXPECT_EQ(repair.glitches[0].first_frame, 0);
+  EXPECT_EQ(repair.glitches[0].last_frame, 0);
+  EXPECT_EQ(repair.glitches[1].first_frame, kFrames - 2);
+  EXPECT_EQ(repair.glitches[1].last_frame, kFrames - 1);
+  for (const BvhGlitch& g : repair.glitches) std::printf("%s\n", describe(g, kFrameTime).c_str());
+  // Held at the neighbouring good frame: off the motion by at most two frame steps of the
+  // forearm (15 rad/s roll and a bend of at most 1.97 rad/s): 2 / 60 s * 17 rad/s = 0.57 rad.
+  EXPECT_LT(worst_rotation_difference(repair.clip, clean), 2.0 / 60 * 17.0);
+}
+
 TEST(BvhGlitches, SwappedArmsAreNamedAndSwappedBack) {
   const auto rig = symmetric_rig21();
   const BvhClip clean = smooth_clip(rig);
