@@ -370,7 +370,7 @@ SimTruth simulate_session(const SimSessionOptions& requested, session::ChunkSink
   // Exercises hold their rest pose after the end; a BVH clip would drift along its end tangents.
   if (options.motion == "bvh" && options.duration_s > motion.duration_s) {
     throw_invalid("duration_s", "is " + std::to_string(options.duration_s) + " s, the BVH clip lasts only " +
-                                    std::to_string(motion.duration_s) + " s");
+                                    std::to_string(motion.duration_s) + " s (duration_s = clip plays exactly the whole clip)");
   }
   const body::PoseLayout layout = body::PoseLayout::all_joints();
 
