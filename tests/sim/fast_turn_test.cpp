@@ -4,6 +4,9 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
 #include <limits>
 #include <numbers>
 
@@ -13,6 +16,7 @@
 #include "sim/bvh_glitches.hpp"
 #include "sim/bvh_motion.hpp"
 #include "sim/imu_synth.hpp"
+#include "sim/motion_library.hpp"
 #include "sim/room_frame.hpp"
 #include "test_motion.hpp"
 #include "test_rigs.hpp"
@@ -40,21 +44,26 @@ BvhClip rolling_forearm_clip(double rate_rad_s, double seconds) {
 // Largest |gyr - analytic| over the middle of the clip (the natural spline's ends bend a constant
 // rate), for an ideal IMU without saturation on the right forearm strap (F_from_A = I, so the
 // roll is about A's y, the elbow -> wrist axis).
-double worst_rate_error(double rate_rad_s) {
-  const BvhClip clip = rolling_forearm_clip(rate_rad_s, 3.0);
-  EXPECT_TRUE(repair_bvh_glitches(clip).glitches.empty()) << rate_rad_s << " rad/s is no glitch";
+double worst_rate_error(const BodyMotion& motion, double rate_rad_s) {
   const Eigen::Matrix3Xd rest = template_rest_joints(body::Sex::kMale, Eigen::VectorXd::Zero(10));
-  const SensorKinematics kinematics(forearm_imu_trajectory(bvh_motion(clip), rest, ForearmStrap{}, W_from_R()));
+  const SensorKinematics kinematics(forearm_imu_trajectory(motion, rest, ForearmStrap{}, W_from_R()));
   ImuSynthOptions options;
   options.error_model = ImuErrorModel::none();
   options.gyr_range_rad_s = std::numeric_limits<double>::infinity();
-  const ImuSynthResult imu = synthesize_imu(kinematics, uniform_times(0.5, 2.5, 80.0), options);
+  const ImuSynthResult imu =
+      synthesize_imu(kinematics, uniform_times(0.25 * motion.duration_s, 0.75 * motion.duration_s, 80.0), options);
   double worst = 0;
   for (const auto& s : imu.samples) {
     const double sign = s.gyr_rad_s.y() > 0 ? 1.0 : -1.0;
     worst = std::max(worst, (s.gyr_rad_s - sign * rate_rad_s * Vec3::UnitY()).norm());
   }
   return worst;
+}
+
+double worst_rate_error(double rate_rad_s) {
+  const BvhClip clip = rolling_forearm_clip(rate_rad_s, 3.0);
+  EXPECT_TRUE(repair_bvh_glitches(clip).glitches.empty()) << rate_rad_s << " rad/s is no glitch";
+  return worst_rate_error(bvh_motion(clip), rate_rad_s);
 }
 
 }  // namespace
@@ -77,6 +86,35 @@ TEST(FastTurn, MocapRollAt40RadPerSecondReadsItsRate) {
   const double bound = std::pow(h, 3) * std::pow(omega, 4) / 96;
   const double worst = worst_rate_error(omega);
   std::printf("40 rad/s: worst gyro error %.3g rad/s (bound %.3g)\n", worst, bound);
+  EXPECT_LT(worst, bound);
+}
+
+// posefuse-sim's path: the clip from a file through select_motion at speed 2 turns at twice the
+// rate; time runs twice as fast through the same spline, so the bound doubles too.
+TEST(FastTurn, SpeedTwoPlaysTheClipAtTwiceTheRate) {
+  const auto rig = rigs::rig21();
+  const std::filesystem::path path =
+      std::filesystem::temp_directory_path() / ("posefuse_fast_turn_" + std::to_string(::getpid()) + ".bvh");
+  {
+    std::ofstream out(path);
+    out << rigs::rig_text(rig, 181, 1.0 / 60, [&](int f, int j, int c) {
+      const auto& joint = rig[static_cast<std::size_t>(j)];
+      if (joint.root) return c == 1 ? 95.0 : 0.0;
+      if (joint.name == "RightForeArm" && c == 2) return 15.0 * (f / 60.0) * 180.0 / pi;
+      return 0.0;
+    });
+  }
+  MotionOptions options;
+  options.bvh_path = path.string();
+  options.exercise.speed = 2.0;
+  const BodyMotion motion = select_motion("bvh", options, MotionContext{});
+  std::filesystem::remove(path);
+  EXPECT_NEAR(motion.duration_s, 1.5, 1e-9);
+  EXPECT_TRUE(motion.warnings.empty());
+  const double h = 1.0 / 60, omega = 15.0;
+  const double bound = 2.0 * std::pow(h, 3) * std::pow(omega, 4) / 96;
+  const double worst = worst_rate_error(motion, 2.0 * omega);
+  std::printf("speed 2: 30 rad/s read with worst error %.3g rad/s (bound %.3g)\n", worst, bound);
   EXPECT_LT(worst, bound);
 }
 
