@@ -155,12 +155,20 @@ void repair_flips(const BvhSkeleton& skeleton, double frame_time_s, const BvhGli
       if (jump <= max_step) continue;
       // Frames a..b are the glitch when the step into b+1 jumps back: a-1 joins b+1 at a
       // possible rate and far closer than either jump. A glitch may also run to the last frame.
+      // The jump as an offset in the joint's frame and in the parent's: a flip is usually one
+      // fixed offset on the true rotation, which the step into b+1 undoes.
+      const Quat jump_in_joint = q(a - 1).conjugate() * q(a);
+      const Quat jump_in_parent = q(a) * q(a - 1).conjugate();
       int b = a;
       bool first_frame_is_the_glitch = false;
       while (b + 1 < n) {
         const double back = geometry::angle_between(q(b), q(b + 1));
         const double bridge = geometry::angle_between(q(a - 1), q(b + 1));
-        if (back > max_step && bridge <= max_step * (b - a + 2) && bridge < 0.5 * std::min(jump, back)) break;
+        const double undone = std::min(geometry::angle_between(q(b) * jump_in_joint.conjugate(), q(b + 1)),
+                                       geometry::angle_between(jump_in_parent.conjugate() * q(b), q(b + 1)));
+        const bool returns = (bridge <= max_step * (b - a + 2) && bridge < 0.5 * std::min(jump, back)) ||
+                             undone <= 2.0 * max_step;
+        if (back > max_step && returns) break;
         if (b - a + 1 >= options.max_glitch_frames) {
           // A jump out of frame 0 that never comes back: frame 0 is the odd one.
           if (a == 1) {
@@ -171,7 +179,8 @@ void repair_flips(const BvhSkeleton& skeleton, double frame_time_s, const BvhGli
                                                " rad in one frame (" + number(jump / frame_time_s) +
                                                " rad/s, limit max_joint_rate_rad_s " +
                                                number(options.max_joint_rate_rad_s) + ") and does not come back within " +
-                                               std::to_string(options.max_glitch_frames) + " frames; not repairable");
+                                               std::to_string(options.max_glitch_frames) + " frames (max_glitch_frames; posefuse-sim: "
+                                               "bvh_max_glitch_frames); not repairable");
         }
         ++b;
       }
@@ -244,7 +253,7 @@ void repair_bone_lengths(const BvhSkeleton& skeleton, const BvhGlitchOptions& op
         throw_invalid(frame_range(a, b), "joint " + skeleton.joints[j].name + " is " + number(worst) +
                                              " file units from its parent (median " + number(medians[j]) + ") for " +
                                              std::to_string(b - a + 1) + " frames, more than max_glitch_frames " +
-                                             std::to_string(options.max_glitch_frames) + "; not repairable");
+                                             std::to_string(options.max_glitch_frames) + " (posefuse-sim: bvh_max_glitch_frames); not repairable");
       }
       if (a == 0 && b == n - 1) throw_invalid(frame_range(a, b), "joint " + skeleton.joints[j].name + " has no frame with its median bone length");
       BvhGlitch g;

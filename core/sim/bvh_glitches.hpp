@@ -14,8 +14,11 @@
 //                 runs of any length. Runs in order; frame 0 is taken as correctly labelled.
 //   flip          a joint's local rotation steps faster than max_joint_rate_rad_s into frame a,
 //                 and as fast again from some frame b to b+1 (b - a < max_glitch_frames) where
-//                 frame b+1 is joined to frame a-1 at no more than that rate and by less than half
-//                 of either jump: frames a..b are replaced by the slerp from a-1 to b+1.
+//                 the motion returns: frame b+1 is joined to frame a-1 at no more than that rate
+//                 and by less than half of either jump, or the step into b+1 undoes the jump
+//                 (the jump's offset, in the joint's or the parent's frame, taken off frame b
+//                 lands within two steps at that rate of b+1): frames a..b are replaced by the
+//                 slerp from a-1 to b+1.
 //   bone length   a joint's distance to its parent (file units, from its OFFSET plus position
 //                 channels) differs from its median over the clip by more than
 //                 bone_length_tolerance of that median (of the rig's median bone for zero-length

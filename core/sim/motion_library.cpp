@@ -28,11 +28,11 @@ BodyMotion played_at(BodyMotion motion, double speed) {
 }
 
 // The clip with its mocap glitches repaired (bvh_glitches.hpp), each repair as a warning.
-BodyMotion clip_motion(const std::string& path, const BvhMotionOptions& options) {
+BodyMotion clip_motion(const std::string& path, const BvhGlitchOptions& glitches, const BvhMotionOptions& options) {
   const BvhClip raw = load_bvh(path);
   BvhRepair repaired;
   try {
-    repaired = repair_bvh_glitches(raw);
+    repaired = repair_bvh_glitches(raw, glitches);
   } catch (const Error& e) {
     throw Error(e.code(), path + ": " + e.field(), e.what());
   }
@@ -59,7 +59,7 @@ BodyMotion select_motion(const std::string& name, const MotionOptions& options, 
     bvh.betas = context.betas;
     bvh.smoothing = options.bvh_smoothing;
     require_positive(options.exercise.speed, "speed");
-    const BodyMotion clip = played_at(clip_motion(options.bvh_path, bvh), options.exercise.speed);
+    const BodyMotion clip = played_at(clip_motion(options.bvh_path, options.bvh_glitches, bvh), options.exercise.speed);
     if (!options.calibration_prefix) return clip;
     return with_calibration_prefix(make_exercise("calibration_pose", options.exercise), clip);
   }

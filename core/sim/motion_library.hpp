@@ -15,6 +15,7 @@
 
 #include "body/template_generator.hpp"
 #include "sim/body_motion.hpp"
+#include "sim/bvh_glitches.hpp"
 #include "sim/bvh_motion.hpp"
 #include "sim/exercises.hpp"
 
@@ -28,6 +29,7 @@ struct MotionOptions {
   // 1's calibration pose (II-H), which a mocap clip does not start in.
   bool calibration_prefix = false;
   BvhSmoothing bvh_smoothing = BvhSmoothing::kGaussian;  // motion "bvh" (bvh_motion.hpp)
+  BvhGlitchOptions bvh_glitches;                         // motion "bvh" (bvh_glitches.hpp)
 };
 
 // What a motion may need to know about the subject.

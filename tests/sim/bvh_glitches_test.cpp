@@ -195,6 +195,13 @@ TEST(BvhGlitches, FlipThatStaysIsRefusedWithItsFrames) {
     EXPECT_NE(std::string(e.what()).find("RightForeArm"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("does not come back"), std::string::npos) << e.what();
   }
+  // With a longer allowance the same 40 frames are interpolated.
+  BvhGlitchOptions longer;
+  longer.max_glitch_frames = 40;
+  const BvhRepair repair = repair_bvh_glitches(glitched, longer);
+  ASSERT_EQ(repair.glitches.size(), 1u);
+  EXPECT_EQ(repair.glitches[0].first_frame, 50);
+  EXPECT_EQ(repair.glitches[0].last_frame, 89);
 }
 
 TEST(BvhGlitches, BoneLengthRunTooLongIsRefused) {

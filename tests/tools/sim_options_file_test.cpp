@@ -52,6 +52,8 @@ TEST(SimOptionsFile, AppliesEveryKindOfValue) {
       "calibration_prefix = true\n"
       "gyro_range_dps = 1000\n"
       "bvh_smoothing = noise_level\n"
+      "bvh_max_glitch_frames = 30\n"
+      "bvh_max_joint_rate_rad_s = 80\n"
       "acc_range_g = 8\n"
       "threads = 3\n",
       "opts.txt", options);
@@ -87,6 +89,8 @@ TEST(SimOptionsFile, AppliesEveryKindOfValue) {
   EXPECT_DOUBLE_EQ(options.imu.synth.acc_range_m_s2, 8 * 9.80665);
   EXPECT_FALSE(options.duration_from_motion);
   EXPECT_EQ(options.motion_options.bvh_smoothing, sim::BvhSmoothing::kNoiseLevel);
+  EXPECT_EQ(options.motion_options.bvh_glitches.max_glitch_frames, 30);
+  EXPECT_DOUBLE_EQ(options.motion_options.bvh_glitches.max_joint_rate_rad_s, 80.0);
   EXPECT_NO_THROW(sim::validate(options));
 }
 
@@ -132,6 +136,8 @@ TEST(SimOptionsFile, ErrorsNameFileLineKeyAndValue) {
       {"duration_s = clips\n", "opts.txt:1:duration_s", "value 'clips' is not a finite number"},
       {"gyro_range_dps = 100\n", "opts.txt:1:gyro_range_dps", "value '100' must be in 125..4000"},
       {"acc_range_g = 64\n", "opts.txt:1:acc_range_g", "value '64' must be in 2..32"},
+      {"bvh_max_glitch_frames = 0\n", "opts.txt:1:bvh_max_glitch_frames", "value '0' must be in 1..600"},
+      {"bvh_max_joint_rate_rad_s = 5\n", "opts.txt:1:bvh_max_joint_rate_rad_s", "value '5' must be in 10..1000"},
       {"bvh_smoothing = median\n", "opts.txt:1:bvh_smoothing", "value 'median' must be gaussian or noise_level"},
       {"ble_repeat_s = 0.5\n", "opts.txt:1:ble_repeat_s", "must be 0 or >= 1"},
       {"buzzer_repeat_s = 1\n", "opts.txt:1:buzzer_repeat_s", "must be 0 or >= 2"},

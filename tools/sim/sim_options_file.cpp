@@ -92,6 +92,16 @@ const std::map<std::string, Setter>& setters() {
                            else if (v == "noise_level") o.motion_options.bvh_smoothing = sim::BvhSmoothing::kNoiseLevel;
                            else bad(f, v, "must be gaussian or noise_level");
                          }}},
+      {"bvh_max_glitch_frames", {"motion bvh: longest mocap glitch repaired by interpolation, frames, 1..600 (12)",
+                                 [](Options& o, const std::string& v, const std::string& f) {
+                                   o.motion_options.bvh_glitches.max_glitch_frames = static_cast<int>(integer(v, f, 1, 600));
+                                 }}},
+      {"bvh_max_joint_rate_rad_s", {"motion bvh: a joint turning faster than this relative to its parent is a glitch, rad/s, 10..1000 (60)",
+                                    [](Options& o, const std::string& v, const std::string& f) {
+                                      const double rate = number(v, f);
+                                      if (rate < 10 || rate > 1000) bad(f, v, "must be in 10..1000");
+                                      o.motion_options.bvh_glitches.max_joint_rate_rad_s = rate;
+                                    }}},
       {"calibration_prefix", {"motion bvh: paper 1's calibration pose (with arm) before the clip, blended in (false)",
                               [](Options& o, const std::string& v, const std::string& f) {
                                 o.motion_options.calibration_prefix = boolean(v, f);
