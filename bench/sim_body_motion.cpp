@@ -5,7 +5,8 @@
 // degrees over all mapped bones; without smoothing it is the retargeting error alone, with the
 // default 0.03 s smoothing it includes the smoothing), and the right forearm IMU driven by the
 // body (paper 1 strap, d_se 0.18 m, r 3.5 cm): largest |angular rate| (rad/s) and |acceleration|
-// (specific force minus g, m/s^2) for smoothing 0, 0.03 (default) and 0.05 s. Then per exercise: duration,
+// (specific force minus g, m/s^2, without full-scale clipping) for smoothing 0, 0.03 (default) and 0.05 s
+// and for the noise-level smoothing spline (BvhSmoothing::kNoiseLevel). Then per exercise: duration,
 // IMU trajectory time and the same peaks.
 //
 //   build/bench/bench_sim_body_motion [folder=../shared/data/mocap]
@@ -13,6 +14,7 @@
 // The clips are not part of the repository: when the folder is missing, the clip part says so
 // and is skipped.
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -44,6 +46,8 @@ Peaks imu_peaks(const BodyMotion& motion, const Eigen::Matrix3Xd& rest) {
   const SensorKinematics kinematics(forearm_imu_trajectory(motion, rest, ForearmStrap{}, W_from_R()));
   ImuSynthOptions options;
   options.error_model = ImuErrorModel::none();
+  // The motion's peaks, not a sensor's: no full-scale clipping.
+  options.gyr_range_rad_s = options.acc_range_m_s2 = std::numeric_limits<double>::infinity();
   const ImuSynthResult imu =
       synthesize_imu(kinematics, uniform_times(kinematics.t_begin_s(), kinematics.t_end_s(), 80.0), options);
   Peaks p;
@@ -95,13 +99,14 @@ int main(int argc, char** argv) {
       if (entry.is_regular_file() && entry.path().extension() == ".bvh") files.push_back(entry.path());
     }
     std::sort(files.begin(), files.end());
-    std::printf("%-18s %7s %10s %17s %17s %13s %13s %13s\n", "clip", "frames", "retarget_ms", "bone_err_s0 mean/max",
-                "bone_err_s.03 mean/max", "gyr/acc s0", "gyr/acc s.03", "gyr/acc s.05");
+    std::printf("%-18s %7s %10s %17s %17s %13s %13s %13s %17s %13s\n", "clip", "frames", "retarget_ms", "bone_err_s0 mean/max",
+                "bone_err_s.03 mean/max", "gyr/acc s0", "gyr/acc s.03", "gyr/acc s.05", "bone_err_noise mean/max",
+                "gyr/acc noise");
     for (const fs::path& path : files) {
       try {
         const BvhClip clip = load_bvh(path);
-        double mean0 = 0, max0 = 0, mean2 = 0, max2 = 0;
-        Peaks peaks[3];
+        double mean0 = 0, max0 = 0, mean2 = 0, max2 = 0, mean_noise = 0, max_noise = 0;
+        Peaks peaks[4];
         double retarget_ms = 0.0;
         const double smoothing[3] = {0.0, BvhMotionOptions{}.smoothing_s, 0.05};
         for (int s = 0; s < 3; ++s) {
@@ -115,9 +120,16 @@ int main(int argc, char** argv) {
           if (s == 1) bone_errors(clip, motion, place, rest, mean2, max2);
           peaks[s] = imu_peaks(motion, rest);
         }
-        std::printf("%-18s %7d %10.1f %8.4f/%8.4f %8.2f/%8.2f %6.1f/%6.1f %6.1f/%6.1f %6.1f/%6.1f\n",
+        BvhMotionOptions by_noise;
+        by_noise.smoothing = BvhSmoothing::kNoiseLevel;
+        BvhPlacement place;
+        const BodyMotion motion = bvh_motion(clip, by_noise, &place);
+        bone_errors(clip, motion, place, rest, mean_noise, max_noise);
+        peaks[3] = imu_peaks(motion, rest);
+        std::printf("%-18s %7d %10.1f %8.4f/%8.4f %8.2f/%8.2f %6.1f/%6.1f %6.1f/%6.1f %6.1f/%6.1f %8.2f/%8.2f %6.1f/%6.1f\n",
                     path.filename().string().c_str(), clip.frame_count(), retarget_ms, mean0, max0, mean2, max2,
-                    peaks[0].gyr, peaks[0].acc, peaks[1].gyr, peaks[1].acc, peaks[2].gyr, peaks[2].acc);
+                    peaks[0].gyr, peaks[0].acc, peaks[1].gyr, peaks[1].acc, peaks[2].gyr, peaks[2].acc, mean_noise,
+                    max_noise, peaks[3].gyr, peaks[3].acc);
       } catch (const posefuse::Error& e) {
         std::printf("%-18s error: %s\n", path.filename().string().c_str(), e.what());
         ++failures;

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -76,6 +77,8 @@ int main(int argc, char** argv) {
         const posefuse::sim::SensorKinematics motion(posefuse::sim::bvh_sensor_trajectory(clip, mount, 0.01, smoothing_s));
         posefuse::sim::ImuSynthOptions options;
         options.error_model = posefuse::sim::ImuErrorModel::none();
+        // The motion's peaks, not a sensor's: no full-scale clipping.
+        options.gyr_range_rad_s = options.acc_range_m_s2 = std::numeric_limits<double>::infinity();
         const auto imu = posefuse::sim::synthesize_imu(
             motion, posefuse::sim::uniform_times(motion.t_begin_s(), motion.t_end_s(), 80.0), options);
         imu_ms = wall_ms_since(start);

@@ -24,6 +24,9 @@ struct BodyMotion {
   PoseSequence poses;
   double duration_s = 0.0;
   std::vector<MotionPhase> phases;  // in time order; may be empty
+  // What was wrong with the input and repaired (e.g. mocap glitches, bvh_glitches.hpp), one
+  // readable line each; empty for a clean input.
+  std::vector<std::string> warnings;
 };
 
 }  // namespace posefuse::sim

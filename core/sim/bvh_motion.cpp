@@ -10,6 +10,7 @@
 #include "sim/bvh_retarget.hpp"
 #include "sim/option_checks.hpp"
 #include "sim/skeleton_pose.hpp"
+#include "sim/smoothing_spline.hpp"
 #include "sim/uniform_cubic_spline.hpp"
 
 namespace posefuse::sim {
@@ -78,7 +79,9 @@ BodyMotion bvh_motion(const BvhClip& clip, const BvhMotionOptions& options, BvhP
   if (placement != nullptr) *placement = place;
 
   auto spline = std::make_shared<const UniformCubicSpline>(
-      0.0, clip.frame_time_s, gaussian_smooth(values, options.smoothing_s / clip.frame_time_s));
+      0.0, clip.frame_time_s,
+      options.smoothing == BvhSmoothing::kNoiseLevel ? smooth_by_noise_level(values, clip.frame_time_s)
+                                                     : gaussian_smooth(values, options.smoothing_s / clip.frame_time_s));
   BodyMotion motion;
   motion.duration_s = clip.duration_s();
   motion.poses = [spline](double t_s) {

@@ -23,9 +23,16 @@
 
 namespace posefuse::sim {
 
+enum class BvhSmoothing {
+  kGaussian,    // every channel by the Gaussian of smoothing_s
+  kNoiseLevel,  // every channel by the cubic smoothing spline whose smoothing matches that
+                // channel's own noise level (smoothing_spline.hpp); smoothing_s is not used
+};
+
 struct BvhMotionOptions {
   body::Sex sex = body::Sex::kMale;
   Eigen::VectorXd betas = Eigen::VectorXd::Zero(body::kTemplateNumBetas);
+  BvhSmoothing smoothing = BvhSmoothing::kGaussian;
   double smoothing_s = 0.03;  // >= 0; see tests/sim/body_imu_test (MocapNoiseIsSmoothed...)
   bool face_front = true;
 };

@@ -44,6 +44,8 @@ BodyMotion with_calibration_prefix(const BodyMotion& calibration, const BodyMoti
   const Eigen::VectorXd held = calibration.poses(hold_end);
   BodyMotion out;
   out.duration_s = clip0 + clip.duration_s;
+  out.warnings = calibration.warnings;
+  out.warnings.insert(out.warnings.end(), clip.warnings.begin(), clip.warnings.end());
   const sim::PoseSequence calib = calibration.poses, moving = clip.poses;
   out.poses = [=](double t) -> Eigen::VectorXd {
     if (t <= hold_end) return calib(t);

@@ -31,6 +31,8 @@ Mat3 scale_misalignment(SimRng& rng, double scale_sigma, double misalignment_sig
   return m;
 }
 
+Vec3 saturated(const Vec3& v, double range) { return v.cwiseMax(-range).cwiseMin(range); }
+
 void check_model(const ImuErrorModel& m) {
   require_non_negative(m.gyr_noise_density_rad_s_sqrt_hz, "error_model.gyr_noise_density_rad_s_sqrt_hz");
   require_non_negative(m.acc_noise_density_m_s2_sqrt_hz, "error_model.acc_noise_density_m_s2_sqrt_hz");
@@ -140,6 +142,8 @@ ImuSynthResult synthesize_imu(const SensorKinematics& motion, const std::vector<
     throw_invalid("options.earth_field.dip_rad", "must be inside (-pi/2, pi/2)");
   }
   check_model(options.error_model);
+  if (!(options.gyr_range_rad_s > 0)) throw_invalid("options.gyr_range_rad_s", "is " + std::to_string(options.gyr_range_rad_s) + ", must be > 0");
+  if (!(options.acc_range_m_s2 > 0)) throw_invalid("options.acc_range_m_s2", "is " + std::to_string(options.acc_range_m_s2) + ", must be > 0");
   for (std::size_t i = 0; i < options.disturbances.size(); ++i) {
     const MagDisturbance& d = options.disturbances[i];
     const std::string field = "options.disturbances[" + std::to_string(i) + "]";
@@ -180,9 +184,11 @@ ImuSynthResult synthesize_imu(const SensorKinematics& motion, const std::vector<
 
     imu::ImuSample s;
     s.t_us = std::llround(t_s[k] * 1e6);
-    s.gyr_rad_s = e.gyr_scale_misalignment * m.omega_A_rad_s + gyr_bias + normal_vec(noise, gyr_sigma);
+    s.gyr_rad_s = saturated(e.gyr_scale_misalignment * m.omega_A_rad_s + gyr_bias + normal_vec(noise, gyr_sigma),
+                            options.gyr_range_rad_s);
     const Vec3 f_A = A_from_W * (m.a_W_m_s2 + gravity_up_W);
-    s.acc_m_s2 = e.acc_scale_misalignment * f_A + e.acc_bias_m_s2 + normal_vec(noise, acc_sigma);
+    s.acc_m_s2 = saturated(e.acc_scale_misalignment * f_A + e.acc_bias_m_s2 + normal_vec(noise, acc_sigma),
+                           options.acc_range_m_s2);
     const Vec3 m_A = A_from_W * m_W + disturbance_A;
     s.mag_uT = e.soft_iron * m_A + e.hard_iron_uT + hard_iron_jump_A + normal_vec(noise, model.mag_noise_uT);
     out.samples.push_back(s);

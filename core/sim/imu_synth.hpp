@@ -81,9 +81,17 @@ struct MagDisturbance {
   Vec3 field_uT = Vec3::Zero();
 };
 
+// A datasheet's g, in which accelerometer ranges are given.
+constexpr double kStandardGravity_m_s2 = 9.80665;
+
 struct ImuSynthOptions {
   double nominal_rate_hz = 80.0;  // sets the white noise per sample (see ImuErrorModel)
   double gravity_m_s2 = 9.81;
+  // Full scale: each axis of the measured gyro and accelerometer signal (errors included) is
+  // clipped to +-range, as the ADC of a MEMS part saturates; defaults are common full scales
+  // (2000 deg/s, 16 g) that a fast punch or a hand clap exceeds. > 0; infinity: no saturation.
+  double gyr_range_rad_s = 2000.0 * static_cast<double>(EIGEN_PI) / 180.0;
+  double acc_range_m_s2 = 16.0 * kStandardGravity_m_s2;
   EarthField earth_field;
   ImuErrorModel error_model;
   // The static errors; drawn from error_model with the seed when not given.

@@ -4,13 +4,45 @@
 
 #include "common/error.hpp"
 #include "sim/bvh.hpp"
+#include "sim/bvh_glitches.hpp"
 #include "sim/bvh_motion.hpp"
 #include "sim/calibration_prefix.hpp"
+#include "sim/option_checks.hpp"
 
 namespace posefuse::sim {
 
 namespace {
 const char* const kBvhMotion = "bvh";
+
+// The motion played `speed` times faster: every instant and phase boundary divided by it.
+BodyMotion played_at(BodyMotion motion, double speed) {
+  if (speed == 1.0) return motion;
+  const PoseSequence poses = motion.poses;
+  motion.poses = [poses, speed](double t_s) { return poses(speed * t_s); };
+  motion.duration_s /= speed;
+  for (MotionPhase& phase : motion.phases) {
+    phase.begin_s /= speed;
+    phase.end_s /= speed;
+  }
+  return motion;
+}
+
+// The clip with its mocap glitches repaired (bvh_glitches.hpp), each repair as a warning.
+BodyMotion clip_motion(const std::string& path, const BvhGlitchOptions& glitches, const BvhMotionOptions& options) {
+  const BvhClip raw = load_bvh(path);
+  BvhRepair repaired;
+  try {
+    repaired = repair_bvh_glitches(raw, glitches);
+  } catch (const Error& e) {
+    throw Error(e.code(), path + ": " + e.field(), e.what());
+  }
+  BodyMotion motion = bvh_motion(repaired.clip, options);
+  for (const BvhGlitch& glitch : repaired.glitches) {
+    motion.warnings.push_back(path + ": " + describe(glitch, raw.frame_time_s));
+  }
+  return motion;
+}
+
 }  // namespace
 
 std::vector<std::string> motion_names() {
@@ -25,7 +57,9 @@ BodyMotion select_motion(const std::string& name, const MotionOptions& options, 
     BvhMotionOptions bvh;
     bvh.sex = context.sex;
     bvh.betas = context.betas;
-    BodyMotion clip = bvh_motion(load_bvh(options.bvh_path), bvh);
+    bvh.smoothing = options.bvh_smoothing;
+    require_positive(options.exercise.speed, "speed");
+    const BodyMotion clip = played_at(clip_motion(options.bvh_path, options.bvh_glitches, bvh), options.exercise.speed);
     if (!options.calibration_prefix) return clip;
     return with_calibration_prefix(make_exercise("calibration_pose", options.exercise), clip);
   }

@@ -15,17 +15,21 @@
 
 #include "body/template_generator.hpp"
 #include "sim/body_motion.hpp"
+#include "sim/bvh_glitches.hpp"
+#include "sim/bvh_motion.hpp"
 #include "sim/exercises.hpp"
 
 namespace posefuse::sim {
 
 struct MotionOptions {
-  ExerciseOptions exercise;  // arm, speed, repetitions, rest hold (exercises only)
-  std::string bvh_path;      // motion "bvh": the clip to play
+  ExerciseOptions exercise;  // arm, speed, repetitions, rest hold (speed also plays a BVH clip faster)
+  std::string bvh_path;      // motion "bvh": the clip to play, its glitches repaired (bvh_glitches.hpp)
   // Motion "bvh": play the calibration_pose exercise (with exercise.arm) up to the end of its
   // hold first and blend into the clip (calibration_prefix.hpp): the forearm stage needs paper
   // 1's calibration pose (II-H), which a mocap clip does not start in.
   bool calibration_prefix = false;
+  BvhSmoothing bvh_smoothing = BvhSmoothing::kGaussian;  // motion "bvh" (bvh_motion.hpp)
+  BvhGlitchOptions bvh_glitches;                         // motion "bvh" (bvh_glitches.hpp)
 };
 
 // What a motion may need to know about the subject.
@@ -39,7 +43,9 @@ std::vector<std::string> motion_names();
 
 // The motion's poses (PoseLayout::all_joints()), its own duration and phases. kInvalidArgument
 // naming "motion" for an unknown name, "bvh_path" when a bvh motion has none, or the option
-// (speed, repetitions, ...) for a bad value; load_bvh's errors for unreadable or malformed files.
+// (speed, repetitions, ...) for a bad value; load_bvh's errors for unreadable or malformed files;
+// for a clip with an unrepairable glitch, repair_bvh_glitches' error with the path before its
+// field ("<path>: bvh.frames[a..b]"). Repaired glitches are in BodyMotion::warnings.
 BodyMotion select_motion(const std::string& name, const MotionOptions& options, const MotionContext& context);
 
 }  // namespace posefuse::sim

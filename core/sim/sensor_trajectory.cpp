@@ -11,6 +11,12 @@ namespace posefuse::sim {
 namespace {
 
 constexpr std::size_t kMargin = 2;  // grid points each end that the 5-point stencil needs
+// Largest turn over the stencil's half-width that log() still reads correctly, with a margin
+// for rounding near pi.
+constexpr double kMaxStencilTurn_rad = 3.0;
+// Faster than any body segment turns (a baseball pitch's upper arm peaks near 160 rad/s): a
+// trajectory turning faster carries a glitch of its input, whose rate would be made up.
+constexpr double kMaxRate_rad_s = 200.0;
 
 bool finite(const Vec3& v) { return v.allFinite(); }
 
@@ -36,9 +42,26 @@ SensorKinematics::SensorKinematics(SensorTrajectory trajectory) : trajectory_(st
                     "not a unit quaternion (norm " + std::to_string(norm) + ")");
     }
     trajectory_.W_from_A[k].normalize();
-    if (k > 0 && geometry::angle_between(t.W_from_A[k - 1], t.W_from_A[k]) > 0.5) {
+  }
+  // The stencil reads each turn over up to kMargin steps through the logarithm, which is
+  // unambiguous below pi: a faster turn would alias (2 pi - x reads as -x).
+  for (std::size_t k = 1; k < n; ++k) {
+    const double step = geometry::angle_between(t.W_from_A[k - 1], t.W_from_A[k]);
+    if (step > kMaxRate_rad_s * t.dt_s) {
       throw_invalid("trajectory.W_from_A[" + std::to_string(k) + "]",
-                    "turns more than 0.5 rad in one step; sample the trajectory more densely");
+                    "turns " + std::to_string(step) + " rad in one step of " + std::to_string(t.dt_s) + " s (" +
+                        std::to_string(step / t.dt_s) + " rad/s, faster than any body segment, limit " +
+                        std::to_string(kMaxRate_rad_s) + " rad/s); a glitch in the motion it was made from?");
+    }
+  }
+  for (std::size_t k = kMargin; k < n; ++k) {
+    const double turn = geometry::angle_between(t.W_from_A[k - kMargin], t.W_from_A[k]);
+    if (turn > kMaxStencilTurn_rad) {
+      throw_invalid("trajectory.W_from_A[" + std::to_string(k) + "]",
+                    "turns " + std::to_string(turn) + " rad in " + std::to_string(kMargin) + " steps of " +
+                        std::to_string(t.dt_s) + " s (" + std::to_string(turn / (kMargin * t.dt_s)) +
+                        " rad/s); the rate is ambiguous from " + std::to_string(kMaxStencilTurn_rad) +
+                        " rad on; sample the trajectory more densely");
     }
   }
 

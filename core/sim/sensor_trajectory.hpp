@@ -41,8 +41,11 @@ struct SensorMotion {
 class SensorKinematics {
  public:
   // Validates (kInvalidArgument naming the field: dt_s > 0, at least 6 poses, equal sizes,
-  // finite values, unit quaternions within 1e-6, less than 0.5 rad between neighbours) and
-  // precomputes the derivatives.
+  // finite values, unit quaternions within 1e-6, no turn faster than 200 rad/s between
+  // neighbours (no body segment turns so fast: a glitch of the input), less than 3 rad of turn
+  // over 2 steps, where the logarithm in the rate stencil would alias) and precomputes the
+  // derivatives. Fast turns need no denser grid: the stencil is exact for a constant rate
+  // about a fixed axis at any step below these bounds.
   explicit SensorKinematics(SensorTrajectory trajectory);
 
   double t_begin_s() const;  // first time `at` accepts

@@ -268,12 +268,32 @@ class FrameWorker {
   SimTimings times_;
 };
 
+MotionContext motion_context(const SimSessionOptions& options) {
+  MotionContext context;
+  context.sex = options.sex;
+  context.betas = options.betas;
+  return context;
+}
+
+SimSessionOptions with_motion_duration(SimSessionOptions options, const BodyMotion& motion) {
+  if (!options.duration_from_motion) return options;
+  options.duration_from_motion = false;
+  options.duration_s = motion.duration_s;
+  if (!(motion.duration_s >= 1.0 && motion.duration_s <= 3600.0)) {
+    throw_invalid("duration_s", "is 'clip': the motion lasts " + std::to_string(motion.duration_s) +
+                                    " s, a session must last 1..3600 s");
+  }
+  return options;
+}
+
 }  // namespace
 
 void validate(const SimSessionOptions& options) {
-  require_finite(options.duration_s, "duration_s");
-  if (options.duration_s < 1.0 || options.duration_s > 3600.0) {
-    throw_invalid("duration_s", "is " + std::to_string(options.duration_s) + ", must be 1..3600 s");
+  if (!options.duration_from_motion) {
+    require_finite(options.duration_s, "duration_s");
+    if (options.duration_s < 1.0 || options.duration_s > 3600.0) {
+      throw_invalid("duration_s", "is " + std::to_string(options.duration_s) + ", must be 1..3600 s");
+    }
   }
   if (options.betas.size() > body::kTemplateNumBetas || !options.betas.allFinite()) {
     throw_invalid("betas", "must be at most 10 finite values");
@@ -315,10 +335,18 @@ void validate(const SimSessionOptions& options) {
   }
 }
 
-SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& sink,
+SimSessionOptions with_session_duration(const SimSessionOptions& options) {
+  if (!options.duration_from_motion) return options;
+  return with_motion_duration(options, select_motion(options.motion, options.motion_options, motion_context(options)));
+}
+
+SimTruth simulate_session(const SimSessionOptions& requested, session::ChunkSink& sink,
                           const std::function<void(const SimProgress&)>& progress) {
-  validate(options);
+  validate(requested);
+  const BodyMotion motion = select_motion(requested.motion, requested.motion_options, motion_context(requested));
+  const SimSessionOptions options = with_motion_duration(requested, motion);
   SimTruth truth;
+  truth.warnings = motion.warnings;
   CpuLap lap(truth.cpu_s);
   // Rest joints do not depend on the layout's DOFs (all zero).
   const body::PoseLayout rest_layout = body::PoseLayout::full_body();
@@ -339,14 +367,10 @@ SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& 
   truth.camera_p_W_m = W_from_Body * truth.K_from_Body.inverse().translation();
   const Eigen::Isometry3d& K_from_Body = truth.K_from_Body;
   const auto W_to_K = [&](const Vec3& p_W) -> Vec3 { return K_from_Body * (W_from_Body.transpose() * p_W); };
-  MotionContext context;
-  context.sex = options.sex;
-  context.betas = options.betas;
-  const BodyMotion motion = select_motion(options.motion, options.motion_options, context);
   // Exercises hold their rest pose after the end; a BVH clip would drift along its end tangents.
   if (options.motion == "bvh" && options.duration_s > motion.duration_s) {
     throw_invalid("duration_s", "is " + std::to_string(options.duration_s) + " s, the BVH clip lasts only " +
-                                    std::to_string(motion.duration_s) + " s");
+                                    std::to_string(motion.duration_s) + " s (duration_s = clip plays exactly the whole clip)");
   }
   const body::PoseLayout layout = body::PoseLayout::all_joints();
 

@@ -53,7 +53,10 @@ struct StrapSlipOptions {
 
 struct SimSessionOptions {
   std::uint64_t seed = 1;
-  double duration_s = 10.0;  // >= 1
+  double duration_s = 10.0;  // 1..3600
+  // Set: the session lasts exactly as long as the motion (the whole BVH clip, or the exercise,
+  // played at its speed) and duration_s is ignored; options file `duration_s = clip`.
+  bool duration_from_motion = false;
   std::string motion = "arm_raising";  // motion_names(); "bvh" needs motion_options.bvh_path
   MotionOptions motion_options;
   body::Sex sex = body::Sex::kMale;
@@ -100,6 +103,11 @@ struct SimSessionOptions {
 
 // kInvalidArgument naming the field.
 void validate(const SimSessionOptions& options);
+
+// The options with the session's length settled: with duration_from_motion, duration_s becomes
+// the motion's length (the motion is selected to learn it) and the flag is cleared;
+// kInvalidArgument naming duration_s when that length is outside 1..3600 s.
+SimSessionOptions with_session_duration(const SimSessionOptions& options);
 
 struct SimDeviceTruth {
   std::string device_id;
@@ -157,6 +165,7 @@ struct SimTruth {
   std::vector<double> ble_broadcast_camera_s;
   std::uint64_t chunks = 0;
   SimTimings cpu_s;
+  std::vector<std::string> warnings;  // input repaired on the way (BodyMotion::warnings)
 };
 
 struct SimProgress {
@@ -166,6 +175,7 @@ struct SimProgress {
 
 // Streams header, data chunks and the end marker into `sink` (finish() is left to the caller).
 // `progress` (optional) is called after every block of frames.
+// truth.options has the session's length settled (with_session_duration).
 SimTruth simulate_session(const SimSessionOptions& options, session::ChunkSink& sink,
                           const std::function<void(const SimProgress&)>& progress = {});
 

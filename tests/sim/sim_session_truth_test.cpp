@@ -4,8 +4,12 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <unistd.h>
 
 #include "body/smpl_model.hpp"
+#include "sim/bvh.hpp"
 #include "sim/exercises.hpp"
 
 #include "common/error.hpp"
@@ -13,6 +17,7 @@
 #include "session/session_validator.hpp"
 #include "sim/sim_session.hpp"
 #include "test_camera.hpp"
+#include "test_rigs.hpp"
 
 using namespace posefuse;
 using namespace posefuse::sim;
@@ -224,4 +229,50 @@ TEST(SimSessionTruth, RepeatedSyncSignalsThroughTheSession) {
   ASSERT_FALSE(truth.ble_broadcast_camera_s.empty());
   EXPECT_LT(truth.ble_broadcast_camera_s.front(), 1.0);
   EXPECT_GE(truth.ble_broadcast_camera_s.back(), 4.5);
+}
+
+// duration_s = clip: a 1.5 s BVH clip made here (one frame of the right forearm flipped 180
+// degrees about its bone, as mocap solves do) gives a session of exactly the clip's length,
+// and the repaired glitch comes back as a warning naming its frames.
+TEST(SimSessionTruth, DurationClipPlaysTheWholeClipAndReportsItsGlitches) {
+  const auto rig = sim::testing::rig21();
+  const std::string text = sim::testing::rig_text(rig, 91, 1.0 / 60, [&](int f, int j, int c) {
+    const auto& joint = rig[static_cast<std::size_t>(j)];
+    if (joint.root) return c == 1 ? 95.0 : 0.0;
+    if (joint.name == "RightArm" && c == 0) return -60.0 + 20.0 * std::sin(2 * 3.14159265358979 * 0.7 * f / 60.0);
+    if (joint.name == "RightForeArm" && c == 2) return f == 40 ? 180.0 : 0.0;
+    return 0.0;
+  });
+  const std::filesystem::path path =
+      std::filesystem::temp_directory_path() / ("posefuse_duration_clip_" + std::to_string(::getpid()) + ".bvh");
+  { std::ofstream(path) << text; }
+  SimSessionOptions o = small(false);
+  o.motion = "bvh";
+  o.motion_options.bvh_path = path.string();
+  o.duration_from_motion = true;
+  ValidatingSink sink;
+  const SimTruth truth = simulate_session(o, sink);
+  sink.validator.finish();
+  std::filesystem::remove(path);
+  EXPECT_EQ(truth.options.duration_s, parse_bvh(text).duration_s());  // 90 frame times as written
+  EXPECT_NEAR(truth.options.duration_s, 1.5, 1e-9);
+  EXPECT_FALSE(truth.options.duration_from_motion);
+  EXPECT_EQ(truth.frames.size(), 46u);  // 0..1.5 s at 30 Hz
+  ASSERT_EQ(truth.warnings.size(), 1u);
+  std::printf("%s\n", truth.warnings[0].c_str());
+  EXPECT_NE(truth.warnings[0].find("bvh frames 40..40 (0.667..0.667 s), RightForeArm"), std::string::npos)
+      << truth.warnings[0];
+
+  // Shorter than a session may be: refused naming duration_s and the clip's length.
+  o.motion_options.exercise.speed = 2.0;  // plays the 1.5 s clip in 0.75 s
+  { std::ofstream(path) << text; }
+  try {
+    ValidatingSink unused;
+    simulate_session(o, unused);
+    ADD_FAILURE() << "a 0.75 s session was simulated";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), "duration_s");
+    EXPECT_NE(std::string(e.what()).find("0.75"), std::string::npos) << e.what();
+  }
+  std::filesystem::remove(path);
 }

@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include "common/error.hpp"
+#include "sim/exercises.hpp"
 #include "tools/sim/sim_options_file.hpp"
 
 using namespace posefuse;
@@ -49,6 +50,11 @@ TEST(SimOptionsFile, AppliesEveryKindOfValue) {
       "arm = both\n"
       "bvh_path = /tmp/clip.bvh\n"
       "calibration_prefix = true\n"
+      "gyro_range_dps = 1000\n"
+      "bvh_smoothing = noise_level\n"
+      "bvh_max_glitch_frames = 30\n"
+      "bvh_max_joint_rate_rad_s = 80\n"
+      "acc_range_g = 8\n"
       "threads = 3\n",
       "opts.txt", options);
   EXPECT_EQ(options.seed, 42u);
@@ -79,7 +85,30 @@ TEST(SimOptionsFile, AppliesEveryKindOfValue) {
   EXPECT_TRUE(options.motion_options.calibration_prefix);
   EXPECT_EQ(options.threads, 3);
   EXPECT_DOUBLE_EQ(options.buzzer.tone_hz, 3400.0);
+  EXPECT_DOUBLE_EQ(options.imu.synth.gyr_range_rad_s, 1000 * 3.14159265358979323846 / 180);
+  EXPECT_DOUBLE_EQ(options.imu.synth.acc_range_m_s2, 8 * 9.80665);
+  EXPECT_FALSE(options.duration_from_motion);
+  EXPECT_EQ(options.motion_options.bvh_smoothing, sim::BvhSmoothing::kNoiseLevel);
+  EXPECT_EQ(options.motion_options.bvh_glitches.max_glitch_frames, 30);
+  EXPECT_DOUBLE_EQ(options.motion_options.bvh_glitches.max_joint_rate_rad_s, 80.0);
   EXPECT_NO_THROW(sim::validate(options));
+}
+
+TEST(SimOptionsFile, DurationClipTakesTheMotionsLength) {
+  sim::SimSessionOptions options;
+  apply_sim_options("duration_s = clip\n", "opts.txt", options);
+  EXPECT_TRUE(options.duration_from_motion);
+  EXPECT_NO_THROW(sim::validate(options));
+  // A later number (the --duration flag) replaces it.
+  posefuse::tools::apply_sim_option("duration_s", "5", "--duration", options);
+  EXPECT_FALSE(options.duration_from_motion);
+  EXPECT_DOUBLE_EQ(options.duration_s, 5.0);
+  // An exercise's own length: arm_raising's is 3 repetitions at speed 1.
+  apply_sim_options("duration_s = clip\nmotion = arm_raising\nspeed = 2\n", "opts.txt", options);
+  const sim::SimSessionOptions settled = sim::with_session_duration(options);
+  EXPECT_FALSE(settled.duration_from_motion);
+  EXPECT_DOUBLE_EQ(settled.duration_s, sim::make_exercise("arm_raising", options.motion_options.exercise).duration_s);
+  EXPECT_GT(settled.duration_s, 1.0);
 }
 
 TEST(SimOptionsFile, ErrorsNameFileLineKeyAndValue) {
@@ -104,6 +133,12 @@ TEST(SimOptionsFile, ErrorsNameFileLineKeyAndValue) {
       {"packet_loss_rate = 1.5\n", "opts.txt:1:packet_loss_rate", "must be in [0, 1]"},
       {"imu_arms = three\n", "opts.txt:1:imu_arms", "value 'three'"},
       {"threads = 0\n", "opts.txt:1:threads", "value '0' must be in 1..64"},
+      {"duration_s = clips\n", "opts.txt:1:duration_s", "value 'clips' is not a finite number"},
+      {"gyro_range_dps = 100\n", "opts.txt:1:gyro_range_dps", "value '100' must be in 125..4000"},
+      {"acc_range_g = 64\n", "opts.txt:1:acc_range_g", "value '64' must be in 2..32"},
+      {"bvh_max_glitch_frames = 0\n", "opts.txt:1:bvh_max_glitch_frames", "value '0' must be in 1..600"},
+      {"bvh_max_joint_rate_rad_s = 5\n", "opts.txt:1:bvh_max_joint_rate_rad_s", "value '5' must be in 10..1000"},
+      {"bvh_smoothing = median\n", "opts.txt:1:bvh_smoothing", "value 'median' must be gaussian or noise_level"},
       {"ble_repeat_s = 0.5\n", "opts.txt:1:ble_repeat_s", "must be 0 or >= 1"},
       {"buzzer_repeat_s = 1\n", "opts.txt:1:buzzer_repeat_s", "must be 0 or >= 2"},
       {"buzzer_tone_hz = 9000\n", "opts.txt:1:buzzer_tone_hz", "must be in [200, 7900] Hz"},

@@ -14,7 +14,7 @@
 namespace {
 
 const char* const kUsage =
-    "usage: posefuse-sim (--out DIR | --chunk-file FILE) [--options FILE] [--seed N] [--duration S]\n"
+    "usage: posefuse-sim (--out DIR | --chunk-file FILE) [--options FILE] [--seed N] [--duration S|clip]\n"
     "                    [--gt DIR] [--contact-sheet PNG] [--threads N] [--quiet]\n"
     "       posefuse-sim --list-options\n"
     "       posefuse-sim calibrate DIR   (frame calibration, paper 1 II-F, of a calibration_capture/ folder)\n"
@@ -89,11 +89,12 @@ int main(int argc, char** argv) {
                    100 * fraction, elapsed, eta, tty ? "" : "\n");
     };
     const tools::SimRunResult result = tools::run_simulation(request, progress);
+    for (const std::string& warning : result.warnings) std::cerr << "posefuse-sim: warning: " << warning << '\n';
     if (!quiet) {
       const double elapsed = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-      std::fprintf(stderr, "%sposefuse-sim: %lld frames, %llu chunks in %.1f s; ground truth in %s\n", tty ? "\n" : "",
-                   static_cast<long long>(result.frames), static_cast<unsigned long long>(result.chunks), elapsed,
-                   result.gt_directory.string().c_str());
+      std::fprintf(stderr, "%sposefuse-sim: %.3f s session, %lld frames, %llu chunks in %.1f s; ground truth in %s\n",
+                   tty ? "\n" : "", result.duration_s, static_cast<long long>(result.frames),
+                   static_cast<unsigned long long>(result.chunks), elapsed, result.gt_directory.string().c_str());
     }
     return 0;
   } catch (const posefuse::Error& e) {

@@ -71,9 +71,12 @@ const std::map<std::string, Setter>& setters() {
                   if (ec != std::errc() || ptr != v.data() + v.size()) bad(f, v, "is not an unsigned integer");
                   o.seed = out;
                 }}},
-      {"duration_s", {"session length, 1..3600 s", [](Options& o, const std::string& v, const std::string& f) {
+      {"duration_s", {"session length, 1..3600 s, or clip: the motion's own length (the whole BVH clip, or the exercise)",
+                      [](Options& o, const std::string& v, const std::string& f) {
+                        o.duration_from_motion = v == "clip";
+                        if (o.duration_from_motion) return;
                         o.duration_s = number(v, f);
-                        if (o.duration_s < 1 || o.duration_s > 3600) bad(f, v, "must be in 1..3600");
+                        if (o.duration_s < 1 || o.duration_s > 3600) bad(f, v, "must be in 1..3600 or clip");
                       }}},
       {"motion", {"an exercise (arm_raising, forearm_protocol, ... see exercises.hpp) or bvh (arm_raising)",
                   [](Options& o, const std::string& v, const std::string& f) {
@@ -83,11 +86,27 @@ const std::map<std::string, Setter>& setters() {
                   }}},
       {"bvh_path", {"motion bvh: the BVH file to play (relative to the working directory)",
                     [](Options& o, const std::string& v, const std::string&) { o.motion_options.bvh_path = v; }}},
+      {"bvh_smoothing", {"motion bvh: gaussian (0.03 s) or noise_level (a smoothing spline per channel matched to its own noise) (gaussian)",
+                         [](Options& o, const std::string& v, const std::string& f) {
+                           if (v == "gaussian") o.motion_options.bvh_smoothing = sim::BvhSmoothing::kGaussian;
+                           else if (v == "noise_level") o.motion_options.bvh_smoothing = sim::BvhSmoothing::kNoiseLevel;
+                           else bad(f, v, "must be gaussian or noise_level");
+                         }}},
+      {"bvh_max_glitch_frames", {"motion bvh: longest mocap glitch repaired by interpolation, frames, 1..600 (12)",
+                                 [](Options& o, const std::string& v, const std::string& f) {
+                                   o.motion_options.bvh_glitches.max_glitch_frames = static_cast<int>(integer(v, f, 1, 600));
+                                 }}},
+      {"bvh_max_joint_rate_rad_s", {"motion bvh: a joint turning faster than this relative to its parent is a glitch, rad/s, 10..1000 (60)",
+                                    [](Options& o, const std::string& v, const std::string& f) {
+                                      const double rate = number(v, f);
+                                      if (rate < 10 || rate > 1000) bad(f, v, "must be in 10..1000");
+                                      o.motion_options.bvh_glitches.max_joint_rate_rad_s = rate;
+                                    }}},
       {"calibration_prefix", {"motion bvh: paper 1's calibration pose (with arm) before the clip, blended in (false)",
                               [](Options& o, const std::string& v, const std::string& f) {
                                 o.motion_options.calibration_prefix = boolean(v, f);
                               }}},
-      {"speed", {"exercise speed factor, > 0; 2 halves every movement and hold (1)",
+      {"speed", {"playback speed factor of the exercise or BVH clip, > 0; 2 halves every movement and hold (1)",
                  [](Options& o, const std::string& v, const std::string& f) {
                    o.motion_options.exercise.speed = positive(v, f);
                  }}},
@@ -232,6 +251,18 @@ const std::map<std::string, Setter>& setters() {
       {"imu_rate_hz", {"IMU rate on each device's clock, Hz (10..1000)", [](Options& o, const std::string& v, const std::string& f) {
                          o.imu.rate_hz = positive(v, f);
                          if (o.imu.rate_hz < 10 || o.imu.rate_hz > 1000) bad(f, v, "must be in 10..1000");
+                       }}},
+      {"gyro_range_dps", {"gyroscope full scale per axis, deg/s (125..4000); beyond it the reading clips (2000)",
+                          [](Options& o, const std::string& v, const std::string& f) {
+                            const double dps = number(v, f);
+                            if (dps < 125 || dps > 4000) bad(f, v, "must be in 125..4000");
+                            o.imu.synth.gyr_range_rad_s = dps * kDegree;
+                          }}},
+      {"acc_range_g", {"accelerometer full scale per axis, g = 9.80665 m/s^2 (2..32); beyond it the reading clips (16)",
+                       [](Options& o, const std::string& v, const std::string& f) {
+                         const double g = number(v, f);
+                         if (g < 2 || g > 32) bad(f, v, "must be in 2..32");
+                         o.imu.synth.acc_range_m_s2 = g * sim::kStandardGravity_m_s2;
                        }}},
       {"imu_errors", {"IMU error model on (true) or ideal signals (false)",
                       [](Options& o, const std::string& v, const std::string& f) {

@@ -30,11 +30,11 @@ SimRunResult run_simulation(const SimRunRequest& request, const std::function<vo
   } else {
     sink = std::make_unique<session::ChunkFileWriter>(*request.chunk_file);
   }
-  // The contact sheet shows the middle frame.
-  const auto middle_us = static_cast<std::int64_t>(0.5 * request.options.duration_s * 1e6);
+  // The session's length first: the contact sheet shows the middle frame.
+  sim::SimSessionOptions options = sim::with_session_duration(request.options);
+  const auto middle_us = static_cast<std::int64_t>(0.5 * options.duration_s * 1e6);
   ContactSheetRecorder recorder(*sink, middle_us);
   session::ChunkSink& target = request.contact_sheet ? static_cast<session::ChunkSink&>(recorder) : *sink;
-  sim::SimSessionOptions options = request.options;
   // A directory stores depth as PNG: encoding it so on the frame threads spares the writer
   // (this thread) decoding zstd and encoding PNG per frame; the files are the same.
   if (request.out_directory) options.depth_encoding = v1::DepthFrame::PNG16;
@@ -59,6 +59,8 @@ SimRunResult run_simulation(const SimRunRequest& request, const std::function<vo
     write_calibration_capture(sim::simulate_panel_capture(request.options.panel_capture, rig), *result.calibration_capture);
   }
   result.chunks = truth.chunks;
+  result.warnings = truth.warnings;
+  result.duration_s = truth.options.duration_s;
   result.frames = static_cast<std::int64_t>(truth.frames.size());
   return result;
 }

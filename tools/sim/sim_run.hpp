@@ -6,6 +6,7 @@
 #include <functional>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "sim/sim_session.hpp"
 
@@ -23,6 +24,8 @@ struct SimRunResult {
   std::filesystem::path gt_directory;
   std::uint64_t chunks = 0;
   std::int64_t frames = 0;
+  double duration_s = 0;              // the session's length (the clip's with duration_s = clip)
+  std::vector<std::string> warnings;  // input repaired on the way, one line each
   // options.panel_capture.enabled: <out>/calibration_capture or <chunk_file>.calibration_capture
   std::optional<std::filesystem::path> calibration_capture;
 };
