@@ -92,7 +92,13 @@ class WatchJob : public QueuedWriter<v1::Job> {
     token_ = runner_.subscribe(job_id_, [weak](const v1::Job& job) {
       if (auto watcher = weak.lock()) watcher->push(job, is_terminal(job.state()));
     });
-    const auto record = runner_.store().get(job_id_);
+    std::optional<JobRecord> record;
+    try {
+      record = runner_.store().get(job_id_);
+    } catch (const Error& error) {  // the job store failed
+      finish(to_status(error));
+      return;
+    }
     if (!record) {
       finish(grpc::Status(grpc::StatusCode::NOT_FOUND, "job_id: no job '" + job_id_ + "'"));
       return;
@@ -111,7 +117,15 @@ class JobResults : public QueuedWriter<v1::FitResult> {
  public:
   void start(const std::shared_ptr<JobResults>& self, JobRunner& runner, const std::string& id) {
     self_ = self;
-    const auto record = runner.store().get(id);
+    std::optional<JobRecord> record;
+    std::vector<v1::FitResult> results;
+    try {
+      record = runner.store().get(id);
+      if (record && is_terminal(record->job.state())) results = runner.store().results(id);
+    } catch (const Error& error) {  // the job store failed
+      finish(to_status(error));
+      return;
+    }
     if (!record) {
       finish(grpc::Status(grpc::StatusCode::NOT_FOUND, "job_id: no job '" + id + "'"));
       return;
@@ -123,7 +137,6 @@ class JobResults : public QueuedWriter<v1::FitResult> {
                               "; its results are complete when it has finished (WatchJob)"));
       return;
     }
-    std::vector<v1::FitResult> results = runner.store().results(id);
     if (results.empty()) {
       finish(grpc::Status::OK);
       return;

@@ -11,6 +11,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <mutex>
@@ -28,7 +29,9 @@ bool is_terminal(v1::Job::State state);
 
 class JobRunner {
  public:
-  JobRunner(JobStore& store, WorkerPool& pool, Metrics& metrics, unsigned max_running);
+  // `recordings_root`: where jobs submitted by reference are opened beneath (empty: off).
+  JobRunner(JobStore& store, WorkerPool& pool, Metrics& metrics, unsigned max_running,
+            std::filesystem::path recordings_root);
   ~JobRunner();  // stops running jobs (they stay RUNNING in the store) and waits for them
 
   // Re-queues every unfinished job in the store. Call once at start.
@@ -51,12 +54,14 @@ class JobRunner {
  private:
   void start_next_locked();
   void run(const std::string& job_id);
+  void run_job(JobRecord& record);
   void publish(const v1::Job& job);
 
   JobStore& store_;
   WorkerPool& pool_;
   Metrics& metrics_;
   const unsigned max_running_;
+  const std::filesystem::path recordings_root_;
   std::mutex mu_;
   std::condition_variable idle_;
   std::deque<std::string> queue_;

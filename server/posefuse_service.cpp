@@ -4,6 +4,7 @@
 
 #include "server/fit_session.hpp"
 #include "server/job_calls.hpp"
+#include "server/job_limits.hpp"
 #include "server/refused_call.hpp"
 #include "server/status.hpp"
 #include "server/log.hpp"
@@ -24,9 +25,6 @@ grpc::ServerUnaryReactor* finish_unary(grpc::CallbackServerContext* context, grp
   reactor->Finish(std::move(status));
   return reactor;
 }
-
-constexpr std::size_t kDefaultPageSize = 50;
-constexpr std::size_t kMaxPageSize = 1000;
 
 }  // namespace
 
@@ -95,12 +93,16 @@ grpc::ServerUnaryReactor* PoseFuseService::GetJob(grpc::CallbackServerContext* c
     return finish_unary(context, denied);
   }
   if (!jobs_) return finish_unary(context, jobs_off());
-  const auto record = jobs_->store().get(request->job_id());
-  if (!record) {
-    return finish_unary(context, grpc::Status(grpc::StatusCode::NOT_FOUND,
-                                              "job_id: no job '" + request->job_id() + "'"));
+  try {
+    const auto record = jobs_->store().get(request->job_id());
+    if (!record) {
+      return finish_unary(context, grpc::Status(grpc::StatusCode::NOT_FOUND,
+                                                "job_id: no job '" + request->job_id() + "'"));
+    }
+    *response = record->job;
+  } catch (const Error& error) {  // the job store failed
+    return finish_unary(context, to_status(error));
   }
-  *response = record->job;
   return finish_unary(context, grpc::Status::OK);
 }
 
@@ -111,19 +113,24 @@ grpc::ServerUnaryReactor* PoseFuseService::ListJobs(grpc::CallbackServerContext*
     return finish_unary(context, denied);
   }
   if (!jobs_) return finish_unary(context, jobs_off());
-  const std::size_t page_size =
-      request->page_size() == 0 ? kDefaultPageSize
-                                : std::min<std::size_t>(request->page_size(), kMaxPageSize);
+  const std::size_t page_size = effective_page_size(request->page_size());
   std::vector<v1::Job::State> states;
   for (const int state : request->states()) states.push_back(static_cast<v1::Job::State>(state));
   try {
     // One more than asked for tells whether another page exists.
     std::vector<v1::Job> jobs = jobs_->store().list(page_size + 1, request->page_token(), states);
-    if (jobs.size() > page_size) {
-      jobs.pop_back();
-      response->set_next_page_token(jobs.back().job_id());
+    // A page ends at page_size jobs or kMaxPageBytes, whichever comes first (always at least
+    // one job, so that a listing makes progress).
+    std::size_t bytes = 0;
+    for (v1::Job& job : jobs) {
+      bytes += job.ByteSizeLong();
+      const std::size_t listed = static_cast<std::size_t>(response->jobs_size());
+      if (listed == page_size || (listed > 0 && bytes > kMaxPageBytes)) {
+        response->set_next_page_token(response->jobs(response->jobs_size() - 1).job_id());
+        break;
+      }
+      *response->add_jobs() = std::move(job);
     }
-    for (v1::Job& job : jobs) *response->add_jobs() = std::move(job);
   } catch (const Error& error) {
     return finish_unary(context, to_status(error));
   }
@@ -137,12 +144,16 @@ grpc::ServerUnaryReactor* PoseFuseService::CancelJob(grpc::CallbackServerContext
     return finish_unary(context, denied);
   }
   if (!jobs_) return finish_unary(context, jobs_off());
-  const auto job = jobs_->cancel(request->job_id());
-  if (!job) {
-    return finish_unary(context, grpc::Status(grpc::StatusCode::NOT_FOUND,
-                                              "job_id: no job '" + request->job_id() + "'"));
+  try {
+    const auto job = jobs_->cancel(request->job_id());
+    if (!job) {
+      return finish_unary(context, grpc::Status(grpc::StatusCode::NOT_FOUND,
+                                                "job_id: no job '" + request->job_id() + "'"));
+    }
+    *response = *job;
+  } catch (const Error& error) {  // the job store failed
+    return finish_unary(context, to_status(error));
   }
-  *response = *job;
   return finish_unary(context, grpc::Status::OK);
 }
 

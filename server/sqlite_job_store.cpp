@@ -9,7 +9,13 @@ namespace posefuse::server {
 
 namespace {
 
-// One prepared statement; finalized on destruction. Errors throw kInternal with SQLite's text.
+// A full disk (or a full database) is a resource running out; anything else is ours to fix.
+ErrorCode store_error_code(int rc) {
+  return (rc & 0xff) == SQLITE_FULL ? ErrorCode::kResourceExhausted : ErrorCode::kInternal;
+}
+
+// One prepared statement; finalized on destruction. Errors throw kInternal (kResourceExhausted
+// for a full disk) with SQLite's text.
 class Statement {
  public:
   Statement(sqlite3* db, const std::string& sql) : db_(db) {
@@ -57,7 +63,8 @@ class Statement {
     if (rc != SQLITE_OK) fail("bind");
   }
   [[noreturn]] void fail(const char* what) {
-    throw Error(ErrorCode::kInternal, "job_store", std::string(what) + ": " + sqlite3_errmsg(db_));
+    throw Error(store_error_code(sqlite3_errcode(db_)), "job_store",
+                std::string(what) + ": " + sqlite3_errmsg(db_));
   }
   sqlite3* db_;
   sqlite3_stmt* stmt_ = nullptr;
@@ -101,10 +108,10 @@ SqliteJobStore::~SqliteJobStore() { sqlite3_close(db_); }
 
 void SqliteJobStore::exec(const char* sql) {
   char* message = nullptr;
-  if (sqlite3_exec(db_, sql, nullptr, nullptr, &message) != SQLITE_OK) {
+  if (const int rc = sqlite3_exec(db_, sql, nullptr, nullptr, &message); rc != SQLITE_OK) {
     const std::string text = message ? message : "unknown error";
     sqlite3_free(message);
-    throw Error(ErrorCode::kInternal, "job_store", text);
+    throw Error(store_error_code(rc), "job_store", text);
   }
 }
 
@@ -181,7 +188,9 @@ void SqliteJobStore::append_results(const std::string& job_id,
     }
     exec("COMMIT");
   } catch (...) {
-    exec("ROLLBACK");
+    // Not exec(): SQLite may have rolled back already (a full disk does that), and the error
+    // to report is the one that got us here.
+    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
     throw;
   }
 }

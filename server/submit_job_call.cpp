@@ -1,6 +1,7 @@
 #include "server/submit_job_call.hpp"
 
 #include "server/job_calls.hpp"
+#include "server/job_limits.hpp"
 #include "server/log.hpp"
 #include "server/random_id.hpp"
 #include "server/status.hpp"
@@ -45,6 +46,7 @@ void SubmitJobCall::read_spec_locked(bool ok) {
   }
   spec_ = request_.spec();
   try {
+    validate_job_spec(spec_);
     if (spec_.source_case() == v1::JobSpec::kRecordingUri) {
       const auto path = resolve_recording(spec_.recording_uri(), context_.recordings_root);
       *response_ = context_.runner.submit(spec_, path.string());
