@@ -85,7 +85,7 @@ class QueuedWriter : public grpc::ServerWriteReactor<Message> {
 class WatchJob : public QueuedWriter<v1::Job> {
  public:
   WatchJob(JobRunner& runner, std::string job_id) : runner_(runner), job_id_(std::move(job_id)) {}
-  void start(const std::shared_ptr<WatchJob>& self) {
+  void start(const std::shared_ptr<WatchJob>& self, const std::string& tenant) {
     self_ = self;
     // Subscribe before reading the current state, so that no change is missed.
     std::weak_ptr<WatchJob> weak = self;
@@ -99,7 +99,7 @@ class WatchJob : public QueuedWriter<v1::Job> {
       finish(to_status(error));
       return;
     }
-    if (!record) {
+    if (!record || record->owner != tenant) {
       finish(grpc::Status(grpc::StatusCode::NOT_FOUND, "job_id: no job '" + job_id_ + "'"));
       return;
     }
@@ -115,12 +115,14 @@ class WatchJob : public QueuedWriter<v1::Job> {
 
 class JobResults : public QueuedWriter<v1::FitResult> {
  public:
-  void start(const std::shared_ptr<JobResults>& self, JobRunner& runner, const std::string& id) {
+  void start(const std::shared_ptr<JobResults>& self, JobRunner& runner, const std::string& id,
+             const std::string& tenant) {
     self_ = self;
     std::optional<JobRecord> record;
     std::vector<v1::FitResult> results;
     try {
       record = runner.store().get(id);
+      if (record && record->owner != tenant) record.reset();  // as if it did not exist
       if (record && is_terminal(record->job.state())) results = runner.store().results(id);
     } catch (const Error& error) {  // the job store failed
       finish(to_status(error));
@@ -170,16 +172,17 @@ fs::path resolve_recording(const std::string& uri, const fs::path& root) {
   return resolved;
 }
 
-grpc::ServerWriteReactor<v1::Job>* watch_job(JobRunner& runner, const std::string& job_id) {
+grpc::ServerWriteReactor<v1::Job>* watch_job(JobRunner& runner, const std::string& job_id,
+                                             const std::string& tenant) {
   auto watcher = std::make_shared<WatchJob>(runner, job_id);
-  watcher->start(watcher);
+  watcher->start(watcher, tenant);
   return watcher.get();
 }
 
-grpc::ServerWriteReactor<v1::FitResult>* job_results(JobRunner& runner,
-                                                     const std::string& job_id) {
+grpc::ServerWriteReactor<v1::FitResult>* job_results(JobRunner& runner, const std::string& job_id,
+                                                     const std::string& tenant) {
   auto writer = std::make_shared<JobResults>();
-  writer->start(writer, runner, job_id);
+  writer->start(writer, runner, job_id, tenant);
   return writer.get();
 }
 

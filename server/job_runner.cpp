@@ -124,8 +124,9 @@ void JobRunner::resume_unfinished() {
   start_next_locked();
 }
 
-v1::Job JobRunner::submit(const v1::JobSpec& spec, const std::string& recording_path) {
-  const v1::Job job = store_.create(spec, recording_path, now_unix_us());
+v1::Job JobRunner::submit(const v1::JobSpec& spec, const std::string& recording_path,
+                          const std::string& owner) {
+  const v1::Job job = store_.create(spec, recording_path, owner, now_unix_us());
   log_event("info", "job_submitted", {{"job", job.job_id()}});
   std::lock_guard lock(mu_);
   queue_.push_back(job.job_id());
@@ -133,9 +134,9 @@ v1::Job JobRunner::submit(const v1::JobSpec& spec, const std::string& recording_
   return job;
 }
 
-std::optional<v1::Job> JobRunner::cancel(const std::string& job_id) {
+std::optional<v1::Job> JobRunner::cancel(const std::string& job_id, const std::string& owner) {
   std::optional<JobRecord> record = store_.get(job_id);
-  if (!record) return std::nullopt;
+  if (!record || record->owner != owner) return std::nullopt;
   if (is_terminal(record->job.state())) return record->job;
   {
     std::lock_guard lock(mu_);

@@ -36,10 +36,12 @@ class JobRunner {
 
   // Re-queues every unfinished job in the store. Call once at start.
   void resume_unfinished();
-  // Stores a new job and queues it.
-  v1::Job submit(const v1::JobSpec& spec, const std::string& recording_path);
-  // Cancels a queued or running job; a finished job is returned unchanged. nullopt: no such job.
-  std::optional<v1::Job> cancel(const std::string& job_id);
+  // Stores a new job of tenant `owner` and queues it.
+  v1::Job submit(const v1::JobSpec& spec, const std::string& recording_path,
+                 const std::string& owner);
+  // Cancels a queued or running job of tenant `owner`; a finished job is returned unchanged.
+  // nullopt: no such job of that tenant.
+  std::optional<v1::Job> cancel(const std::string& job_id, const std::string& owner);
 
   // Calls `listener` with every later version of the job (from a worker thread) until
   // unsubscribe. Returns a token.

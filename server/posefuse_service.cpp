@@ -46,13 +46,14 @@ PoseFuseService::PoseFuseService(const ServerOptions& options, WorkerPool& pool,
 }
 
 grpc::Status PoseFuseService::authenticate(const grpc::CallbackServerContext* context,
-                                           const char* call) const {
-  return authenticate_call(tokens_, *context, call);
+                                           const char* call, std::string& tenant) const {
+  return authenticate_call(tokens_, *context, call, tenant);
 }
 
 grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>* PoseFuseService::Fit(
     grpc::CallbackServerContext* context) {
-  if (grpc::Status denied = authenticate(context, "Fit"); !denied.ok()) {
+  std::string tenant;  // a Fit call keeps nothing: the same for every tenant
+  if (grpc::Status denied = authenticate(context, "Fit", tenant); !denied.ok()) {
     return new RefusedCall<grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>>(denied);
   }
   const std::optional<std::uint64_t> id = registry_.try_admit();
@@ -70,7 +71,8 @@ grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>* PoseFuseService::Fit(
 grpc::ServerUnaryReactor* PoseFuseService::GetServerInfo(grpc::CallbackServerContext* context,
                                                          const v1::GetServerInfoRequest*,
                                                          v1::ServerInfo* response) {
-  if (grpc::Status denied = authenticate(context, "GetServerInfo"); !denied.ok()) {
+  std::string tenant;
+  if (grpc::Status denied = authenticate(context, "GetServerInfo", tenant); !denied.ok()) {
     return finish_unary(context, denied);
   }
   *response = server_info(options_, static_cast<unsigned>(pool_.threads()), jobs_ != nullptr);
@@ -79,23 +81,26 @@ grpc::ServerUnaryReactor* PoseFuseService::GetServerInfo(grpc::CallbackServerCon
 
 grpc::ServerReadReactor<v1::SubmitJobRequest>* PoseFuseService::SubmitJob(
     grpc::CallbackServerContext* context, v1::Job* response) {
-  if (grpc::Status denied = authenticate(context, "SubmitJob"); !denied.ok()) {
+  std::string tenant;
+  if (grpc::Status denied = authenticate(context, "SubmitJob", tenant); !denied.ok()) {
     return new RefusedCall<grpc::ServerReadReactor<v1::SubmitJobRequest>>(denied);
   }
   if (!jobs_) return new RefusedCall<grpc::ServerReadReactor<v1::SubmitJobRequest>>(jobs_off());
-  return SubmitJobCall::start(*submit_context_, response);
+  return SubmitJobCall::start(*submit_context_, response, tenant);
 }
 
 grpc::ServerUnaryReactor* PoseFuseService::GetJob(grpc::CallbackServerContext* context,
                                                   const v1::GetJobRequest* request,
                                                   v1::Job* response) {
-  if (grpc::Status denied = authenticate(context, "GetJob"); !denied.ok()) {
+  std::string tenant;
+  if (grpc::Status denied = authenticate(context, "GetJob", tenant); !denied.ok()) {
     return finish_unary(context, denied);
   }
   if (!jobs_) return finish_unary(context, jobs_off());
   try {
     const auto record = jobs_->store().get(request->job_id());
-    if (!record) {
+    // Another tenant's job is answered exactly like a missing one.
+    if (!record || record->owner != tenant) {
       return finish_unary(context, grpc::Status(grpc::StatusCode::NOT_FOUND,
                                                 "job_id: no job '" + request->job_id() + "'"));
     }
@@ -109,7 +114,8 @@ grpc::ServerUnaryReactor* PoseFuseService::GetJob(grpc::CallbackServerContext* c
 grpc::ServerUnaryReactor* PoseFuseService::ListJobs(grpc::CallbackServerContext* context,
                                                     const v1::ListJobsRequest* request,
                                                     v1::ListJobsResponse* response) {
-  if (grpc::Status denied = authenticate(context, "ListJobs"); !denied.ok()) {
+  std::string tenant;
+  if (grpc::Status denied = authenticate(context, "ListJobs", tenant); !denied.ok()) {
     return finish_unary(context, denied);
   }
   if (!jobs_) return finish_unary(context, jobs_off());
@@ -118,7 +124,7 @@ grpc::ServerUnaryReactor* PoseFuseService::ListJobs(grpc::CallbackServerContext*
   for (const int state : request->states()) states.push_back(static_cast<v1::Job::State>(state));
   try {
     // One more than asked for tells whether another page exists.
-    std::vector<v1::Job> jobs = jobs_->store().list(page_size + 1, request->page_token(), states);
+    std::vector<v1::Job> jobs = jobs_->store().list(page_size + 1, request->page_token(), states, tenant);
     // A page ends at page_size jobs or kMaxPageBytes, whichever comes first (always at least
     // one job, so that a listing makes progress).
     std::size_t bytes = 0;
@@ -140,12 +146,13 @@ grpc::ServerUnaryReactor* PoseFuseService::ListJobs(grpc::CallbackServerContext*
 grpc::ServerUnaryReactor* PoseFuseService::CancelJob(grpc::CallbackServerContext* context,
                                                      const v1::CancelJobRequest* request,
                                                      v1::Job* response) {
-  if (grpc::Status denied = authenticate(context, "CancelJob"); !denied.ok()) {
+  std::string tenant;
+  if (grpc::Status denied = authenticate(context, "CancelJob", tenant); !denied.ok()) {
     return finish_unary(context, denied);
   }
   if (!jobs_) return finish_unary(context, jobs_off());
   try {
-    const auto job = jobs_->cancel(request->job_id());
+    const auto job = jobs_->cancel(request->job_id(), tenant);
     if (!job) {
       return finish_unary(context, grpc::Status(grpc::StatusCode::NOT_FOUND,
                                                 "job_id: no job '" + request->job_id() + "'"));
@@ -159,20 +166,22 @@ grpc::ServerUnaryReactor* PoseFuseService::CancelJob(grpc::CallbackServerContext
 
 grpc::ServerWriteReactor<v1::Job>* PoseFuseService::WatchJob(grpc::CallbackServerContext* context,
                                                              const v1::WatchJobRequest* request) {
-  if (grpc::Status denied = authenticate(context, "WatchJob"); !denied.ok()) {
+  std::string tenant;
+  if (grpc::Status denied = authenticate(context, "WatchJob", tenant); !denied.ok()) {
     return new RefusedCall<grpc::ServerWriteReactor<v1::Job>>(denied);
   }
   if (!jobs_) return new RefusedCall<grpc::ServerWriteReactor<v1::Job>>(jobs_off());
-  return watch_job(*jobs_, request->job_id());
+  return watch_job(*jobs_, request->job_id(), tenant);
 }
 
 grpc::ServerWriteReactor<v1::FitResult>* PoseFuseService::GetJobResults(
     grpc::CallbackServerContext* context, const v1::GetJobResultsRequest* request) {
-  if (grpc::Status denied = authenticate(context, "GetJobResults"); !denied.ok()) {
+  std::string tenant;
+  if (grpc::Status denied = authenticate(context, "GetJobResults", tenant); !denied.ok()) {
     return new RefusedCall<grpc::ServerWriteReactor<v1::FitResult>>(denied);
   }
   if (!jobs_) return new RefusedCall<grpc::ServerWriteReactor<v1::FitResult>>(jobs_off());
-  return job_results(*jobs_, request->job_id());
+  return job_results(*jobs_, request->job_id(), tenant);
 }
 
 v1::ServerInfo server_info(const ServerOptions& options, unsigned workers, bool jobs) {

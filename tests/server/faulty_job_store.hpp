@@ -18,14 +18,15 @@ class FaultyJobStore : public JobStore {
   std::atomic<bool> refuse_results{false};
 
   v1::Job create(const v1::JobSpec& spec, const std::string& recording_path,
-                 std::int64_t now_unix_us) override {
+                 const std::string& owner, std::int64_t now_unix_us) override {
     if (refuse_creates) disk_full();
-    return store_.create(spec, recording_path, now_unix_us);
+    return store_.create(spec, recording_path, owner, now_unix_us);
   }
   std::optional<JobRecord> get(const std::string& job_id) override { return store_.get(job_id); }
   std::vector<v1::Job> list(std::size_t limit, const std::string& after_job_id,
-                            const std::vector<v1::Job::State>& states) override {
-    return store_.list(limit, after_job_id, states);
+                            const std::vector<v1::Job::State>& states,
+                            const std::string& owner) override {
+    return store_.list(limit, after_job_id, states, owner);
   }
   void update(const v1::Job& job) override {
     if (refuse_updates) disk_full();

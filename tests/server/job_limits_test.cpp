@@ -49,7 +49,7 @@ TEST_F(JobsTest, ListingPagesStayWithinTheByteLimitWhateverTheStoredJobsHold) {
       v1::JobSpec spec;
       spec.set_recording_uri("demo.pfchunks");
       spec.set_label(std::string(600 * 1024, static_cast<char>('a' + i)));
-      v1::Job job = store.create(spec, (dir_ / "recordings" / "demo.pfchunks").string(), i + 1);
+      v1::Job job = store.create(spec, (dir_ / "recordings" / "demo.pfchunks").string(), "", i + 1);
       job.set_state(v1::Job::SUCCEEDED);
       store.update(job);
       stored.insert(job.job_id());

@@ -91,7 +91,7 @@ TEST_F(JobsTest, JobLeftRunningByAStoppedServerCompletesAfterRestart) {
     SqliteJobStore store(dir_ / "data" / "jobs.sqlite");
     v1::JobSpec spec;
     spec.set_recording_uri("demo.pfchunks");
-    v1::Job job = store.create(spec, (dir_ / "recordings" / "demo.pfchunks").string(), 1);
+    v1::Job job = store.create(spec, (dir_ / "recordings" / "demo.pfchunks").string(), "", 1);
     id = job.job_id();
     job.set_state(v1::Job::RUNNING);
     store.update(job);
@@ -250,7 +250,7 @@ TEST_F(JobsTest, UploadedJobLeftRunningCompletesAfterRestartAndPartialUploadsAre
     SqliteJobStore store(dir_ / "data" / "jobs.sqlite");
     v1::JobSpec spec;
     spec.set_upload(true);
-    v1::Job job = store.create(spec, (spool / "a.pfchunks").string(), 1);
+    v1::Job job = store.create(spec, (spool / "a.pfchunks").string(), "", 1);
     id = job.job_id();
     job.set_state(v1::Job::RUNNING);
     store.update(job);
