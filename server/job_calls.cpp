@@ -4,6 +4,7 @@
 #include <memory>
 #include <mutex>
 
+#include "server/job_limits.hpp"
 #include "server/status.hpp"
 
 namespace posefuse::server {
@@ -90,7 +91,7 @@ class WatchJob : public QueuedWriter<v1::Job> {
     // Subscribe before reading the current state, so that no change is missed.
     std::weak_ptr<WatchJob> weak = self;
     token_ = runner_.subscribe(job_id_, [weak](const v1::Job& job) {
-      if (auto watcher = weak.lock()) watcher->push(job, is_terminal(job.state()));
+      if (auto watcher = weak.lock()) watcher->push_bounded(job);
     });
     std::optional<JobRecord> record;
     try {
@@ -103,10 +104,15 @@ class WatchJob : public QueuedWriter<v1::Job> {
       finish(grpc::Status(grpc::StatusCode::NOT_FOUND, "job_id: no job '" + job_id_ + "'"));
       return;
     }
-    push(record->job, is_terminal(record->job.state()));
+    push_bounded(record->job);
   }
 
  private:
+  void push_bounded(v1::Job job) {
+    bound_stored_job(job);
+    const bool last = is_terminal(job.state());
+    push(std::move(job), last);
+  }
   void on_done() override { runner_.unsubscribe(token_); }
   JobRunner& runner_;
   std::string job_id_;

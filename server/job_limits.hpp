@@ -20,6 +20,10 @@ inline constexpr std::size_t kMaxPageBytes = 1u << 20;
 // Throws kInvalidArgument naming the field ("spec.label") for a spec beyond these limits.
 void validate_job_spec(const v1::JobSpec& spec);
 
+// `job` as job calls return it: a label stored before labels were bounded is cut to
+// kMaxLabelBytes (at a UTF-8 character boundary), so that no single job is too large to list.
+void bound_stored_job(v1::Job& job);
+
 // The page size ListJobs uses for a requested one.
 std::size_t effective_page_size(std::uint32_t requested);
 

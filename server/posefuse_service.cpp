@@ -105,6 +105,7 @@ grpc::ServerUnaryReactor* PoseFuseService::GetJob(grpc::CallbackServerContext* c
                                                 "job_id: no job '" + request->job_id() + "'"));
     }
     *response = record->job;
+    bound_stored_job(*response);
   } catch (const Error& error) {  // the job store failed
     return finish_unary(context, to_status(error));
   }
@@ -129,6 +130,7 @@ grpc::ServerUnaryReactor* PoseFuseService::ListJobs(grpc::CallbackServerContext*
     // one job, so that a listing makes progress).
     std::size_t bytes = 0;
     for (v1::Job& job : jobs) {
+      bound_stored_job(job);
       bytes += job.ByteSizeLong();
       const std::size_t listed = static_cast<std::size_t>(response->jobs_size());
       if (listed == page_size || (listed > 0 && bytes > kMaxPageBytes)) {
@@ -158,6 +160,7 @@ grpc::ServerUnaryReactor* PoseFuseService::CancelJob(grpc::CallbackServerContext
                                                 "job_id: no job '" + request->job_id() + "'"));
     }
     *response = *job;
+    bound_stored_job(*response);
   } catch (const Error& error) {  // the job store failed
     return finish_unary(context, to_status(error));
   }

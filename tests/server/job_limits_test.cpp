@@ -39,8 +39,8 @@ TEST_F(JobsTest, LabelOverTheLimitIsInvalidArgumentNamingTheFieldAndTheLimit) {
 }
 
 TEST_F(JobsTest, ListingPagesStayWithinTheByteLimitWhateverTheStoredJobsHold) {
-  // Jobs stored before labels were bounded: three finished jobs with 600 KiB labels, which
-  // would make one 1.8 MiB page (and seven such jobs one beyond gRPC's 4 MiB receive limit).
+  // Three failed jobs with 600 KiB error messages (more than any error of ours holds, but
+  // nothing in the store bounds it), which would make one 1.8 MiB page.
   std::set<std::string> stored;
   {
     fs::create_directories(dir_ / "data");
@@ -48,9 +48,9 @@ TEST_F(JobsTest, ListingPagesStayWithinTheByteLimitWhateverTheStoredJobsHold) {
     for (int i = 0; i < 3; ++i) {
       v1::JobSpec spec;
       spec.set_recording_uri("demo.pfchunks");
-      spec.set_label(std::string(600 * 1024, static_cast<char>('a' + i)));
       v1::Job job = store.create(spec, (dir_ / "recordings" / "demo.pfchunks").string(), "", i + 1);
-      job.set_state(v1::Job::SUCCEEDED);
+      job.set_state(v1::Job::FAILED);
+      job.set_error_message(std::string(600 * 1024, static_cast<char>('a' + i)));
       store.update(job);
       stored.insert(job.job_id());
     }
@@ -75,6 +75,36 @@ TEST_F(JobsTest, ListingPagesStayWithinTheByteLimitWhateverTheStoredJobsHold) {
   } while (!token.empty());
   EXPECT_EQ(pages, 3);  // one 600 KiB job per page
   EXPECT_EQ(listed, stored);
+}
+
+TEST_F(JobsTest, LabelStoredBeforeTheLimitIsReturnedCutAtACharacterBoundary) {
+  // A 5 MiB label, stored before labels were bounded: alone more than a client receives.
+  // 'x' then two-byte characters: byte 256 is inside a character, so the cut is at 255.
+  std::string label = "x";
+  while (label.size() < (5u << 20)) label += "\xc3\xa9";  // U+00E9
+  std::string id;
+  {
+    fs::create_directories(dir_ / "data");
+    SqliteJobStore store(dir_ / "data" / "jobs.sqlite");
+    v1::JobSpec spec;
+    spec.set_recording_uri("demo.pfchunks");
+    spec.set_label(label);
+    v1::Job job = store.create(spec, (dir_ / "recordings" / "demo.pfchunks").string(), "", 1);
+    job.set_state(v1::Job::SUCCEEDED);
+    store.update(job);
+    id = job.job_id();
+  }
+  start();
+  grpc::ClientContext context;
+  set_test_deadline(context);
+  v1::ListJobsResponse listing;
+  const grpc::Status status = stub_->ListJobs(&context, {}, &listing);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_EQ(listing.jobs_size(), 1);
+  EXPECT_EQ(listing.jobs(0).label(), label.substr(0, kMaxLabelBytes - 1));
+  const auto states = watch(id);
+  ASSERT_FALSE(states.empty());
+  EXPECT_EQ(states.back().label().size(), kMaxLabelBytes - 1);
 }
 
 TEST(JobLimits, PageSizeZeroIsTheDefaultAndLargeOnesAreCut) {
