@@ -4,6 +4,7 @@
 #include <memory>
 #include <mutex>
 
+#include "server/job_limits.hpp"
 #include "server/status.hpp"
 
 namespace posefuse::server {
@@ -85,22 +86,33 @@ class QueuedWriter : public grpc::ServerWriteReactor<Message> {
 class WatchJob : public QueuedWriter<v1::Job> {
  public:
   WatchJob(JobRunner& runner, std::string job_id) : runner_(runner), job_id_(std::move(job_id)) {}
-  void start(const std::shared_ptr<WatchJob>& self) {
+  void start(const std::shared_ptr<WatchJob>& self, const std::string& tenant) {
     self_ = self;
     // Subscribe before reading the current state, so that no change is missed.
     std::weak_ptr<WatchJob> weak = self;
     token_ = runner_.subscribe(job_id_, [weak](const v1::Job& job) {
-      if (auto watcher = weak.lock()) watcher->push(job, is_terminal(job.state()));
+      if (auto watcher = weak.lock()) watcher->push_bounded(job);
     });
-    const auto record = runner_.store().get(job_id_);
-    if (!record) {
+    std::optional<JobRecord> record;
+    try {
+      record = runner_.store().get(job_id_);
+    } catch (const Error& error) {  // the job store failed
+      finish(to_status(error));
+      return;
+    }
+    if (!record || record->owner != tenant) {
       finish(grpc::Status(grpc::StatusCode::NOT_FOUND, "job_id: no job '" + job_id_ + "'"));
       return;
     }
-    push(record->job, is_terminal(record->job.state()));
+    push_bounded(record->job);
   }
 
  private:
+  void push_bounded(v1::Job job) {
+    bound_stored_job(job);
+    const bool last = is_terminal(job.state());
+    push(std::move(job), last);
+  }
   void on_done() override { runner_.unsubscribe(token_); }
   JobRunner& runner_;
   std::string job_id_;
@@ -109,9 +121,19 @@ class WatchJob : public QueuedWriter<v1::Job> {
 
 class JobResults : public QueuedWriter<v1::FitResult> {
  public:
-  void start(const std::shared_ptr<JobResults>& self, JobRunner& runner, const std::string& id) {
+  void start(const std::shared_ptr<JobResults>& self, JobRunner& runner, const std::string& id,
+             const std::string& tenant) {
     self_ = self;
-    const auto record = runner.store().get(id);
+    std::optional<JobRecord> record;
+    std::vector<v1::FitResult> results;
+    try {
+      record = runner.store().get(id);
+      if (record && record->owner != tenant) record.reset();  // as if it did not exist
+      if (record && is_terminal(record->job.state())) results = runner.store().results(id);
+    } catch (const Error& error) {  // the job store failed
+      finish(to_status(error));
+      return;
+    }
     if (!record) {
       finish(grpc::Status(grpc::StatusCode::NOT_FOUND, "job_id: no job '" + id + "'"));
       return;
@@ -123,7 +145,6 @@ class JobResults : public QueuedWriter<v1::FitResult> {
                               "; its results are complete when it has finished (WatchJob)"));
       return;
     }
-    std::vector<v1::FitResult> results = runner.store().results(id);
     if (results.empty()) {
       finish(grpc::Status::OK);
       return;
@@ -157,16 +178,17 @@ fs::path resolve_recording(const std::string& uri, const fs::path& root) {
   return resolved;
 }
 
-grpc::ServerWriteReactor<v1::Job>* watch_job(JobRunner& runner, const std::string& job_id) {
+grpc::ServerWriteReactor<v1::Job>* watch_job(JobRunner& runner, const std::string& job_id,
+                                             const std::string& tenant) {
   auto watcher = std::make_shared<WatchJob>(runner, job_id);
-  watcher->start(watcher);
+  watcher->start(watcher, tenant);
   return watcher.get();
 }
 
-grpc::ServerWriteReactor<v1::FitResult>* job_results(JobRunner& runner,
-                                                     const std::string& job_id) {
+grpc::ServerWriteReactor<v1::FitResult>* job_results(JobRunner& runner, const std::string& job_id,
+                                                     const std::string& tenant) {
   auto writer = std::make_shared<JobResults>();
-  writer->start(writer, runner, job_id);
+  writer->start(writer, runner, job_id, tenant);
   return writer.get();
 }
 

@@ -3,11 +3,11 @@
 #include <chrono>
 #include <filesystem>
 #include <memory>
+#include <stdexcept>
 
+#include "server/job_recording.hpp"
 #include "server/log.hpp"
 #include "server/status.hpp"
-#include "session/chunk_file.hpp"
-#include "session/directory_reader.hpp"
 #include "session/pipeline.hpp"
 #include "session/stages/default_stages.hpp"
 
@@ -21,9 +21,26 @@ std::int64_t now_unix_us() {
       .count();
 }
 
-std::unique_ptr<session::ChunkSource> open_recording(const std::string& path) {
-  if (std::filesystem::is_directory(path)) return std::make_unique<session::DirectoryReader>(path);
-  return std::make_unique<session::ChunkFileReader>(path);
+// A write to the job store that failed (a full disk, an I/O error). A type of its own, not a
+// posefuse::Error: the pipeline reports an Error thrown by a stage as an item error and goes
+// on, but a job whose results cannot be stored must stop.
+class StoreWriteFailed : public std::runtime_error {
+ public:
+  explicit StoreWriteFailed(const Error& error)
+      : std::runtime_error(error.what()), code_(error.code()) {}
+  ErrorCode code() const { return code_; }
+
+ private:
+  ErrorCode code_;
+};
+
+template <class Write>
+void store_write(Write&& write) {
+  try {
+    write();
+  } catch (const Error& error) {
+    throw StoreWriteFailed(error);
+  }
 }
 
 // Buffers a job's results and writes them to the store in batches; keeps the job's progress.
@@ -38,12 +55,13 @@ class StoreSink : public session::ResultSink {
     pending_.push_back(std::move(result));
     if (pending_.size() >= 64 || progress) flush(progress);
   }
+  // Throws StoreWriteFailed.
   void flush(bool job_changed) {
-    if (!pending_.empty()) store_.append_results(job_.job_id(), pending_);
+    if (!pending_.empty()) store_write([&] { store_.append_results(job_.job_id(), pending_); });
     pending_.clear();
     if (job_changed) {
       job_.set_update_time_unix_us(now_unix_us());
-      store_.update(job_);
+      store_write([&] { store_.update(job_); });
       on_progress_(job_);
     }
   }
@@ -54,6 +72,12 @@ class StoreSink : public session::ResultSink {
   std::function<void(const v1::Job&)> on_progress_;
   std::vector<v1::FitResult> pending_;
 };
+
+void fail_job(v1::Job& job, grpc::StatusCode code, const std::string& message) {
+  job.set_state(v1::Job::FAILED);
+  job.set_error_code(static_cast<int>(code));
+  job.set_error_message(message);
+}
 
 // An uploaded recording (no recording_uri) is the server's own spooled copy: once its job has
 // finished nothing reads it again. A recording submitted by reference belongs to its owner.
@@ -69,8 +93,13 @@ bool is_terminal(v1::Job::State state) {
   return state == v1::Job::SUCCEEDED || state == v1::Job::FAILED || state == v1::Job::CANCELLED;
 }
 
-JobRunner::JobRunner(JobStore& store, WorkerPool& pool, Metrics& metrics, unsigned max_running)
-    : store_(store), pool_(pool), metrics_(metrics), max_running_(std::max(1u, max_running)) {}
+JobRunner::JobRunner(JobStore& store, WorkerPool& pool, Metrics& metrics, unsigned max_running,
+                     std::filesystem::path recordings_root)
+    : store_(store),
+      pool_(pool),
+      metrics_(metrics),
+      max_running_(std::max(1u, max_running)),
+      recordings_root_(std::move(recordings_root)) {}
 
 JobRunner::~JobRunner() {
   std::unique_lock lock(mu_);
@@ -95,8 +124,9 @@ void JobRunner::resume_unfinished() {
   start_next_locked();
 }
 
-v1::Job JobRunner::submit(const v1::JobSpec& spec, const std::string& recording_path) {
-  const v1::Job job = store_.create(spec, recording_path, now_unix_us());
+v1::Job JobRunner::submit(const v1::JobSpec& spec, const std::string& recording_path,
+                          const std::string& owner) {
+  const v1::Job job = store_.create(spec, recording_path, owner, now_unix_us());
   log_event("info", "job_submitted", {{"job", job.job_id()}});
   std::lock_guard lock(mu_);
   queue_.push_back(job.job_id());
@@ -104,9 +134,9 @@ v1::Job JobRunner::submit(const v1::JobSpec& spec, const std::string& recording_
   return job;
 }
 
-std::optional<v1::Job> JobRunner::cancel(const std::string& job_id) {
+std::optional<v1::Job> JobRunner::cancel(const std::string& job_id, const std::string& owner) {
   std::optional<JobRecord> record = store_.get(job_id);
-  if (!record) return std::nullopt;
+  if (!record || record->owner != owner) return std::nullopt;
   if (is_terminal(record->job.state())) return record->job;
   {
     std::lock_guard lock(mu_);
@@ -135,64 +165,91 @@ void JobRunner::start_next_locked() {
 }
 
 void JobRunner::run(const std::string& job_id) {
-  std::optional<JobRecord> record = store_.get(job_id);
-  v1::Job job = record ? record->job : v1::Job();
-  bool handed_back = false;
-  if (record && !is_terminal(job.state())) {
-    job.set_state(v1::Job::RUNNING);
-    job.set_update_time_unix_us(now_unix_us());
-    store_.update(job);
-    publish(job);
-    StoreSink sink(store_, job, [this](const v1::Job& j) { publish(j); });
-    try {
-      auto source = open_recording(record->recording_path);
-      session::PipelineOptions pipeline_options;
-      pipeline_options.on_stage_time = [this](std::string_view stage, double seconds) {
-        metrics_.stage_time(stage, seconds);
-      };
-      session::SessionPipeline pipeline(session::make_default_stages(), sink, pipeline_options);
-      session::SessionChunk chunk;
-      bool cancelled = false;
-      while (source->next(chunk)) {
-        if (stop_flag_) {
-          handed_back = true;
-          break;
-        }
-        {
-          std::lock_guard lock(mu_);
-          cancelled = cancel_requested_.count(job_id) > 0;
-        }
-        if (cancelled) break;
-        pipeline.push(chunk);
-        if (pipeline.ended()) break;
-      }
-      if (!handed_back && !cancelled) pipeline.close();
-      sink.flush(false);
-      if (!handed_back) job.set_state(cancelled ? v1::Job::CANCELLED : v1::Job::SUCCEEDED);
-    } catch (const Error& error) {
-      sink.flush(false);
-      job.set_state(v1::Job::FAILED);
-      job.set_error_code(static_cast<int>(status_code(error.code())));
-      job.set_error_message(error.what());
-    } catch (const std::exception& error) {
-      job.set_state(v1::Job::FAILED);
-      job.set_error_code(static_cast<int>(grpc::StatusCode::INTERNAL));
-      job.set_error_message(std::string("internal error: ") + error.what());
-    }
-    if (!handed_back) {
-      job.set_update_time_unix_us(now_unix_us());
-      store_.update(job);
-      drop_uploaded_recording(*record);
-      publish(job);
-      metrics_.job_finished(v1::Job::State_Name(job.state()));
-      log_event("info", "job_end", {{"job", job_id}, {"state", v1::Job::State_Name(job.state())}});
-    }
+  // Nothing may escape a worker task: an exception there would end the process.
+  try {
+    std::optional<JobRecord> record = store_.get(job_id);
+    if (record && !is_terminal(record->job.state())) run_job(*record);
+  } catch (const std::exception&) {
+    // Only the store's read of the job can get here (run_job catches what it does itself).
+    log_event("error", "job_store_error", {{"job", job_id}});
   }
   std::lock_guard lock(mu_);
   running_.erase(job_id);
   cancel_requested_.erase(job_id);
   start_next_locked();
   idle_.notify_all();
+}
+
+void JobRunner::run_job(JobRecord& record) {
+  v1::Job& job = record.job;
+  const std::string job_id = job.job_id();
+  bool handed_back = false;
+  // Set when the store refused a write: the job fails with it, whatever the pipeline did.
+  std::optional<StoreWriteFailed> store_failure;
+  StoreSink sink(store_, job, [this](const v1::Job& j) { publish(j); });
+  try {
+    job.set_state(v1::Job::RUNNING);
+    job.set_update_time_unix_us(now_unix_us());
+    store_write([&] { store_.update(job); });
+    publish(job);
+    auto source = open_job_recording(record, recordings_root_);
+    session::PipelineOptions pipeline_options;
+    pipeline_options.on_stage_time = [this](std::string_view stage, double seconds) {
+      metrics_.stage_time(stage, seconds);
+    };
+    session::SessionPipeline pipeline(session::make_default_stages(), sink, pipeline_options);
+    session::SessionChunk chunk;
+    bool cancelled = false;
+    while (source->next(chunk)) {
+      if (stop_flag_) {
+        handed_back = true;
+        break;
+      }
+      {
+        std::lock_guard lock(mu_);
+        cancelled = cancel_requested_.count(job_id) > 0;
+      }
+      if (cancelled) break;
+      pipeline.push(chunk);
+      if (pipeline.ended()) break;
+    }
+    if (!handed_back && !cancelled) pipeline.close();
+    if (!handed_back) job.set_state(cancelled ? v1::Job::CANCELLED : v1::Job::SUCCEEDED);
+  } catch (const StoreWriteFailed& failure) {
+    store_failure = failure;
+  } catch (const Error& error) {
+    fail_job(job, status_code(error.code()), error.what());
+  } catch (const std::exception& error) {
+    fail_job(job, grpc::StatusCode::INTERNAL, std::string("internal error: ") + error.what());
+  }
+  // The results that came before the end or the error.
+  if (!store_failure) {
+    try {
+      sink.flush(false);
+    } catch (const StoreWriteFailed& failure) {
+      store_failure = failure;
+    }
+  }
+  if (store_failure) {
+    handed_back = false;  // a job that cannot be stored is not resumed by this process either
+    fail_job(job, status_code(store_failure->code()),
+             std::string("the job store refused a write, the job's results are incomplete: ") +
+                 store_failure->what());
+    log_event("error", "job_store_write_failed", {{"job", job_id}});
+  }
+  if (handed_back) return;
+  job.set_update_time_unix_us(now_unix_us());
+  try {
+    store_.update(job);
+  } catch (const Error&) {
+    // Watchers still learn the end below; the store keeps the job unfinished, so the next
+    // start runs it again.
+    log_event("error", "job_store_write_failed", {{"job", job_id}});
+  }
+  drop_uploaded_recording(record);
+  publish(job);
+  metrics_.job_finished(v1::Job::State_Name(job.state()));
+  log_event("info", "job_end", {{"job", job_id}, {"state", v1::Job::State_Name(job.state())}});
 }
 
 std::uint64_t JobRunner::subscribe(const std::string& job_id, Listener listener) {

@@ -11,6 +11,7 @@
 #include <condition_variable>
 #include <cstdint>
 #include <deque>
+#include <filesystem>
 #include <functional>
 #include <map>
 #include <mutex>
@@ -28,15 +29,19 @@ bool is_terminal(v1::Job::State state);
 
 class JobRunner {
  public:
-  JobRunner(JobStore& store, WorkerPool& pool, Metrics& metrics, unsigned max_running);
+  // `recordings_root`: where jobs submitted by reference are opened beneath (empty: off).
+  JobRunner(JobStore& store, WorkerPool& pool, Metrics& metrics, unsigned max_running,
+            std::filesystem::path recordings_root);
   ~JobRunner();  // stops running jobs (they stay RUNNING in the store) and waits for them
 
   // Re-queues every unfinished job in the store. Call once at start.
   void resume_unfinished();
-  // Stores a new job and queues it.
-  v1::Job submit(const v1::JobSpec& spec, const std::string& recording_path);
-  // Cancels a queued or running job; a finished job is returned unchanged. nullopt: no such job.
-  std::optional<v1::Job> cancel(const std::string& job_id);
+  // Stores a new job of tenant `owner` and queues it.
+  v1::Job submit(const v1::JobSpec& spec, const std::string& recording_path,
+                 const std::string& owner);
+  // Cancels a queued or running job of tenant `owner`; a finished job is returned unchanged.
+  // nullopt: no such job of that tenant.
+  std::optional<v1::Job> cancel(const std::string& job_id, const std::string& owner);
 
   // Calls `listener` with every later version of the job (from a worker thread) until
   // unsubscribe. Returns a token.
@@ -51,12 +56,14 @@ class JobRunner {
  private:
   void start_next_locked();
   void run(const std::string& job_id);
+  void run_job(JobRecord& record);
   void publish(const v1::Job& job);
 
   JobStore& store_;
   WorkerPool& pool_;
   Metrics& metrics_;
   const unsigned max_running_;
+  const std::filesystem::path recordings_root_;
   std::mutex mu_;
   std::condition_variable idle_;
   std::deque<std::string> queue_;

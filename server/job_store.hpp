@@ -17,20 +17,23 @@ namespace posefuse::server {
 struct JobRecord {
   v1::Job job;
   std::string recording_path;  // what the runner reads (resolved by the server, not the client)
+  std::string owner;           // the tenant that submitted it ("" without tenants)
 };
 
 class JobStore {
  public:
   virtual ~JobStore() = default;
 
-  // A new QUEUED job with a fresh unique id; create and update times set to `now_unix_us`.
+  // A new QUEUED job of tenant `owner` with a fresh unique id; create and update times set to
+  // `now_unix_us`.
   virtual v1::Job create(const v1::JobSpec& spec, const std::string& recording_path,
-                         std::int64_t now_unix_us) = 0;
+                         const std::string& owner, std::int64_t now_unix_us) = 0;
   virtual std::optional<JobRecord> get(const std::string& job_id) = 0;
-  // Newest first. `after_job_id` continues a listing after that job (page token); `states`
-  // filters (empty = all). At most `limit` jobs.
+  // The jobs of tenant `owner`, newest first. `after_job_id` continues a listing after that job
+  // (page token); `states` filters (empty = all). At most `limit` jobs.
   virtual std::vector<v1::Job> list(std::size_t limit, const std::string& after_job_id,
-                                    const std::vector<v1::Job::State>& states) = 0;
+                                    const std::vector<v1::Job::State>& states,
+                                    const std::string& owner) = 0;
   // Replaces the stored job of the same id (state, progress, summary, error, update time).
   // Throws kNotFound for an unknown id.
   virtual void update(const v1::Job& job) = 0;

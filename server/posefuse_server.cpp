@@ -45,7 +45,8 @@ void validate_options(const ServerOptions& o) {
   }
 }
 
-PoseFuseServer::PoseFuseServer(ServerOptions options) : options_(std::move(options)) {
+PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store)
+    : options_(std::move(options)) {
   validate_options(options_);
   // Security files first: a bad one fails before any thread or port exists.
   const std::shared_ptr<grpc::ServerCredentials> credentials = make_server_credentials(options_);
@@ -72,9 +73,11 @@ PoseFuseServer::PoseFuseServer(ServerOptions options) : options_(std::move(optio
     if (const std::size_t removed = remove_partial_uploads(upload_spool_dir(options_.data_dir))) {
       log_event("info", "partial_uploads_removed", {{"count", std::to_string(removed)}});
     }
-    job_store_ = std::make_unique<SqliteJobStore>(std::filesystem::path(options_.data_dir) /
-                                                  "jobs.sqlite");
-    jobs_ = std::make_unique<JobRunner>(*job_store_, *pool_, metrics_, options_.max_jobs);
+    const std::filesystem::path data_dir(options_.data_dir);
+    job_store_ = make_store ? make_store(data_dir)
+                            : std::make_unique<SqliteJobStore>(data_dir / "jobs.sqlite");
+    jobs_ = std::make_unique<JobRunner>(*job_store_, *pool_, metrics_, options_.max_jobs,
+                                        options_.recordings_root);
   }
   service_ =
       std::make_unique<PoseFuseService>(options_, *pool_, *registry_, metrics_, jobs_.get(),

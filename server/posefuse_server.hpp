@@ -3,6 +3,8 @@
 // service (grpc.health.v1) and server reflection (reflection_service.hpp), the worker pool and
 // the session registry. Used by posefuse-server's main and, in-process, by the integration
 // tests.
+#include <filesystem>
+#include <functional>
 #include <memory>
 
 #include <grpcpp/grpcpp.h>
@@ -20,11 +22,16 @@
 
 namespace posefuse::server {
 
+// Makes the job store in --data-dir. The default opens <data-dir>/jobs.sqlite; tests pass one
+// that wraps it to inject faults.
+using JobStoreFactory =
+    std::function<std::unique_ptr<JobStore>(const std::filesystem::path& data_dir)>;
+
 class PoseFuseServer {
  public:
   // Binds and starts serving. Throws posefuse::Error (kInvalidArgument naming the option) for
   // bad options, kFailedPrecondition when the address cannot be bound.
-  explicit PoseFuseServer(ServerOptions options);
+  explicit PoseFuseServer(ServerOptions options, JobStoreFactory make_store = {});
   ~PoseFuseServer();  // shuts down if still running
 
   // The bound port (useful with port 0).

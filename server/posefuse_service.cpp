@@ -4,6 +4,7 @@
 
 #include "server/fit_session.hpp"
 #include "server/job_calls.hpp"
+#include "server/job_limits.hpp"
 #include "server/refused_call.hpp"
 #include "server/status.hpp"
 #include "server/log.hpp"
@@ -25,9 +26,6 @@ grpc::ServerUnaryReactor* finish_unary(grpc::CallbackServerContext* context, grp
   return reactor;
 }
 
-constexpr std::size_t kDefaultPageSize = 50;
-constexpr std::size_t kMaxPageSize = 1000;
-
 }  // namespace
 
 PoseFuseService::PoseFuseService(const ServerOptions& options, WorkerPool& pool,
@@ -48,13 +46,14 @@ PoseFuseService::PoseFuseService(const ServerOptions& options, WorkerPool& pool,
 }
 
 grpc::Status PoseFuseService::authenticate(const grpc::CallbackServerContext* context,
-                                           const char* call) const {
-  return authenticate_call(tokens_, *context, call);
+                                           const char* call, std::string& tenant) const {
+  return authenticate_call(tokens_, *context, call, tenant);
 }
 
 grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>* PoseFuseService::Fit(
     grpc::CallbackServerContext* context) {
-  if (grpc::Status denied = authenticate(context, "Fit"); !denied.ok()) {
+  std::string tenant;  // a Fit call keeps nothing: the same for every tenant
+  if (grpc::Status denied = authenticate(context, "Fit", tenant); !denied.ok()) {
     return new RefusedCall<grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>>(denied);
   }
   const std::optional<std::uint64_t> id = registry_.try_admit();
@@ -72,7 +71,8 @@ grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>* PoseFuseService::Fit(
 grpc::ServerUnaryReactor* PoseFuseService::GetServerInfo(grpc::CallbackServerContext* context,
                                                          const v1::GetServerInfoRequest*,
                                                          v1::ServerInfo* response) {
-  if (grpc::Status denied = authenticate(context, "GetServerInfo"); !denied.ok()) {
+  std::string tenant;
+  if (grpc::Status denied = authenticate(context, "GetServerInfo", tenant); !denied.ok()) {
     return finish_unary(context, denied);
   }
   *response = server_info(options_, static_cast<unsigned>(pool_.threads()), jobs_ != nullptr);
@@ -81,49 +81,64 @@ grpc::ServerUnaryReactor* PoseFuseService::GetServerInfo(grpc::CallbackServerCon
 
 grpc::ServerReadReactor<v1::SubmitJobRequest>* PoseFuseService::SubmitJob(
     grpc::CallbackServerContext* context, v1::Job* response) {
-  if (grpc::Status denied = authenticate(context, "SubmitJob"); !denied.ok()) {
+  std::string tenant;
+  if (grpc::Status denied = authenticate(context, "SubmitJob", tenant); !denied.ok()) {
     return new RefusedCall<grpc::ServerReadReactor<v1::SubmitJobRequest>>(denied);
   }
   if (!jobs_) return new RefusedCall<grpc::ServerReadReactor<v1::SubmitJobRequest>>(jobs_off());
-  return SubmitJobCall::start(*submit_context_, response);
+  return SubmitJobCall::start(*submit_context_, response, tenant);
 }
 
 grpc::ServerUnaryReactor* PoseFuseService::GetJob(grpc::CallbackServerContext* context,
                                                   const v1::GetJobRequest* request,
                                                   v1::Job* response) {
-  if (grpc::Status denied = authenticate(context, "GetJob"); !denied.ok()) {
+  std::string tenant;
+  if (grpc::Status denied = authenticate(context, "GetJob", tenant); !denied.ok()) {
     return finish_unary(context, denied);
   }
   if (!jobs_) return finish_unary(context, jobs_off());
-  const auto record = jobs_->store().get(request->job_id());
-  if (!record) {
-    return finish_unary(context, grpc::Status(grpc::StatusCode::NOT_FOUND,
-                                              "job_id: no job '" + request->job_id() + "'"));
+  try {
+    const auto record = jobs_->store().get(request->job_id());
+    // Another tenant's job is answered exactly like a missing one.
+    if (!record || record->owner != tenant) {
+      return finish_unary(context, grpc::Status(grpc::StatusCode::NOT_FOUND,
+                                                "job_id: no job '" + request->job_id() + "'"));
+    }
+    *response = record->job;
+    bound_stored_job(*response);
+  } catch (const Error& error) {  // the job store failed
+    return finish_unary(context, to_status(error));
   }
-  *response = record->job;
   return finish_unary(context, grpc::Status::OK);
 }
 
 grpc::ServerUnaryReactor* PoseFuseService::ListJobs(grpc::CallbackServerContext* context,
                                                     const v1::ListJobsRequest* request,
                                                     v1::ListJobsResponse* response) {
-  if (grpc::Status denied = authenticate(context, "ListJobs"); !denied.ok()) {
+  std::string tenant;
+  if (grpc::Status denied = authenticate(context, "ListJobs", tenant); !denied.ok()) {
     return finish_unary(context, denied);
   }
   if (!jobs_) return finish_unary(context, jobs_off());
-  const std::size_t page_size =
-      request->page_size() == 0 ? kDefaultPageSize
-                                : std::min<std::size_t>(request->page_size(), kMaxPageSize);
+  const std::size_t page_size = effective_page_size(request->page_size());
   std::vector<v1::Job::State> states;
   for (const int state : request->states()) states.push_back(static_cast<v1::Job::State>(state));
   try {
     // One more than asked for tells whether another page exists.
-    std::vector<v1::Job> jobs = jobs_->store().list(page_size + 1, request->page_token(), states);
-    if (jobs.size() > page_size) {
-      jobs.pop_back();
-      response->set_next_page_token(jobs.back().job_id());
+    std::vector<v1::Job> jobs = jobs_->store().list(page_size + 1, request->page_token(), states, tenant);
+    // A page ends at page_size jobs or kMaxPageBytes, whichever comes first (always at least
+    // one job, so that a listing makes progress).
+    std::size_t bytes = 0;
+    for (v1::Job& job : jobs) {
+      bound_stored_job(job);
+      bytes += job.ByteSizeLong();
+      const std::size_t listed = static_cast<std::size_t>(response->jobs_size());
+      if (listed == page_size || (listed > 0 && bytes > kMaxPageBytes)) {
+        response->set_next_page_token(response->jobs(response->jobs_size() - 1).job_id());
+        break;
+      }
+      *response->add_jobs() = std::move(job);
     }
-    for (v1::Job& job : jobs) *response->add_jobs() = std::move(job);
   } catch (const Error& error) {
     return finish_unary(context, to_status(error));
   }
@@ -133,35 +148,43 @@ grpc::ServerUnaryReactor* PoseFuseService::ListJobs(grpc::CallbackServerContext*
 grpc::ServerUnaryReactor* PoseFuseService::CancelJob(grpc::CallbackServerContext* context,
                                                      const v1::CancelJobRequest* request,
                                                      v1::Job* response) {
-  if (grpc::Status denied = authenticate(context, "CancelJob"); !denied.ok()) {
+  std::string tenant;
+  if (grpc::Status denied = authenticate(context, "CancelJob", tenant); !denied.ok()) {
     return finish_unary(context, denied);
   }
   if (!jobs_) return finish_unary(context, jobs_off());
-  const auto job = jobs_->cancel(request->job_id());
-  if (!job) {
-    return finish_unary(context, grpc::Status(grpc::StatusCode::NOT_FOUND,
-                                              "job_id: no job '" + request->job_id() + "'"));
+  try {
+    const auto job = jobs_->cancel(request->job_id(), tenant);
+    if (!job) {
+      return finish_unary(context, grpc::Status(grpc::StatusCode::NOT_FOUND,
+                                                "job_id: no job '" + request->job_id() + "'"));
+    }
+    *response = *job;
+    bound_stored_job(*response);
+  } catch (const Error& error) {  // the job store failed
+    return finish_unary(context, to_status(error));
   }
-  *response = *job;
   return finish_unary(context, grpc::Status::OK);
 }
 
 grpc::ServerWriteReactor<v1::Job>* PoseFuseService::WatchJob(grpc::CallbackServerContext* context,
                                                              const v1::WatchJobRequest* request) {
-  if (grpc::Status denied = authenticate(context, "WatchJob"); !denied.ok()) {
+  std::string tenant;
+  if (grpc::Status denied = authenticate(context, "WatchJob", tenant); !denied.ok()) {
     return new RefusedCall<grpc::ServerWriteReactor<v1::Job>>(denied);
   }
   if (!jobs_) return new RefusedCall<grpc::ServerWriteReactor<v1::Job>>(jobs_off());
-  return watch_job(*jobs_, request->job_id());
+  return watch_job(*jobs_, request->job_id(), tenant);
 }
 
 grpc::ServerWriteReactor<v1::FitResult>* PoseFuseService::GetJobResults(
     grpc::CallbackServerContext* context, const v1::GetJobResultsRequest* request) {
-  if (grpc::Status denied = authenticate(context, "GetJobResults"); !denied.ok()) {
+  std::string tenant;
+  if (grpc::Status denied = authenticate(context, "GetJobResults", tenant); !denied.ok()) {
     return new RefusedCall<grpc::ServerWriteReactor<v1::FitResult>>(denied);
   }
   if (!jobs_) return new RefusedCall<grpc::ServerWriteReactor<v1::FitResult>>(jobs_off());
-  return job_results(*jobs_, request->job_id());
+  return job_results(*jobs_, request->job_id(), tenant);
 }
 
 v1::ServerInfo server_info(const ServerOptions& options, unsigned workers, bool jobs) {

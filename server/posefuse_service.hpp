@@ -55,7 +55,9 @@ class PoseFuseService final : public v1::PoseFuse::CallbackService {
   std::optional<SubmitJobContext> submit_context_;  // set when jobs are on
 
   // OK without tokens or with an accepted one; logs a refusal (peer and call, never the token).
-  grpc::Status authenticate(const grpc::CallbackServerContext* context, const char* call) const;
+  // `tenant`: the caller's tenant, whose jobs are the only ones the call sees.
+  grpc::Status authenticate(const grpc::CallbackServerContext* context, const char* call,
+                            std::string& tenant) const;
 };
 
 // What GetServerInfo returns (also used by tests).

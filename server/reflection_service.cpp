@@ -134,7 +134,8 @@ ReflectionService::ReflectionService(std::vector<std::string> services, const Be
 grpc::ServerBidiReactor<reflection::ServerReflectionRequest, reflection::ServerReflectionResponse>*
 ReflectionService::ServerReflectionInfo(grpc::CallbackServerContext* context) {
   using Reactor = grpc::ServerBidiReactor<ServerReflectionRequest, ServerReflectionResponse>;
-  if (grpc::Status denied = authenticate_call(tokens_, *context, "ServerReflectionInfo");
+  std::string tenant;  // reflection is the same for every tenant
+  if (grpc::Status denied = authenticate_call(tokens_, *context, "ServerReflectionInfo", tenant);
       !denied.ok()) {
     return new RefusedCall<Reactor>(std::move(denied));
   }

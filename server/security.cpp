@@ -24,6 +24,17 @@ bool valid_token_characters(const std::string& token) {
   return true;
 }
 
+// A tenant names who owns jobs: a plain name that is safe in logs and file names.
+bool valid_tenant(const std::string& tenant) {
+  if (tenant.empty() || tenant.size() > 64) return false;
+  for (const char c : tenant) {
+    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+                    c == '_' || c == '.' || c == '-';
+    if (!ok) return false;
+  }
+  return true;
+}
+
 // Looks at every byte of `accepted` whatever `presented` holds, so the time taken tells nothing
 // about how many leading characters matched.
 bool equal_constant_time(std::string_view presented, std::string_view accepted) {
@@ -75,11 +86,18 @@ std::string transport_mode(const ServerOptions& options) {
 
 BearerTokens BearerTokens::load(const std::string& path) {
   const std::string flag = "--tokens-file";
-  std::vector<std::string> tokens;
+  std::vector<AcceptedToken> tokens;
   for (const TextLine& line : meaningful_lines(read_security_file(path, flag))) {
-    const std::string& token = line.text;
+    // "<token>" or "<token> <tenant>".
+    const std::size_t gap = line.text.find_first_of(" \t");
+    const std::string token = line.text.substr(0, gap);
+    const std::string tenant =
+        gap == std::string::npos ? std::string() : trim_whitespace(line.text.substr(gap));
     // The messages name the line, never the token.
     const std::string where = "'" + path + "' line " + std::to_string(line.number);
+    if (gap != std::string::npos && !valid_tenant(tenant)) {
+      throw_invalid(flag, where + ": the tenant after the token must match [A-Za-z0-9_.-]{1,64}");
+    }
     if (!valid_token_characters(token)) {
       throw_invalid(flag, where + ": a token may hold only visible ASCII characters, no spaces");
     }
@@ -87,23 +105,26 @@ BearerTokens BearerTokens::load(const std::string& path) {
       throw_invalid(flag, where + ": token shorter than " + std::to_string(kMinTokenLength) +
                               " characters (make one with: openssl rand -hex 32)");
     }
-    tokens.push_back(token);
+    tokens.push_back({token, tenant});
   }
   if (tokens.empty()) throw_invalid(flag, "'" + path + "' holds no tokens");
   return BearerTokens(std::move(tokens));
 }
 
-BearerTokens::BearerTokens(std::vector<std::string> tokens) : tokens_(std::move(tokens)) {}
+BearerTokens::BearerTokens(std::vector<AcceptedToken> tokens) : tokens_(std::move(tokens)) {}
 
-bool BearerTokens::accepts(std::string_view token) const {
-  bool accepted = false;
-  for (const std::string& candidate : tokens_) {
-    accepted = equal_constant_time(token, candidate) || accepted;  // no early exit
+std::optional<std::string> BearerTokens::tenant_of(std::string_view token) const {
+  const AcceptedToken* match = nullptr;
+  for (const AcceptedToken& candidate : tokens_) {
+    const bool equal = equal_constant_time(token, candidate.token);  // no early exit
+    if (equal && !match) match = &candidate;
   }
-  return accepted;
+  if (!match) return std::nullopt;
+  return match->tenant;
 }
 
-grpc::Status BearerTokens::check(const grpc::CallbackServerContext& context) const {
+grpc::Status BearerTokens::check(const grpc::CallbackServerContext& context,
+                                 std::string& tenant) const {
   const auto& metadata = context.client_metadata();
   const auto found = metadata.find("authorization");
   if (found == metadata.end()) return unauthenticated("no bearer token");
@@ -112,14 +133,18 @@ grpc::Status BearerTokens::check(const grpc::CallbackServerContext& context) con
   if (value.substr(0, kScheme.size()) != kScheme) {
     return unauthenticated("authorization metadata is not of the form 'Bearer <token>'");
   }
-  if (!accepts(value.substr(kScheme.size()))) return unauthenticated("bearer token not accepted");
+  std::optional<std::string> owner = tenant_of(value.substr(kScheme.size()));
+  if (!owner) return unauthenticated("bearer token not accepted");
+  tenant = std::move(*owner);
   return grpc::Status::OK;
 }
 
 grpc::Status authenticate_call(const BearerTokens* tokens,
-                               const grpc::CallbackServerContext& context, const char* call) {
+                               const grpc::CallbackServerContext& context, const char* call,
+                               std::string& tenant) {
+  tenant.clear();
   if (!tokens) return grpc::Status::OK;
-  grpc::Status status = tokens->check(context);
+  grpc::Status status = tokens->check(context, tenant);
   if (!status.ok()) {
     log_event("info", "call_unauthenticated", {{"call", call}, {"peer", context.peer()}});
   }

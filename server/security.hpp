@@ -3,6 +3,7 @@
 // "Security"). TLS and mutual TLS come from PEM files; tokens from a tokens file. Nothing here
 // ever logs or returns a token or key.
 #include <memory>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -25,30 +26,45 @@ std::shared_ptr<grpc::ServerCredentials> make_server_credentials(const ServerOpt
 // "plaintext", "tls" or "mutual-tls": what the server logs at start.
 std::string transport_mode(const ServerOptions& options);
 
+// An accepted token and the tenant it belongs to. Jobs belong to the tenant that submitted
+// them and are visible to that tenant's tokens only; "" is the tenant of tokens listed without
+// one (and of every call on a server without tokens).
+struct AcceptedToken {
+  std::string token;
+  std::string tenant;
+};
+
 // The accepted bearer tokens. check() compares in time that does not depend on where a
 // presented token differs from an accepted one.
 class BearerTokens {
  public:
-  // One token per line; blank lines and lines starting with '#' are skipped; surrounding
+  // One token per line, optionally followed by whitespace and its tenant
+  // ([A-Za-z0-9_.-]{1,64}); blank lines and lines starting with '#' are skipped; surrounding
   // whitespace is trimmed. Throws posefuse::Error (field "--tokens-file") for an unreadable
-  // file, no tokens, or a token that is too short or has characters not allowed in metadata.
+  // file, no tokens, a token that is too short or has characters not allowed in metadata, or a
+  // bad tenant name.
   static BearerTokens load(const std::string& path);
-  explicit BearerTokens(std::vector<std::string> tokens);
+  explicit BearerTokens(std::vector<AcceptedToken> tokens);
 
   std::size_t size() const { return tokens_.size(); }
-  // OK when the call carries `authorization: Bearer <accepted token>`; UNAUTHENTICATED with a
-  // message that says what is missing otherwise (never echoing what was sent).
-  grpc::Status check(const grpc::CallbackServerContext& context) const;
-  bool accepts(std::string_view token) const;
+  // OK when the call carries `authorization: Bearer <accepted token>`, with that token's tenant
+  // in `tenant`; UNAUTHENTICATED with a message that says what is missing otherwise (never
+  // echoing what was sent).
+  grpc::Status check(const grpc::CallbackServerContext& context, std::string& tenant) const;
+  // The tenant of `token`, or nullopt when it is not accepted.
+  std::optional<std::string> tenant_of(std::string_view token) const;
+  bool accepts(std::string_view token) const { return tenant_of(token).has_value(); }
 
  private:
-  std::vector<std::string> tokens_;
+  std::vector<AcceptedToken> tokens_;
 };
 
-// OK when `tokens` is null (no token needed) or the call carries an accepted one; otherwise
-// UNAUTHENTICATED, logged with the call's name and peer (never the token).
+// OK when `tokens` is null (no token needed; tenant "") or the call carries an accepted one
+// (its tenant in `tenant`); otherwise UNAUTHENTICATED, logged with the call's name and peer
+// (never the token).
 grpc::Status authenticate_call(const BearerTokens* tokens,
-                               const grpc::CallbackServerContext& context, const char* call);
+                               const grpc::CallbackServerContext& context, const char* call,
+                               std::string& tenant);
 
 // Tokens this short are refused: they could be guessed.
 constexpr std::size_t kMinTokenLength = 16;

@@ -9,7 +9,13 @@ namespace posefuse::server {
 
 namespace {
 
-// One prepared statement; finalized on destruction. Errors throw kInternal with SQLite's text.
+// A full disk (or a full database) is a resource running out; anything else is ours to fix.
+ErrorCode store_error_code(int rc) {
+  return (rc & 0xff) == SQLITE_FULL ? ErrorCode::kResourceExhausted : ErrorCode::kInternal;
+}
+
+// One prepared statement; finalized on destruction. Errors throw kInternal (kResourceExhausted
+// for a full disk) with SQLite's text.
 class Statement {
  public:
   Statement(sqlite3* db, const std::string& sql) : db_(db) {
@@ -57,7 +63,8 @@ class Statement {
     if (rc != SQLITE_OK) fail("bind");
   }
   [[noreturn]] void fail(const char* what) {
-    throw Error(ErrorCode::kInternal, "job_store", std::string(what) + ": " + sqlite3_errmsg(db_));
+    throw Error(store_error_code(sqlite3_errcode(db_)), "job_store",
+                std::string(what) + ": " + sqlite3_errmsg(db_));
   }
   sqlite3* db_;
   sqlite3_stmt* stmt_ = nullptr;
@@ -88,6 +95,8 @@ SqliteJobStore::SqliteJobStore(const std::filesystem::path& path) : path_(path) 
     exec("CREATE TABLE IF NOT EXISTS jobs ("
          " seq INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT UNIQUE NOT NULL,"
          " state INTEGER NOT NULL, recording_path TEXT NOT NULL, job BLOB NOT NULL)");
+    // The owning tenant; a store made before tenants gets the column, its jobs owned by "".
+    if (!has_column("jobs", "owner")) exec("ALTER TABLE jobs ADD COLUMN owner TEXT NOT NULL DEFAULT ''");
     exec("CREATE TABLE IF NOT EXISTS results ("
          " job_id TEXT NOT NULL, seq INTEGER NOT NULL, result BLOB NOT NULL,"
          " PRIMARY KEY (job_id, seq))");
@@ -101,15 +110,22 @@ SqliteJobStore::~SqliteJobStore() { sqlite3_close(db_); }
 
 void SqliteJobStore::exec(const char* sql) {
   char* message = nullptr;
-  if (sqlite3_exec(db_, sql, nullptr, nullptr, &message) != SQLITE_OK) {
+  if (const int rc = sqlite3_exec(db_, sql, nullptr, nullptr, &message); rc != SQLITE_OK) {
     const std::string text = message ? message : "unknown error";
     sqlite3_free(message);
-    throw Error(ErrorCode::kInternal, "job_store", text);
+    throw Error(store_error_code(rc), "job_store", text);
   }
 }
 
+bool SqliteJobStore::has_column(const char* table, const char* column) {
+  Statement select(db_, std::string("SELECT COUNT(*) FROM pragma_table_info('") + table +
+                            "') WHERE name = ?");
+  select.bind(1, std::string(column));
+  return select.step() && select.int64(0) > 0;
+}
+
 v1::Job SqliteJobStore::create(const v1::JobSpec& spec, const std::string& recording_path,
-                               std::int64_t now_unix_us) {
+                               const std::string& owner, std::int64_t now_unix_us) {
   v1::Job job;
   job.set_job_id(random_hex_id());
   job.set_state(v1::Job::QUEUED);
@@ -118,24 +134,26 @@ v1::Job SqliteJobStore::create(const v1::JobSpec& spec, const std::string& recor
   job.set_label(spec.label());
   if (spec.has_recording_uri()) job.set_recording_uri(spec.recording_uri());
   std::lock_guard lock(mu_);
-  Statement insert(db_, "INSERT INTO jobs (id, state, recording_path, job) VALUES (?, ?, ?, ?)");
+  Statement insert(db_,
+                   "INSERT INTO jobs (id, state, recording_path, job, owner) VALUES (?, ?, ?, ?, ?)");
   insert.bind(1, job.job_id()).bind(2, std::int64_t{job.state()}).bind(3, recording_path);
-  insert.bind_blob(4, job.SerializeAsString());
+  insert.bind_blob(4, job.SerializeAsString()).bind(5, owner);
   insert.step();
   return job;
 }
 
 std::optional<JobRecord> SqliteJobStore::get(const std::string& job_id) {
   std::lock_guard lock(mu_);
-  Statement select(db_, "SELECT job, recording_path FROM jobs WHERE id = ?");
+  Statement select(db_, "SELECT job, recording_path, owner FROM jobs WHERE id = ?");
   select.bind(1, job_id);
   if (!select.step()) return std::nullopt;
-  return JobRecord{parse_job(select.blob(0)), select.text(1)};
+  return JobRecord{parse_job(select.blob(0)), select.text(1), select.text(2)};
 }
 
 std::vector<v1::Job> SqliteJobStore::list(std::size_t limit, const std::string& after_job_id,
-                                          const std::vector<v1::Job::State>& states) {
-  std::string sql = "SELECT job FROM jobs WHERE 1";
+                                          const std::vector<v1::Job::State>& states,
+                                          const std::string& owner) {
+  std::string sql = "SELECT job FROM jobs WHERE owner = ?";
   if (!after_job_id.empty()) sql += " AND seq < (SELECT seq FROM jobs WHERE id = ?)";
   if (!states.empty()) {
     sql += " AND state IN (";
@@ -146,6 +164,7 @@ std::vector<v1::Job> SqliteJobStore::list(std::size_t limit, const std::string& 
   std::lock_guard lock(mu_);
   Statement select(db_, sql);
   int index = 1;
+  select.bind(index++, owner);
   if (!after_job_id.empty()) select.bind(index++, after_job_id);
   for (const v1::Job::State state : states) select.bind(index++, std::int64_t{state});
   select.bind(index, static_cast<std::int64_t>(limit));
@@ -181,7 +200,9 @@ void SqliteJobStore::append_results(const std::string& job_id,
     }
     exec("COMMIT");
   } catch (...) {
-    exec("ROLLBACK");
+    // Not exec(): SQLite may have rolled back already (a full disk does that), and the error
+    // to report is the one that got us here.
+    sqlite3_exec(db_, "ROLLBACK", nullptr, nullptr, nullptr);
     throw;
   }
 }
@@ -208,10 +229,10 @@ void SqliteJobStore::clear_results(const std::string& job_id) {
 
 std::vector<JobRecord> SqliteJobStore::unfinished() {
   std::lock_guard lock(mu_);
-  Statement select(db_, "SELECT job, recording_path FROM jobs WHERE state IN (?, ?) ORDER BY seq");
+  Statement select(db_, "SELECT job, recording_path, owner FROM jobs WHERE state IN (?, ?) ORDER BY seq");
   select.bind(1, std::int64_t{v1::Job::QUEUED}).bind(2, std::int64_t{v1::Job::RUNNING});
   std::vector<JobRecord> records;
-  while (select.step()) records.push_back({parse_job(select.blob(0)), select.text(1)});
+  while (select.step()) records.push_back({parse_job(select.blob(0)), select.text(1), select.text(2)});
   return records;
 }
 

@@ -20,10 +20,11 @@ class SqliteJobStore : public JobStore {
   SqliteJobStore& operator=(const SqliteJobStore&) = delete;
 
   v1::Job create(const v1::JobSpec& spec, const std::string& recording_path,
-                 std::int64_t now_unix_us) override;
+                 const std::string& owner, std::int64_t now_unix_us) override;
   std::optional<JobRecord> get(const std::string& job_id) override;
   std::vector<v1::Job> list(std::size_t limit, const std::string& after_job_id,
-                            const std::vector<v1::Job::State>& states) override;
+                            const std::vector<v1::Job::State>& states,
+                            const std::string& owner) override;
   void update(const v1::Job& job) override;
   void append_results(const std::string& job_id,
                       const std::vector<v1::FitResult>& results) override;
@@ -33,6 +34,7 @@ class SqliteJobStore : public JobStore {
 
  private:
   void exec(const char* sql);
+  bool has_column(const char* table, const char* column);
 
   std::filesystem::path path_;
   std::mutex mu_;

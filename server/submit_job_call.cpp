@@ -1,6 +1,7 @@
 #include "server/submit_job_call.hpp"
 
 #include "server/job_calls.hpp"
+#include "server/job_limits.hpp"
 #include "server/log.hpp"
 #include "server/random_id.hpp"
 #include "server/status.hpp"
@@ -8,16 +9,18 @@
 
 namespace posefuse::server {
 
-SubmitJobCall* SubmitJobCall::start(const SubmitJobContext& context, v1::Job* response) {
-  auto call = std::make_shared<SubmitJobCall>(context, response);
+SubmitJobCall* SubmitJobCall::start(const SubmitJobContext& context, v1::Job* response,
+                                    std::string tenant) {
+  auto call = std::make_shared<SubmitJobCall>(context, response, std::move(tenant));
   call->self_ = call;
   std::lock_guard lock(call->mu_);
   call->start_read_locked();
   return call.get();
 }
 
-SubmitJobCall::SubmitJobCall(const SubmitJobContext& context, v1::Job* response)
-    : context_(context), response_(response) {}
+SubmitJobCall::SubmitJobCall(const SubmitJobContext& context, v1::Job* response,
+                             std::string tenant)
+    : context_(context), response_(response), tenant_(std::move(tenant)) {}
 
 void SubmitJobCall::start_read_locked() {
   read_pending_ = true;
@@ -45,9 +48,10 @@ void SubmitJobCall::read_spec_locked(bool ok) {
   }
   spec_ = request_.spec();
   try {
+    validate_job_spec(spec_);
     if (spec_.source_case() == v1::JobSpec::kRecordingUri) {
       const auto path = resolve_recording(spec_.recording_uri(), context_.recordings_root);
-      *response_ = context_.runner.submit(spec_, path.string());
+      *response_ = context_.runner.submit(spec_, path.string(), tenant_);
       finish_locked(grpc::Status::OK);
       return;
     }
@@ -109,7 +113,7 @@ void SubmitJobCall::commit() {
   }
   try {
     const std::filesystem::path& path = spool_->commit();
-    *response_ = context_.runner.submit(spec_, path.string());
+    *response_ = context_.runner.submit(spec_, path.string(), tenant_);
   } catch (const Error& error) {
     finish_locked(to_status(error));
     return;

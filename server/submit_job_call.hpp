@@ -48,7 +48,9 @@ class SubmitJobCall : public grpc::ServerReadReactor<v1::SubmitJobRequest>,
                       public std::enable_shared_from_this<SubmitJobCall> {
  public:
   // Starts the call; the returned reactor keeps itself alive until OnDone.
-  static SubmitJobCall* start(const SubmitJobContext& context, v1::Job* response);
+  // The job belongs to `tenant`.
+  static SubmitJobCall* start(const SubmitJobContext& context, v1::Job* response,
+                              std::string tenant);
 
   void OnReadDone(bool ok) override;
   void OnCancel() override;
@@ -56,7 +58,7 @@ class SubmitJobCall : public grpc::ServerReadReactor<v1::SubmitJobRequest>,
   void check_idle(std::chrono::steady_clock::time_point now) override;
 
   // Use start(); public only for make_shared.
-  SubmitJobCall(const SubmitJobContext& context, v1::Job* response);
+  SubmitJobCall(const SubmitJobContext& context, v1::Job* response, std::string tenant);
 
  private:
   using Clock = std::chrono::steady_clock;
@@ -69,6 +71,7 @@ class SubmitJobCall : public grpc::ServerReadReactor<v1::SubmitJobRequest>,
 
   const SubmitJobContext& context_;
   v1::Job* response_;
+  const std::string tenant_;
   std::mutex mu_;
   std::shared_ptr<SubmitJobCall> self_;  // released in OnDone
   v1::SubmitJobRequest request_;

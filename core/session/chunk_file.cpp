@@ -16,9 +16,13 @@ std::string chunk_field(std::uint64_t index) { return "chunk[" + std::to_string(
 }  // namespace
 
 ChunkFileReader::ChunkFileReader(const std::filesystem::path& path, std::uint64_t max_chunk_bytes)
-    : path_(path), max_chunk_bytes_(max_chunk_bytes) {
-  in_.open(path, std::ios::binary);
-  if (!in_) throw Error(ErrorCode::kNotFound, path.string(), "cannot open chunk file");
+    : ChunkFileReader(open_path(path, path.string()), path.string(), max_chunk_bytes) {}
+
+ChunkFileReader::ChunkFileReader(UniqueFd file, const std::string& name,
+                                 std::uint64_t max_chunk_bytes)
+    : max_chunk_bytes_(max_chunk_bytes) {
+  require_regular_file(file.get(), name);
+  in_ = std::make_unique<FdInputStream>(std::move(file));
 }
 
 bool ChunkFileReader::next(SessionChunk& chunk) {
@@ -29,9 +33,9 @@ bool ChunkFileReader::next(SessionChunk& chunk) {
   std::uint64_t length = 0;
   int bytes = 0;
   while (true) {
-    const int c = in_.get();
+    const int c = in_->get();
     if (c == std::char_traits<char>::eof()) {
-      if (bytes == 0 && !in_.bad()) return false;  // clean end between chunks
+      if (bytes == 0 && !in_->bad()) return false;  // clean end between chunks
       throw Error(ErrorCode::kDataLoss, field, "file ends inside the length prefix" + where);
     }
     const auto byte = static_cast<std::uint64_t>(c);
@@ -52,8 +56,8 @@ bool ChunkFileReader::next(SessionChunk& chunk) {
   }
 
   buffer_.resize(length);
-  in_.read(buffer_.data(), static_cast<std::streamsize>(length));
-  const auto got = static_cast<std::uint64_t>(in_.gcount());
+  in_->read(buffer_.data(), static_cast<std::streamsize>(length));
+  const auto got = static_cast<std::uint64_t>(in_->gcount());
   if (got != length) {
     throw Error(ErrorCode::kDataLoss, field,
                 "truncated: expected " + std::to_string(length) + " bytes, file has " +

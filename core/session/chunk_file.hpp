@@ -5,9 +5,11 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <string>
 
 #include "session/chunk_stream.hpp"
+#include "session/recording_file.hpp"
 
 namespace posefuse::session {
 
@@ -17,9 +19,13 @@ inline constexpr std::uint64_t kMaxChunkBytes = 64ull << 20;
 
 class ChunkFileReader : public ChunkSource {
  public:
-  // Throws kNotFound when the file cannot be opened.
+  // Throws kNotFound when the file cannot be opened, kInvalidArgument when it is not a regular
+  // file (a FIFO would block every read).
   explicit ChunkFileReader(const std::filesystem::path& path,
                            std::uint64_t max_chunk_bytes = kMaxChunkBytes);
+  // Reads an already open file; `name` is what errors call it. Regular files only, as above.
+  ChunkFileReader(UniqueFd file, const std::string& name,
+                  std::uint64_t max_chunk_bytes = kMaxChunkBytes);
 
   // False at a clean end of file (between chunks). Errors name "chunk[i]" and the byte offset
   // where chunk i starts: kDataLoss for a truncated or corrupt chunk, kResourceExhausted for a
@@ -30,8 +36,7 @@ class ChunkFileReader : public ChunkSource {
   std::uint64_t byte_offset() const { return offset_; }
 
  private:
-  std::filesystem::path path_;
-  std::ifstream in_;
+  std::unique_ptr<std::istream> in_;
   std::uint64_t max_chunk_bytes_;
   std::uint64_t chunks_read_ = 0;
   std::uint64_t offset_ = 0;

@@ -1,14 +1,18 @@
 #include "session/directory_reader.hpp"
 
+#include <sys/stat.h>
+
 #include <algorithm>
 #include <set>
 
 #include "common/error.hpp"
+#include "session/chunk_file.hpp"
 #include "session/chunk_order.hpp"
 #include "session/directory_layout.hpp"
-#include "session/file_bytes.hpp"
 #include "session/image_codec.hpp"
 #include "session/json_message.hpp"
+#include "session/recording_file.hpp"
+#include "session/session_validator.hpp"
 #include "session/text_fields.hpp"
 #include "session/wav.hpp"
 
@@ -20,24 +24,47 @@ namespace {
 
 enum class FrameKind { kDepth, kBodyIndex, kColor };
 
+// A CSV file of the recording as a stream, opened beneath the recording's directory.
+std::unique_ptr<std::istream> open_stream_beneath(int directory, const std::string& relative) {
+  UniqueFd file = open_beneath(directory, relative, relative);
+  require_regular_file(file.get(), relative);
+  return std::make_unique<FdInputStream>(std::move(file));
+}
+
+// Whether the recording has the optional entry `entry` of `kind`; anything else under that
+// name (a link, a FIFO, a file where a folder belongs) is an error rather than silently skipped.
+bool has_entry(int directory, const std::string& entry, FileKind kind) {
+  const FileKind found = entry_kind(directory, entry);
+  if (found == FileKind::kMissing) return false;
+  if (found != kind) {
+    throw_invalid(entry, kind == FileKind::kDirectory
+                             ? "is not a directory (links are refused)"
+                             : "is not a regular file (links, FIFOs and devices are refused)");
+  }
+  return true;
+}
+
 // depth/, body_index/ or color/: one file per frame named <t_us>.<ext>, read in t_us order.
 class FrameFolderStream : public ChunkSource {
  public:
-  FrameFolderStream(const fs::path& folder, const char* folder_name, FrameKind kind)
-      : kind_(kind) {
-    for (const fs::directory_entry& entry : fs::directory_iterator(folder)) {
-      const std::string file = entry.path().filename().string();
+  FrameFolderStream(int recording, const char* folder_name, FrameKind kind)
+      : folder_(open_beneath(recording, folder_name, folder_name)), kind_(kind) {
+    require_directory(folder_.get(), folder_name);
+    for (const std::string& file : list_directory(folder_.get(), folder_name)) {
       if (file.starts_with(".")) continue;  // editor and OS droppings
       const std::string name = std::string(folder_name) + "/" + file;
-      const std::string ext = entry.path().extension().string();
+      const std::string ext = fs::path(file).extension().string();
       const bool ext_ok = ext == ".png" || (kind == FrameKind::kColor && (ext == ".jpg" || ext == ".jpeg"));
-      if (!entry.is_regular_file() || !ext_ok) {
+      if (!ext_ok) {
         throw_invalid(name, kind == FrameKind::kColor
                                 ? "expected files named <t_us>.jpg or <t_us>.png"
                                 : "expected files named <t_us>.png");
       }
-      const std::int64_t t_us = parse_int64(entry.path().stem().string(), name);
-      files_.push_back({t_us, entry.path(), name});
+      if (entry_kind(folder_.get(), file) != FileKind::kRegular) {
+        throw_invalid(name, "is not a regular file (links, FIFOs and devices are refused)");
+      }
+      const std::int64_t t_us = parse_int64(fs::path(file).stem().string(), name);
+      files_.push_back({t_us, file, name});
     }
     std::sort(files_.begin(), files_.end(),
               [](const File& a, const File& b) { return a.t_us < b.t_us; });
@@ -51,9 +78,12 @@ class FrameFolderStream : public ChunkSource {
   bool next(SessionChunk& chunk) override {
     if (next_ == files_.size()) return false;
     const File& file = files_[next_++];
-    std::string bytes = read_file_bytes(file.path, file.name);
+    const UniqueFd opened = open_beneath(folder_.get(), file.entry, file.name);
+    require_regular_file(opened.get(), file.name);
+    // A frame file can be no larger than a chunk of the chunk-file form.
+    std::string bytes = read_all(opened.get(), file.name, kMaxChunkBytes);
     chunk.Clear();
-    const bool jpeg = kind_ == FrameKind::kColor && file.path.extension() != ".png";
+    const bool jpeg = kind_ == FrameKind::kColor && fs::path(file.entry).extension() != ".png";
     // The size comes from the file's header before the bytes move into the chunk.
     const ImageSize size = jpeg ? jpeg_size(bytes, file.name) : png_size(bytes, file.name);
     if (kind_ == FrameKind::kDepth) {
@@ -81,9 +111,10 @@ class FrameFolderStream : public ChunkSource {
 
   struct File {
     std::int64_t t_us;
-    fs::path path;
-    std::string name;
+    std::string entry;  // the name inside the folder
+    std::string name;   // folder/entry, for errors
   };
+  UniqueFd folder_;
   FrameKind kind_;
   std::vector<File> files_;
   std::size_t next_ = 0;
@@ -92,8 +123,9 @@ class FrameFolderStream : public ChunkSource {
 // skeleton.csv: one row per joint; consecutive rows with the same (t_us, body_id) form a frame.
 class SkeletonStream : public ChunkSource {
  public:
-  explicit SkeletonStream(const fs::path& path)
-      : csv_(path, layout::kSkeletonCsv, layout::kSkeletonColumns) {
+  explicit SkeletonStream(int recording)
+      : csv_(open_stream_beneath(recording, layout::kSkeletonCsv), layout::kSkeletonCsv,
+             layout::kSkeletonColumns) {
     have_row_ = csv_.next();
   }
 
@@ -163,8 +195,10 @@ class SkeletonStream : public ChunkSource {
 // imu/<device_id>.csv: samples, grouped into batches of kImuSamplesPerBatch rows.
 class ImuStream : public ChunkSource {
  public:
-  ImuStream(const fs::path& path, std::string device_id)
-      : csv_(path, std::string(layout::kImuDir) + "/" + device_id + ".csv", layout::kImuColumns),
+  // `imu_folder` is the open imu/ folder; `device_id` has passed is_valid_device_id.
+  ImuStream(int imu_folder, std::string device_id)
+      : csv_(open_stream_beneath(imu_folder, device_id + ".csv"),
+             std::string(layout::kImuDir) + "/" + device_id + ".csv", layout::kImuColumns),
         device_id_(std::move(device_id)) {}
 
   bool next(SessionChunk& chunk) override {
@@ -190,9 +224,10 @@ class ImuStream : public ChunkSource {
 // audio.wav cut into chunks by audio_chunks.csv (t_us of each chunk's first frame, frame count).
 class AudioStream : public ChunkSource {
  public:
-  AudioStream(const fs::path& wav, const fs::path& chunks)
-      : wav_(wav, layout::kAudioWav),
-        csv_(chunks, layout::kAudioChunksCsv, layout::kAudioChunkColumns) {}
+  explicit AudioStream(int recording)
+      : wav_(open_wav(recording)),
+        csv_(open_stream_beneath(recording, layout::kAudioChunksCsv), layout::kAudioChunksCsv,
+             layout::kAudioChunkColumns) {}
 
   bool next(SessionChunk& chunk) override {
     if (!csv_.next()) {
@@ -218,6 +253,14 @@ class AudioStream : public ChunkSource {
   }
 
  private:
+  static WavReader open_wav(int recording) {
+    UniqueFd file = open_beneath(recording, layout::kAudioWav, layout::kAudioWav);
+    require_regular_file(file.get(), layout::kAudioWav);
+    struct stat status {};
+    const std::uint64_t size = ::fstat(file.get(), &status) == 0 ? static_cast<std::uint64_t>(status.st_size) : 0;
+    return WavReader(std::make_unique<FdInputStream>(std::move(file)), size, layout::kAudioWav);
+  }
+
   WavReader wav_;
   CsvReader csv_;
 };
@@ -225,8 +268,9 @@ class AudioStream : public ChunkSource {
 // sync_events.csv: one event per row.
 class SyncEventStream : public ChunkSource {
  public:
-  explicit SyncEventStream(const fs::path& path)
-      : csv_(path, layout::kSyncEventsCsv, layout::kSyncEventColumns) {}
+  explicit SyncEventStream(int recording)
+      : csv_(open_stream_beneath(recording, layout::kSyncEventsCsv), layout::kSyncEventsCsv,
+             layout::kSyncEventColumns) {}
 
   bool next(SessionChunk& chunk) override {
     if (!csv_.next()) return false;
@@ -248,75 +292,85 @@ class SyncEventStream : public ChunkSource {
   CsvReader csv_;
 };
 
-bool is_file(const fs::path& path) {
-  std::error_code ec;
-  return fs::is_regular_file(path, ec);
-}
+// header.json and end.json are small; anything larger is not one.
+constexpr std::uint64_t kMaxJsonBytes = 1u << 20;
 
-bool is_folder(const fs::path& path) {
-  std::error_code ec;
-  return fs::is_directory(path, ec);
+std::string read_json_file(int recording, const char* name) {
+  const UniqueFd file = open_beneath(recording, name, name);
+  require_regular_file(file.get(), name);
+  return read_all(file.get(), name, kMaxJsonBytes);
 }
 
 }  // namespace
 
-DirectoryReader::DirectoryReader(const fs::path& directory) : directory_(directory) {
-  if (!is_folder(directory)) {
-    throw Error(ErrorCode::kNotFound, directory.string(), "is not a recording directory");
-  }
-  const fs::path header_path = directory / layout::kHeaderJson;
-  if (!is_file(header_path)) {
-    throw Error(ErrorCode::kNotFound, layout::kHeaderJson,
-                "missing in " + directory.string() + "; every recording directory has one");
-  }
-  message_from_json(read_file_bytes(header_path, layout::kHeaderJson), layout::kHeaderJson,
-                    header_);
+DirectoryReader::DirectoryReader(const fs::path& directory)
+    : DirectoryReader(open_path(directory, directory.string()), directory.string()) {}
 
-  if (is_folder(directory / layout::kDepthDir)) {
-    streams_.push_back(std::make_unique<FrameFolderStream>(directory / layout::kDepthDir,
-                                                           layout::kDepthDir, FrameKind::kDepth));
+DirectoryReader::DirectoryReader(UniqueFd directory, const std::string& name)
+    : directory_(std::move(directory)) {
+  if (file_kind(directory_.get()) != FileKind::kDirectory) {
+    throw Error(ErrorCode::kNotFound, name, "is not a recording directory");
   }
-  if (is_folder(directory / layout::kBodyIndexDir)) {
-    streams_.push_back(std::make_unique<FrameFolderStream>(
-        directory / layout::kBodyIndexDir, layout::kBodyIndexDir, FrameKind::kBodyIndex));
+  const int recording = directory_.get();
+  if (entry_kind(recording, layout::kHeaderJson) == FileKind::kMissing) {
+    throw Error(ErrorCode::kNotFound, layout::kHeaderJson,
+                "missing in " + name + "; every recording directory has one");
   }
-  if (is_file(directory / layout::kSkeletonCsv)) {
-    streams_.push_back(std::make_unique<SkeletonStream>(directory / layout::kSkeletonCsv));
+  message_from_json(read_json_file(recording, layout::kHeaderJson), layout::kHeaderJson, header_);
+  // Device ids become file names (imu/<device_id>.csv): each is checked before any path is
+  // built from it. The id is not quoted: it could be anything.
+  for (int i = 0; i < header_.imu_devices_size(); ++i) {
+    if (!is_valid_device_id(header_.imu_devices(i).device_id())) {
+      throw_invalid(std::string(layout::kHeaderJson) + ".imu_devices[" + std::to_string(i) +
+                        "].device_id",
+                    "must match [A-Za-z0-9_.-]{1,64} and not be '.' or '..'");
+    }
   }
-  if (is_folder(directory / layout::kColorDir)) {
-    streams_.push_back(std::make_unique<FrameFolderStream>(directory / layout::kColorDir,
-                                                           layout::kColorDir, FrameKind::kColor));
+
+  if (has_entry(recording, layout::kDepthDir, FileKind::kDirectory)) {
+    streams_.push_back(
+        std::make_unique<FrameFolderStream>(recording, layout::kDepthDir, FrameKind::kDepth));
   }
-  const fs::path imu_folder = directory / layout::kImuDir;
-  if (is_folder(imu_folder)) {
+  if (has_entry(recording, layout::kBodyIndexDir, FileKind::kDirectory)) {
+    streams_.push_back(std::make_unique<FrameFolderStream>(recording, layout::kBodyIndexDir,
+                                                           FrameKind::kBodyIndex));
+  }
+  if (has_entry(recording, layout::kSkeletonCsv, FileKind::kRegular)) {
+    streams_.push_back(std::make_unique<SkeletonStream>(recording));
+  }
+  if (has_entry(recording, layout::kColorDir, FileKind::kDirectory)) {
+    streams_.push_back(
+        std::make_unique<FrameFolderStream>(recording, layout::kColorDir, FrameKind::kColor));
+  }
+  if (has_entry(recording, layout::kImuDir, FileKind::kDirectory)) {
+    imu_folder_ = open_beneath(recording, layout::kImuDir, layout::kImuDir);
+    require_directory(imu_folder_.get(), layout::kImuDir);
     std::set<std::string> known;
     for (const v1::ImuDevice& device : header_.imu_devices()) known.insert(device.device_id());
-    for (const fs::directory_entry& entry : fs::directory_iterator(imu_folder)) {
-      const std::string file = entry.path().filename().string();
+    for (const std::string& file : list_directory(imu_folder_.get(), layout::kImuDir)) {
       if (file.starts_with(".")) continue;
-      const std::string device_id = entry.path().stem().string();
-      if (entry.path().extension() != ".csv" || !known.contains(device_id)) {
+      const std::string device_id = fs::path(file).stem().string();
+      if (fs::path(file).extension() != ".csv" || !known.contains(device_id)) {
         throw_invalid(std::string(layout::kImuDir) + "/" + file,
                       "expected <device_id>.csv for a device listed in header.json imu_devices");
       }
     }
     for (const v1::ImuDevice& device : header_.imu_devices()) {
-      const fs::path path = imu_folder / (device.device_id() + ".csv");
-      if (is_file(path)) streams_.push_back(std::make_unique<ImuStream>(path, device.device_id()));
+      const std::string file = device.device_id() + ".csv";
+      if (has_entry(imu_folder_.get(), file, FileKind::kRegular)) {
+        streams_.push_back(std::make_unique<ImuStream>(imu_folder_.get(), device.device_id()));
+      }
     }
   }
-  const bool has_wav = is_file(directory / layout::kAudioWav);
-  const bool has_audio_chunks = is_file(directory / layout::kAudioChunksCsv);
+  const bool has_wav = has_entry(recording, layout::kAudioWav, FileKind::kRegular);
+  const bool has_audio_chunks = has_entry(recording, layout::kAudioChunksCsv, FileKind::kRegular);
   if (has_wav != has_audio_chunks) {
     throw Error(ErrorCode::kNotFound, has_wav ? layout::kAudioChunksCsv : layout::kAudioWav,
                 std::string("missing; audio.wav and audio_chunks.csv come together"));
   }
-  if (has_wav) {
-    streams_.push_back(std::make_unique<AudioStream>(directory / layout::kAudioWav,
-                                                     directory / layout::kAudioChunksCsv));
-  }
-  if (is_file(directory / layout::kSyncEventsCsv)) {
-    streams_.push_back(std::make_unique<SyncEventStream>(directory / layout::kSyncEventsCsv));
+  if (has_wav) streams_.push_back(std::make_unique<AudioStream>(recording));
+  if (has_entry(recording, layout::kSyncEventsCsv, FileKind::kRegular)) {
+    streams_.push_back(std::make_unique<SyncEventStream>(recording));
   }
   pending_.resize(streams_.size());
   for (std::size_t i = 0; i < streams_.size(); ++i) refill(i);
@@ -357,10 +411,9 @@ bool DirectoryReader::next(SessionChunk& chunk) {
   }
   if (!end_sent_) {
     end_sent_ = true;
-    const fs::path end_path = directory_ / layout::kEndJson;
-    if (is_file(end_path)) {
+    if (has_entry(directory_.get(), layout::kEndJson, FileKind::kRegular)) {
       chunk.Clear();
-      message_from_json(read_file_bytes(end_path, layout::kEndJson), layout::kEndJson,
+      message_from_json(read_json_file(directory_.get(), layout::kEndJson), layout::kEndJson,
                         *chunk.mutable_end());
       return true;
     }

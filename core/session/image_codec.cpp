@@ -16,12 +16,28 @@ namespace {
 static_assert(std::endian::native == std::endian::little,
               "RAW_U16_LE payloads are copied as-is; a big-endian host needs a byte swap here");
 
-void check_dimensions(std::uint32_t width, std::uint32_t height, const std::string& field) {
+void check_dimensions(std::uint32_t width, std::uint32_t height, std::uint64_t max_pixels,
+                      const std::string& field) {
   if (width == 0 || height == 0 || width > kMaxImageSide || height > kMaxImageSide) {
     throw_invalid(field + ".width", "image size " + std::to_string(width) + "x" +
                                         std::to_string(height) + " is outside 1.." +
                                         std::to_string(kMaxImageSide));
   }
+  if (std::uint64_t{width} * height > max_pixels) {
+    throw_invalid(field + ".width", "image size " + std::to_string(width) + "x" +
+                                        std::to_string(height) + " has more than " +
+                                        std::to_string(max_pixels) + " pixels");
+  }
+}
+
+// IHDR after the size: bit depth (byte 24) and colour type (byte 25; 0 = greyscale).
+struct PngFormat {
+  int bit_depth = 0;
+  int color_type = 0;
+};
+PngFormat png_format(std::string_view bytes) {
+  if (bytes.size() < 26) return {};
+  return {static_cast<unsigned char>(bytes[24]), static_cast<unsigned char>(bytes[25])};
 }
 
 std::string size_text(std::uint32_t width, std::uint32_t height) {
@@ -38,6 +54,15 @@ cv::Mat decode_png(const std::string& data, int expected_type, std::uint32_t wid
     throw_invalid(data_field, "PNG is " + size_text(header.width, header.height) +
                                   ", the chunk says " + size_text(width, height));
   }
+  // The pixel format too, before decoding: a 16-bit RGBA PNG of the right size would decode
+  // to 8 bytes a pixel and only then be refused.
+  const int bits = expected_type == CV_16UC1 ? 16 : 8;
+  const PngFormat format = png_format(data);
+  if (format.bit_depth != bits || format.color_type != 0) {
+    throw_invalid(data_field, "PNG is not " + std::to_string(bits) +
+                                  "-bit greyscale (bit depth " + std::to_string(format.bit_depth) +
+                                  ", colour type " + std::to_string(format.color_type) + ")");
+  }
   const cv::Mat encoded(1, static_cast<int>(data.size()), CV_8UC1,
                         const_cast<char*>(data.data()));
   cv::Mat image = cv::imdecode(encoded, cv::IMREAD_UNCHANGED);
@@ -52,13 +77,14 @@ cv::Mat decode_png(const std::string& data, int expected_type, std::uint32_t wid
 
 cv::Mat raw_to_mat(const std::string& data, int type, std::uint32_t width, std::uint32_t height,
                    const std::string& field, const char* encoding_name) {
-  cv::Mat image(static_cast<int>(height), static_cast<int>(width), type);
-  const std::size_t expected = image.total() * image.elemSize();
+  // The size first: nothing is allocated for a payload that does not match.
+  const std::size_t expected = std::size_t{width} * height * CV_ELEM_SIZE(type);
   if (data.size() != expected) {
     throw_invalid(field + ".data", "has " + std::to_string(data.size()) + " bytes, expected " +
                                        std::to_string(expected) + " (" + size_text(width, height) +
                                        " " + encoding_name + ")");
   }
+  cv::Mat image(static_cast<int>(height), static_cast<int>(width), type);
   std::memcpy(image.data, data.data(), expected);
   return image;
 }
@@ -91,7 +117,7 @@ std::uint32_t read_be16(std::string_view bytes, std::size_t at) {
 }  // namespace
 
 cv::Mat decode_depth(const v1::DepthFrame& frame, const std::string& field) {
-  check_dimensions(frame.width(), frame.height(), field);
+  check_dimensions(frame.width(), frame.height(), kMaxDepthPixels, field);
   switch (frame.encoding()) {
     case v1::DepthFrame::RAW_U16_LE:
       return raw_to_mat(frame.data(), CV_16UC1, frame.width(), frame.height(), field, "RAW_U16_LE");
@@ -176,7 +202,7 @@ v1::DepthFrame encode_depth(const cv::Mat& depth_mm, v1::DepthFrame::Encoding en
 }
 
 cv::Mat decode_color_gray(const v1::ColorFrame& frame, const std::string& field) {
-  check_dimensions(frame.width(), frame.height(), field);
+  check_dimensions(frame.width(), frame.height(), kMaxColorPixels, field);
   const std::string data_field = field + ".data";
   // The header first: rejects other bytes and oversized images before any decoding.
   ImageSize header;
@@ -210,7 +236,7 @@ v1::ColorFrame encode_color_png(const cv::Mat& image, std::int64_t t_us) {
 }
 
 cv::Mat decode_body_index(const v1::BodyIndexFrame& frame, const std::string& field) {
-  check_dimensions(frame.width(), frame.height(), field);
+  check_dimensions(frame.width(), frame.height(), kMaxDepthPixels, field);
   switch (frame.encoding()) {
     case v1::BodyIndexFrame::RAW_U8:
       return raw_to_mat(frame.data(), CV_8UC1, frame.width(), frame.height(), field, "RAW_U8");

@@ -14,8 +14,14 @@
 
 namespace posefuse::session {
 
-// Largest accepted image side, pixels: bounds what a hostile width/height can make us allocate.
+// Largest accepted image side, pixels.
 inline constexpr std::uint32_t kMaxImageSide = 8192;
+// Largest accepted pixel counts: what a hostile width x height (and a few bytes of zstd or PNG
+// that claim to fill it) can make us allocate per decoded frame. Depth-camera images (depth,
+// body index) at most 1024 x 1024 pixels, the largest depth mode of Kinect-class cameras
+// (2 MiB as u16); colour at most 4096 x 3072, the largest colour mode (12 Mpx).
+inline constexpr std::uint64_t kMaxDepthPixels = 1024ull * 1024;
+inline constexpr std::uint64_t kMaxColorPixels = 4096ull * 3072;
 
 // Depth frame -> CV_16UC1 (mm, 0 = no reading), from any encoding.
 cv::Mat decode_depth(const v1::DepthFrame& frame, const std::string& field = "depth");

@@ -63,7 +63,8 @@ void check_vec3(const v1::Vec3& v, const std::string& field) {
   require_finite(v.z(), field + ".z");
 }
 
-void check_intrinsics(const v1::CameraIntrinsics& k, const std::string& field) {
+void check_intrinsics(const v1::CameraIntrinsics& k, std::uint64_t max_pixels,
+                      const std::string& field) {
   if (k.width() == 0 || k.width() > kMaxImageSide) {
     throw_invalid(field + ".width", "is " + std::to_string(k.width()) + ", must be 1.." +
                                         std::to_string(kMaxImageSide));
@@ -71,6 +72,12 @@ void check_intrinsics(const v1::CameraIntrinsics& k, const std::string& field) {
   if (k.height() == 0 || k.height() > kMaxImageSide) {
     throw_invalid(field + ".height", "is " + std::to_string(k.height()) + ", must be 1.." +
                                          std::to_string(kMaxImageSide));
+  }
+  // Frames must have this size: the bound on what one decoded frame may take.
+  if (std::uint64_t{k.width()} * k.height() > max_pixels) {
+    throw_invalid(field + ".width", std::to_string(k.width()) + "x" + std::to_string(k.height()) +
+                                        " has more than " + std::to_string(max_pixels) +
+                                        " pixels");
   }
   require_positive(k.fx(), field + ".fx");
   require_positive(k.fy(), field + ".fy");
@@ -102,6 +109,7 @@ const v1::ImuDevice* find_device(const v1::SessionHeader& header, const std::str
 
 void check_depth(const v1::DepthFrame& frame, const v1::SessionHeader& header,
                  const std::string& field) {
+  require_timestamp_in_range(frame.t_us(), field + ".t_us");
   require_enum(v1::DepthFrame::Encoding_IsValid(frame.encoding()), frame.encoding(),
                field + ".encoding", "DepthFrame.Encoding");
   require_size(frame.width(), frame.height(), header.depth_intrinsics(), field,
@@ -111,6 +119,7 @@ void check_depth(const v1::DepthFrame& frame, const v1::SessionHeader& header,
 
 void check_body_index(const v1::BodyIndexFrame& frame, const v1::SessionHeader& header,
                       const std::string& field) {
+  require_timestamp_in_range(frame.t_us(), field + ".t_us");
   require_enum(v1::BodyIndexFrame::Encoding_IsValid(frame.encoding()), frame.encoding(),
                field + ".encoding", "BodyIndexFrame.Encoding");
   require_size(frame.width(), frame.height(), header.depth_intrinsics(), field,
@@ -129,6 +138,7 @@ void check_body_index(const v1::BodyIndexFrame& frame, const v1::SessionHeader& 
 }
 
 void check_skeleton(const v1::SkeletonFrame& frame, const std::string& field) {
+  require_timestamp_in_range(frame.t_us(), field + ".t_us");
   if (frame.body_id() > kMaxBodyId) {
     throw_invalid(field + ".body_id", "is " + std::to_string(frame.body_id()) + ", must be 0..5");
   }
@@ -148,6 +158,7 @@ void check_skeleton(const v1::SkeletonFrame& frame, const std::string& field) {
 
 void check_color(const v1::ColorFrame& frame, const v1::SessionHeader& header,
                  const std::string& field) {
+  require_timestamp_in_range(frame.t_us(), field + ".t_us");
   if (!header.has_color_intrinsics()) {
     throw_invalid(field, "color frame, but the header has no color_intrinsics");
   }
@@ -171,11 +182,15 @@ void check_imu(const v1::ImuBatch& batch, const v1::SessionHeader& header,
   if (!find_device(header, batch.device_id())) {
     throw_invalid(field + ".device_id", "'" + batch.device_id() + "' is not in header.imu_devices");
   }
+  for (int i = 0; i < batch.t_us_size(); ++i) {
+    require_timestamp_in_range(batch.t_us(i), field + "[" + std::to_string(i) + "].t_us");
+  }
   imu::validate_imu_stream(samples_from_batch(batch, field), field.c_str());
 }
 
 void check_audio(const v1::AudioChunk& audio, const v1::SessionHeader& header,
                  const std::string& field) {
+  require_timestamp_in_range(audio.t_us(), field + ".t_us");
   if (header.audio_sample_rate_hz() == 0) {
     throw_invalid(field, "audio chunk, but header.audio_sample_rate_hz is 0 (no audio stream)");
   }
@@ -200,6 +215,7 @@ void check_audio(const v1::AudioChunk& audio, const v1::SessionHeader& header,
 
 void check_sync(const v1::SyncEvent& event, const v1::SessionHeader& header,
                 const std::string& field) {
+  require_timestamp_in_range(event.t_us(), field + ".t_us");
   if (event.device_id() != "camera" && !find_device(header, event.device_id())) {
     throw_invalid(field + ".device_id", "'" + event.device_id() +
                                             "' is neither \"camera\" nor in header.imu_devices");
@@ -218,6 +234,14 @@ std::string kind_name(const v1::SessionChunk& chunk) {
 }
 
 }  // namespace
+
+void require_timestamp_in_range(std::int64_t t_us, const std::string& field) {
+  if (t_us < -kMaxAbsTimestampUs || t_us > kMaxAbsTimestampUs) {
+    throw_invalid(field, "timestamp " + std::to_string(t_us) + " us is outside +-2^53 us (" +
+                             std::to_string(kMaxAbsTimestampUs) +
+                             " us, about 285 years), the range of a device clock");
+  }
+}
 
 bool is_valid_device_id(const std::string& device_id) {
   if (device_id.empty() || device_id.size() > 64 || device_id == "." || device_id == "..") {
@@ -264,9 +288,9 @@ void validate_header(const v1::SessionHeader& header, const std::string& field) 
     require_positive(device.nominal_rate_hz(), device_field + ".nominal_rate_hz");
   }
   if (!header.has_depth_intrinsics()) throw_invalid(field + ".depth_intrinsics", "is missing");
-  check_intrinsics(header.depth_intrinsics(), field + ".depth_intrinsics");
+  check_intrinsics(header.depth_intrinsics(), kMaxDepthPixels, field + ".depth_intrinsics");
   if (header.has_color_intrinsics()) {
-    check_intrinsics(header.color_intrinsics(), field + ".color_intrinsics");
+    check_intrinsics(header.color_intrinsics(), kMaxColorPixels, field + ".color_intrinsics");
   }
   if (header.has_color_from_depth()) {
     check_quaternion(header.color_from_depth().rotation(), field + ".color_from_depth.rotation",

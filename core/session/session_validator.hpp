@@ -22,6 +22,13 @@ inline constexpr std::uint32_t kMaxBodyId = 5;
 inline constexpr std::size_t kMaxSyncPayloadBytes = 4096;
 inline constexpr std::uint32_t kMaxAudioChannels = 64;
 inline constexpr std::uint32_t kMaxAudioSampleRateHz = 384'000;
+// Every timestamp (t_us of frames, IMU samples, audio and sync events) lies within
+// +-kMaxAbsTimestampUs: 2^53 us, about 285 years either side of a clock's zero, room for any
+// device clock and for Unix time in microseconds. Within it the difference of two timestamps
+// cannot overflow int64 and every timestamp is exact as a double.
+inline constexpr std::int64_t kMaxAbsTimestampUs = std::int64_t{1} << 53;
+// Throws kInvalidArgument naming `field` for a timestamp outside that range.
+void require_timestamp_in_range(std::int64_t t_us, const std::string& field);
 // Device ids appear in file names (imu/<device_id>.csv): [A-Za-z0-9_.-]{1,64}, not "." or "..".
 bool is_valid_device_id(const std::string& device_id);
 

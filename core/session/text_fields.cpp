@@ -87,21 +87,33 @@ std::string from_hex(std::string_view hex, const std::string& field) {
 
 CsvReader::CsvReader(const std::filesystem::path& path, std::string name,
                      std::vector<std::string> columns)
-    : in_(path), name_(std::move(name)), columns_(std::move(columns)) {
-  if (!in_) throw Error(ErrorCode::kNotFound, name_, "cannot open " + path.string());
+    : in_(std::make_unique<std::ifstream>(path)), name_(std::move(name)), columns_(std::move(columns)) {
+  if (!*in_) throw Error(ErrorCode::kNotFound, name_, "cannot open " + path.string());
+  read_header_row();
+}
+
+CsvReader::CsvReader(std::unique_ptr<std::istream> in, std::string name,
+                     std::vector<std::string> columns)
+    : in_(std::move(in)), name_(std::move(name)), columns_(std::move(columns)) {
+  read_header_row();
+}
+
+void CsvReader::read_header_row() {
   std::string header;
-  std::getline(in_, header);
+  std::getline(*in_, header);
   ++line_number_;
   if (!header.empty() && header.back() == '\r') header.pop_back();
   std::string expected;
   for (std::size_t i = 0; i < columns_.size(); ++i) expected += (i ? "," : "") + columns_[i];
+  // The row itself is not quoted: a file that is not this CSV at all must not have its first
+  // line copied into an error message (and from there into logs and job listings).
   if (header != expected) {
-    throw_invalid(name_ + ":1", "header row is '" + header + "', expected '" + expected + "'");
+    throw_invalid(name_ + ":1", "header row is not the expected '" + expected + "'");
   }
 }
 
 bool CsvReader::next() {
-  while (std::getline(in_, line_)) {
+  while (std::getline(*in_, line_)) {
     ++line_number_;
     if (!line_.empty() && line_.back() == '\r') line_.pop_back();
     if (line_.empty()) continue;
@@ -120,7 +132,7 @@ bool CsvReader::next() {
     }
     return true;
   }
-  if (in_.bad()) {
+  if (in_->bad()) {
     throw Error(ErrorCode::kDataLoss, name_, "read failed after line " + std::to_string(line_number_));
   }
   return false;

@@ -7,6 +7,8 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <istream>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -34,6 +36,8 @@ class CsvReader {
  public:
   // `name` is the path shown in errors (relative to the recording directory).
   CsvReader(const std::filesystem::path& path, std::string name, std::vector<std::string> columns);
+  // Reads an already open stream (a recording's file opened beneath its directory).
+  CsvReader(std::unique_ptr<std::istream> in, std::string name, std::vector<std::string> columns);
 
   // Next data row (empty lines are skipped); false at end of file.
   bool next();
@@ -43,7 +47,9 @@ class CsvReader {
   std::size_t line_number() const { return line_number_; }
 
  private:
-  std::ifstream in_;
+  void read_header_row();
+
+  std::unique_ptr<std::istream> in_;
   std::string name_;
   std::vector<std::string> columns_;
   std::string line_;

@@ -33,11 +33,19 @@ void put_le16(std::ostream& out, std::uint16_t v) {
 }  // namespace
 
 WavReader::WavReader(const std::filesystem::path& path, std::string name)
-    : in_(path, std::ios::binary), name_(std::move(name)) {
-  if (!in_) throw Error(ErrorCode::kNotFound, name_, "cannot open " + path.string());
-  const auto file_size = static_cast<std::uint64_t>(std::filesystem::file_size(path));
+    : in_(std::make_unique<std::ifstream>(path, std::ios::binary)), name_(std::move(name)) {
+  if (!*in_) throw Error(ErrorCode::kNotFound, name_, "cannot open " + path.string());
+  read_header(static_cast<std::uint64_t>(std::filesystem::file_size(path)));
+}
+
+WavReader::WavReader(std::unique_ptr<std::istream> in, std::uint64_t file_size, std::string name)
+    : in_(std::move(in)), name_(std::move(name)) {
+  read_header(file_size);
+}
+
+void WavReader::read_header(std::uint64_t file_size) {
   std::array<char, 12> riff{};
-  if (!in_.read(riff.data(), riff.size()) || std::string(riff.data(), 4) != "RIFF" ||
+  if (!in_->read(riff.data(), riff.size()) || std::string(riff.data(), 4) != "RIFF" ||
       std::string(riff.data() + 8, 4) != "WAVE") {
     throw_invalid(name_, "is not a RIFF/WAVE file");
   }
@@ -45,7 +53,7 @@ WavReader::WavReader(const std::filesystem::path& path, std::string name)
   std::uint64_t position = 12;
   while (true) {
     std::array<char, 8> chunk{};
-    if (!in_.read(chunk.data(), chunk.size())) {
+    if (!in_->read(chunk.data(), chunk.size())) {
       throw_invalid(name_, have_format ? "has no data chunk" : "has no fmt chunk");
     }
     position += 8;
@@ -54,7 +62,7 @@ WavReader::WavReader(const std::filesystem::path& path, std::string name)
     if (id == "fmt ") {
       if (size < 16) throw_invalid(name_ + ".fmt", "fmt chunk is too short");
       std::array<char, 16> fmt{};
-      in_.read(fmt.data(), fmt.size());
+      in_->read(fmt.data(), fmt.size());
       const std::uint16_t tag = le16(fmt.data());
       format_.channels = le16(fmt.data() + 2);
       format_.sample_rate_hz = le32(fmt.data() + 4);
@@ -86,7 +94,7 @@ WavReader::WavReader(const std::filesystem::path& path, std::string name)
     // Skip this chunk (and its pad byte: RIFF chunks are word-aligned).
     const std::uint64_t skip = size + (size & 1u);
     position += skip;
-    in_.seekg(static_cast<std::streamoff>(position));
+    in_->seekg(static_cast<std::streamoff>(position));
   }
 }
 
@@ -97,8 +105,8 @@ std::string WavReader::read_frames(std::uint64_t frames) {
                     std::to_string(frames_left()) + " left");
   }
   std::string bytes(frames * 2 * format_.channels, '\0');
-  in_.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-  if (static_cast<std::uint64_t>(in_.gcount()) != bytes.size()) {
+  in_->read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  if (static_cast<std::uint64_t>(in_->gcount()) != bytes.size()) {
     throw Error(ErrorCode::kDataLoss, name_ + ".data", "file ends early");
   }
   frames_read_ += frames;

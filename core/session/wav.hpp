@@ -4,6 +4,8 @@
 #include <cstdint>
 #include <filesystem>
 #include <fstream>
+#include <istream>
+#include <memory>
 #include <string>
 
 namespace posefuse::session {
@@ -19,6 +21,9 @@ class WavReader {
   // kNotFound if the file cannot be opened; kInvalidArgument (field = `name`) for a file that
   // is not 16-bit PCM WAVE; kDataLoss when the data chunk is shorter than its header says.
   WavReader(const std::filesystem::path& path, std::string name);
+  // Reads an already open stream of `file_size` bytes (a recording's file opened beneath its
+  // directory).
+  WavReader(std::unique_ptr<std::istream> in, std::uint64_t file_size, std::string name);
 
   const WavFormat& format() const { return format_; }
   std::uint64_t total_frames() const { return total_frames_; }
@@ -28,7 +33,9 @@ class WavReader {
   std::string read_frames(std::uint64_t frames);
 
  private:
-  std::ifstream in_;
+  void read_header(std::uint64_t file_size);
+
+  std::unique_ptr<std::istream> in_;
   std::string name_;
   WavFormat format_;
   std::uint64_t total_frames_ = 0;

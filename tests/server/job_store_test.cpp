@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <sqlite3.h>
+
 #include "common/error.hpp"
 #include "server/sqlite_job_store.hpp"
 #include "tests/server/test_support.hpp"
@@ -12,6 +14,16 @@ namespace posefuse::server {
 namespace {
 
 namespace fs = std::filesystem;
+
+std::string hex(const std::string& bytes) {
+  static constexpr char kDigits[] = "0123456789abcdef";
+  std::string out;
+  for (const char c : bytes) {
+    out += kDigits[static_cast<unsigned char>(c) >> 4];
+    out += kDigits[static_cast<unsigned char>(c) & 0xF];
+  }
+  return out;
+}
 
 class JobStoreTest : public ::testing::Test {
  protected:
@@ -32,7 +44,7 @@ TEST_F(JobStoreTest, JobsAndResultsSurviveReopening) {
   std::string id;
   {
     SqliteJobStore store(db());
-    v1::Job job = store.create(spec("a"), "/recordings/a.pfchunks", 1000);
+    v1::Job job = store.create(spec("a"), "/recordings/a.pfchunks", "", 1000);
     id = job.job_id();
     EXPECT_EQ(job.state(), v1::Job::QUEUED);
     job.set_state(v1::Job::RUNNING);
@@ -65,19 +77,19 @@ TEST_F(JobStoreTest, JobsAndResultsSurviveReopening) {
 TEST_F(JobStoreTest, ListsNewestFirstWithPagesAndStateFilter) {
   SqliteJobStore store(db());
   std::vector<std::string> ids;
-  for (int i = 0; i < 5; ++i) ids.push_back(store.create(spec("j" + std::to_string(i)), "p", i).job_id());
+  for (int i = 0; i < 5; ++i) ids.push_back(store.create(spec("j" + std::to_string(i)), "p", "", i).job_id());
   v1::Job done = store.get(ids[1])->job;
   done.set_state(v1::Job::SUCCEEDED);
   store.update(done);
 
-  const auto first_page = store.list(2, "", {});
+  const auto first_page = store.list(2, "", {}, "");
   ASSERT_EQ(first_page.size(), 2u);
   EXPECT_EQ(first_page[0].job_id(), ids[4]);
   EXPECT_EQ(first_page[1].job_id(), ids[3]);
-  const auto second_page = store.list(2, first_page.back().job_id(), {});
+  const auto second_page = store.list(2, first_page.back().job_id(), {}, "");
   ASSERT_EQ(second_page.size(), 2u);
   EXPECT_EQ(second_page[0].job_id(), ids[2]);
-  const auto succeeded = store.list(10, "", {v1::Job::SUCCEEDED});
+  const auto succeeded = store.list(10, "", {v1::Job::SUCCEEDED}, "");
   ASSERT_EQ(succeeded.size(), 1u);
   EXPECT_EQ(succeeded[0].job_id(), ids[1]);
   EXPECT_EQ(store.unfinished().size(), 4u);
@@ -102,6 +114,42 @@ TEST_F(JobStoreTest, UnopenableDatabaseIsFailedPrecondition) {
     FAIL() << "no error";
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::kFailedPrecondition);
+  }
+}
+
+TEST_F(JobStoreTest, ListsOnlyTheOwnersJobsAndKeepsEachJobsOwner) {
+  SqliteJobStore store(db());
+  const std::string a = store.create(spec("a"), "p", "clinic-a", 1).job_id();
+  const std::string b = store.create(spec("b"), "p", "clinic-b", 2).job_id();
+  const auto listed = store.list(10, "", {}, "clinic-a");
+  ASSERT_EQ(listed.size(), 1u);
+  EXPECT_EQ(listed[0].job_id(), a);
+  EXPECT_TRUE(store.list(10, "", {}, "").empty());
+  EXPECT_EQ(store.get(b)->owner, "clinic-b");
+  EXPECT_EQ(store.unfinished().size(), 2u);
+}
+
+TEST_F(JobStoreTest, StoreFromBeforeTenantsGetsTheOwnerColumnWithItsJobsSharedByNoTenant) {
+  // The schema without the owner column, with one job, as an older server left it.
+  const std::string id = "0123456789abcdef";
+  {
+    sqlite3* old = nullptr;
+    ASSERT_EQ(sqlite3_open(db().c_str(), &old), SQLITE_OK);
+    v1::Job job;
+    job.set_job_id(id);
+    job.set_state(v1::Job::SUCCEEDED);
+    const std::string sql =
+        "CREATE TABLE jobs (seq INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT UNIQUE NOT NULL,"
+        " state INTEGER NOT NULL, recording_path TEXT NOT NULL, job BLOB NOT NULL);"
+        "INSERT INTO jobs (id, state, recording_path, job) VALUES ('" + id + "', 3, 'p', x'" +
+        hex(job.SerializeAsString()) + "');";
+    EXPECT_EQ(sqlite3_exec(old, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK);
+    sqlite3_close(old);
+  }
+  {
+    SqliteJobStore store(db());  // reopening keeps the column and the job
+    EXPECT_EQ(store.get(id)->owner, "");
+    EXPECT_EQ(store.list(10, "", {}, "").size(), 1u);
   }
 }
 

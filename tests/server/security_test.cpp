@@ -303,6 +303,26 @@ TEST_F(SecurityTest, TokensFileRejectsShortTokensAndCommentOnlyFiles) {
   EXPECT_FALSE(tokens.accepts(""));
 }
 
+TEST_F(SecurityTest, TokensFileMapsTokensToTenants) {
+  const fs::path path = dir_.path() / "tokens";
+  std::ofstream(path) << kToken << "   clinic-a \n" << kOtherToken << "\n";
+  const BearerTokens tokens = BearerTokens::load(path.string());
+  EXPECT_EQ(tokens.tenant_of(kToken), "clinic-a");
+  EXPECT_EQ(tokens.tenant_of(kOtherToken), "");  // listed without a tenant: the shared one
+  EXPECT_EQ(tokens.tenant_of(std::string(kToken) + " clinic-a"), std::nullopt);
+  for (const char* tenant : {"clinic a", "../clinic", "cl!nic"}) {
+    std::ofstream(path) << kToken << " " << tenant << "\n";
+    try {
+      BearerTokens::load(path.string());
+      ADD_FAILURE() << "accepted tenant " << tenant;
+    } catch (const Error& error) {
+      EXPECT_EQ(error.field(), "--tokens-file");
+      EXPECT_NE(std::string(error.what()).find("line 1: the tenant"), std::string::npos) << error.what();
+      EXPECT_EQ(std::string(error.what()).find(kToken), std::string::npos);  // never echoed
+    }
+  }
+}
+
 TEST(ClientSecurity, TokenComesFromTheFileElseTheEnvironment) {
   const fs::path path =
       fs::temp_directory_path() / ("posefuse_token_" + std::to_string(::getpid()));

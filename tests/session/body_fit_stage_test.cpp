@@ -383,6 +383,32 @@ TEST(BodyFitStage, BadOptionsAreErrors) {
                               out));
 }
 
+TEST(BodyFitStage, DurationOptionsHaveAnUpperBoundNamedInTheError) {
+  // Both keep frames for as long as they say: without a bound, a header could make a session
+  // hold every frame of the recording.
+  struct Case {
+    const char* key;
+    const char* too_long;
+    const char* longest;
+  };
+  for (const Case c : {Case{"fit.calibration_s", "30.5", "30"}, Case{"fit.imu_wait_s", "61", "60"},
+                       Case{"fit.imu_wait_s", "1e300", "60"}}) {
+    SCOPED_TRACE(std::string(c.key) + " = " + c.too_long);
+    Output out;
+    BodyFitStage stage;
+    try {
+      stage.start(header_with({{c.key, c.too_long}}), out);
+      ADD_FAILURE() << "accepted";
+    } catch (const Error& error) {
+      EXPECT_EQ(error.field(), std::string("header.options[") + c.key + "]");
+      EXPECT_NE(std::string(error.what()).find(std::string("(0, ") + c.longest + "]"), std::string::npos)
+          << error.what();
+    }
+    BodyFitStage at_the_bound;
+    EXPECT_NO_THROW(at_the_bound.start(header_with({{c.key, c.longest}}), out));
+  }
+}
+
 TEST(BodyFitStage, SkeletonStartPolicyDecision) {
   EXPECT_TRUE(needs_skeleton_start(std::nullopt, 45));  // no previous frame: the skeleton start alone
   EXPECT_TRUE(needs_skeleton_start(45, 45));

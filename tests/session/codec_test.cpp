@@ -62,6 +62,36 @@ TEST(DepthCodec, HostileSizesAreRejectedBeforeAllocating) {
   expect_error([&] { decode_depth(frame); }, ErrorCode::kInvalidArgument, "depth.width");
 }
 
+TEST(DepthCodec, FrameClaimingMorePixelsThanADepthCameraIsRejectedBeforeDecoding) {
+  // A few KB that claim 8192 x 8192 u16 (128 MiB): refused on the claimed size alone, before
+  // the payload is looked at (the payload here is not even zstd).
+  v1::DepthFrame frame;
+  frame.set_width(8192);
+  frame.set_height(8192);
+  frame.set_encoding(v1::DepthFrame::ZSTD_U16_LE);
+  frame.set_data(std::string(4096, 'x'));
+  expect_error([&] { decode_depth(frame); }, ErrorCode::kInvalidArgument, "depth.width");
+  frame.set_width(1025);
+  frame.set_height(1024);
+  expect_error([&] { decode_depth(frame); }, ErrorCode::kInvalidArgument, "depth.width");
+}
+
+TEST(DepthCodec, PngOfTheRightSizeInAnotherPixelFormatIsRejectedByItsHeader) {
+  const cv::Mat rgb16(12, 16, CV_16UC3, cv::Scalar(1, 2, 3));
+  std::vector<unsigned char> png;
+  ASSERT_TRUE(cv::imencode(".png", rgb16, png));
+  v1::DepthFrame frame = encode_depth(ramp_depth(), v1::DepthFrame::PNG16, 0);
+  frame.set_data(std::string(png.begin(), png.end()));
+  try {
+    decode_depth(frame);
+    FAIL() << "a 16-bit RGB PNG was accepted as depth";
+  } catch (const Error& error) {
+    EXPECT_EQ(error.field(), "depth.data");
+    // Refused by the IHDR (colour type 2 = RGB), not after decoding.
+    EXPECT_NE(std::string(error.what()).find("colour type 2"), std::string::npos) << error.what();
+  }
+}
+
 TEST(BodyIndexCodec, RoundTripsAndChecksPngType) {
   cv::Mat ids(12, 16, CV_8UC1, cv::Scalar(255));
   ids(cv::Rect(2, 2, 5, 5)).setTo(3);

@@ -282,6 +282,7 @@ TEST(ForearmStage, BadOptionsAreErrorsNamingTheOption) {
     const char* value;
   };
   for (const Case& c : {Case{"forearm.calibration_s", "-1"}, Case{"forearm.calibration_s", "soon"},
+                        Case{"forearm.calibration_s", "121"}, Case{"forearm.calibration_s", "1e300"},
                         Case{"forearm.calibration_orientation", "wrist"}, Case{"forearm.axis", "laser"},
                         Case{"forearm.upper_arm", "guess"}, Case{"forearm.shoulder_sphere", "yes"},
                         Case{"forearm.body_id", "-2"}, Case{"forearm.K_from_B", "1 0 0"},

@@ -1,6 +1,7 @@
 // SessionPipeline and the IMU orientation stage, without gRPC: the demo session (client/) in,
 // FitResults out.
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numbers>
 #include <string>
@@ -536,6 +537,36 @@ TEST(SessionPipeline, LaterStagesResultsReachAnEarlierStageThatAsksAfterItsCallA
   ASSERT_NE(late, sink.results.end());
   EXPECT_LT(late, report);
   EXPECT_EQ(sink.results.back().summary().warnings(), 1u);
+}
+
+TEST(SessionPipeline, ExtremeTimestampsAreRejectedAndTheStreamDurationStaysPositive) {
+  CollectingSink reference;
+  run(demo::make_demo_session(), reference);
+  ASSERT_TRUE(reference.results.back().has_summary());
+  const double full_duration_s = reference.results.back().summary().stream_duration_s();
+  ASSERT_GT(full_duration_s, 0.0);
+
+  // The first depth frame at INT64_MIN, the last at INT64_MAX: stream order is kept, but their
+  // difference would overflow int64.
+  auto chunks = demo::make_demo_session();
+  const std::size_t first = index_of_nth(chunks, v1::SessionChunk::kDepth, 0);
+  const std::size_t last = index_of_nth(chunks, v1::SessionChunk::kDepth, 299);
+  chunks[first].mutable_depth()->set_t_us(std::numeric_limits<std::int64_t>::min());
+  chunks[last].mutable_depth()->set_t_us(std::numeric_limits<std::int64_t>::max());
+  CollectingSink sink;
+  run(chunks, sink);
+
+  const auto errors = sink.item_errors();
+  ASSERT_GE(errors.size(), 2u);
+  EXPECT_EQ(errors[0].field(), "chunk[" + std::to_string(first) + "].depth.t_us");
+  EXPECT_EQ(errors[1].field(), "chunk[" + std::to_string(last) + "].depth.t_us");
+  EXPECT_NE(errors[0].message().find("outside"), std::string::npos) << errors[0].message();
+  ASSERT_TRUE(sink.results.back().has_summary());
+  const v1::Summary& summary = sink.results.back().summary();
+  EXPECT_EQ(summary.depth_frames(), 298u);
+  // The rejected frames take no part: the duration is that of the chunks that were accepted.
+  EXPECT_GT(summary.stream_duration_s(), 0.0);
+  EXPECT_LE(summary.stream_duration_s(), full_duration_s);
 }
 
 }  // namespace

@@ -116,6 +116,66 @@ TEST(SessionValidator, HeaderFieldsAreChecked) {
   expect_invalid(session, "chunk[0].header.depth_intrinsics");
 }
 
+// Each stream's timestamp field, set on a copy of the chunk.
+void set_t_us(SessionChunk& chunk, std::int64_t t_us) {
+  switch (chunk.chunk_case()) {
+    case SessionChunk::kDepth: chunk.mutable_depth()->set_t_us(t_us); break;
+    case SessionChunk::kBodyIndex: chunk.mutable_body_index()->set_t_us(t_us); break;
+    case SessionChunk::kSkeleton: chunk.mutable_skeleton()->set_t_us(t_us); break;
+    case SessionChunk::kColor: chunk.mutable_color()->set_t_us(t_us); break;
+    case SessionChunk::kImu: chunk.mutable_imu()->set_t_us(0, t_us); break;
+    case SessionChunk::kAudio: chunk.mutable_audio()->set_t_us(t_us); break;
+    case SessionChunk::kSyncEvent: chunk.mutable_sync_event()->set_t_us(t_us); break;
+    default: FAIL() << "not a data chunk";
+  }
+}
+
+TEST(SessionValidator, TimestampsOutsideTwoToThe53AreRejectedInEveryStream) {
+  const auto session = make_session();
+  const v1::SessionHeader& header = session[0].header();
+  struct Stream {
+    SessionChunk::ChunkCase kind;
+    const char* field;
+  };
+  for (const Stream stream : {Stream{SessionChunk::kDepth, ".depth.t_us"},
+                              Stream{SessionChunk::kBodyIndex, ".body_index.t_us"},
+                              Stream{SessionChunk::kSkeleton, ".skeleton.t_us"},
+                              Stream{SessionChunk::kColor, ".color.t_us"},
+                              Stream{SessionChunk::kImu, ".imu[0].t_us"},
+                              Stream{SessionChunk::kAudio, ".audio.t_us"},
+                              Stream{SessionChunk::kSyncEvent, ".sync_event.t_us"}}) {
+    SCOPED_TRACE(stream.field);
+    SessionChunk chunk = session[index_of(session, stream.kind)];
+    for (const std::int64_t t_us : {std::numeric_limits<std::int64_t>::min(),
+                                    std::numeric_limits<std::int64_t>::max(),
+                                    kMaxAbsTimestampUs + 1, -kMaxAbsTimestampUs - 1}) {
+      set_t_us(chunk, t_us);
+      expect_error([&] { validate_chunk(chunk, header, "chunk[9]"); },
+                   ErrorCode::kInvalidArgument, std::string("chunk[9]") + stream.field);
+    }
+    // The bounds themselves are timestamps (the IMU batch stays in order: its first sample is
+    // set, and -2^53 is before the others).
+    set_t_us(chunk, -kMaxAbsTimestampUs);
+    EXPECT_NO_THROW(validate_chunk(chunk, header, "chunk[9]"));
+    if (stream.kind != SessionChunk::kImu) {
+      set_t_us(chunk, kMaxAbsTimestampUs);
+      EXPECT_NO_THROW(validate_chunk(chunk, header, "chunk[9]"));
+    }
+  }
+}
+
+TEST(SessionValidator, HeaderImageSizesAreBoundedInPixels) {
+  // Each side within kMaxImageSide, but more pixels than a frame of that camera may have.
+  auto session = make_session();
+  session[0].mutable_header()->mutable_depth_intrinsics()->set_width(2048);
+  session[0].mutable_header()->mutable_depth_intrinsics()->set_height(1024);
+  expect_invalid(session, "chunk[0].header.depth_intrinsics.width");
+  session = make_session();
+  session[0].mutable_header()->mutable_color_intrinsics()->set_width(8192);
+  session[0].mutable_header()->mutable_color_intrinsics()->set_height(8192);
+  expect_invalid(session, "chunk[0].header.color_intrinsics.width");
+}
+
 TEST(SessionValidator, WrongSizeRawDepth) {
   auto session = make_session();
   const std::size_t i = index_of(session, SessionChunk::kDepth, 1);

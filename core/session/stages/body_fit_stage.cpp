@@ -66,6 +66,20 @@ double positive_option(const v1::SessionHeader& header, const char* key, double 
   return value;
 }
 
+// A duration in seconds in (0, max_s]. The upper bound is a memory bound: the frames of that
+// many seconds are kept (personalisation frames, frames waiting for their IMU data).
+double seconds_option(const v1::SessionHeader& header, const char* key, double fallback,
+                      double max_s) {
+  const std::string* text = option(header, key);
+  if (!text) return fallback;
+  const double value = parse_double(*text, option_field(key));
+  if (!std::isfinite(value) || value <= 0.0 || value > max_s) {
+    throw_invalid(option_field(key),
+                  "is '" + *text + "', must be in (0, " + format_double(max_s) + "] seconds");
+  }
+  return value;
+}
+
 bool bool_option(const v1::SessionHeader& header, const char* key, bool fallback) {
   const std::string* text = option(header, key);
   if (!text) return fallback;
@@ -199,8 +213,8 @@ std::vector<StageOption> BodyFitStage::options() const {
 void BodyFitStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) {
   enabled_ = body_fit_enabled(header);
   if (!enabled_) return;
-  calibration_s_ = positive_option(header, kCalibrationSKey, calibration_s_);
-  imu_wait_s_ = positive_option(header, kImuWaitKey, imu_wait_s_);
+  calibration_s_ = seconds_option(header, kCalibrationSKey, calibration_s_, kMaxFitCalibrationS);
+  imu_wait_s_ = seconds_option(header, kImuWaitKey, imu_wait_s_, kMaxFitImuWaitS);
   lost_energy_ = positive_option(header, kLostEnergyKey, lost_energy_);
   fine_shape_ = bool_option(header, kFineShapeKey, true);
   if (const std::string* text = option(header, kSkeletonStartEnergyKey)) {

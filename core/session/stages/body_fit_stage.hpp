@@ -103,6 +103,10 @@ struct BodyFitFrameStats {
 // them after the camera frames of a short session: with the former 6 s, 70 % of the demo's
 // frames were fitted without the imu term (docs/fitting.md, "Paper 1's protocol").
 inline constexpr double kDefaultImuWaitS = 30.0;
+// Upper bounds of fit.imu_wait_s and fit.calibration_s: at 30 Hz, 1800 waiting frames of
+// ~40 kB (72 MB) and 900 personalisation frames per session at most.
+inline constexpr double kMaxFitImuWaitS = 60.0;
+inline constexpr double kMaxFitCalibrationS = 30.0;
 
 // Paper 2 II-G start policy (docs/fitting.md, "Start policy"): the skeleton-built start is fitted
 // when there is no previous-frame fit (`previous_energy` empty), when the policy is off

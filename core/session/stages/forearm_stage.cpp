@@ -24,6 +24,8 @@ using forearm::Vec3;
 
 constexpr const char* kKFromBKey = "forearm.K_from_B";
 constexpr const char* kCalibrationSKey = "forearm.calibration_s";
+// forearm.calibration_s at most (the default is 5 s).
+constexpr double kMaxForearmCalibrationS = 120.0;
 constexpr const char* kCalibrationOrientationKey = "forearm.calibration_orientation";
 constexpr const char* kBodyIdKey = "forearm.body_id";
 constexpr const char* kAxisKey = "forearm.axis";
@@ -153,8 +155,11 @@ void ForearmStage::start(const v1::SessionHeader& header, StageOutput& out) {
   if (!has_arm) return;  // nothing to do: no arm IMU
   if (const auto text = option(header, kCalibrationSKey)) {
     calibration_s_ = parse_double(*text, option_field(kCalibrationSKey));
-    if (!std::isfinite(calibration_s_) || calibration_s_ <= 0.0) {
-      throw_invalid(option_field(kCalibrationSKey), "is '" + *text + "', must be a positive number of seconds");
+    // The upper bound keeps the window's end (first frame + calibration_s in us) far from
+    // int64 overflow and the samples kept for the search bounded.
+    if (!std::isfinite(calibration_s_) || calibration_s_ <= 0.0 || calibration_s_ > kMaxForearmCalibrationS) {
+      throw_invalid(option_field(kCalibrationSKey), "is '" + *text + "', must be in (0, " +
+                                                        format_double(kMaxForearmCalibrationS) + "] seconds");
     }
   }
   if (const auto text = option(header, kCalibrationOrientationKey)) {

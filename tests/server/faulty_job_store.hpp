@@ -1,0 +1,53 @@
+#pragma once
+// A JobStore for tests that passes every call to a real SQLite store, except the writes it is
+// told to refuse: those throw what SqliteJobStore throws when the disk is full.
+#include <atomic>
+#include <filesystem>
+
+#include "common/error.hpp"
+#include "server/sqlite_job_store.hpp"
+
+namespace posefuse::server {
+
+class FaultyJobStore : public JobStore {
+ public:
+  explicit FaultyJobStore(const std::filesystem::path& path) : store_(path) {}
+
+  std::atomic<bool> refuse_creates{false};
+  std::atomic<bool> refuse_updates{false};
+  std::atomic<bool> refuse_results{false};
+
+  v1::Job create(const v1::JobSpec& spec, const std::string& recording_path,
+                 const std::string& owner, std::int64_t now_unix_us) override {
+    if (refuse_creates) disk_full();
+    return store_.create(spec, recording_path, owner, now_unix_us);
+  }
+  std::optional<JobRecord> get(const std::string& job_id) override { return store_.get(job_id); }
+  std::vector<v1::Job> list(std::size_t limit, const std::string& after_job_id,
+                            const std::vector<v1::Job::State>& states,
+                            const std::string& owner) override {
+    return store_.list(limit, after_job_id, states, owner);
+  }
+  void update(const v1::Job& job) override {
+    if (refuse_updates) disk_full();
+    store_.update(job);
+  }
+  void append_results(const std::string& job_id,
+                      const std::vector<v1::FitResult>& results) override {
+    if (refuse_results) disk_full();
+    store_.append_results(job_id, results);
+  }
+  std::vector<v1::FitResult> results(const std::string& job_id) override {
+    return store_.results(job_id);
+  }
+  void clear_results(const std::string& job_id) override { store_.clear_results(job_id); }
+  std::vector<JobRecord> unfinished() override { return store_.unfinished(); }
+
+ private:
+  [[noreturn]] static void disk_full() {
+    throw Error(ErrorCode::kResourceExhausted, "job_store", "step: database or disk is full");
+  }
+  SqliteJobStore store_;
+};
+
+}  // namespace posefuse::server
