@@ -5,20 +5,6 @@
 
 namespace posefuse::imu {
 
-namespace {
-
-// `tilt_source` turned about the vertical so that it differs from `heading_source` by a pure
-// tilt: with D = tilt_source * heading_source^-1 = (w, x, y, z), Rz(psi) * D has no z part for
-// psi = -2 atan2(z, w), so heading (as the BROAD metric splits it) comes from heading_source and
-// inclination from tilt_source.
-Quat with_heading_of(const Quat& tilt_source, const Quat& heading_source) {
-  const Quat D = tilt_source * heading_source.conjugate();
-  const double psi = -2.0 * std::atan2(D.z(), D.w());
-  return Quat(Eigen::AngleAxisd(psi, Vec3::UnitZ())) * tilt_source;
-}
-
-}  // namespace
-
 std::vector<Quat> robust_orientation_offline(const std::vector<ImuSample>& samples,
                                              const RobustOrientationFilter::Params& params) {
   validate_imu_stream(samples, "imu");
@@ -41,12 +27,27 @@ std::vector<Quat> robust_orientation_offline(const std::vector<ImuSample>& sampl
   }
 
   filter.reset_keeping_calibration(/*flip_gyro=*/true);
+  std::vector<Quat> forward(n);
+  for (std::size_t i = 0; i < n; ++i) forward[i] = filter.update(samples[i]);
+
+  // Each pass takes its heading reference from the field at its own start: the two differ by a
+  // constant turn about the vertical (the field's direction differs a little between where the
+  // recording starts and where it ends). The backward pass is turned onto the forward pass's
+  // reference (the recording's start, as a causal run has it) by the circular mean of their
+  // heading difference; then the average cancels the opposite lags of the two passes in heading
+  // as it does in inclination.
+  double sin_sum = 0.0, cos_sum = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const Quat D = backward[i] * forward[i].conjugate();
+    const double psi = 2.0 * std::atan2(D.z(), D.w());
+    sin_sum += std::sin(psi);
+    cos_sum += std::cos(psi);
+  }
+  const Quat forward_from_backward_reference(Eigen::AngleAxisd(-std::atan2(sin_sum, cos_sum), Vec3::UnitZ()));
   std::vector<Quat> out(n);
   for (std::size_t i = 0; i < n; ++i) {
-    const Quat forward = filter.update(samples[i]);
-    const Quat b = geometry::same_hemisphere(backward[i], forward);
-    const Quat averaged = Quat(forward.coeffs() + b.coeffs()).normalized();
-    out[i] = with_heading_of(averaged, forward);
+    const Quat b = geometry::same_hemisphere(forward_from_backward_reference * backward[i], forward[i]);
+    out[i] = Quat(forward[i].coeffs() + b.coeffs()).normalized();
   }
   return out;
 }
