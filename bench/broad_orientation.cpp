@@ -107,12 +107,17 @@ void write_csv(const fs::path& file, const std::vector<ImuSample>& imu, const st
 }
 
 // Total RMSE (degrees) of one trial's W_from_A against its ground truth.
-double total_rmse_deg(const posefuse::bench::BroadTrial& trial, const std::vector<Quat>& W_from_A) {
+// The estimates in BROAD's frame (sensor -> ENU), as the ground truth and the metric have them.
+std::vector<Quat> ENU_from_A_of(const std::vector<Quat>& W_from_A) {
   std::vector<Quat> ENU_from_A(W_from_A.size());
   const Quat ENU_from_W = posefuse::geometry::ENU_from_W();
   for (std::size_t i = 0; i < W_from_A.size(); ++i) ENU_from_A[i] = ENU_from_W * W_from_A[i];
-  return posefuse::eval::orientation_rmse(ENU_from_A, trial.ENU_from_sensor_gt, trial.movement).total_rad * 180.0 /
-         EIGEN_PI;
+  return ENU_from_A;
+}
+
+double total_rmse_deg(const posefuse::bench::BroadTrial& trial, const std::vector<Quat>& W_from_A) {
+  return posefuse::eval::orientation_rmse(ENU_from_A_of(W_from_A), trial.ENU_from_sensor_gt, trial.movement)
+             .total_rad * 180.0 / EIGEN_PI;
 }
 
 // Leave-one-trial-out over the grid of tuned parameters (broad_loto.hpp), for the robust filter
@@ -277,9 +282,7 @@ int run(int argc, char** argv) {
     mode->run(trial.imu, W_from_A);
     const double seconds = posefuse::bench::thread_cpu_seconds() - start_s;
 
-    std::vector<Quat> ENU_from_A(W_from_A.size());
-    const Quat ENU_from_W = posefuse::geometry::ENU_from_W();
-    for (std::size_t i = 0; i < W_from_A.size(); ++i) ENU_from_A[i] = ENU_from_W * W_from_A[i];
+    const std::vector<Quat> ENU_from_A = ENU_from_A_of(W_from_A);
     const auto rmse = posefuse::eval::orientation_rmse(ENU_from_A, trial.ENU_from_sensor_gt, trial.movement);
     const double rate = static_cast<double>(trial.imu.size()) / seconds * 1e-6;
     std::printf("%-46s %8.3f %8.3f %8.3f %9zu %10.2f\n", trial.name.c_str(), rmse.total_rad * kDeg,

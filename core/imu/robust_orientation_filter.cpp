@@ -309,8 +309,6 @@ void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
   const double norm = m_E.norm();
   if (norm < 1e-6) return;
   const double sin_dip = -m_E.z() / norm;  // positive when the field points down
-  double error_rad = 0.0;
-  if (!heading_error(m_E, error_rad)) return;  // field vertical: no heading information
 
   double k = dt_s > 0.0 ? gains_.mag : 1.0;
   if (time_s_ < params_.init_s && !mag_ref_valid_) {
@@ -371,6 +369,8 @@ void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
     }
   }
 
+  double error_rad = 0.0;
+  if (!heading_error(m_E, error_rad)) return;  // field vertical: no heading information
   const double step_rad = k * error_rad;
   double c, s;
   half_angle_cos_sin(step_rad, c, s);
