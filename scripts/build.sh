@@ -2,17 +2,24 @@
 # Configures and builds posefuse with CMake + Ninja.
 #   scripts/build.sh                  release build in build/
 #   scripts/build.sh --sanitize       ASan+UBSan debug build in build-sanitize/
+#   scripts/build.sh --target NAME    only that CMake target and what it needs (repeatable;
+#                                     default: everything, tests and benchmarks included)
 #   BUILD_DIR=... scripts/build.sh    choose the build folder
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 sanitize=OFF
 build_type=Release
 default_dir="$root/build"
-for arg in "$@"; do
-  case "$arg" in
+targets=()
+while [ $# -gt 0 ]; do
+  case "$1" in
     --sanitize) sanitize=ON; build_type=RelWithDebInfo; default_dir="$root/build-sanitize" ;;
-    *) echo "build: unknown option '$arg'" >&2; exit 2 ;;
+    --target)
+      [ $# -ge 2 ] || { echo "build: --target needs a target name" >&2; exit 2; }
+      targets+=(--target "$2"); shift ;;
+    *) echo "build: unknown option '$1'" >&2; exit 2 ;;
   esac
+  shift
 done
 build_dir=${BUILD_DIR:-$default_dir}
 jobs=${POSEFUSE_JOBS:-$(nproc)}
@@ -20,5 +27,5 @@ jobs=${POSEFUSE_JOBS:-$(nproc)}
 "$root/scripts/setup.sh"
 cmake -S "$root" -B "$build_dir" -G Ninja \
   -DCMAKE_BUILD_TYPE="$build_type" -DPOSEFUSE_SANITIZE="$sanitize" >/dev/null
-cmake --build "$build_dir" -j "$jobs"
+cmake --build "$build_dir" -j "$jobs" "${targets[@]}"
 echo "build: done in $build_dir"

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# The README's first command: builds posefuse, makes the demo session, starts the real
-# posefuse-server on a free loopback port, runs the posefuse client against it, stops the server
-# prints where the results are and scores them against the simulated ground truth (posefuse-score).
+# The README's first command: builds the four programs it runs (not the tests and benchmarks),
+# makes the demo session, starts the real posefuse-server on a free loopback port, runs the
+# posefuse client against it, stops the server, prints where the results are and scores them
+# against the simulated ground truth (posefuse-score).
 #   scripts/demo.sh                      results in build/demo/results
 #   DEMO_DIR=/tmp/demo scripts/demo.sh   choose the folder
 # The demo session comes from the simulator (posefuse-sim, docs/simulator.md): a short take of
@@ -15,7 +16,8 @@ root=$(cd "$(dirname "$0")/.." && pwd)
 build_dir=${BUILD_DIR:-$root/build}
 demo_dir=${DEMO_DIR:-$build_dir/demo}
 
-"$root/scripts/build.sh"
+BUILD_DIR="$build_dir" "$root/scripts/build.sh" \
+  --target posefuse-server --target posefuse --target posefuse-sim --target posefuse-score
 server_bin="$build_dir/server/posefuse-server"
 client_bin="$build_dir/client/posefuse"
 
