@@ -1,6 +1,6 @@
 // Speed of the faithful quaternion Kalman orientation filter (paper 1, II-D) on one core.
-// Target (DESIGN.md): >= 5 million samples/s. Also counts heap allocations per sample, which
-// must be zero for update().
+// Target (docs/architecture.md, "Speed targets"): >= 5 million samples/s. Also counts heap
+// allocations per sample, which must be zero for update().
 //   build/bench/bench_kalman_speed [samples]
 #include <algorithm>
 #include <atomic>

@@ -1,5 +1,5 @@
 #pragma once
-// posefuse::Error -> gRPC status (DESIGN.md "Errors"). The message is the error's
+// posefuse::Error -> gRPC status (docs/architecture.md, "Errors"). The message is the error's
 // "field: message" line unchanged, so the client can print it as one readable line.
 #include <grpcpp/support/status.h>
 

@@ -19,7 +19,8 @@ std::shared_ptr<EmbreeDevice> EmbreeDevice::shared() {
   return device;
 }
 
-// One build thread: sessions run one per core (DESIGN.md), so Embree must not spawn its own pool.
+// One build thread: sessions run one per core (docs/architecture.md, "Threads"), so Embree must
+// not spawn its own pool.
 EmbreeDevice::EmbreeDevice() : device_(rtcNewDevice("threads=1,set_affinity=0")) {
   if (!device_)
     throw Error(ErrorCode::kInternal, "embree.device", "rtcNewDevice failed: " + std::to_string(rtcGetDeviceError(nullptr)));

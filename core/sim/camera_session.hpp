@@ -5,8 +5,8 @@
 //
 // Frames: the body model's canonical frame W (metres, y up, floor y = 0, see
 // body/template_generator.hpp) is placed in the camera frame K by K_from_W. This "W" is the
-// room frame R of room_frame.hpp (K_from_W here is K_from_R there), not DESIGN.md's z-up world;
-// W_from_R(heading) relates the two for the IMUs. The room is the
+// room frame R of room_frame.hpp (K_from_W here is K_from_R there), not the z-up world W of
+// docs/architecture.md, "Frames"; W_from_R(heading) relates the two for the IMUs. The room is the
 // floor y_W = 0 (a plane in K through K_from_W) and a wall facing the camera at z_K =
 // wall_distance_m.
 #include <cstdint>

@@ -1,8 +1,9 @@
 #pragma once
 // Device clocks and packet loss.
 //
-// Every device counts time on its own oscillator (DESIGN.md: timestamps are int64 us on the
-// device's own clock). We model a device clock as an affine function of the camera clock,
+// Every device counts time on its own oscillator (timestamps are int64 us on the device's own
+// clock: docs/architecture.md, "Clocks and timestamps"). We model a device clock as an affine
+// function of the camera clock,
 //   t_device = offset + (1 + drift) * t_camera,
 // which is what paper 1 II-G synchronises (it estimates the offset; the drift is why the
 // estimate has to be refreshed in long sessions: 50 ppm is 3 ms per minute).

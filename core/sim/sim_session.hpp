@@ -5,8 +5,9 @@
 // the ground truth of all of it (SimTruth, written as gt/ by ground_truth_files.hpp).
 //
 // Frames. Body: the body model's canonical frame (metres, y up, x to the subject's left, z to
-// the front, floor y = 0; room_frame.hpp's R). W (DESIGN.md): x magnetic north, y west, z up;
-// the subject faces W's x turned by heading_rad about z: W_from_Body = W_from_R(heading_rad).
+// the front, floor y = 0; room_frame.hpp's R). W (docs/architecture.md, "Frames"): x magnetic
+// north, y west, z up; the subject faces W's x turned by heading_rad about z:
+// W_from_Body = W_from_R(heading_rad).
 // K: the camera, placed facing the subject.
 // F (forearm, paper 1 II-H, forearm_strap.hpp): origin at the strap centre on the elbow -> wrist
 // line, y elbow -> wrist, x to the back of the hand; z to the thumb on the right arm and, F being

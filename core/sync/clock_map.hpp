@@ -1,6 +1,6 @@
 #pragma once
-// Every device clock mapped onto the camera clock (DESIGN.md: "sync maps every device clock
-// onto the camera clock"). Built from the fits: base IMU -> camera from the buzzer event(s),
+// Every device clock mapped onto the camera clock (docs/architecture.md, "Clocks and
+// timestamps"). Built from the fits: base IMU -> camera from the buzzer event(s),
 // other IMUs -> base IMU from BLE broadcasts; chains them so each device maps in one step.
 #include <map>
 #include <string>
