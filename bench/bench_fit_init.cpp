@@ -95,9 +95,9 @@ int main() {
     cpu_us.push_back(1e6 * (bench::thread_cpu_seconds() - start));
     previous = result.theta;
     const fit::JointPose built = fit::pose_joints(rest, layout, result.theta);
-    const std::pair<int, int> pairs[] = {{body::kLeftShoulder, fit::kShoulderLeft}, {body::kRightShoulder, fit::kShoulderRight},
-                                         {body::kLeftElbow, fit::kElbowLeft},       {body::kRightElbow, fit::kElbowRight},
-                                         {body::kLeftWrist, fit::kWristLeft},       {body::kRightWrist, fit::kWristRight}};
+    const std::pair<int, int> pairs[] = {{body::kLeftShoulder, geometry::kShoulderLeft}, {body::kRightShoulder, geometry::kShoulderRight},
+                                         {body::kLeftElbow, geometry::kElbowLeft},       {body::kRightElbow, geometry::kElbowRight},
+                                         {body::kLeftWrist, geometry::kWristLeft},       {body::kRightWrist, geometry::kWristRight}};
     for (int k = 0; k < 6; ++k) {
       const auto [smpl, kinect] = pairs[k];
       init_error[k / 2] += (built.positions_K.col(smpl) - f.truth.positions_K.col(smpl)).norm();

@@ -99,7 +99,7 @@ void print_elbow_error(const v1::RecoveredSegment& s, const Table1Truth& truth,
                        const std::vector<v1::FitResult>& results, v1::Arm arm) {
   const bool left = arm == v1::LEFT;
   const int smpl_elbow = left ? body::kLeftElbow : body::kRightElbow, smpl_wrist = left ? body::kLeftWrist : body::kRightWrist;
-  const int sdk_elbow = left ? sim::kElbowLeft : sim::kElbowRight;
+  const int sdk_elbow = left ? geometry::kElbowLeft : geometry::kElbowRight;
   const auto truth_at = [&](std::int64_t t_us) -> const sim::ForearmTruth* {
     const auto f = std::lower_bound(truth.frame_t_us.begin(), truth.frame_t_us.end(), t_us);
     if (f == truth.frame_t_us.end() || *f != t_us) return nullptr;

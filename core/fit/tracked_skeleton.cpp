@@ -2,15 +2,6 @@
 
 namespace posefuse::fit {
 
-const char* kinect_joint_name(int joint) {
-  static constexpr const char* kNames[kKinectJointCount] = {
-      "SpineBase",  "SpineMid",  "Neck",      "Head",        "ShoulderLeft", "ElbowLeft",     "WristLeft",
-      "HandLeft",   "ShoulderRight", "ElbowRight", "WristRight", "HandRight", "HipLeft",      "KneeLeft",
-      "AnkleLeft",  "FootLeft",  "HipRight",  "KneeRight",   "AnkleRight",   "FootRight",     "SpineShoulder",
-      "HandTipLeft", "ThumbLeft", "HandTipRight", "ThumbRight"};
-  return joint >= 0 && joint < kKinectJointCount ? kNames[joint] : "(no such joint)";
-}
-
 TrackedSkeleton TrackedSkeleton::all_tracked(const KinectSkeleton& positions_K) {
   TrackedSkeleton s;
   s.positions_K = positions_K;

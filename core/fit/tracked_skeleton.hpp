@@ -6,18 +6,13 @@
 #include <string>
 
 #include "fit/zone_sampling.hpp"
+#include "geometry/kinect_joints.hpp"
 
 namespace posefuse::fit {
 
-enum KinectJoint : int {
-  kSpineBase = 0, kSpineMid, kNeck, kHead, kShoulderLeft, kElbowLeft, kWristLeft, kHandLeft,
-  kShoulderRight, kElbowRight, kWristRight, kHandRight, kHipLeft, kKneeLeft, kAnkleLeft, kFootLeft,
-  kHipRight, kKneeRight, kAnkleRight, kFootRight, kSpineShoulder, kHandTipLeft, kThumbLeft,
-  kHandTipRight, kThumbRight,
-};
-
-// Kinect v2 JointType names ("SpineBase", ...), for messages.
-const char* kinect_joint_name(int joint);
+using geometry::kinect_joint_name;
+using geometry::KinectJoint;
+using enum geometry::KinectJoint;
 
 enum class JointTracking { kNotTracked, kInferred, kTracked };
 

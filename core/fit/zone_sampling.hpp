@@ -8,11 +8,12 @@
 #include <vector>
 
 #include "fit/depth_frame.hpp"
+#include "geometry/kinect_joints.hpp"
 #include "raycast/depth_camera.hpp"
 
 namespace posefuse::fit {
 
-inline constexpr int kKinectJointCount = 25;  // joint order as session::kKinectJointNames
+using geometry::kKinectJointCount;  // geometry/kinect_joints.hpp order
 using KinectSkeleton = std::array<Eigen::Vector3d, kKinectJointCount>;  // joint positions in K, metres
 
 enum class BodyZone : int {

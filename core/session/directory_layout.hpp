@@ -5,6 +5,8 @@
 #include <string>
 #include <vector>
 
+#include "geometry/kinect_joints.hpp"
+
 namespace posefuse::session::layout {
 
 inline const char* const kHeaderJson = "header.json";
@@ -31,11 +33,6 @@ inline const std::vector<std::string> kSyncEventColumns = {"t_us", "device_id", 
                                                            "payload_hex"};
 
 // Kinect v2 JointType names, in JointType order (the skeleton.csv joint_name column).
-inline constexpr std::array<const char*, 25> kKinectJointNames = {
-    "SpineBase",     "SpineMid",   "Neck",       "Head",         "ShoulderLeft",
-    "ElbowLeft",     "WristLeft",  "HandLeft",   "ShoulderRight", "ElbowRight",
-    "WristRight",    "HandRight",  "HipLeft",    "KneeLeft",     "AnkleLeft",
-    "FootLeft",      "HipRight",   "KneeRight",  "AnkleRight",   "FootRight",
-    "SpineShoulder", "HandTipLeft", "ThumbLeft", "HandTipRight", "ThumbRight"};
+using geometry::kKinectJointNames;
 
 }  // namespace posefuse::session::layout

@@ -11,6 +11,9 @@
 #include "sim/sim_rng.hpp"
 
 namespace posefuse::sim {
+
+using enum geometry::KinectJoint;
+
 namespace {
 
 using body::Joint;
@@ -50,7 +53,7 @@ void set_quaternion(const Eigen::Quaterniond& q, v1::Quaternion* out) {
 
 const std::array<int, kCameraJointCount>& camera_joint_parents() {
   static const std::array<int, kCameraJointCount> parents = {
-      -1, kSpineBase, kSpineShoulder, kNeckJoint, kSpineShoulder, kShoulderLeft, kElbowLeft,
+      -1, kSpineBase, kSpineShoulder, kNeck, kSpineShoulder, kShoulderLeft, kElbowLeft,
       kWristLeft, kSpineShoulder, kShoulderRight, kElbowRight, kWristRight, kSpineBase, kHipLeft,
       kKneeLeft, kAnkleLeft, kSpineBase, kHipRight, kKneeRight, kAnkleRight, kSpineMid, kHandLeft,
       kHandLeft, kHandRight, kHandRight};

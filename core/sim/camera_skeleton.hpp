@@ -44,19 +44,13 @@
 #include <Eigen/Geometry>
 
 #include "body/body_evaluator.hpp"
+#include "geometry/kinect_joints.hpp"
 #include "posefuse/v1/session.pb.h"
 #include "raycast/depth_camera.hpp"
 
 namespace posefuse::sim {
 
-inline constexpr int kCameraJointCount = 25;
-
-enum CameraJoint : int {
-  kSpineBase = 0, kSpineMid, kNeckJoint, kHeadJoint, kShoulderLeft, kElbowLeft, kWristLeft,
-  kHandLeft, kShoulderRight, kElbowRight, kWristRight, kHandRight, kHipLeft, kKneeLeft,
-  kAnkleLeft, kFootLeft, kHipRight, kKneeRight, kAnkleRight, kFootRight, kSpineShoulder,
-  kHandTipLeft, kThumbLeft, kHandTipRight, kThumbRight
-};
+inline constexpr int kCameraJointCount = geometry::kKinectJointCount;
 
 // Parent of each camera joint in the SDK's hierarchy (-1 for SpineBase).
 const std::array<int, kCameraJointCount>& camera_joint_parents();

@@ -16,6 +16,8 @@ using namespace posefuse::sim;
 
 namespace {
 
+using enum posefuse::geometry::KinectJoint;
+
 CameraSessionOptions small_session() {
   CameraSessionOptions o;
   o.intrinsics = sim::testing::quarter_kinect_intrinsics();
@@ -90,7 +92,7 @@ TEST(CameraSession, ArmRaisingChunksValidate) {
   const Eigen::Matrix3Xd& start = r.true_camera_joints_K.front();
   const Eigen::Matrix3Xd& middle = r.true_camera_joints_K.back();
   EXPECT_LT(start(1, kHandLeft), start(1, kSpineBase));
-  EXPECT_GT(middle(1, kHandLeft), middle(1, kHeadJoint));
+  EXPECT_GT(middle(1, kHandLeft), middle(1, kHead));
 }
 
 TEST(CameraSession, RejectsBadPoseSequence) {

@@ -21,6 +21,8 @@ using posefuse::sim::testing::small_camera;
 
 namespace {
 
+using enum posefuse::geometry::KinectJoint;
+
 using std::numbers::pi;
 constexpr double kDeg = pi / 180.0;
 
@@ -88,7 +90,7 @@ TEST(CameraSkeleton, ErrorFreeFrameHasSdkStructure) {
     EXPECT_EQ(f.joints(j).state(), v1::SkeletonJoint::TRACKED) << "joint " << j;
     EXPECT_LT((position(f, j) - truth.col(j)).norm(), 1e-9) << "joint " << j;
     const Eigen::Quaterniond q = orientation(f, j);
-    const bool end_joint = j == kHeadJoint || j == kFootLeft || j == kFootRight || j >= kHandTipLeft;
+    const bool end_joint = j == kHead || j == kFootLeft || j == kFootRight || j >= kHandTipLeft;
     EXPECT_NEAR(q.norm(), end_joint ? 0.0 : 1.0, 1e-9) << "joint " << j;
     if (!end_joint && j != kSpineBase) {
       // Hierarchical orientation: y along the bone from the parent.
@@ -100,7 +102,7 @@ TEST(CameraSkeleton, ErrorFreeFrameHasSdkStructure) {
   // Facing the camera, the subject's left hand is on the camera's right: x_K < 0.
   EXPECT_LT(truth(0, kHandLeft), -0.3);
   EXPECT_GT(truth(0, kHandRight), 0.3);
-  EXPECT_GT(truth(1, kHeadJoint), truth(1, kNeckJoint) + 0.1);
+  EXPECT_GT(truth(1, kHead), truth(1, kNeck) + 0.1);
 }
 
 TEST(CameraSkeleton, UpperLimbErrorWithinConfiguredBand) {
@@ -165,7 +167,7 @@ TEST(CameraSkeleton, OccludedJointsAreInferredWithLargerError) {
     }
   }
   for (int j : {kShoulderLeft, kElbowLeft, kWristLeft, kHandLeft, kHandTipLeft}) EXPECT_EQ(inferred_frames[j], 300) << j;
-  for (int j : {kShoulderRight, kElbowRight, kWristRight, kHandRight, kHandTipRight, kHeadJoint}) {
+  for (int j : {kShoulderRight, kElbowRight, kWristRight, kHandRight, kHandTipRight, kHead}) {
     EXPECT_EQ(inferred_frames[j], 0) << j;
   }
   ASSERT_GT(inferred_count, 0);
@@ -190,7 +192,7 @@ TEST(CameraSkeleton, FarArmOfSideViewIsInferred) {
   const v1::SkeletonFrame f = CameraSkeletonSimulator(small_camera(), error_free(), 2)
                                   .simulate(scene.joints, scene.depth_mm, 0, 0, 0);
   for (int j : {kElbowLeft, kWristLeft, kHandLeft}) EXPECT_EQ(f.joints(j).state(), v1::SkeletonJoint::INFERRED) << j;
-  for (int j : {kShoulderRight, kElbowRight, kWristRight, kHandRight, kHeadJoint}) {
+  for (int j : {kShoulderRight, kElbowRight, kWristRight, kHandRight, kHead}) {
     EXPECT_EQ(f.joints(j).state(), v1::SkeletonJoint::TRACKED) << j;
   }
 }
