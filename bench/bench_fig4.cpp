@@ -41,6 +41,7 @@
 #include "body/template_generator.hpp"
 #include "fit/joint_kinematics.hpp"
 #include "session/image_codec.hpp"
+#include "session/stage_inputs.hpp"
 #include "session/stages/body_fit_stage.hpp"
 #include "sim/camera_session.hpp"
 #include "sim/bvh.hpp"
@@ -65,6 +66,7 @@ struct Output : session::StageOutput {
   void emit(v1::FitResult&& result) override {
     if (result.has_frame()) frames[result.frame().t_us()] = result.frame();
   }
+  void hand_on(session::StageValue&&) override {}
   void warn(const std::string& code, const std::string& field, const std::string& message) override {
     std::fprintf(stderr, "  warning %s %s: %s\n", code.c_str(), field.c_str(), message.c_str());
   }
@@ -105,17 +107,17 @@ Eigen::Quaterniond random_turn(std::mt19937_64& rng, double angle_rad) {
   return Eigen::Quaterniond(Eigen::AngleAxisd(angle_rad, axis));
 }
 
-// Forearm orientations as the forearm stage would emit them: one batch per arm, one sample per frame.
-std::vector<v1::FitResult> forearm_batches(const sim::CameraSessionResult& sim, std::uint64_t seed) {
+// Forearm orientations as the forearm stage would hand them on: one batch per arm, one sample per frame.
+std::vector<session::ForearmOrientations> forearm_batches(const sim::CameraSessionResult& sim, std::uint64_t seed) {
   std::mt19937_64 rng(seed);
-  std::vector<v1::FitResult> out(2);
+  std::vector<session::ForearmOrientations> out(2);
   for (int a = 0; a < 2; ++a) {
-    v1::ForearmOrientationBatch& batch = *out[static_cast<size_t>(a)].mutable_forearm_orientations();
-    batch.set_arm(a == 0 ? v1::RIGHT : v1::LEFT);  // straps: right, left
+    session::ForearmOrientations& batch = out[static_cast<size_t>(a)];
+    batch.arm = a == 0 ? v1::RIGHT : v1::LEFT;  // straps: right, left
     for (size_t i = 0; i < sim.truth.size(); ++i) {
-      const Eigen::Quaterniond q = random_turn(rng, 3 * kDeg) * sim.truth[i].forearms[static_cast<size_t>(a)].K_from_F;
-      batch.add_t_us(sim.t_us[i]);
-      for (const double c : {q.w(), q.x(), q.y(), q.z()}) batch.add_k_from_f(c);
+      batch.t_us.push_back(sim.t_us[i]);
+      batch.K_from_F.push_back(random_turn(rng, 3 * kDeg) * sim.truth[i].forearms[static_cast<size_t>(a)].K_from_F);
+      batch.pronation_rad.push_back(0.0);
     }
   }
   return out;
@@ -124,7 +126,7 @@ std::vector<v1::FitResult> forearm_batches(const sim::CameraSessionResult& sim, 
 bool g_fine_shape = true;
 std::string g_lambda_imu;  // empty: the stage's default
 
-Output run_stage(const sim::CameraSessionResult& sim, const std::vector<v1::FitResult>& batches,
+Output run_stage(const sim::CameraSessionResult& sim, const std::vector<session::ForearmOrientations>& batches,
                  std::vector<double>* frame_s, std::vector<session::BodyFitFrameStats>* stats) {
   v1::SessionHeader header = sim.header;
   (*header.mutable_options())["fit.enabled"] = "true";
@@ -144,15 +146,20 @@ Output run_stage(const sim::CameraSessionResult& sim, const std::vector<v1::FitR
       begin = end + 1;
     }
   }
+  std::vector<v1::SessionChunk> chunks(1);
+  *chunks[0].mutable_header() = header;
+  chunks.insert(chunks.end(), sim.chunks.begin(), sim.chunks.end());
+  const session::AssembledSession inputs = session::assemble_session(chunks);  // decoded once, not timed
   Output out;
   session::BodyFitStage stage;
   stage.record_frame_stats(stats != nullptr);
   stage.start(header, out);
-  for (const auto& b : batches) stage.on_result(b, out);
-  for (const auto& chunk : sim.chunks) {
-    const bool timed = chunk.has_skeleton() && static_cast<double>(chunk.skeleton().t_us()) * 1e-6 > kCalibrationS + 0.01;
+  for (const auto& b : batches) stage.on_value(b, out);
+  for (const session::SessionInput& input : inputs.inputs) {
+    const auto* frame = std::get_if<session::CameraFrame>(&input);
+    const bool timed = frame && static_cast<double>(frame->t_us) * 1e-6 > kCalibrationS + 0.01;
     const double t0 = bench::thread_cpu_seconds();
-    stage.on_chunk(chunk, out);
+    session::deliver_input(stage, input, out);
     if (timed && frame_s) frame_s->push_back(bench::thread_cpu_seconds() - t0);
   }
   stage.finish(out);

@@ -46,6 +46,7 @@
 #include "forearm/occlusion_tests.hpp"
 #include "forearm/strap_detection.hpp"
 #include "forearm/upper_arm_depth.hpp"
+#include "session/session_inputs.hpp"
 #include "session/chunk_file.hpp"
 #include "session/image_codec.hpp"
 #include "session/pipeline.hpp"
@@ -87,11 +88,6 @@ int replay(const fs::path& chunks, const fs::path& gt, const fs::path& out, cons
   std::printf("%s", eval::format_score_report(eval::score_directories(out, gt)).c_str());
   std::printf("\npipeline: %.2f s CPU (this thread), %.2f s wall\n", cpu_s, wall_s);
   return 0;
-}
-
-geometry::PinholeCamera pinhole(const v1::CameraIntrinsics& c) {
-  return {static_cast<int>(c.width()), static_cast<int>(c.height()), c.fx(), c.fy(), c.cx(), c.cy(),
-          c.k1(), c.k2(), c.k3(), c.p1(), c.p2()};
 }
 
 struct Truth {
@@ -237,8 +233,8 @@ int frames(const fs::path& chunks, const fs::path& gt, std::optional<double> pro
   while (reader.next(chunk)) {
     switch (chunk.chunk_case()) {
       case v1::SessionChunk::kHeader:
-        cameras.depth = pinhole(chunk.header().depth_intrinsics());
-        cameras.color = pinhole(chunk.header().color_intrinsics());
+        cameras.depth = session::pinhole_camera(chunk.header().depth_intrinsics());
+        cameras.color = session::pinhole_camera(chunk.header().color_intrinsics());
         {
           const auto& r = chunk.header().color_from_depth().rotation();
           const auto& t = chunk.header().color_from_depth().translation_m();
@@ -289,7 +285,7 @@ int pose_frames(const fs::path& chunks, const fs::path& gt, double t0_s, double 
     return Vec3(j.position_m().x(), j.position_m().y(), j.position_m().z());
   };
   while (reader.next(chunk)) {
-    if (chunk.chunk_case() == v1::SessionChunk::kHeader) depth_camera = pinhole(chunk.header().depth_intrinsics());
+    if (chunk.chunk_case() == v1::SessionChunk::kHeader) depth_camera = session::pinhole_camera(chunk.header().depth_intrinsics());
     if (chunk.chunk_case() == v1::SessionChunk::kDepth) depth[chunk.depth().t_us()] = session::decode_depth(chunk.depth());
     if (chunk.chunk_case() != v1::SessionChunk::kSkeleton) continue;
     const v1::SkeletonFrame& s = chunk.skeleton();

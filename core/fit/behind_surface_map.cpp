@@ -163,8 +163,16 @@ int BehindSurfaceMap::first_possible_layer(const Eigen::Vector3i& lo, const Eige
   const double far_x = std::max(std::abs(xn0), std::abs(xn1)), far_y = std::max(std::abs(yn0), std::abs(yn1));
   const raycast::DepthIntrinsics& c = camera_->intrinsics();
   const auto [l0, l1] = radial_factor_range(c, near_x * near_x + near_y * near_y, far_x * far_x + far_y * far_y);
-  const auto [xd0, xd1] = product_range(l0, l1, xn0, xn1);
-  const auto [yd0, yd1] = product_range(l0, l1, yn0, yn1);
+  auto [xd0, xd1] = product_range(l0, l1, xn0, xn1);
+  auto [yd0, yd1] = product_range(l0, l1, yn0, yn1);
+  // Tangential distortion shifts by at most 2|p1| |x y| + |p2| (r^2 + 2 x^2) (and its mirror in
+  // y) over the rectangle: widen both ranges by that bound.
+  if (c.p1 != 0.0 || c.p2 != 0.0) {
+    const double r2 = far_x * far_x + far_y * far_y, xy = far_x * far_y;
+    const double shift_x = 2 * std::abs(c.p1) * xy + std::abs(c.p2) * (r2 + 2 * far_x * far_x);
+    const double shift_y = std::abs(c.p1) * (r2 + 2 * far_y * far_y) + 2 * std::abs(c.p2) * xy;
+    xd0 -= shift_x, xd1 += shift_x, yd0 -= shift_y, yd1 += shift_y;
+  }
   // Pixels (floor(u + 0.5)) the voxel centres can land on, one pixel of slack for rounding.
   const int col0 = std::max(0, static_cast<int>(std::floor(c.cx + c.fx * xd0 + 0.5)) - 1);
   const int col1 = std::min(camera_->width() - 1, static_cast<int>(std::floor(c.cx + c.fx * xd1 + 0.5)) + 1);

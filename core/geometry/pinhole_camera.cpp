@@ -38,13 +38,25 @@ std::optional<Vec2> project(const PinholeCamera& c, const Vec3& p) {
 }
 
 Vec3 back_project(const PinholeCamera& c, double u, double v, double z) {
-  const Vec2 distorted((u - c.cx) / c.fx, (v - c.cy) / c.fy);
-  // n = distorted - (distort(n) - n): converges for distortions far milder than a fisheye.
-  Vec2 n = distorted;
+  const double xd = (u - c.cx) / c.fx, yd = (v - c.cy) / c.fy;
+  // The radial part exactly, by Newton on the radius: r L(r^2) = r_d.
+  const double rd = std::hypot(xd, yd);
+  double r = rd;
   for (int i = 0; i < 20; ++i) {
-    const Vec2 step = distorted - distort(c, n);
-    n += step;
-    if (step.squaredNorm() < 1e-26) break;
+    const double r2 = r * r;
+    const double step = (r * (1.0 + r2 * (c.k1 + r2 * (c.k2 + r2 * c.k3))) - rd) /
+                        (1.0 + r2 * (3.0 * c.k1 + r2 * (5.0 * c.k2 + r2 * 7.0 * c.k3)));
+    r -= step;
+    if (std::abs(step) < 1e-14) break;
+  }
+  const double scale = rd > 0.0 ? r / rd : 1.0;
+  Vec2 n(xd * scale, yd * scale);
+  // The tangential part, far smaller, by fixed-point steps from there (none without it).
+  for (int i = 0; i < 20 && (c.p1 != 0.0 || c.p2 != 0.0); ++i) {
+    const Vec2 error = distort(c, n) - Vec2(xd, yd);
+    const double r2 = n.squaredNorm();
+    n -= error / (1.0 + r2 * (c.k1 + r2 * (c.k2 + r2 * c.k3)));
+    if (error.squaredNorm() < 1e-28) break;
   }
   return {-n.x() * z, -n.y() * z, z};
 }

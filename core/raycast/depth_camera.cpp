@@ -21,7 +21,8 @@ void validate(const DepthIntrinsics& c) {
   if (c.width <= 0 || c.height <= 0 || c.width > 16384 || c.height > 16384)
     throw_invalid("intrinsics.size", std::to_string(c.width) + "x" + std::to_string(c.height) + " is not a valid image size");
   const std::pair<const char*, double> values[] = {{"fx", c.fx}, {"fy", c.fy}, {"cx", c.cx}, {"cy", c.cy},
-                                                   {"k1", c.k1}, {"k2", c.k2}, {"k3", c.k3}};
+                                                   {"k1", c.k1}, {"k2", c.k2}, {"k3", c.k3},
+                                                   {"p1", c.p1}, {"p2", c.p2}};
   for (const auto& [name, value] : values)
     if (!std::isfinite(value)) throw_invalid(std::string("intrinsics.") + name, "not finite");
   if (c.fx <= 0 || c.fy <= 0)
@@ -86,10 +87,7 @@ double DepthCamera::undistort_radius(double r_distorted) const {
 }
 
 Eigen::Vector3d DepthCamera::ray_direction(double u, double v) const {
-  const double xd = (u - intrinsics_.cx) / intrinsics_.fx, yd = (v - intrinsics_.cy) / intrinsics_.fy;
-  const double rd = std::hypot(xd, yd);
-  const double scale = rd > 0 ? undistort_radius(rd) / rd : 1.0;
-  return Eigen::Vector3d(-xd * scale, -yd * scale, 1.0).normalized();
+  return geometry::back_project(intrinsics_, u, v, 1.0).normalized();
 }
 
 }  // namespace posefuse::raycast

@@ -1,13 +1,15 @@
 #pragma once
-// Depth camera model: pinhole intrinsics with radial distortion (Brown's model, k1 k2 k3),
-// as the Kinect v2 depth camera and its SDK use.
+// Depth camera model for ray casting: pinhole intrinsics with Brown-Conrady distortion (radial
+// k1 k2 k3, tangential p1 p2), as the Kinect v2 depth camera and its SDK use, with a table of
+// pixel rays.
 //
 // Conventions (paper 1, II-B): the camera frame K has x to the left, y up and z forward (the
 // viewing direction). Pixel (col, row) has its centre at image coordinates (u, v) = (col, row),
 // u growing to the right and v growing downwards in the image, as OpenCV. Therefore
 //   x_n = -x / z,  y_n = -y / z                  (normalised, image-aligned: right, down)
 //   L   = 1 + k1 r^2 + k2 r^4 + k3 r^6,  r^2 = x_n^2 + y_n^2
-//   u   = cx + fx * L * x_n,  v = cy + fy * L * y_n
+//   x_d = L x_n + 2 p1 x_n y_n + p2 (r^2 + 2 x_n^2),  y_d = L y_n + p1 (r^2 + 2 y_n^2) + 2 p2 x_n y_n
+//   u   = cx + fx * x_d,  v = cy + fy * y_d
 // A point to the camera's left (x > 0) lands left of the centre column (u < cx); a point above
 // the optical axis (y > 0) lands above the centre row (v < cy). Depth images store z (not the
 // ray length) in millimetres, 0 where nothing was seen.
@@ -16,16 +18,13 @@
 #include <utility>
 #include <vector>
 
+#include "geometry/pinhole_camera.hpp"
+
 namespace posefuse::raycast {
 
-struct DepthIntrinsics {
-  // Typical Kinect v2 depth camera values; a session header supplies each device's own.
-  int width = 512;
-  int height = 424;
-  double fx = 365.0, fy = 365.0;  // px
-  double cx = 256.0, cy = 212.0;  // px
-  double k1 = 0.09, k2 = -0.27, k3 = 0.09;
-};
+// The depth camera's intrinsics are the one camera model (geometry/pinhole_camera.hpp), with
+// its tangential distortion p1, p2.
+using DepthIntrinsics = geometry::PinholeCamera;
 
 // Throws posefuse::Error for non-positive sizes or focal lengths, non-finite values, or a
 // distortion that is not monotonic over the image (cannot be inverted).
@@ -48,8 +47,11 @@ class DepthCamera {
     const double xn = -p_K.x() / p_K.z(), yn = -p_K.y() / p_K.z();
     // Beyond the validated field the polynomial may fold back into the image.
     if (xn * xn + yn * yn > max_undistorted_radius_ * max_undistorted_radius_) return std::nullopt;
-    const double l = radial_factor(xn * xn + yn * yn);
-    return Eigen::Vector2d(intrinsics_.cx + intrinsics_.fx * l * xn, intrinsics_.cy + intrinsics_.fy * l * yn);
+    const double r2 = xn * xn + yn * yn, l = radial_factor(r2);
+    const double p1 = intrinsics_.p1, p2 = intrinsics_.p2;
+    const double xd = l * xn + 2 * p1 * xn * yn + p2 * (r2 + 2 * xn * xn);
+    const double yd = l * yn + p1 * (r2 + 2 * yn * yn) + 2 * p2 * xn * yn;
+    return Eigen::Vector2d(intrinsics_.cx + intrinsics_.fx * xd, intrinsics_.cy + intrinsics_.fy * yd);
   }
   // Unit ray direction in K through image coordinates (u, v) (inverse of project).
   Eigen::Vector3d ray_direction(double u, double v) const;

@@ -1,7 +1,11 @@
 #include "session/pipeline.hpp"
 
+#include <set>
 #include <string>
 #include <utility>
+
+#include "session/result_encoder.hpp"
+#include "session/stage_inputs.hpp"
 
 namespace posefuse::session {
 
@@ -19,17 +23,18 @@ class SessionPipeline::Output : public StageOutput {
     if (emitter < pipeline_.stages_.size() && pipeline_.wanted_by_a_stage_before(emitter)) {
       pipeline_.later_.emplace_back(emitter, result);
     }
-    if (emitter >= pipeline_.stages_.size() || emitter + 1 == pipeline_.stages_.size()) {
-      pipeline_.sink_.emit(std::move(result));
-      return;
-    }
-    // Later stages see it after the sink, so that the stream keeps cause before effect.
-    const v1::FitResult copy = result;
     pipeline_.sink_.emit(std::move(result));
+  }
+  void hand_on(StageValue&& value) override {
+    // The client sees a value before the later stages' results that follow from it.
+    pipeline_.sink_.emit(encode_value(value));
+    const std::size_t emitter = pipeline_.current_stage_;
+    const ValueKind kind = kind_of(value);
     for (std::size_t next = emitter + 1; next < pipeline_.stages_.size(); ++next) {
+      if (!pipeline_.consumes_[next].contains(kind)) continue;
       pipeline_.current_stage_ = next;
       try {
-        pipeline_.stages_[next]->on_result(copy, *this);
+        pipeline_.stages_[next]->on_value(value, *this);
       } catch (const Error& error) {
         pipeline_.current_stage_ = emitter;
         pipeline_.item_error(error, error.field());
@@ -59,7 +64,22 @@ SessionPipeline::SessionPipeline(std::vector<std::unique_ptr<Stage>> stages, Res
       sink_(sink),
       options_(options),
       output_(std::make_unique<Output>(*this)),
-      started_at_(std::chrono::steady_clock::now()) {}
+      started_at_(std::chrono::steady_clock::now()) {
+  std::set<ValueKind> produced_before;
+  for (const auto& stage : stages_) {
+    const std::vector<ValueKind> consumed = stage->consumes();
+    for (const ValueKind kind : consumed) {
+      if (!produced_before.contains(kind)) {
+        throw Error(ErrorCode::kInternal, "stages",
+                    "stage '" + std::string(stage->name()) + "' consumes " + value_kind_name(kind) +
+                        ", which no stage before it produces (data flows one way: a stage reads only "
+                        "what earlier stages hand on)");
+      }
+    }
+    consumes_.emplace_back(consumed.begin(), consumed.end());
+    for (const ValueKind kind : stage->produces()) produced_before.insert(kind);
+  }
+}
 
 SessionPipeline::~SessionPipeline() = default;
 
@@ -94,6 +114,7 @@ void SessionPipeline::push(const v1::SessionChunk& chunk) {
   }
 
   if (chunk.has_header()) {
+    assembler_ = std::make_unique<FrameAssembler>(chunk.header());
     for (current_stage_ = 0; current_stage_ < stages_.size(); ++current_stage_) {
       Stage& stage = *stages_[current_stage_];
       timed(stage, [&] { stage.start(chunk.header(), *output_); });
@@ -106,23 +127,36 @@ void SessionPipeline::push(const v1::SessionChunk& chunk) {
     end_session();
     return;
   }
-  process_data_chunk(chunk);
+  process_data_chunk(chunk, field);
   // Item errors from stages go through item_error too.
   if (index_ % options_.progress_every_chunks == 0) emit_progress();
 }
 
-void SessionPipeline::process_data_chunk(const v1::SessionChunk& chunk) {
+void SessionPipeline::process_data_chunk(const v1::SessionChunk& chunk, const std::string& field) {
+  std::vector<SessionInput> ready;
+  try {
+    assembler_->add(chunk, validator_.take_decoded_image(), field, ready);
+  } catch (const Error& error) {
+    item_error(error, error.field());
+    return;
+  }
   note_camera_time(chunk);
   if (chunk.has_depth()) ++depth_frames_;
-  for (current_stage_ = 0; current_stage_ < stages_.size(); ++current_stage_) {
-    Stage& stage = *stages_[current_stage_];
-    try {
-      timed(stage, [&] { stage.on_chunk(chunk, *output_); });
-    } catch (const Error& error) {
-      item_error(error, error.field());
+  deliver(ready);
+}
+
+void SessionPipeline::deliver(const std::vector<SessionInput>& inputs) {
+  for (const SessionInput& input : inputs) {
+    for (current_stage_ = 0; current_stage_ < stages_.size(); ++current_stage_) {
+      Stage& stage = *stages_[current_stage_];
+      try {
+        timed(stage, [&] { deliver_input(stage, input, *output_); });
+      } catch (const Error& error) {
+        item_error(error, error.field());
+      }
     }
+    deliver_later_results();
   }
-  deliver_later_results();
 }
 
 bool SessionPipeline::wanted_by_a_stage_before(std::size_t emitter) const {
@@ -170,6 +204,14 @@ void SessionPipeline::item_error(const Error& error, const std::string& field) {
 
 void SessionPipeline::end_session() {
   ended_ = true;
+  if (assembler_) {
+    std::vector<SessionInput> ready;
+    std::vector<AssemblyWarning> warnings;
+    assembler_->finish(ready, warnings);
+    deliver(ready);
+    current_stage_ = stages_.size();
+    for (const AssemblyWarning& w : warnings) output_->warn(w.code, w.field, w.message);
+  }
   for (std::size_t i = 0; i < stages_.size(); ++i) {
     current_stage_ = i;
     timed(*stages_[i], [&] { stages_[i]->finish(*output_); });

@@ -9,23 +9,32 @@
 //    invalid header, a stage that cannot start with the header's options, a chunk after the end
 //    marker, input that stops without an end marker (close), more than max_item_errors bad
 //    chunks (the recording is not worth going on with).
-// Accepted data chunks go to every stage in order; a posefuse::Error from a stage is an ItemError
-// for that chunk. A stage's results go to the stages after it at once (Stage::on_result) and, queued
+// Accepted data chunks go to the FrameAssembler, which decodes each once and hands the stages
+// typed inputs as they complete (camera frames, IMU blocks, audio, clock events; a chunk it
+// refuses is an ItemError too). Every input goes to every stage in order; a posefuse::Error from
+// a stage is an ItemError for that input. A value a stage hands on (Stage::consumes) goes to the
+// later stages that consume its kind at once, and to the client as a FitResult
+// (result_encoder.hpp); the pipeline refuses, at construction, a stage order in which a stage
+// consumes what no earlier stage produces. Results a stage emits go to the client and, queued
 // until the current stage call returns, to the stages before it that ask for them
-// (Stage::on_later_result). Progress results are emitted every progress_every_chunks chunks. After
-// the end marker the stages finish in order, then finish_late() on the stages that take later
-// results, then the pipeline sends one CalibrationReport, a last Progress and the Summary.
+// (Stage::on_later_result: the forearm gaps' wait for the body fit's elbows). Progress results
+// are emitted every progress_every_chunks chunks. After the end marker the assembler hands on
+// what waits and its warnings, the stages finish in order, then finish_late() on the stages
+// that take later results, then the pipeline sends one CalibrationReport, a last Progress and
+// the Summary.
 //
-// Not thread-safe: one session is processed in order on one thread (DESIGN.md "Threads").
+// Not thread-safe: one session is processed in order on one thread (docs/architecture.md, Threads).
 #include <chrono>
 #include <cstdint>
 #include <deque>
 #include <functional>
 #include <memory>
 #include <optional>
+#include <set>
 #include <vector>
 
 #include "common/error.hpp"
+#include "session/frame_assembler.hpp"
 #include "session/pipeline_stage.hpp"
 #include "session/session_validator.hpp"
 
@@ -62,7 +71,9 @@ class SessionPipeline {
   class Output;
 
   void item_error(const Error& error, const std::string& field);
-  void process_data_chunk(const v1::SessionChunk& chunk);
+  void process_data_chunk(const v1::SessionChunk& chunk, const std::string& field);
+  // Hands each input to every stage in order.
+  void deliver(const std::vector<SessionInput>& inputs);
   void end_session();
   void emit_progress();
   // Hands the queued results to the earlier stages that want them (Stage::on_later_result); what
@@ -79,6 +90,8 @@ class SessionPipeline {
   PipelineOptions options_;
   std::unique_ptr<Output> output_;
   SessionValidator validator_;
+  std::unique_ptr<FrameAssembler> assembler_;  // made with the header
+  std::vector<std::set<ValueKind>> consumes_;  // Stage::consumes() of each stage
   bool ended_ = false;
   std::uint64_t index_ = 0;  // chunks received, accepted or not
   std::uint64_t item_errors_ = 0;

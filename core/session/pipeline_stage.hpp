@@ -1,18 +1,21 @@
 #pragma once
-// The interface every pipeline stage implements (IMU orientation now; forearm recovery and body
-// fitting later), and the output a stage writes its results to.
+// The interface every pipeline stage implements, and the output a stage writes its results to.
 //
-// A stage sees the validated session in stream order: start() with the header, on_chunk() for
-// every accepted data chunk, finish() once after the end marker. It emits results as soon as it
-// knows them and adds its part of the calibration report, which the pipeline sends once after
-// every stage has finished. Stages hold all their state themselves (no globals), so many
-// sessions run at once.
+// A stage sees the session in time order as typed inputs (session_inputs.hpp), decoded once by
+// the pipeline's FrameAssembler: start() with the header, then camera frames, IMU blocks, audio
+// and clock events as they complete, and finish() once after the end marker. It hands typed
+// values (stage_values.hpp) to the stages after it and emits what goes only to the client
+// (frame results, recovered segments, warnings); it adds its part of the calibration report,
+// which the pipeline sends once after every stage has finished. Stages hold all their state
+// themselves (no globals), so many sessions run at once.
 #include <string>
 #include <string_view>
 #include <vector>
 
 #include "posefuse/v1/results.pb.h"
 #include "posefuse/v1/session.pb.h"
+#include "session/session_inputs.hpp"
+#include "session/stage_values.hpp"
 
 namespace posefuse::session {
 
@@ -28,6 +31,9 @@ class StageOutput {
  public:
   virtual ~StageOutput() = default;
   virtual void emit(v1::FitResult&& result) = 0;
+  // A value for the stages after this one (those whose consumes() names its kind); the client
+  // gets it as a FitResult too.
+  virtual void hand_on(StageValue&& value) = 0;
   virtual void warn(const std::string& code, const std::string& field,
                     const std::string& message) = 0;
   // The session's calibration report, filled by the stages in finish() and sent after them.
@@ -49,20 +55,26 @@ class Stage {
   // One line: what the stage computes and from what.
   virtual std::string_view description() const = 0;
   virtual std::vector<StageOption> options() const { return {}; }
+  // The kinds of value the stage reads from earlier stages and those it hands on. The pipeline
+  // refuses an order in which a stage consumes a kind no earlier stage produces.
+  virtual std::vector<ValueKind> consumes() const { return {}; }
+  virtual std::vector<ValueKind> produces() const { return {}; }
   // The validated header. Throws posefuse::Error for options the stage cannot use; that ends
   // the session (the pipeline cannot run without the stage).
   virtual void start(const v1::SessionHeader& header, StageOutput& out) = 0;
-  // One validated data chunk, in stream order. A posefuse::Error thrown here becomes an
-  // ItemError for this chunk and the session goes on, so a stage must leave its state
-  // consistent when it throws.
-  virtual void on_chunk(const v1::SessionChunk& chunk, StageOutput& out) = 0;
+  // The session's inputs, in stream order. A posefuse::Error thrown here becomes an ItemError
+  // for this input and the session goes on, so a stage must leave its state consistent when it
+  // throws.
+  virtual void on_camera_frame(const CameraFrame& /*frame*/, StageOutput& /*out*/) {}
+  virtual void on_imu(const ImuBlock& /*block*/, StageOutput& /*out*/) {}
+  virtual void on_audio(const AudioBlock& /*audio*/, StageOutput& /*out*/) {}
+  virtual void on_clock_event(const ClockEvent& /*event*/, StageOutput& /*out*/) {}
+  // A value of a kind in consumes(), handed on by an earlier stage as it is handed on (before
+  // that stage's call returns), so a stage sees an earlier stage's values for an input before
+  // its own call for that input. Errors thrown here are item errors, as from the inputs.
+  virtual void on_value(const StageValue& /*value*/, StageOutput& /*out*/) {}
   // After the end marker: emit what is left and add to out.calibration().
   virtual void finish(StageOutput& out) = 0;
-  // A result emitted by a stage that runs before this one, as it is emitted (e.g. the IMU
-  // orientations the forearm stage builds on). Called before the emitting stage returns, so a
-  // stage sees an earlier stage's results for a chunk before its own on_chunk for that chunk.
-  // Errors thrown here are item errors, as from on_chunk.
-  virtual void on_result(const v1::FitResult& /*result*/, StageOutput& /*out*/) {}
 
   // Results of the stages after this one, for a stage that refines its own output with them (the
   // forearm stage's gap recovery with the body fit's elbows). Asked once after start(). They are

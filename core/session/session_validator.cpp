@@ -107,18 +107,18 @@ const v1::ImuDevice* find_device(const v1::SessionHeader& header, const std::str
   return nullptr;
 }
 
-void check_depth(const v1::DepthFrame& frame, const v1::SessionHeader& header,
-                 const std::string& field) {
+cv::Mat check_depth(const v1::DepthFrame& frame, const v1::SessionHeader& header,
+                    const std::string& field) {
   require_timestamp_in_range(frame.t_us(), field + ".t_us");
   require_enum(v1::DepthFrame::Encoding_IsValid(frame.encoding()), frame.encoding(),
                field + ".encoding", "DepthFrame.Encoding");
   require_size(frame.width(), frame.height(), header.depth_intrinsics(), field,
                "header.depth_intrinsics");
-  decode_depth(frame, field);
+  return decode_depth(frame, field);
 }
 
-void check_body_index(const v1::BodyIndexFrame& frame, const v1::SessionHeader& header,
-                      const std::string& field) {
+cv::Mat check_body_index(const v1::BodyIndexFrame& frame, const v1::SessionHeader& header,
+                         const std::string& field) {
   require_timestamp_in_range(frame.t_us(), field + ".t_us");
   require_enum(v1::BodyIndexFrame::Encoding_IsValid(frame.encoding()), frame.encoding(),
                field + ".encoding", "BodyIndexFrame.Encoding");
@@ -135,6 +135,7 @@ void check_body_index(const v1::BodyIndexFrame& frame, const v1::SessionHeader& 
       }
     }
   }
+  return ids;
 }
 
 void check_skeleton(const v1::SkeletonFrame& frame, const std::string& field) {
@@ -323,18 +324,19 @@ void validate_header(const v1::SessionHeader& header, const std::string& field) 
   }
 }
 
-void validate_chunk(const v1::SessionChunk& chunk, const v1::SessionHeader& header,
-                    const std::string& field) {
+cv::Mat validate_chunk(const v1::SessionChunk& chunk, const v1::SessionHeader& header,
+                       const std::string& field) {
   switch (chunk.chunk_case()) {
     case v1::SessionChunk::kDepth: return check_depth(chunk.depth(), header, field + ".depth");
     case v1::SessionChunk::kBodyIndex:
       return check_body_index(chunk.body_index(), header, field + ".body_index");
-    case v1::SessionChunk::kSkeleton: return check_skeleton(chunk.skeleton(), field + ".skeleton");
-    case v1::SessionChunk::kColor: return check_color(chunk.color(), header, field + ".color");
-    case v1::SessionChunk::kImu: return check_imu(chunk.imu(), header, field + ".imu");
-    case v1::SessionChunk::kAudio: return check_audio(chunk.audio(), header, field + ".audio");
+    case v1::SessionChunk::kSkeleton: check_skeleton(chunk.skeleton(), field + ".skeleton"); return {};
+    case v1::SessionChunk::kColor: check_color(chunk.color(), header, field + ".color"); return {};
+    case v1::SessionChunk::kImu: check_imu(chunk.imu(), header, field + ".imu"); return {};
+    case v1::SessionChunk::kAudio: check_audio(chunk.audio(), header, field + ".audio"); return {};
     case v1::SessionChunk::kSyncEvent:
-      return check_sync(chunk.sync_event(), header, field + ".sync_event");
+      check_sync(chunk.sync_event(), header, field + ".sync_event");
+      return {};
     case v1::SessionChunk::kHeader:
     case v1::SessionChunk::kEnd:
       throw_invalid(field, kind_name(chunk) + " is not a data chunk");
@@ -360,9 +362,10 @@ void SessionValidator::check(const v1::SessionChunk& chunk) {
     check_end(chunk.end(), field + ".end");
     ended_ = true;
   } else {
-    validate_chunk(chunk, *header_, field);
+    cv::Mat decoded = validate_chunk(chunk, *header_, field);
     check_order(chunk, field);
     count(chunk);
+    decoded_ = std::move(decoded);
   }
 }
 

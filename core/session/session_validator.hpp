@@ -9,6 +9,8 @@
 #include <optional>
 #include <string>
 
+#include <opencv2/core.hpp>
+
 #include "posefuse/v1/session.pb.h"
 
 namespace posefuse::session {
@@ -36,10 +38,12 @@ bool is_valid_device_id(const std::string& device_id);
 void validate_header(const v1::SessionHeader& header, const std::string& field = "header");
 
 // Checks the content of one data chunk against the header (sizes, encodings, finite values,
-// enum values) but not its order in the stream. Decodes PNG/zstd images to check them.
-// Header and end chunks are rejected here: they only make sense in a stream.
-void validate_chunk(const v1::SessionChunk& chunk, const v1::SessionHeader& header,
-                    const std::string& field);
+// enum values) but not its order in the stream. Decodes depth and body index images to check
+// them and returns the decoded image (empty for other chunks); colour images are checked by
+// their file header only. Header and end chunks are rejected here: they only make sense in a
+// stream.
+cv::Mat validate_chunk(const v1::SessionChunk& chunk, const v1::SessionHeader& header,
+                       const std::string& field);
 
 // Checks a stream chunk by chunk: header first and exactly once, per-stream timestamp order,
 // every chunk's content (validate_chunk), the end marker last with matching counts.
@@ -48,6 +52,9 @@ class SessionValidator {
   void check(const v1::SessionChunk& chunk);
   // Call after the last chunk: throws if the header or the end marker never came.
   void finish() const;
+  // The depth or body index image decoded by the last accepted check() (empty otherwise), so
+  // that the pipeline decodes each image once; taking it leaves it empty.
+  cv::Mat take_decoded_image() { return std::move(decoded_); }
 
   bool has_header() const { return header_.has_value(); }
   const v1::SessionHeader& header() const { return *header_; }
@@ -64,6 +71,7 @@ class SessionValidator {
 
   std::uint64_t index_ = 0;
   std::optional<v1::SessionHeader> header_;
+  cv::Mat decoded_;
   bool ended_ = false;
   v1::EndOfSession counts_;
   // Last timestamp per stream, to enforce order.

@@ -39,6 +39,8 @@ void set_camera_intrinsics(const raycast::DepthIntrinsics& in, v1::CameraIntrins
   out->set_k1(in.k1);
   out->set_k2(in.k2);
   out->set_k3(in.k3);
+  out->set_p1(in.p1);
+  out->set_p2(in.p2);
 }
 
 PoseSequence arm_raising_sequence(const body::PoseLayout& layout, double period_s) {

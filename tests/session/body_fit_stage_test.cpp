@@ -18,7 +18,9 @@
 #include "body/smpl_model.hpp"
 #include "common/error.hpp"
 #include "session/pipeline.hpp"
+#include "session/result_encoder.hpp"
 #include "session/session_validator.hpp"
+#include "session/stage_inputs.hpp"
 #include "session/stages/body_fit_stage.hpp"
 #include "session/stages/default_stages.hpp"
 #include "session/text_fields.hpp"
@@ -31,6 +33,7 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 
 struct Output : StageOutput {
   void emit(v1::FitResult&& result) override { results.push_back(std::move(result)); }
+  void hand_on(StageValue&& value) override { results.push_back(encode_value(value)); }
   void warn(const std::string& code, const std::string& field, const std::string& message) override {
     v1::Warning w;
     w.set_code(code);
@@ -92,6 +95,20 @@ v1::SessionHeader header_with(std::map<std::string, std::string> options,
   return header;
 }
 
+// The session's chunks that `keep` accepts, after `header`, as the pipeline hands them to a stage.
+template <class Keep>
+AssembledSession assemble(const v1::SessionHeader& header, Keep keep, const sim::CameraSessionResult& from) {
+  std::vector<v1::SessionChunk> chunks(1);
+  *chunks[0].mutable_header() = header;
+  for (const auto& chunk : from.chunks) {
+    if (keep(chunk)) chunks.push_back(chunk);
+  }
+  return assemble_session(chunks);
+}
+AssembledSession assemble(const v1::SessionHeader& header) {
+  return assemble(header, [](const v1::SessionChunk&) { return true; }, session());
+}
+
 // Runs the stage over the session's chunks, keeping those `keep` accepts; `stats` receives the
 // stage's per-frame statistics.
 template <class Keep>
@@ -100,10 +117,9 @@ Output run(const v1::SessionHeader& header, Keep keep, const sim::CameraSessionR
   Output out;
   BodyFitStage stage;
   stage.record_frame_stats(stats != nullptr);
+  const AssembledSession inputs = assemble(header, keep, from);
   stage.start(header, out);
-  for (const auto& chunk : from.chunks) {
-    if (keep(chunk)) stage.on_chunk(chunk, out);
-  }
+  for (const SessionInput& input : inputs.inputs) deliver_input(stage, input, out);
   stage.finish(out);
   if (stats) *stats = stage.frame_stats();
   if (!stats) {
@@ -194,27 +210,28 @@ TEST(BodyFitStage, RunsInTheDefaultPipelineWhenEnabled) {
   EXPECT_EQ(summary->frames_fitted(), session().truth.size());
 }
 
-// The forearm stage's per-sample K_from_F, here the truth, one sample per frame: right, left.
-std::array<v1::FitResult, 2> truth_forearm_batches() {
-  std::array<v1::FitResult, 2> batches;
+// The forearm stage's per-sample K_from_F, here the truth, one sample per frame, handed on as the
+// forearm stage hands them on: right, left.
+void hand_truth_forearms(BodyFitStage& stage, StageOutput& out) {
   for (int strap = 0; strap < 2; ++strap) {
-    v1::ForearmOrientationBatch& batch = *batches[static_cast<size_t>(strap)].mutable_forearm_orientations();
-    batch.set_arm(strap == 0 ? v1::RIGHT : v1::LEFT);
+    ForearmOrientations batch;
+    batch.arm = strap == 0 ? v1::RIGHT : v1::LEFT;
     for (size_t i = 0; i < session().truth.size(); ++i) {
-      const Eigen::Quaterniond q = session().truth[i].forearms[static_cast<size_t>(strap)].K_from_F;
-      batch.add_t_us(session().t_us[i]);
-      for (const double c : {q.w(), q.x(), q.y(), q.z()}) batch.add_k_from_f(c);
+      batch.t_us.push_back(session().t_us[i]);
+      batch.K_from_F.push_back(session().truth[i].forearms[static_cast<size_t>(strap)].K_from_F);
+      batch.pronation_rad.push_back(0.0);
     }
+    stage.on_value(batch, out);
   }
-  return batches;
 }
 
 TEST(BodyFitStage, ForearmOrientationsEnterTheFitAndTheResult) {
   Output out;
   BodyFitStage stage;
+  const AssembledSession inputs = assemble(header_with({}));
   stage.start(header_with({}), out);
-  for (const auto& batch : truth_forearm_batches()) stage.on_result(batch, out);
-  for (const auto& chunk : session().chunks) stage.on_chunk(chunk, out);
+  hand_truth_forearms(stage, out);
+  for (const SessionInput& input : inputs.inputs) deliver_input(stage, input, out);
   stage.finish(out);
   const auto frames = out.frames();
   ASSERT_EQ(frames.size(), session().truth.size());
@@ -254,10 +271,11 @@ TEST(BodyFitStage, FramesWaitForForearmOrientationsThatComeAfterThem) {
     (*header.mutable_options())["fit.imu_wait_s"] = wait_s;
     Output out;
     BodyFitStage stage;
+    const AssembledSession inputs = assemble(header);
     stage.start(header, out);
-    for (const auto& chunk : session().chunks) stage.on_chunk(chunk, out);
+    for (const SessionInput& input : inputs.inputs) deliver_input(stage, input, out);
     const size_t emitted_before_imu = out.frames().size();
-    for (const auto& batch : truth_forearm_batches()) stage.on_result(batch, out);
+    hand_truth_forearms(stage, out);
     stage.finish(out);
     const auto frames = out.frames();
     ASSERT_EQ(frames.size(), session().truth.size());
@@ -502,9 +520,15 @@ TEST(BodyFitStage, BothStartsRunOnTwoThreadsWhenThePolicyIsOff) {
   }
 }
 
-TEST(BodyFitStage, SkeletonConversionChecksTheJointCount) {
-  v1::SkeletonFrame skeleton;
-  EXPECT_THROW(tracked_skeleton_from_proto(skeleton), Error);
+TEST(BodyFitStage, SkeletonConversionKeepsPositionsAndTrackingStates) {
+  Skeleton skeleton;
+  skeleton.joints[geometry::kElbowLeft] = {geometry::Vec3(0.1, 0.2, 1.5), JointState::kInferred, geometry::Quat(0, 0, 0, 0)};
+  skeleton.joints[geometry::kWristLeft] = {geometry::Vec3(0.3, 0.1, 1.4), JointState::kTracked, geometry::Quat::Identity()};
+  const fit::TrackedSkeleton tracked = tracked_skeleton_from(skeleton);
+  EXPECT_EQ(tracked.positions_K[geometry::kElbowLeft], geometry::Vec3(0.1, 0.2, 1.5));
+  EXPECT_EQ(tracked.tracking[geometry::kElbowLeft], fit::JointTracking::kInferred);
+  EXPECT_EQ(tracked.tracking[geometry::kWristLeft], fit::JointTracking::kTracked);
+  EXPECT_EQ(tracked.tracking[geometry::kHead], fit::JointTracking::kNotTracked);
 }
 
 }  // namespace

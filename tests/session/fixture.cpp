@@ -211,7 +211,7 @@ std::vector<SessionChunk> make_session() {
   *data.emplace_back().mutable_sync_event() =
       sync_event(1'050'000, "camera", v1::SyncEvent::OTHER, std::string("\x00\xff,7", 4));
   *data.emplace_back().mutable_sync_event() =
-      sync_event(5'200'000, "wrist_r", v1::SyncEvent::BLE_BROADCAST_RECEIPT, "\x01\x02");
+      sync_event(5'200'000, "wrist_r", v1::SyncEvent::BLE_BROADCAST_RECEIPT, std::string("\x01\x02\x00\x00", 4));
 
   std::stable_sort(data.begin(), data.end(), [&](const SessionChunk& a, const SessionChunk& b) {
     return chunk_order_key(a, header) < chunk_order_key(b, header);

@@ -317,7 +317,6 @@ class TruthFitStage : public Stage {
   std::string_view name() const override { return "truth_fit"; }
   std::string_view description() const override { return "test stage"; }
   void start(const v1::SessionHeader&, StageOutput&) override {}
-  void on_chunk(const v1::SessionChunk&, StageOutput&) override {}
   void finish(StageOutput& out) override {
     const forearm::ForearmModel& m = truth_.model;
     for (std::size_t f = 0; f < truth_.frame_t_us.size(); ++f) {

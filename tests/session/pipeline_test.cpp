@@ -369,15 +369,16 @@ class RecordingStage : public Stage {
   std::string_view name() const override { return "recording"; }
   std::string_view description() const override { return "test stage"; }
   void start(const v1::SessionHeader&, StageOutput&) override { log_.push_back("start"); }
-  void on_chunk(const v1::SessionChunk& chunk, StageOutput&) override {
-    if (chunk.has_depth()) {
+  std::vector<ValueKind> consumes() const override { return {ValueKind::kImuOrientations}; }
+  void on_camera_frame(const CameraFrame& frame, StageOutput&) override {
+    if (!frame.depth_mm.empty()) {
       log_.push_back("depth");
       if (log_.size() == 3) throw_precondition("depth", "this stage rejects the second frame");
     }
   }
-  // Results of the stages before this one (the IMU and forearm stages), as they are emitted.
-  void on_result(const v1::FitResult& result, StageOutput&) override {
-    if (result.has_imu_orientations()) ++orientation_batches_seen;
+  // Values of the stages before this one (the IMU stage's orientations), as they are handed on.
+  void on_value(const StageValue& value, StageOutput&) override {
+    if (std::holds_alternative<ImuOrientations>(value)) ++orientation_batches_seen;
   }
   void finish(StageOutput& out) override {
     log_.push_back("finish");
@@ -426,6 +427,35 @@ TEST(SessionPipeline, PluggedStageSeesChunksInOrderAndStageErrorsAreItemErrors) 
   EXPECT_EQ(sink.results.back().summary().item_errors(), 1u);
 }
 
+// Data flows one way: a stage that reads what only a later stage hands on (here the forearm
+// orientations, put before the forearm stage) is refused when the pipeline is built, naming it.
+class ForearmReaderStage : public Stage {
+ public:
+  std::string_view name() const override { return "forearm_reader"; }
+  std::string_view description() const override { return "test stage"; }
+  std::vector<ValueKind> consumes() const override { return {ValueKind::kForearmOrientations}; }
+  void start(const v1::SessionHeader&, StageOutput&) override {}
+  void finish(StageOutput&) override {}
+};
+
+TEST(SessionPipeline, AStageCannotDependOnALaterStage) {
+  CollectingSink sink;
+  std::vector<std::unique_ptr<Stage>> stages = make_default_stages();
+  stages.insert(stages.begin() + 1, std::make_unique<ForearmReaderStage>());  // after imu, before forearm
+  try {
+    SessionPipeline pipeline(std::move(stages), sink);
+    ADD_FAILURE() << "the pipeline accepted a stage before the stage it depends on";
+  } catch (const Error& error) {
+    EXPECT_EQ(error.field(), "stages");
+    EXPECT_NE(std::string(error.what()).find("'forearm_reader' consumes forearm_orientations"), std::string::npos)
+        << error.what();
+  }
+  // After the forearm stage it is accepted, as the default order is.
+  std::vector<std::unique_ptr<Stage>> in_order = make_default_stages();
+  in_order.push_back(std::make_unique<ForearmReaderStage>());
+  EXPECT_NO_THROW(SessionPipeline(std::move(in_order), sink));
+}
+
 // Results flowing back: a stage that asks for later stages' results gets them after its own call
 // returns (never inside its emit), in order, the last ones after every finish(), and then
 // finish_late(). The later stage answers each frame of the earlier one a frame later (as the body
@@ -436,11 +466,11 @@ class EarlyStage : public Stage {
   std::string_view name() const override { return "early"; }
   std::string_view description() const override { return "test stage"; }
   void start(const v1::SessionHeader&, StageOutput&) override {}
-  void on_chunk(const v1::SessionChunk& chunk, StageOutput& out) override {
-    if (!chunk.has_depth() || !wants_) return;  // the stage that does not ask only records
-    log_.push_back("early " + std::to_string(chunk.depth().t_us()));
+  void on_camera_frame(const CameraFrame& camera, StageOutput& out) override {
+    if (camera.depth_mm.empty() || !wants_) return;  // the stage that does not ask only records
+    log_.push_back("early " + std::to_string(camera.t_us));
     v1::FitResult frame;
-    frame.mutable_frame()->set_t_us(chunk.depth().t_us());
+    frame.mutable_frame()->set_t_us(camera.t_us);
     inside_emit_ = true;
     out.emit(std::move(frame));
     inside_emit_ = false;
@@ -471,11 +501,10 @@ class LateStage : public Stage {
   std::string_view name() const override { return "late"; }
   std::string_view description() const override { return "test stage"; }
   void start(const v1::SessionHeader&, StageOutput&) override {}
-  void on_chunk(const v1::SessionChunk&, StageOutput&) override {}
-  void on_result(const v1::FitResult& result, StageOutput& out) override {
-    if (!result.has_frame()) return;
+  void on_camera_frame(const CameraFrame& camera, StageOutput& out) override {
+    if (camera.depth_mm.empty()) return;
     if (held_) answer(*held_, out);
-    held_ = result.frame().t_us();
+    held_ = camera.t_us;
   }
   void finish(StageOutput& out) override {
     log_.push_back("late finish");

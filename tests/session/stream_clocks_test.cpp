@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "common/error.hpp"
+#include "session/frame_assembler.hpp"
 #include "session/stages/stream_clocks.hpp"
 #include "sim/sync_signals.hpp"
 
@@ -19,6 +20,14 @@ namespace posefuse::session {
 namespace {
 
 constexpr double kSessionS = 600.0;
+
+// What the frame assembler hands the stage's clocks for an audio or sync chunk (mono audio).
+void add_chunk(StreamClocks& clocks, const v1::SessionChunk& chunk) {
+  if (chunk.has_audio()) clocks.add(audio_block(chunk.audio(), 1));
+  if (chunk.has_sync_event()) {
+    if (const std::optional<ClockEvent> event = clock_event(chunk.sync_event())) clocks.add(*event);
+  }
+}
 
 struct SyncStreams {
   sim::SimDevice base{"base", sim::DeviceClock{-1.7171, 12e-6}};
@@ -58,14 +67,14 @@ double arm_error_us(const sync::ClockMap& map, const SyncStreams& s, double t_ca
 TEST(StreamClocks, LaterReceiptsRefitTheDriftOverTheSession) {
   const SyncStreams s = make_streams(30.0);
   StreamClocks clocks("base", 16000.0, 1);
-  for (const auto& chunk : s.audio_and_stop) clocks.add(chunk);
+  for (const auto& chunk : s.audio_and_stop) add_chunk(clocks, chunk);
   // The first burst only (the stage's first map, at calibration).
   std::size_t k = 0;
-  for (; k < s.receipts.size() && s.receipt_camera_s[k] < 10.0; ++k) clocks.add(s.receipts[k]);
+  for (; k < s.receipts.size() && s.receipt_camera_s[k] < 10.0; ++k) add_chunk(clocks, s.receipts[k]);
   const std::optional<sync::ClockMap> first = clocks.try_build({"arm"});
   ASSERT_TRUE(first.has_value()) << clocks.why_not({"arm"}).message;
   const std::size_t first_receipts = clocks.receipt_count();
-  for (; k < s.receipts.size(); ++k) clocks.add(s.receipts[k]);
+  for (; k < s.receipts.size(); ++k) add_chunk(clocks, s.receipts[k]);
   EXPECT_GT(clocks.receipt_count(), 10 * first_receipts);  // 20 bursts
   const std::optional<sync::ClockMap> all = clocks.try_build({"arm"});
   ASSERT_TRUE(all.has_value());
@@ -112,7 +121,7 @@ TEST(StreamClocks, LaterBuzzerStopsGiveTheBaseDrift) {
   const auto add_event = [&](const v1::SyncEvent& e) {
     v1::SessionChunk chunk;
     *chunk.mutable_sync_event() = e;
-    clocks.add(chunk);
+    add_chunk(clocks, chunk);
   };
   // The stop events arrive before the audio (the stream orders events by the base's clock,
   // which may run far ahead of the camera's), the later ones first to check the reordering.
@@ -123,7 +132,7 @@ TEST(StreamClocks, LaterBuzzerStopsGiveTheBaseDrift) {
   for (const v1::AudioChunk& a : sound.audio) {
     v1::SessionChunk chunk;
     *chunk.mutable_audio() = a;
-    clocks.add(chunk);
+    add_chunk(clocks, chunk);
     if (!first && a.t_us() > 3'000'000) {
       first = clocks.try_build({"arm"});
       ASSERT_TRUE(first.has_value()) << clocks.why_not({"arm"}).message;
@@ -156,23 +165,23 @@ TEST(StreamClocks, LaterBuzzerStopsGiveTheBaseDrift) {
   for (const v1::AudioChunk& a : sound.audio) {
     v1::SessionChunk chunk;
     *chunk.mutable_audio() = a;
-    late.add(chunk);
+    add_chunk(late, chunk);
   }
   for (const v1::SyncEvent& e : receipts.events) {
     v1::SessionChunk chunk;
     *chunk.mutable_sync_event() = e;
-    late.add(chunk);
+    add_chunk(late, chunk);
   }
   v1::SessionChunk stop_chunk;
   *stop_chunk.mutable_sync_event() = sound.stop_event;
-  late.add(stop_chunk);
+  add_chunk(late, stop_chunk);
   const std::optional<sync::ClockMap> one_event = late.try_build({"arm"});
   ASSERT_TRUE(one_event.has_value());
   EXPECT_LT(std::abs(error_us(*one_event, base, 1.2)), 1000.0);  // the first stop, not the last
   for (const v1::SyncEvent& e : sound.later_stop_events) {
     v1::SessionChunk chunk;
     *chunk.mutable_sync_event() = e;
-    late.add(chunk);
+    add_chunk(late, chunk);
   }
   const std::optional<sync::ClockMap> late_all = late.try_build({"arm"});
   ASSERT_TRUE(late_all.has_value());
@@ -188,7 +197,7 @@ TEST(StreamClocks, ReceiptWithABadPayloadIsRejected) {
   e.set_device_id("arm");
   e.set_payload("abc");
   try {
-    clocks.add(chunk);
+    add_chunk(clocks, chunk);  // the assembler refuses it: an item error, nothing reaches the clocks
     FAIL() << "expected an error";
   } catch (const Error& error) {
     EXPECT_EQ(error.field(), "sync_event.payload");

@@ -8,6 +8,7 @@
 #include "common/error.hpp"
 #include "raycast/depth_camera.hpp"
 #include "session/image_codec.hpp"
+#include "session/session_inputs.hpp"
 #include "session/imu_batch.hpp"
 
 namespace posefuse::tools {
@@ -120,10 +121,7 @@ cv::Mat ContactSheetRecorder::render() const {
   depth_mm.convertTo(gray, CV_8U, 255.0 / 4500.0);
   cv::cvtColor(gray, overlay, cv::COLOR_GRAY2BGR);
   if (skeleton_) {
-    const auto& in = header_->depth_intrinsics();
-    raycast::DepthIntrinsics intrinsics{static_cast<int>(in.width()), static_cast<int>(in.height()), in.fx(), in.fy(),
-                                        in.cx(), in.cy(), in.k1(), in.k2(), in.k3()};
-    const raycast::DepthCamera camera(intrinsics);
+    const raycast::DepthCamera camera(session::pinhole_camera(header_->depth_intrinsics()));
     std::vector<std::optional<cv::Point>> pixels;
     for (const auto& joint : skeleton_->joints()) {
       const auto uv = camera.project({joint.position_m().x(), joint.position_m().y(), joint.position_m().z()});

@@ -84,17 +84,14 @@ void ArmTracker::settle_orientations_up_to(std::int64_t t_us) {
 
 void ArmTracker::emit_settled_orientations(StageOutput& out) {
   if (orientations_emitted_ == K_from_F_.size()) return;
-  v1::FitResult result;
-  v1::ForearmOrientationBatch& batch = *result.mutable_forearm_orientations();
-  batch.set_device_id(device_id_);
-  batch.set_arm(arm_enum(side_));
+  ForearmOrientations batch{device_id_, arm_enum(side_), {}, {}, {}};
   for (; orientations_emitted_ < K_from_F_.size(); ++orientations_emitted_) {
     const Quat& K_from_F = K_from_F_[orientations_emitted_];
-    batch.add_t_us(arm_[orientations_emitted_].t_us);
-    for (const double v : geometry::to_wxyz(K_from_F)) batch.add_k_from_f(v);
-    batch.add_pronation_rad(forearm::pronation_angle(K_from_F_reference_, K_from_F, side_));
+    batch.t_us.push_back(arm_[orientations_emitted_].t_us);
+    batch.K_from_F.push_back(K_from_F);
+    batch.pronation_rad.push_back(forearm::pronation_angle(K_from_F_reference_, K_from_F, side_));
   }
-  out.emit(std::move(result));
+  out.hand_on(std::move(batch));
 }
 
 Quat ArmTracker::K_from_F_sample(std::size_t i) const {

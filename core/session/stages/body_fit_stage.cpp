@@ -20,7 +20,6 @@
 #include "fit/skeleton_pose_init.hpp"
 #include "fit/start_extrapolation.hpp"
 #include "raycast/depth_camera.hpp"
-#include "session/image_codec.hpp"
 #include "session/stages/proto_values.hpp"
 #include "session/text_fields.hpp"
 
@@ -43,8 +42,6 @@ constexpr const char* kFreezeContourAfterKey = "fit.freeze_contour_after";
 constexpr const char* kJointStepStopDampingKey = "fit.joint_step_stop_max_damping";
 constexpr const char* kProjectStepsKey = "fit.project_steps_onto_limits";
 
-// Depth, body index and skeleton of one frame share the depth frame's t_us (1 ms tolerance).
-constexpr std::int64_t kSameFrameUs = 1000;
 // A forearm orientation further than this from the frame is not used.
 constexpr std::int64_t kForearmToleranceUs = 20'000;
 // Forearm orientations kept behind the oldest queued frame.
@@ -88,26 +85,13 @@ bool bool_option(const v1::SessionHeader& header, const char* key, bool fallback
   throw_invalid(option_field(key), "is '" + *text + "', expected true or false");
 }
 
-raycast::DepthIntrinsics intrinsics_from(const v1::CameraIntrinsics& k) {
-  raycast::DepthIntrinsics in;
-  in.width = static_cast<int>(k.width());
-  in.height = static_cast<int>(k.height());
-  in.fx = k.fx();
-  in.fy = k.fy();
-  in.cx = k.cx();
-  in.cy = k.cy();
-  in.k1 = k.k1();
-  in.k2 = k.k2();
-  in.k3 = k.k3();
-  return in;
-}
-
-fit::JointTracking tracking_from(v1::SkeletonJoint::State state) {
+fit::JointTracking tracking_from(JointState state) {
   switch (state) {
-    case v1::SkeletonJoint::TRACKED: return fit::JointTracking::kTracked;
-    case v1::SkeletonJoint::INFERRED: return fit::JointTracking::kInferred;
-    default: return fit::JointTracking::kNotTracked;
+    case JointState::kTracked: return fit::JointTracking::kTracked;
+    case JointState::kInferred: return fit::JointTracking::kInferred;
+    case JointState::kNotTracked: break;
   }
+  return fit::JointTracking::kNotTracked;
 }
 
 double confidence_of(const fit::TrackedSkeleton& skeleton, int camera_joint) {
@@ -129,15 +113,11 @@ bool needs_skeleton_start(std::optional<double> previous_energy, double skeleton
   return !previous_energy || skeleton_start_energy <= 0.0 || !(*previous_energy < skeleton_start_energy);
 }
 
-fit::TrackedSkeleton tracked_skeleton_from_proto(const v1::SkeletonFrame& skeleton) {
-  if (skeleton.joints_size() != fit::kKinectJointCount) {
-    throw_invalid("skeleton.joints", "holds " + std::to_string(skeleton.joints_size()) + " joints, expected 25");
-  }
+fit::TrackedSkeleton tracked_skeleton_from(const Skeleton& skeleton) {
   fit::TrackedSkeleton out;
-  for (int j = 0; j < fit::kKinectJointCount; ++j) {
-    const v1::SkeletonJoint& joint = skeleton.joints(j);
-    out.positions_K[static_cast<size_t>(j)] = {joint.position_m().x(), joint.position_m().y(), joint.position_m().z()};
-    out.tracking[static_cast<size_t>(j)] = tracking_from(joint.state());
+  for (std::size_t j = 0; j < skeleton.joints.size(); ++j) {
+    out.positions_K[j] = skeleton.joints[j].p_K;
+    out.tracking[j] = tracking_from(skeleton.joints[j].state);
   }
   return out;
 }
@@ -258,54 +238,46 @@ void BodyFitStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) 
     return d.role() == v1::ImuDevice::ARM_LEFT || d.role() == v1::ImuDevice::ARM_RIGHT;
   }));
   const body::Sex sex = header.sex() == v1::SessionHeader::FEMALE ? body::Sex::kFemale : body::Sex::kMale;
-  work_ = std::make_unique<Work>(body::make_template(sex), intrinsics_from(header.depth_intrinsics()), fit_options,
+  work_ = std::make_unique<Work>(body::make_template(sex), session_cameras(header).depth, fit_options,
                                  smoothing);
 }
 
-void BodyFitStage::on_chunk(const v1::SessionChunk& chunk, StageOutput& out) {
+void BodyFitStage::on_camera_frame(const CameraFrame& camera, StageOutput& out) {
   if (!enabled_) return;
-  if (chunk.has_depth()) {
-    if (depth_) ++frames_without_skeleton_;  // the previous depth frame never got its skeleton
-    const cv::Mat depth = decode_depth(chunk.depth());
-    depth_.emplace(chunk.depth().t_us(), std::vector<std::uint16_t>(depth.begin<std::uint16_t>(), depth.end<std::uint16_t>()));
-  } else if (chunk.has_body_index()) {
-    const cv::Mat index = decode_body_index(chunk.body_index());
-    body_index_.emplace(chunk.body_index().t_us(),
-                        std::vector<std::uint8_t>(index.begin<std::uint8_t>(), index.end<std::uint8_t>()));
-  } else if (chunk.has_skeleton()) {
-    const v1::SkeletonFrame& skeleton = chunk.skeleton();
-    if (!body_id_) body_id_ = skeleton.body_id();
-    if (skeleton.body_id() != *body_id_ || !depth_ || std::llabs(depth_->first - skeleton.t_us()) > kSameFrameUs) return;
-    const double assemble_start = thread_cpu_seconds();
-    BodyFitFrame frame;
-    frame.t_us = depth_->first;
-    frame.frame.width = work_->camera.width();
-    frame.frame.height = work_->camera.height();
-    frame.frame.depth_mm = std::move(depth_->second);
-    depth_.reset();
-    frame.frame.body_index.assign(frame.frame.depth_mm.size(), fit::kNoBody);
-    if (body_index_ && std::llabs(body_index_->first - frame.t_us) <= kSameFrameUs &&
-        body_index_->second.size() == frame.frame.body_index.size()) {
-      for (size_t i = 0; i < body_index_->second.size(); ++i) {
-        if (body_index_->second[i] == *body_id_) frame.frame.body_index[i] = 0;
-      }
-    }
-    frame.skeleton = tracked_skeleton_from_proto(skeleton);
-    frame.assemble_s = thread_cpu_seconds() - assemble_start;
-    add_frame(std::move(frame), out);
+  if (!body_id_ && !camera.skeletons.empty()) body_id_ = camera.skeletons.front().body_id;
+  if (camera.depth_mm.empty()) return;
+  const Skeleton* skeleton = body_id_ ? camera.skeleton(*body_id_) : nullptr;
+  if (!skeleton) {
+    ++frames_without_skeleton_;
+    return;
   }
+  const double assemble_start = thread_cpu_seconds();
+  BodyFitFrame frame;
+  frame.t_us = camera.t_us;
+  frame.frame.width = work_->camera.width();
+  frame.frame.height = work_->camera.height();
+  frame.frame.depth_mm.assign(camera.depth_mm.begin<std::uint16_t>(), camera.depth_mm.end<std::uint16_t>());
+  frame.frame.body_index.assign(frame.frame.depth_mm.size(), fit::kNoBody);
+  if (camera.body_index.total() == frame.frame.body_index.size()) {
+    const std::uint8_t* ids = camera.body_index.ptr<std::uint8_t>();
+    for (std::size_t i = 0; i < frame.frame.body_index.size(); ++i) {
+      if (ids[i] == *body_id_) frame.frame.body_index[i] = 0;
+    }
+  }
+  frame.skeleton = tracked_skeleton_from(*skeleton);
+  frame.assemble_s = thread_cpu_seconds() - assemble_start;
+  add_frame(std::move(frame), out);
 }
 
-void BodyFitStage::on_result(const v1::FitResult& result, StageOutput& out) {
-  if (!enabled_ || !result.has_forearm_orientations()) return;
-  const v1::ForearmOrientationBatch& batch = result.forearm_orientations();
-  auto& samples = K_from_F_[batch.arm()];
-  for (int i = 0; i < batch.t_us_size() && 4 * i + 3 < batch.k_from_f_size(); ++i) {
-    const Eigen::Quaterniond q(batch.k_from_f(4 * i), batch.k_from_f(4 * i + 1), batch.k_from_f(4 * i + 2),
-                               batch.k_from_f(4 * i + 3));
+void BodyFitStage::on_value(const StageValue& value, StageOutput& out) {
+  const auto* batch = std::get_if<ForearmOrientations>(&value);
+  if (!enabled_ || !batch) return;
+  auto& samples = K_from_F_[batch->arm];
+  for (std::size_t i = 0; i < batch->t_us.size(); ++i) {
+    const Eigen::Quaterniond& q = batch->K_from_F[i];
     if (!q.coeffs().allFinite() || std::abs(q.norm() - 1.0) > 1e-3) continue;
-    if (!samples.empty() && batch.t_us(i) <= samples.back().first) continue;
-    samples.emplace_back(batch.t_us(i), q.normalized());
+    if (!samples.empty() && batch->t_us[i] <= samples.back().first) continue;
+    samples.emplace_back(batch->t_us[i], q.normalized());
   }
   if (personalised_) fit_ready(false, out);
 }
@@ -608,7 +580,6 @@ void BodyFitStage::finish(StageOutput& out) {
   if (!personalised_ && !calibration_frames_.empty()) personalise(out);
   fit_ready(true, out);
   for (const Eigen::VectorXd& theta : work_->smoother.flush()) emit_smoothed(theta, out);
-  if (depth_) ++frames_without_skeleton_;
   if (frames_without_skeleton_ > 0) {
     out.warn("FIT_NO_SKELETON", "skeleton",
              std::to_string(frames_without_skeleton_) + " depth frames had no skeleton of the fitted person: not fitted");

@@ -1,13 +1,12 @@
 #pragma once
-// Pipeline stage: the body-model fit of paper 2 for every depth frame (issue 7). Runs after the
-// forearm stage, whose per-sample forearm orientations K_from_F (ForearmOrientationBatch) it
-// receives through Stage::on_result and uses for the imu term (eq. 9-11) and the forearm roll
-// (II-B).
+// Pipeline stage: the body-model fit of paper 2 for every depth frame. Runs after the forearm
+// stage, whose per-sample forearm orientations K_from_F (ForearmOrientations) it consumes for
+// the imu term (eq. 9-11) and the forearm roll (II-B).
 //
 // Order of work:
-//  1. Frames: a depth frame, its body index map and the skeleton of the person `fit.body_id`
-//     (the first body seen by default) with the same t_us make one frame; its silhouette is that
-//     person's body index.
+//  1. Frames: a camera frame (frame_assembler.hpp) with a depth frame and the skeleton of the
+//     person `fit.body_id` (the first body seen by default); its silhouette is that person's body
+//     index.
 //  2. Personalisation (III): the frames of the first `fit.calibration_s` seconds are the
 //     calibration frames; fit::personalise on their skeletons gives the shape: the rough shape
 //     (III-A), then the fine tuning of shape and pose on the middle frame's depth (III-B,
@@ -115,9 +114,8 @@ inline constexpr double kMaxFitCalibrationS = 30.0;
 inline constexpr double kDefaultSkeletonStartEnergy = 45.0;
 bool needs_skeleton_start(std::optional<double> previous_energy, double skeleton_start_energy);
 
-// SkeletonFrame -> TrackedSkeleton. Throws posefuse::Error "skeleton.joints" for a frame that
-// does not hold 25 joints.
-fit::TrackedSkeleton tracked_skeleton_from_proto(const v1::SkeletonFrame& skeleton);
+// The camera skeleton as the fit reads it (positions and tracking states).
+fit::TrackedSkeleton tracked_skeleton_from(const Skeleton& skeleton);
 
 // Whether the header turns the body fit on (fit.enabled; false when absent). Throws
 // posefuse::Error naming the option for a value other than true/false/1/0.
@@ -132,8 +130,9 @@ class BodyFitStage : public Stage {
   std::vector<StageOption> options() const override;
 
   void start(const v1::SessionHeader& header, StageOutput& out) override;
-  void on_chunk(const v1::SessionChunk& chunk, StageOutput& out) override;
-  void on_result(const v1::FitResult& result, StageOutput& out) override;
+  std::vector<ValueKind> consumes() const override { return {ValueKind::kForearmOrientations}; }
+  void on_camera_frame(const CameraFrame& frame, StageOutput& out) override;
+  void on_value(const StageValue& value, StageOutput& out) override;
   void finish(StageOutput& out) override;
 
   // With `on`, every fitted frame from then on appends a BodyFitFrameStats (off by default: a
@@ -164,10 +163,7 @@ class BodyFitStage : public Stage {
   std::optional<std::uint32_t> body_id_;
   int arm_imus_ = 0;  // arm IMUs in the header
 
-  // Frame assembly: the latest depth and body index images, by t_us.
-  std::optional<std::pair<std::int64_t, std::vector<std::uint16_t>>> depth_;
-  std::optional<std::pair<std::int64_t, std::vector<std::uint8_t>>> body_index_;
-  std::uint64_t frames_without_skeleton_ = 0;
+  std::uint64_t frames_without_skeleton_ = 0;  // depth frames without the fitted person's skeleton
 
   std::optional<std::int64_t> first_t_us_, last_frame_t_us_;
   std::vector<BodyFitFrame> calibration_frames_;

@@ -9,8 +9,6 @@
 #include "forearm/forearm_axis_depth.hpp"
 #include "forearm/forearm_orientation.hpp"
 #include "forearm/upper_arm_depth.hpp"
-#include "session/image_codec.hpp"
-#include "session/imu_batch.hpp"
 #include "session/stages/body_fit_stage.hpp"
 #include "session/stages/proto_values.hpp"
 #include "session/text_fields.hpp"
@@ -37,10 +35,6 @@ constexpr const char* kAxisCorrectionKey = "forearm.axis_correction";
 constexpr const char* kAxisCorrectionGainKKey = "forearm.axis_correction_gain_K";
 constexpr const char* kAxisCorrectionGainFKey = "forearm.axis_correction_gain_F";
 constexpr const char* kAxisCorrectionMaxDegKey = "forearm.axis_correction_max_deg";
-// A depth frame belongs to a skeleton frame of the same t_us (same sensor); allow clock jitter.
-constexpr std::int64_t kDepthToleranceUs = 1000;
-// Frames waiting for their depth or colour image before they are processed without.
-constexpr std::size_t kMaxPendingFrames = 4;
 
 std::optional<std::string> option(const v1::SessionHeader& header, const char* key) {
   const auto it = header.options().find(key);
@@ -67,15 +61,6 @@ Quat parse_quaternion(const std::string& text, const std::string& field) {
   return q.normalized();
 }
 
-geometry::PinholeCamera pinhole(const v1::CameraIntrinsics& c) {
-  return {static_cast<int>(c.width()), static_cast<int>(c.height()), c.fx(), c.fy(), c.cx(), c.cy(),
-          c.k1(), c.k2(), c.k3(), c.p1(), c.p2()};
-}
-
-Vec3 position(const v1::SkeletonJoint& joint) {
-  return {joint.position_m().x(), joint.position_m().y(), joint.position_m().z()};
-}
-
 // Chordal mean of hemisphere-aligned unit quaternions (fine for the small spread of a hold).
 Quat mean_rotation(const std::vector<Quat>& rotations) {
   Eigen::Vector4d sum = Eigen::Vector4d::Zero();
@@ -83,12 +68,8 @@ Quat mean_rotation(const std::vector<Quat>& rotations) {
   return geometry::from_wxyz(sum.normalized());
 }
 
-// Kinect v2 joint indices of one arm: shoulder, elbow, wrist.
-struct ArmJoints {
-  int shoulder, elbow, wrist;
-};
-ArmJoints arm_joints(forearm::Side side) {
-  return side == forearm::Side::kLeft ? ArmJoints{4, 5, 6} : ArmJoints{8, 9, 10};
+geometry::KinectArmJoints arm_joints(forearm::Side side) {
+  return side == forearm::Side::kLeft ? geometry::kLeftArmJoints : geometry::kRightArmJoints;
 }
 
 }  // namespace
@@ -236,18 +217,14 @@ void ForearmStage::start(const v1::SessionHeader& header, StageOutput& out) {
              "no forearm results");
     return;
   }
+  const SessionCameras session = session_cameras(header);
   forearm::StrapCameras cameras;
-  cameras.depth = pinhole(header.depth_intrinsics());
-  if (header.has_color_intrinsics()) {
-    cameras.color = pinhole(header.color_intrinsics());
-    if (header.has_color_from_depth()) {
-      const auto& r = header.color_from_depth().rotation();
-      const auto& t = header.color_from_depth().translation_m();
-      cameras.color_from_depth = Quat(r.w(), r.x(), r.y(), r.z()).normalized();
-      cameras.color_from_depth_m = Vec3(t.x(), t.y(), t.z());
-    }
+  cameras.depth = session.depth;
+  if (session.color) {
+    cameras.color = *session.color;
+    cameras.color_from_depth = session.color_from_depth;
+    cameras.color_from_depth_m = session.color_from_depth_m;
     cameras_ = cameras;
-    color_tolerance_us_ = header.color_rate_hz() > 0.0 ? 0.5e6 / header.color_rate_hz() : 20000.0;
   } else {
     out.warn("FOREARM_NO_COLOR", "header.color_intrinsics",
              "no colour stream: the strap (paper 1, II-I) cannot be seen, so only forearm orientations are produced");
@@ -270,112 +247,67 @@ void ForearmStage::start(const v1::SessionHeader& header, StageOutput& out) {
   active_ = true;
 }
 
-void ForearmStage::on_result(const v1::FitResult& result, StageOutput& /*out*/) {
-  if (!active_ || !result.has_imu_orientations()) return;
-  const v1::ImuOrientationBatch& batch = result.imu_orientations();
-  for (Device& device : devices_) {
-    if (device.id != batch.device_id()) continue;
-    device.pending_orientations.clear();
-    for (int i = 0; i < batch.t_us_size() && 4 * i + 3 < batch.w_from_a_size(); ++i) {
-      device.pending_orientations.emplace_back(
-          batch.t_us(i), Quat(batch.w_from_a(4 * i), batch.w_from_a(4 * i + 1), batch.w_from_a(4 * i + 2),
-                              batch.w_from_a(4 * i + 3)));
-    }
-  }
-}
-
-void ForearmStage::add_imu(Device& device, const v1::ImuBatch& batch) {
-  const std::vector<imu::ImuSample> samples = samples_from_batch(batch);
-  const auto orientations = std::move(device.pending_orientations);
-  device.pending_orientations.clear();
-  if (orientations.size() != samples.size()) {
-    throw Error(ErrorCode::kFailedPrecondition, "imu", "device '" + device.id +
-                                                            "': no orientation from the IMU stage for this batch");
-  }
-  for (std::size_t i = 0; i < samples.size(); ++i) {
-    if (orientations[i].first != samples[i].t_us) {
-      throw Error(ErrorCode::kInternal, "imu", "orientation and sample times differ");
-    }
-    device.imu.push_back({samples[i].t_us, orientations[i].second, samples[i].acc_m_s2});
-  }
-}
-
-void ForearmStage::on_chunk(const v1::SessionChunk& chunk, StageOutput& out) {
+void ForearmStage::on_value(const StageValue& value, StageOutput& out) {
   if (!active_) return;
-  clocks_->add(chunk);
-  switch (chunk.chunk_case()) {
-    case v1::SessionChunk::kImu:
-      for (Device& device : devices_) {
-        if (device.id == chunk.imu().device_id()) add_imu(device, chunk.imu());
-      }
-      break;
-    case v1::SessionChunk::kDepth:
-      depth_images_.push_back({chunk.depth().t_us(), decode_depth(chunk.depth())});
-      if (depth_images_.size() > kMaxPendingFrames) depth_images_.pop_front();
-      break;
-    case v1::SessionChunk::kColor:
-      if (!cameras_) break;
-      color_images_.push_back({chunk.color().t_us(), decode_color_gray(chunk.color())});
-      if (color_images_.size() > kMaxPendingFrames) color_images_.pop_front();
-      break;
-    case v1::SessionChunk::kSkeleton:
-      if (!body_id_) body_id_ = chunk.skeleton().body_id();
-      if (chunk.skeleton().body_id() != *body_id_) break;
-      pending_frames_.push_back({chunk.skeleton().t_us(), chunk.skeleton()});
-      if (!first_frame_us_) first_frame_us_ = chunk.skeleton().t_us();
-      last_frame_us_ = chunk.skeleton().t_us();
-      break;
-    default: break;
+  const auto* orientations = std::get_if<ImuOrientations>(&value);
+  if (!orientations) return;
+  for (Device& device : devices_) {
+    if (device.id != orientations->device_id) continue;
+    for (std::size_t i = 0; i < orientations->samples.size(); ++i) {
+      device.imu.push_back({orientations->samples[i].t_us, orientations->W_from_A[i], orientations->samples[i].acc_m_s2});
+    }
   }
-  resolve_frames(false);
+  advance(out);
+}
+
+void ForearmStage::on_camera_frame(const CameraFrame& frame, StageOutput& out) {
+  if (!active_) return;
+  if (!body_id_ && !frame.skeletons.empty()) body_id_ = frame.skeletons.front().body_id;
+  if (const Skeleton* skeleton = body_id_ ? frame.skeleton(*body_id_) : nullptr) {
+    if (!first_frame_us_) first_frame_us_ = frame.t_us;
+    last_frame_us_ = frame.t_us;
+    detect_arms(frame, *skeleton);
+  }
+  advance(out);
+}
+
+void ForearmStage::on_audio(const AudioBlock& audio, StageOutput& out) {
+  if (!active_) return;
+  clocks_->add(audio);
+  advance(out);
+}
+
+void ForearmStage::on_clock_event(const ClockEvent& event, StageOutput& out) {
+  if (!active_) return;
+  clocks_->add(event);
+  advance(out);
+}
+
+void ForearmStage::advance(StageOutput& out) {
   if (!calibrated_) try_calibrate(false, out);
   if (calibrated_) feed_trackers(false, out);
 }
 
-void ForearmStage::resolve_frames(bool all) {
-  const auto find = [](const std::deque<Image>& images, std::int64_t t_us, double tolerance_us, bool* wait) {
-    const Image* best = nullptr;
-    for (const Image& image : images) {
-      if (std::abs(static_cast<double>(image.t_us - t_us)) <= tolerance_us &&
-          (!best || std::abs(image.t_us - t_us) < std::abs(best->t_us - t_us))) {
-        best = &image;
-      }
-    }
-    // An image for this time may still come while no later one has arrived.
-    *wait = !best && (images.empty() || images.back().t_us < t_us + tolerance_us);
-    return best;
-  };
-  while (!pending_frames_.empty()) {
-    const PendingFrame& frame = pending_frames_.front();
-    bool wait_depth = false, wait_color = false;
-    const Image* depth = find(depth_images_, frame.t_us, kDepthToleranceUs, &wait_depth);
-    const Image* color = cameras_ ? find(color_images_, frame.t_us, color_tolerance_us_, &wait_color) : nullptr;
-    if ((wait_depth || wait_color) && !all && pending_frames_.size() <= kMaxPendingFrames) return;
-    detect_arms(frame, depth, color);
-    pending_frames_.pop_front();
-  }
-}
-
-void ForearmStage::detect_arms(const PendingFrame& frame, const Image* depth, const Image* color) {
+void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleton) {
+  const bool has_depth = !frame.depth_mm.empty();
+  const bool has_color = !frame.color_gray.empty();
   for (Device& device : devices_) {
     if (!device.side || device.calibration_failed) continue;
-    const ArmJoints j = arm_joints(*device.side);
-    const auto& joints = frame.skeleton.joints();
+    const geometry::KinectArmJoints j = arm_joints(*device.side);
+    const auto& joints = skeleton.joints;
     ArmFrame arm;
     arm.t_us = frame.t_us;
-    arm.shoulder_K = position(joints[j.shoulder]);
-    arm.elbow_K = position(joints[j.elbow]);
-    arm.wrist_K = position(joints[j.wrist]);
-    arm.shoulder_tracked = joints[j.shoulder].state() == v1::SkeletonJoint::TRACKED;
-    arm.forearm_tracked = joints[j.elbow].state() == v1::SkeletonJoint::TRACKED &&
-                          joints[j.wrist].state() == v1::SkeletonJoint::TRACKED;
+    arm.shoulder_K = joints[j.shoulder].p_K;
+    arm.elbow_K = joints[j.elbow].p_K;
+    arm.wrist_K = joints[j.wrist].p_K;
+    arm.shoulder_tracked = joints[j.shoulder].state == JointState::kTracked;
+    arm.forearm_tracked = joints[j.elbow].state == JointState::kTracked && joints[j.wrist].state == JointState::kTracked;
     arm.sdk_elbow_K = arm.elbow_K;
-    arm.sdk_elbow_seen = joints[j.elbow].state() != v1::SkeletonJoint::NOT_TRACKED;
-    const auto& q = joints[j.wrist].orientation();
-    arm.K_from_wrist_sdk = Quat(q.w(), q.x(), q.y(), q.z());
-    if (arm.forearm_tracked && depth && cameras_ && (axis_from_depth_ || upper_arm_from_depth_)) {
+    arm.sdk_elbow_seen = joints[j.elbow].state != JointState::kNotTracked;
+    arm.K_from_wrist_sdk = joints[j.wrist].orientation;
+    if (arm.forearm_tracked && has_depth && cameras_ && (axis_from_depth_ || upper_arm_from_depth_)) {
       // The SDK's joints only say where to look; the axes are the depth image's.
-      const forearm::DepthImageView mm{depth->pixels.cols, depth->pixels.rows, depth->pixels.ptr<std::uint16_t>()};
+      const forearm::DepthImageView mm{frame.depth_mm.cols, frame.depth_mm.rows, frame.depth_mm.ptr<std::uint16_t>()};
       std::optional<forearm::MeasuredUpperArm> upper_arm;
       if (axis_from_depth_ && arm.shoulder_tracked) {
         // Both limbs, so that the upper arm's points next to the elbow are not taken for the forearm's.
@@ -399,9 +331,9 @@ void ForearmStage::detect_arms(const PendingFrame& frame, const Image* depth, co
         arm.upper_arm_direction_K = upper_arm->direction_K;
       }
     }
-    if (arm.forearm_tracked && depth && color && cameras_) {
-      const forearm::GrayImageView gray{color->pixels.cols, color->pixels.rows, color->pixels.ptr<std::uint8_t>()};
-      const forearm::DepthImageView mm{depth->pixels.cols, depth->pixels.rows, depth->pixels.ptr<std::uint16_t>()};
+    if (arm.forearm_tracked && has_depth && has_color && cameras_) {
+      const forearm::GrayImageView gray{frame.color_gray.cols, frame.color_gray.rows, frame.color_gray.ptr<std::uint8_t>()};
+      const forearm::DepthImageView mm{frame.depth_mm.cols, frame.depth_mm.rows, frame.depth_mm.ptr<std::uint16_t>()};
       const forearm::StrapDetection strap = forearm::detect_strap(gray, mm, *cameras_, arm.elbow_K, arm.wrist_K);
       if (strap.found()) arm.strap_K = strap.strap_K;
     }
@@ -642,7 +574,6 @@ void ForearmStage::feed_trackers(bool all, StageOutput& out) {
 
 void ForearmStage::finish(StageOutput& out) {
   if (!active_) return;
-  resolve_frames(true);
   if (!calibrated_) try_calibrate(true, out);
   if (calibrated_) {
     feed_trackers(true, out);

@@ -1,6 +1,6 @@
 #pragma once
 // Pipeline stage: forearm fusion of paper 1 (II-F to II-L) for every arm IMU of the session.
-// Runs after the IMU orientation stage, whose W_from_A it receives through Stage::on_result.
+// Runs after the IMU orientation stage, whose W_from_A (ImuOrientations) it consumes.
 //
 // Inputs: header (IMU roles, depth and colour cameras, options), skeleton frames (shoulder,
 // elbow, wrist of the person `forearm.body_id`), depth and colour frames (strap detection,
@@ -43,8 +43,6 @@
 #include <string>
 #include <vector>
 
-#include <opencv2/core.hpp>
-
 #include "forearm/forearm_model.hpp"
 #include "forearm/strap_detection.hpp"
 #include "session/pipeline_stage.hpp"
@@ -62,8 +60,12 @@ class ForearmStage : public Stage {
   std::vector<StageOption> options() const override;
 
   void start(const v1::SessionHeader& header, StageOutput& out) override;
-  void on_chunk(const v1::SessionChunk& chunk, StageOutput& out) override;
-  void on_result(const v1::FitResult& result, StageOutput& out) override;
+  std::vector<ValueKind> consumes() const override { return {ValueKind::kImuOrientations}; }
+  std::vector<ValueKind> produces() const override { return {ValueKind::kForearmOrientations}; }
+  void on_value(const StageValue& value, StageOutput& out) override;
+  void on_camera_frame(const CameraFrame& frame, StageOutput& out) override;
+  void on_audio(const AudioBlock& audio, StageOutput& out) override;
+  void on_clock_event(const ClockEvent& event, StageOutput& out) override;
   void finish(StageOutput& out) override;
   bool wants_later_results() const override { return active_ && fit_anchor_; }
   void on_later_result(const v1::FitResult& result, StageOutput& out) override;
@@ -78,7 +80,6 @@ class ForearmStage : public Stage {
   struct Device {
     std::string id;
     std::optional<forearm::Side> side;  // none: the base IMU
-    std::vector<std::pair<std::int64_t, forearm::Quat>> pending_orientations;
     std::vector<ImuRecord> imu;  // device clock, as received
     std::optional<std::int64_t> first_device_us;  // first sample handed to the tracker
     std::optional<std::int64_t> last_camera_us;   // last sample handed to the tracker, camera clock
@@ -90,23 +91,15 @@ class ForearmStage : public Stage {
     std::unique_ptr<ArmTracker> tracker;
     std::vector<FitElbow> early_fit_elbows;  // the body fit's, before the tracker existed
   };
-  struct PendingFrame {
-    std::int64_t t_us = 0;
-    v1::SkeletonFrame skeleton;
-  };
-  struct Image {
-    std::int64_t t_us = 0;
-    cv::Mat pixels;
-  };
 
   static forearm::GapSmootherOptions without_shoulder_sphere() {
     forearm::GapSmootherOptions o;
     o.use_shoulder_sphere = false;
     return o;
   }
-  void add_imu(Device& device, const v1::ImuBatch& batch);
-  void resolve_frames(bool all);
-  void detect_arms(const PendingFrame& frame, const Image* depth, const Image* color);
+  // Calibrates once the calibration window has passed, then feeds the trackers.
+  void advance(StageOutput& out);
+  void detect_arms(const CameraFrame& frame, const Skeleton& skeleton);
   void try_calibrate(bool finishing, StageOutput& out);
   void calibrate_arm(Device& device, StageOutput& out);
   std::vector<std::string> arm_device_ids() const;  // the arm IMUs, header order
@@ -128,7 +121,6 @@ class ForearmStage : public Stage {
   forearm::VisualAxisCorrectionOptions axis_correction_options_;
   std::optional<std::uint32_t> body_id_;
   std::optional<forearm::StrapCameras> cameras_;
-  double color_tolerance_us_ = 0.0;
   forearm::CalibrationOptions calibration_options_;
   std::unique_ptr<StreamClocks> clocks_;
   std::optional<sync::ClockMap> clock_map_;
@@ -138,8 +130,6 @@ class ForearmStage : public Stage {
   std::optional<std::int64_t> first_frame_us_;
   std::int64_t last_frame_us_ = 0;
   bool calibrated_ = false;
-  std::deque<PendingFrame> pending_frames_;
-  std::deque<Image> depth_images_, color_images_;
 };
 
 }  // namespace posefuse::session

@@ -5,7 +5,6 @@
 
 #include "common/error.hpp"
 #include "geometry/quaternion.hpp"
-#include "session/imu_batch.hpp"
 #include "session/mag_calibration_option.hpp"
 #include "session/stages/proto_values.hpp"
 #include "session/text_fields.hpp"
@@ -63,35 +62,23 @@ void ImuOrientationStage::start(const v1::SessionHeader& header, StageOutput& /*
   }
 }
 
-void ImuOrientationStage::on_chunk(const v1::SessionChunk& chunk, StageOutput& out) {
-  if (!chunk.has_imu()) return;
-  const v1::ImuBatch& batch = chunk.imu();
-  const auto it = devices_.find(batch.device_id());
+void ImuOrientationStage::on_imu(const ImuBlock& block, StageOutput& out) {
+  const auto it = devices_.find(block.device_id);
   if (it == devices_.end()) {
     // The validator rejects unknown devices; reaching this is a bug of ours.
-    throw Error(ErrorCode::kInternal, "imu.device_id",
-                "'" + batch.device_id() + "' has no filter");
+    throw Error(ErrorCode::kInternal, "imu.device_id", "'" + block.device_id + "' has no filter");
   }
   Device& device = it->second;
-  std::vector<imu::ImuSample> samples = samples_from_batch(batch);
-  if (device.mag_calibration) {
-    for (imu::ImuSample& sample : samples) sample.mag_uT = device.mag_calibration->apply(sample.mag_uT);  // eq. 3
-  }
-
-  v1::FitResult result;
-  v1::ImuOrientationBatch& orientations = *result.mutable_imu_orientations();
-  orientations.set_device_id(batch.device_id());
-  orientations.mutable_t_us()->Reserve(static_cast<int>(samples.size()));
-  orientations.mutable_w_from_a()->Reserve(4 * static_cast<int>(samples.size()));
-  for (const imu::ImuSample& sample : samples) {
-    const imu::Quat W_from_A = geometry::same_hemisphere(device.filter.update(sample),
-                                                         device.last_W_from_A);
+  ImuOrientations orientations{block.device_id, block.samples, {}};
+  orientations.W_from_A.reserve(block.samples.size());
+  for (imu::ImuSample& sample : orientations.samples) {
+    if (device.mag_calibration) sample.mag_uT = device.mag_calibration->apply(sample.mag_uT);  // eq. 3
+    const imu::Quat W_from_A = geometry::same_hemisphere(device.filter.update(sample), device.last_W_from_A);
     device.last_W_from_A = W_from_A;
-    orientations.add_t_us(sample.t_us);
-    for (const double value : geometry::to_wxyz(W_from_A)) orientations.add_w_from_a(value);
+    orientations.W_from_A.push_back(W_from_A);
   }
-  device.samples += samples.size();
-  out.emit(std::move(result));
+  device.samples += block.samples.size();
+  out.hand_on(std::move(orientations));
 }
 
 void ImuOrientationStage::finish(StageOutput& out) {

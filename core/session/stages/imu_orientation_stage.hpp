@@ -2,9 +2,9 @@
 // Pipeline stage: orientation W_from_A of every IMU, sample by sample, with
 // imu::RobustOrientationFilter (one filter per device in header.imu_devices).
 //
-// Each ImuBatch is answered at once with an ImuOrientationBatch of the same t_us (device clock)
-// and one W_from_A per sample; the quaternion sign is kept continuous from sample to sample.
-// K_from_A stays empty until the camera alignment stage exists. At the end every device gets an
+// Each IMU block is answered at once with ImuOrientations (stage_values.hpp): the samples and one
+// W_from_A per sample, device clock; the quaternion sign is kept continuous from sample to
+// sample. The forearm stage reads them; the client gets them as an ImuOrientationBatch. At the end every device gets an
 // ImuCalibration entry: the gyro bias the filter estimated and the magnetic field magnitude it
 // learned. The paper's magnetometer calibration (ellipsoid fit, paper 1 II-E-1) is not run by
 // this stage (mag_fit_residual is NaN, mag_coverage 0); a calibration made before the session
@@ -30,7 +30,8 @@ class ImuOrientationStage : public Stage {
   std::vector<StageOption> options() const override;
 
   void start(const v1::SessionHeader& header, StageOutput& out) override;
-  void on_chunk(const v1::SessionChunk& chunk, StageOutput& out) override;
+  std::vector<ValueKind> produces() const override { return {ValueKind::kImuOrientations}; }
+  void on_imu(const ImuBlock& block, StageOutput& out) override;
   void finish(StageOutput& out) override;
 
  private:

@@ -56,22 +56,17 @@ const std::vector<sync::BuzzerStop>& StreamClocks::heard_stops() const {
   return tone_stops_ ? tone_stops_->stops() : none;
 }
 
-void StreamClocks::add(const v1::SessionChunk& chunk) {
-  if (chunk.has_audio() && channels_ > 0 && tone_stops_) {
-    const v1::AudioChunk& a = chunk.audio();
-    const std::size_t frames = a.pcm_s16le().size() / (2u * channels_);
-    std::vector<std::int16_t> mono(frames);
-    for (std::size_t i = 0; i < frames; ++i) std::memcpy(&mono[i], a.pcm_s16le().data() + 2 * channels_ * i, 2);
-    tone_stops_->add(static_cast<double>(a.t_us()), mono);
-    audio_seen_ = true;
-  }
-  if (!chunk.has_sync_event()) return;
-  const v1::SyncEvent& e = chunk.sync_event();
-  if (e.kind() == v1::SyncEvent::BUZZER_STOP && e.device_id() == base_) {
-    base_stops_us_.insert(std::upper_bound(base_stops_us_.begin(), base_stops_us_.end(), e.t_us()), e.t_us());
-  } else if (e.kind() == v1::SyncEvent::BLE_BROADCAST_RECEIPT) {
-    const std::uint32_t sequence = sync::ble_sequence_from_payload(e.payload());
-    receipts_.push_back({static_cast<std::int64_t>(sequence), e.device_id(), static_cast<double>(e.t_us())});
+void StreamClocks::add(const AudioBlock& audio) {
+  if (channels_ == 0 || !tone_stops_) return;
+  tone_stops_->add(static_cast<double>(audio.t_us), audio.mono);
+  audio_seen_ = true;
+}
+
+void StreamClocks::add(const ClockEvent& event) {
+  if (event.kind == ClockEvent::Kind::kBuzzerStop && event.device_id == base_) {
+    base_stops_us_.insert(std::upper_bound(base_stops_us_.begin(), base_stops_us_.end(), event.t_us), event.t_us);
+  } else if (event.kind == ClockEvent::Kind::kBleReceipt) {
+    receipts_.push_back({static_cast<std::int64_t>(event.ble_sequence), event.device_id, static_cast<double>(event.t_us)});
   }
 }
 

@@ -20,7 +20,7 @@
 #include <string>
 #include <vector>
 
-#include "posefuse/v1/session.pb.h"
+#include "session/session_inputs.hpp"
 #include "sync/broadcast_offsets.hpp"
 #include "sync/clock_map.hpp"
 #include "sync/linear_clock.hpp"
@@ -36,9 +36,10 @@ class StreamClocks {
   StreamClocks(std::string base_device, double audio_sample_rate_hz, unsigned audio_channels,
                std::optional<double> buzzer_tone_hz = sync::BuzzerStopOptions().tone_hz);
 
-  // Audio chunks and sync events; other chunks are ignored. Throws posefuse::Error
-  // kInvalidArgument for a broadcast payload that is not 4 bytes.
-  void add(const v1::SessionChunk& chunk);
+  // The camera microphone's audio (buzzer stops) and the clock events (the base's buzzer stops,
+  // BLE receipts).
+  void add(const AudioBlock& audio);
+  void add(const ClockEvent& event);
 
   // The map base and `devices` -> camera, or nullopt while something is missing (why_not()
   // says what).

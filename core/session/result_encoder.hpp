@@ -1,0 +1,11 @@
+#pragma once
+// Stage values (stage_values.hpp) -> the FitResults the client receives (results.proto): the one
+// place where the pipeline's typed values meet the wire format.
+#include "posefuse/v1/results.pb.h"
+#include "session/stage_values.hpp"
+
+namespace posefuse::session {
+
+v1::FitResult encode_value(const StageValue& value);
+
+}  // namespace posefuse::session
