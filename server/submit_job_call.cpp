@@ -112,8 +112,18 @@ void SubmitJobCall::commit() {
     return;
   }
   try {
-    const std::filesystem::path& path = spool_->commit();
-    *response_ = context_.runner.submit(spec_, path.string(), tenant_);
+    // The store may take the bytes into itself (PostgreSQL: every replica reads them there).
+    const std::string recording = context_.runner.store().keep_upload(spool_->commit());
+    try {
+      *response_ = context_.runner.submit(spec_, recording, tenant_);
+    } catch (const Error&) {
+      try {
+        context_.runner.store().drop_upload(recording, context_.spool_dir);
+      } catch (const std::exception&) {
+        // The error to report is the one that got us here.
+      }
+      throw;
+    }
   } catch (const Error& error) {
     finish_locked(to_status(error));
     return;
