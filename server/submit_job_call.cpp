@@ -113,7 +113,15 @@ void SubmitJobCall::commit() {
   }
   try {
     // The store may take the bytes into itself (PostgreSQL: every replica reads them there).
-    const std::string recording = context_.runner.store().keep_upload(spool_->commit());
+    const std::filesystem::path spooled = spool_->commit();
+    std::string recording;
+    try {
+      recording = context_.runner.store().keep_upload(spooled);
+    } catch (const Error&) {
+      std::error_code ignored;
+      std::filesystem::remove(spooled, ignored);  // no job will read it
+      throw;
+    }
     try {
       *response_ = context_.runner.submit(spec_, recording, tenant_);
     } catch (const Error&) {

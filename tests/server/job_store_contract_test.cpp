@@ -18,7 +18,7 @@
 #include "server/pg_job_store.hpp"
 #include "server/pg_schema.hpp"
 #include "server/sqlite_job_store.hpp"
-#include "tests/server/postgres_cluster.hpp"
+#include "tests/server/postgres_test.hpp"
 #include "tests/server/test_support.hpp"
 
 namespace posefuse::server {

@@ -17,7 +17,7 @@
 #include "server/job_transitions.hpp"
 #include "server/pg_connection.hpp"
 #include "server/pg_schema.hpp"
-#include "tests/server/postgres_cluster.hpp"
+#include "tests/server/postgres_test.hpp"
 #include "tests/server/server_process.hpp"
 #include "tests/server/test_support.hpp"
 

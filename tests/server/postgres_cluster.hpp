@@ -3,9 +3,7 @@
 // listening on a Unix socket in that folder only (no TCP), removed with everything in it
 // afterwards. Debian's server binaries live in /usr/lib/postgresql/<version>/bin. PostgreSQL
 // refuses to run as root, so as root the cluster runs as the `postgres` user, owning its folder.
-//
-// Without PostgreSQL installed, tests skip, unless POSEFUSE_REQUIRE_POSTGRES=1 (CI), which
-// makes that a failure.
+// Tests start one through tests/server/postgres_test.hpp.
 #include <pwd.h>
 #include <sys/stat.h>
 #include <unistd.h>
@@ -17,8 +15,6 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
-
-#include <gtest/gtest.h>
 
 #include "server/pg_connection.hpp"
 
@@ -117,25 +113,5 @@ class PostgresCluster {
   bool running_ = false;
   int databases_ = 0;
 };
-
-// For a fixture's SetUp: a running cluster, or nullptr after recording a skip (PostgreSQL not
-// installed) or a failure (not installed and POSEFUSE_REQUIRE_POSTGRES=1); gtest then skips the
-// test body either way.
-inline std::unique_ptr<PostgresCluster> start_postgres() {
-  const std::filesystem::path bin = PostgresCluster::find_bin_dir();
-  if (bin.empty()) {
-    const char* required = std::getenv("POSEFUSE_REQUIRE_POSTGRES");
-    const std::string reason =
-        "PostgreSQL is not installed (no /usr/lib/postgresql/*/bin/initdb; scripts/setup.sh "
-        "installs it from scripts/packages.txt)";
-    if (required && std::string(required) == "1") {
-      [&]() { FAIL() << reason << " and POSEFUSE_REQUIRE_POSTGRES=1 needs it"; }();
-      return nullptr;
-    }
-    []() { GTEST_SKIP() << "PostgreSQL is not installed"; }();
-    return nullptr;
-  }
-  return std::make_unique<PostgresCluster>(bin);
-}
 
 }  // namespace posefuse::test

@@ -9,6 +9,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <regex>
@@ -38,7 +39,10 @@ class ServerProcess {
     argv.push_back(nullptr);
     const int rc = posix_spawn(&pid_, binary.c_str(), &actions, nullptr, argv.data(), environ);
     posix_spawn_file_actions_destroy(&actions);
-    if (rc != 0) throw std::runtime_error("cannot start " + binary.string());
+    if (rc != 0) {
+      throw std::runtime_error("cannot start " + binary.string() + " (log " + log_.string() +
+                               "): " + std::strerror(rc));
+    }
   }
   ~ServerProcess() {
     if (pid_ > 0) {
