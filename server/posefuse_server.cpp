@@ -111,7 +111,9 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
     if (make_store) {
       job_store_ = make_store(data_dir);
     } else if (!options_.job_store.empty()) {
-      job_store_ = std::make_unique<PgJobStore>(options_.job_store);
+      // A connection per running job's writes, one for the dispatcher's claims and heartbeats,
+      // two for API calls and watchers' reads.
+      job_store_ = std::make_unique<PgJobStore>(options_.job_store, options_.max_jobs + 3);
     } else {
       job_store_ = std::make_unique<SqliteJobStore>(data_dir / "jobs.sqlite");
     }
