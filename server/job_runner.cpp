@@ -261,12 +261,11 @@ void JobRunner::run(const std::shared_ptr<Running>& running, JobRecord record) {
   } catch (const std::exception& error) {
     log_event("error", "job_runner_error", {{"job", record.job.job_id()}, {"error", error.what()}});
   }
-  {
-    std::lock_guard lock(mu_);
-    running_.erase(record.job.job_id());
-    wake_ = true;
-    idle_.notify_all();
-  }
+  // Everything under the lock: once running_ is empty the destructor may free this runner.
+  std::lock_guard lock(mu_);
+  running_.erase(record.job.job_id());
+  wake_ = true;
+  idle_.notify_all();
   wake_cv_.notify_all();
 }
 
