@@ -69,9 +69,12 @@ class PgReplicasTest : public ::testing::Test {
             "--job-store", conninfo_, "--role", role, "--job-lease-s", lease,
             "--job-heartbeat-s", "0.25", "--shutdown-grace-s", "1"};
   }
-  Replica start(const std::string& name, const std::string& role = "both", const char* lease = kLongLease) {
+  Replica start(const std::string& name, const std::string& role = "both", const char* lease = kLongLease,
+                const std::vector<std::string>& extra = {}) {
     Replica replica;
-    replica.process = std::make_unique<test::ServerProcess>(POSEFUSE_SERVER_BINARY, args(name, role, lease),
+    std::vector<std::string> all = args(name, role, lease);
+    all.insert(all.end(), extra.begin(), extra.end());
+    replica.process = std::make_unique<test::ServerProcess>(POSEFUSE_SERVER_BINARY, all,
                                                             dir_ / (name + ".log"));
     const int port = replica.process->port();
     replica.stub = v1::PoseFuse::NewStub(client::make_channel("127.0.0.1:" + std::to_string(port)));
@@ -252,6 +255,41 @@ TEST_F(PgReplicasTest, WatchAndCancelOnAnApiReplicaFollowAndStopAJobOnAWorker) {
   EXPECT_LT(cancel_states.back().progress().chunks_processed(), 10000u);  // stopped mid-way
   EXPECT_EQ(worker.process->terminate(), 0);
   EXPECT_EQ(count(worker.process->log(), "event=job_end job=" + id + " state=CANCELLED"), 1u);
+}
+
+TEST_F(PgReplicasTest, AnUploadedJobWhoseLeasesRunOutFailsWithAClearErrorAndLeavesNoUpload) {
+  const std::vector<std::string> one_attempt{"--job-max-attempts", "1"};
+  Replica a = start("a", "both", kShortLease, one_attempt);
+  v1::Job job;
+  {
+    grpc::ClientContext context;
+    set_test_deadline(context);
+    auto writer = a.stub->SubmitJob(&context, &job);
+    v1::SubmitJobRequest request;
+    request.mutable_spec()->set_upload(true);
+    writer->Write(request);
+    demo::DemoSessionOptions long_session;
+    long_session.duration_s = kLongSessionS;
+    for (const v1::SessionChunk& chunk : demo::make_demo_session(long_session)) {
+      *request.mutable_chunk() = chunk;
+      writer->Write(request);
+    }
+    writer->WritesDone();
+    const grpc::Status status = writer->Finish();
+    ASSERT_TRUE(status.ok()) << status.error_message();
+  }
+  wait_running(a, job.job_id());
+  Replica b = start("b", "both", kShortLease, one_attempt);
+  a.process->kill9();
+  const auto states = watch(b, job.job_id());
+  ASSERT_FALSE(states.empty());
+  const v1::Job& failed = states.back();
+  EXPECT_EQ(failed.state(), v1::Job::FAILED);
+  EXPECT_EQ(failed.error_code(), static_cast<int>(grpc::StatusCode::ABORTED));
+  EXPECT_EQ(failed.error_message().rfind("job: its worker's lease expired 1 time (", 0), 0u)
+      << failed.error_message();
+  EXPECT_EQ(b.process->terminate(), 0);
+  EXPECT_EQ(sql_int("SELECT count(*) FROM uploads", ""), 0);
 }
 
 TEST_F(PgReplicasTest, AnUploadToOneReplicaRunsOnAnotherWithTheResultsOfTheSameRecordingByReference) {
