@@ -1,8 +1,13 @@
 #include "server/sqlite_job_store.hpp"
 
+#include <fcntl.h>
 #include <sqlite3.h>
+#include <sys/file.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <chrono>
+#include <cstring>
 
 #include "common/error.hpp"
 #include "server/job_store_errors.hpp"
@@ -90,12 +95,28 @@ JobRecord read_record(const Statement& row) {
 }  // namespace
 
 SqliteJobStore::SqliteJobStore(const std::filesystem::path& path) : path_(path) {
+  // The store treats every lease as over when it opens (one process owns it): a second process
+  // on the same file would take over the first one's running jobs, so it is refused.
+  std::filesystem::path lock_path = path;
+  lock_path += ".lock";
+  lock_fd_ = ::open(lock_path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0600);
+  if (lock_fd_ < 0) {
+    throw Error(ErrorCode::kFailedPrecondition, path.string(),
+                std::string("cannot open the job store's lock file: ") + std::strerror(errno));
+  }
+  if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
+    ::close(lock_fd_);
+    throw Error(ErrorCode::kFailedPrecondition, path.string(),
+                "another posefuse-server process uses this job store (SQLite serves one process; "
+                "replicas share a PostgreSQL one: --job-store)");
+  }
   if (sqlite3_open_v2(path.c_str(), &db_,
                       SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
                       nullptr) != SQLITE_OK) {
     const std::string message = db_ ? sqlite3_errmsg(db_) : "out of memory";
     sqlite3_close(db_);
     db_ = nullptr;
+    ::close(lock_fd_);
     throw Error(ErrorCode::kFailedPrecondition, path.string(), "cannot open the job store: " + message);
   }
   sqlite3_busy_timeout(db_, 5000);
@@ -122,11 +143,15 @@ SqliteJobStore::SqliteJobStore(const std::filesystem::path& path) : path_(path) 
          " PRIMARY KEY (job_id, seq))");
   } catch (const Error& error) {
     sqlite3_close(db_);
+    ::close(lock_fd_);
     throw Error(ErrorCode::kFailedPrecondition, path.string(), error.what());
   }
 }
 
-SqliteJobStore::~SqliteJobStore() { sqlite3_close(db_); }
+SqliteJobStore::~SqliteJobStore() {
+  sqlite3_close(db_);
+  ::close(lock_fd_);  // releases the lock
+}
 
 void SqliteJobStore::exec(const char* sql) {
   char* message = nullptr;

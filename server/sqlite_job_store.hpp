@@ -1,5 +1,6 @@
 #pragma once
-// JobStore in one SQLite database file (WAL mode), for one server process. Jobs and results are
+// JobStore in one SQLite database file (WAL mode), for one server process (a second one is
+// refused: an flock on <file>.lock). Jobs and results are
 // stored as serialised protobuf messages beside the columns that queries need (state, create
 // time, the lease). Uploads stay the spooled files in the data dir. Events go to the listener
 // of this process only. Thread-safe: one connection, one mutex.
@@ -62,6 +63,7 @@ class SqliteJobStore : public JobStore {
   std::filesystem::path path_;
   std::mutex mu_;
   sqlite3* db_ = nullptr;
+  int lock_fd_ = -1;
   std::mutex listener_mu_;
   std::function<void(const JobEvent&)> listener_;
 };

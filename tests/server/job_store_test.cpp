@@ -2,6 +2,7 @@
 // restart), listing pages newest first, a job left RUNNING is queued again by the first reap.
 // The queue contract shared with PostgreSQL: job_store_contract_test.cpp.
 #include <filesystem>
+#include <optional>
 
 #include <gtest/gtest.h>
 
@@ -109,6 +110,21 @@ TEST_F(JobStoreTest, UpdatingAnUnknownJobIsNotFound) {
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::kNotFound);
   }
+}
+
+TEST_F(JobStoreTest, ASecondOpeningOfTheSameFileIsRefusedUntilTheFirstCloses) {
+  std::optional<SqliteJobStore> first(std::in_place, db());
+  try {
+    SqliteJobStore second(db());
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kFailedPrecondition);
+    EXPECT_NE(std::string(e.what()).find("another posefuse-server process uses this job store"),
+              std::string::npos)
+        << e.what();
+  }
+  first.reset();
+  SqliteJobStore reopened(db());
 }
 
 TEST_F(JobStoreTest, UnopenableDatabaseIsFailedPrecondition) {
