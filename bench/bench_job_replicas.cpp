@@ -135,7 +135,7 @@ std::vector<int> parse_list(const std::string& text) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
+int run_bench(int argc, char** argv) {
   Options options;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i], value = argv[i + 1];
@@ -213,4 +213,14 @@ int main(int argc, char** argv) {
     api.process->terminate();
   }
   return 0;
+}
+
+int main(int argc, char** argv) {
+  // Caught here, so that the cluster and the server processes are stopped on the way out.
+  try {
+    return run_bench(argc, argv);
+  } catch (const std::exception& error) {
+    std::cerr << "bench_job_replicas: " << error.what() << "\n";
+    return 1;
+  }
 }

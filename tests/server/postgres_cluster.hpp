@@ -50,8 +50,15 @@ class PostgresCluster {
       as_user_ = "runuser -u postgres -- ";
     }
     ::chmod(dir_.c_str(), 0700);
-    shell(bin_ / "initdb", "-D " + data() + " -A trust -U posefuse -E UTF8 --no-sync", "initdb");
-    start();
+    try {
+      shell(bin_ / "initdb", "-D " + data() + " -A trust -U posefuse -E UTF8 --no-sync", "initdb");
+      start();
+    } catch (...) {
+      run_quietly("-D " + data() + " -m immediate stop");
+      std::error_code ignored;
+      std::filesystem::remove_all(dir_, ignored);
+      throw;
+    }
   }
 
   ~PostgresCluster() {
