@@ -108,15 +108,28 @@ class WatchJob : public QueuedWriter<v1::Job> {
   }
 
  private:
+  // Versions arrive from the store's events and from the first read, possibly twice and, when
+  // two reads cross, an older one after a newer: those are skipped (an end never is).
   void push_bounded(v1::Job job) {
     bound_stored_job(job);
     const bool last = is_terminal(job.state());
+    {
+      std::lock_guard lock(seen_mu_);
+      std::string bytes = job.SerializeAsString();
+      if (bytes == last_sent_) return;
+      if (!last && job.update_time_unix_us() < last_update_time_us_) return;
+      last_sent_ = std::move(bytes);
+      last_update_time_us_ = job.update_time_unix_us();
+    }
     push(std::move(job), last);
   }
   void on_done() override { runner_.unsubscribe(token_); }
   JobRunner& runner_;
   std::string job_id_;
   std::uint64_t token_ = 0;
+  std::mutex seen_mu_;
+  std::string last_sent_;
+  std::int64_t last_update_time_us_ = 0;
 };
 
 class JobResults : public QueuedWriter<v1::FitResult> {

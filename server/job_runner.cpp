@@ -1,12 +1,16 @@
 #include "server/job_runner.hpp"
 
+#include <unistd.h>
+
 #include <chrono>
 #include <filesystem>
 #include <memory>
 #include <stdexcept>
 
 #include "server/job_recording.hpp"
+#include "server/job_store_errors.hpp"
 #include "server/log.hpp"
+#include "server/random_id.hpp"
 #include "server/status.hpp"
 #include "session/pipeline.hpp"
 #include "session/stages/default_stages.hpp"
@@ -19,6 +23,14 @@ std::int64_t now_unix_us() {
   return std::chrono::duration_cast<std::chrono::microseconds>(
              std::chrono::system_clock::now().time_since_epoch())
       .count();
+}
+
+// "<host>-<pid>-<random>": readable in the store and in logs, unique across restarts.
+std::string make_worker_id() {
+  char host[256] = {};
+  if (::gethostname(host, sizeof host - 1) != 0) host[0] = '\0';
+  return std::string(host[0] ? host : "worker") + "-" + std::to_string(::getpid()) + "-" +
+         random_hex_id().substr(0, 8);
 }
 
 // A write to the job store that failed (a full disk, an I/O error). A type of its own, not a
@@ -34,10 +46,26 @@ class StoreWriteFailed : public std::runtime_error {
   ErrorCode code_;
 };
 
+// The run must stop without writing anything more: its lease is gone, or the store cannot be
+// reached (the lease then expires and another attempt runs the job).
+class RunAbandoned : public std::runtime_error {
+ public:
+  RunAbandoned(const char* reason, bool lease_lost)
+      : std::runtime_error(reason), lease_lost_(lease_lost) {}
+  bool lease_lost() const { return lease_lost_; }
+
+ private:
+  bool lease_lost_;
+};
+
 template <class Write>
 void store_write(Write&& write) {
   try {
     write();
+  } catch (const LeaseLost&) {
+    throw RunAbandoned("lease_lost", true);
+  } catch (const StoreUnavailable&) {
+    throw RunAbandoned("job_store_unavailable", false);
   } catch (const Error& error) {
     throw StoreWriteFailed(error);
   }
@@ -46,8 +74,8 @@ void store_write(Write&& write) {
 // Buffers a job's results and writes them to the store in batches; keeps the job's progress.
 class StoreSink : public session::ResultSink {
  public:
-  StoreSink(JobStore& store, v1::Job& job, std::function<void(const v1::Job&)> on_progress)
-      : store_(store), job_(job), on_progress_(std::move(on_progress)) {}
+  StoreSink(JobStore& store, const JobLease& lease, v1::Job& job)
+      : store_(store), lease_(lease), job_(job) {}
   void emit(v1::FitResult&& result) override {
     if (result.has_progress()) *job_.mutable_progress() = result.progress();
     if (result.has_summary()) *job_.mutable_summary() = result.summary();
@@ -55,21 +83,20 @@ class StoreSink : public session::ResultSink {
     pending_.push_back(std::move(result));
     if (pending_.size() >= 64 || progress) flush(progress);
   }
-  // Throws StoreWriteFailed.
+  // Throws StoreWriteFailed or RunAbandoned.
   void flush(bool job_changed) {
-    if (!pending_.empty()) store_write([&] { store_.append_results(job_.job_id(), pending_); });
+    if (!pending_.empty()) store_write([&] { store_.append_results(lease_, pending_); });
     pending_.clear();
     if (job_changed) {
       job_.set_update_time_unix_us(now_unix_us());
-      store_write([&] { store_.update(job_); });
-      on_progress_(job_);
+      store_write([&] { store_.update_running(lease_, job_); });
     }
   }
 
  private:
   JobStore& store_;
+  const JobLease& lease_;
   v1::Job& job_;
-  std::function<void(const v1::Job&)> on_progress_;
   std::vector<v1::FitResult> pending_;
 };
 
@@ -79,120 +106,191 @@ void fail_job(v1::Job& job, grpc::StatusCode code, const std::string& message) {
   job.set_error_message(message);
 }
 
-// An uploaded recording (no recording_uri) is the server's own spooled copy: once its job has
-// finished nothing reads it again. A recording submitted by reference belongs to its owner.
-void drop_uploaded_recording(const JobRecord& record) {
-  if (!record.job.recording_uri().empty()) return;
-  std::error_code ignored;
-  std::filesystem::remove(record.recording_path, ignored);
-}
-
 }  // namespace
 
-bool is_terminal(v1::Job::State state) {
-  return state == v1::Job::SUCCEEDED || state == v1::Job::FAILED || state == v1::Job::CANCELLED;
-}
-
-JobRunner::JobRunner(JobStore& store, WorkerPool& pool, Metrics& metrics, unsigned max_running,
-                     std::filesystem::path recordings_root)
+JobRunner::JobRunner(JobStore& store, WorkerPool& pool, Metrics& metrics, JobRunnerOptions options)
     : store_(store),
       pool_(pool),
       metrics_(metrics),
-      max_running_(std::max(1u, max_running)),
-      recordings_root_(std::move(recordings_root)) {}
-
-JobRunner::~JobRunner() {
-  std::unique_lock lock(mu_);
-  stopping_ = true;
-  stop_flag_ = true;
-  queue_.clear();
-  idle_.wait(lock, [this] { return running_.empty(); });
+      options_([&] {
+        options.max_running = std::max(1u, options.max_running);
+        return std::move(options);
+      }()),
+      worker_id_(make_worker_id()) {
+  store_.set_event_listener([this](const JobEvent& event) { on_event(event); });
 }
 
-void JobRunner::resume_unfinished() {
-  for (JobRecord& record : store_.unfinished()) {
-    store_.clear_results(record.job.job_id());
-    record.job.set_state(v1::Job::QUEUED);
-    record.job.clear_progress();
-    record.job.set_update_time_unix_us(now_unix_us());
-    store_.update(record.job);
-    log_event("info", "job_resumed", {{"job", record.job.job_id()}});
+JobRunner::~JobRunner() {
+  {
     std::lock_guard lock(mu_);
-    queue_.push_back(record.job.job_id());
+    stopping_ = true;
+    stop_flag_ = true;
   }
-  std::lock_guard lock(mu_);
-  start_next_locked();
+  wake_cv_.notify_all();
+  if (dispatcher_.joinable()) dispatcher_.join();
+  {
+    std::unique_lock lock(mu_);
+    idle_.wait(lock, [this] { return running_.empty(); });
+  }
+  store_.set_event_listener({});
+}
+
+void JobRunner::start() {
+  if (!options_.claims_jobs) return;
+  log_event("info", "job_worker_start", {{"worker", worker_id_},
+                                         {"max_jobs", std::to_string(options_.max_running)},
+                                         {"lease_ms", std::to_string(options_.lease.count())}});
+  dispatcher_ = std::thread([this] { dispatch_loop(); });
+}
+
+void JobRunner::dispatch_loop() {
+  using Clock = std::chrono::steady_clock;
+  Clock::time_point next_heartbeat = Clock::now();
+  while (true) {
+    {
+      std::unique_lock lock(mu_);
+      wake_cv_.wait_until(lock, next_heartbeat, [this] { return stopping_ || wake_; });
+      if (stopping_) return;
+      wake_ = false;
+    }
+    if (Clock::now() >= next_heartbeat) {
+      next_heartbeat = Clock::now() + options_.heartbeat;
+      renew_leases();
+      reap_expired();
+    }
+    claim_more();
+  }
+}
+
+void JobRunner::renew_leases() {
+  std::vector<std::shared_ptr<Running>> running;
+  {
+    std::lock_guard lock(mu_);
+    for (const auto& [id, entry] : running_) running.push_back(entry);
+  }
+  for (const auto& entry : running) {
+    try {
+      switch (store_.renew(entry->lease, options_.lease)) {
+        case LeaseState::kHeld: break;
+        case LeaseState::kCancelRequested: entry->cancel = true; break;
+        case LeaseState::kLost: entry->lost = true; break;
+      }
+    } catch (const std::exception& error) {
+      // The job goes on; if the store stays away past the lease, another attempt takes over.
+      log_event("warning", "job_lease_renew_failed", {{"job", entry->lease.job_id}, {"error", error.what()}});
+    }
+  }
+}
+
+void JobRunner::reap_expired() {
+  try {
+    for (const ReapedJob& job : store_.reap(options_.max_attempts, now_unix_us())) {
+      log_event("info", "job_lease_expired", {{"job", job.job_id}, {"state", v1::Job::State_Name(job.state)}});
+      if (job.state == v1::Job::QUEUED) continue;
+      metrics_.job_finished(v1::Job::State_Name(job.state));
+      // Finished without its worker: nothing reads its upload again.
+      if (const std::optional<JobRecord> record = store_.get(job.job_id)) drop_upload(*record);
+    }
+  } catch (const std::exception& error) {
+    log_event("warning", "job_reap_failed", {{"error", error.what()}});
+  }
+}
+
+void JobRunner::claim_more() {
+  while (true) {
+    {
+      std::lock_guard lock(mu_);
+      if (stopping_ || running_.size() >= options_.max_running) return;
+    }
+    std::optional<JobRecord> record;
+    try {
+      record = store_.claim(worker_id_, options_.lease, now_unix_us());
+      if (claim_failed_) log_event("info", "job_claim_recovered");
+      claim_failed_ = false;
+    } catch (const std::exception& error) {
+      if (!claim_failed_) log_event("error", "job_claim_failed", {{"error", error.what()}});
+      claim_failed_ = true;
+    }
+    std::lock_guard lock(mu_);
+    if (!record) {
+      queue_empty_ = true;
+      idle_.notify_all();
+      return;
+    }
+    queue_empty_ = false;
+    auto running = std::make_shared<Running>();
+    running->lease = {record->job.job_id(), worker_id_, record->attempts};
+    running_[record->job.job_id()] = running;
+    log_event("info", "job_claimed", {{"job", record->job.job_id()},
+                                      {"attempt", std::to_string(record->attempts)},
+                                      {"worker", worker_id_}});
+    pool_.submit([this, running, record = std::move(*record)]() mutable { run(running, std::move(record)); });
+  }
 }
 
 v1::Job JobRunner::submit(const v1::JobSpec& spec, const std::string& recording_path,
                           const std::string& owner) {
   const v1::Job job = store_.create(spec, recording_path, owner, now_unix_us());
   log_event("info", "job_submitted", {{"job", job.job_id()}});
-  std::lock_guard lock(mu_);
-  queue_.push_back(job.job_id());
-  start_next_locked();
+  {
+    std::lock_guard lock(mu_);
+    wake_ = true;
+  }
+  wake_cv_.notify_all();
   return job;
 }
 
 std::optional<v1::Job> JobRunner::cancel(const std::string& job_id, const std::string& owner) {
-  std::optional<JobRecord> record = store_.get(job_id);
-  if (!record || record->owner != owner) return std::nullopt;
-  if (is_terminal(record->job.state())) return record->job;
-  {
-    std::lock_guard lock(mu_);
-    if (running_.count(job_id)) {
-      // The worker stops before its next chunk and stores CANCELLED itself.
-      cancel_requested_.insert(job_id);
-      return record->job;
-    }
-    std::erase(queue_, job_id);
-  }
-  record->job.set_state(v1::Job::CANCELLED);
-  record->job.set_update_time_unix_us(now_unix_us());
-  store_.update(record->job);
-  drop_uploaded_recording(*record);
-  publish(record->job);
+  const std::optional<JobRecord> record = store_.cancel(job_id, owner, now_unix_us());
+  if (!record) return std::nullopt;
+  if (record->job.state() == v1::Job::CANCELLED) drop_upload(*record);
   return record->job;
 }
 
-void JobRunner::start_next_locked() {
-  while (!stopping_ && running_.size() < max_running_ && !queue_.empty()) {
-    const std::string id = queue_.front();
-    queue_.pop_front();
-    running_.insert(id);
-    pool_.submit([this, id] { run(id); });
+void JobRunner::drop_upload(const JobRecord& record) {
+  // A recording submitted by reference belongs to its owner; only uploads are ours.
+  if (!record.job.recording_uri().empty()) return;
+  try {
+    store_.drop_upload(record.recording_path, options_.scratch_dir);
+  } catch (const std::exception& error) {
+    log_event("warning", "upload_drop_failed", {{"job", record.job.job_id()}, {"error", error.what()}});
   }
 }
 
-void JobRunner::run(const std::string& job_id) {
+void JobRunner::run(const std::shared_ptr<Running>& running, JobRecord record) {
   // Nothing may escape a worker task: an exception there would end the process.
   try {
-    std::optional<JobRecord> record = store_.get(job_id);
-    if (record && !is_terminal(record->job.state())) run_job(*record);
-  } catch (const std::exception&) {
-    // Only the store's read of the job can get here (run_job catches what it does itself).
-    log_event("error", "job_store_error", {{"job", job_id}});
+    run_job(*running, record);
+  } catch (const std::exception& error) {
+    log_event("error", "job_runner_error", {{"job", record.job.job_id()}, {"error", error.what()}});
   }
+  // Everything under the lock: once running_ is empty the destructor may free this runner.
   std::lock_guard lock(mu_);
-  running_.erase(job_id);
-  cancel_requested_.erase(job_id);
-  start_next_locked();
+  running_.erase(record.job.job_id());
+  wake_ = true;
   idle_.notify_all();
+  wake_cv_.notify_all();
 }
 
-void JobRunner::run_job(JobRecord& record) {
+void JobRunner::run_job(Running& running, JobRecord& record) {
   v1::Job& job = record.job;
   const std::string job_id = job.job_id();
+  const JobLease& lease = running.lease;
   bool handed_back = false;
+  std::optional<RunAbandoned> abandoned;
   // Set when the store refused a write: the job fails with it, whatever the pipeline did.
   std::optional<StoreWriteFailed> store_failure;
-  StoreSink sink(store_, job, [this](const v1::Job& j) { publish(j); });
+  StoreSink sink(store_, lease, job);
   try {
-    job.set_state(v1::Job::RUNNING);
-    job.set_update_time_unix_us(now_unix_us());
-    store_write([&] { store_.update(job); });
-    publish(job);
-    auto source = open_job_recording(record, recordings_root_);
+    JobRecord local = record;
+    if (job.recording_uri().empty()) {
+      try {
+        local.recording_path = store_.local_recording(record.recording_path, options_.scratch_dir);
+      } catch (const StoreUnavailable&) {
+        throw RunAbandoned("job_store_unavailable", false);
+      }
+    }
+    auto source = open_job_recording(local, options_.recordings_root);
     session::PipelineOptions pipeline_options;
     pipeline_options.on_stage_time = [this](std::string_view stage, double seconds) {
       metrics_.stage_time(stage, seconds);
@@ -205,16 +303,16 @@ void JobRunner::run_job(JobRecord& record) {
         handed_back = true;
         break;
       }
-      {
-        std::lock_guard lock(mu_);
-        cancelled = cancel_requested_.count(job_id) > 0;
-      }
+      if (running.lost) throw RunAbandoned("lease_lost", true);
+      cancelled = running.cancel;
       if (cancelled) break;
       pipeline.push(chunk);
       if (pipeline.ended()) break;
     }
     if (!handed_back && !cancelled) pipeline.close();
     if (!handed_back) job.set_state(cancelled ? v1::Job::CANCELLED : v1::Job::SUCCEEDED);
+  } catch (const RunAbandoned& reason) {
+    abandoned = reason;
   } catch (const StoreWriteFailed& failure) {
     store_failure = failure;
   } catch (const Error& error) {
@@ -223,33 +321,101 @@ void JobRunner::run_job(JobRecord& record) {
     fail_job(job, grpc::StatusCode::INTERNAL, std::string("internal error: ") + error.what());
   }
   // The results that came before the end or the error.
-  if (!store_failure) {
+  if (!store_failure && !abandoned && !handed_back) {
     try {
       sink.flush(false);
     } catch (const StoreWriteFailed& failure) {
       store_failure = failure;
+    } catch (const RunAbandoned& reason) {
+      abandoned = reason;
     }
   }
+  if (abandoned) {
+    log_event("warning", "job_abandoned", {{"job", job_id}, {"reason", abandoned->what()}});
+    if (!abandoned->lease_lost()) handed_back = true;  // try to give it back at once
+  }
+  if (handed_back) {
+    try {
+      store_.release(lease, now_unix_us());
+      log_event("info", "job_handed_back", {{"job", job_id}});
+    } catch (const std::exception&) {
+      // The lease expires instead; a worker then takes the job up again.
+    }
+    return;
+  }
+  if (abandoned) return;
   if (store_failure) {
-    handed_back = false;  // a job that cannot be stored is not resumed by this process either
     fail_job(job, status_code(store_failure->code()),
              std::string("the job store refused a write, the job's results are incomplete: ") +
                  store_failure->what());
     log_event("error", "job_store_write_failed", {{"job", job_id}});
   }
-  if (handed_back) return;
   job.set_update_time_unix_us(now_unix_us());
   try {
-    store_.update(job);
+    store_.update_running(lease, job);
+  } catch (const LeaseLost&) {
+    log_event("warning", "job_abandoned", {{"job", job_id}, {"reason", "lease_lost"}});
+    return;
+  } catch (const StoreUnavailable&) {
+    // Not stored: the lease expires and another attempt runs the job; watchers learn from it.
+    log_event("warning", "job_abandoned", {{"job", job_id}, {"reason", "job_store_unavailable"}});
+    return;
   } catch (const Error&) {
-    // Watchers still learn the end below; the store keeps the job unfinished, so the next
-    // start runs it again.
+    // Watchers here still learn the end; the store keeps the job RUNNING until its lease
+    // expires, and then it runs again.
     log_event("error", "job_store_write_failed", {{"job", job_id}});
+    publish(job);
   }
-  drop_uploaded_recording(record);
-  publish(job);
+  drop_upload(record);
   metrics_.job_finished(v1::Job::State_Name(job.state()));
-  log_event("info", "job_end", {{"job", job_id}, {"state", v1::Job::State_Name(job.state())}});
+  log_event("info", "job_end", {{"job", job_id}, {"state", v1::Job::State_Name(job.state())},
+                                {"attempt", std::to_string(lease.attempt)}});
+}
+
+void JobRunner::on_event(const JobEvent& event) {
+  switch (event.kind) {
+    case JobEvent::Kind::kQueued: {
+      {
+        std::lock_guard lock(mu_);
+        wake_ = true;
+      }
+      wake_cv_.notify_all();
+      return;
+    }
+    case JobEvent::Kind::kChanged:
+      publish_stored(event.job_id);
+      return;
+    case JobEvent::Kind::kCancelRequested: {
+      std::lock_guard lock(mu_);
+      if (const auto it = running_.find(event.job_id); it != running_.end()) it->second->cancel = true;
+      return;
+    }
+    case JobEvent::Kind::kMissedEvents: {
+      std::set<std::string> watched;
+      {
+        std::lock_guard lock(mu_);
+        for (const auto& [token, entry] : listeners_) watched.insert(entry.first);
+        wake_ = true;
+      }
+      wake_cv_.notify_all();
+      for (const std::string& id : watched) publish_stored(id);
+      return;
+    }
+  }
+}
+
+void JobRunner::publish_stored(const std::string& job_id) {
+  {
+    std::lock_guard lock(mu_);
+    bool watched = false;
+    for (const auto& [token, entry] : listeners_) watched = watched || entry.first == job_id;
+    if (!watched) return;
+  }
+  try {
+    if (const std::optional<JobRecord> record = store_.get(job_id)) publish(record->job);
+  } catch (const std::exception& error) {
+    log_event("warning", "job_watch_read_failed", {{"job", job_id}, {"error", error.what()}});
+  }
 }
 
 std::uint64_t JobRunner::subscribe(const std::string& job_id, Listener listener) {
@@ -279,7 +445,9 @@ void JobRunner::publish(const v1::Job& job) {
 
 bool JobRunner::wait_idle(std::chrono::milliseconds timeout) {
   std::unique_lock lock(mu_);
-  return idle_.wait_for(lock, timeout, [this] { return running_.empty() && queue_.empty(); });
+  return idle_.wait_for(lock, timeout, [this] {
+    return running_.empty() && (!options_.claims_jobs || (queue_empty_ && !wake_));
+  });
 }
 
 }  // namespace posefuse::server

@@ -1,78 +1,106 @@
 #pragma once
-// Runs batch jobs: each job reads its recording from disk and goes through the same
-// SessionPipeline as a Fit call, on the worker pool, at most max_running at once. Everything a
-// job produces is written to the JobStore as it goes (results in batches, progress in the job),
-// so a restarted server loses nothing: resume_unfinished() restarts every job that was queued or
-// running (from the beginning; its partial results are dropped first).
+// Runs batch jobs: each job reads its recording and goes through the same SessionPipeline as a
+// Fit call, on the worker pool, at most max_running at once. The queue is the JobStore: a
+// dispatcher thread claims jobs under a lease (job_store.hpp), renews the leases of the jobs
+// it runs every heartbeat, and reaps jobs whose lease expired (their worker was killed), so any
+// number of runners on one shared store run every job exactly once at a time. Everything a job
+// produces is written to the store as it goes, through its lease.
 //
-// Shutdown hands work back: running jobs stop between two chunks and stay RUNNING in the store,
-// queued ones stay QUEUED; the next server start resumes them.
+// Watchers (WatchJob) and cancellation follow the store's events, so they work whichever
+// replica runs the job. Shutdown hands work back: running jobs stop between two chunks and are
+// released to the queue for another worker (or the next start).
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <cstdint>
-#include <deque>
 #include <filesystem>
 #include <functional>
 #include <map>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <set>
 #include <string>
+#include <thread>
 
 #include "server/job_store.hpp"
+#include "server/job_transitions.hpp"
 #include "server/metrics.hpp"
 #include "server/worker_pool.hpp"
 
 namespace posefuse::server {
 
-bool is_terminal(v1::Job::State state);
+struct JobRunnerOptions {
+  unsigned max_running = 1;
+  bool claims_jobs = true;                // false: a replica that serves the API only
+  std::filesystem::path recordings_root;  // jobs by reference open beneath it (empty: off)
+  std::filesystem::path scratch_dir;      // where uploads held by the store are fetched to
+  std::chrono::milliseconds lease{30000};
+  std::chrono::milliseconds heartbeat{10000};  // lease renewal, reaping and queue polling
+  std::uint32_t max_attempts = 3;
+};
 
 class JobRunner {
  public:
-  // `recordings_root`: where jobs submitted by reference are opened beneath (empty: off).
-  JobRunner(JobStore& store, WorkerPool& pool, Metrics& metrics, unsigned max_running,
-            std::filesystem::path recordings_root);
-  ~JobRunner();  // stops running jobs (they stay RUNNING in the store) and waits for them
+  JobRunner(JobStore& store, WorkerPool& pool, Metrics& metrics, JobRunnerOptions options);
+  ~JobRunner();  // hands running jobs back and waits for them
 
-  // Re-queues every unfinished job in the store. Call once at start.
-  void resume_unfinished();
-  // Stores a new job of tenant `owner` and queues it.
+  // Starts claiming (with claims_jobs). Call once, when the server serves.
+  void start();
+  // Stores a new job of tenant `owner`; any worker on the store may run it.
   v1::Job submit(const v1::JobSpec& spec, const std::string& recording_path,
                  const std::string& owner);
-  // Cancels a queued or running job of tenant `owner`; a finished job is returned unchanged.
-  // nullopt: no such job of that tenant.
+  // Cancels a queued or running job of tenant `owner` (a running one stops on its worker,
+  // wherever that is); a finished job is returned unchanged. nullopt: no such job of that tenant.
   std::optional<v1::Job> cancel(const std::string& job_id, const std::string& owner);
 
-  // Calls `listener` with every later version of the job (from a worker thread) until
+  // Calls `listener` with later versions of the job (from the store's event thread) until
   // unsubscribe. Returns a token.
   using Listener = std::function<void(const v1::Job&)>;
   std::uint64_t subscribe(const std::string& job_id, Listener listener);
   void unsubscribe(std::uint64_t token);
 
   JobStore& store() { return store_; }
-  // Waits until no job is running or queued (tests); false on timeout.
+  const std::string& worker_id() const { return worker_id_; }
+  // Waits until this runner runs nothing and its last claim found the queue empty (tests);
+  // false on timeout.
   bool wait_idle(std::chrono::milliseconds timeout);
 
  private:
-  void start_next_locked();
-  void run(const std::string& job_id);
-  void run_job(JobRecord& record);
+  struct Running {
+    JobLease lease;
+    std::atomic<bool> cancel{false};
+    std::atomic<bool> lost{false};
+  };
+
+  void dispatch_loop();
+  void renew_leases();
+  void reap_expired();
+  void claim_more();
+  void run(const std::shared_ptr<Running>& running, JobRecord record);
+  void run_job(Running& running, JobRecord& record);
+  void drop_upload(const JobRecord& record);
+  void on_event(const JobEvent& event);
+  void publish_stored(const std::string& job_id);
   void publish(const v1::Job& job);
 
   JobStore& store_;
   WorkerPool& pool_;
   Metrics& metrics_;
-  const unsigned max_running_;
-  const std::filesystem::path recordings_root_;
+  const JobRunnerOptions options_;
+  const std::string worker_id_;
   std::mutex mu_;
+  std::condition_variable wake_cv_;
   std::condition_variable idle_;
-  std::deque<std::string> queue_;
-  std::set<std::string> running_;
-  std::set<std::string> cancel_requested_;
+  std::map<std::string, std::shared_ptr<Running>> running_;
+  bool wake_ = false;          // something to claim may be there
+  bool queue_empty_ = false;   // the last claim found nothing
   bool stopping_ = false;
+  bool claim_failed_ = false;  // logged once per streak of failures
   std::atomic<bool> stop_flag_{false};
   std::uint64_t next_token_ = 1;
   std::map<std::uint64_t, std::pair<std::string, Listener>> listeners_;
+  std::thread dispatcher_;
 };
 
 }  // namespace posefuse::server

@@ -9,12 +9,21 @@
 #include "common/error.hpp"
 #include "grpc/health/v1/health.pb.h"
 #include "server/log.hpp"
+#include "server/pg_job_store.hpp"
 #include "server/security.hpp"
 #include "server/sqlite_job_store.hpp"
 #include "server/submit_job_call.hpp"
 #include "server/upload_spool.hpp"
 
 namespace posefuse::server {
+
+namespace {
+
+std::chrono::milliseconds seconds_to_ms(double seconds) {
+  return std::chrono::milliseconds(static_cast<std::int64_t>(std::llround(seconds * 1000.0)));
+}
+
+}  // namespace
 
 void validate_options(const ServerOptions& o) {
   if (o.listen.empty()) throw_invalid("--listen", "is empty; expected host:port");
@@ -40,6 +49,28 @@ void validate_options(const ServerOptions& o) {
     throw_invalid(o.tls_cert.empty() ? "--tls-cert" : "--tls-key",
                   "is missing: --tls-cert and --tls-key go together");
   }
+  if (o.role != "api" && o.role != "worker" && o.role != "both") {
+    throw_invalid("--role", "is '" + o.role + "'; expected api, worker or both");
+  }
+  if (!o.job_store.empty() && !is_postgres_conninfo(o.job_store)) {
+    throw_invalid("--job-store", "expected a PostgreSQL connection string (postgresql://... or "
+                                 "key=value ...); without it the job store is SQLite in --data-dir");
+  }
+  if (!o.job_store.empty() && o.data_dir.empty()) {
+    throw_invalid("--job-store", "needs --data-dir (this replica's folder for uploads in transit)");
+  }
+  if (o.role != "both" && o.job_store.empty()) {
+    throw_invalid("--role", o.role + " needs a shared --job-store (PostgreSQL): with SQLite in "
+                            "--data-dir no other process sees this one's jobs");
+  }
+  if (!(o.job_lease_s > 0.0 && o.job_lease_s <= 86400.0)) {
+    throw_invalid("--job-lease-s", "must be in (0, 86400] seconds");
+  }
+  if (!(o.job_heartbeat_s > 0.0 && o.job_heartbeat_s < o.job_lease_s)) {
+    throw_invalid("--job-heartbeat-s", "must be positive and below --job-lease-s (a lease is "
+                                       "renewed before it expires)");
+  }
+  if (o.job_max_attempts == 0) throw_invalid("--job-max-attempts", "must be at least 1");
   if (!o.tls_client_ca.empty() && o.tls_cert.empty()) {
     throw_invalid("--tls-client-ca", "needs --tls-cert and --tls-key (mutual TLS is TLS first)");
   }
@@ -74,10 +105,27 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
       log_event("info", "partial_uploads_removed", {{"count", std::to_string(removed)}});
     }
     const std::filesystem::path data_dir(options_.data_dir);
-    job_store_ = make_store ? make_store(data_dir)
-                            : std::make_unique<SqliteJobStore>(data_dir / "jobs.sqlite");
-    jobs_ = std::make_unique<JobRunner>(*job_store_, *pool_, metrics_, options_.max_jobs,
-                                        options_.recordings_root);
+    // Uploads fetched from a shared store for a job that this replica no longer runs.
+    std::filesystem::remove_all(data_dir / "fetched", error);
+    std::filesystem::create_directories(data_dir / "fetched", error);
+    if (make_store) {
+      job_store_ = make_store(data_dir);
+    } else if (!options_.job_store.empty()) {
+      // A connection per running job's writes, one for the dispatcher's claims and heartbeats,
+      // two for API calls and watchers' reads.
+      job_store_ = std::make_unique<PgJobStore>(options_.job_store, options_.max_jobs + 3);
+    } else {
+      job_store_ = std::make_unique<SqliteJobStore>(data_dir / "jobs.sqlite");
+    }
+    JobRunnerOptions runner;
+    runner.max_running = options_.max_jobs;
+    runner.claims_jobs = options_.role != "api";
+    runner.recordings_root = options_.recordings_root;
+    runner.scratch_dir = data_dir / "fetched";
+    runner.lease = seconds_to_ms(options_.job_lease_s);
+    runner.heartbeat = seconds_to_ms(options_.job_heartbeat_s);
+    runner.max_attempts = options_.job_max_attempts;
+    jobs_ = std::make_unique<JobRunner>(*job_store_, *pool_, metrics_, std::move(runner));
   }
   service_ =
       std::make_unique<PoseFuseService>(options_, *pool_, *registry_, metrics_, jobs_.get(),
@@ -118,14 +166,16 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
   grpc::HealthCheckServiceInterface& health = *server_->GetHealthCheckService();
   health.SetServingStatus(v1::PoseFuse::service_full_name(), true);
   health.SetServingStatus(true);
-  if (jobs_) jobs_->resume_unfinished();
+  if (jobs_) jobs_->start();
   log_event("info", "server_start",
             {{"listen", options_.listen},
              {"port", std::to_string(port_)},
              {"workers", std::to_string(workers)},
              {"max_sessions", std::to_string(options_.max_sessions)},
              {"max_message_mb", std::to_string(options_.max_message_mb)},
-             {"idle_timeout_s", std::to_string(options_.idle_timeout_s)}});
+             {"idle_timeout_s", std::to_string(options_.idle_timeout_s)},
+             {"role", options_.role},
+             {"job_store", !jobs_ ? "off" : options_.job_store.empty() ? "sqlite" : "postgresql"}});
   // The security mode, never a token or key.
   log_event("info", "security",
             {{"transport", transport_mode(options_)},
@@ -149,7 +199,7 @@ void PoseFuseServer::shutdown() {
       std::chrono::duration<double>(options_.shutdown_grace_s));
   server_->Shutdown(std::chrono::system_clock::now() + grace);
   metrics_http_.reset();
-  jobs_.reset();  // running jobs stop between chunks and stay RUNNING: resumed at next start
+  jobs_.reset();  // running jobs stop between chunks and go back to the queue
   log_event("info", "server_stopped");
 }
 

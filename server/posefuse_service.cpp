@@ -47,6 +47,10 @@ PoseFuseService::PoseFuseService(const ServerOptions& options, WorkerPool& pool,
 
 grpc::Status PoseFuseService::authenticate(const grpc::CallbackServerContext* context,
                                            const char* call, std::string& tenant) const {
+  if (options_.role == "worker") {
+    return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
+                        "this replica only runs jobs (--role worker); call an API replica");
+  }
   return authenticate_call(tokens_, *context, call, tenant);
 }
 

@@ -33,6 +33,11 @@ void set_server_option(ServerOptions& o, const std::string& key, const std::stri
   else if (key == "data-dir") o.data_dir = value;
   else if (key == "recordings-root") o.recordings_root = value;
   else if (key == "max-jobs") o.max_jobs = count();
+  else if (key == "job-store") o.job_store = value;
+  else if (key == "role") o.role = value;
+  else if (key == "job-lease-s") o.job_lease_s = number();
+  else if (key == "job-heartbeat-s") o.job_heartbeat_s = number();
+  else if (key == "job-max-attempts") o.job_max_attempts = count();
   else if (key == "max-upload-mb") o.max_upload_mb = number();
   else if (key == "metrics-listen") o.metrics_listen = value;
   else if (key == "tls-cert") o.tls_cert = value;

@@ -14,8 +14,14 @@ struct ServerOptions {
   unsigned max_queued_chunks = 8;          // per session: read but not yet processed
   unsigned max_queued_results = 64;        // per session: computed but not yet sent
   double shutdown_grace_s = 10.0;          // calls in flight get this long to finish
-  // Batch jobs: off unless data_dir is set (job store: <data_dir>/jobs.sqlite).
+  // Batch jobs: off unless data_dir is set (job store: <data_dir>/jobs.sqlite unless job_store
+  // names a PostgreSQL database; data_dir then holds only uploads in transit).
   std::string data_dir;
+  std::string job_store;                   // empty: SQLite; postgresql://... or key=value
+  std::string role = "both";               // api | worker | both (docs/server.md "Job store")
+  double job_lease_s = 30.0;               // a running job's lease; expired: another worker
+  double job_heartbeat_s = 10.0;           // lease renewal, reaping and queue polling
+  unsigned job_max_attempts = 3;           // claims before a job whose lease keeps expiring fails
   std::string recordings_root;             // SubmitJob by reference reads only under this
   unsigned max_jobs = 1;                   // jobs running at once
   double max_upload_mb = 8192.0;           // SubmitJob by upload: whole recording, MiB

@@ -1,5 +1,7 @@
 #include "server/status.hpp"
 
+#include "server/job_store_errors.hpp"
+
 namespace posefuse::server {
 
 grpc::StatusCode status_code(ErrorCode code) {
@@ -16,6 +18,9 @@ grpc::StatusCode status_code(ErrorCode code) {
 }
 
 grpc::Status to_status(const Error& error) {
+  if (dynamic_cast<const StoreUnavailable*>(&error)) {
+    return grpc::Status(grpc::StatusCode::UNAVAILABLE, error.what());
+  }
   return grpc::Status(status_code(error.code()), error.what());
 }
 

@@ -112,8 +112,26 @@ void SubmitJobCall::commit() {
     return;
   }
   try {
-    const std::filesystem::path& path = spool_->commit();
-    *response_ = context_.runner.submit(spec_, path.string(), tenant_);
+    // The store may take the bytes into itself (PostgreSQL: every replica reads them there).
+    const std::filesystem::path spooled = spool_->commit();
+    std::string recording;
+    try {
+      recording = context_.runner.store().keep_upload(spooled);
+    } catch (const Error&) {
+      std::error_code ignored;
+      std::filesystem::remove(spooled, ignored);  // no job will read it
+      throw;
+    }
+    try {
+      *response_ = context_.runner.submit(spec_, recording, tenant_);
+    } catch (const Error&) {
+      try {
+        context_.runner.store().drop_upload(recording, context_.spool_dir);
+      } catch (const std::exception&) {
+        // The error to report is the one that got us here.
+      }
+      throw;
+    }
   } catch (const Error& error) {
     finish_locked(to_status(error));
     return;

@@ -53,6 +53,20 @@ TEST_F(ConfigTest, FileSetsEveryKindOfOptionAndFlagsOverrideItWhereverConfigStan
   EXPECT_EQ(line.options.max_sessions, ServerOptions{}.max_sessions);  // untouched default
 }
 
+TEST_F(ConfigTest, JobStoreRoleAndLeaseKeys) {
+  const std::string path = write_config(
+      "job-store = host=/run/postgresql dbname=posefuse\n"
+      "role = worker\n"
+      "job-lease-s = 12.5\n");
+  const CommandLine line = parse_server_command_line(
+      {"--config", path, "--job-heartbeat-s", "2", "--job-max-attempts=5"});
+  EXPECT_EQ(line.options.job_store, "host=/run/postgresql dbname=posefuse");
+  EXPECT_EQ(line.options.role, "worker");
+  EXPECT_DOUBLE_EQ(line.options.job_lease_s, 12.5);
+  EXPECT_DOUBLE_EQ(line.options.job_heartbeat_s, 2.0);
+  EXPECT_EQ(line.options.job_max_attempts, 5u);
+}
+
 TEST_F(ConfigTest, UnknownKeyIsAnErrorNamingTheFileAndLine) {
   const std::string path = write_config("workers = 2\n\nmax_sessions = 4\n");
   const std::string message = error_of({"--config", path});

@@ -14,7 +14,7 @@ class FaultyJobStore : public JobStore {
   explicit FaultyJobStore(const std::filesystem::path& path) : store_(path) {}
 
   std::atomic<bool> refuse_creates{false};
-  std::atomic<bool> refuse_updates{false};
+  std::atomic<bool> refuse_updates{false};  // a running job's state, and cancelling
   std::atomic<bool> refuse_results{false};
 
   v1::Job create(const v1::JobSpec& spec, const std::string& recording_path,
@@ -40,8 +40,46 @@ class FaultyJobStore : public JobStore {
   std::vector<v1::FitResult> results(const std::string& job_id) override {
     return store_.results(job_id);
   }
-  void clear_results(const std::string& job_id) override { store_.clear_results(job_id); }
-  std::vector<JobRecord> unfinished() override { return store_.unfinished(); }
+  std::optional<JobRecord> cancel(const std::string& job_id, const std::string& owner,
+                                  std::int64_t now_unix_us) override {
+    if (refuse_updates) disk_full();
+    return store_.cancel(job_id, owner, now_unix_us);
+  }
+  std::optional<JobRecord> claim(const std::string& worker, std::chrono::milliseconds lease,
+                                 std::int64_t now_unix_us) override {
+    return store_.claim(worker, lease, now_unix_us);
+  }
+  LeaseState renew(const JobLease& lease, std::chrono::milliseconds duration) override {
+    return store_.renew(lease, duration);
+  }
+  void update_running(const JobLease& lease, const v1::Job& job) override {
+    if (refuse_updates) disk_full();
+    store_.update_running(lease, job);
+  }
+  void append_results(const JobLease& lease, const std::vector<v1::FitResult>& results) override {
+    if (refuse_results) disk_full();
+    store_.append_results(lease, results);
+  }
+  void release(const JobLease& lease, std::int64_t now_unix_us) override {
+    store_.release(lease, now_unix_us);
+  }
+  std::vector<ReapedJob> reap(std::uint32_t max_attempts, std::int64_t now_unix_us) override {
+    return store_.reap(max_attempts, now_unix_us);
+  }
+  void set_event_listener(std::function<void(const JobEvent&)> listener) override {
+    store_.set_event_listener(std::move(listener));
+  }
+  std::string keep_upload(const std::filesystem::path& spooled) override {
+    return store_.keep_upload(spooled);
+  }
+  std::filesystem::path local_recording(const std::string& recording_path,
+                                        const std::filesystem::path& scratch_dir) override {
+    return store_.local_recording(recording_path, scratch_dir);
+  }
+  void drop_upload(const std::string& recording_path,
+                   const std::filesystem::path& scratch_dir) override {
+    store_.drop_upload(recording_path, scratch_dir);
+  }
 
  private:
   [[noreturn]] static void disk_full() {

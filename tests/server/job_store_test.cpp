@@ -1,6 +1,8 @@
 // SqliteJobStore: jobs and results survive closing and reopening the database (a server
-// restart), listing pages newest first, unfinished() finds what a restarted server must resume.
+// restart), listing pages newest first, a job left RUNNING is queued again by the first reap.
+// The queue contract shared with PostgreSQL: job_store_contract_test.cpp.
 #include <filesystem>
+#include <optional>
 
 #include <gtest/gtest.h>
 
@@ -67,10 +69,12 @@ TEST_F(JobStoreTest, JobsAndResultsSurviveReopening) {
   ASSERT_EQ(results.size(), 2u);
   EXPECT_TRUE(results[0].has_progress());
   EXPECT_EQ(results[1].summary().chunks(), 100u);
-  const auto unfinished = reopened.unfinished();
-  ASSERT_EQ(unfinished.size(), 1u);
-  EXPECT_EQ(unfinished[0].job.job_id(), id);
-  reopened.clear_results(id);
+  // The process that ran it is gone: the first reap queues it again without its results.
+  const auto reaped = reopened.reap(3, 2000);
+  ASSERT_EQ(reaped.size(), 1u);
+  EXPECT_EQ(reaped[0].job_id, id);
+  EXPECT_EQ(reaped[0].state, v1::Job::QUEUED);
+  EXPECT_EQ(reopened.get(id)->job.state(), v1::Job::QUEUED);
   EXPECT_TRUE(reopened.results(id).empty());
 }
 
@@ -92,7 +96,7 @@ TEST_F(JobStoreTest, ListsNewestFirstWithPagesAndStateFilter) {
   const auto succeeded = store.list(10, "", {v1::Job::SUCCEEDED}, "");
   ASSERT_EQ(succeeded.size(), 1u);
   EXPECT_EQ(succeeded[0].job_id(), ids[1]);
-  EXPECT_EQ(store.unfinished().size(), 4u);
+  EXPECT_EQ(store.list(10, "", {v1::Job::QUEUED}, "").size(), 4u);
   EXPECT_FALSE(store.get("no-such-job"));
 }
 
@@ -106,6 +110,21 @@ TEST_F(JobStoreTest, UpdatingAnUnknownJobIsNotFound) {
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::kNotFound);
   }
+}
+
+TEST_F(JobStoreTest, ASecondOpeningOfTheSameFileIsRefusedUntilTheFirstCloses) {
+  std::optional<SqliteJobStore> first(std::in_place, db());
+  try {
+    SqliteJobStore second(db());
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kFailedPrecondition);
+    EXPECT_NE(std::string(e.what()).find("another posefuse-server process uses this job store"),
+              std::string::npos)
+        << e.what();
+  }
+  first.reset();
+  SqliteJobStore reopened(db());
 }
 
 TEST_F(JobStoreTest, UnopenableDatabaseIsFailedPrecondition) {
@@ -126,7 +145,6 @@ TEST_F(JobStoreTest, ListsOnlyTheOwnersJobsAndKeepsEachJobsOwner) {
   EXPECT_EQ(listed[0].job_id(), a);
   EXPECT_TRUE(store.list(10, "", {}, "").empty());
   EXPECT_EQ(store.get(b)->owner, "clinic-b");
-  EXPECT_EQ(store.unfinished().size(), 2u);
 }
 
 TEST_F(JobStoreTest, StoreFromBeforeTenantsGetsTheOwnerColumnWithItsJobsSharedByNoTenant) {

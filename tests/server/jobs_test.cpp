@@ -125,7 +125,9 @@ TEST_F(JobsTest, UploadedJobRunsToSucceededWithEveryResultAndDropsItsSpoolFile) 
   const auto samples = orientation_samples(results(job.job_id()));
   EXPECT_EQ(samples.at(demo::kArmDevice), 800u);
   EXPECT_EQ(samples.at(demo::kBaseDevice), 800u);
-  // The spooled copy is gone once the job has finished (its results are in the store).
+  // The spooled copy is gone once its worker has finished the job (its results are in the
+  // store); WatchJob may report the end just before.
+  ASSERT_TRUE(server_->jobs()->wait_idle(std::chrono::seconds(30)));
   EXPECT_EQ(files_in_spool(), 0u);
 }
 
@@ -261,6 +263,7 @@ TEST_F(JobsTest, UploadedJobLeftRunningCompletesAfterRestartAndPartialUploadsAre
   ASSERT_FALSE(states.empty());
   EXPECT_EQ(states.back().state(), v1::Job::SUCCEEDED);
   EXPECT_EQ(orientation_samples(results(id)).at(demo::kArmDevice), 800u);
+  ASSERT_TRUE(server_->jobs()->wait_idle(std::chrono::seconds(30)));
   EXPECT_EQ(files_in_spool(), 0u);
 }
 

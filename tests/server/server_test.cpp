@@ -460,5 +460,28 @@ TEST(ServerOptions, BadValuesNameTheFlag) {
   EXPECT_EQ(rejected_flag(ServerOptions{}), "");
 }
 
+TEST(ServerOptions, JobStoreRolesAndLeasesThatCannotWorkNameTheFlag) {
+  const auto with = [](auto change) {
+    ServerOptions options;
+    options.data_dir = "/tmp/posefuse-data";
+    change(options);
+    return rejected_flag(options);
+  };
+  EXPECT_EQ(with([](ServerOptions& o) { o.job_store = "mysql:db"; }), "--job-store");
+  EXPECT_EQ(with([](ServerOptions& o) { o.job_store = "host=/run/postgresql"; o.data_dir = ""; }),
+            "--job-store");
+  EXPECT_EQ(with([](ServerOptions& o) { o.role = "scheduler"; }), "--role");
+  // API-only or worker-only replicas mean nothing on a store no other process sees.
+  EXPECT_EQ(with([](ServerOptions& o) { o.role = "worker"; }), "--role");
+  EXPECT_EQ(with([](ServerOptions& o) { o.job_heartbeat_s = o.job_lease_s; }), "--job-heartbeat-s");
+  EXPECT_EQ(with([](ServerOptions& o) { o.job_lease_s = 0; }), "--job-lease-s");
+  EXPECT_EQ(with([](ServerOptions& o) { o.job_max_attempts = 0; }), "--job-max-attempts");
+  EXPECT_EQ(with([](ServerOptions& o) {
+              o.job_store = "postgresql:///posefuse?host=/run/postgresql";
+              o.role = "api";
+            }),
+            "");
+}
+
 }  // namespace
 }  // namespace posefuse::server
