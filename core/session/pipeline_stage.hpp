@@ -13,6 +13,7 @@
 
 #include "posefuse/v1/results.pb.h"
 #include "posefuse/v1/session.pb.h"
+#include "session/option_table.hpp"
 
 namespace posefuse::session {
 
@@ -34,13 +35,6 @@ class StageOutput {
   virtual v1::CalibrationReport& calibration() = 0;
 };
 
-// A SessionHeader.options key a stage reads (listed by the server's GetServerInfo).
-struct StageOption {
-  std::string key;            // e.g. "imu.tau_acc_s"
-  std::string default_value;  // as text, as written in SessionHeader.options
-  std::string description;    // one line, with the unit
-};
-
 class Stage {
  public:
   virtual ~Stage() = default;
@@ -48,7 +42,11 @@ class Stage {
   virtual std::string_view name() const = 0;
   // One line: what the stage computes and from what.
   virtual std::string_view description() const = 0;
-  virtual std::vector<StageOption> options() const { return {}; }
+  // The SessionHeader.options keys it reads (listed by the server's GetServerInfo).
+  virtual const OptionTable& options() const {
+    static const OptionTable none;
+    return none;
+  }
   // The validated header. Throws posefuse::Error for options the stage cannot use; that ends
   // the session (the pipeline cannot run without the stage).
   virtual void start(const v1::SessionHeader& header, StageOutput& out) = 0;

@@ -49,6 +49,7 @@
 #include "forearm/strap_detection.hpp"
 #include "session/pipeline_stage.hpp"
 #include "session/stages/arm_tracker.hpp"
+#include "session/stages/forearm_options.hpp"
 #include "session/stages/stream_clocks.hpp"
 
 namespace posefuse::session {
@@ -59,13 +60,13 @@ class ForearmStage : public Stage {
   ~ForearmStage() override;
   std::string_view name() const override { return "forearm"; }
   std::string_view description() const override;
-  std::vector<StageOption> options() const override;
+  const OptionTable& options() const override;
 
   void start(const v1::SessionHeader& header, StageOutput& out) override;
   void on_chunk(const v1::SessionChunk& chunk, StageOutput& out) override;
   void on_result(const v1::FitResult& result, StageOutput& out) override;
   void finish(StageOutput& out) override;
-  bool wants_later_results() const override { return active_ && fit_anchor_; }
+  bool wants_later_results() const override { return active_ && options_.fit_anchor; }
   void on_later_result(const v1::FitResult& result, StageOutput& out) override;
   void finish_late(StageOutput& out) override;
 
@@ -99,11 +100,6 @@ class ForearmStage : public Stage {
     cv::Mat pixels;
   };
 
-  static forearm::GapSmootherOptions without_shoulder_sphere() {
-    forearm::GapSmootherOptions o;
-    o.use_shoulder_sphere = false;
-    return o;
-  }
   void add_imu(Device& device, const v1::ImuBatch& batch);
   void resolve_frames(bool all);
   void detect_arms(const PendingFrame& frame, const Image* depth, const Image* color);
@@ -117,15 +113,7 @@ class ForearmStage : public Stage {
   bool active_ = false;
   std::vector<Device> devices_;  // header order
   std::string base_id_;
-  std::optional<forearm::Quat> K_from_B_;
-  double calibration_s_ = 5.0;
-  bool pose_orientation_ = true;
-  bool axis_from_depth_ = true;  // forearm.axis
-  bool upper_arm_from_depth_ = true;  // forearm.upper_arm
-  forearm::GapSmootherOptions smoother_options_ = without_shoulder_sphere();  // forearm.shoulder_sphere
-  bool fit_anchor_ = false;  // forearm.gap_anchor: auto with fit.enabled
-  bool axis_correction_on_ = true;  // forearm.axis_correction: auto (with axis_from_depth_)
-  forearm::VisualAxisCorrectionOptions axis_correction_options_;
+  ForearmOptions options_;
   std::optional<std::uint32_t> body_id_;
   std::optional<forearm::StrapCameras> cameras_;
   double color_tolerance_us_ = 0.0;
