@@ -42,6 +42,7 @@
 #include "fit/joint_kinematics.hpp"
 #include "session/image_codec.hpp"
 #include "session/stage_inputs.hpp"
+#include "session/stages/body_fit_options.hpp"
 #include "session/stages/body_fit_stage.hpp"
 #include "sim/camera_session.hpp"
 #include "sim/bvh.hpp"
@@ -129,12 +130,12 @@ std::string g_lambda_imu;  // empty: the stage's default
 Output run_stage(const sim::CameraSessionResult& sim, const std::vector<session::ForearmOrientations>& batches,
                  std::vector<double>* frame_s, std::vector<session::BodyFitFrameStats>* stats) {
   v1::SessionHeader header = sim.header;
-  (*header.mutable_options())["fit.enabled"] = "true";
-  (*header.mutable_options())["fit.fine_shape"] = g_fine_shape ? "true" : "false";
-  if (!g_lambda_imu.empty()) (*header.mutable_options())["fit.lambda_imu"] = g_lambda_imu;
-  (*header.mutable_options())["fit.calibration_s"] = std::to_string(kCalibrationS);
+  (*header.mutable_options())[session::kFitEnabledKey] = "true";
+  (*header.mutable_options())[session::kFitFineShapeKey] = g_fine_shape ? "true" : "false";
+  if (!g_lambda_imu.empty()) (*header.mutable_options())[session::kFitLambdaImuKey] = g_lambda_imu;
+  (*header.mutable_options())[session::kFitCalibrationSKey] = std::to_string(kCalibrationS);
   if (const char* energy = std::getenv("FIT_SKELETON_START_ENERGY"))
-    (*header.mutable_options())["fit.skeleton_start_energy"] = energy;
+    (*header.mutable_options())[session::kFitSkeletonStartEnergyKey] = energy;
   // FIG4_OPTIONS="fit.a=1,fit.b=2": further stage options (e.g. fit.freeze_contour_after=0).
   if (const char* extra = std::getenv("FIG4_OPTIONS")) {
     std::string list = extra;

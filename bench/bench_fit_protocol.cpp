@@ -32,6 +32,7 @@
 #include "session/chunk_file.hpp"
 #include "session/pipeline.hpp"
 #include "session/result_reader.hpp"
+#include "session/stages/body_fit_options.hpp"
 #include "session/stages/body_fit_stage.hpp"
 #include "session/stages/default_stages.hpp"
 #include "sim/motion_library.hpp"
@@ -186,13 +187,15 @@ int run(const fs::path& sim_options_path, const fs::path& chunks, const fs::path
     while (reader.next(chunk)) {
       if (chunk.has_header()) {
         auto& header_options = *chunk.mutable_header()->mutable_options();
-        header_options["fit.enabled"] = "true";
+        header_options[session::kFitEnabledKey] = "true";
         for (const std::string& kv : options) {
           const auto eq = kv.find('=');
           if (eq == std::string::npos) throw std::invalid_argument("--option '" + kv + "': expected KEY=VALUE");
           header_options[kv.substr(0, eq)] = kv.substr(eq + 1);
         }
-        if (header_options.count("fit.lost_energy")) lost_energy = std::stod(header_options["fit.lost_energy"]);
+        if (header_options.count(session::kFitLostEnergyKey)) {
+          lost_energy = std::stod(header_options[session::kFitLostEnergyKey]);
+        }
       }
       if (chunk.has_skeleton()) {
         if (!body) body = chunk.skeleton().body_id();

@@ -41,7 +41,9 @@
 #include "bench_clock.hpp"
 #include "common/error.hpp"
 #include "session/pipeline.hpp"
+#include "session/stages/body_fit_options.hpp"
 #include "session/stages/default_stages.hpp"
+#include "session/stages/forearm_options.hpp"
 #include "sim/bvh.hpp"
 #include "sim/bvh_motion.hpp"
 #include "sim/calibration_prefix.hpp"
@@ -179,9 +181,9 @@ Summary run_cylinder(const Named& session_motion, const fs::path& image_folder, 
   for (v1::SessionChunk chunk : session.chunks) {
     if (chunk.has_header()) {
       auto& stage_options = *chunk.mutable_header()->mutable_options();
-      stage_options["forearm.axis"] = session_motion.axis;
-      stage_options["forearm.shoulder_sphere"] = session_motion.shoulder_sphere;
-      stage_options["forearm.upper_arm"] = session_motion.upper_arm;
+      stage_options[session::kForearmAxisKey] = session_motion.axis;
+      stage_options[session::kForearmShoulderSphereKey] = session_motion.shoulder_sphere;
+      stage_options[session::kForearmUpperArmKey] = session_motion.upper_arm;
     }
     if (chunk.has_skeleton()) truth.sdk.push_back(chunk.skeleton());
     pipeline.push(chunk);
@@ -261,7 +263,7 @@ std::vector<Summary> run_body(const std::string& name, const sim::SimSessionOpti
   const sim::BodyMotion motion = sim::select_motion(options.motion, options.motion_options, {options.sex, options.betas});
   const double hold_begin = hold_bound_s(motion, false), hold_end = hold_bound_s(motion, true);
   std::map<std::string, std::string> header_options;
-  if (flags.fit) header_options["fit.enabled"] = "true";
+  if (flags.fit) header_options[session::kFitEnabledKey] = "true";
   for (const auto& [key, value] : flags.header_options) header_options[key] = value;
   const bench::BodyRenderRun run = bench::run_body_render_session(options, header_options, flags.live_order);
   double sim_cpu_s = 0.0;

@@ -8,6 +8,7 @@
 #include "server/refused_call.hpp"
 #include "server/status.hpp"
 #include "server/log.hpp"
+#include "session/option_table.hpp"
 #include "session/session_validator.hpp"
 #include "session/stages/default_stages.hpp"
 
@@ -202,12 +203,13 @@ v1::ServerInfo server_info(const ServerOptions& options, unsigned workers, bool 
     v1::StageInfo& stage_info = *info.add_stages();
     stage_info.set_name(std::string(stage->name()));
     stage_info.set_description(std::string(stage->description()));
-    for (const session::StageOption& option : stage->options()) {
+    for (const session::OptionSpec& option : stage->options()) {
       v1::OptionInfo& option_info = *info.add_options();
       option_info.set_key(option.key);
       option_info.set_stage(std::string(stage->name()));
       option_info.set_default_value(option.default_value);
-      option_info.set_description(option.description);
+      // OptionInfo has no fields for them: the values and the unit follow the description.
+      option_info.set_description(option.description + " [" + session::describe_values_and_unit(option) + "]");
     }
   }
   // No body model is loaded yet (core/body lands later); the list stays empty until then.

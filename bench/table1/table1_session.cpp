@@ -13,6 +13,7 @@
 #include "forearm/synthetic_images.hpp"
 #include "session/image_codec.hpp"
 #include "session/sim_session_parts.hpp"
+#include "session/stages/forearm_options.hpp"
 #include "session/text_fields.hpp"
 #include "sim/body_imu.hpp"
 #include "sim/camera_session.hpp"
@@ -139,8 +140,8 @@ Table1Session simulate_table1_session(const sim::BodyMotion& motion, const Table
   h = shot.header;
   h.set_subject_id("table1");
   set_forearm_header(arm_device.device_id, base_device.device_id, cameras, audio_rate_hz, h);
-  (*h.mutable_options())["forearm.K_from_B"] = quat_option(mount.K_from_B);
-  (*h.mutable_options())["forearm.calibration_s"] = session::format_double(o.calibration_end_s);
+  (*h.mutable_options())[session::kForearmKFromBKey] = quat_option(mount.K_from_B);
+  (*h.mutable_options())[session::kForearmCalibrationSKey] = session::format_double(o.calibration_end_s);
   session.chunks = assemble_session(std::move(header), std::move(timed), frames, counts);
   return session;
 }

@@ -5,11 +5,15 @@
 #include <vector>
 
 #include "common/error.hpp"
+#include "session/stages/imu_options.hpp"
 #include "session/text_fields.hpp"
 
 namespace posefuse::session {
 
-std::string mag_calibration_option_key(const std::string& device_id) { return "imu.mag_calibration." + device_id; }
+std::string mag_calibration_option_key(const std::string& device_id) {
+  const std::string family = kImuMagCalibrationKeys;
+  return family.substr(0, family.find('<')) + device_id;
+}
 
 std::string format_mag_calibration(const imu::MagCalibration& calibration) {
   std::string text;

@@ -14,6 +14,7 @@
 
 #include "posefuse/v1/results.pb.h"
 #include "posefuse/v1/session.pb.h"
+#include "session/option_table.hpp"
 #include "session/session_inputs.hpp"
 #include "session/stage_values.hpp"
 
@@ -40,13 +41,6 @@ class StageOutput {
   virtual v1::CalibrationReport& calibration() = 0;
 };
 
-// A SessionHeader.options key a stage reads (listed by the server's GetServerInfo).
-struct StageOption {
-  std::string key;            // e.g. "imu.tau_acc_s"
-  std::string default_value;  // as text, as written in SessionHeader.options
-  std::string description;    // one line, with the unit
-};
-
 class Stage {
  public:
   virtual ~Stage() = default;
@@ -54,7 +48,11 @@ class Stage {
   virtual std::string_view name() const = 0;
   // One line: what the stage computes and from what.
   virtual std::string_view description() const = 0;
-  virtual std::vector<StageOption> options() const { return {}; }
+  // The SessionHeader.options keys it reads (listed by the server's GetServerInfo).
+  virtual const OptionTable& options() const {
+    static const OptionTable none;
+    return none;
+  }
   // The kinds of value the stage reads from earlier stages and those it hands on. The pipeline
   // refuses an order in which a stage consumes a kind no earlier stage produces.
   virtual std::vector<ValueKind> consumes() const { return {}; }

@@ -14,6 +14,7 @@
 #include "session/image_codec.hpp"
 #include "session/mag_calibration_option.hpp"
 #include "session/session_validator.hpp"
+#include "session/stages/forearm_options.hpp"
 #include "session/text_fields.hpp"
 #include "sim/option_checks.hpp"
 #include "sim/ordered_workers.hpp"
@@ -557,7 +558,7 @@ SimTruth simulate_session(const SimSessionOptions& requested, session::ChunkSink
   (*header.mutable_options())["sim.seed"] = std::to_string(options.seed);
   (*header.mutable_options())["sim.motion"] = options.motion;
   // The forearm stage's W -> K alignment (docs/forearm.md): the base IMU's true mounting.
-  (*header.mutable_options())["forearm.K_from_B"] =
+  (*header.mutable_options())[session::kForearmKFromBKey] =
       session::format_double(truth.K_from_B.w()) + " " + session::format_double(truth.K_from_B.x()) + " " +
       session::format_double(truth.K_from_B.y()) + " " + session::format_double(truth.K_from_B.z());
   // Each IMU's magnetometer calibration from before the session (paper 1, II-E-1), which the

@@ -9,6 +9,7 @@
 
 #include "common/error.hpp"
 #include "session/file_bytes.hpp"
+#include "session/stages/forearm_options.hpp"
 #include "session/text_fields.hpp"
 #include "sim/ground_truth_files.hpp"
 
@@ -258,7 +259,7 @@ std::string calibration_report(const calib::CaptureCalibration& r) {
   std::snprintf(line, sizeof line, "eq. 8 spread over %d readings: %.2f deg RMS\n", r.base.readings, r.base.spread_rad / kDeg);
   out += line;
   out += "K_from_W (w x y z) = " + quat_text(r.K_from_W) + "   (eq. 7, mean base IMU orientation of the capture)\n";
-  out += "forearm.K_from_B = " + quat_text(r.base.K_from_B) + "\n";
+  out += std::string(session::kForearmKFromBKey) + " = " + quat_text(r.base.K_from_B) + "\n";
   return out;
 }
 

@@ -27,63 +27,11 @@ namespace posefuse::session {
 
 namespace {
 
-constexpr const char* kEnabledKey = "fit.enabled";
-constexpr const char* kCalibrationSKey = "fit.calibration_s";
-constexpr const char* kBodyIdKey = "fit.body_id";
-constexpr const char* kSmoothingKey = "fit.smoothing_frames";
-constexpr const char* kImuWaitKey = "fit.imu_wait_s";
-constexpr const char* kLostEnergyKey = "fit.lost_energy";
-constexpr const char* kMaxIterationsKey = "fit.max_iterations";
-constexpr const char* kFineShapeKey = "fit.fine_shape";
-constexpr const char* kLambdaImuKey = "fit.lambda_imu";
-constexpr const char* kSkeletonStartEnergyKey = "fit.skeleton_start_energy";
-constexpr const char* kStartVelocityGainKey = "fit.start_velocity_gain";
-constexpr const char* kFreezeContourAfterKey = "fit.freeze_contour_after";
-constexpr const char* kJointStepStopDampingKey = "fit.joint_step_stop_max_damping";
-constexpr const char* kProjectStepsKey = "fit.project_steps_onto_limits";
-
 // A forearm orientation further than this from the frame is not used.
 constexpr std::int64_t kForearmToleranceUs = 20'000;
 // Forearm orientations kept behind the oldest queued frame.
 constexpr std::int64_t kForearmHistoryUs = 1'000'000;
 constexpr double kUntrackedConfidence = 0.5;
-
-std::string option_field(const char* key) { return std::string("header.options[") + key + "]"; }
-
-const std::string* option(const v1::SessionHeader& header, const char* key) {
-  const auto it = header.options().find(key);
-  return it == header.options().end() ? nullptr : &it->second;
-}
-
-double positive_option(const v1::SessionHeader& header, const char* key, double fallback) {
-  const std::string* text = option(header, key);
-  if (!text) return fallback;
-  const double value = parse_double(*text, option_field(key));
-  if (!std::isfinite(value) || value <= 0.0) throw_invalid(option_field(key), "is '" + *text + "', must be positive");
-  return value;
-}
-
-// A duration in seconds in (0, max_s]. The upper bound is a memory bound: the frames of that
-// many seconds are kept (personalisation frames, frames waiting for their IMU data).
-double seconds_option(const v1::SessionHeader& header, const char* key, double fallback,
-                      double max_s) {
-  const std::string* text = option(header, key);
-  if (!text) return fallback;
-  const double value = parse_double(*text, option_field(key));
-  if (!std::isfinite(value) || value <= 0.0 || value > max_s) {
-    throw_invalid(option_field(key),
-                  "is '" + *text + "', must be in (0, " + format_double(max_s) + "] seconds");
-  }
-  return value;
-}
-
-bool bool_option(const v1::SessionHeader& header, const char* key, bool fallback) {
-  const std::string* text = option(header, key);
-  if (!text) return fallback;
-  if (*text == "true" || *text == "1") return true;
-  if (*text == "false" || *text == "0") return false;
-  throw_invalid(option_field(key), "is '" + *text + "', expected true or false");
-}
 
 fit::JointTracking tracking_from(JointState state) {
   switch (state) {
@@ -106,8 +54,6 @@ void set_joint(v1::JointEstimate& joint, const Eigen::Vector3d& p_K, v1::Source 
 }
 
 }  // namespace
-
-bool body_fit_enabled(const v1::SessionHeader& header) { return bool_option(header, kEnabledKey, false); }
 
 bool needs_skeleton_start(std::optional<double> previous_energy, double skeleton_start_energy) {
   return !previous_energy || skeleton_start_energy <= 0.0 || !(*previous_energy < skeleton_start_energy);
@@ -164,82 +110,19 @@ std::string_view BodyFitStage::description() const {
          "forearm roll from the wrist IMUs";
 }
 
-std::vector<StageOption> BodyFitStage::options() const {
-  const fit::FitOptions defaults;
-  return {
-      {kEnabledKey, "false", "run the body-model fit (about 9-12 ms per depth frame on one core: off by default)"},
-      {kCalibrationSKey, "1", "personalisation: the first seconds of depth frames (controlled pose), seconds"},
-      {kBodyIdKey, "", "the person to fit (body index / skeleton body_id); default the first skeleton's"},
-      {kSmoothingKey, "3", "moving average of the fitted poses over this many frames (odd; 1 = none)"},
-      {kImuWaitKey, "30", "how long a frame waits for its forearm orientations (imu term), seconds of camera time; waiting frames keep only their silhouette's depth (~40 kB each)"},
-      {kLostEnergyKey, "100", "frames fitted above this energy (eq. 4) are counted as lost tracking (FIT_LOST)"},
-      {kMaxIterationsKey, std::to_string(defaults.max_iterations), "LM iterations per start at most"},
-      {kFineShapeKey, "true", "personalisation: fine shape tuning on a calibration depth frame (paper 2 III-B)"},
-      {kLambdaImuKey, format_double(defaults.lambda_imu), "weight of the imu term (eq. 9), >= 0"},
-      {kSkeletonStartEnergyKey, format_double(kDefaultSkeletonStartEnergy),
-       "II-G: fit the skeleton-built start only when the previous-frame fit ends at this energy or above (0 = "
-       "always both starts, on two threads)"},
-      {kFreezeContourAfterKey, std::to_string(defaults.freeze_contour_after),
-       "LM: U_bg (bg / float points) is re-selected in the first this many iterations only (0 = always)"},
-      {kJointStepStopDampingKey, format_double(defaults.joint_step_stop_max_damping),
-       "LM: stop on a joint step under 1 mm only after a step damped by at most this (1e8 = after any step)"},
-      {kProjectStepsKey, defaults.project_steps_onto_limits ? "true" : "false",
-       "LM: each trial step clamped to the pose limits widened by 0.1 rad (false = paper 2's soft limits alone)"},
-      {kStartVelocityGainKey, "0",
-       "previous-frame start moved on by this share of the last frames' velocity (0 = off, 1 = constant velocity)"},
-  };
-}
+const OptionTable& BodyFitStage::options() const { return body_fit_option_table(); }
 
 void BodyFitStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) {
   enabled_ = body_fit_enabled(header);
   if (!enabled_) return;
-  calibration_s_ = seconds_option(header, kCalibrationSKey, calibration_s_, kMaxFitCalibrationS);
-  imu_wait_s_ = seconds_option(header, kImuWaitKey, imu_wait_s_, kMaxFitImuWaitS);
-  lost_energy_ = positive_option(header, kLostEnergyKey, lost_energy_);
-  fine_shape_ = bool_option(header, kFineShapeKey, true);
-  if (const std::string* text = option(header, kSkeletonStartEnergyKey)) {
-    skeleton_start_energy_ = parse_double(*text, option_field(kSkeletonStartEnergyKey));
-    if (!std::isfinite(skeleton_start_energy_) || skeleton_start_energy_ < 0.0)
-      throw_invalid(option_field(kSkeletonStartEnergyKey), "is '" + *text + "', must be finite and not negative");
-  }
-  if (const std::string* text = option(header, kBodyIdKey)) {
-    body_id_ = static_cast<std::uint32_t>(parse_uint64(*text, option_field(kBodyIdKey)));
-  }
-  fit::PoseSmoothingOptions smoothing;
-  if (const std::string* text = option(header, kSmoothingKey)) {
-    smoothing.window_frames = static_cast<int>(parse_int64(*text, option_field(kSmoothingKey)));
-  }
-  fit::FitOptions fit_options;
-  if (const std::string* text = option(header, kMaxIterationsKey)) {
-    fit_options.max_iterations = static_cast<int>(parse_int64(*text, option_field(kMaxIterationsKey)));
-  }
-  if (const std::string* text = option(header, kFreezeContourAfterKey)) {
-    fit_options.freeze_contour_after = static_cast<int>(parse_int64(*text, option_field(kFreezeContourAfterKey)));
-    if (fit_options.freeze_contour_after < 0)
-      throw_invalid(option_field(kFreezeContourAfterKey), "is '" + *text + "', must not be negative");
-  }
-  fit_options.joint_step_stop_max_damping =
-      positive_option(header, kJointStepStopDampingKey, fit_options.joint_step_stop_max_damping);
-  fit_options.project_steps_onto_limits = bool_option(header, kProjectStepsKey, fit_options.project_steps_onto_limits);
-  if (const std::string* text = option(header, kLambdaImuKey)) {
-    fit_options.lambda_imu = parse_double(*text, option_field(kLambdaImuKey));
-    if (!std::isfinite(fit_options.lambda_imu) || fit_options.lambda_imu < 0)
-      throw_invalid(option_field(kLambdaImuKey), "is '" + *text + "', must be >= 0");
-  }
-  if (const std::string* text = option(header, kStartVelocityGainKey)) {
-    extrapolation_.velocity_gain = parse_double(*text, option_field(kStartVelocityGainKey));
-    try {
-      fit::validate(extrapolation_);
-    } catch (const Error&) {
-      throw_invalid(option_field(kStartVelocityGainKey), "is '" + *text + "', must be finite and not negative");
-    }
-  }
+  options_ = read_body_fit_options(header);
+  body_id_ = options_.body_id;
   arm_imus_ = static_cast<int>(std::count_if(header.imu_devices().begin(), header.imu_devices().end(), [](const auto& d) {
     return d.role() == v1::ImuDevice::ARM_LEFT || d.role() == v1::ImuDevice::ARM_RIGHT;
   }));
   const body::Sex sex = header.sex() == v1::SessionHeader::FEMALE ? body::Sex::kFemale : body::Sex::kMale;
-  work_ = std::make_unique<Work>(body::make_template(sex), session_cameras(header).depth, fit_options,
-                                 smoothing);
+  work_ = std::make_unique<Work>(body::make_template(sex), session_cameras(header).depth, options_.fit,
+                                 options_.smoothing);
 }
 
 void BodyFitStage::on_camera_frame(const CameraFrame& camera, StageOutput& out) {
@@ -286,7 +169,7 @@ void BodyFitStage::add_frame(BodyFitFrame&& frame, StageOutput& out) {
   if (!first_t_us_) first_t_us_ = frame.t_us;
   last_frame_t_us_ = frame.t_us;
   if (!personalised_) {
-    if (static_cast<double>(frame.t_us - *first_t_us_) * 1e-6 < calibration_s_) {
+    if (static_cast<double>(frame.t_us - *first_t_us_) * 1e-6 < options_.calibration_s) {
       calibration_frames_.push_back(std::move(frame));
       return;
     }
@@ -324,7 +207,7 @@ void BodyFitStage::personalise(StageOutput& out) {
   // keeps the rough shape (III-A): the refiner's error is caught here, not in personalise().
   fit::ShapePoseRefiner refiner;
   std::optional<Error> fine_error;
-  if (fine_shape_) {
+  if (options_.fine_shape) {
     std::vector<fit::CalibrationFrame> depth_frames;
     for (const BodyFitFrame* f : in_pose.empty() ? all_frames : in_pose_frames) {
       depth_frames.push_back({f->frame, *f->skeleton});
@@ -374,7 +257,7 @@ void BodyFitStage::fit_ready(bool all, StageOutput& out) {
     const std::int64_t t = queue_.front().t_us;
     int covered = 0;
     for (const auto& [arm, samples] : K_from_F_) covered += !samples.empty() && samples.back().first >= t;
-    const bool waited = static_cast<double>(queue_.back().t_us - t) * 1e-6 >= imu_wait_s_;
+    const bool waited = static_cast<double>(queue_.back().t_us - t) * 1e-6 >= options_.imu_wait_s;
     if (!all && covered < arm_imus_ && !waited) return;
     QueuedBodyFitFrame& queued = queue_.front();
     BodyFitFrame frame{queued.t_us, fit::unpack_body_pixels(queued.frame), std::move(queued.skeleton), queued.assemble_s};
@@ -422,14 +305,14 @@ void BodyFitStage::fit_frame(BodyFitFrame& frame, StageOutput& out) {
 
     // II-G: from the previous frame's pose and from the skeleton-built pose; the lower energy
     // wins. The skeleton start is fitted only when the previous one is missing or ends at
-    // skeleton_start_energy_ or above (docs/fitting.md, "Start policy"); with the policy off
+    // fit.skeleton_start_energy or above (docs/fitting.md, "Start policy"); with the policy off
     // both always run, the skeleton start on a second thread.
     const Eigen::VectorXd previous = previous_theta_.value_or(Eigen::VectorXd());
     // The previous-frame start, moved on by the last frames' velocity where that is trusted.
     Eigen::VectorXd previous_start = previous;
-    if (previous.size() > 0 && before_last_fit_ && extrapolation_.velocity_gain > 0) {
+    if (previous.size() > 0 && before_last_fit_ && options_.extrapolation.velocity_gain > 0) {
       if (auto moved = fit::extrapolate_start(w.layout, *before_last_fit_, {previous, previous_t_us_}, frame.t_us,
-                                              extrapolation_)) {
+                                              options_.extrapolation)) {
         previous_start = std::move(*moved);
         stats.extrapolated = true;
       }
@@ -460,7 +343,7 @@ void BodyFitStage::fit_frame(BodyFitFrame& frame, StageOutput& out) {
         return std::nullopt;
       }
     };
-    if (previous.size() > 0 && skeleton_start_energy_ == 0.0) {
+    if (previous.size() > 0 && options_.skeleton_start_energy == 0.0) {
       if (const auto start = skeleton_start()) {
         fit::FrameFitter& second = w.fitter_for_second_thread();
         auto job = std::async(std::launch::async, [&] {
@@ -486,7 +369,7 @@ void BodyFitStage::fit_frame(BodyFitFrame& frame, StageOutput& out) {
         take(stats.fit_previous_s);
       }
       if (needs_skeleton_start(best ? std::optional<double>(best->energy.total()) : std::nullopt,
-                               skeleton_start_energy_)) {
+                               options_.skeleton_start_energy)) {
         if (const auto start = skeleton_start()) {
           keep_lower(w.fitter.fit(observation, *start, w.beta), false);
           take(stats.fit_skeleton_s);
@@ -506,7 +389,7 @@ void BodyFitStage::fit_frame(BodyFitFrame& frame, StageOutput& out) {
     // camera skeleton's wrists are 12-15 cm off). On paper 1's protocol (seeds 1 / 2) the arms' six
     // joints went from 21.2 / 22.8 to 18.8 / 18.2 mm; restarting from the last pose below the
     // threshold plus the skeleton start gave 20.2 / 18.3 mm (docs/fitting.md, "Paper 1's protocol").
-    if (energy > lost_energy_) ++frames_lost_;
+    if (energy > options_.lost_energy) ++frames_lost_;
     previous_theta_ = best->theta;
     previous_t_us_ = frame.t_us;
     fitted_.push_back({frame.t_us, *frame.skeleton, energy, directions.left_K || directions.right_K});
@@ -587,10 +470,10 @@ void BodyFitStage::finish(StageOutput& out) {
   if (frames_without_imu_ > 0) {
     out.warn("FIT_NO_IMU", "fit", std::to_string(frames_without_imu_) + " of " + std::to_string(frames_fitted_) +
                                       " frames fitted without the forearm orientation of every arm IMU (none within " +
-                                      format_double(imu_wait_s_) + " s of camera time, fit.imu_wait_s)");
+                                      format_double(options_.imu_wait_s) + " s of camera time, fit.imu_wait_s)");
   }
   if (frames_lost_ > 0) {
-    out.warn("FIT_LOST", "fit", "tracking lost (energy above " + format_double(lost_energy_) + ") in " +
+    out.warn("FIT_LOST", "fit", "tracking lost (energy above " + format_double(options_.lost_energy) + ") in " +
                                     std::to_string(frames_lost_) + " of " + std::to_string(frames_fitted_) + " frames");
   }
   if (work_->init) {

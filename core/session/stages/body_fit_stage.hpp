@@ -54,6 +54,7 @@
 #include "fit/start_extrapolation.hpp"
 #include "fit/tracked_skeleton.hpp"
 #include "session/pipeline_stage.hpp"
+#include "session/stages/body_fit_options.hpp"
 
 namespace posefuse::session {
 
@@ -97,29 +98,14 @@ struct BodyFitFrameStats {
   }
 };
 
-// How long (camera time) a frame waits for the forearm orientations of its time, `fit.imu_wait_s`.
-// posefuse-sim's chunk files order IMU batches by the device clock, whose offset (1-100 s) puts
-// them after the camera frames of a short session: with the former 6 s, 70 % of the demo's
-// frames were fitted without the imu term (docs/fitting.md, "Paper 1's protocol").
-inline constexpr double kDefaultImuWaitS = 30.0;
-// Upper bounds of fit.imu_wait_s and fit.calibration_s: at 30 Hz, 1800 waiting frames of
-// ~40 kB (72 MB) and 900 personalisation frames per session at most.
-inline constexpr double kMaxFitImuWaitS = 60.0;
-inline constexpr double kMaxFitCalibrationS = 30.0;
-
 // Paper 2 II-G start policy (docs/fitting.md, "Start policy"): the skeleton-built start is fitted
 // when there is no previous-frame fit (`previous_energy` empty), when the policy is off
 // (`skeleton_start_energy` <= 0: both starts always) or when the previous-frame fit ended at
 // `skeleton_start_energy` or above (or at a NaN energy).
-inline constexpr double kDefaultSkeletonStartEnergy = 45.0;
 bool needs_skeleton_start(std::optional<double> previous_energy, double skeleton_start_energy);
 
 // The camera skeleton as the fit reads it (positions and tracking states).
 fit::TrackedSkeleton tracked_skeleton_from(const Skeleton& skeleton);
-
-// Whether the header turns the body fit on (fit.enabled; false when absent). Throws
-// posefuse::Error naming the option for a value other than true/false/1/0.
-bool body_fit_enabled(const v1::SessionHeader& header);
 
 class BodyFitStage : public Stage {
  public:
@@ -127,7 +113,7 @@ class BodyFitStage : public Stage {
   ~BodyFitStage() override;
   std::string_view name() const override { return "body_fit"; }
   std::string_view description() const override;
-  std::vector<StageOption> options() const override;
+  const OptionTable& options() const override;
 
   void start(const v1::SessionHeader& header, StageOutput& out) override;
   std::vector<ValueKind> consumes() const override { return {ValueKind::kForearmOrientations}; }
@@ -155,11 +141,7 @@ class BodyFitStage : public Stage {
 
   bool enabled_ = false;
   std::unique_ptr<Work> work_;
-  double calibration_s_ = 1.0;
-  double imu_wait_s_ = kDefaultImuWaitS;
-  double lost_energy_ = 100.0;
-  bool fine_shape_ = true;
-  double skeleton_start_energy_ = kDefaultSkeletonStartEnergy;
+  BodyFitOptions options_;
   std::optional<std::uint32_t> body_id_;
   int arm_imus_ = 0;  // arm IMUs in the header
 
@@ -185,9 +167,6 @@ class BodyFitStage : public Stage {
   std::int64_t previous_t_us_ = 0;
   // The fit before previous_theta_, while both belong to one track (the constant-velocity start).
   std::optional<fit::FittedPose> before_last_fit_;
-  // Off by default (fit.start_velocity_gain = 0): measured, it did not lower the iterations and
-  // raised the occluded error (docs/benchmarks.md, "Fewer LM iterations").
-  fit::StartExtrapolationOptions extrapolation_{.velocity_gain = 0.0};
   bool record_stats_ = false;
   std::vector<BodyFitFrameStats> stats_;
   std::uint64_t frames_fitted_ = 0, frames_lost_ = 0;

@@ -1,7 +1,6 @@
 #include "session/stages/forearm_stage.hpp"
 
 #include <cmath>
-#include <sstream>
 
 #include "body/smpl_model.hpp"
 #include "common/error.hpp"
@@ -9,7 +8,7 @@
 #include "forearm/forearm_axis_depth.hpp"
 #include "forearm/forearm_orientation.hpp"
 #include "forearm/upper_arm_depth.hpp"
-#include "session/stages/body_fit_stage.hpp"
+#include "session/option_table.hpp"
 #include "session/stages/proto_values.hpp"
 #include "session/text_fields.hpp"
 
@@ -19,47 +18,6 @@ namespace {
 
 using forearm::Quat;
 using forearm::Vec3;
-
-constexpr const char* kKFromBKey = "forearm.K_from_B";
-constexpr const char* kCalibrationSKey = "forearm.calibration_s";
-// forearm.calibration_s at most (the default is 5 s).
-constexpr double kMaxForearmCalibrationS = 120.0;
-constexpr const char* kCalibrationOrientationKey = "forearm.calibration_orientation";
-constexpr const char* kBodyIdKey = "forearm.body_id";
-constexpr const char* kAxisKey = "forearm.axis";
-constexpr const char* kUpperArmKey = "forearm.upper_arm";
-constexpr const char* kShoulderSphereKey = "forearm.shoulder_sphere";
-constexpr const char* kBuzzerHzKey = "forearm.buzzer_hz";
-constexpr const char* kGapAnchorKey = "forearm.gap_anchor";
-constexpr const char* kAxisCorrectionKey = "forearm.axis_correction";
-constexpr const char* kAxisCorrectionGainKKey = "forearm.axis_correction_gain_K";
-constexpr const char* kAxisCorrectionGainFKey = "forearm.axis_correction_gain_F";
-constexpr const char* kAxisCorrectionMaxDegKey = "forearm.axis_correction_max_deg";
-
-std::optional<std::string> option(const v1::SessionHeader& header, const char* key) {
-  const auto it = header.options().find(key);
-  if (it == header.options().end()) return std::nullopt;
-  return it->second;
-}
-
-std::string option_field(const char* key) { return std::string("header.options[") + key + "]"; }
-
-// "w x y z" (spaces or commas), a unit quaternion within 1e-3.
-Quat parse_quaternion(const std::string& text, const std::string& field) {
-  std::string spaced = text;
-  for (char& c : spaced) {
-    if (c == ',') c = ' ';
-  }
-  std::istringstream words(spaced);
-  std::vector<double> values;
-  for (std::string word; words >> word;) values.push_back(parse_double(word, field));
-  if (values.size() != 4) throw_invalid(field, "is '" + text + "', expected four numbers 'w x y z'");
-  const Quat q(values[0], values[1], values[2], values[3]);
-  if (!q.coeffs().allFinite() || std::abs(q.norm() - 1.0) > 1e-3) {
-    throw_invalid(field, "is '" + text + "', not a unit quaternion");
-  }
-  return q.normalized();
-}
 
 // Chordal mean of hemisphere-aligned unit quaternions (fine for the small spread of a hold).
 Quat mean_rotation(const std::vector<Quat>& rotations) {
@@ -82,46 +40,7 @@ std::string_view ForearmStage::description() const {
          "eq. 10), occlusion gaps recovered (paper 1 and smoother), clocks from buzzer and BLE";
 }
 
-std::vector<StageOption> ForearmStage::options() const {
-  return {
-      {kKFromBKey, "", "base IMU orientation in the camera frame, 'w x y z' (paper 1 eq. 8); required"},
-      {kCalibrationSKey, "5", "the calibration pose is searched in this many seconds from the first skeleton frame"},
-      {kCalibrationOrientationKey, "pose",
-       "forearm orientation in the calibration pose: 'pose' (arm plane, palm to the camera) or 'sdk' (SDK wrist, eq. 9)"},
-      {kBodyIdKey, "", "skeleton body id to follow; default: the first one in the stream"},
-      {kAxisKey, "depth",
-       "forearm axis (elbow, wrist) for the calibration frame, strap detection, II-J tests and eq. 10: 'depth' "
-       "(fitted to the depth image around the SDK segment, forearm_axis_depth.hpp) or 'sdk' (the SDK joints, paper 1)"},
-      {kShoulderSphereKey, "off",
-       "'on': the gap smoother keeps the elbow on the sphere of radius d_ul around the SDK shoulder (eq. 13); "
-       "'off' (default): a real SDK's shoulder is off by 5-10 cm, which pulls the recovered trajectory away"},
-      {kUpperArmKey, "depth",
-       "upper arm direction for the calibration pose's arm plane (the roll of A_from_F about the forearm, eq. 9): "
-       "'depth' (fitted to the depth image, upper_arm_depth.hpp; the SDK shoulder if the depth never shows it) or "
-       "'sdk' (the SDK shoulder)"},
-      {kBuzzerHzKey, "2700",
-       "the base IMU's buzzer frequency in Hz (sound-based sync, paper 1 II-G.1): its tone is measured in the audio "
-       "within 10 % of it; or 'auto': the loudest tone between 500 and 8000 Hz that sounds and stops "
-       "(sync/tone_search.hpp). Demodulated 100 Hz off, a stop is found 0.9 ms late (docs/forearm.md)"},
-      {kGapAnchorKey, "auto",
-       "what the gap smoother's elbow anchor follows inside a gap: 'auto' (the body fit's elbows when fit.enabled is "
-       "true, each gap then waits for the fit's frames; else the camera skeleton's) or 'sdk' (the camera skeleton's "
-       "elbow)"},
-      {kAxisCorrectionKey, "auto",
-       "'auto': with forearm.axis = depth, every K_from_F is turned slowly towards the depth-fitted forearm axis of "
-       "the VISUAL frames, through a rotation of K (the IMU filter's tilt, also applied to the K_from_A a gap "
-       "integrates) and one of F (the mounting's tilt; the roll about the forearm stays as calibrated), "
-       "visual_axis_correction.hpp; orientations then wait for the camera frames up to their time (at most 1 s); "
-       "'off': eq. 11 as it is (paper 1)"},
-      {kAxisCorrectionGainKKey, "0.02",
-       "the axis correction's step per VISUAL frame through K, a fraction of the angle, in [0, 1]"},
-      {kAxisCorrectionGainFKey, "0.02",
-       "the axis correction's step per VISUAL frame through F, a fraction of the angle, in [0, 1]; the two gains "
-       "sum to at most 1 and more than 0"},
-      {kAxisCorrectionMaxDegKey, "8",
-       "VISUAL frames whose depth axis is further than this many degrees from the corrected IMU axis are not used"},
-  };
-}
+const OptionTable& ForearmStage::options() const { return forearm_option_table(); }
 
 void ForearmStage::start(const v1::SessionHeader& header, StageOutput& out) {
   for (const v1::ImuDevice& d : header.imu_devices()) {
@@ -134,85 +53,16 @@ void ForearmStage::start(const v1::SessionHeader& header, StageOutput& out) {
   }
   const bool has_arm = std::any_of(devices_.begin(), devices_.end(), [](const Device& d) { return d.side.has_value(); });
   if (!has_arm) return;  // nothing to do: no arm IMU
-  if (const auto text = option(header, kCalibrationSKey)) {
-    calibration_s_ = parse_double(*text, option_field(kCalibrationSKey));
-    // The upper bound keeps the window's end (first frame + calibration_s in us) far from
-    // int64 overflow and the samples kept for the search bounded.
-    if (!std::isfinite(calibration_s_) || calibration_s_ <= 0.0 || calibration_s_ > kMaxForearmCalibrationS) {
-      throw_invalid(option_field(kCalibrationSKey), "is '" + *text + "', must be in (0, " +
-                                                        format_double(kMaxForearmCalibrationS) + "] seconds");
-    }
-  }
-  if (const auto text = option(header, kCalibrationOrientationKey)) {
-    if (*text != "pose" && *text != "sdk") {
-      throw_invalid(option_field(kCalibrationOrientationKey), "is '" + *text + "', expected 'pose' or 'sdk'");
-    }
-    pose_orientation_ = *text == "pose";
-  }
-  if (const auto text = option(header, kAxisKey)) {
-    if (*text != "depth" && *text != "sdk") {
-      throw_invalid(option_field(kAxisKey), "is '" + *text + "', expected 'depth' or 'sdk'");
-    }
-    axis_from_depth_ = *text == "depth";
-  }
-  if (const auto text = option(header, kUpperArmKey)) {
-    if (*text != "depth" && *text != "sdk") {
-      throw_invalid(option_field(kUpperArmKey), "is '" + *text + "', expected 'depth' or 'sdk'");
-    }
-    upper_arm_from_depth_ = *text == "depth";
-  }
-  if (const auto text = option(header, kShoulderSphereKey)) {
-    if (*text != "on" && *text != "off") {
-      throw_invalid(option_field(kShoulderSphereKey), "is '" + *text + "', expected 'on' or 'off'");
-    }
-    smoother_options_.use_shoulder_sphere = *text == "on";
-  }
-  fit_anchor_ = body_fit_enabled(header);
-  if (const auto text = option(header, kGapAnchorKey)) {
-    if (*text != "auto" && *text != "sdk") {
-      throw_invalid(option_field(kGapAnchorKey), "is '" + *text + "', expected 'auto' or 'sdk'");
-    }
-    if (*text == "sdk") fit_anchor_ = false;
-  }
-  if (const auto text = option(header, kAxisCorrectionKey)) {
-    if (*text != "auto" && *text != "off") {
-      throw_invalid(option_field(kAxisCorrectionKey), "is '" + *text + "', expected 'auto' or 'off'");
-    }
-    axis_correction_on_ = *text == "auto";
-  }
-  for (const auto& [key, gain] : {std::pair{kAxisCorrectionGainKKey, &axis_correction_options_.gain_K},
-                                   std::pair{kAxisCorrectionGainFKey, &axis_correction_options_.gain_F}}) {
-    if (const auto text = option(header, key)) {
-      *gain = parse_double(*text, option_field(key));
-      if (!(*gain >= 0.0 && *gain <= 1.0)) throw_invalid(option_field(key), "is '" + *text + "', must be in [0, 1]");
-    }
-  }
-  if (const double sum = axis_correction_options_.gain_K + axis_correction_options_.gain_F; !(sum > 0.0 && sum <= 1.0)) {
-    // Named after the gain the header set (gain_F when only it was).
-    const bool only_F_given = option(header, kAxisCorrectionGainFKey) && !option(header, kAxisCorrectionGainKKey);
-    throw_invalid(option_field(only_F_given ? kAxisCorrectionGainFKey : kAxisCorrectionGainKKey),
-                  std::string("the sum of ") + kAxisCorrectionGainKKey + " and " + kAxisCorrectionGainFKey + " is " +
-                      format_double(sum) + ", must be in (0, 1]");
-  }
-  if (const auto text = option(header, kAxisCorrectionMaxDegKey)) {
-    const double max_deg = parse_double(*text, option_field(kAxisCorrectionMaxDegKey));
-    if (!(max_deg > 0.0 && max_deg <= 90.0)) {
-      throw_invalid(option_field(kAxisCorrectionMaxDegKey), "is '" + *text + "', must be in (0, 90] degrees");
-    }
-    axis_correction_options_.max_angle_rad = max_deg * 3.14159265358979323846 / 180.0;
-  }
-  if (const auto text = option(header, kBodyIdKey)) {
-    body_id_ = static_cast<std::uint32_t>(parse_uint64(*text, option_field(kBodyIdKey)));
-  }
-  if (const auto text = option(header, kKFromBKey)) K_from_B_ = parse_quaternion(*text, option_field(kKFromBKey));
+  options_ = read_forearm_options(header);
+  body_id_ = options_.body_id;
 
   if (base_id_.empty()) {
     out.warn("FOREARM_NO_BASE_IMU", "header.imu_devices",
              "no BASE IMU: neither the clocks (buzzer) nor the camera alignment (eq. 7) can be found; no forearm results");
     return;
   }
-  if (!K_from_B_) {
-    out.warn("FOREARM_NO_CAMERA_ALIGNMENT", option_field(kKFromBKey),
+  if (!options_.K_from_B) {
+    out.warn("FOREARM_NO_CAMERA_ALIGNMENT", option_field(kForearmKFromBKey),
              "missing: the base IMU's orientation in the camera frame (eq. 8) is needed for K_from_W (eq. 7); "
              "no forearm results");
     return;
@@ -229,21 +79,8 @@ void ForearmStage::start(const v1::SessionHeader& header, StageOutput& out) {
     out.warn("FOREARM_NO_COLOR", "header.color_intrinsics",
              "no colour stream: the strap (paper 1, II-I) cannot be seen, so only forearm orientations are produced");
   }
-  std::optional<double> buzzer_tone_hz = sync::BuzzerStopOptions().tone_hz;
-  if (const auto text = option(header, kBuzzerHzKey)) {
-    if (*text == "auto") {
-      buzzer_tone_hz.reset();
-    } else {
-      buzzer_tone_hz = parse_double(*text, option_field(kBuzzerHzKey));
-      const double nyquist_hz = header.audio_sample_rate_hz() / 2.0;
-      if (!(*buzzer_tone_hz > 0.0) || (nyquist_hz > 0.0 && !(*buzzer_tone_hz < nyquist_hz))) {
-        throw_invalid(option_field(kBuzzerHzKey),
-                      "is '" + *text + "', expected 'auto' or a frequency in Hz above 0" +
-                          (nyquist_hz > 0.0 ? " and below " + format_double(nyquist_hz) + " (half the audio rate)" : ""));
-      }
-    }
-  }
-  clocks_ = std::make_unique<StreamClocks>(base_id_, header.audio_sample_rate_hz(), header.audio_channels(), buzzer_tone_hz);
+  clocks_ = std::make_unique<StreamClocks>(base_id_, header.audio_sample_rate_hz(), header.audio_channels(),
+                                           options_.buzzer_tone_hz);
   active_ = true;
 }
 
@@ -305,11 +142,11 @@ void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleto
     arm.sdk_elbow_K = arm.elbow_K;
     arm.sdk_elbow_seen = joints[j.elbow].state != JointState::kNotTracked;
     arm.K_from_wrist_sdk = joints[j.wrist].orientation;
-    if (arm.forearm_tracked && has_depth && cameras_ && (axis_from_depth_ || upper_arm_from_depth_)) {
+    if (arm.forearm_tracked && has_depth && cameras_ && (options_.axis_from_depth || options_.upper_arm_from_depth)) {
       // The SDK's joints only say where to look; the axes are the depth image's.
       const forearm::DepthImageView mm{frame.depth_mm.cols, frame.depth_mm.rows, frame.depth_mm.ptr<std::uint16_t>()};
       std::optional<forearm::MeasuredUpperArm> upper_arm;
-      if (axis_from_depth_ && arm.shoulder_tracked) {
+      if (options_.axis_from_depth && arm.shoulder_tracked) {
         // Both limbs, so that the upper arm's points next to the elbow are not taken for the forearm's.
         if (const auto axes = forearm::measure_arm_axes(mm, cameras_->depth, arm.shoulder_K, arm.elbow_K, arm.wrist_K)) {
           arm.elbow_K = axes->forearm.elbow_K;
@@ -317,7 +154,7 @@ void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleto
           arm.axis_from_depth = true;
           upper_arm = axes->upper_arm;
         }
-      } else if (axis_from_depth_) {
+      } else if (options_.axis_from_depth) {
         if (const auto axis = forearm::measure_forearm_axis(mm, cameras_->depth, arm.elbow_K, arm.wrist_K)) {
           arm.elbow_K = axis->elbow_K;
           arm.wrist_K = axis->wrist_K;
@@ -327,7 +164,7 @@ void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleto
         upper_arm = forearm::measure_upper_arm_axis(mm, cameras_->depth, arm.shoulder_K, arm.elbow_K, arm.wrist_K);
       }
       // Used by the calibration only (the arm plane's upper arm, forearm.upper_arm = depth).
-      if (upper_arm && upper_arm_from_depth_ && !device.tracker) {
+      if (upper_arm && options_.upper_arm_from_depth && !device.tracker) {
         arm.upper_arm_direction_K = upper_arm->direction_K;
       }
     }
@@ -347,7 +184,7 @@ void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleto
 
 void ForearmStage::try_calibrate(bool finishing, StageOutput& out) {
   const std::int64_t window_end_us =
-      first_frame_us_ ? *first_frame_us_ + static_cast<std::int64_t>(std::llround(calibration_s_ * 1e6)) : 0;
+      first_frame_us_ ? *first_frame_us_ + static_cast<std::int64_t>(std::llround(options_.calibration_s * 1e6)) : 0;
   if (!finishing && (!first_frame_us_ || last_frame_us_ < window_end_us)) return;
   const std::vector<std::string> arm_ids = arm_device_ids();
   if (!clock_map_) {
@@ -383,7 +220,7 @@ void ForearmStage::try_calibrate(bool finishing, StageOutput& out) {
   }
   std::vector<Quat> W_from_B;
   for (const ImuRecord& r : base.imu) W_from_B.push_back(r.W_from_A);
-  K_from_W_ = (*K_from_B_ * mean_rotation(W_from_B).conjugate()).normalized();  // eq. 7
+  K_from_W_ = (*options_.K_from_B * mean_rotation(W_from_B).conjugate()).normalized();  // eq. 7
   calibrated_ = true;
   for (Device& device : devices_) {
     if (device.side) calibrate_arm(device, out);
@@ -407,16 +244,17 @@ std::optional<Quat> ForearmStage::W_from_A_at(const Device& device, std::int64_t
 
 void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
   const std::string field = "forearm[" + device.id + "]";
-  const std::int64_t window_end_us = *first_frame_us_ + static_cast<std::int64_t>(std::llround(calibration_s_ * 1e6));
+  const std::int64_t window_end_us =
+      *first_frame_us_ + static_cast<std::int64_t>(std::llround(options_.calibration_s * 1e6));
   std::vector<forearm::CalibrationFrame> with_strap, without_strap;
   const Vec3 up_K = *K_from_W_ * Vec3::UnitZ();
   std::size_t not_raised = 0;
   // The arm plane's upper arm from depth when the depth showed it at enough frames to make a hold.
   std::size_t upper_arm_frames = 0;
   for (const ArmFrame& f : device.frames) upper_arm_frames += f.t_us <= window_end_us && f.upper_arm_direction_K;
-  const bool depth_upper_arm = pose_orientation_ && upper_arm_from_depth_ &&
+  const bool depth_upper_arm = options_.pose_orientation && options_.upper_arm_from_depth &&
                                upper_arm_frames >= static_cast<std::size_t>(calibration_options_.min_still_frames);
-  if (pose_orientation_ && upper_arm_from_depth_ && !depth_upper_arm) {
+  if (options_.pose_orientation && options_.upper_arm_from_depth && !depth_upper_arm) {
     out.warn("FOREARM_UPPER_ARM_NOT_SEEN", field + ".upper_arm",
              "the upper arm was measured in the depth image at " + std::to_string(upper_arm_frames) +
                  " calibration frames (need " + std::to_string(calibration_options_.min_still_frames) +
@@ -437,7 +275,7 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
     c.elbow_K = f.elbow_K;
     c.wrist_K = f.wrist_K;
     c.W_from_A = *W_from_A;
-    if (pose_orientation_) {
+    if (options_.pose_orientation) {
       try {
         Vec3 plane_shoulder_K = f.shoulder_K;
         if (depth_upper_arm) {
@@ -474,8 +312,8 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
       device.calibration_failed = true;
       device.frames.clear();
       out.warn("FOREARM_CALIBRATION", field + ".calibration",
-               std::string("no usable calibration pose (paper 1, II-H) in the first ") + format_double(calibration_s_) +
-                   " s: " + error.what() + " (" + std::to_string(not_raised) +
+               std::string("no usable calibration pose (paper 1, II-H) in the first ") +
+                   format_double(options_.calibration_s) + " s: " + error.what() + " (" + std::to_string(not_raised) +
                    " tracked frames skipped: forearm not raised, paper 1 Fig. 3b); no results for this arm");
       return;
     }
@@ -487,13 +325,13 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
     held.push_back(used[device.calibration->first_frame + i].K_from_F_sdk);
   }
   device.tracker = std::make_unique<ArmTracker>(device.id, *device.side, device.calibration->model, has_model,
-                                                *K_from_W_, mean_rotation(held), smoother_options_);
-  if (axis_correction_on_ && axis_from_depth_ && has_model) {
-    device.tracker->use_axis_correction(axis_correction_options_);
+                                                *K_from_W_, mean_rotation(held), options_.smoother);
+  if (options_.axis_correction_on && options_.axis_from_depth && has_model) {
+    device.tracker->use_axis_correction(options_.axis_correction);
   }
   for (const ArmFrame& f : device.frames) device.tracker->add_frame(f);
   device.frames.clear();
-  if (fit_anchor_) {
+  if (options_.fit_anchor) {
     device.tracker->use_fit_anchor(FitAnchorOptions{});
     for (const FitElbow& fit : device.early_fit_elbows) device.tracker->add_fit_elbow(fit);
     device.early_fit_elbows.clear();

@@ -47,6 +47,7 @@
 #include "forearm/strap_detection.hpp"
 #include "session/pipeline_stage.hpp"
 #include "session/stages/arm_tracker.hpp"
+#include "session/stages/forearm_options.hpp"
 #include "session/stages/stream_clocks.hpp"
 
 namespace posefuse::session {
@@ -57,7 +58,7 @@ class ForearmStage : public Stage {
   ~ForearmStage() override;
   std::string_view name() const override { return "forearm"; }
   std::string_view description() const override;
-  std::vector<StageOption> options() const override;
+  const OptionTable& options() const override;
 
   void start(const v1::SessionHeader& header, StageOutput& out) override;
   std::vector<ValueKind> consumes() const override { return {ValueKind::kImuOrientations}; }
@@ -67,7 +68,7 @@ class ForearmStage : public Stage {
   void on_audio(const AudioBlock& audio, StageOutput& out) override;
   void on_clock_event(const ClockEvent& event, StageOutput& out) override;
   void finish(StageOutput& out) override;
-  bool wants_later_results() const override { return active_ && fit_anchor_; }
+  bool wants_later_results() const override { return active_ && options_.fit_anchor; }
   void on_later_result(const v1::FitResult& result, StageOutput& out) override;
   void finish_late(StageOutput& out) override;
 
@@ -92,11 +93,6 @@ class ForearmStage : public Stage {
     std::vector<FitElbow> early_fit_elbows;  // the body fit's, before the tracker existed
   };
 
-  static forearm::GapSmootherOptions without_shoulder_sphere() {
-    forearm::GapSmootherOptions o;
-    o.use_shoulder_sphere = false;
-    return o;
-  }
   // Calibrates once the calibration window has passed, then feeds the trackers.
   void advance(StageOutput& out);
   void detect_arms(const CameraFrame& frame, const Skeleton& skeleton);
@@ -110,15 +106,7 @@ class ForearmStage : public Stage {
   bool active_ = false;
   std::vector<Device> devices_;  // header order
   std::string base_id_;
-  std::optional<forearm::Quat> K_from_B_;
-  double calibration_s_ = 5.0;
-  bool pose_orientation_ = true;
-  bool axis_from_depth_ = true;  // forearm.axis
-  bool upper_arm_from_depth_ = true;  // forearm.upper_arm
-  forearm::GapSmootherOptions smoother_options_ = without_shoulder_sphere();  // forearm.shoulder_sphere
-  bool fit_anchor_ = false;  // forearm.gap_anchor: auto with fit.enabled
-  bool axis_correction_on_ = true;  // forearm.axis_correction: auto (with axis_from_depth_)
-  forearm::VisualAxisCorrectionOptions axis_correction_options_;
+  ForearmOptions options_;
   std::optional<std::uint32_t> body_id_;
   std::optional<forearm::StrapCameras> cameras_;
   forearm::CalibrationOptions calibration_options_;

@@ -5,58 +5,24 @@
 
 #include "common/error.hpp"
 #include "geometry/quaternion.hpp"
-#include "session/mag_calibration_option.hpp"
+#include "session/stages/imu_options.hpp"
 #include "session/stages/proto_values.hpp"
-#include "session/text_fields.hpp"
 
 namespace posefuse::session {
-
-namespace {
-
-constexpr const char* kTauAccKey = "imu.tau_acc_s";
-constexpr const char* kTauMagKey = "imu.tau_mag_s";
-
-// A positive, finite time constant from the header options, or `fallback` when absent.
-double time_constant_option(const v1::SessionHeader& header, const char* key, double fallback) {
-  const auto it = header.options().find(key);
-  if (it == header.options().end()) return fallback;
-  const std::string field = std::string("header.options[") + key + "]";
-  const double value = parse_double(it->second, field);
-  if (!std::isfinite(value) || value <= 0.0) {
-    throw_invalid(field, "is '" + it->second + "', must be a positive number of seconds");
-  }
-  return value;
-}
-
-}  // namespace
 
 std::string_view ImuOrientationStage::description() const {
   return "orientation W_from_A of every IMU sample (robust 9-axis filter), gyro bias per device";
 }
 
-std::vector<StageOption> ImuOrientationStage::options() const {
-  const imu::RobustOrientationFilter::Params defaults;
-  return {
-      {kTauAccKey, format_double(defaults.tau_acc_s),
-       "inclination: time constant of the accelerometer low-pass, seconds"},
-      {kTauMagKey, format_double(defaults.tau_mag_s),
-       "heading: time constant of the magnetometer correction, seconds"},
-      {"imu.mag_calibration.<device_id>", "",
-       "magnetometer calibration made before the session (paper 1 eq. 3): 'o_x o_y o_z' (uT) and the 3x3 "
-       "correction row by row; applied to the device's readings before the filter"},
-  };
-}
+const OptionTable& ImuOrientationStage::options() const { return imu_option_table(); }
 
 void ImuOrientationStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) {
-  imu::RobustOrientationFilter::Params params;
-  params.tau_acc_s = time_constant_option(header, kTauAccKey, params.tau_acc_s);
-  params.tau_mag_s = time_constant_option(header, kTauMagKey, params.tau_mag_s);
+  const ImuOptions options = read_imu_options(header);
   for (const v1::ImuDevice& device : header.imu_devices()) {
     device_order_.push_back(device.device_id());
-    Device state{imu::RobustOrientationFilter(params)};
-    const std::string key = mag_calibration_option_key(device.device_id());
-    if (const auto it = header.options().find(key); it != header.options().end()) {
-      state.mag_calibration = parse_mag_calibration(it->second, "header.options[" + key + "]");
+    Device state{imu::RobustOrientationFilter(options.filter)};
+    if (const auto it = options.mag_calibrations.find(device.device_id()); it != options.mag_calibrations.end()) {
+      state.mag_calibration = it->second;
     }
     devices_.emplace(device.device_id(), std::move(state));
   }

@@ -11,8 +11,7 @@
 // can come in the header (mag_calibration_option.hpp, "imu.mag_calibration.<device_id>") and is
 // then applied to every reading before the filter (eq. 3), and `calibrated` is true.
 //
-// Options (SessionHeader.options): "imu.tau_acc_s", "imu.tau_mag_s" (see options()),
-// "imu.mag_calibration.<device_id>".
+// Options (SessionHeader.options): imu_options.hpp.
 #include <map>
 #include <optional>
 #include <string>
@@ -27,7 +26,7 @@ class ImuOrientationStage : public Stage {
  public:
   std::string_view name() const override { return "imu_orientation"; }
   std::string_view description() const override;
-  std::vector<StageOption> options() const override;
+  const OptionTable& options() const override;
 
   void start(const v1::SessionHeader& header, StageOutput& out) override;
   std::vector<ValueKind> produces() const override { return {ValueKind::kImuOrientations}; }
