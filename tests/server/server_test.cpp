@@ -19,6 +19,7 @@
 #include "client/fit_call.hpp"
 #include "posefuse/v1/service.grpc.pb.h"
 #include "server/posefuse_server.hpp"
+#include "session/stage_inputs.hpp"
 #include "tests/server/health_check.hpp"
 #include "tests/server/reflection_call.hpp"
 #include "tests/server/test_support.hpp"
@@ -431,9 +432,13 @@ TEST_F(ServerTest, MetricsEndpointCountsSessionsAndStageCalls) {
       << response;
   EXPECT_NE(response.find("\nposefuse_sessions_in_flight 0\n"), std::string::npos);
   EXPECT_NE(response.find("\nposefuse_chunks_received_total 952\n"), std::string::npos);
-  // start + 950 data chunks + finish.
-  EXPECT_NE(response.find("\nposefuse_stage_calls_total{stage=\"imu_orientation\"} 952\n"),
-            std::string::npos);
+  // start, one call per input the frame assembler hands on (camera frames, IMU blocks, audio,
+  // clock events), finish.
+  const std::size_t inputs = session::assemble_session(demo::make_demo_session()).inputs.size();
+  EXPECT_NE(response.find("\nposefuse_stage_calls_total{stage=\"imu_orientation\"} " + std::to_string(inputs + 2) +
+                          "\n"),
+            std::string::npos)
+      << response;
   EXPECT_NE(response.find("\nposefuse_queued_chunks 0\n"), std::string::npos);
   EXPECT_EQ(http_get(server_->metrics_port(), "/other").rfind("HTTP/1.1 404", 0), 0u);
 }
