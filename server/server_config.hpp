@@ -1,6 +1,6 @@
 #pragma once
 // posefuse-server's configuration from its command line and an optional config file
-// (docs/server.md "Configuration").
+// (docs/server.md "Config file").
 //
 // The config file holds `key = value` lines with the same keys as the flags, without the
 // leading "--" (`max-sessions = 4`); blank lines and lines starting with '#' are ignored;
