@@ -8,11 +8,12 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <chrono>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <regex>
+#include <optional>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -53,14 +54,24 @@ class ServerProcess {
   ServerProcess(const ServerProcess&) = delete;
   ServerProcess& operator=(const ServerProcess&) = delete;
 
+  // The port of a complete start line (" event=server_start ... port=N "), none before it is written.
+  static std::optional<int> start_port(const std::string& text) {
+    const std::size_t start = text.find(" event=server_start ");
+    if (start == std::string::npos) return std::nullopt;
+    const std::size_t at = text.find(" port=", start);
+    if (at == std::string::npos || at > text.find('\n', start)) return std::nullopt;
+    std::size_t end = at + 6;
+    while (end < text.size() && std::isdigit(static_cast<unsigned char>(text[end]))) ++end;
+    if (end == at + 6 || end >= text.size() || text[end] != ' ') return std::nullopt;
+    return std::stoi(text.substr(at + 6, end - at - 6));
+  }
+
   // The port from the start line; throws when the process exits first or after `timeout`.
   int port(std::chrono::seconds timeout = std::chrono::seconds(60)) {
-    static const std::regex start_line(" event=server_start .*port=([0-9]+) ");
     const auto deadline = std::chrono::steady_clock::now() + timeout;
     while (std::chrono::steady_clock::now() < deadline) {
-      std::smatch match;
       const std::string text = log();
-      if (std::regex_search(text, match, start_line)) return std::stoi(match[1]);
+      if (const std::optional<int> port = start_port(text)) return *port;
       if (exited()) throw std::runtime_error("posefuse-server exited before serving:\n" + text);
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
     }
