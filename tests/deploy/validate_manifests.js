@@ -24,7 +24,7 @@ const path = require('node:path');
 const YAML = require('yaml');
 
 // kubernetes-models 4.5.x carries the schemas of Kubernetes v1.33.0 (its changelog: "Update
-// schema version to v1.33.0"); 5.x (v1.36.0) needs Node 22 and Debian 12 has Node 20.
+// schema version to v1.33.0"); 5.x (v1.36.0) needs Node 22, 4.5.1 runs on Node 14 and later.
 const KUBERNETES_VERSION = 'v1.33.0';
 const MODELS_VERSION = require('kubernetes-models/package.json').version;
 
