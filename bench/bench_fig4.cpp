@@ -42,6 +42,8 @@
 #include "fit/joint_kinematics.hpp"
 #include "session/image_codec.hpp"
 #include "session/stage_inputs.hpp"
+#include "session/frame_merge.hpp"
+#include "session/result_encoder.hpp"
 #include "session/stages/body_fit_options.hpp"
 #include "session/stages/body_fit_stage.hpp"
 #include "sim/camera_session.hpp"
@@ -67,7 +69,12 @@ struct Output : session::StageOutput {
   void emit(v1::FitResult&& result) override {
     if (result.has_frame()) frames[result.frame().t_us()] = result.frame();
   }
-  void hand_on(session::StageValue&&) override {}
+  // The fitted frames, as the client receives them from the frame merge.
+  void hand_on(session::StageValue&& value) override {
+    if (const auto* fitted = std::get_if<session::FittedFrame>(&value)) {
+      if (auto result = session::encode_value(session::merge_fit_only(*fitted))) emit(std::move(*result));
+    }
+  }
   void warn(const std::string& code, const std::string& field, const std::string& message) override {
     std::fprintf(stderr, "  warning %s %s: %s\n", code.c_str(), field.c_str(), message.c_str());
   }

@@ -3,7 +3,9 @@
 // calibration hold, run through SessionPipeline(make_default_stages()) and scored against the
 // simulator's truth: forearm orientation error (eqs. 14-15) of the camera SDK vs the fusion, IMU
 // position error of the SDK (eq. 16) vs the fusion with the paper's recovery and with the
-// smoother (and the causal live estimate), RMS and maximum over all frames and inside gaps only.
+// smoother, and of the frame results (the frame merge's choice per frame: the strap's position,
+// else a recovered gap's where it came before the frame left the merge, else the causal live
+// estimate), RMS and maximum over all frames and inside gaps only.
 // Two renders:
 //   --render body (the simulator's session generator, core/sim/sim_session.hpp, as posefuse-sim
 //     makes it: the rendered body with clothing, RGB with the strap, both arms exercising with an
@@ -110,7 +112,7 @@ double hold_bound_s(const sim::BodyMotion& motion, bool end) {
 
 // Prints one session's Table I (title already printed) and writes its plot.
 Summary report(const std::string& name, const bench::Table1Series& s, const fs::path& png) {
-  std::printf("| error (frames) | SDK | fusion, paper recovery | fusion, smoother | fusion, live | paper 1 SDK -> fusion |\n");
+  std::printf("| error (frames) | SDK | fusion, paper recovery | fusion, smoother | fusion, frame results | paper 1 SDK -> fusion |\n");
   std::printf("|---|---|---|---|---|---|\n");
   const std::vector<std::vector<double>> orientation = {s.sdk_orientation_deg, s.fusion_orientation_deg,
                                                         s.fusion_orientation_deg, s.fusion_orientation_deg};

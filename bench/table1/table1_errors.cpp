@@ -87,10 +87,10 @@ Table1Series table1_series(const Table1Truth& session, const std::vector<v1::Fit
     if (!r.has_frame()) continue;
     const long f = frame_index(session.frame_t_us, r.frame().t_us());
     if (f < 0) continue;
-    // The forearm stage's orientation (the IMU's, eq. 11), not the body fit's copy of it turned
-    // onto the fitted forearm axis (a frame with SMPL joints, when the fit runs).
+    // The frame result's orientation: the forearm stage's (the IMU's, eq. 11) by the frame merge's
+    // rule (frame_merge.hpp).
     for (const v1::ForearmOrientation& o : r.frame().forearms()) {
-      if (o.arm() == arm.arm && r.frame().smpl_joints_size() == 0) {
+      if (o.arm() == arm.arm) {
         fusion_K_from_F[static_cast<std::size_t>(f)] = quat(o.k_from_f());
       }
     }

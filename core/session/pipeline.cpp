@@ -19,15 +19,11 @@ class SessionPipeline::Output : public StageOutput {
     if (result.has_item_error()) ++pipeline_.item_errors_;
     if (result.has_recovered_segment()) ++pipeline_.recovered_segments_;
     if (result.has_frame() && result.frame().smpl_joints_size() > 0) ++pipeline_.frames_fitted_;
-    const std::size_t emitter = pipeline_.current_stage_;
-    if (emitter < pipeline_.stages_.size() && pipeline_.wanted_by_a_stage_before(emitter)) {
-      pipeline_.later_.emplace_back(emitter, result);
-    }
     pipeline_.sink_.emit(std::move(result));
   }
   void hand_on(StageValue&& value) override {
     // The client sees a value before the later stages' results that follow from it.
-    pipeline_.sink_.emit(encode_value(value));
+    if (std::optional<v1::FitResult> result = encode_value(value)) emit(std::move(*result));
     const std::size_t emitter = pipeline_.current_stage_;
     const ValueKind kind = kind_of(value);
     for (std::size_t next = emitter + 1; next < pipeline_.stages_.size(); ++next) {
@@ -119,8 +115,6 @@ void SessionPipeline::push(const v1::SessionChunk& chunk) {
       Stage& stage = *stages_[current_stage_];
       timed(stage, [&] { stage.start(chunk.header(), *output_); });
     }
-    for (const auto& stage : stages_) wants_later_.push_back(stage->wants_later_results());
-    deliver_later_results();
     return;
   }
   if (chunk.has_end()) {
@@ -155,33 +149,7 @@ void SessionPipeline::deliver(const std::vector<SessionInput>& inputs) {
         item_error(error, error.field());
       }
     }
-    deliver_later_results();
   }
-}
-
-bool SessionPipeline::wanted_by_a_stage_before(std::size_t emitter) const {
-  for (std::size_t s = 0; s < emitter && s < wants_later_.size(); ++s) {
-    if (wants_later_[s]) return true;
-  }
-  return false;
-}
-
-void SessionPipeline::deliver_later_results() {
-  const std::size_t caller = current_stage_;
-  while (!later_.empty()) {
-    const auto [emitter, result] = std::move(later_.front());
-    later_.pop_front();
-    for (std::size_t s = 0; s < emitter; ++s) {
-      if (!wants_later_[s]) continue;
-      current_stage_ = s;
-      try {
-        timed(*stages_[s], [&] { stages_[s]->on_later_result(result, *output_); });
-      } catch (const Error& error) {
-        item_error(error, error.field());
-      }
-    }
-  }
-  current_stage_ = caller;
 }
 
 void SessionPipeline::item_error(const Error& error, const std::string& field) {
@@ -215,13 +183,6 @@ void SessionPipeline::end_session() {
   for (std::size_t i = 0; i < stages_.size(); ++i) {
     current_stage_ = i;
     timed(*stages_[i], [&] { stages_[i]->finish(*output_); });
-    deliver_later_results();
-  }
-  for (std::size_t i = 0; i < stages_.size(); ++i) {
-    if (i >= wants_later_.size() || !wants_later_[i]) continue;
-    current_stage_ = i;
-    timed(*stages_[i], [&] { stages_[i]->finish_late(*output_); });
-    deliver_later_results();
   }
   current_stage_ = stages_.size();  // the pipeline's own results go to no stage
   v1::FitResult calibration;

@@ -15,18 +15,15 @@
 // a stage is an ItemError for that input. A value a stage hands on (Stage::consumes) goes to the
 // later stages that consume its kind at once, and to the client as a FitResult
 // (result_encoder.hpp); the pipeline refuses, at construction, a stage order in which a stage
-// consumes what no earlier stage produces. Results a stage emits go to the client and, queued
-// until the current stage call returns, to the stages before it that ask for them
-// (Stage::on_later_result: the forearm gaps' wait for the body fit's elbows). Progress results
-// are emitted every progress_every_chunks chunks. After the end marker the assembler hands on
-// what waits and its warnings, the stages finish in order, then finish_late() on the stages
-// that take later results, then the pipeline sends one CalibrationReport, a last Progress and
-// the Summary.
+// consumes what no earlier stage produces: data flows one way, and no stage waits for a later one.
+// Results a stage emits (warnings) go to the client. Progress results are emitted every
+// progress_every_chunks chunks. After the end marker the assembler hands on what waits and its
+// warnings, the stages finish in order, then the pipeline sends one CalibrationReport, a last
+// Progress and the Summary.
 //
 // Not thread-safe: one session is processed in order on one thread (docs/architecture.md, Threads).
 #include <chrono>
 #include <cstdint>
-#include <deque>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -76,10 +73,6 @@ class SessionPipeline {
   void deliver(const std::vector<SessionInput>& inputs);
   void end_session();
   void emit_progress();
-  // Hands the queued results to the earlier stages that want them (Stage::on_later_result); what
-  // those emit goes on to the stages after them as usual and may queue more.
-  void deliver_later_results();
-  bool wanted_by_a_stage_before(std::size_t emitter) const;
   void note_camera_time(const v1::SessionChunk& chunk);
   // Runs `call` on `stage`, reporting its duration to options_.on_stage_time.
   template <class Call>
@@ -99,12 +92,8 @@ class SessionPipeline {
   std::uint64_t depth_frames_ = 0;
   std::uint64_t recovered_segments_ = 0;
   std::uint64_t frames_fitted_ = 0;
-  // The stage being called; results it emits go to the stages after it (Stage::on_result).
+  // The stage being called; values it hands on go to the stages after it.
   std::size_t current_stage_ = static_cast<std::size_t>(-1);
-  // Stage::wants_later_results() of each stage, and the results queued for them with the index of
-  // the stage that emitted each.
-  std::vector<bool> wants_later_;
-  std::deque<std::pair<std::size_t, v1::FitResult>> later_;
   std::optional<std::int64_t> first_camera_t_us_, last_camera_t_us_;
   std::chrono::steady_clock::time_point started_at_;
 };

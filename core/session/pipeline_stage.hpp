@@ -32,8 +32,8 @@ class StageOutput {
  public:
   virtual ~StageOutput() = default;
   virtual void emit(v1::FitResult&& result) = 0;
-  // A value for the stages after this one (those whose consumes() names its kind); the client
-  // gets it as a FitResult too.
+  // A value for the stages after this one (those whose consumes() names its kind), delivered
+  // before this call returns; the client gets those it sees as FitResults (result_encoder.hpp).
   virtual void hand_on(StageValue&& value) = 0;
   virtual void warn(const std::string& code, const std::string& field,
                     const std::string& message) = 0;
@@ -74,15 +74,6 @@ class Stage {
   // After the end marker: emit what is left and add to out.calibration().
   virtual void finish(StageOutput& out) = 0;
 
-  // Results of the stages after this one, for a stage that refines its own output with them (the
-  // forearm stage's gap recovery with the body fit's elbows). Asked once after start(). They are
-  // queued and delivered in emission order after the stage call that caused them returns, never
-  // from inside this stage's own emit, so a stage is not re-entered. The last of them come after
-  // this stage's finish(): finish_late() is then called, after every stage has finished and every
-  // later result has been delivered, for what waited on them. Errors are item errors there too.
-  virtual bool wants_later_results() const { return false; }
-  virtual void on_later_result(const v1::FitResult& /*result*/, StageOutput& /*out*/) {}
-  virtual void finish_late(StageOutput& /*out*/) {}
 };
 
 }  // namespace posefuse::session

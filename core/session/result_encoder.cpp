@@ -1,5 +1,7 @@
 #include "session/result_encoder.hpp"
 
+#include "session/stages/proto_values.hpp"
+
 namespace posefuse::session {
 
 namespace {
@@ -26,19 +28,84 @@ void encode(const ForearmOrientations& value, v1::FitResult& result) {
   }
 }
 
+void encode(const RecoveredSegment& value, v1::FitResult& result) {
+  v1::RecoveredSegment& segment = *result.mutable_recovered_segment();
+  segment.set_arm(value.arm);
+  segment.set_device_id(value.device_id);
+  segment.set_method(value.segment.method == forearm::RecoveryMethod::kPaper ? v1::RecoveredSegment::PAPER
+                                                                            : v1::RecoveredSegment::SMOOTHER);
+  segment.set_t_start_us(value.segment.t_start_us);
+  segment.set_t_end_us(value.segment.t_end_us);
+  for (const forearm::RecoveredGapSample& s : value.segment.samples) {
+    v1::RecoveredSegment::Sample& out = *segment.add_samples();
+    out.set_t_us(s.t_us);
+    *out.mutable_imu_m() = to_proto(s.imu_K);
+    *out.mutable_elbow_m() = to_proto(s.elbow_K);
+    *out.mutable_wrist_m() = to_proto(s.wrist_K);
+    *out.mutable_k_from_f() = to_proto(s.K_from_F);
+  }
+}
+
+void encode_joint(const JointEstimate& joint, v1::JointEstimate& out) {
+  *out.mutable_position_m() = to_proto(joint.p_K);
+  out.set_source(joint.source);
+  out.set_confidence(joint.confidence);
+}
+
+void encode(const FrameEstimate& value, v1::FitResult& result) {
+  v1::FrameResult& frame = *result.mutable_frame();
+  frame.set_t_us(value.t_us);
+  for (const JointEstimate& joint : value.smpl_joints) encode_joint(joint, *frame.add_smpl_joints());
+  for (const JointEstimate& joint : value.camera_joints) encode_joint(joint, *frame.add_camera_joints());
+  for (const ForearmEstimate& f : value.forearms) {
+    v1::ForearmOrientation& out = *frame.add_forearms();
+    out.set_arm(f.arm);
+    *out.mutable_k_from_f() = to_proto(f.K_from_F);
+    out.set_pronation_rad(f.pronation_rad);
+    out.set_source(f.source);
+    out.set_confidence(f.confidence);
+  }
+  for (const ImuPositionEstimate& p : value.imu_positions) {
+    v1::ImuPosition& out = *frame.add_imu_positions();
+    out.set_device_id(p.device_id);
+    *out.mutable_position_m() = to_proto(p.p_K);
+    out.set_source(p.source);
+  }
+  frame.set_fit_energy(value.fit_energy);
+}
+
 }  // namespace
 
 const char* value_kind_name(ValueKind kind) {
   switch (kind) {
     case ValueKind::kImuOrientations: return "imu_orientations";
     case ValueKind::kForearmOrientations: return "forearm_orientations";
+    case ValueKind::kArmTrackStart: return "arm_track_start";
+    case ValueKind::kArmTrack: return "arm_track";
+    case ValueKind::kFittedFrame: return "fitted_frame";
+    case ValueKind::kArmFrameEstimates: return "arm_frame_estimates";
+    case ValueKind::kRecoveredSegment: return "recovered_segment";
+    case ValueKind::kFramesDone: return "frames_done";
+    case ValueKind::kFrameEstimate: return "frame_estimate";
   }
   return "(unknown value kind)";
 }
 
-v1::FitResult encode_value(const StageValue& value) {
+std::optional<v1::FitResult> encode_value(const StageValue& value) {
   v1::FitResult result;
-  std::visit([&](const auto& v) { encode(v, result); }, value);
+  bool for_client = true;
+  std::visit(
+      [&](const auto& v) {
+        using T = std::decay_t<decltype(v)>;
+        if constexpr (std::is_same_v<T, ImuOrientations> || std::is_same_v<T, ForearmOrientations> ||
+                      std::is_same_v<T, RecoveredSegment> || std::is_same_v<T, FrameEstimate>) {
+          encode(v, result);
+        } else {
+          for_client = false;  // between stages only
+        }
+      },
+      value);
+  if (!for_client) return std::nullopt;
   return result;
 }
 

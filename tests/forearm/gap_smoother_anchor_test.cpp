@@ -72,7 +72,7 @@ TEST(GapSmootherAnchor, KeepsShortGapsInertial) {
   }
 }
 
-// The body fit's elbow as the anchor (arm_tracker.hpp): 2 cm off, but on a run of badly fitted
+// The body fit's elbow as the anchor (forearm/gap_tracker.hpp): 2 cm off, but on a run of badly fitted
 // frames (high fit energy) it sits 15 cm off for a second, consistently, which the robust weight
 // cannot tell from the truth. Giving those samples a sigma_scale of 4 (the fit energy 16 times its
 // reference) must bring the trajectory most of the way to what it is without them (the inertial
@@ -196,7 +196,7 @@ TEST(GapSmootherAnchor, RefusesBadAnchorsAndOptions) {
 }
 
 // A lone detection 20 cm off inside a 3 s gap: too few visible samples after it to close the gap,
-// so the tracker carries the gap through it (arm_tracker.cpp); with it occluded the smoother
+// so the tracker carries the gap through it (forearm/gap_tracker.cpp); with it occluded the smoother
 // recovers the whole gap as one.
 TEST(LoneDetection, IsTooFewToCloseAGapAndIsOccludedInsideIt) {
   const ArmMotion motion;

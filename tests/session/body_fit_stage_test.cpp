@@ -4,6 +4,8 @@
 // joints. Degenerate inputs (no silhouette, no skeleton, bad options) become warnings or errors.
 #include <gtest/gtest.h>
 
+#include <limits>
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -17,6 +19,7 @@
 
 #include "body/smpl_model.hpp"
 #include "common/error.hpp"
+#include "session/frame_merge.hpp"
 #include "session/pipeline.hpp"
 #include "session/result_encoder.hpp"
 #include "session/session_validator.hpp"
@@ -33,7 +36,11 @@ constexpr double kDeg = std::numbers::pi / 180.0;
 
 struct Output : StageOutput {
   void emit(v1::FitResult&& result) override { results.push_back(std::move(result)); }
-  void hand_on(StageValue&& value) override { results.push_back(encode_value(value)); }
+  // A fitted frame as the client gets it when only the fit estimated the frame (frame_merge.hpp).
+  void hand_on(StageValue&& value) override {
+    if (const auto* fitted = std::get_if<FittedFrame>(&value)) value = merge_fit_only(*fitted);
+    if (std::optional<v1::FitResult> result = encode_value(value)) results.push_back(std::move(*result));
+  }
   void warn(const std::string& code, const std::string& field, const std::string& message) override {
     v1::Warning w;
     w.set_code(code);
@@ -200,8 +207,14 @@ TEST(BodyFitStage, RunsInTheDefaultPipelineWhenEnabled) {
   }
   size_t fitted = 0;
   const v1::Summary* summary = nullptr;
+  std::int64_t last_frame_us = std::numeric_limits<std::int64_t>::min();
   for (const auto& r : sink.results) {
     fitted += r.has_frame() && r.frame().smpl_joints_size() == body::kNumJoints;
+    // One FrameResult per frame (the frame merge), in time order.
+    if (r.has_frame()) {
+      EXPECT_GT(r.frame().t_us(), last_frame_us);
+      last_frame_us = r.frame().t_us();
+    }
     if (r.has_summary()) summary = &r.summary();
     EXPECT_FALSE(r.has_item_error()) << r.item_error().field() << ": " << r.item_error().message();
   }

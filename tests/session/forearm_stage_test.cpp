@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
+#include <set>
 #include <numbers>
 
 #include "body/smpl_model.hpp"
@@ -310,40 +311,43 @@ TEST(ForearmStage, BadOptionsAreErrorsNamingTheOption) {
 }
 
 // A stand-in for the body fit after the forearm stage: it answers every skeleton frame with SMPL
-// joints whose right elbow is the true one, all at its finish() (as a fit waiting for data would).
+// joints whose right elbow is the true one, all at its finish() (as a fit waiting for data would),
+// and says so with FramesDone.
 class TruthFitStage : public Stage {
  public:
   explicit TruthFitStage(const ForearmSessionTruth& truth) : truth_(truth) {}
   std::string_view name() const override { return "truth_fit"; }
   std::string_view description() const override { return "test stage"; }
+  std::vector<ValueKind> produces() const override { return {ValueKind::kFittedFrame, ValueKind::kFramesDone}; }
   void start(const v1::SessionHeader&, StageOutput&) override {}
+  void on_camera_frame(const CameraFrame& camera, StageOutput& out) override {
+    if (!truth_.frame_t_us.empty()) out.hand_on(FramesDone{FrameSource::kBodyFit, truth_.frame_t_us.front() - 1});
+    (void)camera;
+  }
   void finish(StageOutput& out) override {
     const forearm::ForearmModel& m = truth_.model;
     for (std::size_t f = 0; f < truth_.frame_t_us.size(); ++f) {
       const Vec3 strap_centre = truth_.imu_K[f] - truth_.K_from_F[f] * Vec3(m.r_m, 0.0, 0.0);
       const Vec3 elbow = strap_centre - truth_.K_from_F[f] * Vec3(0.0, m.d_se_m, 0.0);
-      v1::FitResult r;
-      v1::FrameResult& frame = *r.mutable_frame();
-      frame.set_t_us(truth_.frame_t_us[f]);
-      frame.set_fit_energy(5.0);
+      FittedFrame fitted;
+      fitted.estimate.t_us = truth_.frame_t_us[f];
+      fitted.estimate.fit_energy = 5.0;
       for (int j = 0; j < body::kNumJoints; ++j) {
-        v1::Vec3& p = *frame.add_smpl_joints()->mutable_position_m();
-        const Vec3 at = j == body::kRightElbow ? elbow : Vec3::Zero();
-        p.set_x(at.x());
-        p.set_y(at.y());
-        p.set_z(at.z());
+        fitted.estimate.smpl_joints.push_back({j == body::kRightElbow ? elbow : Vec3::Zero(), v1::FUSED, 1.0});
       }
-      out.emit(std::move(r));
+      out.hand_on(std::move(fitted));
     }
+    out.hand_on(FramesDone{FrameSource::kBodyFit, INT64_MAX});
   }
 
  private:
   const ForearmSessionTruth& truth_;
 };
 
-// With fit.enabled the stage anchors its gaps to the fit's elbows: the gap waits for the fit's
-// frames (here all at the fit's finish), then is recovered in finish_late, after them in the
-// stream; with forearm.gap_anchor = sdk it is recovered before them, as without the fit.
+// With fit.enabled the gaps are anchored to the fit's elbows: the gap waits for the fit's frames
+// (here all at the fit's finish), then is recovered after them in the stream; with
+// forearm.gap_anchor = sdk it is recovered before them, as without the fit. Either way the frame
+// merge sends each frame once, after the fit's part of it.
 TEST(ForearmStage, WithTheBodyFitTheGapWaitsForItsElbows) {
   for (const std::string anchor : {"auto", "sdk"}) {
     ForearmSessionTruth truth;
@@ -351,25 +355,33 @@ TEST(ForearmStage, WithTheBodyFitTheGapWaitsForItsElbows) {
     (*chunks.front().mutable_header()->mutable_options())["fit.enabled"] = "true";
     (*chunks.front().mutable_header()->mutable_options())["forearm.gap_anchor"] = anchor;
     std::vector<std::unique_ptr<Stage>> stages = make_default_stages();
-    stages.pop_back();  // the real body fit: this session has no depth silhouettes to fit
-    stages.push_back(std::make_unique<TruthFitStage>(truth));
+    // The real body fit (this session has no depth silhouettes to fit) replaced in its place.
+    const auto fit = std::find_if(stages.begin(), stages.end(), [](const auto& s) { return s->name() == "body_fit"; });
+    ASSERT_NE(fit, stages.end());
+    *fit = std::make_unique<TruthFitStage>(truth);
     Sink sink;
     SessionPipeline pipeline(std::move(stages), sink);
     for (const auto& chunk : chunks) pipeline.push(chunk);
     pipeline.close();
 
-    std::size_t first_fit_frame = sink.results.size(), first_segment = sink.results.size();
+    // The forearm stage's last orientations come from its finish(), before the fit's.
+    std::size_t last_orientations = 0, first_segment = sink.results.size(), fit_frames = 0;
+    std::set<std::int64_t> frame_times;
     for (std::size_t i = 0; i < sink.results.size(); ++i) {
       const v1::FitResult& x = sink.results[i];
-      if (x.has_frame() && x.frame().smpl_joints_size() > 0) first_fit_frame = std::min(first_fit_frame, i);
+      if (x.has_forearm_orientations()) last_orientations = i;
       if (x.has_recovered_segment()) first_segment = std::min(first_segment, i);
+      if (x.has_frame()) {
+        fit_frames += x.frame().smpl_joints_size() > 0;
+        EXPECT_TRUE(frame_times.insert(x.frame().t_us()).second) << "two FrameResults at " << x.frame().t_us();
+      }
     }
-    ASSERT_LT(first_fit_frame, sink.results.size()) << anchor;
+    EXPECT_EQ(fit_frames, truth.frame_t_us.size()) << anchor;
     ASSERT_LT(first_segment, sink.results.size()) << anchor;
     if (anchor == "auto") {
-      EXPECT_GT(first_segment, first_fit_frame);
+      EXPECT_GT(first_segment, last_orientations);
     } else {
-      EXPECT_LT(first_segment, first_fit_frame);
+      EXPECT_LT(first_segment, last_orientations);
     }
     const testing::ForearmSessionErrors e = testing::evaluate_forearm_results(truth, sink.results);
     EXPECT_EQ(e.segments, 2u) << anchor;

@@ -456,116 +456,79 @@ TEST(SessionPipeline, AStageCannotDependOnALaterStage) {
   EXPECT_NO_THROW(SessionPipeline(std::move(in_order), sink));
 }
 
-// Results flowing back: a stage that asks for later stages' results gets them after its own call
-// returns (never inside its emit), in order, the last ones after every finish(), and then
-// finish_late(). The later stage answers each frame of the earlier one a frame later (as the body
-// fit waits for data), so its last answer comes from its finish().
-class EarlyStage : public Stage {
+// Values flow one way: what a stage hands on reaches the later stages that consume its kind
+// inside that call, before their own call for the same input; values that pass only between
+// stages (FramesDone) do not reach the client; an error thrown in on_value is an item error for
+// that value and the session goes on.
+class ProducerStage : public Stage {
  public:
-  EarlyStage(std::vector<std::string>& log, bool wants) : log_(log), wants_(wants) {}
-  std::string_view name() const override { return "early"; }
+  explicit ProducerStage(std::vector<std::string>& log) : log_(log) {}
+  std::string_view name() const override { return "producer"; }
   std::string_view description() const override { return "test stage"; }
+  std::vector<ValueKind> produces() const override { return {ValueKind::kFramesDone}; }
   void start(const v1::SessionHeader&, StageOutput&) override {}
   void on_camera_frame(const CameraFrame& camera, StageOutput& out) override {
-    if (camera.depth_mm.empty() || !wants_) return;  // the stage that does not ask only records
-    log_.push_back("early " + std::to_string(camera.t_us));
-    v1::FitResult frame;
-    frame.mutable_frame()->set_t_us(camera.t_us);
-    inside_emit_ = true;
-    out.emit(std::move(frame));
-    inside_emit_ = false;
+    if (camera.depth_mm.empty()) return;
+    log_.push_back("producer " + std::to_string(camera.t_us));
+    out.hand_on(FramesDone{FrameSource::kForearm, camera.t_us});
   }
-  void finish(StageOutput&) override { log_.push_back("early finish"); }
-  bool wants_later_results() const override { return wants_; }
-  void on_later_result(const v1::FitResult& result, StageOutput&) override {
-    if (inside_emit_) log_.push_back("re-entered");
-    if (!result.has_frame() || result.frame().fit_energy() == 0.0) return;  // not the late stage's
-    log_.push_back("later " + std::to_string(result.frame().t_us()));
-    if (result.frame().t_us() == throw_at_us) throw_invalid("later", "rejected by the test");
+  void finish(StageOutput&) override { log_.push_back("producer finish"); }
+
+ private:
+  std::vector<std::string>& log_;
+};
+
+class ConsumerStage : public Stage {
+ public:
+  explicit ConsumerStage(std::vector<std::string>& log) : log_(log) {}
+  std::string_view name() const override { return "consumer"; }
+  std::string_view description() const override { return "test stage"; }
+  std::vector<ValueKind> consumes() const override { return {ValueKind::kFramesDone}; }
+  void start(const v1::SessionHeader&, StageOutput&) override {}
+  void on_value(const StageValue& value, StageOutput&) override {
+    const std::int64_t t = std::get<FramesDone>(value).up_to_t_us;
+    log_.push_back("value " + std::to_string(t));
+    if (t == throw_at_us) throw_invalid("consumer", "rejected by the test");
   }
-  void finish_late(StageOutput& out) override {
-    log_.push_back("early finish_late");
-    out.warn("LATE", "early", "emitted in finish_late");
+  void on_camera_frame(const CameraFrame& camera, StageOutput&) override {
+    if (!camera.depth_mm.empty()) log_.push_back("consumer " + std::to_string(camera.t_us));
   }
+  void finish(StageOutput&) override { log_.push_back("consumer finish"); }
   std::int64_t throw_at_us = -1;
 
  private:
   std::vector<std::string>& log_;
-  bool wants_;
-  bool inside_emit_ = false;
 };
 
-class LateStage : public Stage {
- public:
-  explicit LateStage(std::vector<std::string>& log) : log_(log) {}
-  std::string_view name() const override { return "late"; }
-  std::string_view description() const override { return "test stage"; }
-  void start(const v1::SessionHeader&, StageOutput&) override {}
-  void on_camera_frame(const CameraFrame& camera, StageOutput& out) override {
-    if (camera.depth_mm.empty()) return;
-    if (held_) answer(*held_, out);
-    held_ = camera.t_us;
-  }
-  void finish(StageOutput& out) override {
-    log_.push_back("late finish");
-    if (held_) answer(*held_, out);
-    held_.reset();
-  }
-
- private:
-  void answer(std::int64_t t_us, StageOutput& out) {
-    v1::FitResult frame;
-    frame.mutable_frame()->set_t_us(t_us);
-    frame.mutable_frame()->set_fit_energy(1.0);
-    out.emit(std::move(frame));
-  }
-  std::vector<std::string>& log_;
-  std::optional<std::int64_t> held_;
-};
-
-TEST(SessionPipeline, LaterStagesResultsReachAnEarlierStageThatAsksAfterItsCallAndBeforeFinishLate) {
+TEST(SessionPipeline, AValueReachesTheLaterStagesWithinTheCallThatHandsItOn) {
   const auto chunks = demo::make_demo_session();
   std::vector<std::int64_t> depth_t_us;
   for (const auto& chunk : chunks) {
     if (chunk.has_depth()) depth_t_us.push_back(chunk.depth().t_us());
   }
   ASSERT_GE(depth_t_us.size(), 3u);
-  std::vector<std::string> log, unused_log;
+  std::vector<std::string> log;
   std::vector<std::unique_ptr<Stage>> stages;
-  auto early = std::make_unique<EarlyStage>(log, true);
-  early->throw_at_us = depth_t_us[1];
-  stages.push_back(std::move(early));
-  stages.push_back(std::make_unique<EarlyStage>(unused_log, false));  // does not ask: gets none
-  stages.push_back(std::make_unique<LateStage>(log));
+  stages.push_back(std::make_unique<ProducerStage>(log));
+  auto consumer = std::make_unique<ConsumerStage>(log);
+  consumer->throw_at_us = depth_t_us[1];
+  stages.push_back(std::move(consumer));
   CollectingSink sink;
   SessionPipeline pipeline(std::move(stages), sink);
   for (const auto& chunk : chunks) pipeline.push(chunk);
   pipeline.close();
 
-  // Frame k's answer comes in the call for frame k + 1, after the early stage's part of it.
   std::vector<std::string> expected;
-  for (std::size_t k = 0; k < depth_t_us.size(); ++k) {
-    expected.push_back("early " + std::to_string(depth_t_us[k]));
-    if (k > 0) expected.push_back("later " + std::to_string(depth_t_us[k - 1]));
+  for (const std::int64_t t : depth_t_us) {
+    for (const char* part : {"producer ", "value ", "consumer "}) expected.push_back(part + std::to_string(t));
   }
-  expected.insert(expected.end(), {"early finish", "late finish", "later " + std::to_string(depth_t_us.back()),
-                                   "early finish_late"});
+  expected.insert(expected.end(), {"producer finish", "consumer finish"});
   EXPECT_EQ(log, expected);
-  EXPECT_EQ(std::count(unused_log.begin(), unused_log.end(), "early finish_late"), 0);
-  EXPECT_EQ(std::count_if(unused_log.begin(), unused_log.end(), [](const std::string& l) { return l.rfind("later", 0) == 0; }),
-            0);
-  // The error thrown in on_later_result is an item error naming its field; the session went on.
+  EXPECT_TRUE(sink.of(v1::FitResult::kFrame).empty());  // FramesDone is for the stages only
   const auto errors = sink.item_errors();
   ASSERT_EQ(errors.size(), 1u);
-  EXPECT_EQ(errors[0].field(), "later");
-  // finish_late's warning is in the stream before the calibration report and the summary.
-  const auto late = std::find_if(sink.results.begin(), sink.results.end(),
-                                 [](const v1::FitResult& r) { return r.has_warning() && r.warning().code() == "LATE"; });
-  const auto report = std::find_if(sink.results.begin(), sink.results.end(),
-                                   [](const v1::FitResult& r) { return r.has_calibration(); });
-  ASSERT_NE(late, sink.results.end());
-  EXPECT_LT(late, report);
-  EXPECT_EQ(sink.results.back().summary().warnings(), 1u);
+  EXPECT_EQ(errors[0].field(), "consumer");
+  EXPECT_EQ(sink.results.back().summary().item_errors(), 1u);
 }
 
 TEST(SessionPipeline, ExtremeTimestampsAreRejectedAndTheStreamDurationStaysPositive) {

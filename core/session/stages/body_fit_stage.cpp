@@ -47,11 +47,6 @@ double confidence_of(const fit::TrackedSkeleton& skeleton, int camera_joint) {
                                                                                            : kUntrackedConfidence;
 }
 
-void set_joint(v1::JointEstimate& joint, const Eigen::Vector3d& p_K, v1::Source source, double confidence) {
-  *joint.mutable_position_m() = to_proto(p_K);
-  joint.set_source(source);
-  joint.set_confidence(confidence);
-}
 
 }  // namespace
 
@@ -126,6 +121,21 @@ void BodyFitStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) 
 }
 
 void BodyFitStage::on_camera_frame(const CameraFrame& camera, StageOutput& out) {
+  last_camera_t_us_ = camera.t_us;
+  add_camera_frame(camera, out);
+  out.hand_on(FramesDone{FrameSource::kBodyFit, frames_done_up_to()});
+}
+
+std::int64_t BodyFitStage::frames_done_up_to() const {
+  if (!enabled_) return INT64_MAX;
+  std::int64_t up_to = last_camera_t_us_.value_or(INT64_MIN);
+  if (!calibration_frames_.empty()) up_to = std::min(up_to, calibration_frames_.front().t_us - 1);
+  if (!queue_.empty()) up_to = std::min(up_to, queue_.front().t_us - 1);
+  if (!fitted_.empty()) up_to = std::min(up_to, fitted_.front().t_us - 1);
+  return up_to;
+}
+
+void BodyFitStage::add_camera_frame(const CameraFrame& camera, StageOutput& out) {
   if (!enabled_) return;
   if (!body_id_ && !camera.skeletons.empty()) body_id_ = camera.skeletons.front().body_id;
   if (camera.depth_mm.empty()) return;
@@ -411,10 +421,11 @@ void BodyFitStage::emit_smoothed(const Eigen::VectorXd& theta, StageOutput& out)
   const Eigen::Matrix3Xd camera_joints = fit::camera_joints_from_pose(pose);
   const v1::Source source = f.imu_used ? v1::FUSED : v1::VISUAL;
 
-  v1::FitResult result;
-  v1::FrameResult& frame = *result.mutable_frame();
-  frame.set_t_us(f.t_us);
-  frame.set_fit_energy(f.energy);
+  FittedFrame fitted;
+  fitted.lost = f.energy > options_.lost_energy;
+  FrameEstimate& frame = fitted.estimate;
+  frame.t_us = f.t_us;
+  frame.fit_energy = f.energy;
   std::array<double, body::kNumJoints> smpl_confidence;
   smpl_confidence.fill(1.0);
   for (int j = 0; j < fit::kKinectJointCount; ++j) {
@@ -422,10 +433,10 @@ void BodyFitStage::emit_smoothed(const Eigen::VectorXd& theta, StageOutput& out)
     if (smpl >= 0) smpl_confidence[static_cast<size_t>(smpl)] = confidence_of(f.skeleton, j);
   }
   for (int j = 0; j < body::kNumJoints; ++j) {
-    set_joint(*frame.add_smpl_joints(), pose.positions_K.col(j), source, smpl_confidence[static_cast<size_t>(j)]);
+    frame.smpl_joints.push_back({pose.positions_K.col(j), source, smpl_confidence[static_cast<size_t>(j)]});
   }
   for (int j = 0; j < fit::kKinectJointCount; ++j) {
-    set_joint(*frame.add_camera_joints(), camera_joints.col(j), source, confidence_of(f.skeleton, j));
+    frame.camera_joints.push_back({camera_joints.col(j), source, confidence_of(f.skeleton, j)});
   }
 
   // II-B: the roll of each forearm from its IMU, the axis from the fit.
@@ -437,12 +448,9 @@ void BodyFitStage::emit_smoothed(const Eigen::VectorXd& theta, StageOutput& out)
     const Eigen::Vector3d axis_K = (pose.positions_K.col(wrist) - pose.positions_K.col(elbow)).normalized();
     const Eigen::Quaterniond onto_fit =
         Eigen::Quaterniond::FromTwoVectors(*K_from_F * Eigen::Vector3d::UnitY(), axis_K);
-    v1::ForearmOrientation& forearm = *frame.add_forearms();
-    forearm.set_arm(arm);
-    *forearm.mutable_k_from_f() = to_proto((onto_fit * *K_from_F).normalized());
-    forearm.set_source(v1::FUSED);
+    ForearmEstimate forearm{arm, (onto_fit * *K_from_F).normalized(), 0.0, v1::FUSED, 0.0};
     const int camera_wrist = left ? fit::kWristLeft : fit::kWristRight;
-    forearm.set_confidence(confidence_of(f.skeleton, camera_wrist));
+    forearm.confidence = confidence_of(f.skeleton, camera_wrist);
     try {
       fit::ArmRollOptions roll_options;
       // Paper 1's F (x dorsal, y along the forearm): z is the thumb side on the right forearm and
@@ -450,16 +458,20 @@ void BodyFitStage::emit_smoothed(const Eigen::VectorXd& theta, StageOutput& out)
       roll_options.thumb_F = left ? Eigen::Vector3d(-Eigen::Vector3d::UnitZ()) : Eigen::Vector3d::UnitZ();
       const fit::ForearmRoll roll = fit::forearm_roll(pose, left ? fit::ArmSide::kLeft : fit::ArmSide::kRight, *K_from_F,
                                                       Eigen::Quaterniond::Identity(), roll_options);
-      if (roll.pronation_rad) forearm.set_pronation_rad(*roll.pronation_rad);
+      if (roll.pronation_rad) forearm.pronation_rad = *roll.pronation_rad;
     } catch (const Error&) {
-      forearm.set_confidence(0.0);  // roll undefined (IMU thumb axis along the fitted forearm)
+      forearm.confidence = 0.0;  // roll undefined (IMU thumb axis along the fitted forearm)
     }
+    frame.forearms.push_back(forearm);
   }
-  out.emit(std::move(result));
+  out.hand_on(std::move(fitted));
 }
 
 void BodyFitStage::finish(StageOutput& out) {
-  if (!enabled_) return;
+  if (!enabled_) {
+    out.hand_on(FramesDone{FrameSource::kBodyFit, INT64_MAX});
+    return;
+  }
   if (!personalised_ && !calibration_frames_.empty()) personalise(out);
   fit_ready(true, out);
   for (const Eigen::VectorXd& theta : work_->smoother.flush()) emit_smoothed(theta, out);
@@ -490,6 +502,7 @@ void BodyFitStage::finish(StageOutput& out) {
     shape.set_torso_length_m(length(body::kPelvis, body::kNeck));
     shape.set_estimated(work_->personalisation.has_value());
   }
+  out.hand_on(FramesDone{FrameSource::kBodyFit, INT64_MAX});
 }
 
 }  // namespace posefuse::session

@@ -22,17 +22,12 @@
 //     `fit.imu_wait_s`) until the forearm orientations covering them have arrived, so that the imu
 //     term has them; then they are fitted without.
 //  4. Post-processing: moving average over `fit.smoothing_frames` frames (PoseSmoother), forearm
-//     roll from the IMU (fit::forearm_roll), and a FrameResult per frame: 24 SMPL joints, the 25
+//     roll from the IMU (fit::forearm_roll), and a FittedFrame per frame: 24 SMPL joints, the 25
 //     camera-compatible joints, forearm orientations, per-joint source and confidence, energy.
 //
-// Which wins when the forearm stage and the fit disagree (docs/fitting.md, "Body-fit stage",
-// measured on paper 1's protocol): both stages emit a FrameResult for the frame, and both forearm
-// orientations come from the same IMU orientation (the fit's only rotated onto the fitted forearm
-// axis). Where the strap is seen (the forearm stage's IMU position is VISUAL) its position wins
-// (7-14 mm against the fit's 16-20 mm at the strap); elsewhere (PREDICTED or none) the fit's
-// forearm, elbow and wrist win (the live estimate is 54-78 mm off, anchored to the camera
-// skeleton's elbow; the fit 13-44 mm behind the head and the back). The fit's joint confidence
-// still follows the camera's tracking state (1 tracked, 0.5 otherwise).
+// Hands on a FittedFrame per fitted frame (the frame merge chooses between its estimates and
+// the forearm stages', frame_merge.hpp) and at every camera frame FramesDone. The fit's joint
+// confidence follows the camera's tracking state (1 tracked, 0.5 otherwise).
 //
 // Problems that skip a frame are warnings (FIT_FRAME naming the field, e.g. "frame.body_index"
 // for an empty silhouette, "skeleton" for a missing one); the session goes on.
@@ -117,6 +112,7 @@ class BodyFitStage : public Stage {
 
   void start(const v1::SessionHeader& header, StageOutput& out) override;
   std::vector<ValueKind> consumes() const override { return {ValueKind::kForearmOrientations}; }
+  std::vector<ValueKind> produces() const override { return {ValueKind::kFittedFrame, ValueKind::kFramesDone}; }
   void on_camera_frame(const CameraFrame& frame, StageOutput& out) override;
   void on_value(const StageValue& value, StageOutput& out) override;
   void finish(StageOutput& out) override;
@@ -130,6 +126,9 @@ class BodyFitStage : public Stage {
  private:
   struct Work;  // models, fitter, smoother: built in start()
 
+  void add_camera_frame(const CameraFrame& camera, StageOutput& out);
+  // FramesDone: every frame before the oldest one not handed on yet (all when disabled).
+  std::int64_t frames_done_up_to() const;
   void add_frame(BodyFitFrame&& frame, StageOutput& out);
   void enqueue(BodyFitFrame&& frame);  // packed into queue_
   void personalise(StageOutput& out);
@@ -148,6 +147,7 @@ class BodyFitStage : public Stage {
   std::uint64_t frames_without_skeleton_ = 0;  // depth frames without the fitted person's skeleton
 
   std::optional<std::int64_t> first_t_us_, last_frame_t_us_;
+  std::optional<std::int64_t> last_camera_t_us_;  // any camera frame
   std::vector<BodyFitFrame> calibration_frames_;
   bool personalised_ = false;
   std::deque<QueuedBodyFitFrame> queue_;  // personalised, waiting for forearm orientations

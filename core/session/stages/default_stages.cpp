@@ -1,7 +1,9 @@
 #include "session/stages/default_stages.hpp"
 
 #include "session/stages/body_fit_stage.hpp"
+#include "session/stages/forearm_gaps_stage.hpp"
 #include "session/stages/forearm_stage.hpp"
+#include "session/stages/frame_merge_stage.hpp"
 #include "session/stages/imu_orientation_stage.hpp"
 
 namespace posefuse::session {
@@ -12,6 +14,9 @@ std::vector<std::unique_ptr<Stage>> make_default_stages() {
   stages.push_back(std::make_unique<ForearmStage>());  // needs the IMU orientations first
   // Needs the forearm orientations; off unless the header sets fit.enabled (speed, see its option).
   stages.push_back(std::make_unique<BodyFitStage>());
+  // The gaps see the fit's elbows as an earlier result; the merge sees every per-frame estimate.
+  stages.push_back(std::make_unique<ForearmGapsStage>());
+  stages.push_back(std::make_unique<FrameMergeStage>());
   return stages;
 }
 

@@ -26,6 +26,11 @@ Quat mean_rotation(const std::vector<Quat>& rotations) {
   return geometry::from_wxyz(sum.normalized());
 }
 
+// How long past the calibration window the frames waiting for it hold the frame merge.
+constexpr double kCalibrationGraceS = 10.0;
+
+std::int64_t seconds_to_us(double s) { return static_cast<std::int64_t>(std::llround(s * 1e6)); }
+
 geometry::KinectArmJoints arm_joints(forearm::Side side) {
   return side == forearm::Side::kLeft ? geometry::kLeftArmJoints : geometry::kRightArmJoints;
 }
@@ -36,8 +41,8 @@ ForearmStage::ForearmStage() = default;
 ForearmStage::~ForearmStage() = default;
 
 std::string_view ForearmStage::description() const {
-  return "forearm orientation and pronation per arm IMU sample, IMU position per camera frame (strap in RGB, "
-         "eq. 10), occlusion gaps recovered (paper 1 and smoother), clocks from buzzer and BLE";
+  return "forearm orientation and pronation per arm IMU sample, the strap's IMU position per camera frame (RGB, "
+         "eq. 10), clocks from buzzer and BLE";
 }
 
 const OptionTable& ForearmStage::options() const { return forearm_option_table(); }
@@ -98,7 +103,11 @@ void ForearmStage::on_value(const StageValue& value, StageOutput& out) {
 }
 
 void ForearmStage::on_camera_frame(const CameraFrame& frame, StageOutput& out) {
-  if (!active_) return;
+  last_camera_frame_us_ = frame.t_us;
+  if (!active_) {
+    hand_on_frames_done(true, out);
+    return;
+  }
   if (!body_id_ && !frame.skeletons.empty()) body_id_ = frame.skeletons.front().body_id;
   if (const Skeleton* skeleton = body_id_ ? frame.skeleton(*body_id_) : nullptr) {
     if (!first_frame_us_) first_frame_us_ = frame.t_us;
@@ -106,6 +115,42 @@ void ForearmStage::on_camera_frame(const CameraFrame& frame, StageOutput& out) {
     detect_arms(frame, *skeleton);
   }
   advance(out);
+  hand_on_frames_done(false, out);
+}
+
+void ForearmStage::hand_on_frames_done(bool all, StageOutput& out) {
+  if (!last_camera_frame_us_) return;
+  std::int64_t up_to = all ? INT64_MAX : *last_camera_frame_us_;
+  // Frames held for a calibration that cannot be made (no clocks yet) would hold every later
+  // stage's frames: past the window and kCalibrationGraceS they are no longer waited for (their
+  // estimates, if the calibration comes, are late for the frame merge, which counts them).
+  const bool waiting_for_calibration =
+      first_frame_us_ && *last_camera_frame_us_ <= *first_frame_us_ + seconds_to_us(options_.calibration_s + kCalibrationGraceS);
+  for (const Device& device : devices_) {
+    if (all || !device.side || device.calibration_failed) continue;
+    if (!device.tracker) {
+      if (!device.frames.empty() && waiting_for_calibration) up_to = std::min(up_to, device.frames.front().t_us - 1);
+    } else if (const std::optional<std::int64_t> oldest = device.tracker->oldest_queued_us()) {
+      up_to = std::min(up_to, *oldest - 1);
+    }
+  }
+  out.hand_on(FramesDone{FrameSource::kForearm, up_to});
+}
+
+void ForearmStage::hand_on_track(const Device& device, forearm::ForearmTrackOutput&& track, StageOutput& out) {
+  const v1::Arm arm = *device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT;
+  ForearmOrientations orientations{device.id, arm, {}, {}, {}};
+  for (const forearm::SettledArmSample& s : track.samples) {
+    orientations.t_us.push_back(s.sample.t_us);
+    orientations.K_from_F.push_back(s.K_from_F);
+    orientations.pronation_rad.push_back(s.pronation_rad);
+  }
+  // The track first: the gaps' live estimate of these frames uses the fit's frames up to the
+  // last call, as the fit's frames that these orientations complete come after it.
+  if (!track.samples.empty() || !track.frames.empty()) {
+    out.hand_on(ArmTrack{device.id, arm, std::move(track.samples), std::move(track.frames)});
+  }
+  if (!orientations.t_us.empty()) out.hand_on(std::move(orientations));
 }
 
 void ForearmStage::on_audio(const AudioBlock& audio, StageOutput& out) {
@@ -132,7 +177,7 @@ void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleto
     if (!device.side || device.calibration_failed) continue;
     const geometry::KinectArmJoints j = arm_joints(*device.side);
     const auto& joints = skeleton.joints;
-    ArmFrame arm;
+    forearm::ArmFrame arm;
     arm.t_us = frame.t_us;
     arm.shoulder_K = joints[j.shoulder].p_K;
     arm.elbow_K = joints[j.elbow].p_K;
@@ -251,7 +296,7 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
   std::size_t not_raised = 0;
   // The arm plane's upper arm from depth when the depth showed it at enough frames to make a hold.
   std::size_t upper_arm_frames = 0;
-  for (const ArmFrame& f : device.frames) upper_arm_frames += f.t_us <= window_end_us && f.upper_arm_direction_K;
+  for (const forearm::ArmFrame& f : device.frames) upper_arm_frames += f.t_us <= window_end_us && f.upper_arm_direction_K;
   const bool depth_upper_arm = options_.pose_orientation && options_.upper_arm_from_depth &&
                                upper_arm_frames >= static_cast<std::size_t>(calibration_options_.min_still_frames);
   if (options_.pose_orientation && options_.upper_arm_from_depth && !depth_upper_arm) {
@@ -260,7 +305,7 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
                  " calibration frames (need " + std::to_string(calibration_options_.min_still_frames) +
                  "): the calibration pose's roll comes from the SDK shoulder");
   }
-  for (const ArmFrame& f : device.frames) {
+  for (const forearm::ArmFrame& f : device.frames) {
     if (f.t_us > window_end_us) break;
     if (!f.forearm_tracked || !f.shoulder_tracked) continue;
     if (!forearm::forearm_raised_for_calibration(f.elbow_K, f.wrist_K, up_K)) {
@@ -311,6 +356,10 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
     } catch (const Error& error) {
       device.calibration_failed = true;
       device.frames.clear();
+      ArmTrackStart refused;
+      refused.device_id = device.id;
+      refused.arm = *device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT;
+      out.hand_on(std::move(refused));
       out.warn("FOREARM_CALIBRATION", field + ".calibration",
                std::string("no usable calibration pose (paper 1, II-H) in the first ") +
                    format_double(options_.calibration_s) + " s: " + error.what() + " (" + std::to_string(not_raised) +
@@ -324,42 +373,23 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
   for (std::size_t i = 0; i < device.calibration->frame_count; ++i) {
     held.push_back(used[device.calibration->first_frame + i].K_from_F_sdk);
   }
-  device.tracker = std::make_unique<ArmTracker>(device.id, *device.side, device.calibration->model, has_model,
-                                                *K_from_W_, mean_rotation(held), options_.smoother);
+  device.tracker = std::make_unique<forearm::ForearmTrack>(*device.side, device.calibration->model, has_model,
+                                                          *K_from_W_, mean_rotation(held));
   if (options_.axis_correction_on && options_.axis_from_depth && has_model) {
     device.tracker->use_axis_correction(options_.axis_correction);
   }
-  for (const ArmFrame& f : device.frames) device.tracker->add_frame(f);
+  for (const forearm::ArmFrame& f : device.frames) device.tracker->add_frame(f);
   device.frames.clear();
-  if (options_.fit_anchor) {
-    device.tracker->use_fit_anchor(FitAnchorOptions{});
-    for (const FitElbow& fit : device.early_fit_elbows) device.tracker->add_fit_elbow(fit);
-    device.early_fit_elbows.clear();
-  }
-}
-
-void ForearmStage::on_later_result(const v1::FitResult& result, StageOutput& out) {
-  if (!result.has_frame() || result.frame().smpl_joints_size() != body::kNumJoints) return;
-  const v1::FrameResult& frame = result.frame();
-  for (Device& device : devices_) {
-    // Kept until the arm's tracker exists, not for an arm that will have none.
-    if (!device.side || device.calibration_failed || (calibrated_ && !device.tracker)) continue;
-    const v1::Vec3& p = frame.smpl_joints(*device.side == forearm::Side::kLeft ? body::kLeftElbow : body::kRightElbow)
-                            .position_m();
-    const FitElbow fit{frame.t_us(), Vec3(p.x(), p.y(), p.z()), frame.fit_energy()};
-    if (device.tracker) {
-      device.tracker->add_fit_elbow(fit);
-      device.tracker->process(false, out);  // a gap that waited for these frames
-    } else {
-      device.early_fit_elbows.push_back(fit);
-    }
-  }
-}
-
-void ForearmStage::finish_late(StageOutput& out) {
-  for (Device& device : devices_) {
-    if (device.tracker) device.tracker->finish_late(out);
-  }
+  ArmTrackStart start;
+  start.device_id = device.id;
+  start.arm = *device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT;
+  start.tracked = true;
+  start.model = device.calibration->model;
+  start.has_model = has_model;
+  start.K_from_W = *K_from_W_;
+  start.smoother = options_.smoother;
+  if (options_.fit_anchor) start.fit_anchor = forearm::FitAnchorOptions{};
+  out.hand_on(std::move(start));
 }
 
 std::vector<std::string> ForearmStage::arm_device_ids() const {
@@ -405,20 +435,19 @@ void ForearmStage::feed_trackers(bool all, StageOutput& out) {
       if (!device.first_device_us) device.first_device_us = device.imu.front().t_device_us;
       device.imu.clear();
     }
-    device.tracker->add_imu(t_us, W_from_A, force, out);
-    device.tracker->process(all, out);
+    device.tracker->add_imu(t_us, W_from_A, force);
+    hand_on_track(device, device.tracker->process(all), out);
   }
 }
 
 void ForearmStage::finish(StageOutput& out) {
-  if (!active_) return;
-  if (!calibrated_) try_calibrate(true, out);
-  if (calibrated_) {
-    feed_trackers(true, out);
-    for (Device& device : devices_) {
-      if (device.tracker) device.tracker->finish(out);
-    }
+  if (!active_) {
+    hand_on_frames_done(true, out);
+    return;
   }
+  if (!calibrated_) try_calibrate(true, out);
+  if (calibrated_) feed_trackers(true, out);
+  hand_on_frames_done(true, out);
   v1::CalibrationReport& report = out.calibration();
   if (const std::optional<double> tone_hz = clocks_->buzzer_tone_hz()) report.set_buzzer_tone_hz(*tone_hz);
   for (const Device& device : devices_) {

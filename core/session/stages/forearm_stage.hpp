@@ -23,19 +23,18 @@
 //     bias; = sdk keeps paper 1's SDK joints. With forearm.upper_arm = depth (default) the arm
 //     plane's upper arm (and so the calibration frame's roll about the forearm) is measured in
 //     the depth image too (upper_arm_depth.hpp); = sdk takes it from the SDK shoulder.
-//  3. Then in time order (arm_tracker.hpp): forearm orientation + pronation per IMU sample
-//     (ForearmOrientationBatch; with forearm.axis_correction = auto and the depth axis, turned
-//     slowly onto the forearm axes of the VISUAL frames before it, visual_axis_correction.hpp,
-//     so it waits for the frames up to its time), per camera frame a FrameResult with the forearm orientation and
-//     the IMU position (VISUAL from the strap, or PREDICTED by the live estimator in a gap), and
-//     two RecoveredSegments (PAPER, SMOOTHER) per gap 0.5 s after it closes. With the body fit
-//     on (fit.enabled) and forearm.gap_anchor = auto, the smoother is anchored to the fit's
-//     elbows (Stage::on_later_result), so a gap waits for the fit's frames up to there too.
+//  3. Then in time order (forearm/forearm_track.hpp): forearm orientation + pronation per IMU
+//     sample (ForearmOrientations; with forearm.axis_correction = auto and the depth axis,
+//     turned slowly onto the forearm axes of the visible frames before it,
+//     visual_axis_correction.hpp, so it waits for the frames up to its time), and per camera
+//     frame the strap's IMU position when the II-J tests accept it (ArmTrack). The occlusion
+//     gaps are the forearm_gaps stage's, after the body fit (forearm_gaps_stage.hpp).
+// Hands on per arm an ArmTrackStart once its calibration is over (tracked or not) and, at every
+// camera frame, FramesDone: every ArmTrack frame up to then has been handed on.
 // Problems that stop an arm are warnings naming them (the rest of the session goes on):
 // FOREARM_NO_BASE_IMU, FOREARM_NO_CAMERA_ALIGNMENT, FOREARM_NO_SYNC (no buzzer event, the stop
 // not heard, no shared BLE broadcast), FOREARM_CALIBRATION (too short or no calibration hold),
-// FOREARM_STRAP_NOT_SEEN (no positions: orientation only), FOREARM_GAP_NOT_RECOVERED,
-// FOREARM_GAP_OPEN, FOREARM_NO_LIVE_ESTIMATE.
+// FOREARM_STRAP_NOT_SEEN (no positions: orientation only).
 #include <deque>
 #include <map>
 #include <memory>
@@ -46,7 +45,7 @@
 #include "forearm/forearm_model.hpp"
 #include "forearm/strap_detection.hpp"
 #include "session/pipeline_stage.hpp"
-#include "session/stages/arm_tracker.hpp"
+#include "forearm/forearm_track.hpp"
 #include "session/stages/forearm_options.hpp"
 #include "session/stages/stream_clocks.hpp"
 
@@ -62,15 +61,14 @@ class ForearmStage : public Stage {
 
   void start(const v1::SessionHeader& header, StageOutput& out) override;
   std::vector<ValueKind> consumes() const override { return {ValueKind::kImuOrientations}; }
-  std::vector<ValueKind> produces() const override { return {ValueKind::kForearmOrientations}; }
+  std::vector<ValueKind> produces() const override {
+    return {ValueKind::kForearmOrientations, ValueKind::kArmTrackStart, ValueKind::kArmTrack, ValueKind::kFramesDone};
+  }
   void on_value(const StageValue& value, StageOutput& out) override;
   void on_camera_frame(const CameraFrame& frame, StageOutput& out) override;
   void on_audio(const AudioBlock& audio, StageOutput& out) override;
   void on_clock_event(const ClockEvent& event, StageOutput& out) override;
   void finish(StageOutput& out) override;
-  bool wants_later_results() const override { return active_ && options_.fit_anchor; }
-  void on_later_result(const v1::FitResult& result, StageOutput& out) override;
-  void finish_late(StageOutput& out) override;
 
  private:
   struct ImuRecord {
@@ -84,13 +82,12 @@ class ForearmStage : public Stage {
     std::vector<ImuRecord> imu;  // device clock, as received
     std::optional<std::int64_t> first_device_us;  // first sample handed to the tracker
     std::optional<std::int64_t> last_camera_us;   // last sample handed to the tracker, camera clock
-    std::vector<ArmFrame> frames;  // camera frames until calibration
+    std::vector<forearm::ArmFrame> frames;  // camera frames until calibration
     std::optional<forearm::ForearmCalibration> calibration;
     bool calibration_failed = false;
     std::uint32_t strap_frames = 0;
     bool has_model = false;
-    std::unique_ptr<ArmTracker> tracker;
-    std::vector<FitElbow> early_fit_elbows;  // the body fit's, before the tracker existed
+    std::unique_ptr<forearm::ForearmTrack> tracker;
   };
 
   // Calibrates once the calibration window has passed, then feeds the trackers.
@@ -101,6 +98,10 @@ class ForearmStage : public Stage {
   std::vector<std::string> arm_device_ids() const;  // the arm IMUs, header order
   void refit_clocks(bool finishing);
   void feed_trackers(bool all, StageOutput& out);
+  // The arm's new settled samples and tracked frames, handed on.
+  void hand_on_track(const Device& device, forearm::ForearmTrackOutput&& track, StageOutput& out);
+  // FramesDone: every frame up to the oldest one still held (all at the end or when inactive).
+  void hand_on_frames_done(bool all, StageOutput& out);
   std::optional<forearm::Quat> W_from_A_at(const Device& device, std::int64_t t_camera_us) const;
 
   bool active_ = false;
@@ -117,6 +118,7 @@ class ForearmStage : public Stage {
   std::optional<forearm::Quat> K_from_W_;
   std::optional<std::int64_t> first_frame_us_;
   std::int64_t last_frame_us_ = 0;
+  std::optional<std::int64_t> last_camera_frame_us_;  // any camera frame, with or without the body
   bool calibrated_ = false;
 };
 

@@ -1,4 +1,4 @@
-// The forearm stage's per-arm tracker with the axis correction (ArmTracker::use_axis_correction,
+// One arm (arm_halves.hpp) with the axis correction (ForearmTrack::use_axis_correction,
 // forearm/visual_axis_correction.hpp) on the synthetic arm (tests/forearm/synthetic_arm.hpp) whose
 // IMU filter is tilted: the emitted K_from_F converges onto the truth, every IMU sample is emitted
 // once, in one batch per call at most, and orientations wait for the camera frames up to their time
@@ -12,7 +12,7 @@
 #include "../forearm/synthetic_arm.hpp"
 #include "../imu/expect_error.hpp"
 #include "collecting_output.hpp"
-#include "session/stages/arm_tracker.hpp"
+#include "arm_halves.hpp"
 
 namespace posefuse::session {
 namespace {
@@ -33,9 +33,9 @@ Quat tilted_W_from_A(const ArmMotion& motion, double t) {
   return W_tilt * motion.K_from_W.conjugate() * motion.K_from_A(t);
 }
 
-ArmFrame visible_frame(const ArmMotion& motion, std::int64_t t_us, bool axis_from_depth) {
+forearm::ArmFrame visible_frame(const ArmMotion& motion, std::int64_t t_us, bool axis_from_depth) {
   const double t = seconds(t_us);
-  ArmFrame frame;
+  forearm::ArmFrame frame;
   frame.t_us = t_us;
   frame.shoulder_K = motion.shoulder(t);
   frame.elbow_K = motion.elbow(t);  // the depth axis's ends: exact here
@@ -71,7 +71,7 @@ std::vector<EmittedOrientation> orientations(const CollectingOutput& out) {
 // `axis_from_depth` false: the frames' elbow and wrist are marked as the SDK's.
 CollectingOutput stream_tilted_arm(bool axis_correction, double frames_stop_s = 1e9, bool axis_from_depth = true) {
   const ArmMotion motion;
-  ArmTracker tracker("arm_r", forearm::Side::kRight, motion.model, true, motion.K_from_W, motion.K_from_F(0.0));
+  testing::ArmHalves tracker("arm_r", forearm::Side::kRight, motion.model, true, motion.K_from_W, motion.K_from_F(0.0));
   if (axis_correction) tracker.use_axis_correction({});
   CollectingOutput out;
   std::int64_t next_imu_us = 0, next_frame_us = 0;
@@ -118,7 +118,7 @@ double error_deg(const EmittedOrientation& o) {
   return geometry::angle_between(o.K_from_F, ArmMotion().K_from_F(seconds(o.t_us))) / kDeg;
 }
 
-TEST(ArmTrackerAxisCorrection, TheImuTiltIsTakenOutOfTheEmittedOrientations) {
+TEST(ForearmTrackAxisCorrection, TheImuTiltIsTakenOutOfTheEmittedOrientations) {
   const std::vector<EmittedOrientation> with = orientations(stream_tilted_arm(true));
   const std::vector<EmittedOrientation> without = orientations(stream_tilted_arm(false));
   // Every IMU sample once, in order, either way.
@@ -140,7 +140,7 @@ TEST(ArmTrackerAxisCorrection, TheImuTiltIsTakenOutOfTheEmittedOrientations) {
   EXPECT_LT(last_with, 0.5);
 }
 
-TEST(ArmTrackerAxisCorrection, FramesWithTheSdksJointsDoNotCorrect) {
+TEST(ForearmTrackAxisCorrection, FramesWithTheSdksJointsDoNotCorrect) {
   // Where the depth fit failed the stage keeps the SDK's elbow and wrist (biased by centimetres):
   // such frames are not used, so the tilt stays.
   const std::vector<EmittedOrientation> emitted = orientations(stream_tilted_arm(true, 1e9, false));
@@ -148,7 +148,7 @@ TEST(ArmTrackerAxisCorrection, FramesWithTheSdksJointsDoNotCorrect) {
   EXPECT_NEAR(error_deg(emitted.back()), 5.0, 1e-6);
 }
 
-TEST(ArmTrackerAxisCorrection, WithoutFramesOrientationsWaitAtMostOneSecond) {
+TEST(ForearmTrackAxisCorrection, WithoutFramesOrientationsWaitAtMostOneSecond) {
   // The camera stops at 5 s: the checks inside stream_tilted_arm hold the emitted orientations to
   // 1 s behind the newest IMU sample, and at the end every sample is out.
   const std::vector<EmittedOrientation> emitted = orientations(stream_tilted_arm(true, 5.0));
@@ -156,13 +156,13 @@ TEST(ArmTrackerAxisCorrection, WithoutFramesOrientationsWaitAtMostOneSecond) {
   EXPECT_EQ(emitted.back().t_us, 2399 * kImuPeriodUs);
 }
 
-TEST(ArmTrackerAxisCorrection, MustBeSetBeforeTheFirstSample) {
+TEST(ForearmTrackAxisCorrection, MustBeSetBeforeTheFirstSample) {
   const ArmMotion motion;
-  ArmTracker tracker("arm_r", forearm::Side::kRight, motion.model, true, motion.K_from_W, motion.K_from_F(0.0));
+  testing::ArmHalves tracker("arm_r", forearm::Side::kRight, motion.model, true, motion.K_from_W, motion.K_from_F(0.0));
   CollectingOutput out;
   tracker.add_imu({0}, {motion.K_from_W.conjugate() * motion.K_from_A(0.0)}, {motion.specific_force_A(0.0)}, out);
   posefuse::testing::expect_error([&] { tracker.use_axis_correction({}); }, ErrorCode::kInvalidArgument,
-                                  "forearm[arm_r]", "before the first IMU sample");
+                                  "forearm.axis_correction", "before the first IMU sample");
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
-// The arm tracker with the body fit's elbows as the gap smoother's anchor
-// (ArmTracker::use_fit_anchor): which anchor a gap uses, and when its segments come out.
+// One arm (arm_halves.hpp) with the body fit's elbows as the gap smoother's anchor
+// (GapTracker::use_fit_anchor): which anchor a gap uses, and when its segments come out.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -13,7 +13,7 @@
 #include "../forearm/synthetic_arm.hpp"
 #include "../imu/expect_error.hpp"
 #include "collecting_output.hpp"
-#include "session/stages/arm_tracker.hpp"
+#include "arm_halves.hpp"
 
 namespace posefuse::session {
 namespace {
@@ -49,7 +49,7 @@ Vec3 sdk_elbow_error(double t_s) {
 // fit_lag_s of camera time after their frame, as a lagging fit stage would. After every frame the
 // tracker runs process(false) and `after_frame` sees the output.
 struct Scenario {
-  std::optional<FitAnchorOptions> fit_anchor;
+  std::optional<forearm::FitAnchorOptions> fit_anchor;
   std::function<std::optional<Vec3>(double)> fit_elbow = [](double) { return std::nullopt; };
   double fit_energy = 5.0;
   double fit_lag_s = 0.0;
@@ -64,7 +64,7 @@ Output run(const Scenario& r) {
   noise.seed = r.seed;
   noise.attitude_drift_deg = 3.0;
   const forearm::GapRecoveryInput in = make_gap_input(motion, noise, kDurationS, kGapBeginS, kGapEndS);
-  ArmTracker tracker("arm_r", forearm::Side::kRight, motion.model, true, motion.K_from_W, motion.K_from_F(0.0));
+  testing::ArmHalves tracker("arm_r", forearm::Side::kRight, motion.model, true, motion.K_from_W, motion.K_from_F(0.0));
   if (r.fit_anchor) tracker.use_fit_anchor(*r.fit_anchor);
   Output out;
   std::vector<std::int64_t> t_us;
@@ -79,7 +79,7 @@ Output run(const Scenario& r) {
   std::vector<std::int64_t> fit_queue;
   for (const forearm::TrackSample& s : in.track) {
     const double ts = seconds(s.t_us);
-    ArmFrame frame;
+    forearm::ArmFrame frame;
     frame.t_us = s.t_us;
     frame.shoulder_K = motion.shoulder(ts);
     frame.elbow_K = motion.elbow(ts);
@@ -92,7 +92,7 @@ Output run(const Scenario& r) {
     fit_queue.push_back(s.t_us);
     while (!fit_queue.empty() && seconds(fit_queue.front()) <= ts - r.fit_lag_s) {
       if (const auto elbow = r.fit_elbow(seconds(fit_queue.front()))) {
-        tracker.add_fit_elbow(fit_queue.front(), *elbow, r.fit_energy);
+        tracker.add_fit_elbow(fit_queue.front(), *elbow, r.fit_energy, out);
       }
       fit_queue.erase(fit_queue.begin());
     }
@@ -103,7 +103,7 @@ Output run(const Scenario& r) {
   r.after_frame(kDurationS + 1.0, out);
   if (r.finish_late) {
     for (const std::int64_t t : fit_queue) {
-      if (const auto elbow = r.fit_elbow(seconds(t))) tracker.add_fit_elbow(t, *elbow, r.fit_energy);
+      if (const auto elbow = r.fit_elbow(seconds(t))) tracker.add_fit_elbow(t, *elbow, r.fit_energy, out);
     }
     tracker.finish_late(out);
   }
@@ -150,14 +150,14 @@ Scenario sdk_scenario(unsigned seed) {
 }
 Scenario fit_scenario(unsigned seed, const Vec3& off = Vec3::Zero()) {
   Scenario fit = sdk_scenario(seed);
-  fit.fit_anchor = FitAnchorOptions{};
+  fit.fit_anchor = forearm::FitAnchorOptions{};
   fit.fit_elbow = [motion = ArmMotion(), off](double t_s) { return std::optional<Vec3>(motion.elbow(t_s) + off); };
   return fit;
 }
 
 // A 4 s gap: the SDK's turning 8 cm elbow error against a fit 1 cm off. The fit's anchor is
 // trusted 4 times more (sigma 0.03 against 0.12 m), so the recovered gap follows it.
-TEST(ArmTrackerFitAnchor, ALongGapFollowsTheFitsElbowInsteadOfTheSdks) {
+TEST(GapTrackerFitAnchor, ALongGapFollowsTheFitsElbowInsteadOfTheSdks) {
   for (const unsigned seed : {1u, 2u, 3u}) {
     const Scenario sdk = sdk_scenario(seed);
     Scenario fit = fit_scenario(seed, Vec3(0.0, 0.01, 0.0));
@@ -177,7 +177,7 @@ TEST(ArmTrackerFitAnchor, ALongGapFollowsTheFitsElbowInsteadOfTheSdks) {
 // (the default) the recovered gap comes closer to the truth than with the fit's alone, which
 // leaves those 1.5 s to the drifting inertial data. By little, as in the smoother's own test
 // (GapSmootherAnchor.ASecondAnchorHoldsWhereTheFirstGoesWrong); printed.
-TEST(ArmTrackerFitAnchor, TheSdksElbowIsTheSecondAnchorWhereTheFitIsMissing) {
+TEST(GapTrackerFitAnchor, TheSdksElbowIsTheSecondAnchorWhereTheFitIsMissing) {
   for (const unsigned seed : {1u, 2u, 3u}) {
     Scenario both = fit_scenario(seed, Vec3(0.0, 0.01, 0.0));
     both.fit_elbow = [motion = ArmMotion()](double t_s) {
@@ -198,7 +198,7 @@ TEST(ArmTrackerFitAnchor, TheSdksElbowIsTheSecondAnchorWhereTheFitIsMissing) {
 
 // Fit frames 0.7 s late: the gap waits for them (its boundary window ends at 6.03 s), and its
 // segments come out with the first fit frame at or after 6.03 s, 0.7 s later, not before.
-TEST(ArmTrackerFitAnchor, AGapWaitsForTheFitsFramesUpToTheEndOfItsWindow) {
+TEST(GapTrackerFitAnchor, AGapWaitsForTheFitsFramesUpToTheEndOfItsWindow) {
   Scenario r = fit_scenario(1);
   r.fit_lag_s = 0.7;
   double first_out_s = NAN;
@@ -214,7 +214,7 @@ TEST(ArmTrackerFitAnchor, AGapWaitsForTheFitsFramesUpToTheEndOfItsWindow) {
 
 // The fit never reaches the gap's window in the session: finish() leaves the gap to
 // finish_late(), which recovers it after the fit has finished.
-TEST(ArmTrackerFitAnchor, AGapTheFitHasNotReachedIsRecoveredInFinishLate) {
+TEST(GapTrackerFitAnchor, AGapTheFitHasNotReachedIsRecoveredInFinishLate) {
   Scenario r = fit_scenario(1);
   r.fit_lag_s = 5.0;
   std::size_t after_finish = 99;
@@ -228,9 +228,9 @@ TEST(ArmTrackerFitAnchor, AGapTheFitHasNotReachedIsRecoveredInFinishLate) {
 
 // No fit frame ever: a gap waits max_wait_s of camera time past its window, then uses the SDK's
 // anchor (the same segment as without the option).
-TEST(ArmTrackerFitAnchor, WithoutFitFramesAGapWaitsAtMostMaxWaitThenUsesTheSdk) {
+TEST(GapTrackerFitAnchor, WithoutFitFramesAGapWaitsAtMostMaxWaitThenUsesTheSdk) {
   Scenario r;
-  r.fit_anchor = FitAnchorOptions{.max_wait_s = 0.5};
+  r.fit_anchor = forearm::FitAnchorOptions{.max_wait_s = 0.5};
   double first_out_s = NAN;
   r.after_frame = [&](double ts, const Output& out) {
     if (std::isnan(first_out_s) && smoother_segments(out) > 0) first_out_s = ts;
@@ -244,27 +244,27 @@ TEST(ArmTrackerFitAnchor, WithoutFitFramesAGapWaitsAtMostMaxWaitThenUsesTheSdk) 
 
 // Fit frames without a finite energy (or elbow) are not used: with only such frames the gap falls
 // back to the SDK's anchor, as without the fit.
-TEST(ArmTrackerFitAnchor, FitFramesWithoutAFiniteEnergyOrElbowAreNotUsed) {
+TEST(GapTrackerFitAnchor, FitFramesWithoutAFiniteEnergyOrElbowAreNotUsed) {
   const ArmMotion motion;
   const double with_sdk = smoother_rms_m(run(Scenario{}));
   Scenario no_energy;
-  no_energy.fit_anchor = FitAnchorOptions{};
+  no_energy.fit_anchor = forearm::FitAnchorOptions{};
   no_energy.fit_elbow = [&](double t_s) { return std::optional<Vec3>(motion.elbow(t_s)); };
   no_energy.fit_energy = NAN;
   EXPECT_DOUBLE_EQ(smoother_rms_m(run(no_energy)), with_sdk);
   Scenario no_elbow;
-  no_elbow.fit_anchor = FitAnchorOptions{};
+  no_elbow.fit_anchor = forearm::FitAnchorOptions{};
   no_elbow.fit_elbow = [](double) { return std::optional<Vec3>(Vec3::Constant(NAN)); };
   EXPECT_DOUBLE_EQ(smoother_rms_m(run(no_elbow)), with_sdk);
 }
 
 // A fit that stops 1 s into the 4 s gap (a quarter of its frames): the gap uses the SDK's anchor
 // rather than a few fit samples at its start.
-TEST(ArmTrackerFitAnchor, AFitThatStopsEarlyInTheGapLeavesItToTheSdk) {
+TEST(GapTrackerFitAnchor, AFitThatStopsEarlyInTheGapLeavesItToTheSdk) {
   const ArmMotion motion;
   const double with_sdk = smoother_rms_m(run(Scenario{}));
   Scenario stopped;
-  stopped.fit_anchor = FitAnchorOptions{.max_wait_s = 0.5};
+  stopped.fit_anchor = forearm::FitAnchorOptions{.max_wait_s = 0.5};
   stopped.fit_elbow = [&](double t_s) {
     return t_s < kGapBeginS + 1.0 ? std::optional<Vec3>(motion.elbow(t_s)) : std::nullopt;
   };
@@ -274,7 +274,7 @@ TEST(ArmTrackerFitAnchor, AFitThatStopsEarlyInTheGapLeavesItToTheSdk) {
 // The live estimate follows the SDK's elbow of each frame; with the fit's frames 0.25 s late (as
 // in a live stream, docs/benchmarks.md) the SDK's turning 8 cm bias is measured against them and
 // taken out, so the PREDICTED positions carry the fit's 1 cm error instead of the SDK's 8 cm.
-TEST(ArmTrackerFitAnchor, TheLiveEstimateTakesTheSdksBiasOutWithTheFitsLateFrames) {
+TEST(GapTrackerFitAnchor, TheLiveEstimateTakesTheSdksBiasOutWithTheFitsLateFrames) {
   for (const unsigned seed : {1u, 2u, 3u}) {
     const Scenario sdk = sdk_scenario(seed);
     Scenario fit = fit_scenario(seed, Vec3(0.0, 0.01, 0.0));
@@ -291,13 +291,13 @@ TEST(ArmTrackerFitAnchor, TheLiveEstimateTakesTheSdksBiasOutWithTheFitsLateFrame
   }
 }
 
-TEST(ArmTrackerFitAnchor, RefusesBadOptions) {
+TEST(GapTrackerFitAnchor, RefusesBadOptions) {
   const ArmMotion motion;
-  ArmTracker tracker("arm_r", forearm::Side::kRight, motion.model, true, motion.K_from_W, motion.K_from_F(0.0));
-  for (const FitAnchorOptions bad : {FitAnchorOptions{.sigma_m = 0.0}, FitAnchorOptions{.reference_energy = -1.0},
-                                     FitAnchorOptions{.bias_prior_sigma_m = 0.0},
-                                     FitAnchorOptions{.live_max_age_s = -1.0}, FitAnchorOptions{.live_bias_window_s = NAN},
-                                     FitAnchorOptions{.max_wait_s = NAN}, FitAnchorOptions{.sigma_m = INFINITY}}) {
+  testing::ArmHalves tracker("arm_r", forearm::Side::kRight, motion.model, true, motion.K_from_W, motion.K_from_F(0.0));
+  for (const forearm::FitAnchorOptions bad : {forearm::FitAnchorOptions{.sigma_m = 0.0}, forearm::FitAnchorOptions{.reference_energy = -1.0},
+                                     forearm::FitAnchorOptions{.bias_prior_sigma_m = 0.0},
+                                     forearm::FitAnchorOptions{.live_max_age_s = -1.0}, forearm::FitAnchorOptions{.live_bias_window_s = NAN},
+                                     forearm::FitAnchorOptions{.max_wait_s = NAN}, forearm::FitAnchorOptions{.sigma_m = INFINITY}}) {
     posefuse::testing::expect_error([&] { tracker.use_fit_anchor(bad); }, ErrorCode::kInvalidArgument,
                                     "forearm[arm_r].fit_anchor");
   }

@@ -1,6 +1,6 @@
-// The forearm stage's per-arm tracker (session/stages/arm_tracker.hpp) on a synthetic arm
+// One arm through ForearmTrack and GapTracker (arm_halves.hpp) on a synthetic arm
 // (tests/forearm/synthetic_arm.hpp): how it cuts the track into gaps.
-#include "session/stages/arm_tracker.hpp"
+#include "arm_halves.hpp"
 
 #include <gtest/gtest.h>
 
@@ -34,9 +34,9 @@ struct TrackerRun {
 // `edit_frame`, where given, changes each frame before the tracker gets it.
 template <class StrapSeen>
 TrackerRun run_tracker(double duration_s, StrapSeen strap_seen, bool streaming = false,
-                       const std::function<void(double, ArmFrame&)>& edit_frame = {}) {
+                       const std::function<void(double, forearm::ArmFrame&)>& edit_frame = {}) {
   const ArmMotion motion;
-  ArmTracker tracker("arm_r", forearm::Side::kRight, motion.model, true, motion.K_from_W, motion.K_from_F(0.0));
+  testing::ArmHalves tracker("arm_r", forearm::Side::kRight, motion.model, true, motion.K_from_W, motion.K_from_F(0.0));
   TrackerRun run;
   std::vector<std::int64_t> t_us;
   std::vector<Quat> W_from_A;
@@ -49,7 +49,7 @@ TrackerRun run_tracker(double duration_s, StrapSeen strap_seen, bool streaming =
   tracker.add_imu(t_us, W_from_A, specific_force_A, run.out);
   for (std::int64_t t = 0; seconds(t) <= duration_s; t += 33'333) {
     const double ts = seconds(t);
-    ArmFrame frame;
+    forearm::ArmFrame frame;
     frame.t_us = t;
     frame.shoulder_K = motion.shoulder(ts);
     frame.elbow_K = motion.elbow(ts);
@@ -88,7 +88,7 @@ std::vector<std::pair<double, v1::Source>> positions(const TrackerRun& run) {
 // tracker recovers one gap from before the glimpse to after it, not two that neither method can,
 // the live estimate goes on through the glimpse (a new one cannot start from one sample), and the
 // glimpse is not reported as seen: no other detection confirms it within 500 ms.
-TEST(ArmTracker, LoneDetectionInsideAGapDoesNotSplitIt) {
+TEST(ArmHalves, LoneDetectionInsideAGapDoesNotSplitIt) {
   const double gap_begin_s = 2.0, gap_end_s = 5.0, duration_s = 7.0;
   const double glimpse_s = seconds(105 * 33'333);  // a frame time, 3.5 s
   const TrackerRun run = run_tracker(duration_s, [&](double ts) {
@@ -120,7 +120,7 @@ TEST(ArmTracker, LoneDetectionInsideAGapDoesNotSplitIt) {
 // A detection before the strap is really seen (simulated body render, seed 2: a dark band on the
 // hanging arm at 0.33 s, 97 mm off) has nothing before it to be checked against; it is not used
 // unless another follows within 500 ms.
-TEST(ArmTracker, LoneDetectionAtTheStartIsNotReportedAsSeen) {
+TEST(ArmHalves, LoneDetectionAtTheStartIsNotReportedAsSeen) {
   const double first_s = seconds(6 * 33'333), seen_from_s = 1.5;
   const TrackerRun run = run_tracker(3.0, [&](double ts) { return std::abs(ts - first_s) < 1e-6 || ts >= seen_from_s; });
   EXPECT_EQ(run.lone_detections, 1u);
@@ -138,7 +138,7 @@ TEST(ArmTracker, LoneDetectionAtTheStartIsNotReportedAsSeen) {
 
 // Streaming: the first detection after occluded frames is held until the next frame confirms it,
 // so the results lag by one frame there and by none elsewhere; nothing is lost.
-TEST(ArmTracker, DetectionAfterAGapWaitsOnlyForTheNextFrame) {
+TEST(ArmHalves, DetectionAfterAGapWaitsOnlyForTheNextFrame) {
   const double gap_begin_s = 1.0, gap_end_s = 2.0, duration_s = 3.0;
   const TrackerRun run = run_tracker(
       duration_s, [&](double ts) { return ts <= gap_begin_s || ts >= gap_end_s; }, true);
@@ -169,10 +169,10 @@ TEST(ArmTracker, DetectionAfterAGapWaitsOnlyForTheNextFrame) {
 // passes II-J and, with the SDK's elbow unbiased, the elbow test (12 cm < 13 cm); the elbow it
 // implies jumps 12 cm in one frame (10.7 cm allowed), so it is not VISUAL, and the frames after it
 // are.
-TEST(ArmTracker, StrapThatJumpsForOneFrameIsNotVisual) {
+TEST(ArmHalves, StrapThatJumpsForOneFrameIsNotVisual) {
   const ArmMotion motion;
   const double spike_s = seconds(45 * 33'333), duration_s = 3.0;
-  const auto edit = [&](double ts, ArmFrame& frame) {
+  const auto edit = [&](double ts, forearm::ArmFrame& frame) {
     frame.sdk_elbow_K = frame.elbow_K;
     if (std::abs(ts - spike_s) > 1e-6) return;
     const Vec3 axis = motion.K_from_F(ts) * Vec3::UnitY();
@@ -195,7 +195,7 @@ TEST(ArmTracker, StrapThatJumpsForOneFrameIsNotVisual) {
   // the last visible frame two frames back (17.3 cm allowed) and the rest with their predecessors,
   // so the run is kept after its first frame (a continuity test cannot tell which run is right).
   const double run_end_s = spike_s + 4.5 / 30.0;
-  const auto edit_run = [&](double ts, ArmFrame& frame) {
+  const auto edit_run = [&](double ts, forearm::ArmFrame& frame) {
     frame.sdk_elbow_K = frame.elbow_K;
     if (ts < spike_s - 1e-6 || ts > run_end_s) return;
     const Vec3 axis = motion.K_from_F(ts) * Vec3::UnitY();
@@ -212,7 +212,7 @@ TEST(ArmTracker, StrapThatJumpsForOneFrameIsNotVisual) {
 // A short break in a visible run (the strap missed at 6 frames, 0.2 s): the detection after it has
 // one within 500 ms before it, so it is neither held nor dropped, even when it is seen alone
 // (one frame, then hidden again for a second).
-TEST(ArmTracker, DetectionAfterAShortBreakIsUsedAtOnce) {
+TEST(ArmHalves, DetectionAfterAShortBreakIsUsedAtOnce) {
   const double break_begin_s = 1.0, alone_until_s = 2.2, duration_s = 3.0;
   const double return_s = seconds(36 * 33'333);  // the frame at 1.2 s
   const TrackerRun run = run_tracker(

@@ -1,0 +1,184 @@
+#include "forearm/forearm_track.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "common/error.hpp"
+#include "forearm/forearm_model.hpp"
+#include "forearm/live_gap.hpp"
+#include "forearm/occlusion_tests.hpp"
+#include "forearm/time_series.hpp"
+
+namespace posefuse::forearm {
+
+namespace {
+
+// II-K.1: a detection is confirmed by another within 500 ms (the recoveries' boundary window).
+constexpr double kBoundaryWindowS = 0.5;
+// With the axis correction, how long (IMU time) an orientation waits for camera frames.
+constexpr double kMaxOrientationWaitS = 1.0;
+
+std::int64_t microseconds(double seconds) { return static_cast<std::int64_t>(std::llround(1e6 * seconds)); }
+
+}  // namespace
+
+ForearmTrack::ForearmTrack(Side side, const ForearmModel& model, bool has_model, const Quat& K_from_W,
+                           const Quat& K_from_F_reference)
+    : side_(side), model_(model), has_model_(has_model), K_from_W_(K_from_W), K_from_F_reference_(K_from_F_reference) {}
+
+void ForearmTrack::use_axis_correction(const VisualAxisCorrectionOptions& options) {
+  if (!arm_.empty()) throw_invalid("forearm.axis_correction", "the axis correction must be set before the first IMU sample");
+  axis_correction_.emplace(options);
+}
+
+AxisCorrection ForearmTrack::axis_correction() const {
+  return axis_correction_ ? axis_correction_->correction() : AxisCorrection{};
+}
+
+std::uint64_t ForearmTrack::axis_correction_frames() const {
+  return axis_correction_ ? axis_correction_->frames_used() : 0;
+}
+
+std::optional<std::int64_t> ForearmTrack::oldest_queued_us() const {
+  if (frames_.empty()) return std::nullopt;
+  return frames_.front().t_us;
+}
+
+void ForearmTrack::add_imu(const std::vector<std::int64_t>& t_us, const std::vector<Quat>& W_from_A,
+                           const std::vector<Vec3>& specific_force_A) {
+  for (std::size_t i = 0; i < t_us.size(); ++i) {
+    if (!arm_.empty() && t_us[i] <= arm_.back().t_us) continue;  // clock mapping kept monotonic
+    const ForearmSample s = forearm_sample(K_from_W_, W_from_A[i], model_.F_from_A, K_from_F_reference_, side_);
+    arm_.push_back({t_us[i], s.K_from_A, specific_force_A[i]});
+    K_from_F_imu_.push_back(K_from_F_imu_.empty() ? s.K_from_F : geometry::same_hemisphere(s.K_from_F, K_from_F_imu_.back()));
+  }
+}
+
+void ForearmTrack::settle_orientations_up_to(std::int64_t t_us) {
+  const AxisCorrection correction = axis_correction();
+  for (std::size_t i = K_from_F_.size(); i < arm_.size() && arm_[i].t_us <= t_us; ++i) {
+    K_from_F_.push_back(K_from_F_sample(i));
+    arm_[i].K_from_A = correction.K_from_A(arm_[i].K_from_A);
+  }
+}
+
+void ForearmTrack::take_settled(std::vector<SettledArmSample>& out) {
+  for (; settled_taken_ < K_from_F_.size(); ++settled_taken_) {
+    const Quat& K_from_F = K_from_F_[settled_taken_];
+    out.push_back({arm_[settled_taken_], K_from_F, pronation_angle(K_from_F_reference_, K_from_F, side_)});
+  }
+}
+
+Quat ForearmTrack::K_from_F_sample(std::size_t i) const {
+  if (i < K_from_F_.size()) return K_from_F_[i];
+  return geometry::same_hemisphere(axis_correction().K_from_F(K_from_F_imu_[i]), K_from_F_imu_[i]);
+}
+
+template <class SampleAt>
+Quat ForearmTrack::slerp_at(std::int64_t t_us, const SampleAt& sample_at) const {
+  const std::size_t i = index_at_or_before(arm_, t_us);
+  if (i == kNoIndex) return sample_at(0);
+  if (i + 1 >= arm_.size()) return sample_at(i);
+  const double f = static_cast<double>(t_us - arm_[i].t_us) / static_cast<double>(arm_[i + 1].t_us - arm_[i].t_us);
+  return sample_at(i).slerp(f, sample_at(i + 1)).normalized();
+}
+
+Quat ForearmTrack::K_from_F_at(std::int64_t t_us) const {
+  return slerp_at(t_us, [this](std::size_t i) { return K_from_F_sample(i); });
+}
+
+Quat ForearmTrack::K_from_F_imu_at(std::int64_t t_us) const {
+  return slerp_at(t_us, [this](std::size_t i) { return K_from_F_imu_[i]; });
+}
+
+ForearmTrackOutput ForearmTrack::process(bool all) {
+  ForearmTrackOutput out;
+  const std::int64_t window_us = microseconds(kBoundaryWindowS);
+  while (!frames_.empty() && !arm_.empty() && (all || frames_.front().t_us <= arm_.back().t_us)) {
+    // The orientations up to this frame get the axis correction as it is before the frame.
+    settle_orientations_up_to(frames_.front().t_us);
+    TrackSample sample = visual_sample(frames_.front());
+    // Support before it (a detection within the window): a short break in a visible run.
+    const bool seen_just_before = last_visible_us_ && sample.t_us - *last_visible_us_ <= window_us;
+    if (sample.visible && (track_.empty() || !track_.back().visible) && !seen_just_before) {
+      const Confirmation confirmation = confirm_detection(all, window_us);
+      if (confirmation == Confirmation::kWait) break;
+      if (confirmation == Confirmation::kLone) {
+        sample.visible = false;
+        ++lone_detections_;
+      }
+    }
+    out.frames.push_back(track_frame(frames_.front(), sample));
+    frames_.pop_front();
+  }
+  // Orientations before the next queued frame have seen every frame before them; without a
+  // queued frame they wait for one at most kMaxOrientationWaitS (IMU time), at the end not at
+  // all, and without the axis correction not at all.
+  if (!arm_.empty()) {
+    if (all || !axis_correction_) {
+      settle_orientations_up_to(arm_.back().t_us);
+    } else if (!frames_.empty()) {
+      settle_orientations_up_to(frames_.front().t_us - 1);
+    } else {
+      settle_orientations_up_to(arm_.back().t_us - microseconds(kMaxOrientationWaitS));
+    }
+  }
+  take_settled(out.samples);
+  return out;
+}
+
+TrackSample ForearmTrack::visual_sample(const ArmFrame& frame) const {
+  TrackSample sample{frame.t_us, Vec3::Zero(), false};
+  if (has_model_ && frame.forearm_tracked && frame.strap_K) {
+    const Quat K_from_F = K_from_F_at(frame.t_us);
+    const VisualCheck check = check_visual_forearm(frame.elbow_K, frame.wrist_K, *frame.strap_K, K_from_F);
+    if (check.accepted()) {
+      sample.p_K = imu_position_from_strap(*frame.strap_K, frame.elbow_K, frame.wrist_K, K_from_F, model_.r_m);
+      // The SDK's elbow is tracked here (forearm_tracked): a strap on another body part lies far from it.
+      sample.visible = check_strap_against_elbow(sample.p_K, imu_position_from_elbow(frame.sdk_elbow_K, K_from_F, model_)) ==
+                       VisualRejection::kNone;
+      if (sample.visible) sample.visible = continues_track(sample.p_K, frame.t_us, K_from_F);
+    }
+  }
+  return sample;
+}
+
+bool ForearmTrack::continues_track(const Vec3& imu_K, std::int64_t t_us, const Quat& K_from_F) const {
+  const OcclusionTestOptions options;
+  const std::int64_t max_gap_us = microseconds(options.max_continuity_gap_s);
+  // The last visible sample within the test's reach (a few frames back at most).
+  for (auto previous = track_.rbegin(); previous != track_.rend() && t_us - previous->t_us <= max_gap_us; ++previous) {
+    if (!previous->visible || previous->t_us >= t_us) continue;
+    const Vec3 elbow = elbow_from_imu_position(imu_K, K_from_F, model_);
+    const Vec3 previous_elbow = elbow_from_imu_position(previous->p_K, K_from_F_at(previous->t_us), model_);
+    return check_strap_continuity(elbow, t_us, previous_elbow, previous->t_us, options) == VisualRejection::kNone;
+  }
+  return true;
+}
+
+ForearmTrack::Confirmation ForearmTrack::confirm_detection(bool all, std::int64_t window_us) const {
+  const std::int64_t window_end_us = frames_.front().t_us + window_us;
+  for (std::size_t k = 1; k < frames_.size(); ++k) {
+    const ArmFrame& frame = frames_[k];
+    if (frame.t_us > window_end_us) return Confirmation::kLone;
+    if (!all && frame.t_us > arm_.back().t_us) return Confirmation::kWait;  // its K_from_F is not known yet
+    if (visual_sample(frame).visible) return Confirmation::kConfirmed;
+  }
+  return all ? Confirmation::kLone : Confirmation::kWait;
+}
+
+TrackedArmFrame ForearmTrack::track_frame(const ArmFrame& frame, const TrackSample& sample) {
+  TrackedArmFrame tracked{frame, sample, K_from_F_at(frame.t_us), 0.0};
+  tracked.pronation_rad = pronation_angle(K_from_F_reference_, tracked.K_from_F, side_);
+  if (track_.empty() || frame.t_us > track_.back().t_us) track_.push_back(sample);
+  if (sample.visible) {
+    ++visible_frames_;
+    last_visible_us_ = frame.t_us;
+    if (axis_correction_ && frame.axis_from_depth) {
+      axis_correction_->observe(K_from_F_imu_at(frame.t_us), frame.elbow_K, frame.wrist_K);
+    }
+  }
+  return tracked;
+}
+
+}  // namespace posefuse::forearm

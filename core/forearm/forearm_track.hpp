@@ -1,0 +1,133 @@
+#pragma once
+// One calibrated forearm seen by its IMU and the camera, in time order (paper 1, II-I and II-J):
+// the part of the forearm fusion that needs neither the body fit nor the occlusion gaps.
+//  - every arm IMU sample: K_from_A and K_from_F by eq. 11 and the pronation angle
+//    (forearm_orientation.hpp), optionally turned slowly onto the depth-measured forearm axis of
+//    the visible frames before it (visual_axis_correction.hpp);
+//  - every camera frame, once the IMU samples reach past it: the IMU position from the strap by
+//    eq. 10 and whether the II-J, elbow and continuity tests accept it (visible), with the
+//    frame's K_from_F.
+// What comes out (ForearmTrackOutput) is what the gap tracker (gap_tracker.hpp) and the body fit
+// read; nothing here waits for them (docs/architecture.md, "Pipeline stages").
+#include <cstdint>
+#include <deque>
+#include <optional>
+#include <vector>
+
+#include "forearm/forearm_orientation.hpp"
+#include "forearm/forearm_types.hpp"
+#include "forearm/visual_axis_correction.hpp"
+
+namespace posefuse::forearm {
+
+// What the camera showed of one arm in one camera frame.
+struct ArmFrame {
+  std::int64_t t_us = 0;  // camera clock
+  Vec3 shoulder_K = Vec3::Zero();
+  Vec3 elbow_K = Vec3::Zero();
+  Vec3 wrist_K = Vec3::Zero();
+  // elbow_K and wrist_K are the ends of the depth-fitted forearm axis (forearm_axis_depth.hpp),
+  // not the SDK's joints: only such frames feed the axis correction.
+  bool axis_from_depth = false;
+  bool shoulder_tracked = false;
+  bool forearm_tracked = false;  // elbow and wrist TRACKED
+  // The SDK's own elbow (elbow_K may be the depth axis's) and whether the SDK gave one
+  // (TRACKED or INFERRED): the live estimate's anchor in a gap.
+  Vec3 sdk_elbow_K = Vec3::Zero();
+  bool sdk_elbow_seen = false;
+  Quat K_from_wrist_sdk = Quat(0, 0, 0, 0);  // zero when the SDK gave none
+  std::optional<Vec3> strap_K;               // strap seen (II-I)
+  // Upper arm direction (shoulder -> elbow) measured in depth, calibration frames only
+  // (upper_arm_depth.hpp).
+  std::optional<Vec3> upper_arm_direction_K;
+};
+
+// An IMU sample once its orientation is settled (it will not change any more).
+struct SettledArmSample {
+  ArmSample sample;  // K_from_A as the gaps integrate it (axis-corrected)
+  Quat K_from_F = Quat::Identity();
+  double pronation_rad = 0.0;
+};
+
+// A camera frame once tracked: the strap's IMU position when visible, and the forearm
+// orientation at the frame's time.
+struct TrackedArmFrame {
+  ArmFrame frame;
+  TrackSample visual;  // visual.visible: the strap position passed every test
+  Quat K_from_F = Quat::Identity();
+  double pronation_rad = 0.0;
+};
+
+struct ForearmTrackOutput {
+  std::vector<SettledArmSample> samples;  // settled since the last call, in time order
+  std::vector<TrackedArmFrame> frames;    // tracked since the last call, in time order
+};
+
+class ForearmTrack {
+ public:
+  // `has_model` false: the strap was never seen in the calibration, so r and d_se are unknown
+  // and no frame is visible (orientations only).
+  ForearmTrack(Side side, const ForearmModel& model, bool has_model, const Quat& K_from_W,
+               const Quat& K_from_F_reference);
+
+  // Turn every K_from_F (and the K_from_A the gaps integrate with) towards the depth-measured
+  // forearm axis of the visible frames; call before the first IMU sample. The orientations then
+  // wait for the camera frames up to their time (at most 1 s of IMU time when no frame is
+  // queued), so each gets the correction of the frames before it whatever order the streams
+  // arrive in; without it every sample is settled at once.
+  void use_axis_correction(const VisualAxisCorrectionOptions& options);
+
+  // Arm IMU samples on the camera clock, in time order (earlier or equal times are dropped).
+  void add_imu(const std::vector<std::int64_t>& t_us, const std::vector<Quat>& W_from_A,
+               const std::vector<Vec3>& specific_force_A);
+  void add_frame(const ArmFrame& frame) { frames_.push_back(frame); }
+  // Tracks the queued frames up to the last IMU sample (K_from_F interpolated, not extrapolated;
+  // with `all`, every queued frame: end of session) and returns them with the samples settled.
+  ForearmTrackOutput process(bool all);
+
+  AxisCorrection axis_correction() const;  // identity without it
+  std::uint64_t axis_correction_frames() const;
+  std::uint64_t visible_frames() const { return visible_frames_; }
+  // Detections with no other within 500 ms before or after them: counted, and treated as
+  // occluded.
+  std::uint64_t lone_detections() const { return lone_detections_; }
+  // The oldest frame not tracked yet (none: every frame added has been returned).
+  std::optional<std::int64_t> oldest_queued_us() const;
+
+ private:
+  TrackSample visual_sample(const ArmFrame& frame) const;
+  bool continues_track(const Vec3& imu_K, std::int64_t t_us, const Quat& K_from_F) const;
+  // A detection that would start a visible run (the first after occluded frames, or the first
+  // ever) with no accepted detection in the boundary window before it is used only once another
+  // queued frame within the window after it is accepted too.
+  enum class Confirmation { kConfirmed, kLone, kWait };
+  Confirmation confirm_detection(bool all, std::int64_t window_us) const;
+  TrackedArmFrame track_frame(const ArmFrame& frame, const TrackSample& sample);
+  Quat K_from_F_sample(std::size_t i) const;
+  Quat K_from_F_at(std::int64_t t_us) const;
+  Quat K_from_F_imu_at(std::int64_t t_us) const;
+  template <class SampleAt>
+  Quat slerp_at(std::int64_t t_us, const SampleAt& sample_at) const;
+  void settle_orientations_up_to(std::int64_t t_us);
+  void take_settled(std::vector<SettledArmSample>& out);
+
+  Side side_;
+  ForearmModel model_;
+  bool has_model_;
+  Quat K_from_W_;
+  Quat K_from_F_reference_;
+
+  // Every IMU sample; K_from_A is eq. 11's until the sample is settled, then corrected.
+  std::vector<ArmSample> arm_;
+  std::vector<Quat> K_from_F_imu_;  // eq. 11, before the axis correction
+  std::vector<Quat> K_from_F_;      // settled (corrected), one per settled sample
+  std::size_t settled_taken_ = 0;   // of K_from_F_, returned by process()
+  std::optional<VisualAxisCorrection> axis_correction_;
+  std::vector<TrackSample> track_;
+  std::deque<ArmFrame> frames_;  // queued, not yet tracked
+  std::optional<std::int64_t> last_visible_us_;
+  std::uint64_t visible_frames_ = 0;
+  std::uint64_t lone_detections_ = 0;
+};
+
+}  // namespace posefuse::forearm
