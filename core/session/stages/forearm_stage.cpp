@@ -4,10 +4,9 @@
 
 #include "body/smpl_model.hpp"
 #include "common/error.hpp"
-#include "forearm/calibration_pose_check.hpp"
-#include "forearm/forearm_axis_depth.hpp"
+#include "forearm/arm_frame_measurement.hpp"
+#include "forearm/calibration_frames.hpp"
 #include "forearm/forearm_orientation.hpp"
-#include "forearm/upper_arm_depth.hpp"
 #include "session/option_table.hpp"
 #include "session/stages/proto_values.hpp"
 #include "session/text_fields.hpp"
@@ -171,8 +170,13 @@ void ForearmStage::advance(StageOutput& out) {
 }
 
 void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleton) {
-  const bool has_depth = !frame.depth_mm.empty();
-  const bool has_color = !frame.color_gray.empty();
+  // The SDK's joints only say where to look; the axes and the strap are the images'.
+  const forearm::DepthImageView depth =
+      frame.depth_mm.empty() ? forearm::DepthImageView{}
+                             : forearm::DepthImageView{frame.depth_mm.cols, frame.depth_mm.rows, frame.depth_mm.ptr<std::uint16_t>()};
+  const forearm::GrayImageView gray =
+      frame.color_gray.empty() ? forearm::GrayImageView{}
+                               : forearm::GrayImageView{frame.color_gray.cols, frame.color_gray.rows, frame.color_gray.ptr<std::uint8_t>()};
   for (Device& device : devices_) {
     if (!device.side || device.calibration_failed) continue;
     const geometry::KinectArmJoints j = arm_joints(*device.side);
@@ -187,37 +191,9 @@ void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleto
     arm.sdk_elbow_K = arm.elbow_K;
     arm.sdk_elbow_seen = joints[j.elbow].state != JointState::kNotTracked;
     arm.K_from_wrist_sdk = joints[j.wrist].orientation;
-    if (arm.forearm_tracked && has_depth && cameras_ && (options_.axis_from_depth || options_.upper_arm_from_depth)) {
-      // The SDK's joints only say where to look; the axes are the depth image's.
-      const forearm::DepthImageView mm{frame.depth_mm.cols, frame.depth_mm.rows, frame.depth_mm.ptr<std::uint16_t>()};
-      std::optional<forearm::MeasuredUpperArm> upper_arm;
-      if (options_.axis_from_depth && arm.shoulder_tracked) {
-        // Both limbs, so that the upper arm's points next to the elbow are not taken for the forearm's.
-        if (const auto axes = forearm::measure_arm_axes(mm, cameras_->depth, arm.shoulder_K, arm.elbow_K, arm.wrist_K)) {
-          arm.elbow_K = axes->forearm.elbow_K;
-          arm.wrist_K = axes->forearm.wrist_K;
-          arm.axis_from_depth = true;
-          upper_arm = axes->upper_arm;
-        }
-      } else if (options_.axis_from_depth) {
-        if (const auto axis = forearm::measure_forearm_axis(mm, cameras_->depth, arm.elbow_K, arm.wrist_K)) {
-          arm.elbow_K = axis->elbow_K;
-          arm.wrist_K = axis->wrist_K;
-          arm.axis_from_depth = true;
-        }
-      } else if (!device.tracker && arm.shoulder_tracked) {
-        upper_arm = forearm::measure_upper_arm_axis(mm, cameras_->depth, arm.shoulder_K, arm.elbow_K, arm.wrist_K);
-      }
-      // Used by the calibration only (the arm plane's upper arm, forearm.upper_arm = depth).
-      if (upper_arm && options_.upper_arm_from_depth && !device.tracker) {
-        arm.upper_arm_direction_K = upper_arm->direction_K;
-      }
-    }
-    if (arm.forearm_tracked && has_depth && has_color && cameras_) {
-      const forearm::GrayImageView gray{frame.color_gray.cols, frame.color_gray.rows, frame.color_gray.ptr<std::uint8_t>()};
-      const forearm::DepthImageView mm{frame.depth_mm.cols, frame.depth_mm.rows, frame.depth_mm.ptr<std::uint16_t>()};
-      const forearm::StrapDetection strap = forearm::detect_strap(gray, mm, *cameras_, arm.elbow_K, arm.wrist_K);
-      if (strap.found()) arm.strap_K = strap.strap_K;
+    if (cameras_) {
+      forearm::measure_arm_frame(arm, depth, gray, *cameras_,
+                                 {options_.axis_from_depth, options_.upper_arm_from_depth, !device.tracker});
     }
     if (device.tracker) {
       device.tracker->add_frame(arm);
@@ -291,56 +267,22 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
   const std::string field = "forearm[" + device.id + "]";
   const std::int64_t window_end_us =
       *first_frame_us_ + static_cast<std::int64_t>(std::llround(options_.calibration_s * 1e6));
-  std::vector<forearm::CalibrationFrame> with_strap, without_strap;
-  const Vec3 up_K = *K_from_W_ * Vec3::UnitZ();
-  std::size_t not_raised = 0;
-  // The arm plane's upper arm from depth when the depth showed it at enough frames to make a hold.
-  std::size_t upper_arm_frames = 0;
-  for (const forearm::ArmFrame& f : device.frames) upper_arm_frames += f.t_us <= window_end_us && f.upper_arm_direction_K;
-  const bool depth_upper_arm = options_.pose_orientation && options_.upper_arm_from_depth &&
-                               upper_arm_frames >= static_cast<std::size_t>(calibration_options_.min_still_frames);
-  if (options_.pose_orientation && options_.upper_arm_from_depth && !depth_upper_arm) {
+  forearm::CalibrationFrameOptions frame_options;
+  frame_options.pose_orientation = options_.pose_orientation;
+  frame_options.upper_arm_from_depth = options_.upper_arm_from_depth;
+  frame_options.min_upper_arm_frames = static_cast<std::size_t>(calibration_options_.min_still_frames);
+  const forearm::CalibrationFrames selected = forearm::select_calibration_frames(
+      device.frames, window_end_us, *K_from_W_ * Vec3::UnitZ(),
+      [&](std::int64_t t_us) { return W_from_A_at(device, t_us); }, frame_options);
+  if (options_.pose_orientation && options_.upper_arm_from_depth && !selected.depth_upper_arm) {
     out.warn("FOREARM_UPPER_ARM_NOT_SEEN", field + ".upper_arm",
-             "the upper arm was measured in the depth image at " + std::to_string(upper_arm_frames) +
+             "the upper arm was measured in the depth image at " + std::to_string(selected.upper_arm_frames) +
                  " calibration frames (need " + std::to_string(calibration_options_.min_still_frames) +
                  "): the calibration pose's roll comes from the SDK shoulder");
   }
-  for (const forearm::ArmFrame& f : device.frames) {
-    if (f.t_us > window_end_us) break;
-    if (!f.forearm_tracked || !f.shoulder_tracked) continue;
-    if (!forearm::forearm_raised_for_calibration(f.elbow_K, f.wrist_K, up_K)) {
-      ++not_raised;  // not the calibration pose (e.g. an arm resting at the side)
-      continue;
-    }
-    const std::optional<Quat> W_from_A = W_from_A_at(device, f.t_us);
-    if (!W_from_A) continue;
-    forearm::CalibrationFrame c;
-    c.t_us = f.t_us;
-    c.shoulder_K = f.shoulder_K;
-    c.elbow_K = f.elbow_K;
-    c.wrist_K = f.wrist_K;
-    c.W_from_A = *W_from_A;
-    if (options_.pose_orientation) {
-      try {
-        Vec3 plane_shoulder_K = f.shoulder_K;
-        if (depth_upper_arm) {
-          if (!f.upper_arm_direction_K) continue;
-          // Only the direction matters for the plane: the SDK shoulder moved onto the measured line.
-          plane_shoulder_K = f.elbow_K - (f.shoulder_K - f.elbow_K).norm() * *f.upper_arm_direction_K;
-        }
-        c.K_from_F_sdk = forearm::K_from_F_calibration_pose(plane_shoulder_K, f.elbow_K, f.wrist_K);
-      } catch (const Error&) {
-        continue;  // a straight arm or one seen edge-on: not the calibration pose
-      }
-    } else {
-      if (f.K_from_wrist_sdk.norm() < 0.5) continue;  // the SDK gave no orientation
-      c.K_from_F_sdk = f.K_from_wrist_sdk.normalized();
-    }
-    // Without a strap the lengths are placeholders; only eq. 9 is used then.
-    c.strap_K = f.strap_K.value_or(f.elbow_K + 0.8 * (f.wrist_K - f.elbow_K));
-    without_strap.push_back(c);
-    if (f.strap_K) with_strap.push_back(c);
-  }
+  const std::vector<forearm::CalibrationFrame>& with_strap = selected.with_strap;
+  const std::vector<forearm::CalibrationFrame>& without_strap = selected.without_strap;
+  const std::size_t not_raised = selected.not_raised;
   device.strap_frames = static_cast<std::uint32_t>(with_strap.size());
   bool has_model = true;
   try {

@@ -1,0 +1,26 @@
+#pragma once
+// One arm in one camera frame measured in the images (paper 1, II-I; docs/forearm.md "Forearm
+// axis from depth"): the SDK's joints only say where to look. The forearm axis (elbow and wrist)
+// is replaced by the one fitted to the depth image, the upper arm's direction is measured for
+// the calibration pose's arm plane, and the strap is searched for in the colour image.
+#include "forearm/forearm_track.hpp"
+#include "forearm/strap_detection.hpp"
+#include "geometry/image_view.hpp"
+
+namespace posefuse::forearm {
+
+struct ArmMeasurementOptions {
+  bool axis_from_depth = true;       // forearm.axis = depth
+  bool upper_arm_from_depth = true;  // forearm.upper_arm = depth
+  // Before the arm's calibration: the upper arm's direction is kept for the arm plane.
+  bool calibrating = true;
+};
+
+// Refines `arm`, whose SDK joints and tracking flags are set, in place: elbow_K, wrist_K and
+// axis_from_depth from the depth image, upper_arm_direction_K (calibrating only), strap_K from
+// the colour image. Only an arm whose forearm the SDK tracks is measured; an empty image is not
+// used.
+void measure_arm_frame(ArmFrame& arm, const geometry::DepthImageView& depth, const geometry::GrayImageView& gray,
+                       const StrapCameras& cameras, const ArmMeasurementOptions& options);
+
+}  // namespace posefuse::forearm
