@@ -70,7 +70,7 @@ struct FitOptions {
   // step, so the two tests above rarely fire and most fits ran 13-15 of their 20 iterations. With
   // U_bg fixed the LM steps and the discrete update only lower one energy and the joint-step test
   // fires. 6 keeps the accuracy at 5 frames/s (where a start is 200 ms old and the contour moves
-  // for longer); at 30 frames/s 4 was as accurate (docs/benchmarks.md, "Fewer LM iterations").
+  // for longer); at 30 frames/s 4 was as accurate (docs/fitting.md, "Solver").
   int freeze_contour_after = 6;
 
   // --- Correspondences (II-I, II-J) ---

@@ -1,6 +1,6 @@
 #pragma once
 // The frame merge: one FrameEstimate per camera frame from what the stages before it estimated
-// for that frame, by one rule (docs/architecture.md, "Frame merge"):
+// for that frame, by one rule (docs/architecture.md, "Pipeline stages"):
 //  - body joints (24 SMPL, 25 camera-compatible) and the fit energy: the body fit's. Where the
 //    fit lost tracking (energy above fit.lost_energy) they stay, with their confidence capped at
 //    kLostFitConfidence;

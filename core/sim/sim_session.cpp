@@ -30,8 +30,8 @@ namespace {
 using std::numbers::pi;
 constexpr int kFramesAheadPerWorker = 2;  // frames a worker may finish before they are written
 // zstd level of depth chunks: level 3 took a fifth of a frame's CPU on noisy depth; level 1 is
-// ~2.5 times faster for 14 % larger depth payloads, 11 % larger sessions (docs/benchmarks.md,
-// "Faster frames").
+// ~2.5 times faster for 14 % larger depth payloads, 11 % larger sessions (docs/simulator.md,
+// "Speed").
 constexpr int kDepthZstdLevel = 1;
 using Mat3 = Eigen::Matrix3d;
 

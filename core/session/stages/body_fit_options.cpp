@@ -103,7 +103,7 @@ const OptionTable& body_fit_option_table() {
          .description = "LM: each trial step clamped to the pose limits widened by 0.1 rad (false = paper 2's soft "
                         "limits alone)"},
         // Off by default: measured, it did not lower the iterations and raised the occluded error
-        // (docs/benchmarks.md, "Fewer LM iterations").
+        // (docs/fitting.md, "Start policy").
         {.key = kFitStartVelocityGainKey,
          .type = OptionType::kReal,
          .default_value = "0",
