@@ -100,7 +100,7 @@ int main(int argc, char** argv) {
     }
     return 0;
   } catch (const posefuse::Error& e) {
-    return fail(std::string(e.field()) + ": " + e.what());
+    return fail(e.what());  // "<field>: <message>"
   } catch (const std::exception& e) {
     return fail(e.what());
   }
