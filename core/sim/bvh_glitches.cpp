@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <initializer_list>
 #include <optional>
 #include <tuple>
 
@@ -32,13 +31,6 @@ struct ArmPair {
   double arm_length = 0;         // rest shoulder -> wrist, file units
 };
 
-int first_found(const BvhSkeleton& skeleton, std::initializer_list<const char*> names) {
-  for (const char* name : names) {
-    if (const int j = skeleton.find(name); j >= 0) return j;
-  }
-  return -1;
-}
-
 std::vector<int> subtree(const BvhSkeleton& skeleton, int root) {
   std::vector<int> out = {root};
   for (std::size_t j = static_cast<std::size_t>(root) + 1; j < skeleton.joints.size(); ++j) {
@@ -48,14 +40,17 @@ std::vector<int> subtree(const BvhSkeleton& skeleton, int root) {
   return out;
 }
 
-// The arm chains by the names bvh_retarget.hpp maps; none when the rig has no such pair.
-std::optional<ArmPair> find_arms(const BvhSkeleton& skeleton) {
+// The arm chains as the joint map names them (collar, else shoulder; wrist); none when the rig
+// has no such pair.
+std::optional<ArmPair> find_arms(const BvhSkeleton& skeleton, const BvhJointMap& joint_map) {
+  using namespace body;
+  const BvhJointMatch match = match_bvh_joint_map(joint_map, skeleton, false);
+  const auto joint = [&](int smpl) { return match.bvh_joint[static_cast<std::size_t>(smpl)]; };
   ArmPair arms;
-  const int left = first_found(skeleton, {"LeftShoulder", "LeftCollar", "lCollar", "LeftArm", "LeftUpArm", "lShldr"});
-  const int right =
-      first_found(skeleton, {"RightShoulder", "RightCollar", "rCollar", "RightArm", "RightUpArm", "rShldr"});
-  arms.left_wrist = first_found(skeleton, {"LeftHand", "lHand"});
-  arms.right_wrist = first_found(skeleton, {"RightHand", "rHand"});
+  const int left = joint(kLeftCollar) >= 0 ? joint(kLeftCollar) : joint(kLeftShoulder);
+  const int right = joint(kRightCollar) >= 0 ? joint(kRightCollar) : joint(kRightShoulder);
+  arms.left_wrist = joint(kLeftWrist);
+  arms.right_wrist = joint(kRightWrist);
   if (left < 0 || right < 0 || arms.left_wrist < 0 || arms.right_wrist < 0) return std::nullopt;
   arms.parent = skeleton.joints[static_cast<std::size_t>(left)].parent;
   if (arms.parent < 0 || arms.parent != skeleton.joints[static_cast<std::size_t>(right)].parent) return std::nullopt;
@@ -98,9 +93,9 @@ std::pair<Vec3, Vec3> wrists(const BvhSkeleton& skeleton, const ArmPair& arms, c
           P_from_W * (world.p_W_m[static_cast<std::size_t>(arms.right_wrist)] - world.p_W_m[p])};
 }
 
-void repair_arm_swaps(const BvhSkeleton& skeleton, const BvhGlitchOptions& options, Frames& frames,
-                      std::vector<BvhGlitch>& glitches) {
-  const std::optional<ArmPair> arms = find_arms(skeleton);
+void repair_arm_swaps(const BvhSkeleton& skeleton, const BvhGlitchOptions& options, const BvhJointMap& joint_map,
+                      Frames& frames, std::vector<BvhGlitch>& glitches) {
+  const std::optional<ArmPair> arms = find_arms(skeleton, joint_map);
   if (!arms) return;
   const double min_jump = options.arm_swap_min_jump * arms->arm_length;
   bool swapped = false;
@@ -284,7 +279,7 @@ std::string describe(const BvhGlitch& glitch, double frame_time_s) {
          " s), " + glitch.joint + ": " + glitch.reason + "; repaired by " + glitch.repair;
 }
 
-BvhRepair repair_bvh_glitches(const BvhClip& clip, const BvhGlitchOptions& options) {
+BvhRepair repair_bvh_glitches(const BvhClip& clip, const BvhGlitchOptions& options, const BvhJointMap& joint_map) {
   require_positive(options.max_joint_rate_rad_s, "max_joint_rate_rad_s");
   require_positive(options.bone_length_tolerance, "bone_length_tolerance");
   require_positive(options.arm_swap_min_jump, "arm_swap_min_jump");
@@ -296,7 +291,7 @@ BvhRepair repair_bvh_glitches(const BvhClip& clip, const BvhGlitchOptions& optio
   BvhRepair out;
   out.clip = clip;
   if (clip.frames.size() < 2) return out;
-  repair_arm_swaps(clip.skeleton, options, out.clip.frames, out.glitches);
+  repair_arm_swaps(clip.skeleton, options, joint_map, out.clip.frames, out.glitches);
   repair_flips(clip.skeleton, clip.frame_time_s, options, out.clip.frames, out.glitches);
   repair_bone_lengths(clip.skeleton, options, out.clip.frames, out.glitches);
   return out;

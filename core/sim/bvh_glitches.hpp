@@ -33,6 +33,7 @@
 #include <vector>
 
 #include "sim/bvh.hpp"
+#include "sim/bvh_joint_map.hpp"
 
 namespace posefuse::sim {
 
@@ -66,7 +67,9 @@ struct BvhRepair {
 };
 
 // Throws kInvalidArgument for bad options (naming the option) and for unrepairable glitches
-// (field "bvh.frames[a..b]").
-BvhRepair repair_bvh_glitches(const BvhClip& clip, const BvhGlitchOptions& options = {});
+// (field "bvh.frames[a..b]"). The arms for the swap test are the joint map's (bvh_joint_map.hpp):
+// collar (else shoulder) and wrist per side; a rig without both is not tested for swaps.
+BvhRepair repair_bvh_glitches(const BvhClip& clip, const BvhGlitchOptions& options = {},
+                              const BvhJointMap& joint_map = auto_bvh_joint_map());
 
 }  // namespace posefuse::sim

@@ -33,7 +33,7 @@ BodyMotion bvh_motion(const BvhClip& clip, const BvhMotionOptions& options, BvhP
   require_positive(clip.frame_time_s, "clip.frame_time_s");
   if (clip.frame_count() < 2) throw_invalid("clip.frames", "needs at least 2 frames, got " + std::to_string(clip.frame_count()));
   const Eigen::Matrix3Xd rest_joints = template_rest_joints(options.sex, options.betas);
-  const BvhRetargetMap map = make_bvh_retarget_map(clip.skeleton, rest_joints);
+  const BvhRetargetMap map = make_bvh_retarget_map(clip.skeleton, rest_joints, options.joint_map);
 
   std::vector<RetargetedFrame> frames;
   frames.reserve(clip.frames.size());

@@ -20,6 +20,7 @@
 #include "body/template_generator.hpp"
 #include "sim/body_motion.hpp"
 #include "sim/bvh.hpp"
+#include "sim/bvh_joint_map.hpp"
 
 namespace posefuse::sim {
 
@@ -35,6 +36,7 @@ struct BvhMotionOptions {
   BvhSmoothing smoothing = BvhSmoothing::kGaussian;
   double smoothing_s = 0.03;  // >= 0; see tests/sim/body_imu_test (MocapNoiseIsSmoothed...)
   bool face_front = true;
+  BvhJointMap joint_map = auto_bvh_joint_map();  // which BVH joint drives which SMPL joint
 };
 
 // How the clip was placed: p_R = scale * R_from_bvh * p_bvh + offset_R_m for BVH joint

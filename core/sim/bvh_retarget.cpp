@@ -1,7 +1,6 @@
 #include "sim/bvh_retarget.hpp"
 
 #include <algorithm>
-#include <cctype>
 #include <vector>
 
 #include "common/error.hpp"
@@ -11,59 +10,11 @@ namespace {
 
 using namespace body;
 
-struct MapRow {
-  int smpl;
-  std::vector<const char*> candidates;
-  bool required;
-};
-
-// The name table documented in the header; order matters where candidates overlap (spine).
-const std::vector<MapRow>& map_rows() {
-  static const std::vector<MapRow> rows = {
-      {kPelvis, {"Hips", "hip", "pelvis", "Root"}, true},
-      {kLeftHip, {"LeftUpLeg", "LeftThigh", "lThigh", "LeftHip"}, true},
-      {kRightHip, {"RightUpLeg", "RightThigh", "rThigh", "RightHip"}, true},
-      {kLeftKnee, {"LeftLeg", "LeftShin", "lShin", "LeftKnee"}, true},
-      {kRightKnee, {"RightLeg", "RightShin", "rShin", "RightKnee"}, true},
-      {kLeftAnkle, {"LeftFoot", "lFoot", "LeftAnkle"}, true},
-      {kRightAnkle, {"RightFoot", "rFoot", "RightAnkle"}, true},
-      {kLeftFoot, {"LeftToeBase", "LeftToe", "lToe"}, false},
-      {kRightFoot, {"RightToeBase", "RightToe", "rToe"}, false},
-      {kSpine1, {"LowerBack", "Spine", "abdomen"}, false},
-      {kSpine2, {"Spine", "Spine1", "chest"}, false},
-      {kSpine3, {"Spine1", "Spine2", "chest2", "Chest"}, false},
-      {kNeck, {"Neck1", "Neck", "neck"}, false},
-      {kHead, {"Head"}, true},
-      {kLeftCollar, {"LeftShoulder", "LeftCollar", "lCollar"}, false},
-      {kRightCollar, {"RightShoulder", "RightCollar", "rCollar"}, false},
-      {kLeftShoulder, {"LeftArm", "LeftUpArm", "lShldr"}, true},
-      {kRightShoulder, {"RightArm", "RightUpArm", "rShldr"}, true},
-      {kLeftElbow, {"LeftForeArm", "LeftLowArm", "lForeArm"}, true},
-      {kRightElbow, {"RightForeArm", "RightLowArm", "rForeArm"}, true},
-      {kLeftWrist, {"LeftHand", "lHand"}, true},
-      {kRightWrist, {"RightHand", "rHand"}, true},
-  };
-  return rows;
-}
-
 // The SMPL joint each joint's bone points to (-1 for the ends).
 constexpr std::array<int, kNumJoints> kAimChild = {
     kSpine1, kLeftKnee, kRightKnee, kSpine2, kLeftAnkle, kRightAnkle, kSpine3, kLeftFoot,
     kRightFoot, kNeck, -1, -1, kHead, kLeftShoulder, kRightShoulder, -1, kLeftElbow,
     kRightElbow, kLeftWrist, kRightWrist, kLeftHand, kRightHand, -1, -1};
-
-bool same_name(std::string_view a, std::string_view b) {
-  return a.size() == b.size() && std::equal(a.begin(), a.end(), b.begin(), [](char x, char y) {
-           return std::tolower(static_cast<unsigned char>(x)) == std::tolower(static_cast<unsigned char>(y));
-         });
-}
-
-int find_joint(const BvhSkeleton& skeleton, std::string_view name) {
-  for (std::size_t i = 0; i < skeleton.joints.size(); ++i) {
-    if (same_name(skeleton.joints[i].name, name)) return static_cast<int>(i);
-  }
-  return -1;
-}
 
 bool is_bvh_ancestor(const BvhSkeleton& skeleton, int ancestor, int joint) {
   for (int j = skeleton.joints[static_cast<std::size_t>(joint)].parent; j >= 0;
@@ -121,7 +72,8 @@ std::vector<Vec3> bvh_joint_positions(const BvhSkeleton& skeleton, const BvhLoca
   return position;
 }
 
-BvhRetargetMap make_bvh_retarget_map(const BvhSkeleton& skeleton, const Eigen::Matrix3Xd& rest_joints) {
+BvhRetargetMap make_bvh_retarget_map(const BvhSkeleton& skeleton, const Eigen::Matrix3Xd& rest_joints,
+                                     const BvhJointMap& joints) {
   if (rest_joints.cols() != kNumJoints || !rest_joints.allFinite()) {
     throw_invalid("rest_joints", "must be 3 x 24 and finite");
   }
@@ -133,29 +85,16 @@ BvhRetargetMap make_bvh_retarget_map(const BvhSkeleton& skeleton, const Eigen::M
   map.rest_correction.fill(Quat::Identity());
   map.aim_posed.fill(false);
 
-  std::vector<bool> taken(skeleton.joints.size(), false);
-  for (const MapRow& row : map_rows()) {
-    for (const char* name : row.candidates) {
-      const int b = find_joint(skeleton, name);
-      if (b >= 0 && !taken[static_cast<std::size_t>(b)]) {
-        map.bvh_joint[static_cast<std::size_t>(row.smpl)] = b;
-        taken[static_cast<std::size_t>(b)] = true;
-        break;
-      }
-    }
-    if (row.required && map.bvh_joint[static_cast<std::size_t>(row.smpl)] < 0) {
-      std::string names;
-      for (const char* name : row.candidates) names += std::string(names.empty() ? "" : ", ") + name;
-      throw_invalid("bvh.joints", "no joint for " + joint_label(row.smpl) + " (looked for " + names + ")");
-    }
-  }
+  const BvhJointMatch match = match_bvh_joint_map(joints, skeleton);
+  map.bvh_joint = match.bvh_joint;
   for (int j = 1; j < kNumJoints; ++j) {
     const int b = map.bvh_joint[static_cast<std::size_t>(j)];
     const int a = nearest_mapped_ancestor(map, j);
     if (b < 0 || a < 0) continue;
     const int ab = map.bvh_joint[static_cast<std::size_t>(a)];
     if (!is_bvh_ancestor(skeleton, ab, b)) {
-      throw_invalid("bvh.joints", "'" + skeleton.joints[static_cast<std::size_t>(b)].name + "' (" + joint_label(j) +
+      throw_invalid(bvh_joint_map_field(joints, match.line[static_cast<std::size_t>(j)]),
+                    "'" + skeleton.joints[static_cast<std::size_t>(b)].name + "' (" + joint_label(j) +
                                       ") is not below '" + skeleton.joints[static_cast<std::size_t>(ab)].name +
                                       "' (" + joint_label(a) + ") in the BVH hierarchy");
     }

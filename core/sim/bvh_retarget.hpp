@@ -2,7 +2,8 @@
 // Retargeting a BVH rig (any: the 21-joint clips, CMU's 31 joints, Poser-style names) onto the
 // SMPL skeleton of the body model.
 //
-// Joint map (by name, case-insensitive; the first candidate present and not yet taken wins):
+// Joint map: bvh_joint_map.hpp; a file or a built-in map, by default "auto", the table below
+// (by name, case-insensitive; the first candidate present and not yet taken wins):
 //   pelvis       Hips, hip, pelvis, Root          (required)
 //   left_hip     LeftUpLeg, LeftThigh, lThigh, LeftHip  (required; right_* likewise)
 //   left_knee    LeftLeg, LeftShin, lShin, LeftKnee      (required)
@@ -44,6 +45,7 @@
 
 #include "body/smpl_model.hpp"
 #include "sim/bvh.hpp"
+#include "sim/bvh_joint_map.hpp"
 
 namespace posefuse::sim {
 
@@ -58,8 +60,11 @@ struct BvhRetargetMap {
 
 // Throws kInvalidArgument with field "bvh.joints" naming the SMPL joint and the names looked for
 // when a required joint is missing, and when the map contradicts the BVH hierarchy or a
-// required bone has zero length. rest_joints: the SMPL rest joints (3 x 24).
-BvhRetargetMap make_bvh_retarget_map(const BvhSkeleton& skeleton, const Eigen::Matrix3Xd& rest_joints);
+// required bone has zero length; with a joint-map file, a name the clip lacks and a mapped joint
+// that contradicts the hierarchy are named by the file's line ("<file>:<line>",
+// bvh_joint_map.hpp). rest_joints: the SMPL rest joints (3 x 24).
+BvhRetargetMap make_bvh_retarget_map(const BvhSkeleton& skeleton, const Eigen::Matrix3Xd& rest_joints,
+                                     const BvhJointMap& joints = auto_bvh_joint_map());
 
 struct RetargetedFrame {
   std::array<Quat, body::kNumJoints> parent_from_joint;  // SMPL local rotations (pelvis: R_from_pelvis)

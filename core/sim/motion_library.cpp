@@ -27,16 +27,28 @@ BodyMotion played_at(BodyMotion motion, double speed) {
   return motion;
 }
 
+// An error's message without the "field: " that what() starts with.
+std::string message_of(const Error& e) {
+  const std::string what = e.what();
+  const std::string prefix = e.field() + ": ";
+  return what.compare(0, prefix.size(), prefix) == 0 ? what.substr(prefix.size()) : what;
+}
+
 // The clip with its mocap glitches repaired (bvh_glitches.hpp), each repair as a warning.
 BodyMotion clip_motion(const std::string& path, const BvhGlitchOptions& glitches, const BvhMotionOptions& options) {
   const BvhClip raw = load_bvh(path);
   BvhRepair repaired;
   try {
-    repaired = repair_bvh_glitches(raw, glitches);
+    repaired = repair_bvh_glitches(raw, glitches, options.joint_map);
   } catch (const Error& e) {
-    throw Error(e.code(), path + ": " + e.field(), e.what());
+    throw Error(e.code(), path + ": " + e.field(), message_of(e));
   }
-  BodyMotion motion = bvh_motion(repaired.clip, options);
+  BodyMotion motion;
+  try {
+    motion = bvh_motion(repaired.clip, options);
+  } catch (const Error& e) {  // the rig does not fit the joint map: say which clip
+    throw Error(e.code(), e.field(), message_of(e) + " (clip " + path + ")");
+  }
   for (const BvhGlitch& glitch : repaired.glitches) {
     motion.warnings.push_back(path + ": " + describe(glitch, raw.frame_time_s));
   }
@@ -58,6 +70,7 @@ BodyMotion select_motion(const std::string& name, const MotionOptions& options, 
     bvh.sex = context.sex;
     bvh.betas = context.betas;
     bvh.smoothing = options.bvh_smoothing;
+    bvh.joint_map = options.bvh_joint_map;
     require_positive(options.exercise.speed, "speed");
     const BodyMotion clip = played_at(clip_motion(options.bvh_path, options.bvh_glitches, bvh), options.exercise.speed);
     if (!options.calibration_prefix) return clip;

@@ -16,6 +16,7 @@
 #include "body/template_generator.hpp"
 #include "sim/body_motion.hpp"
 #include "sim/bvh_glitches.hpp"
+#include "sim/bvh_joint_map.hpp"
 #include "sim/bvh_motion.hpp"
 #include "sim/exercises.hpp"
 
@@ -30,6 +31,7 @@ struct MotionOptions {
   bool calibration_prefix = false;
   BvhSmoothing bvh_smoothing = BvhSmoothing::kGaussian;  // motion "bvh" (bvh_motion.hpp)
   BvhGlitchOptions bvh_glitches;                         // motion "bvh" (bvh_glitches.hpp)
+  BvhJointMap bvh_joint_map = auto_bvh_joint_map();      // motion "bvh" (bvh_joint_map.hpp)
 };
 
 // What a motion may need to know about the subject.

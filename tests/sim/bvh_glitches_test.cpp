@@ -21,26 +21,6 @@ namespace {
 constexpr int kFrames = 120;
 constexpr double kFrameTime = 1.0 / 60;
 
-// The 21-joint rig with the right arm's offsets mirrored from the left (x -> -x), so that a
-// mirrored pose of one arm is exactly the other arm's.
-std::vector<rigs::RigJointSpec> symmetric_rig21() {
-  auto rig = rigs::rig21();
-  const auto find = [&](const std::string& name) -> rigs::RigJointSpec& {
-    for (auto& j : rig) {
-      if (j.name == name) return j;
-    }
-    throw std::runtime_error(name);
-  };
-  for (const char* side : {"Arm", "ForeArm", "Hand"}) {
-    const auto& left = find(std::string("Left") + side);
-    auto& right = find(std::string("Right") + side);
-    right.x = -left.x;
-    right.y = left.y;
-    right.z = left.z;
-  }
-  return rig;
-}
-
 // Channel c (Z, Y, X rotation in degrees; root: X, Y, Z position first) of a smooth motion:
 // the right arm raised and swinging, the left arm lowered and swinging, the right forearm
 // rolling fast (15 rad/s about its bone: 14.3 degrees per frame) and bending.
@@ -88,6 +68,11 @@ void flip_forearm(BvhClip& clip, int a, int b) {
     Quat& q = clip.frames[static_cast<std::size_t>(f)].parent_from_joint[static_cast<std::size_t>(j)];
     q = (q * Quat(Eigen::AngleAxisd(pi, Vec3::UnitX()))).normalized();
   }
+}
+
+// Frames 30..44 labelled the other way round (rigs::with_arms_swapped).
+BvhClip swapped_arms_clip(const std::vector<rigs::RigJointSpec>& rig) {
+  return smooth_clip(rig, rigs::with_arms_swapped(rig, [&](int f, int j, int c) { return smooth_value(rig, f, j, c); }, 30, 44));
 }
 
 }  // namespace
@@ -139,22 +124,9 @@ TEST(BvhGlitches, FlippedFirstAndLastFramesAreHeld) {
 }
 
 TEST(BvhGlitches, SwappedArmsAreNamedAndSwappedBack) {
-  const auto rig = symmetric_rig21();
+  const auto rig = rigs::symmetric_rig21();
   const BvhClip clean = smooth_clip(rig);
-  // Frames 30..44 labelled the other way round: each arm joint carries its mirror partner's
-  // channels mirrored (x -> -x turns Rz(a) Ry(b) Rx(c) into Rz(-a) Ry(-b) Rx(c)).
-  const BvhClip swapped = smooth_clip(rig, [&](int f, int j, int c) {
-    const std::string& name = rig[static_cast<std::size_t>(j)].name;
-    const bool left = name.rfind("Left", 0) == 0, right = name.rfind("Right", 0) == 0;
-    const bool arm = name.find("Arm") != std::string::npos || name.find("Hand") != std::string::npos ||
-                     name.find("Shoulder") != std::string::npos;
-    if (f < 30 || f > 44 || !arm || !(left || right)) return smooth_value(rig, f, j, c);
-    const std::string partner = (left ? "Right" : "Left") + name.substr(left ? 4 : 5);
-    int p = 0;
-    while (rig[static_cast<std::size_t>(p)].name != partner) ++p;
-    const double v = smooth_value(rig, f, p, c);
-    return c == 2 ? v : -v;
-  });
+  const BvhClip swapped = swapped_arms_clip(rig);
   const BvhRepair repair = repair_bvh_glitches(swapped);
   ASSERT_EQ(repair.glitches.size(), 1u) << describe(repair.glitches.back(), kFrameTime);
   const BvhGlitch& g = repair.glitches[0];
@@ -228,4 +200,27 @@ TEST(BvhGlitches, RejectsBadOptions) {
   o = {};
   o.arm_swap_ratio = 1.0;
   EXPECT_THROW(repair_bvh_glitches(clip, o), Error);
+}
+
+TEST(BvhGlitches, ArmSwapsAreLookedForOnTheJointMapsArms) {
+  // The swapped clip with every joint renamed: the name table finds no arms, so the swap looks
+  // like an arm turning too fast and never coming back (refused); a joint map naming the arms
+  // finds the swap as on the original names.
+  BvhClip swapped = swapped_arms_clip(rigs::symmetric_rig21());
+  std::string map_text;
+  const auto& names = posefuse::body::smpl_joint_names();
+  const BvhJointMatch original = match_bvh_joint_map(auto_bvh_joint_map(), swapped.skeleton);
+  for (BvhJoint& joint : swapped.skeleton.joints) joint.name = "j_" + joint.name;
+  for (int j = 0; j < posefuse::body::kNumJoints; ++j) {
+    const int b = original.bvh_joint[static_cast<std::size_t>(j)];
+    if (b >= 0) map_text += std::string(names[static_cast<std::size_t>(j)]) + " = " +
+                            swapped.skeleton.joints[static_cast<std::size_t>(b)].name + "\n";
+  }
+  EXPECT_THROW(repair_bvh_glitches(swapped), Error);
+  const BvhRepair repair = repair_bvh_glitches(swapped, {}, parse_bvh_joint_map(map_text, "renamed.map"));
+  ASSERT_EQ(repair.glitches.size(), 1u);
+  EXPECT_EQ(repair.glitches[0].kind, BvhGlitchKind::kArmSwap);
+  EXPECT_EQ(repair.glitches[0].first_frame, 30);
+  EXPECT_EQ(repair.glitches[0].last_frame, 44);
+  EXPECT_EQ(repair.glitches[0].joint, "j_LeftShoulder/j_RightShoulder");
 }

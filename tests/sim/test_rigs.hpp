@@ -6,6 +6,7 @@
 // callback, so tests can write random poses or move one joint alone.
 #include <functional>
 #include <sstream>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -97,6 +98,44 @@ inline std::string rig_text(const std::vector<RigJointSpec>& rig, int frames, do
     s << "\n";
   }
   return s.str();
+}
+
+// The 21-joint rig with the right arm's offsets mirrored from the left (x -> -x), so that a
+// mirrored pose of one arm is exactly the other arm's.
+inline std::vector<RigJointSpec> symmetric_rig21() {
+  auto rig = rig21();
+  const auto find = [&](const std::string& name) -> RigJointSpec& {
+    for (auto& j : rig) {
+      if (j.name == name) return j;
+    }
+    throw std::runtime_error(name);
+  };
+  for (const char* side : {"Arm", "ForeArm", "Hand"}) {
+    const auto& left = find(std::string("Left") + side);
+    auto& right = find(std::string("Right") + side);
+    right.x = -left.x;
+    right.y = left.y;
+    right.z = left.z;
+  }
+  return rig;
+}
+
+// `value` with frames first..last labelled the other way round, as a mocap solve that swaps the
+// arms: each arm joint (Left*/Right* Shoulder, Arm, ForeArm, Hand) carries its mirror partner's
+// channels mirrored (x -> -x turns Rz(a) Ry(b) Rx(c) into Rz(-a) Ry(-b) Rx(c)).
+inline RigValue with_arms_swapped(const std::vector<RigJointSpec>& rig, RigValue value, int first, int last) {
+  return [rig, value, first, last](int f, int j, int c) {
+    const std::string& name = rig[static_cast<std::size_t>(j)].name;
+    const bool left = name.rfind("Left", 0) == 0, right = name.rfind("Right", 0) == 0;
+    const bool arm = name.find("Arm") != std::string::npos || name.find("Hand") != std::string::npos ||
+                     name.find("Shoulder") != std::string::npos;
+    if (f < first || f > last || !arm || !(left || right)) return value(f, j, c);
+    const std::string partner = (left ? "Right" : "Left") + name.substr(left ? 4 : 5);
+    int p = 0;
+    while (rig[static_cast<std::size_t>(p)].name != partner) ++p;
+    const double v = value(f, p, c);
+    return c == 2 ? v : -v;
+  };
 }
 
 }  // namespace posefuse::sim::testing

@@ -2,6 +2,9 @@
 // the value.
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
+
 #include "common/error.hpp"
 #include "sim/exercises.hpp"
 #include "tools/sim/sim_options_file.hpp"
@@ -169,4 +172,25 @@ TEST(SimOptionsFile, MissingFileIsNotFound) {
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::kNotFound);
   }
+}
+
+TEST(SimOptionsFile, BvhJointMapIsBuiltInOrAFileWhoseErrorsNameItsLine) {
+  sim::SimSessionOptions options;
+  EXPECT_EQ(options.motion_options.bvh_joint_map.source, "auto");
+  apply_sim_options("bvh_joint_map = cmu31\n", "opts.txt", options);
+  EXPECT_EQ(options.motion_options.bvh_joint_map.source, "cmu31");
+  EXPECT_EQ(options.motion_options.bvh_joint_map.entries.size(), 22u);
+  EXPECT_TRUE(options.motion_options.bvh_joint_map.strict);
+
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "posefuse_sim_options_joint_map";
+  std::filesystem::create_directories(dir);
+  const std::filesystem::path map = dir / "rig.map";
+  std::ofstream(map) << "pelvis = Hips\nleft_hip = Hips\n";
+  const Error e = error_of("bvh_joint_map = " + map.string() + "\n");
+  EXPECT_EQ(e.field(), map.string() + ":2");
+  EXPECT_NE(std::string(e.what()).find("BVH joint 'Hips' already drives 'pelvis' (line 1)"), std::string::npos) << e.what();
+  const Error missing = error_of("bvh_joint_map = " + (dir / "none.map").string() + "\n");
+  EXPECT_EQ(missing.code(), ErrorCode::kNotFound);
+  EXPECT_EQ(missing.field(), (dir / "none.map").string());
+  std::filesystem::remove_all(dir);
 }

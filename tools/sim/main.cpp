@@ -15,7 +15,7 @@ namespace {
 
 const char* const kUsage =
     "usage: posefuse-sim (--out DIR | --chunk-file FILE) [--options FILE] [--seed N] [--duration S|clip]\n"
-    "                    [--gt DIR] [--contact-sheet PNG] [--threads N] [--quiet]\n"
+    "                    [--gt DIR] [--contact-sheet PNG] [--threads N] [--bvh-joint-map FILE|mocap21|cmu31] [--quiet]\n"
     "       posefuse-sim --list-options\n"
     "       posefuse-sim calibrate DIR   (frame calibration, paper 1 II-F, of a calibration_capture/ folder)\n"
     "Writes a simulated session (recording directory with gt/ inside, or a chunk file with\n"
@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     tools::SimRunRequest request;
-    std::optional<std::string> options_file, seed, duration, threads;
+    std::optional<std::string> options_file, seed, duration, threads, joint_map;
     bool quiet = false;
     for (int i = 1; i < argc; ++i) {
       const std::string flag = argv[i];
@@ -57,6 +57,7 @@ int main(int argc, char** argv) {
       else if (flag == "--seed") seed = value();
       else if (flag == "--duration") duration = value();
       else if (flag == "--threads") threads = value();
+      else if (flag == "--bvh-joint-map") joint_map = value();
       else if (flag == "--quiet") quiet = true;
       else if (flag == "--list-options") {
         for (const auto& key : tools::sim_option_keys()) std::cout << key.key << "\t" << key.meaning << '\n';
@@ -72,6 +73,7 @@ int main(int argc, char** argv) {
     if (seed) tools::apply_sim_option("seed", *seed, "--seed", request.options);
     if (duration) tools::apply_sim_option("duration_s", *duration, "--duration", request.options);
     if (threads) tools::apply_sim_option("threads", *threads, "--threads", request.options);
+    if (joint_map) tools::apply_sim_option("bvh_joint_map", *joint_map, "--bvh-joint-map", request.options);
 
     const auto start = std::chrono::steady_clock::now();
     const bool tty = isatty(STDERR_FILENO) != 0;
@@ -98,7 +100,7 @@ int main(int argc, char** argv) {
     }
     return 0;
   } catch (const posefuse::Error& e) {
-    return fail(std::string(e.field()) + ": " + e.what());
+    return fail(e.what());  // "<field>: <message>"
   } catch (const std::exception& e) {
     return fail(e.what());
   }

@@ -92,6 +92,10 @@ const std::map<std::string, Setter>& setters() {
                            else if (v == "noise_level") o.motion_options.bvh_smoothing = sim::BvhSmoothing::kNoiseLevel;
                            else bad(f, v, "must be gaussian or noise_level");
                          }}},
+      {"bvh_joint_map", {"motion bvh: which BVH joint drives which SMPL joint: auto (by name), mocap21, cmu31, or a joint-map file (relative to the working directory) (auto)",
+                         [](Options& o, const std::string& v, const std::string&) {
+                           o.motion_options.bvh_joint_map = sim::bvh_joint_map_named(v);
+                         }}},
       {"bvh_max_glitch_frames", {"motion bvh: longest mocap glitch repaired by interpolation, frames, 1..600 (12)",
                                  [](Options& o, const std::string& v, const std::string& f) {
                                    o.motion_options.bvh_glitches.max_glitch_frames = static_cast<int>(integer(v, f, 1, 600));
