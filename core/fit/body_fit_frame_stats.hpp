@@ -12,13 +12,13 @@ namespace posefuse::fit {
 // iterations and a NaN energy.
 struct BodyFitFrameStats {
   std::int64_t t_us = 0;
-  double assemble_s = 0;  // depth, body index and skeleton into one frame (decoding not counted)
-  double cleanup_s = 0;   // fit::remove_off_body_depth
+  double assemble_s = 0;         // depth, body index and skeleton into one frame (decoding not counted)
+  double cleanup_s = 0;          // fit::remove_off_body_depth
   ObservationTimes observation;  // fit::prepare_observation by part
-  double start_pose_s = 0;     // the skeleton-built starting pose (SkeletonPoseInitializer)
-  double fit_previous_s = 0;   // LM from the previous frame's pose
-  double fit_skeleton_s = 0;   // LM from the skeleton-built pose
-  double post_s = 0;           // smoothing, joints, forearm roll, the emitted result
+  double start_pose_s = 0;       // the skeleton-built starting pose (SkeletonPoseInitializer)
+  double fit_previous_s = 0;     // LM from the previous frame's pose
+  double fit_skeleton_s = 0;     // LM from the skeleton-built pose
+  double post_s = 0;             // smoothing, joints, forearm roll, the emitted result
   int iterations_previous = 0, iterations_skeleton = 0;
   double energy_previous = std::numeric_limits<double>::quiet_NaN();
   double energy_skeleton = std::numeric_limits<double>::quiet_NaN();

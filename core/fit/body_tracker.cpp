@@ -128,12 +128,13 @@ std::vector<FitWarning> BodyTracker::personalise() {
     work_->personalisation = fit::personalise(work_->model, skeletons, &work_->camera, refiner);
     if (fine_error) {
       work_->personalisation->fine_tuned = false;
-      warnings.push_back({"FIT_FINE_SHAPE", fine_error->field(),
-                          std::string(fine_error->what()) + "; using the rough shape (III-A)"});
+      warnings.push_back(
+          {"FIT_FINE_SHAPE", fine_error->field(), std::string(fine_error->what()) + "; using the rough shape (III-A)"});
     }
     beta = work_->personalisation->beta();
   } catch (const Error& e) {
-    warnings.push_back({"FIT_PERSONALISATION", e.field(), std::string(e.what()) + "; fitting the template shape (beta = 0)"});
+    warnings.push_back(
+        {"FIT_PERSONALISATION", e.field(), std::string(e.what()) + "; fitting the template shape (beta = 0)"});
   }
   work_->set_shape(beta);
   return warnings;
@@ -242,10 +243,11 @@ BodyTracker::Output BodyTracker::fit(BodyFitFrame& frame, const ForearmOrientati
     }
     const double energy = best->energy.total();
     // A velocity holds between two fits of the same track: the winner continued the previous pose.
-    if (previous.size() > 0 && stats.previous_won)
+    if (previous.size() > 0 && stats.previous_won) {
       before_last_fit_ = FittedPose{previous, previous_t_us_};
-    else
+    } else {
       before_last_fit_.reset();
+    }
     // Lost tracking is counted, and the next frame still starts from the lost pose: the start
     // policy adds the skeleton start after a fit at skeleton_start_energy or above, and the lower
     // energy wins. Dropping the previous pose threw away a good one whenever one frame's energy
@@ -272,8 +274,9 @@ BodyTracker::Output BodyTracker::fit(BodyFitFrame& frame, const ForearmOrientati
 FittedBodyFrame BodyTracker::release(const Eigen::VectorXd& theta, const ForearmOrientationAt& K_from_F_at) {
   const Fitted f = std::move(fitted_.front());
   fitted_.pop_front();
-  FittedBodyFrame out = make_fitted_body_frame(work_->rest_joints, work_->layout, theta, f.skeleton,
-                                               {K_from_F_at(ArmSide::kLeft, f.t_us), K_from_F_at(ArmSide::kRight, f.t_us)});
+  FittedBodyFrame out =
+      make_fitted_body_frame(work_->rest_joints, work_->layout, theta, f.skeleton,
+                             {K_from_F_at(ArmSide::kLeft, f.t_us), K_from_F_at(ArmSide::kRight, f.t_us)});
   out.t_us = f.t_us;
   out.energy = f.energy;
   out.lost = f.energy > options_.lost_energy;

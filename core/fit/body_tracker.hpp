@@ -35,8 +35,8 @@
 namespace posefuse::fit {
 
 struct BodyTrackerOptions {
-  double calibration_s = 0;   // personalisation frames: the first this many seconds
-  bool fine_shape = true;     // III-B after III-A
+  double calibration_s = 0;  // personalisation frames: the first this many seconds
+  bool fine_shape = true;    // III-B after III-A
   FitOptions fit;
   PoseSmoothingOptions smoothing;
   StartExtrapolationOptions extrapolation;

@@ -64,7 +64,8 @@ TEST(FitBodyTracker, CalibrationFramesComeBackWithTheFirstFrameAfterThem) {
   const BodyTracker::Admitted admitted = tracker.admit(frame_at(500'000, skeleton));
   EXPECT_TRUE(admitted.warnings.empty());
   ASSERT_EQ(admitted.frames.size(), 6u);
-  for (std::size_t i = 0; i < admitted.frames.size(); ++i) EXPECT_EQ(admitted.frames[i].t_us, 100'000 * static_cast<std::int64_t>(i));
+  for (std::size_t i = 0; i < admitted.frames.size(); ++i)
+    EXPECT_EQ(admitted.frames[i].t_us, 100'000 * static_cast<std::int64_t>(i));
   EXPECT_TRUE(tracker.personalised());
   EXPECT_FALSE(tracker.oldest_held_t_us());
   const std::optional<FittedShape> shape = tracker.shape();
