@@ -18,7 +18,7 @@ struct BodyFitFrameStats {
   double start_pose_s = 0;       // the skeleton-built starting pose (SkeletonPoseInitializer)
   double fit_previous_s = 0;     // LM from the previous frame's pose
   double fit_skeleton_s = 0;     // LM from the skeleton-built pose
-  double post_s = 0;             // smoothing, joints, forearm roll, the emitted result
+  double post_s = 0;             // smoothing, joints, forearm roll, the output frame (not its hand-on)
   int iterations_previous = 0, iterations_skeleton = 0;
   double energy_previous = std::numeric_limits<double>::quiet_NaN();
   double energy_skeleton = std::numeric_limits<double>::quiet_NaN();
