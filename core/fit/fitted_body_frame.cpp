@@ -1,0 +1,68 @@
+#include "fit/fitted_body_frame.hpp"
+
+#include <array>
+
+#include "body/smpl_model.hpp"
+#include "common/error.hpp"
+#include "fit/camera_joints.hpp"
+#include "fit/joint_kinematics.hpp"
+
+namespace posefuse::fit {
+
+namespace {
+
+// The camera's own estimate of an untracked (inferred or lost) joint is the weaker evidence.
+constexpr double kUntrackedConfidence = 0.5;
+
+double confidence_of(const TrackedSkeleton& skeleton, int camera_joint) {
+  return skeleton.tracking[static_cast<size_t>(camera_joint)] == JointTracking::kTracked ? 1.0 : kUntrackedConfidence;
+}
+
+// II-B: the forearm's IMU orientation turned onto the fitted axis, and its roll from the IMU.
+FittedForearm fitted_forearm(const JointPose& pose, ArmSide side, const Eigen::Quaterniond& K_from_F,
+                             const TrackedSkeleton& skeleton) {
+  const bool left = side == ArmSide::kLeft;
+  const int elbow = left ? body::kLeftElbow : body::kRightElbow, wrist = left ? body::kLeftWrist : body::kRightWrist;
+  const Eigen::Vector3d axis_K = (pose.positions_K.col(wrist) - pose.positions_K.col(elbow)).normalized();
+  const Eigen::Quaterniond onto_fit = Eigen::Quaterniond::FromTwoVectors(K_from_F * Eigen::Vector3d::UnitY(), axis_K);
+  FittedForearm forearm{side, (onto_fit * K_from_F).normalized(), 0.0, 0.0};
+  forearm.confidence = confidence_of(skeleton, left ? kWristLeft : kWristRight);
+  try {
+    ArmRollOptions roll_options;
+    // Paper 1's F (x dorsal, y along the forearm): z is the thumb side on the right forearm and
+    // the little-finger side on the left (core/sim/forearm_strap.hpp).
+    roll_options.thumb_F = left ? Eigen::Vector3d(-Eigen::Vector3d::UnitZ()) : Eigen::Vector3d::UnitZ();
+    const ForearmRoll roll = forearm_roll(pose, side, K_from_F, Eigen::Quaterniond::Identity(), roll_options);
+    if (roll.pronation_rad) forearm.pronation_rad = *roll.pronation_rad;
+  } catch (const Error&) {
+    forearm.confidence = 0.0;  // roll undefined (IMU thumb axis along the fitted forearm)
+  }
+  return forearm;
+}
+
+}  // namespace
+
+FittedBodyFrame make_fitted_body_frame(const Eigen::Matrix3Xd& rest_joints, const body::PoseLayout& layout,
+                                       const Eigen::VectorXd& theta, const TrackedSkeleton& skeleton,
+                                       const ForearmOrientationPair& K_from_F) {
+  const JointPose pose = pose_joints(rest_joints, layout, theta);
+  const Eigen::Matrix3Xd camera_joints = camera_joints_from_pose(pose);
+  FittedBodyFrame out;
+  std::array<double, body::kNumJoints> smpl_confidence;
+  smpl_confidence.fill(1.0);
+  for (int j = 0; j < kKinectJointCount; ++j) {
+    const int smpl = smpl_joint_at_camera_joint(j);
+    if (smpl >= 0) smpl_confidence[static_cast<size_t>(smpl)] = confidence_of(skeleton, j);
+  }
+  for (int j = 0; j < body::kNumJoints; ++j) {
+    out.smpl_joints.push_back({pose.positions_K.col(j), smpl_confidence[static_cast<size_t>(j)]});
+  }
+  for (int j = 0; j < kKinectJointCount; ++j) {
+    out.camera_joints.push_back({camera_joints.col(j), confidence_of(skeleton, j)});
+  }
+  if (K_from_F.left) out.forearms.push_back(fitted_forearm(pose, ArmSide::kLeft, *K_from_F.left, skeleton));
+  if (K_from_F.right) out.forearms.push_back(fitted_forearm(pose, ArmSide::kRight, *K_from_F.right, skeleton));
+  return out;
+}
+
+}  // namespace posefuse::fit

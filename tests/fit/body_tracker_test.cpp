@@ -1,0 +1,129 @@
+#include "fit/body_tracker.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "posed_subject.hpp"
+
+namespace posefuse::fit {
+namespace {
+
+using body::PoseLayout;
+
+const std::shared_ptr<body::SmplModel>& female() { return testing::template_model(body::Sex::kFemale); }
+
+// The controlled pose of personalisation (III): facing the camera, arms straight, 60 degrees out.
+TrackedSkeleton controlled_pose_skeleton() {
+  const PoseLayout layout = PoseLayout::full_body();
+  Eigen::VectorXd beta = Eigen::VectorXd::Zero(10);
+  beta << 0.8, -0.5, 0.6, 1.0, -0.7, 0.6, 0.4, 0.5, -0.3, 0.5;
+  const Eigen::VectorXd theta = testing::facing_pose(layout, 3.2, {{"left_shoulder_z", -30}, {"right_shoulder_z", 30}});
+  return testing::pose_subject(*female(), layout, beta, theta).skeleton;
+}
+
+BodyTrackerOptions rough_shape_only() {
+  BodyTrackerOptions options;
+  options.calibration_s = 0.5;
+  options.fine_shape = false;  // III-A alone: no depth needed
+  options.lost_energy = 100;
+  return options;
+}
+
+BodyFitFrame frame_at(std::int64_t t_us, std::optional<TrackedSkeleton> skeleton) {
+  BodyFitFrame frame;
+  frame.t_us = t_us;
+  frame.skeleton = std::move(skeleton);
+  return frame;
+}
+
+std::optional<Eigen::Quaterniond> no_orientation(ArmSide, std::int64_t) { return std::nullopt; }
+
+TEST(FitBodyTracker, SkeletonStartPolicy) {
+  EXPECT_TRUE(needs_skeleton_start(std::nullopt, 45));  // no previous frame: the skeleton start alone
+  EXPECT_TRUE(needs_skeleton_start(45, 45));
+  EXPECT_TRUE(needs_skeleton_start(std::nan(""), 45));
+  EXPECT_FALSE(needs_skeleton_start(44.9, 45));
+  EXPECT_TRUE(needs_skeleton_start(1.0, 0));  // policy off: always both
+}
+
+// The calibration frames are held until the first frame after calibration_s, which personalises;
+// then they come back, in time order, with that frame.
+TEST(FitBodyTracker, CalibrationFramesComeBackWithTheFirstFrameAfterThem) {
+  BodyTracker tracker(female(), raycast::DepthIntrinsics{}, rough_shape_only());
+  const TrackedSkeleton skeleton = controlled_pose_skeleton();
+  for (std::int64_t t = 0; t < 500'000; t += 100'000) {
+    const BodyTracker::Admitted admitted = tracker.admit(frame_at(t, skeleton));
+    EXPECT_TRUE(admitted.frames.empty()) << t;
+    EXPECT_TRUE(admitted.warnings.empty()) << t;
+  }
+  EXPECT_FALSE(tracker.personalised());
+  EXPECT_EQ(tracker.oldest_held_t_us(), std::optional<std::int64_t>(0));
+  EXPECT_FALSE(tracker.shape());
+
+  const BodyTracker::Admitted admitted = tracker.admit(frame_at(500'000, skeleton));
+  EXPECT_TRUE(admitted.warnings.empty());
+  ASSERT_EQ(admitted.frames.size(), 6u);
+  for (std::size_t i = 0; i < admitted.frames.size(); ++i)
+    EXPECT_EQ(admitted.frames[i].t_us, 100'000 * static_cast<std::int64_t>(i));
+  EXPECT_TRUE(tracker.personalised());
+  EXPECT_FALSE(tracker.oldest_held_t_us());
+  const std::optional<FittedShape> shape = tracker.shape();
+  ASSERT_TRUE(shape);
+  EXPECT_TRUE(shape->estimated);
+  EXPECT_GT(shape->beta.norm(), 0.1);
+  EXPECT_EQ(shape->rest_joints_K.cols(), body::kNumJoints);
+
+  // After personalisation every frame comes back at once.
+  EXPECT_EQ(tracker.admit(frame_at(600'000, skeleton)).frames.size(), 1u);
+}
+
+// Without usable calibration skeletons the template shape is fitted, and the tracker says why.
+TEST(FitBodyTracker, RefusedPersonalisationFitsTheTemplateShape) {
+  BodyTracker tracker(female(), raycast::DepthIntrinsics{}, rough_shape_only());
+  tracker.admit(frame_at(0, std::nullopt));
+  const BodyTracker::Admitted admitted = tracker.personalise_now();
+  ASSERT_EQ(admitted.warnings.size(), 1u);
+  EXPECT_EQ(admitted.warnings[0].code, "FIT_PERSONALISATION");
+  EXPECT_EQ(admitted.frames.size(), 1u);
+  const std::optional<FittedShape> shape = tracker.shape();
+  ASSERT_TRUE(shape);
+  EXPECT_FALSE(shape->estimated);
+  EXPECT_TRUE(shape->beta.isZero());
+}
+
+TEST(FitBodyTracker, NoCalibrationFramesNoShape) {
+  BodyTracker tracker(female(), raycast::DepthIntrinsics{}, rough_shape_only());
+  const BodyTracker::Admitted admitted = tracker.personalise_now();
+  EXPECT_TRUE(admitted.frames.empty());
+  EXPECT_TRUE(admitted.warnings.empty());
+  EXPECT_FALSE(tracker.shape());
+}
+
+// A frame that cannot be fitted (here: an empty silhouette) is a warning; the tracker goes on.
+TEST(FitBodyTracker, UnfittableFrameIsAWarning) {
+  const raycast::DepthIntrinsics intrinsics{};
+  BodyTrackerOptions options = rough_shape_only();
+  options.calibration_s = 0;
+  BodyTracker tracker(female(), intrinsics, options);
+  tracker.record_frame_stats(true);
+  BodyFitFrame frame = frame_at(0, controlled_pose_skeleton());
+  frame.frame.width = intrinsics.width;
+  frame.frame.height = intrinsics.height;
+  frame.frame.depth_mm.assign(static_cast<std::size_t>(intrinsics.width * intrinsics.height), 0);
+  frame.frame.body_index.assign(frame.frame.depth_mm.size(), kNoBody);
+  BodyTracker::Admitted admitted = tracker.admit(std::move(frame));
+  ASSERT_EQ(admitted.frames.size(), 1u);
+  const BodyTracker::Output out = tracker.fit(admitted.frames[0], no_orientation);
+  EXPECT_FALSE(out.fitted);
+  EXPECT_TRUE(out.frames.empty());
+  ASSERT_EQ(out.warnings.size(), 1u);
+  EXPECT_EQ(out.warnings[0].code, "FIT_FRAME");
+  EXPECT_NE(out.warnings[0].message.find("t_us=0"), std::string::npos);
+  EXPECT_EQ(tracker.frames_fitted(), 0u);
+  EXPECT_TRUE(tracker.frame_stats().empty());
+  EXPECT_TRUE(tracker.flush(no_orientation).frames.empty());
+}
+
+}  // namespace
+}  // namespace posefuse::fit
