@@ -18,33 +18,10 @@ here=$(cd "$(dirname "$0")" && pwd)
 
 fail() { echo "k8s-validate: FAILED: $*" >&2; exit 1; }
 
-if ! command -v node >/dev/null || ! command -v npm >/dev/null; then
-  message="node and npm are not installed (scripts/setup.sh installs them from scripts/packages.txt)"
-  [ "${POSEFUSE_REQUIRE_INTEROP:-0}" = 1 ] && fail "$message; POSEFUSE_REQUIRE_INTEROP=1 needs them"
-  echo "k8s-validate: SKIPPED: $message"
-  exit 77
-fi
-
-# npm packages: once per build tree and lockfile.
-npm_dir=$work/npm
-mkdir -p "$npm_dir"
-exec 9>"$work/npm.lock"
-flock 9
-if ! cmp -s "$here/package-lock.json" "$npm_dir/installed-lock.json" ||
-   [ ! -d "$npm_dir/node_modules/kubernetes-models" ]; then
-  cp "$here/package.json" "$here/package-lock.json" "$npm_dir/"
-  rm -f "$npm_dir/installed-lock.json"
-  echo "k8s-validate: npm ci in $npm_dir"
-  if ! (cd "$npm_dir" && timeout 300 npm ci --ignore-scripts --no-audit --no-fund \
-          --fetch-retries=2 --fetch-timeout=60000 --loglevel=error); then
-    fail "npm ci could not install kubernetes-models and yaml (pinned by" \
-         "tests/deploy/package-lock.json) into $npm_dir: is the npm registry reachable" \
-         "(offline?) and is npm's cache writable? The manifest test cannot run without them."
-  fi
-  cp "$here/package-lock.json" "$npm_dir/installed-lock.json"
-fi
-flock -u 9
-export NODE_PATH=$npm_dir/node_modules
+# shellcheck source=../npm_packages.sh
+. "$here/../npm_packages.sh"
+require_node k8s-validate
+install_npm_packages k8s-validate "$here" "$work" kubernetes-models "kubernetes-models and yaml"
 
 # The manifests themselves, with the validator's self-test (broken documents made from them).
 (cd "$source" && node "$here/validate_manifests.js" deploy/kubernetes) ||

@@ -18,33 +18,10 @@ here=$(cd "$(dirname "$0")" && pwd)
 
 fail() { echo "interop: FAILED: $*" >&2; exit 1; }
 
-if ! command -v node >/dev/null || ! command -v npm >/dev/null; then
-  message="node and npm are not installed (scripts/setup.sh installs them from scripts/packages.txt)"
-  [ "${POSEFUSE_REQUIRE_INTEROP:-0}" = 1 ] && fail "$message; POSEFUSE_REQUIRE_INTEROP=1 needs them"
-  echo "interop: SKIPPED: $message"
-  exit 77
-fi
-
-# npm packages: once per build tree and lockfile; both test modes may run at once, so they take
-# turns here.
-npm_dir=$work/npm
-mkdir -p "$npm_dir"
-exec 9>"$work/npm.lock"
-flock 9
-if ! cmp -s "$here/package-lock.json" "$npm_dir/installed-lock.json" ||
-   [ ! -d "$npm_dir/node_modules/@grpc/grpc-js" ]; then
-  cp "$here/package.json" "$here/package-lock.json" "$npm_dir/"
-  rm -f "$npm_dir/installed-lock.json"
-  echo "interop: npm ci in $npm_dir"
-  if ! (cd "$npm_dir" && timeout 300 npm ci --ignore-scripts --no-audit --no-fund \
-          --fetch-retries=2 --fetch-timeout=60000 --loglevel=error); then
-    fail "npm ci could not install @grpc/grpc-js and @grpc/proto-loader (pinned by" \
-         "tests/interop/package-lock.json) into $npm_dir: is the npm registry reachable" \
-         "(offline?) and is npm's cache writable? The interop test cannot run without them."
-  fi
-  cp "$here/package-lock.json" "$npm_dir/installed-lock.json"
-fi
-flock -u 9
+# shellcheck source=../npm_packages.sh
+. "$here/../npm_packages.sh"
+require_node interop
+install_npm_packages interop "$here" "$work" @grpc/grpc-js "@grpc/grpc-js and @grpc/proto-loader"
 
 run=$work/run-$mode
 rm -rf "$run"
@@ -83,7 +60,7 @@ done
 [ -n "$port" ] || { cat "$run/server.log" >&2; fail "no server_start line within 60 s"; }
 
 client_status=0
-NODE_PATH=$npm_dir/node_modules node "$here/interop_client.js" \
+node "$here/interop_client.js" \
   --address "127.0.0.1:$port" \
   --recording "$run/recordings/demo.pfchunks" --recording-uri demo.pfchunks \
   --proto-dir "$source/proto" --proto-dir "$source/client/proto" --proto-dir "$source/server/proto" \
