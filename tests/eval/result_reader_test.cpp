@@ -85,8 +85,9 @@ TEST(ResultReader, NamesWhatIsWrong) {
                         (dir / "absent").string());
 }
 
-// Two stages write forearms.csv (the body fit reports its frames seconds after the forearm
-// stage): rows of one arm that go back in time are read, sorted by arm and time.
+// Result directories written before the frame merge have two stages' rows in forearms.csv (the
+// body fit's came seconds after the forearm stage's): they still read, the rows of one arm that
+// go back in time sorted by arm and time; today's one row per frame and arm reads as above.
 TEST(ResultReader, ForearmRowsOfTwoStagesAreSortedByArmAndTime) {
   const auto dir = result_fixture::fresh_result_dir("two_stages");
   result_fixture::write_fixture(dir, {});
