@@ -71,7 +71,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size < 6) return 0;
   const auto decoder = static_cast<Decoder>(data[0] % kDecoders);
-  const int encoding = data[1] % 4;  // 0 (unspecified) and one unknown value included
+  const int encoding = data[1] % 5;  // also 0 (unspecified) and values no encoding has
   const std::uint32_t width = data[2] | (data[3] << 8);
   const std::uint32_t height = data[4] | (data[5] << 8);
   const std::string payload(reinterpret_cast<const char*>(data) + 6, size - 6);

@@ -19,7 +19,11 @@ export CCACHE_DIR=${CCACHE_DIR:-$HOME/.cache/ccache}
 export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$root} CCACHE_NOHASHDIR=${CCACHE_NOHASHDIR:-1}
 
 start=$SECONDS
+# -O1 with line tables (enough for the sanitizers' stack traces) and without NDEBUG: a failed
+# assert() is a finding too.
 cmake -S "$root" -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" \
   -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DPOSEFUSE_FUZZ=ON >/dev/null
 targets=()
 for name in $fuzzers; do targets+=(--target "fuzz_$name"); done
