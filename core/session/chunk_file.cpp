@@ -1,5 +1,7 @@
 #include "session/chunk_file.hpp"
 
+#include <algorithm>
+
 #include <google/protobuf/io/coded_stream.h>
 #include <google/protobuf/io/zero_copy_stream_impl_lite.h>
 
@@ -10,6 +12,7 @@ namespace posefuse::session {
 namespace {
 
 constexpr int kMaxVarintBytes = 10;  // a 64-bit varint has at most 10 bytes
+constexpr std::uint64_t kReadStepBytes = 1ull << 20;
 
 std::string chunk_field(std::uint64_t index) { return "chunk[" + std::to_string(index) + "]"; }
 
@@ -55,9 +58,18 @@ bool ChunkFileReader::next(SessionChunk& chunk) {
                     std::to_string(max_chunk_bytes_) + where);
   }
 
-  buffer_.resize(length);
-  in_->read(buffer_.data(), static_cast<std::streamsize>(length));
-  const auto got = static_cast<std::uint64_t>(in_->gcount());
+  // Read in steps, so that a few bytes claiming a 64 MiB chunk cost what the file holds, not
+  // the claimed length (the buffer grows only as the bytes arrive).
+  buffer_.clear();
+  std::uint64_t got = 0;
+  while (got < length) {
+    const std::uint64_t step = std::min(length - got, kReadStepBytes);
+    buffer_.resize(got + step);
+    in_->read(buffer_.data() + got, static_cast<std::streamsize>(step));
+    const auto read = static_cast<std::uint64_t>(in_->gcount());
+    got += read;
+    if (read != step) break;
+  }
   if (got != length) {
     throw Error(ErrorCode::kDataLoss, field,
                 "truncated: expected " + std::to_string(length) + " bytes, file has " +

@@ -44,6 +44,16 @@ std::string size_text(std::uint32_t width, std::uint32_t height) {
   return std::to_string(width) + "x" + std::to_string(height);
 }
 
+void require_decoded_size(const cv::Mat& image, std::uint32_t width, std::uint32_t height,
+                          const std::string& data_field) {
+  if (static_cast<std::uint32_t>(image.cols) != width ||
+      static_cast<std::uint32_t>(image.rows) != height) {
+    throw_invalid(data_field, "decodes to " + size_text(static_cast<std::uint32_t>(image.cols),
+                                                        static_cast<std::uint32_t>(image.rows)) +
+                                  ", the chunk says " + size_text(width, height));
+  }
+}
+
 // Decodes a PNG payload and checks its type and size against the chunk's fields.
 cv::Mat decode_png(const std::string& data, int expected_type, std::uint32_t width,
                    std::uint32_t height, const std::string& field) {
@@ -67,6 +77,7 @@ cv::Mat decode_png(const std::string& data, int expected_type, std::uint32_t wid
                         const_cast<char*>(data.data()));
   cv::Mat image = cv::imdecode(encoded, cv::IMREAD_UNCHANGED);
   if (image.empty()) throw_invalid(data_field, "PNG cannot be decoded");
+  require_decoded_size(image, width, height, data_field);
   if (image.type() != expected_type) {
     throw_invalid(data_field, std::string("PNG has the wrong pixel type (expected ") +
                                   (expected_type == CV_16UC1 ? "16" : "8") +
@@ -219,6 +230,8 @@ cv::Mat decode_color_gray(const v1::ColorFrame& frame, const std::string& field)
   const cv::Mat encoded(1, static_cast<int>(frame.data().size()), CV_8UC1, const_cast<char*>(frame.data().data()));
   cv::Mat gray = cv::imdecode(encoded, cv::IMREAD_GRAYSCALE);
   if (gray.empty() || gray.type() != CV_8UC1) throw_invalid(data_field, "image cannot be decoded");
+  // The decoder's own idea of the size must be the one checked above.
+  require_decoded_size(gray, frame.width(), frame.height(), data_field);
   return gray;
 }
 
@@ -285,7 +298,10 @@ ImageSize jpeg_size(std::string_view bytes, const std::string& field) {
     throw_invalid(field, "is not a JPEG file");
   }
   // Walk the marker segments (each FF xx LLLL ...) up to the first start-of-frame (SOF0..SOF15
-  // except DHT C4, JPG C8, DAC CC), which holds precision(1) height(2) width(2).
+  // except DHT C4, JPG C8, DAC CC), which holds precision(1) height(2) width(2). The walk must
+  // see the frame header libjpeg decodes: RST0..RST7 (D0..D7) and TEM (01) are markers without
+  // a length, as libjpeg reads them (taking the next two bytes as a length would jump over the
+  // real frame header to a decoy one with a small size).
   std::size_t at = 2;
   while (at + 4 <= bytes.size()) {
     if (static_cast<unsigned char>(bytes[at]) != 0xFF) break;
@@ -294,6 +310,11 @@ ImageSize jpeg_size(std::string_view bytes, const std::string& field) {
       ++at;
       continue;
     }
+    if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7)) {  // no length, no content
+      at += 2;
+      continue;
+    }
+    if (marker == 0xD8 || marker == 0xD9) break;  // a second SOI, or EOI before any frame
     const std::uint32_t length = read_be16(bytes, at + 2);
     const bool is_sof = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 &&
                         marker != 0xCC;

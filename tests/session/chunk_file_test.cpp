@@ -2,6 +2,9 @@
 
 #include <gtest/gtest.h>
 
+#include <sys/resource.h>
+
+#include <cstdint>
 #include <fstream>
 
 #include "fixture.hpp"
@@ -112,6 +115,34 @@ TEST(ChunkFile, OversizedLengthIsResourceExhausted) {
   ASSERT_TRUE(reader.next(chunk));
   ASSERT_TRUE(chunk.has_header());
   expect_error([&] { reader.next(chunk); }, ErrorCode::kResourceExhausted, "chunk[1]");
+}
+
+std::int64_t peak_rss_kib() {
+  rusage usage{};
+  getrusage(RUSAGE_SELF, &usage);
+  return usage.ru_maxrss;
+}
+
+// Found by fuzz/fuzz_chunk_file.cpp (with -malloc_limit_mb=16): a 181-byte file whose length
+// prefix claimed 42 MB made the reader allocate (and zero) the whole claimed length before
+// finding the file short. A file now costs what it holds.
+TEST(ChunkFile, ShortFileClaimingAHugeChunkCostsWhatItHoldsNotWhatItClaims) {
+  TempDir dir;
+  // Length 2^26 - 1 (just under the 64 MiB limit), then 10 bytes.
+  write_bytes(dir / "f", std::string("\xff\xff\xff\x1f") + std::string(10, 'x'));
+  const std::int64_t before = peak_rss_kib();
+  try {
+    read_chunk_file(dir / "f");
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kDataLoss);
+    EXPECT_EQ(e.field(), "chunk[0]");
+    EXPECT_NE(std::string(e.what()).find("expected 67108863 bytes, file has 10"), std::string::npos)
+        << e.what();
+  }
+  // The peak resident size of this process (ctest runs each test alone) grew by far less than
+  // the 64 MiB claimed: one read step (1 MiB) at most, plus noise.
+  EXPECT_LT(peak_rss_kib() - before, 16 * 1024);
 }
 
 TEST(ChunkFile, LimitAppliesOnWriteAndReadToo) {

@@ -121,6 +121,45 @@ TEST(ImageSize, ReadsPngAndJpegHeaders) {
   expect_error([&] { png_size("\x89PNG", "p"); }, ErrorCode::kInvalidArgument, "p");
 }
 
+// Found by fuzz/fuzz_image.cpp: a JPEG whose SOI is followed by RST0 (a marker without a
+// length, which libjpeg skips) made jpeg_size take the next two bytes (FF E0, the APP0 marker)
+// as a length and jump 65 KB ahead to a decoy frame header claiming 8x6, while libjpeg decoded
+// the real 64x48 frame header: a colour frame's size check (and the pixel limit) was bypassed.
+std::string jpeg_with_decoy_frame_header() {
+  const cv::Mat grey(48, 64, CV_8UC1, cv::Scalar(90));
+  std::vector<unsigned char> real;
+  EXPECT_TRUE(cv::imencode(".jpg", grey, real));
+  EXPECT_EQ(real[2], 0xFF);
+  std::string bytes = "\xFF\xD8\xFF\xD0";  // SOI, RST0
+  bytes.append(real.begin() + 2, real.end());  // the real JPEG after its SOI, up to its EOI
+  const std::size_t decoy_at = 4 + ((std::size_t{0xFF} << 8) | real[3]);
+  EXPECT_LT(bytes.size(), decoy_at);
+  bytes.resize(decoy_at, '\0');
+  // SOF0: length 11, precision 8, height 6, width 8, one component.
+  bytes += std::string("\xFF\xC0\x00\x0B\x08\x00\x06\x00\x08\x01\x01\x11\x00", 13);
+  return bytes;
+}
+
+TEST(ImageSize, JpegSizeIsTheFrameHeaderLibjpegDecodesNotADecoyBehindAMarkerWithoutLength) {
+  const std::string jpeg = jpeg_with_decoy_frame_header();
+  const ImageSize size = jpeg_size(jpeg, "j");
+  EXPECT_EQ(size.width, 64u);
+  EXPECT_EQ(size.height, 48u);
+
+  v1::ColorFrame frame;
+  frame.set_width(8);
+  frame.set_height(6);
+  frame.set_encoding(v1::ColorFrame::JPEG);
+  frame.set_data(jpeg);
+  expect_error([&] { decode_color_gray(frame); }, ErrorCode::kInvalidArgument, "color.data");
+  // The frame it really is decodes.
+  frame.set_width(64);
+  frame.set_height(48);
+  const cv::Mat gray = decode_color_gray(frame);
+  EXPECT_EQ(gray.cols, 64);
+  EXPECT_EQ(gray.rows, 48);
+}
+
 TEST(ImuBatchCodec, RoundTripsSamples) {
   std::vector<imu::ImuSample> samples(3);
   for (int i = 0; i < 3; ++i) {

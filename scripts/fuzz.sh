@@ -1,0 +1,71 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer harnesses (fuzz/, clang + ASan + UBSan) into build-fuzz/ and runs each
+# for a bounded time on its seeds (written by the harness itself) and the corpus it grew before.
+#   scripts/fuzz.sh [SECONDS]     seconds per harness (default 30)
+#   FUZZERS="image wav" scripts/fuzz.sh 10     only these harnesses
+#   BUILD_DIR=... scripts/fuzz.sh              choose the build folder (default build-fuzz/)
+# Exits non-zero on any crash, leak, timeout or memory limit, printing the reproducer's path;
+# rerun one with build-fuzz/fuzz/fuzz_NAME REPRODUCER.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+seconds=${1:-30}
+build_dir=${BUILD_DIR:-$root/build-fuzz}
+jobs=${POSEFUSE_JOBS:-$(nproc)}
+all_fuzzers="chunk_file image imu_batch json wav csv session_validator"
+fuzzers=${FUZZERS:-$all_fuzzers}
+
+"$root/scripts/setup.sh"
+export CCACHE_DIR=${CCACHE_DIR:-$HOME/.cache/ccache}
+export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$root} CCACHE_NOHASHDIR=${CCACHE_NOHASHDIR:-1}
+
+start=$SECONDS
+# -O1 with line tables (enough for the sanitizers' stack traces) and without NDEBUG: a failed
+# assert() is a finding too.
+cmake -S "$root" -B "$build_dir" -G Ninja -DCMAKE_BUILD_TYPE=RelWithDebInfo \
+  -DCMAKE_C_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" \
+  -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" \
+  -DCMAKE_C_COMPILER=clang -DCMAKE_CXX_COMPILER=clang++ -DPOSEFUSE_FUZZ=ON >/dev/null
+targets=()
+for name in $fuzzers; do targets+=(--target "fuzz_$name"); done
+cmake --build "$build_dir" -j "$jobs" "${targets[@]}"
+echo "fuzz: built in $((SECONDS - start)) s"
+
+# Leaks inside system libraries that posefuse does not call directly (scripts/lsan.supp).
+export ASAN_OPTIONS=${ASAN_OPTIONS:-detect_leaks=1:abort_on_error=1:allocator_may_return_null=0}
+export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$root/scripts/lsan.supp:print_suppressions=0}
+export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+
+failed=()
+for name in $fuzzers; do
+  binary="$build_dir/fuzz/fuzz_$name"
+  corpus="$build_dir/fuzz-corpus/$name"
+  artifacts="$build_dir/fuzz-artifacts/$name"
+  mkdir -p "$corpus" "$artifacts"
+  POSEFUSE_FUZZ_WRITE_SEEDS="$corpus" "$binary" >/dev/null
+  log="$artifacts/fuzz.log"
+  run_start=$SECONDS
+  # -malloc_limit_mb: one larger allocation is a finding (a memory bomb). Inputs are at most
+  # 64 KiB (-max_len), so 16 MiB is far above what any of them needs, except colour images:
+  # 4096x3072 (kMaxColorPixels) grey is 12 MiB, and libjpeg holds a progressive JPEG's
+  # coefficients (2 bytes a pixel per component) while decoding it.
+  malloc_limit_mb=16
+  [ "$name" = image ] && malloc_limit_mb=64
+  if "$binary" "$corpus" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+       -malloc_limit_mb="$malloc_limit_mb" -max_len=65536 -print_final_stats=1 \
+       -artifact_prefix="$artifacts/" >"$log" 2>&1; then
+    execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
+    echo "fuzz: $name ok, ${execs:-?} runs in $((SECONDS - run_start)) s, corpus $(ls "$corpus" | wc -l) files"
+  else
+    failed+=("$name")
+    echo "fuzz: $name FAILED; log $log" >&2
+    grep -E "^(==[0-9]+==ERROR|SUMMARY|posefuse fuzz invariant|.*runtime error)" "$log" | head -5 >&2 || true
+    for reproducer in $(sed -n 's/.*Test unit written to \(.*\)$/\1/p' "$log"); do
+      echo "fuzz: reproducer $reproducer (rerun: $binary $reproducer)" >&2
+    done
+  fi
+done
+echo "fuzz: done in $((SECONDS - start)) s"
+if [ ${#failed[@]} -gt 0 ]; then
+  echo "fuzz: findings in: ${failed[*]}" >&2
+  exit 1
+fi
