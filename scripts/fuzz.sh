@@ -50,7 +50,8 @@ for name in $fuzzers; do
   # coefficients (2 bytes a pixel per component) while decoding it.
   malloc_limit_mb=16
   [ "$name" = image ] && malloc_limit_mb=64
-  if "$binary" "$corpus" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+  # A fixed seed (FUZZ_SEED, default 1): a CI run mutates the same way each time.
+  if "$binary" "$corpus" -seed="${FUZZ_SEED:-1}" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
        -malloc_limit_mb="$malloc_limit_mb" -max_len=65536 -print_final_stats=1 \
        -artifact_prefix="$artifacts/" >"$log" 2>&1; then
     execs=$(sed -n 's/^stat::number_of_executed_units: *//p' "$log" | tail -1)
