@@ -35,13 +35,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     std::uint32_t length = 0;
     if (!in.ReadVarint32(&length)) break;
     // A chunk longer than what is left is a truncated stream, refused before parsing as the
-    // chunk-file reader does (else protobuf reserves up to 50 MB for a claimed string).
-    if (length > size - static_cast<std::size_t>(in.CurrentPosition())) break;
-    const auto limit = in.PushLimit(static_cast<int>(length));
-    chunk.Clear();
-    const bool parsed = chunk.ParseFromCodedStream(&in) && in.ConsumedEntireMessage();
-    in.PopLimit(limit);
-    if (!parsed) break;
+    // chunk-file reader does.
+    const auto position = static_cast<std::size_t>(in.CurrentPosition());
+    if (length > size - position) break;
+    // Parsed from its own bytes, as the chunk-file reader parses its buffer: a string field of
+    // the chunk claiming more than the chunk holds then fails at once (parsed from the stream,
+    // protobuf reserves up to 50 MB for the claim first).
+    const bool parsed = chunk.ParseFromArray(data + position, static_cast<int>(length));
+    if (!parsed || !in.Skip(static_cast<int>(length))) break;
     try {
       validator.check(chunk);
       const cv::Mat image = validator.take_decoded_image();
