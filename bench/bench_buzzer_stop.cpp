@@ -89,9 +89,10 @@ int main() {
                 score.sigma_sum / kSeeds);
   }
 
-  std::printf("\n| tone Hz | rate Hz | told 2700 Hz: stops found | RMS error us | max error us | mean sigma us "
-              "| measured: tone found | max tone error Hz | stops found | RMS error us | max error us | mean sigma us |\n"
-              "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "\n| tone Hz | rate Hz | told 2700 Hz: stops found | RMS error us | max error us | mean sigma us "
+      "| measured: tone found | max tone error Hz | stops found | RMS error us | max error us | mean sigma us |\n"
+      "|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   for (double tone : {1500.0, 2600.0, 2700.0, 2725.0, 2750.0, 2800.0, 2900.0, 3410.0, 4000.0}) {
     for (double rate : {16000.0, 48000.0}) {
       Score told, searched;
@@ -114,8 +115,10 @@ int main() {
     }
   }
 
-  std::printf("\n| rate Hz | tone given: CPU s per 300 s of audio | tone measured: CPU s per 300 s | measured, %% of real time |\n"
-              "|---|---|---|---|\n");
+  std::printf(
+      "\n| rate Hz | tone given: CPU s per 300 s of audio | tone measured: CPU s per 300 s | measured, %% of real time "
+      "|\n"
+      "|---|---|---|---|\n");
   for (double rate : {16000.0, 48000.0}) {
     std::mt19937 rng(7);
     std::normal_distribution<double> noise(0.0, 800.0);

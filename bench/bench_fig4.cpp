@@ -40,15 +40,15 @@
 #include "body/pose_parameters.hpp"
 #include "body/template_generator.hpp"
 #include "fit/joint_kinematics.hpp"
-#include "session/image_codec.hpp"
-#include "session/stage_inputs.hpp"
 #include "session/frame_merge.hpp"
+#include "session/image_codec.hpp"
 #include "session/result_encoder.hpp"
+#include "session/stage_inputs.hpp"
 #include "session/stages/body_fit_options.hpp"
 #include "session/stages/body_fit_stage.hpp"
-#include "sim/camera_session.hpp"
 #include "sim/bvh.hpp"
 #include "sim/bvh_motion.hpp"
+#include "sim/camera_session.hpp"
 #include "sim/exercises.hpp"
 
 using namespace posefuse;
@@ -100,7 +100,7 @@ struct Sums {
 struct Table {
   Sums camera, fit, fit_no_imu;  // all frames
   Sums camera_occ, fit_occ, fit_no_imu_occ;
-  std::vector<double> frame_s;  // calling thread's CPU time per skeleton chunk (the first measure)
+  std::vector<double> frame_s;                    // calling thread's CPU time per skeleton chunk (the first measure)
   std::vector<session::BodyFitFrameStats> stats;  // the stage's per-frame phases (all threads)
   double elevation_fit = 0, elevation_camera = 0;
   int elevation_n = 0;
@@ -231,16 +231,19 @@ void print_phases(const std::vector<session::BodyFitFrameStats>& stats) {
     iterations_previous += f.iterations_previous;
     iterations_skeleton += f.iterations_skeleton;
   }
-  std::printf("starts: previous frame %d (mean %.1f iterations), skeleton %d (mean %.1f iterations); previous won %d; constant-velocity start %d\n",
-              previous_run, previous_run ? static_cast<double>(iterations_previous) / previous_run : 0.0, skeleton_run,
-              skeleton_run ? static_cast<double>(iterations_skeleton) / skeleton_run : 0.0, previous_won,
-              extrapolated);
+  std::printf(
+      "starts: previous frame %d (mean %.1f iterations), skeleton %d (mean %.1f iterations); previous won %d; "
+      "constant-velocity start %d\n",
+      previous_run, previous_run ? static_cast<double>(iterations_previous) / previous_run : 0.0, skeleton_run,
+      skeleton_run ? static_cast<double>(iterations_skeleton) / skeleton_run : 0.0, previous_won, extrapolated);
 }
 
 void write_stats_csv(const char* path, const std::vector<session::BodyFitFrameStats>& stats) {
   std::FILE* f = std::fopen(path, "w");
   if (!f) return;
-  std::fprintf(f, "t_us,total_ms,observation_ms,fit_previous_ms,fit_skeleton_ms,it_previous,it_skeleton,E_previous,E_skeleton,previous_won\n");
+  std::fprintf(f,
+               "t_us,total_ms,observation_ms,fit_previous_ms,fit_skeleton_ms,it_previous,it_skeleton,E_previous,E_"
+               "skeleton,previous_won\n");
   for (const auto& s : stats)
     std::fprintf(f, "%lld,%.3f,%.3f,%.3f,%.3f,%d,%d,%.4g,%.4g,%d\n", static_cast<long long>(s.t_us), 1e3 * s.total_s(),
                  1e3 * s.observation.total_s(), 1e3 * s.fit_previous_s, 1e3 * s.fit_skeleton_s, s.iterations_previous,
@@ -258,7 +261,8 @@ void write_overlay(const std::string& path, const sim::CameraSessionResult& sim,
   for (int r = 0; r < depth.rows; ++r) {
     for (int c = 0; c < depth.cols; ++c) {
       const double z = depth.at<std::uint16_t>(r, c) * 1e-3;
-      gray.at<std::uint8_t>(r, c) = z <= 0 ? 0 : static_cast<std::uint8_t>(std::clamp(255 - (z - 1.5) * 100, 20.0, 255.0));
+      gray.at<std::uint8_t>(r, c) =
+          z <= 0 ? 0 : static_cast<std::uint8_t>(std::clamp(255 - (z - 1.5) * 100, 20.0, 255.0));
     }
   }
   cv::Mat image;
@@ -274,8 +278,9 @@ void write_overlay(const std::string& path, const sim::CameraSessionResult& sim,
   for (int k = 0; k < kKinds; ++k) {
     for (int s = 0; s < 2; ++s) {
       draw(sim.truth[i].smpl_joints_K.col(kSmplJoints[k][s]), cv::Scalar(255, 80, 0), 9);  // truth: blue
-      if (skeleton) draw(vec(skeleton->joints(kCameraJoints[k][s]).position_m()), cv::Scalar(0, 0, 255), 6);  // camera: red
-      draw(vec(fit.smpl_joints(kSmplJoints[k][s]).position_m()), cv::Scalar(0, 200, 0), 3);  // fit: green
+      if (skeleton)
+        draw(vec(skeleton->joints(kCameraJoints[k][s]).position_m()), cv::Scalar(0, 0, 255), 6);  // camera: red
+      draw(vec(fit.smpl_joints(kSmplJoints[k][s]).position_m()), cv::Scalar(0, 200, 0), 3);       // fit: green
     }
   }
   cv::putText(image, "blue: truth  red: camera skeleton  green: fit", {10, 24}, cv::FONT_HERSHEY_SIMPLEX, 0.6,
@@ -287,8 +292,8 @@ void write_overlay(const std::string& path, const sim::CameraSessionResult& sim,
 
 int main(int argc, char** argv) {
   std::vector<std::string> positional;
-  std::vector<std::string> exercises = {"arm_raising", "shoulder_lift", "forearm_rolling",
-                                        "hair_combing", "torso_tilt", "air_punching"};
+  std::vector<std::string> exercises = {"arm_raising",  "shoulder_lift", "forearm_rolling",
+                                        "hair_combing", "torso_tilt",    "air_punching"};
   double max_seconds = 1e9;
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];
@@ -333,16 +338,18 @@ int main(int argc, char** argv) {
   const body::PoseLayout layout = body::PoseLayout::all_joints();
   const int left_z = layout.index_of("left_shoulder_z"), right_z = layout.index_of("right_shoulder_z");
   Table total;
-  std::printf("bench_fig4: %.1f Hz subsampling, 1 s controlled pose + each exercise (1 repetition, at most %.1f s), fine shape %s\n",
-              rate_hz, std::min(max_seconds, 999.0), g_fine_shape ? "on" : "off");
+  std::printf(
+      "bench_fig4: %.1f Hz subsampling, 1 s controlled pose + each exercise (1 repetition, at most %.1f s), fine shape "
+      "%s\n",
+      rate_hz, std::min(max_seconds, 999.0), g_fine_shape ? "on" : "off");
   bool overlay_written = false;
-  const std::vector<std::string> all_exercises = {"arm_raising", "shoulder_lift", "forearm_rolling",
-                                                  "hair_combing", "torso_tilt", "air_punching", "mocap wipe", "mocap box-1"};
+  const std::vector<std::string> all_exercises = {"arm_raising", "shoulder_lift", "forearm_rolling", "hair_combing",
+                                                  "torso_tilt",  "air_punching",  "mocap wipe",      "mocap box-1"};
   for (size_t e = 0; e < exercises.size(); ++e) {
     const sim::BodyMotion& motion = motions[e];
     // Seeds by the exercise's place in the full list, so that a subset sees the same sessions.
-    const size_t seed_index = static_cast<size_t>(
-        std::find(all_exercises.begin(), all_exercises.end(), exercises[e]) - all_exercises.begin());
+    const size_t seed_index = static_cast<size_t>(std::find(all_exercises.begin(), all_exercises.end(), exercises[e]) -
+                                                  all_exercises.begin());
     Eigen::VectorXd controlled = motion.poses(0.0);
     controlled[left_z] = -45 * kDeg;
     controlled[right_z] = 45 * kDeg;
@@ -362,7 +369,8 @@ int main(int argc, char** argv) {
     const Output without_imu = run_stage(sim, {}, nullptr, nullptr);
     for (const auto& c : sim.chunks) {
       if (!c.has_skeleton() || static_cast<double>(c.skeleton().t_us()) * 1e-6 < kCalibrationS) continue;
-      const size_t i = static_cast<size_t>(std::find(sim.t_us.begin(), sim.t_us.end(), c.skeleton().t_us()) - sim.t_us.begin());
+      const size_t i =
+          static_cast<size_t>(std::find(sim.t_us.begin(), sim.t_us.end(), c.skeleton().t_us()) - sim.t_us.begin());
       const auto fit = with_imu.frames.find(sim.t_us[i]);
       const auto fit_no_imu = without_imu.frames.find(sim.t_us[i]);
       if (fit == with_imu.frames.end() || fit_no_imu == without_imu.frames.end()) continue;
@@ -392,9 +400,11 @@ int main(int argc, char** argv) {
         for (int s = 0; s < 2; ++s) {
           const auto p = [&](int j) { return vec(fit->second.smpl_joints(j).position_m()); };
           const auto q = [&](int j) { return vec(c.skeleton().joints(j).position_m()); };
-          const double true_elevation = elevation_deg(truth.smpl_joints_K.col(body::kPelvis), truth.smpl_joints_K.col(body::kNeck),
-                                                      truth.smpl_joints_K.col(kSmplJoints[0][s]));
-          total.elevation_fit += std::abs(elevation_deg(p(body::kPelvis), p(body::kNeck), p(kSmplJoints[0][s])) - true_elevation);
+          const double true_elevation =
+              elevation_deg(truth.smpl_joints_K.col(body::kPelvis), truth.smpl_joints_K.col(body::kNeck),
+                            truth.smpl_joints_K.col(kSmplJoints[0][s]));
+          total.elevation_fit +=
+              std::abs(elevation_deg(p(body::kPelvis), p(body::kNeck), p(kSmplJoints[0][s])) - true_elevation);
           total.elevation_camera += std::abs(elevation_deg(q(0), q(2), q(kCameraJoints[0][s])) - true_elevation);
           ++total.elevation_n;
         }
@@ -448,8 +458,7 @@ int main(int argc, char** argv) {
   }
   const double lower_all = 100 * (1 - total.fit.mean_all() / total.camera.mean_all());
   const double lower_occ = 100 * (1 - total.fit_occ.mean_all() / total.camera_occ.mean_all());
-  std::printf("fit vs camera skeleton: %.1f %% lower overall, %.1f %% lower under occlusion\n",
-              lower_all, lower_occ);
+  std::printf("fit vs camera skeleton: %.1f %% lower overall, %.1f %% lower under occlusion\n", lower_all, lower_occ);
   std::printf("dropping the imu term: wrists %+.1f %%, elbows %+.1f %% under occlusion\n",
               100 * (total.fit_no_imu_occ.mean(2) / total.fit_occ.mean(2) - 1),
               100 * (total.fit_no_imu_occ.mean(1) / total.fit_occ.mean(1) - 1));
@@ -457,8 +466,10 @@ int main(int argc, char** argv) {
     std::printf("shoulder_lift: shoulder elevation error fit %.1f deg, camera skeleton %.1f deg (%d shoulder-frames)\n",
                 total.elevation_fit / total.elevation_n, total.elevation_camera / total.elevation_n, total.elevation_n);
   }
-  std::printf("time per frame (thread CPU of the calling thread per skeleton chunk): median %.1f ms, p95 %.1f ms (%zu frames)\n",
-              1e3 * percentile(total.frame_s, 0.5), 1e3 * percentile(total.frame_s, 0.95), total.frame_s.size());
+  std::printf(
+      "time per frame (thread CPU of the calling thread per skeleton chunk): median %.1f ms, p95 %.1f ms (%zu "
+      "frames)\n",
+      1e3 * percentile(total.frame_s, 0.5), 1e3 * percentile(total.frame_s, 0.95), total.frame_s.size());
   print_phases(total.stats);
   if (const char* csv = std::getenv("FIG4_STATS_CSV")) write_stats_csv(csv, total.stats);
   return 0;

@@ -49,7 +49,8 @@ int main(int argc, char** argv) {
   double total_fit_cpu_ms = 0;
   long total_iterations = 0;  // over all repeats: CPU per LM iteration = total_fit_cpu_ms / total_iterations
   std::vector<double> fit_wall, fit_cpu, prep_cpu, iterations, start_error, mean_error, max_error, limb_error;
-  std::printf("frame  start_mm  mean_mm  max_mm  iters  rejected  E_start    E_end      E_truth    status       cpu_ms\n");
+  std::printf(
+      "frame  start_mm  mean_mm  max_mm  iters  rejected  E_start    E_end      E_truth    status       cpu_ms\n");
   for (int f = 0; f < frames; ++f) {
     Eigen::VectorXd truth = fit::testing::facing_pose(layout, 2.0 + 0.1 * (f % 5), f);
     for (int d = 6; d < layout.size(); ++d) truth[d] += 0.1 * uni(rng);  // a different pose per frame
@@ -65,7 +66,8 @@ int main(int argc, char** argv) {
       start[d] += (layout.dof(d).kind == body::DofKind::kTranslation ? perturb_m : perturb_rad) * uni(rng);
     eval.evaluate(beta, start, body::Derivatives::kNone);
     double start_max = 0;
-    for (int j : fit::kBgJoints) start_max = std::max(start_max, (eval.joints().col(j) - rendered.joints_K.col(j)).norm());
+    for (int j : fit::kBgJoints)
+      start_max = std::max(start_max, (eval.joints().col(j) - rendered.joints_K.col(j)).norm());
 
     const fit::EnergyTerms truth_terms = fitter.energy(observation, truth, beta);
     const double truth_energy = truth_terms.total();
@@ -96,7 +98,8 @@ int main(int argc, char** argv) {
     }
     if (std::getenv("FIT_JOINTS")) {
       for (int j : fit::kBgJoints)
-        std::printf("  %s %.1f", body::smpl_joint_names()[j], 1e3 * (eval.joints().col(j) - rendered.joints_K.col(j)).norm());
+        std::printf("  %s %.1f", body::smpl_joint_names()[j],
+                    1e3 * (eval.joints().col(j) - rendered.joints_K.col(j)).norm());
       std::printf("\n");
     }
     double limb_sum = 0;  // paper 2's Fig. 4 joints
@@ -113,16 +116,21 @@ int main(int argc, char** argv) {
                 result.initial_energy.total(), result.energy.total(), truth_energy, fit::fit_status_name(result.status),
                 fit_cpu.back());
   }
-  std::printf("\n%d frames, 512x424, N_s = %d, %d DOF, max %d LM iterations, start perturbation %.1f deg / %.3f m per DOF\n",
-              frames, options.num_samples, layout.size(), options.max_iterations, perturb_rad * 180 / std::numbers::pi,
-              perturb_m);
-  std::printf("fit time, thread CPU:   median %.2f ms, p95 %.2f ms\n", percentile(fit_cpu, 0.5), percentile(fit_cpu, 0.95));
+  std::printf(
+      "\n%d frames, 512x424, N_s = %d, %d DOF, max %d LM iterations, start perturbation %.1f deg / %.3f m per DOF\n",
+      frames, options.num_samples, layout.size(), options.max_iterations, perturb_rad * 180 / std::numbers::pi,
+      perturb_m);
+  std::printf("fit time, thread CPU:   median %.2f ms, p95 %.2f ms\n", percentile(fit_cpu, 0.5),
+              percentile(fit_cpu, 0.95));
   std::printf("fit CPU per LM iteration: %.3f ms (%.1f ms over %ld iterations)\n",
-              total_fit_cpu_ms / static_cast<double>(std::max(1L, total_iterations)), total_fit_cpu_ms, total_iterations);
-  std::printf("fit time, wall:         median %.2f ms, p95 %.2f ms\n", percentile(fit_wall, 0.5), percentile(fit_wall, 0.95));
+              total_fit_cpu_ms / static_cast<double>(std::max(1L, total_iterations)), total_fit_cpu_ms,
+              total_iterations);
+  std::printf("fit time, wall:         median %.2f ms, p95 %.2f ms\n", percentile(fit_wall, 0.5),
+              percentile(fit_wall, 0.95));
   std::printf("preprocessing, CPU:     median %.2f ms (prepare_observation, not in the fit time)\n",
               percentile(prep_cpu, 0.5));
-  std::printf("LM iterations:          median %.0f, max %.0f\n", percentile(iterations, 0.5), percentile(iterations, 1.0));
+  std::printf("LM iterations:          median %.0f, max %.0f\n", percentile(iterations, 0.5),
+              percentile(iterations, 1.0));
   std::printf("start joint error:      median of max %.1f mm\n", 1e3 * percentile(start_error, 0.5));
   std::printf("joint error (16 joints): median of mean %.2f mm, median of max %.2f mm, worst max %.2f mm\n",
               1e3 * percentile(mean_error, 0.5), 1e3 * percentile(max_error, 0.5), 1e3 * percentile(max_error, 1.0));

@@ -95,9 +95,10 @@ int main() {
     cpu_us.push_back(1e6 * (bench::thread_cpu_seconds() - start));
     previous = result.theta;
     const fit::JointPose built = fit::pose_joints(rest, layout, result.theta);
-    const std::pair<int, int> pairs[] = {{body::kLeftShoulder, geometry::kShoulderLeft}, {body::kRightShoulder, geometry::kShoulderRight},
-                                         {body::kLeftElbow, geometry::kElbowLeft},       {body::kRightElbow, geometry::kElbowRight},
-                                         {body::kLeftWrist, geometry::kWristLeft},       {body::kRightWrist, geometry::kWristRight}};
+    const std::pair<int, int> pairs[] = {
+        {body::kLeftShoulder, geometry::kShoulderLeft}, {body::kRightShoulder, geometry::kShoulderRight},
+        {body::kLeftElbow, geometry::kElbowLeft},       {body::kRightElbow, geometry::kElbowRight},
+        {body::kLeftWrist, geometry::kWristLeft},       {body::kRightWrist, geometry::kWristRight}};
     for (int k = 0; k < 6; ++k) {
       const auto [smpl, kinect] = pairs[k];
       init_error[k / 2] += (built.positions_K.col(smpl) - f.truth.positions_K.col(smpl)).norm();
@@ -112,7 +113,8 @@ int main() {
               skeleton_error[1] / per_kind, skeleton_error[2] / per_kind,
               (skeleton_error[0] + skeleton_error[1] + skeleton_error[2]) / (3 * per_kind));
   std::printf("  built starting pose      %10.1f %10.1f %10.1f %10.1f\n", init_error[0] / per_kind,
-              init_error[1] / per_kind, init_error[2] / per_kind, (init_error[0] + init_error[1] + init_error[2]) / (3 * per_kind));
+              init_error[1] / per_kind, init_error[2] / per_kind,
+              (init_error[0] + init_error[1] + init_error[2]) / (3 * per_kind));
 
   // 2. Rough shape on the controlled pose.
   const body::PoseLayout full = body::PoseLayout::full_body();
@@ -121,7 +123,8 @@ int main() {
   pose[full.index_of("left_shoulder_z")] = -30 * kDeg;
   pose[full.index_of("right_shoulder_z")] = 30 * kDeg;
   std::vector<fit::TrackedSkeleton> calibration;
-  for (int i = 0; i < 30; ++i) calibration.push_back(simulate(simulator, camera, full_rest, full, pose, 1000 + i).skeleton);
+  for (int i = 0; i < 30; ++i)
+    calibration.push_back(simulate(simulator, camera, full_rest, full, pose, 1000 + i).skeleton);
   const double start = bench::thread_cpu_seconds();
   const fit::RoughShapeResult r = fit::estimate_rough_shape(*model, calibration, &camera);
   const double ms = 1e3 * (bench::thread_cpu_seconds() - start);

@@ -1,9 +1,9 @@
 // Speed of the depth preprocessing for model fitting (paper 2, II-D/H; issue 7) on one 512x424
 // frame: point cloud, normals of every cloud pixel, silhouette distance map (D_2D), behind-
-// surface map (D_3D, 0.02 m: the first full-grid version and today's query-time search), zone sampling of N_s = 250 pixels and the normals of those samples.
-// Frames: the built-in body template rendered with Embree at 2.0 m (a realistic silhouette, its
-// Kinect-like skeleton taken from the model's joints), and a plane filling the whole image (the
-// worst case for per-pixel work). Single-threaded; prints medians of wall and thread CPU time.
+// surface map (D_3D, 0.02 m: the first full-grid version and today's query-time search), zone sampling of N_s = 250
+// pixels and the normals of those samples. Frames: the built-in body template rendered with Embree at 2.0 m (a
+// realistic silhouette, its Kinect-like skeleton taken from the model's joints), and a plane filling the whole image
+// (the worst case for per-pixel work). Single-threaded; prints medians of wall and thread CPU time.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -16,11 +16,11 @@
 #include "bench_clock.hpp"
 #include "body/body_evaluator.hpp"
 #include "body/template_generator.hpp"
+#include "dense_behind_surface.hpp"
 #include "fit/behind_surface_map.hpp"
 #include "fit/point_normals.hpp"
 #include "fit/silhouette_distance.hpp"
 #include "fit/zone_sampling.hpp"
-#include "dense_behind_surface.hpp"
 #include "model_frames.hpp"
 #include "synthetic_frames.hpp"
 
@@ -74,8 +74,9 @@ std::vector<Eigen::Vector3d> float_like_points(const fit::PointCloud& cloud, con
   while (static_cast<int>(points.size()) < count) {
     const size_t pixel = static_cast<size_t>(uniform(rng) * cloud.valid.size());
     if (!cloud.valid[pixel]) continue;
-    const Eigen::Vector3d p = cloud.value_K[pixel].cast<double>() +
-                              Eigen::Vector3d(0.04 * (uniform(rng) - 0.5), 0.04 * (uniform(rng) - 0.5), -0.1 * uniform(rng));
+    const Eigen::Vector3d p =
+        cloud.value_K[pixel].cast<double>() +
+        Eigen::Vector3d(0.04 * (uniform(rng) - 0.5), 0.04 * (uniform(rng) - 0.5), -0.1 * uniform(rng));
     const auto uv = camera.project(p);
     if (!uv || map.is_behind(p)) continue;
     const int col = static_cast<int>(std::lround(uv->x())), row = static_cast<int>(std::lround(uv->y()));
@@ -126,7 +127,8 @@ int main() {
   std::printf("%-6s %-40s %12s %12s\n", "frame", "operation", "median wall", "median cpu");
   const BodyFrame body = render_body(camera);
   bench_frame("body", camera, body.frame, body.skeleton_K, 30);
-  const fit::DepthFrame plane = fit::testing::render_plane(camera, {0, 0, 2}, Eigen::Vector3d(0.2, 0.1, -1).normalized());
+  const fit::DepthFrame plane =
+      fit::testing::render_plane(camera, {0, 0, 2}, Eigen::Vector3d(0.2, 0.1, -1).normalized());
   bench_frame("plane", camera, plane, fit::testing::t_pose_skeleton(2.0), 10);
   return 0;
 }

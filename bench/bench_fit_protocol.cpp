@@ -295,19 +295,21 @@ int run(const fs::path& sim_options_path, const fs::path& chunks, const fs::path
 
   std::printf("\nphases of %s (s):", sim_options.motion.c_str());
   for (const auto& p : motion.phases) std::printf(" %s %.2f-%.2f;", p.name.c_str(), p.begin_s, p.end_s);
-  std::printf("\n\nArm joint error by phase, mm (mean; left / right). fit = SMPL joints of the body fit, camera = "
-              "the session's camera skeleton;\nstrap = the fit's forearm point at d_se; IMU = the forearm stage's IMU "
-              "position (frames VISUAL, PREDICTED)\n");
-  std::printf("| phase | frames | lost | E median | fit shoulders | fit elbows | fit wrists | fit all six | camera "
-              "elbows | camera wrists | camera all six | fit strap point | IMU VISUAL | IMU PREDICTED |\n");
+  std::printf(
+      "\n\nArm joint error by phase, mm (mean; left / right). fit = SMPL joints of the body fit, camera = "
+      "the session's camera skeleton;\nstrap = the fit's forearm point at d_se; IMU = the forearm stage's IMU "
+      "position (frames VISUAL, PREDICTED)\n");
+  std::printf(
+      "| phase | frames | lost | E median | fit shoulders | fit elbows | fit wrists | fit all six | camera "
+      "elbows | camera wrists | camera all six | fit strap point | IMU VISUAL | IMU PREDICTED |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n");
   const auto row = [&](const std::string& name, const PhaseSums& p) {
-    const auto lr = [](const Mean (&m)[kSides]) {
+    const auto lr = [](const Mean(&m)[kSides]) {
       char b[64];
       std::snprintf(b, sizeof b, "%.0f / %.0f", 1e3 * m[0].value(), 1e3 * m[1].value());
       return std::string(b);
     };
-    const auto six = [](const Mean (&m)[kKinds][kSides]) {
+    const auto six = [](const Mean(&m)[kKinds][kSides]) {
       Mean all6;
       for (int k = 0; k < kKinds; ++k)
         for (int s = 0; s < kSides; ++s) {
@@ -321,10 +323,10 @@ int run(const fs::path& sim_options_path, const fs::path& chunks, const fs::path
                   1e3 * p.visual[1].value(), p.visual_n[1]);
     std::snprintf(predicted, sizeof predicted, "%.0f (%d) / %.0f (%d)", 1e3 * p.predicted[0].value(), p.predicted_n[0],
                   1e3 * p.predicted[1].value(), p.predicted_n[1]);
-    std::printf("| %s | %d | %d | %.1f | %s | %s | %s | %.1f | %s | %s | %.1f | %s | %s | %s |\n", name.c_str(), p.frames,
-                score_existing ? -1 : p.lost, median(p.energy), lr(p.fit[0]).c_str(), lr(p.fit[1]).c_str(), lr(p.fit[2]).c_str(), six(p.fit),
-                lr(p.camera[1]).c_str(), lr(p.camera[2]).c_str(), six(p.camera), lr(p.fit_strap).c_str(), visual,
-                predicted);
+    std::printf("| %s | %d | %d | %.1f | %s | %s | %s | %.1f | %s | %s | %.1f | %s | %s | %s |\n", name.c_str(),
+                p.frames, score_existing ? -1 : p.lost, median(p.energy), lr(p.fit[0]).c_str(), lr(p.fit[1]).c_str(),
+                lr(p.fit[2]).c_str(), six(p.fit), lr(p.camera[1]).c_str(), lr(p.camera[2]).c_str(), six(p.camera),
+                lr(p.fit_strap).c_str(), visual, predicted);
   };
   for (const auto& name : order) row(name, sums[name]);
   row("all", all);

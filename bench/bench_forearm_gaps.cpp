@@ -32,13 +32,12 @@ struct Pool {
   double rms() const { return std::sqrt(sum_sq / static_cast<double>(count)); }
 };
 
-void row(const std::string& name, const ArmMotion& motion, double length, const double* starts,
-         int start_count) {
+void row(const std::string& name, const ArmMotion& motion, double length, const double* starts, int start_count) {
   Pool paper, smoother, live;
   for (int s = 0; s < start_count; ++s) {
     for (unsigned seed = 1; seed <= 3; ++seed) {
-      const GapRecoveryInput in = make_gap_input(motion, {.seed = seed}, starts[s] + length + 1.5,
-                                                 starts[s], starts[s] + length);
+      const GapRecoveryInput in =
+          make_gap_input(motion, {.seed = seed}, starts[s] + length + 1.5, starts[s], starts[s] + length);
       const GapSpan span = find_gaps(in.track).at(0);
       paper.add(motion, recover_gap_paper(in, span));
       smoother.add(motion, recover_gap_smoother(in, span));
@@ -46,14 +45,16 @@ void row(const std::string& name, const ArmMotion& motion, double length, const 
     }
   }
   std::printf("| %-22s | %4.1f | %6.1f | %6.1f | %6.1f | %6.1f | %6.1f | %6.1f |\n", name.c_str(), length,
-              100 * paper.rms(), 100 * paper.max_m, 100 * smoother.rms(), 100 * smoother.max_m,
-              100 * live.rms(), 100 * live.max_m);
+              100 * paper.rms(), 100 * paper.max_m, 100 * smoother.rms(), 100 * smoother.max_m, 100 * live.rms(),
+              100 * live.max_m);
 }
 
 }  // namespace
 
 int main() {
-  std::printf("| motion                 | gap s | paper RMS cm | paper max cm | smoother RMS cm | smoother max cm | live RMS cm | live max cm |\n");
+  std::printf(
+      "| motion                 | gap s | paper RMS cm | paper max cm | smoother RMS cm | smoother max cm | live RMS "
+      "cm | live max cm |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   const double starts[] = {1.0, 1.3, 1.6};
   ArmMotion slow;

@@ -42,8 +42,9 @@ struct Pooled {
 int main() {
   constexpr double kDeg = 3.14159265358979323846 / 180.0;
   std::printf("forearm stage on synthetic sessions (10 s, occlusion from 5.5 s; 3 seeds per row)\n\n");
-  std::printf("| gap s | orient. RMS deg | orient. max deg | visible RMS mm | live max mm | paper RMS mm | paper max mm "
-              "| smoother RMS mm | smoother max mm | pipeline CPU ms per s |\n");
+  std::printf(
+      "| gap s | orient. RMS deg | orient. max deg | visible RMS mm | live max mm | paper RMS mm | paper max mm "
+      "| smoother RMS mm | smoother max mm | pipeline CPU ms per s |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   for (const double gap_s : {0.5, 0.9, 1.5}) {
     Pooled pooled;
@@ -63,7 +64,8 @@ int main() {
       pooled.stage_s += bench::thread_cpu_seconds() - cpu0;
       pooled.session_s += options.duration_s;
       const auto e = session::testing::evaluate_forearm_results(truth, sink.results);
-      pooled.orientation_sq += e.orientation_rms_rad * e.orientation_rms_rad * static_cast<double>(e.orientation_samples);
+      pooled.orientation_sq +=
+          e.orientation_rms_rad * e.orientation_rms_rad * static_cast<double>(e.orientation_samples);
       pooled.orientation_n += e.orientation_samples;
       pooled.orientation_max = std::max(pooled.orientation_max, e.orientation_max_rad);
       pooled.visible_sq += e.visible_rms_m * e.visible_rms_m * static_cast<double>(e.visible_frames);
@@ -84,7 +86,8 @@ int main() {
                 1e3 * rms(pooled.recovered_sq[smoother], pooled.recovered_n[smoother]),
                 1e3 * pooled.recovered_max[smoother], 1e3 * pooled.stage_s / pooled.session_s);
   }
-  std::printf("\npipeline CPU: thread CPU time of the whole pipeline (validation, IMU orientation stage, forearm\n"
-              "stage incl. PNG decoding of 480x270 colour and 200x166 depth frames) per second of session.\n");
+  std::printf(
+      "\npipeline CPU: thread CPU time of the whole pipeline (validation, IMU orientation stage, forearm\n"
+      "stage incl. PNG decoding of 480x270 colour and 200x166 depth frames) per second of session.\n");
   return 0;
 }

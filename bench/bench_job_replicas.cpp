@@ -24,9 +24,9 @@
 #include "posefuse/v1/service.grpc.pb.h"
 #include "server/job_transitions.hpp"
 #include "server/pg_connection.hpp"
+#include "tests/scratch_dir.hpp"
 #include "tests/server/postgres_cluster.hpp"
 #include "tests/server/server_process.hpp"
-#include "tests/scratch_dir.hpp"
 
 namespace {
 
@@ -61,10 +61,9 @@ class Site {
     Process p;
     p.process = std::make_unique<test::ServerProcess>(
         POSEFUSE_SERVER_BINARY,
-        std::vector<std::string>{"--listen", "127.0.0.1:0", "--workers", "1", "--max-jobs", "1",
-                                 "--data-dir", (dir_ / name).string(), "--recordings-root",
-                                 recordings_.string(), "--job-store", conninfo_,
-                                 "--role", role, "--job-lease-s", std::to_string(lease_s_),
+        std::vector<std::string>{"--listen", "127.0.0.1:0", "--workers", "1", "--max-jobs", "1", "--data-dir",
+                                 (dir_ / name).string(), "--recordings-root", recordings_.string(), "--job-store",
+                                 conninfo_, "--role", role, "--job-lease-s", std::to_string(lease_s_),
                                  "--job-heartbeat-s", std::to_string(lease_s_ / 4)},
         dir_ / (name + ".log"));
     p.stub = v1::PoseFuse::NewStub(client::make_channel("127.0.0.1:" + std::to_string(p.process->port())));
@@ -108,7 +107,8 @@ void wait_all(Process& api, const std::vector<std::string>& ids) {
     while (true) {
       const v1::Job job = get(api, id);
       if (server::is_terminal(job.state())) {
-        if (job.state() != v1::Job::SUCCEEDED) throw std::runtime_error("job " + id + " " + v1::Job::State_Name(job.state()));
+        if (job.state() != v1::Job::SUCCEEDED)
+          throw std::runtime_error("job " + id + " " + v1::Job::State_Name(job.state()));
         break;
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(20));
@@ -116,9 +116,7 @@ void wait_all(Process& api, const std::vector<std::string>& ids) {
   }
 }
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 std::int64_t relation_bytes(const std::string& conninfo, const std::string& table) {
   server::PgConnection connection(conninfo);
@@ -182,9 +180,10 @@ int run_bench(int argc, char** argv) {
     api.process->terminate();
   }
   const double hours = options.session_s / 3600.0;
-  std::printf("\ndatabase size per hour of recording: results %.1f MiB (kept), upload %.1f MiB "
-              "(the chunk file, while its job is queued or running)\n",
-              results_bytes_per_job / hours / (1 << 20), recording_bytes / hours / (1 << 20));
+  std::printf(
+      "\ndatabase size per hour of recording: results %.1f MiB (kept), upload %.1f MiB "
+      "(the chunk file, while its job is queued or running)\n",
+      results_bytes_per_job / hours / (1 << 20), recording_bytes / hours / (1 << 20));
 
   // Takeover: a job three times as long, its worker killed once it runs.
   demo::DemoSessionOptions long_session;

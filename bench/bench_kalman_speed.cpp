@@ -61,8 +61,8 @@ std::vector<ImuSample> make_stream(std::size_t count, bool with_mag) {
 }
 
 struct Timing {
-  double best_s = 1e300;    // thread CPU time
-  double median_s = 0.0;    // thread CPU time
+  double best_s = 1e300;  // thread CPU time
+  double median_s = 0.0;  // thread CPU time
   double best_wall_s = 0.0;
   double allocations_per_sample = 0.0;
 };
@@ -93,9 +93,8 @@ Timing time_runs(std::size_t samples, int repeats, Run run) {
 
 void print_row(const char* name, std::size_t samples, const Timing& t) {
   const double n = static_cast<double>(samples);
-  std::printf("| %-44s | %9zu | %8.2f | %8.2f | %8.2f | %8.1f | %10.2e |\n", name, samples,
-              1e-6 * n / t.best_s, 1e-6 * n / t.median_s, 1e-6 * n / t.best_wall_s,
-              1e9 * t.best_s / n, t.allocations_per_sample);
+  std::printf("| %-44s | %9zu | %8.2f | %8.2f | %8.2f | %8.1f | %10.2e |\n", name, samples, 1e-6 * n / t.best_s,
+              1e-6 * n / t.median_s, 1e-6 * n / t.best_wall_s, 1e9 * t.best_s / n, t.allocations_per_sample);
 }
 
 }  // namespace
@@ -108,15 +107,15 @@ int main(int argc, char** argv) {
   std::vector<Quat> out(samples);
   double checksum = 0.0;
 
-  std::printf("bench_kalman_speed: %zu samples, best and median of %d runs, one thread\n\n",
-              samples, repeats);
-  std::printf("M/s: million samples per second of thread CPU time (best, median) and of wall\n"
-              "time (best); ns/samp from the best CPU time; allocs/smp: heap allocations per sample.\n\n");
-  std::printf("| %-44s | %9s | %8s | %8s | %8s | %8s | %10s |\n", "case", "samples", "best M/s",
-              "med M/s", "wall M/s", "ns/samp", "allocs/smp");
+  std::printf("bench_kalman_speed: %zu samples, best and median of %d runs, one thread\n\n", samples, repeats);
+  std::printf(
+      "M/s: million samples per second of thread CPU time (best, median) and of wall\n"
+      "time (best); ns/samp from the best CPU time; allocs/smp: heap allocations per sample.\n\n");
+  std::printf("| %-44s | %9s | %8s | %8s | %8s | %8s | %10s |\n", "case", "samples", "best M/s", "med M/s", "wall M/s",
+              "ns/samp", "allocs/smp");
   const std::string dash(10, '-');
-  std::printf("|%s|%s|%s|%s|%s|%s|%s|\n", std::string(46, '-').c_str(), std::string(11, '-').c_str(),
-              dash.c_str(), dash.c_str(), dash.c_str(), dash.c_str(), std::string(12, '-').c_str());
+  std::printf("|%s|%s|%s|%s|%s|%s|%s|\n", std::string(46, '-').c_str(), std::string(11, '-').c_str(), dash.c_str(),
+              dash.c_str(), dash.c_str(), dash.c_str(), std::string(12, '-').c_str());
 
   for (const bool mag : {true, false}) {
     const std::vector<ImuSample>& stream = mag ? with_mag : without_mag;
@@ -125,8 +124,8 @@ int main(int argc, char** argv) {
       for (std::size_t i = 0; i < samples; ++i) out[i] = filter.update(stream[i]);
       checksum += out.back().w();
     });
-    print_row(mag ? "update() per sample, predict + correct" : "update() per sample, predict only (no mag)",
-              samples, per_sample);
+    print_row(mag ? "update() per sample, predict + correct" : "update() per sample, predict only (no mag)", samples,
+              per_sample);
   }
   const Timing batch = time_runs(samples, repeats, [&] {
     KalmanOrientationFilter filter;

@@ -3,8 +3,8 @@
 // Single-threaded (Embree device with threads=1). Prints a table of medians.
 #include <algorithm>
 #include <chrono>
-#include <ctime>
 #include <cstdio>
+#include <ctime>
 #include <functional>
 #include <numbers>
 #include <vector>

@@ -40,7 +40,8 @@ cv::Mat shade(const raycast::RenderImages& images, const Eigen::Matrix3Xd& verti
       const Eigen::Vector3d to_camera = -camera.pixel_ray(col, row).cast<double>().normalized();
       const double lambert = std::max(0.0, n.dot(to_camera));
       const auto level = static_cast<unsigned char>(60 + 190 * lambert);
-      out.at<cv::Vec3b>(row, col) = cv::Vec3b(static_cast<unsigned char>(level * 0.8), static_cast<unsigned char>(level * 0.9), level);
+      out.at<cv::Vec3b>(row, col) =
+          cv::Vec3b(static_cast<unsigned char>(level * 0.8), static_cast<unsigned char>(level * 0.9), level);
     }
   return out;
 }
@@ -63,11 +64,27 @@ int main(int argc, char** argv) {
   const raycast::DepthCamera camera(intrinsics);
   const std::vector<View> views = {
       {"rest", {}, {}},
-      {"relaxed", {{"left_shoulder_z", -70}, {"right_shoulder_z", 70}, {"left_elbow_y", -20}, {"right_elbow_y", 20}}, {}},
-      {"reach", {{"left_shoulder_z", 60}, {"left_elbow_y", -30}, {"right_shoulder_y", 70}, {"right_elbow_y", 90},
-                 {"spine2_z", -10}, {"head_y", 20}}, {}},
-      {"side", {{"left_shoulder_z", -60}, {"left_shoulder_y", -60}, {"left_elbow_y", -90}, {"right_shoulder_z", 75},
-                {"left_hip_x", -60}, {"left_knee_x", 80}, {"spine1_x", 15}}, {}, 120},
+      {"relaxed",
+       {{"left_shoulder_z", -70}, {"right_shoulder_z", 70}, {"left_elbow_y", -20}, {"right_elbow_y", 20}},
+       {}},
+      {"reach",
+       {{"left_shoulder_z", 60},
+        {"left_elbow_y", -30},
+        {"right_shoulder_y", 70},
+        {"right_elbow_y", 90},
+        {"spine2_z", -10},
+        {"head_y", 20}},
+       {}},
+      {"side",
+       {{"left_shoulder_z", -60},
+        {"left_shoulder_y", -60},
+        {"left_elbow_y", -90},
+        {"right_shoulder_z", 75},
+        {"left_hip_x", -60},
+        {"left_knee_x", 80},
+        {"spine1_x", 15}},
+       {},
+       120},
       {"shapes", {{"left_shoulder_z", -50}, {"right_shoulder_z", 50}}, {{0, 2}, {7, 2}, {8, 1.5}, {6, 2}}},
       {"slim", {{"left_shoulder_z", -50}, {"right_shoulder_z", 50}}, {{0, -1.5}, {7, -2}, {8, -1.5}, {5, 2}}},
   };

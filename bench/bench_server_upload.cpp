@@ -15,7 +15,8 @@
 //     while sending; the time runs until the final status) and by SubmitJob upload (until the
 //     job is returned: spooled to disk, not yet run); MB/s of serialised chunks, depth frames/s,
 //     times real time; the server's peak VmRSS above idle during the call. Best of --repeats.
-//  2. N concurrent Fit sessions paced at real time, each row on a fresh server process (each chunk sent when its stream's clock says
+//  2. N concurrent Fit sessions paced at real time, each row on a fresh server process (each chunk sent when its
+//  stream's clock says
 //     it was recorded): latency of every per-item result (an ImuOrientationBatch answering an
 //     ImuBatch: its send -> its arrival; the pipeline has no per-depth-frame result yet), median
 //     and p95 over all sessions; how long after the last chunk the call ended; the server's
@@ -164,8 +165,7 @@ std::vector<v1::SessionChunk> simulated_camera_frames(const v1::CameraIntrinsics
   options.intrinsics.k1 = options.intrinsics.k2 = options.intrinsics.k3 = 0.0;
   options.duration_s = 1.0;
   const body::PoseLayout layout = body::PoseLayout::full_body();
-  const auto result =
-      sim::simulate_camera_session(options, layout, sim::arm_raising_sequence(layout, 4.0));
+  const auto result = sim::simulate_camera_session(options, layout, sim::arm_raising_sequence(layout, 4.0));
   std::vector<v1::SessionChunk> frames;
   for (const auto& chunk : result.chunks) {
     if (chunk.has_depth() || chunk.has_body_index()) frames.push_back(chunk);
@@ -191,8 +191,7 @@ Session make_session(double duration_s, bool raw_depth, const std::vector<v1::Se
       const std::int64_t t_us = chunk.depth().t_us();
       const v1::DepthFrame& frame = sim_depth[depth_i++ % sim_depth.size()]->depth();
       *chunk.mutable_depth() =
-          raw_depth ? session::encode_depth(session::decode_depth(frame), v1::DepthFrame::RAW_U16_LE, t_us)
-                    : frame;
+          raw_depth ? session::encode_depth(session::decode_depth(frame), v1::DepthFrame::RAW_U16_LE, t_us) : frame;
       chunk.mutable_depth()->set_t_us(t_us);
       ++out.depth_frames;
     } else if (chunk.has_body_index()) {
@@ -209,7 +208,7 @@ Session make_session(double duration_s, bool raw_depth, const std::vector<v1::Se
       t_us = chunk.imu().t_us(chunk.imu().t_us_size() - 1);
     } else if (chunk.has_depth() || chunk.has_body_index() || chunk.has_skeleton()) {
       stream = "camera";
-      t_us = chunk.has_depth() ? chunk.depth().t_us()
+      t_us = chunk.has_depth()        ? chunk.depth().t_us()
              : chunk.has_body_index() ? chunk.body_index().t_us()
                                       : chunk.skeleton().t_us();
     }
@@ -229,9 +228,9 @@ Session make_session(double duration_s, bool raw_depth, const std::vector<v1::Se
 struct FitOutcome {
   bool ok = false;
   std::string error;
-  double seconds = 0.0;                // first write -> final status
-  double after_last_chunk_s = 0.0;     // last write -> final status
-  std::vector<double> latencies_ms;    // per ImuOrientationBatch
+  double seconds = 0.0;              // first write -> final status
+  double after_last_chunk_s = 0.0;   // last write -> final status
+  std::vector<double> latencies_ms;  // per ImuOrientationBatch
 };
 
 // One Fit call; `paced`: each chunk waits for its send_at_s.
@@ -246,8 +245,8 @@ FitOutcome run_fit(v1::PoseFuse::Stub& stub, const Session& session, bool paced)
     for (std::size_t i = 0; i < session.chunks.size(); ++i) {
       const auto& chunk = session.chunks[i];
       if (paced) {
-        std::this_thread::sleep_until(start + std::chrono::duration_cast<Clock::duration>(
-                                                  std::chrono::duration<double>(session.send_at_s[i])));
+        std::this_thread::sleep_until(
+            start + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(session.send_at_s[i])));
       }
       if (chunk.has_imu()) {
         std::lock_guard lock(mu);
@@ -302,8 +301,8 @@ std::unique_ptr<v1::PoseFuse::Stub> new_stub(int port) {
   grpc::ChannelArguments arguments;
   arguments.SetMaxSendMessageSize(64 << 20);
   arguments.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);  // a connection of its own
-  return v1::PoseFuse::NewStub(grpc::CreateCustomChannel(
-      "127.0.0.1:" + std::to_string(port), grpc::InsecureChannelCredentials(), arguments));
+  return v1::PoseFuse::NewStub(
+      grpc::CreateCustomChannel("127.0.0.1:" + std::to_string(port), grpc::InsecureChannelCredentials(), arguments));
 }
 
 double percentile(std::vector<double> values, double p) {
@@ -318,8 +317,8 @@ std::vector<int> parse_list(const std::string& text) {
   std::size_t start = 0;
   while (start <= text.size()) {
     const std::size_t comma = std::min(text.find(',', start), text.size());
-    values.push_back(static_cast<int>(
-        session::parse_uint64(std::string_view(text).substr(start, comma - start), "--sessions")));
+    values.push_back(
+        static_cast<int>(session::parse_uint64(std::string_view(text).substr(start, comma - start), "--sessions")));
     start = comma + 1;
   }
   return values;
@@ -342,8 +341,7 @@ int main(int argc, char** argv) {
     }
   }
 
-  const fs::path data_dir =
-      fs::temp_directory_path() / ("posefuse_bench_server_" + std::to_string(getpid()));
+  const fs::path data_dir = fs::temp_directory_path() / ("posefuse_bench_server_" + std::to_string(getpid()));
   fs::create_directories(data_dir);
   // Before any thread exists in this process (the simulator and gRPC start some): one server
   // for table 1 and a fresh one for each row of table 2, so that memory left cached by earlier
@@ -368,18 +366,23 @@ int main(int argc, char** argv) {
   const double idle_rss = rss_mib(server.pid);
 
   std::printf("posefuse-server over loopback (server in its own process, %u CPUs here, load %s)\n",
-              std::thread::hardware_concurrency(), [] {
+              std::thread::hardware_concurrency(),
+              [] {
                 std::ifstream load("/proc/loadavg");
                 std::string first;
                 load >> first;
                 return first;
-              }().c_str());
-  std::printf("session: %.0f s, %d depth frames 512x424 at 30 Hz + body index + skeleton, "
-              "2 IMUs at 80 Hz; server idle VmRSS %.1f MiB\n\n",
-              duration_s, zstd.depth_frames, idle_rss);
+              }()
+                  .c_str());
+  std::printf(
+      "session: %.0f s, %d depth frames 512x424 at 30 Hz + body index + skeleton, "
+      "2 IMUs at 80 Hz; server idle VmRSS %.1f MiB\n\n",
+      duration_s, zstd.depth_frames, idle_rss);
 
   std::printf("1. upload throughput, one session as fast as possible (best of %d)\n", repeats);
-  std::printf("| depth encoding | call | MB | seconds | MB/s | depth frames/s | x real time | server peak RSS above idle MiB |\n");
+  std::printf(
+      "| depth encoding | call | MB | seconds | MB/s | depth frames/s | x real time | server peak RSS above idle MiB "
+      "|\n");
   std::printf("|---|---|---:|---:|---:|---:|---:|---:|\n");
   for (const auto* session : {&zstd, &raw}) {
     const char* encoding = session == &zstd ? "zstd (simulator)" : "raw";
@@ -407,13 +410,15 @@ int main(int argc, char** argv) {
         peak = std::max(peak, monitor.peak() - before);
       }
       const double mb = static_cast<double>(session->bytes) / 1e6;
-      std::printf("| %s | %s | %.1f | %.2f | %.1f | %.0f | %.1f | %.1f |\n", encoding, call, mb,
-                  best_s, mb / best_s, session->depth_frames / best_s, duration_s / best_s, peak);
+      std::printf("| %s | %s | %.1f | %.2f | %.1f | %.0f | %.1f | %.1f |\n", encoding, call, mb, best_s, mb / best_s,
+                  session->depth_frames / best_s, duration_s / best_s, peak);
     }
   }
 
   std::printf("\n2. concurrent Fit sessions paced at real time (zstd depth), per-item result latency\n");
-  std::printf("| sessions | results | latency median ms | latency p95 ms | call end after last chunk, max s | server RSS above idle MiB | per session MiB |\n");
+  std::printf(
+      "| sessions | results | latency median ms | latency p95 ms | call end after last chunk, max s | server RSS above "
+      "idle MiB | per session MiB |\n");
   std::printf("|---:|---:|---:|---:|---:|---:|---:|\n");
   for (std::size_t row = 0; row < concurrency.size(); ++row) {
     const int n = concurrency[row];
@@ -429,8 +434,8 @@ int main(int argc, char** argv) {
       std::this_thread::sleep_for(std::chrono::duration<double>(0.3 * duration_s));
       double sum = 0.0;
       int count = 0;
-      const auto until = Clock::now() + std::chrono::duration_cast<Clock::duration>(
-                                            std::chrono::duration<double>(0.6 * duration_s));
+      const auto until =
+          Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(0.6 * duration_s));
       while (!done && Clock::now() < until) {
         sum += rss_mib(fresh.pid);
         ++count;
@@ -440,7 +445,8 @@ int main(int argc, char** argv) {
     });
     std::vector<std::thread> clients;
     for (int i = 0; i < n; ++i) {
-      clients.emplace_back([&, i] { outcomes[static_cast<std::size_t>(i)] = run_fit(*stubs[static_cast<std::size_t>(i)], zstd, true); });
+      clients.emplace_back(
+          [&, i] { outcomes[static_cast<std::size_t>(i)] = run_fit(*stubs[static_cast<std::size_t>(i)], zstd, true); });
     }
     for (auto& client : clients) client.join();
     done = true;
@@ -456,9 +462,8 @@ int main(int argc, char** argv) {
       latencies.insert(latencies.end(), outcome.latencies_ms.begin(), outcome.latencies_ms.end());
       worst_end = std::max(worst_end, outcome.after_last_chunk_s);
     }
-    std::printf("| %d | %zu | %.2f | %.2f | %.2f | %.1f | %.2f |\n", n, latencies.size(),
-                percentile(latencies, 0.5), percentile(latencies, 0.95), worst_end,
-                steady_rss - before, (steady_rss - before) / n);
+    std::printf("| %d | %zu | %.2f | %.2f | %.2f | %.1f | %.2f |\n", n, latencies.size(), percentile(latencies, 0.5),
+                percentile(latencies, 0.95), worst_end, steady_rss - before, (steady_rss - before) / n);
   }
 
   stop_all();

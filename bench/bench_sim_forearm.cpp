@@ -46,11 +46,11 @@
 #include "forearm/occlusion_tests.hpp"
 #include "forearm/strap_detection.hpp"
 #include "forearm/upper_arm_depth.hpp"
-#include "session/session_inputs.hpp"
 #include "session/chunk_file.hpp"
 #include "session/image_codec.hpp"
 #include "session/pipeline.hpp"
 #include "session/result_reader.hpp"
+#include "session/session_inputs.hpp"
 #include "session/stages/default_stages.hpp"
 
 namespace {
@@ -136,8 +136,9 @@ int frames(const fs::path& chunks, const fs::path& gt, std::optional<double> pro
   forearm::StrapCameras cameras;
   std::map<std::int64_t, cv::Mat> depth, color;
   std::deque<v1::SkeletonFrame> skeletons;
-  std::printf("t_s arm occl | sdk_wrist_err axis_elbow_along axis_wrist_along axis_lat_err R | strap: miss frac "
-              "along_err lat_err | d_se d_sw | strap_front_of_axis strap_axis_distance | check\n");
+  std::printf(
+      "t_s arm occl | sdk_wrist_err axis_elbow_along axis_wrist_along axis_lat_err R | strap: miss frac "
+      "along_err lat_err | d_se d_sw | strap_front_of_axis strap_axis_distance | check\n");
   const auto process = [&](const v1::SkeletonFrame& s) {
     const auto jt = truth.joints.find(s.t_us());
     if (jt == truth.joints.end()) return;
@@ -208,7 +209,8 @@ int frames(const fs::path& chunks, const fs::path& gt, std::optional<double> pro
         const Vec3 dir = (t_wr - t_el).normalized();
         const Vec3 e = strap.strap_K - t_strap;
         std::printf("%+.3f %.3f ", e.dot(dir), (e - e.dot(dir) * dir).norm());
-        std::printf("| %.3f %.3f ", along(strap.strap_K, m_el, m_wr), (m_wr - m_el).norm() - along(strap.strap_K, m_el, m_wr));
+        std::printf("| %.3f %.3f ", along(strap.strap_K, m_el, m_wr),
+                    (m_wr - m_el).norm() - along(strap.strap_K, m_el, m_wr));
         {
           // The strap's offset from the measured axis towards the camera, and its distance from it.
           const Vec3 axis = (m_wr - m_el).normalized();
@@ -262,7 +264,6 @@ int frames(const fs::path& chunks, const fs::path& gt, std::optional<double> pro
   return 0;
 }
 
-
 // Angle of `measured` from `truth` (unit directions), in degrees: towards the camera (the
 // component of the difference along the viewing ray made perpendicular to the truth) and the rest.
 std::pair<double, double> direction_error_deg(const Vec3& measured, const Vec3& truth, const Vec3& ray) {
@@ -279,14 +280,17 @@ int pose_frames(const fs::path& chunks, const fs::path& gt, double t0_s, double 
   v1::SessionChunk chunk;
   geometry::PinholeCamera depth_camera;
   std::map<std::int64_t, cv::Mat> depth;
-  std::printf("t_s arm | upper_arm_err_deg depth side | forearm_err_deg depth side | pose_frame_err_F_deg x y z | "
-              "upper_arm_R upper_arm_points\n");
+  std::printf(
+      "t_s arm | upper_arm_err_deg depth side | forearm_err_deg depth side | pose_frame_err_F_deg x y z | "
+      "upper_arm_R upper_arm_points\n");
   const auto vec = [](const v1::SkeletonJoint& j) {
     return Vec3(j.position_m().x(), j.position_m().y(), j.position_m().z());
   };
   while (reader.next(chunk)) {
-    if (chunk.chunk_case() == v1::SessionChunk::kHeader) depth_camera = session::pinhole_camera(chunk.header().depth_intrinsics());
-    if (chunk.chunk_case() == v1::SessionChunk::kDepth) depth[chunk.depth().t_us()] = session::decode_depth(chunk.depth());
+    if (chunk.chunk_case() == v1::SessionChunk::kHeader)
+      depth_camera = session::pinhole_camera(chunk.header().depth_intrinsics());
+    if (chunk.chunk_case() == v1::SessionChunk::kDepth)
+      depth[chunk.depth().t_us()] = session::decode_depth(chunk.depth());
     if (chunk.chunk_case() != v1::SessionChunk::kSkeleton) continue;
     const v1::SkeletonFrame& s = chunk.skeleton();
     if (1e-6 * s.t_us() < t0_s || 1e-6 * s.t_us() > t1_s) continue;
@@ -315,8 +319,8 @@ int pose_frames(const fs::path& chunks, const fs::path& gt, double t0_s, double 
       try {
         const Vec3 plane_shoulder = m_el - (sh - m_el).norm() * axes->upper_arm->direction_K;
         const Quat K_from_F = forearm::K_from_F_calibration_pose(plane_shoulder, m_el, m_wr);
-        const Vec3 e = (180.0 / 3.14159265358979323846) *
-                       geometry::rotation_vector_from_quat(q->second.conjugate() * K_from_F);
+        const Vec3 e =
+            (180.0 / 3.14159265358979323846) * geometry::rotation_vector_from_quat(q->second.conjugate() * K_from_F);
         std::printf("%+6.2f %+6.2f %+6.2f | ", e.x(), e.y(), e.z());
       } catch (const Error& error) {
         std::printf("(%s) | ", error.what());
@@ -355,7 +359,9 @@ Quat mean_of(const std::vector<Quat>& qs) {
   return geometry::from_wxyz(sum.normalized());
 }
 
-double deg_between(const Quat& a, const Quat& b) { return geometry::angle_between(a, b) * 180.0 / 3.14159265358979323846; }
+double deg_between(const Quat& a, const Quat& b) {
+  return geometry::angle_between(a, b) * 180.0 / 3.14159265358979323846;
+}
 
 int split(const fs::path& result_dir, const fs::path& gt_dir, const std::string& device, double hold_t0_s,
           double hold_t1_s) {
@@ -378,8 +384,10 @@ int split(const fs::path& result_dir, const fs::path& gt_dir, const std::string&
     return m;
   };
   const auto WA_e = by_time(result.imu_orientations.at(device)), WA_t = by_time(truth.imu_orientations.at(device));
-  const auto KF_e = by_time(result.forearm_orientations.at(device)), KF_t = by_time(truth.forearm_orientations.at(device));
-  const auto nearest = [](const std::map<std::int64_t, Quat>& m, std::int64_t t, std::int64_t tolerance) -> const Quat* {
+  const auto KF_e = by_time(result.forearm_orientations.at(device)),
+             KF_t = by_time(truth.forearm_orientations.at(device));
+  const auto nearest = [](const std::map<std::int64_t, Quat>& m, std::int64_t t,
+                          std::int64_t tolerance) -> const Quat* {
     const Quat* best = nullptr;
     std::int64_t best_dt = tolerance + 1;
     auto it = m.lower_bound(t);
@@ -415,7 +423,7 @@ int split(const fs::path& result_dir, const fs::path& gt_dir, const std::string&
   std::vector<Quat> hold_truth, hold_true_pose;
   for (const Row& r : rows) {
     if (r.t_camera_us < hold_t0_s * 1e6 || r.t_camera_us > hold_t1_s * 1e6) continue;
-    hold_truth.push_back((KW_t * r.WA_t).conjugate() * r.KF_t);     // mounting and slip then
+    hold_truth.push_back((KW_t * r.WA_t).conjugate() * r.KF_t);      // mounting and slip then
     hold_true_pose.push_back((KW_e * r.WA_e).conjugate() * r.KF_t);  // eq. 9 with the true pose frame
   }
   if (hold_truth.empty()) throw std::runtime_error("no samples in the hold");
@@ -425,14 +433,17 @@ int split(const fs::path& result_dir, const fs::path& gt_dir, const std::string&
   const Quat AF_best = mean_of(all_true_pose);
   std::printf("%s: %zu samples, %zu in the hold %.2f-%.2f s\n", device.c_str(), rows.size(), hold_truth.size(),
               hold_t0_s, hold_t1_s);
-  std::printf("K_from_W error %.2f deg; A_from_F: %.2f deg from the mounting, %.2f from the truth over the hold "
-              "(the hold's truth %.2f from the mounting);\n",
-              deg_between(KW_e, KW_t), deg_between(*AF_e, *AF_mount), deg_between(*AF_e, AF_hold),
-              deg_between(AF_hold, *AF_mount));
-  const Vec3 pose_part = (180.0 / 3.14159265358979323846) * geometry::rotation_vector_from_quat(AF_true_pose.conjugate() * *AF_e);
-  std::printf("  of which the calibration pose's frame %.2f deg (in F: x %+.2f, y (roll) %+.2f, z %+.2f), "
-              "K_from_A in the hold %.2f deg\n",
-              pose_part.norm(), pose_part.x(), pose_part.y(), pose_part.z(), deg_between(AF_true_pose, AF_hold));
+  std::printf(
+      "K_from_W error %.2f deg; A_from_F: %.2f deg from the mounting, %.2f from the truth over the hold "
+      "(the hold's truth %.2f from the mounting);\n",
+      deg_between(KW_e, KW_t), deg_between(*AF_e, *AF_mount), deg_between(*AF_e, AF_hold),
+      deg_between(AF_hold, *AF_mount));
+  const Vec3 pose_part =
+      (180.0 / 3.14159265358979323846) * geometry::rotation_vector_from_quat(AF_true_pose.conjugate() * *AF_e);
+  std::printf(
+      "  of which the calibration pose's frame %.2f deg (in F: x %+.2f, y (roll) %+.2f, z %+.2f), "
+      "K_from_A in the hold %.2f deg\n",
+      pose_part.norm(), pose_part.x(), pose_part.y(), pose_part.z(), deg_between(AF_true_pose, AF_hold));
   const auto score = [&](const char* name, const auto& K_from_F_of) {
     double sum_sq = 0.0, max_deg = 0.0;
     Vec3 mean = Vec3::Zero();
@@ -444,8 +455,8 @@ int split(const fs::path& result_dir, const fs::path& gt_dir, const std::string&
       mean += (180.0 / 3.14159265358979323846) * geometry::rotation_vector_from_quat(r.KF_t.conjugate() * q);
     }
     mean /= static_cast<double>(rows.size());
-    std::printf("  %-62s RMS %5.2f  max %5.2f  mean in F %+5.2f %+5.2f %+5.2f\n", name,
-                std::sqrt(sum_sq / rows.size()), max_deg, mean.x(), mean.y(), mean.z());
+    std::printf("  %-62s RMS %5.2f  max %5.2f  mean in F %+5.2f %+5.2f %+5.2f\n", name, std::sqrt(sum_sq / rows.size()),
+                max_deg, mean.x(), mean.y(), mean.z());
   };
   std::printf("K_from_F error (deg), eq. 11 with:\n");
   score("the result file's K_from_F", [](const Row& r) { return r.KF_e; });
@@ -455,7 +466,8 @@ int split(const fs::path& result_dir, const fs::path& gt_dir, const std::string&
   score("the true A_from_F (mounting, no slip)", [&](const Row& r) { return Quat(KW_e * r.WA_e * *AF_mount); });
   score("the truth's A_from_F over the hold", [&](const Row& r) { return Quat(KW_e * r.WA_e * AF_hold); });
   score("eq. 9 with the true pose frame", [&](const Row& r) { return Quat(KW_e * r.WA_e * AF_true_pose); });
-  score("all true, A_from_F over the hold (the slip since)", [&](const Row& r) { return Quat(KW_t * r.WA_t * AF_hold); });
+  score("all true, A_from_F over the hold (the slip since)",
+        [&](const Row& r) { return Quat(KW_t * r.WA_t * AF_hold); });
   score("all true, the mounting (the slip)", [&](const Row& r) { return Quat(KW_t * r.WA_t * *AF_mount); });
   score("the best constant A_from_F (a bound)", [&](const Row& r) { return Quat(KW_e * r.WA_e * AF_best); });
   return 0;

@@ -2,10 +2,10 @@
 //   build/bench/bench_sim_session [seconds=60] [threads=2] [motion=arm_raising]
 // Prints thread CPU seconds per part of the work (summed over threads) and the wall time.
 // Chunks are serialised (as a chunk file would) and counted, not written.
+#include <unistd.h>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <unistd.h>
 #include <string>
 
 #include "bench_clock.hpp"
@@ -56,10 +56,12 @@ int main(int argc, char** argv) {
   std::printf("| part | CPU s | CPU ms per frame |\n| --- | --- | --- |\n");
   double total = 0;
   for (const auto& [part, seconds] : truth.cpu_s) {
-    std::printf("| %s | %.2f | %.2f |\n", part.c_str(), seconds, 1e3 * seconds / static_cast<double>(truth.frames.size()));
+    std::printf("| %s | %.2f | %.2f |\n", part.c_str(), seconds,
+                1e3 * seconds / static_cast<double>(truth.frames.size()));
     total += seconds;
   }
-  std::printf("| **total CPU (all threads)** | %.2f | %.2f |\n", total, 1e3 * total / static_cast<double>(truth.frames.size()));
+  std::printf("| **total CPU (all threads)** | %.2f | %.2f |\n", total,
+              1e3 * total / static_cast<double>(truth.frames.size()));
   std::printf("| gt/ files (written to %s) | %.2f | |\n\n", std::filesystem::temp_directory_path().c_str(), gt_cpu);
   std::printf("wall: simulation %.2f s (main thread CPU %.2f s), gt/ %.2f s; real time factor %.2f\n", wall_ms / 1e3,
               main_cpu, gt_wall_ms / 1e3, options.duration_s / ((wall_ms + gt_wall_ms) / 1e3));

@@ -11,8 +11,8 @@
 //   glitch-*   a 10 s clip (both arms swinging, the right forearm rolling) with glitches put in:
 //              a 2-frame 180 degree forearm flip, an 8-frame flip, arms swapped for 15 frames
 //              (while the arms are apart, and while they are near mirror images: a swap the
-//              wrist test cannot see, docs/simulator.md), and a 30-frame flip (longer than bvh_max_glitch_frames = 12: refused by design)
-//              also with bvh_max_glitch_frames = 40 (interpolated across);
+//              wrist test cannot see, docs/simulator.md), and a 30-frame flip (longer than bvh_max_glitch_frames = 12:
+//              refused by design) also with bvh_max_glitch_frames = 40 (interpolated across);
 //   CLIP       every .bvh file of the folder (skipped with a message when it is missing).
 // By default the camera renders at a quarter of the Kinect's resolution (128 x 106) without
 // colour, so the table measures the motion path (retargeting, 1 kHz poses, IMU synthesis) and
@@ -21,6 +21,7 @@
 // (all threads, getrusage) seconds per simulated second, and ok or the refusal.
 #include <sys/resource.h>
 
+#include <unistd.h>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -28,7 +29,6 @@
 #include <fstream>
 #include <numbers>
 #include <string>
-#include <unistd.h>
 #include <vector>
 
 #include "bench_clock.hpp"
@@ -72,7 +72,7 @@ double sine_deg(double t, double amplitude_rad, double rate_rad_s, double phase 
 
 struct Case {
   std::string name;
-  std::string path;       // BVH file
+  std::string path;  // BVH file
   int max_glitch_frames = 12;
 };
 
@@ -88,10 +88,11 @@ rigs::RigValue at_rest_plus(const std::vector<rigs::RigJointSpec>& rig, rigs::Ri
   };
 }
 
-std::string write_clip(const std::filesystem::path& dir, const std::string& name, const std::vector<rigs::RigJointSpec>& rig,
-                       double seconds, const rigs::RigValue& value) {
+std::string write_clip(const std::filesystem::path& dir, const std::string& name,
+                       const std::vector<rigs::RigJointSpec>& rig, double seconds, const rigs::RigValue& value) {
   const std::filesystem::path path = dir / (name + ".bvh");
-  std::ofstream(path) << rigs::rig_text(rig, static_cast<int>(std::lround(seconds / kFrameTime)) + 1, kFrameTime, value);
+  std::ofstream(path) << rigs::rig_text(rig, static_cast<int>(std::lround(seconds / kFrameTime)) + 1, kFrameTime,
+                                        value);
   return path.string();
 }
 
@@ -102,11 +103,13 @@ std::vector<Case> synthetic_cases(const std::filesystem::path& dir) {
   for (double rate : {5.0, 10.0, 20.0}) {
     const std::string w = std::to_string(static_cast<int>(rate));
     cases.push_back({"swing-" + w, write_clip(dir, "swing-" + w, rig, 8.0, at_rest_plus(rig, [=](int f, int j, int c) {
-                                                 return j == right_arm && c == 0 ? sine_deg(f * kFrameTime, 1.0, rate) : 0.0;
-                                               }))});
-    cases.push_back({"roll-" + w, write_clip(dir, "roll-" + w, rig, 8.0, at_rest_plus(rig, [=](int f, int j, int c) {
-                                                return j == right_forearm && c == 2 ? sine_deg(f * kFrameTime, 1.5, rate) : 0.0;
+                                                return j == right_arm && c == 0 ? sine_deg(f * kFrameTime, 1.0, rate)
+                                                                                : 0.0;
                                               }))});
+    cases.push_back({"roll-" + w, write_clip(dir, "roll-" + w, rig, 8.0, at_rest_plus(rig, [=](int f, int j, int c) {
+                                               return j == right_forearm && c == 2 ? sine_deg(f * kFrameTime, 1.5, rate)
+                                                                                   : 0.0;
+                                             }))});
   }
   // Glitches on a symmetric rig (an exact arm swap needs mirror-image arms).
   const auto sym = rigs::symmetric_rig21();
@@ -122,7 +125,9 @@ std::vector<Case> synthetic_cases(const std::filesystem::path& dir) {
     return 0.0;
   });
   const auto flipped = [=](int first, int last) -> rigs::RigValue {
-    return [=](int f, int j, int c) { return base(f, j, c) + (j == r_fore && c == 2 && f >= first && f <= last ? 180.0 : 0.0); };
+    return [=](int f, int j, int c) {
+      return base(f, j, c) + (j == r_fore && c == 2 && f >= first && f <= last ? 180.0 : 0.0);
+    };
   };
   cases.push_back({"glitch-flip-2", write_clip(dir, "glitch-flip-2", sym, 10.0, flipped(300, 301))});
   cases.push_back({"glitch-flip-8", write_clip(dir, "glitch-flip-8", sym, 10.0, flipped(300, 307))});
@@ -169,7 +174,8 @@ int main(int argc, char** argv) {
     if (a == "--full") full = true;
     else folder = a;
   }
-  const std::filesystem::path dir = std::filesystem::temp_directory_path() / ("bench_sim_stress_" + std::to_string(::getpid()));
+  const std::filesystem::path dir =
+      std::filesystem::temp_directory_path() / ("bench_sim_stress_" + std::to_string(::getpid()));
   std::filesystem::create_directories(dir);
   std::vector<Case> cases = synthetic_cases(dir);
   if (std::filesystem::is_directory(folder)) {
@@ -184,8 +190,10 @@ int main(int argc, char** argv) {
   }
 
   std::printf("camera: %s\n\n", full ? "posefuse-sim defaults (512 x 424 depth, 960 x 540 colour)"
-                                      : "128 x 106 depth, no colour (--full: posefuse-sim defaults)");
-  std::printf("| case | speed | simulated s | peak \\|ω\\| right IMU, rad/s | wall s per simulated s | CPU s per simulated s | result |\n");
+                                     : "128 x 106 depth, no colour (--full: posefuse-sim defaults)");
+  std::printf(
+      "| case | speed | simulated s | peak \\|ω\\| right IMU, rad/s | wall s per simulated s | CPU s per simulated s | "
+      "result |\n");
   std::printf("| --- | --- | --- | --- | --- | --- | --- |\n");
   std::fflush(stdout);
   int refused = 0;
@@ -225,7 +233,8 @@ int main(int argc, char** argv) {
         }
       } catch (const Error& e) {
         result = "refused: " + one_line(e.what());
-        if (const auto at = result.find(dir.string() + "/"); at != std::string::npos) result.erase(at, dir.string().size() + 1);
+        if (const auto at = result.find(dir.string() + "/"); at != std::string::npos)
+          result.erase(at, dir.string().size() + 1);
         ++refused;
       } catch (const std::exception& e) {
         result = "failed: " + one_line(e.what());
@@ -245,7 +254,8 @@ int main(int argc, char** argv) {
     }
   }
   std::printf("\n%.1f simulated s in %.1f s wall, %.1f s CPU (%.3f / %.3f per simulated s); %d case(s) not simulated\n",
-              total_simulated, total_wall, total_cpu, total_wall / total_simulated, total_cpu / total_simulated, refused);
+              total_simulated, total_wall, total_cpu, total_wall / total_simulated, total_cpu / total_simulated,
+              refused);
   std::filesystem::remove_all(dir);
   return 0;
 }

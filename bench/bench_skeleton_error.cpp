@@ -3,7 +3,8 @@
 // options but no colour stream, which the skeleton does not see), each exercise played once
 // at its own length, the reported joints against the error-free camera joints of the truth.
 //
-//   build/bench/bench_skeleton_error [seeds=3] [exercises=arm_raising,shoulder_lift,forearm_rolling,hair_combing,torso_tilt,air_punching,forearm_protocol]
+//   build/bench/bench_skeleton_error [seeds=3]
+//   [exercises=arm_raising,shoulder_lift,forearm_rolling,hair_combing,torso_tilt,air_punching,forearm_protocol]
 //
 // Seeds 1..seeds are reporting seeds: nothing is tuned on them (the bench changes no model
 // parameter). Prints, for shoulders, elbows, wrists and hands (left and right pooled):
@@ -79,7 +80,9 @@ struct Totals {
   }
 };
 
-double pct(std::size_t a, std::size_t b) { return b == 0 ? NAN : 100.0 * static_cast<double>(a) / static_cast<double>(b); }
+double pct(std::size_t a, std::size_t b) {
+  return b == 0 ? NAN : 100.0 * static_cast<double>(a) / static_cast<double>(b);
+}
 
 std::vector<std::string> split(const std::string& s) {
   std::vector<std::string> out;
@@ -99,15 +102,18 @@ Vec3 position(const v1::SkeletonFrame& f, int j) {
 
 int main(int argc, char** argv) {
   const int seeds = argc > 1 ? std::atoi(argv[1]) : 3;
-  const std::vector<std::string> exercises =
-      split(argc > 2 ? argv[2] : "arm_raising,shoulder_lift,forearm_rolling,hair_combing,torso_tilt,air_punching,forearm_protocol");
+  const std::vector<std::string> exercises = split(
+      argc > 2 ? argv[2]
+               : "arm_raising,shoulder_lift,forearm_rolling,hair_combing,torso_tilt,air_punching,forearm_protocol");
   if (seeds < 1 || exercises.empty()) {
     std::fprintf(stderr, "usage: bench_skeleton_error [seeds>=1] [exercise,exercise,...]\n");
     return 2;
   }
   Totals t;
   const auto start = bench::WallClock::now();
-  std::printf("| exercise | seed | frames | right forearm occluded | left forearm occluded |\n| --- | --- | --- | --- | --- |\n");
+  std::printf(
+      "| exercise | seed | frames | right forearm occluded | left forearm occluded |\n| --- | --- | --- | --- | --- "
+      "|\n");
   for (const std::string& exercise : exercises) {
     for (int seed = 1; seed <= seeds; ++seed) {
       sim::SimSessionOptions options;
@@ -178,27 +184,30 @@ int main(int argc, char** argv) {
   std::printf("\n%zu frames (30 Hz) over %zu sessions; arm forearm occluded in %.1f %% of arm-frames; wall %.0f s\n\n",
               t.frames, exercises.size() * static_cast<std::size_t>(seeds), pct(t.occluded_arm_frames, t.arm_frames),
               wall_s);
-  std::printf("| joints | bias mm | spread mm | mean abs error mm (range over sessions) | off track %% of frames |\n"
-              "| --- | --- | --- | --- | --- |\n");
+  std::printf(
+      "| joints | bias mm | spread mm | mean abs error mm (range over sessions) | off track %% of frames |\n"
+      "| --- | --- | --- | --- | --- |\n");
   for (int g = 0; g < kGroups; ++g) {
     const double k = 1e3 / t.samples[g];
     std::printf("| %s | %.1f | %.1f | %.1f (%.1f-%.1f) | %.2f |\n", kGroupNames[g], k * t.bias[g], k * t.spread[g],
                 k * t.mean_abs[g], 1e3 * t.mean_abs_min[g], 1e3 * t.mean_abs_max[g],
                 pct(t.off_track[g], t.joint_frames[g]));
   }
-  std::printf("\nframes with any of the eight joints off track: %.2f %% (%zu of %zu)\n\n", pct(t.frames_any_off, t.frames),
-              t.frames_any_off, t.frames);
+  std::printf("\nframes with any of the eight joints off track: %.2f %% (%zu of %zu)\n\n",
+              pct(t.frames_any_off, t.frames), t.frames_any_off, t.frames);
 
-  std::printf("| condition | joints | joint-frames | TRACKED %% | INFERRED %% | NOT_TRACKED %% | mean abs error mm TRACKED / INFERRED |\n"
-              "| --- | --- | --- | --- | --- | --- | --- |\n");
+  std::printf(
+      "| condition | joints | joint-frames | TRACKED %% | INFERRED %% | NOT_TRACKED %% | mean abs error mm TRACKED / "
+      "INFERRED |\n"
+      "| --- | --- | --- | --- | --- | --- | --- |\n");
   for (int c = 0; c < kConditions; ++c) {
     for (int g = 0; g < kGroups; ++g) {
       const StateCount& s = t.states[c][g];
       const auto mean_mm = [&](int state) { return s.n[state] ? 1e3 * s.error_sum[state] / s.n[state] : NAN; };
-      std::printf("| %s | %s | %zu | %.1f | %.1f | %.1f | %.1f / %.1f |\n", kConditionNames[c], kGroupNames[g], s.total(),
-                  pct(s.n[v1::SkeletonJoint::TRACKED], s.total()), pct(s.n[v1::SkeletonJoint::INFERRED], s.total()),
-                  pct(s.n[v1::SkeletonJoint::NOT_TRACKED], s.total()), mean_mm(v1::SkeletonJoint::TRACKED),
-                  mean_mm(v1::SkeletonJoint::INFERRED));
+      std::printf("| %s | %s | %zu | %.1f | %.1f | %.1f | %.1f / %.1f |\n", kConditionNames[c], kGroupNames[g],
+                  s.total(), pct(s.n[v1::SkeletonJoint::TRACKED], s.total()),
+                  pct(s.n[v1::SkeletonJoint::INFERRED], s.total()), pct(s.n[v1::SkeletonJoint::NOT_TRACKED], s.total()),
+                  mean_mm(v1::SkeletonJoint::TRACKED), mean_mm(v1::SkeletonJoint::INFERRED));
     }
   }
   return 0;

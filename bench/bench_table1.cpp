@@ -112,7 +112,9 @@ double hold_bound_s(const sim::BodyMotion& motion, bool end) {
 
 // Prints one session's Table I (title already printed) and writes its plot.
 Summary report(const std::string& name, const bench::Table1Series& s, const fs::path& png) {
-  std::printf("| error (frames) | SDK | fusion, paper recovery | fusion, smoother | fusion, frame results | paper 1 SDK -> fusion |\n");
+  std::printf(
+      "| error (frames) | SDK | fusion, paper recovery | fusion, smoother | fusion, frame results | paper 1 SDK -> "
+      "fusion |\n");
   std::printf("|---|---|---|---|---|---|\n");
   const std::vector<std::vector<double>> orientation = {s.sdk_orientation_deg, s.fusion_orientation_deg,
                                                         s.fusion_orientation_deg, s.fusion_orientation_deg};
@@ -132,20 +134,25 @@ Summary report(const std::string& name, const bench::Table1Series& s, const fs::
     truth_visible += !s.occluded[f];
     accepted += !s.occluded[f] && s.stage_visible[f];
   }
-  std::printf("the stage accepted the strap (eq. 10, II-J tests) at %zu of the %zu frames where it is visible\n", accepted,
-              truth_visible);
-  if (s.sdk_orientation_missing > 0) std::printf("(SDK gave no wrist orientation at %zu frames)\n", s.sdk_orientation_missing);
+  std::printf("the stage accepted the strap (eq. 10, II-J tests) at %zu of the %zu frames where it is visible\n",
+              accepted, truth_visible);
+  if (s.sdk_orientation_missing > 0)
+    std::printf("(SDK gave no wrist orientation at %zu frames)\n", s.sdk_orientation_missing);
 
   const cv::Scalar red(40, 40, 220), blue(200, 90, 20), orange(20, 140, 240), black(0, 0, 0);
-  const bool written = bench::write_time_plot(
-      png.string(), s.t_s, s.occluded,
-      {{"orientation error, deg (eqs. 14-15; Fig. 4)", {{"SDK", s.sdk_orientation_deg, red}, {"fusion", s.fusion_orientation_deg, blue}}},
-       {"IMU position error, m (Fig. 5)",
-        {{"SDK (eq. 16)", s.sdk_position_m, red}, {"paper recovery", s.paper_position_m, orange},
-         {"smoother", s.smoother_position_m, blue}}},
-       {"IMU x_K, m (Fig. 6)",
-        {{"truth", s.true_x_m, black}, {"SDK (eq. 16)", s.sdk_x_m, red}, {"paper recovery", s.paper_x_m, orange},
-         {"smoother", s.smoother_x_m, blue}}}});
+  const bool written =
+      bench::write_time_plot(png.string(), s.t_s, s.occluded,
+                             {{"orientation error, deg (eqs. 14-15; Fig. 4)",
+                               {{"SDK", s.sdk_orientation_deg, red}, {"fusion", s.fusion_orientation_deg, blue}}},
+                              {"IMU position error, m (Fig. 5)",
+                               {{"SDK (eq. 16)", s.sdk_position_m, red},
+                                {"paper recovery", s.paper_position_m, orange},
+                                {"smoother", s.smoother_position_m, blue}}},
+                              {"IMU x_K, m (Fig. 6)",
+                               {{"truth", s.true_x_m, black},
+                                {"SDK (eq. 16)", s.sdk_x_m, red},
+                                {"paper recovery", s.paper_x_m, orange},
+                                {"smoother", s.smoother_x_m, blue}}}});
   std::printf("plot: %s%s\n", png.string().c_str(), written ? "" : " (NOT written)");
   Summary summary{name, {}, {}, {}};
   for (std::size_t i = 0; i < 2; ++i) summary.orientation[i] = eval::summarize_errors(orientation[i]);
@@ -160,10 +167,11 @@ void print_title(const std::string& name, std::uint64_t seed, const bench::Table
                  double hold_end, double sim_cpu_s, double pipeline_cpu_s) {
   std::size_t occluded = 0;
   for (const bool o : s.occluded) occluded += o;
-  std::printf("\n### %s (seed %llu): %.1f s, %zu frames, %zu occluded in %zu gaps; calibration hold %.1f-%.1f s; "
-              "CPU s: simulation %.1f, pipeline %.1f\n\n",
-              name.c_str(), static_cast<unsigned long long>(seed), s.t_s.back(), s.t_s.size(), occluded,
-              gap_count(s.occluded), hold_begin, hold_end, sim_cpu_s, pipeline_cpu_s);
+  std::printf(
+      "\n### %s (seed %llu): %.1f s, %zu frames, %zu occluded in %zu gaps; calibration hold %.1f-%.1f s; "
+      "CPU s: simulation %.1f, pipeline %.1f\n\n",
+      name.c_str(), static_cast<unsigned long long>(seed), s.t_s.back(), s.t_s.size(), occluded, gap_count(s.occluded),
+      hold_begin, hold_end, sim_cpu_s, pipeline_cpu_s);
 }
 
 Summary run_cylinder(const Named& session_motion, const fs::path& image_folder, double longest_s, std::uint64_t seed) {
@@ -172,7 +180,8 @@ Summary run_cylinder(const Named& session_motion, const fs::path& image_folder, 
   options.strap.F_from_A = geometry::quat_from_rotation_vector(geometry::Vec3(0.2, -0.1, 0.3));
   options.duration_s = longest_s;
   options.sdk_joint_errors = session_motion.sdk_joint_errors;
-  const double hold_begin = hold_bound_s(session_motion.motion, false), hold_end = hold_bound_s(session_motion.motion, true);
+  const double hold_begin = hold_bound_s(session_motion.motion, false),
+               hold_end = hold_bound_s(session_motion.motion, true);
   options.calibration_end_s = hold_end;
   const double cpu0 = bench::thread_cpu_seconds();
   const bench::Table1Session session = bench::simulate_table1_session(session_motion.motion, options);
@@ -255,14 +264,15 @@ std::vector<Summary> cylinder_sessions(const fs::path& mocap, const fs::path& im
 // The body render's command-line switches.
 struct BodyFlags {
   bool print_gaps = false, imu_noise_only = false, fit = false, protocol_only = false, live_order = false;
-  std::string only;        // --only: the sessions whose name contains this
-  int protocol_seeds = 2;  // --protocol-seeds: the protocol with seeds 1 .. this
+  std::string only;                                   // --only: the sessions whose name contains this
+  int protocol_seeds = 2;                             // --protocol-seeds: the protocol with seeds 1 .. this
   std::map<std::string, std::string> header_options;  // --option KEY=VALUE (after --fit's)
 };
 
 std::vector<Summary> run_body(const std::string& name, const sim::SimSessionOptions& options, const fs::path& images,
                               const BodyFlags& flags) {
-  const sim::BodyMotion motion = sim::select_motion(options.motion, options.motion_options, {options.sex, options.betas});
+  const sim::BodyMotion motion =
+      sim::select_motion(options.motion, options.motion_options, {options.sex, options.betas});
   const double hold_begin = hold_bound_s(motion, false), hold_end = hold_bound_s(motion, true);
   std::map<std::string, std::string> header_options;
   if (flags.fit) header_options[session::kFitEnabledKey] = "true";
@@ -280,7 +290,8 @@ std::vector<Summary> run_body(const std::string& name, const sim::SimSessionOpti
     const bench::Table1Series s = bench::table1_series(bench::body_render_truth(run, arm), run.results,
                                                        bench::body_render_arm(run, arm), hold_begin, hold_end);
     print_title(arm_name, options.seed, s, hold_begin, hold_end, sim_cpu_s, run.pipeline_cpu_s);
-    if (flags.print_gaps) bench::print_gap_report(bench::body_render_truth(run, arm), run.results, bench::body_render_arm(run, arm));
+    if (flags.print_gaps)
+      bench::print_gap_report(bench::body_render_truth(run, arm), run.results, bench::body_render_arm(run, arm));
     summaries.push_back(report(arm_name, s, images / ("table1_body_" + arm_name + ".png")));
   }
   return summaries;
@@ -357,10 +368,11 @@ void print_protocol_pool(const std::vector<Summary>& summaries) {
     smoother_max_meeting += u.position[2].max <= 0.06 ? 1 : 0;
   }
   if (arms == 0) return;
-  std::printf("\nprotocol, %d arms pooled: orientation RMS %.2f deg (max %.2f; %d of %d arms <= 5 deg), smoother "
-              "position RMS %.4f m (max %.4f; %d of %d arms <= 0.02 m RMS, %d of %d <= 0.06 m max)\n",
-              arms, orientation.rms(), orientation.max, orientation.arms_meeting, arms, smoother.rms(), smoother.max,
-              smoother.arms_meeting, arms, smoother_max_meeting, arms);
+  std::printf(
+      "\nprotocol, %d arms pooled: orientation RMS %.2f deg (max %.2f; %d of %d arms <= 5 deg), smoother "
+      "position RMS %.4f m (max %.4f; %d of %d arms <= 0.02 m RMS, %d of %d <= 0.06 m max)\n",
+      arms, orientation.rms(), orientation.max, orientation.arms_meeting, arms, smoother.rms(), smoother.max,
+      smoother.arms_meeting, arms, smoother_max_meeting, arms);
 }
 
 }  // namespace
@@ -419,8 +431,9 @@ int main(int argc, char** argv) {
   if (render != "body" &&
       (flags.fit || flags.live_order || flags.protocol_only || flags.print_gaps || flags.imu_noise_only ||
        !flags.only.empty() || flags.protocol_seeds != 2 || !flags.header_options.empty())) {
-    std::fprintf(stderr, "bench_table1: --fit, --live-order, --protocol-only, --protocol-seeds, --only, --option, --gaps "
-                         "and --imu-noise-only need --render body\n");
+    std::fprintf(stderr,
+                 "bench_table1: --fit, --live-order, --protocol-only, --protocol-seeds, --only, --option, --gaps "
+                 "and --imu-noise-only need --render body\n");
     return 2;
   }
   std::printf("paper 1 Table I on simulated sessions, %s render%s; sessions cut at %.0f s\n", render.c_str(),
@@ -428,12 +441,14 @@ int main(int argc, char** argv) {
   const double cpu0 = bench::thread_cpu_seconds();
   const std::vector<Summary> summaries =
       render == "body" ? body_sessions(mocap, images, longest_s, flags) : cylinder_sessions(mocap, images, longest_s);
-  std::printf("\n### summary (%s render; all frames, and inside gaps; targets on the protocol: orientation RMS <= 5 "
-              "deg, smoother position RMS <= 0.02 m and max <= 0.06 m)\n\n",
-              render.c_str());
-  std::printf("| session | orient. RMS deg SDK / fusion | orient. max deg SDK / fusion | position RMS m SDK / paper / "
-              "smoother / live | position max m SDK / paper / smoother / live | in gaps: position RMS m SDK / paper / "
-              "smoother / live | in gaps: position max m SDK / paper / smoother / live |\n|---|---|---|---|---|---|---|\n");
+  std::printf(
+      "\n### summary (%s render; all frames, and inside gaps; targets on the protocol: orientation RMS <= 5 "
+      "deg, smoother position RMS <= 0.02 m and max <= 0.06 m)\n\n",
+      render.c_str());
+  std::printf(
+      "| session | orient. RMS deg SDK / fusion | orient. max deg SDK / fusion | position RMS m SDK / paper / "
+      "smoother / live | position max m SDK / paper / smoother / live | in gaps: position RMS m SDK / paper / "
+      "smoother / live | in gaps: position max m SDK / paper / smoother / live |\n|---|---|---|---|---|---|---|\n");
   std::printf("| paper 1 | 84.25 / 11.34 | 179.79 / 17.43 | 0.0703 / 0.0407 / - / - | 0.2392 / 0.1410 / - / - | | |\n");
   for (const Summary& u : summaries) {
     std::printf("| %s | %.2f / %.2f | %.2f / %.2f |", u.name.c_str(), u.orientation[0].rms, u.orientation[1].rms,

@@ -38,10 +38,10 @@ RobustParams grid_point(const std::vector<GridAxis>& axes, std::size_t index, co
 std::string describe_grid_point(const std::vector<GridAxis>& axes, std::size_t index);
 
 struct Fold {
-  std::size_t held_out = 0;      // trial index
-  std::size_t chosen = 0;        // grid point chosen on the other trials
-  double held_out_score = 0.0;   // the chosen point's score on the held-out trial
-  double training_mean = 0.0;    // the chosen point's mean over the other trials
+  std::size_t held_out = 0;     // trial index
+  std::size_t chosen = 0;       // grid point chosen on the other trials
+  double held_out_score = 0.0;  // the chosen point's score on the held-out trial
+  double training_mean = 0.0;   // the chosen point's mean over the other trials
 };
 
 // score[trial][point]: lower is better. One fold per trial (needs at least two trials); ties go

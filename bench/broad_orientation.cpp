@@ -14,8 +14,8 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <ctime>
 #include <filesystem>
 #include <functional>
@@ -29,8 +29,8 @@
 #include "common/error.hpp"
 #include "eval/orientation_error.hpp"
 #include "geometry/frames.hpp"
-#include "imu/robust_offline.hpp"
 #include "imu/kalman_orientation_filter.hpp"
+#include "imu/robust_offline.hpp"
 #include "imu/robust_orientation_filter.hpp"
 
 namespace {
@@ -86,10 +86,11 @@ const std::vector<Mode>& modes() {
 }
 
 void print_usage(std::FILE* to) {
-  std::fprintf(to, "usage: bench_broad_orientation [--mode NAME] [--csv-out DIR] [--tau-acc S] FOLDER\n"
-                  "       bench_broad_orientation --loto [--mode robust|robust-offline] [--threads N] FOLDER\n"
-                  "  --tau-acc S: the robust mode's accelerometer time constant (default %.1f s)\n"
-                  "  --loto: leave-one-trial-out validation of the robust filter's tuned parameters\nmodes:\n",
+  std::fprintf(to,
+               "usage: bench_broad_orientation [--mode NAME] [--csv-out DIR] [--tau-acc S] FOLDER\n"
+               "       bench_broad_orientation --loto [--mode robust|robust-offline] [--threads N] FOLDER\n"
+               "  --tau-acc S: the robust mode's accelerometer time constant (default %.1f s)\n"
+               "  --loto: leave-one-trial-out validation of the robust filter's tuned parameters\nmodes:\n",
                posefuse::imu::RobustOrientationFilter::Params().tau_acc_s);
   for (const Mode& m : modes()) std::fprintf(to, "  %-16s %s\n", m.name, m.summary);
 }
@@ -100,8 +101,7 @@ void write_csv(const fs::path& file, const std::vector<ImuSample>& imu, const st
   std::fprintf(f, "t_s,w,x,y,z\n");
   for (std::size_t i = 0; i < imu.size(); ++i) {
     const Quat& q = ENU_from_A[i];
-    std::fprintf(f, "%.6f,%.9f,%.9f,%.9f,%.9f\n", 1e-6 * static_cast<double>(imu[i].t_us), q.w(), q.x(), q.y(),
-                 q.z());
+    std::fprintf(f, "%.6f,%.9f,%.9f,%.9f,%.9f\n", 1e-6 * static_cast<double>(imu[i].t_us), q.w(), q.x(), q.y(), q.z());
   }
   if (std::fclose(f) != 0) throw posefuse::Error(posefuse::ErrorCode::kDataLoss, file.string(), "write failed");
 }
@@ -116,8 +116,8 @@ std::vector<Quat> ENU_from_A_of(const std::vector<Quat>& W_from_A) {
 }
 
 double total_rmse_deg(const posefuse::bench::BroadTrial& trial, const std::vector<Quat>& W_from_A) {
-  return posefuse::eval::orientation_rmse(ENU_from_A_of(W_from_A), trial.ENU_from_sensor_gt, trial.movement)
-             .total_rad * 180.0 / EIGEN_PI;
+  return posefuse::eval::orientation_rmse(ENU_from_A_of(W_from_A), trial.ENU_from_sensor_gt, trial.movement).total_rad *
+         180.0 / EIGEN_PI;
 }
 
 // Leave-one-trial-out over the grid of tuned parameters (broad_loto.hpp), for the robust filter
@@ -174,13 +174,14 @@ int run_loto(const std::vector<posefuse::bench::BroadTrial>& trials, bool offlin
   if (default_point == points) throw posefuse::Error(posefuse::ErrorCode::kInternal, "grid", "lacks the defaults");
 
   const auto folds = posefuse::bench::leave_one_trial_out(score);
-  std::printf("%-46s %9s %9s %9s  %s\n", "held-out trial", "held-out", "defaults", "training", "chosen on the other trials");
+  std::printf("%-46s %9s %9s %9s  %s\n", "held-out trial", "held-out", "defaults", "training",
+              "chosen on the other trials");
   double sum_held = 0.0, sum_default = 0.0, max_held = 0.0;
   std::size_t worst = 0;
   for (const auto& f : folds) {
     const double d = score[f.held_out][default_point];
-    std::printf("%-46s %9.3f %9.3f %9.3f  %s\n", trials[f.held_out].name.c_str(), f.held_out_score, d,
-                f.training_mean, posefuse::bench::describe_grid_point(axes, f.chosen).c_str());
+    std::printf("%-46s %9.3f %9.3f %9.3f  %s\n", trials[f.held_out].name.c_str(), f.held_out_score, d, f.training_mean,
+                posefuse::bench::describe_grid_point(axes, f.chosen).c_str());
     sum_held += f.held_out_score;
     sum_default += d;
     if (f.held_out_score > max_held) {
@@ -295,8 +296,9 @@ int run(int argc, char** argv) {
     if (!csv_dir.empty()) write_csv(fs::path(csv_dir) / (trial.name + ".csv"), trial.imu, ENU_from_A);
   }
   const double n = static_cast<double>(files.size());
-  std::printf("%-46s %8.3f %8.3f %8.3f %9zu %10.2f\n", ("mean over " + std::to_string(files.size()) + " trials").c_str(),
-              sum_total / n, sum_heading / n, sum_incl / n, sum_samples, sum_rate / n);
+  std::printf("%-46s %8.3f %8.3f %8.3f %9zu %10.2f\n",
+              ("mean over " + std::to_string(files.size()) + " trials").c_str(), sum_total / n, sum_heading / n,
+              sum_incl / n, sum_samples, sum_rate / n);
   return 0;
 }
 

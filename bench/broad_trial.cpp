@@ -32,8 +32,8 @@ class Handle {
 // Reads a dataset of `cols` columns (cols == 0: one-dimensional) as `mem_type` into `out`;
 // returns the row count.
 template <typename T>
-std::size_t read_dataset(hid_t file, const std::string& path, const char* name, int cols,
-                         hid_t mem_type, std::vector<T>& out) {
+std::size_t read_dataset(hid_t file, const std::string& path, const char* name, int cols, hid_t mem_type,
+                         std::vector<T>& out) {
   const std::string field = path + ":" + name;
   if (H5Lexists(file, name, H5P_DEFAULT) <= 0) throw Error(ErrorCode::kNotFound, field, "dataset missing");
   Handle set(H5Dopen2(file, name, H5P_DEFAULT), H5Dclose);

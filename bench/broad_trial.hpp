@@ -9,11 +9,11 @@
 namespace posefuse::bench {
 
 struct BroadTrial {
-  std::string name;                         // file name without ".hdf5"
+  std::string name;  // file name without ".hdf5"
   double sampling_rate_hz = 0.0;
-  std::vector<imu::ImuSample> imu;          // timestamps built from the sampling rate, from t = 0
+  std::vector<imu::ImuSample> imu;                 // timestamps built from the sampling rate, from t = 0
   std::vector<geometry::Quat> ENU_from_sensor_gt;  // optical ground truth; NaN where lost
-  std::vector<bool> movement;               // errors are counted only where true
+  std::vector<bool> movement;                      // errors are counted only where true
 };
 
 // Reads imu_gyr, imu_acc, imu_mag (N x 3), opt_quat (N x 4, [w x y z]), movement (N) and the

@@ -18,7 +18,8 @@
 //   tapping             taps of S m/s^2 (10 ms half-sine) twice a second on the accelerometer
 //   bias step           the gyro bias steps by S deg/s in the middle of a 10 s break at 70 s
 // Printed per row: mean over seeds of the total RMSE (deg, over the whole recording after the
-// first 5 s, breaks included), its worst seed, and the largest single-sample error. The ground truth is the simulator's.
+// first 5 s, breaks included), its worst seed, and the largest single-sample error. The ground truth is the
+// simulator's.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -109,7 +110,8 @@ sim::SensorTrajectory trajectory(const Case& c, const MotionShape& shape) {
       for (int k = 0; k < 3; ++k) v += std::sin(2.0 * kPi * shape.freq_hz[a][k] * t + shape.phase[a][k]);
       w[a] = v / 3.0;
     }
-    if (i > 0) q = (q * posefuse::geometry::quat_from_rotation_vector(e * c.peak_rate_rad_s * kGridDtS * w)).normalized();
+    if (i > 0)
+      q = (q * posefuse::geometry::quat_from_rotation_vector(e * c.peak_rate_rad_s * kGridDtS * w)).normalized();
     traj.W_from_A.push_back(q);
     traj.p_W_m.push_back(Vec3(0.15 * std::sin(0.9 * t), 0.1 * std::sin(1.3 * t + 1.0), 0.05 * std::sin(2.1 * t)) * e);
   }
@@ -151,8 +153,8 @@ Score run_case(const Case& c, unsigned seed, bool offline, double rate_hz, doubl
   for (std::size_t i = 0; i < t.size(); ++i) {
     counted[i] = t[i] > kStartRestS;
     if (counted[i]) {
-      score.max_deg = std::max(score.max_deg,
-                               posefuse::eval::orientation_error(W_from_A[i], imu.W_from_A[i]).total_rad / kDeg);
+      score.max_deg =
+          std::max(score.max_deg, posefuse::eval::orientation_error(W_from_A[i], imu.W_from_A[i]).total_rad / kDeg);
     }
   }
   score.rmse_deg = posefuse::eval::orientation_rmse(W_from_A, imu.W_from_A, counted).total_rad / kDeg;
@@ -180,11 +182,25 @@ std::vector<Family> families() {
     return std::vector<sim::MagDisturbance>{{Kind::kHardIronJump, on_s, 0.5, f}, {Kind::kHardIronJump, off_s, 0.5, -f}};
   };
   return {
-      {"attached magnet", "uT", {0, 3, 6, 10, 20, 50, 150},
-       [=](double s, unsigned seed) { Case c; c.disturbances = attached(s, 40, 100, seed); return c; }},
-      {"magnet duration", "s", {5, 15, 30, 60, 100},
-       [=](double s, unsigned seed) { Case c; c.disturbances = attached(30, 40, 40 + s, seed); return c; }},
-      {"stationary magnet", "uT", {5, 10, 20, 40, 80},
+      {"attached magnet",
+       "uT",
+       {0, 3, 6, 10, 20, 50, 150},
+       [=](double s, unsigned seed) {
+         Case c;
+         c.disturbances = attached(s, 40, 100, seed);
+         return c;
+       }},
+      {"magnet duration",
+       "s",
+       {5, 15, 30, 60, 100},
+       [=](double s, unsigned seed) {
+         Case c;
+         c.disturbances = attached(30, 40, 40 + s, seed);
+         return c;
+       }},
+      {"stationary magnet",
+       "uT",
+       {5, 10, 20, 40, 80},
        [=](double s, unsigned seed) {
          Case c;
          for (double t = 20; t < kDurationS - 5; t += 15) {
@@ -192,18 +208,38 @@ std::vector<Family> families() {
          }
          return c;
        }},
-      {"fast with breaks", "rad/s", {2, 5, 10, 15, 20},
-       [](double s, unsigned) { Case c; c.peak_rate_rad_s = s; c.break_every_s = 25; c.break_s = 10; return c; }},
-      {"break length", "s", {2, 5, 10, 20},
-       [](double s, unsigned) { Case c; c.peak_rate_rad_s = 8; c.break_every_s = 25; c.break_s = s; return c; }},
-      {"vibration", "m/s^2", {1, 3, 10, 30},
+      {"fast with breaks",
+       "rad/s",
+       {2, 5, 10, 15, 20},
+       [](double s, unsigned) {
+         Case c;
+         c.peak_rate_rad_s = s;
+         c.break_every_s = 25;
+         c.break_s = 10;
+         return c;
+       }},
+      {"break length",
+       "s",
+       {2, 5, 10, 20},
+       [](double s, unsigned) {
+         Case c;
+         c.peak_rate_rad_s = 8;
+         c.break_every_s = 25;
+         c.break_s = s;
+         return c;
+       }},
+      {"vibration",
+       "m/s^2",
+       {1, 3, 10, 30},
        [](double s, unsigned seed) {
          Case c;
          const Vec3 d = seeded_direction(seed, 2);
          c.extra_acc_m_s2 = [=](double t) { return Vec3(s * std::sin(2 * kPi * 40 * t) * d); };
          return c;
        }},
-      {"tapping", "m/s^2", {10, 30, 100},
+      {"tapping",
+       "m/s^2",
+       {10, 30, 100},
        [](double s, unsigned seed) {
          Case c;
          const Vec3 d = seeded_direction(seed, 3);
@@ -213,7 +249,9 @@ std::vector<Family> families() {
          };
          return c;
        }},
-      {"bias step", "deg/s", {0.5, 1, 2, 4},
+      {"bias step",
+       "deg/s",
+       {0.5, 1, 2, 4},
        [](double s, unsigned seed) {
          Case c;
          c.break_every_s = 65;  // one break, 60-70 s
@@ -234,7 +272,8 @@ int run(int argc, char** argv) {
     const std::string arg = argv[i];
     if (arg == "--mode" && i + 1 < argc) {
       const std::string m = argv[++i];
-      if (m != "robust" && m != "robust-offline") throw posefuse::Error(posefuse::ErrorCode::kInvalidArgument, "--mode", "must be robust or robust-offline");
+      if (m != "robust" && m != "robust-offline")
+        throw posefuse::Error(posefuse::ErrorCode::kInvalidArgument, "--mode", "must be robust or robust-offline");
       offline = m == "robust-offline";
     } else if (arg == "--seeds" && i + 1 < argc) {
       if (std::sscanf(argv[++i], "%u-%u", &first_seed, &last_seed) != 2 || first_seed > last_seed) {
@@ -242,12 +281,16 @@ int run(int argc, char** argv) {
       }
     } else if (arg == "--rate" && i + 1 < argc) {
       rate_hz = std::atof(argv[++i]);
-      if (!(rate_hz >= 20.0 && rate_hz <= 2000.0)) throw posefuse::Error(posefuse::ErrorCode::kInvalidArgument, "--rate", "must be 20..2000 Hz");
+      if (!(rate_hz >= 20.0 && rate_hz <= 2000.0))
+        throw posefuse::Error(posefuse::ErrorCode::kInvalidArgument, "--rate", "must be 20..2000 Hz");
     } else if (arg == "--gyro-scale-sigma" && i + 1 < argc) {
       gyro_scale_sigma = std::atof(argv[++i]);
-      if (!(gyro_scale_sigma >= 0.0 && gyro_scale_sigma <= 0.1)) throw posefuse::Error(posefuse::ErrorCode::kInvalidArgument, "--gyro-scale-sigma", "must be 0..0.1");
+      if (!(gyro_scale_sigma >= 0.0 && gyro_scale_sigma <= 0.1))
+        throw posefuse::Error(posefuse::ErrorCode::kInvalidArgument, "--gyro-scale-sigma", "must be 0..0.1");
     } else {
-      std::fprintf(stderr, "usage: bench_imu_disturbances [--mode robust|robust-offline] [--seeds FIRST-LAST] [--rate HZ] [--gyro-scale-sigma S]\n");
+      std::fprintf(stderr,
+                   "usage: bench_imu_disturbances [--mode robust|robust-offline] [--seeds FIRST-LAST] [--rate HZ] "
+                   "[--gyro-scale-sigma S]\n");
       return 2;
     }
   }

@@ -31,9 +31,7 @@ using namespace posefuse;
 using namespace posefuse::session;
 using Clock = std::chrono::steady_clock;
 
-double seconds_since(Clock::time_point start) {
-  return std::chrono::duration<double>(Clock::now() - start).count();
-}
+double seconds_since(Clock::time_point start) { return std::chrono::duration<double>(Clock::now() - start).count(); }
 
 std::uint64_t disk_bytes(const std::filesystem::path& path) {
   if (std::filesystem::is_regular_file(path)) return std::filesystem::file_size(path);
@@ -95,8 +93,7 @@ std::vector<v1::SessionChunk> make_session(double seconds, v1::DepthFrame::Encod
     const std::int64_t t = 33'333LL * f;
     make_frame(f, depth, ids, rng);
     *chunks.emplace_back().mutable_depth() = encode_depth(depth, encoding, t);
-    *chunks.emplace_back().mutable_body_index() =
-        encode_body_index(ids, v1::BodyIndexFrame::PNG8, t);
+    *chunks.emplace_back().mutable_body_index() = encode_body_index(ids, v1::BodyIndexFrame::PNG8, t);
     v1::SkeletonFrame* s = chunks.emplace_back().mutable_skeleton();
     s->set_t_us(t);
     for (int j = 0; j < 25; ++j) {
@@ -130,10 +127,9 @@ std::vector<v1::SessionChunk> make_session(double seconds, v1::DepthFrame::Encod
   return chunks;
 }
 
-void row(const char* what, const char* encoding, std::uint64_t bytes, double wall_s,
-         double recorded_s) {
-  std::printf("| %-32s | %-11s | %8.1f | %7.3f | %8.1f |\n", what, encoding, bytes / 1048576.0,
-              wall_s, recorded_s / wall_s);
+void row(const char* what, const char* encoding, std::uint64_t bytes, double wall_s, double recorded_s) {
+  std::printf("| %-32s | %-11s | %8.1f | %7.3f | %8.1f |\n", what, encoding, bytes / 1048576.0, wall_s,
+              recorded_s / wall_s);
 }
 
 }  // namespace
@@ -143,12 +139,10 @@ int main(int argc, char** argv) {
   const std::filesystem::path dir =
       std::filesystem::temp_directory_path() / ("posefuse_session_bench_" + std::to_string(getpid()));
   std::filesystem::create_directories(dir);
-  std::printf("session I/O, %.0f s recording, 512x424 depth + body index at 30 Hz, 3 IMUs at 80 Hz\n",
-              seconds);
+  std::printf("session I/O, %.0f s recording, 512x424 depth + body index at 30 Hz, 3 IMUs at 80 Hz\n", seconds);
   std::printf("| %-32s | %-11s | %8s | %7s | %8s |\n", "case", "depth", "MiB", "s", "x realtime");
   std::printf("|---|---|---|---|---|\n");
-  for (const auto encoding : {v1::DepthFrame::RAW_U16_LE, v1::DepthFrame::PNG16,
-                              v1::DepthFrame::ZSTD_U16_LE}) {
+  for (const auto encoding : {v1::DepthFrame::RAW_U16_LE, v1::DepthFrame::PNG16, v1::DepthFrame::ZSTD_U16_LE}) {
     const char* name = v1::DepthFrame::Encoding_Name(encoding).c_str();
     auto start = Clock::now();
     const auto chunks = make_session(seconds, encoding);

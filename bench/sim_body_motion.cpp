@@ -14,10 +14,10 @@
 // The clips are not part of the repository: when the folder is missing, the clip part says so
 // and is skipped.
 #include <algorithm>
-#include <limits>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -60,8 +60,8 @@ Peaks imu_peaks(const BodyMotion& motion, const Eigen::Matrix3Xd& rest) {
 }
 
 // Mean and max angle (degrees) between the model's mapped bones and the BVH's at every frame.
-void bone_errors(const BvhClip& clip, const BodyMotion& motion, const BvhPlacement& place,
-                 const Eigen::Matrix3Xd& rest, double& mean_deg, double& max_deg) {
+void bone_errors(const BvhClip& clip, const BodyMotion& motion, const BvhPlacement& place, const Eigen::Matrix3Xd& rest,
+                 double& mean_deg, double& max_deg) {
   const BvhRetargetMap map = make_bvh_retarget_map(clip.skeleton, rest);
   double sum = 0.0;
   int count = 0;
@@ -99,9 +99,9 @@ int main(int argc, char** argv) {
       if (entry.is_regular_file() && entry.path().extension() == ".bvh") files.push_back(entry.path());
     }
     std::sort(files.begin(), files.end());
-    std::printf("%-18s %7s %10s %17s %17s %13s %13s %13s %17s %13s\n", "clip", "frames", "retarget_ms", "bone_err_s0 mean/max",
-                "bone_err_s.03 mean/max", "gyr/acc s0", "gyr/acc s.03", "gyr/acc s.05", "bone_err_noise mean/max",
-                "gyr/acc noise");
+    std::printf("%-18s %7s %10s %17s %17s %13s %13s %13s %17s %13s\n", "clip", "frames", "retarget_ms",
+                "bone_err_s0 mean/max", "bone_err_s.03 mean/max", "gyr/acc s0", "gyr/acc s.03", "gyr/acc s.05",
+                "bone_err_noise mean/max", "gyr/acc noise");
     for (const fs::path& path : files) {
       try {
         const BvhClip clip = load_bvh(path);
@@ -126,17 +126,19 @@ int main(int argc, char** argv) {
         const BodyMotion motion = bvh_motion(clip, by_noise, &place);
         bone_errors(clip, motion, place, rest, mean_noise, max_noise);
         peaks[3] = imu_peaks(motion, rest);
-        std::printf("%-18s %7d %10.1f %8.4f/%8.4f %8.2f/%8.2f %6.1f/%6.1f %6.1f/%6.1f %6.1f/%6.1f %8.2f/%8.2f %6.1f/%6.1f\n",
-                    path.filename().string().c_str(), clip.frame_count(), retarget_ms, mean0, max0, mean2, max2,
-                    peaks[0].gyr, peaks[0].acc, peaks[1].gyr, peaks[1].acc, peaks[2].gyr, peaks[2].acc, mean_noise,
-                    max_noise, peaks[3].gyr, peaks[3].acc);
+        std::printf(
+            "%-18s %7d %10.1f %8.4f/%8.4f %8.2f/%8.2f %6.1f/%6.1f %6.1f/%6.1f %6.1f/%6.1f %8.2f/%8.2f %6.1f/%6.1f\n",
+            path.filename().string().c_str(), clip.frame_count(), retarget_ms, mean0, max0, mean2, max2, peaks[0].gyr,
+            peaks[0].acc, peaks[1].gyr, peaks[1].acc, peaks[2].gyr, peaks[2].acc, mean_noise, max_noise, peaks[3].gyr,
+            peaks[3].acc);
       } catch (const posefuse::Error& e) {
         std::printf("%-18s error: %s\n", path.filename().string().c_str(), e.what());
         ++failures;
       }
     }
   }
-  std::printf("\n%-26s %10s %16s %10s %10s\n", "exercise (right arm)", "duration_s", "imu_trajectory_ms", "max_gyr", "max_acc");
+  std::printf("\n%-26s %10s %16s %10s %10s\n", "exercise (right arm)", "duration_s", "imu_trajectory_ms", "max_gyr",
+              "max_acc");
   for (const std::string& name : exercise_names()) {
     const BodyMotion motion = make_exercise(name);
     const Peaks p = imu_peaks(motion, rest);

@@ -39,9 +39,8 @@ int main(int argc, char** argv) {
     if (entry.is_regular_file() && entry.path().extension() == ".bvh") files.push_back(entry.path());
   }
   std::sort(files.begin(), files.end());
-  std::printf("%-22s %6s %7s %7s %9s %9s %12s %12s %12s %12s %8s %8s\n", "file", "joints", "frames", "fps",
-              "length_s", "parse_ms", "fk_all_ms", "resample30_ms",
-              "head-hips_m", "wrist_imu_ms", "max_gyr", "max_acc");
+  std::printf("%-22s %6s %7s %7s %9s %9s %12s %12s %12s %12s %8s %8s\n", "file", "joints", "frames", "fps", "length_s",
+              "parse_ms", "fk_all_ms", "resample30_ms", "head-hips_m", "wrist_imu_ms", "max_gyr", "max_acc");
   int failures = 0;
   for (const fs::path& path : files) {
     try {
@@ -56,8 +55,8 @@ int main(int argc, char** argv) {
       for (const auto& frame : clip.frames) {
         const auto pose = posefuse::sim::forward_kinematics(clip.skeleton, frame, 0.01);
         if (head >= 0 && hips >= 0) {
-          head_above_hips_m += pose.p_W_m[static_cast<std::size_t>(head)].z() -
-                               pose.p_W_m[static_cast<std::size_t>(hips)].z();
+          head_above_hips_m +=
+              pose.p_W_m[static_cast<std::size_t>(head)].z() - pose.p_W_m[static_cast<std::size_t>(hips)].z();
         }
       }
       head_above_hips_m /= static_cast<double>(clip.frames.size());
@@ -74,7 +73,8 @@ int main(int argc, char** argv) {
         posefuse::sim::BvhSensorMount mount;
         mount.joint = "RightForeArm";
         mount.offset_joint_m = 0.8 * 0.01 * clip.skeleton.joints[static_cast<std::size_t>(hand)].offset;
-        const posefuse::sim::SensorKinematics motion(posefuse::sim::bvh_sensor_trajectory(clip, mount, 0.01, smoothing_s));
+        const posefuse::sim::SensorKinematics motion(
+            posefuse::sim::bvh_sensor_trajectory(clip, mount, 0.01, smoothing_s));
         posefuse::sim::ImuSynthOptions options;
         options.error_model = posefuse::sim::ImuErrorModel::none();
         // The motion's peaks, not a sensor's: no full-scale clipping.
@@ -87,9 +87,10 @@ int main(int argc, char** argv) {
           max_force = std::max(max_force, sample.acc_m_s2.norm());
         }
       }
-      std::printf("%-22s %6zu %7d %7.1f %9.2f %9.2f %12.2f %12.2f %12.3f %12.2f %8.2f %8.2f\n", path.filename().string().c_str(),
-                  clip.skeleton.joints.size(), clip.frame_count(), 1.0 / clip.frame_time_s,
-                  clip.duration_s(), parse_ms, fk_ms, resample_ms, head_above_hips_m, imu_ms, max_rate, max_force);
+      std::printf("%-22s %6zu %7d %7.1f %9.2f %9.2f %12.2f %12.2f %12.3f %12.2f %8.2f %8.2f\n",
+                  path.filename().string().c_str(), clip.skeleton.joints.size(), clip.frame_count(),
+                  1.0 / clip.frame_time_s, clip.duration_s(), parse_ms, fk_ms, resample_ms, head_above_hips_m, imu_ms,
+                  max_rate, max_force);
       if (resampled.frames.empty()) ++failures;
     } catch (const posefuse::Error& e) {
       std::printf("%-22s error: %s\n", path.filename().string().c_str(), e.what());

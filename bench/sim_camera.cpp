@@ -23,14 +23,16 @@ int main(int argc, char** argv) {
   const body::PoseLayout layout = body::PoseLayout::full_body();
   const auto start = std::chrono::steady_clock::now();
   const double cpu_start_ms = 1e3 * posefuse::bench::thread_cpu_seconds();
-  const sim::CameraSessionResult r = sim::simulate_camera_session(options, layout, sim::arm_raising_sequence(layout, 4.0));
+  const sim::CameraSessionResult r =
+      sim::simulate_camera_session(options, layout, sim::arm_raising_sequence(layout, 4.0));
   const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   const double cpu_ms = 1e3 * posefuse::bench::thread_cpu_seconds() - cpu_start_ms;
   std::size_t bytes = 0;
   for (const auto& c : r.chunks) bytes += c.ByteSizeLong();
-  std::printf("%zu frames of %dx%d: wall %.1f ms (%.2f ms per frame), thread CPU %.1f ms (%.2f ms per frame), "
-              "%.1f MB of chunks\n",
-              r.t_us.size(), options.intrinsics.width, options.intrinsics.height, ms, ms / r.t_us.size(), cpu_ms,
-              cpu_ms / r.t_us.size(), bytes / 1e6);
+  std::printf(
+      "%zu frames of %dx%d: wall %.1f ms (%.2f ms per frame), thread CPU %.1f ms (%.2f ms per frame), "
+      "%.1f MB of chunks\n",
+      r.t_us.size(), options.intrinsics.width, options.intrinsics.height, ms, ms / r.t_us.size(), cpu_ms,
+      cpu_ms / r.t_us.size(), bytes / 1e6);
   return 0;
 }

@@ -34,8 +34,7 @@ ChannelSecurity load_channel_security(const std::string& ca_file, const std::str
                                       const std::string& key_file, const std::string& token_file,
                                       const char* token_env) {
   if (cert_file.empty() != key_file.empty()) {
-    throw_invalid(cert_file.empty() ? "--tls-cert" : "--tls-key",
-                  "is missing: --tls-cert and --tls-key go together");
+    throw_invalid(cert_file.empty() ? "--tls-cert" : "--tls-key", "is missing: --tls-cert and --tls-key go together");
   }
   ChannelSecurity security;
   security.ca_pem = read_option_file(ca_file, "--tls-ca");

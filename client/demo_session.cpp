@@ -28,9 +28,7 @@ using std::numbers::pi;
 constexpr double kGravity_m_s2 = 9.81;
 constexpr double kRestS = 1.5;  // the arm rests this long first, so the filter can settle
 
-Quat axis_rotation(const Vec3& axis, double angle_rad) {
-  return Quat(Eigen::AngleAxisd(angle_rad, axis));
-}
+Quat axis_rotation(const Vec3& axis, double angle_rad) { return Quat(Eigen::AngleAxisd(angle_rad, axis)); }
 
 // Earth-like field in W (x north, z up): 49 uT, pointing 60 degrees below the horizon.
 Vec3 earth_field_W_uT() {
@@ -61,8 +59,8 @@ struct Noise {
   }
 };
 
-imu::ImuSample imu_sample(std::int64_t t_us, const Quat& W_from_S, const Vec3& rate_S,
-                          const Vec3& gyro_bias, Noise& noise) {
+imu::ImuSample imu_sample(std::int64_t t_us, const Quat& W_from_S, const Vec3& rate_S, const Vec3& gyro_bias,
+                          Noise& noise) {
   const Quat S_from_W = W_from_S.conjugate();
   imu::ImuSample s;
   s.t_us = t_us;
@@ -73,8 +71,7 @@ imu::ImuSample imu_sample(std::int64_t t_us, const Quat& W_from_S, const Vec3& r
 }
 
 void add_imu_stream(const std::string& device_id, std::int64_t clock_start_us, bool moving,
-                    const DemoSessionOptions& options, Noise& noise,
-                    std::vector<v1::SessionChunk>& chunks) {
+                    const DemoSessionOptions& options, Noise& noise, std::vector<v1::SessionChunk>& chunks) {
   const Vec3 gyro_bias = moving ? Vec3(0.010, -0.007, 0.004) : Vec3(-0.004, 0.006, 0.002);
   const int n = static_cast<int>(std::floor(options.duration_s * options.imu_rate_hz));
   const double period_us = 1e6 / options.imu_rate_hz;
@@ -94,13 +91,11 @@ void add_imu_stream(const std::string& device_id, std::int64_t clock_start_us, b
 
 // A stick figure facing the camera 2 m away, swaying sideways by `sway_m` (frame K, metres).
 constexpr std::array<std::array<double, 3>, 25> kSkeleton_K_m = {{
-    {0.00, -0.10, 2.00}, {0.00, 0.15, 2.00},  {0.00, 0.45, 2.00},  {0.00, 0.60, 2.00},
-    {0.18, 0.38, 2.00},  {0.25, 0.12, 2.00},  {0.28, -0.10, 1.95}, {0.29, -0.18, 1.95},
-    {-0.18, 0.38, 2.00}, {-0.25, 0.12, 2.00}, {-0.28, -0.10, 1.95}, {-0.29, -0.18, 1.95},
-    {0.10, -0.12, 2.00}, {0.10, -0.55, 2.00}, {0.10, -0.95, 2.00}, {0.10, -1.00, 1.90},
-    {-0.10, -0.12, 2.00}, {-0.10, -0.55, 2.00}, {-0.10, -0.95, 2.00}, {-0.10, -1.00, 1.90},
-    {0.00, 0.38, 2.00},  {0.30, -0.26, 1.95}, {0.26, -0.20, 1.93}, {-0.30, -0.26, 1.95},
-    {-0.26, -0.20, 1.93},
+    {0.00, -0.10, 2.00},  {0.00, 0.15, 2.00},   {0.00, 0.45, 2.00},   {0.00, 0.60, 2.00},   {0.18, 0.38, 2.00},
+    {0.25, 0.12, 2.00},   {0.28, -0.10, 1.95},  {0.29, -0.18, 1.95},  {-0.18, 0.38, 2.00},  {-0.25, 0.12, 2.00},
+    {-0.28, -0.10, 1.95}, {-0.29, -0.18, 1.95}, {0.10, -0.12, 2.00},  {0.10, -0.55, 2.00},  {0.10, -0.95, 2.00},
+    {0.10, -1.00, 1.90},  {-0.10, -0.12, 2.00}, {-0.10, -0.55, 2.00}, {-0.10, -0.95, 2.00}, {-0.10, -1.00, 1.90},
+    {0.00, 0.38, 2.00},   {0.30, -0.26, 1.95},  {0.26, -0.20, 1.93},  {-0.30, -0.26, 1.95}, {-0.26, -0.20, 1.93},
 }};
 
 v1::SkeletonFrame skeleton_frame(std::int64_t t_us, double sway_m) {
@@ -131,8 +126,7 @@ v1::CameraIntrinsics depth_intrinsics(const DemoSessionOptions& options) {
 }
 
 // Depth (mm) and body index of a wall at 3 m and an upright ellipse "person" at 2 m.
-void camera_images(const v1::CameraIntrinsics& k, double sway_m, cv::Mat& depth_mm,
-                   cv::Mat& body_index) {
+void camera_images(const v1::CameraIntrinsics& k, double sway_m, cv::Mat& depth_mm, cv::Mat& body_index) {
   const int w = static_cast<int>(k.width()), h = static_cast<int>(k.height());
   depth_mm = cv::Mat(h, w, CV_16UC1, cv::Scalar(3000));
   body_index = cv::Mat(h, w, CV_8UC1, cv::Scalar(255));
@@ -157,13 +151,11 @@ void add_camera_streams(const DemoSessionOptions& options, const v1::CameraIntri
   const int n = static_cast<int>(std::floor(options.duration_s * options.camera_rate_hz));
   for (int i = 0; i < n; ++i) {
     const double t_s = i / options.camera_rate_hz;
-    const auto t_us =
-        kCameraClockStartUs + static_cast<std::int64_t>(std::llround(t_s * 1e6));
+    const auto t_us = kCameraClockStartUs + static_cast<std::int64_t>(std::llround(t_s * 1e6));
     const double sway_m = 0.05 * std::sin(2.0 * pi * 0.2 * t_s);
     cv::Mat depth_mm, body_index;
     camera_images(k, sway_m, depth_mm, body_index);
-    *chunks.emplace_back().mutable_depth() =
-        session::encode_depth(depth_mm, v1::DepthFrame::PNG16, t_us);
+    *chunks.emplace_back().mutable_depth() = session::encode_depth(depth_mm, v1::DepthFrame::PNG16, t_us);
     *chunks.emplace_back().mutable_body_index() =
         session::encode_body_index(body_index, v1::BodyIndexFrame::PNG8, t_us);
     *chunks.emplace_back().mutable_skeleton() = skeleton_frame(t_us, sway_m);
@@ -196,13 +188,10 @@ Quat demo_arm_W_from_A(double t_s) {
   const double yaw = 0.3 + a * 0.8 * std::sin(2.0 * pi * 0.15 * t_s);
   const double pitch = a * 0.5 * std::sin(2.0 * pi * 0.23 * t_s + 0.4);
   const double roll = a * 0.9 * std::sin(2.0 * pi * 0.31 * t_s + 1.0);
-  return axis_rotation(Vec3::UnitZ(), yaw) * axis_rotation(Vec3::UnitY(), pitch) *
-         axis_rotation(Vec3::UnitX(), roll);
+  return axis_rotation(Vec3::UnitZ(), yaw) * axis_rotation(Vec3::UnitY(), pitch) * axis_rotation(Vec3::UnitX(), roll);
 }
 
-Quat demo_base_W_from_B() {
-  return axis_rotation(Vec3::UnitZ(), 0.7) * axis_rotation(Vec3::UnitX(), 0.05);
-}
+Quat demo_base_W_from_B() { return axis_rotation(Vec3::UnitZ(), 0.7) * axis_rotation(Vec3::UnitX(), 0.05); }
 
 std::vector<v1::SessionChunk> make_demo_session(const DemoSessionOptions& options) {
   const v1::SessionHeader header = demo_header(options);
@@ -228,8 +217,7 @@ std::vector<v1::SessionChunk> make_demo_session(const DemoSessionOptions& option
   return chunks;
 }
 
-std::uint64_t write_demo_session(const std::filesystem::path& out,
-                                 const DemoSessionOptions& options) {
+std::uint64_t write_demo_session(const std::filesystem::path& out, const DemoSessionOptions& options) {
   const std::vector<v1::SessionChunk> chunks = make_demo_session(options);
   std::unique_ptr<session::ChunkSink> sink;
   if (out.extension() == ".pfchunks") {

@@ -30,10 +30,10 @@ struct DemoSessionOptions {
   double duration_s = 10.0;
   double imu_rate_hz = 80.0;
   double camera_rate_hz = 30.0;
-  std::uint32_t depth_width = 64;   // pixels (Kinect v2's 512x424, scaled by 1/8)
+  std::uint32_t depth_width = 64;  // pixels (Kinect v2's 512x424, scaled by 1/8)
   std::uint32_t depth_height = 53;
   int imu_samples_per_batch = 32;
-  std::uint32_t seed = 1;           // noise seed; same seed, same session
+  std::uint32_t seed = 1;  // noise seed; same seed, same session
 };
 
 // The ground truth the arm IMU's signals were made from: W_from_A at `t_s` seconds after the
@@ -47,7 +47,6 @@ std::vector<v1::SessionChunk> make_demo_session(const DemoSessionOptions& option
 
 // Writes the demo session as a chunk file when `out` ends in ".pfchunks", else as a new
 // recording directory. Returns the number of chunks written.
-std::uint64_t write_demo_session(const std::filesystem::path& out,
-                                 const DemoSessionOptions& options = {});
+std::uint64_t write_demo_session(const std::filesystem::path& out, const DemoSessionOptions& options = {});
 
 }  // namespace posefuse::demo

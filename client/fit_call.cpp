@@ -44,8 +44,7 @@ class BearerTokenInterceptor : public grpc::experimental::Interceptor {
  public:
   explicit BearerTokenInterceptor(const std::string& token) : value_("Bearer " + token) {}
   void Intercept(grpc::experimental::InterceptorBatchMethods* methods) override {
-    if (methods->QueryInterceptionHookPoint(
-            grpc::experimental::InterceptionHookPoints::PRE_SEND_INITIAL_METADATA)) {
+    if (methods->QueryInterceptionHookPoint(grpc::experimental::InterceptionHookPoints::PRE_SEND_INITIAL_METADATA)) {
       methods->GetSendInitialMetadata()->insert({"authorization", value_});
     }
     methods->Proceed();
@@ -58,8 +57,7 @@ class BearerTokenInterceptor : public grpc::experimental::Interceptor {
 class BearerTokenInterceptorFactory : public grpc::experimental::ClientInterceptorFactoryInterface {
  public:
   explicit BearerTokenInterceptorFactory(std::string token) : token_(std::move(token)) {}
-  grpc::experimental::Interceptor* CreateClientInterceptor(
-      grpc::experimental::ClientRpcInfo*) override {
+  grpc::experimental::Interceptor* CreateClientInterceptor(grpc::experimental::ClientRpcInfo*) override {
     return new BearerTokenInterceptor(token_);
   }
 
@@ -76,8 +74,7 @@ bool tls_failure(const std::string& message) {
 
 }  // namespace
 
-std::shared_ptr<grpc::Channel> make_channel(const std::string& address,
-                                            const ChannelSecurity& security) {
+std::shared_ptr<grpc::Channel> make_channel(const std::string& address, const ChannelSecurity& security) {
   grpc::ChannelArguments args;
   args.SetMaxReceiveMessageSize(64 << 20);
   std::shared_ptr<grpc::ChannelCredentials> credentials = grpc::InsecureChannelCredentials();
@@ -92,8 +89,7 @@ std::shared_ptr<grpc::Channel> make_channel(const std::string& address,
   if (!security.bearer_token.empty()) {
     interceptors.push_back(std::make_unique<BearerTokenInterceptorFactory>(security.bearer_token));
   }
-  return grpc::experimental::CreateCustomChannelWithInterceptors(address, credentials, args,
-                                                                 std::move(interceptors));
+  return grpc::experimental::CreateCustomChannelWithInterceptors(address, credentials, args, std::move(interceptors));
 }
 
 std::string status_line(const grpc::Status& status, const std::string& address) {
@@ -110,13 +106,11 @@ std::string status_line(const grpc::Status& status, const std::string& address) 
     return "cannot reach the server at " + address + " (UNAVAILABLE: " + status.error_message() +
            "); is posefuse-server running (and if it uses TLS, was --tls-ca given)?";
   }
-  return "server " + address + ": " + code_name(status.error_code()) + ": " +
-         status.error_message();
+  return "server " + address + ": " + code_name(status.error_code()) + ": " + status.error_message();
 }
 
-FitOutcome run_fit(const std::shared_ptr<grpc::Channel>& channel,
-                   const std::filesystem::path& recording, ResultWriter& writer,
-                   const std::function<void(const FitProgress&)>& on_progress,
+FitOutcome run_fit(const std::shared_ptr<grpc::Channel>& channel, const std::filesystem::path& recording,
+                   ResultWriter& writer, const std::function<void(const FitProgress&)>& on_progress,
                    const std::map<std::string, std::string>& header_options) {
   FitOutcome outcome;
   std::unique_ptr<Recording> source;
@@ -156,8 +150,7 @@ FitOutcome run_fit(const std::shared_ptr<grpc::Channel>& channel,
 
   auto progress_now = [&] {
     return FitProgress{chunks_sent.load(), depth_frames_sent.load(), fraction.load(),
-                       std::chrono::duration<double>(std::chrono::steady_clock::now() - started)
-                           .count()};
+                       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count()};
   };
   auto last_report = started;
   v1::FitResult result;

@@ -36,15 +36,13 @@ struct FitOutcome {
 // from the receiving thread now and then (at most every 200 ms). `header_options` replace the
 // recording's SessionHeader.options of the same keys (see Recording). Never throws for
 // server-side problems: look at the outcome.
-FitOutcome run_fit(const std::shared_ptr<grpc::Channel>& channel,
-                   const std::filesystem::path& recording, ResultWriter& writer,
-                   const std::function<void(const FitProgress&)>& on_progress = {},
+FitOutcome run_fit(const std::shared_ptr<grpc::Channel>& channel, const std::filesystem::path& recording,
+                   ResultWriter& writer, const std::function<void(const FitProgress&)>& on_progress = {},
                    const std::map<std::string, std::string>& header_options = {});
 
 // A channel to `address` (host:port) with the client's message size limits, secured as
 // `security` says (plaintext, no token by default).
-std::shared_ptr<grpc::Channel> make_channel(const std::string& address,
-                                            const ChannelSecurity& security = {});
+std::shared_ptr<grpc::Channel> make_channel(const std::string& address, const ChannelSecurity& security = {});
 
 // One readable line for a failed call, e.g.
 // "server 127.0.0.1:50051: INVALID_ARGUMENT: chunk[0].header.depth_intrinsics.fx: ...".

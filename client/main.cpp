@@ -10,8 +10,8 @@
 #include <unistd.h>
 
 #include <cmath>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <map>
 #include <string>
 #include <vector>
@@ -79,7 +79,8 @@ Arguments parse_arguments(int argc, char** argv, int first) {
       continue;
     }
     if (text == "--option" || text.rfind("--option=", 0) == 0) {  // repeatable: one stage option each
-      if (text == "--option" && i + 1 >= argc) throw posefuse::Error(posefuse::ErrorCode::kInvalidArgument, text, "needs KEY=VALUE");
+      if (text == "--option" && i + 1 >= argc)
+        throw posefuse::Error(posefuse::ErrorCode::kInvalidArgument, text, "needs KEY=VALUE");
       const auto [key, value] = client::parse_header_option(text == "--option" ? argv[++i] : text.substr(9));
       args.header_options[key] = value;
     } else if (const auto eq = text.find('='); eq != std::string::npos) {
@@ -121,9 +122,8 @@ void check_server_flags(const Arguments& args, std::vector<std::string> known) {
 std::shared_ptr<grpc::Channel> connect(const Arguments& args) {
   return client::make_channel(
       args.flag("--server", "127.0.0.1:50051"),
-      client::load_channel_security(args.flag("--tls-ca", ""), args.flag("--tls-cert", ""),
-                                    args.flag("--tls-key", ""), args.flag("--token-file", ""),
-                                    std::getenv("POSEFUSE_TOKEN")));
+      client::load_channel_security(args.flag("--tls-ca", ""), args.flag("--tls-cert", ""), args.flag("--tls-key", ""),
+                                    args.flag("--token-file", ""), std::getenv("POSEFUSE_TOKEN")));
 }
 
 std::string format_eta(double seconds) {
@@ -132,8 +132,7 @@ std::string format_eta(double seconds) {
   if (seconds < 60) {
     std::snprintf(text, sizeof text, "%.0f s", seconds);
   } else {
-    std::snprintf(text, sizeof text, "%d min %02d s", static_cast<int>(seconds) / 60,
-                  static_cast<int>(seconds) % 60);
+    std::snprintf(text, sizeof text, "%d min %02d s", static_cast<int>(seconds) / 60, static_cast<int>(seconds) % 60);
   }
   return text;
 }
@@ -154,10 +153,10 @@ class ProgressLine {
       std::snprintf(percent, sizeof percent, " (%3.0f%%)", 100.0 * p.fraction_read);
       eta = format_eta(p.elapsed_s * (1.0 - p.fraction_read) / p.fraction_read);
     }
-    std::fprintf(stderr, "%sfit: %llu chunks%s, %llu frames, %.1f frames/s, ETA %s%s",
-                 tty_ ? "\r" : "", static_cast<unsigned long long>(p.chunks_sent), percent,
-                 static_cast<unsigned long long>(p.depth_frames_sent), fps,
-                 last ? "0 s" : eta.c_str(), tty_ ? "   " : "\n");
+    std::fprintf(stderr, "%sfit: %llu chunks%s, %llu frames, %.1f frames/s, ETA %s%s", tty_ ? "\r" : "",
+                 static_cast<unsigned long long>(p.chunks_sent), percent,
+                 static_cast<unsigned long long>(p.depth_frames_sent), fps, last ? "0 s" : eta.c_str(),
+                 tty_ ? "   " : "\n");
     if (tty_ && last) std::fputc('\n', stderr);
   }
   // Ends a line left open on a terminal, so that an error starts on its own line.
@@ -179,8 +178,8 @@ int command_fit(const Arguments& args) {
   client::ResultWriter writer(args.flag("--out", ""));
   ProgressLine progress;
   const client::FitOutcome outcome = client::run_fit(
-      connect(args), args.positional[0], writer,
-      [&](const client::FitProgress& p) { progress.show(p, false); }, args.header_options);
+      connect(args), args.positional[0], writer, [&](const client::FitProgress& p) { progress.show(p, false); },
+      args.header_options);
   if (outcome.local_error) {
     progress.interrupt();
     throw *outcome.local_error;
@@ -189,8 +188,7 @@ int command_fit(const Arguments& args) {
     progress.interrupt();
     std::fprintf(stderr, "posefuse: fit: %s\n", client::status_line(outcome.status, server).c_str());
     if (outcome.results_received > 0) {
-      std::fprintf(stderr, "posefuse: fit: partial results are in %s\n",
-                   writer.directory().string().c_str());
+      std::fprintf(stderr, "posefuse: fit: partial results are in %s\n", writer.directory().string().c_str());
     }
     return 1;
   }
@@ -208,11 +206,10 @@ int command_fit(const Arguments& args) {
   if (summary != nullptr) {
     std::printf("  %llu chunks, %llu depth frames, %.1f s of recording processed in %.2f s\n",
                 static_cast<unsigned long long>(summary->chunks()),
-                static_cast<unsigned long long>(summary->depth_frames()),
-                summary->stream_duration_s(), summary->processing_duration_s());
+                static_cast<unsigned long long>(summary->depth_frames()), summary->stream_duration_s(),
+                summary->processing_duration_s());
   }
-  std::printf("  %llu warnings, %llu item errors (warnings.txt)\n",
-              static_cast<unsigned long long>(writer.warnings()),
+  std::printf("  %llu warnings, %llu item errors (warnings.txt)\n", static_cast<unsigned long long>(writer.warnings()),
               static_cast<unsigned long long>(writer.item_errors()));
   return 0;
 }
@@ -221,11 +218,10 @@ int command_convert(const Arguments& args) {
   check_flags(args, {});
   require(args.positional.size() == 2, "convert takes IN and OUT");
   const std::filesystem::path in = args.positional[0], out = args.positional[1];
-  const std::uint64_t chunks = std::filesystem::is_directory(in)
-                                   ? posefuse::session::directory_to_chunk_file(in, out)
-                                   : posefuse::session::chunk_file_to_directory(in, out);
-  std::printf("converted %llu chunks: %s -> %s\n", static_cast<unsigned long long>(chunks),
-              in.string().c_str(), out.string().c_str());
+  const std::uint64_t chunks = std::filesystem::is_directory(in) ? posefuse::session::directory_to_chunk_file(in, out)
+                                                                 : posefuse::session::chunk_file_to_directory(in, out);
+  std::printf("converted %llu chunks: %s -> %s\n", static_cast<unsigned long long>(chunks), in.string().c_str(),
+              out.string().c_str());
   return 0;
 }
 
@@ -247,8 +243,7 @@ int command_health(const Arguments& args) {
     std::fprintf(stderr, "posefuse: health: %s\n", client::status_line(status, server).c_str());
     return 1;
   }
-  const std::string name =
-      grpc::health::v1::HealthCheckResponse::ServingStatus_Name(response.status());
+  const std::string name = grpc::health::v1::HealthCheckResponse::ServingStatus_Name(response.status());
   std::printf("%s\n", name.c_str());
   return response.status() == grpc::health::v1::HealthCheckResponse::SERVING ? 0 : 1;
 }
@@ -267,8 +262,7 @@ int command_info(const Arguments& args) {
     return 1;
   }
   std::printf("posefuse-server %s (%s; gRPC %s, protobuf %s)\n", info.server_version().c_str(),
-              info.api_version().c_str(), info.grpc_version().c_str(),
-              info.protobuf_version().c_str());
+              info.api_version().c_str(), info.grpc_version().c_str(), info.protobuf_version().c_str());
   std::printf("session format versions:");
   for (const auto v : info.session_format_versions()) std::printf(" %u", v);
   std::printf("\nstages:\n");
@@ -277,20 +271,19 @@ int command_info(const Arguments& args) {
   }
   std::printf("options (SessionHeader.options):\n");
   for (const auto& option : info.options()) {
-    std::printf("  %-18s default %-6s %s\n", option.key().c_str(),
-                option.default_value().c_str(), option.description().c_str());
+    std::printf("  %-18s default %-6s %s\n", option.key().c_str(), option.default_value().c_str(),
+                option.description().c_str());
   }
   std::printf("models: %s\n", info.models().empty() ? "none loaded" : "");
   for (const auto& model : info.models()) {
-    std::printf("  %s %s: %s\n", model.name().c_str(), model.version().c_str(),
-                model.description().c_str());
+    std::printf("  %s %s: %s\n", model.name().c_str(), model.version().c_str(), model.description().c_str());
   }
   const auto& limits = info.limits();
-  std::printf("limits: max message %.1f MiB, %u sessions, %u queued chunks per session, "
-              "idle timeout %.0f s, %u workers\n",
-              static_cast<double>(limits.max_message_bytes()) / (1024.0 * 1024.0),
-              limits.max_sessions(), limits.max_queued_chunks(), limits.idle_timeout_s(),
-              limits.workers());
+  std::printf(
+      "limits: max message %.1f MiB, %u sessions, %u queued chunks per session, "
+      "idle timeout %.0f s, %u workers\n",
+      static_cast<double>(limits.max_message_bytes()) / (1024.0 * 1024.0), limits.max_sessions(),
+      limits.max_queued_chunks(), limits.idle_timeout_s(), limits.workers());
   if (info.jobs_supported()) {
     std::printf("batch jobs: on, uploads up to %.0f MiB\n",
                 static_cast<double>(limits.max_upload_bytes()) / (1024.0 * 1024.0));
@@ -311,8 +304,8 @@ std::string job_line(const posefuse::v1::Job& job) {
   return line;
 }
 
-std::unique_ptr<posefuse::v1::PoseFuse::Stub> job_stub(const Arguments& args,
-                                                       std::size_t positional, bool takes_header_options = false) {
+std::unique_ptr<posefuse::v1::PoseFuse::Stub> job_stub(const Arguments& args, std::size_t positional,
+                                                       bool takes_header_options = false) {
   std::vector<std::string> known{"--label", "--out"};
   if (takes_header_options) known.emplace_back("--option");
   check_server_flags(args, known);
@@ -425,8 +418,7 @@ int command_results(const Arguments& args) {
   if (!status.ok()) return call_failed("results", args, status);
   writer.finish();
   std::printf("results: %s (%llu IMU orientations, %llu warnings, %llu item errors)\n",
-              writer.directory().string().c_str(),
-              static_cast<unsigned long long>(writer.orientation_samples()),
+              writer.directory().string().c_str(), static_cast<unsigned long long>(writer.orientation_samples()),
               static_cast<unsigned long long>(writer.warnings()),
               static_cast<unsigned long long>(writer.item_errors()));
   return 0;

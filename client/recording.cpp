@@ -18,11 +18,10 @@ std::uint64_t expected_directory_chunks(const std::filesystem::path& directory) 
   const auto end_path = directory / session::layout::kEndJson;
   if (!std::filesystem::exists(end_path)) return 0;
   v1::EndOfSession end;
-  session::message_from_json(session::read_file_bytes(end_path, session::layout::kEndJson),
-                             session::layout::kEndJson, end);
-  std::uint64_t chunks = 2 + end.depth_frames() + end.body_index_frames() +
-                         end.skeleton_frames() + end.color_frames() + end.audio_chunks() +
-                         end.sync_events();
+  session::message_from_json(session::read_file_bytes(end_path, session::layout::kEndJson), session::layout::kEndJson,
+                             end);
+  std::uint64_t chunks = 2 + end.depth_frames() + end.body_index_frames() + end.skeleton_frames() + end.color_frames() +
+                         end.audio_chunks() + end.sync_events();
   const std::uint64_t per_batch = session::layout::kImuSamplesPerBatch;
   for (const auto& [device, samples] : end.imu_samples()) {
     chunks += (samples + per_batch - 1) / per_batch;
@@ -61,9 +60,7 @@ bool Recording::next(session::SessionChunk& chunk) {
 
 double Recording::fraction_read() const {
   if (chunk_file_ != nullptr) {
-    return file_bytes_ == 0 ? 1.0
-                            : static_cast<double>(chunk_file_->byte_offset()) /
-                                  static_cast<double>(file_bytes_);
+    return file_bytes_ == 0 ? 1.0 : static_cast<double>(chunk_file_->byte_offset()) / static_cast<double>(file_bytes_);
   }
   if (expected_chunks_ == 0) return -1.0;
   return std::min(1.0, static_cast<double>(chunks_read_) / static_cast<double>(expected_chunks_));
@@ -72,7 +69,8 @@ double Recording::fraction_read() const {
 std::pair<std::string, std::string> parse_header_option(const std::string& text) {
   const auto eq = text.find('=');
   if (eq == std::string::npos || eq == 0) {
-    throw Error(ErrorCode::kInvalidArgument, "--option", "is '" + text + "', expected KEY=VALUE (e.g. fit.enabled=true)");
+    throw Error(ErrorCode::kInvalidArgument, "--option",
+                "is '" + text + "', expected KEY=VALUE (e.g. fit.enabled=true)");
   }
   for (const unsigned char c : text) {
     if (c <= ' ' || c == 0x7f) {

@@ -19,8 +19,7 @@ class Recording : public session::ChunkSource {
   // A directory is read with DirectoryReader, anything else as a chunk file. Throws
   // posefuse::Error (kNotFound, kInvalidArgument) naming the path.
   // `header_options` are set in SessionHeader.options, replacing the recording's own values.
-  explicit Recording(const std::filesystem::path& path,
-                     std::map<std::string, std::string> header_options = {});
+  explicit Recording(const std::filesystem::path& path, std::map<std::string, std::string> header_options = {});
   ~Recording() override;
 
   bool next(session::SessionChunk& chunk) override;

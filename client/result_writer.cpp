@@ -8,12 +8,10 @@
 
 namespace posefuse::client {
 
-ResultWriter::ResultWriter(const std::filesystem::path& directory)
-    : directory_(directory), files_(directory) {
+ResultWriter::ResultWriter(const std::filesystem::path& directory) : directory_(directory), files_(directory) {
   warnings_file_ = std::make_unique<std::ofstream>(directory_ / "warnings.txt");
   if (!*warnings_file_) {
-    throw Error(ErrorCode::kFailedPrecondition, (directory_ / "warnings.txt").string(),
-                "cannot create");
+    throw Error(ErrorCode::kFailedPrecondition, (directory_ / "warnings.txt").string(), "cannot create");
   }
 }
 
@@ -37,15 +35,14 @@ void ResultWriter::write(const v1::FitResult& result) {
       break;
     case v1::FitResult::kItemError:
       ++item_errors_;
-      note("error", result.item_error().code(), result.item_error().field(),
-           result.item_error().message());
+      note("error", result.item_error().code(), result.item_error().field(), result.item_error().message());
       break;
     default: break;  // progress is shown, not stored
   }
 }
 
-void ResultWriter::note(const std::string& kind, const std::string& code,
-                        const std::string& field, const std::string& message) {
+void ResultWriter::note(const std::string& kind, const std::string& code, const std::string& field,
+                        const std::string& message) {
   *warnings_file_ << kind << " [" << code << "] " << field << ": " << message << '\n';
 }
 

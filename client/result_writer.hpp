@@ -38,8 +38,7 @@ class ResultWriter {
   const std::filesystem::path& directory() const { return directory_; }
 
  private:
-  void note(const std::string& kind, const std::string& code, const std::string& field,
-            const std::string& message);
+  void note(const std::string& kind, const std::string& code, const std::string& field, const std::string& message);
 
   std::filesystem::path directory_;
   session::ResultFiles files_;

@@ -19,8 +19,9 @@ const std::vector<std::string> kColumns = {"t_us", "gx", "gy", "gz", "payload"};
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
   fuzz::init_harness([] {
-    return fuzz::Seeds{{"imu.csv", "t_us,gx,gy,gz,payload\n1000,0.5,-1e-3,nan,00ff\n"
-                                   "2000,inf,-inf,3.25,\r\n\n-9223372036854775808,1,2,3,AbCd\n"}};
+    return fuzz::Seeds{{"imu.csv",
+                        "t_us,gx,gy,gz,payload\n1000,0.5,-1e-3,nan,00ff\n"
+                        "2000,inf,-inf,3.25,\r\n\n-9223372036854775808,1,2,3,AbCd\n"}};
   });
   return 0;
 }

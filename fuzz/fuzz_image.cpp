@@ -22,20 +22,17 @@ enum Decoder : std::uint8_t { kDepth, kBodyIndex, kColor, kPngSize, kJpegSize, k
 
 std::string input(Decoder decoder, int encoding, std::uint16_t width, std::uint16_t height,
                   const std::string& payload) {
-  std::string out{static_cast<char>(decoder), static_cast<char>(encoding),
-                  static_cast<char>(width & 0xFF), static_cast<char>(width >> 8),
-                  static_cast<char>(height & 0xFF), static_cast<char>(height >> 8)};
+  std::string out{static_cast<char>(decoder),    static_cast<char>(encoding),      static_cast<char>(width & 0xFF),
+                  static_cast<char>(width >> 8), static_cast<char>(height & 0xFF), static_cast<char>(height >> 8)};
   return out + payload;
 }
 
-void check(const cv::Mat& image, std::uint32_t width, std::uint32_t height, int type,
-           const char* what) {
+void check(const cv::Mat& image, std::uint32_t width, std::uint32_t height, int type, const char* what) {
   if (image.empty() || static_cast<std::uint32_t>(image.cols) != width ||
       static_cast<std::uint32_t>(image.rows) != height || image.type() != type) {
     fuzz::invariant_failed(std::string(what) + ": decoded " + std::to_string(image.cols) + "x" +
-                           std::to_string(image.rows) + " type " + std::to_string(image.type()) +
-                           ", the chunk says " + std::to_string(width) + "x" +
-                           std::to_string(height));
+                           std::to_string(image.rows) + " type " + std::to_string(image.type()) + ", the chunk says " +
+                           std::to_string(width) + "x" + std::to_string(height));
   }
 }
 
@@ -51,16 +48,21 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
     const cv::Mat ids(6, 8, CV_8UC1, cv::Scalar(1));
     fuzz::Seeds seeds;
     for (const auto e : {v1::DepthFrame::RAW_U16_LE, v1::DepthFrame::PNG16, v1::DepthFrame::ZSTD_U16_LE}) {
-      seeds.push_back({"depth-" + std::to_string(e), input(kDepth, e, 8, 6, session::encode_depth(depth, e, 0).data())});
+      seeds.push_back(
+          {"depth-" + std::to_string(e), input(kDepth, e, 8, 6, session::encode_depth(depth, e, 0).data())});
     }
     for (const auto e : {v1::BodyIndexFrame::RAW_U8, v1::BodyIndexFrame::PNG8}) {
       seeds.push_back({"body-index-" + std::to_string(e),
                        input(kBodyIndex, e, 8, 6, session::encode_body_index(ids, e, 0).data())});
     }
-    seeds.push_back({"color-png-bgr", input(kColor, v1::ColorFrame::PNG, 8, 6, fuzz::encoded_image(8, 6, CV_8UC3, ".png"))});
-    seeds.push_back({"color-png-grey", input(kColor, v1::ColorFrame::PNG, 8, 6, fuzz::encoded_image(8, 6, CV_8UC1, ".png"))});
-    seeds.push_back({"color-jpeg-bgr", input(kColor, v1::ColorFrame::JPEG, 8, 6, fuzz::encoded_image(8, 6, CV_8UC3, ".jpg"))});
-    seeds.push_back({"color-jpeg-grey", input(kColor, v1::ColorFrame::JPEG, 16, 16, fuzz::encoded_image(16, 16, CV_8UC1, ".jpg"))});
+    seeds.push_back(
+        {"color-png-bgr", input(kColor, v1::ColorFrame::PNG, 8, 6, fuzz::encoded_image(8, 6, CV_8UC3, ".png"))});
+    seeds.push_back(
+        {"color-png-grey", input(kColor, v1::ColorFrame::PNG, 8, 6, fuzz::encoded_image(8, 6, CV_8UC1, ".png"))});
+    seeds.push_back(
+        {"color-jpeg-bgr", input(kColor, v1::ColorFrame::JPEG, 8, 6, fuzz::encoded_image(8, 6, CV_8UC3, ".jpg"))});
+    seeds.push_back(
+        {"color-jpeg-grey", input(kColor, v1::ColorFrame::JPEG, 16, 16, fuzz::encoded_image(16, 16, CV_8UC1, ".jpg"))});
     seeds.push_back({"png-size", input(kPngSize, 0, 0, 0, fuzz::encoded_image(8, 6, CV_16UC1, ".png"))});
     seeds.push_back({"jpeg-size", input(kJpegSize, 0, 0, 0, fuzz::encoded_image(8, 6, CV_8UC1, ".jpg"))});
     return seeds;
@@ -106,8 +108,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       }
       case kPngSize: {
         const session::ImageSize s = session::png_size(payload, "png");
-        if (s.width == 0 || s.height == 0 || s.width > session::kMaxImageSide ||
-            s.height > session::kMaxImageSide) {
+        if (s.width == 0 || s.height == 0 || s.width > session::kMaxImageSide || s.height > session::kMaxImageSide) {
           fuzz::invariant_failed("png_size out of range");
         }
         break;

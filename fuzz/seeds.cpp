@@ -3,11 +3,11 @@
 #include <sys/mman.h>
 #include <unistd.h>
 
+#include <google/protobuf/stubs/logging.h>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
-#include <google/protobuf/stubs/logging.h>
 #include <opencv2/core/utils/logger.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -82,8 +82,8 @@ v1::SessionHeader tiny_header() {
   h.set_subject_id("S-fuzz");
   h.set_sex(v1::SessionHeader::FEMALE);
   h.set_height_m(1.7);
-  const std::pair<const char*, v1::ImuDevice::Role> devices[] = {
-      {"wrist_l", v1::ImuDevice::ARM_LEFT}, {"base", v1::ImuDevice::BASE}};
+  const std::pair<const char*, v1::ImuDevice::Role> devices[] = {{"wrist_l", v1::ImuDevice::ARM_LEFT},
+                                                                 {"base", v1::ImuDevice::BASE}};
   for (const auto& [id, role] : devices) {
     v1::ImuDevice* d = h.add_imu_devices();
     d->set_device_id(id);
@@ -105,16 +105,16 @@ v1::SessionHeader tiny_header() {
 std::vector<v1::SessionChunk> tiny_session() {
   std::vector<v1::SessionChunk> chunks;
   *chunks.emplace_back().mutable_header() = tiny_header();
-  const v1::DepthFrame::Encoding depth_encodings[] = {
-      v1::DepthFrame::RAW_U16_LE, v1::DepthFrame::PNG16, v1::DepthFrame::ZSTD_U16_LE};
+  const v1::DepthFrame::Encoding depth_encodings[] = {v1::DepthFrame::RAW_U16_LE, v1::DepthFrame::PNG16,
+                                                      v1::DepthFrame::ZSTD_U16_LE};
   for (int f = 0; f < 3; ++f) {
     const std::int64_t t_us = kStartUs + f * kFrameUs;
     *chunks.emplace_back().mutable_depth() =
         session::encode_depth(gradient(kWidth, kHeight, CV_16UC1), depth_encodings[f], t_us);
     cv::Mat ids(kHeight, kWidth, CV_8UC1, cv::Scalar(255));
     ids(cv::Rect(2, 1, 3, 4)).setTo(1);
-    *chunks.emplace_back().mutable_body_index() = session::encode_body_index(
-        ids, f % 2 ? v1::BodyIndexFrame::PNG8 : v1::BodyIndexFrame::RAW_U8, t_us);
+    *chunks.emplace_back().mutable_body_index() =
+        session::encode_body_index(ids, f % 2 ? v1::BodyIndexFrame::PNG8 : v1::BodyIndexFrame::RAW_U8, t_us);
     *chunks.emplace_back().mutable_skeleton() = skeleton(t_us);
     v1::ColorFrame* color = chunks.emplace_back().mutable_color();
     color->set_t_us(t_us + 1'000);

@@ -16,10 +16,8 @@ class FitSession::Sink : public session::ResultSink {
   FitSession& session_;
 };
 
-
-FitSession* FitSession::start(grpc::CallbackServerContext* context, std::uint64_t id,
-                              const ServerOptions& options, WorkerPool& pool,
-                              SessionRegistry& registry, Metrics& metrics) {
+FitSession* FitSession::start(grpc::CallbackServerContext* context, std::uint64_t id, const ServerOptions& options,
+                              WorkerPool& pool, SessionRegistry& registry, Metrics& metrics) {
   auto session = std::make_shared<FitSession>(context, id, options, pool, registry, metrics);
   session->self_ = session;
   session->sink_ = std::make_unique<Sink>(*session);
@@ -27,8 +25,8 @@ FitSession* FitSession::start(grpc::CallbackServerContext* context, std::uint64_
   pipeline_options.on_stage_time = [&metrics](std::string_view stage, double seconds) {
     metrics.stage_time(stage, seconds);
   };
-  session->pipeline_ = std::make_unique<session::SessionPipeline>(
-      session::make_default_stages(), *session->sink_, pipeline_options);
+  session->pipeline_ =
+      std::make_unique<session::SessionPipeline>(session::make_default_stages(), *session->sink_, pipeline_options);
   metrics.session_started();
   registry.watch(id, session);
   log_event("info", "session_start", {{"session", std::to_string(id)}, {"peer", context->peer()}});
@@ -37,15 +35,9 @@ FitSession* FitSession::start(grpc::CallbackServerContext* context, std::uint64_
   return session.get();
 }
 
-FitSession::FitSession(grpc::CallbackServerContext* context, std::uint64_t id,
-                       const ServerOptions& options, WorkerPool& pool, SessionRegistry& registry,
-                       Metrics& metrics)
-    : context_(context),
-      id_(id),
-      options_(options),
-      pool_(pool),
-      registry_(registry),
-      metrics_(metrics) {}
+FitSession::FitSession(grpc::CallbackServerContext* context, std::uint64_t id, const ServerOptions& options,
+                       WorkerPool& pool, SessionRegistry& registry, Metrics& metrics)
+    : context_(context), id_(id), options_(options), pool_(pool), registry_(registry), metrics_(metrics) {}
 
 void FitSession::clear_inbox_locked() {
   metrics_.queued_chunks_add(-static_cast<std::int64_t>(inbox_.size()));
@@ -120,14 +112,12 @@ void FitSession::work() {
       }
       if (pipeline_->ended()) status = grpc::Status::OK;
     } catch (const Error& error) {
-      log_event("info", "session_error", {{"session", std::to_string(id_)},
-                                          {"code", error_code_name(error.code())},
-                                          {"field", error.field()}});
+      log_event("info", "session_error",
+                {{"session", std::to_string(id_)}, {"code", error_code_name(error.code())}, {"field", error.field()}});
       status = to_status(error);
     } catch (const std::exception& error) {
       log_event("error", "session_internal_error", {{"session", std::to_string(id_)}});
-      status = grpc::Status(grpc::StatusCode::INTERNAL,
-                            std::string("internal error: ") + error.what());
+      status = grpc::Status(grpc::StatusCode::INTERNAL, std::string("internal error: ") + error.what());
     }
     if (status) {
       std::lock_guard lock(mu_);
@@ -213,14 +203,13 @@ void FitSession::OnCancel() {
 void FitSession::check_idle(Clock::time_point now) {
   std::lock_guard lock(mu_);
   if (finished_ || final_status_) return;
-  const bool waiting_for_client = (read_pending_ && inbox_.empty() && !worker_scheduled_) ||
-                                  write_pending_;
+  const bool waiting_for_client = (read_pending_ && inbox_.empty() && !worker_scheduled_) || write_pending_;
   if (!waiting_for_client) return;
   if (now - last_read_at_ < std::chrono::duration<double>(options_.idle_timeout_s)) return;
   log_event("info", "session_idle", {{"session", std::to_string(id_)}});
-  final_status_ = grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED,
-                               "no message from the client for " +
-                                   std::to_string(options_.idle_timeout_s) + " s (idle timeout)");
+  final_status_ =
+      grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED,
+                   "no message from the client for " + std::to_string(options_.idle_timeout_s) + " s (idle timeout)");
   clear_inbox_locked();
   outbox_.clear();
   if (write_pending_) {

@@ -39,9 +39,8 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
                    public std::enable_shared_from_this<FitSession> {
  public:
   // Starts the call; the returned reactor keeps itself alive until OnDone.
-  static FitSession* start(grpc::CallbackServerContext* context, std::uint64_t id,
-                           const ServerOptions& options, WorkerPool& pool,
-                           SessionRegistry& registry, Metrics& metrics);
+  static FitSession* start(grpc::CallbackServerContext* context, std::uint64_t id, const ServerOptions& options,
+                           WorkerPool& pool, SessionRegistry& registry, Metrics& metrics);
 
   void OnReadDone(bool ok) override;
   void OnWriteDone(bool ok) override;
@@ -50,8 +49,8 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
   void check_idle(std::chrono::steady_clock::time_point now) override;
 
   // Use start(); public only for make_shared.
-  FitSession(grpc::CallbackServerContext* context, std::uint64_t id, const ServerOptions& options,
-             WorkerPool& pool, SessionRegistry& registry, Metrics& metrics);
+  FitSession(grpc::CallbackServerContext* context, std::uint64_t id, const ServerOptions& options, WorkerPool& pool,
+             SessionRegistry& registry, Metrics& metrics);
 
  private:
   class Sink;
@@ -79,7 +78,7 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
   std::shared_ptr<FitSession> self_;  // released in OnDone
   v1::SessionChunk read_buffer_;
   bool read_pending_ = false;
-  bool input_closed_ = false;          // the client half-closed (or the read side failed)
+  bool input_closed_ = false;  // the client half-closed (or the read side failed)
   std::deque<v1::SessionChunk> inbox_;
   bool worker_scheduled_ = false;
   bool worker_waits_for_writes_ = false;
@@ -89,7 +88,7 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
   std::optional<grpc::Status> final_status_;  // decided; sent once the outbox is empty
   bool finished_ = false;                     // Finish() was called
   Clock::time_point last_read_at_ = Clock::now();
-  std::uint64_t chunks_read_ = 0;   // for the log line
+  std::uint64_t chunks_read_ = 0;  // for the log line
   std::uint64_t item_errors_ = 0;
 
   // Used only by the task running work() (one at a time).

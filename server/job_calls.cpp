@@ -153,8 +153,7 @@ class JobResults : public QueuedWriter<v1::FitResult> {
     }
     if (!is_terminal(record->job.state())) {
       finish(grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
-                          "job_id: job '" + id + "' is " +
-                              v1::Job::State_Name(record->job.state()) +
+                          "job_id: job '" + id + "' is " + v1::Job::State_Name(record->job.state()) +
                               "; its results are complete when it has finished (WatchJob)"));
       return;
     }
@@ -191,8 +190,7 @@ fs::path resolve_recording(const std::string& uri, const fs::path& root) {
   return resolved;
 }
 
-grpc::ServerWriteReactor<v1::Job>* watch_job(JobRunner& runner, const std::string& job_id,
-                                             const std::string& tenant) {
+grpc::ServerWriteReactor<v1::Job>* watch_job(JobRunner& runner, const std::string& job_id, const std::string& tenant) {
   auto watcher = std::make_shared<WatchJob>(runner, job_id);
   watcher->start(watcher, tenant);
   return watcher.get();

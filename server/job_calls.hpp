@@ -18,8 +18,7 @@ namespace posefuse::server {
 std::filesystem::path resolve_recording(const std::string& uri, const std::filesystem::path& root);
 
 // Both answer NOT_FOUND for a job of another tenant than `tenant`, as for a missing one.
-grpc::ServerWriteReactor<v1::Job>* watch_job(JobRunner& runner, const std::string& job_id,
-                                             const std::string& tenant);
+grpc::ServerWriteReactor<v1::Job>* watch_job(JobRunner& runner, const std::string& job_id, const std::string& tenant);
 grpc::ServerWriteReactor<v1::FitResult>* job_results(JobRunner& runner, const std::string& job_id,
                                                      const std::string& tenant);
 

@@ -13,8 +13,7 @@ namespace {
 
 // The recording, opened beneath the root. resolve_recording stored its path below the root's
 // canonical form.
-session::UniqueFd open_under_root(const fs::path& recording, const fs::path& root,
-                                  const std::string& field) {
+session::UniqueFd open_under_root(const fs::path& recording, const fs::path& root, const std::string& field) {
   if (root.empty()) {
     throw Error(ErrorCode::kFailedPrecondition, field,
                 "the server was started without --recordings-root; submit by reference is off");
@@ -30,21 +29,18 @@ session::UniqueFd open_under_root(const fs::path& recording, const fs::path& roo
 
 }  // namespace
 
-std::unique_ptr<session::ChunkSource> open_job_recording(const JobRecord& record,
-                                                         const fs::path& recordings_root) {
+std::unique_ptr<session::ChunkSource> open_job_recording(const JobRecord& record, const fs::path& recordings_root) {
   const bool by_reference = !record.job.recording_uri().empty();
   const std::string field = by_reference ? "spec.recording_uri" : "recording";
-  session::UniqueFd opened =
-      by_reference ? open_under_root(record.recording_path, recordings_root, field)
-                   : session::open_path(record.recording_path, field);
+  session::UniqueFd opened = by_reference ? open_under_root(record.recording_path, recordings_root, field)
+                                          : session::open_path(record.recording_path, field);
   switch (session::file_kind(opened.get())) {
-    case session::FileKind::kDirectory:
-      return std::make_unique<session::DirectoryReader>(std::move(opened), field);
-    case session::FileKind::kRegular:
-      return std::make_unique<session::ChunkFileReader>(std::move(opened), field);
+    case session::FileKind::kDirectory: return std::make_unique<session::DirectoryReader>(std::move(opened), field);
+    case session::FileKind::kRegular: return std::make_unique<session::ChunkFileReader>(std::move(opened), field);
     default:
-      throw_invalid(field, "is neither a regular file nor a directory (FIFOs, devices and "
-                           "sockets are refused)");
+      throw_invalid(field,
+                    "is neither a regular file nor a directory (FIFOs, devices and "
+                    "sockets are refused)");
   }
 }
 

@@ -20,8 +20,7 @@ namespace posefuse::server {
 namespace {
 
 std::int64_t now_unix_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
       .count();
 }
 
@@ -29,8 +28,7 @@ std::int64_t now_unix_us() {
 std::string make_worker_id() {
   char host[256] = {};
   if (::gethostname(host, sizeof host - 1) != 0) host[0] = '\0';
-  return std::string(host[0] ? host : "worker") + "-" + std::to_string(::getpid()) + "-" +
-         random_hex_id().substr(0, 8);
+  return std::string(host[0] ? host : "worker") + "-" + std::to_string(::getpid()) + "-" + random_hex_id().substr(0, 8);
 }
 
 // A write to the job store that failed (a full disk, an I/O error). A type of its own, not a
@@ -38,8 +36,7 @@ std::string make_worker_id() {
 // on, but a job whose results cannot be stored must stop.
 class StoreWriteFailed : public std::runtime_error {
  public:
-  explicit StoreWriteFailed(const Error& error)
-      : std::runtime_error(error.what()), code_(error.code()) {}
+  explicit StoreWriteFailed(const Error& error) : std::runtime_error(error.what()), code_(error.code()) {}
   ErrorCode code() const { return code_; }
 
  private:
@@ -50,8 +47,7 @@ class StoreWriteFailed : public std::runtime_error {
 // reached (the lease then expires and another attempt runs the job).
 class RunAbandoned : public std::runtime_error {
  public:
-  RunAbandoned(const char* reason, bool lease_lost)
-      : std::runtime_error(reason), lease_lost_(lease_lost) {}
+  RunAbandoned(const char* reason, bool lease_lost) : std::runtime_error(reason), lease_lost_(lease_lost) {}
   bool lease_lost() const { return lease_lost_; }
 
  private:
@@ -74,8 +70,7 @@ void store_write(Write&& write) {
 // Buffers a job's results and writes them to the store in batches; keeps the job's progress.
 class StoreSink : public session::ResultSink {
  public:
-  StoreSink(JobStore& store, const JobLease& lease, v1::Job& job)
-      : store_(store), lease_(lease), job_(job) {}
+  StoreSink(JobStore& store, const JobLease& lease, v1::Job& job) : store_(store), lease_(lease), job_(job) {}
   void emit(v1::FitResult&& result) override {
     if (result.has_progress()) *job_.mutable_progress() = result.progress();
     if (result.has_summary()) *job_.mutable_summary() = result.summary();
@@ -137,9 +132,10 @@ JobRunner::~JobRunner() {
 
 void JobRunner::start() {
   if (!options_.claims_jobs) return;
-  log_event("info", "job_worker_start", {{"worker", worker_id_},
-                                         {"max_jobs", std::to_string(options_.max_running)},
-                                         {"lease_ms", std::to_string(options_.lease.count())}});
+  log_event("info", "job_worker_start",
+            {{"worker", worker_id_},
+             {"max_jobs", std::to_string(options_.max_running)},
+             {"lease_ms", std::to_string(options_.lease.count())}});
   dispatcher_ = std::thread([this] { dispatch_loop(); });
 }
 
@@ -221,15 +217,13 @@ void JobRunner::claim_more() {
     auto running = std::make_shared<Running>();
     running->lease = {record->job.job_id(), worker_id_, record->attempts};
     running_[record->job.job_id()] = running;
-    log_event("info", "job_claimed", {{"job", record->job.job_id()},
-                                      {"attempt", std::to_string(record->attempts)},
-                                      {"worker", worker_id_}});
+    log_event("info", "job_claimed",
+              {{"job", record->job.job_id()}, {"attempt", std::to_string(record->attempts)}, {"worker", worker_id_}});
     pool_.submit([this, running, record = std::move(*record)]() mutable { run(running, std::move(record)); });
   }
 }
 
-v1::Job JobRunner::submit(const v1::JobSpec& spec, const std::string& recording_path,
-                          const std::string& owner) {
+v1::Job JobRunner::submit(const v1::JobSpec& spec, const std::string& recording_path, const std::string& owner) {
   const v1::Job job = store_.create(spec, recording_path, owner, now_unix_us());
   log_event("info", "job_submitted", {{"job", job.job_id()}});
   {
@@ -346,8 +340,7 @@ void JobRunner::run_job(Running& running, JobRecord& record) {
   if (abandoned) return;
   if (store_failure) {
     fail_job(job, status_code(store_failure->code()),
-             std::string("the job store refused a write, the job's results are incomplete: ") +
-                 store_failure->what());
+             std::string("the job store refused a write, the job's results are incomplete: ") + store_failure->what());
     log_event("error", "job_store_write_failed", {{"job", job_id}});
   }
   job.set_update_time_unix_us(now_unix_us());
@@ -368,8 +361,8 @@ void JobRunner::run_job(Running& running, JobRecord& record) {
   }
   drop_upload(record);
   metrics_.job_finished(v1::Job::State_Name(job.state()));
-  log_event("info", "job_end", {{"job", job_id}, {"state", v1::Job::State_Name(job.state())},
-                                {"attempt", std::to_string(lease.attempt)}});
+  log_event("info", "job_end",
+            {{"job", job_id}, {"state", v1::Job::State_Name(job.state())}, {"attempt", std::to_string(lease.attempt)}});
 }
 
 void JobRunner::on_event(const JobEvent& event) {
@@ -382,9 +375,7 @@ void JobRunner::on_event(const JobEvent& event) {
       wake_cv_.notify_all();
       return;
     }
-    case JobEvent::Kind::kChanged:
-      publish_stored(event.job_id);
-      return;
+    case JobEvent::Kind::kChanged: publish_stored(event.job_id); return;
     case JobEvent::Kind::kCancelRequested: {
       std::lock_guard lock(mu_);
       if (const auto it = running_.find(event.job_id); it != running_.end()) it->second->cancel = true;
@@ -445,9 +436,8 @@ void JobRunner::publish(const v1::Job& job) {
 
 bool JobRunner::wait_idle(std::chrono::milliseconds timeout) {
   std::unique_lock lock(mu_);
-  return idle_.wait_for(lock, timeout, [this] {
-    return running_.empty() && (!options_.claims_jobs || (queue_empty_ && !wake_));
-  });
+  return idle_.wait_for(lock, timeout,
+                        [this] { return running_.empty() && (!options_.claims_jobs || (queue_empty_ && !wake_)); });
 }
 
 }  // namespace posefuse::server

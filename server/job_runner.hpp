@@ -48,8 +48,7 @@ class JobRunner {
   // Starts claiming (with claims_jobs). Call once, when the server serves.
   void start();
   // Stores a new job of tenant `owner`; any worker on the store may run it.
-  v1::Job submit(const v1::JobSpec& spec, const std::string& recording_path,
-                 const std::string& owner);
+  v1::Job submit(const v1::JobSpec& spec, const std::string& recording_path, const std::string& owner);
   // Cancels a queued or running job of tenant `owner` (a running one stops on its worker,
   // wherever that is); a finished job is returned unchanged. nullopt: no such job of that tenant.
   std::optional<v1::Job> cancel(const std::string& job_id, const std::string& owner);
@@ -93,8 +92,8 @@ class JobRunner {
   std::condition_variable wake_cv_;
   std::condition_variable idle_;
   std::map<std::string, std::shared_ptr<Running>> running_;
-  bool wake_ = false;          // something to claim may be there
-  bool queue_empty_ = false;   // the last claim found nothing
+  bool wake_ = false;         // something to claim may be there
+  bool queue_empty_ = false;  // the last claim found nothing
   bool stopping_ = false;
   bool claim_failed_ = false;  // logged once per streak of failures
   std::atomic<bool> stop_flag_{false};

@@ -64,20 +64,18 @@ class JobStore {
 
   // A new QUEUED job of tenant `owner` with a fresh unique id; create and update times set to
   // `now_unix_us`.
-  virtual v1::Job create(const v1::JobSpec& spec, const std::string& recording_path,
-                         const std::string& owner, std::int64_t now_unix_us) = 0;
+  virtual v1::Job create(const v1::JobSpec& spec, const std::string& recording_path, const std::string& owner,
+                         std::int64_t now_unix_us) = 0;
   virtual std::optional<JobRecord> get(const std::string& job_id) = 0;
   // The jobs of tenant `owner`, newest first. `after_job_id` continues a listing after that job
   // (page token); `states` filters (empty = all). At most `limit` jobs.
   virtual std::vector<v1::Job> list(std::size_t limit, const std::string& after_job_id,
-                                    const std::vector<v1::Job::State>& states,
-                                    const std::string& owner) = 0;
+                                    const std::vector<v1::Job::State>& states, const std::string& owner) = 0;
   // Replaces the stored job of the same id whatever holds it (tests and tools set up states
   // with it; workers write through update_running). Throws kNotFound for an unknown id.
   virtual void update(const v1::Job& job) = 0;
   // Results in order; append continues the sequence (unfenced, as update).
-  virtual void append_results(const std::string& job_id,
-                              const std::vector<v1::FitResult>& results) = 0;
+  virtual void append_results(const std::string& job_id, const std::vector<v1::FitResult>& results) = 0;
   virtual std::vector<v1::FitResult> results(const std::string& job_id) = 0;
 
   // Cancels a job of tenant `owner`: a QUEUED one becomes CANCELLED at once, a RUNNING one is
@@ -88,8 +86,7 @@ class JobStore {
 
   // The oldest QUEUED job, now RUNNING under a lease of `lease` for `worker`, its attempts
   // counted and any results of an earlier attempt dropped. nullopt when none is queued.
-  virtual std::optional<JobRecord> claim(const std::string& worker,
-                                         std::chrono::milliseconds lease,
+  virtual std::optional<JobRecord> claim(const std::string& worker, std::chrono::milliseconds lease,
                                          std::int64_t now_unix_us) = 0;
   // Extends a held lease by `lease` from now.
   virtual LeaseState renew(const JobLease& lease, std::chrono::milliseconds duration) = 0;
@@ -117,8 +114,7 @@ class JobStore {
   virtual std::string keep_upload(const std::filesystem::path& spooled) = 0;
   virtual std::filesystem::path local_recording(const std::string& recording_path,
                                                 const std::filesystem::path& scratch_dir) = 0;
-  virtual void drop_upload(const std::string& recording_path,
-                           const std::filesystem::path& scratch_dir) = 0;
+  virtual void drop_upload(const std::string& recording_path, const std::filesystem::path& scratch_dir) = 0;
 };
 
 }  // namespace posefuse::server

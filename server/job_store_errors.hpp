@@ -11,8 +11,7 @@ namespace posefuse::server {
 // lease (another attempt runs it) instead of failing.
 class StoreUnavailable : public Error {
  public:
-  explicit StoreUnavailable(const std::string& message)
-      : Error(ErrorCode::kFailedPrecondition, "job_store", message) {}
+  explicit StoreUnavailable(const std::string& message) : Error(ErrorCode::kFailedPrecondition, "job_store", message) {}
 };
 
 // A worker's write under a lease that no longer holds the job (it expired and another attempt

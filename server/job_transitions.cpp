@@ -55,8 +55,8 @@ v1::Job::State mark_lease_expired(v1::Job& job, std::uint32_t attempts, std::uin
     job.set_error_message("job: its worker's lease expired " + std::to_string(attempts) +
                           (attempts == 1 ? " time" : " times") +
                           " (the worker stopped or lost the job store each time; "
-                          "--job-max-attempts " + std::to_string(max_attempts) +
-                          "); not run again");
+                          "--job-max-attempts " +
+                          std::to_string(max_attempts) + "); not run again");
     job.set_update_time_unix_us(now_unix_us);
   } else {
     mark_queued_again(job, now_unix_us);

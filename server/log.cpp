@@ -15,9 +15,8 @@ std::string utc_now() {
   std::tm tm{};
   gmtime_r(&seconds, &tm);
   char text[64];
-  std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900,
-                tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec,
-                static_cast<int>(ms.count()));
+  std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900, tm.tm_mon + 1, tm.tm_mday,
+                tm.tm_hour, tm.tm_min, tm.tm_sec, static_cast<int>(ms.count()));
   return text;
 }
 
@@ -37,10 +36,8 @@ void append_value(std::string& line, const std::string& value) {
 
 }  // namespace
 
-void log_event(std::string_view level, std::string_view event,
-               std::initializer_list<LogField> fields) {
-  std::string line = "time=" + utc_now() + " level=" + std::string(level) +
-                     " event=" + std::string(event);
+void log_event(std::string_view level, std::string_view event, std::initializer_list<LogField> fields) {
+  std::string line = "time=" + utc_now() + " level=" + std::string(level) + " event=" + std::string(event);
   for (const auto& [key, value] : fields) {
     line += ' ';
     line += key;

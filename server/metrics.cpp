@@ -70,8 +70,7 @@ std::string Metrics::render(const Gauges& gauges) const {
   sample(out, "posefuse_chunks_received_total", "", static_cast<double>(chunks_received_.load()));
   header(out, "posefuse_item_errors_total", "counter", "Chunks or items answered with ItemError.");
   sample(out, "posefuse_item_errors_total", "", static_cast<double>(item_errors_.load()));
-  header(out, "posefuse_queued_chunks", "gauge",
-         "Chunks received and waiting for the pipeline, over all sessions.");
+  header(out, "posefuse_queued_chunks", "gauge", "Chunks received and waiting for the pipeline, over all sessions.");
   sample(out, "posefuse_queued_chunks", "", static_cast<double>(queued_chunks_.load()));
   header(out, "posefuse_worker_queue_depth", "gauge", "Tasks waiting for a worker thread.");
   sample(out, "posefuse_worker_queue_depth", "", static_cast<double>(gauges.worker_queue));
@@ -81,13 +80,11 @@ std::string Metrics::render(const Gauges& gauges) const {
   std::lock_guard lock(mu_);
   header(out, "posefuse_sessions_finished_total", "counter", "Fit calls finished, by status.");
   for (const auto& [status, n] : sessions_finished_) {
-    sample(out, "posefuse_sessions_finished_total", "status=\"" + status + "\"",
-           static_cast<double>(n));
+    sample(out, "posefuse_sessions_finished_total", "status=\"" + status + "\"", static_cast<double>(n));
   }
   header(out, "posefuse_stage_calls_total", "counter", "Pipeline stage calls, by stage.");
   for (const auto& [stage, totals] : stages_) {
-    sample(out, "posefuse_stage_calls_total", "stage=\"" + stage + "\"",
-           static_cast<double>(totals.calls));
+    sample(out, "posefuse_stage_calls_total", "stage=\"" + stage + "\"", static_cast<double>(totals.calls));
   }
   header(out, "posefuse_stage_seconds_total", "counter", "Wall time in pipeline stages, by stage.");
   for (const auto& [stage, totals] : stages_) {

@@ -35,8 +35,7 @@ class Metrics {
     std::uint64_t calls = 0;
     double seconds = 0.0;
   };
-  std::atomic<std::uint64_t> sessions_started_{0}, sessions_refused_{0}, chunks_received_{0},
-      item_errors_{0};
+  std::atomic<std::uint64_t> sessions_started_{0}, sessions_refused_{0}, chunks_received_{0}, item_errors_{0};
   std::atomic<std::int64_t> queued_chunks_{0};
   mutable std::mutex mu_;
   std::map<std::string, std::uint64_t, std::less<>> sessions_finished_;  // by status

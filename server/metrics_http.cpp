@@ -15,8 +15,7 @@ namespace posefuse::server {
 namespace {
 
 [[noreturn]] void fail(const std::string& listen, const std::string& what) {
-  throw Error(ErrorCode::kFailedPrecondition, "--metrics-listen",
-              "cannot listen on '" + listen + "': " + what);
+  throw Error(ErrorCode::kFailedPrecondition, "--metrics-listen", "cannot listen on '" + listen + "': " + what);
 }
 
 void send_all(int fd, const std::string& bytes) {
@@ -52,8 +51,7 @@ MetricsHttpServer::MetricsHttpServer(const std::string& listen, std::function<st
   if (listen_fd_ < 0) fail(listen, std::strerror(errno));
   const int yes = 1;
   ::setsockopt(listen_fd_, SOL_SOCKET, SO_REUSEADDR, &yes, sizeof yes);
-  if (::bind(listen_fd_, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0 ||
-      ::listen(listen_fd_, 8) != 0) {
+  if (::bind(listen_fd_, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0 || ::listen(listen_fd_, 8) != 0) {
     const std::string why = std::strerror(errno);
     ::close(listen_fd_);
     fail(listen, why);
@@ -93,10 +91,9 @@ void MetricsHttpServer::answer(int connection) {
   }
   const bool metrics = request.rfind("GET /metrics ", 0) == 0 || request.rfind("GET /metrics?", 0) == 0;
   const std::string body = metrics ? render_() : "not found; try /metrics\n";
-  const std::string head =
-      std::string(metrics ? "HTTP/1.1 200 OK\r\n" : "HTTP/1.1 404 Not Found\r\n") +
-      "Content-Type: text/plain; version=0.0.4; charset=utf-8\r\n" +
-      "Content-Length: " + std::to_string(body.size()) + "\r\nConnection: close\r\n\r\n";
+  const std::string head = std::string(metrics ? "HTTP/1.1 200 OK\r\n" : "HTTP/1.1 404 Not Found\r\n") +
+                           "Content-Type: text/plain; version=0.0.4; charset=utf-8\r\n" +
+                           "Content-Length: " + std::to_string(body.size()) + "\r\nConnection: close\r\n\r\n";
   send_all(connection, head + body);
 }
 

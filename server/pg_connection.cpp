@@ -17,9 +17,7 @@ std::string trimmed(const char* text) {
 
 // SQLSTATE classes that mean the server is away rather than the statement being wrong:
 // 08 connection exception, 57P0x the server shutting down or starting.
-bool server_away(const std::string& sqlstate) {
-  return sqlstate.rfind("08", 0) == 0 || sqlstate.rfind("57P0", 0) == 0;
-}
+bool server_away(const std::string& sqlstate) { return sqlstate.rfind("08", 0) == 0 || sqlstate.rfind("57P0", 0) == 0; }
 
 }  // namespace
 
@@ -28,22 +26,19 @@ PgParam pg_int(std::int64_t value) { return {std::to_string(value), false}; }
 PgParam pg_bytes(std::string value) { return {std::move(value), true}; }
 
 std::string pg_string(const PGresult* result, int row, int column) {
-  return std::string(PQgetvalue(result, row, column),
-                     static_cast<std::size_t>(PQgetlength(result, row, column)));
+  return std::string(PQgetvalue(result, row, column), static_cast<std::size_t>(PQgetlength(result, row, column)));
 }
 
 std::int64_t pg_int64(const PGresult* result, int row, int column) {
   return std::stoll(pg_string(result, row, column));
 }
 
-bool pg_bool(const PGresult* result, int row, int column) {
-  return PQgetvalue(result, row, column)[0] == 't';
-}
+bool pg_bool(const PGresult* result, int row, int column) { return PQgetvalue(result, row, column)[0] == 't'; }
 
 std::string pg_bytea(const PGresult* result, int row, int column) {
   std::size_t length = 0;
-  unsigned char* bytes = PQunescapeBytea(
-      reinterpret_cast<const unsigned char*>(PQgetvalue(result, row, column)), &length);
+  unsigned char* bytes =
+      PQunescapeBytea(reinterpret_cast<const unsigned char*>(PQgetvalue(result, row, column)), &length);
   if (!bytes) throw Error(ErrorCode::kResourceExhausted, "job_store", "out of memory reading bytea");
   std::string out(reinterpret_cast<const char*>(bytes), length);
   PQfreemem(bytes);
@@ -56,8 +51,7 @@ void check_conninfo(const std::string& conninfo, const std::string& field) {
   if (!options) {
     const std::string reason = message ? trimmed(message) : "out of memory";
     PQfreemem(message);
-    throw_invalid(field, "is not a PostgreSQL connection string (postgresql://... or key=value): " +
-                             reason);
+    throw_invalid(field, "is not a PostgreSQL connection string (postgresql://... or key=value): " + reason);
   }
   PQconninfoFree(options);
 }
@@ -70,7 +64,8 @@ PgConnection::PgConnection(const std::string& conninfo) : conn_(PQconnectdb(conn
     throw StoreUnavailable("cannot connect to the PostgreSQL job store: " + reason);
   }
   // Notices (e.g. "relation already exists, skipping") are not ours to print.
-  PQsetNoticeProcessor(conn_, [](void*, const char*) {}, nullptr);
+  PQsetNoticeProcessor(
+      conn_, [](void*, const char*) {}, nullptr);
 }
 
 PgConnection::~PgConnection() { PQfinish(conn_); }
@@ -84,8 +79,8 @@ PgResult PgConnection::exec(const std::string& sql, const std::vector<PgParam>& 
     lengths.push_back(static_cast<int>(param.value.size()));
     formats.push_back(param.binary ? 1 : 0);
   }
-  PgResult result(PQexecParams(conn_, sql.c_str(), static_cast<int>(params.size()), nullptr,
-                               values.data(), lengths.data(), formats.data(), 0));
+  PgResult result(PQexecParams(conn_, sql.c_str(), static_cast<int>(params.size()), nullptr, values.data(),
+                               lengths.data(), formats.data(), 0));
   const ExecStatusType status = result ? PQresultStatus(result.get()) : PGRES_FATAL_ERROR;
   if (status != PGRES_COMMAND_OK && status != PGRES_TUPLES_OK) fail(result.get(), "statement");
   return result;

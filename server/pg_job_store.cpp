@@ -42,15 +42,13 @@ void write_job(PgConnection& connection, const v1::Job& job) {
 
 // Locks the job's row when `lease` holds it; throws LeaseLost otherwise.
 void lock_held(PgConnection& connection, const JobLease& lease) {
-  PgResult held = connection.exec(std::string("SELECT 1 FROM jobs WHERE ") + kHeld + " FOR UPDATE",
-                                  lease_params(lease));
+  PgResult held =
+      connection.exec(std::string("SELECT 1 FROM jobs WHERE ") + kHeld + " FOR UPDATE", lease_params(lease));
   if (PQntuples(held.get()) == 0) throw LeaseLost(lease.job_id);
 }
 
-void insert_results(PgConnection& connection, const std::string& job_id,
-                    const std::vector<v1::FitResult>& results) {
-  PgResult next = connection.exec("SELECT COALESCE(MAX(seq) + 1, 0) FROM results WHERE job_id = $1",
-                                  {pg_text(job_id)});
+void insert_results(PgConnection& connection, const std::string& job_id, const std::vector<v1::FitResult>& results) {
+  PgResult next = connection.exec("SELECT COALESCE(MAX(seq) + 1, 0) FROM results WHERE job_id = $1", {pg_text(job_id)});
   std::int64_t seq = pg_int64(next.get(), 0, 0);
   for (const v1::FitResult& result : results) {
     connection.exec("INSERT INTO results (job_id, seq, result) VALUES ($1, $2, $3)",
@@ -65,8 +63,7 @@ bool is_postgres_conninfo(const std::string& job_store) {
          job_store.find('=') != std::string::npos;
 }
 
-PgJobStore::PgJobStore(const std::string& conninfo, std::size_t connections)
-    : pool_(conninfo, connections) {
+PgJobStore::PgJobStore(const std::string& conninfo, std::size_t connections) : pool_(conninfo, connections) {
   check_conninfo(conninfo, "--job-store");
   {
     PgPool::Borrowed connection = pool_.borrow();
@@ -74,7 +71,9 @@ PgJobStore::PgJobStore(const std::string& conninfo, std::size_t connections)
   }
   notifications_ = std::make_unique<PgListener>(
       conninfo, kChannel, [this](const std::string& payload) { on_notification(payload); },
-      [this] { deliver({JobEvent::Kind::kMissedEvents, ""}); });
+      [this] {
+        deliver({JobEvent::Kind::kMissedEvents, ""});
+      });
 }
 
 PgJobStore::~PgJobStore() { notifications_.reset(); }
@@ -92,8 +91,8 @@ auto PgJobStore::run(bool retry, Body&& body) {
   return body(*connection);
 }
 
-v1::Job PgJobStore::create(const v1::JobSpec& spec, const std::string& recording_path,
-                           const std::string& owner, std::int64_t now_unix_us) {
+v1::Job PgJobStore::create(const v1::JobSpec& spec, const std::string& recording_path, const std::string& owner,
+                           std::int64_t now_unix_us) {
   const v1::Job job = new_job(spec, now_unix_us);
   run(false, [&](PgConnection& c) {
     c.transaction([&] {
@@ -108,16 +107,14 @@ v1::Job PgJobStore::create(const v1::JobSpec& spec, const std::string& recording
 
 std::optional<JobRecord> PgJobStore::get(const std::string& job_id) {
   return run(true, [&](PgConnection& c) -> std::optional<JobRecord> {
-    PgResult row = c.exec(std::string("SELECT ") + kRecordColumns + " FROM jobs WHERE id = $1",
-                          {pg_text(job_id)});
+    PgResult row = c.exec(std::string("SELECT ") + kRecordColumns + " FROM jobs WHERE id = $1", {pg_text(job_id)});
     if (PQntuples(row.get()) == 0) return std::nullopt;
     return read_record(row.get(), 0);
   });
 }
 
 std::vector<v1::Job> PgJobStore::list(std::size_t limit, const std::string& after_job_id,
-                                      const std::vector<v1::Job::State>& states,
-                                      const std::string& owner) {
+                                      const std::vector<v1::Job::State>& states, const std::string& owner) {
   std::string state_array = "{";
   for (std::size_t i = 0; i < states.size(); ++i) {
     state_array += (i ? "," : "") + std::to_string(static_cast<int>(states[i]));
@@ -129,8 +126,7 @@ std::vector<v1::Job> PgJobStore::list(std::size_t limit, const std::string& afte
         " AND ($2 = '' OR seq < (SELECT seq FROM jobs WHERE id = $2))"
         " AND (cardinality($3::integer[]) = 0 OR state = ANY($3::integer[]))"
         " ORDER BY seq DESC LIMIT $4",
-        {pg_text(owner), pg_text(after_job_id), pg_text(state_array),
-         pg_int(static_cast<std::int64_t>(limit))});
+        {pg_text(owner), pg_text(after_job_id), pg_text(state_array), pg_int(static_cast<std::int64_t>(limit))});
     std::vector<v1::Job> jobs;
     for (int i = 0; i < PQntuples(rows.get()); ++i) {
       jobs.push_back(parse_stored_job(pg_bytea(rows.get(), i, 0), "job_store.jobs.job"));
@@ -143,8 +139,7 @@ void PgJobStore::update(const v1::Job& job) {
   run(false, [&](PgConnection& c) {
     c.transaction([&] {
       PgResult updated = c.exec("UPDATE jobs SET state = $2, job = $3 WHERE id = $1 RETURNING id",
-                                {pg_text(job.job_id()), pg_int(job.state()),
-                                 pg_bytes(job.SerializeAsString())});
+                                {pg_text(job.job_id()), pg_int(job.state()), pg_bytes(job.SerializeAsString())});
       if (PQntuples(updated.get()) == 0) {
         throw Error(ErrorCode::kNotFound, "job_id", "no job '" + job.job_id() + "'");
       }
@@ -153,15 +148,13 @@ void PgJobStore::update(const v1::Job& job) {
   });
 }
 
-void PgJobStore::append_results(const std::string& job_id,
-                                const std::vector<v1::FitResult>& results) {
+void PgJobStore::append_results(const std::string& job_id, const std::vector<v1::FitResult>& results) {
   run(false, [&](PgConnection& c) { c.transaction([&] { insert_results(c, job_id, results); }); });
 }
 
 std::vector<v1::FitResult> PgJobStore::results(const std::string& job_id) {
   return run(true, [&](PgConnection& c) {
-    PgResult rows = c.exec("SELECT result FROM results WHERE job_id = $1 ORDER BY seq",
-                           {pg_text(job_id)});
+    PgResult rows = c.exec("SELECT result FROM results WHERE job_id = $1 ORDER BY seq", {pg_text(job_id)});
     std::vector<v1::FitResult> results(static_cast<std::size_t>(PQntuples(rows.get())));
     for (int i = 0; i < PQntuples(rows.get()); ++i) {
       if (!results[static_cast<std::size_t>(i)].ParseFromString(pg_bytea(rows.get(), i, 0))) {
@@ -177,8 +170,8 @@ std::optional<JobRecord> PgJobStore::cancel(const std::string& job_id, const std
   return run(false, [&](PgConnection& c) {
     std::optional<JobRecord> record;
     c.transaction([&] {
-      PgResult row = c.exec(std::string("SELECT ") + kRecordColumns + " FROM jobs WHERE id = $1 FOR UPDATE",
-                            {pg_text(job_id)});
+      PgResult row =
+          c.exec(std::string("SELECT ") + kRecordColumns + " FROM jobs WHERE id = $1 FOR UPDATE", {pg_text(job_id)});
       if (PQntuples(row.get()) == 0) return;
       record = read_record(row.get(), 0);
       if (record->owner != owner) {
@@ -198,8 +191,7 @@ std::optional<JobRecord> PgJobStore::cancel(const std::string& job_id, const std
   });
 }
 
-std::optional<JobRecord> PgJobStore::claim(const std::string& worker,
-                                           std::chrono::milliseconds lease,
+std::optional<JobRecord> PgJobStore::claim(const std::string& worker, std::chrono::milliseconds lease,
                                            std::int64_t now_unix_us) {
   return run(false, [&](PgConnection& c) {
     std::optional<JobRecord> record;
@@ -213,7 +205,8 @@ std::optional<JobRecord> PgJobStore::claim(const std::string& worker,
       const std::string& id = record->job.job_id();
       c.exec("DELETE FROM results WHERE job_id = $1", {pg_text(id)});
       c.exec(std::string("UPDATE jobs SET state = 2, job = $5, attempts = $3, lease_owner = $2,"
-                         " lease_expires = ") + kLeaseEnd + ", cancel_requested = false WHERE id = $1",
+                         " lease_expires = ") +
+                 kLeaseEnd + ", cancel_requested = false WHERE id = $1",
              {pg_text(id), pg_text(worker), pg_int(record->attempts), pg_int(lease.count()),
               pg_bytes(record->job.SerializeAsString())});
       notify(c, "changed", id);
@@ -226,9 +219,9 @@ LeaseState PgJobStore::renew(const JobLease& lease, std::chrono::milliseconds du
   return run(true, [&](PgConnection& c) {
     std::vector<PgParam> params = lease_params(lease);
     params.push_back(pg_int(duration.count()));
-    PgResult row = c.exec(std::string("UPDATE jobs SET lease_expires = ") + kLeaseEnd + " WHERE " +
-                              kHeld + " RETURNING cancel_requested",
-                          params);
+    PgResult row = c.exec(
+        std::string("UPDATE jobs SET lease_expires = ") + kLeaseEnd + " WHERE " + kHeld + " RETURNING cancel_requested",
+        params);
     if (PQntuples(row.get()) == 0) return LeaseState::kLost;
     return pg_bool(row.get(), 0, 0) ? LeaseState::kCancelRequested : LeaseState::kHeld;
   });
@@ -240,8 +233,7 @@ void PgJobStore::update_running(const JobLease& lease, const v1::Job& job) {
       lock_held(c, lease);
       write_job(c, job);
       if (is_terminal(job.state())) {
-        c.exec("UPDATE jobs SET lease_owner = '', lease_expires = NULL WHERE id = $1",
-               {pg_text(lease.job_id)});
+        c.exec("UPDATE jobs SET lease_owner = '', lease_expires = NULL WHERE id = $1", {pg_text(lease.job_id)});
       }
       notify(c, "changed", lease.job_id);
     });
@@ -260,14 +252,14 @@ void PgJobStore::append_results(const JobLease& lease, const std::vector<v1::Fit
 void PgJobStore::release(const JobLease& lease, std::int64_t now_unix_us) {
   run(false, [&](PgConnection& c) {
     c.transaction([&] {
-      PgResult row = c.exec(std::string("SELECT job FROM jobs WHERE ") + kHeld + " FOR UPDATE",
-                            lease_params(lease));
+      PgResult row = c.exec(std::string("SELECT job FROM jobs WHERE ") + kHeld + " FOR UPDATE", lease_params(lease));
       if (PQntuples(row.get()) == 0) return;
       v1::Job job = parse_stored_job(pg_bytea(row.get(), 0, 0), "job_store.jobs.job");
       mark_queued_again(job, now_unix_us);
-      c.exec("UPDATE jobs SET state = 1, job = $2, attempts = attempts - 1, lease_owner = '',"
-             " lease_expires = NULL WHERE id = $1",
-             {pg_text(lease.job_id), pg_bytes(job.SerializeAsString())});
+      c.exec(
+          "UPDATE jobs SET state = 1, job = $2, attempts = attempts - 1, lease_owner = '',"
+          " lease_expires = NULL WHERE id = $1",
+          {pg_text(lease.job_id), pg_bytes(job.SerializeAsString())});
       c.exec("DELETE FROM results WHERE job_id = $1", {pg_text(lease.job_id)});
       notify(c, "queued", lease.job_id);
     });
@@ -285,8 +277,8 @@ std::vector<ReapedJob> PgJobStore::reap(std::uint32_t max_attempts, std::int64_t
                              " ORDER BY seq FOR UPDATE SKIP LOCKED");
       for (int i = 0; i < PQntuples(rows.get()); ++i) {
         JobRecord record = read_record(rows.get(), i);
-        const v1::Job::State state = mark_lease_expired(
-            record.job, record.attempts, max_attempts, pg_bool(rows.get(), i, 4), now_unix_us);
+        const v1::Job::State state =
+            mark_lease_expired(record.job, record.attempts, max_attempts, pg_bool(rows.get(), i, 4), now_unix_us);
         const std::string& id = record.job.job_id();
         write_job(c, record.job);
         c.exec("UPDATE jobs SET lease_owner = '', lease_expires = NULL WHERE id = $1", {pg_text(id)});
@@ -354,34 +346,31 @@ std::filesystem::path PgJobStore::local_recording(const std::string& recording_p
     // Row by row: an upload may be far larger than memory.
     for (std::int64_t seq = 0;; ++seq) {
       const std::string bytes = run(true, [&](PgConnection& c) -> std::string {
-        PgResult row = c.exec("SELECT data FROM uploads WHERE upload_id = $1 AND seq = $2",
-                              {pg_text(upload_id), pg_int(seq)});
+        PgResult row =
+            c.exec("SELECT data FROM uploads WHERE upload_id = $1 AND seq = $2", {pg_text(upload_id), pg_int(seq)});
         return PQntuples(row.get()) == 0 ? std::string() : pg_bytea(row.get(), 0, 0);
       });
       if (bytes.empty()) {
         if (seq == 0) {
-          throw Error(ErrorCode::kNotFound, "recording",
-                      "the uploaded recording is not in the job store");
+          throw Error(ErrorCode::kNotFound, "recording", "the uploaded recording is not in the job store");
         }
         break;
       }
       out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
     }
-    if (!out.flush()) throw Error(ErrorCode::kResourceExhausted, "recording", "cannot write the scratch copy (disk full?)");
+    if (!out.flush())
+      throw Error(ErrorCode::kResourceExhausted, "recording", "cannot write the scratch copy (disk full?)");
   }
   std::filesystem::rename(partial, local);
   return local;
 }
 
-void PgJobStore::drop_upload(const std::string& recording_path,
-                             const std::filesystem::path& scratch_dir) {
+void PgJobStore::drop_upload(const std::string& recording_path, const std::filesystem::path& scratch_dir) {
   if (recording_path.rfind(kUploadPrefix, 0) != 0) return;
   const std::string upload_id = recording_path.substr(std::string(kUploadPrefix).size());
   std::error_code ignored;
   std::filesystem::remove(scratch_dir / (upload_id + ".pfchunks"), ignored);
-  run(false, [&](PgConnection& c) {
-    c.exec("DELETE FROM uploads WHERE upload_id = $1", {pg_text(upload_id)});
-  });
+  run(false, [&](PgConnection& c) { c.exec("DELETE FROM uploads WHERE upload_id = $1", {pg_text(upload_id)}); });
 }
 
 }  // namespace posefuse::server

@@ -29,15 +29,13 @@ class PgJobStore : public JobStore {
   explicit PgJobStore(const std::string& conninfo, std::size_t connections = 4);
   ~PgJobStore() override;
 
-  v1::Job create(const v1::JobSpec& spec, const std::string& recording_path,
-                 const std::string& owner, std::int64_t now_unix_us) override;
+  v1::Job create(const v1::JobSpec& spec, const std::string& recording_path, const std::string& owner,
+                 std::int64_t now_unix_us) override;
   std::optional<JobRecord> get(const std::string& job_id) override;
   std::vector<v1::Job> list(std::size_t limit, const std::string& after_job_id,
-                            const std::vector<v1::Job::State>& states,
-                            const std::string& owner) override;
+                            const std::vector<v1::Job::State>& states, const std::string& owner) override;
   void update(const v1::Job& job) override;
-  void append_results(const std::string& job_id,
-                      const std::vector<v1::FitResult>& results) override;
+  void append_results(const std::string& job_id, const std::vector<v1::FitResult>& results) override;
   std::vector<v1::FitResult> results(const std::string& job_id) override;
   std::optional<JobRecord> cancel(const std::string& job_id, const std::string& owner,
                                   std::int64_t now_unix_us) override;
@@ -52,8 +50,7 @@ class PgJobStore : public JobStore {
   std::string keep_upload(const std::filesystem::path& spooled) override;
   std::filesystem::path local_recording(const std::string& recording_path,
                                         const std::filesystem::path& scratch_dir) override;
-  void drop_upload(const std::string& recording_path,
-                   const std::filesystem::path& scratch_dir) override;
+  void drop_upload(const std::string& recording_path, const std::filesystem::path& scratch_dir) override;
 
  private:
   // Runs body(connection) on a pooled connection; with `retry`, once more on a fresh one when

@@ -11,8 +11,7 @@
 namespace posefuse::server {
 
 PgListener::PgListener(std::string conninfo, std::string channel,
-                       std::function<void(const std::string&)> on_notification,
-                       std::function<void()> on_connected)
+                       std::function<void(const std::string&)> on_notification, std::function<void()> on_connected)
     : conninfo_(std::move(conninfo)),
       channel_(std::move(channel)),
       on_notification_(std::move(on_notification)),

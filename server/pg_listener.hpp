@@ -16,8 +16,7 @@ namespace posefuse::server {
 
 class PgListener {
  public:
-  PgListener(std::string conninfo, std::string channel,
-             std::function<void(const std::string& payload)> on_notification,
+  PgListener(std::string conninfo, std::string channel, std::function<void(const std::string& payload)> on_notification,
              std::function<void()> on_connected);
   ~PgListener();  // stops the thread
   PgListener(const PgListener&) = delete;

@@ -58,8 +58,7 @@ void migrate_pg_schema(PgConnection& connection) {
     if (version > pg_schema_version()) {
       throw Error(ErrorCode::kFailedPrecondition, "--job-store",
                   "the database's posefuse schema is version " + std::to_string(version) +
-                      ", newer than this posefuse-server knows (" +
-                      std::to_string(pg_schema_version()) +
+                      ", newer than this posefuse-server knows (" + std::to_string(pg_schema_version()) +
                       "): a newer server has migrated it; run that version or a newer one");
     }
     for (; version < pg_schema_version(); ++version) {

@@ -29,8 +29,7 @@ void validate_options(const ServerOptions& o) {
   if (o.listen.empty()) throw_invalid("--listen", "is empty; expected host:port");
   if (o.max_sessions == 0) throw_invalid("--max-sessions", "must be at least 1");
   if (!(o.max_message_mb > 0.0 && o.max_message_mb <= 1024.0)) {
-    throw_invalid("--max-message-mb", "is " + std::to_string(o.max_message_mb) +
-                                          ", must be in (0, 1024]");
+    throw_invalid("--max-message-mb", "is " + std::to_string(o.max_message_mb) + ", must be in (0, 1024]");
   }
   if (!(o.idle_timeout_s > 0.0 && std::isfinite(o.idle_timeout_s))) {
     throw_invalid("--idle-timeout-s", "must be a positive number of seconds");
@@ -39,36 +38,38 @@ void validate_options(const ServerOptions& o) {
   if (o.max_queued_results == 0) throw_invalid("--max-queued-results", "must be at least 1");
   if (o.max_jobs == 0) throw_invalid("--max-jobs", "must be at least 1");
   if (!(o.max_upload_mb > 0.0 && o.max_upload_mb <= 1024.0 * 1024.0)) {
-    throw_invalid("--max-upload-mb", "is " + std::to_string(o.max_upload_mb) +
-                                         ", must be in (0, 1048576] (MiB; at most 1 TiB)");
+    throw_invalid("--max-upload-mb",
+                  "is " + std::to_string(o.max_upload_mb) + ", must be in (0, 1048576] (MiB; at most 1 TiB)");
   }
   if (!(o.shutdown_grace_s >= 0.0 && std::isfinite(o.shutdown_grace_s))) {
     throw_invalid("--shutdown-grace-s", "must be >= 0 seconds");
   }
   if (o.tls_cert.empty() != o.tls_key.empty()) {
-    throw_invalid(o.tls_cert.empty() ? "--tls-cert" : "--tls-key",
-                  "is missing: --tls-cert and --tls-key go together");
+    throw_invalid(o.tls_cert.empty() ? "--tls-cert" : "--tls-key", "is missing: --tls-cert and --tls-key go together");
   }
   if (o.role != "api" && o.role != "worker" && o.role != "both") {
     throw_invalid("--role", "is '" + o.role + "'; expected api, worker or both");
   }
   if (!o.job_store.empty() && !is_postgres_conninfo(o.job_store)) {
-    throw_invalid("--job-store", "expected a PostgreSQL connection string (postgresql://... or "
-                                 "key=value ...); without it the job store is SQLite in --data-dir");
+    throw_invalid("--job-store",
+                  "expected a PostgreSQL connection string (postgresql://... or "
+                  "key=value ...); without it the job store is SQLite in --data-dir");
   }
   if (!o.job_store.empty() && o.data_dir.empty()) {
     throw_invalid("--job-store", "needs --data-dir (this replica's folder for uploads in transit)");
   }
   if (o.role != "both" && o.job_store.empty()) {
-    throw_invalid("--role", o.role + " needs a shared --job-store (PostgreSQL): with SQLite in "
-                            "--data-dir no other process sees this one's jobs");
+    throw_invalid("--role", o.role +
+                                " needs a shared --job-store (PostgreSQL): with SQLite in "
+                                "--data-dir no other process sees this one's jobs");
   }
   if (!(o.job_lease_s > 0.0 && o.job_lease_s <= 86400.0)) {
     throw_invalid("--job-lease-s", "must be in (0, 86400] seconds");
   }
   if (!(o.job_heartbeat_s > 0.0 && o.job_heartbeat_s < o.job_lease_s)) {
-    throw_invalid("--job-heartbeat-s", "must be positive and below --job-lease-s (a lease is "
-                                       "renewed before it expires)");
+    throw_invalid("--job-heartbeat-s",
+                  "must be positive and below --job-lease-s (a lease is "
+                  "renewed before it expires)");
   }
   if (o.job_max_attempts == 0) throw_invalid("--job-max-attempts", "must be at least 1");
   if (!o.tls_client_ca.empty() && o.tls_cert.empty()) {
@@ -76,28 +77,25 @@ void validate_options(const ServerOptions& o) {
   }
 }
 
-PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store)
-    : options_(std::move(options)) {
+PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store) : options_(std::move(options)) {
   validate_options(options_);
   // Security files first: a bad one fails before any thread or port exists.
   const std::shared_ptr<grpc::ServerCredentials> credentials = make_server_credentials(options_);
   if (!options_.tokens_file.empty()) {
     tokens_ = std::make_unique<BearerTokens>(BearerTokens::load(options_.tokens_file));
   }
-  const unsigned workers =
-      options_.workers > 0 ? options_.workers : std::max(1u, std::thread::hardware_concurrency());
+  const unsigned workers = options_.workers > 0 ? options_.workers : std::max(1u, std::thread::hardware_concurrency());
   pool_ = std::make_unique<WorkerPool>(workers);
   // The idle check runs a few times per timeout, at most every 250 ms.
-  const auto check_interval = std::chrono::milliseconds(static_cast<long>(
-      std::clamp(options_.idle_timeout_s * 1000.0 / 4.0, 10.0, 250.0)));
+  const auto check_interval =
+      std::chrono::milliseconds(static_cast<long>(std::clamp(options_.idle_timeout_s * 1000.0 / 4.0, 10.0, 250.0)));
   registry_ = std::make_unique<SessionRegistry>(options_.max_sessions, check_interval);
   if (!options_.data_dir.empty()) {
     std::error_code error;
     std::filesystem::create_directories(upload_spool_dir(options_.data_dir), error);
     if (error) {
       throw Error(ErrorCode::kFailedPrecondition, "--data-dir",
-                  "cannot create '" + options_.data_dir + "' and its uploads/ folder: " +
-                      error.message());
+                  "cannot create '" + options_.data_dir + "' and its uploads/ folder: " + error.message());
     }
     // Uploads that a stopped server was receiving never became jobs: their clients got no job
     // id and send again.
@@ -127,24 +125,20 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
     runner.max_attempts = options_.job_max_attempts;
     jobs_ = std::make_unique<JobRunner>(*job_store_, *pool_, metrics_, std::move(runner));
   }
-  service_ =
-      std::make_unique<PoseFuseService>(options_, *pool_, *registry_, metrics_, jobs_.get(),
-                                        tokens_.get());
+  service_ = std::make_unique<PoseFuseService>(options_, *pool_, *registry_, metrics_, jobs_.get(), tokens_.get());
 
   // Before the gRPC server, so that a bad --metrics-listen fails before anything serves.
   if (!options_.metrics_listen.empty()) {
-    metrics_http_ = std::make_unique<MetricsHttpServer>(options_.metrics_listen,
-                                                        [this] { return render_metrics(); });
+    metrics_http_ = std::make_unique<MetricsHttpServer>(options_.metrics_listen, [this] { return render_metrics(); });
     log_event("info", "metrics_start", {{"port", std::to_string(metrics_http_->port())}});
   }
 
   // Naming a health message links health.proto's descriptor into the server, so that
   // reflection can describe the health service as well as answer its name.
   reflection_ = std::make_unique<ReflectionService>(
-      std::vector<std::string>{
-          v1::PoseFuse::service_full_name(),
-          grpc::health::v1::HealthCheckRequest::descriptor()->file()->service(0)->full_name(),
-          reflection::ServerReflection::service_full_name()},
+      std::vector<std::string>{v1::PoseFuse::service_full_name(),
+                               grpc::health::v1::HealthCheckRequest::descriptor()->file()->service(0)->full_name(),
+                               reflection::ServerReflection::service_full_name()},
       tokens_.get());
 
   grpc::EnableDefaultHealthCheckService(true);
@@ -155,11 +149,11 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
   builder.SetMaxReceiveMessageSize(static_cast<int>(options_.max_message_mb * 1024 * 1024));
   server_ = builder.BuildAndStart();
   if (!server_ || port_ == 0) {
-    throw Error(ErrorCode::kFailedPrecondition, "--listen",
-                "cannot listen on '" + options_.listen + "' (address in use or invalid?" +
-                    (options_.tls_cert.empty()
-                         ? std::string(")")
-                         : std::string(" or --tls-cert and --tls-key are not a matching pair?)")));
+    throw Error(
+        ErrorCode::kFailedPrecondition, "--listen",
+        "cannot listen on '" + options_.listen + "' (address in use or invalid?" +
+            (options_.tls_cert.empty() ? std::string(")")
+                                       : std::string(" or --tls-cert and --tls-key are not a matching pair?)")));
   }
   // The overall status ("") and the PoseFuse service's own, so that a probe may ask either;
   // shutdown() turns both to NOT_SERVING.
@@ -175,7 +169,9 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
              {"max_message_mb", std::to_string(options_.max_message_mb)},
              {"idle_timeout_s", std::to_string(options_.idle_timeout_s)},
              {"role", options_.role},
-             {"job_store", !jobs_ ? "off" : options_.job_store.empty() ? "sqlite" : "postgresql"}});
+             {"job_store", !jobs_                       ? "off"
+                           : options_.job_store.empty() ? "sqlite"
+                                                        : "postgresql"}});
   // The security mode, never a token or key.
   log_event("info", "security",
             {{"transport", transport_mode(options_)},
@@ -186,8 +182,7 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
 PoseFuseServer::~PoseFuseServer() { shutdown(); }
 
 std::string PoseFuseServer::render_metrics() const {
-  return metrics_.render({registry_->active(), pool_->queued(),
-                          static_cast<unsigned>(pool_->threads())});
+  return metrics_.render({registry_->active(), pool_->queued(), static_cast<unsigned>(pool_->threads())});
 }
 
 void PoseFuseServer::shutdown() {
@@ -195,8 +190,8 @@ void PoseFuseServer::shutdown() {
   shut_down_ = true;
   log_event("info", "server_shutdown", {{"sessions", std::to_string(registry_->active())}});
   server_->GetHealthCheckService()->SetServingStatus(false);
-  const auto grace = std::chrono::duration_cast<std::chrono::milliseconds>(
-      std::chrono::duration<double>(options_.shutdown_grace_s));
+  const auto grace =
+      std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::duration<double>(options_.shutdown_grace_s));
   server_->Shutdown(std::chrono::system_clock::now() + grace);
   metrics_http_.reset();
   jobs_.reset();  // running jobs stop between chunks and go back to the queue

@@ -24,8 +24,7 @@ namespace posefuse::server {
 
 // Makes the job store in --data-dir. The default opens <data-dir>/jobs.sqlite; tests pass one
 // that wraps it to inject faults.
-using JobStoreFactory =
-    std::function<std::unique_ptr<JobStore>(const std::filesystem::path& data_dir)>;
+using JobStoreFactory = std::function<std::unique_ptr<JobStore>(const std::filesystem::path& data_dir)>;
 
 class PoseFuseServer {
  public:

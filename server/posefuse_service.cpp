@@ -5,9 +5,9 @@
 #include "server/fit_session.hpp"
 #include "server/job_calls.hpp"
 #include "server/job_limits.hpp"
+#include "server/log.hpp"
 #include "server/refused_call.hpp"
 #include "server/status.hpp"
-#include "server/log.hpp"
 #include "session/option_table.hpp"
 #include "session/session_validator.hpp"
 #include "session/stages/default_stages.hpp"
@@ -29,25 +29,19 @@ grpc::ServerUnaryReactor* finish_unary(grpc::CallbackServerContext* context, grp
 
 }  // namespace
 
-PoseFuseService::PoseFuseService(const ServerOptions& options, WorkerPool& pool,
-                                 SessionRegistry& registry, Metrics& metrics, JobRunner* jobs,
-                                 const BearerTokens* tokens)
-    : options_(options),
-      pool_(pool),
-      registry_(registry),
-      metrics_(metrics),
-      jobs_(jobs),
-      tokens_(tokens) {
+PoseFuseService::PoseFuseService(const ServerOptions& options, WorkerPool& pool, SessionRegistry& registry,
+                                 Metrics& metrics, JobRunner* jobs, const BearerTokens* tokens)
+    : options_(options), pool_(pool), registry_(registry), metrics_(metrics), jobs_(jobs), tokens_(tokens) {
   if (jobs_) {
-    submit_context_.emplace(SubmitJobContext{
-        *jobs_, pool_, registry_, options_.recordings_root, upload_spool_dir(options_.data_dir),
-        static_cast<std::uint64_t>(options_.max_upload_mb * 1024 * 1024),
-        std::chrono::duration<double>(options_.idle_timeout_s), options_.max_sessions});
+    submit_context_.emplace(
+        SubmitJobContext{*jobs_, pool_, registry_, options_.recordings_root, upload_spool_dir(options_.data_dir),
+                         static_cast<std::uint64_t>(options_.max_upload_mb * 1024 * 1024),
+                         std::chrono::duration<double>(options_.idle_timeout_s), options_.max_sessions});
   }
 }
 
-grpc::Status PoseFuseService::authenticate(const grpc::CallbackServerContext* context,
-                                           const char* call, std::string& tenant) const {
+grpc::Status PoseFuseService::authenticate(const grpc::CallbackServerContext* context, const char* call,
+                                           std::string& tenant) const {
   if (options_.role == "worker") {
     return grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
                         "this replica only runs jobs (--role worker); call an API replica");
@@ -55,8 +49,7 @@ grpc::Status PoseFuseService::authenticate(const grpc::CallbackServerContext* co
   return authenticate_call(tokens_, *context, call, tenant);
 }
 
-grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>* PoseFuseService::Fit(
-    grpc::CallbackServerContext* context) {
+grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>* PoseFuseService::Fit(grpc::CallbackServerContext* context) {
   std::string tenant;  // a Fit call keeps nothing: the same for every tenant
   if (grpc::Status denied = authenticate(context, "Fit", tenant); !denied.ok()) {
     return new RefusedCall<grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>>(denied);
@@ -65,17 +58,15 @@ grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>* PoseFuseService::Fit(
   if (!id) {
     metrics_.session_refused();
     log_event("info", "session_refused", {{"reason", "max_sessions"}, {"peer", context->peer()}});
-    return new RefusedCall<grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>>(grpc::Status(
-        grpc::StatusCode::RESOURCE_EXHAUSTED,
-        "server busy: " + std::to_string(options_.max_sessions) +
-            " sessions are running (--max-sessions); retry later"));
+    return new RefusedCall<grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>>(
+        grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, "server busy: " + std::to_string(options_.max_sessions) +
+                                                               " sessions are running (--max-sessions); retry later"));
   }
   return FitSession::start(context, *id, options_, pool_, registry_, metrics_);
 }
 
 grpc::ServerUnaryReactor* PoseFuseService::GetServerInfo(grpc::CallbackServerContext* context,
-                                                         const v1::GetServerInfoRequest*,
-                                                         v1::ServerInfo* response) {
+                                                         const v1::GetServerInfoRequest*, v1::ServerInfo* response) {
   std::string tenant;
   if (grpc::Status denied = authenticate(context, "GetServerInfo", tenant); !denied.ok()) {
     return finish_unary(context, denied);
@@ -84,8 +75,8 @@ grpc::ServerUnaryReactor* PoseFuseService::GetServerInfo(grpc::CallbackServerCon
   return finish_unary(context, grpc::Status::OK);
 }
 
-grpc::ServerReadReactor<v1::SubmitJobRequest>* PoseFuseService::SubmitJob(
-    grpc::CallbackServerContext* context, v1::Job* response) {
+grpc::ServerReadReactor<v1::SubmitJobRequest>* PoseFuseService::SubmitJob(grpc::CallbackServerContext* context,
+                                                                          v1::Job* response) {
   std::string tenant;
   if (grpc::Status denied = authenticate(context, "SubmitJob", tenant); !denied.ok()) {
     return new RefusedCall<grpc::ServerReadReactor<v1::SubmitJobRequest>>(denied);
@@ -95,8 +86,7 @@ grpc::ServerReadReactor<v1::SubmitJobRequest>* PoseFuseService::SubmitJob(
 }
 
 grpc::ServerUnaryReactor* PoseFuseService::GetJob(grpc::CallbackServerContext* context,
-                                                  const v1::GetJobRequest* request,
-                                                  v1::Job* response) {
+                                                  const v1::GetJobRequest* request, v1::Job* response) {
   std::string tenant;
   if (grpc::Status denied = authenticate(context, "GetJob", tenant); !denied.ok()) {
     return finish_unary(context, denied);
@@ -106,8 +96,8 @@ grpc::ServerUnaryReactor* PoseFuseService::GetJob(grpc::CallbackServerContext* c
     const auto record = jobs_->store().get(request->job_id());
     // Another tenant's job is answered exactly like a missing one.
     if (!record || record->owner != tenant) {
-      return finish_unary(context, grpc::Status(grpc::StatusCode::NOT_FOUND,
-                                                "job_id: no job '" + request->job_id() + "'"));
+      return finish_unary(context,
+                          grpc::Status(grpc::StatusCode::NOT_FOUND, "job_id: no job '" + request->job_id() + "'"));
     }
     *response = record->job;
     bound_stored_job(*response);
@@ -151,8 +141,7 @@ grpc::ServerUnaryReactor* PoseFuseService::ListJobs(grpc::CallbackServerContext*
 }
 
 grpc::ServerUnaryReactor* PoseFuseService::CancelJob(grpc::CallbackServerContext* context,
-                                                     const v1::CancelJobRequest* request,
-                                                     v1::Job* response) {
+                                                     const v1::CancelJobRequest* request, v1::Job* response) {
   std::string tenant;
   if (grpc::Status denied = authenticate(context, "CancelJob", tenant); !denied.ok()) {
     return finish_unary(context, denied);
@@ -161,8 +150,8 @@ grpc::ServerUnaryReactor* PoseFuseService::CancelJob(grpc::CallbackServerContext
   try {
     const auto job = jobs_->cancel(request->job_id(), tenant);
     if (!job) {
-      return finish_unary(context, grpc::Status(grpc::StatusCode::NOT_FOUND,
-                                                "job_id: no job '" + request->job_id() + "'"));
+      return finish_unary(context,
+                          grpc::Status(grpc::StatusCode::NOT_FOUND, "job_id: no job '" + request->job_id() + "'"));
     }
     *response = *job;
     bound_stored_job(*response);
@@ -182,8 +171,8 @@ grpc::ServerWriteReactor<v1::Job>* PoseFuseService::WatchJob(grpc::CallbackServe
   return watch_job(*jobs_, request->job_id(), tenant);
 }
 
-grpc::ServerWriteReactor<v1::FitResult>* PoseFuseService::GetJobResults(
-    grpc::CallbackServerContext* context, const v1::GetJobResultsRequest* request) {
+grpc::ServerWriteReactor<v1::FitResult>* PoseFuseService::GetJobResults(grpc::CallbackServerContext* context,
+                                                                        const v1::GetJobResultsRequest* request) {
   std::string tenant;
   if (grpc::Status denied = authenticate(context, "GetJobResults", tenant); !denied.ok()) {
     return new RefusedCall<grpc::ServerWriteReactor<v1::FitResult>>(denied);

@@ -4,15 +4,15 @@
 // one (no --data-dir) they answer FAILED_PRECONDITION.
 #include <grpcpp/grpcpp.h>
 
-#include "posefuse/v1/service.grpc.pb.h"
 #include <optional>
+#include "posefuse/v1/service.grpc.pb.h"
 
-#include "server/submit_job_call.hpp"
 #include "server/job_runner.hpp"
 #include "server/metrics.hpp"
 #include "server/security.hpp"
 #include "server/server_options.hpp"
 #include "server/session_registry.hpp"
+#include "server/submit_job_call.hpp"
 #include "server/worker_pool.hpp"
 
 namespace posefuse::server {
@@ -21,29 +21,25 @@ class PoseFuseService final : public v1::PoseFuse::CallbackService {
  public:
   // `jobs` may be null: batch jobs are off. `tokens` may be null: no bearer token is needed;
   // otherwise every call without an accepted one ends UNAUTHENTICATED before doing anything.
-  PoseFuseService(const ServerOptions& options, WorkerPool& pool, SessionRegistry& registry,
-                  Metrics& metrics, JobRunner* jobs, const BearerTokens* tokens);
+  PoseFuseService(const ServerOptions& options, WorkerPool& pool, SessionRegistry& registry, Metrics& metrics,
+                  JobRunner* jobs, const BearerTokens* tokens);
 
-  grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>* Fit(
-      grpc::CallbackServerContext* context) override;
-  grpc::ServerUnaryReactor* GetServerInfo(grpc::CallbackServerContext* context,
-                                          const v1::GetServerInfoRequest* request,
+  grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>* Fit(grpc::CallbackServerContext* context) override;
+  grpc::ServerUnaryReactor* GetServerInfo(grpc::CallbackServerContext* context, const v1::GetServerInfoRequest* request,
                                           v1::ServerInfo* response) override;
 
   grpc::ServerReadReactor<v1::SubmitJobRequest>* SubmitJob(grpc::CallbackServerContext* context,
                                                            v1::Job* response) override;
-  grpc::ServerUnaryReactor* GetJob(grpc::CallbackServerContext* context,
-                                   const v1::GetJobRequest* request, v1::Job* response) override;
-  grpc::ServerUnaryReactor* ListJobs(grpc::CallbackServerContext* context,
-                                     const v1::ListJobsRequest* request,
+  grpc::ServerUnaryReactor* GetJob(grpc::CallbackServerContext* context, const v1::GetJobRequest* request,
+                                   v1::Job* response) override;
+  grpc::ServerUnaryReactor* ListJobs(grpc::CallbackServerContext* context, const v1::ListJobsRequest* request,
                                      v1::ListJobsResponse* response) override;
-  grpc::ServerUnaryReactor* CancelJob(grpc::CallbackServerContext* context,
-                                      const v1::CancelJobRequest* request,
+  grpc::ServerUnaryReactor* CancelJob(grpc::CallbackServerContext* context, const v1::CancelJobRequest* request,
                                       v1::Job* response) override;
   grpc::ServerWriteReactor<v1::Job>* WatchJob(grpc::CallbackServerContext* context,
                                               const v1::WatchJobRequest* request) override;
-  grpc::ServerWriteReactor<v1::FitResult>* GetJobResults(
-      grpc::CallbackServerContext* context, const v1::GetJobResultsRequest* request) override;
+  grpc::ServerWriteReactor<v1::FitResult>* GetJobResults(grpc::CallbackServerContext* context,
+                                                         const v1::GetJobResultsRequest* request) override;
 
  private:
   const ServerOptions& options_;
@@ -56,8 +52,7 @@ class PoseFuseService final : public v1::PoseFuse::CallbackService {
 
   // OK without tokens or with an accepted one; logs a refusal (peer and call, never the token).
   // `tenant`: the caller's tenant, whose jobs are the only ones the call sees.
-  grpc::Status authenticate(const grpc::CallbackServerContext* context, const char* call,
-                            std::string& tenant) const;
+  grpc::Status authenticate(const grpc::CallbackServerContext* context, const char* call, std::string& tenant) const;
 };
 
 // What GetServerInfo returns (also used by tests).

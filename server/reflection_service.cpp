@@ -33,8 +33,7 @@ void set_error(ServerReflectionResponse& response, grpc::StatusCode code, std::s
   error.set_error_message(std::move(message));
 }
 
-void answer_with_file(ServerReflectionResponse& response, const pb::FileDescriptor* file,
-                      const std::string& what) {
+void answer_with_file(ServerReflectionResponse& response, const pb::FileDescriptor* file, const std::string& what) {
   if (!file) {
     set_error(response, grpc::StatusCode::NOT_FOUND, what + " not found");
     return;
@@ -44,12 +43,9 @@ void answer_with_file(ServerReflectionResponse& response, const pb::FileDescript
 }
 
 // One request after another on one stream: read, answer, write, read the next.
-class ReflectionStream
-    : public grpc::ServerBidiReactor<ServerReflectionRequest, ServerReflectionResponse> {
+class ReflectionStream : public grpc::ServerBidiReactor<ServerReflectionRequest, ServerReflectionResponse> {
  public:
-  explicit ReflectionStream(const std::vector<std::string>& services) : services_(services) {
-    StartRead(&request_);
-  }
+  explicit ReflectionStream(const std::vector<std::string>& services) : services_(services) { StartRead(&request_); }
   void OnReadDone(bool ok) override {
     if (!ok) {
       Finish(grpc::Status::OK);  // the client has asked everything
@@ -100,9 +96,9 @@ ServerReflectionResponse answer_reflection_request(const ServerReflectionRequest
       const pb::Descriptor* type = pool.FindMessageTypeByName(wanted.containing_type());
       const pb::FieldDescriptor* extension =
           type ? pool.FindExtensionByNumber(type, wanted.extension_number()) : nullptr;
-      answer_with_file(response, extension ? extension->file() : nullptr,
-                       "extension " + std::to_string(wanted.extension_number()) + " of '" +
-                           wanted.containing_type() + "'");
+      answer_with_file(
+          response, extension ? extension->file() : nullptr,
+          "extension " + std::to_string(wanted.extension_number()) + " of '" + wanted.containing_type() + "'");
       break;
     }
     case ServerReflectionRequest::kAllExtensionNumbersOfType: {
@@ -135,8 +131,7 @@ grpc::ServerBidiReactor<reflection::ServerReflectionRequest, reflection::ServerR
 ReflectionService::ServerReflectionInfo(grpc::CallbackServerContext* context) {
   using Reactor = grpc::ServerBidiReactor<ServerReflectionRequest, ServerReflectionResponse>;
   std::string tenant;  // reflection is the same for every tenant
-  if (grpc::Status denied = authenticate_call(tokens_, *context, "ServerReflectionInfo", tenant);
-      !denied.ok()) {
+  if (grpc::Status denied = authenticate_call(tokens_, *context, "ServerReflectionInfo", tenant); !denied.ok()) {
     return new RefusedCall<Reactor>(std::move(denied));
   }
   return new ReflectionStream(services_);

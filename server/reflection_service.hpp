@@ -21,8 +21,7 @@ class ReflectionService final : public reflection::ServerReflection::CallbackSer
   // `services`: the fully-qualified names list_services answers. `tokens` may be null (open).
   ReflectionService(std::vector<std::string> services, const BearerTokens* tokens);
 
-  grpc::ServerBidiReactor<reflection::ServerReflectionRequest,
-                          reflection::ServerReflectionResponse>*
+  grpc::ServerBidiReactor<reflection::ServerReflectionRequest, reflection::ServerReflectionResponse>*
   ServerReflectionInfo(grpc::CallbackServerContext* context) override;
 
  private:
@@ -32,7 +31,7 @@ class ReflectionService final : public reflection::ServerReflection::CallbackSer
 
 // The answer to one request (from the generated descriptor pool); NOT_FOUND and
 // INVALID_ARGUMENT come back as error_response, as the protocol says.
-reflection::ServerReflectionResponse answer_reflection_request(
-    const reflection::ServerReflectionRequest& request, const std::vector<std::string>& services);
+reflection::ServerReflectionResponse answer_reflection_request(const reflection::ServerReflectionRequest& request,
+                                                               const std::vector<std::string>& services);
 
 }  // namespace posefuse::server

@@ -9,8 +9,8 @@ namespace posefuse::server {
 
 namespace {
 
-void require_pem(const std::string& text, std::string_view marker, const std::string& path,
-                 const std::string& flag, const char* what) {
+void require_pem(const std::string& text, std::string_view marker, const std::string& path, const std::string& flag,
+                 const char* what) {
   if (text.find("-----BEGIN ") == std::string::npos || text.find(marker) == std::string::npos) {
     throw_invalid(flag, "'" + path + "' is not a PEM " + what);
   }
@@ -28,8 +28,8 @@ bool valid_token_characters(const std::string& token) {
 bool valid_tenant(const std::string& tenant) {
   if (tenant.empty() || tenant.size() > 64) return false;
   for (const char c : tenant) {
-    const bool ok = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
-                    c == '_' || c == '.' || c == '-';
+    const bool ok =
+        (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '.' || c == '-';
     if (!ok) return false;
   }
   return true;
@@ -48,8 +48,9 @@ bool equal_constant_time(std::string_view presented, std::string_view accepted) 
 
 grpc::Status unauthenticated(const std::string& why) {
   return grpc::Status(grpc::StatusCode::UNAUTHENTICATED,
-                      why + "; this server requires 'authorization: Bearer <token>' metadata "
-                            "with a token from its --tokens-file");
+                      why +
+                          "; this server requires 'authorization: Bearer <token>' metadata "
+                          "with a token from its --tokens-file");
 }
 
 }  // namespace
@@ -72,8 +73,7 @@ std::shared_ptr<grpc::ServerCredentials> make_server_credentials(const ServerOpt
   ssl.pem_key_cert_pairs.push_back(std::move(pair));
   if (!options.tls_client_ca.empty()) {
     ssl.pem_root_certs = read_security_file(options.tls_client_ca, "--tls-client-ca");
-    require_pem(ssl.pem_root_certs, "CERTIFICATE-----", options.tls_client_ca, "--tls-client-ca",
-                "CA certificate");
+    require_pem(ssl.pem_root_certs, "CERTIFICATE-----", options.tls_client_ca, "--tls-client-ca", "CA certificate");
     ssl.client_certificate_request = GRPC_SSL_REQUEST_AND_REQUIRE_CLIENT_CERTIFICATE_AND_VERIFY;
   }
   return grpc::SslServerCredentials(ssl);
@@ -91,8 +91,7 @@ BearerTokens BearerTokens::load(const std::string& path) {
     // "<token>" or "<token> <tenant>".
     const std::size_t gap = line.text.find_first_of(" \t");
     const std::string token = line.text.substr(0, gap);
-    const std::string tenant =
-        gap == std::string::npos ? std::string() : trim_whitespace(line.text.substr(gap));
+    const std::string tenant = gap == std::string::npos ? std::string() : trim_whitespace(line.text.substr(gap));
     // The messages name the line, never the token.
     const std::string where = "'" + path + "' line " + std::to_string(line.number);
     if (gap != std::string::npos && !valid_tenant(tenant)) {
@@ -123,8 +122,7 @@ std::optional<std::string> BearerTokens::tenant_of(std::string_view token) const
   return match->tenant;
 }
 
-grpc::Status BearerTokens::check(const grpc::CallbackServerContext& context,
-                                 std::string& tenant) const {
+grpc::Status BearerTokens::check(const grpc::CallbackServerContext& context, std::string& tenant) const {
   const auto& metadata = context.client_metadata();
   const auto found = metadata.find("authorization");
   if (found == metadata.end()) return unauthenticated("no bearer token");
@@ -139,8 +137,7 @@ grpc::Status BearerTokens::check(const grpc::CallbackServerContext& context,
   return grpc::Status::OK;
 }
 
-grpc::Status authenticate_call(const BearerTokens* tokens,
-                               const grpc::CallbackServerContext& context, const char* call,
+grpc::Status authenticate_call(const BearerTokens* tokens, const grpc::CallbackServerContext& context, const char* call,
                                std::string& tenant) {
   tenant.clear();
   if (!tokens) return grpc::Status::OK;

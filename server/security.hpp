@@ -62,8 +62,7 @@ class BearerTokens {
 // OK when `tokens` is null (no token needed; tenant "") or the call carries an accepted one
 // (its tenant in `tenant`); otherwise UNAUTHENTICATED, logged with the call's name and peer
 // (never the token).
-grpc::Status authenticate_call(const BearerTokens* tokens,
-                               const grpc::CallbackServerContext& context, const char* call,
+grpc::Status authenticate_call(const BearerTokens* tokens, const grpc::CallbackServerContext& context, const char* call,
                                std::string& tenant);
 
 // Tokens this short are refused: they could be guessed.

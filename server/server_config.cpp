@@ -19,8 +19,7 @@ unsigned parse_count(const std::string& text, const std::string& field) {
 
 }  // namespace
 
-void set_server_option(ServerOptions& o, const std::string& key, const std::string& value,
-                       const std::string& field) {
+void set_server_option(ServerOptions& o, const std::string& key, const std::string& value, const std::string& field) {
   auto number = [&] { return session::parse_double(value, field); };
   auto count = [&] { return parse_count(value, field); };
   if (key == "listen") o.listen = value;
@@ -44,8 +43,9 @@ void set_server_option(ServerOptions& o, const std::string& key, const std::stri
   else if (key == "tls-key") o.tls_key = value;
   else if (key == "tls-client-ca") o.tls_client_ca = value;
   else if (key == "tokens-file") o.tokens_file = value;
-  else throw_invalid(field, "unknown " + std::string(field.rfind("--", 0) == 0 ? "flag" : "key") +
-                                " (see posefuse-server --help)");
+  else
+    throw_invalid(
+        field, "unknown " + std::string(field.rfind("--", 0) == 0 ? "flag" : "key") + " (see posefuse-server --help)");
 }
 
 void load_server_config(const std::filesystem::path& path, ServerOptions& options) {
@@ -65,8 +65,8 @@ void load_server_config(const std::filesystem::path& path, ServerOptions& option
     }
     if (key == "config") throw_invalid("--config", where + ": a config file cannot name another");
     if (const auto [it, inserted] = first_line.emplace(key, line.number); !inserted) {
-      throw_invalid("--config", where + ": '" + key + "' is set again (first on line " +
-                                    std::to_string(it->second) + ")");
+      throw_invalid("--config",
+                    where + ": '" + key + "' is set again (first on line " + std::to_string(it->second) + ")");
     }
     try {
       set_server_option(options, key, value, key);

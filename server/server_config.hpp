@@ -26,8 +26,8 @@ void load_server_config(const std::filesystem::path& path, ServerOptions& option
 
 struct CommandLine {
   ServerOptions options;
-  bool help = false;           // --help or -h: print the usage and exit
-  std::string config_file;     // empty without --config
+  bool help = false;        // --help or -h: print the usage and exit
+  std::string config_file;  // empty without --config
 };
 
 // `arguments` without the program name. "--flag value" and "--flag=value" both work.

@@ -17,15 +17,15 @@ struct ServerOptions {
   // Batch jobs: off unless data_dir is set (job store: <data_dir>/jobs.sqlite unless job_store
   // names a PostgreSQL database; data_dir then holds only uploads in transit).
   std::string data_dir;
-  std::string job_store;                   // empty: SQLite; postgresql://... or key=value
-  std::string role = "both";               // api | worker | both (docs/server.md "Job store")
-  double job_lease_s = 30.0;               // a running job's lease; expired: another worker
-  double job_heartbeat_s = 10.0;           // lease renewal, reaping and queue polling
-  unsigned job_max_attempts = 3;           // claims before a job whose lease keeps expiring fails
-  std::string recordings_root;             // SubmitJob by reference reads only under this
-  unsigned max_jobs = 1;                   // jobs running at once
-  double max_upload_mb = 8192.0;           // SubmitJob by upload: whole recording, MiB
-  std::string metrics_listen;              // IPv4 HOST:PORT for GET /metrics; empty = off
+  std::string job_store;          // empty: SQLite; postgresql://... or key=value
+  std::string role = "both";      // api | worker | both (docs/server.md "Job store")
+  double job_lease_s = 30.0;      // a running job's lease; expired: another worker
+  double job_heartbeat_s = 10.0;  // lease renewal, reaping and queue polling
+  unsigned job_max_attempts = 3;  // claims before a job whose lease keeps expiring fails
+  std::string recordings_root;    // SubmitJob by reference reads only under this
+  unsigned max_jobs = 1;          // jobs running at once
+  double max_upload_mb = 8192.0;  // SubmitJob by upload: whole recording, MiB
+  std::string metrics_listen;     // IPv4 HOST:PORT for GET /metrics; empty = off
   // Security (docs/server.md "Security"): PEM files; TLS is on when tls_cert is set, mutual TLS
   // when tls_client_ca is set too. Bearer tokens are required when tokens_file is set.
   std::string tls_cert;

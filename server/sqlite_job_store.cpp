@@ -34,13 +34,11 @@ class Statement {
   Statement& operator=(const Statement&) = delete;
 
   Statement& bind(int index, const std::string& text) {
-    check(sqlite3_bind_text(stmt_, index, text.data(), static_cast<int>(text.size()),
-                            SQLITE_TRANSIENT));
+    check(sqlite3_bind_text(stmt_, index, text.data(), static_cast<int>(text.size()), SQLITE_TRANSIENT));
     return *this;
   }
   Statement& bind_blob(int index, const std::string& bytes) {
-    check(sqlite3_bind_blob(stmt_, index, bytes.data(), static_cast<int>(bytes.size()),
-                            SQLITE_TRANSIENT));
+    check(sqlite3_bind_blob(stmt_, index, bytes.data(), static_cast<int>(bytes.size()), SQLITE_TRANSIENT));
     return *this;
   }
   Statement& bind(int index, std::int64_t value) {
@@ -57,13 +55,11 @@ class Statement {
   std::int64_t int64(int column) const { return sqlite3_column_int64(stmt_, column); }
   std::string text(int column) const {
     const auto* p = reinterpret_cast<const char*>(sqlite3_column_text(stmt_, column));
-    return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(stmt_, column)))
-             : std::string();
+    return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(stmt_, column))) : std::string();
   }
   std::string blob(int column) const {
     const auto* p = static_cast<const char*>(sqlite3_column_blob(stmt_, column));
-    return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(stmt_, column)))
-             : std::string();
+    return p ? std::string(p, static_cast<std::size_t>(sqlite3_column_bytes(stmt_, column))) : std::string();
   }
 
  private:
@@ -71,16 +67,14 @@ class Statement {
     if (rc != SQLITE_OK) fail("bind");
   }
   [[noreturn]] void fail(const char* what) {
-    throw Error(store_error_code(sqlite3_errcode(db_)), "job_store",
-                std::string(what) + ": " + sqlite3_errmsg(db_));
+    throw Error(store_error_code(sqlite3_errcode(db_)), "job_store", std::string(what) + ": " + sqlite3_errmsg(db_));
   }
   sqlite3* db_;
   sqlite3_stmt* stmt_ = nullptr;
 };
 
 std::int64_t system_now_us() {
-  return std::chrono::duration_cast<std::chrono::microseconds>(
-             std::chrono::system_clock::now().time_since_epoch())
+  return std::chrono::duration_cast<std::chrono::microseconds>(std::chrono::system_clock::now().time_since_epoch())
       .count();
 }
 
@@ -110,8 +104,7 @@ SqliteJobStore::SqliteJobStore(const std::filesystem::path& path) : path_(path) 
                 "another posefuse-server process uses this job store (SQLite serves one process; "
                 "replicas share a PostgreSQL one: --job-store)");
   }
-  if (sqlite3_open_v2(path.c_str(), &db_,
-                      SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
+  if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
                       nullptr) != SQLITE_OK) {
     const std::string message = db_ ? sqlite3_errmsg(db_) : "out of memory";
     sqlite3_close(db_);
@@ -122,9 +115,10 @@ SqliteJobStore::SqliteJobStore(const std::filesystem::path& path) : path_(path) 
   sqlite3_busy_timeout(db_, 5000);
   try {
     exec("PRAGMA journal_mode=WAL");
-    exec("CREATE TABLE IF NOT EXISTS jobs ("
-         " seq INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT UNIQUE NOT NULL,"
-         " state INTEGER NOT NULL, recording_path TEXT NOT NULL, job BLOB NOT NULL)");
+    exec(
+        "CREATE TABLE IF NOT EXISTS jobs ("
+        " seq INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT UNIQUE NOT NULL,"
+        " state INTEGER NOT NULL, recording_path TEXT NOT NULL, job BLOB NOT NULL)");
     // The owning tenant; a store made before tenants gets the column, its jobs owned by "".
     if (!has_column("jobs", "owner")) exec("ALTER TABLE jobs ADD COLUMN owner TEXT NOT NULL DEFAULT ''");
     // The lease columns of the shared queue (job_store.hpp); a job left RUNNING by an older
@@ -138,9 +132,10 @@ SqliteJobStore::SqliteJobStore(const std::filesystem::path& path) : path_(path) 
     // One process owns this file: a job RUNNING at open was left by a process that stopped,
     // so its lease is over now rather than after its expiry time.
     exec("UPDATE jobs SET lease_expires_us = 0 WHERE state = 2");
-    exec("CREATE TABLE IF NOT EXISTS results ("
-         " job_id TEXT NOT NULL, seq INTEGER NOT NULL, result BLOB NOT NULL,"
-         " PRIMARY KEY (job_id, seq))");
+    exec(
+        "CREATE TABLE IF NOT EXISTS results ("
+        " job_id TEXT NOT NULL, seq INTEGER NOT NULL, result BLOB NOT NULL,"
+        " PRIMARY KEY (job_id, seq))");
   } catch (const Error& error) {
     sqlite3_close(db_);
     ::close(lock_fd_);
@@ -177,19 +172,17 @@ void SqliteJobStore::in_transaction(Body&& body) {
 }
 
 bool SqliteJobStore::has_column(const char* table, const char* column) {
-  Statement select(db_, std::string("SELECT COUNT(*) FROM pragma_table_info('") + table +
-                            "') WHERE name = ?");
+  Statement select(db_, std::string("SELECT COUNT(*) FROM pragma_table_info('") + table + "') WHERE name = ?");
   select.bind(1, std::string(column));
   return select.step() && select.int64(0) > 0;
 }
 
-v1::Job SqliteJobStore::create(const v1::JobSpec& spec, const std::string& recording_path,
-                               const std::string& owner, std::int64_t now_unix_us) {
+v1::Job SqliteJobStore::create(const v1::JobSpec& spec, const std::string& recording_path, const std::string& owner,
+                               std::int64_t now_unix_us) {
   const v1::Job job = new_job(spec, now_unix_us);
   {
     std::lock_guard lock(mu_);
-    Statement insert(db_,
-                     "INSERT INTO jobs (id, state, recording_path, job, owner) VALUES (?, ?, ?, ?, ?)");
+    Statement insert(db_, "INSERT INTO jobs (id, state, recording_path, job, owner) VALUES (?, ?, ?, ?, ?)");
     insert.bind(1, job.job_id()).bind(2, std::int64_t{job.state()}).bind(3, recording_path);
     insert.bind_blob(4, job.SerializeAsString()).bind(5, owner);
     insert.step();
@@ -207,8 +200,7 @@ std::optional<JobRecord> SqliteJobStore::get(const std::string& job_id) {
 }
 
 std::vector<v1::Job> SqliteJobStore::list(std::size_t limit, const std::string& after_job_id,
-                                          const std::vector<v1::Job::State>& states,
-                                          const std::string& owner) {
+                                          const std::vector<v1::Job::State>& states, const std::string& owner) {
   std::string sql = "SELECT job FROM jobs WHERE owner = ?";
   if (!after_job_id.empty()) sql += " AND seq < (SELECT seq FROM jobs WHERE id = ?)";
   if (!states.empty()) {
@@ -240,14 +232,12 @@ void SqliteJobStore::update(const v1::Job& job) {
   notify({JobEvent::Kind::kChanged, job.job_id()});
 }
 
-void SqliteJobStore::append_results(const std::string& job_id,
-                                    const std::vector<v1::FitResult>& results) {
+void SqliteJobStore::append_results(const std::string& job_id, const std::vector<v1::FitResult>& results) {
   std::lock_guard lock(mu_);
   in_transaction([&] { append_results_locked(job_id, results); });
 }
 
-void SqliteJobStore::append_results_locked(const std::string& job_id,
-                                           const std::vector<v1::FitResult>& results) {
+void SqliteJobStore::append_results_locked(const std::string& job_id, const std::vector<v1::FitResult>& results) {
   {
     Statement next(db_, "SELECT COALESCE(MAX(seq) + 1, 0) FROM results WHERE job_id = ?");
     next.bind(1, job_id);
@@ -288,8 +278,9 @@ void SqliteJobStore::write_job_locked(const v1::Job& job) {
 }
 
 bool SqliteJobStore::holds_locked(const JobLease& lease) {
-  Statement select(db_, "SELECT COUNT(*) FROM jobs WHERE id = ? AND lease_owner = ? AND attempts = ?"
-                        " AND state = ?");
+  Statement select(db_,
+                   "SELECT COUNT(*) FROM jobs WHERE id = ? AND lease_owner = ? AND attempts = ?"
+                   " AND state = ?");
   select.bind(1, lease.job_id).bind(2, lease.worker).bind(3, std::int64_t{lease.attempt});
   select.bind(4, std::int64_t{v1::Job::RUNNING});
   return select.step() && select.int64(0) > 0;
@@ -326,15 +317,14 @@ std::optional<JobRecord> SqliteJobStore::cancel(const std::string& job_id, const
   return record;
 }
 
-std::optional<JobRecord> SqliteJobStore::claim(const std::string& worker,
-                                               std::chrono::milliseconds lease,
+std::optional<JobRecord> SqliteJobStore::claim(const std::string& worker, std::chrono::milliseconds lease,
                                                std::int64_t now_unix_us) {
   std::optional<JobRecord> record;
   {
     std::lock_guard lock(mu_);
     in_transaction([&] {
-      Statement select(db_, std::string("SELECT ") + kRecordColumns +
-                                " FROM jobs WHERE state = ? ORDER BY seq LIMIT 1");
+      Statement select(db_,
+                       std::string("SELECT ") + kRecordColumns + " FROM jobs WHERE state = ? ORDER BY seq LIMIT 1");
       select.bind(1, std::int64_t{v1::Job::QUEUED});
       if (!select.step()) return;
       record = read_record(select);
@@ -357,8 +347,9 @@ std::optional<JobRecord> SqliteJobStore::claim(const std::string& worker,
 
 LeaseState SqliteJobStore::renew(const JobLease& lease, std::chrono::milliseconds duration) {
   std::lock_guard lock(mu_);
-  Statement update(db_, "UPDATE jobs SET lease_expires_us = ? WHERE id = ? AND lease_owner = ?"
-                        " AND attempts = ? AND state = ? RETURNING cancel_requested");
+  Statement update(db_,
+                   "UPDATE jobs SET lease_expires_us = ? WHERE id = ? AND lease_owner = ?"
+                   " AND attempts = ? AND state = ? RETURNING cancel_requested");
   update.bind(1, system_now_us() + std::chrono::microseconds(duration).count());
   update.bind(2, lease.job_id).bind(3, lease.worker).bind(4, std::int64_t{lease.attempt});
   update.bind(5, std::int64_t{v1::Job::RUNNING});
@@ -385,8 +376,7 @@ void SqliteJobStore::update_running(const JobLease& lease, const v1::Job& job) {
   notify({JobEvent::Kind::kChanged, job.job_id()});
 }
 
-void SqliteJobStore::append_results(const JobLease& lease,
-                                    const std::vector<v1::FitResult>& results) {
+void SqliteJobStore::append_results(const JobLease& lease, const std::vector<v1::FitResult>& results) {
   std::lock_guard lock(mu_);
   in_transaction([&] {
     if (!holds_locked(lease)) throw LeaseLost(lease.job_id);
@@ -430,8 +420,8 @@ std::vector<ReapedJob> SqliteJobStore::reap(std::uint32_t max_attempts, std::int
         while (select.step()) expired.emplace_back(read_record(select), select.int64(4) != 0);
       }
       for (auto& [record, cancel_requested] : expired) {
-        const v1::Job::State state = mark_lease_expired(record.job, record.attempts, max_attempts,
-                                                        cancel_requested, now_unix_us);
+        const v1::Job::State state =
+            mark_lease_expired(record.job, record.attempts, max_attempts, cancel_requested, now_unix_us);
         write_job_locked(record.job);
         Statement end(db_, "UPDATE jobs SET lease_owner = '' WHERE id = ?");
         end.bind(1, record.job.job_id());
@@ -442,8 +432,7 @@ std::vector<ReapedJob> SqliteJobStore::reap(std::uint32_t max_attempts, std::int
     });
   }
   for (const ReapedJob& job : reaped) {
-    notify({job.state == v1::Job::QUEUED ? JobEvent::Kind::kQueued : JobEvent::Kind::kChanged,
-            job.job_id});
+    notify({job.state == v1::Job::QUEUED ? JobEvent::Kind::kQueued : JobEvent::Kind::kChanged, job.job_id});
   }
   return reaped;
 }
@@ -458,12 +447,9 @@ void SqliteJobStore::notify(const JobEvent& event) {
   if (listener_) listener_(event);
 }
 
-std::string SqliteJobStore::keep_upload(const std::filesystem::path& spooled) {
-  return spooled.string();
-}
+std::string SqliteJobStore::keep_upload(const std::filesystem::path& spooled) { return spooled.string(); }
 
-std::filesystem::path SqliteJobStore::local_recording(const std::string& recording_path,
-                                                      const std::filesystem::path&) {
+std::filesystem::path SqliteJobStore::local_recording(const std::string& recording_path, const std::filesystem::path&) {
   return recording_path;
 }
 

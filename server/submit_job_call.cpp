@@ -9,8 +9,7 @@
 
 namespace posefuse::server {
 
-SubmitJobCall* SubmitJobCall::start(const SubmitJobContext& context, v1::Job* response,
-                                    std::string tenant) {
+SubmitJobCall* SubmitJobCall::start(const SubmitJobContext& context, v1::Job* response, std::string tenant) {
   auto call = std::make_shared<SubmitJobCall>(context, response, std::move(tenant));
   call->self_ = call;
   std::lock_guard lock(call->mu_);
@@ -18,8 +17,7 @@ SubmitJobCall* SubmitJobCall::start(const SubmitJobContext& context, v1::Job* re
   return call.get();
 }
 
-SubmitJobCall::SubmitJobCall(const SubmitJobContext& context, v1::Job* response,
-                             std::string tenant)
+SubmitJobCall::SubmitJobCall(const SubmitJobContext& context, v1::Job* response, std::string tenant)
     : context_(context), response_(response), tenant_(std::move(tenant)) {}
 
 void SubmitJobCall::start_read_locked() {
@@ -42,8 +40,8 @@ void SubmitJobCall::OnReadDone(bool ok) {
 
 void SubmitJobCall::read_spec_locked(bool ok) {
   if (!ok || !request_.has_spec()) {
-    finish_locked(grpc::Status(grpc::StatusCode::INVALID_ARGUMENT,
-                               "spec: the first SubmitJobRequest must be a JobSpec"));
+    finish_locked(
+        grpc::Status(grpc::StatusCode::INVALID_ARGUMENT, "spec: the first SubmitJobRequest must be a JobSpec"));
     return;
   }
   spec_ = request_.spec();
@@ -71,9 +69,8 @@ void SubmitJobCall::read_spec_locked(bool ok) {
   }
   context_.registry.watch(*slot_, weak_from_this());
   try {
-    spool_ = std::make_unique<UploadSpool>(
-        context_.spool_dir / (random_hex_id() + ".pfchunks"), context_.max_upload_bytes,
-        session::PipelineOptions{}.max_item_errors);
+    spool_ = std::make_unique<UploadSpool>(context_.spool_dir / (random_hex_id() + ".pfchunks"),
+                                           context_.max_upload_bytes, session::PipelineOptions{}.max_item_errors);
   } catch (const Error& error) {
     finish_locked(to_status(error));
     return;
@@ -136,10 +133,11 @@ void SubmitJobCall::commit() {
     finish_locked(to_status(error));
     return;
   }
-  log_event("info", "upload_end", {{"session", std::to_string(*slot_)},
-                                    {"job", response_->job_id()},
-                                    {"chunks", std::to_string(spool_->chunks())},
-                                    {"bytes", std::to_string(spool_->bytes())}});
+  log_event("info", "upload_end",
+            {{"session", std::to_string(*slot_)},
+             {"job", response_->job_id()},
+             {"chunks", std::to_string(spool_->chunks())},
+             {"bytes", std::to_string(spool_->bytes())}});
   finish_locked(grpc::Status::OK);
 }
 
@@ -147,9 +145,10 @@ void SubmitJobCall::finish_locked(grpc::Status status) {
   if (finished_) return;
   finished_ = true;
   if (spool_ && !status.ok()) {
-    log_event("info", "upload_refused", {{"session", std::to_string(*slot_)},
-                                         {"status", status_code_name(status.error_code())},
-                                         {"chunks", std::to_string(spool_->chunks())}});
+    log_event("info", "upload_refused",
+              {{"session", std::to_string(*slot_)},
+               {"status", status_code_name(status.error_code())},
+               {"chunks", std::to_string(spool_->chunks())}});
   }
   spool_.reset();  // an upload that did not become a job leaves no file
   Finish(std::move(status));
@@ -164,10 +163,9 @@ void SubmitJobCall::check_idle(Clock::time_point now) {
   std::lock_guard lock(mu_);
   if (finished_ || !read_pending_ || now - last_read_at_ < context_.idle_timeout) return;
   log_event("info", "upload_idle", {{"session", std::to_string(*slot_)}});
-  finish_locked(grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED,
-                             "no message from the client for " +
-                                 std::to_string(context_.idle_timeout.count()) +
-                                 " s (idle timeout)"));
+  finish_locked(grpc::Status(
+      grpc::StatusCode::DEADLINE_EXCEEDED,
+      "no message from the client for " + std::to_string(context_.idle_timeout.count()) + " s (idle timeout)"));
 }
 
 void SubmitJobCall::OnDone() {

@@ -40,7 +40,7 @@ struct SubmitJobContext {
   std::filesystem::path spool_dir;        // by upload: where the chunk files go
   std::uint64_t max_upload_bytes;
   std::chrono::duration<double> idle_timeout;
-  unsigned max_sessions;                  // for the RESOURCE_EXHAUSTED message
+  unsigned max_sessions;  // for the RESOURCE_EXHAUSTED message
 };
 
 class SubmitJobCall : public grpc::ServerReadReactor<v1::SubmitJobRequest>,
@@ -49,8 +49,7 @@ class SubmitJobCall : public grpc::ServerReadReactor<v1::SubmitJobRequest>,
  public:
   // Starts the call; the returned reactor keeps itself alive until OnDone.
   // The job belongs to `tenant`.
-  static SubmitJobCall* start(const SubmitJobContext& context, v1::Job* response,
-                              std::string tenant);
+  static SubmitJobCall* start(const SubmitJobContext& context, v1::Job* response, std::string tenant);
 
   void OnReadDone(bool ok) override;
   void OnCancel() override;
@@ -76,8 +75,8 @@ class SubmitJobCall : public grpc::ServerReadReactor<v1::SubmitJobRequest>,
   std::shared_ptr<SubmitJobCall> self_;  // released in OnDone
   v1::SubmitJobRequest request_;
   v1::JobSpec spec_;
-  std::unique_ptr<UploadSpool> spool_;     // set while an upload is arriving
-  std::optional<std::uint64_t> slot_;      // the upload's session slot
+  std::unique_ptr<UploadSpool> spool_;  // set while an upload is arriving
+  std::optional<std::uint64_t> slot_;   // the upload's session slot
   bool read_pending_ = false;
   bool cancelled_ = false;
   bool finished_ = false;

@@ -18,8 +18,7 @@ std::filesystem::path UploadSpool::partial_path(const std::filesystem::path& fin
   return partial;
 }
 
-UploadSpool::UploadSpool(std::filesystem::path final_path, std::uint64_t max_bytes,
-                         std::uint64_t max_rejected_chunks)
+UploadSpool::UploadSpool(std::filesystem::path final_path, std::uint64_t max_bytes, std::uint64_t max_rejected_chunks)
     : final_path_(std::move(final_path)),
       partial_path_(partial_path(final_path_)),
       max_bytes_(max_bytes),
@@ -40,9 +39,9 @@ void UploadSpool::add(const v1::SessionChunk& chunk) {
   // The file's length prefix is at most 10 bytes; counting it keeps the bound exact enough.
   const std::uint64_t size = chunk.ByteSizeLong() + 10;
   if (bytes_ + size > max_bytes_) {
-    throw Error(ErrorCode::kResourceExhausted, "upload",
-                "larger than the server's limit of " + std::to_string(max_bytes_ >> 20) +
-                    " MiB (--max-upload-mb) at " + field);
+    throw Error(
+        ErrorCode::kResourceExhausted, "upload",
+        "larger than the server's limit of " + std::to_string(max_bytes_ >> 20) + " MiB (--max-upload-mb) at " + field);
   }
   try {
     validator_.check(chunk);
@@ -51,8 +50,8 @@ void UploadSpool::add(const v1::SessionChunk& chunk) {
     if (!validator_.has_header()) throw;
     if (++rejected_ > max_rejected_) {
       throw Error(ErrorCode::kInvalidArgument, "chunks",
-                  std::to_string(rejected_) + " chunks rejected (limit " +
-                      std::to_string(max_rejected_) + "); the last at " + field);
+                  std::to_string(rejected_) + " chunks rejected (limit " + std::to_string(max_rejected_) +
+                      "); the last at " + field);
     }
   }
   if (chunk.has_end()) ended_ = true;
@@ -71,8 +70,7 @@ const std::filesystem::path& UploadSpool::commit() {
   std::error_code error;
   std::filesystem::rename(partial_path_, final_path_, error);
   if (error) {
-    throw Error(ErrorCode::kInternal, "upload", "cannot move the spooled upload into place: " +
-                                                    error.message());
+    throw Error(ErrorCode::kInternal, "upload", "cannot move the spooled upload into place: " + error.message());
   }
   committed_ = true;
   return final_path_;

@@ -26,8 +26,7 @@ namespace posefuse::server {
 class UploadSpool {
  public:
   // Writes to `<final_path>.partial` until commit().
-  UploadSpool(std::filesystem::path final_path, std::uint64_t max_bytes,
-              std::uint64_t max_rejected_chunks);
+  UploadSpool(std::filesystem::path final_path, std::uint64_t max_bytes, std::uint64_t max_rejected_chunks);
   ~UploadSpool();  // removes the partial file unless committed
   UploadSpool(const UploadSpool&) = delete;
   UploadSpool& operator=(const UploadSpool&) = delete;

@@ -1,8 +1,8 @@
 #include "body_render_session.hpp"
 
 #include <algorithm>
-#include <cstddef>
 #include <cmath>
+#include <cstddef>
 #include <limits>
 #include <optional>
 
@@ -24,8 +24,8 @@ struct ResultCollector : session::ResultSink {
 // The simulator's chunks go straight into the pipeline on the writer's thread.
 class PipelineChunkSink : public session::ChunkSink {
  public:
-  PipelineChunkSink(ResultCollector& results, BodyRenderRun& run, const std::map<std::string, std::string>& header_options,
-                    bool hold)
+  PipelineChunkSink(ResultCollector& results, BodyRenderRun& run,
+                    const std::map<std::string, std::string>& header_options, bool hold)
       : pipeline_(session::make_default_stages(), results), run_(run), header_options_(header_options), hold_(hold) {}
   void write(const v1::SessionChunk& chunk) override {
     if (hold_) {

@@ -37,8 +37,12 @@ struct TruthTrack {
     const double w = std::clamp(static_cast<double>(t_us - t[a]) / static_cast<double>(t[b] - t[a]), 0.0, 1.0);
     return ((1.0 - w) * value(a) + w * value(b)).eval();
   }
-  Vec3 position(std::int64_t t_us) const { return at(t_us, [&](std::size_t f) { return p(f); }); }
-  Vec3 velocity(std::int64_t t_us) const { return at(t_us, [&](std::size_t f) { return v(f); }); }
+  Vec3 position(std::int64_t t_us) const {
+    return at(t_us, [&](std::size_t f) { return p(f); });
+  }
+  Vec3 velocity(std::int64_t t_us) const {
+    return at(t_us, [&](std::size_t f) { return v(f); });
+  }
 };
 
 void print_boundary(const char* side, const std::vector<forearm::TrackSample>& track, const TruthTrack& truth,
@@ -55,10 +59,11 @@ void print_boundary(const char* side, const std::vector<forearm::TrackSample>& t
   try {
     const forearm::BoundaryState b = forearm::fit_boundary_line(track, t_us, direction, 0.5);
     const Vec3 v_true = truth.velocity(t_us);
-    std::printf(" %s: %d samples, p err %.0f mm, v err %.2f m/s (|v| true %.2f, fit %.2f), worst sample %.0f mm at "
-                "%+.2f s;",
-                side, b.sample_count, 1e3 * (b.p_K - truth.position(t_us)).norm(), (b.v_K - v_true).norm(),
-                v_true.norm(), b.v_K.norm(), 1e3 * worst, 1e-6 * static_cast<double>(worst_t - t_us));
+    std::printf(
+        " %s: %d samples, p err %.0f mm, v err %.2f m/s (|v| true %.2f, fit %.2f), worst sample %.0f mm at "
+        "%+.2f s;",
+        side, b.sample_count, 1e3 * (b.p_K - truth.position(t_us)).norm(), (b.v_K - v_true).norm(), v_true.norm(),
+        b.v_K.norm(), 1e3 * worst, 1e-6 * static_cast<double>(worst_t - t_us));
   } catch (const Error&) {
     std::printf(" %s: no fit;", side);
   }
@@ -72,8 +77,9 @@ void print_acceleration_error(const v1::RecoveredSegment& s, const TruthTrack& t
     const auto& samples = s.samples();
     int k = 0;
     while (k + 2 < samples.size() && samples[k + 1].t_us() <= t_us) ++k;
-    const double w = std::clamp(static_cast<double>(t_us - samples[k].t_us()) /
-                                    static_cast<double>(samples[k + 1].t_us() - samples[k].t_us()), 0.0, 1.0);
+    const double w = std::clamp(
+        static_cast<double>(t_us - samples[k].t_us()) / static_cast<double>(samples[k + 1].t_us() - samples[k].t_us()),
+        0.0, 1.0);
     return ((1.0 - w) * vec(samples[k].imu_m()) + w * vec(samples[k + 1].imu_m())).eval();
   };
   std::printf("    acceleration error (recovered - truth), m/s^2, mean per 0.5 s bin from the start [x y z]:");
@@ -98,7 +104,8 @@ void print_acceleration_error(const v1::RecoveredSegment& s, const TruthTrack& t
 void print_elbow_error(const v1::RecoveredSegment& s, const Table1Truth& truth,
                        const std::vector<v1::FitResult>& results, v1::Arm arm) {
   const bool left = arm == v1::LEFT;
-  const int smpl_elbow = left ? body::kLeftElbow : body::kRightElbow, smpl_wrist = left ? body::kLeftWrist : body::kRightWrist;
+  const int smpl_elbow = left ? body::kLeftElbow : body::kRightElbow,
+            smpl_wrist = left ? body::kLeftWrist : body::kRightWrist;
   const int sdk_elbow = left ? geometry::kElbowLeft : geometry::kElbowRight;
   const auto truth_at = [&](std::int64_t t_us) -> const sim::ForearmTruth* {
     const auto f = std::lower_bound(truth.frame_t_us.begin(), truth.frame_t_us.end(), t_us);
@@ -122,7 +129,8 @@ void print_elbow_error(const v1::RecoveredSegment& s, const Table1Truth& truth,
     const Vec3 wrist = vec(r.frame().smpl_joints(smpl_wrist).position_m());
     fit_sum[static_cast<std::size_t>(b)] += (elbow - t->elbow_K_m).norm();
     energy_sum[static_cast<std::size_t>(b)] += r.frame().fit_energy();
-    angle_sum[static_cast<std::size_t>(b)] += forearm::forearm_direction_angle(elbow, wrist, t->K_from_F) * 180.0 / std::numbers::pi;
+    angle_sum[static_cast<std::size_t>(b)] +=
+        forearm::forearm_direction_angle(elbow, wrist, t->K_from_F) * 180.0 / std::numbers::pi;
     ++fit_n[static_cast<std::size_t>(b)];
   }
   for (const v1::SkeletonFrame& k : truth.sdk) {
@@ -162,7 +170,8 @@ void print_gap_report(const Table1Truth& truth, const std::vector<v1::FitResult>
   // detections (or true ones the truth's occlusion test calls hidden).
   for (const forearm::TrackSample& v : track) {
     const auto f = std::lower_bound(truth.frame_t_us.begin(), truth.frame_t_us.end(), v.t_us);
-    const bool hidden = f != truth.frame_t_us.end() && *f == v.t_us && truth.forearm[static_cast<std::size_t>(f - truth.frame_t_us.begin())].occluded;
+    const bool hidden = f != truth.frame_t_us.end() && *f == v.t_us &&
+                        truth.forearm[static_cast<std::size_t>(f - truth.frame_t_us.begin())].occluded;
     const double e = (v.p_K - truth_track.position(v.t_us)).norm();
     if (hidden || e > 0.04) {
       std::printf("VISUAL at %.2f s: error %.0f mm%s\n", 1e-6 * static_cast<double>(v.t_us), 1e3 * e,

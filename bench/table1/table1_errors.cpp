@@ -33,8 +33,8 @@ void fill_from_segments(const std::vector<const v1::RecoveredSegment*>& segments
     for (int i = 0; i + 1 < samples.size(); ++i) {
       const std::int64_t a = samples[i].t_us(), b = samples[i + 1].t_us();
       if (b <= a) continue;
-      for (auto it = std::lower_bound(frame_t_us.begin(), frame_t_us.end(), a);
-           it != frame_t_us.end() && *it <= b; ++it) {
+      for (auto it = std::lower_bound(frame_t_us.begin(), frame_t_us.end(), a); it != frame_t_us.end() && *it <= b;
+           ++it) {
         if (*it <= s->t_start_us() || *it >= s->t_end_us()) continue;  // strictly inside the gap
         const double w = static_cast<double>(*it - a) / static_cast<double>(b - a);
         const std::size_t f = static_cast<std::size_t>(it - frame_t_us.begin());
@@ -116,9 +116,8 @@ Table1Series table1_series(const Table1Truth& session, const std::vector<v1::Fit
     s.sdk_orientation_deg.push_back(
         has_sdk_orientation ? eval::paper_orientation_error_deg(sdk_K_from_wrist[f] * wrist_from_F, truth.K_from_F)
                             : kNaN);
-    s.fusion_orientation_deg.push_back(fusion_K_from_F[f].norm() > 0.5
-                                           ? eval::paper_orientation_error_deg(fusion_K_from_F[f], truth.K_from_F)
-                                           : kNaN);
+    s.fusion_orientation_deg.push_back(
+        fusion_K_from_F[f].norm() > 0.5 ? eval::paper_orientation_error_deg(fusion_K_from_F[f], truth.K_from_F) : kNaN);
     const Vec3 paper_f = paper_filled[f] ? paper[f] : visual[f];
     const Vec3 smoother_f = smoother_filled[f] ? smoother[f] : visual[f];
     const Vec3 live_f = visual[f].allFinite() ? visual[f] : live[f];

@@ -24,8 +24,8 @@ struct Table1Series {
   std::vector<double> sdk_position_m, paper_position_m, smoother_position_m, live_position_m;
   // x_K of the IMU (paper 1, Fig. 6): truth, SDK, paper, smoother.
   std::vector<double> true_x_m, sdk_x_m, paper_x_m, smoother_x_m;
-  std::size_t sdk_orientation_missing = 0;     // frames whose wrist had no SDK orientation
-  std::vector<bool> stage_visible;             // the stage gave an eq. 10 (VISUAL) position
+  std::size_t sdk_orientation_missing = 0;  // frames whose wrist had no SDK orientation
+  std::vector<bool> stage_visible;          // the stage gave an eq. 10 (VISUAL) position
 };
 
 // The arm scored: the stage's results for it (ForearmOrientation and RecoveredSegment by arm,

@@ -88,9 +88,9 @@ Table1Session simulate_table1_session(const sim::BodyMotion& motion, const Table
       sim::SensorKinematics(sim::base_imu_trajectory(camera.K_from_W, W_from_R, mount, -0.05, duration_s + 0.05)),
       base_device, imu_options(o.seed + 1), 0.0, duration_s);
   const Eigen::Matrix3Xd rest = sim::template_rest_joints(camera.sex, camera.betas);
-  const sim::ImuDeviceResult arm_imu = sim::simulate_imu_device(
-      sim::SensorKinematics(sim::forearm_imu_trajectory(motion, rest, o.strap, W_from_R)), arm_device,
-      imu_options(o.seed + 2), 0.0, duration_s);
+  const sim::ImuDeviceResult arm_imu =
+      sim::simulate_imu_device(sim::SensorKinematics(sim::forearm_imu_trajectory(motion, rest, o.strap, W_from_R)),
+                               arm_device, imu_options(o.seed + 2), 0.0, duration_s);
 
   std::vector<TimedChunk> timed;
   SimChunkCounts counts;
@@ -120,15 +120,16 @@ Table1Session simulate_table1_session(const sim::BodyMotion& motion, const Table
     scene.wall_z_m = camera.wall_distance_m;
     // The upper arm is in the depth image too (a cylinder from the SMPL shoulder to the elbow).
     scene.shoulder_K = shot.truth[f].smpl_joints_K.col(truth.side == sim::BodySide::kRight ? body::kRightShoulder
-                                                                                          : body::kLeftShoulder);
+                                                                                           : body::kLeftShoulder);
     const forearm::testing::ForearmImages images =
         forearm::testing::render_forearm(scene, cameras, 6.0, 0.002, o.seed * 100000 + f);
     v1::SessionChunk depth, color;
-    *depth.mutable_depth() = session::encode_depth(
-        cv::Mat(cameras.depth.height, cameras.depth.width, CV_16UC1, const_cast<std::uint16_t*>(images.depth_mm.data())),
-        v1::DepthFrame::PNG16, t_us);
+    *depth.mutable_depth() = session::encode_depth(cv::Mat(cameras.depth.height, cameras.depth.width, CV_16UC1,
+                                                           const_cast<std::uint16_t*>(images.depth_mm.data())),
+                                                   v1::DepthFrame::PNG16, t_us);
     *color.mutable_color() = session::encode_color_png(
-        cv::Mat(cameras.color.height, cameras.color.width, CV_8UC1, const_cast<std::uint8_t*>(images.gray.data())), t_us);
+        cv::Mat(cameras.color.height, cameras.color.width, CV_8UC1, const_cast<std::uint8_t*>(images.gray.data())),
+        t_us);
     timed.push_back({t_s, std::move(depth)});
     timed.push_back({t_s + 1e-6, std::move(color)});
     // shot.chunks per frame: depth, body index, skeleton; only the skeleton is used (see the header).

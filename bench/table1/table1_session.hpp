@@ -6,7 +6,8 @@
 // Colour and depth near the forearm come from the strap-test renderer
 // (tests/forearm/synthetic_images.hpp: the forearm as a cylinder with the black strap, drawn only
 // while the simulator's Embree test says the strap is visible, and the upper arm as a cylinder
-// from the shoulder to the elbow), because the simulator has no RGB yet. Kept in this one function so that the posefuse-sim CLI can replace it.
+// from the shoulder to the elbow), because the simulator has no RGB yet. Kept in this one function so that the
+// posefuse-sim CLI can replace it.
 #include <cstdint>
 #include <vector>
 
@@ -18,9 +19,9 @@
 namespace posefuse::bench {
 
 struct Table1SessionOptions {
-  double duration_s = 0.0;            // <= the motion's; 0: the whole motion
-  double calibration_end_s = 5.0;     // the stage's forearm.calibration_s (hold ends before it)
-  sim::ForearmStrap strap;            // right forearm
+  double duration_s = 0.0;         // <= the motion's; 0: the whole motion
+  double calibration_end_s = 5.0;  // the stage's forearm.calibration_s (hold ends before it)
+  sim::ForearmStrap strap;         // right forearm
   // false: the SDK skeleton without its error model (no bias, jitter, jumps, flips, inferred
   // offsets), to separate the SDK's joint errors from the rest.
   bool sdk_joint_errors = true;
@@ -28,10 +29,10 @@ struct Table1SessionOptions {
 };
 
 struct Table1Session {
-  std::vector<v1::SessionChunk> chunks;     // header, data in camera-time order, end marker
-  std::vector<std::int64_t> frame_t_us;     // camera clock
-  std::vector<sim::ForearmTruth> forearm;   // the right forearm per frame (the "mocap")
-  double d_sw_m = 0.0;                      // true strap-to-wrist length (at the first frame)
+  std::vector<v1::SessionChunk> chunks;    // header, data in camera-time order, end marker
+  std::vector<std::int64_t> frame_t_us;    // camera clock
+  std::vector<sim::ForearmTruth> forearm;  // the right forearm per frame (the "mocap")
+  double d_sw_m = 0.0;                     // true strap-to-wrist length (at the first frame)
 };
 
 Table1Session simulate_table1_session(const sim::BodyMotion& motion, const Table1SessionOptions& options);

@@ -15,7 +15,7 @@ struct PlotLine {
 };
 
 struct PlotPanel {
-  std::string title;      // includes the unit
+  std::string title;  // includes the unit
   std::vector<PlotLine> lines;
 };
 

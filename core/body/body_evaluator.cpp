@@ -88,8 +88,8 @@ BodyEvaluator::BodyEvaluator(std::shared_ptr<const SmplModel> model, PoseLayout 
 
 void BodyEvaluator::update_shape(const Eigen::Ref<const Eigen::VectorXd>& beta) {
   if (beta.size() > num_betas_)
-    throw_invalid("beta", "size " + std::to_string(beta.size()) + ", model has " +
-                              std::to_string(num_betas_) + " shape directions");
+    throw_invalid("beta", "size " + std::to_string(beta.size()) + ", model has " + std::to_string(num_betas_) +
+                              " shape directions");
   // Compared in place: evaluate() must not allocate on the fitter's hot path.
   bool same = shape_valid_;
   for (Eigen::Index b = 0; b < num_betas_; ++b) {
@@ -153,8 +153,7 @@ void BodyEvaluator::evaluate(const Eigen::Ref<const Eigen::VectorXd>& beta,
   }
 
   // Per joint: x -> R(k) x + (c(k) - R(k) J(k)).
-  for (int k = 0; k < kNumJoints; ++k)
-    offsets_[k] = joints_.col(k) - rotations_[k] * rest_joints_.col(k);
+  for (int k = 0; k < kNumJoints; ++k) offsets_[k] = joints_.col(k) - rotations_[k] * rest_joints_.col(k);
 
   const bool pose_derivatives = what != Derivatives::kNone;
   const bool vertex_pose_derivatives = what == Derivatives::kPose || what == Derivatives::kPoseAndShape;
@@ -192,8 +191,7 @@ void BodyEvaluator::evaluate(const Eigen::Ref<const Eigen::VectorXd>& beta,
         const double w = weight_value_[e];
         // d/d beta of R(k)(v_posed - J(k)) + c(k)
         for (int b = 0; b < num_betas_; ++b) {
-          const Eigen::Vector3d dv = m.shapedirs.block<3, 1>(3 * i, b) -
-                                     rest_joint_shape_dirs_.block<3, 1>(3 * k, b);
+          const Eigen::Vector3d dv = m.shapedirs.block<3, 1>(3 * i, b) - rest_joint_shape_dirs_.block<3, 1>(3 * k, b);
           out.col(b) += w * (rotations_[k] * dv + joint_shape_jacobian_.block<3, 1>(3 * k, b));
         }
       }
@@ -207,9 +205,8 @@ void BodyEvaluator::evaluate(const Eigen::Ref<const Eigen::VectorXd>& beta,
         for (int d : layout_.dofs_of_joint(j)) {
           const Dof& dof = layout_.dof(d);
           joint_pose_jacobian_.block<3, 1>(3 * k, d) =
-              dof.kind == DofKind::kTranslation
-                  ? dof.axis
-                  : Eigen::Vector3d(dof_rate_[d].cross(joints_.col(k) - joints_.col(j)));
+              dof.kind == DofKind::kTranslation ? dof.axis
+                                                : Eigen::Vector3d(dof_rate_[d].cross(joints_.col(k) - joints_.col(j)));
         }
   }
 }
@@ -269,8 +266,7 @@ void BodyEvaluator::compute_vertex_pose_jacobian(int i) {
   }
 }
 
-void BodyEvaluator::add_vertex_pose_jacobian(int i, double scale,
-                                             Eigen::Ref<Eigen::Matrix3Xd> out) const {
+void BodyEvaluator::add_vertex_pose_jacobian(int i, double scale, Eigen::Ref<Eigen::Matrix3Xd> out) const {
   const auto dofs = vertex_dofs(i);
   const auto block = vertex_pose_jacobian(i);
   for (size_t c = 0; c < dofs.size(); ++c) out.col(dofs[c]) += scale * block.col(static_cast<Eigen::Index>(c));

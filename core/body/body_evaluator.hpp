@@ -36,15 +36,15 @@ class BodyEvaluator {
 
   // Poses the model; beta has model.num_betas() entries (fewer are padded with zeros),
   // theta has layout.size(). Throws posefuse::Error for wrong sizes or non-finite values.
-  void evaluate(const Eigen::Ref<const Eigen::VectorXd>& beta,
-                const Eigen::Ref<const Eigen::VectorXd>& theta, Derivatives what);
+  void evaluate(const Eigen::Ref<const Eigen::VectorXd>& beta, const Eigen::Ref<const Eigen::VectorXd>& theta,
+                Derivatives what);
 
   const SmplModel& model() const { return *model_; }
   const PoseLayout& layout() const { return layout_; }
 
-  const Eigen::Matrix3Xd& vertices() const { return vertices_; }   // 3 x V, posed
-  const Eigen::Matrix3Xd& joints() const { return joints_; }       // 3 x 24, posed
-  const Eigen::Matrix3Xd& rest_joints() const { return rest_joints_; }  // 3 x 24, shaped
+  const Eigen::Matrix3Xd& vertices() const { return vertices_; }                // 3 x V, posed
+  const Eigen::Matrix3Xd& joints() const { return joints_; }                    // 3 x 24, posed
+  const Eigen::Matrix3Xd& rest_joints() const { return rest_joints_; }          // 3 x 24, shaped
   const Eigen::Matrix3d& joint_rotation(int j) const { return rotations_[j]; }  // global R(j)
 
   // Jacobians below belong to the last evaluate() that asked for them (Derivatives::kPose or
@@ -100,9 +100,9 @@ class BodyEvaluator {
   // Shape state (cached while beta does not change).
   Eigen::VectorXd beta_;
   bool shape_valid_ = false;
-  Eigen::VectorXd v_shaped_;       // 3V
-  Eigen::VectorXd v_posed_;        // 3V
-  Eigen::Matrix3Xd rest_joints_;   // 3 x 24
+  Eigen::VectorXd v_shaped_;               // 3V
+  Eigen::VectorXd v_posed_;                // 3V
+  Eigen::Matrix3Xd rest_joints_;           // 3 x 24
   Eigen::MatrixXd rest_joint_shape_dirs_;  // 72 x B, J_regressor * shapedirs
 
   // Pose state.
@@ -111,7 +111,7 @@ class BodyEvaluator {
   std::vector<Eigen::Matrix3d> local_rotations_, rotations_;
   std::vector<Eigen::Matrix3d> left_jacobians_;
   std::vector<char> dof_is_translation_;
-  std::vector<Eigen::Vector3d> dof_rate_;           // W_d per DOF (world frame)
+  std::vector<Eigen::Vector3d> dof_rate_;                       // W_d per DOF (world frame)
   std::vector<Eigen::Matrix3d> dof_local_rotation_derivative_;  // d R_loc / d theta_d
   Eigen::Matrix3Xd joints_;
   std::array<Eigen::Vector3d, kNumJoints> offsets_;  // x -> R(k) x + offsets_[k], offsets_[k] = c(k) - R(k) J(k)

@@ -43,7 +43,8 @@ void write_ply(std::ostream& out, const Eigen::Matrix3Xd& vertices, const Eigen:
       << "\nproperty list uchar int vertex_indices\nend_header\n";
   for (Eigen::Index i = 0; i < vertices.cols(); ++i)
     out << vertices(0, i) << ' ' << vertices(1, i) << ' ' << vertices(2, i) << '\n';
-  for (Eigen::Index f = 0; f < faces.cols(); ++f) out << "3 " << faces(0, f) << ' ' << faces(1, f) << ' ' << faces(2, f) << '\n';
+  for (Eigen::Index f = 0; f < faces.cols(); ++f)
+    out << "3 " << faces(0, f) << ' ' << faces(1, f) << ' ' << faces(2, f) << '\n';
 }
 
 void write_skeleton(std::ostream& out, const Eigen::Matrix3Xd& joints, const std::array<int, kNumJoints>& parents) {

@@ -83,8 +83,7 @@ MeshTopologyReport check_topology(const Eigen::Matrix3Xi& faces, int num_vertice
     ++report.num_vertices;
     if (count_fans(v, incident[v], faces) != 1) ++report.num_nonmanifold_vertices;
   }
-  report.euler_characteristic =
-      report.num_vertices - report.num_edges + static_cast<int>(faces.cols());
+  report.euler_characteristic = report.num_vertices - report.num_edges + static_cast<int>(faces.cols());
   return report;
 }
 
@@ -100,8 +99,7 @@ Eigen::Matrix3Xi face_adjacency(const Eigen::Matrix3Xi& faces, int num_vertices)
   Eigen::Matrix3Xi adjacency = Eigen::Matrix3Xi::Constant(3, faces.cols(), -1);
   for (const auto& [edge, list] : sides) {
     if (list.size() > 2)
-      throw_invalid("faces", "edge (" + std::to_string(edge.first) + ", " +
-                                 std::to_string(edge.second) + ") has " +
+      throw_invalid("faces", "edge (" + std::to_string(edge.first) + ", " + std::to_string(edge.second) + ") has " +
                                  std::to_string(list.size()) + " faces; mesh is not manifold");
     if (list.size() == 2) {
       adjacency(list[0].second, list[0].first) = list[1].first;

@@ -7,12 +7,12 @@
 namespace posefuse::body {
 
 struct MeshTopologyReport {
-  int num_vertices = 0;        // vertices referenced by at least one face
-  int num_unreferenced = 0;    // vertices no face uses
+  int num_vertices = 0;      // vertices referenced by at least one face
+  int num_unreferenced = 0;  // vertices no face uses
   int num_edges = 0;
-  int num_boundary_edges = 0;  // edges with one face
-  int num_nonmanifold_edges = 0;   // edges with more than two faces
-  int num_misoriented_edges = 0;   // edges whose two faces traverse it in the same direction
+  int num_boundary_edges = 0;        // edges with one face
+  int num_nonmanifold_edges = 0;     // edges with more than two faces
+  int num_misoriented_edges = 0;     // edges whose two faces traverse it in the same direction
   int num_nonmanifold_vertices = 0;  // vertices whose faces do not form one fan
   int num_degenerate_faces = 0;      // faces repeating a vertex
   int euler_characteristic = 0;      // V - E + F

@@ -244,8 +244,8 @@ std::map<std::string, NpyArray> parse_npz(std::string_view bytes, const std::str
     } else {
       throw_invalid(field, "unsupported zip compression method " + std::to_string(method));
     }
-    const uLong actual_crc = crc32(crc32(0L, Z_NULL, 0), reinterpret_cast<const Bytef*>(content.data()),
-                                   static_cast<uInt>(content.size()));
+    const uLong actual_crc =
+        crc32(crc32(0L, Z_NULL, 0), reinterpret_cast<const Bytef*>(content.data()), static_cast<uInt>(content.size()));
     if (actual_crc != crc) data_loss(field, "CRC mismatch: archive is corrupt");
     std::string key = member;
     if (key.size() > 4 && key.substr(key.size() - 4) == ".npy") key.resize(key.size() - 4);

@@ -24,27 +24,50 @@ struct LimitRow {
 // a positive one the right arm. Ranges are typical active ranges of motion of adults, widened a
 // little because the limit term is soft.
 constexpr LimitRow kLimits[] = {
-    {kSpine1, 0, -25, 45}, {kSpine1, 1, -30, 30}, {kSpine1, 2, -25, 25},
-    {kSpine2, 0, -20, 35}, {kSpine2, 1, -25, 25}, {kSpine2, 2, -20, 20},
-    {kSpine3, 0, -20, 35}, {kSpine3, 1, -25, 25}, {kSpine3, 2, -20, 20},
-    {kNeck, 0, -40, 50},   {kNeck, 2, -35, 35},
-    {kHead, 0, -30, 40},   {kHead, 1, -70, 70},   {kHead, 2, -30, 30},
+    {kSpine1, 0, -25, 45},
+    {kSpine1, 1, -30, 30},
+    {kSpine1, 2, -25, 25},
+    {kSpine2, 0, -20, 35},
+    {kSpine2, 1, -25, 25},
+    {kSpine2, 2, -20, 20},
+    {kSpine3, 0, -20, 35},
+    {kSpine3, 1, -25, 25},
+    {kSpine3, 2, -20, 20},
+    {kNeck, 0, -40, 50},
+    {kNeck, 2, -35, 35},
+    {kHead, 0, -30, 40},
+    {kHead, 1, -70, 70},
+    {kHead, 2, -30, 30},
     // Left/right pairs mirror their y and z ranges.
-    {kLeftCollar, 1, -20, 20},     {kLeftCollar, 2, -15, 30},
-    {kRightCollar, 1, -20, 20},    {kRightCollar, 2, -30, 15},
-    {kLeftShoulder, 1, -120, 50},  {kLeftShoulder, 2, -95, 95},
-    {kRightShoulder, 1, -50, 120}, {kRightShoulder, 2, -95, 95},
-    {kLeftElbow, 1, -155, 10},     {kLeftElbow, 2, -30, 30},
-    {kRightElbow, 1, -10, 155},    {kRightElbow, 2, -30, 30},
-    {kLeftWrist, 1, -80, 80},      {kLeftWrist, 2, -45, 45},
-    {kRightWrist, 1, -80, 80},     {kRightWrist, 2, -45, 45},
+    {kLeftCollar, 1, -20, 20},
+    {kLeftCollar, 2, -15, 30},
+    {kRightCollar, 1, -20, 20},
+    {kRightCollar, 2, -30, 15},
+    {kLeftShoulder, 1, -120, 50},
+    {kLeftShoulder, 2, -95, 95},
+    {kRightShoulder, 1, -50, 120},
+    {kRightShoulder, 2, -95, 95},
+    {kLeftElbow, 1, -155, 10},
+    {kLeftElbow, 2, -30, 30},
+    {kRightElbow, 1, -10, 155},
+    {kRightElbow, 2, -30, 30},
+    {kLeftWrist, 1, -80, 80},
+    {kLeftWrist, 2, -45, 45},
+    {kRightWrist, 1, -80, 80},
+    {kRightWrist, 2, -45, 45},
     // Legs hang along -y: x is flexion (negative = hip forward, positive = knee back).
-    {kLeftHip, 0, -120, 30},   {kLeftHip, 2, -25, 50},
-    {kRightHip, 0, -120, 30},  {kRightHip, 2, -50, 25},
-    {kLeftKnee, 0, -5, 150},   {kLeftKnee, 2, -10, 10},
-    {kRightKnee, 0, -5, 150},  {kRightKnee, 2, -10, 10},
-    {kLeftAnkle, 0, -45, 30},  {kLeftAnkle, 2, -25, 25},
-    {kRightAnkle, 0, -45, 30}, {kRightAnkle, 2, -25, 25},
+    {kLeftHip, 0, -120, 30},
+    {kLeftHip, 2, -25, 50},
+    {kRightHip, 0, -120, 30},
+    {kRightHip, 2, -50, 25},
+    {kLeftKnee, 0, -5, 150},
+    {kLeftKnee, 2, -10, 10},
+    {kRightKnee, 0, -5, 150},
+    {kRightKnee, 2, -10, 10},
+    {kLeftAnkle, 0, -45, 30},
+    {kLeftAnkle, 2, -25, 25},
+    {kRightAnkle, 0, -45, 30},
+    {kRightAnkle, 2, -25, 25},
 };
 
 // The elbows of the layouts without arm roll (upper_body, full_body). Paper 2 (II-B) drops the
@@ -59,8 +82,10 @@ constexpr LimitRow kLimits[] = {
 // the extension side of y reaches 60 deg, the swing of flexion ~120 deg with the humerus turned
 // ~120 deg (chosen on paper 1's protocol among 10, 30, 45, 60 and 90 deg).
 constexpr LimitRow kNoRollElbowLimits[] = {
-    {kLeftElbow, 1, -155, 60},  {kLeftElbow, 2, -150, 150},
-    {kRightElbow, 1, -60, 155}, {kRightElbow, 2, -150, 150},
+    {kLeftElbow, 1, -155, 60},
+    {kLeftElbow, 2, -150, 150},
+    {kRightElbow, 1, -60, 155},
+    {kRightElbow, 2, -150, 150},
 };
 
 Dof rotation_dof(int joint, int axis) {
@@ -102,8 +127,8 @@ void add_upper_body(std::vector<Dof>& dofs) {
   add_joint(dofs, kNeck, {0, 2});
   add_joint(dofs, kHead, {0, 1, 2});
   // Arm bones run along x in the T-pose: swing about y and z, no roll about x.
-  for (int j : {kLeftCollar, kRightCollar, kLeftShoulder, kRightShoulder, kLeftElbow,
-                kRightElbow, kLeftWrist, kRightWrist})
+  for (int j :
+       {kLeftCollar, kRightCollar, kLeftShoulder, kRightShoulder, kLeftElbow, kRightElbow, kLeftWrist, kRightWrist})
     add_joint(dofs, j, {1, 2});
   for (Dof& d : dofs)
     for (const LimitRow& row : kNoRollElbowLimits)
@@ -144,21 +169,17 @@ int PoseLayout::index_of(const std::string& name) const {
   throw Error(ErrorCode::kNotFound, "dof", "no DOF named '" + name + "' in this layout");
 }
 
-void PoseLayout::to_smpl(const Eigen::Ref<const Eigen::VectorXd>& theta,
-                         Eigen::Matrix3Xd& rotation_vectors, Eigen::Vector3d& translation) const {
+void PoseLayout::to_smpl(const Eigen::Ref<const Eigen::VectorXd>& theta, Eigen::Matrix3Xd& rotation_vectors,
+                         Eigen::Vector3d& translation) const {
   if (theta.size() != size())
-    throw_invalid("theta", "size " + std::to_string(theta.size()) + ", layout has " +
-                               std::to_string(size()) + " DOF");
+    throw_invalid("theta", "size " + std::to_string(theta.size()) + ", layout has " + std::to_string(size()) + " DOF");
   rotation_vectors.setZero(3, kNumJoints);
   translation.setZero();
   for (int d = 0; d < size(); ++d) {
-    if (!std::isfinite(theta[d]))
-      throw_invalid("theta[" + std::to_string(d) + "]", "not finite");
+    if (!std::isfinite(theta[d])) throw_invalid("theta[" + std::to_string(d) + "]", "not finite");
     const Dof& dof = dofs_[d];
-    if (dof.kind == DofKind::kTranslation)
-      translation += theta[d] * dof.axis;
-    else
-      rotation_vectors.col(dof.joint) += theta[d] * dof.axis;
+    if (dof.kind == DofKind::kTranslation) translation += theta[d] * dof.axis;
+    else rotation_vectors.col(dof.joint) += theta[d] * dof.axis;
   }
 }
 

@@ -29,10 +29,10 @@ enum class DofKind { kTranslation, kRotation };
 
 struct Dof {
   DofKind kind = DofKind::kRotation;
-  int joint = 0;              // SMPL joint (0 for the global translation)
-  Eigen::Vector3d axis;       // unit axis: translation direction or rotation axis (parent frame)
-  std::string name;           // e.g. "left_elbow_y"
-  bool limited = false;       // global DOF are not limited (eq. 8 sums over N_theta - 6)
+  int joint = 0;                    // SMPL joint (0 for the global translation)
+  Eigen::Vector3d axis;             // unit axis: translation direction or rotation axis (parent frame)
+  std::string name;                 // e.g. "left_elbow_y"
+  bool limited = false;             // global DOF are not limited (eq. 8 sums over N_theta - 6)
   double min_rad = 0, max_rad = 0;  // soft limits for eq. 8
 };
 

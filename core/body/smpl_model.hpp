@@ -20,15 +20,35 @@ inline constexpr int kNumPoseFeatures = 9 * (kNumJoints - 1);
 
 // SMPL joint order; the index is the joint id used everywhere in core/body.
 enum Joint : int {
-  kPelvis = 0, kLeftHip, kRightHip, kSpine1, kLeftKnee, kRightKnee, kSpine2, kLeftAnkle,
-  kRightAnkle, kSpine3, kLeftFoot, kRightFoot, kNeck, kLeftCollar, kRightCollar, kHead,
-  kLeftShoulder, kRightShoulder, kLeftElbow, kRightElbow, kLeftWrist, kRightWrist, kLeftHand,
+  kPelvis = 0,
+  kLeftHip,
+  kRightHip,
+  kSpine1,
+  kLeftKnee,
+  kRightKnee,
+  kSpine2,
+  kLeftAnkle,
+  kRightAnkle,
+  kSpine3,
+  kLeftFoot,
+  kRightFoot,
+  kNeck,
+  kLeftCollar,
+  kRightCollar,
+  kHead,
+  kLeftShoulder,
+  kRightShoulder,
+  kLeftElbow,
+  kRightElbow,
+  kLeftWrist,
+  kRightWrist,
+  kLeftHand,
   kRightHand,
 };
 
 // SMPL's kinematic tree: parent of each joint (-1 for the root). A parent always has a lower id.
-inline constexpr std::array<int, kNumJoints> kSmplParents = {
-    -1, 0, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8, 9, 9, 9, 12, 13, 14, 16, 17, 18, 19, 20, 21};
+inline constexpr std::array<int, kNumJoints> kSmplParents = {-1, 0, 0, 0,  1,  2,  3,  4,  5,  6,  7,  8,
+                                                             9,  9, 9, 12, 13, 14, 16, 17, 18, 19, 20, 21};
 
 // SMPL's joint names, in joint order.
 const std::array<const char*, kNumJoints>& smpl_joint_names();

@@ -22,8 +22,7 @@ const NpyArray& require(const std::map<std::string, NpyArray>& arrays, const std
 // Checks the rank and the dimensions given as >= 0 (-1: any size >= 1).
 void require_shape(const NpyArray& a, const std::string& key, std::vector<int64_t> expected) {
   bool ok = a.shape.size() == expected.size();
-  for (size_t d = 0; ok && d < expected.size(); ++d)
-    ok = expected[d] < 0 ? a.shape[d] >= 1 : a.shape[d] == expected[d];
+  for (size_t d = 0; ok && d < expected.size(); ++d) ok = expected[d] < 0 ? a.shape[d] >= 1 : a.shape[d] == expected[d];
   if (!ok) {
     std::string want = "(";
     for (size_t d = 0; d < expected.size(); ++d)
@@ -88,7 +87,8 @@ std::shared_ptr<SmplModel> smpl_from_arrays(const std::map<std::string, NpyArray
     if (integer_at(kintree, static_cast<size_t>(kNumJoints + j), "kintree_table") != j)
       throw_invalid("kintree_table[1][" + std::to_string(j) + "]", "joint ids must be 0..23 in order");
     const double parent = kintree.values[static_cast<size_t>(j)];
-    model->parents[j] = (parent == 4294967295.0 || parent == -1.0) ? -1 : integer_at(kintree, static_cast<size_t>(j), "kintree_table");
+    model->parents[j] =
+        (parent == 4294967295.0 || parent == -1.0) ? -1 : integer_at(kintree, static_cast<size_t>(j), "kintree_table");
   }
 
   const NpyArray& faces = require(arrays, "f");

@@ -151,7 +151,8 @@ void BodySurface::normal_vertex_factors(const SurfacePoint& s, AddVertex&& add) 
   };
   for (int k = 0; k < 3; ++k) {
     const Eigen::Matrix3d chain = w[k] * outer;
-    unit_normal_factors(faces_(k, s.face), [&](int q, const Eigen::Matrix3d& factor) { accumulate(q, chain * factor); });
+    unit_normal_factors(faces_(k, s.face),
+                        [&](int q, const Eigen::Matrix3d& factor) { accumulate(q, chain * factor); });
   }
   for (int r = 0; r < ring_size; ++r) add(ring_vertex[r], ring_factor[r]);
 }
@@ -165,9 +166,8 @@ void BodySurface::vertex_normal_pose_jacobian(int vertex, const BodyEvaluator& e
 
 void BodySurface::normal_pose_jacobian(const SurfacePoint& s, const BodyEvaluator& eval,
                                        Eigen::Ref<Eigen::Matrix3Xd> out) const {
-  normal_vertex_factors(s, [&](int vertex, const Eigen::Matrix3d& factor) {
-    eval.add_vertex_pose_jacobian(vertex, factor, out);
-  });
+  normal_vertex_factors(
+      s, [&](int vertex, const Eigen::Matrix3d& factor) { eval.add_vertex_pose_jacobian(vertex, factor, out); });
 }
 
 void BodySurface::normal_shape_jacobian(const SurfacePoint& s, const BodyEvaluator& eval,
@@ -217,8 +217,10 @@ WalkResult BodySurface::walk(const SurfacePoint& start, double du, double dv) co
     const double ba = bary[edge], bb = bary[(edge + 1) % 3];
     // Unfold: rotate the remaining step about the shared edge from this face's plane into the next.
     const Eigen::Vector3d axis = (vertices_.col(vb) - vertices_.col(va)).normalized();
-    const Eigen::Vector3d n_from = (corner(face, 1) - corner(face, 0)).cross(corner(face, 2) - corner(face, 0)).normalized();
-    const Eigen::Vector3d n_to = (corner(next, 1) - corner(next, 0)).cross(corner(next, 2) - corner(next, 0)).normalized();
+    const Eigen::Vector3d n_from =
+        (corner(face, 1) - corner(face, 0)).cross(corner(face, 2) - corner(face, 0)).normalized();
+    const Eigen::Vector3d n_to =
+        (corner(next, 1) - corner(next, 0)).cross(corner(next, 2) - corner(next, 0)).normalized();
     const double angle = std::atan2(n_from.cross(n_to).dot(axis), n_from.dot(n_to));
     step = Eigen::AngleAxisd(angle, axis) * step;
     Eigen::Vector3d next_bary = Eigen::Vector3d::Zero();

@@ -52,7 +52,8 @@ class BodySurface {
   void normal_pose_jacobian(const SurfacePoint& s, const BodyEvaluator& eval, Eigen::Ref<Eigen::Matrix3Xd> out) const;
   // d S_p / d beta and d S_n / d beta (3 x B, added into `out`), from an evaluator run with
   // Derivatives::kPoseAndShape (paper 2, III-B: shape and pose fitted together).
-  void position_shape_jacobian(const SurfacePoint& s, const BodyEvaluator& eval, Eigen::Ref<Eigen::Matrix3Xd> out) const;
+  void position_shape_jacobian(const SurfacePoint& s, const BodyEvaluator& eval,
+                               Eigen::Ref<Eigen::Matrix3Xd> out) const;
   void normal_shape_jacobian(const SurfacePoint& s, const BodyEvaluator& eval, Eigen::Ref<Eigen::Matrix3Xd> out) const;
   // d n_v / d theta of the unit vertex normal n_v (3 x N, added into `out`); samples that share a
   // vertex can share this (SurfacePoseJacobians): d S_n = normal_projection(s) sum_k w_k d n_k.

@@ -6,8 +6,8 @@ namespace posefuse::body {
 
 void SurfacePoseJacobians::reset(const BodySurface& surface, const BodyEvaluator& eval) {
   const int num_vertices = eval.model().num_vertices(), num_pose = eval.layout().size();
-  if (model_ != &eval.model() || layout_ != &eval.layout() || static_cast<int>(slot_of_vertex_.size()) != num_vertices ||
-      num_pose != num_pose_) {
+  if (model_ != &eval.model() || layout_ != &eval.layout() ||
+      static_cast<int>(slot_of_vertex_.size()) != num_vertices || num_pose != num_pose_) {
     model_ = &eval.model();
     layout_ = &eval.layout();
     slot_of_vertex_.assign(static_cast<size_t>(num_vertices), -1);
@@ -97,7 +97,8 @@ void SurfacePoseJacobians::evaluate(const BodySurface& surface, const BodyEvalua
 }
 
 void SurfacePoseJacobians::evaluate_packed(const BodySurface& surface, const BodyEvaluator& eval, const SurfacePoint& s,
-                                           Eigen::Ref<Eigen::Matrix3Xd> d_position, Eigen::Ref<Eigen::Matrix3Xd> d_normal) {
+                                           Eigen::Ref<Eigen::Matrix3Xd> d_position,
+                                           Eigen::Ref<Eigen::Matrix3Xd> d_normal) {
   write_columns(surface, eval, s, true, d_position, d_normal);
 }
 
@@ -113,7 +114,8 @@ void SurfacePoseJacobians::write_columns(const BodySurface& surface, const BodyE
   // Column by column: fixed-size arithmetic, no temporaries.
   for (size_t k = 0; k < columns.size(); ++k) {
     const Eigen::Index c = columns[k], out = packed ? static_cast<Eigen::Index>(k) : c;
-    d_position.col(out) = w[0] * store_.col(begin[0] + c) + w[1] * store_.col(begin[1] + c) + w[2] * store_.col(begin[2] + c);
+    d_position.col(out) =
+        w[0] * store_.col(begin[0] + c) + w[1] * store_.col(begin[1] + c) + w[2] * store_.col(begin[2] + c);
     d_normal.col(out) = outer * (w[0] * store_.col(begin[0] + n + c) + w[1] * store_.col(begin[1] + n + c) +
                                  w[2] * store_.col(begin[2] + n + c));
   }

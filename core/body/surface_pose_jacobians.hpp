@@ -47,7 +47,8 @@ class SurfacePoseJacobians {
   // The DOFs that can move a point of face f or turn its normal, ascending (valid after reset()).
   std::span<const int> face_columns(int face) const {
     return {face_columns_.data() + face_column_begin_[static_cast<size_t>(face)],
-            static_cast<size_t>(face_column_begin_[static_cast<size_t>(face) + 1] - face_column_begin_[static_cast<size_t>(face)])};
+            static_cast<size_t>(face_column_begin_[static_cast<size_t>(face) + 1] -
+                                face_column_begin_[static_cast<size_t>(face)])};
   }
 
  private:
@@ -70,7 +71,7 @@ class SurfacePoseJacobians {
   std::vector<std::uint32_t> rigid_joints_;
   std::vector<int> slot_of_vertex_;  // -1: not computed since reset()
   std::vector<int> cached_vertices_;
-  Eigen::Matrix3Xd store_;           // 3 x (2N * number of vertices), filled in order of first use
+  Eigen::Matrix3Xd store_;  // 3 x (2N * number of vertices), filled in order of first use
 };
 
 }  // namespace posefuse::body

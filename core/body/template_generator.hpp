@@ -37,11 +37,11 @@ struct BodyDimensions {
   double collar_side = 0.075, collar_up = 0.14;  // spine3 -> collar
   double collar_to_shoulder = 0.105;             // along x, collar and shoulder at one height
   double upper_arm = 0.28, forearm = 0.25;
-  double hip_extra_width = 0;     // added to the half width of the lower torso rings
+  double hip_extra_width = 0;       // added to the half width of the lower torso rings
   double shoulder_extra_width = 0;  // added to the half width of the upper torso rings
-  double torso_girth = 1.0;       // scale of the torso cross-sections
-  double limb_girth = 1.0;        // scale of arm and leg cross-sections
-  double head_scale = 1.0;        // scale of the head and of neck -> head
+  double torso_girth = 1.0;         // scale of the torso cross-sections
+  double limb_girth = 1.0;          // scale of arm and leg cross-sections
+  double head_scale = 1.0;          // scale of the head and of neck -> head
 };
 
 BodyDimensions default_dimensions(Sex sex);

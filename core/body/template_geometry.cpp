@@ -30,8 +30,8 @@ struct MeshBuilder {
     return static_cast<int>(vertices.size()) - 1;
   }
   // n vertices at c + r1 cos(psi) e1 + r2 sin(psi) e2, psi = psi0 + 2 pi m / n.
-  std::vector<int> ring(const Vector3d& c, const Vector3d& e1, const Vector3d& e2, double r1,
-                        double r2, int n, double psi0) {
+  std::vector<int> ring(const Vector3d& c, const Vector3d& e1, const Vector3d& e2, double r1, double r2, int n,
+                        double psi0) {
     std::vector<int> ids(n);
     for (int m = 0; m < n; ++m) {
       const double psi = psi0 + 2 * pi * m / n;
@@ -88,14 +88,13 @@ constexpr std::array<Station, 9> kFemaleTorso = {{{0.150, 0.080, 0.095},
 struct LimbRing {
   double t, r1, r2;
 };
-constexpr LimbRing kUpperArm[] = {{0.0, 0.062, 0.060}, {0.3, 0.050, 0.052}, {0.6, 0.045, 0.047},
-                                  {0.85, 0.040, 0.043}, {1.0, 0.036, 0.040}};
-constexpr LimbRing kForearm[] = {{0.15, 0.040, 0.045}, {0.5, 0.034, 0.040}, {0.8, 0.026, 0.033},
-                                 {1.0, 0.020, 0.029}};
-constexpr LimbRing kThigh[] = {{0.3, 0.078, 0.082}, {0.5, 0.070, 0.074}, {0.75, 0.060, 0.063},
-                               {0.92, 0.054, 0.056}, {1.0, 0.050, 0.052}};
-constexpr LimbRing kShin[] = {{0.12, 0.050, 0.053}, {0.35, 0.050, 0.058}, {0.6, 0.040, 0.045},
-                              {0.85, 0.032, 0.036}, {1.0, 0.032, 0.036}};
+constexpr LimbRing kUpperArm[] = {
+    {0.0, 0.062, 0.060}, {0.3, 0.050, 0.052}, {0.6, 0.045, 0.047}, {0.85, 0.040, 0.043}, {1.0, 0.036, 0.040}};
+constexpr LimbRing kForearm[] = {{0.15, 0.040, 0.045}, {0.5, 0.034, 0.040}, {0.8, 0.026, 0.033}, {1.0, 0.020, 0.029}};
+constexpr LimbRing kThigh[] = {
+    {0.3, 0.078, 0.082}, {0.5, 0.070, 0.074}, {0.75, 0.060, 0.063}, {0.92, 0.054, 0.056}, {1.0, 0.050, 0.052}};
+constexpr LimbRing kShin[] = {
+    {0.12, 0.050, 0.053}, {0.35, 0.050, 0.058}, {0.6, 0.040, 0.045}, {0.85, 0.032, 0.036}, {1.0, 0.032, 0.036}};
 // Hand orb rings: fraction of the radius along the arm (from the orb centre).
 constexpr double kOrbRings[] = {-0.7, -0.35, 0.0, 0.4, 0.75, 0.93};
 // Head rings: fraction of the vertical radius from the head centre.
@@ -193,11 +192,9 @@ LabelledTemplateGeometry build_template_geometry_with_parts(const BodyDimensions
   MeshBuilder b;
   // Torso: rings in horizontal planes, e1 = z (front), e2 = x (left), u = +y.
   const double crotch_y = hip_y - 0.075;
-  const std::array<double, 9> station_y = {crotch_y,         hip_y,
-                                           pelvis_y,         spine1.y() + 0.02,
-                                           spine2.y(),       spine3.y() + 0.02,
-                                           shoulder_y - 0.075, shoulder_y,
-                                           shoulder_y + 0.05};
+  const std::array<double, 9> station_y = {crotch_y,           hip_y,      pelvis_y,
+                                           spine1.y() + 0.02,  spine2.y(), spine3.y() + 0.02,
+                                           shoulder_y - 0.075, shoulder_y, shoulder_y + 0.05};
   std::array<std::vector<int>, 9> rings;
   for (int s = 0; s < 9; ++s) {
     double half_width = d.torso_girth * torso[s].half_width;
@@ -207,8 +204,7 @@ LabelledTemplateGeometry build_template_geometry_with_parts(const BodyDimensions
     for (int k = 0; k < kTorsoRing; ++k) {
       const double psi = 2 * pi * k / kTorsoRing;
       const double depth = d.torso_girth * (std::cos(psi) >= 0 ? torso[s].front : torso[s].back);
-      rings[s][k] = b.add(Vector3d(0, station_y[s], 0) + depth * std::cos(psi) * ez +
-                          half_width * std::sin(psi) * ex);
+      rings[s][k] = b.add(Vector3d(0, station_y[s], 0) + depth * std::cos(psi) * ez + half_width * std::sin(psi) * ex);
     }
   }
   // Shoulder openings: quads between stations 6-8 in columns 3..7 (left) and 13..17 (right).
@@ -228,8 +224,8 @@ LabelledTemplateGeometry build_template_geometry_with_parts(const BodyDimensions
     b.part = left ? BodyPart::kLeftArm : BodyPart::kRightArm;
     const int c = left ? 5 : 15;  // torso column facing the arm
     const auto &top = rings[8], &mid = rings[7], &low = rings[6];
-    std::vector<int> opening = {top[c],     top[c - 1], top[c - 2], mid[c - 2], low[c - 2], low[c - 1],
-                                low[c],     low[c + 1], low[c + 2], mid[c + 2], top[c + 2], top[c + 1]};
+    std::vector<int> opening = {top[c], top[c - 1], top[c - 2], mid[c - 2], low[c - 2], low[c - 1],
+                                low[c], low[c + 1], low[c + 2], mid[c + 2], top[c + 2], top[c + 1]};
     const Vector3d e1 = ey, e2 = side * ez;  // e1 x e2 = side * x, the arm direction
     const Vector3d shoulder = joints.col(left ? kLeftShoulder : kRightShoulder);
     const Vector3d root = shoulder - side * 0.02 * ex;
@@ -276,11 +272,10 @@ LabelledTemplateGeometry build_template_geometry_with_parts(const BodyDimensions
     // e1 = x, e2 = z, u = -y; the crotch vertex lies on the inner side of each leg.
     const Vector3d e1 = ex, e2 = ez;
     const double psi0 = left ? pi : 0.0;
-    auto limb = [&](const Vector3d& from, const Vector3d& to, std::span<const LimbRing> table,
-                    const Vector3d& offset) {
+    auto limb = [&](const Vector3d& from, const Vector3d& to, std::span<const LimbRing> table, const Vector3d& offset) {
       for (const LimbRing& r : table) {
-        auto next = b.ring(from + r.t * (to - from) + offset, e1, e2, d.limb_girth * r.r1,
-                           d.limb_girth * r.r2, kLimbRing, psi0);
+        auto next = b.ring(from + r.t * (to - from) + offset, e1, e2, d.limb_girth * r.r1, d.limb_girth * r.r2,
+                           kLimbRing, psi0);
         b.stitch(previous, next);
         previous = std::move(next);
       }
@@ -315,8 +310,8 @@ LabelledTemplateGeometry build_template_geometry_with_parts(const BodyDimensions
   }
   for (double f : kHeadRings) {
     const double s = std::sqrt(1 - f * f);
-    auto next = b.ring(head_centre + f * head_radii.y() * ey, ez, ex, s * head_radii.z(), s * head_radii.x(),
-                       kLimbRing, 0);
+    auto next =
+        b.ring(head_centre + f * head_radii.y() * ey, ez, ex, s * head_radii.z(), s * head_radii.x(), kLimbRing, 0);
     b.stitch(previous, next);
     previous = std::move(next);
   }
@@ -325,7 +320,8 @@ LabelledTemplateGeometry build_template_geometry_with_parts(const BodyDimensions
   compact(b);
   LabelledTemplateGeometry out;
   out.geometry.vertices.resize(3, static_cast<Eigen::Index>(b.vertices.size()));
-  for (size_t i = 0; i < b.vertices.size(); ++i) out.geometry.vertices.col(static_cast<Eigen::Index>(i)) = b.vertices[i];
+  for (size_t i = 0; i < b.vertices.size(); ++i)
+    out.geometry.vertices.col(static_cast<Eigen::Index>(i)) = b.vertices[i];
   out.geometry.faces.resize(3, static_cast<Eigen::Index>(b.faces.size()));
   for (size_t f = 0; f < b.faces.size(); ++f) out.geometry.faces.col(static_cast<Eigen::Index>(f)) = b.faces[f];
   out.geometry.joints = joints;

@@ -44,8 +44,7 @@ void add_chain_weights(double s, std::initializer_list<ChainJoint> chain, double
   const int n = static_cast<int>(chain.size());
   double previous_t = 1.0;  // share already passed from bone 0 onwards
   for (int k = 1; k <= n; ++k) {
-    const double t = k == n ? 0.0
-                            : std::clamp((s - c[k].position + c[k].half_width) / (2 * c[k].half_width), 0.0, 1.0);
+    const double t = k == n ? 0.0 : std::clamp((s - c[k].position + c[k].half_width) / (2 * c[k].half_width), 0.0, 1.0);
     w[c[k - 1].joint] += share * (previous_t - t);
     previous_t = t;
   }
@@ -68,9 +67,13 @@ Eigen::MatrixXd skinning_weights(const LabelledTemplateGeometry& g) {
     const int side = p.x() >= 0 ? 1 : -1;
     auto row = w.row(i);
     auto spine_chain = [&](double share) {
-      add_chain_weights(p.y(), {{kPelvis, pelvis_y, 0}, {kSpine1, j(1, kSpine1), 0.05},
-                                {kSpine2, j(1, kSpine2), 0.04}, {kSpine3, j(1, kSpine3), 0.03},
-                                {kNeck, j(1, kNeck), 0.03}, {kHead, j(1, kHead), 0.03}},
+      add_chain_weights(p.y(),
+                        {{kPelvis, pelvis_y, 0},
+                         {kSpine1, j(1, kSpine1), 0.05},
+                         {kSpine2, j(1, kSpine2), 0.04},
+                         {kSpine3, j(1, kSpine3), 0.03},
+                         {kNeck, j(1, kNeck), 0.03},
+                         {kHead, j(1, kHead), 0.03}},
                         share, row);
     };
     switch (g.parts[i]) {
@@ -81,7 +84,8 @@ Eigen::MatrixXd skinning_weights(const LabelledTemplateGeometry& g) {
         row[kLeftHip] += hip * left_share;
         row[kRightHip] += hip * (1 - left_share);
         const int shoulder = side > 0 ? kLeftShoulder : kRightShoulder;
-        const double collar = g.parts[i] == BodyPart::kTorso ? 0.6 * ramp(1 - (p - j.col(shoulder)).norm() / 0.12) : 0.0;
+        const double collar =
+            g.parts[i] == BodyPart::kTorso ? 0.6 * ramp(1 - (p - j.col(shoulder)).norm() / 0.12) : 0.0;
         row[side > 0 ? kLeftCollar : kRightCollar] += collar;
         spine_chain(1 - hip - collar);
         break;
@@ -94,8 +98,12 @@ Eigen::MatrixXd skinning_weights(const LabelledTemplateGeometry& g) {
         const int collar = left ? kLeftCollar : kRightCollar, shoulder = left ? kLeftShoulder : kRightShoulder;
         const int elbow = left ? kLeftElbow : kRightElbow, wrist = left ? kLeftWrist : kRightWrist;
         const int hand = left ? kLeftHand : kRightHand;
-        add_chain_weights(s, {{collar, at(collar), 0}, {shoulder, at(shoulder), 0.05}, {elbow, at(elbow), 0.04},
-                              {wrist, at(wrist), 0.03}, {hand, at(hand), 0.02}},
+        add_chain_weights(s,
+                          {{collar, at(collar), 0},
+                           {shoulder, at(shoulder), 0.05},
+                           {elbow, at(elbow), 0.04},
+                           {wrist, at(wrist), 0.03},
+                           {hand, at(hand), 0.02}},
                           1.0, row);
         break;
       }

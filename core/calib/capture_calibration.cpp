@@ -35,8 +35,8 @@ Quat still_orientation(const std::vector<imu::ImuSample>& samples, const std::st
 CaptureCalibration calibrate_capture(const CalibrationCapture& capture, const CaptureCalibrationOptions& options) {
   const int poses = static_cast<int>(capture.poses.size());
   if (poses < options.min_poses) {
-    throw_invalid("poses", std::to_string(poses) + " panel pose(s), need at least " + std::to_string(options.min_poses) +
-                               " (eq. 8 is checked by the spread over poses)");
+    throw_invalid("poses", std::to_string(poses) + " panel pose(s), need at least " +
+                               std::to_string(options.min_poses) + " (eq. 8 is checked by the spread over poses)");
   }
   CaptureCalibration out;
   std::vector<std::array<Vec3, 4>> markers;
@@ -63,8 +63,9 @@ CaptureCalibration calibrate_capture(const CalibrationCapture& capture, const Ca
   }
   for (int i = 0; i < poses; ++i) {
     for (int j = i + 1; j < poses; ++j) {
-      out.pose_spread_rad = std::max(out.pose_spread_rad, geometry::angle_between(readings[static_cast<std::size_t>(i)].K_from_P,
-                                                                                  readings[static_cast<std::size_t>(j)].K_from_P));
+      out.pose_spread_rad =
+          std::max(out.pose_spread_rad, geometry::angle_between(readings[static_cast<std::size_t>(i)].K_from_P,
+                                                                readings[static_cast<std::size_t>(j)].K_from_P));
     }
   }
   if (out.pose_spread_rad < options.min_pose_spread_rad) {
@@ -76,7 +77,8 @@ CaptureCalibration calibrate_capture(const CalibrationCapture& capture, const Ca
   out.mocap = mocap_to_camera(markers, seen, capture.camera, capture.panel);
   out.base = base_imu_in_camera(readings);
   Eigen::Vector4d sum = Eigen::Vector4d::Zero();
-  for (const PanelImuReading& r : readings) sum += geometry::to_wxyz(geometry::same_hemisphere(r.W_from_B, readings[0].W_from_B));
+  for (const PanelImuReading& r : readings)
+    sum += geometry::to_wxyz(geometry::same_hemisphere(r.W_from_B, readings[0].W_from_B));
   out.K_from_W = K_from_W_from_base(out.base.K_from_B, geometry::from_wxyz(sum.normalized()));
   return out;
 }

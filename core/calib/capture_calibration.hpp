@@ -18,9 +18,9 @@
 namespace posefuse::calib {
 
 struct CapturePose {
-  std::vector<std::uint16_t> ir;        // camera.width x camera.height, row-major
-  std::vector<std::uint16_t> depth_mm;  // same pixels
-  std::array<Vec3, 4> markers_E{};      // mocap, M0..M3
+  std::vector<std::uint16_t> ir;                    // camera.width x camera.height, row-major
+  std::vector<std::uint16_t> depth_mm;              // same pixels
+  std::array<Vec3, 4> markers_E{};                  // mocap, M0..M3
   std::vector<imu::ImuSample> panel_imu, base_imu;  // the hold at this pose
 };
 
@@ -31,9 +31,9 @@ struct CalibrationCapture {
 };
 
 struct CaptureCalibrationOptions {
-  int min_poses = 3;                   // eq. 8's spread needs several readings
-  double min_pose_spread_rad = 0.17;   // the panel must be turned (about 10 degrees) between poses
-  int min_imu_samples = 10;            // per IMU and pose
+  int min_poses = 3;                  // eq. 8's spread needs several readings
+  double min_pose_spread_rad = 0.17;  // the panel must be turned (about 10 degrees) between poses
+  int min_imu_samples = 10;           // per IMU and pose
   PanelCameraOptions camera;
 };
 
@@ -43,8 +43,8 @@ struct CapturePoseReport {
 };
 
 struct CaptureCalibration {
-  MocapToCamera mocap;          // K_from_E, E_origin_K (eqs. 4-6)
-  BaseImuAlignment base;        // K_from_B (eq. 8)
+  MocapToCamera mocap;               // K_from_E, E_origin_K (eqs. 4-6)
+  BaseImuAlignment base;             // K_from_B (eq. 8)
   Quat K_from_W = Quat::Identity();  // eq. 7 with the mean W_from_B of the capture
   double pose_spread_rad = 0.0;      // largest angle between two poses' K_from_P
   std::vector<CapturePoseReport> poses;

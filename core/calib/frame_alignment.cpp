@@ -42,20 +42,20 @@ MocapToCamera mocap_to_camera(const std::array<Vec3, 4>& markers_E, const PanelI
   const PanelPose in_E = panel_pose_from_markers(markers_E, panel);
   MocapToCamera out;
   out.K_from_E = (seen.pose.X_from_P * in_E.X_from_P.conjugate()).normalized();  // eq. 4
-  out.E_origin_K = seen.pose.origin_X - out.K_from_E * in_E.origin_X;           // eq. 5
+  out.E_origin_K = seen.pose.origin_X - out.K_from_E * in_E.origin_X;            // eq. 5
   out.poses = 1;
   out.marker_residual_px = reprojection_rms_px(out, markers_E, seen, camera);
   if (!(out.marker_residual_px <= max_residual_px)) {
-    throw_precondition("mocap.markers", "mocap markers mapped into the camera land " +
-                                            std::to_string(out.marker_residual_px) + " px RMS from the IR points (limit " +
-                                            std::to_string(max_residual_px) + ")");
+    throw_precondition("mocap.markers",
+                       "mocap markers mapped into the camera land " + std::to_string(out.marker_residual_px) +
+                           " px RMS from the IR points (limit " + std::to_string(max_residual_px) + ")");
   }
   return out;
 }
 
-MocapToCamera mocap_to_camera(const std::vector<std::array<Vec3, 4>>& markers_E,
-                              const std::vector<PanelInCamera>& seen, const PinholeCamera& camera,
-                              const PanelGeometry& panel, double max_spread_rad, double max_spread_m) {
+MocapToCamera mocap_to_camera(const std::vector<std::array<Vec3, 4>>& markers_E, const std::vector<PanelInCamera>& seen,
+                              const PinholeCamera& camera, const PanelGeometry& panel, double max_spread_rad,
+                              double max_spread_m) {
   if (markers_E.empty() || markers_E.size() != seen.size()) {
     throw_invalid("poses", std::to_string(markers_E.size()) + " mocap readings for " + std::to_string(seen.size()) +
                                " camera readings; need the same number, at least one");
@@ -75,7 +75,8 @@ MocapToCamera mocap_to_camera(const std::vector<std::array<Vec3, 4>>& markers_E,
   double origin_spread_sq = 0.0, residual_sq = 0.0;
   for (std::size_t i = 0; i < seen.size(); ++i) {
     origin_spread_sq += (single[i].E_origin_K - out.E_origin_K).squaredNorm() / static_cast<double>(seen.size());
-    residual_sq += std::pow(reprojection_rms_px(out, markers_E[i], seen[i], camera), 2) / static_cast<double>(seen.size());
+    residual_sq +=
+        std::pow(reprojection_rms_px(out, markers_E[i], seen[i], camera), 2) / static_cast<double>(seen.size());
   }
   out.marker_residual_px = std::sqrt(residual_sq);
   const double rotation_spread = rms_angle(rotations, out.K_from_E);

@@ -24,8 +24,7 @@ struct MocapToCamera {
 // Throws what panel_pose_from_markers throws, and kFailedPrecondition "mocap.markers" when the
 // mapped markers reproject more than max_residual_px from the bright points (RMS).
 MocapToCamera mocap_to_camera(const std::array<Vec3, 4>& markers_E, const PanelInCamera& seen_by_camera,
-                              const PinholeCamera& camera, const PanelGeometry& panel,
-                              double max_residual_px = 3.0);
+                              const PinholeCamera& camera, const PanelGeometry& panel, double max_residual_px = 3.0);
 
 // Several panel poses combined: rotations averaged (chordal mean), origins averaged; the residual
 // is recomputed for every pose. Throws kInvalidArgument "poses" when empty or sizes differ, and

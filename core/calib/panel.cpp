@@ -64,7 +64,8 @@ PanelPose panel_pose_from_markers(const std::array<Vec3, 4>& markers_E, const Pa
   if (rms_residual_m) *rms_residual_m = rms;
   if (!(rms <= max_residual_m)) {
     throw_precondition("markers_E", "the markers fit the panel's L with an RMS residual of " +
-                                        std::to_string(rms * 1e3) + " mm (limit " + std::to_string(max_residual_m * 1e3) +
+                                        std::to_string(rms * 1e3) + " mm (limit " +
+                                        std::to_string(max_residual_m * 1e3) +
                                         " mm): mislabelled markers or another panel");
   }
   return pose;

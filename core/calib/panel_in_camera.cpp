@@ -44,8 +44,8 @@ std::vector<Vec2> bright_points(const IrImageView& ir, const PanelCameraOptions&
       const int neighbours[4][2] = {{col - 1, row}, {col + 1, row}, {col, row - 1}, {col, row + 1}};
       for (const auto& nb : neighbours) {
         if (nb[0] < 0 || nb[1] < 0 || nb[0] >= ir.width || nb[1] >= ir.height) continue;
-        const std::size_t j = static_cast<std::size_t>(nb[1]) * static_cast<std::size_t>(ir.width) +
-                              static_cast<std::size_t>(nb[0]);
+        const std::size_t j =
+            static_cast<std::size_t>(nb[1]) * static_cast<std::size_t>(ir.width) + static_cast<std::size_t>(nb[0]);
         if (!seen[j] && ir.pixels[j] >= threshold) {
           seen[j] = 1;
           stack.push_back(j);
@@ -98,12 +98,12 @@ std::array<Vec2, 4> label_markers(const std::vector<Vec2>& p) {
 void check_inputs(const IrImageView& ir, const DepthView& depth, const PinholeCamera& camera) {
   geometry::validate(camera, "camera");
   if (!ir.pixels || ir.width != camera.width || ir.height != camera.height) {
-    throw_invalid("ir.pixels", "missing or not the camera's " + std::to_string(camera.width) + "x" +
-                                   std::to_string(camera.height));
+    throw_invalid("ir.pixels",
+                  "missing or not the camera's " + std::to_string(camera.width) + "x" + std::to_string(camera.height));
   }
   if (!depth.pixels || depth.width != camera.width || depth.height != camera.height) {
-    throw_invalid("depth.pixels", "missing or not the camera's " + std::to_string(camera.width) + "x" +
-                                           std::to_string(camera.height));
+    throw_invalid("depth.pixels",
+                  "missing or not the camera's " + std::to_string(camera.width) + "x" + std::to_string(camera.height));
   }
 }
 
@@ -232,7 +232,8 @@ PanelInCamera panel_in_camera(const IrImageView& ir, const DepthView& depth, con
   const Eigen::Matrix<double, 6, 1> a = A.colPivHouseholderQr().solve(b);
   Eigen::Matrix2d linear;
   linear << a(0), a(1), a(3), a(4);
-  if (std::abs(linear.determinant()) < 1e-6) throw_precondition("ir.markers", "the markers' L is degenerate in the image");
+  if (std::abs(linear.determinant()) < 1e-6)
+    throw_precondition("ir.markers", "the markers' L is degenerate in the image");
   const Eigen::Matrix2d inverse = linear.inverse();
   const Vec2 offset(a(2), a(5));
 
@@ -248,7 +249,7 @@ PanelInCamera panel_in_camera(const IrImageView& ir, const DepthView& depth, con
     for (int row = 0; row < depth.height; ++row) {
       for (int col = 0; col < depth.width; ++col) {
         const std::uint16_t z = depth.pixels[static_cast<std::size_t>(row) * static_cast<std::size_t>(depth.width) +
-                                                  static_cast<std::size_t>(col)];
+                                             static_cast<std::size_t>(col)];
         if (z == 0) continue;
         const Vec3 p = geometry::back_project(camera, col, row, z * 1e-3);
         Vec2 xy;  // in P
@@ -259,9 +260,8 @@ PanelInCamera panel_in_camera(const IrImageView& ir, const DepthView& depth, con
           if (std::abs(p_P.z()) > 5.0 * o.max_plane_rms_m) continue;
           xy = p_P.head<2>();
         }
-        const bool near_marker = std::any_of(model.begin(), model.end(), [&](const Vec3& m) {
-          return (xy - m.head<2>()).norm() < clearance;
-        });
+        const bool near_marker = std::any_of(model.begin(), model.end(),
+                                             [&](const Vec3& m) { return (xy - m.head<2>()).norm() < clearance; });
         const bool on_board = xy.x() > panel.board_x_min_m + margin && xy.x() < panel.board_x_max_m - margin &&
                               xy.y() > panel.board_y_min_m + margin && xy.y() < panel.board_y_max_m - margin;
         if (near_marker || !on_board) continue;
@@ -285,9 +285,9 @@ PanelInCamera panel_in_camera(const IrImageView& ir, const DepthView& depth, con
   }
   out.marker_residual_px = std::sqrt(sum_sq / 4.0);
   if (out.marker_residual_px > o.max_marker_residual_px) {
-    throw_precondition("panel.markers", "the panel pose reprojects its markers " +
-                                            std::to_string(out.marker_residual_px) + " px RMS from the bright points (limit " +
-                                            std::to_string(o.max_marker_residual_px) + ")");
+    throw_precondition("panel.markers",
+                       "the panel pose reprojects its markers " + std::to_string(out.marker_residual_px) +
+                           " px RMS from the bright points (limit " + std::to_string(o.max_marker_residual_px) + ")");
   }
   return out;
 }

@@ -38,7 +38,7 @@ using geometry::IrImageView;
 using DepthView = geometry::DepthImageView;  // the same pixels as the IR image (one sensor)
 
 struct PanelCameraOptions {
-  double bright_fraction = 0.6;   // of the image maximum
+  double bright_fraction = 0.6;  // of the image maximum
   int min_blob_pixels = 3;
   int max_blob_pixels = 2000;
   double region_margin_m = 0.012;
@@ -52,14 +52,14 @@ struct PanelCameraOptions {
 };
 
 struct PanelInCamera {
-  PanelPose pose;                         // K_from_P and the origin in K
-  std::array<Vec2, 4> marker_px;          // bright points M0..M3
+  PanelPose pose;                 // K_from_P and the origin in K
+  std::array<Vec2, 4> marker_px;  // bright points M0..M3
   int x_points = 0, y_points = 0, board_points = 0;
   double x_elongation = 0.0, y_elongation = 0.0;
-  double board_rms_m = 0.0;               // board points from their plane
-  double axis_skew_rad = 0.0;             // largest deviation from orthogonality of x, y, z
-  double intersection_gap_m = 0.0;        // between the X and Y lines
-  double marker_residual_px = 0.0;        // RMS reprojection of the model markers
+  double board_rms_m = 0.0;         // board points from their plane
+  double axis_skew_rad = 0.0;       // largest deviation from orthogonality of x, y, z
+  double intersection_gap_m = 0.0;  // between the X and Y lines
+  double marker_residual_px = 0.0;  // RMS reprojection of the model markers
 };
 
 // Throws posefuse::Error: kInvalidArgument "ir.pixels" / "depth.pixels" (missing or size

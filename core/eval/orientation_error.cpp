@@ -23,12 +23,12 @@ OrientationError orientation_error(const Quat& est, const Quat& gt) {
 OrientationRmse orientation_rmse(const std::vector<Quat>& est, const std::vector<Quat>& gt,
                                  const std::vector<bool>& counted) {
   if (est.size() != gt.size()) {
-    throw_invalid("ref_from_sensor_est", "has " + std::to_string(est.size()) +
-                                             " samples, ground truth has " + std::to_string(gt.size()));
+    throw_invalid("ref_from_sensor_est",
+                  "has " + std::to_string(est.size()) + " samples, ground truth has " + std::to_string(gt.size()));
   }
   if (counted.size() != gt.size()) {
-    throw_invalid("counted", "has " + std::to_string(counted.size()) +
-                                 " entries, ground truth has " + std::to_string(gt.size()));
+    throw_invalid("counted",
+                  "has " + std::to_string(counted.size()) + " entries, ground truth has " + std::to_string(gt.size()));
   }
   double sum_total = 0.0, sum_heading = 0.0, sum_inclination = 0.0;
   OrientationRmse r;

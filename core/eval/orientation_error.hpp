@@ -33,7 +33,6 @@ struct OrientationRmse {
 // rows where markers were lost). Sizes must match (posefuse::Error otherwise); if no sample
 // counts, the result has samples = 0 and NaN errors.
 OrientationRmse orientation_rmse(const std::vector<Quat>& ref_from_sensor_est,
-                                 const std::vector<Quat>& ref_from_sensor_gt,
-                                 const std::vector<bool>& counted);
+                                 const std::vector<Quat>& ref_from_sensor_gt, const std::vector<bool>& counted);
 
 }  // namespace posefuse::eval

@@ -91,7 +91,8 @@ void score_orientation_folders(const session::ResultDirectory& result, const ses
       report.orientations.push_back(score_angles(file, device, rows, truths.at(device), quat, !forearm, options));
     }
     for (const auto& [device, rows] : truths) {
-      if (!results.count(device)) report.notes.push_back(std::string(folder) + "/" + device + ".csv: not in the results");
+      if (!results.count(device))
+        report.notes.push_back(std::string(folder) + "/" + device + ".csv: not in the results");
     }
   }
 }
@@ -109,9 +110,9 @@ void score_forearms(const session::ResultDirectory& result, const session::Resul
       if (r.arm == arm) theirs.push_back(r);
     }
     if (mine.empty()) continue;
-    report.orientations.push_back(score_angles(layout::kForearmsCsv, v1::Arm_Name(arm), mine, theirs,
-                                               [](const session::ForearmRow& r) { return r.K_from_F; }, false,
-                                               options));
+    report.orientations.push_back(score_angles(
+        layout::kForearmsCsv, v1::Arm_Name(arm), mine, theirs, [](const session::ForearmRow& r) { return r.K_from_F; },
+        false, options));
   }
 }
 
@@ -150,8 +151,9 @@ void score_recovered(const session::ResultDirectory& result, const std::map<std:
   const auto& rows = result.recovered;
   while (begin < rows.size()) {
     std::size_t end = begin + 1;
-    while (end < rows.size() && rows[end].device_id == rows[begin].device_id && rows[end].method == rows[begin].method &&
-           rows[end].t_start_us == rows[begin].t_start_us && rows[end].t_end_us == rows[begin].t_end_us) {
+    while (end < rows.size() && rows[end].device_id == rows[begin].device_id &&
+           rows[end].method == rows[begin].method && rows[end].t_start_us == rows[begin].t_start_us &&
+           rows[end].t_end_us == rows[begin].t_end_us) {
       ++end;
     }
     const std::string method = "recovered " + v1::RecoveredSegment::Method_Name(rows[begin].method);
@@ -187,7 +189,8 @@ void score_positions(const session::ResultDirectory& result, const session::Resu
     const auto track = truth_tracks.find(device);
     std::vector<std::int64_t> result_times;
     for (const auto* r : rows) result_times.push_back(r->t_us);
-    if (track == truth_tracks.end()) throw_unmatched(std::string(layout::kImuPositionsCsv) + " (" + device + ")", result_times, {}, options);
+    if (track == truth_tracks.end())
+      throw_unmatched(std::string(layout::kImuPositionsCsv) + " (" + device + ")", result_times, {}, options);
     std::vector<std::int64_t> occluded_times;
     const auto arm = arms.find(device);
     for (const auto& o : occlusion) {
@@ -207,11 +210,14 @@ void score_positions(const session::ResultDirectory& result, const session::Resu
       predicted.push_back(r->source == v1::PREDICTED);
       occluded.push_back(nearest(occluded_times, track->second.t_us[*i], 0).has_value());
     }
-    if (errors.empty()) throw_unmatched(std::string(layout::kImuPositionsCsv) + " (" + device + ")", result_times, track->second.t_us, options);
+    if (errors.empty())
+      throw_unmatched(std::string(layout::kImuPositionsCsv) + " (" + device + ")", result_times, track->second.t_us,
+                      options);
     report.positions.push_back({device, "all", summarize_errors(errors), unmatched});
     report.positions.push_back({device, "VISUAL", summarize_errors(errors, visual), 0});
     report.positions.push_back({device, "PREDICTED", summarize_errors(errors, predicted), 0});
-    if (!occlusion.empty()) report.positions.push_back({device, "occluded (gt)", summarize_errors(errors, occluded), 0});
+    if (!occlusion.empty())
+      report.positions.push_back({device, "occluded (gt)", summarize_errors(errors, occluded), 0});
   }
   score_recovered(result, truth_tracks, report);
 }

@@ -36,9 +36,9 @@ struct ScoreOptions {
 };
 
 struct AngleScore {
-  std::string stream;  // file, e.g. "forearm_orientations/imu_left.csv"
-  std::string key;     // device id or arm
-  ErrorSummary deg;    // eqs. 14-15
+  std::string stream;        // file, e.g. "forearm_orientations/imu_left.csv"
+  std::string key;           // device id or arm
+  ErrorSummary deg;          // eqs. 14-15
   ErrorSummary heading_deg;  // imu_orientations only (count 0 otherwise)
   std::size_t unmatched = 0;
 };
@@ -93,8 +93,8 @@ ScoreReport score_results(const session::ResultDirectory& result, const session:
                           const std::vector<OcclusionRow>& occlusion, const ScoreOptions& options = {});
 
 // Reads both directories (and gt's occlusion.csv) and scores.
-ScoreReport score_directories(const std::filesystem::path& result_directory,
-                              const std::filesystem::path& gt_directory, const ScoreOptions& options = {});
+ScoreReport score_directories(const std::filesystem::path& result_directory, const std::filesystem::path& gt_directory,
+                              const ScoreOptions& options = {});
 
 // The tables posefuse-score prints.
 std::string format_score_report(const ScoreReport& report);

@@ -52,8 +52,9 @@ ForearmRoll forearm_roll(const JointPose& pose, ArmSide side, const Eigen::Quate
   const Eigen::Vector3d thumb_imu = perpendicular(K_from_F * options.thumb_F, a);
   const Eigen::Vector3d thumb_model = perpendicular(pose.K_from_joint[elbow] * Eigen::Vector3d::UnitZ(), a);
   if (thumb_imu.isZero() || thumb_model.isZero())
-    throw_precondition("K_from_A", "the IMU's thumb axis lies along the fitted forearm: the IMU and the fit disagree "
-                                   "by 90 deg about the forearm direction, no roll can be read");
+    throw_precondition("K_from_A",
+                       "the IMU's thumb axis lies along the fitted forearm: the IMU and the fit disagree "
+                       "by 90 deg about the forearm direction, no roll can be read");
 
   ForearmRoll out;
   out.axis_disagreement_rad = std::acos(std::clamp((K_from_F * options.along_F).dot(a), -1.0, 1.0));

@@ -63,7 +63,8 @@ uint64_t classification_stamp(const raycast::DepthCamera& camera, const std::vec
     }
   }
   const raycast::DepthIntrinsics& c = camera.intrinsics();
-  for (double v : {origin.x(), origin.y(), origin.z(), voxel_size, c.fx, c.fy, c.cx, c.cy, c.k1, c.k2, c.k3}) mix_double(v);
+  for (double v : {origin.x(), origin.y(), origin.z(), voxel_size, c.fx, c.fy, c.cx, c.cy, c.k1, c.k2, c.k3})
+    mix_double(v);
   for (int v : {size.x(), size.y(), size.z(), c.width, c.height, box.col0, box.row0, box.col1, box.row1})
     mix(static_cast<uint64_t>(v));
   return h | 1;  // never 0, the empty cache's stamp
@@ -84,7 +85,8 @@ BehindSurfaceMap::BehindSurfaceMap(const PointCloud& cloud, const raycast::Depth
                                    const BehindSurfaceParams& params)
     : camera_(&camera), voxel_size_m_(params.voxel_size_m) {
   if (!std::isfinite(params.voxel_size_m) || params.voxel_size_m <= 0)
-    throw_invalid("behind_params.voxel_size_m", "must be positive and finite, got " + std::to_string(params.voxel_size_m));
+    throw_invalid("behind_params.voxel_size_m",
+                  "must be positive and finite, got " + std::to_string(params.voxel_size_m));
   if (!std::isfinite(params.margin_m) || params.margin_m < 0)
     throw_invalid("behind_params.margin_m", "must be non-negative and finite, got " + std::to_string(params.margin_m));
   const size_t pixels = static_cast<size_t>(camera.width()) * camera.height();
@@ -181,9 +183,7 @@ int BehindSurfaceMap::first_possible_layer(const Eigen::Vector3i& lo, const Eige
   if (col0 > col1 || row0 > row1) return size_.z();  // the box is outside the image: nothing behind
   // The coarsest level where the window spans at most 4 x 4 blocks.
   int level = 0;
-  while (level + 1 < static_cast<int>(level_size_.size()) &&
-         std::max(col1 - col0, row1 - row0) >> level > 3)
-    ++level;
+  while (level + 1 < static_cast<int>(level_size_.size()) && std::max(col1 - col0, row1 - row0) >> level > 3) ++level;
   uint16_t least = kNoReading;
   for (int row = row0 >> level; row <= row1 >> level; ++row)
     for (int col = col0 >> level; col <= col1 >> level; ++col)
@@ -236,8 +236,8 @@ Eigen::Vector3d BehindSurfaceMap::search(const Eigen::Vector3d& p_K, BehindSurfa
   // Shells of Chebyshev radius r hold only voxels at squared grid distance >= r^2, so once the
   // best squared distance found is <= r^2 no later shell can beat it: the result is a nearest
   // behind voxel of the whole grid, as a full distance transform would give.
-  const int max_radius = std::max({c.x(), size_.x() - 1 - c.x(), c.y(), size_.y() - 1 - c.y(), c.z(),
-                                   size_.z() - 1 - c.z()});
+  const int max_radius =
+      std::max({c.x(), size_.x() - 1 - c.x(), c.y(), size_.y() - 1 - c.y(), c.z(), size_.z() - 1 - c.z()});
   int64_t best_d2 = std::numeric_limits<int64_t>::max();
   Eigen::Vector3i best(-1, -1, -1);
   // 0 = not classified yet, 1 = not behind, 2 = behind.

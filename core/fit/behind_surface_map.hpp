@@ -89,7 +89,7 @@ class BehindSurfaceMap {
   // Layer below which no voxel of the box [lo, hi] (voxel indices) can be behind the surface.
   int first_possible_layer(const Eigen::Vector3i& lo, const Eigen::Vector3i& hi) const;
 
-  std::vector<uint16_t> depth_mm_;     // depth inside the silhouette, kNoDepth elsewhere
+  std::vector<uint16_t> depth_mm_;  // depth inside the silhouette, kNoDepth elsewhere
   // min_depth_mm_[l]: level l of the min pyramid over 2^l x 2^l pixel blocks (kNoReading where
   // no pixel of the block has depth); level 0 is depth_mm_ with kNoReading for kNoDepth.
   std::vector<std::vector<uint16_t>> min_depth_mm_;

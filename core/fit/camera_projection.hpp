@@ -10,7 +10,7 @@
 namespace posefuse::fit {
 
 struct Projection {
-  Eigen::Vector2d pixel;               // image coordinates (u, v)
+  Eigen::Vector2d pixel;                        // image coordinates (u, v)
   Eigen::Matrix<double, 2, 3> d_pixel_d_point;  // d (u, v) / d p_K
 };
 

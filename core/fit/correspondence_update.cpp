@@ -10,12 +10,17 @@ namespace {
 
 bool is_limb_neck_or_head(int joint) {
   switch (joint) {
-    case body::kLeftShoulder: case body::kRightShoulder: case body::kLeftElbow: case body::kRightElbow:
-    case body::kLeftWrist: case body::kRightWrist: case body::kLeftHand: case body::kRightHand:
-    case body::kNeck: case body::kHead:
-      return true;
-    default:
-      return false;
+    case body::kLeftShoulder:
+    case body::kRightShoulder:
+    case body::kLeftElbow:
+    case body::kRightElbow:
+    case body::kLeftWrist:
+    case body::kRightWrist:
+    case body::kLeftHand:
+    case body::kRightHand:
+    case body::kNeck:
+    case body::kHead: return true;
+    default: return false;
   }
 }
 

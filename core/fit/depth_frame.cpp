@@ -41,11 +41,11 @@ void validate(const DepthFrame& frame, const raycast::DepthCamera& camera) {
                                      std::to_string(camera.height()));
   const size_t pixels = static_cast<size_t>(frame.width) * frame.height;
   if (frame.depth_mm.size() != pixels)
-    throw_invalid("frame.depth_mm", "has " + std::to_string(frame.depth_mm.size()) + " values, expected " +
-                                        std::to_string(pixels));
+    throw_invalid("frame.depth_mm",
+                  "has " + std::to_string(frame.depth_mm.size()) + " values, expected " + std::to_string(pixels));
   if (frame.body_index.size() != pixels)
-    throw_invalid("frame.body_index", "has " + std::to_string(frame.body_index.size()) + " values, expected " +
-                                          std::to_string(pixels));
+    throw_invalid("frame.body_index",
+                  "has " + std::to_string(frame.body_index.size()) + " values, expected " + std::to_string(pixels));
 }
 
 VectorImage VectorImage::empty(int width, int height) {

@@ -9,8 +9,8 @@
 
 namespace posefuse::fit {
 
-inline constexpr uint16_t kNoDepth = 0;       // depth pixel without a reading
-inline constexpr uint8_t kNoBody = 255;       // body-index pixel outside every body
+inline constexpr uint16_t kNoDepth = 0;  // depth pixel without a reading
+inline constexpr uint8_t kNoBody = 255;  // body-index pixel outside every body
 
 // A rectangle of pixels, bounds inclusive (empty when col0 > col1 or row0 > row1).
 struct PixelRect {
@@ -24,8 +24,8 @@ PixelRect nonzero_box(const std::vector<uint8_t>& mask, int width, int height);
 struct DepthFrame {
   int width = 0;
   int height = 0;
-  std::vector<uint16_t> depth_mm;    // row-major, z in millimetres, kNoDepth = no reading
-  std::vector<uint8_t> body_index;   // row-major, kNoBody = background
+  std::vector<uint16_t> depth_mm;   // row-major, z in millimetres, kNoDepth = no reading
+  std::vector<uint8_t> body_index;  // row-major, kNoBody = background
 };
 
 // Throws posefuse::Error (field "frame.width", "frame.depth_mm", "frame.body_index") when the
@@ -38,7 +38,7 @@ struct VectorImage {
   int height = 0;
   std::vector<Eigen::Vector3f> value_K;  // zero where !valid
   std::vector<uint8_t> valid;
-  int count = 0;                         // number of valid pixels
+  int count = 0;  // number of valid pixels
 
   // width x height pixels, none valid.
   static VectorImage empty(int width, int height);

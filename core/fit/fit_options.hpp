@@ -7,15 +7,15 @@ namespace posefuse::fit {
 
 struct FitOptions {
   // --- Energy (eq. 4-12), paper 2 IV-C ---
-  int num_samples = 250;         // N_s: depth samples of the data term (eq. 5)
-  double sigma_p_m = 0.003;      // sigma_p: position scale of the data term, metres
-  double sigma_n = 0.25;         // sigma_n: normal scale of the data term (unit vectors)
-  double lambda_bg = 10;         // eq. 6, residuals in pixels
-  double lambda_bg_joint = 25;   // eq. 7, residuals in pixels
-  double lambda_float = 0.25;    // eq. 12, residuals in metres
-  double lambda_limit = 10000;   // eq. 8, residuals in radians
-  double lambda_imu = 15;        // eq. 9, unit-vector differences
-  int max_bg_points = 150;       // H_max: size cap of the bg point set U_bg (eq. 6)
+  int num_samples = 250;        // N_s: depth samples of the data term (eq. 5)
+  double sigma_p_m = 0.003;     // sigma_p: position scale of the data term, metres
+  double sigma_n = 0.25;        // sigma_n: normal scale of the data term (unit vectors)
+  double lambda_bg = 10;        // eq. 6, residuals in pixels
+  double lambda_bg_joint = 25;  // eq. 7, residuals in pixels
+  double lambda_float = 0.25;   // eq. 12, residuals in metres
+  double lambda_limit = 10000;  // eq. 8, residuals in radians
+  double lambda_imu = 15;       // eq. 9, unit-vector differences
+  int max_bg_points = 150;      // H_max: size cap of the bg point set U_bg (eq. 6)
 
   // bg points are model vertices whose normal is nearly perpendicular to the viewing ray
   // (paper: "normal vector points perpendicular to the camera's optical axis"). Ours: a vertex
@@ -29,7 +29,7 @@ struct FitOptions {
   double silhouette_edge_px = 0.7;
 
   // --- Solver (II-F) ---
-  int max_iterations = 20;       // paper 2 IV-C: at most 20 LM iterations per frame
+  int max_iterations = 20;  // paper 2 IV-C: at most 20 LM iterations per frame
   // Damping. Paper 2 adds gamma * I with gamma = 1000 at the start. Our pose DOFs (metres,
   // radians) and correspondences (barycentrics) live on very different scales, so we damp with
   // gamma * diag(J^T J) (Marquardt) instead; gamma is then relative and starts much lower.
@@ -40,7 +40,7 @@ struct FitOptions {
   // bench_fit_frame (docs/fitting.md).
   double damping_increase = 4;
   double damping_decrease = 0.5;
-  double max_damping = 1e8;      // give up the iteration (converged) beyond this
+  double max_damping = 1e8;  // give up the iteration (converged) beyond this
   // Each trial step is projected onto the pose limits widened by limit_projection_margin_rad (ours;
   // paper 2's limits are only the soft eq. 8). That term is zero inside the range, so the
   // Gauss-Newton step does not see it: behind the back on paper 1's protocol the hidden arm's DOFs
@@ -74,12 +74,12 @@ struct FitOptions {
   int freeze_contour_after = 6;
 
   // --- Correspondences (II-I, II-J) ---
-  bool discrete_update = true;   // eq. 17 after every accepted step
-  int num_candidate_sets = 10;   // U^cand_{t % 10}
-  int candidates_per_set = 64;   // ours; the paper gives no count
+  bool discrete_update = true;        // eq. 17 after every accepted step
+  int num_candidate_sets = 10;        // U^cand_{t % 10}
+  int candidates_per_set = 64;        // ours; the paper gives no count
   double limb_candidate_density = 3;  // upper limbs, neck and head get 3x the density
-  int max_climb_steps = 30;      // adjacent-face climb (II-J) per sample and update
-  uint64_t seed = 1;             // candidate sets are pre-randomised from this seed
+  int max_climb_steps = 30;           // adjacent-face climb (II-J) per sample and update
+  uint64_t seed = 1;                  // candidate sets are pre-randomised from this seed
 };
 
 // Throws posefuse::Error naming the field ("fit_options.sigma_p_m", ...) for a non-finite,

@@ -75,7 +75,8 @@ void FrameFitter::vertex_jacobian(int i, Eigen::Ref<Eigen::Matrix3Xd> out) const
   eval_.add_vertex_pose_jacobian(i, 1.0, out.leftCols(layout_.size()));
   if (free_betas_.empty()) return;
   const auto shape = eval_.vertex_shape_jacobian(i);
-  for (size_t b = 0; b < free_betas_.size(); ++b) out.col(layout_.size() + static_cast<Eigen::Index>(b)) = shape.col(free_betas_[b]);
+  for (size_t b = 0; b < free_betas_.size(); ++b)
+    out.col(layout_.size() + static_cast<Eigen::Index>(b)) = shape.col(free_betas_[b]);
 }
 
 double FrameFitter::shape_bound_energy(const Eigen::VectorXd& beta) const {
@@ -113,7 +114,8 @@ void FrameFitter::set_up_blocks(const FrameObservation& o) {
 
 void FrameFitter::pose_model(const Eigen::VectorXd& theta, const Eigen::VectorXd& beta) {
   // The vertices' pose Jacobians follow in linearise(), for the vertices the residuals use.
-  eval_.evaluate(beta, theta, free_betas_.empty() ? body::Derivatives::kPoseOnRequest : body::Derivatives::kPoseAndShape);
+  eval_.evaluate(beta, theta,
+                 free_betas_.empty() ? body::Derivatives::kPoseOnRequest : body::Derivatives::kPoseAndShape);
   surface_.update(eval_.vertices());
   scene_.update_vertices(eval_.vertices());
   if (free_betas_.empty()) return;
@@ -157,7 +159,8 @@ void FrameFitter::select_point_sets(const FrameObservation& o) {
     if (std::abs(normals.col(v).dot(p.normalized())) <= options_.bg_contour_max_cos) contour_vertices_.push_back(v);
   }
   contour_points_.resize(3, static_cast<Eigen::Index>(contour_vertices_.size()));
-  for (size_t k = 0; k < contour_vertices_.size(); ++k) contour_points_.col(static_cast<Eigen::Index>(k)) = vertices.col(contour_vertices_[k]);
+  for (size_t k = 0; k < contour_vertices_.size(); ++k)
+    contour_points_.col(static_cast<Eigen::Index>(k)) = vertices.col(contour_vertices_[k]);
   const std::vector<bool> visible = scene_.visible(contour_points_, kContourVisibilityTolerance_m);
   selected_.clear();
   for (size_t k = 0; k < contour_vertices_.size(); ++k)
@@ -225,7 +228,8 @@ void FrameFitter::compute_used_vertex_jacobians() {
   for (int v : used_vertices_) used_[static_cast<size_t>(v)] = 0;
 }
 
-EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::VectorXd& theta, const Eigen::VectorXd& beta) {
+EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::VectorXd& theta,
+                                   const Eigen::VectorXd& beta) {
   build_blocks(eval_, o);
   compute_used_vertex_jacobians();
   const int n = static_cast<int>(data_.size());
@@ -252,7 +256,8 @@ EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::Vecto
       data_jacobian_.setZero();
       for (int c = 0; c < m; ++c) data_jacobian_.col(columns[static_cast<size_t>(c)]) = packed_data_jacobian_.col(c);
       data_[i].evaluate_shape(surface_, eval_, correspondences_[i], data_shape_jacobian_);
-      for (int b = 0; b < free; ++b) data_jacobian_.col(N + b) = data_shape_jacobian_.col(free_betas_[static_cast<size_t>(b)]);
+      for (int b = 0; b < free; ++b)
+        data_jacobian_.col(N + b) = data_shape_jacobian_.col(free_betas_[static_cast<size_t>(b)]);
       system_.add_block(i, data_jacobian_, uv_jacobian_[i], residual_.segment<6>(row));
     }
     take(6, e.data);
@@ -291,13 +296,15 @@ EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::Vecto
     free_beta_values_.resize(free);
     for (int b = 0; b < free; ++b) free_beta_values_[b] = beta[free_betas_[static_cast<size_t>(b)]];
     jacobian_.middleRows(row, free).leftCols(N).setZero();
-    shape_bound_.evaluate(free_beta_values_, residual_.segment(row, free), jacobian_.middleRows(row, free).rightCols(free));
+    shape_bound_.evaluate(free_beta_values_, residual_.segment(row, free),
+                          jacobian_.middleRows(row, free).rightCols(free));
     take(free, e.shape);
     const int k = static_cast<int>(prior_matrix_.rows());
     if (k > 0) {
       residual_.segment(row, k) = prior_matrix_ * beta - prior_target_;
       jacobian_.middleRows(row, k).leftCols(N).setZero();
-      for (int b = 0; b < free; ++b) jacobian_.middleRows(row, k).col(N + b) = prior_matrix_.col(free_betas_[static_cast<size_t>(b)]);
+      for (int b = 0; b < free; ++b)
+        jacobian_.middleRows(row, k).col(N + b) = prior_matrix_.col(free_betas_[static_cast<size_t>(b)]);
       take(k, e.shape);
     }
   }
@@ -317,7 +324,8 @@ EnergyTerms FrameFitter::energy_at(const FrameObservation& o, const body::BodyEv
   build_blocks(eval, o);
   EnergyTerms e;
   for (size_t i = 0; i < data_.size(); ++i) e.data += data_[i].residual(surface, correspondences[i]).squaredNorm();
-  for (const SilhouettePoint& s : bg_) e.bg += s.block.residual(intrinsics_, eval.vertices().col(s.index)).squaredNorm();
+  for (const SilhouettePoint& s : bg_)
+    e.bg += s.block.residual(intrinsics_, eval.vertices().col(s.index)).squaredNorm();
   for (const SilhouettePoint& s : bg_joint_)
     e.bg_joint += s.block.residual(intrinsics_, eval.joints().col(s.index)).squaredNorm();
   for (const BehindPoint& f : float_) e.float_term += f.block.residual(eval.vertices().col(f.vertex)).squaredNorm();
@@ -353,9 +361,10 @@ FitResult FrameFitter::fit_shape_and_pose(const FrameObservation& observation, c
   const Eigen::Index k = freedom.prior_matrix.rows();
   if ((k > 0 && freedom.prior_matrix.cols() != num_betas) || freedom.prior_target.size() != k ||
       !freedom.prior_matrix.allFinite() || !freedom.prior_target.allFinite())
-    throw_invalid("shape_freedom.prior_matrix", std::to_string(k) + " x " + std::to_string(freedom.prior_matrix.cols()) +
-                                                    " with a target of " + std::to_string(freedom.prior_target.size()) +
-                                                    ", expected k x " + std::to_string(num_betas) + " and k, finite");
+    throw_invalid("shape_freedom.prior_matrix", std::to_string(k) + " x " +
+                                                    std::to_string(freedom.prior_matrix.cols()) + " with a target of " +
+                                                    std::to_string(freedom.prior_target.size()) + ", expected k x " +
+                                                    std::to_string(num_betas) + " and k, finite");
   free_betas_ = std::move(free);
   shape_bound_.bound = freedom.max_abs_beta;
   prior_matrix_ = freedom.prior_matrix;
@@ -429,8 +438,9 @@ FitResult FrameFitter::run(const FrameObservation& observation, const Eigen::Vec
         // II-I: the correspondences follow their (du, dv) over face borders.
         for (size_t i = 0; i < correspondences_.size(); ++i)
           trial_correspondences_[i] = trial_surface_.walk(correspondences_[i], uv_step_[i].x(), uv_step_[i].y()).end;
-        energy_after = energy_at(observation, trial_eval_, trial_surface_, trial_correspondences_, trial_theta_,
-                                 trial_beta_).total();
+        energy_after =
+            energy_at(observation, trial_eval_, trial_surface_, trial_correspondences_, trial_theta_, trial_beta_)
+                .total();
         joint_step = 0;
         for (int j : kBgJoints)
           joint_step = std::max(joint_step, (trial_eval_.joints().col(j) - eval_.joints().col(j)).norm());

@@ -37,10 +37,10 @@ namespace posefuse::fit {
 // The 16 joints of the bgJoint term (eq. 7): the upper body's joints without the hands (orbs).
 inline constexpr int kBgJointCount = 16;
 inline constexpr int kBgJoints[kBgJointCount] = {
-    body::kPelvis,       body::kLeftHip,       body::kRightHip,      body::kSpine1,
-    body::kSpine2,       body::kSpine3,        body::kNeck,          body::kLeftCollar,
-    body::kRightCollar,  body::kHead,          body::kLeftShoulder,  body::kRightShoulder,
-    body::kLeftElbow,    body::kRightElbow,    body::kLeftWrist,     body::kRightWrist};
+    body::kPelvis,      body::kLeftHip,    body::kRightHip,     body::kSpine1,
+    body::kSpine2,      body::kSpine3,     body::kNeck,         body::kLeftCollar,
+    body::kRightCollar, body::kHead,       body::kLeftShoulder, body::kRightShoulder,
+    body::kLeftElbow,   body::kRightElbow, body::kLeftWrist,    body::kRightWrist};
 
 // Energy of each term of eq. 4, weights included (E = sum of all).
 struct EnergyTerms {
@@ -57,13 +57,13 @@ const char* fit_status_name(FitStatus status);
 
 struct FitResult {
   Eigen::VectorXd theta;
-  Eigen::VectorXd beta;        // the shape: as given to fit(), or fitted by fit_shape_and_pose()
+  Eigen::VectorXd beta;                             // the shape: as given to fit(), or fitted by fit_shape_and_pose()
   std::vector<body::SurfacePoint> correspondences;  // nu_i, one per observation sample
-  EnergyTerms energy;          // at theta (point sets selected at theta)
-  EnergyTerms initial_energy;  // at the start pose, after the first correspondence update
-  int iterations = 0;          // LM iterations (one linearisation each)
+  EnergyTerms energy;                               // at theta (point sets selected at theta)
+  EnergyTerms initial_energy;                       // at the start pose, after the first correspondence update
+  int iterations = 0;                               // LM iterations (one linearisation each)
   int accepted_steps = 0;
-  int rejected_steps = 0;      // trial steps that raised the energy (gamma was raised)
+  int rejected_steps = 0;  // trial steps that raised the energy (gamma was raised)
   FitStatus status = FitStatus::kMaxIterations;
 };
 
@@ -182,15 +182,15 @@ class FrameFitter {
   Eigen::VectorXd residual_;
   std::vector<UvJacobian> uv_jacobian_;
   Eigen::Matrix3Xd point_jacobian_;
-  Eigen::MatrixXd data_jacobian_;  // 6 x N (+ free betas)
+  Eigen::MatrixXd data_jacobian_;         // 6 x N (+ free betas)
   Eigen::MatrixXd packed_data_jacobian_;  // 6 x N, the first face_columns().size() used
   Eigen::Matrix3Xd contour_points_;
   std::vector<int> contour_vertices_, selected_;
-  std::vector<char> used_;         // per vertex, within compute_used_vertex_jacobians()
+  std::vector<char> used_;  // per vertex, within compute_used_vertex_jacobians()
   std::vector<int> used_vertices_;
   std::vector<raycast::ClosestPoint> hits_;
   std::vector<body::SurfacePoint> hit_points_;
-  Eigen::MatrixXd joint_jacobian_;  // 72 x P, shape fit only
+  Eigen::MatrixXd joint_jacobian_;       // 72 x P, shape fit only
   Eigen::MatrixXd data_shape_jacobian_;  // 6 x B
   Eigen::VectorXd free_beta_values_;
   Eigen::VectorXd step_, trial_x_, trial_theta_, trial_beta_;

@@ -14,8 +14,7 @@ namespace {
 constexpr size_t kMinSamples = 10;
 
 void check_unit(const std::optional<Eigen::Vector3d>& v, const char* field) {
-  if (v && (!v->allFinite() || std::abs(v->norm() - 1) > 1e-3))
-    throw_invalid(field, "must be a finite unit vector");
+  if (v && (!v->allFinite() || std::abs(v->norm() - 1) > 1e-3)) throw_invalid(field, "must be a finite unit vector");
 }
 
 }  // namespace
@@ -23,8 +22,8 @@ void check_unit(const std::optional<Eigen::Vector3d>& v, const char* field) {
 void validate(const FrameObservation& o) {
   if (o.points_K.empty()) throw_precondition("observation.points_K", "no depth samples");
   if (o.normals_K.size() != o.points_K.size())
-    throw_invalid("observation.normals_K", std::to_string(o.normals_K.size()) + " normals for " +
-                                               std::to_string(o.points_K.size()) + " points");
+    throw_invalid("observation.normals_K",
+                  std::to_string(o.normals_K.size()) + " normals for " + std::to_string(o.points_K.size()) + " points");
   for (size_t i = 0; i < o.points_K.size(); ++i) {
     if (!o.points_K[i].allFinite() || o.points_K[i].z() <= 0)
       throw_invalid("observation.points_K[" + std::to_string(i) + "]", "not finite or not in front of the camera");

@@ -10,8 +10,8 @@ namespace posefuse::fit {
 
 Eigen::Matrix3Xd rest_joints(const body::SmplModel& model, const Eigen::VectorXd& beta) {
   if (beta.size() > model.num_betas())
-    throw_invalid("beta", "size " + std::to_string(beta.size()) + ", model has " +
-                              std::to_string(model.num_betas()) + " shape directions");
+    throw_invalid("beta", "size " + std::to_string(beta.size()) + ", model has " + std::to_string(model.num_betas()) +
+                              " shape directions");
   for (Eigen::Index b = 0; b < beta.size(); ++b)
     if (!std::isfinite(beta[b])) throw_invalid("beta[" + std::to_string(b) + "]", "not finite");
   Eigen::VectorXd shaped = Eigen::Map<const Eigen::VectorXd>(model.v_template.data(), 3 * model.num_vertices());
@@ -31,7 +31,8 @@ Eigen::MatrixXd rest_joint_shape_directions(const body::SmplModel& model) {
 }
 
 JointPose pose_joints(const Eigen::Matrix3Xd& rest, const body::PoseLayout& layout, const Eigen::VectorXd& theta) {
-  if (rest.cols() != body::kNumJoints) throw_invalid("rest_joints", "needs 24 columns, has " + std::to_string(rest.cols()));
+  if (rest.cols() != body::kNumJoints)
+    throw_invalid("rest_joints", "needs 24 columns, has " + std::to_string(rest.cols()));
   Eigen::Matrix3Xd rotation_vectors;
   Eigen::Vector3d translation;
   layout.to_smpl(theta, rotation_vectors, translation);

@@ -15,14 +15,17 @@ std::size_t PackedBodyFrame::bytes() const {
 
 PackedBodyFrame pack_body_pixels(const DepthFrame& frame) {
   if (frame.width <= 0 || frame.height <= 0)
-    throw_invalid("frame.width", std::to_string(frame.width) + "x" + std::to_string(frame.height) + " is not an image size");
+    throw_invalid("frame.width",
+                  std::to_string(frame.width) + "x" + std::to_string(frame.height) + " is not an image size");
   const std::size_t pixels = static_cast<std::size_t>(frame.width) * static_cast<std::size_t>(frame.height);
   if (pixels > std::numeric_limits<std::uint32_t>::max())
     throw_invalid("frame.width", std::to_string(frame.width) + "x" + std::to_string(frame.height) + " is too large");
   if (frame.depth_mm.size() != pixels)
-    throw_invalid("frame.depth_mm", "has " + std::to_string(frame.depth_mm.size()) + " values, expected " + std::to_string(pixels));
+    throw_invalid("frame.depth_mm",
+                  "has " + std::to_string(frame.depth_mm.size()) + " values, expected " + std::to_string(pixels));
   if (frame.body_index.size() != pixels)
-    throw_invalid("frame.body_index", "has " + std::to_string(frame.body_index.size()) + " values, expected " + std::to_string(pixels));
+    throw_invalid("frame.body_index",
+                  "has " + std::to_string(frame.body_index.size()) + " values, expected " + std::to_string(pixels));
   PackedBodyFrame packed;
   packed.width = frame.width;
   packed.height = frame.height;

@@ -14,8 +14,8 @@ Personalisation personalise(std::shared_ptr<const body::SmplModel> model, const 
   p.rough = estimate_rough_shape(*model, frames, camera, options.rough);
   p.fine_tune_frame = options.fine_tune_frame.value_or(frames.size() / 2);
   if (p.fine_tune_frame >= frames.size())
-    throw_invalid("personalisation_options.fine_tune_frame",
-                  std::to_string(p.fine_tune_frame) + " is past the " + std::to_string(frames.size()) + " calibration frames");
+    throw_invalid("personalisation_options.fine_tune_frame", std::to_string(p.fine_tune_frame) + " is past the " +
+                                                                 std::to_string(frames.size()) + " calibration frames");
   const body::PoseLayout layout = body::PoseLayout::full_body();
   const SkeletonPoseInitializer init(model, layout, p.rough.beta, options.init);
   p.initial_theta = init.initialise(frames[p.fine_tune_frame], Eigen::VectorXd()).theta;

@@ -45,7 +45,7 @@ struct Personalisation {
   std::size_t fine_tune_frame = 0;
   Eigen::VectorXd initial_theta;  // full-body pose the fine tuning started from
   bool fine_tuned = false;
-  ShapePoseFit fine;              // valid when fine_tuned
+  ShapePoseFit fine;                 // valid when fine_tuned
   SegmentLengths segment_lengths{};  // the 7 measurements of the final shape
 
   const Eigen::VectorXd& beta() const { return fine_tuned ? fine.beta : rough.beta; }
@@ -54,8 +54,8 @@ struct Personalisation {
 // Throws what estimate_rough_shape throws (the pose and view checks), "personalisation_options.
 // fine_tune_frame" for an index past the frames, and kInternal "fine_tuning.beta" /
 // "fine_tuning.theta" when the refiner returns wrong sizes or non-finite values.
-Personalisation personalise(std::shared_ptr<const body::SmplModel> model, const std::vector<TrackedSkeleton>& calibration_frames,
-                            const raycast::DepthCamera* camera, const ShapePoseRefiner& refiner,
-                            const PersonalisationOptions& options = {});
+Personalisation personalise(std::shared_ptr<const body::SmplModel> model,
+                            const std::vector<TrackedSkeleton>& calibration_frames, const raycast::DepthCamera* camera,
+                            const ShapePoseRefiner& refiner, const PersonalisationOptions& options = {});
 
 }  // namespace posefuse::fit

@@ -11,9 +11,11 @@ namespace posefuse::fit {
 
 void validate(const NormalParams& params) {
   if (params.window_radius_px < 1 || params.window_radius_px > 64)
-    throw_invalid("normal_params.window_radius_px", "must be in [1, 64], got " + std::to_string(params.window_radius_px));
+    throw_invalid("normal_params.window_radius_px",
+                  "must be in [1, 64], got " + std::to_string(params.window_radius_px));
   if (!std::isfinite(params.max_distance_m) || params.max_distance_m <= 0)
-    throw_invalid("normal_params.max_distance_m", "must be positive and finite, got " + std::to_string(params.max_distance_m));
+    throw_invalid("normal_params.max_distance_m",
+                  "must be positive and finite, got " + std::to_string(params.max_distance_m));
   if (params.min_neighbours < 3)
     throw_invalid("normal_params.min_neighbours", "must be at least 3, got " + std::to_string(params.min_neighbours));
 }
@@ -59,7 +61,8 @@ std::optional<Eigen::Vector3f> normal_at(const PointCloud& cloud, int col, int r
 
 }  // namespace
 
-std::optional<Eigen::Vector3f> estimate_normal_at(const PointCloud& cloud, int col, int row, const NormalParams& params) {
+std::optional<Eigen::Vector3f> estimate_normal_at(const PointCloud& cloud, int col, int row,
+                                                  const NormalParams& params) {
   validate(params);
   if (col < 0 || row < 0 || col >= cloud.width || row >= cloud.height)
     throw_invalid("pixel", "(" + std::to_string(col) + ", " + std::to_string(row) + ") is outside the image");

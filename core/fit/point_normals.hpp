@@ -13,8 +13,8 @@
 namespace posefuse::fit {
 
 struct NormalParams {
-  int window_radius_px = 5;     // Chebyshev distance in pixels (paper: 5)
-  float max_distance_m = 0.05f; // Euclidean distance in K (paper: 0.05 m)
+  int window_radius_px = 5;      // Chebyshev distance in pixels (paper: 5)
+  float max_distance_m = 0.05f;  // Euclidean distance in K (paper: 0.05 m)
   // Fewer neighbours (centre included) than this gives no normal: a plane fit needs at least 3
   // and a handful more keeps single-row slivers and noise from giving a confident direction.
   int min_neighbours = 6;

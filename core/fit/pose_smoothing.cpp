@@ -11,7 +11,8 @@ namespace posefuse::fit {
 PoseSmoother::PoseSmoother(body::PoseLayout layout, const PoseSmoothingOptions& options)
     : layout_(std::move(layout)), half_(options.window_frames / 2) {
   if (options.window_frames < 1 || options.window_frames % 2 == 0)
-    throw_invalid("smoothing_options.window_frames", "must be odd and positive, got " + std::to_string(options.window_frames));
+    throw_invalid("smoothing_options.window_frames",
+                  "must be odd and positive, got " + std::to_string(options.window_frames));
 }
 
 std::optional<Eigen::VectorXd> PoseSmoother::push(const Eigen::VectorXd& theta) {

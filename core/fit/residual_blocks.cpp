@@ -71,8 +71,8 @@ void BehindResidual::evaluate(const Eigen::Vector3d& x_K, const Eigen::Ref<const
 }
 
 int LimitResidual::size(const body::PoseLayout& layout) {
-  return static_cast<int>(std::count_if(layout.dofs().begin(), layout.dofs().end(),
-                                        [](const body::Dof& d) { return d.limited; }));
+  return static_cast<int>(
+      std::count_if(layout.dofs().begin(), layout.dofs().end(), [](const body::Dof& d) { return d.limited; }));
 }
 
 void LimitResidual::evaluate(const body::PoseLayout& layout, const Eigen::Ref<const Eigen::VectorXd>& theta,
@@ -143,7 +143,8 @@ void ForearmDirectionResidual::evaluate(const Eigen::Matrix3Xd& joints_K, const 
   const Eigen::Vector3d direction = forearm / length;
   r = weight * (direction - expected_K);
   // d Pi(a) = (I - Pi(a) Pi(a)^T) / |a| da (eq. 10-11).
-  const Eigen::Matrix3d d_direction = (weight / length) * (Eigen::Matrix3d::Identity() - direction * direction.transpose());
+  const Eigen::Matrix3d d_direction =
+      (weight / length) * (Eigen::Matrix3d::Identity() - direction * direction.transpose());
   d_r_d_theta.noalias() =
       d_direction * (joint_jacobian.middleRows<3>(3 * wrist) - joint_jacobian.middleRows<3>(3 * elbow));
 }

@@ -115,8 +115,8 @@ struct ForearmDirectionResidual {
 
   Eigen::Vector3d residual(const Eigen::Matrix3Xd& joints_K) const;
   // joint_jacobian: BodyEvaluator::joint_pose_jacobian() (72 x N).
-  void evaluate(const Eigen::Matrix3Xd& joints_K, const Eigen::MatrixXd& joint_jacobian,
-                Eigen::Ref<Eigen::Vector3d> r, Eigen::Ref<Eigen::MatrixXd> d_r_d_theta) const;
+  void evaluate(const Eigen::Matrix3Xd& joints_K, const Eigen::MatrixXd& joint_jacobian, Eigen::Ref<Eigen::Vector3d> r,
+                Eigen::Ref<Eigen::MatrixXd> d_r_d_theta) const;
 };
 
 }  // namespace posefuse::fit

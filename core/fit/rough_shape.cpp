@@ -19,7 +19,8 @@ double angle_deg(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
 
 void validate(const RoughShapeOptions& o) {
   auto positive = [](double v, const char* name) {
-    if (!std::isfinite(v) || v <= 0) throw_invalid(std::string("rough_options.") + name, "must be positive, got " + std::to_string(v));
+    if (!std::isfinite(v) || v <= 0)
+      throw_invalid(std::string("rough_options.") + name, "must be positive, got " + std::to_string(v));
   };
   positive(o.initial_step, "initial_step");
   positive(o.min_step, "min_step");
@@ -47,19 +48,21 @@ void check_frame(const TrackedSkeleton& s, const std::string& frame, const rayca
     const double bend = angle_deg(p[b] - p[a], p[c] - p[b]);
     if (bend > max_deg)
       throw_precondition(frame + ".pose." + name, "bent " + std::to_string(std::lround(bend)) + " deg, at most " +
-                                                      std::to_string(std::lround(max_deg)) + " deg in the controlled pose");
+                                                      std::to_string(std::lround(max_deg)) +
+                                                      " deg in the controlled pose");
   };
   too_bent("left_knee", kHipLeft, kKneeLeft, kAnkleLeft, limits.max_knee_bend_deg);
   too_bent("right_knee", kHipRight, kKneeRight, kAnkleRight, limits.max_knee_bend_deg);
   too_bent("left_elbow", kShoulderLeft, kElbowLeft, kWristLeft, limits.max_elbow_bend_deg);
   too_bent("right_elbow", kShoulderRight, kElbowRight, kWristRight, limits.max_elbow_bend_deg);
   const Eigen::Vector3d down = 0.5 * (p[kHipLeft] + p[kHipRight]) - 0.5 * (p[kShoulderLeft] + p[kShoulderRight]);
-  for (const auto& [name, shoulder, elbow] : {std::tuple{"left_arm", kShoulderLeft, kElbowLeft},
-                                              std::tuple{"right_arm", kShoulderRight, kElbowRight}}) {
+  for (const auto& [name, shoulder, elbow] :
+       {std::tuple{"left_arm", kShoulderLeft, kElbowLeft}, std::tuple{"right_arm", kShoulderRight, kElbowRight}}) {
     const double abduction = angle_deg(p[elbow] - p[shoulder], down);
     if (abduction < limits.min_arm_abduction_deg || abduction > limits.max_arm_abduction_deg)
       throw_precondition(frame + ".pose." + name,
-                         "held " + std::to_string(std::lround(abduction)) + " deg from the trunk, the controlled pose needs " +
+                         "held " + std::to_string(std::lround(abduction)) +
+                             " deg from the trunk, the controlled pose needs " +
                              std::to_string(std::lround(limits.min_arm_abduction_deg)) + " to " +
                              std::to_string(std::lround(limits.max_arm_abduction_deg)) + " deg");
   }
@@ -137,7 +140,8 @@ RoughShapeResult estimate_rough_shape(const body::SmplModel& model, const std::v
     // Projected gradient: components pushing a beta further past its bound do not count.
     Eigen::VectorXd projected = gradient;
     for (int b = 0; b < betas; ++b)
-      if ((r.beta[b] >= options.max_abs_beta && gradient[b] < 0) || (r.beta[b] <= -options.max_abs_beta && gradient[b] > 0))
+      if ((r.beta[b] >= options.max_abs_beta && gradient[b] < 0) ||
+          (r.beta[b] <= -options.max_abs_beta && gradient[b] > 0))
         projected[b] = 0;
     if (projected.norm() <= options.min_gradient_norm) {
       r.stop = RoughShapeStop::kConverged;

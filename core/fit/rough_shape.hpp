@@ -3,7 +3,8 @@
 // segment measurements match the camera skeleton's (eq. 18), with the paper's step rule (eq. 19):
 // beta starts at 0, the step size lambda at 1; an update that does not lower E_s is rejected and
 // halves lambda; the search stops when lambda < 0.01 (or after max_iterations, or when the
-// gradient vanishes). Betas are kept within +-max_abs_beta. Measurements are averaged over the frames of the controlled pose.
+// gradient vanishes). Betas are kept within +-max_abs_beta. Measurements are averaged over the frames of the controlled
+// pose.
 //
 // The controlled pose (paper 2, Fig. 3; the paper shows it but gives no numbers, these are ours):
 // standing facing the camera, legs and arms straight, arms held away from the trunk so that the
@@ -43,10 +44,10 @@ struct RoughShapeOptions {
   // halves below 0.01 before any step is accepted and beta stays 0). In decimetres the built-in
   // template converges to E_s ~ 1e-23 m^2 in ~57,000 iterations (0.2 s).
   double length_unit_m = 0.1;
-  double initial_step = 1.0;              // lambda_0 (paper: 1)
-  double min_step = 0.01;                 // convergence when lambda falls below (paper: 0.01)
+  double initial_step = 1.0;  // lambda_0 (paper: 1)
+  double min_step = 0.01;     // convergence when lambda falls below (paper: 0.01)
   int max_iterations = 200'000;
-  double min_gradient_norm = 1e-12;       // stop when the (projected) gradient vanishes
+  double min_gradient_norm = 1e-12;  // stop when the (projected) gradient vanishes
   // Betas are kept in [-max_abs_beta, max_abs_beta] (projected gradient descent; not in the
   // paper): the camera skeleton's joint biases can otherwise push the shape far outside the
   // model's range (betas of -8 on the simulator's skeleton, see docs/benchmarks.md).
@@ -58,10 +59,10 @@ const char* rough_shape_stop_name(RoughShapeStop stop);
 
 struct RoughShapeResult {
   Eigen::VectorXd beta;
-  SegmentLengths measured{};   // K_l, mean over the frames
-  SegmentLengths model{};      // L_l(beta)
-  double energy = 0;           // E_s(beta), m^2
-  double initial_energy = 0;   // E_s(0)
+  SegmentLengths measured{};  // K_l, mean over the frames
+  SegmentLengths model{};     // L_l(beta)
+  double energy = 0;          // E_s(beta), m^2
+  double initial_energy = 0;  // E_s(0)
   int iterations = 0;
   double final_step = 0;
   RoughShapeStop stop = RoughShapeStop::kMaxIterations;
@@ -76,7 +77,8 @@ struct RoughShapeResult {
 void check_controlled_pose(const std::vector<TrackedSkeleton>& calibration_frames, const raycast::DepthCamera* camera,
                            const ControlledPoseLimits& limits = {});
 
-RoughShapeResult estimate_rough_shape(const body::SmplModel& model, const std::vector<TrackedSkeleton>& calibration_frames,
+RoughShapeResult estimate_rough_shape(const body::SmplModel& model,
+                                      const std::vector<TrackedSkeleton>& calibration_frames,
                                       const raycast::DepthCamera* camera, const RoughShapeOptions& options = {});
 
 }  // namespace posefuse::fit

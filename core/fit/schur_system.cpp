@@ -66,7 +66,8 @@ void SchurSystem::add_block(int i, std::span<const int> columns, const Eigen::Re
   block_gradient_[i].noalias() = B.transpose() * r;
 }
 
-void SchurSystem::add_pose_rows(const Eigen::Ref<const Eigen::MatrixXd>& J, const Eigen::Ref<const Eigen::VectorXd>& r) {
+void SchurSystem::add_pose_rows(const Eigen::Ref<const Eigen::MatrixXd>& J,
+                                const Eigen::Ref<const Eigen::VectorXd>& r) {
   if (J.cols() != num_pose_ || J.rows() != r.size())
     throw Error(ErrorCode::kInternal, "schur_system", "pose rows of the wrong size");
   if (J.rows() == 0) return;
@@ -105,7 +106,8 @@ bool SchurSystem::solve(double gamma, Eigen::VectorXd& d_pose, std::vector<Eigen
     const double* jacobian = block_jacobian_.data() + 6 * static_cast<size_t>(begin);
     const int* columns = block_columns_.data() + begin;
     for (int a = 0; a < end - begin; ++a) {
-      const double ea_u = inverse(0, 0) * u[a] + inverse(0, 1) * v[a], ea_v = inverse(1, 0) * u[a] + inverse(1, 1) * v[a];
+      const double ea_u = inverse(0, 0) * u[a] + inverse(0, 1) * v[a],
+                   ea_v = inverse(1, 0) * u[a] + inverse(1, 1) * v[a];
       rhs_[columns[a]] += u[a] * scaled_gradient.x() + v[a] * scaled_gradient.y();
       const Eigen::Map<const Eigen::Matrix<double, 6, 1>> column_a(jacobian + 6 * a);
       for (int b = 0; b <= a; ++b) {
@@ -130,7 +132,7 @@ bool SchurSystem::solve(double gamma, Eigen::VectorXd& d_pose, std::vector<Eigen
 }
 
 double SchurSystem::predicted_decrease(double gamma, const Eigen::VectorXd& d_pose,
-                                      const std::vector<Eigen::Vector2d>& d_uv) const {
+                                       const std::vector<Eigen::Vector2d>& d_uv) const {
   double damped = 0, linear = gradient_.dot(d_pose);
   for (int d = 0; d < num_pose_; ++d) damped += std::max(diagonal(d), kMinDiagonal) * d_pose[d] * d_pose[d];
   for (int i = 0; i < num_blocks_; ++i) {

@@ -48,7 +48,8 @@ class SchurSystem {
   bool solve(double gamma, Eigen::VectorXd& d_pose, std::vector<Eigen::Vector2d>& d_uv);
   // Decrease of the quadratic model |r + J delta|^2 for a step solve() returned with this gamma:
   // gamma delta^T D delta - g^T delta (for LM's gain ratio).
-  double predicted_decrease(double gamma, const Eigen::VectorXd& d_pose, const std::vector<Eigen::Vector2d>& d_uv) const;
+  double predicted_decrease(double gamma, const Eigen::VectorXd& d_pose,
+                            const std::vector<Eigen::Vector2d>& d_uv) const;
 
  private:
   // diag(J_pose^T J_pose), entry d.

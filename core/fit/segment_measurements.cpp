@@ -26,8 +26,10 @@ const std::array<Measurement, kBodySegmentCount>& measurements() {
     return std::array<Measurement, kBodySegmentCount>{
         upper_arm,
         forearm,
-        Measurement{{0.5, {kHipLeft}, {kKneeLeft}}, {0.5, {kHipRight}, {kKneeRight}},
-                    {0.5, {kKneeLeft}, {kAnkleLeft}}, {0.5, {kKneeRight}, {kAnkleRight}}},
+        Measurement{{0.5, {kHipLeft}, {kKneeLeft}},
+                    {0.5, {kHipRight}, {kKneeRight}},
+                    {0.5, {kKneeLeft}, {kAnkleLeft}},
+                    {0.5, {kKneeRight}, {kAnkleRight}}},
         Measurement{{1.0, {kHipLeft, kHipRight}, {kShoulderLeft, kShoulderRight}}},
         Measurement{{1.0, {kShoulderLeft}, {kShoulderRight}}},
         Measurement{{1.0, {kAnkleLeft, kAnkleRight}, {kHead}}},
@@ -47,15 +49,15 @@ Eigen::Vector3d mean_of(const std::vector<int>& joints, PositionOf&& position) {
 }  // namespace
 
 const char* body_segment_name(BodySegment segment) {
-  static constexpr const char* kNames[kBodySegmentCount] = {"upperArm",          "forearm",     "wholeLeg", "hipToShoulder",
-                                                            "shoulderToShoulder", "ankleToHead", "wholeArm"};
+  static constexpr const char* kNames[kBodySegmentCount] = {
+      "upperArm", "forearm", "wholeLeg", "hipToShoulder", "shoulderToShoulder", "ankleToHead", "wholeArm"};
   return kNames[static_cast<int>(segment)];
 }
 
 const std::vector<int>& measured_camera_joints() {
-  static const std::vector<int> joints = {kShoulderLeft, kShoulderRight, kElbowLeft, kElbowRight, kWristLeft,
-                                          kWristRight,   kHandTipLeft,   kHandTipRight, kHipLeft,  kHipRight,
-                                          kKneeLeft,     kKneeRight,     kAnkleLeft,  kAnkleRight, kHead};
+  static const std::vector<int> joints = {kShoulderLeft, kShoulderRight, kElbowLeft,    kElbowRight, kWristLeft,
+                                          kWristRight,   kHandTipLeft,   kHandTipRight, kHipLeft,    kHipRight,
+                                          kKneeLeft,     kKneeRight,     kAnkleLeft,    kAnkleRight, kHead};
   return joints;
 }
 
@@ -69,8 +71,7 @@ SegmentLengths measure_segments(const KinectSkeleton& skeleton_K) {
 }
 
 ModelSegmentLengths::ModelSegmentLengths(const body::SmplModel& model, double head_above_skull_base_m) {
-  if (!std::isfinite(head_above_skull_base_m))
-    throw_invalid("head_above_skull_base_m", "not finite");
+  if (!std::isfinite(head_above_skull_base_m)) throw_invalid("head_above_skull_base_m", "not finite");
   const Eigen::Matrix3Xd rest = rest_joints(model, Eigen::VectorXd());
   const Eigen::MatrixXd rest_dirs = rest_joint_shape_directions(model);
   num_betas_ = model.num_betas();
@@ -80,14 +81,20 @@ ModelSegmentLengths::ModelSegmentLengths(const body::SmplModel& model, double he
     std::vector<std::pair<int, double>> smpl;
   };
   const Linear map[] = {
-      {kShoulderLeft, {{body::kLeftShoulder, 1}}}, {kShoulderRight, {{body::kRightShoulder, 1}}},
-      {kElbowLeft, {{body::kLeftElbow, 1}}},       {kElbowRight, {{body::kRightElbow, 1}}},
-      {kWristLeft, {{body::kLeftWrist, 1}}},       {kWristRight, {{body::kRightWrist, 1}}},
+      {kShoulderLeft, {{body::kLeftShoulder, 1}}},
+      {kShoulderRight, {{body::kRightShoulder, 1}}},
+      {kElbowLeft, {{body::kLeftElbow, 1}}},
+      {kElbowRight, {{body::kRightElbow, 1}}},
+      {kWristLeft, {{body::kLeftWrist, 1}}},
+      {kWristRight, {{body::kRightWrist, 1}}},
       {kHandTipLeft, {{body::kLeftHand, 2}, {body::kLeftWrist, -1}}},
       {kHandTipRight, {{body::kRightHand, 2}, {body::kRightWrist, -1}}},
-      {kHipLeft, {{body::kLeftHip, 1}}},           {kHipRight, {{body::kRightHip, 1}}},
-      {kKneeLeft, {{body::kLeftKnee, 1}}},         {kKneeRight, {{body::kRightKnee, 1}}},
-      {kAnkleLeft, {{body::kLeftAnkle, 1}}},       {kAnkleRight, {{body::kRightAnkle, 1}}},
+      {kHipLeft, {{body::kLeftHip, 1}}},
+      {kHipRight, {{body::kRightHip, 1}}},
+      {kKneeLeft, {{body::kLeftKnee, 1}}},
+      {kKneeRight, {{body::kRightKnee, 1}}},
+      {kAnkleLeft, {{body::kLeftAnkle, 1}}},
+      {kAnkleRight, {{body::kRightAnkle, 1}}},
       {kHead, {{body::kHead, 1}}},
   };
   std::array<Eigen::Vector3d, kKinectJointCount> base;

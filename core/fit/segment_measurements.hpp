@@ -21,7 +21,13 @@
 namespace posefuse::fit {
 
 enum class BodySegment : int {
-  kUpperArm, kForearm, kWholeLeg, kHipToShoulder, kShoulderToShoulder, kAnkleToHead, kWholeArm,
+  kUpperArm,
+  kForearm,
+  kWholeLeg,
+  kHipToShoulder,
+  kShoulderToShoulder,
+  kAnkleToHead,
+  kWholeArm,
 };
 inline constexpr int kBodySegmentCount = 7;
 const char* body_segment_name(BodySegment segment);  // the paper's names, e.g. "upperArm"

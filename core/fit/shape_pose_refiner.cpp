@@ -34,7 +34,8 @@ void add_shape_priors(const ShapeRefinerOptions& options, const SegmentLengths& 
                                 freedom.prior_matrix.row(l).dot(start);
   }
   if (betas > 0)
-    freedom.prior_matrix.bottomRows(betas).diagonal().setConstant(1 / (options.beta_sigma * std::sqrt(static_cast<double>(nb))));
+    freedom.prior_matrix.bottomRows(betas).diagonal().setConstant(
+        1 / (options.beta_sigma * std::sqrt(static_cast<double>(nb))));
 }
 
 }  // namespace
@@ -43,16 +44,17 @@ std::size_t silhouette_pixels_at_border(const DepthFrame& frame, int border_px) 
   std::size_t count = 0;
   for (int row = 0; row < frame.height; ++row) {
     for (int col = 0; col < frame.width; ++col) {
-      const bool border = row < border_px || col < border_px || row >= frame.height - border_px ||
-                          col >= frame.width - border_px;
+      const bool border =
+          row < border_px || col < border_px || row >= frame.height - border_px || col >= frame.width - border_px;
       if (border && frame.body_index[static_cast<std::size_t>(row) * frame.width + col] != kNoBody) ++count;
     }
   }
   return count;
 }
 
-ShapePoseRefiner make_depth_shape_refiner(std::shared_ptr<const body::SmplModel> model, const raycast::DepthCamera& camera,
-                                          std::vector<CalibrationFrame> frames, const ShapeRefinerOptions& options) {
+ShapePoseRefiner make_depth_shape_refiner(std::shared_ptr<const body::SmplModel> model,
+                                          const raycast::DepthCamera& camera, std::vector<CalibrationFrame> frames,
+                                          const ShapeRefinerOptions& options) {
   if (!model) throw_invalid("model", "is null");
   FitOptions fit_options = options.fit;
   fit_options.lambda_float = 0;  // III-B: data, bg, bgJoint, limit
@@ -62,7 +64,8 @@ ShapePoseRefiner make_depth_shape_refiner(std::shared_ptr<const body::SmplModel>
   SegmentLengths measured{};
   for (const CalibrationFrame& f : frames) {
     const SegmentLengths one = measure_segments(f.skeleton.positions_K);
-    for (int l = 0; l < kBodySegmentCount; ++l) measured[static_cast<size_t>(l)] += one[static_cast<size_t>(l)] / static_cast<double>(frames.size());
+    for (int l = 0; l < kBodySegmentCount; ++l)
+      measured[static_cast<size_t>(l)] += one[static_cast<size_t>(l)] / static_cast<double>(frames.size());
   }
   const ModelSegmentLengths segment_model(*model, options.head_above_skull_base_m);
   auto shared_frames = std::make_shared<const std::vector<CalibrationFrame>>(std::move(frames));

@@ -78,8 +78,9 @@ struct CalibrationFrame {
 // The refiner for personalise(model, skeletons, camera, refiner): frame_index indexes `frames`,
 // which must be the frames whose skeletons personalise() gets, in the same order. The camera must
 // outlive the refiner. Throws posefuse::Error "model" (null).
-ShapePoseRefiner make_depth_shape_refiner(std::shared_ptr<const body::SmplModel> model, const raycast::DepthCamera& camera,
-                                          std::vector<CalibrationFrame> frames, const ShapeRefinerOptions& options = {});
+ShapePoseRefiner make_depth_shape_refiner(std::shared_ptr<const body::SmplModel> model,
+                                          const raycast::DepthCamera& camera, std::vector<CalibrationFrame> frames,
+                                          const ShapeRefinerOptions& options = {});
 
 // Number of silhouette pixels within border_px of the image edge.
 std::size_t silhouette_pixels_at_border(const DepthFrame& frame, int border_px);

@@ -108,7 +108,8 @@ void chamfer(SilhouetteDistanceMap& map, const PixelRect& region) {
   const bool wide = region.col1 > region.col0;
   for (int row = first_row; row <= region.row1; ++row) {
     const bool up = row > region.row0;
-    const size_t begin = static_cast<size_t>(row) * width + region.col0, last = static_cast<size_t>(row) * width + region.col1;
+    const size_t begin = static_cast<size_t>(row) * width + region.col0,
+                 last = static_cast<size_t>(row) * width + region.col1;
     forward(begin, up, false, wide);
     if (up) {
       for (size_t i = begin + 1; i < last; ++i) forward(i, true, true, true);
@@ -119,7 +120,8 @@ void chamfer(SilhouetteDistanceMap& map, const PixelRect& region) {
   }
   for (int row = region.row1; row >= region.row0; --row) {
     const bool down = row < region.row1;
-    const size_t begin = static_cast<size_t>(row) * width + region.col0, last = static_cast<size_t>(row) * width + region.col1;
+    const size_t begin = static_cast<size_t>(row) * width + region.col0,
+                 last = static_cast<size_t>(row) * width + region.col1;
     backward(last, down, wide, false);
     if (!wide) continue;  // one column: last == begin (and i = last - 1 could wrap at pixel 0)
     if (down) {
@@ -147,9 +149,10 @@ SilhouetteDistanceMap distance_map_in(const std::vector<uint8_t>& silhouette, in
     throw_invalid("silhouette", "size " + std::to_string(width) + "x" + std::to_string(height) + " is not valid");
   const size_t pixels = static_cast<size_t>(width) * height;
   if (silhouette.size() != pixels)
-    throw_invalid("silhouette", "has " + std::to_string(silhouette.size()) + " values, expected " + std::to_string(pixels));
-  if (region.col0 < 0 || region.row0 < 0 || region.col1 >= width || region.row1 >= height || region.col0 > region.col1 ||
-      region.row0 > region.row1)
+    throw_invalid("silhouette",
+                  "has " + std::to_string(silhouette.size()) + " values, expected " + std::to_string(pixels));
+  if (region.col0 < 0 || region.row0 < 0 || region.col1 >= width || region.row1 >= height ||
+      region.col0 > region.col1 || region.row0 > region.row1)
     throw_invalid("region", "[" + std::to_string(region.col0) + ", " + std::to_string(region.col1) + "] x [" +
                                 std::to_string(region.row0) + ", " + std::to_string(region.row1) +
                                 "] is empty or leaves the image");

@@ -1,15 +1,15 @@
 #include "fit/skeleton_pose_init.hpp"
 
-#include <Eigen/Geometry>
 #include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
 #include <Eigen/SVD>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
 #include <optional>
 
-#include "common/error.hpp"
 #include "body/body_evaluator.hpp"
+#include "common/error.hpp"
 #include "fit/joint_kinematics.hpp"
 
 namespace posefuse::fit {
@@ -84,7 +84,8 @@ struct Builder {
   }
 
   void fall_back(InitSegment segment, const std::string& why) {
-    fallbacks.push_back({segment, why + (has_previous ? "; kept the previous pose" : "; left at the rest pose (no previous pose)")});
+    fallbacks.push_back(
+        {segment, why + (has_previous ? "; kept the previous pose" : "; left at the rest pose (no previous pose)")});
   }
 
   bool long_enough(InitSegment segment, const Eigen::Vector3d& v, int from, int to) {
@@ -139,11 +140,13 @@ struct Builder {
   // the few-centimetre errors of the hip joints, which only 17 cm apart would turn it by 10-20 deg.
   void global() {
     const Eigen::Vector3d rest_collars = 0.5 * (rest.col(body::kLeftCollar) + rest.col(body::kRightCollar));
-    const std::pair<int, Eigen::Vector3d> trunk[] = {
-        {kSpineBase, rest.col(body::kPelvis)},         {kSpineMid, rest.col(body::kSpine2)},
-        {kHipLeft, rest.col(body::kLeftHip)},          {kHipRight, rest.col(body::kRightHip)},
-        {kSpineShoulder, rest_collars},                {kShoulderLeft, rest.col(body::kLeftShoulder)},
-        {kShoulderRight, rest.col(body::kRightShoulder)}};
+    const std::pair<int, Eigen::Vector3d> trunk[] = {{kSpineBase, rest.col(body::kPelvis)},
+                                                     {kSpineMid, rest.col(body::kSpine2)},
+                                                     {kHipLeft, rest.col(body::kLeftHip)},
+                                                     {kHipRight, rest.col(body::kRightHip)},
+                                                     {kSpineShoulder, rest_collars},
+                                                     {kShoulderLeft, rest.col(body::kLeftShoulder)},
+                                                     {kShoulderRight, rest.col(body::kRightShoulder)}};
     std::vector<Eigen::Vector3d> from, to;
     std::string first_missing;
     int first_missing_joint = kSpineBase;
@@ -174,8 +177,9 @@ struct Builder {
                               (first_missing.empty() ? std::string(", all on one line") : " (" + first_missing + ")");
       if (!has_previous)
         throw_precondition(std::string("skeleton.") + kinect_joint_name(first_missing_joint),
-                           why + ": the global pose needs three trunk joints (SpineBase, SpineMid, SpineShoulder, "
-                                 "hips, shoulders) when there is no previous pose");
+                           why +
+                               ": the global pose needs three trunk joints (SpineBase, SpineMid, SpineShoulder, "
+                               "hips, shoulders) when there is no previous pose");
       return fall_back(InitSegment::kGlobal, why);
     }
     const Eigen::JacobiSVD<Eigen::Matrix3d> svd(h, Eigen::ComputeFullU | Eigen::ComputeFullV);
@@ -259,7 +263,8 @@ const char* init_segment_name(InitSegment segment) {
 }
 
 bool SkeletonInitResult::fell_back(InitSegment segment) const {
-  return std::any_of(fallbacks.begin(), fallbacks.end(), [&](const SegmentFallback& f) { return f.segment == segment; });
+  return std::any_of(fallbacks.begin(), fallbacks.end(),
+                     [&](const SegmentFallback& f) { return f.segment == segment; });
 }
 
 SkeletonPoseInitializer::SkeletonPoseInitializer(std::shared_ptr<const body::SmplModel> model, body::PoseLayout layout,
@@ -271,7 +276,8 @@ SkeletonPoseInitializer::SkeletonPoseInitializer(std::shared_ptr<const body::Smp
     throw_invalid("init_options.head_above_skull_base_m",
                   "must be finite and within 0.5 m, got " + std::to_string(options_.head_above_skull_base_m));
   if (!std::isfinite(options_.min_bone_length_m) || options_.min_bone_length_m <= 0)
-    throw_invalid("init_options.min_bone_length_m", "must be positive, got " + std::to_string(options_.min_bone_length_m));
+    throw_invalid("init_options.min_bone_length_m",
+                  "must be positive, got " + std::to_string(options_.min_bone_length_m));
   rest_joints_ = fit::rest_joints(*model_, beta);
 }
 
@@ -292,7 +298,8 @@ SkeletonInitResult SkeletonPoseInitializer::initialise(const TrackedSkeleton& sk
                                        ? "no joint is tracked or inferred with a finite position"
                                        : "no joint is tracked with a finite position");
 
-  Builder b{layout_, rest_joints_, options_, skeleton, has_previous, has_previous ? previous_theta : layout_.zero(), {}, {}};
+  Builder b{layout_, rest_joints_, options_, skeleton, has_previous, has_previous ? previous_theta : layout_.zero(), {},
+            {}};
   b.global();
   b.spine();
   b.neck();

@@ -57,8 +57,21 @@ struct SkeletonInitOptions {
 };
 
 enum class InitSegment {
-  kGlobal, kSpine, kNeck, kLeftCollar, kRightCollar, kLeftShoulder, kRightShoulder, kLeftElbow,
-  kRightElbow, kLeftWrist, kRightWrist, kLeftHip, kRightHip, kLeftKnee, kRightKnee,
+  kGlobal,
+  kSpine,
+  kNeck,
+  kLeftCollar,
+  kRightCollar,
+  kLeftShoulder,
+  kRightShoulder,
+  kLeftElbow,
+  kRightElbow,
+  kLeftWrist,
+  kRightWrist,
+  kLeftHip,
+  kRightHip,
+  kLeftKnee,
+  kRightKnee,
 };
 const char* init_segment_name(InitSegment segment);
 

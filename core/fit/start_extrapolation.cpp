@@ -10,7 +10,8 @@ namespace posefuse::fit {
 void validate(const StartExtrapolationOptions& o) {
   const auto require = [](double value, const char* field) {
     if (!std::isfinite(value) || value < 0)
-      throw_invalid(std::string("start_extrapolation.") + field, std::to_string(value) + " must be finite and not negative");
+      throw_invalid(std::string("start_extrapolation.") + field,
+                    std::to_string(value) + " must be finite and not negative");
   };
   require(o.velocity_gain, "velocity_gain");
   require(o.max_rotation_rad, "max_rotation_rad");

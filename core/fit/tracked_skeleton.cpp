@@ -12,13 +12,11 @@ TrackedSkeleton TrackedSkeleton::all_tracked(const KinectSkeleton& positions_K) 
 std::string joint_unusable_reason(const TrackedSkeleton& skeleton, int joint, bool accept_inferred) {
   const std::string name = kinect_joint_name(joint);
   switch (skeleton.tracking[joint]) {
-    case JointTracking::kNotTracked:
-      return name + " is not tracked";
+    case JointTracking::kNotTracked: return name + " is not tracked";
     case JointTracking::kInferred:
       if (!accept_inferred) return name + " is inferred";
       break;
-    case JointTracking::kTracked:
-      break;
+    case JointTracking::kTracked: break;
   }
   if (!skeleton.positions_K[joint].allFinite()) return name + " is not finite";
   return "";

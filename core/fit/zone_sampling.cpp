@@ -23,19 +23,27 @@ struct Bone {
 };
 
 constexpr Bone kBones[] = {
-    {kSpineShoulder, kNeck, BodyZone::kHead},        {kNeck, kHead, BodyZone::kHead},
-    {kSpineBase, kSpineMid, BodyZone::kTorso},       {kSpineMid, kSpineShoulder, BodyZone::kTorso},
-    {kSpineShoulder, kShoulderLeft, BodyZone::kTorso}, {kSpineShoulder, kShoulderRight, BodyZone::kTorso},
-    {kSpineBase, kHipLeft, BodyZone::kTorso},        {kSpineBase, kHipRight, BodyZone::kTorso},
+    {kSpineShoulder, kNeck, BodyZone::kHead},
+    {kNeck, kHead, BodyZone::kHead},
+    {kSpineBase, kSpineMid, BodyZone::kTorso},
+    {kSpineMid, kSpineShoulder, BodyZone::kTorso},
+    {kSpineShoulder, kShoulderLeft, BodyZone::kTorso},
+    {kSpineShoulder, kShoulderRight, BodyZone::kTorso},
+    {kSpineBase, kHipLeft, BodyZone::kTorso},
+    {kSpineBase, kHipRight, BodyZone::kTorso},
     {kShoulderLeft, kElbowLeft, BodyZone::kLeftUpperArm},
-    {kElbowLeft, kWristLeft, BodyZone::kLeftForearm}, {kWristLeft, kHandLeft, BodyZone::kLeftForearm},
+    {kElbowLeft, kWristLeft, BodyZone::kLeftForearm},
+    {kWristLeft, kHandLeft, BodyZone::kLeftForearm},
     {kHandLeft, kHandTipLeft, BodyZone::kLeftForearm},
     {kShoulderRight, kElbowRight, BodyZone::kRightUpperArm},
-    {kElbowRight, kWristRight, BodyZone::kRightForearm}, {kWristRight, kHandRight, BodyZone::kRightForearm},
+    {kElbowRight, kWristRight, BodyZone::kRightForearm},
+    {kWristRight, kHandRight, BodyZone::kRightForearm},
     {kHandRight, kHandTipRight, BodyZone::kRightForearm},
-    {kHipLeft, kKneeLeft, BodyZone::kLeftLeg},       {kKneeLeft, kAnkleLeft, BodyZone::kLeftLeg},
+    {kHipLeft, kKneeLeft, BodyZone::kLeftLeg},
+    {kKneeLeft, kAnkleLeft, BodyZone::kLeftLeg},
     {kAnkleLeft, kFootLeft, BodyZone::kLeftLeg},
-    {kHipRight, kKneeRight, BodyZone::kRightLeg},    {kKneeRight, kAnkleRight, BodyZone::kRightLeg},
+    {kHipRight, kKneeRight, BodyZone::kRightLeg},
+    {kKneeRight, kAnkleRight, BodyZone::kRightLeg},
     {kAnkleRight, kFootRight, BodyZone::kRightLeg},
 };
 
@@ -70,7 +78,8 @@ void validate(const ZoneSamplingParams& params) {
   if (!std::isfinite(params.edge_share) || params.edge_share < 0 || params.edge_share > 1)
     throw_invalid("zone_params.edge_share", "must be in [0, 1], got " + std::to_string(params.edge_share));
   if (!std::isfinite(params.edge_band_px) || params.edge_band_px < 0)
-    throw_invalid("zone_params.edge_band_px", "must be finite and non-negative, got " + std::to_string(params.edge_band_px));
+    throw_invalid("zone_params.edge_band_px",
+                  "must be finite and non-negative, got " + std::to_string(params.edge_band_px));
 }
 
 // Splits `total` into integer quotas proportional to `shares` (largest remainder), never giving
@@ -259,8 +268,7 @@ std::vector<DepthSample> sample_depth_pixels(const PointCloud& cloud, const Kine
   std::vector<float> to_outside_px;  // filled only once: these are full-image arrays
   if (any_outside)
     to_outside_px = std::move(silhouette_distance_map(outside, cloud.width, cloud.height, band_region).distance_px);
-  else
-    to_outside_px.assign(outside.size(), std::numeric_limits<float>::infinity());
+  else to_outside_px.assign(outside.size(), std::numeric_limits<float>::infinity());
 
   std::array<std::vector<int>, kBodyZoneCount> edge_pixels, inner_pixels;
   // Zones are assigned inside the box only; row by row it is the same ascending pixel order.
@@ -271,7 +279,8 @@ std::vector<DepthSample> sample_depth_pixels(const PointCloud& cloud, const Kine
       (to_outside_px[i] <= params.edge_band_px ? edge_pixels : inner_pixels)[zone[i]].push_back(static_cast<int>(i));
     }
   std::array<int, kBodyZoneCount> available{};
-  for (int z = 0; z < kBodyZoneCount; ++z) available[z] = static_cast<int>(edge_pixels[z].size() + inner_pixels[z].size());
+  for (int z = 0; z < kBodyZoneCount; ++z)
+    available[z] = static_cast<int>(edge_pixels[z].size() + inner_pixels[z].size());
   const int total = std::min(params.num_samples, cloud.count);
   const auto quota = zone_quotas(total, params.zone_share, available);
 

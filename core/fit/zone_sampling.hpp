@@ -13,7 +13,7 @@
 
 namespace posefuse::fit {
 
-using geometry::kKinectJointCount;  // geometry/kinect_joints.hpp order
+using geometry::kKinectJointCount;                                      // geometry/kinect_joints.hpp order
 using KinectSkeleton = std::array<Eigen::Vector3d, kKinectJointCount>;  // joint positions in K, metres
 
 enum class BodyZone : int {
@@ -64,7 +64,6 @@ BodyZone nearest_bone_zone(const Eigen::Vector2d& pixel, const KinectSkeleton& s
 // ("zone_params.*"), a non-finite joint ("skeleton[i]") or a skeleton with no bone in front of
 // the camera ("skeleton").
 std::vector<DepthSample> sample_depth_pixels(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
-                                             const raycast::DepthCamera& camera,
-                                             const ZoneSamplingParams& params = {});
+                                             const raycast::DepthCamera& camera, const ZoneSamplingParams& params = {});
 
 }  // namespace posefuse::fit

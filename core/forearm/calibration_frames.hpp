@@ -17,17 +17,17 @@
 namespace posefuse::forearm {
 
 struct CalibrationFrameOptions {
-  bool pose_orientation = true;      // forearm.calibration_orientation = pose (else sdk)
-  bool upper_arm_from_depth = true;  // forearm.upper_arm = depth
+  bool pose_orientation = true;           // forearm.calibration_orientation = pose (else sdk)
+  bool upper_arm_from_depth = true;       // forearm.upper_arm = depth
   std::size_t min_upper_arm_frames = 15;  // a still hold's frames (CalibrationOptions::min_still_frames)
 };
 
 struct CalibrationFrames {
   std::vector<CalibrationFrame> with_strap;     // the strap seen: the full model (II-H)
   std::vector<CalibrationFrame> without_strap;  // every frame in the pose: eq. 9 only
-  std::size_t not_raised = 0;        // tracked frames whose forearm was not raised
-  std::size_t upper_arm_frames = 0;  // frames whose upper arm the depth image showed
-  bool depth_upper_arm = false;      // the arm plane's upper arm came from depth
+  std::size_t not_raised = 0;                   // tracked frames whose forearm was not raised
+  std::size_t upper_arm_frames = 0;             // frames whose upper arm the depth image showed
+  bool depth_upper_arm = false;                 // the arm plane's upper arm came from depth
 };
 
 // `frames` in time order; those after window_end_us are not used. `W_from_A_at(t_us)`: the arm

@@ -178,8 +178,9 @@ std::optional<MeasuredForearmAxis> measure_forearm_axis(const geometry::DepthIma
       options.min_points < 3 || options.refinements < 0 || !(options.slice_m > 0.0) ||
       !(options.hand_min_m >= 0.0 && options.hand_min_m < options.hand_max_m) || !(options.width_tolerance_m >= 0.0) ||
       !(options.hand_widening_m >= 0.0) || !(options.max_width_pixel_m > 0.0)) {
-    throw_invalid("options", "radii and slice_m must be positive, min_points >= 3, refinements >= 0, "
-                             "0 <= hand_min_m < hand_max_m, width_tolerance_m and hand_widening_m >= 0");
+    throw_invalid("options",
+                  "radii and slice_m must be positive, min_points >= 3, refinements >= 0, "
+                  "0 <= hand_min_m < hand_max_m, width_tolerance_m and hand_widening_m >= 0");
   }
   if (excluded && (!excluded->point.allFinite() || !excluded->direction.allFinite() ||
                    std::abs(excluded->direction.norm() - 1.0) > 1e-6)) {

@@ -41,11 +41,11 @@ struct ForearmAxisOptions {
   double excluded_radius_m = 0.06;
   // Wrist from the width profile (wrist_from_width_profile); false: the distal end of the inliers.
   bool wrist_from_width = true;
-  double slice_m = 0.01;            // slices across the axis for the width profile
-  double hand_min_m = 0.04;         // the wrist lies at least this far before the distal end
-  double hand_max_m = 0.16;         // and at most this far (a hand with fingers, ~0.18 m)
-  double width_tolerance_m = 0.001; // slices within this of the narrowest count as the wrist's
-  double hand_widening_m = 0.008;   // the hand beyond the wrist is at least this much wider somewhere
+  double slice_m = 0.01;             // slices across the axis for the width profile
+  double hand_min_m = 0.04;          // the wrist lies at least this far before the distal end
+  double hand_max_m = 0.16;          // and at most this far (a hand with fingers, ~0.18 m)
+  double width_tolerance_m = 0.001;  // slices within this of the narrowest count as the wrist's
+  double hand_widening_m = 0.008;    // the hand beyond the wrist is at least this much wider somewhere
   // Only where a depth pixel's footprint at the forearm is at most this (Kinect v2: 6.8 mm at
   // 2.5 m); coarser images keep the distal end.
   double max_width_pixel_m = 0.008;

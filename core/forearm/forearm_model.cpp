@@ -18,8 +18,8 @@ Quat K_from_F_from_imu(const Quat& K_from_W, const Quat& W_from_A, const Quat& F
   return (K_from_W * W_from_A * F_from_A.conjugate()).normalized();  // eq. 11
 }
 
-Vec3 imu_position_from_strap(const Vec3& strap_K, const Vec3& elbow_K, const Vec3& wrist_K,
-                             const Quat& K_from_F, double r_m) {
+Vec3 imu_position_from_strap(const Vec3& strap_K, const Vec3& elbow_K, const Vec3& wrist_K, const Quat& K_from_F,
+                             double r_m) {
   if (!strap_K.allFinite()) throw_invalid("strap_K", "not finite");
   if (!elbow_K.allFinite()) throw_invalid("elbow_K", "not finite");
   if (!wrist_K.allFinite()) throw_invalid("wrist_K", "not finite");
@@ -69,7 +69,8 @@ double hold_wrist_distance(std::vector<double> d) {
     }
   }
   const auto mean = [&](std::size_t from, std::size_t to) {
-    return std::accumulate(d.begin() + static_cast<std::ptrdiff_t>(from), d.begin() + static_cast<std::ptrdiff_t>(to), 0.0) /
+    return std::accumulate(d.begin() + static_cast<std::ptrdiff_t>(from), d.begin() + static_cast<std::ptrdiff_t>(to),
+                           0.0) /
            static_cast<double>(to - from);
   };
   if (widest <= kWristGroupGapM) return mean(0, d.size());

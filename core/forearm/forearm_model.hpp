@@ -17,8 +17,8 @@ Quat K_from_F_from_imu(const Quat& K_from_W, const Quat& W_from_A, const Quat& F
 // eq. 10: F's origin is the strap point projected onto the elbow-wrist segment; the IMU is at
 // F_o + rot(K_from_F, [r, 0, 0]). Throws posefuse::Error kInvalidArgument "elbow_K/wrist_K" when
 // elbow and wrist coincide, or a named input is not finite.
-Vec3 imu_position_from_strap(const Vec3& strap_K, const Vec3& elbow_K, const Vec3& wrist_K,
-                             const Quat& K_from_F, double r_m);
+Vec3 imu_position_from_strap(const Vec3& strap_K, const Vec3& elbow_K, const Vec3& wrist_K, const Quat& K_from_F,
+                             double r_m);
 
 // One camera frame of the calibration pose (II-H): skeleton joints, the strap point seen in
 // RGB/depth (II-I), the SDK forearm orientation, and the arm IMU's filter output.
@@ -35,12 +35,12 @@ struct CalibrationFrame {
 struct CalibrationOptions {
   // A still hold: the arm IMU's orientation within still_angle_rad of the hold's first frame, the
   // elbow within still_radius_m of its elbow and the wrist within still_radius_m of its
-  // elbow -> wrist line (a depth-measured wrist moves along the forearm between frames). The IMU is the precise cue; the
-  // radius is loose because the SDK's joints wander by several cm/s with the arm at rest
-  // (sim/camera_skeleton.hpp's slowly turning bias; 2 cm broke 3 s holds into 14-frame runs).
+  // elbow -> wrist line (a depth-measured wrist moves along the forearm between frames). The IMU is the precise cue;
+  // the radius is loose because the SDK's joints wander by several cm/s with the arm at rest (sim/camera_skeleton.hpp's
+  // slowly turning bias; 2 cm broke 3 s holds into 14-frame runs).
   double still_angle_rad = 3.0 * 3.14159265358979323846 / 180.0;
   double still_radius_m = 0.05;
-  int min_still_frames = 15;      // half a second at 30 Hz
+  int min_still_frames = 15;  // half a second at 30 Hz
 };
 
 struct ForearmCalibration {

@@ -27,7 +27,8 @@ ForearmTrack::ForearmTrack(Side side, const ForearmModel& model, bool has_model,
     : side_(side), model_(model), has_model_(has_model), K_from_W_(K_from_W), K_from_F_reference_(K_from_F_reference) {}
 
 void ForearmTrack::use_axis_correction(const VisualAxisCorrectionOptions& options) {
-  if (!arm_.empty()) throw_invalid("forearm.axis_correction", "the axis correction must be set before the first IMU sample");
+  if (!arm_.empty())
+    throw_invalid("forearm.axis_correction", "the axis correction must be set before the first IMU sample");
   axis_correction_.emplace(options);
 }
 
@@ -50,7 +51,8 @@ void ForearmTrack::add_imu(const std::vector<std::int64_t>& t_us, const std::vec
     if (!arm_.empty() && t_us[i] <= arm_.back().t_us) continue;  // clock mapping kept monotonic
     const ForearmSample s = forearm_sample(K_from_W_, W_from_A[i], model_.F_from_A, K_from_F_reference_, side_);
     arm_.push_back({t_us[i], s.K_from_A, specific_force_A[i]});
-    K_from_F_imu_.push_back(K_from_F_imu_.empty() ? s.K_from_F : geometry::same_hemisphere(s.K_from_F, K_from_F_imu_.back()));
+    K_from_F_imu_.push_back(K_from_F_imu_.empty() ? s.K_from_F
+                                                  : geometry::same_hemisphere(s.K_from_F, K_from_F_imu_.back()));
   }
 }
 
@@ -135,8 +137,8 @@ TrackSample ForearmTrack::visual_sample(const ArmFrame& frame) const {
     if (check.accepted()) {
       sample.p_K = imu_position_from_strap(*frame.strap_K, frame.elbow_K, frame.wrist_K, K_from_F, model_.r_m);
       // The SDK's elbow is tracked here (forearm_tracked): a strap on another body part lies far from it.
-      sample.visible = check_strap_against_elbow(sample.p_K, imu_position_from_elbow(frame.sdk_elbow_K, K_from_F, model_)) ==
-                       VisualRejection::kNone;
+      sample.visible = check_strap_against_elbow(sample.p_K, imu_position_from_elbow(frame.sdk_elbow_K, K_from_F,
+                                                                                     model_)) == VisualRejection::kNone;
       if (sample.visible) sample.visible = continues_track(sample.p_K, frame.t_us, K_from_F);
     }
   }

@@ -16,10 +16,10 @@ inline constexpr double kGravity = 9.81;  // m/s^2, as in eq. 12
 // Rigid forearm (II-H, Fig. 2). In F the elbow is at (0, -d_se, 0), the wrist at (0, d_sw, 0)
 // and the arm IMU at (r, 0, 0); the shoulder is d_ul from the elbow.
 struct ForearmModel {
-  double r_m = 0.0;     // forearm core to strap surface
-  double d_se_m = 0.0;  // strap to elbow
-  double d_sw_m = 0.0;  // strap to wrist
-  double d_ul_m = 0.0;  // shoulder to elbow (upper arm length)
+  double r_m = 0.0;                  // forearm core to strap surface
+  double d_se_m = 0.0;               // strap to elbow
+  double d_sw_m = 0.0;               // strap to wrist
+  double d_ul_m = 0.0;               // shoulder to elbow (upper arm length)
   Quat F_from_A = Quat::Identity();  // paper's ^A_F q (eq. 9)
 };
 

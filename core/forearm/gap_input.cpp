@@ -28,9 +28,7 @@ void check_times(const std::vector<Sample>& samples, const char* series) {
   }
 }
 
-bool finite_unit(const Quat& q) {
-  return q.coeffs().allFinite() && std::abs(q.norm() - 1.0) < 1e-3;
-}
+bool finite_unit(const Quat& q) { return q.coeffs().allFinite() && std::abs(q.norm() - 1.0) < 1e-3; }
 
 }  // namespace
 
@@ -52,8 +50,8 @@ void validate(const GapRecoveryInput& in) {
   for (std::size_t i = 0; i < in.shoulder.size(); ++i) {
     if (!in.shoulder[i].p_K.allFinite()) throw_invalid(at("shoulder", i, "p_K"), "not finite");
   }
-  for (const auto& [anchor, name] : {std::pair{&in.elbow_anchor, "elbow_anchor"},
-                                      std::pair{&in.second_elbow_anchor, "second_elbow_anchor"}}) {
+  for (const auto& [anchor, name] :
+       {std::pair{&in.elbow_anchor, "elbow_anchor"}, std::pair{&in.second_elbow_anchor, "second_elbow_anchor"}}) {
     for (std::size_t i = 0; i < anchor->size(); ++i) {
       if (!(*anchor)[i].p_K.allFinite()) throw_invalid(at(name, i, "p_K"), "not finite");
       if (!((*anchor)[i].sigma_scale >= 1.0) || !std::isfinite((*anchor)[i].sigma_scale)) {
@@ -74,7 +72,10 @@ std::vector<GapSpan> find_gaps(const std::vector<TrackSample>& track) {
   std::vector<GapSpan> gaps;
   std::size_t i = 0;
   while (i < track.size()) {
-    if (track[i].visible) { ++i; continue; }
+    if (track[i].visible) {
+      ++i;
+      continue;
+    }
     GapSpan g;
     g.first_occluded = i;
     while (i < track.size() && !track[i].visible) ++i;
@@ -99,8 +100,8 @@ void occlude_inside(std::vector<TrackSample>& track, std::int64_t t_start_us, st
   }
 }
 
-BoundaryState fit_boundary_line(const std::vector<TrackSample>& track, std::int64_t t_at_us,
-                                int side, double window_s) {
+BoundaryState fit_boundary_line(const std::vector<TrackSample>& track, std::int64_t t_at_us, int side,
+                                double window_s) {
   const auto window_us = static_cast<std::int64_t>(std::llround(window_s * 1e6));
   const std::int64_t lo = side < 0 ? t_at_us - window_us : t_at_us;
   const std::int64_t hi = side < 0 ? t_at_us : t_at_us + window_us;
@@ -117,9 +118,8 @@ BoundaryState fit_boundary_line(const std::vector<TrackSample>& track, std::int6
   }
   const char* field = side < 0 ? "track.before_gap" : "track.after_gap";
   if (state.sample_count < 2 || normal.determinant() <= 1e-12) {
-    throw_precondition(field, std::to_string(state.sample_count) +
-                                  " visible samples within " + std::to_string(window_s) +
-                                  " s of t=" + std::to_string(t_at_us) +
+    throw_precondition(field, std::to_string(state.sample_count) + " visible samples within " +
+                                  std::to_string(window_s) + " s of t=" + std::to_string(t_at_us) +
                                   " us; a boundary fit needs at least 2");
   }
   const Eigen::Matrix<double, 2, 3> solution = normal.ldlt().solve(rhs);
@@ -156,20 +156,19 @@ void ArmTimeline::require_coverage(std::int64_t t0, std::int64_t t1, const char*
   const auto& sh = input_.shoulder;
   if (arm.front().t_us > t0 || arm.back().t_us < t1) {
     throw_precondition(field, "arm samples [" + std::to_string(arm.front().t_us) + ", " +
-                                  std::to_string(arm.back().t_us) + "] us do not cover [" +
-                                  std::to_string(t0) + ", " + std::to_string(t1) + "] us");
+                                  std::to_string(arm.back().t_us) + "] us do not cover [" + std::to_string(t0) + ", " +
+                                  std::to_string(t1) + "] us");
   }
   if (sh.front().t_us > t0 || sh.back().t_us < t1) {
-    throw_precondition(field, "shoulder samples do not cover [" + std::to_string(t0) + ", " +
-                                  std::to_string(t1) + "] us");
+    throw_precondition(field,
+                       "shoulder samples do not cover [" + std::to_string(t0) + ", " + std::to_string(t1) + "] us");
   }
 }
 
 std::size_t ArmTimeline::arm_index_before(double t) const {
   const auto& arm = input_.arm;
-  const auto it = std::upper_bound(arm.begin(), arm.end(), t, [](double value, const ArmSample& s) {
-    return value < static_cast<double>(s.t_us);
-  });
+  const auto it = std::upper_bound(
+      arm.begin(), arm.end(), t, [](double value, const ArmSample& s) { return value < static_cast<double>(s.t_us); });
   const auto after = static_cast<std::size_t>(it - arm.begin());
   return std::min(after == 0 ? 0 : after - 1, arm.size() >= 2 ? arm.size() - 2 : 0);
 }
@@ -238,8 +237,7 @@ Vec3 position_at(const RecoveredGap& gap, std::int64_t t) {
   const auto it = std::lower_bound(gap.t_us.begin(), gap.t_us.end(), t);
   const auto i = static_cast<std::size_t>(it - gap.t_us.begin());
   if (gap.t_us[i] == t) return gap.p_K[i];
-  const double u = static_cast<double>(t - gap.t_us[i - 1]) /
-                   static_cast<double>(gap.t_us[i] - gap.t_us[i - 1]);
+  const double u = static_cast<double>(t - gap.t_us[i - 1]) / static_cast<double>(gap.t_us[i] - gap.t_us[i - 1]);
   return (1.0 - u) * gap.p_K[i - 1] + u * gap.p_K[i];
 }
 

@@ -22,16 +22,16 @@ struct ElbowAnchorSample {
 };
 
 struct GapRecoveryInput {
-  std::vector<TrackSample> track;        // ~30 Hz, strictly increasing t_us
-  std::vector<ArmSample> arm;            // ~80 Hz, strictly increasing t_us
-  std::vector<ShoulderSample> shoulder;  // strictly increasing t_us; interpolated (II-K.4)
+  std::vector<TrackSample> track;               // ~30 Hz, strictly increasing t_us
+  std::vector<ArmSample> arm;                   // ~80 Hz, strictly increasing t_us
+  std::vector<ShoulderSample> shoulder;         // strictly increasing t_us; interpolated (II-K.4)
   std::vector<ElbowAnchorSample> elbow_anchor;  // optional (smoother only); strictly increasing t_us
   // A second, independent anchor (optional, smoother only), with its own error c0 + tau c1 and
   // GapSmootherOptions::second_anchor_*: the camera skeleton's elbow alongside the body fit's,
   // whose errors come from different places.
   std::vector<ElbowAnchorSample> second_elbow_anchor;
   ForearmModel model;
-  Quat K_from_W = Quat::Identity();      // eq. 7
+  Quat K_from_W = Quat::Identity();  // eq. 7
 };
 
 // Throws posefuse::Error (kInvalidArgument) naming the first bad field: empty series, non-finite
@@ -68,8 +68,7 @@ struct BoundaryState {
 };
 // Throws posefuse::Error kFailedPrecondition "track.before_gap" / "track.after_gap" when fewer
 // than 2 visible samples (at distinct times) lie in the window.
-BoundaryState fit_boundary_line(const std::vector<TrackSample>& track, std::int64_t t_at_us,
-                                int side, double window_s);
+BoundaryState fit_boundary_line(const std::vector<TrackSample>& track, std::int64_t t_at_us, int side, double window_s);
 
 // The arm IMU series resampled at any time: K_from_A by slerp, net acceleration (eq. 12) and
 // the shoulder-sphere centre (eq. 13) by linear interpolation.

@@ -46,10 +46,19 @@ struct Problem {
   std::vector<std::size_t> arm_index;  // node i is arm sample arm_index[i]
   std::vector<double> t_s;             // node times, s
   std::vector<Vec3> sphere_centre;     // eq. 13 at each node
-  struct Fix { std::size_t node; double u; Vec3 z; double sigma_scale = 1.0; };
-  std::vector<Fix> fixes;              // visible track samples
+  struct Fix {
+    std::size_t node;
+    double u;
+    Vec3 z;
+    double sigma_scale = 1.0;
+  };
+  std::vector<Fix> fixes;  // visible track samples
   // An elbow anchor's samples (Fix::z the anchor position) and its sigmas.
-  struct Anchor { std::vector<Fix> samples; double sigma_m; double bias_prior_sigma_m; };
+  struct Anchor {
+    std::vector<Fix> samples;
+    double sigma_m;
+    double bias_prior_sigma_m;
+  };
   std::array<Anchor, 2> anchors;
   GapSmootherOptions options;
 
@@ -149,9 +158,9 @@ struct Problem {
     }
     const double sb = options.bias_prior_sigma_m_s2, se = options.leak_prior_sigma_m_s2;
     for (int c = 0; c < 3; ++c) {
-      for (const auto& [column, value, sigma] : {std::tuple{bias_column(), b[c], sb},
-                                                  std::tuple{drift0_column(), e0[c], se},
-                                                  std::tuple{drift1_column(), e1[c], se}}) {
+      for (const auto& [column, value, sigma] :
+           {std::tuple{bias_column(), b[c], sb}, std::tuple{drift0_column(), e0[c], se},
+            std::tuple{drift1_column(), e1[c], se}}) {
         const int row = sys.add_row();
         sys.residual[static_cast<std::size_t>(row)] = value / sigma;
         sys.jacobian.emplace_back(row, column + c, 1.0 / sigma);
@@ -192,8 +201,7 @@ RecoveredGap recover_gap_smoother(const GapRecoveryInput& input, const GapSpan& 
                                   const GapSmootherOptions& options) {
   check_options(options);
   // The paper's recovery validates everything, checks the boundaries, and is the start point.
-  const RecoveredGap start =
-      recover_gap_paper(input, gap, {.boundary_window_s = options.boundary_window_s});
+  const RecoveredGap start = recover_gap_paper(input, gap, {.boundary_window_s = options.boundary_window_s});
   const ArmTimeline arm(input);
   const BoundaryState entry = fit_boundary_line(input.track, gap.t_start_us, -1, options.boundary_window_s);
   const BoundaryState exit = fit_boundary_line(input.track, gap.t_end_us, +1, options.boundary_window_s);
@@ -288,7 +296,8 @@ RecoveredGap recover_gap_smoother(const GapRecoveryInput& input, const GapSpan& 
   for (std::int64_t t : out.t_us) {
     const double ts = static_cast<double>(t) * 1e-6;
     const auto it = std::upper_bound(problem.t_s.begin(), problem.t_s.end(), ts);
-    const std::size_t k = std::min(static_cast<std::size_t>(std::max<std::ptrdiff_t>(it - problem.t_s.begin(), 1)) - 1, n - 2);
+    const std::size_t k =
+        std::min(static_cast<std::size_t>(std::max<std::ptrdiff_t>(it - problem.t_s.begin(), 1)) - 1, n - 2);
     const double u = std::clamp((ts - problem.t_s[k]) / (problem.t_s[k + 1] - problem.t_s[k]), 0.0, 1.0);
     out.p_K.push_back((1.0 - u) * x.segment<3>(3 * static_cast<int>(k)) +
                       u * x.segment<3>(3 * static_cast<int>(k + 1)));

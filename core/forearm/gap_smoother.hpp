@@ -37,10 +37,10 @@
 namespace posefuse::forearm {
 
 struct GapSmootherOptions {
-  double boundary_window_s = 0.5;    // visible data used on each side (as II-K.1)
-  double acc_sigma_m_s2 = 0.1;       // per-sample net acceleration error (noise + attitude)
-  double position_sigma_m = 0.01;    // depth-camera IMU position error
-  double sphere_sigma_m = 0.015;     // shoulder position + upper-arm length error
+  double boundary_window_s = 0.5;  // visible data used on each side (as II-K.1)
+  double acc_sigma_m_s2 = 0.1;     // per-sample net acceleration error (noise + attitude)
+  double position_sigma_m = 0.01;  // depth-camera IMU position error
+  double sphere_sigma_m = 0.015;   // shoulder position + upper-arm length error
   double bias_prior_sigma_m_s2 = 0.3;
   double leak_prior_sigma_m_s2 = 0.3;  // e0, e1: ~2 degrees of attitude error times g
   bool use_shoulder_sphere = true;

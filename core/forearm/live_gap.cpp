@@ -9,8 +9,7 @@
 
 namespace posefuse::forearm {
 
-LiveGapEstimator::LiveGapEstimator(const ForearmModel& model, const Quat& K_from_W,
-                                   const LiveGapOptions& options)
+LiveGapEstimator::LiveGapEstimator(const ForearmModel& model, const Quat& K_from_W, const LiveGapOptions& options)
     : model_(model), gravity_K_(K_from_W * Vec3(0.0, 0.0, kGravity)), options_(options) {
   if (!(options.boundary_window_s > 0.0)) throw_invalid("options.boundary_window_s", "must be > 0");
   if (!(options.velocity_time_constant_s > 0.0)) {
@@ -71,8 +70,8 @@ void LiveGapEstimator::begin(const std::vector<TrackSample>& track, const std::v
     ++count;
   }
   if (count < 2 || normal.determinant() <= 1e-12) {
-    throw_precondition("track.before_gap", std::to_string(count) +
-                                               " visible samples in the window before the gap; need 2");
+    throw_precondition("track.before_gap",
+                       std::to_string(count) + " visible samples in the window before the gap; need 2");
   }
   const Eigen::Matrix<double, 2, 3> line = normal.ldlt().solve(rhs);
   const Vec3 dq_end = dq.back() + acc.back() * (t0 - t_s.back());
@@ -98,7 +97,7 @@ Vec3 LiveGapEstimator::update(const ArmSample& sample, const Vec3& shoulder_K) {
   a_K_ = a;
   t_us_ = sample.t_us;
   if (options_.use_shoulder_sphere) {
-    const Quat K_from_F = K_from_A * model_.F_from_A.conjugate();  // eq. 11
+    const Quat K_from_F = K_from_A * model_.F_from_A.conjugate();     // eq. 11
     const Vec3 centre = sphere_centre(shoulder_K, K_from_F, model_);  // eq. 13
     p_K_ = snap_to_sphere(p_K_, centre, model_.d_ul_m);
     const Vec3 radial = p_K_ - centre;
@@ -125,8 +124,7 @@ Vec3 elbow_from_imu_position(const Vec3& imu_K, const Quat& K_from_F, const Fore
   return imu_K - K_from_F.normalized() * Vec3(model.r_m, model.d_se_m, 0.0);
 }
 
-RecoveredGap recover_gap_live(const GapRecoveryInput& input, const GapSpan& gap,
-                              const LiveGapOptions& options) {
+RecoveredGap recover_gap_live(const GapRecoveryInput& input, const GapSpan& gap, const LiveGapOptions& options) {
   const ArmTimeline arm = checked_gap_timeline(input, gap);
   LiveGapEstimator live(input.model, input.K_from_W, options);
   live.begin(input.track, input.arm, gap.t_start_us);
@@ -141,8 +139,8 @@ RecoveredGap recover_gap_live(const GapRecoveryInput& input, const GapSpan& gap,
   }
   // At t_end the gap closes: the live estimate there is the extrapolation to that time.
   out.t_us.push_back(gap.t_end_us);
-  out.p_K.push_back(live.position_K() + live.velocity_K() *
-                                            (static_cast<double>(gap.t_end_us - out.t_us[out.t_us.size() - 2]) * 1e-6));
+  out.p_K.push_back(live.position_K() +
+                    live.velocity_K() * (static_cast<double>(gap.t_end_us - out.t_us[out.t_us.size() - 2]) * 1e-6));
   return out;
 }
 

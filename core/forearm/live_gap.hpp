@@ -30,8 +30,7 @@ class LiveGapEstimator {
   // before t_start_us. Throws posefuse::Error kFailedPrecondition "track.before_gap" (fewer than
   // 2 visible samples in the window) or "arm" (fewer than 2 arm samples in it);
   // kInvalidArgument for non-finite or out-of-order samples in the window.
-  void begin(const std::vector<TrackSample>& track, const std::vector<ArmSample>& arm,
-             std::int64_t t_start_us);
+  void begin(const std::vector<TrackSample>& track, const std::vector<ArmSample>& arm, std::int64_t t_start_us);
 
   // Advances to one arm sample inside the gap (strictly increasing times after t_start) with
   // the shoulder position at that time; returns the position estimate. Throws
@@ -68,7 +67,6 @@ Vec3 elbow_from_imu_position(const Vec3& imu_K, const Quat& K_from_F, const Fore
 
 // Runs LiveGapEstimator over `gap` as it would run live (each estimate uses only data up to its
 // time), at the same times as recover_gap_paper. Same errors as recover_gap_paper.
-RecoveredGap recover_gap_live(const GapRecoveryInput& input, const GapSpan& gap,
-                              const LiveGapOptions& options = {});
+RecoveredGap recover_gap_live(const GapRecoveryInput& input, const GapSpan& gap, const LiveGapOptions& options = {});
 
 }  // namespace posefuse::forearm

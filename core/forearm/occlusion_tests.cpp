@@ -7,9 +7,7 @@
 namespace posefuse::forearm {
 
 namespace {
-double angle_between_vectors(const Vec3& a, const Vec3& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b));
-}
+double angle_between_vectors(const Vec3& a, const Vec3& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
 }  // namespace
 
 double forearm_direction_angle(const Vec3& elbow_K, const Vec3& wrist_K, const Quat& K_from_F) {
@@ -44,12 +42,11 @@ const char* visual_rejection_name(VisualRejection r) {
   return "unknown";
 }
 
-VisualCheck check_visual_forearm(const Vec3& elbow_K, const Vec3& wrist_K, const Vec3& strap_K,
-                                 const Quat& K_from_F, const OcclusionTestOptions& o) {
+VisualCheck check_visual_forearm(const Vec3& elbow_K, const Vec3& wrist_K, const Vec3& strap_K, const Quat& K_from_F,
+                                 const OcclusionTestOptions& o) {
   VisualCheck c;
-  if (!elbow_K.allFinite() || !wrist_K.allFinite() || !strap_K.allFinite() ||
-      !K_from_F.coeffs().allFinite() || (wrist_K - elbow_K).norm() < 1e-4 ||
-      (elbow_K + wrist_K).norm() < 1e-4) {
+  if (!elbow_K.allFinite() || !wrist_K.allFinite() || !strap_K.allFinite() || !K_from_F.coeffs().allFinite() ||
+      (wrist_K - elbow_K).norm() < 1e-4 || (elbow_K + wrist_K).norm() < 1e-4) {
     c.rejection = VisualRejection::kDegenerate;
     return c;
   }
@@ -72,7 +69,7 @@ VisualRejection check_strap_against_elbow(const Vec3& imu_from_strap_K, const Ve
                                           const OcclusionTestOptions& o) {
   if (!imu_from_strap_K.allFinite() || !imu_from_elbow_K.allFinite()) return VisualRejection::kDegenerate;
   return (imu_from_strap_K - imu_from_elbow_K).norm() > o.max_elbow_disagreement_m ? VisualRejection::kStrapFarFromElbow
-                                                                                     : VisualRejection::kNone;
+                                                                                   : VisualRejection::kNone;
 }
 
 VisualRejection check_strap_continuity(const Vec3& implied_elbow_K, std::int64_t t_us,

@@ -12,7 +12,7 @@ struct OcclusionTestOptions {
   // II-J.1 rejects a forearm "nearly parallel to the camera ray" without a number; we reject
   // when the forearm axis is within this angle of the ray to its midpoint.
   double min_ray_angle_rad = std::numbers::pi / 9.0;  // 20 degrees
-  double max_strap_distance_m = 0.05;  // II-J.2
+  double max_strap_distance_m = 0.05;                 // II-J.2
   // Beyond the paper (check_strap_against_elbow): the SDK elbow's bias (5-10 cm) plus 3 cm.
   double max_elbow_disagreement_m = 0.13;
   // Beyond the paper (check_strap_continuity): how far the elbow a strap implies may move from the
@@ -59,8 +59,8 @@ struct VisualCheck {
 
 // All of II-J in order; the first failing test names the rejection. Never throws: a frame that
 // cannot be tested is rejected as kDegenerate.
-VisualCheck check_visual_forearm(const Vec3& elbow_K, const Vec3& wrist_K, const Vec3& strap_K,
-                                 const Quat& K_from_F, const OcclusionTestOptions& options = {});
+VisualCheck check_visual_forearm(const Vec3& elbow_K, const Vec3& wrist_K, const Vec3& strap_K, const Quat& K_from_F,
+                                 const OcclusionTestOptions& options = {});
 
 // Beyond the paper: the IMU position from the strap (eq. 10) against the one from the SDK's elbow
 // carried along the IMU's forearm axis (live_gap.hpp imu_position_from_elbow). II-J tests the

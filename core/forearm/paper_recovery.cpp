@@ -28,8 +28,7 @@ std::vector<Vec3> integrate_to_end(const std::vector<std::int64_t>& t_us, const 
 
 }  // namespace
 
-RecoveredGap recover_gap_paper(const GapRecoveryInput& input, const GapSpan& gap,
-                               const PaperRecoveryOptions& options) {
+RecoveredGap recover_gap_paper(const GapRecoveryInput& input, const GapSpan& gap, const PaperRecoveryOptions& options) {
   const ArmTimeline arm = checked_gap_timeline(input, gap);
 
   // II-K.1: p0, v0 from the 500 ms before the gap; pn, vn from the 500 ms after it.

@@ -40,16 +40,16 @@ void check_inputs(const GrayImageView& color, const DepthImageView& depth, const
   }
   if (depth.pixels == nullptr || depth.width != cameras.depth.width || depth.height != cameras.depth.height) {
     throw_invalid("depth.pixels", "image " + std::to_string(depth.width) + "x" + std::to_string(depth.height) +
-                                           " does not match the depth camera's " + std::to_string(cameras.depth.width) +
-                                           "x" + std::to_string(cameras.depth.height));
+                                      " does not match the depth camera's " + std::to_string(cameras.depth.width) +
+                                      "x" + std::to_string(cameras.depth.height));
   }
   if (!elbow_K.allFinite()) throw_invalid("elbow_K", "not finite");
   if (!wrist_K.allFinite()) throw_invalid("wrist_K", "not finite");
   if (!cameras.color_from_depth.coeffs().allFinite() || !cameras.color_from_depth_m.allFinite()) {
     throw_invalid("cameras.color_from_depth", "not finite");
   }
-  const bool fractions_ok = o.search_begin_fraction >= 0.0 && o.search_begin_fraction < o.search_end_fraction &&
-                            o.search_end_fraction <= 1.0;
+  const bool fractions_ok =
+      o.search_begin_fraction >= 0.0 && o.search_begin_fraction < o.search_end_fraction && o.search_end_fraction <= 1.0;
   if (o.min_samples < 4 || !(o.window_fraction > 0.0 && o.window_fraction < 0.5) || !fractions_ok ||
       !(o.match_radius_px > 0.0) || o.depth_search_radius_px < 1 || !(o.max_depth_spread_m > 0.0) ||
       o.min_depth_samples < 1 || !std::isfinite(o.min_contrast) || !std::isfinite(o.max_strap_level) ||
@@ -92,9 +92,8 @@ const char* strap_miss_name(StrapMiss miss) {
   return "unknown";
 }
 
-StrapDetection detect_strap(const GrayImageView& color, const DepthImageView& depth,
-                            const StrapCameras& cameras, const Vec3& elbow_K, const Vec3& wrist_K,
-                            const StrapDetectionOptions& options) {
+StrapDetection detect_strap(const GrayImageView& color, const DepthImageView& depth, const StrapCameras& cameras,
+                            const Vec3& elbow_K, const Vec3& wrist_K, const StrapDetectionOptions& options) {
   check_inputs(color, depth, cameras, elbow_K, wrist_K, options);
   StrapDetection out;
   const Quat color_from_K = cameras.color_from_depth.normalized();
@@ -128,8 +127,8 @@ StrapDetection detect_strap(const GrayImageView& color, const DepthImageView& de
   int best = begin;
   double best_level = INFINITY;
   for (int i = begin; i <= end; ++i) {
-    const double level = (prefix[static_cast<std::size_t>(i + half + 1)] - prefix[static_cast<std::size_t>(i - half)]) /
-                         (2 * half + 1);
+    const double level =
+        (prefix[static_cast<std::size_t>(i + half + 1)] - prefix[static_cast<std::size_t>(i - half)]) / (2 * half + 1);
     if (level < best_level) {
       best_level = level;
       best = i;

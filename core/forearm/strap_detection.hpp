@@ -48,15 +48,15 @@ struct StrapCameras {
 
 struct StrapDetectionOptions {
   int min_samples = 16;
-  double window_fraction = 0.08;        // moving average length, fraction of the segment
-  double search_begin_fraction = 0.1;   // elbow = 0, wrist = 1
+  double window_fraction = 0.08;       // moving average length, fraction of the segment
+  double search_begin_fraction = 0.1;  // elbow = 0, wrist = 1
   double search_end_fraction = 0.95;
-  double min_contrast = 40.0;           // grey levels below the profile's median
-  double max_strap_level = 100.0;       // grey level; a black strap is darker than this
-  double side_offset_windows = 1.5;     // band centre to each side window's centre, in windows
-  double min_side_contrast = 20.0;      // grey levels, each side window above the band
-  double match_radius_px = 1.5;         // colour pixels
-  int depth_search_radius_px = 8;       // depth pixels around the predicted strap pixel
+  double min_contrast = 40.0;        // grey levels below the profile's median
+  double max_strap_level = 100.0;    // grey level; a black strap is darker than this
+  double side_offset_windows = 1.5;  // band centre to each side window's centre, in windows
+  double min_side_contrast = 20.0;   // grey levels, each side window above the band
+  double match_radius_px = 1.5;      // colour pixels
+  int depth_search_radius_px = 8;    // depth pixels around the predicted strap pixel
   double max_depth_spread_m = 0.03;
   int min_depth_samples = 1;
 };
@@ -72,12 +72,12 @@ const char* strap_miss_name(StrapMiss miss);
 struct StrapDetection {
   StrapMiss miss = StrapMiss::kNone;
   bool found() const { return miss == StrapMiss::kNone; }
-  Vec2 color_px = Vec2::Zero();   // band centre in the colour image
-  double fraction = 0.0;          // where along the projected segment (elbow 0, wrist 1)
-  double band_level = 0.0;        // moving-average grey level at the band
-  double contrast = 0.0;          // profile median - band_level
-  double side_contrast = 0.0;     // the darker side window - band_level (0 when one is outside)
-  Vec3 strap_K = Vec3::Zero();    // strap surface point in K (when found)
+  Vec2 color_px = Vec2::Zero();  // band centre in the colour image
+  double fraction = 0.0;         // where along the projected segment (elbow 0, wrist 1)
+  double band_level = 0.0;       // moving-average grey level at the band
+  double contrast = 0.0;         // profile median - band_level
+  double side_contrast = 0.0;    // the darker side window - band_level (0 when one is outside)
+  Vec3 strap_K = Vec3::Zero();   // strap surface point in K (when found)
   int depth_samples = 0;
 };
 
@@ -85,8 +85,7 @@ struct StrapDetection {
 // size disagrees with the cameras ("color.pixels", "depth.pixels"), non-finite joints
 // ("elbow_K", "wrist_K"), or options out of range ("options"). A strap that is not seen is not
 // an error: the result's miss says why.
-StrapDetection detect_strap(const GrayImageView& color, const DepthImageView& depth,
-                            const StrapCameras& cameras, const Vec3& elbow_K, const Vec3& wrist_K,
-                            const StrapDetectionOptions& options = {});
+StrapDetection detect_strap(const GrayImageView& color, const DepthImageView& depth, const StrapCameras& cameras,
+                            const Vec3& elbow_K, const Vec3& wrist_K, const StrapDetectionOptions& options = {});
 
 }  // namespace posefuse::forearm

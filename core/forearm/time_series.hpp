@@ -11,8 +11,8 @@ inline constexpr std::size_t kNoIndex = static_cast<std::size_t>(-1);
 // Index of the last sample at or before t_us; kNoIndex when none.
 template <class Series>
 std::size_t index_at_or_before(const Series& series, std::int64_t t_us) {
-  const auto it = std::upper_bound(series.begin(), series.end(), t_us,
-                                   [](std::int64_t t, const auto& s) { return t < s.t_us; });
+  const auto it =
+      std::upper_bound(series.begin(), series.end(), t_us, [](std::int64_t t, const auto& s) { return t < s.t_us; });
   return it == series.begin() ? kNoIndex : static_cast<std::size_t>(it - series.begin() - 1);
 }
 

@@ -6,9 +6,9 @@
 #include <vector>
 
 #include "common/error.hpp"
+#include "forearm/forearm_axis_depth.hpp"
 #include "geometry/point_pca.hpp"
 #include "geometry/segment_distance.hpp"
-#include "forearm/forearm_axis_depth.hpp"
 
 namespace posefuse::forearm {
 
@@ -22,8 +22,8 @@ void check_joint(const Vec3& p, const char* field) {
 
 std::optional<MeasuredUpperArm> measure_upper_arm_axis(const geometry::DepthImageView& depth,
                                                        const geometry::PinholeCamera& depth_camera,
-                                                       const Vec3& shoulder_K, const Vec3& elbow_K,
-                                                       const Vec3& wrist_K, const UpperArmAxisOptions& options) {
+                                                       const Vec3& shoulder_K, const Vec3& elbow_K, const Vec3& wrist_K,
+                                                       const UpperArmAxisOptions& options) {
   if (!depth.pixels || depth.width != depth_camera.width || depth.height != depth_camera.height) {
     throw_invalid("depth.pixels", "missing, or its size differs from the depth camera's");
   }
@@ -35,8 +35,9 @@ std::optional<MeasuredUpperArm> measure_upper_arm_axis(const geometry::DepthImag
       !(options.elbow_clearance_m >= 0.0) ||
       !(options.shoulder_skip_fraction >= 0.0 && options.shoulder_skip_fraction < 1.0) || options.min_points < 3 ||
       options.refinements < 0) {
-    throw_invalid("options", "radii must be positive, shoulder_skip_fraction in [0, 1), min_points >= 3, "
-                             "refinements >= 0");
+    throw_invalid("options",
+                  "radii must be positive, shoulder_skip_fraction in [0, 1), min_points >= 3, "
+                  "refinements >= 0");
   }
   const Vec3 upper = elbow_K - shoulder_K;
   // Too short to hold a piece of arm, e.g. a straight arm's forearm end found up the upper arm.

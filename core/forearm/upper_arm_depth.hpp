@@ -37,15 +37,15 @@
 namespace posefuse::forearm {
 
 struct UpperArmAxisOptions {
-  double search_radius_m = 0.15;         // the SDK shoulder is 5-10 cm off, plus the arm's radius
-  double shoulder_skip_fraction = 0.1;   // of the SDK shoulder -> elbow length
-  double elbow_clearance_m = 0.07;       // along the arm from the elbow (the forearm's radius + margin)
-  double forearm_clearance_m = 0.05;     // from the forearm's axis (its surface lies R = 3-4 cm from it)
-  double inlier_radius_m = 0.07;         // around the fitted surface line
+  double search_radius_m = 0.15;        // the SDK shoulder is 5-10 cm off, plus the arm's radius
+  double shoulder_skip_fraction = 0.1;  // of the SDK shoulder -> elbow length
+  double elbow_clearance_m = 0.07;      // along the arm from the elbow (the forearm's radius + margin)
+  double forearm_clearance_m = 0.05;    // from the forearm's axis (its surface lies R = 3-4 cm from it)
+  double inlier_radius_m = 0.07;        // around the fitted surface line
   int refinements = 2;
   int min_points = 30;
-  double min_length_m = 0.08;            // extent of the inliers along the line
-  double slice_m = 0.02;                 // slices across the line for the direction (step 3)
+  double min_length_m = 0.08;  // extent of the inliers along the line
+  double slice_m = 0.02;       // slices across the line for the direction (step 3)
   // Each slice's centroid moved onto the axis by the fitted radius profile (step 3), only where a
   // depth pixel's footprint at the arm is at most max_taper_pixel_m: at the strap tests' 11 mm
   // pixels the slices' radii are too noisy (a plain cylinder's roll went from < 1.5 to 2.8 deg).
@@ -58,7 +58,7 @@ struct MeasuredUpperArm {
   Vec3 centroid_K = Vec3::Zero();    // of the inliers (on the surface, not the axis)
   Vec3 axis_point_K = Vec3::Zero();  // on the axis, level with the centroid (cylinder_axis)
   double radius_m = 0.0;
-  int points = 0;                    // inliers of the last fit
+  int points = 0;  // inliers of the last fit
 };
 
 // shoulder_K: the SDK's shoulder; elbow_K, wrist_K: the forearm axis (measured in depth,
@@ -67,8 +67,8 @@ struct MeasuredUpperArm {
 // does not show an upper arm there (too few points, too short).
 std::optional<MeasuredUpperArm> measure_upper_arm_axis(const geometry::DepthImageView& depth,
                                                        const geometry::PinholeCamera& depth_camera,
-                                                       const Vec3& shoulder_K, const Vec3& elbow_K,
-                                                       const Vec3& wrist_K, const UpperArmAxisOptions& options = {});
+                                                       const Vec3& shoulder_K, const Vec3& elbow_K, const Vec3& wrist_K,
+                                                       const UpperArmAxisOptions& options = {});
 
 // Both limbs of one arm, each without the other's points. The forearm fit alone
 // (measure_forearm_axis) takes the upper arm's points next to the elbow for the forearm's

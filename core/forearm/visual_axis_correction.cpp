@@ -14,7 +14,8 @@ constexpr double kMinSegmentM = 0.05;
 
 void check_gain(double gain, const char* name) {
   if (!(gain >= 0.0 && gain <= 1.0)) {
-    throw_invalid(std::string("VisualAxisCorrectionOptions.") + name, "is " + std::to_string(gain) + ", must be in [0, 1]");
+    throw_invalid(std::string("VisualAxisCorrectionOptions.") + name,
+                  "is " + std::to_string(gain) + ", must be in [0, 1]");
   }
 }
 }  // namespace
@@ -24,7 +25,8 @@ VisualAxisCorrection::VisualAxisCorrection(const VisualAxisCorrectionOptions& op
   check_gain(options.gain_F, "gain_F");
   const double sum = options.gain_K + options.gain_F;
   if (!(sum > 0.0 && sum <= 1.0)) {
-    throw_invalid("VisualAxisCorrectionOptions.gain_K", "plus gain_F is " + std::to_string(sum) + ", must be in (0, 1]");
+    throw_invalid("VisualAxisCorrectionOptions.gain_K",
+                  "plus gain_F is " + std::to_string(sum) + ", must be in (0, 1]");
   }
   if (!(options.max_angle_rad > 0.0 && options.max_angle_rad <= kPi / 2)) {
     throw_invalid("VisualAxisCorrectionOptions.max_angle_rad",
@@ -44,10 +46,12 @@ bool VisualAxisCorrection::observe(const Quat& K_from_F_imu, const Vec3& elbow_K
   if (angle > options_.max_angle_rad) return false;
   if (cross.norm() > 1e-12) {
     const Vec3 turn_axis_K = cross.normalized();
-    correction_.K_side = (Quat(Eigen::AngleAxisd(options_.gain_K * angle, turn_axis_K)) * correction_.K_side).normalized();
+    correction_.K_side =
+        (Quat(Eigen::AngleAxisd(options_.gain_K * angle, turn_axis_K)) * correction_.K_side).normalized();
     // The same turn of the axis through F: rotating F by w_F turns y_K about K_from_F w_F.
     const Vec3 turn_axis_F = K_from_F.conjugate() * turn_axis_K;
-    correction_.F_side = (correction_.F_side * Quat(Eigen::AngleAxisd(options_.gain_F * angle, turn_axis_F))).normalized();
+    correction_.F_side =
+        (correction_.F_side * Quat(Eigen::AngleAxisd(options_.gain_F * angle, turn_axis_F))).normalized();
   }
   ++frames_used_;
   return true;

@@ -10,9 +10,7 @@ struct ImageView {
   int width = 0;
   int height = 0;
   const Pixel* pixels = nullptr;  // width * height values, row by row from the top-left
-  const Pixel& at(int col, int row) const {
-    return pixels[static_cast<long>(row) * static_cast<long>(width) + col];
-  }
+  const Pixel& at(int col, int row) const { return pixels[static_cast<long>(row) * static_cast<long>(width) + col]; }
 };
 
 using GrayImageView = ImageView<std::uint8_t>;    // grey levels

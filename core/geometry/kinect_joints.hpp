@@ -9,19 +9,39 @@ namespace posefuse::geometry {
 inline constexpr int kKinectJointCount = 25;
 
 enum KinectJoint : int {
-  kSpineBase = 0, kSpineMid, kNeck, kHead, kShoulderLeft, kElbowLeft, kWristLeft, kHandLeft,
-  kShoulderRight, kElbowRight, kWristRight, kHandRight, kHipLeft, kKneeLeft, kAnkleLeft, kFootLeft,
-  kHipRight, kKneeRight, kAnkleRight, kFootRight, kSpineShoulder, kHandTipLeft, kThumbLeft,
-  kHandTipRight, kThumbRight,
+  kSpineBase = 0,
+  kSpineMid,
+  kNeck,
+  kHead,
+  kShoulderLeft,
+  kElbowLeft,
+  kWristLeft,
+  kHandLeft,
+  kShoulderRight,
+  kElbowRight,
+  kWristRight,
+  kHandRight,
+  kHipLeft,
+  kKneeLeft,
+  kAnkleLeft,
+  kFootLeft,
+  kHipRight,
+  kKneeRight,
+  kAnkleRight,
+  kFootRight,
+  kSpineShoulder,
+  kHandTipLeft,
+  kThumbLeft,
+  kHandTipRight,
+  kThumbRight,
 };
 
 // JointType names, in JointType order (skeleton.csv's joint_name column, messages).
 inline constexpr std::array<const char*, kKinectJointCount> kKinectJointNames = {
-    "SpineBase",     "SpineMid",    "Neck",      "Head",         "ShoulderLeft",
-    "ElbowLeft",     "WristLeft",   "HandLeft",  "ShoulderRight", "ElbowRight",
-    "WristRight",    "HandRight",   "HipLeft",   "KneeLeft",     "AnkleLeft",
-    "FootLeft",      "HipRight",    "KneeRight", "AnkleRight",   "FootRight",
-    "SpineShoulder", "HandTipLeft", "ThumbLeft", "HandTipRight", "ThumbRight"};
+    "SpineBase",   "SpineMid",      "Neck",         "Head",       "ShoulderLeft", "ElbowLeft", "WristLeft",
+    "HandLeft",    "ShoulderRight", "ElbowRight",   "WristRight", "HandRight",    "HipLeft",   "KneeLeft",
+    "AnkleLeft",   "FootLeft",      "HipRight",     "KneeRight",  "AnkleRight",   "FootRight", "SpineShoulder",
+    "HandTipLeft", "ThumbLeft",     "HandTipRight", "ThumbRight"};
 
 // The joint's name, or "(no such joint)" outside 0..24.
 inline const char* kinect_joint_name(int joint) {

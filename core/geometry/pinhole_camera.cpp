@@ -21,8 +21,8 @@ Vec2 distort(const PinholeCamera& c, const Vec2& n) {
 
 void validate(const PinholeCamera& c, const std::string& field) {
   if (c.width <= 0 || c.height <= 0) {
-    throw_invalid(field + ".width", "image size " + std::to_string(c.width) + "x" +
-                                        std::to_string(c.height) + " must be positive");
+    throw_invalid(field + ".width",
+                  "image size " + std::to_string(c.width) + "x" + std::to_string(c.height) + " must be positive");
   }
   if (!(std::isfinite(c.fx) && c.fx > 0.0)) throw_invalid(field + ".fx", "must be a positive number");
   if (!(std::isfinite(c.fy) && c.fy > 0.0)) throw_invalid(field + ".fy", "must be a positive number");

@@ -23,8 +23,8 @@ using Vec2 = Eigen::Vector2d;
 // of the fit's ray casting (raycast::DepthCamera), the forearm stage's strap search. Defaults:
 // a typical Kinect v2 depth camera; a session header supplies each device's own.
 struct PinholeCamera {
-  int width = 512;   // pixels
-  int height = 424;  // pixels
+  int width = 512;                                        // pixels
+  int height = 424;                                       // pixels
   double fx = 365.0, fy = 365.0, cx = 256.0, cy = 212.0;  // pixels
   double k1 = 0.09, k2 = -0.27, k3 = 0.09, p1 = 0.0, p2 = 0.0;
 };

@@ -28,8 +28,8 @@ struct AccelCalibrationParams {
 
 // Default-constructed: the factory calibration (identity, zero offset).
 struct AccelCalibration {
-  Vec3 offset_m_s2 = Vec3::Zero();      // o
-  Mat3 correction = Mat3::Identity();   // C, symmetric positive definite
+  Vec3 offset_m_s2 = Vec3::Zero();     // o
+  Mat3 correction = Mat3::Identity();  // C, symmetric positive definite
   Vec3 apply(const Vec3& raw_m_s2) const { return correction * (raw_m_s2 - offset_m_s2); }
 };
 

@@ -19,8 +19,8 @@ using Mat9 = Eigen::Matrix<double, 9, 9>;
 
 Vec9 quadric_row(const Vec3& y) {
   Vec9 row;
-  row << y.x() * y.x(), y.y() * y.y(), y.z() * y.z(), 2.0 * y.y() * y.z(), 2.0 * y.x() * y.z(),
-      2.0 * y.x() * y.y(), 2.0 * y.x(), 2.0 * y.y(), 2.0 * y.z();
+  row << y.x() * y.x(), y.y() * y.y(), y.z() * y.z(), 2.0 * y.y() * y.z(), 2.0 * y.x() * y.z(), 2.0 * y.x() * y.y(),
+      2.0 * y.x(), 2.0 * y.y(), 2.0 * y.z();
   return row;
 }
 
@@ -36,8 +36,7 @@ Mat3 EllipsoidFit::sphere_from_ellipsoid(double radius) const {
   return radius * axes * radii.cwiseInverse().asDiagonal() * axes.transpose();
 }
 
-EllipsoidFit fit_ellipsoid(const std::vector<Vec3>& points, const char* field,
-                           double max_condition_number) {
+EllipsoidFit fit_ellipsoid(const std::vector<Vec3>& points, const char* field, double max_condition_number) {
   const std::size_t n = points.size();
   if (n < 9) {
     throw_precondition(field, std::to_string(n) +
@@ -70,17 +69,14 @@ EllipsoidFit fit_ellipsoid(const std::vector<Vec3>& points, const char* field,
   const double smallest = normal_eigen.eigenvalues()(0);
   const double largest = normal_eigen.eigenvalues()(8);
   EllipsoidFit fit;
-  fit.condition_number = smallest > 0.0 ? std::sqrt(largest / smallest)
-                                          : std::numeric_limits<double>::infinity();
+  fit.condition_number = smallest > 0.0 ? std::sqrt(largest / smallest) : std::numeric_limits<double>::infinity();
   if (!(fit.condition_number <= max_condition_number)) {
     throw_precondition(field, "the points do not determine an ellipsoid (condition number " +
-                                  number(fit.condition_number) + " > " +
-                                  number(max_condition_number) +
+                                  number(fit.condition_number) + " > " + number(max_condition_number) +
                                   "): their directions are too few, planar or clustered");
   }
-  const Vec9 v = normal_eigen.eigenvectors() *
-                 (normal_eigen.eigenvalues().cwiseInverse().asDiagonal() *
-                  (normal_eigen.eigenvectors().transpose() * rhs));
+  const Vec9 v = normal_eigen.eigenvectors() * (normal_eigen.eigenvalues().cwiseInverse().asDiagonal() *
+                                                (normal_eigen.eigenvectors().transpose() * rhs));
 
   // y^T M y + 2 g^T y = 1  ->  (y - c)^T (M / k) (y - c) = 1 with c = -M^-1 g, k = 1 + c^T M c.
   Mat3 M;
@@ -93,9 +89,8 @@ EllipsoidFit fit_ellipsoid(const std::vector<Vec3>& points, const char* field,
   const double k = 1.0 + center_y.dot(M * center_y);
   const Vec3 shape_values = m_values / k;  // eigenvalues of M / k, same eigenvectors
   if (!definite || !(shape_values.array() > 0.0).all() || !shape_values.allFinite()) {
-    throw_precondition(field, "the fitted quadric is not an ellipsoid (eigenvalues " +
-                                  number(shape_values(0)) + ", " + number(shape_values(1)) + ", " +
-                                  number(shape_values(2)) + " are not all positive)");
+    throw_precondition(field, "the fitted quadric is not an ellipsoid (eigenvalues " + number(shape_values(0)) + ", " +
+                                  number(shape_values(1)) + ", " + number(shape_values(2)) + " are not all positive)");
   }
   fit.center = mean + scale * center_y;
   fit.radii = scale * shape_values.cwiseSqrt().cwiseInverse();

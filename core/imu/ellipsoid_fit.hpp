@@ -21,9 +21,9 @@ using geometry::Mat3;
 using geometry::Vec3;
 
 struct EllipsoidFit {
-  Vec3 center = Vec3::Zero();     // o
-  Vec3 radii = Vec3::Ones();      // alpha, beta, gamma: semi-axis lengths along axes' columns
-  Mat3 axes = Mat3::Identity();   // H: columns are the unit semi-axis directions, det +1
+  Vec3 center = Vec3::Zero();    // o
+  Vec3 radii = Vec3::Ones();     // alpha, beta, gamma: semi-axis lengths along axes' columns
+  Mat3 axes = Mat3::Identity();  // H: columns are the unit semi-axis directions, det +1
   // sqrt(largest / smallest eigenvalue) of D^T D for the normalised design matrix D: how well
   // the points pin down the 9 coefficients. Measured for points spread over a cap of the
   // sphere: whole sphere 3-7 (36 or more points), hemisphere ~12, 60 degree cap ~30, 45 degree
@@ -41,8 +41,7 @@ struct EllipsoidFit {
 //  `max_condition_number` (the points do not determine the 9 coefficients: too few, planar or
 //  clustered directions), or if the fitted quadric is not an ellipsoid (not positive definite);
 //  kInvalidArgument (field[i]) on a non-finite point.
-EllipsoidFit fit_ellipsoid(const std::vector<Vec3>& points, const char* field,
-                           double max_condition_number);
+EllipsoidFit fit_ellipsoid(const std::vector<Vec3>& points, const char* field, double max_condition_number);
 
 // Spread of |transform(p)| over the points as std/mean (0 for points on one sphere around 0).
 // `linear` and `offset` give transform(p) = linear * (p - offset).

@@ -8,20 +8,17 @@
 
 namespace posefuse::imu {
 
-GyroBiasTracker::GyroBiasTracker(const Params& params)
-    : params_(params), bias_rad_s_(params.initial_bias_rad_s) {
+GyroBiasTracker::GyroBiasTracker(const Params& params) : params_(params), bias_rad_s_(params.initial_bias_rad_s) {
   if (!(params.still_threshold_rad_s > 0.0) || !std::isfinite(params.still_threshold_rad_s)) {
     throw_invalid("gyro_bias.still_threshold_rad_s",
                   "must be positive and finite, got " + std::to_string(params.still_threshold_rad_s));
   }
   if (params.window_samples < 1) {
-    throw_invalid("gyro_bias.window_samples",
-                  "must be >= 1, got " + std::to_string(params.window_samples));
+    throw_invalid("gyro_bias.window_samples", "must be >= 1, got " + std::to_string(params.window_samples));
   }
   if (!(params.max_still_rate_rad_s > 0.0)) {
     throw_invalid("gyro_bias.max_still_rate_rad_s",
-                  "must be positive (infinity disables it), got " +
-                      std::to_string(params.max_still_rate_rad_s));
+                  "must be positive (infinity disables it), got " + std::to_string(params.max_still_rate_rad_s));
   }
   if (!params.initial_bias_rad_s.allFinite()) {
     throw_invalid("gyro_bias.initial_bias_rad_s", "not finite");
@@ -47,8 +44,7 @@ const Vec3& GyroBiasTracker::update(const Vec3& rate) {
   if (!still) return bias_rad_s_;
 
   ++still_count_;
-  const double weight =
-      1.0 / static_cast<double>(std::min<std::int64_t>(still_count_, params_.window_samples));
+  const double weight = 1.0 / static_cast<double>(std::min<std::int64_t>(still_count_, params_.window_samples));
   bias_rad_s_ += weight * (rate - bias_rad_s_);
   return bias_rad_s_;
 }

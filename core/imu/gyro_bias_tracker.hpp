@@ -31,7 +31,7 @@ class GyroBiasTracker {
  public:
   struct Params {
     double still_threshold_rad_s = 3.0 * 3.14159265358979323846 / 180.0;  // paper: 3 deg/s
-    int window_samples = 800;                  // memory of the average, in still samples (>= 1)
+    int window_samples = 800;  // memory of the average, in still samples (>= 1)
     double max_still_rate_rad_s = std::numeric_limits<double>::infinity();  // off = paper
     // E.g. the factory or last session's bias; used until the first still sample, whose value
     // then replaces it (the running mean starts there).

@@ -27,8 +27,7 @@ void validate_imu_stream(const std::vector<ImuSample>& samples, const char* stre
     const ImuSample& s = samples[i];
     validate_imu_sample(s, stream, i);
     if (i > 0 && s.t_us <= samples[i - 1].t_us) {
-      throw_invalid(at(stream, i, "t_us"), "timestamp " + std::to_string(s.t_us) +
-                                               " is not after the previous one (" +
+      throw_invalid(at(stream, i, "t_us"), "timestamp " + std::to_string(s.t_us) + " is not after the previous one (" +
                                                std::to_string(samples[i - 1].t_us) + ")");
     }
   }

@@ -11,10 +11,10 @@ using geometry::Quat;
 using geometry::Vec3;
 
 struct ImuSample {
-  std::int64_t t_us = 0;     // device clock, microseconds; strictly increasing within a stream
-  Vec3 gyr_rad_s = Vec3::Zero();   // angular rate, rad/s
-  Vec3 acc_m_s2 = Vec3::Zero();    // specific force, m/s^2 (reads +g upwards at rest)
-  Vec3 mag_uT = Vec3::Zero();      // magnetic flux density, uT; NaN components mean "no reading"
+  std::int64_t t_us = 0;          // device clock, microseconds; strictly increasing within a stream
+  Vec3 gyr_rad_s = Vec3::Zero();  // angular rate, rad/s
+  Vec3 acc_m_s2 = Vec3::Zero();   // specific force, m/s^2 (reads +g upwards at rest)
+  Vec3 mag_uT = Vec3::Zero();     // magnetic flux density, uT; NaN components mean "no reading"
 };
 
 // Checks a stream before any filter touches it: finite gyro/acc values and strictly increasing

@@ -35,7 +35,7 @@ Mat4 quaternion_transition_matrix(const Vec3& rate, double dt) {
     sin_h_over_h = std::sin(h) / h;
   }
   const Vec3 v = (sin_h_over_h * half_dt) * rate;  // sin(h) w / |w|
-  Mat4 Phi;  // c I + Omega(v), column by column
+  Mat4 Phi;                                        // c I + Omega(v), column by column
   Phi.col(0) = Vec4(c, v.x(), v.y(), v.z());
   Phi.col(1) = Vec4(-v.x(), c, -v.z(), v.y());
   Phi.col(2) = Vec4(-v.y(), v.z(), c, -v.x());
@@ -65,9 +65,9 @@ void KalmanOrientationFilter::reset() {
 Quat KalmanOrientationFilter::update(const ImuSample& sample) {
   validate_imu_sample(sample, "imu", sample_index_);
   if (initialised_ && sample.t_us <= last_t_us_) {
-    throw_invalid("imu[" + std::to_string(sample_index_) + "].t_us",
-                  "timestamp " + std::to_string(sample.t_us) + " is not after the previous one (" +
-                      std::to_string(last_t_us_) + ")");
+    throw_invalid("imu[" + std::to_string(sample_index_) + "].t_us", "timestamp " + std::to_string(sample.t_us) +
+                                                                         " is not after the previous one (" +
+                                                                         std::to_string(last_t_us_) + ")");
   }
   return step(sample);
 }
@@ -82,13 +82,12 @@ std::vector<Quat> KalmanOrientationFilter::process(const std::vector<ImuSample>&
 }
 
 void KalmanOrientationFilter::initialise(const ImuSample& sample) {
-  const VectorObservation obs = observe_W_from_A(sample.acc_m_s2, sample.mag_uT,
-                                                 params_.observation_limits);
+  const VectorObservation obs = observe_W_from_A(sample.acc_m_s2, sample.mag_uT, params_.observation_limits);
   if (!obs.ok()) {
     const char* field = obs.status == ObservationStatus::kNoGravity ? "acc_m_s2" : "mag_uT";
-    throw_precondition("imu[" + std::to_string(sample_index_) + "]." + field,
-                       std::string("the first sample must give an orientation to start from: ") +
-                           observation_status_name(obs.status));
+    throw_precondition(
+        "imu[" + std::to_string(sample_index_) + "]." + field,
+        std::string("the first sample must give an orientation to start from: ") + observation_status_name(obs.status));
   }
   const Quat& q = obs.W_from_A;
   q_ = Vec4(q.w(), q.x(), q.y(), q.z());
@@ -102,15 +101,15 @@ Quat KalmanOrientationFilter::step(const ImuSample& sample) {
     initialise(sample);
   } else {
     const double dt_s = 1e-6 * static_cast<double>(sample.t_us - last_t_us_);
-    const Vec3& bias = params_.track_gyro_bias ? bias_tracker_.update(sample.gyr_rad_s)
-                                               : params_.gyro_bias.initial_bias_rad_s;
+    const Vec3& bias =
+        params_.track_gyro_bias ? bias_tracker_.update(sample.gyr_rad_s) : params_.gyro_bias.initial_bias_rad_s;
     if (dt_s <= params_.max_prediction_dt_s) {
       predict(sample.gyr_rad_s - bias, dt_s);
     } else {
       P_ = initial_variance_ * Mat4::Identity();
     }
-    const VectorObservation obs = observe_W_from_A_near(
-        sample.acc_m_s2, sample.mag_uT, W_from_A(), params_.observation_limits);  // eq. 1, 2
+    const VectorObservation obs =
+        observe_W_from_A_near(sample.acc_m_s2, sample.mag_uT, W_from_A(), params_.observation_limits);  // eq. 1, 2
     if (obs.ok()) {
       const Quat& z = obs.W_from_A;
       correct(Vec4(z.w(), z.x(), z.y(), z.z()));

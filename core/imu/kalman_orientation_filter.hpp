@@ -48,7 +48,7 @@ class KalmanOrientationFilter {
     // about a long dropout); the covariance is reset to the initial one instead so that the next
     // observation takes over.
     double max_prediction_dt_s = 0.5;
-    bool track_gyro_bias = true;   // false: use gyro_bias.initial_bias_rad_s throughout
+    bool track_gyro_bias = true;  // false: use gyro_bias.initial_bias_rad_s throughout
     GyroBiasTracker::Params gyro_bias;
     ObservationLimits observation_limits;
   };

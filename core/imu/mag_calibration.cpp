@@ -41,8 +41,7 @@ double direction_coverage(const std::vector<Vec3>& points, const Vec3& center, c
     const double z = d.z() / norm;
     const int band = std::clamp(static_cast<int>((z + 1.0) * 0.5 * kBands), 0, kBands - 1);
     const double longitude = std::atan2(d.y(), d.x()) + EIGEN_PI;  // [0, 2 pi]
-    const int sector =
-        std::clamp(static_cast<int>(longitude / (2.0 * EIGEN_PI) * kSectors), 0, kSectors - 1);
+    const int sector = std::clamp(static_cast<int>(longitude / (2.0 * EIGEN_PI) * kSectors), 0, kSectors - 1);
     hit[static_cast<std::size_t>(band * kSectors + sector)] = true;
   }
   return static_cast<double>(std::count(hit.begin(), hit.end(), true)) / kDirectionBins;
@@ -75,8 +74,7 @@ MagCalibrationResult calibrate_magnetometer(const std::vector<Vec3>& raw, const 
   Vec3 mean = Vec3::Zero();
   for (const Vec3& p : usable) mean += p;
   mean /= static_cast<double>(usable.size());
-  require_coverage(direction_coverage(usable, mean), params.min_direction_coverage,
-                   "seen from their mean");
+  require_coverage(direction_coverage(usable, mean), params.min_direction_coverage, "seen from their mean");
 
   const EllipsoidFit fit = fit_ellipsoid(usable, kField, params.max_condition_number);
   MagCalibration& cal = result.calibration;

@@ -33,19 +33,19 @@ struct MagCalibrationParams {
 
 // The correction of eq. 3 (scaled to uT). Default-constructed: the identity (raw readings).
 struct MagCalibration {
-  Vec3 center_uT = Vec3::Zero();        // o, the hard-iron offset
-  Vec3 radii_uT = Vec3::Ones();         // alpha, beta, gamma
-  Mat3 axes = Mat3::Identity();         // H
-  double field_strength_uT = 1.0;       // (alpha beta gamma)^(1/3)
-  Mat3 correction = Mat3::Identity();   // field_strength_uT * H diag(1/alpha,1/beta,1/gamma) H^T
+  Vec3 center_uT = Vec3::Zero();       // o, the hard-iron offset
+  Vec3 radii_uT = Vec3::Ones();        // alpha, beta, gamma
+  Mat3 axes = Mat3::Identity();        // H
+  double field_strength_uT = 1.0;      // (alpha beta gamma)^(1/3)
+  Mat3 correction = Mat3::Identity();  // field_strength_uT * H diag(1/alpha,1/beta,1/gamma) H^T
 
   // Eq. 3: calibrated reading in uT. A NaN (missing) reading stays NaN.
   Vec3 apply(const Vec3& raw_uT) const { return correction * (raw_uT - center_uT); }
 };
 
 struct MagCalibrationReport {
-  std::size_t sample_count = 0;    // usable (finite) readings that went into the fit
-  std::size_t missing_count = 0;   // readings skipped because a component was NaN (no reading)
+  std::size_t sample_count = 0;         // usable (finite) readings that went into the fit
+  std::size_t missing_count = 0;        // readings skipped because a component was NaN (no reading)
   double relative_spread_before = 0.0;  // std/mean of |m'| (raw)
   double relative_spread_after = 0.0;   // std/mean of |m| (calibrated)
   double direction_coverage = 0.0;      // of the calibrated readings, in [0, 1]
@@ -72,7 +72,6 @@ inline constexpr int kDirectionBins = 128;
 
 // Fraction of the kDirectionBins bins hit by the directions of linear * (p - center).
 // Points at the centre are ignored.
-double direction_coverage(const std::vector<Vec3>& points, const Vec3& center,
-                          const Mat3& linear = Mat3::Identity());
+double direction_coverage(const std::vector<Vec3>& points, const Vec3& center, const Mat3& linear = Mat3::Identity());
 
 }  // namespace posefuse::imu

@@ -274,8 +274,7 @@ void RobustOrientationFilter::correct_inclination(const Vec3& acc_m_s2, double d
   renormalize(E_from_I_);
 }
 
-bool RobustOrientationFilter::fits_field(double norm_uT, double sin_dip, double ref_norm_uT,
-                                         double ref_sin_dip) const {
+bool RobustOrientationFilter::fits_field(double norm_uT, double sin_dip, double ref_norm_uT, double ref_sin_dip) const {
   // |norm - ref| < threshold * ref and |dip - ref dip| < threshold, the latter to first order
   // in sin(dip): |sin dip - sin ref| < threshold * cos(ref). Squared, to avoid square roots.
   const double d_norm = norm_uT - ref_norm_uT;

@@ -161,8 +161,8 @@ class RobustOrientationFilter {
   double init_weight_count_ = 0.0;  // samples seen during start-up, for equal-weight averaging
 
   // Inclination.
-  Vec3 acc_lp1_I_ = Vec3::Zero();  // first low-pass stage
-  Vec3 acc_lp_I_ = Vec3::Zero();   // second stage: the filtered vector
+  Vec3 acc_lp1_I_ = Vec3::Zero();              // first low-pass stage
+  Vec3 acc_lp_I_ = Vec3::Zero();               // second stage: the filtered vector
   Vec3 acc_correction_rate_E_ = Vec3::Zero();  // last tilt correction / dt, for the bias
 
   // Rest detection and bias.

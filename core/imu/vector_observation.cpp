@@ -10,8 +10,7 @@ const char* observation_status_name(ObservationStatus status) {
     case ObservationStatus::kNonFinite: return "non-finite accelerometer or magnetometer reading";
     case ObservationStatus::kNoGravity: return "accelerometer reading too small to give gravity";
     case ObservationStatus::kNoMagneticField: return "magnetometer reading too small";
-    case ObservationStatus::kFieldAlongGravity:
-      return "magnetic field parallel to gravity: heading undefined";
+    case ObservationStatus::kFieldAlongGravity: return "magnetic field parallel to gravity: heading undefined";
   }
   return "unknown";
 }
@@ -36,12 +35,12 @@ Mat3 W_from_A_matrix_from_vectors(const Vec3& acc, const Vec3& mag, const Observ
   } else if (!(cross_sq >= min_sin * min_sin * acc_sq * mag_sq) || !(cross_sq > 0.0)) {
     result = ObservationStatus::kFieldAlongGravity;
   } else {
-    const Vec3 up = acc * (1.0 / std::sqrt(acc_sq));                      // g_hat
-    const Vec3 west = acc_cross_mag * (1.0 / std::sqrt(cross_sq));         // g x m, normalised
+    const Vec3 up = acc * (1.0 / std::sqrt(acc_sq));                // g_hat
+    const Vec3 west = acc_cross_mag * (1.0 / std::sqrt(cross_sq));  // g x m, normalised
     const Vec3 north = west.cross(up);  // (g x m) x g: unit, both factors unit and orthogonal
-    W_from_A.row(0) = north;  // eq. 1, V'_X
-    W_from_A.row(1) = west;   // eq. 1, V'_Y
-    W_from_A.row(2) = up;     // eq. 1, V'_Z
+    W_from_A.row(0) = north;            // eq. 1, V'_X
+    W_from_A.row(1) = west;             // eq. 1, V'_Y
+    W_from_A.row(2) = up;               // eq. 1, V'_Z
   }
   if (status != nullptr) *status = result;
   return W_from_A;
@@ -54,8 +53,7 @@ VectorObservation observe_W_from_A(const Vec3& acc, const Vec3& mag, const Obser
   return obs;
 }
 
-VectorObservation observe_W_from_A_near(const Vec3& acc, const Vec3& mag,
-                                        const Quat& predicted_W_from_A,
+VectorObservation observe_W_from_A_near(const Vec3& acc, const Vec3& mag, const Quat& predicted_W_from_A,
                                         const ObservationLimits& limits) {
   VectorObservation obs = observe_W_from_A(acc, mag, limits);
   if (obs.ok()) obs.W_from_A = geometry::same_hemisphere(obs.W_from_A, predicted_W_from_A);  // eq. 2

@@ -21,10 +21,10 @@ using geometry::Vec3;
 // Why a reading pair gives no observation. The filter then only predicts.
 enum class ObservationStatus {
   kOk,
-  kNonFinite,             // a NaN or infinite component (a NaN magnetometer = no reading)
-  kNoGravity,             // |acc| below ObservationLimits::min_acc_norm_m_s2 (free fall, zero)
-  kNoMagneticField,       // |mag| below ObservationLimits::min_mag_norm_uT
-  kFieldAlongGravity,     // field and gravity (nearly) parallel: heading undefined
+  kNonFinite,          // a NaN or infinite component (a NaN magnetometer = no reading)
+  kNoGravity,          // |acc| below ObservationLimits::min_acc_norm_m_s2 (free fall, zero)
+  kNoMagneticField,    // |mag| below ObservationLimits::min_mag_norm_uT
+  kFieldAlongGravity,  // field and gravity (nearly) parallel: heading undefined
 };
 const char* observation_status_name(ObservationStatus status);
 
@@ -48,17 +48,15 @@ struct VectorObservation {
 
 // Eq. 1 as a matrix: rows V'_X, V'_Y, V'_Z normalised. Only valid when `status` (optional
 // output) is kOk; the identity otherwise.
-Mat3 W_from_A_matrix_from_vectors(const Vec3& acc_m_s2, const Vec3& mag_uT,
-                                  const ObservationLimits& limits, ObservationStatus* status);
+Mat3 W_from_A_matrix_from_vectors(const Vec3& acc_m_s2, const Vec3& mag_uT, const ObservationLimits& limits,
+                                  ObservationStatus* status);
 
 // Eq. 1 + van Waveren: the observed W_from_A, with whatever sign van Waveren's pivot gives.
-VectorObservation observe_W_from_A(const Vec3& acc_m_s2, const Vec3& mag_uT,
-                                   const ObservationLimits& limits = {});
+VectorObservation observe_W_from_A(const Vec3& acc_m_s2, const Vec3& mag_uT, const ObservationLimits& limits = {});
 
 // Eq. 1 + van Waveren + eq. 2: the observed W_from_A as the member of {q, -q} on the side of
 // `predicted_W_from_A` (non-negative dot product), so the filter never averages across the sign.
-VectorObservation observe_W_from_A_near(const Vec3& acc_m_s2, const Vec3& mag_uT,
-                                        const Quat& predicted_W_from_A,
+VectorObservation observe_W_from_A_near(const Vec3& acc_m_s2, const Vec3& mag_uT, const Quat& predicted_W_from_A,
                                         const ObservationLimits& limits = {});
 
 }  // namespace posefuse::imu

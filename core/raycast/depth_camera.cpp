@@ -19,14 +19,15 @@ double max_image_radius(const DepthIntrinsics& c) {
 
 void validate(const DepthIntrinsics& c) {
   if (c.width <= 0 || c.height <= 0 || c.width > 16384 || c.height > 16384)
-    throw_invalid("intrinsics.size", std::to_string(c.width) + "x" + std::to_string(c.height) + " is not a valid image size");
-  const std::pair<const char*, double> values[] = {{"fx", c.fx}, {"fy", c.fy}, {"cx", c.cx}, {"cy", c.cy},
-                                                   {"k1", c.k1}, {"k2", c.k2}, {"k3", c.k3},
-                                                   {"p1", c.p1}, {"p2", c.p2}};
+    throw_invalid("intrinsics.size",
+                  std::to_string(c.width) + "x" + std::to_string(c.height) + " is not a valid image size");
+  const std::pair<const char*, double> values[] = {{"fx", c.fx}, {"fy", c.fy}, {"cx", c.cx}, {"cy", c.cy}, {"k1", c.k1},
+                                                   {"k2", c.k2}, {"k3", c.k3}, {"p1", c.p1}, {"p2", c.p2}};
   for (const auto& [name, value] : values)
     if (!std::isfinite(value)) throw_invalid(std::string("intrinsics.") + name, "not finite");
   if (c.fx <= 0 || c.fy <= 0)
-    throw_invalid("intrinsics.fx", "focal lengths must be positive, got " + std::to_string(c.fx) + ", " + std::to_string(c.fy));
+    throw_invalid("intrinsics.fx",
+                  "focal lengths must be positive, got " + std::to_string(c.fx) + ", " + std::to_string(c.fy));
   // r * L(r^2) must increase over the image so that distortion can be inverted.
   const double r_max = max_image_radius(c);
   for (int i = 1; i <= 200; ++i) {
@@ -65,8 +66,8 @@ DepthCamera::DepthCamera(const DepthIntrinsics& intrinsics) : intrinsics_(intrin
 std::pair<int, int> DepthCamera::columns_within(float min_x, float max_x) const {
   if (!columns_fall_) return {0, width()};
   // Columns whose smallest x exceeds max_x come first, those whose largest x is below min_x last.
-  const auto first = std::partition_point(column_x_.begin(), column_x_.end(),
-                                          [&](const AxisBounds& x) { return x.min > max_x; });
+  const auto first =
+      std::partition_point(column_x_.begin(), column_x_.end(), [&](const AxisBounds& x) { return x.min > max_x; });
   const auto last = std::partition_point(first, column_x_.end(), [&](const AxisBounds& x) { return x.max >= min_x; });
   return {static_cast<int>(first - column_x_.begin()), static_cast<int>(last - column_x_.begin())};
 }

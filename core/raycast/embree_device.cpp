@@ -23,7 +23,8 @@ std::shared_ptr<EmbreeDevice> EmbreeDevice::shared() {
 // not spawn its own pool.
 EmbreeDevice::EmbreeDevice() : device_(rtcNewDevice("threads=1,set_affinity=0")) {
   if (!device_)
-    throw Error(ErrorCode::kInternal, "embree.device", "rtcNewDevice failed: " + std::to_string(rtcGetDeviceError(nullptr)));
+    throw Error(ErrorCode::kInternal, "embree.device",
+                "rtcNewDevice failed: " + std::to_string(rtcGetDeviceError(nullptr)));
 }
 
 EmbreeDevice::~EmbreeDevice() { rtcReleaseDevice(device_); }

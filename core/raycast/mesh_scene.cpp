@@ -36,8 +36,8 @@ MeshScene::MeshScene(std::shared_ptr<EmbreeDevice> device, const Eigen::Matrix3X
   rtcSetGeometryBuildQuality(geometry_, RTC_BUILD_QUALITY_REFIT);
   vertex_buffer_ = static_cast<float*>(rtcSetNewGeometryBuffer(geometry_, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
                                                                3 * sizeof(float), static_cast<size_t>(num_vertices)));
-  auto* index = static_cast<unsigned*>(rtcSetNewGeometryBuffer(geometry_, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3,
-                                                               3 * sizeof(unsigned), static_cast<size_t>(faces.cols())));
+  auto* index = static_cast<unsigned*>(rtcSetNewGeometryBuffer(
+      geometry_, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(unsigned), static_cast<size_t>(faces.cols())));
   device_->check("geometry buffers");
   for (Eigen::Index f = 0; f < faces.cols(); ++f)
     for (int k = 0; k < 3; ++k) index[3 * f + k] = static_cast<unsigned>(faces(k, f));
@@ -54,7 +54,8 @@ MeshScene::~MeshScene() {
 
 void MeshScene::update_vertices(const Eigen::Matrix3Xd& vertices_K) {
   if (vertices_K.cols() != num_vertices_)
-    throw_invalid("vertices_K", std::to_string(vertices_K.cols()) + " vertices, scene has " + std::to_string(num_vertices_));
+    throw_invalid("vertices_K",
+                  std::to_string(vertices_K.cols()) + " vertices, scene has " + std::to_string(num_vertices_));
   if (!vertices_K.allFinite()) throw_invalid("vertices_K", "not finite");
   for (int i = 0; i < num_vertices_; ++i)
     for (int c = 0; c < 3; ++c) vertex_buffer_[3 * i + c] = static_cast<float>(vertices_K(c, i));
@@ -212,9 +213,7 @@ struct ClosestPointSearch {
   ClosestPoint best;
 };
 
-Eigen::Vector3d vertex_at(const float* buffer, int i) {
-  return {buffer[3 * i], buffer[3 * i + 1], buffer[3 * i + 2]};
-}
+Eigen::Vector3d vertex_at(const float* buffer, int i) { return {buffer[3 * i], buffer[3 * i + 1], buffer[3 * i + 2]}; }
 
 bool closest_point_callback(RTCPointQueryFunctionArguments* args) {
   auto* search = static_cast<ClosestPointSearch*>(args->userPtr);

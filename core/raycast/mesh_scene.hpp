@@ -35,9 +35,9 @@ struct RenderImages {
 
 struct ClosestPoint {
   int face = -1;
-  double u = 0, v = 0;        // barycentrics as above
-  Eigen::Vector3d point;      // on the surface, in K
-  double distance = 0;        // metres
+  double u = 0, v = 0;    // barycentrics as above
+  Eigen::Vector3d point;  // on the surface, in K
+  double distance = 0;    // metres
 };
 
 class MeshScene {

@@ -14,8 +14,8 @@ double segment_parameter(const Eigen::Vector3d& p, const Eigen::Vector3d& a, con
 
 }  // namespace
 
-Eigen::Vector3d closest_point_barycentric(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                                          const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+Eigen::Vector3d closest_point_barycentric(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                          const Eigen::Vector3d& c) {
   // Project onto the plane; if the projection lies inside, it is the answer.
   const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
   const double d00 = ab.dot(ab), d01 = ab.dot(ac), d11 = ac.dot(ac);

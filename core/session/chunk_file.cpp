@@ -21,8 +21,7 @@ std::string chunk_field(std::uint64_t index) { return "chunk[" + std::to_string(
 ChunkFileReader::ChunkFileReader(const std::filesystem::path& path, std::uint64_t max_chunk_bytes)
     : ChunkFileReader(open_path(path, path.string()), path.string(), max_chunk_bytes) {}
 
-ChunkFileReader::ChunkFileReader(UniqueFd file, const std::string& name,
-                                 std::uint64_t max_chunk_bytes)
+ChunkFileReader::ChunkFileReader(UniqueFd file, const std::string& name, std::uint64_t max_chunk_bytes)
     : max_chunk_bytes_(max_chunk_bytes) {
   require_regular_file(file.get(), name);
   in_ = std::make_unique<FdInputStream>(std::move(file));
@@ -53,9 +52,9 @@ bool ChunkFileReader::next(SessionChunk& chunk) {
     }
   }
   if (length > max_chunk_bytes_) {
-    throw Error(ErrorCode::kResourceExhausted, field,
-                "length " + std::to_string(length) + " bytes exceeds the limit of " +
-                    std::to_string(max_chunk_bytes_) + where);
+    throw Error(
+        ErrorCode::kResourceExhausted, field,
+        "length " + std::to_string(length) + " bytes exceeds the limit of " + std::to_string(max_chunk_bytes_) + where);
   }
 
   // Read in steps, so that a few bytes claiming a 64 MiB chunk cost what the file holds, not
@@ -72,8 +71,7 @@ bool ChunkFileReader::next(SessionChunk& chunk) {
   }
   if (got != length) {
     throw Error(ErrorCode::kDataLoss, field,
-                "truncated: expected " + std::to_string(length) + " bytes, file has " +
-                    std::to_string(got) + where);
+                "truncated: expected " + std::to_string(length) + " bytes, file has " + std::to_string(got) + where);
   }
   chunk.Clear();
   if (!chunk.ParseFromString(buffer_)) {

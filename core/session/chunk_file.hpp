@@ -21,11 +21,9 @@ class ChunkFileReader : public ChunkSource {
  public:
   // Throws kNotFound when the file cannot be opened, kInvalidArgument when it is not a regular
   // file (a FIFO would block every read).
-  explicit ChunkFileReader(const std::filesystem::path& path,
-                           std::uint64_t max_chunk_bytes = kMaxChunkBytes);
+  explicit ChunkFileReader(const std::filesystem::path& path, std::uint64_t max_chunk_bytes = kMaxChunkBytes);
   // Reads an already open file; `name` is what errors call it. Regular files only, as above.
-  ChunkFileReader(UniqueFd file, const std::string& name,
-                  std::uint64_t max_chunk_bytes = kMaxChunkBytes);
+  ChunkFileReader(UniqueFd file, const std::string& name, std::uint64_t max_chunk_bytes = kMaxChunkBytes);
 
   // False at a clean end of file (between chunks). Errors name "chunk[i]" and the byte offset
   // where chunk i starts: kDataLoss for a truncated or corrupt chunk, kResourceExhausted for a
@@ -46,8 +44,7 @@ class ChunkFileReader : public ChunkSource {
 class ChunkFileWriter : public ChunkSink {
  public:
   // Creates or truncates the file; kFailedPrecondition when it cannot be created.
-  explicit ChunkFileWriter(const std::filesystem::path& path,
-                           std::uint64_t max_chunk_bytes = kMaxChunkBytes);
+  explicit ChunkFileWriter(const std::filesystem::path& path, std::uint64_t max_chunk_bytes = kMaxChunkBytes);
 
   // kResourceExhausted when the chunk is larger than max_chunk_bytes (nothing is written).
   void write(const SessionChunk& chunk) override;

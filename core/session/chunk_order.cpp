@@ -8,8 +8,7 @@ ChunkOrderKey chunk_order_key(const v1::SessionChunk& chunk, const v1::SessionHe
   switch (chunk.chunk_case()) {
     case v1::SessionChunk::kDepth: return {chunk.depth().t_us(), 0, 0};
     case v1::SessionChunk::kBodyIndex: return {chunk.body_index().t_us(), 1, 0};
-    case v1::SessionChunk::kSkeleton:
-      return {chunk.skeleton().t_us(), 2, chunk.skeleton().body_id()};
+    case v1::SessionChunk::kSkeleton: return {chunk.skeleton().t_us(), 2, chunk.skeleton().body_id()};
     case v1::SessionChunk::kColor: return {chunk.color().t_us(), 3, 0};
     case v1::SessionChunk::kImu: {
       const v1::ImuBatch& batch = chunk.imu();

@@ -19,15 +19,13 @@ std::uint64_t copy_validated(ChunkSource& source, ChunkSink& sink) {
   return validator.chunks_checked();
 }
 
-std::uint64_t directory_to_chunk_file(const std::filesystem::path& directory,
-                                      const std::filesystem::path& chunk_file) {
+std::uint64_t directory_to_chunk_file(const std::filesystem::path& directory, const std::filesystem::path& chunk_file) {
   DirectoryReader reader(directory);
   ChunkFileWriter writer(chunk_file);
   return copy_validated(reader, writer);
 }
 
-std::uint64_t chunk_file_to_directory(const std::filesystem::path& chunk_file,
-                                      const std::filesystem::path& directory) {
+std::uint64_t chunk_file_to_directory(const std::filesystem::path& chunk_file, const std::filesystem::path& directory) {
   ChunkFileReader reader(chunk_file);
   DirectoryWriter writer(directory);
   return copy_validated(reader, writer);

@@ -13,11 +13,9 @@ namespace posefuse::session {
 std::uint64_t copy_validated(ChunkSource& source, ChunkSink& sink);
 
 // A recording directory -> a chunk file. Returns the number of chunks written.
-std::uint64_t directory_to_chunk_file(const std::filesystem::path& directory,
-                                      const std::filesystem::path& chunk_file);
+std::uint64_t directory_to_chunk_file(const std::filesystem::path& directory, const std::filesystem::path& chunk_file);
 
 // A chunk file -> a new recording directory (which must not exist or be empty).
-std::uint64_t chunk_file_to_directory(const std::filesystem::path& chunk_file,
-                                      const std::filesystem::path& directory);
+std::uint64_t chunk_file_to_directory(const std::filesystem::path& chunk_file, const std::filesystem::path& directory);
 
 }  // namespace posefuse::session

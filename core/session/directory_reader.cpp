@@ -37,9 +37,8 @@ bool has_entry(int directory, const std::string& entry, FileKind kind) {
   const FileKind found = entry_kind(directory, entry);
   if (found == FileKind::kMissing) return false;
   if (found != kind) {
-    throw_invalid(entry, kind == FileKind::kDirectory
-                             ? "is not a directory (links are refused)"
-                             : "is not a regular file (links, FIFOs and devices are refused)");
+    throw_invalid(entry, kind == FileKind::kDirectory ? "is not a directory (links are refused)"
+                                                      : "is not a regular file (links, FIFOs and devices are refused)");
   }
   return true;
 }
@@ -56,9 +55,8 @@ class FrameFolderStream : public ChunkSource {
       const std::string ext = fs::path(file).extension().string();
       const bool ext_ok = ext == ".png" || (kind == FrameKind::kColor && (ext == ".jpg" || ext == ".jpeg"));
       if (!ext_ok) {
-        throw_invalid(name, kind == FrameKind::kColor
-                                ? "expected files named <t_us>.jpg or <t_us>.png"
-                                : "expected files named <t_us>.png");
+        throw_invalid(name, kind == FrameKind::kColor ? "expected files named <t_us>.jpg or <t_us>.png"
+                                                      : "expected files named <t_us>.png");
       }
       if (entry_kind(folder_.get(), file) != FileKind::kRegular) {
         throw_invalid(name, "is not a regular file (links, FIFOs and devices are refused)");
@@ -66,8 +64,7 @@ class FrameFolderStream : public ChunkSource {
       const std::int64_t t_us = parse_int64(fs::path(file).stem().string(), name);
       files_.push_back({t_us, file, name});
     }
-    std::sort(files_.begin(), files_.end(),
-              [](const File& a, const File& b) { return a.t_us < b.t_us; });
+    std::sort(files_.begin(), files_.end(), [](const File& a, const File& b) { return a.t_us < b.t_us; });
     for (std::size_t i = 1; i < files_.size(); ++i) {
       if (files_[i].t_us == files_[i - 1].t_us) {
         throw_invalid(files_[i].name, "two frames at " + std::to_string(files_[i].t_us) + " us");
@@ -91,8 +88,7 @@ class FrameFolderStream : public ChunkSource {
     } else if (kind_ == FrameKind::kBodyIndex) {
       fill(chunk.mutable_body_index(), file.t_us, size, v1::BodyIndexFrame::PNG8, std::move(bytes));
     } else {
-      fill(chunk.mutable_color(), file.t_us, size, jpeg ? v1::ColorFrame::JPEG : v1::ColorFrame::PNG,
-           std::move(bytes));
+      fill(chunk.mutable_color(), file.t_us, size, jpeg ? v1::ColorFrame::JPEG : v1::ColorFrame::PNG, std::move(bytes));
     }
     return true;
   }
@@ -100,8 +96,8 @@ class FrameFolderStream : public ChunkSource {
  private:
   // DepthFrame, BodyIndexFrame and ColorFrame share these fields.
   template <typename Frame>
-  static void fill(Frame* frame, std::int64_t t_us, ImageSize size,
-                   typename Frame::Encoding encoding, std::string bytes) {
+  static void fill(Frame* frame, std::int64_t t_us, ImageSize size, typename Frame::Encoding encoding,
+                   std::string bytes) {
     frame->set_t_us(t_us);
     frame->set_width(size.width);
     frame->set_height(size.height);
@@ -124,8 +120,7 @@ class FrameFolderStream : public ChunkSource {
 class SkeletonStream : public ChunkSource {
  public:
   explicit SkeletonStream(int recording)
-      : csv_(open_stream_beneath(recording, layout::kSkeletonCsv), layout::kSkeletonCsv,
-             layout::kSkeletonColumns) {
+      : csv_(open_stream_beneath(recording, layout::kSkeletonCsv), layout::kSkeletonCsv, layout::kSkeletonColumns) {
     have_row_ = csv_.next();
   }
 
@@ -150,23 +145,20 @@ class SkeletonStream : public ChunkSource {
     const std::uint64_t index = parse_uint64(csv_.at(2), csv_.field(2));
     const auto expected = static_cast<std::uint64_t>(frame.joints_size());
     if (index != expected) {
-      throw_invalid(csv_.field(2), "joint " + std::to_string(index) + " where joint " +
-                                       std::to_string(expected) +
+      throw_invalid(csv_.field(2), "joint " + std::to_string(index) + " where joint " + std::to_string(expected) +
                                        " was expected (rows of a frame list joints 0..24 in order)");
     }
     if (index >= layout::kKinectJointNames.size()) {
       throw_invalid(csv_.field(2), "a frame has more than 25 joints");
     }
     if (csv_.at(3) != layout::kKinectJointNames[index]) {
-      throw_invalid(csv_.field(3), quoted(csv_.at(3)) + " but joint " +
-                                       std::to_string(index) + " is " +
+      throw_invalid(csv_.field(3), quoted(csv_.at(3)) + " but joint " + std::to_string(index) + " is " +
                                        layout::kKinectJointNames[index]);
     }
     v1::SkeletonJoint* joint = frame.add_joints();
     v1::SkeletonJoint::State state{};
     if (!v1::SkeletonJoint::State_Parse(std::string(csv_.at(4)), &state)) {
-      throw_invalid(csv_.field(4), quoted(csv_.at(4)) +
-                                       " is not NOT_TRACKED, INFERRED or TRACKED");
+      throw_invalid(csv_.field(4), quoted(csv_.at(4)) + " is not NOT_TRACKED, INFERRED or TRACKED");
     }
     joint->set_state(state);
     // An all-zero vector or quaternion is left unset: proto3 reads an unset message as all
@@ -232,9 +224,9 @@ class AudioStream : public ChunkSource {
   bool next(SessionChunk& chunk) override {
     if (!csv_.next()) {
       if (wav_.frames_left() > 0) {
-        throw_invalid(layout::kAudioChunksCsv,
-                      "covers " + std::to_string(wav_.total_frames() - wav_.frames_left()) +
-                          " sample frames, audio.wav has " + std::to_string(wav_.total_frames()));
+        throw_invalid(layout::kAudioChunksCsv, "covers " + std::to_string(wav_.total_frames() - wav_.frames_left()) +
+                                                   " sample frames, audio.wav has " +
+                                                   std::to_string(wav_.total_frames()));
       }
       return false;
     }
@@ -280,8 +272,7 @@ class SyncEventStream : public ChunkSource {
     event->set_device_id(std::string(csv_.at(1)));
     v1::SyncEvent::Kind kind{};
     if (!v1::SyncEvent::Kind_Parse(std::string(csv_.at(2)), &kind)) {
-      throw_invalid(csv_.field(2), quoted(csv_.at(2)) +
-                                       " is not BUZZER_STOP, BLE_BROADCAST_RECEIPT or OTHER");
+      throw_invalid(csv_.field(2), quoted(csv_.at(2)) + " is not BUZZER_STOP, BLE_BROADCAST_RECEIPT or OTHER");
     }
     event->set_kind(kind);
     event->set_payload(from_hex(csv_.at(3), csv_.field(3)));
@@ -306,8 +297,7 @@ std::string read_json_file(int recording, const char* name) {
 DirectoryReader::DirectoryReader(const fs::path& directory)
     : DirectoryReader(open_path(directory, directory.string()), directory.string()) {}
 
-DirectoryReader::DirectoryReader(UniqueFd directory, const std::string& name)
-    : directory_(std::move(directory)) {
+DirectoryReader::DirectoryReader(UniqueFd directory, const std::string& name) : directory_(std::move(directory)) {
   if (file_kind(directory_.get()) != FileKind::kDirectory) {
     throw Error(ErrorCode::kNotFound, name, "is not a recording directory");
   }
@@ -321,26 +311,22 @@ DirectoryReader::DirectoryReader(UniqueFd directory, const std::string& name)
   // built from it. The id is not quoted: it could be anything.
   for (int i = 0; i < header_.imu_devices_size(); ++i) {
     if (!is_valid_device_id(header_.imu_devices(i).device_id())) {
-      throw_invalid(std::string(layout::kHeaderJson) + ".imu_devices[" + std::to_string(i) +
-                        "].device_id",
+      throw_invalid(std::string(layout::kHeaderJson) + ".imu_devices[" + std::to_string(i) + "].device_id",
                     "must match [A-Za-z0-9_.-]{1,64} and not be '.' or '..'");
     }
   }
 
   if (has_entry(recording, layout::kDepthDir, FileKind::kDirectory)) {
-    streams_.push_back(
-        std::make_unique<FrameFolderStream>(recording, layout::kDepthDir, FrameKind::kDepth));
+    streams_.push_back(std::make_unique<FrameFolderStream>(recording, layout::kDepthDir, FrameKind::kDepth));
   }
   if (has_entry(recording, layout::kBodyIndexDir, FileKind::kDirectory)) {
-    streams_.push_back(std::make_unique<FrameFolderStream>(recording, layout::kBodyIndexDir,
-                                                           FrameKind::kBodyIndex));
+    streams_.push_back(std::make_unique<FrameFolderStream>(recording, layout::kBodyIndexDir, FrameKind::kBodyIndex));
   }
   if (has_entry(recording, layout::kSkeletonCsv, FileKind::kRegular)) {
     streams_.push_back(std::make_unique<SkeletonStream>(recording));
   }
   if (has_entry(recording, layout::kColorDir, FileKind::kDirectory)) {
-    streams_.push_back(
-        std::make_unique<FrameFolderStream>(recording, layout::kColorDir, FrameKind::kColor));
+    streams_.push_back(std::make_unique<FrameFolderStream>(recording, layout::kColorDir, FrameKind::kColor));
   }
   if (has_entry(recording, layout::kImuDir, FileKind::kDirectory)) {
     imu_folder_ = open_beneath(recording, layout::kImuDir, layout::kImuDir);
@@ -413,8 +399,7 @@ bool DirectoryReader::next(SessionChunk& chunk) {
     end_sent_ = true;
     if (has_entry(directory_.get(), layout::kEndJson, FileKind::kRegular)) {
       chunk.Clear();
-      message_from_json(read_json_file(directory_.get(), layout::kEndJson), layout::kEndJson,
-                        *chunk.mutable_end());
+      message_from_json(read_json_file(directory_.get(), layout::kEndJson), layout::kEndJson, *chunk.mutable_end());
       return true;
     }
   }

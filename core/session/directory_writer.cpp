@@ -61,17 +61,16 @@ void DirectoryWriter::finish() {
 void DirectoryWriter::write_header(const v1::SessionHeader& header) {
   for (int i = 0; i < header.imu_devices_size(); ++i) {
     if (!is_valid_device_id(header.imu_devices(i).device_id())) {
-      throw_invalid("header.imu_devices[" + std::to_string(i) + "].device_id",
-                    "'" + header.imu_devices(i).device_id() +
-                        "' must match [A-Za-z0-9_.-]{1,64} (it becomes a file name)");
+      throw_invalid(
+          "header.imu_devices[" + std::to_string(i) + "].device_id",
+          "'" + header.imu_devices(i).device_id() + "' must match [A-Za-z0-9_.-]{1,64} (it becomes a file name)");
     }
   }
   write_file_bytes(directory_ / layout::kHeaderJson, message_to_json(header));
   have_header_ = true;
 }
 
-fs::path DirectoryWriter::frame_path(const char* subdirectory, std::int64_t t_us,
-                                     const char* ext) {
+fs::path DirectoryWriter::frame_path(const char* subdirectory, std::int64_t t_us, const char* ext) {
   const fs::path folder = directory_ / subdirectory;
   make_directory(folder);
   fs::path path = folder / (std::to_string(t_us) + ext);
@@ -98,8 +97,7 @@ void DirectoryWriter::write_body_index(const v1::BodyIndexFrame& frame) {
   if (frame.encoding() == v1::BodyIndexFrame::PNG8) {
     write_file_bytes(path, frame.data());
   } else {
-    const cv::Mat ids =
-        decode_body_index(frame, "chunk[" + std::to_string(index_) + "].body_index");
+    const cv::Mat ids = decode_body_index(frame, "chunk[" + std::to_string(index_) + "].body_index");
     write_file_bytes(path, encode_body_index(ids, v1::BodyIndexFrame::PNG8, frame.t_us()).data());
   }
 }
@@ -121,16 +119,14 @@ void DirectoryWriter::write_skeleton(const v1::SkeletonFrame& frame) {
     const v1::SkeletonJoint& joint = frame.joints(j);
     const std::string& state = v1::SkeletonJoint::State_Name(joint.state());
     if (state.empty() || j >= static_cast<int>(layout::kKinectJointNames.size())) {
-      throw_invalid("chunk[" + std::to_string(index_) + "].skeleton.joints[" + std::to_string(j) +
-                        "]",
+      throw_invalid("chunk[" + std::to_string(index_) + "].skeleton.joints[" + std::to_string(j) + "]",
                     "joint index or state out of range; validate the stream first");
     }
-    skeleton_->row({std::to_string(frame.t_us()), std::to_string(frame.body_id()),
-                    std::to_string(j), layout::kKinectJointNames[static_cast<std::size_t>(j)],
-                    state, format_double(joint.position_m().x()),
-                    format_double(joint.position_m().y()), format_double(joint.position_m().z()),
-                    format_double(joint.orientation().w()), format_double(joint.orientation().x()),
-                    format_double(joint.orientation().y()),
+    skeleton_->row({std::to_string(frame.t_us()), std::to_string(frame.body_id()), std::to_string(j),
+                    layout::kKinectJointNames[static_cast<std::size_t>(j)], state,
+                    format_double(joint.position_m().x()), format_double(joint.position_m().y()),
+                    format_double(joint.position_m().z()), format_double(joint.orientation().w()),
+                    format_double(joint.orientation().x()), format_double(joint.orientation().y()),
                     format_double(joint.orientation().z())});
   }
 }
@@ -141,15 +137,13 @@ void DirectoryWriter::write_imu(const v1::ImuBatch& batch) {
     throw_invalid(field + ".device_id", "'" + batch.device_id() + "' is not a valid device id");
   }
   const int n = batch.t_us_size();
-  if (batch.gyr_rad_s_size() != 3 * n || batch.acc_m_s2_size() != 3 * n ||
-      batch.mag_ut_size() != 3 * n) {
+  if (batch.gyr_rad_s_size() != 3 * n || batch.acc_m_s2_size() != 3 * n || batch.mag_ut_size() != 3 * n) {
     throw_invalid(field, "array sizes do not match t_us; validate the stream first");
   }
   auto& csv = imu_[batch.device_id()];
   if (!csv) {
     make_directory(directory_ / layout::kImuDir);
-    csv = std::make_unique<CsvWriter>(directory_ / layout::kImuDir / (batch.device_id() + ".csv"),
-                                      layout::kImuColumns);
+    csv = std::make_unique<CsvWriter>(directory_ / layout::kImuDir / (batch.device_id() + ".csv"), layout::kImuColumns);
   }
   std::vector<std::string> row(layout::kImuColumns.size());
   for (int i = 0; i < n; ++i) {
@@ -170,13 +164,12 @@ void DirectoryWriter::write_audio(const v1::AudioChunk& audio) {
                    WavFormat{audio.sample_rate_hz(), static_cast<std::uint16_t>(audio.channels())});
     audio_chunks_.emplace(directory_ / layout::kAudioChunksCsv, layout::kAudioChunkColumns);
   }
-  if (audio.sample_rate_hz() != audio_->format().sample_rate_hz ||
-      audio.channels() != audio_->format().channels) {
+  if (audio.sample_rate_hz() != audio_->format().sample_rate_hz || audio.channels() != audio_->format().channels) {
     throw_invalid(field, "sample rate or channel count differs from the first audio chunk");
   }
   audio_->write_frames(audio.pcm_s16le());
-  audio_chunks_->row({std::to_string(audio.t_us()),
-                      std::to_string(audio.pcm_s16le().size() / (2u * audio.channels()))});
+  audio_chunks_->row(
+      {std::to_string(audio.t_us()), std::to_string(audio.pcm_s16le().size() / (2u * audio.channels()))});
 }
 
 void DirectoryWriter::write_sync(const v1::SyncEvent& event) {

@@ -5,9 +5,9 @@
 #include <utility>
 
 #include "common/error.hpp"
-#include "sync/broadcast_offsets.hpp"
 #include "session/image_codec.hpp"
 #include "session/imu_batch.hpp"
+#include "sync/broadcast_offsets.hpp"
 
 namespace posefuse::session {
 
@@ -33,8 +33,8 @@ Skeleton skeleton_from(const v1::SkeletonFrame& frame) {
     SkeletonJoint& out = skeleton.joints[static_cast<std::size_t>(j)];
     out.p_K = {in.position_m().x(), in.position_m().y(), in.position_m().z()};
     out.state = joint_state(in.state());
-    out.orientation = geometry::Quat(in.orientation().w(), in.orientation().x(), in.orientation().y(),
-                                     in.orientation().z());
+    out.orientation =
+        geometry::Quat(in.orientation().w(), in.orientation().x(), in.orientation().y(), in.orientation().z());
   }
   return skeleton;
 }
@@ -143,9 +143,9 @@ void FrameAssembler::add(const v1::SessionChunk& chunk, cv::Mat decoded, const s
       const v1::SkeletonFrame& s = chunk.skeleton();
       Pending& p = frame_at(s.t_us(), field + ".skeleton", [](const Pending&) { return true; });
       if (p.frame.skeleton(s.body_id())) {
-        throw_invalid(field + ".skeleton.body_id", "body " + std::to_string(s.body_id()) +
-                                                       " has a second skeleton for the camera frame at " +
-                                                       at_us(p.t_us));
+        throw_invalid(
+            field + ".skeleton.body_id",
+            "body " + std::to_string(s.body_id()) + " has a second skeleton for the camera frame at " + at_us(p.t_us));
       }
       p.frame.skeletons.push_back(skeleton_from(s));
       break;
@@ -214,8 +214,8 @@ void FrameAssembler::release_ready(std::vector<SessionInput>& ready, bool all) {
     // frame's depth, body index or skeletons (each stream is in order); its colour frame may
     // still come until the colour stream passes half a colour period after it.
     const bool later_frame = pending_.size() >= 2 && pending_[1].t_us > front.t_us + kSameFrameToleranceUs;
-    const bool color_passed = !has_color_ || (last_color_us_ && static_cast<double>(*last_color_us_ - front.t_us) >=
-                                                                    color_tolerance_us_);
+    const bool color_passed =
+        !has_color_ || (last_color_us_ && static_cast<double>(*last_color_us_ - front.t_us) >= color_tolerance_us_);
     if (!all && !(later_frame && color_passed) && pending_.size() <= options_.max_pending_frames) return;
     release_front(ready);
   }

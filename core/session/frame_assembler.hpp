@@ -55,8 +55,7 @@ class FrameAssembler {
   // `decoded` is the validator's decoded depth or body index image (SessionValidator::
   // take_decoded_image), or empty to decode here. Throws posefuse::Error naming `field` for a
   // refused chunk; `ready` is then unchanged.
-  void add(const v1::SessionChunk& chunk, cv::Mat decoded, const std::string& field,
-           std::vector<SessionInput>& ready);
+  void add(const v1::SessionChunk& chunk, cv::Mat decoded, const std::string& field, std::vector<SessionInput>& ready);
   // End of the stream: every waiting frame, then the session's warnings.
   void finish(std::vector<SessionInput>& ready, std::vector<AssemblyWarning>& warnings);
 

@@ -100,9 +100,10 @@ void FrameMerger::add(const ArmFrameEstimates& estimates) {
 
 void FrameMerger::add(const RecoveredSegment& segment) {
   if (segment.segment.method != forearm::RecoveryMethod::kSmoother) return;
-  for (auto it = held_.upper_bound(segment.segment.t_start_us); it != held_.end() && it->first < segment.segment.t_end_us;
-       ++it) {
-    if (const auto p = position_inside(segment.segment, it->first)) it->second.recovered.push_back({segment.device_id, *p});
+  for (auto it = held_.upper_bound(segment.segment.t_start_us);
+       it != held_.end() && it->first < segment.segment.t_end_us; ++it) {
+    if (const auto p = position_inside(segment.segment, it->first))
+      it->second.recovered.push_back({segment.device_id, *p});
   }
 }
 

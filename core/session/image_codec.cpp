@@ -4,8 +4,8 @@
 #include <cstring>
 #include <vector>
 
-#include <opencv2/imgcodecs.hpp>
 #include <zstd.h>
+#include <opencv2/imgcodecs.hpp>
 
 #include "common/error.hpp"
 
@@ -16,17 +16,14 @@ namespace {
 static_assert(std::endian::native == std::endian::little,
               "RAW_U16_LE payloads are copied as-is; a big-endian host needs a byte swap here");
 
-void check_dimensions(std::uint32_t width, std::uint32_t height, std::uint64_t max_pixels,
-                      const std::string& field) {
+void check_dimensions(std::uint32_t width, std::uint32_t height, std::uint64_t max_pixels, const std::string& field) {
   if (width == 0 || height == 0 || width > kMaxImageSide || height > kMaxImageSide) {
-    throw_invalid(field + ".width", "image size " + std::to_string(width) + "x" +
-                                        std::to_string(height) + " is outside 1.." +
-                                        std::to_string(kMaxImageSide));
+    throw_invalid(field + ".width", "image size " + std::to_string(width) + "x" + std::to_string(height) +
+                                        " is outside 1.." + std::to_string(kMaxImageSide));
   }
   if (std::uint64_t{width} * height > max_pixels) {
-    throw_invalid(field + ".width", "image size " + std::to_string(width) + "x" +
-                                        std::to_string(height) + " has more than " +
-                                        std::to_string(max_pixels) + " pixels");
+    throw_invalid(field + ".width", "image size " + std::to_string(width) + "x" + std::to_string(height) +
+                                        " has more than " + std::to_string(max_pixels) + " pixels");
   }
 }
 
@@ -46,42 +43,40 @@ std::string size_text(std::uint32_t width, std::uint32_t height) {
 
 void require_decoded_size(const cv::Mat& image, std::uint32_t width, std::uint32_t height,
                           const std::string& data_field) {
-  if (static_cast<std::uint32_t>(image.cols) != width ||
-      static_cast<std::uint32_t>(image.rows) != height) {
-    throw_invalid(data_field, "decodes to " + size_text(static_cast<std::uint32_t>(image.cols),
-                                                        static_cast<std::uint32_t>(image.rows)) +
-                                  ", the chunk says " + size_text(width, height));
+  if (static_cast<std::uint32_t>(image.cols) != width || static_cast<std::uint32_t>(image.rows) != height) {
+    throw_invalid(data_field,
+                  "decodes to " +
+                      size_text(static_cast<std::uint32_t>(image.cols), static_cast<std::uint32_t>(image.rows)) +
+                      ", the chunk says " + size_text(width, height));
   }
 }
 
 // Decodes a PNG payload and checks its type and size against the chunk's fields.
-cv::Mat decode_png(const std::string& data, int expected_type, std::uint32_t width,
-                   std::uint32_t height, const std::string& field) {
+cv::Mat decode_png(const std::string& data, int expected_type, std::uint32_t width, std::uint32_t height,
+                   const std::string& field) {
   const std::string data_field = field + ".data";
   // Reading the header first rejects non-PNG bytes and oversized images before any decoding.
   const ImageSize header = png_size(data, data_field);
   if (header.width != width || header.height != height) {
-    throw_invalid(data_field, "PNG is " + size_text(header.width, header.height) +
-                                  ", the chunk says " + size_text(width, height));
+    throw_invalid(data_field,
+                  "PNG is " + size_text(header.width, header.height) + ", the chunk says " + size_text(width, height));
   }
   // The pixel format too, before decoding: a 16-bit RGBA PNG of the right size would decode
   // to 8 bytes a pixel and only then be refused.
   const int bits = expected_type == CV_16UC1 ? 16 : 8;
   const PngFormat format = png_format(data);
   if (format.bit_depth != bits || format.color_type != 0) {
-    throw_invalid(data_field, "PNG is not " + std::to_string(bits) +
-                                  "-bit greyscale (bit depth " + std::to_string(format.bit_depth) +
-                                  ", colour type " + std::to_string(format.color_type) + ")");
+    throw_invalid(data_field, "PNG is not " + std::to_string(bits) + "-bit greyscale (bit depth " +
+                                  std::to_string(format.bit_depth) + ", colour type " +
+                                  std::to_string(format.color_type) + ")");
   }
-  const cv::Mat encoded(1, static_cast<int>(data.size()), CV_8UC1,
-                        const_cast<char*>(data.data()));
+  const cv::Mat encoded(1, static_cast<int>(data.size()), CV_8UC1, const_cast<char*>(data.data()));
   cv::Mat image = cv::imdecode(encoded, cv::IMREAD_UNCHANGED);
   if (image.empty()) throw_invalid(data_field, "PNG cannot be decoded");
   require_decoded_size(image, width, height, data_field);
   if (image.type() != expected_type) {
     throw_invalid(data_field, std::string("PNG has the wrong pixel type (expected ") +
-                                  (expected_type == CV_16UC1 ? "16" : "8") +
-                                  "-bit single channel)");
+                                  (expected_type == CV_16UC1 ? "16" : "8") + "-bit single channel)");
   }
   return image;
 }
@@ -92,8 +87,8 @@ cv::Mat raw_to_mat(const std::string& data, int type, std::uint32_t width, std::
   const std::size_t expected = std::size_t{width} * height * CV_ELEM_SIZE(type);
   if (data.size() != expected) {
     throw_invalid(field + ".data", "has " + std::to_string(data.size()) + " bytes, expected " +
-                                       std::to_string(expected) + " (" + size_text(width, height) +
-                                       " " + encoding_name + ")");
+                                       std::to_string(expected) + " (" + size_text(width, height) + " " +
+                                       encoding_name + ")");
   }
   cv::Mat image(static_cast<int>(height), static_cast<int>(width), type);
   std::memcpy(image.data, data.data(), expected);
@@ -110,8 +105,7 @@ std::string encode_png(const cv::Mat& image) {
 
 std::string mat_bytes(const cv::Mat& image) {
   const cv::Mat contiguous = image.isContinuous() ? image : image.clone();
-  return std::string(reinterpret_cast<const char*>(contiguous.data),
-                     contiguous.total() * contiguous.elemSize());
+  return std::string(reinterpret_cast<const char*>(contiguous.data), contiguous.total() * contiguous.elemSize());
 }
 
 std::uint32_t read_be32(std::string_view bytes, std::size_t at) {
@@ -132,8 +126,7 @@ cv::Mat decode_depth(const v1::DepthFrame& frame, const std::string& field) {
   switch (frame.encoding()) {
     case v1::DepthFrame::RAW_U16_LE:
       return raw_to_mat(frame.data(), CV_16UC1, frame.width(), frame.height(), field, "RAW_U16_LE");
-    case v1::DepthFrame::PNG16:
-      return decode_png(frame.data(), CV_16UC1, frame.width(), frame.height(), field);
+    case v1::DepthFrame::PNG16: return decode_png(frame.data(), CV_16UC1, frame.width(), frame.height(), field);
     case v1::DepthFrame::ZSTD_U16_LE: {
       const std::size_t expected = std::size_t{frame.width()} * frame.height() * 2;
       const std::string& data = frame.data();
@@ -142,9 +135,9 @@ cv::Mat decode_depth(const v1::DepthFrame& frame, const std::string& field) {
         throw_invalid(field + ".data", "is not a zstd frame");
       }
       if (content != ZSTD_CONTENTSIZE_UNKNOWN && content != expected) {
-        throw_invalid(field + ".data", "zstd content is " + std::to_string(content) +
-                                           " bytes, expected " + std::to_string(expected) + " (" +
-                                           size_text(frame.width(), frame.height()) + " u16)");
+        throw_invalid(field + ".data", "zstd content is " + std::to_string(content) + " bytes, expected " +
+                                           std::to_string(expected) + " (" + size_text(frame.width(), frame.height()) +
+                                           " u16)");
       }
       std::string raw(expected, '\0');
       const std::size_t got = ZSTD_decompress(raw.data(), raw.size(), data.data(), data.size());
@@ -152,14 +145,12 @@ cv::Mat decode_depth(const v1::DepthFrame& frame, const std::string& field) {
         throw_invalid(field + ".data", std::string("zstd: ") + ZSTD_getErrorName(got));
       }
       if (got != expected) {
-        throw_invalid(field + ".data", "zstd content is " + std::to_string(got) +
-                                           " bytes, expected " + std::to_string(expected));
+        throw_invalid(field + ".data",
+                      "zstd content is " + std::to_string(got) + " bytes, expected " + std::to_string(expected));
       }
       return raw_to_mat(raw, CV_16UC1, frame.width(), frame.height(), field, "ZSTD_U16_LE");
     }
-    default:
-      throw_invalid(field + ".encoding",
-                    "unknown depth encoding " + std::to_string(frame.encoding()));
+    default: throw_invalid(field + ".encoding", "unknown depth encoding " + std::to_string(frame.encoding()));
   }
 }
 
@@ -179,8 +170,8 @@ ZSTD_CCtx* thread_compression_context() {
 
 }  // namespace
 
-v1::DepthFrame encode_depth(const cv::Mat& depth_mm, v1::DepthFrame::Encoding encoding,
-                            std::int64_t t_us, int zstd_level) {
+v1::DepthFrame encode_depth(const cv::Mat& depth_mm, v1::DepthFrame::Encoding encoding, std::int64_t t_us,
+                            int zstd_level) {
   if (depth_mm.type() != CV_16UC1) throw_invalid("depth_mm", "expected a CV_16UC1 image");
   v1::DepthFrame frame;
   frame.set_t_us(t_us);
@@ -188,17 +179,13 @@ v1::DepthFrame encode_depth(const cv::Mat& depth_mm, v1::DepthFrame::Encoding en
   frame.set_height(static_cast<std::uint32_t>(depth_mm.rows));
   frame.set_encoding(encoding);
   switch (encoding) {
-    case v1::DepthFrame::RAW_U16_LE:
-      frame.set_data(mat_bytes(depth_mm));
-      break;
-    case v1::DepthFrame::PNG16:
-      frame.set_data(encode_png(depth_mm));
-      break;
+    case v1::DepthFrame::RAW_U16_LE: frame.set_data(mat_bytes(depth_mm)); break;
+    case v1::DepthFrame::PNG16: frame.set_data(encode_png(depth_mm)); break;
     case v1::DepthFrame::ZSTD_U16_LE: {
       const std::string raw = mat_bytes(depth_mm);
       std::string packed(ZSTD_compressBound(raw.size()), '\0');
-      const std::size_t size =
-          ZSTD_compressCCtx(thread_compression_context(), packed.data(), packed.size(), raw.data(), raw.size(), zstd_level);
+      const std::size_t size = ZSTD_compressCCtx(thread_compression_context(), packed.data(), packed.size(), raw.data(),
+                                                 raw.size(), zstd_level);
       if (ZSTD_isError(size)) {
         throw Error(ErrorCode::kInternal, "depth", std::string("zstd: ") + ZSTD_getErrorName(size));
       }
@@ -206,8 +193,7 @@ v1::DepthFrame encode_depth(const cv::Mat& depth_mm, v1::DepthFrame::Encoding en
       frame.set_data(std::move(packed));
       break;
     }
-    default:
-      throw_invalid("encoding", "unknown depth encoding " + std::to_string(encoding));
+    default: throw_invalid("encoding", "unknown depth encoding " + std::to_string(encoding));
   }
   return frame;
 }
@@ -220,8 +206,7 @@ cv::Mat decode_color_gray(const v1::ColorFrame& frame, const std::string& field)
   switch (frame.encoding()) {
     case v1::ColorFrame::PNG: header = png_size(frame.data(), data_field); break;
     case v1::ColorFrame::JPEG: header = jpeg_size(frame.data(), data_field); break;
-    default:
-      throw_invalid(field + ".encoding", "unknown color encoding " + std::to_string(frame.encoding()));
+    default: throw_invalid(field + ".encoding", "unknown color encoding " + std::to_string(frame.encoding()));
   }
   if (header.width != frame.width() || header.height != frame.height()) {
     throw_invalid(data_field, "image is " + size_text(header.width, header.height) + ", the chunk says " +
@@ -253,16 +238,13 @@ cv::Mat decode_body_index(const v1::BodyIndexFrame& frame, const std::string& fi
   switch (frame.encoding()) {
     case v1::BodyIndexFrame::RAW_U8:
       return raw_to_mat(frame.data(), CV_8UC1, frame.width(), frame.height(), field, "RAW_U8");
-    case v1::BodyIndexFrame::PNG8:
-      return decode_png(frame.data(), CV_8UC1, frame.width(), frame.height(), field);
-    default:
-      throw_invalid(field + ".encoding",
-                    "unknown body index encoding " + std::to_string(frame.encoding()));
+    case v1::BodyIndexFrame::PNG8: return decode_png(frame.data(), CV_8UC1, frame.width(), frame.height(), field);
+    default: throw_invalid(field + ".encoding", "unknown body index encoding " + std::to_string(frame.encoding()));
   }
 }
 
-v1::BodyIndexFrame encode_body_index(const cv::Mat& body_index,
-                                     v1::BodyIndexFrame::Encoding encoding, std::int64_t t_us) {
+v1::BodyIndexFrame encode_body_index(const cv::Mat& body_index, v1::BodyIndexFrame::Encoding encoding,
+                                     std::int64_t t_us) {
   if (body_index.type() != CV_8UC1) throw_invalid("body_index", "expected a CV_8UC1 image");
   v1::BodyIndexFrame frame;
   frame.set_t_us(t_us);
@@ -284,10 +266,9 @@ ImageSize png_size(std::string_view bytes, const std::string& field) {
     throw_invalid(field, "is not a PNG file");
   }
   const ImageSize size{read_be32(bytes, 16), read_be32(bytes, 20)};
-  if (size.width == 0 || size.height == 0 || size.width > kMaxImageSide ||
-      size.height > kMaxImageSide) {
-    throw_invalid(field, "PNG size " + size_text(size.width, size.height) + " is outside 1.." +
-                             std::to_string(kMaxImageSide));
+  if (size.width == 0 || size.height == 0 || size.width > kMaxImageSide || size.height > kMaxImageSide) {
+    throw_invalid(field,
+                  "PNG size " + size_text(size.width, size.height) + " is outside 1.." + std::to_string(kMaxImageSide));
   }
   return size;
 }
@@ -316,8 +297,7 @@ ImageSize jpeg_size(std::string_view bytes, const std::string& field) {
     }
     if (marker == 0xD8 || marker == 0xD9) break;  // a second SOI, or EOI before any frame
     const std::uint32_t length = read_be16(bytes, at + 2);
-    const bool is_sof = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 &&
-                        marker != 0xCC;
+    const bool is_sof = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
     if (is_sof) {
       if (at + 9 > bytes.size()) break;
       const ImageSize size{read_be16(bytes, at + 7), read_be16(bytes, at + 5)};

@@ -26,13 +26,13 @@ inline constexpr std::uint64_t kMaxColorPixels = 4096ull * 3072;
 // Depth frame -> CV_16UC1 (mm, 0 = no reading), from any encoding.
 cv::Mat decode_depth(const v1::DepthFrame& frame, const std::string& field = "depth");
 // zstd_level: ZSTD_U16_LE only (1 is ~2.5 times faster than 3 on noisy depth, 14 % larger).
-v1::DepthFrame encode_depth(const cv::Mat& depth_mm, v1::DepthFrame::Encoding encoding,
-                            std::int64_t t_us, int zstd_level = 3);
+v1::DepthFrame encode_depth(const cv::Mat& depth_mm, v1::DepthFrame::Encoding encoding, std::int64_t t_us,
+                            int zstd_level = 3);
 
 // Body index frame -> CV_8UC1 (255 = background, else body id 0..5).
 cv::Mat decode_body_index(const v1::BodyIndexFrame& frame, const std::string& field = "body_index");
-v1::BodyIndexFrame encode_body_index(const cv::Mat& body_index,
-                                     v1::BodyIndexFrame::Encoding encoding, std::int64_t t_us);
+v1::BodyIndexFrame encode_body_index(const cv::Mat& body_index, v1::BodyIndexFrame::Encoding encoding,
+                                     std::int64_t t_us);
 
 // Colour frame -> CV_8UC1 grey levels (the strap search, paper 1 II-I, needs brightness only),
 // from JPEG or PNG, 8-bit grey or BGR; checks the size against the chunk's width and height.

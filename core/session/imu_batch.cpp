@@ -8,8 +8,8 @@ namespace {
 
 void check_size(int actual, int expected, const std::string& field) {
   if (actual != expected) {
-    throw_invalid(field, "has " + std::to_string(actual) + " values, expected " +
-                             std::to_string(expected) + " (x y z per sample)");
+    throw_invalid(field, "has " + std::to_string(actual) + " values, expected " + std::to_string(expected) +
+                             " (x y z per sample)");
   }
 }
 
@@ -40,8 +40,7 @@ std::vector<imu::ImuSample> samples_from_batch(const v1::ImuBatch& batch, const 
   return samples;
 }
 
-v1::ImuBatch batch_from_samples(const std::string& device_id,
-                                const std::vector<imu::ImuSample>& samples) {
+v1::ImuBatch batch_from_samples(const std::string& device_id, const std::vector<imu::ImuSample>& samples) {
   v1::ImuBatch batch;
   batch.set_device_id(device_id);
   const int n = static_cast<int>(samples.size());

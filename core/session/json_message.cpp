@@ -36,13 +36,11 @@ std::string message_to_json(const google::protobuf::Message& message) {
   return json;
 }
 
-void message_from_json(const std::string& json, const std::string& name,
-                       google::protobuf::Message& message) {
+void message_from_json(const std::string& json, const std::string& name, google::protobuf::Message& message) {
   google::protobuf::util::JsonParseOptions options;
   options.ignore_unknown_fields = false;
   const auto status = google::protobuf::util::JsonStringToMessage(json, &message, options);
-  if (!status.ok()) throw_invalid(name, "not a valid " + message.GetTypeName() + ": " +
-                                            std::string(status.message()));
+  if (!status.ok()) throw_invalid(name, "not a valid " + message.GetTypeName() + ": " + std::string(status.message()));
 }
 
 }  // namespace posefuse::session

@@ -9,7 +9,6 @@ namespace posefuse::session {
 
 std::string message_to_json(const google::protobuf::Message& message);
 // Unknown fields are an error. Throws kInvalidArgument naming `name` (e.g. "header.json").
-void message_from_json(const std::string& json, const std::string& name,
-                       google::protobuf::Message& message);
+void message_from_json(const std::string& json, const std::string& name, google::protobuf::Message& message);
 
 }  // namespace posefuse::session

@@ -29,8 +29,9 @@ imu::MagCalibration parse_mag_calibration(const std::string& text, const std::st
   std::vector<double> values;
   for (std::string word; words >> word;) values.push_back(parse_double(word, field));
   if (values.size() != 12) {
-    throw_invalid(field, "is " + session::quoted(text) + ", expected 12 numbers: the centre o_x o_y o_z (uT) and the 3x3 "
-                                                "correction row by row");
+    throw_invalid(field, "is " + session::quoted(text) +
+                             ", expected 12 numbers: the centre o_x o_y o_z (uT) and the 3x3 "
+                             "correction row by row");
   }
   imu::MagCalibration calibration;
   for (const double v : values) {

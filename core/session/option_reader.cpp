@@ -42,7 +42,8 @@ const char* type_name(OptionType type) {
 
 }  // namespace
 
-OptionReader::OptionReader(const OptionTable& table, const v1::SessionHeader& header) : table_(table), header_(header) {}
+OptionReader::OptionReader(const OptionTable& table, const v1::SessionHeader& header)
+    : table_(table), header_(header) {}
 
 const OptionSpec& OptionReader::spec(std::string_view key, OptionType type) const {
   const OptionSpec* found = find_option(table_, key);
@@ -55,7 +56,8 @@ const OptionSpec& OptionReader::spec(std::string_view key, OptionType type) cons
 }
 
 bool OptionReader::given(std::string_view key) const {
-  if (!find_option(table_, key)) throw Error(ErrorCode::kInternal, option_field(key), "is not in the stage's option table");
+  if (!find_option(table_, key))
+    throw Error(ErrorCode::kInternal, option_field(key), "is not in the stage's option table");
   return header_.options().find(std::string(key)) != header_.options().end();
 }
 

@@ -36,9 +36,9 @@ struct OptionSpec {
   // As written in SessionHeader.options. Empty: no default, the option is then optional.
   std::string default_value{};
   std::optional<OptionBound> min{}, max{};  // kInteger, kReal
-  std::vector<std::string> words{};    // kChoice: the values; kReal: words accepted instead of a number
-  std::string unit{};                  // "s", "Hz", "deg"; empty for a count or a plain number
-  std::string description{};           // one line, without the type, range and unit
+  std::vector<std::string> words{};         // kChoice: the values; kReal: words accepted instead of a number
+  std::string unit{};                       // "s", "Hz", "deg"; empty for a count or a plain number
+  std::string description{};                // one line, without the type, range and unit
 };
 
 // A stage's options, in the order GetServerInfo and docs/options.md list them.

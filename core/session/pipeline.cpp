@@ -38,8 +38,7 @@ class SessionPipeline::Output : public StageOutput {
     }
     pipeline_.current_stage_ = emitter;
   }
-  void warn(const std::string& code, const std::string& field,
-            const std::string& message) override {
+  void warn(const std::string& code, const std::string& field, const std::string& message) override {
     v1::FitResult result;
     v1::Warning& warning = *result.mutable_warning();
     warning.set_code(code);
@@ -54,8 +53,7 @@ class SessionPipeline::Output : public StageOutput {
   v1::CalibrationReport calibration_;
 };
 
-SessionPipeline::SessionPipeline(std::vector<std::unique_ptr<Stage>> stages, ResultSink& sink,
-                                 PipelineOptions options)
+SessionPipeline::SessionPipeline(std::vector<std::unique_ptr<Stage>> stages, ResultSink& sink, PipelineOptions options)
     : stages_(std::move(stages)),
       sink_(sink),
       options_(options),
@@ -87,8 +85,7 @@ void SessionPipeline::timed(Stage& stage, Call&& call) {
   }
   const auto start = std::chrono::steady_clock::now();
   call();  // a throwing stage call is not timed: it is counted as an item error instead
-  options_.on_stage_time(
-      stage.name(), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  options_.on_stage_time(stage.name(), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 }
 
 void SessionPipeline::push(const v1::SessionChunk& chunk) {
@@ -165,8 +162,7 @@ void SessionPipeline::item_error(const Error& error, const std::string& field) {
   if (item_errors_ > options_.max_item_errors) {
     throw Error(ErrorCode::kInvalidArgument, "chunks",
                 std::to_string(item_errors_) + " chunks or items rejected (limit " +
-                    std::to_string(options_.max_item_errors) +
-                    "); the last: " + field + ": " + item.message());
+                    std::to_string(options_.max_item_errors) + "); the last: " + field + ": " + item.message());
   }
 }
 
@@ -199,8 +195,7 @@ void SessionPipeline::end_session() {
   summary.set_warnings(warnings_);
   summary.set_item_errors(item_errors_);
   if (first_camera_t_us_) {
-    summary.set_stream_duration_s(static_cast<double>(*last_camera_t_us_ - *first_camera_t_us_) *
-                                  1e-6);
+    summary.set_stream_duration_s(static_cast<double>(*last_camera_t_us_ - *first_camera_t_us_) * 1e-6);
   }
   summary.set_processing_duration_s(
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started_at_).count());

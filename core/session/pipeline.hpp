@@ -47,8 +47,7 @@ struct PipelineOptions {
 
 class SessionPipeline {
  public:
-  SessionPipeline(std::vector<std::unique_ptr<Stage>> stages, ResultSink& sink,
-                  PipelineOptions options = {});
+  SessionPipeline(std::vector<std::unique_ptr<Stage>> stages, ResultSink& sink, PipelineOptions options = {});
   ~SessionPipeline();
   SessionPipeline(const SessionPipeline&) = delete;
   SessionPipeline& operator=(const SessionPipeline&) = delete;

@@ -35,8 +35,7 @@ class StageOutput {
   // A value for the stages after this one (those whose consumes() names its kind), delivered
   // before this call returns; the client gets those it sees as FitResults (result_encoder.hpp).
   virtual void hand_on(StageValue&& value) = 0;
-  virtual void warn(const std::string& code, const std::string& field,
-                    const std::string& message) = 0;
+  virtual void warn(const std::string& code, const std::string& field, const std::string& message) = 0;
   // The session's calibration report, filled by the stages in finish() and sent after them.
   virtual v1::CalibrationReport& calibration() = 0;
 };
@@ -73,7 +72,6 @@ class Stage {
   virtual void on_value(const StageValue& /*value*/, StageOutput& /*out*/) {}
   // After the end marker: emit what is left and add to out.calibration().
   virtual void finish(StageOutput& out) = 0;
-
 };
 
 }  // namespace posefuse::session

@@ -21,8 +21,9 @@ constexpr int kReadFlags = O_RDONLY | O_CLOEXEC | O_NONBLOCK;
 [[noreturn]] void throw_open_error(int error, const std::string& name) {
   if (error == ENOENT || error == ENOTDIR) throw Error(ErrorCode::kNotFound, name, "does not exist");
   if (error == ELOOP || error == EXDEV) {
-    throw_invalid(name, "is or passes through a symbolic link, or leads outside the recording; "
-                        "the files of a recording must be regular files inside it");
+    throw_invalid(name,
+                  "is or passes through a symbolic link, or leads outside the recording; "
+                  "the files of a recording must be regular files inside it");
   }
   throw Error(ErrorCode::kNotFound, name, std::string("cannot be opened: ") + std::strerror(error));
 }
@@ -63,8 +64,7 @@ int open_by_components(int directory, const std::vector<std::string>& components
   for (std::size_t i = 0; i < components.size(); ++i) {
     const std::string& component = components[i];
     const bool last = i + 1 == components.size();
-    const int fd = ::openat(at, component.c_str(),
-                            kReadFlags | O_NOFOLLOW | (last ? 0 : O_DIRECTORY));
+    const int fd = ::openat(at, component.c_str(), kReadFlags | O_NOFOLLOW | (last ? 0 : O_DIRECTORY));
     if (fd < 0) return -1;
     if (last) return fd;
     current = UniqueFd(fd);
@@ -92,8 +92,7 @@ UniqueFd open_path(const std::filesystem::path& path, const std::string& name) {
   const int fd = ::open(path.c_str(), kReadFlags);
   if (fd < 0) {
     const int error = errno;
-    throw Error(ErrorCode::kNotFound, name,
-                "cannot open " + path.string() + ": " + std::strerror(error));
+    throw Error(ErrorCode::kNotFound, name, "cannot open " + path.string() + ": " + std::strerror(error));
   }
   return UniqueFd(fd);
 }
@@ -158,14 +157,12 @@ std::string read_all(int fd, const std::string& name, std::uint64_t max_bytes) {
   const auto size = static_cast<std::uint64_t>(status.st_size);
   if (size > max_bytes) {
     throw Error(ErrorCode::kResourceExhausted, name,
-                "is " + std::to_string(size) + " bytes, at most " + std::to_string(max_bytes) +
-                    " allowed");
+                "is " + std::to_string(size) + " bytes, at most " + std::to_string(max_bytes) + " allowed");
   }
   std::string bytes(static_cast<std::size_t>(size), '\0');
   std::size_t done = 0;
   while (done < bytes.size()) {
-    const ssize_t got = ::pread(fd, bytes.data() + done, bytes.size() - done,
-                                static_cast<off_t>(done));
+    const ssize_t got = ::pread(fd, bytes.data() + done, bytes.size() - done, static_cast<off_t>(done));
     if (got < 0 && errno == EINTR) continue;
     if (got <= 0) throw Error(ErrorCode::kDataLoss, name, "read fewer bytes than the file size");
     done += static_cast<std::size_t>(got);
@@ -190,8 +187,7 @@ FdInputStream::Buffer::int_type FdInputStream::Buffer::underflow() {
   return traits_type::to_int_type(data_[0]);
 }
 
-FdInputStream::Buffer::pos_type FdInputStream::Buffer::seekoff(off_type offset,
-                                                               std::ios_base::seekdir dir,
+FdInputStream::Buffer::pos_type FdInputStream::Buffer::seekoff(off_type offset, std::ios_base::seekdir dir,
                                                                std::ios_base::openmode) {
   int whence = SEEK_SET;
   if (dir == std::ios_base::cur) {
@@ -205,8 +201,7 @@ FdInputStream::Buffer::pos_type FdInputStream::Buffer::seekoff(off_type offset,
   return at < 0 ? pos_type(off_type(-1)) : pos_type(static_cast<off_type>(at));
 }
 
-FdInputStream::Buffer::pos_type FdInputStream::Buffer::seekpos(pos_type position,
-                                                               std::ios_base::openmode which) {
+FdInputStream::Buffer::pos_type FdInputStream::Buffer::seekpos(pos_type position, std::ios_base::openmode which) {
   return seekoff(off_type(position), std::ios_base::beg, which);
 }
 

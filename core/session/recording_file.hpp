@@ -73,8 +73,7 @@ class FdInputStream : public std::istream {
 
    protected:
     int_type underflow() override;
-    pos_type seekoff(off_type offset, std::ios_base::seekdir dir,
-                     std::ios_base::openmode which) override;
+    pos_type seekoff(off_type offset, std::ios_base::seekdir dir, std::ios_base::openmode which) override;
     pos_type seekpos(pos_type position, std::ios_base::openmode which) override;
 
    private:

@@ -33,7 +33,7 @@ void encode(const RecoveredSegment& value, v1::FitResult& result) {
   segment.set_arm(value.arm);
   segment.set_device_id(value.device_id);
   segment.set_method(value.segment.method == forearm::RecoveryMethod::kPaper ? v1::RecoveredSegment::PAPER
-                                                                            : v1::RecoveredSegment::SMOOTHER);
+                                                                             : v1::RecoveredSegment::SMOOTHER);
   segment.set_t_start_us(value.segment.t_start_us);
   segment.set_t_end_us(value.segment.t_end_us);
   for (const forearm::RecoveredGapSample& s : value.segment.samples) {

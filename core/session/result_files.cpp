@@ -50,14 +50,13 @@ void ResultFiles::write_orientations(const v1::ImuOrientationBatch& batch) {
   require_device_id(batch.device_id(), "imu_orientations.device_id");
   if (batch.w_from_a_size() != 4 * batch.t_us_size()) {
     throw Error(ErrorCode::kInvalidArgument, "imu_orientations.W_from_A",
-                "has " + std::to_string(batch.w_from_a_size()) + " values for " +
-                    std::to_string(batch.t_us_size()) + " samples");
+                "has " + std::to_string(batch.w_from_a_size()) + " values for " + std::to_string(batch.t_us_size()) +
+                    " samples");
   }
   auto& csv = orientations_[batch.device_id()];
   if (!csv) {
-    csv = std::make_unique<CsvWriter>(
-        directory_ / result_layout::kImuOrientationDir / (batch.device_id() + ".csv"),
-        result_layout::kOrientationColumns);
+    csv = std::make_unique<CsvWriter>(directory_ / result_layout::kImuOrientationDir / (batch.device_id() + ".csv"),
+                                      result_layout::kOrientationColumns);
   }
   for (int i = 0; i < batch.t_us_size(); ++i) {
     csv->row({std::to_string(batch.t_us(i)), format_double(batch.w_from_a(4 * i)),
@@ -83,8 +82,7 @@ void ResultFiles::write_forearm_orientations(const v1::ForearmOrientationBatch& 
     if (error) {
       throw Error(ErrorCode::kFailedPrecondition, folder.string(), "cannot create: " + error.message());
     }
-    csv = std::make_unique<CsvWriter>(folder / (batch.device_id() + ".csv"),
-                                      result_layout::kForearmOrientationColumns);
+    csv = std::make_unique<CsvWriter>(folder / (batch.device_id() + ".csv"), result_layout::kForearmOrientationColumns);
   }
   for (int i = 0; i < batch.t_us_size(); ++i) {
     csv->row({std::to_string(batch.t_us(i)), format_double(batch.k_from_f(4 * i)),
@@ -95,7 +93,7 @@ void ResultFiles::write_forearm_orientations(const v1::ForearmOrientationBatch& 
 }
 
 CsvWriter& ResultFiles::opened_file(std::optional<CsvWriter>& file, const char* name,
-                                   const std::vector<std::string>& columns) {
+                                    const std::vector<std::string>& columns) {
   if (!file) file.emplace(directory_ / name, columns);
   return *file;
 }
@@ -118,8 +116,8 @@ void ResultFiles::write_frame(const v1::FrameResult& frame) {
                  frame.smpl_joints(), body::smpl_joint_names().data());
   }
   if (frame.camera_joints_size() > 0) {
-    write_joints(opened_file(camera_joints_, result_layout::kCameraJointsCsv, result_layout::kJointColumns),
-                 t, frame.camera_joints(), layout::kKinectJointNames.data());
+    write_joints(opened_file(camera_joints_, result_layout::kCameraJointsCsv, result_layout::kJointColumns), t,
+                 frame.camera_joints(), layout::kKinectJointNames.data());
   }
   for (const auto& forearm : frame.forearms()) {
     const v1::Quaternion& q = forearm.k_from_f();
@@ -140,7 +138,8 @@ void ResultFiles::write_frame(const v1::FrameResult& frame) {
 
 void ResultFiles::write_segment(const v1::RecoveredSegment& segment) {
   require_device_id(segment.device_id(), "recovered_segment.device_id");
-  CsvWriter& csv = opened_file(segments_, result_layout::kRecoveredSegmentsCsv, result_layout::kRecoveredSegmentColumns);
+  CsvWriter& csv =
+      opened_file(segments_, result_layout::kRecoveredSegmentsCsv, result_layout::kRecoveredSegmentColumns);
   for (const v1::RecoveredSegment::Sample& s : segment.samples()) {
     std::vector<std::string> row{segment.device_id(), v1::RecoveredSegment::Method_Name(segment.method()),
                                  std::to_string(segment.t_start_us()), std::to_string(segment.t_end_us()),

@@ -44,10 +44,9 @@ inline const std::vector<std::string> kOrientationColumns = {"t_us", "w", "x", "
 inline const std::vector<std::string> kForearmOrientationColumns = {"t_us", "w", "x", "y", "z", "pronation_rad"};
 inline const std::vector<std::string> kJointColumns = {"t_us", "joint", "joint_name", "x_m",
                                                        "y_m",  "z_m",   "source",     "confidence"};
-inline const std::vector<std::string> kForearmColumns = {"t_us", "arm", "qw", "qx", "qy",
-                                                         "qz", "pronation_rad", "source", "confidence"};
-inline const std::vector<std::string> kImuPositionColumns = {"t_us", "device_id", "x_m", "y_m", "z_m",
-                                                             "source"};
+inline const std::vector<std::string> kForearmColumns = {"t_us", "arm",           "qw",     "qx",        "qy",
+                                                         "qz",   "pronation_rad", "source", "confidence"};
+inline const std::vector<std::string> kImuPositionColumns = {"t_us", "device_id", "x_m", "y_m", "z_m", "source"};
 inline const std::vector<std::string> kRecoveredSegmentColumns = {
     "device_id", "method",    "t_start_us", "t_end_us",  "t_us",      "imu_x_m", "imu_y_m", "imu_z_m", "elbow_x_m",
     "elbow_y_m", "elbow_z_m", "wrist_x_m",  "wrist_y_m", "wrist_z_m", "w",       "x",       "y",       "z"};
@@ -78,8 +77,7 @@ class ResultFiles {
   const std::filesystem::path& directory() const { return directory_; }
 
  private:
-  CsvWriter& opened_file(std::optional<CsvWriter>& file, const char* name,
-                        const std::vector<std::string>& columns);
+  CsvWriter& opened_file(std::optional<CsvWriter>& file, const char* name, const std::vector<std::string>& columns);
 
   std::filesystem::path directory_;
   std::map<std::string, std::unique_ptr<CsvWriter>> orientations_;

@@ -43,7 +43,8 @@ class ResultCsv {
   }
   v1::Source source(std::size_t c) const {
     v1::Source s{};
-    if (!v1::Source_Parse(text(c), &s)) throw_invalid(csv_.field(c), session::quoted(csv_.at(c)) + " is not a Source name");
+    if (!v1::Source_Parse(text(c), &s))
+      throw_invalid(csv_.field(c), session::quoted(csv_.at(c)) + " is not a Source name");
     return s;
   }
   v1::Arm arm(std::size_t c) const {
@@ -73,8 +74,7 @@ class ResultCsv {
 };
 
 std::vector<TimedOrientation> read_orientations(const fs::path& path, const std::string& name, bool forearm) {
-  ResultCsv csv(path, name,
-                forearm ? result_layout::kForearmOrientationColumns : result_layout::kOrientationColumns);
+  ResultCsv csv(path, name, forearm ? result_layout::kForearmOrientationColumns : result_layout::kOrientationColumns);
   std::vector<TimedOrientation> rows;
   std::int64_t previous = 0;
   while (csv.next()) {
@@ -89,7 +89,7 @@ std::vector<TimedOrientation> read_orientations(const fs::path& path, const std:
 
 // imu_orientations/<id>.csv or forearm_orientations/<id>.csv, keyed by id.
 std::map<std::string, std::vector<TimedOrientation>> read_orientation_folder(ResultDirectory& out, const char* folder,
-                                                                            bool forearm) {
+                                                                             bool forearm) {
   std::map<std::string, std::vector<TimedOrientation>> by_device;
   const fs::path dir = out.directory / folder;
   if (!fs::is_directory(dir)) return by_device;
@@ -117,27 +117,26 @@ std::vector<Row> read_rows(ResultDirectory& out, const char* name, const std::ve
   return rows;
 }
 
-std::vector<JointRow> read_joints(ResultDirectory& out, const char* name, int joint_count,
-                                  const char* const* names) {
+std::vector<JointRow> read_joints(ResultDirectory& out, const char* name, int joint_count, const char* const* names) {
   std::int64_t previous = 0;
-  return read_rows<JointRow>(out, name, result_layout::kJointColumns,
-                             [&](const ResultCsv& csv, const std::vector<JointRow>& rows) {
-    JointRow row;
-    row.t_us = csv.time_after(0, previous, rows.empty());
-    const std::int64_t joint = csv.int64(1);
-    if (joint < 0 || joint >= joint_count) {
-      throw_invalid(csv.field(1), std::to_string(joint) + " is not in 0.." + std::to_string(joint_count - 1));
-    }
-    row.joint = static_cast<int>(joint);
-    if (csv.text(2) != names[row.joint]) {
-      throw_invalid(csv.field(2), session::quoted(csv.text(2)) + " is not joint " + std::to_string(joint) +
-                                      "'s name " + session::quoted(names[row.joint]));
-    }
-    row.p_K = csv.vec3(3);
-    row.source = csv.source(6);
-    row.confidence = csv.number(7);
-    return row;
-  });
+  return read_rows<JointRow>(
+      out, name, result_layout::kJointColumns, [&](const ResultCsv& csv, const std::vector<JointRow>& rows) {
+        JointRow row;
+        row.t_us = csv.time_after(0, previous, rows.empty());
+        const std::int64_t joint = csv.int64(1);
+        if (joint < 0 || joint >= joint_count) {
+          throw_invalid(csv.field(1), std::to_string(joint) + " is not in 0.." + std::to_string(joint_count - 1));
+        }
+        row.joint = static_cast<int>(joint);
+        if (csv.text(2) != names[row.joint]) {
+          throw_invalid(csv.field(2), session::quoted(csv.text(2)) + " is not joint " + std::to_string(joint) +
+                                          "'s name " + session::quoted(names[row.joint]));
+        }
+        row.p_K = csv.vec3(3);
+        row.source = csv.source(6);
+        row.confidence = csv.number(7);
+        return row;
+      });
 }
 
 // Not in time order, even per arm: the forearm stage and, with `fit.enabled`, the body-fit stage
@@ -145,16 +144,16 @@ std::vector<JointRow> read_joints(ResultDirectory& out, const char* name, int jo
 // (arm, t_us) here, the rows of one frame kept in file order.
 std::vector<ForearmRow> read_forearms(ResultDirectory& out) {
   std::vector<ForearmRow> rows = read_rows<ForearmRow>(out, result_layout::kForearmsCsv, result_layout::kForearmColumns,
-                               [&](const ResultCsv& csv, const std::vector<ForearmRow>&) {
-    ForearmRow row;
-    row.arm = csv.arm(1);
-    row.t_us = csv.int64(0);
-    row.K_from_F = csv.quat(2);
-    row.pronation_rad = csv.number(6);
-    row.source = csv.source(7);
-    row.confidence = csv.number(8);
-    return row;
-  });
+                                                       [&](const ResultCsv& csv, const std::vector<ForearmRow>&) {
+                                                         ForearmRow row;
+                                                         row.arm = csv.arm(1);
+                                                         row.t_us = csv.int64(0);
+                                                         row.K_from_F = csv.quat(2);
+                                                         row.pronation_rad = csv.number(6);
+                                                         row.source = csv.source(7);
+                                                         row.confidence = csv.number(8);
+                                                         return row;
+                                                       });
   std::stable_sort(rows.begin(), rows.end(), [](const ForearmRow& a, const ForearmRow& b) {
     return std::make_pair(static_cast<int>(a.arm), a.t_us) < std::make_pair(static_cast<int>(b.arm), b.t_us);
   });
@@ -165,43 +164,44 @@ std::vector<ImuPositionRow> read_imu_positions(ResultDirectory& out) {
   std::map<std::string, std::int64_t> previous;  // per device
   return read_rows<ImuPositionRow>(out, result_layout::kImuPositionsCsv, result_layout::kImuPositionColumns,
                                    [&](const ResultCsv& csv, const std::vector<ImuPositionRow>&) {
-    ImuPositionRow row;
-    row.device_id = csv.device_id(1);
-    const bool first = !previous.count(row.device_id);
-    row.t_us = csv.time_after(0, previous[row.device_id], first);
-    row.p_K = csv.vec3(2);
-    row.source = csv.source(5);
-    return row;
-  });
+                                     ImuPositionRow row;
+                                     row.device_id = csv.device_id(1);
+                                     const bool first = !previous.count(row.device_id);
+                                     row.t_us = csv.time_after(0, previous[row.device_id], first);
+                                     row.p_K = csv.vec3(2);
+                                     row.source = csv.source(5);
+                                     return row;
+                                   });
 }
 
 std::vector<RecoveredRow> read_recovered(ResultDirectory& out) {
   std::int64_t previous = 0;
-  return read_rows<RecoveredRow>(out, result_layout::kRecoveredSegmentsCsv, result_layout::kRecoveredSegmentColumns,
-                                 [&](const ResultCsv& csv, const std::vector<RecoveredRow>& rows) {
-    RecoveredRow row;
-    row.device_id = csv.device_id(0);
-    if (!v1::RecoveredSegment::Method_Parse(csv.text(1), &row.method) ||
-        row.method == v1::RecoveredSegment::METHOD_UNSPECIFIED) {
-      throw_invalid(csv.field(1), session::quoted(csv.text(1)) + " is not PAPER or SMOOTHER");
-    }
-    row.t_start_us = csv.int64(2);
-    row.t_end_us = csv.int64(3);
-    if (row.t_end_us < row.t_start_us) {
-      throw_invalid(csv.field(3), std::to_string(row.t_end_us) + " is before t_start_us " +
-                                      std::to_string(row.t_start_us));
-    }
-    // Rows of one segment are consecutive; a new segment may start earlier than the last one.
-    const bool same_segment = !rows.empty() && rows.back().device_id == row.device_id &&
-                              rows.back().method == row.method && rows.back().t_start_us == row.t_start_us &&
-                              rows.back().t_end_us == row.t_end_us;
-    row.t_us = csv.time_after(4, previous, !same_segment);
-    row.imu_K = csv.vec3(5);
-    row.elbow_K = csv.vec3(8);
-    row.wrist_K = csv.vec3(11);
-    row.K_from_F = csv.quat(14);
-    return row;
-  });
+  return read_rows<RecoveredRow>(
+      out, result_layout::kRecoveredSegmentsCsv, result_layout::kRecoveredSegmentColumns,
+      [&](const ResultCsv& csv, const std::vector<RecoveredRow>& rows) {
+        RecoveredRow row;
+        row.device_id = csv.device_id(0);
+        if (!v1::RecoveredSegment::Method_Parse(csv.text(1), &row.method) ||
+            row.method == v1::RecoveredSegment::METHOD_UNSPECIFIED) {
+          throw_invalid(csv.field(1), session::quoted(csv.text(1)) + " is not PAPER or SMOOTHER");
+        }
+        row.t_start_us = csv.int64(2);
+        row.t_end_us = csv.int64(3);
+        if (row.t_end_us < row.t_start_us) {
+          throw_invalid(csv.field(3),
+                        std::to_string(row.t_end_us) + " is before t_start_us " + std::to_string(row.t_start_us));
+        }
+        // Rows of one segment are consecutive; a new segment may start earlier than the last one.
+        const bool same_segment = !rows.empty() && rows.back().device_id == row.device_id &&
+                                  rows.back().method == row.method && rows.back().t_start_us == row.t_start_us &&
+                                  rows.back().t_end_us == row.t_end_us;
+        row.t_us = csv.time_after(4, previous, !same_segment);
+        row.imu_K = csv.vec3(5);
+        row.elbow_K = csv.vec3(8);
+        row.wrist_K = csv.vec3(11);
+        row.K_from_F = csv.quat(14);
+        return row;
+      });
 }
 
 }  // namespace
@@ -215,8 +215,8 @@ ResultDirectory read_result_files(const fs::path& directory) {
   out.imu_orientations = read_orientation_folder(out, result_layout::kImuOrientationDir, false);
   out.forearm_orientations = read_orientation_folder(out, result_layout::kForearmOrientationDir, true);
   out.smpl_joints = read_joints(out, result_layout::kSmplJointsCsv, body::kNumJoints, body::smpl_joint_names().data());
-  out.camera_joints = read_joints(out, result_layout::kCameraJointsCsv, static_cast<int>(layout::kKinectJointNames.size()),
-                                  layout::kKinectJointNames.data());
+  out.camera_joints = read_joints(out, result_layout::kCameraJointsCsv,
+                                  static_cast<int>(layout::kKinectJointNames.size()), layout::kKinectJointNames.data());
   out.forearms = read_forearms(out);
   out.imu_positions = read_imu_positions(out);
   out.recovered = read_recovered(out);
@@ -224,8 +224,7 @@ ResultDirectory read_result_files(const fs::path& directory) {
     out.files.insert(result_layout::kCalibrationJson);
     v1::CalibrationReport report;
     message_from_json(read_file_bytes(directory / result_layout::kCalibrationJson, result_layout::kCalibrationJson),
-                      result_layout::kCalibrationJson,
-                      report);
+                      result_layout::kCalibrationJson, report);
     out.calibration = std::move(report);
   }
   return out;

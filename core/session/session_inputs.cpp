@@ -10,8 +10,17 @@ const Skeleton* CameraFrame::skeleton(std::uint32_t body_id) const {
 }
 
 geometry::PinholeCamera pinhole_camera(const v1::CameraIntrinsics& c) {
-  return {static_cast<int>(c.width()), static_cast<int>(c.height()), c.fx(), c.fy(), c.cx(), c.cy(),
-          c.k1(), c.k2(), c.k3(), c.p1(), c.p2()};
+  return {static_cast<int>(c.width()),
+          static_cast<int>(c.height()),
+          c.fx(),
+          c.fy(),
+          c.cx(),
+          c.cy(),
+          c.k1(),
+          c.k2(),
+          c.k3(),
+          c.p1(),
+          c.p2()};
 }
 
 SessionCameras session_cameras(const v1::SessionHeader& header) {

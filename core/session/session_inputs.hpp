@@ -37,10 +37,10 @@ struct Skeleton {
 // nothing for this instant; cv::Mat shares the pixels, so a stage may keep a frame cheaply.
 struct CameraFrame {
   std::int64_t t_us = 0;
-  cv::Mat depth_mm;    // CV_16UC1, millimetres, 0 = no reading
-  cv::Mat body_index;  // CV_8UC1, the body id of each pixel, 255 = background
+  cv::Mat depth_mm;                 // CV_16UC1, millimetres, 0 = no reading
+  cv::Mat body_index;               // CV_8UC1, the body id of each pixel, 255 = background
   std::vector<Skeleton> skeletons;  // one per body seen, by body id
-  cv::Mat color_gray;  // CV_8UC1 brightness of the colour frame nearest in time
+  cv::Mat color_gray;               // CV_8UC1 brightness of the colour frame nearest in time
   std::int64_t color_t_us = 0;
 
   // The skeleton of `body_id`, or nullptr.
@@ -64,7 +64,7 @@ struct ClockEvent {
   enum class Kind { kBuzzerStop, kBleReceipt };
   Kind kind = Kind::kBuzzerStop;
   std::string device_id;
-  std::int64_t t_us = 0;  // device clock
+  std::int64_t t_us = 0;           // device clock
   std::uint32_t ble_sequence = 0;  // kBleReceipt only
 };
 

@@ -42,8 +42,7 @@ void validate_header(const v1::SessionHeader& header, const std::string& field =
 // them and returns the decoded image (empty for other chunks); colour images are checked by
 // their file header only. Header and end chunks are rejected here: they only make sense in a
 // stream.
-cv::Mat validate_chunk(const v1::SessionChunk& chunk, const v1::SessionHeader& header,
-                       const std::string& field);
+cv::Mat validate_chunk(const v1::SessionChunk& chunk, const v1::SessionHeader& header, const std::string& field);
 
 // Checks a stream chunk by chunk: header first and exactly once, per-stream timestamp order,
 // every chunk's content (validate_chunk), the end marker last with matching counts.
@@ -75,8 +74,7 @@ class SessionValidator {
   bool ended_ = false;
   v1::EndOfSession counts_;
   // Last timestamp per stream, to enforce order.
-  std::optional<std::int64_t> last_depth_t_us_, last_body_index_t_us_, last_color_t_us_,
-      last_audio_t_us_;
+  std::optional<std::int64_t> last_depth_t_us_, last_body_index_t_us_, last_color_t_us_, last_audio_t_us_;
   std::map<std::uint32_t, std::int64_t> last_skeleton_t_us_;  // by body_id
   std::map<std::string, std::int64_t> last_imu_t_us_;         // by device_id
   std::map<std::string, std::int64_t> last_sync_t_us_;        // by device_id

@@ -85,15 +85,13 @@ std::string from_hex(std::string_view hex, const std::string& field) {
   return out;
 }
 
-CsvReader::CsvReader(const std::filesystem::path& path, std::string name,
-                     std::vector<std::string> columns)
+CsvReader::CsvReader(const std::filesystem::path& path, std::string name, std::vector<std::string> columns)
     : in_(std::make_unique<std::ifstream>(path)), name_(std::move(name)), columns_(std::move(columns)) {
   if (!*in_) throw Error(ErrorCode::kNotFound, name_, "cannot open " + path.string());
   read_header_row();
 }
 
-CsvReader::CsvReader(std::unique_ptr<std::istream> in, std::string name,
-                     std::vector<std::string> columns)
+CsvReader::CsvReader(std::unique_ptr<std::istream> in, std::string name, std::vector<std::string> columns)
     : in_(std::move(in)), name_(std::move(name)), columns_(std::move(columns)) {
   read_header_row();
 }
@@ -127,8 +125,7 @@ bool CsvReader::next() {
     }
     if (fields_.size() != columns_.size()) {
       throw_invalid(name_ + ":" + std::to_string(line_number_),
-                    "has " + std::to_string(fields_.size()) + " fields, expected " +
-                        std::to_string(columns_.size()));
+                    "has " + std::to_string(fields_.size()) + " fields, expected " + std::to_string(columns_.size()));
     }
     return true;
   }

@@ -19,8 +19,7 @@ std::uint32_t le32(const char* p) {
   return v;
 }
 std::uint16_t le16(const char* p) {
-  return static_cast<std::uint16_t>(static_cast<unsigned char>(p[0]) |
-                                    (static_cast<unsigned char>(p[1]) << 8));
+  return static_cast<std::uint16_t>(static_cast<unsigned char>(p[0]) | (static_cast<unsigned char>(p[1]) << 8));
 }
 void put_le32(std::ostream& out, std::uint32_t v) {
   for (int i = 0; i < 4; ++i) out.put(static_cast<char>((v >> (8 * i)) & 0xFF));
@@ -68,8 +67,7 @@ void WavReader::read_header(std::uint64_t file_size) {
       format_.sample_rate_hz = le32(fmt.data() + 4);
       const std::uint16_t bits = le16(fmt.data() + 14);
       if (tag != kFormatPcm || bits != kBitsPerSample) {
-        throw_invalid(name_ + ".fmt", "format tag " + std::to_string(tag) + " with " +
-                                          std::to_string(bits) +
+        throw_invalid(name_ + ".fmt", "format tag " + std::to_string(tag) + " with " + std::to_string(bits) +
                                           " bits per sample; only 16-bit PCM (tag 1) is supported");
       }
       if (format_.channels == 0 || format_.sample_rate_hz == 0) {
@@ -80,13 +78,12 @@ void WavReader::read_header(std::uint64_t file_size) {
       if (!have_format) throw_invalid(name_, "data chunk comes before the fmt chunk");
       const std::uint64_t frame_bytes = 2ull * format_.channels;
       if (size % frame_bytes != 0) {
-        throw_invalid(name_ + ".data", "size " + std::to_string(size) +
-                                           " is not a whole number of sample frames");
+        throw_invalid(name_ + ".data", "size " + std::to_string(size) + " is not a whole number of sample frames");
       }
       if (position + size > file_size) {
-        throw Error(ErrorCode::kDataLoss, name_ + ".data",
-                    "header says " + std::to_string(size) + " bytes, the file holds " +
-                        std::to_string(file_size - position));
+        throw Error(
+            ErrorCode::kDataLoss, name_ + ".data",
+            "header says " + std::to_string(size) + " bytes, the file holds " + std::to_string(file_size - position));
       }
       total_frames_ = size / frame_bytes;
       return;  // positioned at the first sample
@@ -100,9 +97,9 @@ void WavReader::read_header(std::uint64_t file_size) {
 
 std::string WavReader::read_frames(std::uint64_t frames) {
   if (frames > frames_left()) {
-    throw Error(ErrorCode::kDataLoss, name_ + ".data",
-                "asked for " + std::to_string(frames) + " sample frames, only " +
-                    std::to_string(frames_left()) + " left");
+    throw Error(
+        ErrorCode::kDataLoss, name_ + ".data",
+        "asked for " + std::to_string(frames) + " sample frames, only " + std::to_string(frames_left()) + " left");
   }
   std::string bytes(frames * 2 * format_.channels, '\0');
   in_->read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
@@ -136,8 +133,8 @@ WavWriter::WavWriter(const std::filesystem::path& path, WavFormat format)
 
 void WavWriter::write_frames(const std::string& pcm_s16le) {
   if (pcm_s16le.size() % (2u * format_.channels) != 0) {
-    throw_invalid(path_.string(), "PCM byte count " + std::to_string(pcm_s16le.size()) +
-                                      " is not a whole number of sample frames");
+    throw_invalid(path_.string(),
+                  "PCM byte count " + std::to_string(pcm_s16le.size()) + " is not a whole number of sample frames");
   }
   if (data_bytes_ + pcm_s16le.size() > kMaxDataBytes) {
     throw Error(ErrorCode::kResourceExhausted, path_.string(), "audio exceeds the 4 GiB WAV limit");

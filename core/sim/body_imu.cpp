@@ -43,8 +43,8 @@ SensorTrajectory forearm_imu_trajectory(const BodyMotion& motion, const Eigen::M
     const Eigen::VectorXd theta = motion.poses(t);
     if (theta.size() != layout.size() || !theta.allFinite()) {
       throw_invalid("motion.poses", "gave a theta of size " + std::to_string(theta.size()) + " (all_joints has " +
-                                        std::to_string(layout.size()) + ") or non-finite values at t = " +
-                                        std::to_string(t) + " s");
+                                        std::to_string(layout.size()) +
+                                        ") or non-finite values at t = " + std::to_string(t) + " s");
     }
     const ForearmPose pose = forearm_pose(pose_skeleton(rest_joints, layout, theta), rest_R_from_F, strap);
     out.p_W_m.push_back(W_from_R * pose.imu_R_m);
@@ -53,8 +53,8 @@ SensorTrajectory forearm_imu_trajectory(const BodyMotion& motion, const Eigen::M
   return out;
 }
 
-SensorTrajectory base_imu_trajectory(const Eigen::Isometry3d& K_from_R, const Quat& W_from_R,
-                                     const BaseImuMount& mount, double t_begin_s, double t_end_s, double dt_s) {
+SensorTrajectory base_imu_trajectory(const Eigen::Isometry3d& K_from_R, const Quat& W_from_R, const BaseImuMount& mount,
+                                     double t_begin_s, double t_end_s, double dt_s) {
   require_positive(dt_s, "dt_s");
   require_interval(t_begin_s, t_end_s, "t_end_s");
   if (!K_from_R.matrix().allFinite()) throw_invalid("K_from_R", "is not finite");

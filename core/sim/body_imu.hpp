@@ -31,8 +31,7 @@ struct BaseImuMount {
 
 // A still sensor on the camera over [t_begin_s, t_end_s] (SensorKinematics' valid range):
 // W_from_B = W_from_R * R_from_K * K_from_B. K_from_R is the camera session's K_from_W.
-SensorTrajectory base_imu_trajectory(const Eigen::Isometry3d& K_from_R, const Quat& W_from_R,
-                                     const BaseImuMount& mount, double t_begin_s, double t_end_s,
-                                     double dt_s = 0.01);
+SensorTrajectory base_imu_trajectory(const Eigen::Isometry3d& K_from_R, const Quat& W_from_R, const BaseImuMount& mount,
+                                     double t_begin_s, double t_end_s, double dt_s = 0.01);
 
 }  // namespace posefuse::sim

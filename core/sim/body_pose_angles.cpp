@@ -38,8 +38,8 @@ ArmAngles blend(const ArmAngles& a, const ArmAngles& b, double w) {
 }
 
 void check_arm(const ArmAngles& a, const char* field) {
-  for (double v : {a.shoulder_abduction_rad, a.shoulder_flexion_rad, a.humeral_rotation_rad,
-                   a.elbow_flexion_rad, a.supination_rad}) {
+  for (double v : {a.shoulder_abduction_rad, a.shoulder_flexion_rad, a.humeral_rotation_rad, a.elbow_flexion_rad,
+                   a.supination_rad}) {
     if (!std::isfinite(v)) throw_invalid(field, "has a non-finite angle");
   }
 }

@@ -59,9 +59,7 @@ class Parser {
   }
 
  private:
-  [[noreturn]] void fail(int line, const std::string& message) const {
-    throw_invalid(where(line), message);
-  }
+  [[noreturn]] void fail(int line, const std::string& message) const { throw_invalid(where(line), message); }
   [[noreturn]] void truncated(int line, const std::string& message) const {
     throw Error(ErrorCode::kDataLoss, where(line), message + " (file ends early)");
   }
@@ -106,8 +104,9 @@ class Parser {
     parse_joint(skeleton, -1, last_line);
     if (pos_ < tokens_.size()) {
       const Token& t = tokens_[pos_];
-      fail(t.line, "unexpected '" + std::string(t.text) + "' after the root joint (only one ROOT "
-                   "is supported; or unbalanced braces)");
+      fail(t.line, "unexpected '" + std::string(t.text) +
+                       "' after the root joint (only one ROOT "
+                       "is supported; or unbalanced braces)");
     }
     if (motion_index < 0) fail(last_line, "missing MOTION section");
     return motion_index;
@@ -170,22 +169,20 @@ class Parser {
 
     const Token channels_word = next(last_line, "CHANNELS");
     if (channels_word.text != "CHANNELS") {
-      fail(channels_word.line, "expected CHANNELS in joint '" + std::string(name.text) +
-                                   "', found '" + std::string(channels_word.text) + "'");
+      fail(channels_word.line, "expected CHANNELS in joint '" + std::string(name.text) + "', found '" +
+                                   std::string(channels_word.text) + "'");
     }
     const Token count_token = next(last_line, "the channel count");
     const double count = number(count_token, "channel count");
     if (count < 0 || count > 6 || count != std::floor(count)) {
-      fail(count_token.line, "channel count must be an integer 0..6, got '" +
-                                 std::string(count_token.text) + "'");
+      fail(count_token.line, "channel count must be an integer 0..6, got '" + std::string(count_token.text) + "'");
     }
     skeleton.joints[index].first_channel = skeleton.channel_count;
     for (int k = 0; k < static_cast<int>(count); ++k) {
       const Token c = next(last_line, "a channel name");
       BvhChannel channel{};
       if (!channel_from_name(c.text, channel)) {
-        fail(c.line, "unknown channel '" + std::string(c.text) + "' in joint '" +
-                         std::string(name.text) + "'");
+        fail(c.line, "unknown channel '" + std::string(c.text) + "' in joint '" + std::string(name.text) + "'");
       }
       for (BvhChannel seen : skeleton.joints[index].channels) {
         if (seen == channel) fail(c.line, "channel '" + std::string(c.text) + "' repeated");
@@ -256,14 +253,13 @@ class Parser {
       // Blank lines between frames are tolerated; a frame line must hold every channel.
       index = next_nonempty(index);
       if (index < 0) {
-        truncated(last_line, "only " + std::to_string(f) + " of " + std::to_string(frame_count) +
-                                 " frame lines");
+        truncated(last_line, "only " + std::to_string(f) + " of " + std::to_string(frame_count) + " frame lines");
       }
       t.clear();
       append_tokens(lines_[index], index + 1, t);
       if (t.size() != values.size()) {
-        fail(index + 1, "frame " + std::to_string(f) + " has " + std::to_string(t.size()) + " values, the hierarchy declares " +
-                            std::to_string(values.size()) + " channels");
+        fail(index + 1, "frame " + std::to_string(f) + " has " + std::to_string(t.size()) +
+                            " values, the hierarchy declares " + std::to_string(values.size()) + " channels");
       }
       for (std::size_t k = 0; k < values.size(); ++k) values[k] = number(t[k], "channel value");
       clip.frames.push_back(decode(skeleton, values));
@@ -310,9 +306,9 @@ class Parser {
 void check_pose_matches(const BvhSkeleton& skeleton, const BvhLocalPose& pose) {
   const std::size_t n = skeleton.joints.size();
   if (pose.parent_from_joint.size() != n || pose.translation.size() != n) {
-    throw_invalid("bvh_pose", "pose has " + std::to_string(pose.parent_from_joint.size()) +
-                                  " rotations and " + std::to_string(pose.translation.size()) +
-                                  " translations for a skeleton of " + std::to_string(n) + " joints");
+    throw_invalid("bvh_pose", "pose has " + std::to_string(pose.parent_from_joint.size()) + " rotations and " +
+                                  std::to_string(pose.translation.size()) + " translations for a skeleton of " +
+                                  std::to_string(n) + " joints");
   }
 }
 
@@ -325,9 +321,7 @@ int BvhSkeleton::find(std::string_view name) const {
   return -1;
 }
 
-BvhClip parse_bvh(std::string_view text, const std::string& source_name) {
-  return Parser(text, source_name).parse();
-}
+BvhClip parse_bvh(std::string_view text, const std::string& source_name) { return Parser(text, source_name).parse(); }
 
 BvhClip load_bvh(const std::filesystem::path& path) {
   std::ifstream in(path, std::ios::binary);
@@ -340,8 +334,7 @@ BvhClip load_bvh(const std::filesystem::path& path) {
 
 Quat W_from_bvh_world() { return Quat(Eigen::AngleAxisd(EIGEN_PI / 2.0, Vec3::UnitX())); }
 
-BvhWorldPose forward_kinematics(const BvhSkeleton& skeleton, const BvhLocalPose& pose,
-                                double metres_per_unit) {
+BvhWorldPose forward_kinematics(const BvhSkeleton& skeleton, const BvhLocalPose& pose, double metres_per_unit) {
   check_pose_matches(skeleton, pose);
   require_positive(metres_per_unit, "metres_per_unit");
   const std::size_t n = skeleton.joints.size();
@@ -390,8 +383,7 @@ BvhClip resample(const BvhClip& clip, double rate_hz) {
   out.frames.reserve(count);
   const std::size_t last = clip.frames.size() - 1;
   for (std::size_t k = 0; k < count; ++k) {
-    const double position = std::min(static_cast<double>(k) / rate_hz / clip.frame_time_s,
-                                     static_cast<double>(last));
+    const double position = std::min(static_cast<double>(k) / rate_hz / clip.frame_time_s, static_cast<double>(last));
     const auto i0 = std::min(static_cast<std::size_t>(std::floor(position)), last);
     const std::size_t i1 = std::min(i0 + 1, last);
     const double u = position - static_cast<double>(i0);

@@ -29,11 +29,11 @@ enum class BvhChannel { kXposition, kYposition, kZposition, kXrotation, kYrotati
 
 struct BvhJoint {
   std::string name;
-  int parent = -1;                        // index into BvhSkeleton::joints; -1 for the root
-  Vec3 offset = Vec3::Zero();             // file units, in the parent's frame
-  std::vector<BvhChannel> channels;       // in declared order
-  int first_channel = 0;                  // index of channels[0] within a frame line
-  std::optional<Vec3> end_site_offset;    // file units, in this joint's frame ("End Site")
+  int parent = -1;                      // index into BvhSkeleton::joints; -1 for the root
+  Vec3 offset = Vec3::Zero();           // file units, in the parent's frame
+  std::vector<BvhChannel> channels;     // in declared order
+  int first_channel = 0;                // index of channels[0] within a frame line
+  std::optional<Vec3> end_site_offset;  // file units, in this joint's frame ("End Site")
 };
 
 struct BvhSkeleton {
@@ -53,7 +53,7 @@ struct BvhLocalPose {
 
 struct BvhClip {
   BvhSkeleton skeleton;
-  double frame_time_s = 0.0;        // > 0
+  double frame_time_s = 0.0;         // > 0
   std::vector<BvhLocalPose> frames;  // frame i is at time i * frame_time_s
 
   int frame_count() const { return static_cast<int>(frames.size()); }
@@ -75,8 +75,8 @@ Quat W_from_bvh_world();
 
 // World pose of every joint at one frame, in W and metres.
 struct BvhWorldPose {
-  std::vector<Quat> W_from_joint;                 // per joint
-  std::vector<Vec3> p_W_m;                        // joint origins
+  std::vector<Quat> W_from_joint;                   // per joint
+  std::vector<Vec3> p_W_m;                          // joint origins
   std::vector<std::optional<Vec3>> end_site_p_W_m;  // per joint; set where it has an End Site
 };
 
@@ -84,8 +84,7 @@ struct BvhWorldPose {
 // p_M(joint) = p_M(parent) + M_from_parent * (offset + translation); then W_from_M and
 // `metres_per_unit` (0.01 for centimetre files) map into W. Throws kInvalidArgument if the
 // pose does not match the skeleton or metres_per_unit is not positive and finite.
-BvhWorldPose forward_kinematics(const BvhSkeleton& skeleton, const BvhLocalPose& pose,
-                                double metres_per_unit);
+BvhWorldPose forward_kinematics(const BvhSkeleton& skeleton, const BvhLocalPose& pose, double metres_per_unit);
 
 // The clip resampled at `rate_hz`: frames at k / rate_hz for every k with k / rate_hz <=
 // duration. Rotations are slerped (shortest arc), translations interpolated linearly, both

@@ -28,7 +28,7 @@ struct ArmPair {
   std::vector<int> left, right;  // the two arm subtrees, paired joint by joint in file order
   int parent = -1;               // the joint both arms hang from
   int left_wrist = -1, right_wrist = -1;
-  double arm_length = 0;         // rest shoulder -> wrist, file units
+  double arm_length = 0;  // rest shoulder -> wrist, file units
 };
 
 std::vector<int> subtree(const BvhSkeleton& skeleton, int root) {
@@ -56,7 +56,9 @@ std::optional<ArmPair> find_arms(const BvhSkeleton& skeleton, const BvhJointMap&
   if (arms.parent < 0 || arms.parent != skeleton.joints[static_cast<std::size_t>(right)].parent) return std::nullopt;
   arms.left = subtree(skeleton, left);
   arms.right = subtree(skeleton, right);
-  const auto in = [](const std::vector<int>& chain, int j) { return std::find(chain.begin(), chain.end(), j) != chain.end(); };
+  const auto in = [](const std::vector<int>& chain, int j) {
+    return std::find(chain.begin(), chain.end(), j) != chain.end();
+  };
   if (arms.left.size() != arms.right.size() || !in(arms.left, arms.left_wrist) || !in(arms.right, arms.right_wrist)) {
     return std::nullopt;
   }
@@ -161,8 +163,8 @@ void repair_flips(const BvhSkeleton& skeleton, double frame_time_s, const BvhGli
         const double bridge = geometry::angle_between(q(a - 1), q(b + 1));
         const double undone = std::min(geometry::angle_between(q(b) * jump_in_joint.conjugate(), q(b + 1)),
                                        geometry::angle_between(jump_in_parent.conjugate() * q(b), q(b + 1)));
-        const bool returns = (bridge <= max_step * (b - a + 2) && bridge < 0.5 * std::min(jump, back)) ||
-                             undone <= 2.0 * max_step;
+        const bool returns =
+            (bridge <= max_step * (b - a + 2) && bridge < 0.5 * std::min(jump, back)) || undone <= 2.0 * max_step;
         if (back > max_step && returns) break;
         if (b - a + 1 >= options.max_glitch_frames) {
           // A jump out of frame 0 that never comes back: frame 0 is the odd one.
@@ -170,12 +172,13 @@ void repair_flips(const BvhSkeleton& skeleton, double frame_time_s, const BvhGli
             first_frame_is_the_glitch = true;
             break;
           }
-          throw_invalid(frame_range(a, b), "joint " + skeleton.joints[j].name + " turns " + number(jump) +
-                                               " rad in one frame (" + number(jump / frame_time_s) +
-                                               " rad/s, limit max_joint_rate_rad_s " +
-                                               number(options.max_joint_rate_rad_s) + ") and does not come back within " +
-                                               std::to_string(options.max_glitch_frames) + " frames (max_glitch_frames; posefuse-sim: "
-                                               "bvh_max_glitch_frames); not repairable");
+          throw_invalid(frame_range(a, b),
+                        "joint " + skeleton.joints[j].name + " turns " + number(jump) + " rad in one frame (" +
+                            number(jump / frame_time_s) + " rad/s, limit max_joint_rate_rad_s " +
+                            number(options.max_joint_rate_rad_s) + ") and does not come back within " +
+                            std::to_string(options.max_glitch_frames) +
+                            " frames (max_glitch_frames; posefuse-sim: "
+                            "bvh_max_glitch_frames); not repairable");
         }
         ++b;
       }
@@ -248,17 +251,21 @@ void repair_bone_lengths(const BvhSkeleton& skeleton, const BvhGlitchOptions& op
         throw_invalid(frame_range(a, b), "joint " + skeleton.joints[j].name + " is " + number(worst) +
                                              " file units from its parent (median " + number(medians[j]) + ") for " +
                                              std::to_string(b - a + 1) + " frames, more than max_glitch_frames " +
-                                             std::to_string(options.max_glitch_frames) + " (posefuse-sim: bvh_max_glitch_frames); not repairable");
+                                             std::to_string(options.max_glitch_frames) +
+                                             " (posefuse-sim: bvh_max_glitch_frames); not repairable");
       }
-      if (a == 0 && b == n - 1) throw_invalid(frame_range(a, b), "joint " + skeleton.joints[j].name + " has no frame with its median bone length");
+      if (a == 0 && b == n - 1)
+        throw_invalid(frame_range(a, b),
+                      "joint " + skeleton.joints[j].name + " has no frame with its median bone length");
       BvhGlitch g;
       g.kind = BvhGlitchKind::kBoneLength;
       g.first_frame = a;
       g.last_frame = b;
       g.joint = skeleton.joints[j].name;
       g.reason = "bone length jumps to " + number(worst) + " file units (median " + number(medians[j]) + ")";
-      g.repair = a > 0 && b + 1 < n ? "interpolating the joint's translation across the frames"
-                                    : "holding the joint's translation of frame " + std::to_string(a > 0 ? a - 1 : b + 1);
+      g.repair = a > 0 && b + 1 < n
+                     ? "interpolating the joint's translation across the frames"
+                     : "holding the joint's translation of frame " + std::to_string(a > 0 ? a - 1 : b + 1);
       glitches.push_back(g);
       const Vec3 before = frames[static_cast<std::size_t>(a > 0 ? a - 1 : b + 1)].translation[j];
       const Vec3 after = frames[static_cast<std::size_t>(b + 1 < n ? b + 1 : a - 1)].translation[j];

@@ -62,7 +62,7 @@ struct BvhGlitch {
 std::string describe(const BvhGlitch& glitch, double frame_time_s);
 
 struct BvhRepair {
-  BvhClip clip;                    // repaired
+  BvhClip clip;                     // repaired
   std::vector<BvhGlitch> glitches;  // in the order repaired: arm swaps, flips, bone lengths
 };
 

@@ -100,12 +100,21 @@ std::string at(const std::string& source, int line) { return source + ":" + std:
 
 bool is_required_smpl_joint(int smpl) {
   switch (smpl) {
-    case kPelvis: case kLeftHip: case kRightHip: case kLeftKnee: case kRightKnee: case kLeftAnkle:
-    case kRightAnkle: case kHead: case kLeftShoulder: case kRightShoulder: case kLeftElbow:
-    case kRightElbow: case kLeftWrist: case kRightWrist:
-      return true;
-    default:
-      return false;
+    case kPelvis:
+    case kLeftHip:
+    case kRightHip:
+    case kLeftKnee:
+    case kRightKnee:
+    case kLeftAnkle:
+    case kRightAnkle:
+    case kHead:
+    case kLeftShoulder:
+    case kRightShoulder:
+    case kLeftElbow:
+    case kRightElbow:
+    case kLeftWrist:
+    case kRightWrist: return true;
+    default: return false;
   }
 }
 
@@ -170,8 +179,8 @@ BvhJointMap parse_bvh_joint_map(std::string_view text, const std::string& source
     const std::string smpl_name(trim(row.substr(0, equals)));
     const std::string bvh_name(trim(row.substr(equals + 1)));
     if (smpl_name.empty() || bvh_name.empty() || bvh_name.find_first_of(" \t=") != std::string::npos) {
-      throw_invalid(at(source, line), "expected 'smpl_joint = BvhJointName' (one name each side), found '" +
-                                          std::string(row) + "'");
+      throw_invalid(at(source, line),
+                    "expected 'smpl_joint = BvhJointName' (one name each side), found '" + std::string(row) + "'");
     }
     const int smpl = smpl_index(smpl_name);
     if (smpl < 0) {
@@ -182,8 +191,8 @@ BvhJointMap parse_bvh_joint_map(std::string_view text, const std::string& source
     }
     const auto su = static_cast<std::size_t>(smpl);
     if (smpl_line[su] != 0) {
-      throw_invalid(at(source, line), "'" + smpl_name + "' is mapped twice (first on line " +
-                                          std::to_string(smpl_line[su]) + ")");
+      throw_invalid(at(source, line),
+                    "'" + smpl_name + "' is mapped twice (first on line " + std::to_string(smpl_line[su]) + ")");
     }
     for (const BvhJointMapEntry& e : map.entries) {
       if (same_name(e.names.front(), bvh_name)) {

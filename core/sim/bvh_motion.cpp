@@ -31,7 +31,8 @@ double lowest_foot_y(const Eigen::Matrix3Xd& joints) {
 BodyMotion bvh_motion(const BvhClip& clip, const BvhMotionOptions& options, BvhPlacement* placement) {
   require_non_negative(options.smoothing_s, "smoothing_s");
   require_positive(clip.frame_time_s, "clip.frame_time_s");
-  if (clip.frame_count() < 2) throw_invalid("clip.frames", "needs at least 2 frames, got " + std::to_string(clip.frame_count()));
+  if (clip.frame_count() < 2)
+    throw_invalid("clip.frames", "needs at least 2 frames, got " + std::to_string(clip.frame_count()));
   const Eigen::Matrix3Xd rest_joints = template_rest_joints(options.sex, options.betas);
   const BvhRetargetMap map = make_bvh_retarget_map(clip.skeleton, rest_joints, options.joint_map);
 
@@ -67,8 +68,8 @@ BodyMotion bvh_motion(const BvhClip& clip, const BvhMotionOptions& options, BvhP
       v.segment<4>(4 * j) << q.w(), q.x(), q.y(), q.z();
       theta.segment<3>(all_joints_rotation_index(j)) = geometry::rotation_vector_from_quat(q);
     }
-    const Vec3 translation = place.scale * (place.R_from_bvh * frames[f].hips_R_units) + place.offset_R_m -
-                             rest_joints.col(body::kPelvis);
+    const Vec3 translation =
+        place.scale * (place.R_from_bvh * frames[f].hips_R_units) + place.offset_R_m - rest_joints.col(body::kPelvis);
     v.tail<3>() = translation;
     theta.head<3>() = translation;
     lowest = std::min(lowest, lowest_foot_y(pose_skeleton(rest_joints, layout, theta).joints));
@@ -80,8 +81,9 @@ BodyMotion bvh_motion(const BvhClip& clip, const BvhMotionOptions& options, BvhP
 
   auto spline = std::make_shared<const UniformCubicSpline>(
       0.0, clip.frame_time_s,
-      options.smoothing == BvhSmoothing::kNoiseLevel ? smooth_by_noise_level(values, clip.frame_time_s)
-                                                     : gaussian_smooth(values, options.smoothing_s / clip.frame_time_s));
+      options.smoothing == BvhSmoothing::kNoiseLevel
+          ? smooth_by_noise_level(values, clip.frame_time_s)
+          : gaussian_smooth(values, options.smoothing_s / clip.frame_time_s));
   BodyMotion motion;
   motion.duration_s = clip.duration_s();
   motion.poses = [spline](double t_s) {

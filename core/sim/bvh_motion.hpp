@@ -49,7 +49,6 @@ struct BvhPlacement {
 
 // Throws posefuse::Error for clips with fewer than 2 frames, rigs that cannot be mapped
 // (bvh_retarget.hpp) and bad options. `placement`, when given, receives the placement.
-BodyMotion bvh_motion(const BvhClip& clip, const BvhMotionOptions& options = {},
-                      BvhPlacement* placement = nullptr);
+BodyMotion bvh_motion(const BvhClip& clip, const BvhMotionOptions& options = {}, BvhPlacement* placement = nullptr);
 
 }  // namespace posefuse::sim

@@ -12,9 +12,10 @@ using namespace body;
 
 // The SMPL joint each joint's bone points to (-1 for the ends).
 constexpr std::array<int, kNumJoints> kAimChild = {
-    kSpine1, kLeftKnee, kRightKnee, kSpine2, kLeftAnkle, kRightAnkle, kSpine3, kLeftFoot,
-    kRightFoot, kNeck, -1, -1, kHead, kLeftShoulder, kRightShoulder, -1, kLeftElbow,
-    kRightElbow, kLeftWrist, kRightWrist, kLeftHand, kRightHand, -1, -1};
+    kSpine1,    kLeftKnee,     kRightKnee,     kSpine2,    kLeftAnkle, kRightAnkle,
+    kSpine3,    kLeftFoot,     kRightFoot,     kNeck,      -1,         -1,
+    kHead,      kLeftShoulder, kRightShoulder, -1,         kLeftElbow, kRightElbow,
+    kLeftWrist, kRightWrist,   kLeftHand,      kRightHand, -1,         -1};
 
 bool is_bvh_ancestor(const BvhSkeleton& skeleton, int ancestor, int joint) {
   for (int j = skeleton.joints[static_cast<std::size_t>(joint)].parent; j >= 0;
@@ -61,7 +62,9 @@ void bvh_world(const BvhSkeleton& skeleton, const BvhLocalPose& pose, std::vecto
   }
 }
 
-std::string joint_label(int smpl) { return std::string("SMPL joint '") + smpl_joint_names()[static_cast<std::size_t>(smpl)] + "'"; }
+std::string joint_label(int smpl) {
+  return std::string("SMPL joint '") + smpl_joint_names()[static_cast<std::size_t>(smpl)] + "'";
+}
 
 }  // namespace
 
@@ -95,8 +98,8 @@ BvhRetargetMap make_bvh_retarget_map(const BvhSkeleton& skeleton, const Eigen::M
     if (!is_bvh_ancestor(skeleton, ab, b)) {
       throw_invalid(bvh_joint_map_field(joints, match.line[static_cast<std::size_t>(j)]),
                     "'" + skeleton.joints[static_cast<std::size_t>(b)].name + "' (" + joint_label(j) +
-                                      ") is not below '" + skeleton.joints[static_cast<std::size_t>(ab)].name +
-                                      "' (" + joint_label(a) + ") in the BVH hierarchy");
+                        ") is not below '" + skeleton.joints[static_cast<std::size_t>(ab)].name + "' (" +
+                        joint_label(a) + ") in the BVH hierarchy");
     }
   }
 
@@ -138,7 +141,8 @@ BvhRetargetMap make_bvh_retarget_map(const BvhSkeleton& skeleton, const Eigen::M
 
   const double smpl_leg = (rest_joints.col(kLeftKnee) - rest_joints.col(kLeftHip)).norm() +
                           (rest_joints.col(kLeftAnkle) - rest_joints.col(kLeftKnee)).norm();
-  const double bvh_leg = (bvh_at(kLeftKnee) - bvh_at(kLeftHip)).norm() + (bvh_at(kLeftAnkle) - bvh_at(kLeftKnee)).norm();
+  const double bvh_leg =
+      (bvh_at(kLeftKnee) - bvh_at(kLeftHip)).norm() + (bvh_at(kLeftAnkle) - bvh_at(kLeftKnee)).norm();
   if (!(bvh_leg > eps)) throw_invalid("bvh.joints", "the left leg has zero length in the rest pose");
   map.leg_length_ratio = smpl_leg / bvh_leg;
   return map;

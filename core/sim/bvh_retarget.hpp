@@ -50,11 +50,11 @@
 namespace posefuse::sim {
 
 struct BvhRetargetMap {
-  std::array<int, body::kNumJoints> bvh_joint{};   // BVH joint index per SMPL joint, -1 = none
-  std::array<int, body::kNumJoints> aim_joint{};   // SMPL joint the bone aims at, -1 = none
-  std::array<Vec3, body::kNumJoints> rest_bone{};  // s: unit rest direction towards aim_joint
+  std::array<int, body::kNumJoints> bvh_joint{};         // BVH joint index per SMPL joint, -1 = none
+  std::array<int, body::kNumJoints> aim_joint{};         // SMPL joint the bone aims at, -1 = none
+  std::array<Vec3, body::kNumJoints> rest_bone{};        // s: unit rest direction towards aim_joint
   std::array<Quat, body::kNumJoints> rest_correction{};  // C_j
-  std::array<bool, body::kNumJoints> aim_posed{};  // apply A_j
+  std::array<bool, body::kNumJoints> aim_posed{};        // apply A_j
   double leg_length_ratio = 1.0;  // SMPL (hip -> knee -> ankle) / BVH rest leg length, per file unit
 };
 
@@ -69,7 +69,7 @@ BvhRetargetMap make_bvh_retarget_map(const BvhSkeleton& skeleton, const Eigen::M
 struct RetargetedFrame {
   std::array<Quat, body::kNumJoints> parent_from_joint;  // SMPL local rotations (pelvis: R_from_pelvis)
   std::array<Quat, body::kNumJoints> global;             // G_j
-  Vec3 hips_R_units = Vec3::Zero();  // BVH root joint position, in R's axes, file units
+  Vec3 hips_R_units = Vec3::Zero();                      // BVH root joint position, in R's axes, file units
 };
 
 // One frame. The BVH world is taken as R directly (both Y up, T-pose facing +z).

@@ -9,8 +9,8 @@
 
 namespace posefuse::sim {
 
-SensorTrajectory bvh_sensor_trajectory(const BvhClip& clip, const BvhSensorMount& mount,
-                                       double metres_per_unit, double smoothing_s, double dt_s) {
+SensorTrajectory bvh_sensor_trajectory(const BvhClip& clip, const BvhSensorMount& mount, double metres_per_unit,
+                                       double smoothing_s, double dt_s) {
   require_positive(dt_s, "dt_s");
   require_non_negative(smoothing_s, "smoothing_s");
   require_positive(clip.frame_time_s, "clip.frame_time_s");

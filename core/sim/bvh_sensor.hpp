@@ -11,9 +11,9 @@
 namespace posefuse::sim {
 
 struct BvhSensorMount {
-  std::string joint;                        // e.g. "RightForeArm"
-  Vec3 offset_joint_m = Vec3::Zero();       // sensor origin in the joint's frame, metres
-  Quat joint_from_A = Quat::Identity();     // sensor orientation in the joint's frame
+  std::string joint;                     // e.g. "RightForeArm"
+  Vec3 offset_joint_m = Vec3::Zero();    // sensor origin in the joint's frame, metres
+  Quat joint_from_A = Quat::Identity();  // sensor orientation in the joint's frame
 };
 
 // Per frame: W_from_A = W_from_joint * joint_from_A, p = p_joint + W_from_joint * offset. The
@@ -24,8 +24,7 @@ struct BvhSensorMount {
 // smoothed by a zero-phase Gaussian of standard deviation smoothing_s (0 = none; at the ends
 // the frames are continued by point reflection, see gaussian_smooth). kInvalidArgument naming the field for an unknown
 // joint, a clip with fewer than 2 frames, or bad numbers.
-SensorTrajectory bvh_sensor_trajectory(const BvhClip& clip, const BvhSensorMount& mount,
-                                       double metres_per_unit, double smoothing_s = 0.0,
-                                       double dt_s = 1e-3);
+SensorTrajectory bvh_sensor_trajectory(const BvhClip& clip, const BvhSensorMount& mount, double metres_per_unit,
+                                       double smoothing_s = 0.0, double dt_s = 1e-3);
 
 }  // namespace posefuse::sim

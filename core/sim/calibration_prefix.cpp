@@ -37,8 +37,7 @@ double calibration_hold_end_s(const BodyMotion& motion) {
   throw_invalid("motion.phases", "has no calibration_hold");
 }
 
-BodyMotion with_calibration_prefix(const BodyMotion& calibration, const BodyMotion& clip,
-                                        double blend_s) {
+BodyMotion with_calibration_prefix(const BodyMotion& calibration, const BodyMotion& clip, double blend_s) {
   const double hold_end = calibration_hold_end_s(calibration);
   const double clip0 = hold_end + blend_s;
   const Eigen::VectorXd held = calibration.poses(hold_end);

@@ -12,8 +12,7 @@ namespace posefuse::sim {
 // clip(t - t_clip0), t_clip0 = t_hold_end + blend_s. The clip is evaluated slightly before its
 // start during the blend, where BodyMotion continues C2-smoothly. Phases: the calibration's, then
 // the clip's shifted.
-BodyMotion with_calibration_prefix(const BodyMotion& calibration, const BodyMotion& clip,
-                                        double blend_s = 1.5);
+BodyMotion with_calibration_prefix(const BodyMotion& calibration, const BodyMotion& clip, double blend_s = 1.5);
 
 // End of the first "calibration_hold" phase (posefuse::Error when there is none).
 double calibration_hold_end_s(const BodyMotion& motion);

@@ -1,8 +1,8 @@
 #include "sim/camera_session.hpp"
 
 #include <cmath>
-#include <opencv2/core.hpp>
 #include <numbers>
+#include <opencv2/core.hpp>
 #include <string>
 
 #include "body/body_evaluator.hpp"
@@ -59,8 +59,8 @@ PoseSequence arm_raising_sequence(const body::PoseLayout& layout, double period_
   };
 }
 
-CameraSessionResult simulate_camera_session(const CameraSessionOptions& options,
-                                            const body::PoseLayout& layout, const PoseSequence& poses) {
+CameraSessionResult simulate_camera_session(const CameraSessionOptions& options, const body::PoseLayout& layout,
+                                            const PoseSequence& poses) {
   require_positive(options.rate_hz, "rate_hz");
   require_positive(options.duration_s, "duration_s");
   require_positive(options.wall_distance_m, "wall_distance_m");
@@ -79,9 +79,8 @@ CameraSessionResult simulate_camera_session(const CameraSessionOptions& options,
 
   // The floor y_W = 0 in K: normal R e_y through the point t (W's origin).
   const Eigen::Vector3d floor_normal_K = options.K_from_W.linear() * Eigen::Vector3d::UnitY();
-  const std::vector<RoomPlane> room = {
-      RoomPlane{floor_normal_K, floor_normal_K.dot(options.K_from_W.translation())},
-      RoomPlane{Eigen::Vector3d::UnitZ(), options.wall_distance_m}};
+  const std::vector<RoomPlane> room = {RoomPlane{floor_normal_K, floor_normal_K.dot(options.K_from_W.translation())},
+                                       RoomPlane{Eigen::Vector3d::UnitZ(), options.wall_distance_m}};
 
   CameraSessionResult result;
   result.header = make_header(options);
@@ -93,20 +92,18 @@ CameraSessionResult simulate_camera_session(const CameraSessionOptions& options,
     const Eigen::VectorXd theta = poses(t_s);
     if (theta.size() != layout.size() || !theta.allFinite()) {
       throw_invalid("poses", "frame " + std::to_string(f) + " gave " + std::to_string(theta.size()) +
-                                 " values (layout has " + std::to_string(layout.size()) +
-                                 ") or non-finite ones");
+                                 " values (layout has " + std::to_string(layout.size()) + ") or non-finite ones");
     }
     evaluator.evaluate(options.betas, theta, body::Derivatives::kNone);
     scene.update_vertices(options.K_from_W * evaluator.vertices());
     scene.render(camera, static_cast<std::uint8_t>(options.body_id), images);
     composite_room(camera, room, images.depth_mm);
-    const NoisyDepth noisy = apply_depth_noise(camera, images.depth_mm, images.body_index,
-                                               options.depth_noise, options.seed, f);
+    const NoisyDepth noisy =
+        apply_depth_noise(camera, images.depth_mm, images.body_index, options.depth_noise, options.seed, f);
     const SmplJointsK joints = smpl_joints_in_camera(evaluator, options.K_from_W);
 
     // cv::Mat views of the images (the codec copies the pixels).
-    const cv::Mat depth(camera.height(), camera.width(), CV_16UC1,
-                        const_cast<std::uint16_t*>(noisy.depth_mm.data()));
+    const cv::Mat depth(camera.height(), camera.width(), CV_16UC1, const_cast<std::uint16_t*>(noisy.depth_mm.data()));
     const cv::Mat body_index(camera.height(), camera.width(), CV_8UC1,
                              const_cast<std::uint8_t*>(noisy.body_index.data()));
     result.chunks.emplace_back().mutable_depth()->CopyFrom(

@@ -37,8 +37,8 @@ struct CameraSessionOptions {
   double rate_hz = 30.0;
   double duration_s = 1.0;
   // The camera 1 m above the floor, 2.5 m in front of the subject, facing them.
-  Eigen::Isometry3d K_from_W = Eigen::Translation3d(0, -1.0, 2.5) *
-                               Eigen::AngleAxisd(3.14159265358979323846, Eigen::Vector3d::UnitY());
+  Eigen::Isometry3d K_from_W =
+      Eigen::Translation3d(0, -1.0, 2.5) * Eigen::AngleAxisd(3.14159265358979323846, Eigen::Vector3d::UnitY());
   double wall_distance_m = 4.0;
   DepthNoiseOptions depth_noise;
   CameraSkeletonOptions skeleton;
@@ -49,11 +49,11 @@ struct CameraSessionOptions {
 };
 
 struct CameraSessionResult {
-  v1::SessionHeader header;              // depth intrinsics and rate filled in
-  std::vector<v1::SessionChunk> chunks;  // per frame: depth, body index, skeleton
-  std::vector<std::int64_t> t_us;        // frame times (camera clock)
+  v1::SessionHeader header;                            // depth intrinsics and rate filled in
+  std::vector<v1::SessionChunk> chunks;                // per frame: depth, body index, skeleton
+  std::vector<std::int64_t> t_us;                      // frame times (camera clock)
   std::vector<Eigen::Matrix3Xd> true_camera_joints_K;  // error-free 25 joints per frame
-  std::vector<FrameTruth> truth;  // per frame: SMPL and camera joints, forearms of forearm_straps
+  std::vector<FrameTruth> truth;                       // per frame: SMPL and camera joints, forearms of forearm_straps
 };
 
 // Copies intrinsics into a header's CameraIntrinsics (no tangential distortion).
@@ -65,7 +65,7 @@ PoseSequence arm_raising_sequence(const body::PoseLayout& layout, double period_
 
 // Throws posefuse::Error for bad options, or when the pose sequence returns a theta of the
 // wrong size or non-finite values (naming the frame).
-CameraSessionResult simulate_camera_session(const CameraSessionOptions& options,
-                                            const body::PoseLayout& layout, const PoseSequence& poses);
+CameraSessionResult simulate_camera_session(const CameraSessionOptions& options, const body::PoseLayout& layout,
+                                            const PoseSequence& poses);
 
 }  // namespace posefuse::sim

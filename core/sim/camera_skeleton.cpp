@@ -22,12 +22,31 @@ constexpr int kNone = -1;
 
 // SMPL joint whose rotation carries the bone parent -> camera joint (kNone: end joints,
 // which report no orientation). SpineBase reports the pelvis rotation itself.
-constexpr std::array<int, kCameraJointCount> kSmplRotatingBone = {
-    body::kPelvis, body::kSpine1, body::kSpine3, kNone, body::kLeftCollar, body::kLeftShoulder,
-    body::kLeftElbow, body::kLeftWrist, body::kRightCollar, body::kRightShoulder,
-    body::kRightElbow, body::kRightWrist, body::kPelvis, body::kLeftHip, body::kLeftKnee, kNone,
-    body::kPelvis, body::kRightHip, body::kRightKnee, kNone, body::kSpine2, kNone, kNone, kNone,
-    kNone};
+constexpr std::array<int, kCameraJointCount> kSmplRotatingBone = {body::kPelvis,
+                                                                  body::kSpine1,
+                                                                  body::kSpine3,
+                                                                  kNone,
+                                                                  body::kLeftCollar,
+                                                                  body::kLeftShoulder,
+                                                                  body::kLeftElbow,
+                                                                  body::kLeftWrist,
+                                                                  body::kRightCollar,
+                                                                  body::kRightShoulder,
+                                                                  body::kRightElbow,
+                                                                  body::kRightWrist,
+                                                                  body::kPelvis,
+                                                                  body::kLeftHip,
+                                                                  body::kLeftKnee,
+                                                                  kNone,
+                                                                  body::kPelvis,
+                                                                  body::kRightHip,
+                                                                  body::kRightKnee,
+                                                                  kNone,
+                                                                  body::kSpine2,
+                                                                  kNone,
+                                                                  kNone,
+                                                                  kNone,
+                                                                  kNone};
 
 constexpr double kHeadAboveSkullBase_m = 0.09;
 constexpr double kThumbOffset_m = 0.04;
@@ -53,16 +72,14 @@ void set_quaternion(const Eigen::Quaterniond& q, v1::Quaternion* out) {
 
 const std::array<int, kCameraJointCount>& camera_joint_parents() {
   static const std::array<int, kCameraJointCount> parents = {
-      -1, kSpineBase, kSpineShoulder, kNeck, kSpineShoulder, kShoulderLeft, kElbowLeft,
-      kWristLeft, kSpineShoulder, kShoulderRight, kElbowRight, kWristRight, kSpineBase, kHipLeft,
-      kKneeLeft, kAnkleLeft, kSpineBase, kHipRight, kKneeRight, kAnkleRight, kSpineMid, kHandLeft,
-      kHandLeft, kHandRight, kHandRight};
+      -1,         kSpineBase,     kSpineShoulder, kNeck,       kSpineShoulder, kShoulderLeft, kElbowLeft,
+      kWristLeft, kSpineShoulder, kShoulderRight, kElbowRight, kWristRight,    kSpineBase,    kHipLeft,
+      kKneeLeft,  kAnkleLeft,     kSpineBase,     kHipRight,   kKneeRight,     kAnkleRight,   kSpineMid,
+      kHandLeft,  kHandLeft,      kHandRight,     kHandRight};
   return parents;
 }
 
-bool is_upper_limb(int j) {
-  return (j >= kShoulderLeft && j <= kHandRight) || (j >= kHandTipLeft && j <= kThumbRight);
-}
+bool is_upper_limb(int j) { return (j >= kShoulderLeft && j <= kHandRight) || (j >= kHandTipLeft && j <= kThumbRight); }
 
 void validate(const CameraSkeletonOptions& o) {
   require_interval(o.upper_limb_bias_min_m, o.upper_limb_bias_max_m, "upper_limb_bias_max_m");
@@ -94,8 +111,8 @@ SmplJointsK smpl_joints_in_camera(const body::BodyEvaluator& evaluator, const Ei
 
 Eigen::Matrix3Xd camera_joints_from_smpl(const SmplJointsK& smpl) {
   if (smpl.positions_K.cols() != body::kNumJoints || !smpl.positions_K.allFinite()) {
-    throw_invalid("positions_K", "must hold 24 finite SMPL joints, got " +
-                                     std::to_string(smpl.positions_K.cols()) + " columns");
+    throw_invalid("positions_K",
+                  "must hold 24 finite SMPL joints, got " + std::to_string(smpl.positions_K.cols()) + " columns");
   }
   // The same correspondence the fit reports its camera-compatible joints with.
   fit::JointPose pose;
@@ -113,9 +130,8 @@ CameraSkeletonSimulator::CameraSkeletonSimulator(const raycast::DepthCamera& cam
   validate(options);
   SimRng rng(seed, "skeleton_bias");
   for (int j = 0; j < kCameraJointCount; ++j) {
-    bias_length_m_[j] = is_upper_limb(j)
-                            ? uniform_in(rng, options.upper_limb_bias_min_m, options.upper_limb_bias_max_m)
-                            : uniform_in(rng, options.other_bias_min_m, options.other_bias_max_m);
+    bias_length_m_[j] = is_upper_limb(j) ? uniform_in(rng, options.upper_limb_bias_min_m, options.upper_limb_bias_max_m)
+                                         : uniform_in(rng, options.other_bias_min_m, options.other_bias_max_m);
     bias_u_[j] = random_unit(rng);
     bias_v_[j] = bias_u_[j].cross(random_unit(rng));
     if (bias_v_[j].norm() < 1e-6) bias_v_[j] = bias_u_[j].unitOrthogonal();
@@ -130,11 +146,12 @@ v1::SkeletonFrame CameraSkeletonSimulator::simulate(const SmplJointsK& smpl, con
                                                     std::uint32_t body_id) const {
   const int width = camera_.width(), height = camera_.height();
   if (depth_mm.size() != static_cast<std::size_t>(width) * height) {
-    throw_invalid("depth_mm", "has " + std::to_string(depth_mm.size()) + " pixels, the camera " +
-                                  std::to_string(width * height));
+    throw_invalid("depth_mm",
+                  "has " + std::to_string(depth_mm.size()) + " pixels, the camera " + std::to_string(width * height));
   }
   for (int j = 0; j < body::kNumJoints; ++j) {
-    if (!smpl.K_from_joint[j].allFinite()) throw_invalid("K_from_joint", "joint " + std::to_string(j) + " is not finite");
+    if (!smpl.K_from_joint[j].allFinite())
+      throw_invalid("K_from_joint", "joint " + std::to_string(j) + " is not finite");
   }
   Eigen::Matrix3Xd truth = camera_joints_from_smpl(smpl);
 
@@ -180,9 +197,9 @@ v1::SkeletonFrame CameraSkeletonSimulator::simulate(const SmplJointsK& smpl, con
   }
   // 4. A jump of one upper-limb joint.
   if (jump_rng.uniform() < options_.jump_probability) {
-    static constexpr int kUpperLimb[12] = {kShoulderLeft, kElbowLeft, kWristLeft, kHandLeft,
-                                           kShoulderRight, kElbowRight, kWristRight, kHandRight,
-                                           kHandTipLeft, kThumbLeft, kHandTipRight, kThumbRight};
+    static constexpr int kUpperLimb[12] = {kShoulderLeft,  kElbowLeft,  kWristLeft,    kHandLeft,
+                                           kShoulderRight, kElbowRight, kWristRight,   kHandRight,
+                                           kHandTipLeft,   kThumbLeft,  kHandTipRight, kThumbRight};
     const int j = kUpperLimb[std::min(11, static_cast<int>(jump_rng.uniform() * 12))];
     const double length = uniform_in(jump_rng, options_.jump_min_m, options_.jump_max_m);
     reported.col(j) += length * random_unit(jump_rng);

@@ -75,7 +75,7 @@ void validate(const CameraSkeletonOptions& options);
 
 // SMPL joints of a posed body in the camera frame K.
 struct SmplJointsK {
-  Eigen::Matrix3Xd positions_K;                            // 3 x 24
+  Eigen::Matrix3Xd positions_K;                                // 3 x 24
   std::array<Eigen::Matrix3d, body::kNumJoints> K_from_joint;  // global joint rotations
 };
 SmplJointsK smpl_joints_in_camera(const body::BodyEvaluator& evaluator, const Eigen::Isometry3d& K_from_W);
@@ -85,13 +85,12 @@ Eigen::Matrix3Xd camera_joints_from_smpl(const SmplJointsK& smpl);
 
 class CameraSkeletonSimulator {
  public:
-  CameraSkeletonSimulator(const raycast::DepthCamera& camera, const CameraSkeletonOptions& options,
-                          std::uint64_t seed);
+  CameraSkeletonSimulator(const raycast::DepthCamera& camera, const CameraSkeletonOptions& options, std::uint64_t seed);
 
   // One frame. depth_mm is the depth image the SDK sees (width x height of the camera, 0 =
   // nothing), used for the occlusion test. t_us is also the time of the slow bias.
-  v1::SkeletonFrame simulate(const SmplJointsK& smpl, const std::vector<uint16_t>& depth_mm,
-                             std::int64_t frame_index, std::int64_t t_us, std::uint32_t body_id) const;
+  v1::SkeletonFrame simulate(const SmplJointsK& smpl, const std::vector<uint16_t>& depth_mm, std::int64_t frame_index,
+                             std::int64_t t_us, std::uint32_t body_id) const;
 
  private:
   raycast::DepthCamera camera_;

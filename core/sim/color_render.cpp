@@ -37,8 +37,7 @@ void validate(const ColorCameraOptions& options) {
   require_positive(options.strap_width_m, "color.strap_width_m");
 }
 
-bool is_strap(const RenderModel& model, const StrapPlacement& straps, double width_m, int face, double u,
-              double v) {
+bool is_strap(const RenderModel& model, const StrapPlacement& straps, double width_m, int face, double u, double v) {
   const Eigen::Vector3i corners = model.model->faces.col(face);
   const int arm = model.forearm_arm[static_cast<std::size_t>(corners[0])];
   if (arm < 0 || std::isnan(straps[static_cast<std::size_t>(arm)])) return false;
@@ -51,8 +50,8 @@ bool is_strap(const RenderModel& model, const StrapPlacement& straps, double wid
   return std::abs(s - straps[static_cast<std::size_t>(arm)]) <= 0.5 * width_m;
 }
 
-ColorRenderer::ColorRenderer(const ColorCameraOptions& options, const RenderModel& model,
-                             const StrapPlacement& straps, const std::vector<RoomPlane>& room_K, std::uint64_t seed)
+ColorRenderer::ColorRenderer(const ColorCameraOptions& options, const RenderModel& model, const StrapPlacement& straps,
+                             const std::vector<RoomPlane>& room_K, std::uint64_t seed)
     : options_(options),
       camera_(options.intrinsics),
       scene_(raycast::EmbreeDevice::shared(), model.model->faces, model.model->num_vertices()),
@@ -86,8 +85,9 @@ ColorRenderer::ColorRenderer(const ColorCameraOptions& options, const RenderMode
       // Plane 0 is the floor, the others walls; nothing hit stays dark.
       const Eigen::Vector3d colour =
           hit == room_C.size() ? Eigen::Vector3d(0.05, 0.05, 0.05) : (hit == 0 ? kFloorAlbedo : kWallAlbedo);
-      out[col] = cv::Vec3s(static_cast<short>(std::lround(255 * colour[0])), static_cast<short>(std::lround(255 * colour[1])),
-                           static_cast<short>(std::lround(255 * colour[2])));
+      out[col] =
+          cv::Vec3s(static_cast<short>(std::lround(255 * colour[0])), static_cast<short>(std::lround(255 * colour[1])),
+                    static_cast<short>(std::lround(255 * colour[2])));
     }
   }
   noise_ = cv::Mat::zeros(camera_.height() + 2 * kNoiseMargin, camera_.width() + 2 * kNoiseMargin, CV_16SC3);

@@ -37,8 +37,8 @@ struct ColorCameraOptions {
   Eigen::Isometry3d color_from_depth =
       Eigen::AngleAxisd(0.5 * 3.14159265358979323846 / 180.0, Eigen::Vector3d::UnitY()) *
       Eigen::Translation3d(0.052, 0.0, 0.0);
-  double noise_sigma = 3.0;  // per channel, of 255
-  int jpeg_quality = 90;     // 1..100
+  double noise_sigma = 3.0;     // per channel, of 255
+  int jpeg_quality = 90;        // 1..100
   double strap_width_m = 0.03;  // strap band along the forearm, centred at d_se
 };
 
@@ -49,8 +49,7 @@ using StrapPlacement = std::array<double, 2>;
 
 // Whether the render model's face `face` at barycentrics (u, v) lies on a strap band of width
 // `width_m` (the forearm coordinate interpolated from the face's corners).
-bool is_strap(const RenderModel& model, const StrapPlacement& straps, double width_m, int face, double u,
-              double v);
+bool is_strap(const RenderModel& model, const StrapPlacement& straps, double width_m, int face, double u, double v);
 
 class ColorRenderer {
  public:

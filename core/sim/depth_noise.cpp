@@ -95,8 +95,8 @@ void validate(const DepthNoiseOptions& options) {
   require_positive(options.edge_min_jump_m, "edge_min_jump_m");
   require_finite(options.edge_slope_deg, "edge_slope_deg");
   if (options.edge_slope_deg <= options.max_incidence_deg || options.edge_slope_deg >= 90.0) {
-    throw_invalid("edge_slope_deg", "must lie in (max_incidence_deg, 90), got " +
-                                        std::to_string(options.edge_slope_deg));
+    throw_invalid("edge_slope_deg",
+                  "must lie in (max_incidence_deg, 90), got " + std::to_string(options.edge_slope_deg));
   }
   require_probability(options.flying_pixel_probability, "flying_pixel_probability");
   require_positive(options.min_range_m, "min_range_m");
@@ -117,8 +117,7 @@ double axial_sigma_m(const DepthNoiseOptions& options, double z_m) {
 std::vector<RoomPlane> simple_room(double camera_height_m, double wall_distance_m) {
   require_positive(camera_height_m, "camera_height_m");
   require_positive(wall_distance_m, "wall_distance_m");
-  return {RoomPlane{Eigen::Vector3d::UnitY(), -camera_height_m},
-          RoomPlane{Eigen::Vector3d::UnitZ(), wall_distance_m}};
+  return {RoomPlane{Eigen::Vector3d::UnitY(), -camera_height_m}, RoomPlane{Eigen::Vector3d::UnitZ(), wall_distance_m}};
 }
 
 void composite_room(const raycast::DepthCamera& camera, const std::vector<RoomPlane>& planes,
@@ -157,7 +156,10 @@ class IncidenceCosines {
  public:
   IncidenceCosines(const raycast::DepthCamera& camera, const std::vector<uint16_t>& depth_mm,
                    const DepthNoiseOptions& options)
-      : camera_(camera), depth_mm_(depth_mm), edges_(camera, options), width_(camera.width()),
+      : camera_(camera),
+        depth_mm_(depth_mm),
+        edges_(camera, options),
+        width_(camera.width()),
         height_(camera.height()) {}
 
   // NaN where the pixel has no depth or no neighbour on its surface along a row or column.
@@ -217,8 +219,7 @@ class IncidenceCosines {
 
 }  // namespace
 
-std::vector<float> incidence_angles_deg(const raycast::DepthCamera& camera,
-                                        const std::vector<uint16_t>& depth_mm,
+std::vector<float> incidence_angles_deg(const raycast::DepthCamera& camera, const std::vector<uint16_t>& depth_mm,
                                         const DepthNoiseOptions& options) {
   validate(options);
   check_image_size(camera, depth_mm.size(), "depth_mm");
@@ -255,11 +256,9 @@ void StaticBackground::composite(std::vector<uint16_t>& depth_mm) const {
   }
 }
 
-NoisyDepth apply_depth_noise(const raycast::DepthCamera& camera,
-                             const std::vector<uint16_t>& clean_depth_mm,
-                             const std::vector<uint8_t>& clean_body_index,
-                             const DepthNoiseOptions& options, std::uint64_t seed,
-                             std::int64_t frame_index, const StaticBackground* background) {
+NoisyDepth apply_depth_noise(const raycast::DepthCamera& camera, const std::vector<uint16_t>& clean_depth_mm,
+                             const std::vector<uint8_t>& clean_body_index, const DepthNoiseOptions& options,
+                             std::uint64_t seed, std::int64_t frame_index, const StaticBackground* background) {
   validate(options);
   check_image_size(camera, clean_depth_mm.size(), "clean_depth_mm");
   check_image_size(camera, clean_body_index.size(), "clean_body_index");

@@ -72,8 +72,7 @@ void composite_room(const raycast::DepthCamera& camera, const std::vector<RoomPl
 
 // Angle (degrees) between each pixel's viewing ray and the surface normal estimated from the
 // depth image's gradients; NaN where the depth or all neighbours are missing.
-std::vector<float> incidence_angles_deg(const raycast::DepthCamera& camera,
-                                        const std::vector<uint16_t>& depth_mm,
+std::vector<float> incidence_angles_deg(const raycast::DepthCamera& camera, const std::vector<uint16_t>& depth_mm,
                                         const DepthNoiseOptions& options);
 
 struct NoisyDepth {
@@ -112,10 +111,9 @@ class StaticBackground {
 // index map (kNoBody where no person). Both sized width x height of the camera. `background`
 // (optional, made with the same camera and options; kInvalidArgument otherwise): the room the
 // depth was composited with, whose cached incidence is reused away from the person.
-NoisyDepth apply_depth_noise(const raycast::DepthCamera& camera,
-                             const std::vector<uint16_t>& clean_depth_mm,
-                             const std::vector<uint8_t>& clean_body_index,
-                             const DepthNoiseOptions& options, std::uint64_t seed,
-                             std::int64_t frame_index, const StaticBackground* background = nullptr);
+NoisyDepth apply_depth_noise(const raycast::DepthCamera& camera, const std::vector<uint16_t>& clean_depth_mm,
+                             const std::vector<uint8_t>& clean_body_index, const DepthNoiseOptions& options,
+                             std::uint64_t seed, std::int64_t frame_index,
+                             const StaticBackground* background = nullptr);
 
 }  // namespace posefuse::sim

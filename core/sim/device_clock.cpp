@@ -67,8 +67,8 @@ std::vector<bool> lost_samples(const PacketLossModel& model, std::size_t n, std:
   if (model.samples_per_packet == 0) throw_invalid("packet_loss.samples_per_packet", "must be >= 1");
   const double enter_bad = loss / ((1.0 - loss) * burst);
   if (enter_bad > 1.0) {
-    throw_invalid("packet_loss.loss_rate", "too high for bursts of " + std::to_string(burst) +
-                                               " packets (at most burst / (1 + burst))");
+    throw_invalid("packet_loss.loss_rate",
+                  "too high for bursts of " + std::to_string(burst) + " packets (at most burst / (1 + burst))");
   }
   const double stay_bad = 1.0 - 1.0 / burst;
   SimRng rng(seed, "packet_loss");

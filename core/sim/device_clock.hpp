@@ -42,8 +42,8 @@ void stamp_on_device_clock(std::vector<imu::ImuSample>& samples, const std::vect
 // packet is lost and the state stays bad with probability 1 - 1/mean_burst_packets. p is set so
 // that the long-run loss rate is loss_rate: p = loss_rate / ((1 - loss_rate) mean_burst_packets).
 struct PacketLossModel {
-  double loss_rate = 0.01;          // fraction of packets lost, [0, 1)
-  double mean_burst_packets = 2.0;  // mean length of a run of lost packets, >= 1
+  double loss_rate = 0.01;             // fraction of packets lost, [0, 1)
+  double mean_burst_packets = 2.0;     // mean length of a run of lost packets, >= 1
   std::size_t samples_per_packet = 1;  // consecutive samples sharing one packet, >= 1
 };
 

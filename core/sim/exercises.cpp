@@ -33,7 +33,7 @@ ArmAngles arm(double abduction_deg, double flexion_deg, double humeral_rotation_
 // above the back of the head; guard: fist in front of the chin). Checked in
 // tests/sim/exercises_test.
 ArmAngles hanging() { return arm(8, 0, 0, 0); }
-ArmAngles calibration() { return arm(90, 0, 90, 90); }   // paper 1 Fig. 3b
+ArmAngles calibration() { return arm(90, 0, 90, 90); }  // paper 1 Fig. 3b
 ArmAngles behind_head() { return arm(175, -10, 110, 100); }
 ArmAngles in_front_of_belly() { return arm(12, 20, -80, 95); }
 ArmAngles behind_back() { return arm(15, -35, -90, 75); }
@@ -80,8 +80,8 @@ class Timeline {
     motion.poses = [segments](double t_s) {
       const std::vector<Segment>& all = *segments;
       // The last segment starting at or before t (held before the first and after the last).
-      const auto it = std::upper_bound(all.begin(), all.end(), t_s,
-                                       [](double t, const Segment& s) { return t < s.begin_s; });
+      const auto it =
+          std::upper_bound(all.begin(), all.end(), t_s, [](double t, const Segment& s) { return t < s.begin_s; });
       const Segment& s = it == all.begin() ? all.front() : *(it - 1);
       const double w = s.duration_s > 0 ? smootherstep((t_s - s.begin_s) / s.duration_s) : 1.0;
       return all_joints_theta(blend(s.from, s.to, w));
@@ -200,9 +200,7 @@ const std::vector<ExerciseDef>& definitions() {
          t.move(with_arm(forearm_forward(0), o.arm), s(0.5), "rolling");
        }},
       {"hair_combing",
-       [](Timeline& t, const ExerciseOptions& o, const auto& s) {
-         t.move(with_arm(comb_front(), o.arm), s(1.5));
-       },
+       [](Timeline& t, const ExerciseOptions& o, const auto& s) { t.move(with_arm(comb_front(), o.arm), s(1.5)); },
        [](Timeline& t, const ExerciseOptions& o, const auto& s) {
          t.move(with_arm(comb_back(), o.arm), s(1.2), "combing");
          t.move(with_arm(comb_front(), o.arm), s(1.2), "combing");

@@ -22,8 +22,8 @@ enum class BodySide { kRight, kLeft };
 
 struct ForearmStrap {
   BodySide side = BodySide::kRight;
-  double strap_to_elbow_m = 0.18;   // d_se, along the forearm axis
-  double strap_radius_m = 0.035;    // r: forearm axis to the IMU on the strap surface
+  double strap_to_elbow_m = 0.18;  // d_se, along the forearm axis
+  double strap_radius_m = 0.035;   // r: forearm axis to the IMU on the strap surface
   geometry::Quat F_from_A = geometry::Quat::Identity();
 };
 

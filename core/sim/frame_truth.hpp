@@ -33,8 +33,8 @@ struct ForearmTruth {
 };
 
 struct FrameTruth {
-  Eigen::Matrix3Xd smpl_joints_K;    // 3 x 24, SMPL order
-  Eigen::Matrix3Xd camera_joints_K;  // 3 x 25, Kinect v2 JointType order, before the SDK errors
+  Eigen::Matrix3Xd smpl_joints_K;      // 3 x 24, SMPL order
+  Eigen::Matrix3Xd camera_joints_K;    // 3 x 25, Kinect v2 JointType order, before the SDK errors
   std::vector<ForearmTruth> forearms;  // one per strap, in the order given
 };
 

@@ -89,8 +89,8 @@ v1::CalibrationReport calibration_report(const SimTruth& truth) {
 std::string truth_json(const SimTruth& truth) {
   const SimSessionOptions& o = truth.options;
   std::ostringstream s;
-  s << "{\n  \"seed\": " << o.seed << ",\n  \"duration_s\": " << format_double(o.duration_s)
-    << ",\n  \"motion\": \"" << o.motion << "\",\n  \"frames\": {\n"
+  s << "{\n  \"seed\": " << o.seed << ",\n  \"duration_s\": " << format_double(o.duration_s) << ",\n  \"motion\": \""
+    << o.motion << "\",\n  \"frames\": {\n"
     << "    \"K_from_W\": " << json_quat(truth.K_from_W) << ",\n"
     << "    \"W_from_Body\": " << json_quat(truth.W_from_Body) << ",\n"
     << "    \"K_from_Body_rotation\": " << json_quat(Quat(truth.K_from_Body.linear())) << ",\n"
@@ -107,10 +107,11 @@ std::string truth_json(const SimTruth& truth) {
     s << (first ? "" : ",") << "\n    {\"arm\": \"" << (arm.arm == 0 ? "LEFT" : "RIGHT") << "\", \"device_id\": \""
       << arm.device_id << "\", \"r_m\": " << format_double(arm.r_m) << ", \"d_se_m\": " << format_double(arm.d_se_m)
       << ", \"d_sw_m\": " << format_double(arm.d_sw_m) << ", \"d_ul_m\": " << format_double(arm.d_ul_m)
-      << ", \"F_from_A\": " << json_quat(arm.F_from_A) << ", \"strap_width_m\": "
-      << format_double(o.color_camera.strap_width_m) << ", \"strap_slip_max_rotation_rad\": "
-      << format_double(o.strap_slip.enabled ? o.strap_slip.max_rotation_rad : 0.0) << ", \"strap_slip_max_slide_m\": "
-      << format_double(o.strap_slip.enabled ? o.strap_slip.max_slide_m : 0.0) << "}";
+      << ", \"F_from_A\": " << json_quat(arm.F_from_A)
+      << ", \"strap_width_m\": " << format_double(o.color_camera.strap_width_m) << ", \"strap_slip_max_rotation_rad\": "
+      << format_double(o.strap_slip.enabled ? o.strap_slip.max_rotation_rad : 0.0)
+      << ", \"strap_slip_max_slide_m\": " << format_double(o.strap_slip.enabled ? o.strap_slip.max_slide_m : 0.0)
+      << "}";
     first = false;
   }
   s << "\n  ],\n  \"devices\": [";
@@ -119,8 +120,9 @@ std::string truth_json(const SimTruth& truth) {
     const ImuErrors& e = d.errors;
     s << (first ? "" : ",") << "\n    {\"device_id\": \"" << d.device_id << "\", \"role\": \""
       << v1::ImuDevice::Role_Name(d.role) << "\", \"clock_offset_s\": " << format_double(d.clock.offset_s)
-      << ", \"clock_drift\": " << format_double(d.clock.drift) << ",\n     \"gyr_bias_rad_s\": "
-      << json_vec(e.gyr_bias_rad_s) << ", \"gyr_scale_misalignment\": " << json_mat(e.gyr_scale_misalignment)
+      << ", \"clock_drift\": " << format_double(d.clock.drift)
+      << ",\n     \"gyr_bias_rad_s\": " << json_vec(e.gyr_bias_rad_s)
+      << ", \"gyr_scale_misalignment\": " << json_mat(e.gyr_scale_misalignment)
       << ",\n     \"acc_bias_m_s2\": " << json_vec(e.acc_bias_m_s2)
       << ", \"acc_scale_misalignment\": " << json_mat(e.acc_scale_misalignment)
       << ",\n     \"hard_iron_uT\": " << json_vec(e.hard_iron_uT) << ", \"soft_iron\": " << json_mat(e.soft_iron)
@@ -203,8 +205,8 @@ void write_ground_truth(const SimTruth& truth, const std::filesystem::path& dire
   files.write_calibration(calibration_report(truth));
   files.close();
 
-  session::CsvWriter occlusion(directory / "occlusion.csv", {"t_us", "arm", "forearm_visible_fraction",
-                                                             "forearm_occluded", "strap_visible"});
+  session::CsvWriter occlusion(directory / "occlusion.csv",
+                               {"t_us", "arm", "forearm_visible_fraction", "forearm_occluded", "strap_visible"});
   for (const SimFrameTruth& frame : truth.frames) {
     for (const SimArmTruth& arm : truth.arms) {
       const auto a = static_cast<std::size_t>(arm.arm);

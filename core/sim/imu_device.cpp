@@ -3,8 +3,7 @@
 namespace posefuse::sim {
 
 ImuDeviceResult simulate_imu_device(const SensorKinematics& motion, const SimDevice& device,
-                                    const ImuDeviceOptions& options, double t_camera_begin_s,
-                                    double t_camera_end_s) {
+                                    const ImuDeviceOptions& options, double t_camera_begin_s, double t_camera_end_s) {
   ImuDeviceResult out;
   out.ticks = regular_device_ticks(device.clock, options.rate_hz, t_camera_begin_s, t_camera_end_s);
   ImuSynthOptions synth = options.synth;

@@ -21,7 +21,7 @@ struct ImuDeviceResult {
   std::vector<imu::ImuSample> received;  // device clock, lost samples removed
   std::vector<v1::ImuBatch> batches;     // `received` as chunks
   // Ground truth for every sample the device took, lost or not.
-  ImuSynthResult truth;                  // t_us on the camera clock
+  ImuSynthResult truth;  // t_us on the camera clock
   DeviceTicks ticks;
   std::vector<bool> lost;
 };
@@ -29,7 +29,6 @@ struct ImuDeviceResult {
 // Samples inside the camera interval [t_camera_begin_s, t_camera_end_s], which must lie inside
 // the motion's valid range. kInvalidArgument / kOutOfRange naming the field otherwise.
 ImuDeviceResult simulate_imu_device(const SensorKinematics& motion, const SimDevice& device,
-                                    const ImuDeviceOptions& options, double t_camera_begin_s,
-                                    double t_camera_end_s);
+                                    const ImuDeviceOptions& options, double t_camera_begin_s, double t_camera_end_s);
 
 }  // namespace posefuse::sim

@@ -6,8 +6,8 @@
 #include <Eigen/Eigenvalues>
 
 #include "common/error.hpp"
-#include "sim/option_checks.hpp"
 #include "session/imu_batch.hpp"
+#include "sim/option_checks.hpp"
 #include "sim/sim_rng.hpp"
 
 namespace posefuse::sim {
@@ -49,9 +49,8 @@ void check_model(const ImuErrorModel& m) {
 }
 
 void check_errors(const ImuErrors& e) {
-  if (!e.gyr_bias_rad_s.allFinite() || !e.gyr_scale_misalignment.allFinite() ||
-      !e.acc_bias_m_s2.allFinite() || !e.acc_scale_misalignment.allFinite() ||
-      !e.hard_iron_uT.allFinite() || !e.soft_iron.allFinite()) {
+  if (!e.gyr_bias_rad_s.allFinite() || !e.gyr_scale_misalignment.allFinite() || !e.acc_bias_m_s2.allFinite() ||
+      !e.acc_scale_misalignment.allFinite() || !e.hard_iron_uT.allFinite() || !e.soft_iron.allFinite()) {
     throw_invalid("errors", "non-finite value in the IMU errors");
   }
   if (!e.soft_iron.isApprox(e.soft_iron.transpose(), 1e-12)) {
@@ -142,8 +141,10 @@ ImuSynthResult synthesize_imu(const SensorKinematics& motion, const std::vector<
     throw_invalid("options.earth_field.dip_rad", "must be inside (-pi/2, pi/2)");
   }
   check_model(options.error_model);
-  if (!(options.gyr_range_rad_s > 0)) throw_invalid("options.gyr_range_rad_s", "is " + std::to_string(options.gyr_range_rad_s) + ", must be > 0");
-  if (!(options.acc_range_m_s2 > 0)) throw_invalid("options.acc_range_m_s2", "is " + std::to_string(options.acc_range_m_s2) + ", must be > 0");
+  if (!(options.gyr_range_rad_s > 0))
+    throw_invalid("options.gyr_range_rad_s", "is " + std::to_string(options.gyr_range_rad_s) + ", must be > 0");
+  if (!(options.acc_range_m_s2 > 0))
+    throw_invalid("options.acc_range_m_s2", "is " + std::to_string(options.acc_range_m_s2) + ", must be > 0");
   for (std::size_t i = 0; i < options.disturbances.size(); ++i) {
     const MagDisturbance& d = options.disturbances[i];
     const std::string field = "options.disturbances[" + std::to_string(i) + "]";
@@ -198,8 +199,7 @@ ImuSynthResult synthesize_imu(const SensorKinematics& motion, const std::vector<
   return out;
 }
 
-std::vector<v1::ImuBatch> imu_batches(const std::string& device_id,
-                                      const std::vector<imu::ImuSample>& samples,
+std::vector<v1::ImuBatch> imu_batches(const std::string& device_id, const std::vector<imu::ImuSample>& samples,
                                       std::size_t samples_per_batch) {
   if (samples_per_batch == 0) throw_invalid("samples_per_batch", "must be >= 1");
   std::vector<v1::ImuBatch> batches;

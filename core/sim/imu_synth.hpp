@@ -28,9 +28,9 @@ using Mat3 = Eigen::Matrix3d;
 
 // The local earth field. Defaults: a mid-latitude site (about 48 uT total, 64 degrees dip).
 struct EarthField {
-  double horizontal_uT = 21.0;             // horizontal (north) component, uT, > 0
+  double horizontal_uT = 21.0;                                  // horizontal (north) component, uT, > 0
   double dip_rad = 64.0 * static_cast<double>(EIGEN_PI) / 180;  // inclination below the horizon, rad, in (-pi/2, pi/2)
-  Vec3 m_W_uT() const;                     // (H, 0, -H tan(dip))
+  Vec3 m_W_uT() const;                                          // (H, 0, -H tan(dip))
 };
 
 // Statistical description of a cheap consumer IMU (MEMS parts of the WICED Sense class).
@@ -101,10 +101,10 @@ struct ImuSynthOptions {
 };
 
 struct ImuSynthResult {
-  std::vector<imu::ImuSample> samples;     // t_us = round(t_s * 1e6): the camera clock
-  ImuErrors errors;                        // what was applied
-  std::vector<Vec3> gyr_bias_rad_s;        // true gyro bias at each sample (drift included)
-  std::vector<Quat> W_from_A;              // true orientation at each sample
+  std::vector<imu::ImuSample> samples;  // t_us = round(t_s * 1e6): the camera clock
+  ImuErrors errors;                     // what was applied
+  std::vector<Vec3> gyr_bias_rad_s;     // true gyro bias at each sample (drift included)
+  std::vector<Quat> W_from_A;           // true orientation at each sample
 };
 
 // Samples at the given times (camera clock seconds, strictly increasing, inside the
@@ -116,8 +116,7 @@ ImuSynthResult synthesize_imu(const SensorKinematics& motion, const std::vector<
 std::vector<double> uniform_times(double t_begin_s, double t_end_s, double rate_hz);
 
 // The samples cut into ImuBatch chunks of at most `samples_per_batch` samples.
-std::vector<v1::ImuBatch> imu_batches(const std::string& device_id,
-                                      const std::vector<imu::ImuSample>& samples,
+std::vector<v1::ImuBatch> imu_batches(const std::string& device_id, const std::vector<imu::ImuSample>& samples,
                                       std::size_t samples_per_batch = 32);
 
 }  // namespace posefuse::sim

@@ -8,7 +8,7 @@ namespace posefuse::sim {
 void require_finite(double value, const std::string& field);
 void require_positive(double value, const std::string& field);      // > 0 and finite
 void require_non_negative(double value, const std::string& field);  // >= 0 and finite
-void require_probability(double value, const std::string& field);  // in [0, 1]
+void require_probability(double value, const std::string& field);   // in [0, 1]
 // begin and end finite, end >= begin; `field` names the end.
 void require_interval(double begin, double end, const std::string& field);
 

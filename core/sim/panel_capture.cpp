@@ -17,7 +17,7 @@ namespace {
 
 using std::numbers::pi;
 constexpr double kDeg = pi / 180.0;
-constexpr int kSupersampling = 3;           // IR rays per pixel along each axis
+constexpr int kSupersampling = 3;                 // IR rays per pixel along each axis
 constexpr double kRetroRadiance = 8.0 * 65535.0;  // markers: a 1/8 covered pixel saturates
 constexpr double kBoardReflectivity = 0.6, kWallReflectivity = 0.5, kFloorReflectivity = 0.3;
 constexpr double kShotCountsPerElectron = 4.0, kReadNoiseCounts = 20.0;
@@ -31,13 +31,14 @@ struct PanelMesh {
   int marker_faces_begin = 0;
 };
 
-void add_icosphere(const Vec3& centre, double radius, std::vector<Vec3>& vertices, std::vector<Eigen::Vector3i>& faces) {
+void add_icosphere(const Vec3& centre, double radius, std::vector<Vec3>& vertices,
+                   std::vector<Eigen::Vector3i>& faces) {
   const double t = (1.0 + std::sqrt(5.0)) / 2.0;
-  std::vector<Vec3> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                         {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  std::vector<Eigen::Vector3i> f = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                                    {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
-                                    {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+  std::vector<Vec3> v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                         {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<Eigen::Vector3i> f = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                                    {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                                    {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   for (Vec3& p : v) p.normalize();
   for (int level = 0; level < 2; ++level) {
     std::vector<Eigen::Vector3i> finer;
@@ -70,8 +71,8 @@ PanelMesh panel_mesh(const calib::PanelGeometry& panel) {
     v.push_back({x0, y1, z});
   }
   // Front, back, then the four sides (corners 0-3 front, 4-7 back).
-  f = {{0, 1, 2}, {0, 2, 3}, {4, 6, 5}, {4, 7, 6}, {0, 4, 5}, {0, 5, 1}, {1, 5, 6}, {1, 6, 2},
-       {2, 6, 7}, {2, 7, 3}, {3, 7, 4}, {3, 4, 0}};
+  f = {{0, 1, 2}, {0, 2, 3}, {4, 6, 5}, {4, 7, 6}, {0, 4, 5}, {0, 5, 1},
+       {1, 5, 6}, {1, 6, 2}, {2, 6, 7}, {2, 7, 3}, {3, 7, 4}, {3, 4, 0}};
   PanelMesh mesh;
   mesh.marker_faces_begin = static_cast<int>(f.size());
   for (const Vec3& m : panel.markers_P()) add_icosphere(m, panel.marker_radius_m, v, f);
@@ -150,10 +151,12 @@ std::vector<double> render_ir_radiance(const raycast::DepthIntrinsics& intrinsic
   const raycast::DepthIntrinsics& fine = camera.intrinsics();
   raycast::RenderImages hits;
   scene.render(camera, 0, hits);
-  std::vector<double> radiance(static_cast<std::size_t>(intrinsics.width) * static_cast<std::size_t>(intrinsics.height), 0.0);
+  std::vector<double> radiance(static_cast<std::size_t>(intrinsics.width) * static_cast<std::size_t>(intrinsics.height),
+                               0.0);
   for (int row = 0; row < fine.height; ++row) {
     for (int col = 0; col < fine.width; ++col) {
-      const std::size_t i = static_cast<std::size_t>(row) * static_cast<std::size_t>(fine.width) + static_cast<std::size_t>(col);
+      const std::size_t i =
+          static_cast<std::size_t>(row) * static_cast<std::size_t>(fine.width) + static_cast<std::size_t>(col);
       const Vec3 ray = camera.pixel_ray(col, row).cast<double>();  // z = 1
       const int face = hits.face[i];
       double value = 0.0;
@@ -175,8 +178,8 @@ std::vector<double> render_ir_radiance(const raycast::DepthIntrinsics& intrinsic
   return radiance;
 }
 
-std::vector<imu::ImuSample> still_imu(const Quat& W_from_A, const Vec3& p_W, double t0_s, double hold_s,
-                                      double rate_hz, ImuSynthOptions options) {
+std::vector<imu::ImuSample> still_imu(const Quat& W_from_A, const Vec3& p_W, double t0_s, double hold_s, double rate_hz,
+                                      ImuSynthOptions options) {
   SensorTrajectory still;
   still.dt_s = 0.01;
   still.t0_s = t0_s - 0.05;
@@ -184,7 +187,8 @@ std::vector<imu::ImuSample> still_imu(const Quat& W_from_A, const Vec3& p_W, dou
   still.p_W_m.assign(n, p_W);
   still.W_from_A.assign(n, W_from_A);
   options.nominal_rate_hz = rate_hz;
-  return synthesize_imu(SensorKinematics(std::move(still)), uniform_times(t0_s, t0_s + hold_s, rate_hz), options).samples;
+  return synthesize_imu(SensorKinematics(std::move(still)), uniform_times(t0_s, t0_s + hold_s, rate_hz), options)
+      .samples;
 }
 
 }  // namespace
@@ -198,7 +202,8 @@ void validate(const PanelCaptureOptions& o) {
     throw_invalid("panel_capture.distance_max_m", "must be finite and >= distance_min_m");
   }
   require_non_negative(o.max_tilt_deg, "panel_capture.max_tilt_deg");
-  if (o.max_tilt_deg > 60.0) throw_invalid("panel_capture.max_tilt_deg", "must be at most 60 (the panel must face the camera)");
+  if (o.max_tilt_deg > 60.0)
+    throw_invalid("panel_capture.max_tilt_deg", "must be at most 60 (the panel must face the camera)");
   require_non_negative(o.max_roll_deg, "panel_capture.max_roll_deg");
   require_non_negative(o.marker_noise_m, "panel_capture.marker_noise_m");
   require_non_negative(o.imu_misalignment_deg, "panel_capture.imu_misalignment_deg");
@@ -261,7 +266,8 @@ PanelCaptureResult simulate_panel_capture(const PanelCaptureOptions& o, const Pa
     scene.update_vertices(vertices_K);
 
     // (b) IR, then depth with the sensor's errors; saturated pixels return no depth.
-    const std::vector<double> radiance = render_ir_radiance(rig.depth_intrinsics, ir_camera, scene, mesh, vertices_K, room, o.ir_gain);
+    const std::vector<double> radiance =
+        render_ir_radiance(rig.depth_intrinsics, ir_camera, scene, mesh, vertices_K, room, o.ir_gain);
     SimRng ir_rng(rig.seed, "panel_capture/ir/" + std::to_string(i));
     seen.ir.resize(pixels);
     for (std::size_t p = 0; p < pixels; ++p) {
@@ -285,7 +291,8 @@ PanelCaptureResult simulate_panel_capture(const PanelCaptureOptions& o, const Pa
     const std::array<Vec3, 4> markers_P = capture.panel.markers_P();
     for (std::size_t m = 0; m < 4; ++m) {
       const Vec3 noise(marker_rng.normal(), marker_rng.normal(), marker_rng.normal());
-      seen.markers_E[m] = truth.K_from_E.conjugate() * (pose.to_X(markers_P[m]) - truth.E_origin_K) + o.marker_noise_m * noise;
+      seen.markers_E[m] =
+          truth.K_from_E.conjugate() * (pose.to_X(markers_P[m]) - truth.E_origin_K) + o.marker_noise_m * noise;
     }
 
     // (c) the still hold: the panel IMU and the base IMU (positions do not matter when still).

@@ -29,16 +29,16 @@
 namespace posefuse::sim {
 
 struct PanelCaptureOptions {
-  bool enabled = false;               // posefuse-sim writes calibration_capture/ when set
-  int poses = 4;                      // 1..20 random poses (ignored when poses_K is given)
+  bool enabled = false;                               // posefuse-sim writes calibration_capture/ when set
+  int poses = 4;                                      // 1..20 random poses (ignored when poses_K is given)
   double distance_min_m = 1.3, distance_max_m = 1.9;  // panel centre from the camera
-  double max_tilt_deg = 35.0;         // turn about K's x and y, each uniform in +-this
-  double max_roll_deg = 30.0;         // turn in the panel plane
-  double marker_noise_m = 0.0003;     // mocap marker position noise, per axis sigma
-  double imu_misalignment_deg = 0.5;  // panel IMU on the panel, per axis sigma
-  double hold_s = 1.0;                // each pose held still this long
-  double ir_gain = 20000.0;           // IR counts of a facing white surface at 1 m
-  std::vector<calib::PanelPose> poses_K;  // explicit poses (tests), else random ones
+  double max_tilt_deg = 35.0;                         // turn about K's x and y, each uniform in +-this
+  double max_roll_deg = 30.0;                         // turn in the panel plane
+  double marker_noise_m = 0.0003;                     // mocap marker position noise, per axis sigma
+  double imu_misalignment_deg = 0.5;                  // panel IMU on the panel, per axis sigma
+  double hold_s = 1.0;                                // each pose held still this long
+  double ir_gain = 20000.0;                           // IR counts of a facing white surface at 1 m
+  std::vector<calib::PanelPose> poses_K;              // explicit poses (tests), else random ones
 };
 
 // kInvalidArgument naming the field ("panel_capture.<field>").
@@ -59,11 +59,11 @@ struct PanelCaptureRig {
 
 struct PanelCaptureTruth {
   Quat K_from_E = Quat::Identity();
-  Vec3 E_origin_K = Vec3::Zero();   // eq. 6
+  Vec3 E_origin_K = Vec3::Zero();  // eq. 6
   Quat K_from_B = Quat::Identity();
   Quat K_from_W = Quat::Identity();
   Quat P_from_panel_imu = Quat::Identity();  // the panel IMU's visual-alignment error
-  std::vector<calib::PanelPose> K_from_P;     // per pose
+  std::vector<calib::PanelPose> K_from_P;    // per pose
   ImuErrors panel_imu_errors, base_imu_errors;
   double marker_noise_m = 0.0;
 };

@@ -33,11 +33,22 @@ enum class Region { kTorso, kSleeve, kLegs, kShoes, kSkin, kHead };
 
 Region region_of(int joint) {
   switch (joint) {
-    case body::kPelvis: case body::kSpine1: case body::kSpine2: case body::kSpine3:
-    case body::kLeftCollar: case body::kRightCollar: return Region::kTorso;
-    case body::kLeftShoulder: case body::kRightShoulder: return Region::kSleeve;
-    case body::kLeftHip: case body::kRightHip: case body::kLeftKnee: case body::kRightKnee: return Region::kLegs;
-    case body::kLeftAnkle: case body::kRightAnkle: case body::kLeftFoot: case body::kRightFoot: return Region::kShoes;
+    case body::kPelvis:
+    case body::kSpine1:
+    case body::kSpine2:
+    case body::kSpine3:
+    case body::kLeftCollar:
+    case body::kRightCollar: return Region::kTorso;
+    case body::kLeftShoulder:
+    case body::kRightShoulder: return Region::kSleeve;
+    case body::kLeftHip:
+    case body::kRightHip:
+    case body::kLeftKnee:
+    case body::kRightKnee: return Region::kLegs;
+    case body::kLeftAnkle:
+    case body::kRightAnkle:
+    case body::kLeftFoot:
+    case body::kRightFoot: return Region::kShoes;
     case body::kHead: return Region::kHead;
     default: return Region::kSkin;  // neck, elbows, wrists, hands
   }
@@ -95,8 +106,8 @@ void validate(const ClothingOptions& options) {
   require_non_negative(options.trousers_offset_m, "clothing.trousers_offset_m");
   require_non_negative(options.skin_offset_m, "clothing.skin_offset_m");
   require_positive(options.wavelength_m, "clothing.wavelength_m");
-  for (double offset : {options.torso_offset_m, options.sleeve_offset_m, options.trousers_offset_m,
-                        options.skin_offset_m}) {
+  for (double offset :
+       {options.torso_offset_m, options.sleeve_offset_m, options.trousers_offset_m, options.skin_offset_m}) {
     if (offset > 0.1) throw_invalid("clothing offsets", "above 0.1 m: " + std::to_string(offset));
   }
 }

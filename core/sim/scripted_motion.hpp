@@ -24,11 +24,11 @@ namespace posefuse::sim {
 
 struct ArmGeometry {
   Vec3 shoulder_p_W_m = Vec3(0.0, -0.18, 1.40);  // right shoulder of a subject at the origin
-  double heading_rad = 0.0;       // the subject faces W's x turned by this about z
-  double upper_arm_m = 0.30;      // shoulder to elbow
-  double strap_to_elbow_m = 0.20; // d_se
-  double strap_radius_m = 0.035;  // r: forearm axis to the strap surface
-  Quat F_from_A = Quat::Identity();  // IMU orientation on the forearm
+  double heading_rad = 0.0;                      // the subject faces W's x turned by this about z
+  double upper_arm_m = 0.30;                     // shoulder to elbow
+  double strap_to_elbow_m = 0.20;                // d_se
+  double strap_radius_m = 0.035;                 // r: forearm axis to the strap surface
+  Quat F_from_A = Quat::Identity();              // IMU orientation on the forearm
 };
 
 struct ArmAngles {
@@ -44,7 +44,7 @@ struct ArmPose {
   Vec3 elbow_p_W_m = Vec3::Zero();
   Vec3 strap_p_W_m = Vec3::Zero();  // strap centre on the forearm axis (F's origin)
   Quat W_from_A = Quat::Identity();
-  Vec3 imu_p_W_m = Vec3::Zero();    // strap centre + r along x_F
+  Vec3 imu_p_W_m = Vec3::Zero();  // strap centre + r along x_F
 };
 
 ArmPose arm_pose(const ArmGeometry& geometry, const ArmAngles& angles);
@@ -92,7 +92,7 @@ struct ArmRaisingOptions {
   double pause_top_s = 0.5;
   double pause_bottom_s = 0.5;  // between repetitions
   int repetitions = 3;
-  double hold_s = 1.0;          // still before and after
+  double hold_s = 1.0;  // still before and after
 };
 ScriptedMotion arm_raising(const ArmRaisingOptions& options);
 

@@ -28,8 +28,8 @@ SensorKinematics::SensorKinematics(SensorTrajectory trajectory) : trajectory_(st
   require_finite(t.t0_s, "trajectory.t0_s");
   const std::size_t n = t.p_W_m.size();
   if (t.W_from_A.size() != n) {
-    throw_invalid("trajectory.W_from_A", std::to_string(t.W_from_A.size()) + " orientations for " +
-                                             std::to_string(n) + " positions");
+    throw_invalid("trajectory.W_from_A",
+                  std::to_string(t.W_from_A.size()) + " orientations for " + std::to_string(n) + " positions");
   }
   if (n < 2 * kMargin + 2) {
     throw_invalid("trajectory.p_W_m", "needs at least 6 poses, got " + std::to_string(n));
@@ -72,8 +72,8 @@ SensorKinematics::SensorKinematics(SensorTrajectory trajectory) : trajectory_(st
     const Quat A_k_from_W = t.W_from_A[k].conjugate();
     auto r = [&](std::size_t j) { return geometry::rotation_vector_from_quat(A_k_from_W * t.W_from_A[j]); };
     omega_A_[k] = (r(k - 2) - 8.0 * r(k - 1) + 8.0 * r(k + 1) - r(k + 2)) / (12.0 * dt);
-    a_W_[k] = (-t.p_W_m[k - 2] + 16.0 * t.p_W_m[k - 1] - 30.0 * t.p_W_m[k] + 16.0 * t.p_W_m[k + 1] -
-               t.p_W_m[k + 2]) / (12.0 * dt * dt);
+    a_W_[k] = (-t.p_W_m[k - 2] + 16.0 * t.p_W_m[k - 1] - 30.0 * t.p_W_m[k] + 16.0 * t.p_W_m[k + 1] - t.p_W_m[k + 2]) /
+              (12.0 * dt * dt);
   }
 }
 
@@ -82,8 +82,7 @@ double SensorKinematics::t_begin_s() const {
 }
 
 double SensorKinematics::t_end_s() const {
-  return trajectory_.t0_s +
-         static_cast<double>(trajectory_.p_W_m.size() - 1 - kMargin) * trajectory_.dt_s;
+  return trajectory_.t0_s + static_cast<double>(trajectory_.p_W_m.size() - 1 - kMargin) * trajectory_.dt_s;
 }
 
 SensorMotion SensorKinematics::at(double t_s) const {
@@ -91,8 +90,8 @@ SensorMotion SensorKinematics::at(double t_s) const {
   const double tolerance = 1e-9 * trajectory_.dt_s;
   if (!(t_s >= t_begin_s() - tolerance && t_s <= t_end_s() + tolerance)) {
     throw Error(ErrorCode::kOutOfRange, "t_s",
-                std::to_string(t_s) + " s is outside the trajectory's valid range [" +
-                    std::to_string(t_begin_s()) + ", " + std::to_string(t_end_s()) + "] s");
+                std::to_string(t_s) + " s is outside the trajectory's valid range [" + std::to_string(t_begin_s()) +
+                    ", " + std::to_string(t_end_s()) + "] s");
   }
   const std::size_t last_interval = trajectory_.p_W_m.size() - 2 - kMargin;
   const double u = (t_s - trajectory_.t0_s) / trajectory_.dt_s;

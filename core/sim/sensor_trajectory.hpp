@@ -24,8 +24,8 @@ using geometry::Quat;
 using geometry::Vec3;
 
 struct SensorTrajectory {
-  double t0_s = 0.0;   // time of the first pose, camera clock seconds
-  double dt_s = 0.0;   // grid step, > 0
+  double t0_s = 0.0;           // time of the first pose, camera clock seconds
+  double dt_s = 0.0;           // grid step, > 0
   std::vector<Vec3> p_W_m;     // sensor origin in W
   std::vector<Quat> W_from_A;  // sensor orientation; unit
 };

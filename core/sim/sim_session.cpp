@@ -1,11 +1,11 @@
 #include "sim/sim_session.hpp"
 
+#include <time.h>
 #include <algorithm>
 #include <cmath>
 #include <memory>
 #include <numbers>
 #include <opencv2/core.hpp>
-#include <time.h>
 
 #include "body/body_evaluator.hpp"
 #include "common/error.hpp"
@@ -16,10 +16,10 @@
 #include "session/session_validator.hpp"
 #include "session/stages/forearm_options.hpp"
 #include "session/text_fields.hpp"
-#include "sim/option_checks.hpp"
-#include "sim/ordered_workers.hpp"
 #include "sim/forearm_strap.hpp"
 #include "sim/mag_precalibration.hpp"
+#include "sim/option_checks.hpp"
+#include "sim/ordered_workers.hpp"
 #include "sim/room_frame.hpp"
 #include "sim/sim_rng.hpp"
 #include "sim/skeleton_pose.hpp"
@@ -138,11 +138,10 @@ struct FrameOutput {
 class FrameWorker {
  public:
   FrameWorker(const SimSessionOptions& options, const RenderModel& render, const body::PoseLayout& layout,
-              const raycast::DepthCamera& camera, const CameraSkeletonSimulator& skeleton,
-              const StrapPlacement& straps, const std::array<ForearmStrap, 2>& forearm_straps,
-              const std::array<Quat, 2>& rest_R_from_F, const Eigen::Isometry3d& K_from_Body,
-              const std::vector<RoomPlane>& room, const StaticBackground& background,
-              const std::vector<Eigen::Matrix3Xd>& wobble)
+              const raycast::DepthCamera& camera, const CameraSkeletonSimulator& skeleton, const StrapPlacement& straps,
+              const std::array<ForearmStrap, 2>& forearm_straps, const std::array<Quat, 2>& rest_R_from_F,
+              const Eigen::Isometry3d& K_from_Body, const std::vector<RoomPlane>& room,
+              const StaticBackground& background, const std::vector<Eigen::Matrix3Xd>& wobble)
       : options_(options),
         render_(render),
         evaluator_(render.model, layout),
@@ -156,7 +155,8 @@ class FrameWorker {
         background_(background),
         wobble_(wobble),
         soft_tissue_(render.model->weights, render.surface_vertices) {
-    if (options.color) color_ = std::make_unique<ColorRenderer>(options.color_camera, render, straps, room, options.seed);
+    if (options.color)
+      color_ = std::make_unique<ColorRenderer>(options.color_camera, render, straps, room, options.seed);
   }
 
   FrameOutput process(const FramePlan& plan, const BodyMotion& motion) {
@@ -177,8 +177,8 @@ class FrameWorker {
     out.truth = frame_truth(plan);  // from the clean render, before the room is added
     lap("truth per frame");
     background_.composite(images_.depth_mm);
-    const NoisyDepth noisy = apply_depth_noise(camera_, images_.depth_mm, images_.body_index,
-                                               options_.depth_noise, options_.seed, plan.index, &background_);
+    const NoisyDepth noisy = apply_depth_noise(camera_, images_.depth_mm, images_.body_index, options_.depth_noise,
+                                               options_.seed, plan.index, &background_);
     lap("depth: room, sensor errors");
     const SmplJointsK joints = smpl_joints_in_camera(evaluator_, K_from_Body_);
     const cv::Mat depth(camera_.height(), camera_.width(), CV_16UC1, const_cast<std::uint16_t*>(noisy.depth_mm.data()));
@@ -230,11 +230,10 @@ class FrameWorker {
       }
       truth.forearm_visible_fraction[a] = visible / 5.0;
       const auto pixel = pixel_of(truth.strap_p_K[a]);
-      truth.strap_visible[a] = pixel >= 0 && images_.face[static_cast<std::size_t>(pixel)] >= 0 &&
-                               is_strap(render_, straps_, options_.color_camera.strap_width_m,
-                                        images_.face[static_cast<std::size_t>(pixel)],
-                                        images_.u[static_cast<std::size_t>(pixel)],
-                                        images_.v[static_cast<std::size_t>(pixel)]);
+      truth.strap_visible[a] =
+          pixel >= 0 && images_.face[static_cast<std::size_t>(pixel)] >= 0 &&
+          is_strap(render_, straps_, options_.color_camera.strap_width_m, images_.face[static_cast<std::size_t>(pixel)],
+                   images_.u[static_cast<std::size_t>(pixel)], images_.v[static_cast<std::size_t>(pixel)]);
     }
     return truth;
   }
@@ -305,8 +304,8 @@ void validate(const SimSessionOptions& options) {
   require_positive(options.camera_height_m, "camera_height_m");
   require_positive(options.subject_distance_m, "subject_distance_m");
   if (options.wall_distance_m <= options.subject_distance_m + 0.5) {
-    throw_invalid("wall_distance_m", "is " + std::to_string(options.wall_distance_m) +
-                                         ", must be at least 0.5 m behind the subject");
+    throw_invalid("wall_distance_m",
+                  "is " + std::to_string(options.wall_distance_m) + ", must be at least 0.5 m behind the subject");
   }
   validate(options.depth_noise);
   if (options.color) validate(options.color_camera);
@@ -371,7 +370,8 @@ SimTruth simulate_session(const SimSessionOptions& requested, session::ChunkSink
   // Exercises hold their rest pose after the end; a BVH clip would drift along its end tangents.
   if (options.motion == "bvh" && options.duration_s > motion.duration_s) {
     throw_invalid("duration_s", "is " + std::to_string(options.duration_s) + " s, the BVH clip lasts only " +
-                                    std::to_string(motion.duration_s) + " s (duration_s = clip plays exactly the whole clip)");
+                                    std::to_string(motion.duration_s) +
+                                    " s (duration_s = clip plays exactly the whole clip)");
   }
   const body::PoseLayout layout = body::PoseLayout::all_joints();
 
@@ -392,8 +392,8 @@ SimTruth simulate_session(const SimSessionOptions& requested, session::ChunkSink
     t.d_sw_m = forearm - t.d_se_m;
     t.d_ul_m = (truth.rest_joints.col(kElbow[a]) - truth.rest_joints.col(kShoulder[a])).norm();
     if (t.d_sw_m <= 0.02) {
-      throw_invalid("strap_to_elbow_m", "is " + std::to_string(t.d_se_m) + ", the forearm is only " +
-                                            std::to_string(forearm) + " m long");
+      throw_invalid("strap_to_elbow_m",
+                    "is " + std::to_string(t.d_se_m) + ", the forearm is only " + std::to_string(forearm) + " m long");
     }
     t.F_from_A = random_rotation(mount_rng, options.mount_sigma_rad);
     if (t.has_imu) straps[a] = t.d_se_m;
@@ -448,9 +448,7 @@ SimTruth simulate_session(const SimSessionOptions& requested, session::ChunkSink
   // heading), with a small mounting error.
   {
     Mat3 K_from_B_nominal;
-    K_from_B_nominal << 0, 1, 0,
-                        0, 0, 1,
-                        1, 0, 0;
+    K_from_B_nominal << 0, 1, 0, 0, 0, 1, 1, 0, 0;
     SimRng rng(options.seed, "base_mount");
     truth.K_from_B = (Quat(K_from_B_nominal) * random_rotation(rng, 0.02)).normalized();
     const Quat W_from_B = (Quat(W_from_Body) * Quat(K_from_Body.linear()).conjugate() * truth.K_from_B).normalized();
@@ -472,9 +470,9 @@ SimTruth simulate_session(const SimSessionOptions& requested, session::ChunkSink
     const ImuDeviceResult result = simulate_imu_device(kinematics[d], devices[d], imu, 0.0, options.duration_s);
     SimDeviceTruth device;
     device.device_id = devices[d].device_id;
-    device.role = d + 1 == devices.size() ? v1::ImuDevice::BASE
+    device.role = d + 1 == devices.size()                ? v1::ImuDevice::BASE
                   : device.device_id == kArmDeviceIds[0] ? v1::ImuDevice::ARM_LEFT
-                                                          : v1::ImuDevice::ARM_RIGHT;
+                                                         : v1::ImuDevice::ARM_RIGHT;
     device.clock = devices[d].clock;
     device.errors = result.truth.errors;
     device.t_device_us = result.ticks.t_device_us;
@@ -514,7 +512,8 @@ SimTruth simulate_session(const SimSessionOptions& requested, session::ChunkSink
     truth.buzzer_stop_camera_s = result.stop_camera_s;
     truth.buzzer_heard_camera_s = result.stop_heard_camera_s;
     small.emplace_back().mutable_sync_event()->CopyFrom(result.stop_event);
-    for (const v1::SyncEvent& stop : result.later_stop_events) small.emplace_back().mutable_sync_event()->CopyFrom(stop);
+    for (const v1::SyncEvent& stop : result.later_stop_events)
+      small.emplace_back().mutable_sync_event()->CopyFrom(stop);
     truth.buzzer_later_stops_camera_s = result.later_stops_camera_s;
     for (const auto& chunk : result.audio) small.emplace_back().mutable_audio()->CopyFrom(chunk);
     BleBroadcastOptions ble_options = options.ble;
@@ -564,10 +563,9 @@ SimTruth simulate_session(const SimSessionOptions& requested, session::ChunkSink
   // Each IMU's magnetometer calibration from before the session (paper 1, II-E-1), which the
   // IMU stage applies (eq. 3); without it hard iron turns the headings, and through eq. 7 K_from_W.
   for (const SimDeviceTruth& device : truth.devices) {
-    const imu::MagCalibration calibration =
-        simulate_mag_precalibration(device.errors, options.imu.synth.earth_field,
-                                    options.imu.synth.error_model.mag_noise_uT, options.seed,
-                                    "mag_precalibration/" + device.device_id);
+    const imu::MagCalibration calibration = simulate_mag_precalibration(
+        device.errors, options.imu.synth.earth_field, options.imu.synth.error_model.mag_noise_uT, options.seed,
+        "mag_precalibration/" + device.device_id);
     (*header.mutable_options())[session::mag_calibration_option_key(device.device_id)] =
         session::format_mag_calibration(calibration);
   }
@@ -577,8 +575,7 @@ SimTruth simulate_session(const SimSessionOptions& requested, session::ChunkSink
   // Order the small chunks once; frames are merged in as they are rendered.
   std::vector<std::pair<session::ChunkOrderKey, std::size_t>> order;
   for (std::size_t i = 0; i < small.size(); ++i) order.emplace_back(session::chunk_order_key(small[i], header), i);
-  std::stable_sort(order.begin(), order.end(),
-                   [](const auto& x, const auto& y) { return x.first < y.first; });
+  std::stable_sort(order.begin(), order.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
   std::size_t next_small = 0;
   v1::EndOfSession counts;
   const auto emit = [&](const v1::SessionChunk& chunk) {
@@ -618,9 +615,9 @@ SimTruth simulate_session(const SimSessionOptions& requested, session::ChunkSink
   const auto frames = static_cast<std::int64_t>(std::floor(options.duration_s * options.depth_rate_hz + 1e-9)) + 1;
   std::vector<double> frame_times_s;
   for (std::int64_t i = 0; i < frames; ++i) frame_times_s.push_back(static_cast<double>(i) / options.depth_rate_hz);
-  const std::vector<Eigen::Matrix3Xd> wobble = segment_wobble(
-      [&](double t) { return pose_skeleton(truth.rest_joints, layout, motion.poses(t)).joints; }, frame_times_s,
-      options.soft_tissue);
+  const std::vector<Eigen::Matrix3Xd> wobble =
+      segment_wobble([&](double t) { return pose_skeleton(truth.rest_joints, layout, motion.poses(t)).joints; },
+                     frame_times_s, options.soft_tissue);
   lap("soft-tissue wobble (segment springs)");
   std::vector<std::unique_ptr<FrameWorker>> workers;
   for (int w = 0; w < options.threads; ++w) {

@@ -62,7 +62,7 @@ struct SimSessionOptions {
   MotionOptions motion_options;
   body::Sex sex = body::Sex::kMale;
   Eigen::VectorXd betas = Eigen::VectorXd::Zero(body::kTemplateNumBetas);
-  double heading_rad = 0.3;         // subject's facing, from magnetic north towards west
+  double heading_rad = 0.3;  // subject's facing, from magnetic north towards west
 
   // Camera: depth at depth_rate_hz; the colour camera at the same rate and instants.
   raycast::DepthIntrinsics depth_intrinsics;
@@ -79,24 +79,24 @@ struct SimSessionOptions {
 
   // IMUs: one per listed arm (0 left, 1 right) and the base on the camera.
   std::array<bool, 2> arm_imu = {true, true};
-  double strap_to_elbow_m = 0.15;   // d_se
-  double strap_radius_m = 0.035;    // r
-  double mount_sigma_rad = 0.05;    // random F_from_A per arm, per-axis standard deviation
+  double strap_to_elbow_m = 0.15;  // d_se
+  double strap_radius_m = 0.035;   // r
+  double mount_sigma_rad = 0.05;   // random F_from_A per arm, per-axis standard deviation
   StrapSlipOptions strap_slip;
-  ImuDeviceOptions imu;             // rate, error model, packet loss (seeds are derived)
+  ImuDeviceOptions imu;               // rate, error model, packet loss (seeds are derived)
   double clock_offset_max_s = 100.0;  // device clock offsets drawn in [1, this]
   double clock_drift_max = 50e-6;     // and drifts in [-this, this]
 
   // Sync signals: the buzzer stops at buzzer_stop_s (camera clock, clamped into the session).
   double buzzer_stop_s = 1.5;
-  double buzzer_repeat_s = 0.0;     // > 0: the buzzer stops again every this many s (0: once, paper 1)
-  BuzzerOptions buzzer;             // stop_device_us is set from buzzer_stop_s
-  AudioOptions audio;               // t_begin_s and duration_s are set to the session
+  double buzzer_repeat_s = 0.0;  // > 0: the buzzer stops again every this many s (0: once, paper 1)
+  BuzzerOptions buzzer;          // stop_device_us is set from buzzer_stop_s
+  AudioOptions audio;            // t_begin_s and duration_s are set to the session
   BleBroadcastOptions ble;
 
   PanelCaptureOptions panel_capture;  // not simulated here: posefuse-sim writes it beside the session
 
-  int threads = 2;                  // frames rendered in parallel (results do not depend on it)
+  int threads = 2;  // frames rendered in parallel (results do not depend on it)
   // How depth chunks are encoded: ZSTD_U16_LE (chunk files) or PNG16, which a recording
   // directory stores as is (its depth files), sparing the writer a decode and re-encode.
   v1::DepthFrame::Encoding depth_encoding = v1::DepthFrame::ZSTD_U16_LE;
@@ -118,8 +118,8 @@ struct SimDeviceTruth {
   std::vector<std::int64_t> t_device_us;  // every sample taken, lost or not
   std::vector<double> t_camera_s;
   std::vector<bool> lost;
-  std::vector<Quat> W_from_A;             // true orientation per sample (A or B)
-  std::vector<Vec3> gyr_bias_rad_s;       // true gyro bias per sample
+  std::vector<Quat> W_from_A;        // true orientation per sample (A or B)
+  std::vector<Vec3> gyr_bias_rad_s;  // true gyro bias per sample
   // Arm IMUs only (empty for the base): the forearm under the strap at each sample's true
   // camera time, K_from_F and pronation as in SimFrameTruth.
   std::vector<Quat> K_from_F;
@@ -127,7 +127,7 @@ struct SimDeviceTruth {
 };
 
 struct SimArmTruth {
-  int arm = 0;                  // 0 left, 1 right
+  int arm = 0;  // 0 left, 1 right
   bool has_imu = false;
   std::string device_id;
   double r_m = 0, d_se_m = 0, d_sw_m = 0, d_ul_m = 0;
@@ -136,15 +136,15 @@ struct SimArmTruth {
 
 struct SimFrameTruth {
   std::int64_t t_us = 0;
-  Eigen::Matrix3Xd smpl_joints_K;    // 3 x 24
-  Eigen::Matrix3Xd camera_joints_K;  // 3 x 25, error-free
-  std::array<Quat, 2> K_from_F;      // per arm, from the body model
-  std::array<Vec3, 2> strap_p_K;     // F's origin per arm
-  std::array<double, 2> pronation_rad{};  // twist about y_F relative to the rest pose; + pronation
+  Eigen::Matrix3Xd smpl_joints_K;                    // 3 x 24
+  Eigen::Matrix3Xd camera_joints_K;                  // 3 x 25, error-free
+  std::array<Quat, 2> K_from_F;                      // per arm, from the body model
+  std::array<Vec3, 2> strap_p_K;                     // F's origin per arm
+  std::array<double, 2> pronation_rad{};             // twist about y_F relative to the rest pose; + pronation
   std::array<double, 2> forearm_visible_fraction{};  // of 5 points on elbow -> wrist, in the render
   std::array<bool, 2> strap_visible{};
-  std::vector<Vec3> imu_p_K;         // per device in SimTruth::devices order
-  std::vector<Quat> K_from_imu;      // per device, at the frame instant
+  std::vector<Vec3> imu_p_K;     // per device in SimTruth::devices order
+  std::vector<Quat> K_from_imu;  // per device, at the frame instant
 };
 
 // Thread CPU seconds per part of the work, summed over threads (for bench_sim_session).
@@ -159,7 +159,7 @@ struct SimTruth {
   Vec3 camera_p_W_m = Vec3::Zero();
   std::vector<SimDeviceTruth> devices;  // arm IMUs (left, right as present), then the base
   std::array<SimArmTruth, 2> arms;
-  Eigen::Matrix3Xd rest_joints;         // 3 x 24, Body frame, shaped
+  Eigen::Matrix3Xd rest_joints;  // 3 x 24, Body frame, shaped
   std::vector<SimFrameTruth> frames;
   double buzzer_stop_camera_s = 0, buzzer_heard_camera_s = 0;
   std::vector<double> buzzer_later_stops_camera_s;  // SimSessionOptions::buzzer_repeat_s

@@ -17,7 +17,7 @@
 namespace posefuse::sim {
 
 struct SkeletonPose {
-  Eigen::Matrix3Xd joints;                               // 3 x 24, posed, model frame
+  Eigen::Matrix3Xd joints;                                 // 3 x 24, posed, model frame
   std::array<Eigen::Matrix3d, body::kNumJoints> rotation;  // global R(j), model frame
 };
 

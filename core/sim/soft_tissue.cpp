@@ -48,25 +48,33 @@ Eigen::Matrix3Xd bounded(const Eigen::Matrix3Xd& x, double max_m) {
 
 void validate(const SoftTissueOptions& o) {
   require_positive(o.frequency_hz, "soft_tissue.frequency_hz");
-  if (o.frequency_hz > 50.0) throw_invalid("soft_tissue.frequency_hz", "is " + std::to_string(o.frequency_hz) + ", must be <= 50 Hz");
+  if (o.frequency_hz > 50.0)
+    throw_invalid("soft_tissue.frequency_hz", "is " + std::to_string(o.frequency_hz) + ", must be <= 50 Hz");
   require_positive(o.damping_ratio, "soft_tissue.damping_ratio");
   require_non_negative(o.gain, "soft_tissue.gain");
   require_non_negative(o.max_displacement_m, "soft_tissue.max_displacement_m");
   if (o.max_displacement_m > 0.1) {
-    throw_invalid("soft_tissue.max_displacement_m", "is " + std::to_string(o.max_displacement_m) + ", must be <= 0.1 m");
+    throw_invalid("soft_tissue.max_displacement_m",
+                  "is " + std::to_string(o.max_displacement_m) + ", must be <= 0.1 m");
   }
 }
 
 double soft_tissue_looseness(int joint) {
   switch (joint) {
-    case body::kSpine1: case body::kSpine2: return 1.0;  // belly
-    case body::kLeftShoulder: case body::kRightShoulder: return 1.0;  // upper arms
+    case body::kSpine1:
+    case body::kSpine2: return 1.0;  // belly
+    case body::kLeftShoulder:
+    case body::kRightShoulder: return 1.0;  // upper arms
     case body::kPelvis: return 0.8;
     case body::kSpine3: return 0.7;  // chest
-    case body::kLeftHip: case body::kRightHip: return 0.6;  // thighs
-    case body::kLeftCollar: case body::kRightCollar: return 0.5;
-    case body::kLeftKnee: case body::kRightKnee: return 0.4;  // calves
-    case body::kLeftElbow: case body::kRightElbow: return 0.3;  // forearms
+    case body::kLeftHip:
+    case body::kRightHip: return 0.6;  // thighs
+    case body::kLeftCollar:
+    case body::kRightCollar: return 0.5;
+    case body::kLeftKnee:
+    case body::kRightKnee: return 0.4;  // calves
+    case body::kLeftElbow:
+    case body::kRightElbow: return 0.3;  // forearms
     case body::kNeck: return 0.2;
     default: return 0.0;  // head, hands, feet: skin on bone
   }

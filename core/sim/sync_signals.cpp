@@ -31,8 +31,8 @@ std::int16_t to_s16(double x) {
 
 }  // namespace
 
-BleBroadcastResult ble_broadcast_receipts(const std::vector<SimDevice>& devices,
-                                          const BleBroadcastOptions& options, std::uint64_t seed) {
+BleBroadcastResult ble_broadcast_receipts(const std::vector<SimDevice>& devices, const BleBroadcastOptions& options,
+                                          std::uint64_t seed) {
   check_devices(devices);
   require_finite(options.first_broadcast_s, "ble.first_broadcast_s");
   require_positive(options.interval_s, "ble.interval_s");
@@ -55,8 +55,8 @@ BleBroadcastResult ble_broadcast_receipts(const std::vector<SimDevice>& devices,
   for (int burst = 0;; ++burst) {
     const double burst_start = options.first_broadcast_s + burst * options.repeat_every_s;
     if (burst > 0 && (options.repeat_every_s <= 0 || burst_start >= options.repeat_until_s)) break;
-    const double next_burst = options.repeat_every_s > 0 ? burst_start + options.repeat_every_s
-                                                         : std::numeric_limits<double>::infinity();
+    const double next_burst =
+        options.repeat_every_s > 0 ? burst_start + options.repeat_every_s : std::numeric_limits<double>::infinity();
     int complete_rounds = 0;
     for (int round = 0; round < options.max_rounds && complete_rounds < options.rounds_received_by_all; ++round) {
       const double t_camera = burst_start + round * options.interval_s;
@@ -129,7 +129,8 @@ BuzzerResult buzzer_stop(const SimDevice& base, const BuzzerOptions& buzzer, con
     const double stop_camera_s = base.clock.to_camera_s(stop_us);
     const double heard_s = stop_camera_s + buzzer.distance_m / buzzer.speed_of_sound_m_s;
     if (!(heard_s > audio.t_begin_s && heard_s < audio_end_s)) {
-      throw_invalid(field, "the stop is heard at " + std::to_string(heard_s) + " s camera time, outside the audio span");
+      throw_invalid(field,
+                    "the stop is heard at " + std::to_string(heard_s) + " s camera time, outside the audio span");
     }
     tones.emplace_back(heard_s - buzzer.duration_s, heard_s);
     result.later_stops_camera_s.push_back(stop_camera_s);
@@ -149,7 +150,8 @@ BuzzerResult buzzer_stop(const SimDevice& base, const BuzzerOptions& buzzer, con
       const double t = audio.t_begin_s + static_cast<double>(i) / rate;
       double x = audio.noise_rms * rng.normal();
       for (const auto& [start_s, stop_s] : tones) {
-        if (t >= start_s && t < stop_s) x += buzzer.amplitude * std::sin(2.0 * EIGEN_PI * buzzer.tone_hz * (t - start_s));
+        if (t >= start_s && t < stop_s)
+          x += buzzer.amplitude * std::sin(2.0 * EIGEN_PI * buzzer.tone_hz * (t - start_s));
       }
       const auto v = static_cast<std::uint16_t>(to_s16(x));
       pcm.push_back(static_cast<char>(v & 0xffu));

@@ -23,28 +23,28 @@ struct SimDevice {
 };
 
 struct BleBroadcastOptions {
-  double first_broadcast_s = 0.5;   // camera clock
-  double interval_s = 0.1;          // between broadcasts, > 0
-  double receive_probability = 0.6; // per device and broadcast, (0, 1]
-  int rounds_received_by_all = 3;   // the PC stops after this many broadcasts every device got
-  int max_rounds = 200;             // ... or after this many broadcasts
+  double first_broadcast_s = 0.5;        // camera clock
+  double interval_s = 0.1;               // between broadcasts, > 0
+  double receive_probability = 0.6;      // per device and broadcast, (0, 1]
+  int rounds_received_by_all = 3;        // the PC stops after this many broadcasts every device got
+  int max_rounds = 200;                  // ... or after this many broadcasts
   double clock_resolution_s = 312.5e-6;  // BLE clock tick; timestamps are floored to it
-  double receipt_jitter_s = 0.0;    // per device and receipt, standard deviation
+  double receipt_jitter_s = 0.0;         // per device and receipt, standard deviation
   // Paper 1 broadcasts once, at the start. With repeat_every_s > 0 the PC starts another burst
   // (same stopping rule, sequence numbers counting on) every repeat_every_s after the first one
   // while the burst's start is before repeat_until_s: receipts spread over the session are what
   // makes the clocks' drift observable. A burst ends early where the next one begins.
-  double repeat_every_s = 0.0;      // 0: one burst; otherwise >= interval_s
-  double repeat_until_s = 0.0;      // camera clock
+  double repeat_every_s = 0.0;  // 0: one burst; otherwise >= interval_s
+  double repeat_until_s = 0.0;  // camera clock
 };
 
 struct BleBroadcastResult {
-  std::vector<v1::SyncEvent> events;  // in camera-time order
+  std::vector<v1::SyncEvent> events;         // in camera-time order
   std::vector<double> broadcast_t_camera_s;  // ground truth, one per broadcast sent (= sequence number)
 };
 
-BleBroadcastResult ble_broadcast_receipts(const std::vector<SimDevice>& devices,
-                                          const BleBroadcastOptions& options, std::uint64_t seed);
+BleBroadcastResult ble_broadcast_receipts(const std::vector<SimDevice>& devices, const BleBroadcastOptions& options,
+                                          std::uint64_t seed);
 
 struct BuzzerOptions {
   std::int64_t stop_device_us = 2'000'000;  // the stop command, on the base IMU's clock
@@ -63,15 +63,15 @@ struct AudioOptions {
   std::uint32_t sample_rate_hz = 16000;  // the Kinect v2 microphone array's rate; 48000 too
   double t_begin_s = 0.0;                // camera clock of the first sample frame
   double duration_s = 4.0;
-  double noise_rms = 0.01;               // white noise, of full scale
-  double chunk_s = 0.1;                  // samples per AudioChunk = round(chunk_s * rate)
+  double noise_rms = 0.01;  // white noise, of full scale
+  double chunk_s = 0.1;     // samples per AudioChunk = round(chunk_s * rate)
 };
 
 struct BuzzerResult {
-  v1::SyncEvent stop_event;           // BUZZER_STOP on the base clock
-  std::vector<v1::AudioChunk> audio;  // mono PCM s16le on the camera clock
-  double stop_camera_s = 0.0;         // truth: the stop on the camera clock
-  double stop_heard_camera_s = 0.0;   // truth: when the microphone hears it
+  v1::SyncEvent stop_event;                      // BUZZER_STOP on the base clock
+  std::vector<v1::AudioChunk> audio;             // mono PCM s16le on the camera clock
+  double stop_camera_s = 0.0;                    // truth: the stop on the camera clock
+  double stop_heard_camera_s = 0.0;              // truth: when the microphone hears it
   std::vector<v1::SyncEvent> later_stop_events;  // one per BuzzerOptions::later_stops_device_us
   std::vector<double> later_stops_camera_s;      // truth
 };

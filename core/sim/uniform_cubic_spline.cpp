@@ -57,7 +57,8 @@ Eigen::VectorXd UniformCubicSpline::at_extended(double t_s) const {
     return values_[0] + (t_s - t_begin_s()) * slope;
   }
   if (t_s > t_end_s()) {
-    const Eigen::VectorXd slope = (values_[last] - values_[last - 1]) / dt_s_ + dt_s_ / 6.0 * second_derivatives_[last - 1];
+    const Eigen::VectorXd slope =
+        (values_[last] - values_[last - 1]) / dt_s_ + dt_s_ / 6.0 * second_derivatives_[last - 1];
     return values_[last] + (t_s - t_end_s()) * slope;
   }
   return at(t_s);

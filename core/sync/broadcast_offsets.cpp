@@ -27,8 +27,7 @@ std::uint32_t ble_sequence_from_payload(const std::string& payload) {
 }
 
 std::vector<ClockObservation> broadcast_observations(const std::vector<BroadcastReceipt>& receipts,
-                                                     const std::string& device,
-                                                     const std::string& reference_device,
+                                                     const std::string& device, const std::string& reference_device,
                                                      double tick_us) {
   if (!std::isfinite(tick_us) || tick_us < 0.0) throw_invalid("tick_us", "must be >= 0");
   std::map<std::int64_t, double> device_stamp, reference_stamp;
@@ -41,8 +40,8 @@ std::vector<ClockObservation> broadcast_observations(const std::vector<Broadcast
                                                                             : nullptr;
     if (target == nullptr) continue;
     if (!target->emplace(r.broadcast_id, r.t_device_us).second) {
-      throw_invalid(at + "broadcast_id", "device '" + r.device + "' reports broadcast " +
-                                             std::to_string(r.broadcast_id) + " twice");
+      throw_invalid(at + "broadcast_id",
+                    "device '" + r.device + "' reports broadcast " + std::to_string(r.broadcast_id) + " twice");
     }
   }
   std::vector<ClockObservation> out;
@@ -53,14 +52,12 @@ std::vector<ClockObservation> broadcast_observations(const std::vector<Broadcast
     out.push_back({t_device, ref->second, sigma});
   }
   if (out.empty()) {
-    throw_precondition("receipts", "no broadcast was heard by both '" + device + "' and '" +
-                                       reference_device + "'");
+    throw_precondition("receipts", "no broadcast was heard by both '" + device + "' and '" + reference_device + "'");
   }
   return out;
 }
 
-std::vector<ClockObservation> lower_envelope(const std::vector<ClockObservation>& observations,
-                                             double bin_us) {
+std::vector<ClockObservation> lower_envelope(const std::vector<ClockObservation>& observations, double bin_us) {
   if (!std::isfinite(bin_us) || bin_us <= 0.0) throw_invalid("bin_us", "must be > 0");
   if (observations.empty()) throw_invalid("observations", "no observations");
   std::map<long long, ClockObservation> best;
@@ -71,8 +68,7 @@ std::vector<ClockObservation> lower_envelope(const std::vector<ClockObservation>
     }
     const auto bin = static_cast<long long>(std::floor(ob.device_us / bin_us));
     const auto it = best.find(bin);
-    if (it == best.end() ||
-        ob.reference_us - ob.device_us < it->second.reference_us - it->second.device_us) {
+    if (it == best.end() || ob.reference_us - ob.device_us < it->second.reference_us - it->second.device_us) {
       best[bin] = ob;
     }
   }

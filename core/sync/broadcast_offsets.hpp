@@ -31,8 +31,7 @@ struct BroadcastReceipt {
 // Throws posefuse::Error kInvalidArgument "receipts[i].*" on a non-finite stamp or a device that
 // reports one broadcast twice; kFailedPrecondition "receipts" when no broadcast was heard by both.
 std::vector<ClockObservation> broadcast_observations(const std::vector<BroadcastReceipt>& receipts,
-                                                     const std::string& device,
-                                                     const std::string& reference_device,
+                                                     const std::string& device, const std::string& reference_device,
                                                      double tick_us = kBleClockTickUs);
 
 // Host receipt time vs the device's own timestamp of the same packet: the host sees it later by
@@ -40,7 +39,6 @@ std::vector<ClockObservation> broadcast_observations(const std::vector<Broadcast
 // observation with the smallest latency (the lower envelope) for fit_linear_clock; the fitted
 // offset then includes the minimum latency, which no receipt can reveal.
 // Throws posefuse::Error kInvalidArgument "bin_us" if not > 0, "observations" when empty.
-std::vector<ClockObservation> lower_envelope(const std::vector<ClockObservation>& observations,
-                                             double bin_us);
+std::vector<ClockObservation> lower_envelope(const std::vector<ClockObservation>& observations, double bin_us);
 
 }  // namespace posefuse::sync

@@ -20,16 +20,13 @@ double median_of(std::vector<double> v) {
 void check_options(const AudioPcm& audio, const BuzzerStopOptions& o) {
   if (!std::isfinite(audio.t0_camera_us)) throw_invalid("audio.t0_camera_us", "not finite");
   if (!std::isfinite(audio.sample_rate_hz) || audio.sample_rate_hz <= 0.0) {
-    throw_invalid("audio.sample_rate_hz",
-                  "must be a positive rate, got " + std::to_string(audio.sample_rate_hz));
+    throw_invalid("audio.sample_rate_hz", "must be a positive rate, got " + std::to_string(audio.sample_rate_hz));
   }
   if (audio.samples.empty()) throw_invalid("audio.samples", "no samples");
   if (!std::isfinite(o.tone_hz) || o.tone_hz <= 0.0 || o.tone_hz >= audio.sample_rate_hz / 2.0) {
-    throw_invalid("options.tone_hz", "must lie in (0, sample_rate/2), got " +
-                                         std::to_string(o.tone_hz));
+    throw_invalid("options.tone_hz", "must lie in (0, sample_rate/2), got " + std::to_string(o.tone_hz));
   }
-  if (!(o.window_s > 0.0) || !(o.min_on_s > 0.0) || !(o.min_off_s > 0.0) ||
-      !(o.min_on_to_off_ratio > 1.0)) {
+  if (!(o.window_s > 0.0) || !(o.min_on_s > 0.0) || !(o.min_off_s > 0.0) || !(o.min_on_to_off_ratio > 1.0)) {
     throw_invalid("options", "window_s, min_on_s, min_off_s must be > 0 and ratio > 1");
   }
 }
@@ -88,14 +85,16 @@ BuzzerStop detect_buzzer_stop(const AudioPcm& audio, const BuzzerStopOptions& o)
   const double peak = *std::max_element(env.begin(), env.end());
   std::ptrdiff_t last_high = -1;
   for (std::ptrdiff_t m = m_count - 1; m >= 0; --m) {
-    if (env[static_cast<std::size_t>(m)] >= 0.5 * peak) { last_high = m; break; }
+    if (env[static_cast<std::size_t>(m)] >= 0.5 * peak) {
+      last_high = m;
+      break;
+    }
   }
   const std::ptrdiff_t on_end = last_high - window;
   const std::ptrdiff_t off_begin = last_high + window;
   if (peak <= 0.0 || on_end - min_on < 0 || off_begin + min_off > m_count) {
-    throw_precondition("audio.buzzer", "no tone stop with " + std::to_string(o.min_on_s) +
-                                           " s of tone before and " + std::to_string(o.min_off_s) +
-                                           " s of silence after it");
+    throw_precondition("audio.buzzer", "no tone stop with " + std::to_string(o.min_on_s) + " s of tone before and " +
+                                           std::to_string(o.min_off_s) + " s of silence after it");
   }
   auto level_over = [&](std::ptrdiff_t begin, std::ptrdiff_t end) {
     return std::vector<double>(env.begin() + begin, env.begin() + end);
@@ -105,8 +104,7 @@ BuzzerStop detect_buzzer_stop(const AudioPcm& audio, const BuzzerStopOptions& o)
   const double off_level = median_of(level_over(off_begin, off_begin + min_off));
   if (on_level < 0.5 * peak || on_level < o.min_on_to_off_ratio * off_level) {
     throw_precondition("audio.buzzer", "tone level " + std::to_string(on_level) +
-                                           " is not clearly above the silence level " +
-                                           std::to_string(off_level));
+                                           " is not clearly above the silence level " + std::to_string(off_level));
   }
 
   // Least-squares line through the ramp between 30% and 70% of the tone level; the true
@@ -119,7 +117,11 @@ BuzzerStop detect_buzzer_stop(const AudioPcm& audio, const BuzzerStopOptions& o)
     const double e = env[static_cast<std::size_t>(m)];
     if (e < 0.3 * on_level || e > 0.7 * on_level) continue;
     const double t = static_cast<double>(m - last_high);
-    s_t += t; s_e += e; s_tt += t * t; s_te += t * e; ++count;
+    s_t += t;
+    s_e += e;
+    s_tt += t * t;
+    s_te += t * e;
+    ++count;
   }
   double crossing = 0.0;  // in samples relative to last_high
   double slope = 0.0;     // envelope units per sample
@@ -150,12 +152,10 @@ BuzzerStop detect_buzzer_stop(const AudioPcm& audio, const BuzzerStopOptions& o)
   // constant complex term that shifts the half-level crossing by up to 1 / (2 sin omega)
   // samples depending on the tone's phase at the stop (uniform too: divide by sqrt(3)).
   const double mirror_bias = 0.5 / std::abs(std::sin(omega));
-  const double sigma_samples = std::sqrt(noise_samples * noise_samples + 1.0 / 12.0 +
-                                         mirror_bias * mirror_bias / 3.0);
+  const double sigma_samples = std::sqrt(noise_samples * noise_samples + 1.0 / 12.0 + mirror_bias * mirror_bias / 3.0);
 
   BuzzerStop stop;
-  const double centre = static_cast<double>(last_high) + crossing +
-                        0.5 * static_cast<double>(window - 1) +
+  const double centre = static_cast<double>(last_high) + crossing + 0.5 * static_cast<double>(window - 1) +
                         0.5 * static_cast<double>(half_period - 1);
   stop.t_camera_us = audio.t0_camera_us + centre * 1e6 / fs;
   stop.sigma_us = sigma_samples * 1e6 / fs;
@@ -164,8 +164,7 @@ BuzzerStop detect_buzzer_stop(const AudioPcm& audio, const BuzzerStopOptions& o)
   return stop;
 }
 
-ClockObservation buzzer_observation(const BuzzerStop& stop, double base_stop_device_us,
-                                    double base_stop_sigma_us) {
+ClockObservation buzzer_observation(const BuzzerStop& stop, double base_stop_device_us, double base_stop_sigma_us) {
   if (!std::isfinite(base_stop_device_us)) throw_invalid("base_stop_device_us", "not finite");
   if (!std::isfinite(base_stop_sigma_us) || base_stop_sigma_us < 0.0) {
     throw_invalid("base_stop_sigma_us", "must be finite and >= 0");

@@ -16,11 +16,11 @@ struct AudioPcm {
 };
 
 struct BuzzerStopOptions {
-  double tone_hz = 2700.0;     // buzzer fundamental; must be below the Nyquist frequency
-  double window_s = 0.005;     // envelope window (rounded to whole tone periods); the edge ramp
-                               // lasts one window, so shorter is sharper but noisier
-  double min_on_s = 0.05;      // the tone must have sounded at least this long before stopping
-  double min_off_s = 0.05;     // and stay silent at least this long afterwards
+  double tone_hz = 2700.0;           // buzzer fundamental; must be below the Nyquist frequency
+  double window_s = 0.005;           // envelope window (rounded to whole tone periods); the edge ramp
+                                     // lasts one window, so shorter is sharper but noisier
+  double min_on_s = 0.05;            // the tone must have sounded at least this long before stopping
+  double min_off_s = 0.05;           // and stay silent at least this long afterwards
   double min_on_to_off_ratio = 4.0;  // tone envelope / silence envelope; below this: no event
 };
 
@@ -50,7 +50,6 @@ struct ClockObservation {
 // The buzzer stop as an observation base IMU -> camera (offset = t_camera - t_base).
 // `base_stop_sigma_us` is the uncertainty of the base IMU's own stop timestamp and of the
 // buzzer's electrical-to-acoustic delay; it adds in quadrature to the audio edge sigma.
-ClockObservation buzzer_observation(const BuzzerStop& stop, double base_stop_device_us,
-                                    double base_stop_sigma_us);
+ClockObservation buzzer_observation(const BuzzerStop& stop, double base_stop_device_us, double base_stop_sigma_us);
 
 }  // namespace posefuse::sync

@@ -13,8 +13,7 @@ void ClockMap::add_direct(const std::string& device, const LinearClock& camera_f
   camera_from_device_[device] = camera_from_device;
 }
 
-void ClockMap::add_via(const std::string& device, const std::string& via,
-                       const LinearClock& via_from_device) {
+void ClockMap::add_via(const std::string& device, const std::string& via, const LinearClock& via_from_device) {
   if (!has(via)) throw Error(ErrorCode::kNotFound, "via", "clock '" + via + "' is not mapped");
   add_direct(device, compose(camera_from(via), via_from_device));
 }

@@ -20,8 +20,7 @@ class ClockMap {
 
   // `device` maps to the clock of the already added `via` device by `via_from_device`.
   // Throws posefuse::Error kNotFound "via" when `via` is unknown.
-  void add_via(const std::string& device, const std::string& via,
-               const LinearClock& via_from_device);
+  void add_via(const std::string& device, const std::string& via, const LinearClock& via_from_device);
 
   bool has(const std::string& device) const;
   const LinearClock& camera_from(const std::string& device) const;  // kNotFound "device"

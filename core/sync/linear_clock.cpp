@@ -28,8 +28,8 @@ LinearClock compose(const LinearClock& outer, const LinearClock& inner) {
   // Jacobian of (offset, drift) with respect to (inner offset, inner drift, outer offset,
   // outer drift).
   Eigen::Matrix<double, 2, 4> jac;
-  jac << 1.0 + outer.drift, 0.0, 1.0, mid_at_anchor - outer.anchor_device_us,
-         0.0, 1.0 + outer.drift, 0.0, 1.0 + inner.drift;
+  jac << 1.0 + outer.drift, 0.0, 1.0, mid_at_anchor - outer.anchor_device_us, 0.0, 1.0 + outer.drift, 0.0,
+      1.0 + inner.drift;
   Eigen::Matrix4d cov = Eigen::Matrix4d::Zero();
   cov.topLeftCorner<2, 2>() = inner.covariance;
   cov.bottomRightCorner<2, 2>() = outer.covariance;
@@ -52,12 +52,10 @@ void validate(const std::vector<ClockObservation>& obs, const ClockFitOptions& o
     if (!std::isfinite(obs[i].device_us)) throw_invalid(at + "device_us", "not finite");
     if (!std::isfinite(obs[i].reference_us)) throw_invalid(at + "reference_us", "not finite");
     if (!std::isfinite(obs[i].sigma_us) || obs[i].sigma_us < 0.0) {
-      throw_invalid(at + "sigma_us", "must be finite and >= 0, got " +
-                                         std::to_string(obs[i].sigma_us));
+      throw_invalid(at + "sigma_us", "must be finite and >= 0, got " + std::to_string(obs[i].sigma_us));
     }
   }
-  if (!(o.drift_prior_sigma > 0.0) || !(o.outlier_sigmas > 0.0) || !(o.min_sigma_us > 0.0) ||
-      o.max_iterations < 1) {
+  if (!(o.drift_prior_sigma > 0.0) || !(o.outlier_sigmas > 0.0) || !(o.min_sigma_us > 0.0) || o.max_iterations < 1) {
     throw_invalid("options", "drift_prior_sigma, outlier_sigmas, min_sigma_us and max_iterations must be > 0");
   }
 }
@@ -90,8 +88,7 @@ ClockFit fit_linear_clock(const std::vector<ClockObservation>& obs, const ClockF
 
   auto sigma_of = [&](std::size_t i) { return std::max(obs[i].sigma_us, o.min_sigma_us); };
   auto residual = [&](std::size_t i, double offset, double drift) {
-    return (obs[i].reference_us - obs[i].device_us) - offset -
-           drift * (obs[i].device_us - anchor);
+    return (obs[i].reference_us - obs[i].device_us) - offset - drift * (obs[i].device_us - anchor);
   };
 
   double drift = pairwise_slope_median(obs);

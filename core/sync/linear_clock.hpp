@@ -15,8 +15,8 @@ namespace posefuse::sync {
 // reference_us = device_us + offset_us + drift * (device_us - anchor_device_us)
 struct LinearClock {
   double anchor_device_us = 0.0;
-  double offset_us = 0.0;  // reference - device at the anchor
-  double drift = 0.0;      // dimensionless rate error, 1e-6 = 1 ppm
+  double offset_us = 0.0;                                // reference - device at the anchor
+  double drift = 0.0;                                    // dimensionless rate error, 1e-6 = 1 ppm
   Eigen::Matrix2d covariance = Eigen::Matrix2d::Zero();  // of (offset_us, drift)
 
   double to_reference_us(double device_us) const;
@@ -38,9 +38,9 @@ struct ClockFitOptions {
 
 struct ClockFit {
   LinearClock clock;
-  std::vector<bool> inlier;       // per observation
+  std::vector<bool> inlier;  // per observation
   int inlier_count = 0;
-  double residual_rms_us = 0.0;   // over inliers
+  double residual_rms_us = 0.0;  // over inliers
 };
 
 // Robust weighted least squares of reference - device = offset + drift * (device - anchor),
@@ -50,7 +50,6 @@ struct ClockFit {
 // observations' own sigmas). The covariance is inflated when the inliers scatter more than their
 // sigmas claim. Throws posefuse::Error: kInvalidArgument "observations[i].*" on non-finite or
 // negative values, "observations" when empty.
-ClockFit fit_linear_clock(const std::vector<ClockObservation>& observations,
-                          const ClockFitOptions& options = {});
+ClockFit fit_linear_clock(const std::vector<ClockObservation>& observations, const ClockFitOptions& options = {});
 
 }  // namespace posefuse::sync

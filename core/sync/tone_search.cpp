@@ -70,13 +70,15 @@ std::optional<FoundTone> find_stopping_tone(const AudioPcm& audio, const ToneSea
   if (frames < 4) return std::nullopt;
   const double bin_hz = rate / static_cast<double>(n);
   const std::size_t k_min = std::max<std::size_t>(kBandFar + 1, static_cast<std::size_t>(std::ceil(o.min_hz / bin_hz)));
-  const std::size_t k_max = std::min(n / 2 - kBandFar - 1, static_cast<std::size_t>(std::floor(std::min(o.max_hz, rate / 2.0) / bin_hz)));
+  const std::size_t k_max =
+      std::min(n / 2 - kBandFar - 1, static_cast<std::size_t>(std::floor(std::min(o.max_hz, rate / 2.0) / bin_hz)));
   if (k_min > k_max) return std::nullopt;
 
   // power[f][k]: frame f, bin k (all bins up to Nyquist, for the neighbourhoods).
   std::vector<std::vector<double>> power(frames, std::vector<double>(n / 2 + 1));
   std::vector<double> hann(n);
-  for (std::size_t i = 0; i < n; ++i) hann[i] = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n));
+  for (std::size_t i = 0; i < n; ++i)
+    hann[i] = 0.5 - 0.5 * std::cos(2.0 * std::numbers::pi * static_cast<double>(i) / static_cast<double>(n));
   std::vector<Complex> x(n);
   for (std::size_t f = 0; f < frames; ++f) {
     for (std::size_t i = 0; i < n; ++i) x[i] = hann[i] * static_cast<double>(audio.samples[f * n + i]);

@@ -19,11 +19,11 @@
 namespace posefuse::sync {
 
 struct ToneSearchOptions {
-  double min_hz = 500.0;               // piezo buzzers sound at 2-4 kHz; mains hum lies below
-  double max_hz = 8000.0;              // and at most the Nyquist frequency of the audio
-  double frame_s = 0.02;               // rounded up to a power of two samples (at least 64)
-  double min_on_to_off_ratio = 4.0;    // amplitude, as BuzzerStopOptions
-  double min_peak_to_band_ratio = 4.0; // amplitude, the loud frame's peak against its neighbourhood
+  double min_hz = 500.0;                // piezo buzzers sound at 2-4 kHz; mains hum lies below
+  double max_hz = 8000.0;               // and at most the Nyquist frequency of the audio
+  double frame_s = 0.02;                // rounded up to a power of two samples (at least 64)
+  double min_on_to_off_ratio = 4.0;     // amplitude, as BuzzerStopOptions
+  double min_peak_to_band_ratio = 4.0;  // amplitude, the loud frame's peak against its neighbourhood
 };
 
 struct FoundTone {

@@ -19,15 +19,17 @@ ToneStopScanner::ToneStopScanner(double sample_rate_hz, const ToneStopScannerOpt
   const ToneStopScannerOptions& o = options;
   if (!(o.scan_every_s > 0.0) || !(o.margin_s >= 0.0) || !(o.merge_s >= 0.0) ||
       !(o.window_s >= o.scan_every_s + o.margin_s + o.detector.min_on_s)) {
-    throw_invalid("options", "need scan_every_s > 0, margin_s and merge_s >= 0, and window_s >= "
-                             "scan_every_s + margin_s + detector.min_on_s");
+    throw_invalid("options",
+                  "need scan_every_s > 0, margin_s and merge_s >= 0, and window_s >= "
+                  "scan_every_s + margin_s + detector.min_on_s");
   }
   window_.sample_rate_hz = sample_rate_hz;
   if (o.find_tone) {
     validate_tone_search(o.tone_search, sample_rate_hz);
   } else if (!(o.detector.tone_hz > 0.0) || !(o.detector.tone_hz < sample_rate_hz / 2.0)) {
     throw_invalid("options.detector.tone_hz", "must be in (0, " + std::to_string(sample_rate_hz / 2.0) +
-                                                  ") Hz (the Nyquist frequency), got " + std::to_string(o.detector.tone_hz));
+                                                  ") Hz (the Nyquist frequency), got " +
+                                                  std::to_string(o.detector.tone_hz));
   }
 }
 
@@ -71,7 +73,8 @@ void ToneStopScanner::scan() {
       if (!heard_outside_hz_ && (early || scans_without_tone_ % scans_per_window == 0)) {
         ToneSearchOptions everywhere;
         everywhere.max_hz = std::min(everywhere.max_hz, window_.sample_rate_hz / 2.0);
-        if (const std::optional<FoundTone> other = find_stopping_tone(window_, everywhere)) heard_outside_hz_ = other->hz;
+        if (const std::optional<FoundTone> other = find_stopping_tone(window_, everywhere))
+          heard_outside_hz_ = other->hz;
       }
       return;
     }
@@ -84,7 +87,8 @@ void ToneStopScanner::scan() {
   } catch (const Error&) {
     return;  // no tone stop in this window: the usual case
   }
-  const double end_us = window_.t0_camera_us + 1e6 * static_cast<double>(window_.samples.size()) / window_.sample_rate_hz;
+  const double end_us =
+      window_.t0_camera_us + 1e6 * static_cast<double>(window_.samples.size()) / window_.sample_rate_hz;
   if (stop.t_camera_us > end_us - 1e6 * options_.margin_s) return;  // wait for the silence after it
   if (!stops_.empty() && std::abs(stop.t_camera_us - stops_.back().t_camera_us) < 1e6 * options_.merge_s) return;
   stops_.push_back(stop);

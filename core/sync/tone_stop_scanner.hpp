@@ -19,10 +19,10 @@ namespace posefuse::sync {
 
 struct ToneStopScannerOptions {
   BuzzerStopOptions detector;
-  double window_s = 4.0;       // audio kept; must hold a stop with min_on_s before and margin_s after
-  double scan_every_s = 0.5;   // new audio between two scans
-  double margin_s = 0.2;       // a stop is taken only this far before the window's end (silence after it)
-  double merge_s = 0.25;       // stops this close are the same stop seen by two scans
+  double window_s = 4.0;      // audio kept; must hold a stop with min_on_s before and margin_s after
+  double scan_every_s = 0.5;  // new audio between two scans
+  double margin_s = 0.2;      // a stop is taken only this far before the window's end (silence after it)
+  double merge_s = 0.25;      // stops this close are the same stop seen by two scans
   // The tone's frequency measured, not given (detector.tone_hz unused until found): each scan
   // first searches tone_search's band of the window for a tone that sounds and stops
   // (tone_search.hpp); the first found is kept for the rest of the stream. Why measure even a

@@ -41,8 +41,7 @@ NumericDerivative central_difference(BodyEvaluator& probe, const Eigen::VectorXd
 }
 
 // Central differences of every vertex and joint against the analytic pose Jacobian.
-void check_pose_jacobian(const std::shared_ptr<SmplModel>& model, const PoseLayout& layout,
-                         unsigned seed) {
+void check_pose_jacobian(const std::shared_ptr<SmplModel>& model, const PoseLayout& layout, unsigned seed) {
   BodyEvaluator eval(model, layout);
   const Eigen::VectorXd beta = random_vector(model->num_betas(), 1.0, seed);
   const Eigen::VectorXd theta = random_vector(layout.size(), 0.8, seed + 1);
@@ -132,9 +131,10 @@ TEST(BodyEvaluator, ZeroPoseReproducesShapedTemplate) {
   BodyEvaluator eval(model, PoseLayout::upper_body());
   const Eigen::VectorXd beta = random_vector(10, 1.0, 60);
   eval.evaluate(beta, PoseLayout::upper_body().zero(), Derivatives::kNone);
-  Eigen::VectorXd shaped = Eigen::Map<const Eigen::VectorXd>(model->v_template.data(), model->v_template.size()) +
-                           model->shapedirs * beta;
-  EXPECT_LT((Eigen::Map<const Eigen::VectorXd>(eval.vertices().data(), shaped.size()) - shaped).cwiseAbs().maxCoeff(), 1e-12);
+  Eigen::VectorXd shaped =
+      Eigen::Map<const Eigen::VectorXd>(model->v_template.data(), model->v_template.size()) + model->shapedirs * beta;
+  EXPECT_LT((Eigen::Map<const Eigen::VectorXd>(eval.vertices().data(), shaped.size()) - shaped).cwiseAbs().maxCoeff(),
+            1e-12);
 }
 
 TEST(BodyEvaluator, VertexDependsOnlyOnAncestorDofs) {

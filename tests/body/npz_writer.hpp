@@ -18,7 +18,8 @@ inline void put(std::string& out, uint64_t value, int width) {
 inline std::string npy(const std::vector<int64_t>& shape, const std::vector<double>& values,
                        const std::string& dtype = "<f8", bool fortran_order = false) {
   std::string shape_text = "(";
-  for (size_t i = 0; i < shape.size(); ++i) shape_text += std::to_string(shape[i]) + (shape.size() == 1 || i + 1 < shape.size() ? "," : "");
+  for (size_t i = 0; i < shape.size(); ++i)
+    shape_text += std::to_string(shape[i]) + (shape.size() == 1 || i + 1 < shape.size() ? "," : "");
   shape_text += ")";
   std::string header = "{'descr': '" + dtype + "', 'fortran_order': " + (fortran_order ? "True" : "False") +
                        ", 'shape': " + shape_text + ", }";
@@ -35,9 +36,16 @@ inline std::string npy(const std::vector<int64_t>& shape, const std::vector<doub
       for (int64_t c = 0; c < shape[1]; ++c) ordered[c * shape[0] + r] = values[r * shape[1] + c];
   }
   for (double v : ordered) {
-    if (dtype == "<f8") { char b[8]; std::memcpy(b, &v, 8); out.append(b, 8); }
-    else if (dtype == "<f4") { float f = static_cast<float>(v); char b[4]; std::memcpy(b, &f, 4); out.append(b, 4); }
-    else if (dtype == "<i4") put(out, static_cast<uint32_t>(static_cast<int32_t>(v)), 4);
+    if (dtype == "<f8") {
+      char b[8];
+      std::memcpy(b, &v, 8);
+      out.append(b, 8);
+    } else if (dtype == "<f4") {
+      float f = static_cast<float>(v);
+      char b[4];
+      std::memcpy(b, &f, 4);
+      out.append(b, 4);
+    } else if (dtype == "<i4") put(out, static_cast<uint32_t>(static_cast<int32_t>(v)), 4);
     else if (dtype == "<u4") put(out, static_cast<uint32_t>(v), 4);
     else if (dtype == "<i8") put(out, static_cast<uint64_t>(static_cast<int64_t>(v)), 8);
     else out.append(16, '\0');  // unsupported dtypes: filler bytes
@@ -66,8 +74,8 @@ inline std::string zip(const std::vector<std::pair<std::string, std::string>>& m
   std::string out, directory;
   for (const auto& [name, content] : members) {
     const std::string data = deflated ? deflate_raw(content) : content;
-    const uint32_t crc = static_cast<uint32_t>(crc32(crc32(0L, Z_NULL, 0), reinterpret_cast<const Bytef*>(content.data()),
-                                                     static_cast<uInt>(content.size())));
+    const uint32_t crc = static_cast<uint32_t>(
+        crc32(crc32(0L, Z_NULL, 0), reinterpret_cast<const Bytef*>(content.data()), static_cast<uInt>(content.size())));
     const uint64_t offset = out.size();
     put(out, 0x04034b50, 4);
     put(out, 45, 2);

@@ -8,8 +8,8 @@
 
 namespace posefuse::body::testing {
 
-inline std::shared_ptr<SmplModel> random_model(int vertices_per_joint, int num_betas,
-                                               bool with_posedirs, unsigned seed) {
+inline std::shared_ptr<SmplModel> random_model(int vertices_per_joint, int num_betas, bool with_posedirs,
+                                               unsigned seed) {
   std::mt19937 rng(seed);
   std::uniform_real_distribution<double> uni(-1.0, 1.0);
   auto m = std::make_shared<SmplModel>();

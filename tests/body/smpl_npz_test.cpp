@@ -29,9 +29,11 @@ Members smpl_members(const SmplModel& m, bool fortran_weights = false) {
   Members members;
   members.emplace_back("v_template.npy", testing::npy({v, 3}, flat(m.v_template.transpose())));
   members.emplace_back("shapedirs.npy", testing::npy({v, 3, m.num_betas()}, flat(m.shapedirs)));
-  if (m.has_posedirs()) members.emplace_back("posedirs.npy", testing::npy({v, 3, kNumPoseFeatures}, flat(m.posedirs), "<f4"));
+  if (m.has_posedirs())
+    members.emplace_back("posedirs.npy", testing::npy({v, 3, kNumPoseFeatures}, flat(m.posedirs), "<f4"));
   members.emplace_back("J_regressor.npy", testing::npy({kNumJoints, v}, flat(Eigen::MatrixXd(m.J_regressor))));
-  members.emplace_back("weights.npy", testing::npy({v, kNumJoints}, flat(Eigen::MatrixXd(m.weights)), "<f8", fortran_weights));
+  members.emplace_back("weights.npy",
+                       testing::npy({v, kNumJoints}, flat(Eigen::MatrixXd(m.weights)), "<f8", fortran_weights));
   std::vector<double> kintree;
   for (int j = 0; j < kNumJoints; ++j) kintree.push_back(j == 0 ? 4294967295.0 : m.parents[j]);
   for (int j = 0; j < kNumJoints; ++j) kintree.push_back(j);
@@ -114,26 +116,49 @@ TEST(SmplNpz, MalformedArraysAreNamed) {
       if (m.first == key + ".npy") m.second = std::move(content);
     return testing::zip(members, false);
   };
-  expect_error([&] { load(replaced("weights", testing::npy({v, 23}, std::vector<double>(v * 23, 1.0 / 23)))); },
-               ErrorCode::kInvalidArgument, "weights");
-  expect_error([&] { load(replaced("shapedirs", testing::npy({v, 10}, std::vector<double>(v * 10, 0.0)))); },
-               ErrorCode::kInvalidArgument, "shapedirs");
-  expect_error([&] { load(replaced("J_regressor", testing::npy({kNumJoints, v + 1}, std::vector<double>(kNumJoints * (v + 1), 0.0)))); },
-               ErrorCode::kInvalidArgument, "J_regressor");
+  expect_error(
+      [&] {
+        load(replaced("weights", testing::npy({v, 23}, std::vector<double>(v * 23, 1.0 / 23))));
+      },
+      ErrorCode::kInvalidArgument, "weights");
+  expect_error(
+      [&] {
+        load(replaced("shapedirs", testing::npy({v, 10}, std::vector<double>(v * 10, 0.0))));
+      },
+      ErrorCode::kInvalidArgument, "shapedirs");
+  expect_error(
+      [&] {
+        load(
+            replaced("J_regressor", testing::npy({kNumJoints, v + 1}, std::vector<double>(kNumJoints * (v + 1), 0.0))));
+      },
+      ErrorCode::kInvalidArgument, "J_regressor");
   std::vector<double> nan_vertices(v * 3, 0.1);
   nan_vertices[7] = std::numeric_limits<double>::quiet_NaN();
-  expect_error([&] { load(replaced("v_template", testing::npy({v, 3}, nan_vertices))); }, ErrorCode::kInvalidArgument,
-               "v_template");
-  expect_error([&] { load(replaced("f", testing::npy({2, 3}, {0, 1, 2, 0, 1, 1e6}, "<i4"))); }, ErrorCode::kInvalidArgument,
-               "f");
+  expect_error(
+      [&] {
+        load(replaced("v_template", testing::npy({v, 3}, nan_vertices)));
+      },
+      ErrorCode::kInvalidArgument, "v_template");
+  expect_error(
+      [&] {
+        load(replaced("f", testing::npy({2, 3}, {0, 1, 2, 0, 1, 1e6}, "<i4")));
+      },
+      ErrorCode::kInvalidArgument, "f");
   std::vector<double> kintree(48, 0);
   for (int j = 0; j < 24; ++j) kintree[24 + j] = j;
   kintree[0] = -1;  // every joint a child of the pelvis: not SMPL's tree
-  expect_error([&] { load(replaced("kintree_table", testing::npy({2, 24}, kintree, "<i8"))); }, ErrorCode::kInvalidArgument,
-               "kintree_table");
-  expect_error([&] { load(replaced("weights", testing::npy({v, 24}, std::vector<double>(v * 24, 0.0), "<c16"))); },
-               ErrorCode::kInvalidArgument, "test.npz/weights.npy.dtype");
-  expect_error([&] { load(replaced("weights", "not an npy file at all")); }, ErrorCode::kDataLoss, "test.npz/weights.npy");
+  expect_error(
+      [&] {
+        load(replaced("kintree_table", testing::npy({2, 24}, kintree, "<i8")));
+      },
+      ErrorCode::kInvalidArgument, "kintree_table");
+  expect_error(
+      [&] {
+        load(replaced("weights", testing::npy({v, 24}, std::vector<double>(v * 24, 0.0), "<c16")));
+      },
+      ErrorCode::kInvalidArgument, "test.npz/weights.npy.dtype");
+  expect_error([&] { load(replaced("weights", "not an npy file at all")); }, ErrorCode::kDataLoss,
+               "test.npz/weights.npy");
   std::string short_array = testing::npy({v, 24}, std::vector<double>(v * 24, 1.0 / 24));
   short_array.resize(short_array.size() - 9);
   expect_error([&] { load(replaced("weights", short_array)); }, ErrorCode::kDataLoss, "test.npz/weights.npy");

@@ -34,7 +34,8 @@ TEST(BodySurface, PoseJacobiansOfPositionAndNormalMatchFiniteDifferences) {
   BodySurface surface(model->faces, model->num_vertices()), moved(model->faces, model->num_vertices());
   surface.update(eval.vertices());
   for (int trial = 0; trial < 25; ++trial) {
-    const SurfacePoint s{static_cast<int>(rng() % model->num_faces()), 0.2 + 0.3 * (uni(rng) + 0.5), 0.1 + 0.3 * (uni(rng) + 0.5)};
+    const SurfacePoint s{static_cast<int>(rng() % model->num_faces()), 0.2 + 0.3 * (uni(rng) + 0.5),
+                         0.1 + 0.3 * (uni(rng) + 0.5)};
     Eigen::Matrix3Xd jp = Eigen::Matrix3Xd::Zero(3, layout.size()), jn = jp;
     surface.position_pose_jacobian(s, eval, jp);
     surface.normal_pose_jacobian(s, eval, jn);
@@ -132,8 +133,10 @@ TEST(SurfacePoseJacobians, PackedColumnsHoldEveryNonZeroColumn) {
       const int d = columns[static_cast<size_t>(c)];
       ASSERT_TRUE(c == 0 || d > columns[static_cast<size_t>(c) - 1]) << "face " << face;
       listed[static_cast<size_t>(d)] = true;
-      ASSERT_LT((pp.col(c) - jp.col(d)).cwiseAbs().maxCoeff(), 1e-12 * (1 + jp.cwiseAbs().maxCoeff())) << "face " << face;
-      ASSERT_LT((pn.col(c) - jn.col(d)).cwiseAbs().maxCoeff(), 1e-12 * (1 + jn.cwiseAbs().maxCoeff())) << "face " << face;
+      ASSERT_LT((pp.col(c) - jp.col(d)).cwiseAbs().maxCoeff(), 1e-12 * (1 + jp.cwiseAbs().maxCoeff()))
+          << "face " << face;
+      ASSERT_LT((pn.col(c) - jn.col(d)).cwiseAbs().maxCoeff(), 1e-12 * (1 + jn.cwiseAbs().maxCoeff()))
+          << "face " << face;
     }
     for (int d = 0; d < n; ++d)
       if (!listed[static_cast<size_t>(d)]) {

@@ -18,7 +18,7 @@ TEST_P(TemplateTest, IsClosedOrientedManifoldSphere) {
   EXPECT_EQ(report.num_nonmanifold_vertices, 0);
   EXPECT_EQ(report.num_degenerate_faces, 0);
   EXPECT_EQ(report.num_unreferenced, 0);
-  EXPECT_EQ(report.euler_characteristic, 2);  // genus 0
+  EXPECT_EQ(report.euler_characteristic, 2);                        // genus 0
   EXPECT_GT(signed_volume(model->v_template, model->faces), 0.03);  // outward normals, ~60-80 l
   EXPECT_GT(model->num_vertices(), 800);
   EXPECT_LT(model->num_vertices(), 1200);
@@ -48,12 +48,18 @@ struct Measure {
   int a, b;
 };
 constexpr Measure kMeasures[] = {
-    {"pelvis-spine1", kPelvis, kSpine1},       {"spine1-spine2", kSpine1, kSpine2},
-    {"spine2-spine3", kSpine2, kSpine3},       {"spine3-neck", kSpine3, kNeck},
-    {"neck-head", kNeck, kHead},               {"l_hip-knee", kLeftHip, kLeftKnee},
-    {"r_knee-ankle", kRightKnee, kRightAnkle}, {"l_shoulder-elbow", kLeftShoulder, kLeftElbow},
-    {"r_elbow-wrist", kRightElbow, kRightWrist}, {"l_collar-shoulder", kLeftCollar, kLeftShoulder},
-    {"shoulder-shoulder", kLeftShoulder, kRightShoulder}, {"hip-hip", kLeftHip, kRightHip},
+    {"pelvis-spine1", kPelvis, kSpine1},
+    {"spine1-spine2", kSpine1, kSpine2},
+    {"spine2-spine3", kSpine2, kSpine3},
+    {"spine3-neck", kSpine3, kNeck},
+    {"neck-head", kNeck, kHead},
+    {"l_hip-knee", kLeftHip, kLeftKnee},
+    {"r_knee-ankle", kRightKnee, kRightAnkle},
+    {"l_shoulder-elbow", kLeftShoulder, kLeftElbow},
+    {"r_elbow-wrist", kRightElbow, kRightWrist},
+    {"l_collar-shoulder", kLeftCollar, kLeftShoulder},
+    {"shoulder-shoulder", kLeftShoulder, kRightShoulder},
+    {"hip-hip", kLeftHip, kRightHip},
 };
 
 // Documented change (metres per unit beta) of each measure; see template_shape_directions().
@@ -77,9 +83,7 @@ double expected_change(int direction, const Measure& m, double rest_length) {
   }
 }
 
-double length(const BodyEvaluator& e, const Measure& m) {
-  return (e.joints().col(m.a) - e.joints().col(m.b)).norm();
-}
+double length(const BodyEvaluator& e, const Measure& m) { return (e.joints().col(m.a) - e.joints().col(m.b)).norm(); }
 
 TEST_P(TemplateTest, ShapeDirectionsChangeSegmentLengthsLinearlyAsDocumented) {
   const auto model = make_template(GetParam());
@@ -110,7 +114,7 @@ TEST_P(TemplateTest, RegressedJointsAreInsideTheBodyAtPlausiblePlaces) {
   EXPECT_GT(j(1, kHead), j(1, kNeck));
   EXPECT_GT(j(1, kNeck), j(1, kSpine3));
   EXPECT_GT(j(1, kPelvis), j(1, kLeftKnee));
-  EXPECT_GT(j(0, kLeftWrist), j(0, kLeftElbow));   // left is +x
+  EXPECT_GT(j(0, kLeftWrist), j(0, kLeftElbow));  // left is +x
   EXPECT_LT(j(0, kRightWrist), j(0, kRightElbow));
   const double stature = model->v_template.row(1).maxCoeff() - model->v_template.row(1).minCoeff();
   EXPECT_GT(stature, GetParam() == Sex::kMale ? 1.70 : 1.55);
@@ -134,7 +138,10 @@ TEST_P(TemplateTest, SkinningKeepsFacesIntactInUsualRangeOfMotion) {
       {{"left_shoulder_z", -80 * kDeg}, {"right_shoulder_z", 80 * kDeg}},
       {{"left_shoulder_y", -90 * kDeg}, {"right_shoulder_z", -60 * kDeg}, {"right_elbow_z", 20 * kDeg}},
       {{"left_hip_x", -90 * kDeg}, {"left_knee_x", 90 * kDeg}, {"right_hip_z", -30 * kDeg}},
-      {{"spine1_x", 20 * kDeg}, {"spine2_x", 20 * kDeg}, {"spine3_y", 20 * kDeg}, {"neck_x", 30 * kDeg},
+      {{"spine1_x", 20 * kDeg},
+       {"spine2_x", 20 * kDeg},
+       {"spine3_y", 20 * kDeg},
+       {"neck_x", 30 * kDeg},
        {"head_y", 50 * kDeg}},
       {{"left_collar_z", 25 * kDeg}, {"left_wrist_y", 60 * kDeg}, {"right_wrist_z", -40 * kDeg}},
   };

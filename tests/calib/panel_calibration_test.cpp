@@ -135,8 +135,9 @@ TEST(MocapToCamera, Eqs4To6FromOneAndSeveralPoses) {
   std::vector<std::array<Vec3, 4>> moved = markers;
   for (Vec3& m : moved[1]) m += Vec3(0.05, 0, 0);
   expect_error([&] { mocap_to_camera(moved, seen, camera, panel); }, ErrorCode::kFailedPrecondition, "mocap.poses");
-  expect_error([&] { mocap_to_camera(std::vector<std::array<Vec3, 4>>{}, std::vector<PanelInCamera>{}, camera, panel); },
-               ErrorCode::kInvalidArgument, "poses");
+  expect_error(
+      [&] { mocap_to_camera(std::vector<std::array<Vec3, 4>>{}, std::vector<PanelInCamera>{}, camera, panel); },
+      ErrorCode::kInvalidArgument, "poses");
   std::array<Vec3, 4> collinear{Vec3(0, 0, 0), Vec3(0.1, 0, 0), Vec3(0.2, 0, 0), Vec3(0.3, 0, 0)};
   expect_error([&] { panel_pose_from_markers(collinear, panel); }, ErrorCode::kInvalidArgument, "markers_E");
 }

@@ -27,8 +27,8 @@ struct PanelImages {
 struct PanelRenderOptions {
   double depth_noise_m = 0.0;
   double ir_noise = 0.0;
-  double step_m = 0.0;           // board surface z_P offset for x_P > long_leg / 2
-  bool cover_marker_3 = false;   // M3 covered: only three bright points
+  double step_m = 0.0;          // board surface z_P offset for x_P > long_leg / 2
+  bool cover_marker_3 = false;  // M3 covered: only three bright points
   std::uint64_t seed = 1;
 };
 
@@ -52,7 +52,8 @@ inline PanelImages render_panel(const PanelGeometry& panel, const PanelPose& K_p
       for (std::size_t m = 0; m < markers.size(); ++m) {
         if (m == 3 && o.cover_marker_3) continue;
         const Vec3 w = origin_P - markers[m];
-        const double a = dir_P.squaredNorm(), b = 2 * w.dot(dir_P), c = w.squaredNorm() - std::pow(panel.marker_radius_m, 2);
+        const double a = dir_P.squaredNorm(), b = 2 * w.dot(dir_P),
+                     c = w.squaredNorm() - std::pow(panel.marker_radius_m, 2);
         if (b * b - 4 * a * c >= 0) marker = true;
       }
       if (marker) {

@@ -96,12 +96,11 @@ TEST_F(ClientTest, FitSendsHeaderOptionsToTheServer) {
   server::PoseFuseServer server(one_worker_on_a_free_port());
   demo::write_demo_session(dir_ / "demo.pfchunks");
   ResultWriter writer(dir_ / "out");
-  const FitOutcome outcome = run_fit(make_channel("127.0.0.1:" + std::to_string(server.port())),
-                                     dir_ / "demo.pfchunks", writer, {}, {{"fit.enabled", "yes"}});
+  const FitOutcome outcome = run_fit(make_channel("127.0.0.1:" + std::to_string(server.port())), dir_ / "demo.pfchunks",
+                                     writer, {}, {{"fit.enabled", "yes"}});
   ASSERT_FALSE(outcome.local_error);
   EXPECT_FALSE(outcome.status.ok());
-  EXPECT_NE(outcome.status.error_message().find("fit.enabled"), std::string::npos)
-      << outcome.status.error_message();
+  EXPECT_NE(outcome.status.error_message().find("fit.enabled"), std::string::npos) << outcome.status.error_message();
 }
 
 TEST_F(ClientTest, MissingRecordingIsNotFound) {
@@ -118,8 +117,7 @@ TEST_F(ClientTest, FitWritesResultFiles) {
   demo::write_demo_session(dir_ / "demo");
 
   ResultWriter writer(dir_ / "out");
-  const FitOutcome outcome =
-      run_fit(make_channel("127.0.0.1:" + std::to_string(server.port())), dir_ / "demo", writer);
+  const FitOutcome outcome = run_fit(make_channel("127.0.0.1:" + std::to_string(server.port())), dir_ / "demo", writer);
   ASSERT_FALSE(outcome.local_error) << outcome.local_error->what();
   ASSERT_TRUE(outcome.status.ok()) << outcome.status.error_message();
   EXPECT_EQ(outcome.progress.chunks_sent, 952u);

@@ -23,7 +23,7 @@ struct FixtureSpec {
   double forearm_angle_rad = 0.0;         // K_from_F turned by this about x_F
   double position_offset_m = 0.0;         // IMU positions and joints moved along +z_K
   double r_m = 0.035;
-  double K_from_W_angle_rad = 0.0;        // about z
+  double K_from_W_angle_rad = 0.0;  // about z
   std::int64_t clock_offset_us = -1'000'000;
   double buzzer_tone_hz = 2700.0;
   bool with_joints = true;

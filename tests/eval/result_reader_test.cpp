@@ -82,7 +82,7 @@ TEST(ResultReader, NamesWhatIsWrong) {
     posefuse::testing::expect_error([&] { session::read_result_files(dir); }, ErrorCode::kInvalidArgument, c.field);
   }
   posefuse::testing::expect_error([&] { session::read_result_files(dir / "absent"); }, ErrorCode::kNotFound,
-                        (dir / "absent").string());
+                                  (dir / "absent").string());
 }
 
 // Result directories written before the frame merge have two stages' rows in forearms.csv (the

@@ -7,8 +7,8 @@
 #include <fstream>
 #include <numbers>
 
-#include "common/error.hpp"
 #include "../imu/expect_error.hpp"
+#include "common/error.hpp"
 #include "eval/result_score.hpp"
 #include "result_fixture.hpp"
 
@@ -106,7 +106,7 @@ TEST(ResultScore, RowsWithoutNearTruthAreCountedNotScored) {
   result.device_t0_us = truth.device_t0_us;
   const Pair p = write_pair("late", result, truth);
   posefuse::testing::expect_error([&] { eval::score_directories(p.result, p.truth); }, ErrorCode::kInvalidArgument,
-                        "forearm_orientations/imu_right.csv (imu_right)", "no t_us within 2000 us");
+                                  "forearm_orientations/imu_right.csv (imu_right)", "no t_us within 2000 us");
   eval::ScoreOptions wide;
   wide.tolerance_us = 5000;
   const eval::ScoreReport r = eval::score_directories(p.result, p.truth, wide);
@@ -120,17 +120,17 @@ TEST(ResultScore, MissingFilesAreClearErrors) {
   const Pair p = write_pair("missing", {}, truth);
   // A result stream without truth cannot be scored.
   posefuse::testing::expect_error([&] { eval::score_directories(p.result, p.truth); }, ErrorCode::kNotFound,
-                        (p.truth / "camera_joints.csv").string(), "missing in the truth directory");
+                                  (p.truth / "camera_joints.csv").string(), "missing in the truth directory");
   // The other way round a truth stream without results is a note.
   const eval::ScoreReport r = eval::score_directories(p.truth, p.result);
   ASSERT_FALSE(r.notes.empty());
   EXPECT_NE(r.notes.front().find("camera_joints.csv: not in the results"), std::string::npos) << r.notes.front();
   posefuse::testing::expect_error([&] { eval::score_directories(p.result / "nowhere", p.truth); }, ErrorCode::kNotFound,
-                        (p.result / "nowhere").string(), "not a directory");
+                                  (p.result / "nowhere").string(), "not a directory");
   const auto empty = result_fixture::fresh_result_dir("empty");
   std::filesystem::create_directories(empty);
-  posefuse::testing::expect_error([&] { eval::score_directories(empty, p.truth); }, ErrorCode::kNotFound, empty.string(),
-                        "none of the result files");
+  posefuse::testing::expect_error([&] { eval::score_directories(empty, p.truth); }, ErrorCode::kNotFound,
+                                  empty.string(), "none of the result files");
 }
 
 TEST(ResultScore, OccludedFramesFromTheTruthsOcclusionFile) {
@@ -154,5 +154,5 @@ TEST(ResultScore, OccludedFramesFromTheTruthsOcclusionFile) {
     bad << "0,RIGHT,0.5,yes,1\n";
   }
   posefuse::testing::expect_error([&] { eval::score_directories(p.result, p.truth); }, ErrorCode::kInvalidArgument,
-                        "occlusion.csv:12:forearm_occluded", "not 0 or 1");
+                                  "occlusion.csv:12:forearm_occluded", "not 0 or 1");
 }

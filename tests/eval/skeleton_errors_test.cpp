@@ -48,10 +48,10 @@ TEST(JointErrorStats, ARotatingBiasHasNoMeanButSpreadsByItsLength) {
 
 TEST(OffTrackFrames, SingleAndDoubleFrameJumpsAreFoundStepsAreNot) {
   std::vector<Vec3> e = offset_and_jitter(60);
-  e[0] += Vec3(0.0, 0.0, 0.2);   // at the first frame (clamped window)
+  e[0] += Vec3(0.0, 0.0, 0.2);  // at the first frame (clamped window)
   e[10] += Vec3(0.15, 0.0, 0.0);
   e[30] += Vec3(0.0, -0.2, 0.1);
-  e[31] += Vec3(0.0, 0.1, 0.2);  // two frames in a row, other directions
+  e[31] += Vec3(0.0, 0.1, 0.2);   // two frames in a row, other directions
   e[59] += Vec3(-0.3, 0.0, 0.0);  // at the last frame
   // An INFERRED-like step: 100 mm more from frame 45 on, kept.
   for (int k = 45; k < 60; ++k) e[static_cast<std::size_t>(k)] += Vec3(0.0, 0.0, 0.1);

@@ -14,9 +14,8 @@ namespace {
 
 // A step: the left half of the image (x > 0 in K) sees a wall at 1.0 m, the right half at 1.5 m.
 DepthFrame render_step(const raycast::DepthCamera& camera) {
-  return testing::render_frame(camera, [](const Eigen::Vector3d& ray) -> std::optional<double> {
-    return ray.x() > 0 ? 1.0 : 1.5;
-  });
+  return testing::render_frame(
+      camera, [](const Eigen::Vector3d& ray) -> std::optional<double> { return ray.x() > 0 ? 1.0 : 1.5; });
 }
 
 TEST(FitBehindSurface, StepSemantics) {
@@ -103,9 +102,11 @@ DepthFrame random_scene(const raycast::DepthCamera& camera, std::mt19937_64& rng
   std::vector<Sphere> spheres;
   const int count = 2 + static_cast<int>(uniform(rng) * 3);
   for (int s = 0; s < count; ++s)
-    spheres.push_back({{-0.5 + uniform(rng), -0.4 + 0.8 * uniform(rng), 0.9 + 1.5 * uniform(rng)}, 0.08 + 0.3 * uniform(rng)});
+    spheres.push_back(
+        {{-0.5 + uniform(rng), -0.4 + 0.8 * uniform(rng), 0.9 + 1.5 * uniform(rng)}, 0.08 + 0.3 * uniform(rng)});
   const bool back_plane = uniform(rng) < 0.5;
-  const Eigen::Vector3d plane_normal = Eigen::Vector3d(0.3 * (uniform(rng) - 0.5), 0.3 * (uniform(rng) - 0.5), -1).normalized();
+  const Eigen::Vector3d plane_normal =
+      Eigen::Vector3d(0.3 * (uniform(rng) - 0.5), 0.3 * (uniform(rng) - 0.5), -1).normalized();
   const double plane_depth = 2.6 + 0.5 * uniform(rng);
   DepthFrame frame = testing::render_frame(camera, [&](const Eigen::Vector3d& ray) -> std::optional<double> {
     std::optional<double> nearest;

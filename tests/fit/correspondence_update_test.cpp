@@ -49,7 +49,8 @@ TEST(FitCorrespondenceUpdate, CandidatesAndClimbNeverRaiseTheCostAndFindTheSurfa
   for (int iteration = 0; iteration < 3; ++iteration) update.update(m.surface, targets, {}, iteration, nu);
   std::vector<double> distance;
   for (size_t i = 0; i < nu.size(); ++i) {
-    const double after = match_cost(m.surface, nu[i], m.points[i], m.normals[i], targets.inv_sigma_p2, targets.inv_sigma_n2);
+    const double after =
+        match_cost(m.surface, nu[i], m.points[i], m.normals[i], targets.inv_sigma_p2, targets.inv_sigma_n2);
     EXPECT_LE(after, before[i]) << i;
     distance.push_back((m.surface.position(nu[i]) - m.points[i]).norm());
   }

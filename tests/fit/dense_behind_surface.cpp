@@ -20,7 +20,8 @@ void distance_transform_1d(const std::vector<double>& f, int n, std::vector<doub
     }
     ++k;
     v[k] = q;
-    z[k] = k == 0 ? -kInf : ((f[q] + double(q) * q) - (f[v[k - 1]] + double(v[k - 1]) * v[k - 1])) / (2.0 * (q - v[k - 1]));
+    z[k] = k == 0 ? -kInf
+                  : ((f[q] + double(q) * q) - (f[v[k - 1]] + double(v[k - 1]) * v[k - 1])) / (2.0 * (q - v[k - 1]));
     z[k + 1] = kInf;
   }
   for (int q = 0, j = 0; q < n; ++q) {

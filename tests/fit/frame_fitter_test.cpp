@@ -6,9 +6,9 @@
 
 #include <Eigen/Geometry>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <limits>
-#include <cstdio>
 #include <numbers>
 #include <random>
 
@@ -43,9 +43,12 @@ Eigen::VectorXd perturbed(const body::PoseLayout& layout, const Eigen::VectorXd&
 // Largest angle between the model's and the truth's bones (upper arms, forearms, spine to neck,
 // shoulder girdle).
 double worst_bone_angle_rad(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b) {
-  const int bones[][2] = {{body::kLeftShoulder, body::kLeftElbow},  {body::kLeftElbow, body::kLeftWrist},
-                          {body::kRightShoulder, body::kRightElbow}, {body::kRightElbow, body::kRightWrist},
-                          {body::kPelvis, body::kNeck},             {body::kLeftShoulder, body::kRightShoulder}};
+  const int bones[][2] = {{body::kLeftShoulder, body::kLeftElbow},
+                          {body::kLeftElbow, body::kLeftWrist},
+                          {body::kRightShoulder, body::kRightElbow},
+                          {body::kRightElbow, body::kRightWrist},
+                          {body::kPelvis, body::kNeck},
+                          {body::kLeftShoulder, body::kRightShoulder}};
   double worst = 0;
   for (const auto& bone : bones) {
     const Eigen::Vector3d da = (a.col(bone[1]) - a.col(bone[0])).normalized();
@@ -60,9 +63,9 @@ double worst_bone_angle_rad(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b
 // and neck DOFs bend the torso surface almost alike, so the fit may split a bend differently
 // between them (up to ~1 cm at spine3 or the head joint in bench_fit_frame) with the surface and
 // the limbs in place; they count in the mean over all 16.
-constexpr int kReportedJoints[] = {body::kPelvis,         body::kLeftHip,    body::kRightHip,
-                                   body::kLeftShoulder,   body::kRightShoulder, body::kLeftElbow,
-                                   body::kRightElbow,     body::kLeftWrist,  body::kRightWrist};
+constexpr int kReportedJoints[] = {body::kPelvis,       body::kLeftHip,       body::kRightHip,
+                                   body::kLeftShoulder, body::kRightShoulder, body::kLeftElbow,
+                                   body::kRightElbow,   body::kLeftWrist,     body::kRightWrist};
 
 double worst_joint_error_m(const Eigen::Matrix3Xd& a, const Eigen::Matrix3Xd& b) {
   double worst = 0;
@@ -98,12 +101,14 @@ double expect_fits_rendered_frames_back(const FitOptions& options) {
     const double joint_error = worst_joint_error_m(eval.joints(), rendered.joints_K);
     const double mean_error = mean_joint_error_m(eval.joints(), rendered.joints_K);
     const double bone_angle = worst_bone_angle_rad(eval.joints(), rendered.joints_K);
-    std::printf("variant %d: start %.1f mm -> worst %.2f mm, mean of 16 %.2f mm, bones %.2f deg, %d iterations (%d rejected), E %.4g -> %.4g "
-                "(data %.4g bg %.4g bgJoint %.4g float %.4g limit %.4g imu %.4g), %s\n",
-                variant, 1e3 * start_error, 1e3 * joint_error, 1e3 * mean_error, bone_angle / kDeg, result.iterations,
-                result.rejected_steps, result.initial_energy.total(), result.energy.total(), result.energy.data,
-                result.energy.bg, result.energy.bg_joint, result.energy.float_term, result.energy.limit,
-                result.energy.imu, fit_status_name(result.status));
+    std::printf(
+        "variant %d: start %.1f mm -> worst %.2f mm, mean of 16 %.2f mm, bones %.2f deg, %d iterations (%d rejected), "
+        "E %.4g -> %.4g "
+        "(data %.4g bg %.4g bgJoint %.4g float %.4g limit %.4g imu %.4g), %s\n",
+        variant, 1e3 * start_error, 1e3 * joint_error, 1e3 * mean_error, bone_angle / kDeg, result.iterations,
+        result.rejected_steps, result.initial_energy.total(), result.energy.total(), result.energy.data,
+        result.energy.bg, result.energy.bg_joint, result.energy.float_term, result.energy.limit, result.energy.imu,
+        fit_status_name(result.status));
     EXPECT_GT(start_error, 0.03);
     EXPECT_LT(joint_error, 0.005) << "variant " << variant;
     // The mean includes the spine's inner joints, neck, head and collars (see kReportedJoints).
@@ -172,7 +177,6 @@ TEST(FrameFitter, AStepShrunkByDampingIsNotTakenForConvergence) {
   EXPECT_LT(error, 0.005);
   EXPECT_GT(iterations, stopped_iterations);
 }
-
 
 namespace posefuse::fit {
 namespace {
@@ -277,7 +281,8 @@ TEST(FrameFitterEnergy, ImuTermPullsTheForearmTowardsTheImuDirection) {
                                                              ForearmDirections{imu_direction, std::nullopt});
     const FitResult result = fitter.fit(observation, truth, s.beta);
     eval.evaluate(s.beta, result.theta, body::Derivatives::kNone);
-    angle_to_imu[with_imu] = std::acos(std::clamp(testing::forearm_direction(eval.joints(), true).dot(imu_direction), -1.0, 1.0));
+    angle_to_imu[with_imu] =
+        std::acos(std::clamp(testing::forearm_direction(eval.joints(), true).dot(imu_direction), -1.0, 1.0));
     if (!with_imu) {
       EXPECT_EQ(result.energy.imu, 0.0);
     }
@@ -300,8 +305,8 @@ namespace protocol {
 
 Eigen::VectorXd calibration_pose(const body::PoseLayout& layout) {
   Eigen::VectorXd theta = testing::facing_pose(layout, 2.2, 0);
-  for (const char* dof : {"left_shoulder_y", "left_shoulder_z", "right_shoulder_y", "right_shoulder_z", "left_elbow_y",
-                          "right_elbow_y"})
+  for (const char* dof :
+       {"left_shoulder_y", "left_shoulder_z", "right_shoulder_y", "right_shoulder_z", "left_elbow_y", "right_elbow_y"})
     theta[layout.index_of(dof)] = 0;
   theta[layout.index_of("left_elbow_z")] = 90 * kDeg;  // forearms up, palms to the camera
   theta[layout.index_of("right_elbow_z")] = -90 * kDeg;
@@ -331,16 +336,18 @@ struct ProtocolFit {
 ProtocolFit fit_protocol_pose(const Scene& s, const Eigen::VectorXd& truth, unsigned seed,
                               const testing::ModelFrame& rendered) {
   FrameFitter fitter(s.model, s.layout, s.camera.intrinsics(), FitOptions{});
-  const FrameObservation observation = prepare_observation(
-      rendered.frame, s.camera, rendered.skeleton_K, fitter.options(),
-      ForearmDirections{testing::forearm_direction(rendered.joints_K, true), testing::forearm_direction(rendered.joints_K, false)});
+  const FrameObservation observation =
+      prepare_observation(rendered.frame, s.camera, rendered.skeleton_K, fitter.options(),
+                          ForearmDirections{testing::forearm_direction(rendered.joints_K, true),
+                                            testing::forearm_direction(rendered.joints_K, false)});
   ProtocolFit out;
   out.limit_energy_at_truth = fitter.energy(observation, truth, s.beta).limit;
   const FitResult result = fitter.fit(observation, perturbed(s.layout, truth, 1 * kDeg, 0.005, seed), s.beta);
   body::BodyEvaluator eval(s.model, s.layout);
   eval.evaluate(s.beta, result.theta, body::Derivatives::kNone);
   for (int side = 0; side < 2; ++side) {
-    const int wrist = side == 0 ? body::kLeftWrist : body::kRightWrist, elbow = side == 0 ? body::kLeftElbow : body::kRightElbow;
+    const int wrist = side == 0 ? body::kLeftWrist : body::kRightWrist,
+              elbow = side == 0 ? body::kLeftElbow : body::kRightElbow;
     out.wrist_error_m[side] = (eval.joints().col(wrist) - rendered.joints_K.col(wrist)).norm();
     out.elbow_error_m[side] = (eval.joints().col(elbow) - rendered.joints_K.col(elbow)).norm();
   }
@@ -374,11 +381,13 @@ TEST(FrameFitterProtocol, HiddenForearmBehindTheBackIsFittedBackFromItsImuDirect
   const testing::ModelFrame rendered = testing::render_model_frame(s.model, s.layout, s.beta, truth, s.camera);
   // The left wrist and the forearm's middle are hidden: the depth there is the torso, in front.
   for (const double along : {0.75, 1.0}) {
-    const Eigen::Vector3d p = rendered.joints_K.col(body::kLeftElbow) +
-                              along * (rendered.joints_K.col(body::kLeftWrist) - rendered.joints_K.col(body::kLeftElbow));
+    const Eigen::Vector3d p =
+        rendered.joints_K.col(body::kLeftElbow) +
+        along * (rendered.joints_K.col(body::kLeftWrist) - rendered.joints_K.col(body::kLeftElbow));
     const auto px = s.camera.project(p);
     ASSERT_TRUE(px);
-    const size_t i = static_cast<size_t>(std::lround(px->y())) * s.camera.width() + static_cast<size_t>(std::lround(px->x()));
+    const size_t i =
+        static_cast<size_t>(std::lround(px->y())) * s.camera.width() + static_cast<size_t>(std::lround(px->x()));
     ASSERT_NE(rendered.frame.body_index[i], kNoBody);
     EXPECT_LT(rendered.frame.depth_mm[i] * 1e-3, p.z() - 0.05) << "at " << along << " of the forearm";
   }
@@ -424,9 +433,11 @@ TEST(FrameFitterProtocol, StepsStayWithinTheLimitsWidenedByTheMargin) {
         }
         worst_excess_rad = std::max(worst_excess_rad, excess);
       }
-      std::printf("projection %s, seed %u: worst excess beyond a limit %.3f rad, %d iterations (%d rejected), E %.4g, limit %.4g\n",
-                  project ? "on" : "off", seed, worst_excess_rad, result.iterations, result.rejected_steps,
-                  result.energy.total(), result.energy.limit);
+      std::printf(
+          "projection %s, seed %u: worst excess beyond a limit %.3f rad, %d iterations (%d rejected), E %.4g, limit "
+          "%.4g\n",
+          project ? "on" : "off", seed, worst_excess_rad, result.iterations, result.rejected_steps,
+          result.energy.total(), result.energy.limit);
       EXPECT_LT(result.energy.total(), result.initial_energy.total());
     }
   }

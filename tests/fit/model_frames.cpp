@@ -8,7 +8,7 @@ namespace posefuse::fit::testing {
 namespace {
 // SMPL joint for each Kinect v2 joint (kKinectJointNames order); hand tips and thumbs use the hand.
 constexpr int kSmplForKinect[kKinectJointCount] = {0, 6, 12, 15, 16, 18, 20, 22, 17, 19, 21, 23, 1,
-                                                   4, 7, 10, 2, 5, 8, 11, 9, 22, 22, 23, 23};
+                                                   4, 7, 10, 2,  5,  8,  11, 9,  22, 22, 23, 23};
 }  // namespace
 
 ModelFrame render_model_frame(const std::shared_ptr<const body::SmplModel>& model, const body::PoseLayout& layout,

@@ -14,8 +14,8 @@ namespace posefuse::fit::testing {
 
 struct ModelFrame {
   DepthFrame frame;
-  KinectSkeleton skeleton_K;   // Kinect joints at the SMPL joints (hand tips and thumbs at the hand)
-  Eigen::Matrix3Xd joints_K;   // the 24 SMPL joints
+  KinectSkeleton skeleton_K;  // Kinect joints at the SMPL joints (hand tips and thumbs at the hand)
+  Eigen::Matrix3Xd joints_K;  // the 24 SMPL joints
 };
 
 ModelFrame render_model_frame(const std::shared_ptr<const body::SmplModel>& model, const body::PoseLayout& layout,

@@ -99,7 +99,8 @@ TEST(FitNormals, SampleNormalsAgreeWithTheMap) {
   const NormalMap normals = estimate_normals(cloud);
   std::vector<DepthSample> samples;
   for (int row = 1; row < camera.height(); row += 4)
-    for (int col = 2; col < camera.width(); col += 5) samples.push_back({col, row, BodyZone::kTorso, false, Eigen::Vector3f::Zero()});
+    for (int col = 2; col < camera.width(); col += 5)
+      samples.push_back({col, row, BodyZone::kTorso, false, Eigen::Vector3f::Zero()});
   const auto sampled = estimate_sample_normals(cloud, samples);
   ASSERT_EQ(sampled.size(), samples.size());
   int with_normal = 0;

@@ -26,7 +26,7 @@ struct PosedSubject {
   JointPose joints;
   TrackedSkeleton skeleton;
 };
-PosedSubject pose_subject(const body::SmplModel& model, const body::PoseLayout& layout,
-                          const Eigen::VectorXd& beta, const Eigen::VectorXd& theta);
+PosedSubject pose_subject(const body::SmplModel& model, const body::PoseLayout& layout, const Eigen::VectorXd& beta,
+                          const Eigen::VectorXd& theta);
 
 }  // namespace posefuse::fit::testing

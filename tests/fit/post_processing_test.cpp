@@ -52,7 +52,7 @@ TEST(FitPoseSmoothing, PelvisRotationIsUnwrappedBeforeAveraging) {
   std::vector<Eigen::VectorXd> raw;
   for (int t = 0; t < 5; ++t) {
     Eigen::VectorXd theta = layout.zero();
-    const double angle = std::numbers::pi - 0.02 + 0.01 * t;  // crosses pi
+    const double angle = std::numbers::pi - 0.02 + 0.01 * t;                     // crosses pi
     theta[y] = angle > std::numbers::pi ? angle - 2 * std::numbers::pi : angle;  // as a log map gives it
     raw.push_back(theta);
   }
@@ -83,8 +83,8 @@ Eigen::Quaterniond imu_orientation(const Eigen::Vector3d& along_K, const Eigen::
                                    const Eigen::Quaterniond& A_from_F) {
   const Eigen::Vector3d thumb = Eigen::AngleAxisd(roll, along_K) * thumb_K;
   Eigen::Matrix3d K_from_F;
-  K_from_F.col(0) = thumb;           // thumb_F = x
-  K_from_F.col(1) = along_K;         // along_F = y
+  K_from_F.col(0) = thumb;    // thumb_F = x
+  K_from_F.col(1) = along_K;  // along_F = y
   K_from_F.col(2) = thumb.cross(along_K);
   return Eigen::Quaterniond(K_from_F) * A_from_F.conjugate();
 }
@@ -93,15 +93,15 @@ TEST(FitArmRoll, PronationFromNeutralWithTheElbowBent) {
   const PoseLayout layout = PoseLayout::upper_body();
   // Upper arms hanging, elbows bent 90 degrees forward: the roll-free model forearm is in the
   // neutral position (thumb up).
-  const Eigen::VectorXd theta = testing::facing_pose(layout, 2.0, {{"left_shoulder_z", -90}, {"left_elbow_y", -90},
-                                                                   {"right_shoulder_z", 90}, {"right_elbow_y", 90}});
+  const Eigen::VectorXd theta = testing::facing_pose(
+      layout, 2.0, {{"left_shoulder_z", -90}, {"left_elbow_y", -90}, {"right_shoulder_z", 90}, {"right_elbow_y", 90}});
   const JointPose pose = pose_joints(rest_joints(*male(), Eigen::VectorXd()), layout, theta);
   const Eigen::Quaterniond A_from_F(Eigen::AngleAxisd(0.7, Eigen::Vector3d(1, -2, 0.5).normalized()));
   for (ArmSide side : {ArmSide::kLeft, ArmSide::kRight}) {
     const bool left = side == ArmSide::kLeft;
     const int elbow = left ? body::kLeftElbow : body::kRightElbow, wrist = left ? body::kLeftWrist : body::kRightWrist;
     const Eigen::Vector3d along = (pose.positions_K.col(wrist) - pose.positions_K.col(elbow)).normalized();
-    const Eigen::Vector3d up_K = Eigen::Vector3d::UnitY();  // the camera's y is up
+    const Eigen::Vector3d up_K = Eigen::Vector3d::UnitY();                                 // the camera's y is up
     EXPECT_LT((pose.K_from_joint[elbow] * Eigen::Vector3d::UnitZ() - up_K).norm(), 1e-9);  // thumb up
     for (double roll_deg : {-80.0, -20.0, 0.0, 35.0, 90.0}) {
       const ForearmRoll r = forearm_roll(pose, side, imu_orientation(along, up_K, roll_deg * kDeg, A_from_F), A_from_F);
@@ -129,39 +129,49 @@ TEST(FitArmRoll, RollOfAnyPoseAndNoPronationWithAStraightElbow) {
   for (int trial = 0; trial < 20; ++trial) {
     Eigen::VectorXd theta = testing::facing_pose(layout, 2.0, {});
     for (int d = 6; d < layout.size(); ++d)
-      if (layout.dof(d).limited) theta[d] = 0.5 * (layout.dof(d).min_rad + layout.dof(d).max_rad) +
-                                            0.45 * uniform(rng) * (layout.dof(d).max_rad - layout.dof(d).min_rad);
+      if (layout.dof(d).limited)
+        theta[d] = 0.5 * (layout.dof(d).min_rad + layout.dof(d).max_rad) +
+                   0.45 * uniform(rng) * (layout.dof(d).max_rad - layout.dof(d).min_rad);
     const JointPose pose = pose_joints(rest, layout, theta);
-    const Eigen::Vector3d along = (pose.positions_K.col(body::kLeftWrist) - pose.positions_K.col(body::kLeftElbow)).normalized();
+    const Eigen::Vector3d along =
+        (pose.positions_K.col(body::kLeftWrist) - pose.positions_K.col(body::kLeftElbow)).normalized();
     Eigen::Vector3d thumb = pose.K_from_joint[body::kLeftElbow] * Eigen::Vector3d::UnitZ();
     thumb = (thumb - thumb.dot(along) * along).normalized();
     const double roll = 3.0 * uniform(rng);
-    const Eigen::Quaterniond A_from_F(Eigen::AngleAxisd(2 * uniform(rng), Eigen::Vector3d(uniform(rng), 1, 0).normalized()));
+    const Eigen::Quaterniond A_from_F(
+        Eigen::AngleAxisd(2 * uniform(rng), Eigen::Vector3d(uniform(rng), 1, 0).normalized()));
     const ForearmRoll r = forearm_roll(pose, ArmSide::kLeft, imu_orientation(along, thumb, roll, A_from_F), A_from_F);
     EXPECT_NEAR(r.roll_rad, roll, 1e-9) << trial;
   }
   // Straight arm: roll is defined, pronation is not.
   const JointPose straight = pose_joints(rest, layout, testing::facing_pose(layout, 2.0, {}));
-  const Eigen::Vector3d along = (straight.positions_K.col(body::kLeftWrist) - straight.positions_K.col(body::kLeftElbow)).normalized();
+  const Eigen::Vector3d along =
+      (straight.positions_K.col(body::kLeftWrist) - straight.positions_K.col(body::kLeftElbow)).normalized();
   const Eigen::Vector3d thumb = straight.K_from_joint[body::kLeftElbow] * Eigen::Vector3d::UnitZ();
-  const ForearmRoll r = forearm_roll(straight, ArmSide::kLeft, imu_orientation(along, thumb, 0.4, Eigen::Quaterniond::Identity()),
-                                     Eigen::Quaterniond::Identity());
+  const ForearmRoll r =
+      forearm_roll(straight, ArmSide::kLeft, imu_orientation(along, thumb, 0.4, Eigen::Quaterniond::Identity()),
+                   Eigen::Quaterniond::Identity());
   EXPECT_NEAR(r.roll_rad, 0.4, 1e-9);
   EXPECT_FALSE(r.pronation_rad.has_value());
 }
 
 TEST(FitArmRoll, BadInputNamesTheField) {
   const PoseLayout layout = PoseLayout::upper_body();
-  const JointPose pose = pose_joints(rest_joints(*male(), Eigen::VectorXd()), layout, testing::facing_pose(layout, 2.0, {}));
+  const JointPose pose =
+      pose_joints(rest_joints(*male(), Eigen::VectorXd()), layout, testing::facing_pose(layout, 2.0, {}));
   const Eigen::Quaterniond unit = Eigen::Quaterniond::Identity();
-  EXPECT_EQ(testing::error_field([&] { forearm_roll(pose, ArmSide::kLeft, Eigen::Quaterniond(2, 0, 0, 0), unit); }), "K_from_A");
-  EXPECT_EQ(testing::error_field([&] { forearm_roll(pose, ArmSide::kLeft, unit, Eigen::Quaterniond(std::nan(""), 0, 0, 0)); }),
+  EXPECT_EQ(testing::error_field([&] { forearm_roll(pose, ArmSide::kLeft, Eigen::Quaterniond(2, 0, 0, 0), unit); }),
+            "K_from_A");
+  EXPECT_EQ(testing::error_field(
+                [&] { forearm_roll(pose, ArmSide::kLeft, unit, Eigen::Quaterniond(std::nan(""), 0, 0, 0)); }),
             "A_from_F");
   ArmRollOptions bad;
   bad.thumb_F = Eigen::Vector3d::UnitY();
-  EXPECT_EQ(testing::error_field([&] { forearm_roll(pose, ArmSide::kLeft, unit, unit, bad); }), "arm_roll_options.thumb_F");
+  EXPECT_EQ(testing::error_field([&] { forearm_roll(pose, ArmSide::kLeft, unit, unit, bad); }),
+            "arm_roll_options.thumb_F");
   // An IMU whose thumb axis points along the fitted forearm gives no roll.
-  const Eigen::Vector3d along = (pose.positions_K.col(body::kLeftWrist) - pose.positions_K.col(body::kLeftElbow)).normalized();
+  const Eigen::Vector3d along =
+      (pose.positions_K.col(body::kLeftWrist) - pose.positions_K.col(body::kLeftElbow)).normalized();
   const Eigen::Quaterniond thumb_along = Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitX(), along);
   EXPECT_EQ(testing::error_field([&] { forearm_roll(pose, ArmSide::kLeft, thumb_along, unit); }), "K_from_A");
   JointPose broken = pose;

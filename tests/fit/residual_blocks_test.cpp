@@ -63,8 +63,10 @@ TEST(FitResidualBlocks, DataResidualPoseAndCorrespondenceJacobiansMatchFiniteDif
     block.evaluate(m.surface, m.eval, nu, r, J, J_uv);
     EXPECT_LT((r - block.residual(m.surface, nu)).norm(), 1e-12);
     for (int d = 0; d < m.layout.size(); ++d) {
-      const Eigen::VectorXd fd = m.pose_difference(d, [&] { return Eigen::VectorXd(block.residual(m.probe_surface, nu)); });
-      ASSERT_LT((fd - J.col(d)).norm(), 1e-5 * (1 + fd.norm())) << "face " << nu.face << " dof " << m.layout.dof(d).name;
+      const Eigen::VectorXd fd =
+          m.pose_difference(d, [&] { return Eigen::VectorXd(block.residual(m.probe_surface, nu)); });
+      ASSERT_LT((fd - J.col(d)).norm(), 1e-5 * (1 + fd.norm()))
+          << "face " << nu.face << " dof " << m.layout.dof(d).name;
     }
     for (int c = 0; c < 2; ++c) {
       body::SurfacePoint plus = nu, minus = nu;
@@ -78,8 +80,8 @@ TEST(FitResidualBlocks, DataResidualPoseAndCorrespondenceJacobiansMatchFiniteDif
 
 TEST(FitResidualBlocks, ProjectionJacobianMatchesFiniteDifferences) {
   const raycast::DepthIntrinsics intrinsics;
-  for (const Eigen::Vector3d& p : {Eigen::Vector3d(0.3, -0.2, 2.0), Eigen::Vector3d(-1.1, 0.8, 1.5),
-                                  Eigen::Vector3d(0.01, 0.02, 0.7)}) {
+  for (const Eigen::Vector3d& p :
+       {Eigen::Vector3d(0.3, -0.2, 2.0), Eigen::Vector3d(-1.1, 0.8, 1.5), Eigen::Vector3d(0.01, 0.02, 0.7)}) {
     const Projection proj = project_with_jacobian(intrinsics, p);
     // Same pixel as the camera model.
     const auto pixel = raycast::DepthCamera(intrinsics).project(p);
@@ -88,7 +90,8 @@ TEST(FitResidualBlocks, ProjectionJacobianMatchesFiniteDifferences) {
     for (int c = 0; c < 3; ++c) {
       const Eigen::Vector3d h = kStep * Eigen::Vector3d::Unit(c);
       const Eigen::Vector2d fd =
-          (project_with_jacobian(intrinsics, p + h).pixel - project_with_jacobian(intrinsics, p - h).pixel) / (2 * kStep);
+          (project_with_jacobian(intrinsics, p + h).pixel - project_with_jacobian(intrinsics, p - h).pixel) /
+          (2 * kStep);
       EXPECT_LT((fd - proj.d_pixel_d_point.col(c)).norm(), 1e-4 * (1 + fd.norm())) << "axis " << c;
     }
   }
@@ -187,7 +190,8 @@ TEST(FitResidualBlocks, ForearmDirectionResidualMatchesFiniteDifferences) {
                                             1.0};
     EXPECT_LT(matching.residual(m.eval.joints()).norm(), 1e-12);
     for (int d = 0; d < m.layout.size(); ++d) {
-      const Eigen::VectorXd fd = m.pose_difference(d, [&] { return Eigen::VectorXd(block.residual(m.probe.joints())); });
+      const Eigen::VectorXd fd =
+          m.pose_difference(d, [&] { return Eigen::VectorXd(block.residual(m.probe.joints())); });
       ASSERT_LT((fd - J.col(d)).norm(), 1e-5 * (1 + fd.norm())) << "dof " << d;
     }
   }

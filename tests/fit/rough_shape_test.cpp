@@ -64,7 +64,8 @@ TEST(FitRoughShape, AveragesNoisyFrames) {
     for (auto& p : f.positions_K) p += Eigen::Vector3d(noise(rng), noise(rng), noise(rng));
   const RoughShapeResult r = estimate_rough_shape(*female(), frames, &kinect());
   const SegmentLengths truth = ModelSegmentLengths(*female(), 0.09).lengths(true_shape());
-  for (int s = 0; s < kBodySegmentCount; ++s) EXPECT_NEAR(r.model[s], truth[s], 0.005) << body_segment_name(BodySegment(s));
+  for (int s = 0; s < kBodySegmentCount; ++s)
+    EXPECT_NEAR(r.model[s], truth[s], 0.005) << body_segment_name(BodySegment(s));
 }
 
 // Camera-skeleton biases can ask for a shape outside the model's range: betas stop at the bound.
@@ -82,8 +83,9 @@ TEST(FitRoughShape, BetasStayWithinTheirBound) {
 }
 
 std::string refusal(const TrackedSkeleton& frame) {
-  const TrackedSkeleton good = testing::pose_subject(*female(), PoseLayout::full_body(), true_shape(),
-                                                     controlled_pose(PoseLayout::full_body())).skeleton;
+  const TrackedSkeleton good =
+      testing::pose_subject(*female(), PoseLayout::full_body(), true_shape(), controlled_pose(PoseLayout::full_body()))
+          .skeleton;
   return testing::error_field([&] { estimate_rough_shape(*female(), {good, frame}, &kinect()); });
 }
 
@@ -126,7 +128,8 @@ TEST(FitPersonalisation, FineTuningSeamGetsTheRoughShapeAndAFullBodyStart) {
   EXPECT_FALSE(rough_only.fine_tuned);
   EXPECT_EQ(rough_only.beta(), rough_only.rough.beta);
   EXPECT_EQ(rough_only.fine_tune_frame, 2u);
-  for (int s = 0; s < kBodySegmentCount; ++s) EXPECT_NEAR(rough_only.segment_lengths[s], rough_only.rough.measured[s], 1e-3);
+  for (int s = 0; s < kBodySegmentCount; ++s)
+    EXPECT_NEAR(rough_only.segment_lengths[s], rough_only.rough.measured[s], 1e-3);
 
   std::size_t seen_frame = 99;
   Eigen::VectorXd seen_beta, seen_theta;
@@ -145,7 +148,8 @@ TEST(FitPersonalisation, FineTuningSeamGetsTheRoughShapeAndAFullBodyStart) {
   ASSERT_EQ(seen_theta.size(), layout.size());
   const JointPose start = pose_joints(rest_joints(*female(), p.rough.beta), layout, seen_theta);
   for (int j = 0; j < body::kNumJoints; ++j)
-    EXPECT_LT((start.positions_K.col(j) - subject.joints.positions_K.col(j)).norm(), 0.02) << body::smpl_joint_names()[j];
+    EXPECT_LT((start.positions_K.col(j) - subject.joints.positions_K.col(j)).norm(), 0.02)
+        << body::smpl_joint_names()[j];
   EXPECT_TRUE(p.fine_tuned);
   EXPECT_EQ(p.beta(), refined_beta);
   EXPECT_EQ(p.fine.energy, 1.5);

@@ -89,7 +89,8 @@ TEST(FitSchurSystem, PackedBlocksEqualDenseBlocks) {
     ASSERT_TRUE(packed.solve(gamma, d_packed, uv_packed));
     EXPECT_LT((d_packed - d_dense).norm(), 1e-12 * (1 + d_dense.norm())) << "gamma " << gamma;
     for (int i = 0; i < n; ++i) EXPECT_LT((uv_packed[i] - uv_dense[i]).norm(), 1e-12 * (1 + uv_dense[i].norm()));
-    EXPECT_NEAR(packed.predicted_decrease(gamma, d_packed, uv_packed), dense.predicted_decrease(gamma, d_dense, uv_dense),
+    EXPECT_NEAR(packed.predicted_decrease(gamma, d_packed, uv_packed),
+                dense.predicted_decrease(gamma, d_dense, uv_dense),
                 1e-12 * std::abs(dense.predicted_decrease(gamma, d_dense, uv_dense)));
   }
 }
@@ -98,7 +99,8 @@ TEST(FitSchurSystem, RejectsPackedColumnsThatAreNotAscending) {
   SchurSystem system;
   system.reset(10, 1);
   const std::vector<int> columns = {3, 2};
-  EXPECT_THROW(system.add_block(0, columns, Eigen::MatrixXd::Ones(6, 2), UvJacobian::Ones(), Eigen::Matrix<double, 6, 1>::Ones()),
+  EXPECT_THROW(system.add_block(0, columns, Eigen::MatrixXd::Ones(6, 2), UvJacobian::Ones(),
+                                Eigen::Matrix<double, 6, 1>::Ones()),
                Error);
 }
 

@@ -34,8 +34,9 @@ struct ShapedModel {
   body::BodyEvaluator eval{model, layout}, probe{model, layout};
   body::BodySurface surface{model->faces, model->num_vertices()}, probe_surface{model->faces, model->num_vertices()};
   Eigen::VectorXd beta = (Eigen::VectorXd(10) << 0.5, -0.4, 0.3, 0.8, -0.6, 0.2, 0.4, 0.3, -0.2, 0.1).finished();
-  Eigen::VectorXd theta = testing::facing_pose(layout, 2.4, {{"left_shoulder_z", -40}, {"right_shoulder_z", 35},
-                                                             {"left_elbow_y", -30}, {"spine2_x", 8}, {"head_y", 10}});
+  Eigen::VectorXd theta = testing::facing_pose(
+      layout, 2.4,
+      {{"left_shoulder_z", -40}, {"right_shoulder_z", 35}, {"left_elbow_y", -30}, {"spine2_x", 8}, {"head_y", 10}});
 
   ShapedModel() {
     eval.evaluate(beta, theta, body::Derivatives::kPoseAndShape);
@@ -86,7 +87,8 @@ TEST(FitShapeJacobians, SilhouetteAndBehindResidualsOfVerticesAndJointsMatchFini
     for (int b = 0; b < 10; ++b) {
       const Eigen::VectorXd fd2 =
           m.shape_difference(b, [&] { return silhouette.residual(intrinsics, m.probe.vertices().col(vertex)); });
-      const Eigen::VectorXd fd3 = m.shape_difference(b, [&] { return behind.residual(m.probe.vertices().col(vertex)); });
+      const Eigen::VectorXd fd3 =
+          m.shape_difference(b, [&] { return behind.residual(m.probe.vertices().col(vertex)); });
       ASSERT_LT((fd2 - J2.col(b)).norm(), 1e-4 * (1 + fd2.norm())) << "vertex " << vertex << " beta " << b;
       ASSERT_LT((fd3 - J3.col(b)).norm(), 1e-6 * (1 + fd3.norm())) << "vertex " << vertex << " beta " << b;
     }
@@ -239,8 +241,10 @@ TEST(FitPersonalisation, FineTuningRecoversKnownBetasFromARenderedFrame) {
     for (int b = 0; b < 10; ++b) std::printf("  %d: %+.3f %+.3f %+.3f\n", b, truth[b], p.rough.beta[b], p.beta()[b]);
     const SegmentLengths lengths = ModelSegmentLengths(*s.model, 0.09).lengths(truth);
     for (int k = 0; k < kBodySegmentCount; ++k) {
-      std::printf("  %s: truth %.4f m, fine %.4f m\n", body_segment_name(BodySegment(k)), lengths[k], p.segment_lengths[k]);
-      EXPECT_NEAR(p.segment_lengths[k], lengths[k], beta_sigma > 0 ? 0.012 : 0.007) << body_segment_name(BodySegment(k));
+      std::printf("  %s: truth %.4f m, fine %.4f m\n", body_segment_name(BodySegment(k)), lengths[k],
+                  p.segment_lengths[k]);
+      EXPECT_NEAR(p.segment_lengths[k], lengths[k], beta_sigma > 0 ? 0.012 : 0.007)
+          << body_segment_name(BodySegment(k));
     }
     for (int b : {6, 7, 8}) {
       EXPECT_NEAR(p.rough.beta[b], 0.0, 1e-9) << "beta " << b << " is invisible to the rough shape";
@@ -265,8 +269,10 @@ TEST(FitPersonalisation, FineTuningRecoversKnownBetasFromARenderedFrame) {
 TEST(FitPersonalisation, FineTuningCorrectsABiasedSkeletonsArmLength) {
   CalibrationScene s;
   TrackedSkeleton biased = s.subject.skeleton;
-  for (const auto& [shoulder, rest] : {std::pair{kShoulderLeft, std::vector<int>{kElbowLeft, kWristLeft, kHandLeft, kHandTipLeft, kThumbLeft}},
-                                       std::pair{kShoulderRight, std::vector<int>{kElbowRight, kWristRight, kHandRight, kHandTipRight, kThumbRight}}}) {
+  for (const auto& [shoulder, rest] :
+       {std::pair{kShoulderLeft, std::vector<int>{kElbowLeft, kWristLeft, kHandLeft, kHandTipLeft, kThumbLeft}},
+        std::pair{kShoulderRight,
+                  std::vector<int>{kElbowRight, kWristRight, kHandRight, kHandTipRight, kThumbRight}}}) {
     const Eigen::Vector3d along = (biased.positions_K[rest[0]] - biased.positions_K[shoulder]).normalized();
     for (int j : rest) biased.positions_K[j] -= 0.04 * along;  // upper arms 4 cm short
   }
@@ -274,10 +280,11 @@ TEST(FitPersonalisation, FineTuningCorrectsABiasedSkeletonsArmLength) {
   const Personalisation p = personalise(s.model, {biased}, &kinect(), refiner);
   const SegmentLengths truth = ModelSegmentLengths(*s.model, 0.09).lengths(true_shape());
   const int upper = static_cast<int>(BodySegment::kUpperArm), whole = static_cast<int>(BodySegment::kWholeArm);
-  std::printf("upper arm: truth %.4f, rough %.4f, fine %.4f m; whole arm %.4f, %.4f, %.4f m; rest joints %.1f -> %.1f mm\n",
-              truth[upper], p.rough.model[upper], p.segment_lengths[upper], truth[whole], p.rough.model[whole],
-              p.segment_lengths[whole], 1e3 * mean_rest_joint_distance_m(*s.model, p.rough.beta, true_shape()),
-              1e3 * mean_rest_joint_distance_m(*s.model, p.beta(), true_shape()));
+  std::printf(
+      "upper arm: truth %.4f, rough %.4f, fine %.4f m; whole arm %.4f, %.4f, %.4f m; rest joints %.1f -> %.1f mm\n",
+      truth[upper], p.rough.model[upper], p.segment_lengths[upper], truth[whole], p.rough.model[whole],
+      p.segment_lengths[whole], 1e3 * mean_rest_joint_distance_m(*s.model, p.rough.beta, true_shape()),
+      1e3 * mean_rest_joint_distance_m(*s.model, p.beta(), true_shape()));
   EXPECT_LT(std::abs(p.segment_lengths[whole] - truth[whole]), 0.35 * std::abs(p.rough.model[whole] - truth[whole]));
   EXPECT_LT(mean_rest_joint_distance_m(*s.model, p.beta(), true_shape()),
             0.8 * mean_rest_joint_distance_m(*s.model, p.rough.beta, true_shape()));
@@ -286,7 +293,8 @@ TEST(FitPersonalisation, FineTuningCorrectsABiasedSkeletonsArmLength) {
 TEST(FitPersonalisation, RefinerRefusesASubjectNotFullyInView) {
   CalibrationScene s;
   // 1.2 m from the camera the feet and head leave the image.
-  const Eigen::VectorXd near = testing::facing_pose(s.layout, 1.2, {{"left_shoulder_z", -45}, {"right_shoulder_z", 45}});
+  const Eigen::VectorXd near =
+      testing::facing_pose(s.layout, 1.2, {{"left_shoulder_z", -45}, {"right_shoulder_z", 45}});
   const testing::ModelFrame cut = testing::render_model_frame(s.model, s.layout, true_shape(), near, kinect());
   const ShapePoseRefiner refiner = make_depth_shape_refiner(s.model, kinect(), {{cut.frame, s.subject.skeleton}});
   try {
@@ -313,7 +321,8 @@ TEST(FitPersonalisation, RefinerRefusesAFrameTheModelDoesNotFit) {
   const testing::ModelFrame other = testing::render_model_frame(s.model, s.layout, true_shape(), raised, kinect());
   ShapeRefinerOptions options;
   options.fit.max_iterations = 10;
-  const ShapePoseRefiner refiner = make_depth_shape_refiner(s.model, kinect(), {{other.frame, s.subject.skeleton}}, options);
+  const ShapePoseRefiner refiner =
+      make_depth_shape_refiner(s.model, kinect(), {{other.frame, s.subject.skeleton}}, options);
   try {
     const ShapePoseFit fit = refiner(0, Eigen::VectorXd::Zero(10), s.theta);
     ADD_FAILURE() << "fitted to E = " << fit.energy;

@@ -127,7 +127,7 @@ void plain_chamfer(const std::vector<uint8_t>& silhouette, int width, const Pixe
   for (int row = region.row1; row >= region.row0; --row)
     for (int col = region.col1; col >= region.col0; --col) {
       const size_t i = static_cast<size_t>(row) * width + col;
-      const bool down = row < region.row1, left = col > region.col0, right = col < region.col1;
+      const bool down = row<region.row1, left = col> region.col0, right = col < region.col1;
       if (right) relax(i, i + 1, 1.0f);
       if (down && right) relax(i, i + width + 1, diagonal);
       if (down) relax(i, i + width, 1.0f);
@@ -137,12 +137,18 @@ void plain_chamfer(const std::vector<uint8_t>& silhouette, int width, const Pixe
 
 TEST(FitSilhouetteDistance, ChamferEqualsThePlainTwoPassChamferExactly) {
   const int width = 31, height = 19;
-  const std::vector<PixelRect> regions = {{0, 0, width - 1, height - 1}, {0, 0, 0, 0},   {0, 0, 0, height - 1},
-                                          {0, 0, width - 1, 0},          {5, 3, 5, 12},  {4, 2, 20, 2},
-                                          {3, 4, 17, 15},                {29, 17, 30, 18}};
+  const std::vector<PixelRect> regions = {{0, 0, width - 1, height - 1},
+                                          {0, 0, 0, 0},
+                                          {0, 0, 0, height - 1},
+                                          {0, 0, width - 1, 0},
+                                          {5, 3, 5, 12},
+                                          {4, 2, 20, 2},
+                                          {3, 4, 17, 15},
+                                          {29, 17, 30, 18}};
   for (int trial = 0; trial < 6; ++trial)
     for (const PixelRect& region : regions) {
-      std::vector<uint8_t> silhouette = random_silhouette(width, height, 0.03 + 0.1 * trial, 40 + static_cast<uint64_t>(trial));
+      std::vector<uint8_t> silhouette =
+          random_silhouette(width, height, 0.03 + 0.1 * trial, 40 + static_cast<uint64_t>(trial));
       silhouette[static_cast<size_t>(region.row0) * width + region.col0] = 1;  // at least one seed inside
       const SilhouetteDistanceMap map = silhouette_distance_map(silhouette, width, height, region);
       std::vector<float> distance(static_cast<size_t>(width) * height, std::numeric_limits<float>::infinity());
@@ -208,8 +214,10 @@ TEST(FitSilhouetteDistance, NearMapFindsPixelsAsCloseAsTheFullMapEverywhere) {
         ASSERT_EQ(near.distance_px[i] == 0, full.distance_px[i] == 0);  // the fitter's inside test
       }
   }
-  EXPECT_EQ(testing::error_field([] { silhouette_distance_map_near(std::vector<uint8_t>(12, 0), 4, 3); }), "silhouette");
-  EXPECT_EQ(testing::error_field([] { silhouette_distance_map_near(std::vector<uint8_t>(11, 1), 4, 3); }), "silhouette");
+  EXPECT_EQ(testing::error_field([] { silhouette_distance_map_near(std::vector<uint8_t>(12, 0), 4, 3); }),
+            "silhouette");
+  EXPECT_EQ(testing::error_field([] { silhouette_distance_map_near(std::vector<uint8_t>(11, 1), 4, 3); }),
+            "silhouette");
 }
 
 TEST(FitSilhouetteDistance, BadInputNamesTheField) {

@@ -28,14 +28,14 @@ Eigen::VectorXd shape() {
 // A pose inside the limits with the trunk turned, bent and tilted, one shoulder lifted and
 // every arm joint bent.
 Eigen::VectorXd known_pose(const PoseLayout& layout) {
-  return testing::facing_pose(layout, 2.3,
-                              {{"pelvis_x", 8}, {"pelvis_y", -15}, {"pelvis_z", 5}, {"spine2_x", 10}, {"spine2_z", -6},
-                               {"spine3_x", 6}, {"spine3_y", 8}, {"neck_x", 15}, {"neck_z", -10},
-                               {"left_collar_z", 15}, {"right_collar_y", 8},
-                               {"left_shoulder_y", -30}, {"left_shoulder_z", -50}, {"right_shoulder_y", 20},
-                               {"right_shoulder_z", 70}, {"left_elbow_y", -80}, {"left_elbow_z", 10},
-                               {"right_elbow_y", 45}, {"left_wrist_y", 20}, {"right_wrist_z", -25},
-                               {"left_hip_x", -20}, {"right_hip_z", -10}});
+  return testing::facing_pose(
+      layout, 2.3,
+      {{"pelvis_x", 8},          {"pelvis_y", -15},        {"pelvis_z", 5},          {"spine2_x", 10},
+       {"spine2_z", -6},         {"spine3_x", 6},          {"spine3_y", 8},          {"neck_x", 15},
+       {"neck_z", -10},          {"left_collar_z", 15},    {"right_collar_y", 8},    {"left_shoulder_y", -30},
+       {"left_shoulder_z", -50}, {"right_shoulder_y", 20}, {"right_shoulder_z", 70}, {"left_elbow_y", -80},
+       {"left_elbow_z", 10},     {"right_elbow_y", 45},    {"left_wrist_y", 20},     {"right_wrist_z", -25},
+       {"left_hip_x", -20},      {"right_hip_z", -10}});
 }
 
 double max_joint_error(const JointPose& a, const JointPose& b, std::initializer_list<int> joints) {
@@ -47,9 +47,9 @@ double max_joint_error(const JointPose& a, const JointPose& b, std::initializer_
 constexpr std::initializer_list<int> kArmJoints = {body::kLeftShoulder, body::kRightShoulder, body::kLeftElbow,
                                                    body::kRightElbow,   body::kLeftWrist,     body::kRightWrist,
                                                    body::kLeftHand,     body::kRightHand};
-constexpr std::initializer_list<int> kTrunkJoints = {body::kPelvis, body::kLeftHip, body::kRightHip, body::kSpine2,
-                                                     body::kSpine3, body::kNeck, body::kHead, body::kLeftCollar,
-                                                     body::kRightCollar, body::kLeftKnee, body::kRightKnee};
+constexpr std::initializer_list<int> kTrunkJoints = {
+    body::kPelvis, body::kLeftHip,    body::kRightHip,    body::kSpine2,   body::kSpine3,   body::kNeck,
+    body::kHead,   body::kLeftCollar, body::kRightCollar, body::kLeftKnee, body::kRightKnee};
 
 TEST(FitSkeletonInit, ErrorFreeSkeletonGivesTheKnownJoints) {
   const PoseLayout layout = PoseLayout::upper_body();
@@ -70,13 +70,19 @@ TEST(FitSkeletonInit, ErrorFreeSkeletonGivesTheKnownJoints) {
 TEST(FitSkeletonInit, FullBodyLayoutBuildsTheKnees) {
   const PoseLayout layout = PoseLayout::full_body();
   const Eigen::VectorXd theta = testing::facing_pose(layout, 2.8,
-                                                     {{"left_hip_x", -30}, {"left_knee_x", 60}, {"right_hip_z", -15},
-                                                      {"right_knee_x", 20}, {"left_shoulder_z", -70}, {"right_shoulder_z", 70}});
+                                                     {{"left_hip_x", -30},
+                                                      {"left_knee_x", 60},
+                                                      {"right_hip_z", -15},
+                                                      {"right_knee_x", 20},
+                                                      {"left_shoulder_z", -70},
+                                                      {"right_shoulder_z", 70}});
   const testing::PosedSubject truth = testing::pose_subject(*male(), layout, Eigen::VectorXd(), theta);
   const SkeletonPoseInitializer init(male(), layout, Eigen::VectorXd());
   const SkeletonInitResult result = init.initialise(truth.skeleton, Eigen::VectorXd());
   const JointPose built = pose_joints(init.rest_joints(), layout, result.theta);
-  EXPECT_LT(max_joint_error(built, truth.joints, {body::kLeftKnee, body::kRightKnee, body::kLeftAnkle, body::kRightAnkle}), 0.01);
+  EXPECT_LT(
+      max_joint_error(built, truth.joints, {body::kLeftKnee, body::kRightKnee, body::kLeftAnkle, body::kRightAnkle}),
+      0.01);
 }
 
 TEST(FitSkeletonInit, PoseIsClampedIntoTheLimits) {
@@ -135,7 +141,8 @@ TEST(FitSkeletonInit, MissingJointsKeepThePreviousSegmentsAndSaySo) {
   // Accepting inferred joints builds the left arm again.
   SkeletonInitOptions accept;
   accept.accept_inferred_joints = true;
-  const SkeletonInitResult accepted = SkeletonPoseInitializer(male(), layout, beta, accept).initialise(damaged, previous);
+  const SkeletonInitResult accepted =
+      SkeletonPoseInitializer(male(), layout, beta, accept).initialise(damaged, previous);
   EXPECT_FALSE(accepted.fell_back(InitSegment::kLeftShoulder));
   for (int d : dofs_of(body::kLeftShoulder)) EXPECT_NEAR(accepted.theta[d], full.theta[d], 1e-12);
 }
@@ -153,7 +160,8 @@ TEST(FitSkeletonInit, FirstFrameWithoutAPreviousPose) {
   for (int d : layout.dofs_of_joint(body::kLeftElbow)) EXPECT_EQ(result.theta[d], 0.0);
   // With only the two shoulders of the trunk there is no global pose to start from ...
   TrackedSkeleton no_trunk = truth.skeleton;
-  for (int j : {kSpineBase, kSpineMid, kHipLeft, kHipRight, kSpineShoulder}) no_trunk.tracking[j] = JointTracking::kInferred;
+  for (int j : {kSpineBase, kSpineMid, kHipLeft, kHipRight, kSpineShoulder})
+    no_trunk.tracking[j] = JointTracking::kInferred;
   EXPECT_EQ(testing::error_field([&] { init.initialise(no_trunk, Eigen::VectorXd()); }), "skeleton.SpineBase");
   // ... but with a previous pose the global segment falls back, and one hip is enough with the rest.
   EXPECT_TRUE(init.initialise(no_trunk, known_pose(layout)).fell_back(InitSegment::kGlobal));

@@ -20,8 +20,7 @@ struct Track {
   // Every rotation DOF turns by 3 deg per frame, the translation moves 1 cm per frame.
   Eigen::VectorXd velocity() const {
     Eigen::VectorXd v(layout.size());
-    for (int d = 0; d < layout.size(); ++d)
-      v[d] = layout.dof(d).kind == body::DofKind::kTranslation ? 0.01 : 3 * kDeg;
+    for (int d = 0; d < layout.size(); ++d) v[d] = layout.dof(d).kind == body::DofKind::kTranslation ? 0.01 : 3 * kDeg;
     return v;
   }
 };
@@ -42,8 +41,8 @@ TEST(StartExtrapolation, GainScalesTheVelocity) {
   const Track track;
   StartExtrapolationOptions half;
   half.velocity_gain = 0.5;
-  const auto start = extrapolate_start(track.layout, {track.first, 0}, {track.first + track.velocity(), kFrameUs},
-                                       2 * kFrameUs, half);
+  const auto start =
+      extrapolate_start(track.layout, {track.first, 0}, {track.first + track.velocity(), kFrameUs}, 2 * kFrameUs, half);
   ASSERT_TRUE(start.has_value());
   EXPECT_LT((*start - (track.first + 1.5 * track.velocity())).cwiseAbs().maxCoeff(), 1e-12);
 }
@@ -67,8 +66,8 @@ TEST(StartExtrapolation, FallsBackOnAGapOrTimesOutOfOrder) {
   const Track track;
   const FittedPose a{track.first, 0}, b{track.first + track.velocity(), kFrameUs};
   EXPECT_FALSE(extrapolate_start(track.layout, a, b, kFrameUs + 2 * kFrameUs).has_value());  // gap 2x > 1.5x
-  EXPECT_FALSE(extrapolate_start(track.layout, a, b, kFrameUs).has_value());                  // same time
-  EXPECT_FALSE(extrapolate_start(track.layout, b, a, 2 * kFrameUs).has_value());              // out of order
+  EXPECT_FALSE(extrapolate_start(track.layout, a, b, kFrameUs).has_value());                 // same time
+  EXPECT_FALSE(extrapolate_start(track.layout, b, a, 2 * kFrameUs).has_value());             // out of order
 }
 
 TEST(StartExtrapolation, BadInputIsAnErrorNamingTheField) {

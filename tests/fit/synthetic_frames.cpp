@@ -36,7 +36,8 @@ DepthFrame render_frame(const raycast::DepthCamera& camera,
   return frame;
 }
 
-DepthFrame render_plane(const raycast::DepthCamera& camera, const Eigen::Vector3d& point_K, const Eigen::Vector3d& normal_K) {
+DepthFrame render_plane(const raycast::DepthCamera& camera, const Eigen::Vector3d& point_K,
+                        const Eigen::Vector3d& normal_K) {
   return render_frame(camera, [&](const Eigen::Vector3d& ray) -> std::optional<double> {
     const double denom = normal_K.dot(ray);
     if (std::abs(denom) < 1e-9) return std::nullopt;
@@ -78,9 +79,9 @@ KinectSkeleton t_pose_skeleton(double depth_m) {
   s[17] = at(0.1, -0.55);
   s[18] = at(0.1, -0.9);
   s[19] = at(0.1, -0.95);
-  s[20] = at(0, 0.4);        // SpineShoulder
-  s[21] = at(-0.85, 0.4);    // HandTipLeft
-  s[22] = at(-0.8, 0.43);    // ThumbLeft
+  s[20] = at(0, 0.4);      // SpineShoulder
+  s[21] = at(-0.85, 0.4);  // HandTipLeft
+  s[22] = at(-0.8, 0.43);  // ThumbLeft
   s[23] = at(0.85, 0.4);
   s[24] = at(0.8, 0.43);
   return s;

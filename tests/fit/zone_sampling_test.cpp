@@ -83,7 +83,8 @@ TEST(FitZoneSampling, QuotasHonouredWithNearEdgeShare) {
   const std::array<int, kBodyZoneCount> expected = {35, 85, 25, 25, 25, 25, 15, 15};
   EXPECT_EQ(count_per_zone(samples, false), expected);
   const auto edges = count_per_zone(samples, true);
-  for (int z = 0; z < kBodyZoneCount; ++z) EXPECT_EQ(edges[z], std::lround(0.3 * expected[z])) << body_zone_name(BodyZone(z));
+  for (int z = 0; z < kBodyZoneCount; ++z)
+    EXPECT_EQ(edges[z], std::lround(0.3 * expected[z])) << body_zone_name(BodyZone(z));
 
   // Samples are distinct cloud pixels, their p_K is the cloud's, and near_edge is true.
   std::vector<uint8_t> outside(figure.cloud.valid.size());
@@ -191,7 +192,8 @@ TEST(FitZoneSampling, BadInputNamesTheField) {
             "zone_params.edge_share");
   PointCloud wrong_size = figure.cloud;
   wrong_size.width -= 1;
-  EXPECT_EQ(testing::error_field([&] { sample_depth_pixels(wrong_size, figure.skeleton, figure.camera); }), "cloud.width");
+  EXPECT_EQ(testing::error_field([&] { sample_depth_pixels(wrong_size, figure.skeleton, figure.camera); }),
+            "cloud.width");
   KinectSkeleton skeleton = figure.skeleton;
   skeleton[5].x() = std::numeric_limits<double>::quiet_NaN();
   EXPECT_EQ(testing::error_field([&] { sample_depth_pixels(figure.cloud, skeleton, figure.camera); }), "skeleton[5]");

@@ -30,7 +30,7 @@ TEST(CalibrationFrames, FramesInThePoseWithTheImuAreKeptTheOthersCounted) {
   ArmFrame untracked = pose_frame(7 * 33'333, true);
   untracked.forearm_tracked = false;
   frames.push_back(untracked);
-  frames.push_back(pose_frame(8 * 33'333, true));  // no IMU sample there
+  frames.push_back(pose_frame(8 * 33'333, true));   // no IMU sample there
   frames.push_back(pose_frame(20 * 33'333, true));  // after the window
   const auto W_from_A_at = [](std::int64_t t_us) -> std::optional<Quat> {
     if (t_us > 7 * 33'333) return std::nullopt;
@@ -57,7 +57,8 @@ TEST(CalibrationFrames, TheUpperArmFromDepthIsUsedOnlyWithEnoughFrames) {
   const auto W_from_A_at = [](std::int64_t) -> std::optional<Quat> { return Quat::Identity(); };
   CalibrationFrameOptions options;
   options.min_upper_arm_frames = 4;
-  const CalibrationFrames with_depth = select_calibration_frames(frames, 1'000'000, Vec3::UnitY(), W_from_A_at, options);
+  const CalibrationFrames with_depth =
+      select_calibration_frames(frames, 1'000'000, Vec3::UnitY(), W_from_A_at, options);
   EXPECT_TRUE(with_depth.depth_upper_arm);
   EXPECT_EQ(with_depth.upper_arm_frames, 4u);
   EXPECT_EQ(with_depth.without_strap.size(), 4u);  // the frame without it is left out

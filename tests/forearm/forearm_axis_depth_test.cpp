@@ -70,7 +70,8 @@ TEST(ForearmAxisDepth, WristWhereTheHandBeginsWhateverTheSdkWristBias) {
     EXPECT_LT(std::abs((axis->wrist_K - scene.wrist_K).dot(along)), 0.015) << bias_m;
     EXPECT_LT(distance_to_line(axis->wrist_K, scene.elbow_K, scene.wrist_K), 0.008) << bias_m;
     // The distal end alone runs on over the hand (the failure this replaces).
-    const auto end = measure_forearm_axis(images.depth_view(cameras), cameras.depth, sdk.elbow_K, sdk_wrist, distal_end);
+    const auto end =
+        measure_forearm_axis(images.depth_view(cameras), cameras.depth, sdk.elbow_K, sdk_wrist, distal_end);
     ASSERT_TRUE(end.has_value()) << bias_m;
     EXPECT_GT((end->wrist_K - scene.wrist_K).dot(along), 0.07) << bias_m;
   }

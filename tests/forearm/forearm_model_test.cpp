@@ -225,7 +225,8 @@ TEST(OcclusionTests, StrapWhoseElbowJumpsIsRejected) {
   EXPECT_EQ(check_strap_continuity(elbow + Vec3(0.14, -0.12, 0.05), t0 + one_frame, elbow, t0),
             VisualRejection::kStrapJumped);
   // Two frames: 17.3 cm allowed.
-  EXPECT_EQ(check_strap_continuity(elbow + Vec3(0.0, -0.17, 0.0), t0 + 2 * one_frame, elbow, t0), VisualRejection::kNone);
+  EXPECT_EQ(check_strap_continuity(elbow + Vec3(0.0, -0.17, 0.0), t0 + 2 * one_frame, elbow, t0),
+            VisualRejection::kNone);
   // Older than 0.1 s: nothing to compare with.
   EXPECT_EQ(check_strap_continuity(elbow + Vec3(0.5, 0.0, 0.0), t0 + 100'001, elbow, t0), VisualRejection::kNone);
   OcclusionTestOptions strict;
@@ -234,7 +235,8 @@ TEST(OcclusionTests, StrapWhoseElbowJumpsIsRejected) {
             VisualRejection::kStrapJumped);
   EXPECT_EQ(check_strap_continuity(Vec3::Constant(NAN), t0 + one_frame, elbow, t0), VisualRejection::kDegenerate);
   EXPECT_EQ(check_strap_continuity(elbow, t0, elbow, t0), VisualRejection::kDegenerate);  // not after it
-  EXPECT_STREQ(visual_rejection_name(VisualRejection::kStrapJumped), "strap's elbow jumped since the last visible frame");
+  EXPECT_STREQ(visual_rejection_name(VisualRejection::kStrapJumped),
+               "strap's elbow jumped since the last visible frame");
 }
 
 TEST(OcclusionTests, StrapWithin5cmAndNearerTheWrist) {
@@ -251,8 +253,7 @@ TEST(OcclusionTests, StrapWithin5cmAndNearerTheWrist) {
   const VisualCheck beyond = check_visual_forearm(elbow, wrist, wrist + Vec3(0, 0.06, 0), K_from_F);
   EXPECT_EQ(beyond.rejection, VisualRejection::kStrapOffSegment);
   EXPECT_EQ(check_visual_forearm(elbow, elbow, on_axis, K_from_F).rejection, VisualRejection::kDegenerate);
-  EXPECT_EQ(check_visual_forearm(elbow, wrist, Vec3::Constant(NAN), K_from_F).rejection,
-            VisualRejection::kDegenerate);
+  EXPECT_EQ(check_visual_forearm(elbow, wrist, Vec3::Constant(NAN), K_from_F).rejection, VisualRejection::kDegenerate);
 }
 
 }  // namespace

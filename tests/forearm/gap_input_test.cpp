@@ -33,8 +33,8 @@ TEST(GapInput, BoundaryLineIsExactOnLinearMotion) {
   EXPECT_EQ(before.sample_count, 16);
   EXPECT_LT((before.p_K - (p0 + v * (20 * 0.033333))).norm(), 1e-9);
   EXPECT_LT((before.v_K - v).norm(), 1e-9);
-  expect_error([&] { fit_boundary_line(track, 40 * 33'333, +1, 0.5); },
-               ErrorCode::kFailedPrecondition, "track.after_gap");
+  expect_error([&] { fit_boundary_line(track, 40 * 33'333, +1, 0.5); }, ErrorCode::kFailedPrecondition,
+               "track.after_gap");
 }
 
 TEST(GapInput, NetAccelerationAndSphereAreExactOnTheModel) {

@@ -43,10 +43,11 @@ TEST(GapSmootherAnchor, BoundsTheDriftOfALongGap) {
       const GapErrors inertial = gap_errors(motion, recover_gap_smoother(in, span, without_anchor()));
       const GapErrors anchored = gap_errors(motion, recover_gap_smoother(in, span, strong));
       const GapErrors by_default = gap_errors(motion, recover_gap_smoother(in, span));
-      std::printf("seed %u, bias period %.0f s: inertial only RMS %.1f max %.1f mm; anchor sigma 0.03 m RMS %.1f "
-                  "max %.1f mm; default RMS %.1f max %.1f mm\n",
-                  seed, period_s, 1e3 * inertial.rms_m, 1e3 * inertial.max_m, 1e3 * anchored.rms_m,
-                  1e3 * anchored.max_m, 1e3 * by_default.rms_m, 1e3 * by_default.max_m);
+      std::printf(
+          "seed %u, bias period %.0f s: inertial only RMS %.1f max %.1f mm; anchor sigma 0.03 m RMS %.1f "
+          "max %.1f mm; default RMS %.1f max %.1f mm\n",
+          seed, period_s, 1e3 * inertial.rms_m, 1e3 * inertial.max_m, 1e3 * anchored.rms_m, 1e3 * anchored.max_m,
+          1e3 * by_default.rms_m, 1e3 * by_default.max_m);
       EXPECT_GT(inertial.max_m, 0.15) << seed;  // the scenario really drifts
       EXPECT_LT(anchored.rms_m, 0.6 * inertial.rms_m) << seed;
       EXPECT_LT(anchored.max_m, 0.5 * inertial.max_m) << seed;
@@ -86,8 +87,8 @@ TEST(GapSmootherAnchor, SamplesWithALargerSigmaScalePullLess) {
     SensorNoise noise;
     noise.seed = seed;
     GapRecoveryInput in = make_gap_input(motion, noise, 7.0, 1.5, 5.5);
-    add_elbow_anchor(in, motion, AnchorError{.bias_m = 0.02, .bias_period_s = 60.0, .jump_probability = 0.0,
-                                             .seed = seed});
+    add_elbow_anchor(in, motion,
+                     AnchorError{.bias_m = 0.02, .bias_period_s = 60.0, .jump_probability = 0.0, .seed = seed});
     const GapSpan span = only_gap(in);
     const GapErrors good = gap_errors(motion, recover_gap_smoother(in, span, fit_anchor));
     GapRecoveryInput without_run = in;
@@ -101,10 +102,11 @@ TEST(GapSmootherAnchor, SamplesWithALargerSigmaScalePullLess) {
       if (in_bad_run(a)) a.sigma_scale = 4.0;
     }
     const GapErrors scaled = gap_errors(motion, recover_gap_smoother(in, span, fit_anchor));
-    std::printf("seed %u, max (RMS) mm: anchor good %.1f (%.1f), the run left out %.1f (%.1f), the run 15 cm off "
-                "%.1f (%.1f), with sigma_scale 4 %.1f (%.1f)\n",
-                seed, 1e3 * good.max_m, 1e3 * good.rms_m, 1e3 * none.max_m, 1e3 * none.rms_m, 1e3 * bad.max_m,
-                1e3 * bad.rms_m, 1e3 * scaled.max_m, 1e3 * scaled.rms_m);
+    std::printf(
+        "seed %u, max (RMS) mm: anchor good %.1f (%.1f), the run left out %.1f (%.1f), the run 15 cm off "
+        "%.1f (%.1f), with sigma_scale 4 %.1f (%.1f)\n",
+        seed, 1e3 * good.max_m, 1e3 * good.rms_m, 1e3 * none.max_m, 1e3 * none.rms_m, 1e3 * bad.max_m, 1e3 * bad.rms_m,
+        1e3 * scaled.max_m, 1e3 * scaled.rms_m);
     EXPECT_GT(bad.max_m, none.max_m + 0.03) << seed;  // the bad run really pulls
     EXPECT_LT(std::abs(scaled.max_m - none.max_m), 0.5 * (bad.max_m - none.max_m)) << seed;
     EXPECT_LT(scaled.rms_m, bad.rms_m) << seed;
@@ -133,8 +135,8 @@ TEST(GapSmootherAnchor, ASecondAnchorHoldsWhereTheFirstGoesWrong) {
     add_elbow_anchor(in, motion, AnchorError{.seed = seed + 10});
     in.second_elbow_anchor = std::move(in.elbow_anchor);
     in.elbow_anchor.clear();
-    add_elbow_anchor(in, motion, AnchorError{.bias_m = 0.02, .bias_period_s = 60.0, .jump_probability = 0.0,
-                                             .seed = seed});
+    add_elbow_anchor(in, motion,
+                     AnchorError{.bias_m = 0.02, .bias_period_s = 60.0, .jump_probability = 0.0, .seed = seed});
     GapRecoveryInput missing = in;
     std::erase_if(missing.elbow_anchor, in_bad_run);
     for (ElbowAnchorSample& a : in.elbow_anchor) {
@@ -146,9 +148,10 @@ TEST(GapSmootherAnchor, ASecondAnchorHoldsWhereTheFirstGoesWrong) {
       first_only.second_elbow_anchor.clear();
       const GapErrors one = gap_errors(motion, recover_gap_smoother(first_only, span, options));
       const GapErrors both = gap_errors(motion, recover_gap_smoother(*input, span, options));
-      std::printf("seed %u, the fit's run %s, RMS (max) mm: the fit's anchor alone %.1f (%.1f), with the SDK's as a "
-                  "second %.1f (%.1f)\n",
-                  seed, name, 1e3 * one.rms_m, 1e3 * one.max_m, 1e3 * both.rms_m, 1e3 * both.max_m);
+      std::printf(
+          "seed %u, the fit's run %s, RMS (max) mm: the fit's anchor alone %.1f (%.1f), with the SDK's as a "
+          "second %.1f (%.1f)\n",
+          seed, name, 1e3 * one.rms_m, 1e3 * one.max_m, 1e3 * both.rms_m, 1e3 * both.max_m);
       EXPECT_LT(both.rms_m, one.rms_m) << seed << " " << name;
       EXPECT_LT(both.max_m, one.max_m) << seed << " " << name;
     }

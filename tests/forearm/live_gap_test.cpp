@@ -59,10 +59,12 @@ TEST(LiveGap, EntryVelocityIsNotUnderestimated) {
 TEST(LiveGap, ImuPositionFromElbowFollowsTheModel) {
   const ArmMotion motion;
   for (const double t : {0.5, 1.7, 2.9}) {
-    EXPECT_LT((imu_position_from_elbow(motion.elbow(t), motion.K_from_F(t), motion.model) - motion.imu_position(t)).norm(),
-              1e-12);
-    EXPECT_LT((elbow_from_imu_position(motion.imu_position(t), motion.K_from_F(t), motion.model) - motion.elbow(t)).norm(),
-              1e-12);
+    EXPECT_LT(
+        (imu_position_from_elbow(motion.elbow(t), motion.K_from_F(t), motion.model) - motion.imu_position(t)).norm(),
+        1e-12);
+    EXPECT_LT(
+        (elbow_from_imu_position(motion.imu_position(t), motion.K_from_F(t), motion.model) - motion.elbow(t)).norm(),
+        1e-12);
   }
 }
 

@@ -125,13 +125,10 @@ TEST(GapSmoother, BeatsThePaperWhenEntryVelocityIsUnderestimated) {
 TEST(GapRecovery, RefusesGapsWithoutBoundaryData) {
   const ArmMotion motion;
   GapRecoveryInput in = make_gap_input(motion, SensorNoise{}, 3.0, -1.0, 1.0);  // starts occluded
-  expect_error([&] { recover_gap_paper(in, only_gap(in)); }, ErrorCode::kFailedPrecondition,
-               "track.before_gap");
-  expect_error([&] { recover_gap_smoother(in, only_gap(in)); }, ErrorCode::kFailedPrecondition,
-               "track.before_gap");
+  expect_error([&] { recover_gap_paper(in, only_gap(in)); }, ErrorCode::kFailedPrecondition, "track.before_gap");
+  expect_error([&] { recover_gap_smoother(in, only_gap(in)); }, ErrorCode::kFailedPrecondition, "track.before_gap");
   in = make_gap_input(motion, SensorNoise{}, 3.0, 2.0, 9.0);  // ends occluded
-  expect_error([&] { recover_gap_paper(in, only_gap(in)); }, ErrorCode::kFailedPrecondition,
-               "track.after_gap");
+  expect_error([&] { recover_gap_paper(in, only_gap(in)); }, ErrorCode::kFailedPrecondition, "track.after_gap");
   // Only one visible sample after the gap.
   in = make_gap_input(motion, SensorNoise{}, 3.0, 1.0, 2.0);
   for (std::size_t i = 0; i < in.track.size(); ++i) {

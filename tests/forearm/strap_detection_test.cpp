@@ -28,8 +28,8 @@ TEST(StrapDetection, FindsTheBandOnExactImages) {
   const StrapCameras cameras = test_cameras();
   const ForearmScene scene;
   const ForearmImages images = render_forearm(scene, cameras);
-  const StrapDetection d = detect_strap(images.gray_view(cameras), images.depth_view(cameras), cameras,
-                                        scene.elbow_K, scene.wrist_K);
+  const StrapDetection d =
+      detect_strap(images.gray_view(cameras), images.depth_view(cameras), cameras, scene.elbow_K, scene.wrist_K);
   ASSERT_TRUE(d.found()) << strap_miss_name(d.miss);
   const StrapError e = strap_error(scene, d.strap_K);
   // One colour pixel is 3.8 mm at 2 m; the band centre is found to about half a pixel and the
@@ -59,8 +59,8 @@ TEST(StrapDetection, NoisyImages) {
   for (std::uint64_t seed = 1; seed <= 5; ++seed) {
     // Grey noise 10 levels, depth noise 3 mm (Kinect-like at 2 m).
     const ForearmImages images = render_forearm(scene, cameras, 10.0, 0.003, seed);
-    const StrapDetection d = detect_strap(images.gray_view(cameras), images.depth_view(cameras), cameras,
-                                          scene.elbow_K, scene.wrist_K);
+    const StrapDetection d =
+        detect_strap(images.gray_view(cameras), images.depth_view(cameras), cameras, scene.elbow_K, scene.wrist_K);
     ASSERT_TRUE(d.found()) << strap_miss_name(d.miss);
     const StrapError e = strap_error(scene, d.strap_K);
     EXPECT_LT(std::abs(e.axial_m), 0.008) << "seed " << seed;
@@ -74,8 +74,8 @@ TEST(StrapDetection, StrapNeverSeen) {
   ForearmScene scene;
   scene.strap_visible = false;
   const ForearmImages images = render_forearm(scene, cameras, 10.0, 0.003);
-  const StrapDetection d = detect_strap(images.gray_view(cameras), images.depth_view(cameras), cameras,
-                                        scene.elbow_K, scene.wrist_K);
+  const StrapDetection d =
+      detect_strap(images.gray_view(cameras), images.depth_view(cameras), cameras, scene.elbow_K, scene.wrist_K);
   EXPECT_EQ(d.miss, StrapMiss::kNoDarkBand);
   EXPECT_FALSE(d.found());
   EXPECT_LT(d.contrast, 40.0);
@@ -85,15 +85,15 @@ TEST(StrapDetection, SegmentOutsideOrNoDepth) {
   const StrapCameras cameras = test_cameras();
   const ForearmScene scene;
   ForearmImages images = render_forearm(scene, cameras);
-  const StrapDetection outside = detect_strap(images.gray_view(cameras), images.depth_view(cameras), cameras,
-                                              Vec3(3.0, 0.0, 2.0), scene.wrist_K);
+  const StrapDetection outside =
+      detect_strap(images.gray_view(cameras), images.depth_view(cameras), cameras, Vec3(3.0, 0.0, 2.0), scene.wrist_K);
   EXPECT_EQ(outside.miss, StrapMiss::kOutsideImage);
-  const StrapDetection behind = detect_strap(images.gray_view(cameras), images.depth_view(cameras), cameras,
-                                             Vec3(0.0, 0.0, -1.0), scene.wrist_K);
+  const StrapDetection behind =
+      detect_strap(images.gray_view(cameras), images.depth_view(cameras), cameras, Vec3(0.0, 0.0, -1.0), scene.wrist_K);
   EXPECT_EQ(behind.miss, StrapMiss::kOutsideImage);
   std::fill(images.depth_mm.begin(), images.depth_mm.end(), std::uint16_t{0});  // no depth at all
-  const StrapDetection hole = detect_strap(images.gray_view(cameras), images.depth_view(cameras), cameras,
-                                           scene.elbow_K, scene.wrist_K);
+  const StrapDetection hole =
+      detect_strap(images.gray_view(cameras), images.depth_view(cameras), cameras, scene.elbow_K, scene.wrist_K);
   EXPECT_EQ(hole.miss, StrapMiss::kNoDepth);
 }
 
@@ -108,19 +108,25 @@ TEST(StrapDetection, RefusesBadInput) {
   DepthImageView no_depth{cameras.depth.width, cameras.depth.height, nullptr};
   expect_error([&] { detect_strap(images.gray_view(cameras), no_depth, cameras, scene.elbow_K, scene.wrist_K); },
                ErrorCode::kInvalidArgument, "depth.pixels");
-  expect_error([&] {
-    detect_strap(images.gray_view(cameras), images.depth_view(cameras), cameras, Vec3::Constant(NAN), scene.wrist_K);
-  }, ErrorCode::kInvalidArgument, "elbow_K");
+  expect_error(
+      [&] {
+        detect_strap(images.gray_view(cameras), images.depth_view(cameras), cameras, Vec3::Constant(NAN),
+                     scene.wrist_K);
+      },
+      ErrorCode::kInvalidArgument, "elbow_K");
   StrapDetectionOptions options;
   options.window_fraction = 0.0;
-  expect_error([&] {
-    detect_strap(images.gray_view(cameras), images.depth_view(cameras), cameras, scene.elbow_K, scene.wrist_K, options);
-  }, ErrorCode::kInvalidArgument, "options");
+  expect_error(
+      [&] {
+        detect_strap(images.gray_view(cameras), images.depth_view(cameras), cameras, scene.elbow_K, scene.wrist_K,
+                     options);
+      },
+      ErrorCode::kInvalidArgument, "options");
   StrapCameras bad = cameras;
   bad.color.fx = 0.0;
-  expect_error([&] {
-    detect_strap(images.gray_view(cameras), images.depth_view(cameras), bad, scene.elbow_K, scene.wrist_K);
-  }, ErrorCode::kInvalidArgument, "cameras.color.fx");
+  expect_error(
+      [&] { detect_strap(images.gray_view(cameras), images.depth_view(cameras), bad, scene.elbow_K, scene.wrist_K); },
+      ErrorCode::kInvalidArgument, "cameras.color.fx");
 }
 
 }  // namespace

@@ -20,7 +20,7 @@
 namespace posefuse::forearm::testing {
 
 struct ArmMotion {
-  Vec3 shoulder_K{0.2, 0.3, 2.0};   // 2 m in front of the camera (paper III)
+  Vec3 shoulder_K{0.2, 0.3, 2.0};  // 2 m in front of the camera (paper III)
   Vec3 shoulder_sway_m{0.01, 0.005, 0.01};
   double sway_hz = 0.2;
   double azimuth0 = 0.3, azimuth_amp = 0.9, azimuth_hz = 0.5, azimuth_phase = 0.0;
@@ -49,13 +49,12 @@ struct ArmMotion {
   Quat K_from_A(double t) const { return K_from_F(t) * model.F_from_A; }
   Vec3 elbow(double t) const { return shoulder(t) + model.d_ul_m * upper_arm_direction(t); }
   Vec3 wrist(double t) const { return elbow(t) + K_from_F(t) * Vec3(0.0, model.d_se_m + model.d_sw_m, 0.0); }
-  Vec3 imu_position(double t) const {
-    return elbow(t) + K_from_F(t) * Vec3(model.r_m, model.d_se_m, 0.0);
-  }
+  Vec3 imu_position(double t) const { return elbow(t) + K_from_F(t) * Vec3(model.r_m, model.d_se_m, 0.0); }
   Vec3 acceleration(double t) const {
     const double h = 1e-3;
     return (-imu_position(t + 2 * h) + 16.0 * imu_position(t + h) - 30.0 * imu_position(t) +
-            16.0 * imu_position(t - h) - imu_position(t - 2 * h)) / (12.0 * h * h);
+            16.0 * imu_position(t - h) - imu_position(t - 2 * h)) /
+           (12.0 * h * h);
   }
   Vec3 specific_force_A(double t) const {
     return K_from_A(t).conjugate() * (acceleration(t) + K_from_W * Vec3(0.0, 0.0, kGravity));
@@ -63,9 +62,9 @@ struct ArmMotion {
 };
 
 struct SensorNoise {
-  double track_sigma_m = 0.005;     // depth-camera position noise
+  double track_sigma_m = 0.005;  // depth-camera position noise
   double shoulder_sigma_m = 0.005;
-  double acc_sigma_m_s2 = 0.05;     // white accelerometer noise
+  double acc_sigma_m_s2 = 0.05;  // white accelerometer noise
   Vec3 acc_bias_A{0.08, -0.06, 0.05};
   double attitude_drift_deg = 2.0;  // slowly wandering orientation-filter error (leaks gravity)
   double attitude_noise_deg = 0.3;  // white orientation jitter
@@ -75,14 +74,18 @@ struct SensorNoise {
 inline double seconds(std::int64_t t_us) { return static_cast<double>(t_us) * 1e-6; }
 
 inline SensorNoise noise_free() {
-  return {.track_sigma_m = 0, .shoulder_sigma_m = 0, .acc_sigma_m_s2 = 0, .acc_bias_A = Vec3::Zero(),
-          .attitude_drift_deg = 0, .attitude_noise_deg = 0};
+  return {.track_sigma_m = 0,
+          .shoulder_sigma_m = 0,
+          .acc_sigma_m_s2 = 0,
+          .acc_bias_A = Vec3::Zero(),
+          .attitude_drift_deg = 0,
+          .attitude_noise_deg = 0};
 }
 
 // A session [0, duration_s] with the track occluded in (gap_start_s, gap_end_s).
 // Camera 30 Hz, arm IMU 80 Hz with a 3 ms phase offset.
-inline GapRecoveryInput make_gap_input(const ArmMotion& motion, const SensorNoise& noise,
-                                       double duration_s, double gap_start_s, double gap_end_s) {
+inline GapRecoveryInput make_gap_input(const ArmMotion& motion, const SensorNoise& noise, double duration_s,
+                                       double gap_start_s, double gap_end_s) {
   std::mt19937 rng(noise.seed);
   std::normal_distribution<double> n01(0.0, 1.0);
   auto gauss3 = [&](double sigma) -> Vec3 {
@@ -94,8 +97,7 @@ inline GapRecoveryInput make_gap_input(const ArmMotion& motion, const SensorNois
   in.K_from_W = motion.K_from_W;
   for (std::int64_t t = 0; seconds(t) <= duration_s; t += 33'333) {
     const double ts = seconds(t);
-    TrackSample s{t, motion.imu_position(ts) + gauss3(noise.track_sigma_m),
-                  !(ts > gap_start_s && ts < gap_end_s)};
+    TrackSample s{t, motion.imu_position(ts) + gauss3(noise.track_sigma_m), !(ts > gap_start_s && ts < gap_end_s)};
     if (!s.visible) s.p_K = Vec3::Constant(std::nan(""));
     in.track.push_back(s);
     in.shoulder.push_back({t, motion.shoulder(ts) + gauss3(noise.shoulder_sigma_m)});
@@ -105,8 +107,8 @@ inline GapRecoveryInput make_gap_input(const ArmMotion& motion, const SensorNois
     const double deg = std::numbers::pi / 180.0;
     const Vec3 drift(std::sin(2.0 * std::numbers::pi * 0.23 * ts), std::cos(2.0 * std::numbers::pi * 0.17 * ts),
                      std::sin(2.0 * std::numbers::pi * 0.31 * ts + 1.0));
-    const Vec3 attitude_error = drift * (noise.attitude_drift_deg * deg / std::sqrt(3.0)) +
-                                gauss3(noise.attitude_noise_deg * deg);
+    const Vec3 attitude_error =
+        drift * (noise.attitude_drift_deg * deg / std::sqrt(3.0)) + gauss3(noise.attitude_noise_deg * deg);
     in.arm.push_back({t, geometry::quat_from_rotation_vector(attitude_error) * motion.K_from_A(ts),
                       motion.specific_force_A(ts) + noise.acc_bias_A + gauss3(noise.acc_sigma_m_s2)});
   }

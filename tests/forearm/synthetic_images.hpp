@@ -21,10 +21,10 @@ namespace posefuse::forearm::testing {
 struct ForearmScene {
   Vec3 elbow_K = Vec3(0.1, 0.25, 2.0);
   Vec3 wrist_K = Vec3(0.1, 0.51, 1.95);
-  double radius_m = 0.035;      // r: forearm core to strap surface
+  double radius_m = 0.035;        // r: forearm core to strap surface
   double strap_to_elbow_m = 0.2;  // d_se: band centre
   double strap_width_m = 0.03;
-  bool strap_visible = true;    // false: skin all along (the strap never seen)
+  bool strap_visible = true;  // false: skin all along (the strap never seen)
   double skin_level = 170.0, strap_level = 25.0, wall_level = 120.0;
   double wall_z_m = 3.0;
   std::optional<Vec3> shoulder_K;  // set: the upper arm is drawn, shoulder -> elbow
@@ -55,7 +55,8 @@ inline std::optional<double> hit_cylinder(const Vec3& a, const Vec3& b, double r
   const double length = (b - a).norm();
   const Vec3 w = origin - a;
   const Vec3 v_perp = dir - dir.dot(axis) * axis, w_perp = w - w.dot(axis) * axis;
-  const double qa = v_perp.squaredNorm(), qb = 2.0 * w_perp.dot(v_perp), qc = w_perp.squaredNorm() - radius_m * radius_m;
+  const double qa = v_perp.squaredNorm(), qb = 2.0 * w_perp.dot(v_perp),
+               qc = w_perp.squaredNorm() - radius_m * radius_m;
   const double disc = qb * qb - 4.0 * qa * qc;
   if (qa < 1e-12 || disc < 0.0) return std::nullopt;
   const double t = (-qb - std::sqrt(disc)) / (2.0 * qa);
@@ -67,8 +68,7 @@ inline std::optional<double> hit_cylinder(const Vec3& a, const Vec3& b, double r
 
 // The forearm's hit (axial position from the elbow out), or the upper arm's when it is drawn
 // and nearer (axial set to -1: never on the strap).
-inline std::optional<double> hit_cylinder(const ForearmScene& s, const Vec3& origin, const Vec3& dir,
-                                          double* axial_m) {
+inline std::optional<double> hit_cylinder(const ForearmScene& s, const Vec3& origin, const Vec3& dir, double* axial_m) {
   std::optional<double> t = hit_cylinder(s.elbow_K, s.wrist_K, s.radius_m, origin, dir, axial_m);
   if (s.hand_length_m > 0.0) {
     double hand_axial = 0.0;
@@ -83,13 +83,14 @@ inline std::optional<double> hit_cylinder(const ForearmScene& s, const Vec3& ori
     const int steps = s.upper_arm_shoulder_radius_m > 0.0 ? kTaperSteps : 1;
     for (int i = 0; i < steps; ++i) {
       const double f0 = static_cast<double>(i) / steps, f1 = static_cast<double>(i + 1) / steps;
-      const double radius_m = steps == 1 ? s.upper_arm_radius_m
-                                         : s.upper_arm_shoulder_radius_m +
-                                               (0.5 * (f0 + f1)) * (s.upper_arm_radius_m - s.upper_arm_shoulder_radius_m);
+      const double radius_m = steps == 1
+                                  ? s.upper_arm_radius_m
+                                  : s.upper_arm_shoulder_radius_m +
+                                        (0.5 * (f0 + f1)) * (s.upper_arm_radius_m - s.upper_arm_shoulder_radius_m);
       double upper_axial = 0.0;
-      const auto upper = hit_cylinder(*s.shoulder_K + f0 * (s.elbow_K - *s.shoulder_K),
-                                      *s.shoulder_K + f1 * (s.elbow_K - *s.shoulder_K), radius_m, origin, dir,
-                                      &upper_axial);
+      const auto upper =
+          hit_cylinder(*s.shoulder_K + f0 * (s.elbow_K - *s.shoulder_K),
+                       *s.shoulder_K + f1 * (s.elbow_K - *s.shoulder_K), radius_m, origin, dir, &upper_axial);
       if (upper && (!t || *upper < *t)) {
         t = upper;
         *axial_m = -1.0;
@@ -103,9 +104,7 @@ struct ForearmImages {
   std::vector<std::uint8_t> gray;
   std::vector<std::uint16_t> depth_mm;
   GrayImageView gray_view(const StrapCameras& c) const { return {c.color.width, c.color.height, gray.data()}; }
-  DepthImageView depth_view(const StrapCameras& c) const {
-    return {c.depth.width, c.depth.height, depth_mm.data()};
-  }
+  DepthImageView depth_view(const StrapCameras& c) const { return {c.depth.width, c.depth.height, depth_mm.data()}; }
 };
 
 // Pixels [col0, col1] x [row0, row1] that can see the cylinder: the projected end circles'
@@ -120,9 +119,9 @@ inline PixelBox cylinder_box(const ForearmScene& s, const PinholeCamera& camera,
   std::vector<Vec3> ends = {s.elbow_K, s.wrist_K};
   if (s.shoulder_K) ends.push_back(*s.shoulder_K);
   if (s.hand_length_m > 0.0) ends.push_back(s.hand_end_K());
-  const double radius_m = std::max({s.radius_m, s.shoulder_K ? s.upper_arm_radius_m : 0.0,
-                                    s.shoulder_K ? s.upper_arm_shoulder_radius_m : 0.0,
-                                    s.hand_length_m > 0.0 ? s.hand_radius_m : 0.0});
+  const double radius_m =
+      std::max({s.radius_m, s.shoulder_K ? s.upper_arm_radius_m : 0.0,
+                s.shoulder_K ? s.upper_arm_shoulder_radius_m : 0.0, s.hand_length_m > 0.0 ? s.hand_radius_m : 0.0});
   for (const Vec3& end : ends) {
     const Vec3 p = cam_from_K * end + cam_from_K_m;
     const auto uv = geometry::project(camera, p);
@@ -164,7 +163,8 @@ inline ForearmImages render_forearm(const ForearmScene& s, const StrapCameras& c
     for (int col = 0; col < c.depth.width; ++col) {
       double axial = 0.0;
       std::optional<double> t;  // along a z = 1 ray: the depth itself
-      if (depth_box.contains(col, row)) t = hit_cylinder(s, Vec3::Zero(), geometry::back_project(c.depth, col, row, 1.0), &axial);
+      if (depth_box.contains(col, row))
+        t = hit_cylinder(s, Vec3::Zero(), geometry::back_project(c.depth, col, row, 1.0), &axial);
       const double z = (t ? *t : s.wall_z_m) + (depth_box.contains(col, row) ? depth_noise_m * normal(rng) : 0.0);
       out.depth_mm[static_cast<std::size_t>(row * c.depth.width + col)] =
           static_cast<std::uint16_t>(std::lround(z * 1000.0));

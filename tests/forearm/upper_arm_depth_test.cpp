@@ -76,9 +76,10 @@ TEST(UpperArmDepth, CalibrationFrameDoesNotFollowTheSdkShoulderBias) {
     EXPECT_LT(geometry::angle_between(frames.back(), true_frame), 2.0 * kDeg);
     // The roll alone (twist about y_F).
     EXPECT_LT(std::abs(twist_about_y(true_frame.conjugate() * frames.back())), 1.5 * kDeg);
-    worst_sdk_deg = std::max(worst_sdk_deg, geometry::angle_between(K_from_F_calibration_pose(sdk_shoulder, scene.elbow_K,
-                                                                                              scene.wrist_K),
-                                                                    true_frame) / kDeg);
+    worst_sdk_deg = std::max(
+        worst_sdk_deg,
+        geometry::angle_between(K_from_F_calibration_pose(sdk_shoulder, scene.elbow_K, scene.wrist_K), true_frame) /
+            kDeg);
   }
   for (const Quat& q : frames) EXPECT_LT(geometry::angle_between(q, frames.front()), 1.0 * kDeg);
   // With the SDK shoulder (even with the true elbow and wrist) the roll is far off: the test means something.
@@ -110,16 +111,16 @@ TEST(UpperArmDepth, TaperedUpperArmKeepsTheRoll) {
     const Vec3 sdk_shoulder = *scene.shoulder_K + bias;
     const Vec3 sdk_elbow = scene.elbow_K + kElbowBias, sdk_wrist = scene.wrist_K + kWristBias;
     const auto arm = measure_arm_axes(images.depth_view(cameras), cameras.depth, sdk_shoulder, sdk_elbow, sdk_wrist);
-    const auto plain_arm = measure_arm_axes(images.depth_view(cameras), cameras.depth, sdk_shoulder, sdk_elbow,
-                                            sdk_wrist, {}, plain);
+    const auto plain_arm =
+        measure_arm_axes(images.depth_view(cameras), cameras.depth, sdk_shoulder, sdk_elbow, sdk_wrist, {}, plain);
     ASSERT_TRUE(arm && arm->upper_arm && plain_arm && plain_arm->upper_arm);
     const double roll_deg = twist_about_y(true_frame.conjugate() * frame_from(*arm, sdk_shoulder)) / kDeg;
     const double plain_roll_deg = twist_about_y(true_frame.conjugate() * frame_from(*plain_arm, sdk_shoulder)) / kDeg;
     worst_roll_deg = std::max(worst_roll_deg, std::abs(roll_deg));
     worst_plain_roll_deg = std::min(worst_plain_roll_deg, std::abs(plain_roll_deg));
   }
-  std::printf("tapered upper arm: worst |roll| %.2f deg with taper_correction, best %.2f deg without\n",
-              worst_roll_deg, worst_plain_roll_deg);
+  std::printf("tapered upper arm: worst |roll| %.2f deg with taper_correction, best %.2f deg without\n", worst_roll_deg,
+              worst_plain_roll_deg);
   EXPECT_LT(worst_roll_deg, 1.5);
   EXPECT_GT(worst_plain_roll_deg, 2.0);  // the test means something: the taper turns the plain roll
 }
@@ -136,8 +137,8 @@ TEST(UpperArmDepth, TaperCorrectionOnACylinder) {
     const auto arm = measure_arm_axes(images.depth_view(cameras), cameras.depth, sdk_shoulder,
                                       scene.elbow_K + kElbowBias, scene.wrist_K + kWristBias);
     ASSERT_TRUE(arm && arm->upper_arm);
-    worst_roll_deg = std::max(
-        worst_roll_deg, std::abs(twist_about_y(true_frame.conjugate() * frame_from(*arm, sdk_shoulder))) / kDeg);
+    worst_roll_deg = std::max(worst_roll_deg,
+                              std::abs(twist_about_y(true_frame.conjugate() * frame_from(*arm, sdk_shoulder))) / kDeg);
   }
   std::printf("cylinder at Kinect pixels: worst |roll| %.2f deg\n", worst_roll_deg);
   EXPECT_LT(worst_roll_deg, 1.0);
@@ -165,8 +166,7 @@ TEST(UpperArmDepth, NoUpperArmInDepthGivesNone) {
   scene.shoulder_K.reset();  // only the forearm is drawn
   const StrapCameras cameras = test_cameras();
   const auto images = render_forearm(scene, cameras);
-  EXPECT_FALSE(measure_upper_arm_axis(images.depth_view(cameras), cameras.depth, shoulder, scene.elbow_K,
-                                      scene.wrist_K)
+  EXPECT_FALSE(measure_upper_arm_axis(images.depth_view(cameras), cameras.depth, shoulder, scene.elbow_K, scene.wrist_K)
                    .has_value());
   // Both limbs: the forearm is still found, without an upper arm.
   const auto arm = measure_arm_axes(images.depth_view(cameras), cameras.depth, shoulder, scene.elbow_K + kElbowBias,

@@ -1,5 +1,5 @@
-#include "geometry/frames.hpp"
 #include "geometry/quaternion.hpp"
+#include "geometry/frames.hpp"
 
 #include <gtest/gtest.h>
 

@@ -11,8 +11,7 @@ namespace pg = posefuse::geometry;
 
 namespace {
 void expect_same_rotation(const pg::Quat& a, const pg::Quat& b) {
-  EXPECT_NEAR(std::abs(a.dot(b)), 1.0, 1e-12) << a.coeffs().transpose() << " vs "
-                                               << b.coeffs().transpose();
+  EXPECT_NEAR(std::abs(a.dot(b)), 1.0, 1e-12) << a.coeffs().transpose() << " vs " << b.coeffs().transpose();
   EXPECT_NEAR(a.norm(), 1.0, 1e-14);
 }
 }  // namespace

@@ -40,9 +40,8 @@ std::vector<Quat> random_orientations(int count, std::mt19937& rng) {
 }
 
 void expect_refusal(const std::vector<Vec3>& means, const std::string& message_part) {
-  posefuse::testing::expect_error([&] { calibrate_accelerometer(means); },
-                                  posefuse::ErrorCode::kFailedPrecondition, "acc_samples",
-                                  message_part);
+  posefuse::testing::expect_error([&] { calibrate_accelerometer(means); }, posefuse::ErrorCode::kFailedPrecondition,
+                                  "acc_samples", message_part);
 }
 
 }  // namespace
@@ -67,9 +66,8 @@ TEST(AccelCalibration, RecoversOffsetAndScaleFromManyOrientations) {
 TEST(AccelCalibration, NineNoiseFreeOrientationsAreExact) {
   std::mt19937 rng(9);
   std::vector<Quat> orientations;
-  for (const Vec3& up_A : {Vec3(1, 0, 0), Vec3(-1, 0, 0), Vec3(0, 1, 0), Vec3(0, -1, 0),
-                           Vec3(0, 0, 1), Vec3(0, 0, -1), Vec3(1, 1, 1), Vec3(-1, 1, -1),
-                           Vec3(1, -1, -1)}) {
+  for (const Vec3& up_A : {Vec3(1, 0, 0), Vec3(-1, 0, 0), Vec3(0, 1, 0), Vec3(0, -1, 0), Vec3(0, 0, 1), Vec3(0, 0, -1),
+                           Vec3(1, 1, 1), Vec3(-1, 1, -1), Vec3(1, -1, -1)}) {
     // W_from_A taking the sensor direction up_A to W's up.
     orientations.push_back(Quat::FromTwoVectors(up_A.normalized(), Vec3::UnitZ()));
   }
@@ -108,11 +106,11 @@ TEST(AccelCalibration, DefaultIsFactoryIdentityAndBadInputIsRejected) {
   std::mt19937 rng(13);
   std::vector<Vec3> means = still_means(random_orientations(12, rng), 0.005, rng);
   means[3].x() = std::nan("");
-  posefuse::testing::expect_error([&] { calibrate_accelerometer(means); },
-                                  posefuse::ErrorCode::kInvalidArgument, "acc_samples[3]");
+  posefuse::testing::expect_error([&] { calibrate_accelerometer(means); }, posefuse::ErrorCode::kInvalidArgument,
+                                  "acc_samples[3]");
   means[3].x() = 0.0;
   AccelCalibrationParams bad;
   bad.gravity_m_s2 = -1.0;
-  posefuse::testing::expect_error([&] { calibrate_accelerometer(means, bad); },
-                                  posefuse::ErrorCode::kInvalidArgument, "accel.gravity_m_s2");
+  posefuse::testing::expect_error([&] { calibrate_accelerometer(means, bad); }, posefuse::ErrorCode::kInvalidArgument,
+                                  "accel.gravity_m_s2");
 }

@@ -10,8 +10,7 @@
 namespace posefuse::testing {
 
 template <typename Call>
-void expect_error(Call&& call, ErrorCode code, const std::string& field,
-                  const std::string& message_part = "") {
+void expect_error(Call&& call, ErrorCode code, const std::string& field, const std::string& message_part = "") {
   try {
     call();
     ADD_FAILURE() << "expected posefuse::Error on " << field;

@@ -24,9 +24,7 @@ std::vector<ImuSample> still_stream(int n) {
 
 TEST(ValidateImuStream, AcceptsCleanStream) { EXPECT_NO_THROW(validate_imu_stream(still_stream(5))); }
 
-TEST(ValidateImuStream, RejectsEmpty) {
-  EXPECT_THROW(validate_imu_stream({}), Error);
-}
+TEST(ValidateImuStream, RejectsEmpty) { EXPECT_THROW(validate_imu_stream({}), Error); }
 
 TEST(ValidateImuStream, NamesNaNGyroSample) {
   auto s = still_stream(5);

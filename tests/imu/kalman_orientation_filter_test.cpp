@@ -30,8 +30,7 @@ struct Noise {
 // Body rate of a swinging, twisting arm (rad/s, sensor frame): three sines, up to ~1.7 rad/s.
 Vec3 swing_rate(double t) {
   const double tau = 2.0 * EIGEN_PI;
-  return Vec3(1.5 * std::sin(tau * 0.35 * t), 1.2 * std::sin(tau * 0.5 * t + 1.0),
-              0.9 * std::cos(tau * 0.23 * t));
+  return Vec3(1.5 * std::sin(tau * 0.35 * t), 1.2 * std::sin(tau * 0.5 * t + 1.0), 0.9 * std::cos(tau * 0.23 * t));
 }
 
 // Still for the first 5 s, then a brisk swing: three 0.8 Hz sines 120 degrees apart, so that at
@@ -58,8 +57,7 @@ struct Recording {
 
 // Integrates the true orientation finely (20 sub-steps per sample) and synthesises readings.
 template <typename RateFn>
-Recording simulate(const Quat& start, RateFn rate_at, int count, const Noise& noise,
-                   std::uint32_t seed) {
+Recording simulate(const Quat& start, RateFn rate_at, int count, const Noise& noise, std::uint32_t seed) {
   std::mt19937 rng(seed);
   Recording rec;
   Quat W_from_A = start;
@@ -70,8 +68,8 @@ Recording simulate(const Quat& start, RateFn rate_at, int count, const Noise& no
     if (i > 0) {
       for (int k = 0; k < kSub; ++k) {
         const double t_mid = t - dt + (k + 0.5) * dt / kSub;
-        W_from_A = (W_from_A * posefuse::geometry::quat_from_rotation_vector(
-                                   rate_at(t_mid) * (dt / kSub))).normalized();
+        W_from_A =
+            (W_from_A * posefuse::geometry::quat_from_rotation_vector(rate_at(t_mid) * (dt / kSub))).normalized();
       }
     }
     ImuSample s = ideal_sample(kPeriodUs * i, W_from_A, rate_at(t));
@@ -109,7 +107,7 @@ TEST(KalmanPrediction, ConstantRateAboutEachAxisIntegratesExactly) {
     Vec4 q(start.w(), start.x(), start.y(), start.z());
     const Mat4 Phi = quaternion_transition_matrix(rate * axis, dt);
     EXPECT_LT((Phi * Phi.transpose() - Mat4::Identity()).norm(), 1e-14);  // norm-preserving
-    const int steps = 400;  // 5 s, 12.5 rad: almost two turns
+    const int steps = 400;                                                // 5 s, 12.5 rad: almost two turns
     for (int i = 0; i < steps; ++i) q = Phi * q;
     const Quat expected = start * Quat(Eigen::AngleAxisd(rate * dt * steps, axis));
     EXPECT_LT(quat_distance(Quat(q[0], q[1], q[2], q[3]), expected), 1e-12) << axis.transpose();
@@ -156,7 +154,8 @@ TEST(KalmanPrediction, FilterWithoutObservationsFollowsGyro) {
 // is a single noisy observation) and below 0.2 deg RMS over the last 20 s.
 TEST(KalmanOrientationFilter, StillSensorStaysOnTruth) {
   const Quat truth(Eigen::AngleAxisd(2.0, Vec3(0.2, -0.4, 1.0).normalized()));
-  const Recording rec = simulate(truth, [](double) { return Vec3::Zero(); }, 80 * 30, Noise{}, 5);
+  const Recording rec = simulate(
+      truth, [](double) { return Vec3::Zero(); }, 80 * 30, Noise{}, 5);
   KalmanOrientationFilter filter;
   const std::vector<Quat> out = filter.process(rec.samples);
   ASSERT_EQ(out.size(), rec.samples.size());
@@ -210,8 +209,8 @@ TEST(KalmanOrientationFilter, PaperBiasTestIsFooledBySmoothSwing) {
 // Eq. 2 inside the filter: a slow 720 degree turn gives outputs without sign jumps.
 TEST(KalmanOrientationFilter, OutputIsContinuousOverSlow720DegreeTurn) {
   const Vec3 rate = Vec3(0.2, -0.3, 0.5).normalized() * (4.0 * EIGEN_PI / 20.0);  // 720 deg in 20 s
-  const Recording rec = simulate(Quat::Identity(), [&](double) { return rate; }, 80 * 20 + 1,
-                                 Noise{}, 17);
+  const Recording rec = simulate(
+      Quat::Identity(), [&](double) { return rate; }, 80 * 20 + 1, Noise{}, 17);
   KalmanOrientationFilter::Params params;
   params.track_gyro_bias = false;
   params.gyro_bias.initial_bias_rad_s = Noise{}.gyro_bias_rad_s;
@@ -229,7 +228,8 @@ TEST(KalmanOrientationFilter, OutputIsContinuousOverSlow720DegreeTurn) {
 // the observation takes over again.
 TEST(KalmanOrientationFilter, HandlesMagDropoutAndTimeGap) {
   const Quat truth(Eigen::AngleAxisd(0.8, Vec3(0, 1, 0)));
-  Recording rec = simulate(truth, [](double) { return Vec3::Zero(); }, 800, Noise{}, 23);
+  Recording rec = simulate(
+      truth, [](double) { return Vec3::Zero(); }, 800, Noise{}, 23);
   for (int i = 200; i < 300; ++i) rec.samples[i].mag_uT.setConstant(kNaN);
   for (int i = 400; i < 800; ++i) rec.samples[i].t_us += 1'000'000;  // 1 s gap before 400
   KalmanOrientationFilter filter;
@@ -249,7 +249,8 @@ TEST(KalmanOrientationFilter, RejectsBadStreams) {
   using posefuse::ErrorCode;
   using posefuse::testing::expect_error;
   expect_error([&] { filter.process({}); }, ErrorCode::kInvalidArgument, "imu", "no samples");
-  Recording rec = simulate(Quat::Identity(), [](double) { return Vec3::Zero(); }, 10, Noise{}, 1);
+  Recording rec = simulate(
+      Quat::Identity(), [](double) { return Vec3::Zero(); }, 10, Noise{}, 1);
   std::vector<ImuSample> nan_gyro = rec.samples;
   nan_gyro[4].gyr_rad_s.z() = kNaN;
   expect_error([&] { filter.process(nan_gyro); }, ErrorCode::kInvalidArgument, "imu[4].gyr_rad_s");
@@ -260,29 +261,30 @@ TEST(KalmanOrientationFilter, RejectsBadStreams) {
 }
 
 TEST(KalmanOrientationFilter, UpdateRejectsBadSampleAndKeepsState) {
-  Recording rec = simulate(Quat::Identity(), [](double) { return Vec3::Zero(); }, 10, Noise{}, 2);
+  Recording rec = simulate(
+      Quat::Identity(), [](double) { return Vec3::Zero(); }, 10, Noise{}, 2);
   KalmanOrientationFilter filter;
   for (int i = 0; i < 5; ++i) filter.update(rec.samples[i]);
   const Quat before = filter.W_from_A();
   ImuSample repeated = rec.samples[5];
   repeated.t_us = rec.samples[4].t_us;
-  posefuse::testing::expect_error([&] { filter.update(repeated); },
-                                  posefuse::ErrorCode::kInvalidArgument, "imu[5].t_us");
+  posefuse::testing::expect_error([&] { filter.update(repeated); }, posefuse::ErrorCode::kInvalidArgument,
+                                  "imu[5].t_us");
   ImuSample nan_acc = rec.samples[5];
   nan_acc.acc_m_s2.x() = kNaN;
-  posefuse::testing::expect_error([&] { filter.update(nan_acc); },
-                                  posefuse::ErrorCode::kInvalidArgument, "imu[5].acc_m_s2");
+  posefuse::testing::expect_error([&] { filter.update(nan_acc); }, posefuse::ErrorCode::kInvalidArgument,
+                                  "imu[5].acc_m_s2");
   EXPECT_EQ(filter.W_from_A().coeffs(), before.coeffs());
   EXPECT_NO_THROW(filter.update(rec.samples[5]));
 }
 
 TEST(KalmanOrientationFilter, FirstSampleMustGiveAnObservation) {
-  Recording rec = simulate(Quat::Identity(), [](double) { return Vec3::Zero(); }, 10, Noise{}, 3);
+  Recording rec = simulate(
+      Quat::Identity(), [](double) { return Vec3::Zero(); }, 10, Noise{}, 3);
   rec.samples[0].mag_uT.setConstant(kNaN);
   KalmanOrientationFilter filter;
-  posefuse::testing::expect_error([&] { filter.process(rec.samples); },
-                                  posefuse::ErrorCode::kFailedPrecondition, "imu[0].mag_uT",
-                                  "the first sample must give an orientation");
+  posefuse::testing::expect_error([&] { filter.process(rec.samples); }, posefuse::ErrorCode::kFailedPrecondition,
+                                  "imu[0].mag_uT", "the first sample must give an orientation");
   EXPECT_FALSE(filter.initialised());
 }
 

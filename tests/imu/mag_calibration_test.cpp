@@ -36,9 +36,8 @@ std::vector<Vec3> rotated_readings(int count, const Distortion& d, double noise_
 }
 
 void expect_refusal(const std::vector<Vec3>& readings, const std::string& message_part) {
-  posefuse::testing::expect_error([&] { calibrate_magnetometer(readings); },
-                                  posefuse::ErrorCode::kFailedPrecondition, "mag_samples",
-                                  message_part);
+  posefuse::testing::expect_error([&] { calibrate_magnetometer(readings); }, posefuse::ErrorCode::kFailedPrecondition,
+                                  "mag_samples", message_part);
 }
 
 }  // namespace
@@ -70,8 +69,7 @@ TEST(MagCalibration, RecoversHardAndSoftIron) {
   const Quat W_from_A(Eigen::AngleAxisd(2.2, Vec3(0.3, 0.1, -1).normalized()));
   const Vec3 true_A = W_from_A.conjugate() * earth_field_W();
   const Vec3 corrected = cal.apply(d.soft_iron * true_A + d.hard_iron_uT);
-  EXPECT_LT(posefuse::geometry::Quat::FromTwoVectors(corrected, true_A).vec().norm() * 2.0,
-            0.2 * kDeg);
+  EXPECT_LT(posefuse::geometry::Quat::FromTwoVectors(corrected, true_A).vec().norm() * 2.0, 0.2 * kDeg);
 }
 
 TEST(MagCalibration, SkipsMissingReadingsAndRejectsInfinite) {
@@ -83,8 +81,8 @@ TEST(MagCalibration, SkipsMissingReadingsAndRejectsInfinite) {
   EXPECT_EQ(result.report.missing_count, 1u);
   EXPECT_TRUE(result.calibration.apply(raw[10]).array().isNaN().all());  // missing stays missing
   raw[20].y() = std::numeric_limits<double>::infinity();
-  posefuse::testing::expect_error([&] { calibrate_magnetometer(raw); },
-                                  posefuse::ErrorCode::kInvalidArgument, "mag_samples[20]");
+  posefuse::testing::expect_error([&] { calibrate_magnetometer(raw); }, posefuse::ErrorCode::kInvalidArgument,
+                                  "mag_samples[20]");
 }
 
 // A sensor turned about one axis only (here about W's vertical, the usual mistake of turning it
@@ -96,8 +94,7 @@ TEST(MagCalibration, RefusesPlanarRotation) {
   std::vector<Vec3> raw;
   for (int i = 0; i < 3000; ++i) {
     const Quat W_from_A = Quat(Eigen::AngleAxisd(i * 0.01, Vec3::UnitZ())) * tilt;
-    raw.push_back(d.soft_iron * (W_from_A.conjugate() * earth_field_W()) + d.hard_iron_uT +
-                  random_vector(rng, 0.3));
+    raw.push_back(d.soft_iron * (W_from_A.conjugate() * earth_field_W()) + d.hard_iron_uT + random_vector(rng, 0.3));
   }
   expect_refusal(raw, "of the directions");
 }
@@ -147,8 +144,7 @@ std::vector<Vec3> hyperboloid_points(double scale) {
 
 TEST(EllipsoidFit, RefusesHyperboloid) {
   posefuse::testing::expect_error([&] { fit_ellipsoid(hyperboloid_points(1.0), "points", 1e3); },
-                                  posefuse::ErrorCode::kFailedPrecondition, "points",
-                                  "not an ellipsoid");
+                                  posefuse::ErrorCode::kFailedPrecondition, "points", "not an ellipsoid");
 }
 
 // Readings that are no ellipsoid (a disturbed field) are refused by the calibration itself.

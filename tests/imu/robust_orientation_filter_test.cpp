@@ -89,8 +89,7 @@ SynthOptions turning(double duration_s) {
 }
 
 // Every estimate from `first` on is within `max_deg` (total error) of the truth.
-void expect_tracks(const std::vector<Quat>& est, const std::vector<Quat>& truth, std::size_t first,
-                   double max_deg) {
+void expect_tracks(const std::vector<Quat>& est, const std::vector<Quat>& truth, std::size_t first, double max_deg) {
   ASSERT_EQ(est.size(), truth.size());
   for (std::size_t i = first; i < est.size(); ++i) {
     ASSERT_TRUE(est[i].coeffs().allFinite()) << "sample " << i;
@@ -347,7 +346,8 @@ TEST(RobustOrientationFilter, VibrationDoesNotHideRest) {
   o.duration_s = 20.0;
   o.gyro_bias_rad_s = Vec3(1.0, -0.6, 0.8) * kDeg;
   Synthetic data = make_stream(o);
-  for (ImuSample& s : data.imu) s.acc_m_s2 += 3.0 * std::sin(2.0 * EIGEN_PI * 40.0 * 1e-6 * static_cast<double>(s.t_us)) * Vec3(0.6, 0.0, 0.8);
+  for (ImuSample& s : data.imu)
+    s.acc_m_s2 += 3.0 * std::sin(2.0 * EIGEN_PI * 40.0 * 1e-6 * static_cast<double>(s.t_us)) * Vec3(0.6, 0.0, 0.8);
   RobustOrientationFilter filter;
   filter.process(data.imu);
   EXPECT_TRUE(filter.at_rest());

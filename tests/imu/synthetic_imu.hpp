@@ -15,9 +15,7 @@ inline constexpr double kGravity = 9.81;
 inline constexpr double kDeg = EIGEN_PI / 180.0;
 
 // Earth field of central Europe: 48 uT, inclination 64 degrees downwards, pointing north.
-inline Vec3 earth_field_W() {
-  return 48.0 * Vec3(std::cos(64.0 * kDeg), 0.0, -std::sin(64.0 * kDeg));
-}
+inline Vec3 earth_field_W() { return 48.0 * Vec3(std::cos(64.0 * kDeg), 0.0, -std::sin(64.0 * kDeg)); }
 inline Vec3 up_specific_force_W() { return Vec3(0.0, 0.0, kGravity); }
 
 inline Quat random_orientation(std::mt19937& rng) {

@@ -59,7 +59,6 @@ TEST(DepthCamera, RejectsBadIntrinsics) {
   EXPECT_THROW(DepthCamera{bad}, Error);
 }
 
-
 // columns_within / row_within may only drop pixels whose ray lies outside the box: checked
 // against the per-pixel test for boxes all over the (distorted) image.
 TEST(DepthCamera, ColumnsAndRowsWithinKeepEveryPixelInsideTheBox) {

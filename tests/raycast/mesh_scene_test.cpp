@@ -22,13 +22,12 @@ struct TestMesh {
 // Icosahedron subdivided `levels` times and projected onto the sphere; outward faces.
 TestMesh icosphere(const Eigen::Vector3d& centre, double radius, int levels) {
   const double t = (1 + std::sqrt(5.0)) / 2;
-  std::vector<Eigen::Vector3d> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0}, {0, -1, t}, {0, 1, t},
-                                    {0, -1, -t}, {0, 1, -t}, {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<Eigen::Vector3d> v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
+                                    {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
   for (auto& p : v) p.normalize();
-  std::vector<Eigen::Vector3i> f = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11},
-                                    {1, 5, 9},  {5, 11, 4}, {11, 10, 2}, {10, 7, 6}, {7, 1, 8},
-                                    {3, 9, 4},  {3, 4, 2},  {3, 2, 6},   {3, 6, 8},  {3, 8, 9},
-                                    {4, 9, 5},  {2, 4, 11}, {6, 2, 10},  {8, 6, 7},  {9, 8, 1}};
+  std::vector<Eigen::Vector3i> f = {{0, 11, 5},  {0, 5, 1},  {0, 1, 7},  {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                                    {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                                    {3, 8, 9},   {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
   for (int level = 0; level < levels; ++level) {
     std::map<std::pair<int, int>, int> midpoint;
     auto mid = [&](int a, int b) {
@@ -58,9 +57,9 @@ TestMesh box(const Eigen::Vector3d& centre, const Eigen::Vector3d& half, const E
   TestMesh mesh;
   mesh.vertices.resize(3, 8);
   for (int c = 0; c < 8; ++c)
-    mesh.vertices.col(c) = centre + K_from_box * Eigen::Vector3d((c & 1) ? half.x() : -half.x(),
-                                                                 (c & 2) ? half.y() : -half.y(),
-                                                                 (c & 4) ? half.z() : -half.z());
+    mesh.vertices.col(c) =
+        centre + K_from_box * Eigen::Vector3d((c & 1) ? half.x() : -half.x(), (c & 2) ? half.y() : -half.y(),
+                                              (c & 4) ? half.z() : -half.z());
   mesh.faces.resize(3, 12);
   mesh.faces << 0, 0, 4, 4, 0, 0, 2, 2, 0, 0, 1, 1,  //
       2, 3, 5, 7, 1, 5, 6, 7, 4, 6, 3, 7,            //
@@ -102,8 +101,8 @@ TEST(MeshScene, SphereDepthMatchesAnalyticWithinOneMillimetre) {
       // Face id and barycentrics reproduce the hit point.
       const Eigen::Vector3i f = sphere.faces.col(images.face[pixel]);
       const double u = images.u[pixel], v = images.v[pixel];
-      const Eigen::Vector3d p = u * sphere.vertices.col(f[0]) + v * sphere.vertices.col(f[1]) +
-                                (1 - u - v) * sphere.vertices.col(f[2]);
+      const Eigen::Vector3d p =
+          u * sphere.vertices.col(f[0]) + v * sphere.vertices.col(f[1]) + (1 - u - v) * sphere.vertices.col(f[2]);
       EXPECT_LT((p - images.depth_mm[pixel] / 1000.0 * d).norm(), 0.002);
       ++compared;
     }
@@ -129,7 +128,8 @@ TEST(MeshScene, RotatedBoxDepthMatchesAnalyticWithinOneMillimetre) {
   const DepthCamera camera{DepthIntrinsics{}};
   const Eigen::Vector3d centre(-0.2, 0.1, 1.5), half(0.25, 0.15, 0.2);
   const Eigen::Matrix3d K_from_box =
-      (Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX())).toRotationMatrix();
+      (Eigen::AngleAxisd(0.5, Eigen::Vector3d::UnitY()) * Eigen::AngleAxisd(0.3, Eigen::Vector3d::UnitX()))
+          .toRotationMatrix();
   const TestMesh mesh = box(centre, half, K_from_box);
   MeshScene scene(EmbreeDevice::shared(), mesh.faces, 8);
   scene.update_vertices(mesh.vertices);

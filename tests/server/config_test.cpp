@@ -41,12 +41,11 @@ TEST_F(ConfigTest, FileSetsEveryKindOfOptionAndFlagsOverrideItWhereverConfigStan
       "max-message-mb = 2.5\n"
       "data-dir = /var/lib/posefuse data # not a comment\n"
       "max-upload-mb = 100\n");
-  const CommandLine line =
-      parse_server_command_line({"--workers", "5", "--config", path, "--listen=127.0.0.1:7000"});
+  const CommandLine line = parse_server_command_line({"--workers", "5", "--config", path, "--listen=127.0.0.1:7000"});
   EXPECT_FALSE(line.help);
   EXPECT_EQ(line.config_file, path);
   EXPECT_EQ(line.options.listen, "127.0.0.1:7000");  // flag after --config
-  EXPECT_EQ(line.options.workers, 5u);                // flag before --config
+  EXPECT_EQ(line.options.workers, 5u);               // flag before --config
   EXPECT_DOUBLE_EQ(line.options.max_message_mb, 2.5);
   EXPECT_EQ(line.options.data_dir, "/var/lib/posefuse data # not a comment");
   EXPECT_DOUBLE_EQ(line.options.max_upload_mb, 100.0);
@@ -58,8 +57,8 @@ TEST_F(ConfigTest, JobStoreRoleAndLeaseKeys) {
       "job-store = host=/run/postgresql dbname=posefuse\n"
       "role = worker\n"
       "job-lease-s = 12.5\n");
-  const CommandLine line = parse_server_command_line(
-      {"--config", path, "--job-heartbeat-s", "2", "--job-max-attempts=5"});
+  const CommandLine line =
+      parse_server_command_line({"--config", path, "--job-heartbeat-s", "2", "--job-max-attempts=5"});
   EXPECT_EQ(line.options.job_store, "host=/run/postgresql dbname=posefuse");
   EXPECT_EQ(line.options.role, "worker");
   EXPECT_DOUBLE_EQ(line.options.job_lease_s, 12.5);
@@ -70,21 +69,17 @@ TEST_F(ConfigTest, JobStoreRoleAndLeaseKeys) {
 TEST_F(ConfigTest, UnknownKeyIsAnErrorNamingTheFileAndLine) {
   const std::string path = write_config("workers = 2\n\nmax_sessions = 4\n");
   const std::string message = error_of({"--config", path});
-  EXPECT_EQ(message.rfind("--config: '" + path + "' line 3: max_sessions: unknown key", 0), 0u)
-      << message;
+  EXPECT_EQ(message.rfind("--config: '" + path + "' line 3: max_sessions: unknown key", 0), 0u) << message;
 }
 
 TEST_F(ConfigTest, BadLinesAreErrorsNamingTheLine) {
-  EXPECT_NE(error_of({"--config", write_config("workers = many\n")})
-                .find("line 1: workers: "),
-            std::string::npos);
+  EXPECT_NE(error_of({"--config", write_config("workers = many\n")}).find("line 1: workers: "), std::string::npos);
   EXPECT_NE(error_of({"--config", write_config("workers 2\n")}).find("line 1: expected 'key = value'"),
             std::string::npos);
   EXPECT_NE(error_of({"--config", write_config("workers = 1\nworkers = 2\n")})
                 .find("line 2: 'workers' is set again (first on line 1)"),
             std::string::npos);
-  EXPECT_NE(error_of({"--config", write_config("--workers = 2\n")}).find("without '--'"),
-            std::string::npos);
+  EXPECT_NE(error_of({"--config", write_config("--workers = 2\n")}).find("without '--'"), std::string::npos);
   EXPECT_NE(error_of({"--config", write_config("config = other.conf\n")}).find("cannot name another"),
             std::string::npos);
   EXPECT_EQ(error_of({"--config", (temp_.path() / "missing.conf").string()}).rfind("--config", 0), 0u);
@@ -109,8 +104,7 @@ TEST(StructuredLog, OneLinePerEventWithQuotedValues) {
   EXPECT_EQ(text.substr(0, 5), "time=");
   for (std::size_t i = 0; i < pattern.size(); ++i) {
     const char c = text[5 + i];
-    EXPECT_TRUE(pattern[i] == 'd' ? std::isdigit(static_cast<unsigned char>(c)) != 0 : c == pattern[i])
-        << text;
+    EXPECT_TRUE(pattern[i] == 'd' ? std::isdigit(static_cast<unsigned char>(c)) != 0 : c == pattern[i]) << text;
   }
   EXPECT_EQ(text.substr(5 + pattern.size()),
             " level=info event=upload_end job=abc note=\"two words \\\"quoted\\\" next\"\n");

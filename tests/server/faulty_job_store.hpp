@@ -17,29 +17,25 @@ class FaultyJobStore : public JobStore {
   std::atomic<bool> refuse_updates{false};  // a running job's state, and cancelling
   std::atomic<bool> refuse_results{false};
 
-  v1::Job create(const v1::JobSpec& spec, const std::string& recording_path,
-                 const std::string& owner, std::int64_t now_unix_us) override {
+  v1::Job create(const v1::JobSpec& spec, const std::string& recording_path, const std::string& owner,
+                 std::int64_t now_unix_us) override {
     if (refuse_creates) disk_full();
     return store_.create(spec, recording_path, owner, now_unix_us);
   }
   std::optional<JobRecord> get(const std::string& job_id) override { return store_.get(job_id); }
   std::vector<v1::Job> list(std::size_t limit, const std::string& after_job_id,
-                            const std::vector<v1::Job::State>& states,
-                            const std::string& owner) override {
+                            const std::vector<v1::Job::State>& states, const std::string& owner) override {
     return store_.list(limit, after_job_id, states, owner);
   }
   void update(const v1::Job& job) override {
     if (refuse_updates) disk_full();
     store_.update(job);
   }
-  void append_results(const std::string& job_id,
-                      const std::vector<v1::FitResult>& results) override {
+  void append_results(const std::string& job_id, const std::vector<v1::FitResult>& results) override {
     if (refuse_results) disk_full();
     store_.append_results(job_id, results);
   }
-  std::vector<v1::FitResult> results(const std::string& job_id) override {
-    return store_.results(job_id);
-  }
+  std::vector<v1::FitResult> results(const std::string& job_id) override { return store_.results(job_id); }
   std::optional<JobRecord> cancel(const std::string& job_id, const std::string& owner,
                                   std::int64_t now_unix_us) override {
     if (refuse_updates) disk_full();
@@ -60,24 +56,19 @@ class FaultyJobStore : public JobStore {
     if (refuse_results) disk_full();
     store_.append_results(lease, results);
   }
-  void release(const JobLease& lease, std::int64_t now_unix_us) override {
-    store_.release(lease, now_unix_us);
-  }
+  void release(const JobLease& lease, std::int64_t now_unix_us) override { store_.release(lease, now_unix_us); }
   std::vector<ReapedJob> reap(std::uint32_t max_attempts, std::int64_t now_unix_us) override {
     return store_.reap(max_attempts, now_unix_us);
   }
   void set_event_listener(std::function<void(const JobEvent&)> listener) override {
     store_.set_event_listener(std::move(listener));
   }
-  std::string keep_upload(const std::filesystem::path& spooled) override {
-    return store_.keep_upload(spooled);
-  }
+  std::string keep_upload(const std::filesystem::path& spooled) override { return store_.keep_upload(spooled); }
   std::filesystem::path local_recording(const std::string& recording_path,
                                         const std::filesystem::path& scratch_dir) override {
     return store_.local_recording(recording_path, scratch_dir);
   }
-  void drop_upload(const std::string& recording_path,
-                   const std::filesystem::path& scratch_dir) override {
+  void drop_upload(const std::string& recording_path, const std::filesystem::path& scratch_dir) override {
     store_.drop_upload(recording_path, scratch_dir);
   }
 

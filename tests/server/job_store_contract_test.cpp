@@ -160,8 +160,7 @@ TEST_P(JobStoreContract, AJobWhoseLeaseExpiresMaxAttemptsTimesFailsWithAClearErr
   const v1::Job failed = store_->get(id)->job;
   EXPECT_EQ(failed.state(), v1::Job::FAILED);
   EXPECT_EQ(failed.error_code(), static_cast<int>(grpc::StatusCode::ABORTED));
-  EXPECT_EQ(failed.error_message().rfind("job: its worker's lease expired 2 times", 0), 0u)
-      << failed.error_message();
+  EXPECT_EQ(failed.error_message().rfind("job: its worker's lease expired 2 times", 0), 0u) << failed.error_message();
   EXPECT_FALSE(store_->claim("w", 20ms, 4));
 }
 
@@ -280,8 +279,7 @@ TEST_F(PgJobStoreTest, ADatabaseWithANewerSchemaIsRefusedWithBothVersions) {
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::kFailedPrecondition);
     const std::string expected = "the database's posefuse schema is version " +
-                                 std::to_string(pg_schema_version() + 5) +
-                                 ", newer than this posefuse-server knows (" +
+                                 std::to_string(pg_schema_version() + 5) + ", newer than this posefuse-server knows (" +
                                  std::to_string(pg_schema_version()) + ")";
     EXPECT_NE(std::string(e.what()).find(expected), std::string::npos) << e.what();
   }
@@ -313,8 +311,7 @@ TEST_F(PgJobStoreTest, AnUnreachableDatabaseIsStoreUnavailableAndABadConninfoNam
     PgJobStore store("host=/nonexistent/socket/dir dbname=x");
     FAIL() << "no error";
   } catch (const StoreUnavailable& e) {
-    EXPECT_NE(std::string(e.what()).find("cannot connect to the PostgreSQL job store"), std::string::npos)
-        << e.what();
+    EXPECT_NE(std::string(e.what()).find("cannot connect to the PostgreSQL job store"), std::string::npos) << e.what();
   }
   try {
     PgJobStore store("host=/tmp nonsense_key=1");

@@ -66,10 +66,8 @@ TEST_F(JobStoreFaultsTest, JobWhoseResultsCannotBeStoredFailsAndTheServerServesO
   const v1::Job& failed = states.back();
   EXPECT_EQ(failed.state(), v1::Job::FAILED);
   EXPECT_EQ(failed.error_code(), static_cast<int>(grpc::StatusCode::RESOURCE_EXHAUSTED));
-  EXPECT_NE(failed.error_message().find("job store refused a write"), std::string::npos)
-      << failed.error_message();
-  EXPECT_NE(failed.error_message().find("disk is full"), std::string::npos)
-      << failed.error_message();
+  EXPECT_NE(failed.error_message().find("job store refused a write"), std::string::npos) << failed.error_message();
+  EXPECT_NE(failed.error_message().find("disk is full"), std::string::npos) << failed.error_message();
   // The failure was stored (only results were refused): GetJob says the same.
   {
     grpc::ClientContext context;

@@ -119,8 +119,7 @@ TEST_F(JobStoreTest, ASecondOpeningOfTheSameFileIsRefusedUntilTheFirstCloses) {
     FAIL() << "no error";
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::kFailedPrecondition);
-    EXPECT_NE(std::string(e.what()).find("another posefuse-server process uses this job store"),
-              std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("another posefuse-server process uses this job store"), std::string::npos)
         << e.what();
   }
   first.reset();
@@ -159,8 +158,8 @@ TEST_F(JobStoreTest, StoreFromBeforeTenantsGetsTheOwnerColumnWithItsJobsSharedBy
     const std::string sql =
         "CREATE TABLE jobs (seq INTEGER PRIMARY KEY AUTOINCREMENT, id TEXT UNIQUE NOT NULL,"
         " state INTEGER NOT NULL, recording_path TEXT NOT NULL, job BLOB NOT NULL);"
-        "INSERT INTO jobs (id, state, recording_path, job) VALUES ('" + id + "', 3, 'p', x'" +
-        hex(job.SerializeAsString()) + "');";
+        "INSERT INTO jobs (id, state, recording_path, job) VALUES ('" +
+        id + "', 3, 'p', x'" + hex(job.SerializeAsString()) + "');";
     EXPECT_EQ(sqlite3_exec(old, sql.c_str(), nullptr, nullptr, nullptr), SQLITE_OK);
     sqlite3_close(old);
   }

@@ -33,8 +33,7 @@ class JobsTest : public ::testing::Test {
     options.data_dir = (dir_ / "data").string();
     options.recordings_root = (dir_ / "recordings").string();
     server_ = std::make_unique<PoseFuseServer>(options, std::move(make_store));
-    stub_ = v1::PoseFuse::NewStub(
-        client::make_channel("127.0.0.1:" + std::to_string(server_->port())));
+    stub_ = v1::PoseFuse::NewStub(client::make_channel("127.0.0.1:" + std::to_string(server_->port())));
   }
 
   grpc::Status submit(const std::string& uri, v1::Job& job) {
@@ -82,8 +81,7 @@ class JobsTest : public ::testing::Test {
       return writer->Finish();
     }
   };
-  std::unique_ptr<OpenUpload> open_upload(const std::vector<v1::SessionChunk>& chunks,
-                                          std::size_t count) {
+  std::unique_ptr<OpenUpload> open_upload(const std::vector<v1::SessionChunk>& chunks, std::size_t count) {
     auto call = std::make_unique<OpenUpload>();
     set_test_deadline(call->context);
     call->writer = stub_->SubmitJob(&call->context, &call->job);
@@ -131,7 +129,8 @@ class JobsTest : public ::testing::Test {
     v1::GetJobResultsRequest request;
     request.set_job_id(id);
     grpc::Status ignored;
-    return posefuse::test::read_all<v1::FitResult>(*stub_->GetJobResults(&context, request), status ? *status : ignored);
+    return posefuse::test::read_all<v1::FitResult>(*stub_->GetJobResults(&context, request),
+                                                   status ? *status : ignored);
   }
 
   posefuse::test::TempDir temp_;

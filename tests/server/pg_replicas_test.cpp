@@ -64,18 +64,33 @@ class PgReplicasTest : public ::testing::Test {
   static constexpr const char* kLongLease = "20";
   static constexpr const char* kShortLease = "2";
   std::vector<std::string> args(const std::string& name, const std::string& role, const char* lease) {
-    return {"--listen", "127.0.0.1:0", "--workers", "2", "--max-jobs", "1",
-            "--data-dir", (dir_ / name).string(), "--recordings-root", (dir_ / "recordings").string(),
-            "--job-store", conninfo_, "--role", role, "--job-lease-s", lease,
-            "--job-heartbeat-s", "0.25", "--shutdown-grace-s", "1"};
+    return {"--listen",
+            "127.0.0.1:0",
+            "--workers",
+            "2",
+            "--max-jobs",
+            "1",
+            "--data-dir",
+            (dir_ / name).string(),
+            "--recordings-root",
+            (dir_ / "recordings").string(),
+            "--job-store",
+            conninfo_,
+            "--role",
+            role,
+            "--job-lease-s",
+            lease,
+            "--job-heartbeat-s",
+            "0.25",
+            "--shutdown-grace-s",
+            "1"};
   }
   Replica start(const std::string& name, const std::string& role = "both", const char* lease = kLongLease,
                 const std::vector<std::string>& extra = {}) {
     Replica replica;
     std::vector<std::string> all = args(name, role, lease);
     all.insert(all.end(), extra.begin(), extra.end());
-    replica.process = std::make_unique<test::ServerProcess>(POSEFUSE_SERVER_BINARY, all,
-                                                            dir_ / (name + ".log"));
+    replica.process = std::make_unique<test::ServerProcess>(POSEFUSE_SERVER_BINARY, all, dir_ / (name + ".log"));
     const int port = replica.process->port();
     replica.stub = v1::PoseFuse::NewStub(client::make_channel("127.0.0.1:" + std::to_string(port)));
     return replica;
@@ -143,9 +158,7 @@ class PgReplicasTest : public ::testing::Test {
     PgResult row = job_id.empty() ? connection.exec(sql) : connection.exec(sql, {pg_text(job_id)});
     return PQntuples(row.get()) == 0 ? -1 : pg_int64(row.get(), 0, 0);
   }
-  std::int64_t attempts(const std::string& id) {
-    return sql_int("SELECT attempts FROM jobs WHERE id = $1", id);
-  }
+  std::int64_t attempts(const std::string& id) { return sql_int("SELECT attempts FROM jobs WHERE id = $1", id); }
   std::int64_t result_rows(const std::string& id) {
     return sql_int("SELECT count(*) FROM results WHERE job_id = $1", id);
   }
@@ -202,8 +215,7 @@ TEST_F(PgReplicasTest, AKilledReplicasJobIsFinishedByAnotherAfterItsLeaseWithThe
   EXPECT_EQ(count(b_log, "event=job_claimed job=" + id + " attempt=2"), 1u) << b_log;
   EXPECT_EQ(attempts(id), 2);
   std::cout << "lease takeover and rerun after kill -9: "
-            << std::chrono::duration<double>(std::chrono::steady_clock::now() - killed_at).count()
-            << " s\n";
+            << std::chrono::duration<double>(std::chrono::steady_clock::now() - killed_at).count() << " s\n";
 
   // The same recording uninterrupted on one node: the same results, row for row.
   const std::string single = submit(b, "long.pfchunks").job_id();
@@ -286,8 +298,7 @@ TEST_F(PgReplicasTest, AnUploadedJobWhoseLeasesRunOutFailsWithAClearErrorAndLeav
   const v1::Job& failed = states.back();
   EXPECT_EQ(failed.state(), v1::Job::FAILED);
   EXPECT_EQ(failed.error_code(), static_cast<int>(grpc::StatusCode::ABORTED));
-  EXPECT_EQ(failed.error_message().rfind("job: its worker's lease expired 1 time (", 0), 0u)
-      << failed.error_message();
+  EXPECT_EQ(failed.error_message().rfind("job: its worker's lease expired 1 time (", 0), 0u) << failed.error_message();
   EXPECT_EQ(b.process->terminate(), 0);
   EXPECT_EQ(sql_int("SELECT count(*) FROM uploads", ""), 0);
 }

@@ -9,9 +9,9 @@
 #include <unistd.h>
 
 #include <cstdlib>
-#include <memory>
 #include <filesystem>
 #include <fstream>
+#include <memory>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -72,15 +72,14 @@ class PostgresCluster {
   // Unix socket only, no fsync (a test cluster needs no durability against power loss).
   void start() {
     shell(bin_ / "pg_ctl",
-          "-D " + data() + " -l " + (dir_ / "server.log").string() + " -w -t 60 -o \"-k " +
-              dir_.string() + " -c listen_addresses= -c fsync=off -c max_connections=200\" start",
+          "-D " + data() + " -l " + (dir_ / "server.log").string() + " -w -t 60 -o \"-k " + dir_.string() +
+              " -c listen_addresses= -c fsync=off -c max_connections=200\" start",
           "pg_ctl start");
     running_ = true;
   }
   // `immediate`: as a crash (no checkpoint, clients cut off at once).
   void stop(bool immediate = true) {
-    shell(bin_ / "pg_ctl", "-D " + data() + " -w -m " + (immediate ? "immediate" : "fast") + " stop",
-          "pg_ctl stop");
+    shell(bin_ / "pg_ctl", "-D " + data() + " -w -m " + (immediate ? "immediate" : "fast") + " stop", "pg_ctl stop");
     running_ = false;
   }
 

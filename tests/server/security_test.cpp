@@ -33,40 +33,38 @@ constexpr const char* kOtherToken = "fedcba9876543210fedcba9876543210";
 // The certificate files, made once for the whole test binary and removed at exit.
 class Certificates {
  public:
-  Certificates()
-      : dir_(fs::temp_directory_path() / ("posefuse_tls_" + std::to_string(::getpid()))) {
+  Certificates() : dir_(fs::temp_directory_path() / ("posefuse_tls_" + std::to_string(::getpid()))) {
     fs::remove_all(dir_);
     fs::create_directories(dir_);
     ok_ = make_ca("ca") && make_ca("other_ca") &&
-          make_leaf("server", "ca", "subjectAltName=IP:127.0.0.1,DNS:localhost\n"
-                                    "extendedKeyUsage=serverAuth\n") &&
+          make_leaf("server", "ca",
+                    "subjectAltName=IP:127.0.0.1,DNS:localhost\n"
+                    "extendedKeyUsage=serverAuth\n") &&
           make_leaf("client", "ca", "extendedKeyUsage=clientAuth\n");
   }
   ~Certificates() { fs::remove_all(dir_); }
 
   bool ok() const { return ok_; }
   std::string file(const std::string& name) const { return (dir_ / name).string(); }
-  std::string pem(const std::string& name) const {
-    return session::read_file_bytes(file(name), name);
-  }
+  std::string pem(const std::string& name) const { return session::read_file_bytes(file(name), name); }
 
  private:
   bool run(const std::string& command) const {
     return std::system((command + " >" + file("openssl.log") + " 2>&1").c_str()) == 0;
   }
   bool make_ca(const std::string& name) const {
-    return run("openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes"
-               " -days 2 -subj /CN=posefuse-test-" + name + " -keyout " + file(name + ".key") +
-               " -out " + file(name + ".crt"));
+    return run(
+        "openssl req -x509 -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes"
+        " -days 2 -subj /CN=posefuse-test-" +
+        name + " -keyout " + file(name + ".key") + " -out " + file(name + ".crt"));
   }
   bool make_leaf(const std::string& name, const std::string& ca, const std::string& ext) const {
     std::ofstream(file(name + ".ext")) << ext;
     return run("openssl req -new -newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes"
-               " -subj /CN=posefuse-test-" + name + " -keyout " + file(name + ".key") +
-               " -out " + file(name + ".csr")) &&
-           run("openssl x509 -req -days 2 -in " + file(name + ".csr") + " -CA " +
-               file(ca + ".crt") + " -CAkey " + file(ca + ".key") + " -CAcreateserial -out " +
-               file(name + ".crt") + " -extfile " + file(name + ".ext"));
+               " -subj /CN=posefuse-test-" +
+               name + " -keyout " + file(name + ".key") + " -out " + file(name + ".csr")) &&
+           run("openssl x509 -req -days 2 -in " + file(name + ".csr") + " -CA " + file(ca + ".crt") + " -CAkey " +
+               file(ca + ".key") + " -CAcreateserial -out " + file(name + ".crt") + " -extfile " + file(name + ".ext"));
   }
 
   fs::path dir_;
@@ -80,9 +78,7 @@ const Certificates& certificates() {
 
 class SecurityTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    ASSERT_TRUE(certificates().ok()) << "openssl failed to make the test certificates";
-  }
+  void SetUp() override { ASSERT_TRUE(certificates().ok()) << "openssl failed to make the test certificates"; }
 
   void start(ServerOptions options) {
     options.listen = "127.0.0.1:0";
@@ -131,8 +127,7 @@ TEST_F(SecurityTest, TlsFitWithTheServersCaWritesEveryResult) {
   const fs::path recording = dir_.path() / "demo.pfchunks";
   demo::write_demo_session(recording);
   client::ResultWriter writer(dir_.path() / "out");
-  const client::FitOutcome outcome =
-      client::run_fit(client::make_channel(address_, trusting("ca")), recording, writer);
+  const client::FitOutcome outcome = client::run_fit(client::make_channel(address_, trusting("ca")), recording, writer);
   ASSERT_FALSE(outcome.local_error) << outcome.local_error->what();
   ASSERT_TRUE(outcome.status.ok()) << outcome.status.error_message();
   EXPECT_EQ(writer.orientation_samples(), 1600u);  // 800 per IMU in the demo session
@@ -177,8 +172,7 @@ TEST_F(SecurityTest, CallWithoutTokenIsUnauthenticated) {
   start(token_options());
   const grpc::Status status = server_info({});
   EXPECT_EQ(status.error_code(), grpc::StatusCode::UNAUTHENTICATED);
-  EXPECT_NE(status.error_message().find("no bearer token"), std::string::npos)
-      << status.error_message();
+  EXPECT_NE(status.error_message().find("no bearer token"), std::string::npos) << status.error_message();
   EXPECT_NE(client::status_line(status, address_).find("--token-file"), std::string::npos);
 }
 
@@ -211,8 +205,7 @@ TEST_F(SecurityTest, FitAndJobCallsWithoutTokenAreUnauthenticated) {
     grpc::ClientContext context;
     set_test_deadline(context);
     v1::ListJobsResponse response;
-    EXPECT_EQ(stub->ListJobs(&context, {}, &response).error_code(),
-              grpc::StatusCode::UNAUTHENTICATED);
+    EXPECT_EQ(stub->ListJobs(&context, {}, &response).error_code(), grpc::StatusCode::UNAUTHENTICATED);
   }
   {
     grpc::ClientContext context;
@@ -324,11 +317,9 @@ TEST_F(SecurityTest, TokensFileMapsTokensToTenants) {
 }
 
 TEST(ClientSecurity, TokenComesFromTheFileElseTheEnvironment) {
-  const fs::path path =
-      fs::temp_directory_path() / ("posefuse_token_" + std::to_string(::getpid()));
+  const fs::path path = fs::temp_directory_path() / ("posefuse_token_" + std::to_string(::getpid()));
   std::ofstream(path) << "# my clinic\n  " << kToken << " \n";
-  EXPECT_EQ(client::load_channel_security("", "", "", path.string(), "from-env").bearer_token,
-            kToken);
+  EXPECT_EQ(client::load_channel_security("", "", "", path.string(), "from-env").bearer_token, kToken);
   EXPECT_EQ(client::load_channel_security("", "", "", "", "from-env").bearer_token, "from-env");
   EXPECT_EQ(client::load_channel_security("", "", "", "", nullptr).bearer_token, "");
   fs::remove(path);

@@ -2,8 +2,8 @@
 // The real posefuse-server executable as a child process, for tests that need several
 // processes or kill -9: its stdout and stderr go to a log file, the bound port is read from the
 // `event=server_start ... port=N ` line (as tests/interop/run_interop.sh does).
-#include <signal.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -26,8 +26,7 @@ namespace posefuse::test {
 
 class ServerProcess {
  public:
-  ServerProcess(const std::filesystem::path& binary, const std::vector<std::string>& args,
-                std::filesystem::path log)
+  ServerProcess(const std::filesystem::path& binary, const std::vector<std::string>& args, std::filesystem::path log)
       : log_(std::move(log)) {
     posix_spawn_file_actions_t actions;
     posix_spawn_file_actions_init(&actions);

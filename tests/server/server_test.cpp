@@ -33,9 +33,7 @@ struct CallResult {
   grpc::Status status;
   std::vector<v1::FitResult> results;
 
-  std::map<std::string, std::size_t> orientation_samples() const {
-    return test::orientation_samples(results);
-  }
+  std::map<std::string, std::size_t> orientation_samples() const { return test::orientation_samples(results); }
   std::vector<v1::ItemError> item_errors() const {
     std::vector<v1::ItemError> out;
     for (const auto& r : results) {
@@ -93,12 +91,11 @@ class ServerTest : public ::testing::Test {
   std::unique_ptr<v1::PoseFuse::Stub> stub_;
 };
 
-std::size_t nth_index(const std::vector<v1::SessionChunk>& chunks, v1::SessionChunk::ChunkCase kind,
-                      int n) {
+std::size_t nth_index(const std::vector<v1::SessionChunk>& chunks, v1::SessionChunk::ChunkCase kind, int n) {
   int seen = 0;
   for (std::size_t i = 0; i < chunks.size(); ++i) {
-    if (chunks[i].chunk_case() == kind && (kind != v1::SessionChunk::kImu ||
-                                           chunks[i].imu().device_id() == demo::kArmDevice)) {
+    if (chunks[i].chunk_case() == kind &&
+        (kind != v1::SessionChunk::kImu || chunks[i].imu().device_id() == demo::kArmDevice)) {
       if (seen++ == n) return i;
     }
   }
@@ -165,8 +162,7 @@ TEST_F(ServerTest, UnknownEnumValueIsAnItemErrorNamingTheField) {
   auto chunks = demo::make_demo_session();
   const std::size_t skeleton = nth_index(chunks, v1::SessionChunk::kSkeleton, 4);
   // A value from a newer schema (or garbage): proto3 keeps it, the validator must reject it.
-  chunks[skeleton].mutable_skeleton()->mutable_joints(3)->set_state(
-      static_cast<v1::SkeletonJoint::State>(7));
+  chunks[skeleton].mutable_skeleton()->mutable_joints(3)->set_state(static_cast<v1::SkeletonJoint::State>(7));
   const CallResult call = fit(chunks);
   ASSERT_TRUE(call.status.ok()) << call.status.error_message();
   const auto errors = call.item_errors();
@@ -219,8 +215,7 @@ TEST_F(ServerTest, OversizedMessageIsResourceExhausted) {
   const std::size_t depth = nth_index(chunks, v1::SessionChunk::kDepth, 0);
   chunks[depth].mutable_depth()->set_data(std::string(2 << 20, '\0'));
   const CallResult call = fit(chunks);
-  EXPECT_EQ(call.status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED)
-      << call.status.error_message();
+  EXPECT_EQ(call.status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << call.status.error_message();
 }
 
 TEST_F(ServerTest, SessionsBeyondTheLimitAreRefusedWithResourceExhausted) {
@@ -392,8 +387,7 @@ TEST_F(ServerTest, JobCallsWithoutDataDirAreFailedPrecondition) {
   v1::Job job;
   v1::GetJobRequest request;
   request.set_job_id("x");
-  EXPECT_EQ(stub_->GetJob(&context, request, &job).error_code(),
-            grpc::StatusCode::FAILED_PRECONDITION);
+  EXPECT_EQ(stub_->GetJob(&context, request, &job).error_code(), grpc::StatusCode::FAILED_PRECONDITION);
 }
 
 // A plain HTTP GET on loopback; returns the whole response (head and body).
@@ -429,17 +423,15 @@ TEST_F(ServerTest, MetricsEndpointCountsSessionsAndStageCalls) {
 
   const std::string response = http_get(server_->metrics_port(), "/metrics");
   EXPECT_EQ(response.rfind("HTTP/1.1 200 OK\r\n", 0), 0u) << response;
-  EXPECT_NE(response.find("\nposefuse_sessions_finished_total{status=\"OK\"} 1\n"),
-            std::string::npos)
-      << response;
+  EXPECT_NE(response.find("\nposefuse_sessions_finished_total{status=\"OK\"} 1\n"), std::string::npos) << response;
   EXPECT_NE(response.find("\nposefuse_sessions_in_flight 0\n"), std::string::npos);
   EXPECT_NE(response.find("\nposefuse_chunks_received_total 952\n"), std::string::npos);
   // start, one call per input the frame assembler hands on (camera frames, IMU blocks, audio,
   // clock events), finish.
   const std::size_t inputs = session::assemble_session(demo::make_demo_session()).inputs.size();
-  EXPECT_NE(response.find("\nposefuse_stage_calls_total{stage=\"imu_orientation\"} " + std::to_string(inputs + 2) +
-                          "\n"),
-            std::string::npos)
+  EXPECT_NE(
+      response.find("\nposefuse_stage_calls_total{stage=\"imu_orientation\"} " + std::to_string(inputs + 2) + "\n"),
+      std::string::npos)
       << response;
   EXPECT_NE(response.find("\nposefuse_queued_chunks 0\n"), std::string::npos);
   EXPECT_EQ(http_get(server_->metrics_port(), "/other").rfind("HTTP/1.1 404", 0), 0u);
@@ -475,7 +467,10 @@ TEST(ServerOptions, JobStoreRolesAndLeasesThatCannotWorkNameTheFlag) {
     return rejected_flag(options);
   };
   EXPECT_EQ(with([](ServerOptions& o) { o.job_store = "mysql:db"; }), "--job-store");
-  EXPECT_EQ(with([](ServerOptions& o) { o.job_store = "host=/run/postgresql"; o.data_dir = ""; }),
+  EXPECT_EQ(with([](ServerOptions& o) {
+              o.job_store = "host=/run/postgresql";
+              o.data_dir = "";
+            }),
             "--job-store");
   EXPECT_EQ(with([](ServerOptions& o) { o.role = "scheduler"; }), "--role");
   // API-only or worker-only replicas mean nothing on a store no other process sees.

@@ -19,9 +19,7 @@ constexpr const char* kClinicB = "fedcba9876543210fedcba9876543210";
 class TenantsTest : public JobsTest {
  protected:
   void start_with_tenants() {
-    std::ofstream(dir_ / "tokens") << "# token tenant\n"
-                                   << kClinicA << " clinic-a\n"
-                                   << kClinicB << "\tclinic-b\n";
+    std::ofstream(dir_ / "tokens") << "# token tenant\n" << kClinicA << " clinic-a\n" << kClinicB << "\tclinic-b\n";
     ServerOptions options;
     options.tokens_file = (dir_ / "tokens").string();
     start(options);
@@ -32,8 +30,7 @@ class TenantsTest : public JobsTest {
   std::unique_ptr<v1::PoseFuse::Stub> stub_for(const std::string& token) const {
     client::ChannelSecurity security;
     security.bearer_token = token;
-    return v1::PoseFuse::NewStub(
-        client::make_channel("127.0.0.1:" + std::to_string(server_->port()), security));
+    return v1::PoseFuse::NewStub(client::make_channel("127.0.0.1:" + std::to_string(server_->port()), security));
   }
 
   static grpc::Status get(v1::PoseFuse::Stub& stub, const std::string& id, v1::Job& job) {
@@ -50,8 +47,7 @@ class TenantsTest : public JobsTest {
     EXPECT_TRUE(stub.ListJobs(&context, {}, &response).ok());
     return response.jobs_size();
   }
-  static grpc::Status watch_to_end(v1::PoseFuse::Stub& stub, const std::string& id,
-                                   std::vector<v1::Job>& states) {
+  static grpc::Status watch_to_end(v1::PoseFuse::Stub& stub, const std::string& id, std::vector<v1::Job>& states) {
     grpc::ClientContext context;
     set_test_deadline(context);
     v1::WatchJobRequest request;
@@ -60,15 +56,13 @@ class TenantsTest : public JobsTest {
     states = posefuse::test::read_all<v1::Job>(*stub.WatchJob(&context, request), status);
     return status;
   }
-  static grpc::Status results_of(v1::PoseFuse::Stub& stub, const std::string& id,
-                                 std::size_t& count) {
+  static grpc::Status results_of(v1::PoseFuse::Stub& stub, const std::string& id, std::size_t& count) {
     grpc::ClientContext context;
     set_test_deadline(context);
     v1::GetJobResultsRequest request;
     request.set_job_id(id);
     grpc::Status status;
-    count = posefuse::test::read_all<v1::FitResult>(*stub.GetJobResults(&context, request), status)
-                .size();
+    count = posefuse::test::read_all<v1::FitResult>(*stub.GetJobResults(&context, request), status).size();
     return status;
   }
 
@@ -110,17 +104,14 @@ TEST_F(TenantsTest, JobsAreSeenOnlyByTheirTenant) {
   EXPECT_EQ(other.error_code(), grpc::StatusCode::NOT_FOUND);
   EXPECT_EQ(other.error_message(), "job_id: no job '" + job.job_id() + "'");
   EXPECT_EQ(listed(*clinic_b_), 0);
-  EXPECT_EQ(watch_to_end(*clinic_b_, job.job_id(), states).error_code(),
-            grpc::StatusCode::NOT_FOUND);
-  EXPECT_EQ(results_of(*clinic_b_, job.job_id(), results).error_code(),
-            grpc::StatusCode::NOT_FOUND);
+  EXPECT_EQ(watch_to_end(*clinic_b_, job.job_id(), states).error_code(), grpc::StatusCode::NOT_FOUND);
+  EXPECT_EQ(results_of(*clinic_b_, job.job_id(), results).error_code(), grpc::StatusCode::NOT_FOUND);
   {
     grpc::ClientContext context;
     set_test_deadline(context);
     v1::CancelJobRequest request;
     request.set_job_id(job.job_id());
-    EXPECT_EQ(clinic_b_->CancelJob(&context, request, &none).error_code(),
-              grpc::StatusCode::NOT_FOUND);
+    EXPECT_EQ(clinic_b_->CancelJob(&context, request, &none).error_code(), grpc::StatusCode::NOT_FOUND);
   }
 }
 

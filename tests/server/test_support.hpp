@@ -50,8 +50,7 @@ std::vector<Message> read_all(Reader& reader, grpc::Status& status) {
 }
 
 // device_id -> number of W_from_A samples in the results.
-inline std::map<std::string, std::size_t> orientation_samples(
-    const std::vector<v1::FitResult>& results) {
+inline std::map<std::string, std::size_t> orientation_samples(const std::vector<v1::FitResult>& results) {
   std::map<std::string, std::size_t> n;
   for (const auto& r : results) {
     if (r.has_imu_orientations()) {

@@ -11,8 +11,8 @@
 
 #include "../forearm/synthetic_arm.hpp"
 #include "../imu/expect_error.hpp"
-#include "collecting_output.hpp"
 #include "arm_halves.hpp"
+#include "collecting_output.hpp"
 
 namespace posefuse::session {
 namespace {
@@ -59,8 +59,8 @@ std::vector<EmittedOrientation> orientations(const CollectingOutput& out) {
     if (!r.has_forearm_orientations()) continue;
     const v1::ForearmOrientationBatch& b = r.forearm_orientations();
     for (int i = 0; i < b.t_us_size(); ++i) {
-      all.push_back({b.t_us(i), Quat(b.k_from_f(4 * i), b.k_from_f(4 * i + 1), b.k_from_f(4 * i + 2),
-                                     b.k_from_f(4 * i + 3))});
+      all.push_back(
+          {b.t_us(i), Quat(b.k_from_f(4 * i), b.k_from_f(4 * i + 1), b.k_from_f(4 * i + 2), b.k_from_f(4 * i + 3))});
     }
   }
   return all;
@@ -87,7 +87,8 @@ CollectingOutput stream_tilted_arm(bool axis_correction, double frames_stop_s = 
     const std::size_t results_before = out.results.size();
     tracker.add_imu(t_us, W_from_A, force, out);
     for (; next_frame_us < batch_end_us; next_frame_us += kFramePeriodUs) {
-      if (seconds(next_frame_us) < frames_stop_s) tracker.add_frame(visible_frame(motion, next_frame_us, axis_from_depth));
+      if (seconds(next_frame_us) < frames_stop_s)
+        tracker.add_frame(visible_frame(motion, next_frame_us, axis_from_depth));
     }
     tracker.process(false, out);
     // One orientation batch per batch of IMU samples at most, however many frames came with it.
@@ -100,8 +101,8 @@ CollectingOutput stream_tilted_arm(bool axis_correction, double frames_stop_s = 
       // Nothing is emitted past the newest frame processed, or 1 s before the newest sample.
       const std::vector<EmittedOrientation> emitted = orientations(out);
       if (!emitted.empty()) {
-        const std::int64_t newest_frame_us = std::min(next_frame_us - kFramePeriodUs,
-                                                      static_cast<std::int64_t>(frames_stop_s * 1e6));
+        const std::int64_t newest_frame_us =
+            std::min(next_frame_us - kFramePeriodUs, static_cast<std::int64_t>(frames_stop_s * 1e6));
         EXPECT_LE(emitted.back().t_us, std::max(newest_frame_us, t_us.back() - 1'000'000))
             << "after the batch ending at " << batch_end_us;
       }
@@ -133,8 +134,8 @@ TEST(ForearmTrackAxisCorrection, TheImuTiltIsTakenOutOfTheEmittedOrientations) {
     last_with = std::max(last_with, error_deg(with[i]));
     last_without = std::max(last_without, error_deg(without[i]));
   }
-  std::printf("K_from_F max error over the last 5 s: %.3f deg without the correction, %.3f deg with it\n",
-              last_without, last_with);
+  std::printf("K_from_F max error over the last 5 s: %.3f deg without the correction, %.3f deg with it\n", last_without,
+              last_with);
   EXPECT_NEAR(error_deg(with.front()), 5.0, 0.01);  // nothing seen yet
   EXPECT_GT(last_without, 4.9);
   EXPECT_LT(last_with, 0.5);

@@ -12,8 +12,8 @@
 
 #include "../forearm/synthetic_arm.hpp"
 #include "../imu/expect_error.hpp"
-#include "collecting_output.hpp"
 #include "arm_halves.hpp"
+#include "collecting_output.hpp"
 
 namespace posefuse::session {
 namespace {
@@ -190,8 +190,9 @@ TEST(GapTrackerFitAnchor, TheSdksElbowIsTheSecondAnchorWhereTheFitIsMissing) {
     ASSERT_EQ(smoother_segments(with_both), 1u);
     ASSERT_EQ(smoother_segments(with_fit_only), 1u);
     const double e_both = smoother_rms_m(with_both), e_fit_only = smoother_rms_m(with_fit_only);
-    std::printf("seed %u: smoother RMS with the fit's elbow alone %.1f mm, with the SDK's as the second anchor %.1f mm\n",
-                seed, 1e3 * e_fit_only, 1e3 * e_both);
+    std::printf(
+        "seed %u: smoother RMS with the fit's elbow alone %.1f mm, with the SDK's as the second anchor %.1f mm\n", seed,
+        1e3 * e_fit_only, 1e3 * e_both);
     EXPECT_LT(e_both, e_fit_only) << seed;
   }
 }
@@ -283,9 +284,10 @@ TEST(GapTrackerFitAnchor, TheLiveEstimateTakesTheSdksBiasOutWithTheFitsLateFrame
     stale.fit_anchor->live_max_age_s = 0.1;
     const double e_sdk = predicted_rms_m(run(sdk)), e_fit = predicted_rms_m(run(fit)),
                  e_stale = predicted_rms_m(run(stale));
-    std::printf("seed %u: PREDICTED RMS with the SDK's elbow %.1f mm, less its bias from the fit %.1f mm, fit "
-                "frames too old %.1f mm\n",
-                seed, 1e3 * e_sdk, 1e3 * e_fit, 1e3 * e_stale);
+    std::printf(
+        "seed %u: PREDICTED RMS with the SDK's elbow %.1f mm, less its bias from the fit %.1f mm, fit "
+        "frames too old %.1f mm\n",
+        seed, 1e3 * e_sdk, 1e3 * e_fit, 1e3 * e_stale);
     EXPECT_LT(e_fit, 0.5 * e_sdk) << seed;
     EXPECT_DOUBLE_EQ(e_stale, e_sdk) << seed;
   }
@@ -294,10 +296,11 @@ TEST(GapTrackerFitAnchor, TheLiveEstimateTakesTheSdksBiasOutWithTheFitsLateFrame
 TEST(GapTrackerFitAnchor, RefusesBadOptions) {
   const ArmMotion motion;
   testing::ArmHalves tracker("arm_r", forearm::Side::kRight, motion.model, true, motion.K_from_W, motion.K_from_F(0.0));
-  for (const forearm::FitAnchorOptions bad : {forearm::FitAnchorOptions{.sigma_m = 0.0}, forearm::FitAnchorOptions{.reference_energy = -1.0},
-                                     forearm::FitAnchorOptions{.bias_prior_sigma_m = 0.0},
-                                     forearm::FitAnchorOptions{.live_max_age_s = -1.0}, forearm::FitAnchorOptions{.live_bias_window_s = NAN},
-                                     forearm::FitAnchorOptions{.max_wait_s = NAN}, forearm::FitAnchorOptions{.sigma_m = INFINITY}}) {
+  for (const forearm::FitAnchorOptions bad :
+       {forearm::FitAnchorOptions{.sigma_m = 0.0}, forearm::FitAnchorOptions{.reference_energy = -1.0},
+        forearm::FitAnchorOptions{.bias_prior_sigma_m = 0.0}, forearm::FitAnchorOptions{.live_max_age_s = -1.0},
+        forearm::FitAnchorOptions{.live_bias_window_s = NAN}, forearm::FitAnchorOptions{.max_wait_s = NAN},
+        forearm::FitAnchorOptions{.sigma_m = INFINITY}}) {
     posefuse::testing::expect_error([&] { tracker.use_fit_anchor(bad); }, ErrorCode::kInvalidArgument,
                                     "forearm[arm_r].fit_anchor");
   }

@@ -91,9 +91,8 @@ std::vector<std::pair<double, v1::Source>> positions(const TrackerRun& run) {
 TEST(ArmHalves, LoneDetectionInsideAGapDoesNotSplitIt) {
   const double gap_begin_s = 2.0, gap_end_s = 5.0, duration_s = 7.0;
   const double glimpse_s = seconds(105 * 33'333);  // a frame time, 3.5 s
-  const TrackerRun run = run_tracker(duration_s, [&](double ts) {
-    return ts <= gap_begin_s || ts >= gap_end_s || std::abs(ts - glimpse_s) < 1e-6;
-  });
+  const TrackerRun run = run_tracker(
+      duration_s, [&](double ts) { return ts <= gap_begin_s || ts >= gap_end_s || std::abs(ts - glimpse_s) < 1e-6; });
 
   for (const std::string& w : run.out.warnings) ADD_FAILURE() << w;
   std::size_t visible_inside = 0, predicted_from_glimpse = 0;
@@ -122,7 +121,8 @@ TEST(ArmHalves, LoneDetectionInsideAGapDoesNotSplitIt) {
 // unless another follows within 500 ms.
 TEST(ArmHalves, LoneDetectionAtTheStartIsNotReportedAsSeen) {
   const double first_s = seconds(6 * 33'333), seen_from_s = 1.5;
-  const TrackerRun run = run_tracker(3.0, [&](double ts) { return std::abs(ts - first_s) < 1e-6 || ts >= seen_from_s; });
+  const TrackerRun run =
+      run_tracker(3.0, [&](double ts) { return std::abs(ts - first_s) < 1e-6 || ts >= seen_from_s; });
   EXPECT_EQ(run.lone_detections, 1u);
   std::size_t visual_before = 0, visual_after = 0;
   double first_visual_s = -1.0;
@@ -179,7 +179,8 @@ TEST(ArmHalves, StrapThatJumpsForOneFrameIsNotVisual) {
     frame.elbow_K -= 0.38 * axis;
     *frame.strap_K -= 0.12 * axis;
   };
-  const TrackerRun run = run_tracker(duration_s, [](double) { return true; }, false, edit);
+  const TrackerRun run = run_tracker(
+      duration_s, [](double) { return true; }, false, edit);
   std::size_t visual = 0, frames = 0;
   for (const auto& [ts, source] : positions(run)) {
     ++frames;
@@ -203,7 +204,8 @@ TEST(ArmHalves, StrapThatJumpsForOneFrameIsNotVisual) {
     *frame.strap_K -= 0.12 * axis;
   };
   std::size_t visual_in_run = 0;
-  for (const auto& [ts, source] : positions(run_tracker(duration_s, [](double) { return true; }, false, edit_run))) {
+  for (const auto& [ts, source] : positions(run_tracker(
+           duration_s, [](double) { return true; }, false, edit_run))) {
     visual_in_run += source == v1::VISUAL && ts > spike_s - 1e-6 && ts < run_end_s;
   }
   EXPECT_EQ(visual_in_run, 4u);

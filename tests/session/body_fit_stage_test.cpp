@@ -9,8 +9,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <map>
 #include <cstdio>
+#include <map>
 #include <memory>
 #include <numbers>
 #include <string>
@@ -113,7 +113,8 @@ AssembledSession assemble(const v1::SessionHeader& header, Keep keep, const sim:
   return assemble_session(chunks);
 }
 AssembledSession assemble(const v1::SessionHeader& header) {
-  return assemble(header, [](const v1::SessionChunk&) { return true; }, session());
+  return assemble(
+      header, [](const v1::SessionChunk&) { return true; }, session());
 }
 
 // Runs the stage over the session's chunks, keeping those `keep` accepts; `stats` receives the
@@ -173,12 +174,12 @@ TEST(BodyFitStage, FitsEveryFrameCloseToTheTruth) {
   // The camera skeleton's error for the same joints, for comparison.
   for (const auto& chunk : session().chunks) {
     if (!chunk.has_skeleton()) continue;
-    const size_t i = static_cast<size_t>(std::find(session().t_us.begin(), session().t_us.end(), chunk.skeleton().t_us()) -
-                                         session().t_us.begin());
+    const size_t i = static_cast<size_t>(
+        std::find(session().t_us.begin(), session().t_us.end(), chunk.skeleton().t_us()) - session().t_us.begin());
     const int camera_of[] = {4, 8, 5, 9, 6, 10};
     for (int k = 0; k < 6; ++k) {
-      sum_camera += (vec(chunk.skeleton().joints(camera_of[k]).position_m()) -
-                     truth[i].smpl_joints_K.col(arm_joints[k])).norm();
+      sum_camera +=
+          (vec(chunk.skeleton().joints(camera_of[k]).position_m()) - truth[i].smpl_joints_K.col(arm_joints[k])).norm();
     }
   }
   const double mean_fit = sum_fit / n, mean_camera = sum_camera / n;
@@ -305,8 +306,8 @@ TEST(BodyFitStage, FramesWaitForForearmOrientationsThatComeAfterThem) {
       ASSERT_TRUE(out.warned("FIT_NO_IMU", "fit"));
       for (const auto& w : out.warnings) {
         if (w.code() == "FIT_NO_IMU") {
-          EXPECT_EQ(w.message().rfind(std::to_string(frames.size() - fused) + " of " + std::to_string(frames.size()), 0),
-                    0u)
+          EXPECT_EQ(
+              w.message().rfind(std::to_string(frames.size() - fused) + " of " + std::to_string(frames.size()), 0), 0u)
               << w.message();
         }
       }
@@ -366,8 +367,8 @@ TEST(BodyFitStage, OutOfTheControlledPoseFitsTheTemplateShape) {
   // Arms raised 135 deg from the trunk: personalisation refuses (fit/rough_shape.hpp), the stage
   // warns and still fits the frames with beta = 0.
   const sim::CameraSessionResult hanging = simulate(0.1, 45.0);
-  const Output out = run(header_with({{"fit.calibration_s", "0.05"}}, hanging),
-                         [](const v1::SessionChunk&) { return true; }, hanging);
+  const Output out = run(
+      header_with({{"fit.calibration_s", "0.05"}}, hanging), [](const v1::SessionChunk&) { return true; }, hanging);
   bool warned = false;
   for (const auto& w : out.warnings) warned |= w.code() == "FIT_PERSONALISATION";
   EXPECT_TRUE(warned);
@@ -409,7 +410,8 @@ TEST(BodyFitStage, BadOptionsAreErrors) {
     EXPECT_THROW(stage_with.start(header_with({{"fit.joint_step_stop_max_damping", damping}}), out), Error) << damping;
   }
   BodyFitStage valid;
-  EXPECT_NO_THROW(valid.start(header_with({{"fit.start_velocity_gain", "1"}, {"fit.freeze_contour_after", "0"},
+  EXPECT_NO_THROW(valid.start(header_with({{"fit.start_velocity_gain", "1"},
+                                           {"fit.freeze_contour_after", "0"},
                                            {"fit.joint_step_stop_max_damping", "1e8"}}),
                               out));
 }
@@ -466,8 +468,8 @@ TEST(BodyFitStage, SkeletonStartRunsOnlyWhenThePreviousFitIsNotGood) {
                                                  std::stod(threshold));
       EXPECT_EQ(f.iterations_skeleton > 0, expected) << "frame " << i;
       skipped += !expected;
-      const double lower = std::min(had_previous ? f.energy_previous : INFINITY,
-                                    expected ? f.energy_skeleton : INFINITY);
+      const double lower =
+          std::min(had_previous ? f.energy_previous : INFINITY, expected ? f.energy_skeleton : INFINITY);
       EXPECT_EQ(f.previous_won, had_previous && f.energy_previous == lower);
       EXPECT_GT(f.total_s(), 0.0);
     }
@@ -492,7 +494,9 @@ TEST(BodyFitStage, LostTrackingIsCountedAndTheNextFrameStillStartsFromTheFittedP
   run(header_with({}), kAllChunks, session(), &first);
   ASSERT_GE(first.size(), 3u);
   // A frame's energy is its winner's (a start that did not run has a NaN energy).
-  const auto energy_of = [](const BodyFitFrameStats& f) { return f.previous_won ? f.energy_previous : f.energy_skeleton; };
+  const auto energy_of = [](const BodyFitFrameStats& f) {
+    return f.previous_won ? f.energy_previous : f.energy_skeleton;
+  };
   double highest = 0;
   for (const auto& f : first) highest = std::max(highest, energy_of(f));
   std::vector<BodyFitFrameStats> stats;
@@ -535,8 +539,10 @@ TEST(BodyFitStage, BothStartsRunOnTwoThreadsWhenThePolicyIsOff) {
 
 TEST(BodyFitStage, SkeletonConversionKeepsPositionsAndTrackingStates) {
   Skeleton skeleton;
-  skeleton.joints[geometry::kElbowLeft] = {geometry::Vec3(0.1, 0.2, 1.5), JointState::kInferred, geometry::Quat(0, 0, 0, 0)};
-  skeleton.joints[geometry::kWristLeft] = {geometry::Vec3(0.3, 0.1, 1.4), JointState::kTracked, geometry::Quat::Identity()};
+  skeleton.joints[geometry::kElbowLeft] = {geometry::Vec3(0.1, 0.2, 1.5), JointState::kInferred,
+                                           geometry::Quat(0, 0, 0, 0)};
+  skeleton.joints[geometry::kWristLeft] = {geometry::Vec3(0.3, 0.1, 1.4), JointState::kTracked,
+                                           geometry::Quat::Identity()};
   const fit::TrackedSkeleton tracked = tracked_skeleton_from(skeleton);
   EXPECT_EQ(tracked.positions_K[geometry::kElbowLeft], geometry::Vec3(0.1, 0.2, 1.5));
   EXPECT_EQ(tracked.tracking[geometry::kElbowLeft], fit::JointTracking::kInferred);

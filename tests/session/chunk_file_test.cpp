@@ -60,8 +60,7 @@ TEST(ChunkFile, EmptyFileHasNoChunks) {
 
 TEST(ChunkFile, MissingFileIsNotFound) {
   TempDir dir;
-  expect_error([&] { ChunkFileReader reader(dir / "nope"); }, ErrorCode::kNotFound,
-               (dir / "nope").string());
+  expect_error([&] { ChunkFileReader reader(dir / "nope"); }, ErrorCode::kNotFound, (dir / "nope").string());
 }
 
 TEST(ChunkFile, TruncatedPayloadIsDataLossNamingChunkAndOffset) {
@@ -83,8 +82,7 @@ TEST(ChunkFile, TruncatedPayloadIsDataLossNamingChunkAndOffset) {
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::kDataLoss);
     EXPECT_EQ(e.field(), "chunk[2]");
-    EXPECT_NE(std::string(e.what()).find("byte offset " + std::to_string(chunk2)), std::string::npos)
-        << e.what();
+    EXPECT_NE(std::string(e.what()).find("byte offset " + std::to_string(chunk2)), std::string::npos) << e.what();
   }
 }
 
@@ -137,8 +135,7 @@ TEST(ChunkFile, ShortFileClaimingAHugeChunkCostsWhatItHoldsNotWhatItClaims) {
   } catch (const Error& e) {
     EXPECT_EQ(e.code(), ErrorCode::kDataLoss);
     EXPECT_EQ(e.field(), "chunk[0]");
-    EXPECT_NE(std::string(e.what()).find("expected 67108863 bytes, file has 10"), std::string::npos)
-        << e.what();
+    EXPECT_NE(std::string(e.what()).find("expected 67108863 bytes, file has 10"), std::string::npos) << e.what();
   }
   // The peak resident size of this process (ctest runs each test alone) grew by far less than
   // the 64 MiB claimed: one read step (1 MiB) at most, plus noise.

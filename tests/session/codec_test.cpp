@@ -25,8 +25,7 @@ cv::Mat ramp_depth() {
 
 TEST(DepthCodec, EveryEncodingRoundTrips) {
   const cv::Mat depth = ramp_depth();
-  for (const auto encoding : {v1::DepthFrame::RAW_U16_LE, v1::DepthFrame::PNG16,
-                              v1::DepthFrame::ZSTD_U16_LE}) {
+  for (const auto encoding : {v1::DepthFrame::RAW_U16_LE, v1::DepthFrame::PNG16, v1::DepthFrame::ZSTD_U16_LE}) {
     const v1::DepthFrame frame = encode_depth(depth, encoding, 5);
     EXPECT_EQ(frame.width(), 16u);
     EXPECT_EQ(frame.height(), 12u);
@@ -96,8 +95,7 @@ TEST(BodyIndexCodec, RoundTripsAndChecksPngType) {
   cv::Mat ids(12, 16, CV_8UC1, cv::Scalar(255));
   ids(cv::Rect(2, 2, 5, 5)).setTo(3);
   for (const auto encoding : {v1::BodyIndexFrame::RAW_U8, v1::BodyIndexFrame::PNG8}) {
-    EXPECT_EQ(cv::norm(decode_body_index(encode_body_index(ids, encoding, 0)), ids, cv::NORM_INF),
-              0.0);
+    EXPECT_EQ(cv::norm(decode_body_index(encode_body_index(ids, encoding, 0)), ids, cv::NORM_INF), 0.0);
   }
   // A 16-bit PNG is not a body index map.
   v1::BodyIndexFrame frame = encode_body_index(ids, v1::BodyIndexFrame::PNG8, 0);
@@ -116,8 +114,7 @@ TEST(ImageSize, ReadsPngAndJpegHeaders) {
   EXPECT_EQ(p.height, 7u);
   EXPECT_EQ(j.width, 9u);
   EXPECT_EQ(j.height, 7u);
-  expect_error([&] { jpeg_size(std::string(png.begin(), png.end()), "j"); },
-               ErrorCode::kInvalidArgument, "j");
+  expect_error([&] { jpeg_size(std::string(png.begin(), png.end()), "j"); }, ErrorCode::kInvalidArgument, "j");
   expect_error([&] { png_size("\x89PNG", "p"); }, ErrorCode::kInvalidArgument, "p");
 }
 
@@ -130,7 +127,7 @@ std::string jpeg_with_decoy_frame_header() {
   std::vector<unsigned char> real;
   EXPECT_TRUE(cv::imencode(".jpg", grey, real));
   EXPECT_EQ(real[2], 0xFF);
-  std::string bytes = "\xFF\xD8\xFF\xD0";  // SOI, RST0
+  std::string bytes = "\xFF\xD8\xFF\xD0";      // SOI, RST0
   bytes.append(real.begin() + 2, real.end());  // the real JPEG after its SOI, up to its EOI
   const std::size_t decoy_at = 4 + ((std::size_t{0xFF} << 8) | real[3]);
   EXPECT_LT(bytes.size(), decoy_at);
@@ -210,7 +207,9 @@ TEST(Wav, RoundTripsAndSkipsUnknownChunks) {
   // Insert an odd-sized LIST chunk before "data", as some recorders do.
   std::ifstream in(dir / "a.wav", std::ios::binary);
   std::string bytes((std::istreambuf_iterator<char>(in)), {});
-  bytes.insert(36, std::string("LIST\x03\x00\x00\x00" "abc\x00", 12));
+  bytes.insert(36, std::string("LIST\x03\x00\x00\x00"
+                               "abc\x00",
+                               12));
   std::ofstream(dir / "b.wav", std::ios::binary) << bytes;
   WavReader with_list(dir / "b.wav", "b.wav");
   EXPECT_EQ(with_list.read_frames(5), pcm);
@@ -226,12 +225,10 @@ TEST(Wav, TruncatedOrNotPcm) {
   std::ifstream in(dir / "a.wav", std::ios::binary);
   std::string bytes((std::istreambuf_iterator<char>(in)), {});
   std::ofstream(dir / "cut.wav", std::ios::binary) << bytes.substr(0, bytes.size() - 10);
-  expect_error([&] { WavReader r(dir / "cut.wav", "cut.wav"); }, ErrorCode::kDataLoss,
-               "cut.wav.data");
+  expect_error([&] { WavReader r(dir / "cut.wav", "cut.wav"); }, ErrorCode::kDataLoss, "cut.wav.data");
   bytes[34] = 8;  // 8 bits per sample
   std::ofstream(dir / "u8.wav", std::ios::binary) << bytes;
-  expect_error([&] { WavReader r(dir / "u8.wav", "u8.wav"); }, ErrorCode::kInvalidArgument,
-               "u8.wav.fmt");
+  expect_error([&] { WavReader r(dir / "u8.wav", "u8.wav"); }, ErrorCode::kInvalidArgument, "u8.wav.fmt");
 }
 
 TEST(TextFields, NumbersRoundTripExactly) {

@@ -56,10 +56,10 @@ TEST(Directory, ChunkFileToDirectoryToChunkFileIsExact) {
 TEST(Directory, LayoutIsAsDocumented) {
   TempDir dir;
   write_directory(dir / "rec", make_session());
-  for (const char* name : {"header.json", "end.json", "skeleton.csv", "sync_events.csv",
-                           "audio.wav", "audio_chunks.csv", "imu/wrist_l.csv", "imu/wrist_r.csv",
-                           "imu/base.csv", "depth/1000000.png", "depth/1066666.png",
-                           "body_index/1033333.png", "color/1001000.png", "color/1034333.jpg"}) {
+  for (const char* name :
+       {"header.json", "end.json", "skeleton.csv", "sync_events.csv", "audio.wav", "audio_chunks.csv",
+        "imu/wrist_l.csv", "imu/wrist_r.csv", "imu/base.csv", "depth/1000000.png", "depth/1066666.png",
+        "body_index/1033333.png", "color/1001000.png", "color/1034333.jpg"}) {
     EXPECT_TRUE(fs::is_regular_file(dir / "rec" / name)) << name;
   }
   const std::string imu = text_of(dir / "rec/imu/wrist_l.csv");
@@ -68,8 +68,7 @@ TEST(Directory, LayoutIsAsDocumented) {
   const std::string skeleton = text_of(dir / "rec/skeleton.csv");
   EXPECT_EQ(std::count(skeleton.begin(), skeleton.end(), '\n'), 1 + 4 * 25);
   EXPECT_NE(text_of(dir / "rec/header.json").find("\"subject_id\": \"S-0042\""), std::string::npos);
-  EXPECT_NE(text_of(dir / "rec/sync_events.csv").find("1050000,camera,OTHER,00ff2c37"),
-            std::string::npos);
+  EXPECT_NE(text_of(dir / "rec/sync_events.csv").find("1050000,camera,OTHER,00ff2c37"), std::string::npos);
 }
 
 TEST(Directory, RawAndZstdDepthBecomePngWithTheSamePixels) {
@@ -81,10 +80,8 @@ TEST(Directory, RawAndZstdDepthBecomePngWithTheSamePixels) {
   const cv::Mat raw_pixels = decode_depth(session[raw].depth());
   const cv::Mat zstd_pixels = decode_depth(session[zstd].depth());
   const cv::Mat id_pixels = decode_body_index(session[ids].body_index());
-  *session[raw].mutable_depth() =
-      encode_depth(raw_pixels, v1::DepthFrame::RAW_U16_LE, session[raw].depth().t_us());
-  *session[zstd].mutable_depth() =
-      encode_depth(zstd_pixels, v1::DepthFrame::ZSTD_U16_LE, session[zstd].depth().t_us());
+  *session[raw].mutable_depth() = encode_depth(raw_pixels, v1::DepthFrame::RAW_U16_LE, session[raw].depth().t_us());
+  *session[zstd].mutable_depth() = encode_depth(zstd_pixels, v1::DepthFrame::ZSTD_U16_LE, session[zstd].depth().t_us());
   *session[ids].mutable_body_index() =
       encode_body_index(id_pixels, v1::BodyIndexFrame::RAW_U8, session[ids].body_index().t_us());
   write_chunk_file(dir / "in", session);
@@ -136,29 +133,25 @@ TEST(Directory, MalformedHeaderJson) {
   TempDir dir;
   write_directory(dir / "rec", make_session());
   replace_text(dir / "rec/header.json", "\"subject_id\"", "\"subject_name\"");
-  expect_error([&] { DirectoryReader reader(dir / "rec"); }, ErrorCode::kInvalidArgument,
-               "header.json");
+  expect_error([&] { DirectoryReader reader(dir / "rec"); }, ErrorCode::kInvalidArgument, "header.json");
 }
 
 TEST(Directory, MissingEndJsonFailsConversion) {
   TempDir dir;
   write_directory(dir / "rec", make_session());
   fs::remove(dir / "rec/end.json");
-  expect_error([&] { directory_to_chunk_file(dir / "rec", dir / "out"); },
-               ErrorCode::kInvalidArgument, "end");
+  expect_error([&] { directory_to_chunk_file(dir / "rec", dir / "out"); }, ErrorCode::kInvalidArgument, "end");
 }
 
 TEST(Directory, BadCsvFieldsNameFileLineAndColumn) {
   TempDir dir;
   write_directory(dir / "rec", make_session());
   replace_text(dir / "rec/skeleton.csv", ",TRACKED,", ",TRACKD,");
-  expect_error([&] { read_directory(dir / "rec"); }, ErrorCode::kInvalidArgument,
-               "skeleton.csv:2:state");
+  expect_error([&] { read_directory(dir / "rec"); }, ErrorCode::kInvalidArgument, "skeleton.csv:2:state");
 
   write_directory(dir / "rec2", make_session());
   replace_text(dir / "rec2/imu/base.csv", "\n1022500,", "\n1022500x,");
-  expect_error([&] { read_directory(dir / "rec2"); }, ErrorCode::kInvalidArgument,
-               "imu/base.csv:3:t_us");
+  expect_error([&] { read_directory(dir / "rec2"); }, ErrorCode::kInvalidArgument, "imu/base.csv:3:t_us");
 }
 
 TEST(Directory, NaNInImuCsvIsCaughtByTheConverter) {
@@ -173,8 +166,7 @@ TEST(Directory, NaNInImuCsvIsCaughtByTheConverter) {
   const auto chunks = read_directory(dir / "rec");
   std::size_t base_batch = 0;
   while (!(chunks[base_batch].has_imu() && chunks[base_batch].imu().device_id() == "base")) ++base_batch;
-  expect_error([&] { directory_to_chunk_file(dir / "rec", dir / "out"); },
-               ErrorCode::kInvalidArgument,
+  expect_error([&] { directory_to_chunk_file(dir / "rec", dir / "out"); }, ErrorCode::kInvalidArgument,
                "chunk[" + std::to_string(base_batch) + "].imu[1].gyr_rad_s");
 }
 
@@ -187,39 +179,35 @@ TEST(Directory, WrongSizeDepthPngIsCaughtByTheConverter) {
   const auto chunks = read_directory(dir / "rec");
   const std::size_t i = index_of(chunks, SessionChunk::kDepth, 1);
   EXPECT_EQ(chunks[i].depth().height(), 11u);
-  expect_error([&] { directory_to_chunk_file(dir / "rec", dir / "out"); },
-               ErrorCode::kInvalidArgument, "chunk[" + std::to_string(i) + "].depth.height");
+  expect_error([&] { directory_to_chunk_file(dir / "rec", dir / "out"); }, ErrorCode::kInvalidArgument,
+               "chunk[" + std::to_string(i) + "].depth.height");
 }
 
 TEST(Directory, FrameFileNamesMustBeTimestamps) {
   TempDir dir;
   write_directory(dir / "rec", make_session());
   fs::rename(dir / "rec/depth/1000000.png", dir / "rec/depth/first.png");
-  expect_error([&] { DirectoryReader reader(dir / "rec"); }, ErrorCode::kInvalidArgument,
-               "depth/first.png");
+  expect_error([&] { DirectoryReader reader(dir / "rec"); }, ErrorCode::kInvalidArgument, "depth/first.png");
 }
 
 TEST(Directory, AudioNeedsItsChunkTable) {
   TempDir dir;
   write_directory(dir / "rec", make_session());
   fs::remove(dir / "rec/audio_chunks.csv");
-  expect_error([&] { DirectoryReader reader(dir / "rec"); }, ErrorCode::kNotFound,
-               "audio_chunks.csv");
+  expect_error([&] { DirectoryReader reader(dir / "rec"); }, ErrorCode::kNotFound, "audio_chunks.csv");
 }
 
 TEST(Directory, ImuFileForUnknownDevice) {
   TempDir dir;
   write_directory(dir / "rec", make_session());
   fs::copy_file(dir / "rec/imu/base.csv", dir / "rec/imu/ankle.csv");
-  expect_error([&] { DirectoryReader reader(dir / "rec"); }, ErrorCode::kInvalidArgument,
-               "imu/ankle.csv");
+  expect_error([&] { DirectoryReader reader(dir / "rec"); }, ErrorCode::kInvalidArgument, "imu/ankle.csv");
 }
 
 TEST(Directory, WriterRefusesNonEmptyDirectory) {
   TempDir dir;
   write_directory(dir / "rec", make_session());
-  expect_error([&] { DirectoryWriter writer(dir / "rec"); }, ErrorCode::kFailedPrecondition,
-               (dir / "rec").string());
+  expect_error([&] { DirectoryWriter writer(dir / "rec"); }, ErrorCode::kFailedPrecondition, (dir / "rec").string());
 }
 
 TEST(Directory, WriterNeedsHeaderFirst) {

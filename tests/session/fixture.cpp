@@ -26,7 +26,7 @@ constexpr int kImuSamples = 70;
 constexpr std::int64_t kImuPeriodUs = 12'500;  // 80 Hz
 constexpr int kImuBatch = 32;                  // matches layout::kImuSamplesPerBatch
 constexpr std::uint32_t kAudioRateHz = 16'000;
-constexpr int kAudioChunkFrames = 1'600;        // 100 ms
+constexpr int kAudioChunkFrames = 1'600;  // 100 ms
 
 void set_intrinsics(v1::CameraIntrinsics* k, double f) {
   k->set_width(kWidth);
@@ -49,9 +49,7 @@ v1::SessionHeader make_header() {
   h.set_sex(v1::SessionHeader::FEMALE);
   h.set_height_m(1.68);
   const std::pair<const char*, v1::ImuDevice::Role> devices[] = {
-      {"wrist_l", v1::ImuDevice::ARM_LEFT},
-      {"wrist_r", v1::ImuDevice::ARM_RIGHT},
-      {"base", v1::ImuDevice::BASE}};
+      {"wrist_l", v1::ImuDevice::ARM_LEFT}, {"wrist_r", v1::ImuDevice::ARM_RIGHT}, {"base", v1::ImuDevice::BASE}};
   for (const auto& [id, role] : devices) {
     v1::ImuDevice* d = h.add_imu_devices();
     d->set_device_id(id);
@@ -133,8 +131,7 @@ v1::ColorFrame color(int frame, v1::ColorFrame::Encoding encoding) {
   return c;
 }
 
-std::vector<v1::ImuBatch> imu_batches(const std::string& device_id, std::int64_t clock_start_us,
-                                      double phase) {
+std::vector<v1::ImuBatch> imu_batches(const std::string& device_id, std::int64_t clock_start_us, double phase) {
   std::vector<imu::ImuSample> samples(kImuSamples);
   for (int i = 0; i < kImuSamples; ++i) {
     imu::ImuSample& s = samples[static_cast<std::size_t>(i)];
@@ -175,8 +172,7 @@ v1::AudioChunk audio(int chunk) {
   return a;
 }
 
-v1::SyncEvent sync_event(std::int64_t t_us, const char* device, v1::SyncEvent::Kind kind,
-                         std::string payload) {
+v1::SyncEvent sync_event(std::int64_t t_us, const char* device, v1::SyncEvent::Kind kind, std::string payload) {
   v1::SyncEvent e;
   e.set_t_us(t_us);
   e.set_device_id(device);
@@ -193,8 +189,7 @@ std::vector<SessionChunk> make_session() {
   for (int f = 0; f < 3; ++f) {
     const std::int64_t t_us = kCameraStartUs + f * kFramePeriodUs;
     *data.emplace_back().mutable_depth() = encode_depth(depth_image(f), v1::DepthFrame::PNG16, t_us);
-    *data.emplace_back().mutable_body_index() =
-        encode_body_index(body_index_image(f), v1::BodyIndexFrame::PNG8, t_us);
+    *data.emplace_back().mutable_body_index() = encode_body_index(body_index_image(f), v1::BodyIndexFrame::PNG8, t_us);
     *data.emplace_back().mutable_skeleton() = skeleton(f, 0);
   }
   *data.emplace_back().mutable_skeleton() = skeleton(1, 2);
@@ -206,8 +201,7 @@ std::vector<SessionChunk> make_session() {
     for (v1::ImuBatch& batch : imu_batches(id, start, phase)) *data.emplace_back().mutable_imu() = batch;
   }
   for (int a = 0; a < 3; ++a) *data.emplace_back().mutable_audio() = audio(a);
-  *data.emplace_back().mutable_sync_event() =
-      sync_event(990'000, "wrist_l", v1::SyncEvent::BUZZER_STOP, "");
+  *data.emplace_back().mutable_sync_event() = sync_event(990'000, "wrist_l", v1::SyncEvent::BUZZER_STOP, "");
   *data.emplace_back().mutable_sync_event() =
       sync_event(1'050'000, "camera", v1::SyncEvent::OTHER, std::string("\x00\xff,7", 4));
   *data.emplace_back().mutable_sync_event() =
@@ -232,9 +226,7 @@ void recount_end(std::vector<SessionChunk>& chunks) {
       case SessionChunk::kBodyIndex: end.set_body_index_frames(end.body_index_frames() + 1); break;
       case SessionChunk::kSkeleton: end.set_skeleton_frames(end.skeleton_frames() + 1); break;
       case SessionChunk::kColor: end.set_color_frames(end.color_frames() + 1); break;
-      case SessionChunk::kImu:
-        (*end.mutable_imu_samples())[c.imu().device_id()] += c.imu().t_us_size();
-        break;
+      case SessionChunk::kImu: (*end.mutable_imu_samples())[c.imu().device_id()] += c.imu().t_us_size(); break;
       case SessionChunk::kAudio:
         end.set_audio_chunks(end.audio_chunks() + 1);
         end.set_audio_frames(end.audio_frames() + c.audio().pcm_s16le().size() / 2 / c.audio().channels());
@@ -289,8 +281,7 @@ void expect_error(const std::function<void()>& action, ErrorCode code, const std
   }
 }
 
-void expect_same_stream(const std::vector<SessionChunk>& expected,
-                        const std::vector<SessionChunk>& actual) {
+void expect_same_stream(const std::vector<SessionChunk>& expected, const std::vector<SessionChunk>& actual) {
   ASSERT_EQ(expected.size(), actual.size());
   for (std::size_t i = 0; i < expected.size(); ++i) {
     std::string diff;

@@ -22,8 +22,7 @@ using v1::SessionChunk;
 std::vector<SessionChunk> make_session();
 
 // Position of the n-th (0-based) chunk of `kind` in `chunks`.
-std::size_t index_of(const std::vector<SessionChunk>& chunks, SessionChunk::ChunkCase kind,
-                     int n = 0);
+std::size_t index_of(const std::vector<SessionChunk>& chunks, SessionChunk::ChunkCase kind, int n = 0);
 
 // Recomputes the end marker of `chunks` (last chunk) after a test changed the stream.
 void recount_end(std::vector<SessionChunk>& chunks);
@@ -41,8 +40,7 @@ std::vector<SessionChunk> read_chunk_file(const std::filesystem::path& path);
 void expect_error(const std::function<void()>& action, ErrorCode code, const std::string& field);
 
 // Asserts the two streams are equal chunk by chunk (names the first differing chunk).
-void expect_same_stream(const std::vector<SessionChunk>& expected,
-                        const std::vector<SessionChunk>& actual);
+void expect_same_stream(const std::vector<SessionChunk>& expected, const std::vector<SessionChunk>& actual);
 
 // A fresh empty directory, removed with everything in it on destruction.
 class TempDir {

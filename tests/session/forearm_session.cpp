@@ -99,11 +99,10 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
   const std::size_t base_poses = static_cast<std::size_t>(std::ceil((o.duration_s + 0.02) / 1e-3)) + 1;
   base_trajectory.p_W_m.assign(base_poses, camera.centre_W + Vec3(0, 0, 0.1));
   base_trajectory.W_from_A.assign(base_poses, W_from_B);
-  const sim::ImuDeviceResult base_imu = sim::simulate_imu_device(
-      sim::SensorKinematics(base_trajectory), base_device, imu_options(o.seed + 1), 0.0, o.duration_s);
-  const sim::ImuDeviceResult arm_imu = sim::simulate_imu_device(
-      sim::SensorKinematics(sim::imu_trajectory(arm, motion)), arm_device, imu_options(o.seed + 2), 0.0,
-      o.duration_s);
+  const sim::ImuDeviceResult base_imu = sim::simulate_imu_device(sim::SensorKinematics(base_trajectory), base_device,
+                                                                 imu_options(o.seed + 1), 0.0, o.duration_s);
+  const sim::ImuDeviceResult arm_imu = sim::simulate_imu_device(sim::SensorKinematics(sim::imu_trajectory(arm, motion)),
+                                                                arm_device, imu_options(o.seed + 2), 0.0, o.duration_s);
 
   std::vector<TimedChunk> timed;
   SimChunkCounts counts;
@@ -127,14 +126,17 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
   }();
   std::mt19937_64 rng(o.seed);
   std::normal_distribution<double> normal(0.0, 1.0);
-  const auto noisy = [&](const Vec3& p) { return Vec3(p + o.joint_noise_m * Vec3(normal(rng), normal(rng), normal(rng))); };
+  const auto noisy = [&](const Vec3& p) {
+    return Vec3(p + o.joint_noise_m * Vec3(normal(rng), normal(rng), normal(rng)));
+  };
   const Vec3 shoulder_K = camera.to_K(arm.shoulder_p_W_m);
   std::uint64_t frames = 0;
   *truth = ForearmSessionTruth{};
   truth->K_from_W = camera.K_from_W;
   truth->device_us_at_camera_zero = {{arm_device.device_id, arm_device.clock.to_device_us(0.0)},
                                      {base_device.device_id, base_device.clock.to_device_us(0.0)}};
-  truth->device_drift = {{arm_device.device_id, arm_device.clock.drift}, {base_device.device_id, base_device.clock.drift}};
+  truth->device_drift = {{arm_device.device_id, arm_device.clock.drift},
+                         {base_device.device_id, base_device.clock.drift}};
   truth->model = {arm.strap_radius_m, arm.strap_to_elbow_m, d_sw, arm.upper_arm_m, arm.F_from_A};
   truth->K_from_F_calibration = camera.K_from_W * sim::arm_pose(arm, sim::calibration_pose_angles()).W_from_F;
   for (int k = 0;; ++k) {
@@ -162,12 +164,13 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
     const forearm::testing::ForearmImages images =
         forearm::testing::render_forearm(scene, cameras, 6.0, 0.002, o.seed * 1000 + static_cast<std::uint64_t>(k));
     v1::SessionChunk depth;
-    *depth.mutable_depth() = encode_depth(
-        cv::Mat(cameras.depth.height, cameras.depth.width, CV_16UC1, const_cast<std::uint16_t*>(images.depth_mm.data())),
-        v1::DepthFrame::PNG16, t_us);
+    *depth.mutable_depth() = encode_depth(cv::Mat(cameras.depth.height, cameras.depth.width, CV_16UC1,
+                                                  const_cast<std::uint16_t*>(images.depth_mm.data())),
+                                          v1::DepthFrame::PNG16, t_us);
     v1::SessionChunk color;
     *color.mutable_color() = encode_color_png(
-        cv::Mat(cameras.color.height, cameras.color.width, CV_8UC1, const_cast<std::uint8_t*>(images.gray.data())), t_us);
+        cv::Mat(cameras.color.height, cameras.color.width, CV_8UC1, const_cast<std::uint8_t*>(images.gray.data())),
+        t_us);
     v1::SessionChunk skeleton;
     v1::SkeletonFrame& s = *skeleton.mutable_skeleton();
     s.set_t_us(t_us);

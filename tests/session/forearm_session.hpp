@@ -20,14 +20,14 @@ namespace posefuse::session::testing {
 
 struct ForearmSessionOptions {
   double duration_s = 9.0;
-  double hold_s = 3.0;              // calibration pose from t = 0 (camera clock)
-  double occlusion_begin_s = 5.5;   // strap hidden and elbow/wrist INFERRED in [begin, end)
+  double hold_s = 3.0;             // calibration pose from t = 0 (camera clock)
+  double occlusion_begin_s = 5.5;  // strap hidden and elbow/wrist INFERRED in [begin, end)
   double occlusion_end_s = 6.4;
-  bool strap_drawn = true;          // false: the strap is never seen
-  bool buzzer = true;               // false: no BUZZER_STOP event
-  bool camera_alignment = true;     // false: no forearm.K_from_B option
+  bool strap_drawn = true;       // false: the strap is never seen
+  bool buzzer = true;            // false: no BUZZER_STOP event
+  bool camera_alignment = true;  // false: no forearm.K_from_B option
   double joint_noise_m = 0.004;
-  double calibration_s = 4.0;       // the stage option
+  double calibration_s = 4.0;  // the stage option
   // Constant SDK errors of the elbow and wrist joints (a real SDK's are 5-10 cm), and the
   // stage's forearm.axis ("depth" or "sdk").
   forearm::Vec3 elbow_bias_m = forearm::Vec3::Zero();
@@ -38,19 +38,19 @@ struct ForearmSessionOptions {
   forearm::Vec3 shoulder_bias_m = forearm::Vec3::Zero();
   bool upper_arm_drawn = true;
   std::string upper_arm = "depth";
-  double ble_repeat_s = 0.0;         // BLE bursts every this many s (0: one, at 0.5 s)
-  double arm_clock_drift = 30e-6;    // the arm IMU's clock rate error (the base's is -20 ppm)
-  double buzzer_tone_hz = 2700.0;    // the base IMU's buzzer
-  std::string buzzer_hz_option;      // the stage's forearm.buzzer_hz; empty: not set (2700)
+  double ble_repeat_s = 0.0;       // BLE bursts every this many s (0: one, at 0.5 s)
+  double arm_clock_drift = 30e-6;  // the arm IMU's clock rate error (the base's is -20 ppm)
+  double buzzer_tone_hz = 2700.0;  // the base IMU's buzzer
+  std::string buzzer_hz_option;    // the stage's forearm.buzzer_hz; empty: not set (2700)
   std::uint64_t seed = 7;
 };
 
 struct ForearmSessionTruth {
-  std::vector<std::int64_t> frame_t_us;     // camera clock
-  std::vector<forearm::Vec3> imu_K;         // true IMU position per frame
-  std::vector<forearm::Quat> K_from_F;      // true forearm orientation per frame
-  std::vector<double> supination_rad;       // the script's supination angle per frame
-  forearm::ForearmModel model;              // r, d_se, d_sw, d_ul and F_from_A
+  std::vector<std::int64_t> frame_t_us;  // camera clock
+  std::vector<forearm::Vec3> imu_K;      // true IMU position per frame
+  std::vector<forearm::Quat> K_from_F;   // true forearm orientation per frame
+  std::vector<double> supination_rad;    // the script's supination angle per frame
+  forearm::ForearmModel model;           // r, d_se, d_sw, d_ul and F_from_A
   forearm::Quat K_from_W = forearm::Quat::Identity();
   forearm::Quat K_from_F_calibration = forearm::Quat::Identity();  // the forearm in the calibration pose
   // Each IMU's clock reading at camera time 0, when both take their first sample: the true
@@ -60,8 +60,7 @@ struct ForearmSessionTruth {
 };
 
 // Header, data chunks in approximate camera-time order, end marker.
-std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& options,
-                                                   ForearmSessionTruth* truth);
+std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& options, ForearmSessionTruth* truth);
 
 // The forearm stage's results against the truth. Truth exists at camera frames only, so IMU
 // samples and recovered samples are compared where they lie within 2 ms of a frame.

@@ -7,8 +7,8 @@
 #include <cmath>
 #include <cstdio>
 #include <map>
-#include <set>
 #include <numbers>
+#include <set>
 
 #include "body/smpl_model.hpp"
 #include "forearm/forearm_orientation.hpp"
@@ -45,13 +45,12 @@ struct StageRun {
 // One pipeline run per options, shared by the tests that read it.
 const StageRun& run_session(const ForearmSessionOptions& options) {
   static std::map<std::string, std::unique_ptr<StageRun>> cache;
-  const std::string key = std::to_string(options.strap_drawn) + std::to_string(options.buzzer) +
-                          std::to_string(options.camera_alignment) + std::to_string(options.hold_s) +
-                          std::to_string(options.elbow_bias_m.norm()) + options.axis +
-                          std::to_string(options.shoulder_bias_m.norm()) + std::to_string(options.upper_arm_drawn) +
-                          options.upper_arm + "/" + std::to_string(options.ble_repeat_s) + "/" +
-                          std::to_string(options.arm_clock_drift) + "/" + std::to_string(options.buzzer_tone_hz) +
-                          "/" + options.buzzer_hz_option;
+  const std::string key =
+      std::to_string(options.strap_drawn) + std::to_string(options.buzzer) + std::to_string(options.camera_alignment) +
+      std::to_string(options.hold_s) + std::to_string(options.elbow_bias_m.norm()) + options.axis +
+      std::to_string(options.shoulder_bias_m.norm()) + std::to_string(options.upper_arm_drawn) + options.upper_arm +
+      "/" + std::to_string(options.ble_repeat_s) + "/" + std::to_string(options.arm_clock_drift) + "/" +
+      std::to_string(options.buzzer_tone_hz) + "/" + options.buzzer_hz_option;
   auto& slot = cache[key];
   if (!slot) {
     slot = std::make_unique<StageRun>();
@@ -78,10 +77,11 @@ TEST(ForearmStage, CalibratesTheForearmModel) {
   EXPECT_EQ(model.arm(), v1::RIGHT);
   EXPECT_GE(model.calibration_frames(), 80u);  // the 3 s hold at 30 Hz
   // Joint noise 4 mm averaged over the hold; a colour pixel is 5 mm, a depth pixel 14 mm here.
-  std::printf("calibration: r %.4f (true %.4f) d_se %.4f (%.4f) d_sw %.4f (%.4f) d_ul %.4f (%.4f) m, A_from_F %.2f deg\n",
-              model.r_m(), r.truth.model.r_m, model.d_se_m(), r.truth.model.d_se_m, model.d_sw_m(),
-              r.truth.model.d_sw_m, model.d_ul_m(), r.truth.model.d_ul_m,
-              geometry::angle_between(quat(model.a_from_f()), r.truth.model.F_from_A.conjugate()) / kDeg);
+  std::printf(
+      "calibration: r %.4f (true %.4f) d_se %.4f (%.4f) d_sw %.4f (%.4f) d_ul %.4f (%.4f) m, A_from_F %.2f deg\n",
+      model.r_m(), r.truth.model.r_m, model.d_se_m(), r.truth.model.d_se_m, model.d_sw_m(), r.truth.model.d_sw_m,
+      model.d_ul_m(), r.truth.model.d_ul_m,
+      geometry::angle_between(quat(model.a_from_f()), r.truth.model.F_from_A.conjugate()) / kDeg);
   EXPECT_NEAR(model.r_m(), r.truth.model.r_m, 0.006);
   EXPECT_NEAR(model.d_se_m(), r.truth.model.d_se_m, 0.006);
   EXPECT_NEAR(model.d_sw_m(), r.truth.model.d_sw_m, 0.006);
@@ -120,7 +120,9 @@ TEST(ForearmStage, RepeatedBroadcastsGiveTheDriftBetweenTheImus) {
   const auto& drift_ppm = calibration->calibration().clock_drift_ppm();
   ASSERT_TRUE(drift_ppm.contains("arm_r") && drift_ppm.contains("base"));
   // camera_from_device's rate error is 1 / (1 + drift) - 1 of the device clock's.
-  const auto rate_error_ppm = [&](const std::string& device) { return 1e6 * (1.0 / (1.0 + r.truth.device_drift.at(device)) - 1.0); };
+  const auto rate_error_ppm = [&](const std::string& device) {
+    return 1e6 * (1.0 / (1.0 + r.truth.device_drift.at(device)) - 1.0);
+  };
   const double true_relative_ppm = rate_error_ppm("arm_r") - rate_error_ppm("base");
   const double relative_ppm = drift_ppm.at("arm_r") - drift_ppm.at("base");
   ForearmSessionOptions one_burst = options;
@@ -187,9 +189,11 @@ TEST(ForearmStage, ImuPositionsVisibleThenPredictedThenRecovered) {
   ASSERT_EQ(e.recovered.size(), 2u);
   const auto& smoother = e.recovered.at(v1::RecoveredSegment::SMOOTHER);
   const auto& paper = e.recovered.at(v1::RecoveredSegment::PAPER);
-  std::printf("IMU position: visible %zu frames RMS %.1f mm; predicted %zu frames max %.1f mm; recovered max: "
-              "smoother %.1f mm, paper %.1f mm\n", e.visible_frames, 1e3 * e.visible_rms_m, e.predicted_frames,
-              1e3 * e.predicted_max_m, 1e3 * smoother.max_m, 1e3 * paper.max_m);
+  std::printf(
+      "IMU position: visible %zu frames RMS %.1f mm; predicted %zu frames max %.1f mm; recovered max: "
+      "smoother %.1f mm, paper %.1f mm\n",
+      e.visible_frames, 1e3 * e.visible_rms_m, e.predicted_frames, 1e3 * e.predicted_max_m, 1e3 * smoother.max_m,
+      1e3 * paper.max_m);
   EXPECT_LT(e.visible_rms_m, 0.012);
   EXPECT_LT(e.predicted_max_m, 0.15);
   EXPECT_GE(smoother.samples, 8u);  // 80 Hz samples within 2 ms of a 30 Hz frame, ~1 s
@@ -267,8 +271,8 @@ TEST(ForearmStage, BuzzerOffItsNominalFrequencyIsMeasured) {
   const v1::CalibrationReport* calibration = calibration_of(r);
   ASSERT_NE(calibration, nullptr);
   EXPECT_NEAR(calibration->buzzer_tone_hz(), 2800.0, 5.0);
-  const double base_error_us = static_cast<double>(calibration->clock_offset_us().at("base") +
-                                                   r.truth.device_us_at_camera_zero.at("base"));
+  const double base_error_us =
+      static_cast<double>(calibration->clock_offset_us().at("base") + r.truth.device_us_at_camera_zero.at("base"));
   std::printf("2800 Hz buzzer, nominal 2700 Hz: base offset error %.0f us\n", base_error_us);
   EXPECT_LT(std::abs(base_error_us), 400.0);
 }
@@ -282,19 +286,31 @@ TEST(ForearmStage, BadOptionsAreErrorsNamingTheOption) {
     const char* key;
     const char* value;
   };
-  for (const Case& c : {Case{"forearm.calibration_s", "-1"}, Case{"forearm.calibration_s", "soon"},
-                        Case{"forearm.calibration_s", "121"}, Case{"forearm.calibration_s", "1e300"},
-                        Case{"forearm.calibration_orientation", "wrist"}, Case{"forearm.axis", "laser"},
-                        Case{"forearm.upper_arm", "guess"}, Case{"forearm.shoulder_sphere", "yes"},
-                        Case{"forearm.body_id", "-2"}, Case{"forearm.K_from_B", "1 0 0"},
-                        Case{"forearm.buzzer_hz", "loud"}, Case{"forearm.buzzer_hz", "0"},
-                        Case{"forearm.buzzer_hz", "-2700"}, Case{"forearm.buzzer_hz", "9000"},
-                        Case{"forearm.buzzer_hz", "nan"}, Case{"forearm.gap_anchor", "fit"},
-                        Case{"forearm.axis_correction", "on"}, Case{"forearm.axis_correction_gain_K", "-0.1"},
-                        Case{"forearm.axis_correction_gain_K", "1.5"}, Case{"forearm.axis_correction_gain_F", "fast"},
+  for (const Case& c : {Case{"forearm.calibration_s", "-1"},
+                        Case{"forearm.calibration_s", "soon"},
+                        Case{"forearm.calibration_s", "121"},
+                        Case{"forearm.calibration_s", "1e300"},
+                        Case{"forearm.calibration_orientation", "wrist"},
+                        Case{"forearm.axis", "laser"},
+                        Case{"forearm.upper_arm", "guess"},
+                        Case{"forearm.shoulder_sphere", "yes"},
+                        Case{"forearm.body_id", "-2"},
+                        Case{"forearm.K_from_B", "1 0 0"},
+                        Case{"forearm.buzzer_hz", "loud"},
+                        Case{"forearm.buzzer_hz", "0"},
+                        Case{"forearm.buzzer_hz", "-2700"},
+                        Case{"forearm.buzzer_hz", "9000"},
+                        Case{"forearm.buzzer_hz", "nan"},
+                        Case{"forearm.gap_anchor", "fit"},
+                        Case{"forearm.axis_correction", "on"},
+                        Case{"forearm.axis_correction_gain_K", "-0.1"},
+                        Case{"forearm.axis_correction_gain_K", "1.5"},
+                        Case{"forearm.axis_correction_gain_F", "fast"},
                         Case{"forearm.axis_correction_gain_F", "0.99"},
-                        Case{"forearm.axis_correction_max_deg", "-8"}, Case{"forearm.axis_correction_max_deg", "91"},
-                        Case{"forearm.axis_correction_max_deg", "nan"}, Case{"fit.enabled", "maybe"}}) {
+                        Case{"forearm.axis_correction_max_deg", "-8"},
+                        Case{"forearm.axis_correction_max_deg", "91"},
+                        Case{"forearm.axis_correction_max_deg", "nan"},
+                        Case{"fit.enabled", "maybe"}}) {
     v1::SessionHeader bad = header;
     (*bad.mutable_options())[c.key] = c.value;
     Sink sink;
@@ -484,11 +500,12 @@ TEST(ForearmStage, DepthAxisUndoesBiasedSdkJoints) {
   EXPECT_NEAR(model.d_se_m(), r.truth.model.d_se_m, 0.006);
   EXPECT_NEAR(model.d_sw_m(), r.truth.model.d_sw_m, 0.006);
   const testing::ForearmSessionErrors e = testing::evaluate_forearm_results(r.truth, r.sink.results);
-  const testing::ForearmSessionErrors exact = testing::evaluate_forearm_results(run_session({}).truth,
-                                                                                run_session({}).sink.results);
-  std::printf("biased SDK joints, depth axis: orientation RMS %.2f deg, %zu visible frames (exact joints %zu), "
-              "visible RMS %.4f m\n", e.orientation_rms_rad / kDeg, e.visible_frames, exact.visible_frames,
-              e.visible_rms_m);
+  const testing::ForearmSessionErrors exact =
+      testing::evaluate_forearm_results(run_session({}).truth, run_session({}).sink.results);
+  std::printf(
+      "biased SDK joints, depth axis: orientation RMS %.2f deg, %zu visible frames (exact joints %zu), "
+      "visible RMS %.4f m\n",
+      e.orientation_rms_rad / kDeg, e.visible_frames, exact.visible_frames, e.visible_rms_m);
   EXPECT_LT(e.orientation_rms_rad, 3.0 * kDeg);
   EXPECT_GE(e.visible_frames + 5, exact.visible_frames);
   EXPECT_LT(e.visible_rms_m, 0.01);
@@ -516,7 +533,8 @@ TEST(ForearmStage, UpperArmFromDepthUndoesBiasedShoulder) {
   const StageRun& r = run_session(biased_shoulder("depth"));
   for (const auto& w : r.sink.warnings()) ADD_FAILURE() << w.code() << " " << w.field() << ": " << w.message();
   const v1::ForearmModel& model = calibrated_model(r);
-  const double A_from_F_deg = geometry::angle_between(quat(model.a_from_f()), r.truth.model.F_from_A.conjugate()) / kDeg;
+  const double A_from_F_deg =
+      geometry::angle_between(quat(model.a_from_f()), r.truth.model.F_from_A.conjugate()) / kDeg;
   const testing::ForearmSessionErrors e = testing::evaluate_forearm_results(r.truth, r.sink.results);
   std::printf("SDK shoulder 9 cm off, upper arm from depth: A_from_F %.2f deg, orientation RMS %.2f deg\n",
               A_from_F_deg, e.orientation_rms_rad / kDeg);
@@ -528,7 +546,8 @@ TEST(ForearmStage, UpperArmFromDepthUndoesBiasedShoulder) {
 TEST(ForearmStage, UpperArmFromSdkShoulderFollowsItsBias) {
   const StageRun& r = run_session(biased_shoulder("sdk"));
   const testing::ForearmSessionErrors e = testing::evaluate_forearm_results(r.truth, r.sink.results);
-  std::printf("SDK shoulder 9 cm off, upper arm from the SDK: orientation RMS %.2f deg\n", e.orientation_rms_rad / kDeg);
+  std::printf("SDK shoulder 9 cm off, upper arm from the SDK: orientation RMS %.2f deg\n",
+              e.orientation_rms_rad / kDeg);
   EXPECT_GT(e.orientation_rms_rad, 8.0 * kDeg);
 }
 

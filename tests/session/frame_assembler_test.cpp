@@ -7,12 +7,12 @@
 #include <variant>
 #include <vector>
 
+#include "fixture.hpp"
 #include "geometry/pinhole_camera.hpp"
 #include "raycast/depth_camera.hpp"
 #include "session/frame_assembler.hpp"
 #include "session/image_codec.hpp"
 #include "session/stage_inputs.hpp"
-#include "fixture.hpp"
 
 namespace posefuse::session {
 namespace {
@@ -186,7 +186,8 @@ TEST(SessionCameras, ADepthPixelIsTheSamePointInTheForearmAndFitPaths) {
       EXPECT_LT((*fit_uv - Eigen::Vector2d(u, v)).norm(), 1e-7) << u << " " << v;
       geometry::PinholeCamera radial_only = depth;
       radial_only.p1 = radial_only.p2 = 0.0;
-      largest_tangential_px = std::max(largest_tangential_px, (*geometry::project(radial_only, forearm_p) - *forearm_uv).norm());
+      largest_tangential_px =
+          std::max(largest_tangential_px, (*geometry::project(radial_only, forearm_p) - *forearm_uv).norm());
     }
   }
   EXPECT_GT(largest_tangential_px, 0.5);  // dropping p1, p2 would move the image's corners

@@ -84,7 +84,10 @@ TEST(FrameMerger, AFrameWaitsForEveryContributorThenLeavesOnce) {
   FrameMerger merger;
   merger.add(FramesDone{FrameSource::kForearm, kT - 1});
   merger.add(FramesDone{FrameSource::kBodyFit, kT - 1});
-  ArmFrameEstimates arms{"arm_r", v1::RIGHT, {arm_estimate(kT, forearm::PositionSource::kPredicted, Vec3(0.5, 0.5, 1.0), kImuForearm).estimate}};
+  ArmFrameEstimates arms{
+      "arm_r",
+      v1::RIGHT,
+      {arm_estimate(kT, forearm::PositionSource::kPredicted, Vec3(0.5, 0.5, 1.0), kImuForearm).estimate}};
   merger.add(arms);
   merger.add(FramesDone{FrameSource::kForearm, kT});
   EXPECT_TRUE(merger.take_complete().empty());  // the fit has not passed kT

@@ -24,7 +24,11 @@ const OptionTable& test_table() {
        .min = at_least(1),
        .max = at_most(9),
        .description = "a count"},
-      {.key = "t.id", .type = OptionType::kInteger, .min = at_least(0), .max = at_most(4294967295.0), .description = "an id"},
+      {.key = "t.id",
+       .type = OptionType::kInteger,
+       .min = at_least(0),
+       .max = at_most(4294967295.0),
+       .description = "an id"},
       {.key = "t.duration_s",
        .type = OptionType::kReal,
        .default_value = "5",
@@ -39,7 +43,11 @@ const OptionTable& test_table() {
        .words = {"auto"},
        .unit = "Hz",
        .description = "a frequency or auto"},
-      {.key = "t.mode", .type = OptionType::kChoice, .default_value = "depth", .words = {"depth", "sdk"}, .description = "a mode"},
+      {.key = "t.mode",
+       .type = OptionType::kChoice,
+       .default_value = "depth",
+       .words = {"depth", "sdk"},
+       .description = "a mode"},
       {.key = "t.rotation", .type = OptionType::kQuaternion, .description = "a rotation"},
       {.key = "t.mag.<device_id>", .type = OptionType::kMagCalibration, .description = "per device"},
   };
@@ -98,10 +106,14 @@ TEST(OptionReader, UnsetOptionsTakeTheTablesDefaults) {
 TEST(OptionReader, SetOptionsAreParsedAsTheirType) {
   imu::MagCalibration calibration;
   calibration.center_uT = imu::Vec3(1, 2, 3);
-  const v1::SessionHeader header =
-      header_with({{"t.flag", "0"}, {"t.count", "9"}, {"t.id", "4294967295"}, {"t.duration_s", "120"},
-                   {"t.tone_hz", "auto"}, {"t.mode", "sdk"}, {"t.rotation", "0, 0, 0, 1.0004"},
-                   {"t.mag.left", format_mag_calibration(calibration)}});
+  const v1::SessionHeader header = header_with({{"t.flag", "0"},
+                                                {"t.count", "9"},
+                                                {"t.id", "4294967295"},
+                                                {"t.duration_s", "120"},
+                                                {"t.tone_hz", "auto"},
+                                                {"t.mode", "sdk"},
+                                                {"t.rotation", "0, 0, 0, 1.0004"},
+                                                {"t.mag.left", format_mag_calibration(calibration)}});
   const OptionReader options(test_table(), header);
   EXPECT_FALSE(options.boolean("t.flag"));
   EXPECT_EQ(options.integer("t.count"), 9);  // the bounds are inclusive
@@ -128,13 +140,16 @@ TEST(OptionReader, ValuesOutOfRangeAreRefused) {
   const auto count = [](const OptionReader& o) { o.integer("t.count"); };
   for (const char* value : {"0", "10", "-3"}) expect_refused("t.count", value, "must be an integer in [1, 9]", count);
   const auto id = [](const OptionReader& o) { o.optional_integer("t.id"); };
-  for (const char* value : {"-1", "4294967296"}) expect_refused("t.id", value, "must be an integer in [0, 4294967295]", id);
-  expect_refused("t.tone_hz", "0", "must be a number > 0 Hz or 'auto'", [](const OptionReader& o) { o.real("t.tone_hz"); });
+  for (const char* value : {"-1", "4294967296"})
+    expect_refused("t.id", value, "must be an integer in [0, 4294967295]", id);
+  expect_refused("t.tone_hz", "0", "must be a number > 0 Hz or 'auto'",
+                 [](const OptionReader& o) { o.real("t.tone_hz"); });
 }
 
 TEST(OptionReader, ValuesOfTheWrongTypeAreRefused) {
   const auto flag = [](const OptionReader& o) { o.boolean("t.flag"); };
-  for (const char* value : {"yes", "on", "2", "TRUE", ""}) expect_refused("t.flag", value, "must be true or false", flag);
+  for (const char* value : {"yes", "on", "2", "TRUE", ""})
+    expect_refused("t.flag", value, "must be true or false", flag);
   const auto count = [](const OptionReader& o) { o.integer("t.count"); };
   for (const char* value : {"2.5", "three", "+3", " 3", ""}) {
     expect_refused("t.count", value, "must be an integer in [1, 9]", count);
@@ -149,7 +164,8 @@ TEST(OptionReader, ValuesOfTheWrongTypeAreRefused) {
   expect_refused("t.rotation", "1 0 0", "expected four numbers 'w x y z'", rotation);
   expect_refused("t.rotation", "2 0 0 0", "not a unit quaternion", rotation);
   expect_refused("t.rotation", "1 0 0 x", "expected four numbers 'w x y z'", rotation);
-  expect_refused("t.mag.left", "1 2 3", "expected 12 numbers", [](const OptionReader& o) { o.mag_calibration("t.mag.left"); });
+  expect_refused("t.mag.left", "1 2 3", "expected 12 numbers",
+                 [](const OptionReader& o) { o.mag_calibration("t.mag.left"); });
 }
 
 TEST(OptionReader, UnknownChoicesAreRefused) {
@@ -164,8 +180,8 @@ TEST(OptionReader, ReadingAKeyNotInTheTableOrAsAnotherTypeIsABug) {
   expect_bug([&] { options.given("t.missing"); });
   expect_bug([&] { options.real("t.flag"); });
   expect_bug([&] { options.boolean("t.count"); });
-  expect_bug([&] { options.integer("t.id"); });          // no default: read as optional
-  expect_bug([&] { options.real("t.tone_hz"); });        // holds its word: ask word() first
+  expect_bug([&] { options.integer("t.id"); });               // no default: read as optional
+  expect_bug([&] { options.real("t.tone_hz"); });             // holds its word: ask word() first
   expect_bug([&] { options.choice_is("t.mode", "laser"); });  // not one of its choices
 }
 

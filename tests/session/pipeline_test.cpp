@@ -41,15 +41,13 @@ class CollectingSink : public ResultSink {
     return out;
   }
   // device_id -> (t_us, W_from_A) of every orientation result, in order.
-  std::map<std::string, std::vector<std::pair<std::int64_t, geometry::Quat>>> orientations()
-      const {
+  std::map<std::string, std::vector<std::pair<std::int64_t, geometry::Quat>>> orientations() const {
     std::map<std::string, std::vector<std::pair<std::int64_t, geometry::Quat>>> out;
     for (const auto& r : of(v1::FitResult::kImuOrientations)) {
       const auto& b = r.imu_orientations();
       for (int i = 0; i < b.t_us_size(); ++i) {
-        out[b.device_id()].emplace_back(
-            b.t_us(i), geometry::Quat(b.w_from_a(4 * i), b.w_from_a(4 * i + 1),
-                                      b.w_from_a(4 * i + 2), b.w_from_a(4 * i + 3)));
+        out[b.device_id()].emplace_back(b.t_us(i), geometry::Quat(b.w_from_a(4 * i), b.w_from_a(4 * i + 1),
+                                                                  b.w_from_a(4 * i + 2), b.w_from_a(4 * i + 3)));
       }
     }
     return out;
@@ -64,8 +62,8 @@ void run(const std::vector<v1::SessionChunk>& chunks, CollectingSink& sink) {
   pipeline.close();
 }
 
-std::size_t index_of_nth(const std::vector<v1::SessionChunk>& chunks,
-                         v1::SessionChunk::ChunkCase kind, int n, const std::string& device = "") {
+std::size_t index_of_nth(const std::vector<v1::SessionChunk>& chunks, v1::SessionChunk::ChunkCase kind, int n,
+                         const std::string& device = "") {
   int seen = 0;
   for (std::size_t i = 0; i < chunks.size(); ++i) {
     if (chunks[i].chunk_case() != kind) continue;
@@ -148,8 +146,7 @@ TEST(SessionPipeline, ArmOrientationFollowsTheDemoTruth) {
   for (const auto& [t_us, W_from_A] : arm) {
     const double t_s = static_cast<double>(t_us - demo::kArmClockStartUs) * 1e-6;
     if (t_s < 1.0) continue;  // start-up
-    const double error_deg =
-        geometry::angle_between(W_from_A, demo::demo_arm_W_from_A(t_s)) * 180.0 / pi;
+    const double error_deg = geometry::angle_between(W_from_A, demo::demo_arm_W_from_A(t_s)) * 180.0 / pi;
     sum_deg += error_deg;
     max_deg = std::max(max_deg, error_deg);
     ++n;
@@ -197,8 +194,7 @@ TEST(SessionPipeline, WrongDepthSizeNamesTheFieldAndLaterChunksKeepTheirStreamIn
   const auto errors = sink.item_errors();
   ASSERT_GE(errors.size(), 2u);
   EXPECT_EQ(errors[0].field(), "chunk[" + std::to_string(bad_depth) + "].depth.width");
-  EXPECT_EQ(errors[1].field().rfind("chunk[" + std::to_string(bad_skeleton) + "].skeleton", 0),
-            0u)
+  EXPECT_EQ(errors[1].field().rfind("chunk[" + std::to_string(bad_skeleton) + "].skeleton", 0), 0u)
       << errors[1].field();
   ASSERT_TRUE(sink.results.back().has_summary());
   EXPECT_EQ(sink.results.back().summary().depth_frames(), 299u);
@@ -405,8 +401,7 @@ TEST(SessionPipeline, PluggedStageSeesChunksInOrderAndStageErrorsAreItemErrors) 
   pipeline.close();
 
   ASSERT_EQ(log.size(), 302u);
-  EXPECT_EQ(recorder.orientation_batches_seen,
-            static_cast<int>(sink.of(v1::FitResult::kImuOrientations).size()));
+  EXPECT_EQ(recorder.orientation_batches_seen, static_cast<int>(sink.of(v1::FitResult::kImuOrientations).size()));
   EXPECT_GT(recorder.orientation_batches_seen, 0);
   EXPECT_EQ(log.front(), "start");
   EXPECT_EQ(log.back(), "finish");

@@ -13,9 +13,7 @@ namespace {
 constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
 constexpr float kInfF = std::numeric_limits<float>::infinity();
 
-std::string chunk_field(std::size_t i, const std::string& rest) {
-  return "chunk[" + std::to_string(i) + "]" + rest;
-}
+std::string chunk_field(std::size_t i, const std::string& rest) { return "chunk[" + std::to_string(i) + "]" + rest; }
 
 void expect_invalid(const std::vector<SessionChunk>& chunks, const std::string& field) {
   expect_error([&] { validate_all(chunks); }, ErrorCode::kInvalidArgument, field);
@@ -137,21 +135,18 @@ TEST(SessionValidator, TimestampsOutsideTwoToThe53AreRejectedInEveryStream) {
     SessionChunk::ChunkCase kind;
     const char* field;
   };
-  for (const Stream stream : {Stream{SessionChunk::kDepth, ".depth.t_us"},
-                              Stream{SessionChunk::kBodyIndex, ".body_index.t_us"},
-                              Stream{SessionChunk::kSkeleton, ".skeleton.t_us"},
-                              Stream{SessionChunk::kColor, ".color.t_us"},
-                              Stream{SessionChunk::kImu, ".imu[0].t_us"},
-                              Stream{SessionChunk::kAudio, ".audio.t_us"},
-                              Stream{SessionChunk::kSyncEvent, ".sync_event.t_us"}}) {
+  for (const Stream stream :
+       {Stream{SessionChunk::kDepth, ".depth.t_us"}, Stream{SessionChunk::kBodyIndex, ".body_index.t_us"},
+        Stream{SessionChunk::kSkeleton, ".skeleton.t_us"}, Stream{SessionChunk::kColor, ".color.t_us"},
+        Stream{SessionChunk::kImu, ".imu[0].t_us"}, Stream{SessionChunk::kAudio, ".audio.t_us"},
+        Stream{SessionChunk::kSyncEvent, ".sync_event.t_us"}}) {
     SCOPED_TRACE(stream.field);
     SessionChunk chunk = session[index_of(session, stream.kind)];
-    for (const std::int64_t t_us : {std::numeric_limits<std::int64_t>::min(),
-                                    std::numeric_limits<std::int64_t>::max(),
+    for (const std::int64_t t_us : {std::numeric_limits<std::int64_t>::min(), std::numeric_limits<std::int64_t>::max(),
                                     kMaxAbsTimestampUs + 1, -kMaxAbsTimestampUs - 1}) {
       set_t_us(chunk, t_us);
-      expect_error([&] { validate_chunk(chunk, header, "chunk[9]"); },
-                   ErrorCode::kInvalidArgument, std::string("chunk[9]") + stream.field);
+      expect_error([&] { validate_chunk(chunk, header, "chunk[9]"); }, ErrorCode::kInvalidArgument,
+                   std::string("chunk[9]") + stream.field);
     }
     // The bounds themselves are timestamps (the IMU batch stays in order: its first sample is
     // set, and -2^53 is before the others).
@@ -224,8 +219,7 @@ TEST(SessionValidator, BodyIndexValuesAreBodyIdsOrBackground) {
   const std::size_t i = index_of(session, SessionChunk::kBodyIndex);
   cv::Mat ids = decode_body_index(session[i].body_index());
   ids.at<std::uint8_t>(3, 3) = 7;
-  *session[i].mutable_body_index() =
-      encode_body_index(ids, v1::BodyIndexFrame::RAW_U8, session[i].body_index().t_us());
+  *session[i].mutable_body_index() = encode_body_index(ids, v1::BodyIndexFrame::RAW_U8, session[i].body_index().t_us());
   expect_invalid(session, chunk_field(i, ".body_index.data"));
 }
 
@@ -301,8 +295,7 @@ TEST(SessionValidator, UnknownEnumValues) {
 
   session = make_session();
   const std::size_t skeleton = index_of(session, SessionChunk::kSkeleton);
-  session[skeleton].mutable_skeleton()->mutable_joints(4)->set_state(
-      v1::SkeletonJoint::STATE_UNSPECIFIED);
+  session[skeleton].mutable_skeleton()->mutable_joints(4)->set_state(v1::SkeletonJoint::STATE_UNSPECIFIED);
   expect_invalid(session, chunk_field(skeleton, ".skeleton.joints[4].state"));
 
   session = make_session();
@@ -371,8 +364,7 @@ TEST(SessionValidator, MessagesAreReadable) {
     FAIL() << "no error";
   } catch (const Error& e) {
     EXPECT_EQ(std::string(e.what()),
-              chunk_field(i, ".depth.data") +
-                  ": has 380 bytes, expected 384 (16x12 RAW_U16_LE)");
+              chunk_field(i, ".depth.data") + ": has 380 bytes, expected 384 (16x12 RAW_U16_LE)");
   }
 }
 

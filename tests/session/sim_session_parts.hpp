@@ -97,7 +97,8 @@ inline v1::CameraIntrinsics camera_intrinsics(const geometry::PinholeCamera& c) 
 inline void set_forearm_header(const std::string& arm_id, const std::string& base_id,
                                const forearm::StrapCameras& cameras, std::uint32_t audio_rate_hz,
                                v1::SessionHeader& h) {
-  for (const auto& [id, role] : {std::pair{arm_id, v1::ImuDevice::ARM_RIGHT}, std::pair{base_id, v1::ImuDevice::BASE}}) {
+  for (const auto& [id, role] :
+       {std::pair{arm_id, v1::ImuDevice::ARM_RIGHT}, std::pair{base_id, v1::ImuDevice::BASE}}) {
     v1::ImuDevice& d = *h.add_imu_devices();
     d.set_device_id(id);
     d.set_role(role);
@@ -117,7 +118,8 @@ inline void set_forearm_header(const std::string& arm_id, const std::string& bas
 // skeleton and colour frames.
 inline std::vector<v1::SessionChunk> assemble_session(v1::SessionChunk header, std::vector<TimedChunk> timed,
                                                       std::uint64_t frames, const SimChunkCounts& counts) {
-  std::stable_sort(timed.begin(), timed.end(), [](const TimedChunk& a, const TimedChunk& b) { return a.key_s < b.key_s; });
+  std::stable_sort(timed.begin(), timed.end(),
+                   [](const TimedChunk& a, const TimedChunk& b) { return a.key_s < b.key_s; });
   std::vector<v1::SessionChunk> chunks;
   chunks.reserve(timed.size() + 2);
   chunks.push_back(std::move(header));

@@ -40,7 +40,8 @@ void expect_field(const std::function<void()>& read, const std::string& key) {
 }
 
 TEST(StageOptions, EveryKeyIsDeclaredOnceUnderItsStagesPrefix) {
-  const std::map<std::string, std::string> prefix{{"imu_orientation", "imu."}, {"forearm", "forearm."}, {"body_fit", "fit."}};
+  const std::map<std::string, std::string> prefix{
+      {"imu_orientation", "imu."}, {"forearm", "forearm."}, {"body_fit", "fit."}};
   std::set<std::string> keys;
   for (const auto& stage : make_default_stages()) {
     for (const OptionSpec& option : stage->options()) {
@@ -141,13 +142,22 @@ TEST(StageOptions, EveryForearmOptionReachesTheStage) {
 
 TEST(StageOptions, ForearmChecksAcrossOptionsNameTheOptionSet) {
   // The gains' sum: named after the gain the header set.
-  expect_field([] { read_forearm_options(header_with({{kForearmAxisCorrectionGainFKey, "0.99"}})); },
-               kForearmAxisCorrectionGainFKey);
-  expect_field([] { read_forearm_options(header_with({{kForearmAxisCorrectionGainKKey, "0.99"}})); },
-               kForearmAxisCorrectionGainKKey);
-  expect_field([] {
-    read_forearm_options(header_with({{kForearmAxisCorrectionGainKKey, "0"}, {kForearmAxisCorrectionGainFKey, "0"}}));
-  }, kForearmAxisCorrectionGainKKey);
+  expect_field(
+      [] {
+        read_forearm_options(header_with({{kForearmAxisCorrectionGainFKey, "0.99"}}));
+      },
+      kForearmAxisCorrectionGainFKey);
+  expect_field(
+      [] {
+        read_forearm_options(header_with({{kForearmAxisCorrectionGainKKey, "0.99"}}));
+      },
+      kForearmAxisCorrectionGainKKey);
+  expect_field(
+      [] {
+        read_forearm_options(
+            header_with({{kForearmAxisCorrectionGainKKey, "0"}, {kForearmAxisCorrectionGainFKey, "0"}}));
+      },
+      kForearmAxisCorrectionGainKKey);
   // The buzzer below half the audio rate.
   v1::SessionHeader audio = header_with({{kForearmBuzzerHzKey, "4000"}});
   audio.set_audio_sample_rate_hz(8000);
@@ -190,10 +200,10 @@ TEST(StageOptions, EveryBodyFitOptionReachesTheStage) {
 
 TEST(StageOptions, BodyFitBadValuesNameTheOption) {
   for (const auto& [key, value] : std::vector<std::pair<std::string, std::string>>{{kFitSmoothingFramesKey, "2"},
-                                                                                  {kFitSmoothingFramesKey, "0"},
-                                                                                  {kFitMaxIterationsKey, "-1"},
-                                                                                  {kFitBodyIdKey, "-2"},
-                                                                                  {kFitLostEnergyKey, "0"}}) {
+                                                                                   {kFitSmoothingFramesKey, "0"},
+                                                                                   {kFitMaxIterationsKey, "-1"},
+                                                                                   {kFitBodyIdKey, "-2"},
+                                                                                   {kFitLostEnergyKey, "0"}}) {
     expect_field([&] { read_body_fit_options(header_with({{key, value}})); }, key);
   }
   expect_field([] { body_fit_enabled(header_with({{kFitEnabledKey, "maybe"}})); }, kFitEnabledKey);

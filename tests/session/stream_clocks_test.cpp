@@ -88,8 +88,8 @@ TEST(StreamClocks, LaterReceiptsRefitTheDriftOverTheSession) {
   };
   const double first_end_us = relative_error_us(*first, kSessionS);
   const double all_end_us = relative_error_us(*all, kSessionS);
-  std::printf("arm vs base at %.0f s: first burst only %.0f us, all %zu receipts %.0f us (sigma %.0f us)\n",
-              kSessionS, first_end_us, clocks.receipt_count(), all_end_us,
+  std::printf("arm vs base at %.0f s: first burst only %.0f us, all %zu receipts %.0f us (sigma %.0f us)\n", kSessionS,
+              first_end_us, clocks.receipt_count(), all_end_us,
               all->sigma_us("arm", static_cast<double>(s.arm.clock.to_device_us(kSessionS))));
   // One burst spans about a second: its drift is mostly the prior, tens of ms off after 10 min.
   EXPECT_GT(std::abs(first_end_us), 5000.0);
@@ -146,11 +146,12 @@ TEST(StreamClocks, LaterBuzzerStopsGiveTheBaseDrift) {
     const std::int64_t device_us = d.clock.to_device_us(t);
     return map.to_camera_us(d.device_id, static_cast<double>(device_us)) - 1e6 * d.clock.to_camera_s(device_us);
   };
-  std::printf("at %.0f s: base %.0f us (first stop only) -> %.0f us (4 stops, sigma %.0f us), arm %.0f -> %.0f us; "
-              "base drift %.2f ppm (true %.2f)\n",
-              kLongS, error_us(*first, base, kLongS), error_us(*all, base, kLongS),
-              all->sigma_us("base", static_cast<double>(base.clock.to_device_us(kLongS))), error_us(*first, arm, kLongS),
-              error_us(*all, arm, kLongS), all->camera_from("base").drift * 1e6, 1e6 * (1.0 / (1.0 + 37e-6) - 1.0));
+  std::printf(
+      "at %.0f s: base %.0f us (first stop only) -> %.0f us (4 stops, sigma %.0f us), arm %.0f -> %.0f us; "
+      "base drift %.2f ppm (true %.2f)\n",
+      kLongS, error_us(*first, base, kLongS), error_us(*all, base, kLongS),
+      all->sigma_us("base", static_cast<double>(base.clock.to_device_us(kLongS))), error_us(*first, arm, kLongS),
+      error_us(*all, arm, kLongS), all->camera_from("base").drift * 1e6, 1e6 * (1.0 / (1.0 + 37e-6) - 1.0));
   EXPECT_GT(std::abs(error_us(*first, base, kLongS)), 5000.0);  // 37 ppm over 300 s, unobserved
   // Four stops, each to about 0.1 ms (audio edge and the stamp's 0.2 ms): every mapped time
   // within a millisecond, the arm's through the base's.

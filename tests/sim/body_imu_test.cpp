@@ -71,9 +71,9 @@ TEST(BodyImu, SkeletonPoseMatchesTheBodyEvaluator) {
 
 TEST(BodyImu, RoomFrameInTheWorld) {
   const Quat north = W_from_R(0.0);
-  EXPECT_LT((north * Vec3::UnitY() - Vec3::UnitZ()).norm(), 1e-12);  // up is up
-  EXPECT_LT((north * Vec3::UnitZ() - Vec3::UnitX()).norm(), 1e-12);  // front faces north
-  EXPECT_LT((north * Vec3::UnitX() - Vec3::UnitY()).norm(), 1e-12);  // left is west
+  EXPECT_LT((north * Vec3::UnitY() - Vec3::UnitZ()).norm(), 1e-12);             // up is up
+  EXPECT_LT((north * Vec3::UnitZ() - Vec3::UnitX()).norm(), 1e-12);             // front faces north
+  EXPECT_LT((north * Vec3::UnitX() - Vec3::UnitY()).norm(), 1e-12);             // left is west
   EXPECT_LT((W_from_R(pi / 2) * Vec3::UnitZ() - Vec3::UnitY()).norm(), 1e-12);  // turned to the west
   EXPECT_THROW(W_from_R(std::nan("")), Error);
 }
@@ -121,7 +121,8 @@ TEST(BodyImu, EveryExerciseGivesPhysiologicalSpecificForce) {
     for (BodySide side : {BodySide::kRight, BodySide::kLeft}) {
       ForearmStrap strap;
       strap.side = side;
-      const ImuSynthResult imu = ideal_imu(SensorKinematics(forearm_imu_trajectory(motion, rest_joints(), strap, W_from_R())));
+      const ImuSynthResult imu =
+          ideal_imu(SensorKinematics(forearm_imu_trajectory(motion, rest_joints(), strap, W_from_R())));
       EXPECT_LT(largest_acceleration(imu), 25.0) << name;
       for (const auto& s : imu.samples) EXPECT_LT(s.gyr_rad_s.norm(), 12.0) << name;
     }
@@ -129,9 +130,9 @@ TEST(BodyImu, EveryExerciseGivesPhysiologicalSpecificForce) {
 }
 
 // A mocap-like clip (60 fps, smooth arm swings plus 0.15 deg of noise on every rotation channel
-// and 1 mm on the root: about 4 mm of jitter at the wrist, as optical mocap has): differentiated twice without smoothing it gives accelerations far
-// beyond a real forearm's; bvh_motion's default smoothing brings them back to the noise-free
-// motion's range.
+// and 1 mm on the root: about 4 mm of jitter at the wrist, as optical mocap has): differentiated twice without
+// smoothing it gives accelerations far beyond a real forearm's; bvh_motion's default smoothing brings them back to the
+// noise-free motion's range.
 TEST(BodyImu, MocapNoiseIsSmoothedBeforeDifferentiation) {
   const auto rig = posefuse::sim::testing::rig21();
   std::mt19937 rng(11);
@@ -142,12 +143,14 @@ TEST(BodyImu, MocapNoiseIsSmoothedBeforeDifferentiation) {
   auto clip_text = [&](double noise_scale) {
     return posefuse::sim::testing::rig_text(rig, frames, 1.0 / 60, [&](int f, int j, int c) {
       const double t = f / 60.0;
-      const double n = noise_scale * jitter[(static_cast<std::size_t>(f) * rig.size() + static_cast<std::size_t>(j)) * 6 +
-                                            static_cast<std::size_t>(c)];
+      const double n =
+          noise_scale * jitter[(static_cast<std::size_t>(f) * rig.size() + static_cast<std::size_t>(j)) * 6 +
+                               static_cast<std::size_t>(c)];
       if (rig[static_cast<std::size_t>(j)].root) return c < 3 ? (c == 1 ? 95.0 : 0.0) + 0.1 * n : 0.15 * n;
       double value = 0.15 * n;
       if (rig[static_cast<std::size_t>(j)].name == "RightArm" && c == 0) value += 60.0 * std::sin(2 * pi * 0.5 * t);
-      if (rig[static_cast<std::size_t>(j)].name == "RightForeArm" && c == 1) value += 50.0 + 40.0 * std::sin(2 * pi * 0.8 * t);
+      if (rig[static_cast<std::size_t>(j)].name == "RightForeArm" && c == 1)
+        value += 50.0 + 40.0 * std::sin(2 * pi * 0.8 * t);
       if (rig[static_cast<std::size_t>(j)].name == "RightForeArm" && c == 2) value += 60.0 * std::sin(2 * pi * 0.6 * t);
       return value;
     });
@@ -156,13 +159,14 @@ TEST(BodyImu, MocapNoiseIsSmoothedBeforeDifferentiation) {
   auto peak = [&](const BvhClip& clip, double smoothing_s) {
     BvhMotionOptions options;
     options.smoothing_s = smoothing_s;
-    const SensorTrajectory trajectory = forearm_imu_trajectory(bvh_motion(clip, options), rest_joints(), ForearmStrap{}, W_from_R());
+    const SensorTrajectory trajectory =
+        forearm_imu_trajectory(bvh_motion(clip, options), rest_joints(), ForearmStrap{}, W_from_R());
     return largest_acceleration(ideal_imu(SensorKinematics(trajectory)));
   };
   const double standard = BvhMotionOptions{}.smoothing_s;
   const double clean_peak = peak(clean, standard), raw_peak = peak(noisy, 0.0), smoothed_peak = peak(noisy, standard);
-  std::printf("peak |a| m/s^2: clean %.1f, noisy unsmoothed %.1f, noisy smoothed %.2f s %.1f\n", clean_peak,
-              raw_peak, standard, smoothed_peak);
+  std::printf("peak |a| m/s^2: clean %.1f, noisy unsmoothed %.1f, noisy smoothed %.2f s %.1f\n", clean_peak, raw_peak,
+              standard, smoothed_peak);
   // Measured with the default 0.03 s: clean 8.3, unsmoothed 228.4 (per axis clipped at the
   // accelerometer's 16 g), smoothed 9.8 m/s^2 (0.02 s
   // leaves 20.5, 0.04 s 8.4).
@@ -171,8 +175,8 @@ TEST(BodyImu, MocapNoiseIsSmoothedBeforeDifferentiation) {
   // Smoothing chosen from each channel's noise level instead of a fixed width.
   BvhMotionOptions by_noise;
   by_noise.smoothing = BvhSmoothing::kNoiseLevel;
-  const double noise_level_peak = largest_acceleration(
-      ideal_imu(SensorKinematics(forearm_imu_trajectory(bvh_motion(noisy, by_noise), rest_joints(), ForearmStrap{}, W_from_R()))));
+  const double noise_level_peak = largest_acceleration(ideal_imu(SensorKinematics(
+      forearm_imu_trajectory(bvh_motion(noisy, by_noise), rest_joints(), ForearmStrap{}, W_from_R()))));
   std::printf("noise-level smoothing spline: peak %.1f m/s^2\n", noise_level_peak);
   EXPECT_LT(noise_level_peak, 1.3 * clean_peak);
 }

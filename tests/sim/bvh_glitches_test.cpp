@@ -72,7 +72,8 @@ void flip_forearm(BvhClip& clip, int a, int b) {
 
 // Frames 30..44 labelled the other way round (rigs::with_arms_swapped).
 BvhClip swapped_arms_clip(const std::vector<rigs::RigJointSpec>& rig) {
-  return smooth_clip(rig, rigs::with_arms_swapped(rig, [&](int f, int j, int c) { return smooth_value(rig, f, j, c); }, 30, 44));
+  return smooth_clip(rig, rigs::with_arms_swapped(
+                              rig, [&](int f, int j, int c) { return smooth_value(rig, f, j, c); }, 30, 44));
 }
 
 }  // namespace
@@ -213,8 +214,9 @@ TEST(BvhGlitches, ArmSwapsAreLookedForOnTheJointMapsArms) {
   for (BvhJoint& joint : swapped.skeleton.joints) joint.name = "j_" + joint.name;
   for (int j = 0; j < posefuse::body::kNumJoints; ++j) {
     const int b = original.bvh_joint[static_cast<std::size_t>(j)];
-    if (b >= 0) map_text += std::string(names[static_cast<std::size_t>(j)]) + " = " +
-                            swapped.skeleton.joints[static_cast<std::size_t>(b)].name + "\n";
+    if (b >= 0)
+      map_text += std::string(names[static_cast<std::size_t>(j)]) + " = " +
+                  swapped.skeleton.joints[static_cast<std::size_t>(b)].name + "\n";
   }
   EXPECT_THROW(repair_bvh_glitches(swapped), Error);
   const BvhRepair repair = repair_bvh_glitches(swapped, {}, parse_bvh_joint_map(map_text, "renamed.map"));

@@ -38,9 +38,9 @@ double wave(int f, int j, int c) {
 std::vector<RigJointSpec> renamed_rig() {
   std::vector<RigJointSpec> rig = rig21();
   const std::vector<std::string> names = {
-      "torso_base", "thigh_l", "calf_l", "foot_l", "ball_l", "thigh_r", "calf_r", "foot_r", "ball_r",
-      "spine_01", "spine_02", "neck_01", "skull", "clavicle_l", "upperarm_l", "lowerarm_l", "hand_l",
-      "clavicle_r", "upperarm_r", "lowerarm_r", "hand_r"};
+      "torso_base", "thigh_l",    "calf_l",   "foot_l",     "ball_l",     "thigh_r",    "calf_r",
+      "foot_r",     "ball_r",     "spine_01", "spine_02",   "neck_01",    "skull",      "clavicle_l",
+      "upperarm_l", "lowerarm_l", "hand_l",   "clavicle_r", "upperarm_r", "lowerarm_r", "hand_r"};
   for (std::size_t j = 0; j < rig.size(); ++j) rig[j].name = names[j];
   return rig;
 }
@@ -137,12 +137,15 @@ TEST(BvhJointMap, ARigWithItsOwnNamesMovesLikeTheOriginalThroughAMapFile) {
 TEST(BvhJointMap, BadFilesAreRefusedNamingTheLine) {
   const std::string text = kRenamedMap;
   EXPECT_EQ(parse_bvh_joint_map(text, "m").entries.size(), 21u);
-  expect_error([&] { parse_bvh_joint_map(with_line(text, 3, "left_hip thigh_l"), "m"); }, "m:3", "expected 'smpl_joint = BvhJointName'");
-  expect_error([&] { parse_bvh_joint_map(with_line(text, 3, "left_hip = thigh l"), "m"); }, "m:3", "one name each side");
+  expect_error([&] { parse_bvh_joint_map(with_line(text, 3, "left_hip thigh_l"), "m"); }, "m:3",
+               "expected 'smpl_joint = BvhJointName'");
+  expect_error([&] { parse_bvh_joint_map(with_line(text, 3, "left_hip = thigh l"), "m"); }, "m:3",
+               "one name each side");
   expect_error([&] { parse_bvh_joint_map(with_line(text, 3, "left_hip ="), "m"); }, "m:3", "one name each side");
   expect_error([&] { parse_bvh_joint_map(with_line(text, 3, "left_thigh = thigh_l"), "m"); }, "m:3",
                "'left_thigh' is not an SMPL joint (known: pelvis, left_hip");
-  expect_error([&] { parse_bvh_joint_map(with_line(text, 3, "left_hand = thigh_l"), "m"); }, "m:3", "follow the wrists");
+  expect_error([&] { parse_bvh_joint_map(with_line(text, 3, "left_hand = thigh_l"), "m"); }, "m:3",
+               "follow the wrists");
   expect_error([&] { parse_bvh_joint_map(with_line(text, 4, "left_hip = thigh_r"), "m"); }, "m:4",
                "'left_hip' is mapped twice (first on line 3)");
   expect_error([&] { parse_bvh_joint_map(with_line(text, 4, "right_hip = THIGH_L"), "m"); }, "m:4",
@@ -157,6 +160,8 @@ TEST(BvhJointMap, BadFilesAreRefusedNamingTheLine) {
   BvhMotionOptions options;
   options.joint_map = parse_bvh_joint_map(with_line(text, 19, "left_elbow = forearm_l"), "m");
   expect_error([&] { bvh_motion(renamed, options); }, "m:19", "'forearm_l' (SMPL joint 'left_elbow') is not a joint");
-  options.joint_map = parse_bvh_joint_map(with_line(with_line(text, 19, "left_elbow = hand_l"), 21, "left_wrist = lowerarm_l"), "m");
-  expect_error([&] { bvh_motion(renamed, options); }, "m:21", "'lowerarm_l' (SMPL joint 'left_wrist') is not below 'hand_l'");
+  options.joint_map =
+      parse_bvh_joint_map(with_line(with_line(text, 19, "left_elbow = hand_l"), 21, "left_wrist = lowerarm_l"), "m");
+  expect_error([&] { bvh_motion(renamed, options); }, "m:21",
+               "'lowerarm_l' (SMPL joint 'left_wrist') is not below 'hand_l'");
 }

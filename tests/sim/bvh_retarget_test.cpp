@@ -46,9 +46,7 @@ std::string random_clip(const std::vector<RigJointSpec>& rig, int frames, unsign
   });
 }
 
-double angle_deg(const Vec3& a, const Vec3& b) {
-  return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / pi;
-}
+double angle_deg(const Vec3& a, const Vec3& b) { return std::atan2(a.cross(b).norm(), a.dot(b)) * 180.0 / pi; }
 
 // Largest angle over every frame and every mapped SMPL bone between the retargeted model's bone
 // and the BVH's (placed in R), at the frame times.
@@ -168,7 +166,7 @@ TEST(BvhRetarget, ForearmRollComesFromTheBvh) {
   EXPECT_LT((before.wrist_R_m - after.wrist_R_m).norm(), 1e-9);
   const Eigen::AngleAxisd turn(before.R_from_F.conjugate() * after.R_from_F);
   EXPECT_NEAR(turn.angle() * 180.0 / pi, roll_deg, 1e-6);
-  EXPECT_NEAR(std::abs(turn.axis().y()), 1.0, 1e-9);  // about F's y: the forearm axis
+  EXPECT_NEAR(std::abs(turn.axis().y()), 1.0, 1e-9);         // about F's y: the forearm axis
   EXPECT_GT((before.imu_R_m - after.imu_R_m).norm(), 0.02);  // the IMU on the strap rolls along
 }
 

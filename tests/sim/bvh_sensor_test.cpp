@@ -59,8 +59,8 @@ TEST(UniformCubicSpline, ContinuesAlongTheEndTangents) {
   const UniformCubicSpline spline(0.0, h, wave);
   const double e = 1e-6;
   for (double end : {spline.t_begin_s(), spline.t_end_s()}) {
-    const double slope_in = end == 0.0 ? (spline.at(e)[0] - spline.at(0.0)[0]) / e
-                                       : (spline.at(end)[0] - spline.at(end - e)[0]) / e;
+    const double slope_in =
+        end == 0.0 ? (spline.at(e)[0] - spline.at(0.0)[0]) / e : (spline.at(end)[0] - spline.at(end - e)[0]) / e;
     const double outside = end == 0.0 ? -0.01 : end + 0.01;
     EXPECT_NEAR(spline.at_extended(outside)[0], spline.at(end)[0] + (outside - end) * slope_in, 1e-6);
     EXPECT_EQ(spline.at_extended(end)[0], spline.at(end)[0]);
@@ -76,7 +76,8 @@ TEST(UniformCubicSpline, ContinuesAlongTheEndTangents) {
   for (int k = 0; k < 20; ++k) EXPECT_NEAR(smooth_line[static_cast<std::size_t>(k)][0], 2.0 - 0.3 * k, 1e-12) << k;
   const auto smooth_step = gaussian_smooth(step, 1.5);
   for (int k = 0; k < 10; ++k) {
-    EXPECT_NEAR(smooth_step[static_cast<std::size_t>(k)][0] + smooth_step[static_cast<std::size_t>(19 - k)][0], 1.0, 1e-12);
+    EXPECT_NEAR(smooth_step[static_cast<std::size_t>(k)][0] + smooth_step[static_cast<std::size_t>(19 - k)][0], 1.0,
+                1e-12);
   }
   EXPECT_EQ(gaussian_smooth(step, 0.0)[3][0], 0.0);
 }

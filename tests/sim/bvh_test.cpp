@@ -29,7 +29,9 @@ std::string chain_text(const std::string& mid_channels, const std::vector<std::s
        "  JOINT Mid\n"
        "  {\n"
        "    OFFSET 0 10 0\n"
-       "    CHANNELS 3 " << mid_channels << "\n"
+       "    CHANNELS 3 "
+    << mid_channels
+    << "\n"
        "    JOINT Tip\n"
        "    {\n"
        "      OFFSET 0 20 0\n"
@@ -42,7 +44,9 @@ std::string chain_text(const std::string& mid_channels, const std::vector<std::s
        "  }\n"
        "}\n"
        "MOTION\n"
-       "Frames: " << frames.size() << "\n"
+       "Frames: "
+    << frames.size()
+    << "\n"
        "Frame Time: 0.5\n";
   for (const auto& f : frames) s << f << "\n";
   return s.str();
@@ -86,8 +90,8 @@ TEST(Bvh, ParsesChainStructure) {
 
 // Hand computation in the file frame M (cm), then W = (x, -z, y) * 0.01.
 TEST(Bvh, ForwardKinematicsMatchesHandComputation) {
-  const BvhClip clip = parse_bvh(chain_text(
-      "Zrotation Yrotation Xrotation", {"1 2 3 0 0 0 0 0 0 0 0 0", "100 0 0 90 0 0 0 0 90 0 0 0"}));
+  const BvhClip clip = parse_bvh(
+      chain_text("Zrotation Yrotation Xrotation", {"1 2 3 0 0 0 0 0 0 0 0 0", "100 0 0 90 0 0 0 0 90 0 0 0"}));
   auto to_W = [](double x, double y, double z) { return Vec3(0.01 * x, -0.01 * z, 0.01 * y); };
 
   const BvhWorldPose rest = forward_kinematics(clip.skeleton, clip.frames[0], 0.01);
@@ -247,9 +251,10 @@ TEST(Bvh, CmuLike31JointRig) {
   const auto& v = values[2];
   auto rad = [&](int k) { return v[static_cast<std::size_t>(joint.first_channel + k)] * pi / 180.0; };
   const Quat expected = Quat(Eigen::AngleAxisd(rad(0), Vec3::UnitZ())) *
-                        Quat(Eigen::AngleAxisd(rad(1), Vec3::UnitX())) *
-                        Quat(Eigen::AngleAxisd(rad(2), Vec3::UnitY()));
-  EXPECT_LT(posefuse::geometry::angle_between(clip.frames[2].parent_from_joint[static_cast<std::size_t>(left_arm)], expected), 1e-9);
+                        Quat(Eigen::AngleAxisd(rad(1), Vec3::UnitX())) * Quat(Eigen::AngleAxisd(rad(2), Vec3::UnitY()));
+  EXPECT_LT(
+      posefuse::geometry::angle_between(clip.frames[2].parent_from_joint[static_cast<std::size_t>(left_arm)], expected),
+      1e-9);
 
   // Bones keep their lengths under any pose; end sites sit at their offset's length.
   for (const BvhLocalPose& frame : clip.frames) {
@@ -266,7 +271,8 @@ TEST(Bvh, CmuLike31JointRig) {
 }
 
 TEST(Bvh, ToleratesCrlfAndBlankLines) {
-  std::string text = chain_text("Zrotation Yrotation Xrotation", {"1 2 3 0 0 0 0 0 0 0 0 0", "", "1 2 3 0 0 0 0 0 0 0 0 0"});
+  std::string text =
+      chain_text("Zrotation Yrotation Xrotation", {"1 2 3 0 0 0 0 0 0 0 0 0", "", "1 2 3 0 0 0 0 0 0 0 0 0"});
   // chain_text counts the blank line as a frame; fix the count and use CRLF endings.
   text.replace(text.find("Frames: 3"), 9, "Frames: 2");
   std::string crlf;
@@ -279,8 +285,8 @@ TEST(Bvh, ToleratesCrlfAndBlankLines) {
 
 TEST(Bvh, ResampleSlerpsRotationsAndInterpolatesPositions) {
   // Two frames 0.5 s apart: root x 0 -> 100, Mid's Z rotation 0 -> 90 degrees.
-  const BvhClip clip = parse_bvh(chain_text(
-      "Zrotation Yrotation Xrotation", {"0 0 0 0 0 0 0 0 0 0 0 0", "100 0 0 0 0 0 90 0 0 0 0 0"}));
+  const BvhClip clip =
+      parse_bvh(chain_text("Zrotation Yrotation Xrotation", {"0 0 0 0 0 0 0 0 0 0 0 0", "100 0 0 0 0 0 90 0 0 0 0 0"}));
   const BvhClip up = resample(clip, 8.0);  // 0, 0.125, ..., 0.5 s
   ASSERT_EQ(up.frame_count(), 5);
   EXPECT_DOUBLE_EQ(up.frame_time_s, 0.125);
@@ -299,8 +305,8 @@ TEST(Bvh, ResampleSlerpsRotationsAndInterpolatesPositions) {
 
 TEST(Bvh, ResampleTakesShortestArc) {
   // 170 -> -170 degrees about z: the short way is through 180, not through 0.
-  const BvhClip clip = parse_bvh(chain_text(
-      "Zrotation Yrotation Xrotation", {"0 0 0 0 0 0 170 0 0 0 0 0", "0 0 0 0 0 0 -170 0 0 0 0 0"}));
+  const BvhClip clip = parse_bvh(
+      chain_text("Zrotation Yrotation Xrotation", {"0 0 0 0 0 0 170 0 0 0 0 0", "0 0 0 0 0 0 -170 0 0 0 0 0"}));
   const BvhClip mid = resample(clip, 4.0);  // 0, 0.25, 0.5 s
   ASSERT_EQ(mid.frame_count(), 3);
   const Quat half_turn(Eigen::AngleAxisd(pi, Vec3::UnitZ()));
@@ -323,28 +329,30 @@ TEST(BvhMalformed, MissingMotion) {
 }
 
 TEST(BvhMalformed, WrongChannelCountOnFrameLine) {
-  expect_rejected(chain_text("Zrotation Yrotation Xrotation",
-                             {"0 0 0 0 0 0 0 0 0 0 0 0", "0 0 0 0 0 0 0 0 0 0 0"}),
+  expect_rejected(chain_text("Zrotation Yrotation Xrotation", {"0 0 0 0 0 0 0 0 0 0 0 0", "0 0 0 0 0 0 0 0 0 0 0"}),
                   kFirstFrameLine + 1, ErrorCode::kInvalidArgument);
-  expect_rejected(chain_text("Zrotation Yrotation Xrotation", {"0 0 0 0 0 0 0 0 0 0 0 0 0"}),
-                  kFirstFrameLine, ErrorCode::kInvalidArgument);
+  expect_rejected(chain_text("Zrotation Yrotation Xrotation", {"0 0 0 0 0 0 0 0 0 0 0 0 0"}), kFirstFrameLine,
+                  ErrorCode::kInvalidArgument);
 }
 
 TEST(BvhMalformed, NonNumericValues) {
-  expect_rejected(chain_text("Zrotation Yrotation Xrotation", {"0 0 0 0 0 abc 0 0 0 0 0 0"}),
-                  kFirstFrameLine, ErrorCode::kInvalidArgument);
-  expect_rejected(chain_text("Zrotation Yrotation Xrotation", {"0 0 0 0 0 1.5x 0 0 0 0 0 0"}),
-                  kFirstFrameLine, ErrorCode::kInvalidArgument);
-  expect_rejected(chain_text("Zrotation Yrotation Xrotation", {"0 0 0 0 0 nan 0 0 0 0 0 0"}),
-                  kFirstFrameLine, ErrorCode::kInvalidArgument);
-  expect_rejected(chain_text("Zrotation Yrotation Xrotation", {"0 0 0 inf 0 0 0 0 0 0 0 0"}),
-                  kFirstFrameLine, ErrorCode::kInvalidArgument);
-  expect_rejected(chain_text("Zrotation Yrotation Xrotation", {"0 0 0 +-5 0 0 0 0 0 0 0 0"}),
-                  kFirstFrameLine, ErrorCode::kInvalidArgument);
-  expect_rejected(chain_text("Zrotation Yrotation Xrotation", {"0 0 0 + 0 0 0 0 0 0 0 0"}),
-                  kFirstFrameLine, ErrorCode::kInvalidArgument);
+  expect_rejected(chain_text("Zrotation Yrotation Xrotation", {"0 0 0 0 0 abc 0 0 0 0 0 0"}), kFirstFrameLine,
+                  ErrorCode::kInvalidArgument);
+  expect_rejected(chain_text("Zrotation Yrotation Xrotation", {"0 0 0 0 0 1.5x 0 0 0 0 0 0"}), kFirstFrameLine,
+                  ErrorCode::kInvalidArgument);
+  expect_rejected(chain_text("Zrotation Yrotation Xrotation", {"0 0 0 0 0 nan 0 0 0 0 0 0"}), kFirstFrameLine,
+                  ErrorCode::kInvalidArgument);
+  expect_rejected(chain_text("Zrotation Yrotation Xrotation", {"0 0 0 inf 0 0 0 0 0 0 0 0"}), kFirstFrameLine,
+                  ErrorCode::kInvalidArgument);
+  expect_rejected(chain_text("Zrotation Yrotation Xrotation", {"0 0 0 +-5 0 0 0 0 0 0 0 0"}), kFirstFrameLine,
+                  ErrorCode::kInvalidArgument);
+  expect_rejected(chain_text("Zrotation Yrotation Xrotation", {"0 0 0 + 0 0 0 0 0 0 0 0"}), kFirstFrameLine,
+                  ErrorCode::kInvalidArgument);
   EXPECT_EQ(parse_bvh(chain_text("Zrotation Yrotation Xrotation", {"+1 0 0 0 0 0 0 0 0 0 0 1e1"}))
-                .frames[0].translation[0].x(), 1.0);
+                .frames[0]
+                .translation[0]
+                .x(),
+            1.0);
   std::string text = chain_text("Zrotation Yrotation Xrotation", {"0 0 0 0 0 0 0 0 0 0 0 0"});
   text.replace(text.find("OFFSET 0 10 0"), 13, "OFFSET 0 ten 0");
   expect_rejected(text, 8, ErrorCode::kInvalidArgument);
@@ -362,7 +370,7 @@ TEST(BvhMalformed, UnknownOrBadChannels) {
 
 TEST(BvhMalformed, UnbalancedBraces) {
   std::string missing = chain_text("Zrotation Yrotation Xrotation", {"0 0 0 0 0 0 0 0 0 0 0 0"});
-  missing.erase(missing.rfind("}\nMOTION"), 2);  // drop the root's closing brace (line 20)
+  missing.erase(missing.rfind("}\nMOTION"), 2);               // drop the root's closing brace (line 20)
   expect_rejected(missing, 20, ErrorCode::kInvalidArgument);  // MOTION moves up to line 20
   std::string extra = chain_text("Zrotation Yrotation Xrotation", {"0 0 0 0 0 0 0 0 0 0 0 0"});
   extra.insert(extra.find("MOTION"), "}\n");
@@ -379,7 +387,8 @@ TEST(BvhMalformed, FrameTimeNotPositive) {
 
 TEST(BvhMalformed, Truncated) {
   // Frames says 3, two lines follow: the error names the file's last line.
-  std::string text = chain_text("Zrotation Yrotation Xrotation", {"0 0 0 0 0 0 0 0 0 0 0 0", "0 0 0 0 0 0 0 0 0 0 0 0"});
+  std::string text =
+      chain_text("Zrotation Yrotation Xrotation", {"0 0 0 0 0 0 0 0 0 0 0 0", "0 0 0 0 0 0 0 0 0 0 0 0"});
   text.replace(text.find("Frames: 2"), 9, "Frames: 3");
   expect_rejected(text, kFirstFrameLine + 2, ErrorCode::kDataLoss);  // the empty line after the last "\n"
   // Cut inside the hierarchy.
@@ -392,7 +401,8 @@ TEST(BvhMalformed, Truncated) {
 }
 
 TEST(BvhMalformed, ExtraFrameLines) {
-  std::string text = chain_text("Zrotation Yrotation Xrotation", {"0 0 0 0 0 0 0 0 0 0 0 0", "0 0 0 0 0 0 0 0 0 0 0 0"});
+  std::string text =
+      chain_text("Zrotation Yrotation Xrotation", {"0 0 0 0 0 0 0 0 0 0 0 0", "0 0 0 0 0 0 0 0 0 0 0 0"});
   text.replace(text.find("Frames: 2"), 9, "Frames: 1");
   expect_rejected(text, kFirstFrameLine + 1, ErrorCode::kInvalidArgument);
 }
@@ -409,8 +419,8 @@ TEST(BvhMalformed, MissingFile) {
 // Every prefix of a valid file, and the file with any one byte replaced, either parses or is
 // rejected with posefuse::Error: never a crash, a hang or another exception type.
 TEST(BvhMalformed, EveryPrefixAndByteFlipRejectedCleanly) {
-  const std::string full = chain_text("Zrotation Yrotation Xrotation",
-                                      {"1 2 3 10 20 30 1 2 3 4 5 6", "1 2 3 10 20 30 1 2 3 4 5 6"});
+  const std::string full =
+      chain_text("Zrotation Yrotation Xrotation", {"1 2 3 10 20 30 1 2 3 4 5 6", "1 2 3 10 20 30 1 2 3 4 5 6"});
   int parsed = 0;
   for (std::size_t n = 0; n < full.size(); ++n) {
     try {

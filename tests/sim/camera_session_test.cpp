@@ -81,7 +81,9 @@ TEST(CameraSession, ArmRaisingChunksValidate) {
       EXPECT_TRUE(near_person) << col << ", " << row;
     }
   }
-  std::printf("frame 0: %d body pixels (%d at the person's depth), %d wall pixels, %d other (floor) pixels in the lower half\n", body, body_near, wall, floor);
+  std::printf(
+      "frame 0: %d body pixels (%d at the person's depth), %d wall pixels, %d other (floor) pixels in the lower half\n",
+      body, body_near, wall, floor);
   // At this resolution the 1 px edge shift adds a large share of the thin limbs' pixels, so
   // only the structure above is checked, not a ratio.
   EXPECT_GT(body_near, 300);

@@ -139,8 +139,8 @@ TEST(CameraSkeleton, UpperLimbErrorWithinConfiguredBand) {
   }
   std::printf("mean joint error: upper limb %.1f mm (band %.0f-%.0f), others %.1f mm (band %.0f-%.0f)\n",
               1000 * upper_sum / upper_count, 1000 * options.upper_limb_bias_min_m,
-              1000 * options.upper_limb_bias_max_m, 1000 * other_sum / other_count,
-              1000 * options.other_bias_min_m, 1000 * options.other_bias_max_m);
+              1000 * options.upper_limb_bias_max_m, 1000 * other_sum / other_count, 1000 * options.other_bias_min_m,
+              1000 * options.other_bias_max_m);
 }
 
 TEST(CameraSkeleton, OccludedJointsAreInferredWithLargerError) {
@@ -148,7 +148,8 @@ TEST(CameraSkeleton, OccludedJointsAreInferredWithLargerError) {
   // A board 1.5 m from the camera covers the right part of the image (the subject's left side).
   const raycast::DepthCamera camera = small_camera();
   for (int row = 0; row < camera.height(); ++row) {
-    for (int col = 68; col < camera.width(); ++col) scene.depth_mm[static_cast<std::size_t>(row) * camera.width() + col] = 1500;
+    for (int col = 68; col < camera.width(); ++col)
+      scene.depth_mm[static_cast<std::size_t>(row) * camera.width() + col] = 1500;
   }
   const Eigen::Matrix3Xd truth = camera_joints_from_smpl(scene.joints);
   const CameraSkeletonSimulator sim(camera, CameraSkeletonOptions{}, 5);
@@ -166,20 +167,22 @@ TEST(CameraSkeleton, OccludedJointsAreInferredWithLargerError) {
       (inferred ? inferred_count : tracked_count) += 1;
     }
   }
-  for (int j : {kShoulderLeft, kElbowLeft, kWristLeft, kHandLeft, kHandTipLeft}) EXPECT_EQ(inferred_frames[j], 300) << j;
+  for (int j : {kShoulderLeft, kElbowLeft, kWristLeft, kHandLeft, kHandTipLeft})
+    EXPECT_EQ(inferred_frames[j], 300) << j;
   for (int j : {kShoulderRight, kElbowRight, kWristRight, kHandRight, kHandTipRight, kHead}) {
     EXPECT_EQ(inferred_frames[j], 0) << j;
   }
   ASSERT_GT(inferred_count, 0);
   ASSERT_GT(tracked_count, 0);
-  std::printf("upper-limb mean error: inferred %.1f mm, tracked %.1f mm\n",
-              1000 * inferred_error / inferred_count, 1000 * tracked_error / tracked_count);
+  std::printf("upper-limb mean error: inferred %.1f mm, tracked %.1f mm\n", 1000 * inferred_error / inferred_count,
+              1000 * tracked_error / tracked_count);
   EXPECT_GT(inferred_error / inferred_count, tracked_error / tracked_count + 0.02);
 
   // An inferred shoulder is lowered.
   CameraSkeletonOptions drop_only = error_free();
   drop_only.inferred_shoulder_drop_m = 0.05;
-  const v1::SkeletonFrame f = CameraSkeletonSimulator(camera, drop_only, 5).simulate(scene.joints, scene.depth_mm, 0, 0, 0);
+  const v1::SkeletonFrame f =
+      CameraSkeletonSimulator(camera, drop_only, 5).simulate(scene.joints, scene.depth_mm, 0, 0, 0);
   EXPECT_NEAR(position(f, kShoulderLeft).y(), truth(1, kShoulderLeft) - 0.05, 1e-9);
   EXPECT_NEAR(position(f, kShoulderRight).y(), truth(1, kShoulderRight), 1e-9);
 }
@@ -189,8 +192,8 @@ TEST(CameraSkeleton, FarArmOfSideViewIsInferred) {
   const PosedScene scene = posed_scene(0.0, 90.0);
   const Eigen::Matrix3Xd truth = camera_joints_from_smpl(scene.joints);
   ASSERT_GT(truth(2, kElbowLeft), truth(2, kElbowRight) + 0.3);
-  const v1::SkeletonFrame f = CameraSkeletonSimulator(small_camera(), error_free(), 2)
-                                  .simulate(scene.joints, scene.depth_mm, 0, 0, 0);
+  const v1::SkeletonFrame f =
+      CameraSkeletonSimulator(small_camera(), error_free(), 2).simulate(scene.joints, scene.depth_mm, 0, 0, 0);
   for (int j : {kElbowLeft, kWristLeft, kHandLeft}) EXPECT_EQ(f.joints(j).state(), v1::SkeletonJoint::INFERRED) << j;
   for (int j : {kShoulderRight, kElbowRight, kWristRight, kHandRight, kHead}) {
     EXPECT_EQ(f.joints(j).state(), v1::SkeletonJoint::TRACKED) << j;
@@ -255,11 +258,9 @@ TEST(CameraSkeleton, SpineStaysStraightWhenBent) {
   const PosedScene scene = posed_scene(15.0);
   const Eigen::Matrix3Xd truth = camera_joints_from_smpl(scene.joints);
   const Eigen::Vector3d base = truth.col(kSpineBase), top = truth.col(kSpineShoulder);
-  auto off_line_m = [&](const Eigen::Vector3d& p) {
-    return (p - base).cross((top - base).normalized()).norm();
-  };
-  const v1::SkeletonFrame f = CameraSkeletonSimulator(small_camera(), error_free(), 3)
-                                  .simulate(scene.joints, scene.depth_mm, 0, 0, 0);
+  auto off_line_m = [&](const Eigen::Vector3d& p) { return (p - base).cross((top - base).normalized()).norm(); };
+  const v1::SkeletonFrame f =
+      CameraSkeletonSimulator(small_camera(), error_free(), 3).simulate(scene.joints, scene.depth_mm, 0, 0, 0);
   std::printf("bent spine: SMPL spine2 %.1f mm off the base-shoulder line, reported SpineMid %.3f mm\n",
               1000 * off_line_m(truth.col(kSpineMid)), 1000 * off_line_m(position(f, kSpineMid)));
   EXPECT_GT(off_line_m(truth.col(kSpineMid)), 0.01);
@@ -268,7 +269,8 @@ TEST(CameraSkeleton, SpineStaysStraightWhenBent) {
 
 TEST(CameraSkeleton, DeterministicForSeedAndFrame) {
   const PosedScene scene = posed_scene();
-  const CameraSkeletonSimulator a(small_camera(), CameraSkeletonOptions{}, 8), b(small_camera(), CameraSkeletonOptions{}, 8);
+  const CameraSkeletonSimulator a(small_camera(), CameraSkeletonOptions{}, 8),
+      b(small_camera(), CameraSkeletonOptions{}, 8);
   const CameraSkeletonSimulator c(small_camera(), CameraSkeletonOptions{}, 9);
   const std::string fa = a.simulate(scene.joints, scene.depth_mm, 5, 5 * kFrameUs, 0).SerializeAsString();
   EXPECT_EQ(fa, b.simulate(scene.joints, scene.depth_mm, 5, 5 * kFrameUs, 0).SerializeAsString());

@@ -42,8 +42,8 @@ double detect_stop_s(const std::vector<double>& x, double rate, double t_begin_s
 
 TEST(DeviceClock, RoundTripAndDrift) {
   const DeviceClock clock{123.456789, 47e-6};
-  for (std::int64_t device_us : {std::int64_t{0}, std::int64_t{123456789}, std::int64_t{130000001},
-                                 std::int64_t{-5}, std::int64_t{987654321012}}) {
+  for (std::int64_t device_us : {std::int64_t{0}, std::int64_t{123456789}, std::int64_t{130000001}, std::int64_t{-5},
+                                 std::int64_t{987654321012}}) {
     EXPECT_EQ(clock.to_device_us(clock.to_camera_s(device_us)), device_us);
   }
   for (double t = -3.0; t < 4000.0; t += 97.3) {
@@ -202,9 +202,11 @@ TEST(BleBroadcast, SeedsAndBadOptions) {
   const auto b = ble_broadcast_receipts(devices, options, 1);
   const auto c = ble_broadcast_receipts(devices, options, 2);
   ASSERT_EQ(a.events.size(), b.events.size());
-  for (std::size_t k = 0; k < a.events.size(); ++k) EXPECT_EQ(a.events[k].SerializeAsString(), b.events[k].SerializeAsString());
+  for (std::size_t k = 0; k < a.events.size(); ++k)
+    EXPECT_EQ(a.events[k].SerializeAsString(), b.events[k].SerializeAsString());
   bool same = a.events.size() == c.events.size();
-  for (std::size_t k = 0; same && k < a.events.size(); ++k) same = a.events[k].SerializeAsString() == c.events[k].SerializeAsString();
+  for (std::size_t k = 0; same && k < a.events.size(); ++k)
+    same = a.events[k].SerializeAsString() == c.events[k].SerializeAsString();
   EXPECT_FALSE(same);
   options.receive_probability = 0;
   EXPECT_THROW(ble_broadcast_receipts(devices, options, 1), Error);

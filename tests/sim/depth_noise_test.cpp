@@ -91,8 +91,8 @@ TEST(DepthNoise, GrazingFloorPixelsAreDropped) {
       }
     }
   }
-  std::printf("floor: %d grazing pixels (%d kept), %d steeper pixels (%d dropped)\n", grazing,
-              grazing_kept, steep, steep_dropped);
+  std::printf("floor: %d grazing pixels (%d kept), %d steeper pixels (%d dropped)\n", grazing, grazing_kept, steep,
+              steep_dropped);
   ASSERT_GT(grazing, 100);
   ASSERT_GT(steep, 100);
   EXPECT_EQ(grazing_kept, 0);
@@ -109,7 +109,8 @@ TEST(DepthNoise, IncidenceOfTiltedPlaneFromGradients) {
     for (int col = 2; col < camera.width() - 2; ++col) {
       const Eigen::Vector3d ray = camera.pixel_ray(col, row).cast<double>().normalized();
       const double truth_deg = std::acos(std::abs(ray.dot(normal))) * 180.0 / pi;
-      worst_deg = std::max(worst_deg, std::abs(truth_deg - incidence[static_cast<std::size_t>(row) * camera.width() + col]));
+      worst_deg =
+          std::max(worst_deg, std::abs(truth_deg - incidence[static_cast<std::size_t>(row) * camera.width() + col]));
     }
   }
   std::printf("tilted plane: worst incidence error %.2f deg\n", worst_deg);
@@ -153,8 +154,8 @@ TEST(DepthNoise, FlyingPixelsAlongDepthEdges) {
     for (int col = 0; col < camera.width(); ++col) {
       const std::size_t i = static_cast<std::size_t>(row) * camera.width() + col;
       const double z = noisy.depth_mm[i] * 1e-3;
-      const bool off_surfaces = std::abs(z - 1.5) > 6 * axial_sigma_m(options, 1.5) &&
-                                std::abs(z - 3.0) > 6 * axial_sigma_m(options, 3.0);
+      const bool off_surfaces =
+          std::abs(z - 1.5) > 6 * axial_sigma_m(options, 1.5) && std::abs(z - 3.0) > 6 * axial_sigma_m(options, 3.0);
       if (!off_surfaces) continue;
       ++flying;
       EXPECT_TRUE(col == edge_col - 1 || col == edge_col) << "col " << col;

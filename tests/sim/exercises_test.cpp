@@ -187,7 +187,8 @@ TEST(Exercises, OtherExercisesMoveTheRightParts) {
   EXPECT_NEAR(joint(lifted, body::kLeftShoulder).y(), joint(rest, body::kLeftShoulder).y(), 1e-12);
   // Arm raising: the hand well above the head at the top.
   const BodyMotion raise = make_exercise("arm_raising");
-  EXPECT_GT(joint(pose_at(raise, middle(phase(raise, "raised"))), body::kRightWrist).y(), joint(rest, body::kHead).y() + 0.2);
+  EXPECT_GT(joint(pose_at(raise, middle(phase(raise, "raised"))), body::kRightWrist).y(),
+            joint(rest, body::kHead).y() + 0.2);
   // Torso tilt: the neck moves towards the side of the tilt, the pelvis stays.
   const BodyMotion tilt = make_exercise("torso_tilt");
   const SkeletonPose right = pose_at(tilt, middle(phase(tilt, "tilt_right")));

@@ -3,10 +3,10 @@
 // steps of a fast turn without a per-step limit.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
 #include <limits>
 #include <numbers>
 

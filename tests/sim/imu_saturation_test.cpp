@@ -22,9 +22,9 @@ namespace {
 // while the origin circles at 30 rad/s on 0.2 m (180 m/s^2, 18.4 g, centripetal).
 SensorKinematics fast_motion() {
   const Vec3 axis(0.6, 0.0, 0.8);
-  return SensorKinematics(rigs::sample_trajectory(
-      [](double t) { return Vec3(0.2 * std::cos(30 * t), 0.2 * std::sin(30 * t), 0); },
-      [&](double t) { return Quat(Eigen::AngleAxisd(50.0 * t, axis)); }, 0.0, 1.0));
+  return SensorKinematics(
+      rigs::sample_trajectory([](double t) { return Vec3(0.2 * std::cos(30 * t), 0.2 * std::sin(30 * t), 0); },
+                              [&](double t) { return Quat(Eigen::AngleAxisd(50.0 * t, axis)); }, 0.0, 1.0));
 }
 
 }  // namespace

@@ -58,8 +58,8 @@ TEST(ImuSynth, NoisyGyroIntegratesWithinAngleRandomWalk) {
   for (int seed = 1; seed <= kRuns; ++seed) {
     o.seed = static_cast<std::uint64_t>(seed);
     const ImuSynthResult r = synthesize_imu(motion, t, o);
-    const double error = angle_between(integrate_gyro(r.samples, complex_orientation(t.front())),
-                                       complex_orientation(t.back()));
+    const double error =
+        angle_between(integrate_gyro(r.samples, complex_orientation(t.front())), complex_orientation(t.back()));
     EXPECT_LT(error, 5.0 * sigma) << "seed " << seed;  // P(chi_3 > 5) ~ 1.5e-5
     sum_sq += error * error;
   }
@@ -89,9 +89,9 @@ TEST(ImuSynth, SpecificForceAtRestReadsGravityUp) {
 TEST(ImuSynth, SpecificForceOnCircleIncludesCentripetalAcceleration) {
   // Sensor on a 0.5 m circle at 2 rad/s, facing along the radius (A's x outwards).
   const double w = 2.0, radius = 0.5;
-  const SensorKinematics motion(sample_trajectory(
-      [&](double t) { return Vec3(radius * std::cos(w * t), radius * std::sin(w * t), 0); },
-      [&](double t) { return rot(w * t, Vec3::UnitZ()); }, 0, 3));
+  const SensorKinematics motion(
+      sample_trajectory([&](double t) { return Vec3(radius * std::cos(w * t), radius * std::sin(w * t), 0); },
+                        [&](double t) { return rot(w * t, Vec3::UnitZ()); }, 0, 3));
   const ImuSynthResult r = synthesize_imu(motion, uniform_times(0.1, 2.9, 80), ideal_options());
   for (const auto& s : r.samples) {
     EXPECT_LT((s.acc_m_s2 - Vec3(-w * w * radius, 0, 9.81)).norm(), 2e-5);

@@ -13,8 +13,7 @@ TEST(MagPrecalibration, UndoesHardAndSoftIron) {
   const sim::EarthField field;
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     const sim::ImuErrors errors = sim::draw_imu_errors(model, seed);
-    const imu::MagCalibration c =
-        sim::simulate_mag_precalibration(errors, field, model.mag_noise_uT, seed, "test");
+    const imu::MagCalibration c = sim::simulate_mag_precalibration(errors, field, model.mag_noise_uT, seed, "test");
     EXPECT_LT((c.center_uT - errors.hard_iron_uT).norm(), 0.1) << seed;
     // A calibrated reading points where the field does, in any orientation (the heading the
     // filter takes from it); measured 0.037-0.045 deg (seeds 1-3).

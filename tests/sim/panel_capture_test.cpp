@@ -36,10 +36,9 @@ PanelCaptureRig rig(std::uint64_t seed) {
 // heading built from g x m turns with that tilt by up to 1 / cos(dip) of it (the field dips
 // 64 degrees); magnetometer noise averaged over the hold adds sigma / sqrt(n) / H.
 double imu_bound_rad(const ImuErrors& e, const ImuSynthOptions& imu, std::size_t samples) {
-  const double tilt = e.acc_bias_m_s2.norm() / imu.gravity_m_s2 +
-                      (e.acc_scale_misalignment - Mat3::Identity()).norm();
-  const double field = 3.0 * imu.error_model.mag_noise_uT / std::sqrt(static_cast<double>(samples)) /
-                       imu.earth_field.horizontal_uT;
+  const double tilt = e.acc_bias_m_s2.norm() / imu.gravity_m_s2 + (e.acc_scale_misalignment - Mat3::Identity()).norm();
+  const double field =
+      3.0 * imu.error_model.mag_noise_uT / std::sqrt(static_cast<double>(samples)) / imu.earth_field.horizontal_uT;
   return tilt / std::cos(imu.earth_field.dip_rad) + field;
 }
 
@@ -57,15 +56,16 @@ TEST(PanelCapture, CalibrationRecoversKFromEAndKFromBWithinTheInjectedNoise) {
     // K_from_B per eq. 8 inherits the panel IMU's and the base IMU's orientation errors, the
     // panel IMU's visual misalignment on the panel (truth) and the camera's K_from_P error.
     const double camera_bound_deg = 0.5;
-    const double b_bound_deg = (imu_bound_rad(sim.truth.panel_imu_errors, r.imu, n) +
-                                imu_bound_rad(sim.truth.base_imu_errors, r.imu, n) +
-                                geometry::angle_between(sim.truth.P_from_panel_imu, Quat::Identity())) /
-                                   kDeg +
-                               camera_bound_deg;
-    std::printf("seed %llu: K_from_E %.3f deg, E origin %.2f mm, markers %.2f px; K_from_B %.3f deg (bound %.2f, "
-                "spread %.3f deg), K_from_W %.3f deg\n",
-                static_cast<unsigned long long>(seed), e_deg, origin_mm, result.mocap.marker_residual_px, b_deg,
-                b_bound_deg, result.base.spread_rad / kDeg, w_deg);
+    const double b_bound_deg =
+        (imu_bound_rad(sim.truth.panel_imu_errors, r.imu, n) + imu_bound_rad(sim.truth.base_imu_errors, r.imu, n) +
+         geometry::angle_between(sim.truth.P_from_panel_imu, Quat::Identity())) /
+            kDeg +
+        camera_bound_deg;
+    std::printf(
+        "seed %llu: K_from_E %.3f deg, E origin %.2f mm, markers %.2f px; K_from_B %.3f deg (bound %.2f, "
+        "spread %.3f deg), K_from_W %.3f deg\n",
+        static_cast<unsigned long long>(seed), e_deg, origin_mm, result.mocap.marker_residual_px, b_deg, b_bound_deg,
+        result.base.spread_rad / kDeg, w_deg);
     for (std::size_t i = 0; i < result.poses.size(); ++i) {
       const calib::PanelInCamera& seen = result.poses[i].seen;
       std::printf("  pose %zu: K_from_P %.3f deg, origin %.2f mm, board RMS %.2f mm, markers %.2f px\n", i,
@@ -142,7 +142,8 @@ TEST(PanelCapture, RefusesAPanelOutOfViewAndTooFewOrTooSimilarPoses) {
     options.poses_K[i].origin_X += Vec3(0.03 * static_cast<double>(i), 0.0, 0.0);
   }
   const PanelCaptureResult same = simulate_panel_capture(options, r);
-  expect_error([&] { calib::calibrate_capture(same.capture); }, ErrorCode::kFailedPrecondition, "poses", "turned at most");
+  expect_error([&] { calib::calibrate_capture(same.capture); }, ErrorCode::kFailedPrecondition, "poses",
+               "turned at most");
   options.poses_K.clear();
   options.poses = 0;
   expect_error([&] { simulate_panel_capture(options, r); }, ErrorCode::kInvalidArgument, "panel_capture.poses");

@@ -30,7 +30,8 @@ TEST(RenderModel, SubdivisionQuadruplesFacesAndKeepsTheSurface) {
   body::BodyEvaluator coarse_eval(fitted, layout), fine_eval(std::make_shared<body::SmplModel>(fine), layout);
   coarse_eval.evaluate(betas, theta, body::Derivatives::kNone);
   fine_eval.evaluate(betas, theta, body::Derivatives::kNone);
-  EXPECT_LT((fine_eval.vertices().leftCols(fitted->num_vertices()) - coarse_eval.vertices()).cwiseAbs().maxCoeff(), 1e-12);
+  EXPECT_LT((fine_eval.vertices().leftCols(fitted->num_vertices()) - coarse_eval.vertices()).cwiseAbs().maxCoeff(),
+            1e-12);
   EXPECT_LT((fine_eval.joints() - coarse_eval.joints()).cwiseAbs().maxCoeff(), 1e-12);
 }
 
@@ -58,13 +59,13 @@ TEST(RenderModel, ClothingOffsetsAreBoundedSmoothAndKeepTheJoints) {
       ++forearm;
     }
   }
-  std::printf("offsets: largest %.4f m, mean shirt %.4f m (%d), mean forearm %.4f m (%d)\n", largest,
-              torso_sum / torso, torso, forearm_sum / forearm, forearm);
+  std::printf("offsets: largest %.4f m, mean shirt %.4f m (%d), mean forearm %.4f m (%d)\n", largest, torso_sum / torso,
+              torso, forearm_sum / forearm, forearm);
   EXPECT_LE(largest, options.torso_offset_m + 1e-12);
   ASSERT_GT(torso, 50);
   ASSERT_GT(forearm, 20);
-  EXPECT_GT(torso_sum / torso, 0.005);        // clothing: several mm on average
-  EXPECT_LT(forearm_sum / forearm, 0.004);    // forearms: soft tissue only
+  EXPECT_GT(torso_sum / torso, 0.005);      // clothing: several mm on average
+  EXPECT_LT(forearm_sum / forearm, 0.004);  // forearms: soft tissue only
   EXPECT_GT(torso_sum / torso, 2 * forearm_sum / forearm);
 
   // Same joints as the fitted template in any pose (the regressor reads the ghosts).

@@ -49,9 +49,9 @@ TEST(ArmPose, CalibrationPoseMatchesPaper) {
   const Vec3 left(-std::sin(0.7), std::cos(0.7), 0);
   const ArmPose p = arm_pose(g, calibration_pose_angles());
   expect_near(p.elbow_p_W_m, g.shoulder_p_W_m - 0.30 * left, 1e-12);
-  expect_near(p.W_from_F * Vec3::UnitY(), Vec3::UnitZ(), 1e-12);  // forearm up
-  expect_near(p.W_from_F * Vec3::UnitX(), -forward, 1e-12);       // back of the hand away from the camera
-  expect_near(p.W_from_F * Vec3::UnitZ(), left, 1e-12);           // thumb towards the head
+  expect_near(p.W_from_F * Vec3::UnitY(), Vec3::UnitZ(), 1e-12);          // forearm up
+  expect_near(p.W_from_F * Vec3::UnitX(), -forward, 1e-12);               // back of the hand away from the camera
+  expect_near(p.W_from_F * Vec3::UnitZ(), left, 1e-12);                   // thumb towards the head
   EXPECT_NEAR((p.strap_p_W_m - p.elbow_p_W_m).dot(forward), 0.0, 1e-12);  // coronal plane
 }
 
@@ -87,7 +87,7 @@ TEST(ScriptedMotion, ForearmRollingRotatesAboutTheForearmOnly) {
     EXPECT_NEAR(angle_between(p.W_from_F, start.W_from_F), std::abs(a.supination_rad), 1e-7);
   }
   EXPECT_NEAR(peak, o.amplitude_rad, 1e-3);
-  EXPECT_EQ(m.angles(0.5).supination_rad, 0.0);              // hold
+  EXPECT_EQ(m.angles(0.5).supination_rad, 0.0);  // hold
   EXPECT_EQ(m.angles(m.duration_s - 0.5).supination_rad, 0.0);
 
   // The IMU pipeline on it: the synthesized gyro integrates back to the truth, and it turns

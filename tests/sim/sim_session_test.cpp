@@ -48,8 +48,8 @@ TEST(SimSession, ImuAudioAndSyncChunksValidate) {
   const ScriptedMotion motion = forearm_rolling(rolling);  // 10 s
   const SensorKinematics arm_motion(imu_trajectory(ArmGeometry(), motion));
   const Quat camera_mount = rot(0.2, Vec3::UnitZ());
-  const SensorKinematics base_motion(sample_trajectory([](double) { return Vec3(2.5, 0, 0.8); },
-                                                       [&](double) { return camera_mount; }, -0.1, 10.1));
+  const SensorKinematics base_motion(
+      sample_trajectory([](double) { return Vec3(2.5, 0, 0.8); }, [&](double) { return camera_mount; }, -0.1, 10.1));
 
   ImuDeviceOptions options;
   options.packet_loss.loss_rate = 0.02;
@@ -60,8 +60,9 @@ TEST(SimSession, ImuAudioAndSyncChunksValidate) {
 
   // Device timestamps tick every 12.5 ms on the device's own clock; truth maps through it.
   EXPECT_NEAR(static_cast<double>(arm_imu.ticks.t_device_us.size()), 800.0, 1.0);
-  EXPECT_EQ(arm_imu.received.size() + static_cast<std::size_t>(std::count(arm_imu.lost.begin(), arm_imu.lost.end(), true)),
-            arm_imu.ticks.t_device_us.size());
+  EXPECT_EQ(
+      arm_imu.received.size() + static_cast<std::size_t>(std::count(arm_imu.lost.begin(), arm_imu.lost.end(), true)),
+      arm_imu.ticks.t_device_us.size());
   EXPECT_LT(arm_imu.received.size(), arm_imu.ticks.t_device_us.size());  // some were lost
   for (const auto& s : arm_imu.received) {
     EXPECT_EQ(s.t_us % 12500, 0);

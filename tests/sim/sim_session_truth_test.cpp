@@ -3,10 +3,10 @@
 // documented, and the strap slip stays within its bounds.
 #include <gtest/gtest.h>
 
+#include <unistd.h>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
-#include <unistd.h>
 
 #include "body/smpl_model.hpp"
 #include "sim/bvh.hpp"
@@ -127,9 +127,10 @@ TEST(SimSessionTruth, EveryExerciseGivesAValidSessionWithTheImuOnTheRenderedFore
         pronation_max = std::max(pronation_max, frame.pronation_rad[a]);
       }
     }
-    std::printf("%-26s IMU vs strap %.4f mm %.5f deg, strap vs joints %.4f mm, IMU moved %.0f mm, pronation %.1f..%.1f deg\n",
-                name.c_str(), worst_mm, worst_deg, worst_axis_mm, largest_motion_mm, pronation_min * 180 / 3.14159265358979,
-                pronation_max * 180 / 3.14159265358979);
+    std::printf(
+        "%-26s IMU vs strap %.4f mm %.5f deg, strap vs joints %.4f mm, IMU moved %.0f mm, pronation %.1f..%.1f deg\n",
+        name.c_str(), worst_mm, worst_deg, worst_axis_mm, largest_motion_mm, pronation_min * 180 / 3.14159265358979,
+        pronation_max * 180 / 3.14159265358979);
     EXPECT_LT(worst_mm, 1.0) << name;
     EXPECT_LT(worst_deg, 0.05) << name;
     EXPECT_LT(worst_axis_mm, 1e-6) << name;

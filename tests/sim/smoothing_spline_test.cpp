@@ -26,7 +26,8 @@ Vec3 position(double t) {
 }
 Vec3 acceleration(double t) {
   const double w1 = 2 * pi * 0.5, w2 = 2 * pi * 0.8, w3 = 2 * pi * 1.1;
-  return {-0.3 * w1 * w1 * std::sin(w1 * t), -0.2 * w2 * w2 * std::sin(w2 * t + 1.0), -0.1 * w3 * w3 * std::cos(w3 * t)};
+  return {-0.3 * w1 * w1 * std::sin(w1 * t), -0.2 * w2 * w2 * std::sin(w2 * t + 1.0),
+          -0.1 * w3 * w3 * std::cos(w3 * t)};
 }
 
 std::vector<Eigen::VectorXd> mocap_samples(int n, double sigma_m, unsigned seed) {
@@ -105,7 +106,7 @@ TEST(SmoothingSpline, ChosenSmoothingLeavesTheNoiseAsResidual) {
   std::printf("noise %.5f, residual %.5f, error to the truth %.5f m, lambda %.3g\n", s.noise_sigma, residual_rms,
               error_rms, s.lambda);
   EXPECT_NEAR(residual_rms, s.noise_sigma, 1e-3 * s.noise_sigma);  // Reinsch's criterion, bisected
-  EXPECT_LT(error_rms, s.noise_sigma);  // closer to the motion than the samples are
+  EXPECT_LT(error_rms, s.noise_sigma);                             // closer to the motion than the samples are
 }
 
 // The specific force's motion part: the analytic acceleration vs what the simulator's chain
@@ -116,13 +117,15 @@ TEST(SmoothingSpline, AccelerationOfAnAnalyticMotionFromJitteredMocap) {
   const double gaussian = acceleration_rms_error(gaussian_smooth(noisy, 0.03 / kH));
   const double spline = acceleration_rms_error(smooth_by_noise_level(noisy, kH));
   const double clean = acceleration_rms_error(mocap_samples(1200, 0.0, 11));
-  std::printf("rms |a| error, m/s^2: clean samples %.4f, jittered unsmoothed %.3f, Gaussian 0.03 s %.3f, "
-              "noise-chosen spline %.3f\n", clean, raw, gaussian, spline);
+  std::printf(
+      "rms |a| error, m/s^2: clean samples %.4f, jittered unsmoothed %.3f, Gaussian 0.03 s %.3f, "
+      "noise-chosen spline %.3f\n",
+      clean, raw, gaussian, spline);
   // The chain itself: a cubic spline's second derivative is off by at most 3/8 h^2 |p^(4)|
   // (Hall and Meyer 1976), |p^(4)| <= 0.3 w1^4 + 0.2 w2^4 + 0.1 w3^4 = 385 m/s^4: 0.040 m/s^2.
   const double w1 = 2 * pi * 0.5, w2 = 2 * pi * 0.8, w3 = 2 * pi * 1.1;
   EXPECT_LT(clean, 3.0 / 8.0 * kH * kH * (0.3 * std::pow(w1, 4) + 0.2 * std::pow(w2, 4) + 0.1 * std::pow(w3, 4)));
-  EXPECT_GT(raw, 10.0);    // 1 mm of jitter twice differentiated at 60 Hz
+  EXPECT_GT(raw, 10.0);  // 1 mm of jitter twice differentiated at 60 Hz
   EXPECT_LT(spline, gaussian);
 }
 

@@ -112,7 +112,7 @@ TEST(SoftTissue, MeshMovesOnlyWhereFleshIsLooseAndNeverBeyondTheBound) {
   }
   EXPECT_LE(largest_move, max_m + 1e-12);
   EXPECT_GT(upper_arm, 0.95 * max_m);  // loosest (weights blend a little even at the core)
-  EXPECT_LT(hand, 0.5 * max_m);  // only blended in at the wrist and neck borders
+  EXPECT_LT(hand, 0.5 * max_m);        // only blended in at the wrist and neck borders
   for (int v = render.surface_vertices; v < moved.cols(); ++v) EXPECT_EQ(moved.col(v), rest.col(v));  // ghosts
 }
 

@@ -1,7 +1,7 @@
 #pragma once
 // Analytic sensor motions for the simulator tests, sampled onto a dense grid.
-#include <cmath>
 #include <algorithm>
+#include <cmath>
 #include <functional>
 #include <numbers>
 #include <vector>
@@ -26,14 +26,12 @@ inline Quat complex_orientation(double t) {
 }
 
 inline Vec3 complex_position(double t) {
-  return {0.3 * std::sin(2 * pi * 0.5 * t), 0.2 * std::cos(2 * pi * 0.8 * t),
-          1.2 + 0.1 * std::sin(2 * pi * 1.1 * t)};
+  return {0.3 * std::sin(2 * pi * 0.5 * t), 0.2 * std::cos(2 * pi * 0.8 * t), 1.2 + 0.1 * std::sin(2 * pi * 1.1 * t)};
 }
 
 // Samples the functions at t0 + k dt for t in [t0, t1].
-inline SensorTrajectory sample_trajectory(const std::function<Vec3(double)>& p,
-                                          const std::function<Quat(double)>& q, double t0,
-                                          double t1, double dt = 1e-3) {
+inline SensorTrajectory sample_trajectory(const std::function<Vec3(double)>& p, const std::function<Quat(double)>& q,
+                                          double t0, double t1, double dt = 1e-3) {
   SensorTrajectory out;
   out.t0_s = t0;
   out.dt_s = dt;

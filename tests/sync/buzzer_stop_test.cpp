@@ -23,8 +23,8 @@ namespace {
 
 using posefuse::testing::expect_error;
 
-AudioPcm tone_that_stops(double rate_hz, double tone_hz, double t0_us, double stop_us,
-                         double duration_s, double amplitude, double noise_sigma, unsigned seed) {
+AudioPcm tone_that_stops(double rate_hz, double tone_hz, double t0_us, double stop_us, double duration_s,
+                         double amplitude, double noise_sigma, unsigned seed) {
   AudioPcm audio;
   audio.t0_camera_us = t0_us;
   audio.sample_rate_hz = rate_hz;
@@ -92,11 +92,8 @@ TEST(BuzzerStop, RefusesAudioWithoutAStop) {
   expect_error([] { detect_buzzer_stop(tone_that_stops(16000.0, 2700.0, 0, 1e9, 0.5, 8000, 300, 1)); },
                ErrorCode::kFailedPrecondition, "audio.buzzer");
   // Tone at another frequency: at 2700 Hz nothing stops above the noise.
-  expect_error(
-      [] {
-        detect_buzzer_stop(tone_that_stops(16000.0, 1000.0, 0, 2.5e5, 0.5, 8000, 300, 1));
-      },
-      ErrorCode::kFailedPrecondition, "audio.buzzer");
+  expect_error([] { detect_buzzer_stop(tone_that_stops(16000.0, 1000.0, 0, 2.5e5, 0.5, 8000, 300, 1)); },
+               ErrorCode::kFailedPrecondition, "audio.buzzer");
 }
 
 TEST(BuzzerStop, RefusesBadInput) {
@@ -110,8 +107,7 @@ TEST(BuzzerStop, RefusesBadInput) {
   bad = audio;
   bad.t0_camera_us = NAN;
   expect_error([&] { detect_buzzer_stop(bad); }, ErrorCode::kInvalidArgument, "audio.t0_camera_us");
-  expect_error([&] { detect_buzzer_stop(audio, {.tone_hz = 9000.0}); }, ErrorCode::kInvalidArgument,
-               "options.tone_hz");
+  expect_error([&] { detect_buzzer_stop(audio, {.tone_hz = 9000.0}); }, ErrorCode::kInvalidArgument, "options.tone_hz");
   bad.samples.assign(100, 0);
   bad.t0_camera_us = 0;
   expect_error([&] { detect_buzzer_stop(bad); }, ErrorCode::kFailedPrecondition, "audio.samples");

@@ -16,8 +16,7 @@ TEST(ClockMap, ChainsArmThroughBaseToCamera) {
   // arm = camera * (1 - 10 ppm) - 2 s.
   auto base_of = [](double cam) { return cam * (1.0 + 20e-6) + 3e6; };
   auto arm_of = [](double cam) { return cam * (1.0 - 10e-6) - 2e6; };
-  const ClockFit camera_from_base =
-      fit_linear_clock({{base_of(1e6), 1e6, 50.0}, {base_of(500e6), 500e6, 50.0}});
+  const ClockFit camera_from_base = fit_linear_clock({{base_of(1e6), 1e6, 50.0}, {base_of(500e6), 500e6, 50.0}});
   std::vector<ClockObservation> arm_to_base;
   for (double cam = 0; cam < 500e6; cam += 1e6) arm_to_base.push_back({arm_of(cam), base_of(cam), 128.0});
   const ClockFit base_from_arm = fit_linear_clock(arm_to_base);

@@ -77,8 +77,7 @@ TEST(LinearClock, SingleEventGivesOffsetWithGrowingUncertainty) {
 TEST(LinearClock, TwoBuzzerEventsGiveDrift) {
   // Buzzer at the start and at the end of a 10-minute session; camera runs 30 ppm fast.
   const TrueClock camera{0.0, 30e-6};
-  std::vector<ClockObservation> obs = {{5e6, camera.read(5e6) + 40.0, 80.0},
-                                       {605e6, camera.read(605e6) - 30.0, 80.0}};
+  std::vector<ClockObservation> obs = {{5e6, camera.read(5e6) + 40.0, 80.0}, {605e6, camera.read(605e6) - 30.0, 80.0}};
   const ClockFit fit = fit_linear_clock(obs);
   EXPECT_NEAR(fit.clock.drift, 30e-6, 0.3e-6);
   EXPECT_NEAR(fit.clock.to_reference_us(305e6), camera.read(305e6), 100.0);
@@ -119,16 +118,27 @@ TEST(LinearClock, ComposeEqualsChainedMaps) {
 
 TEST(LinearClock, RefusesBadInput) {
   expect_error([] { fit_linear_clock({}); }, ErrorCode::kInvalidArgument, "observations");
-  expect_error([] { fit_linear_clock({{0, 1, 1}, {NAN, 1, 1}}); }, ErrorCode::kInvalidArgument,
-               "observations[1].device_us");
-  expect_error([] { fit_linear_clock({{0, 1, -1}}); }, ErrorCode::kInvalidArgument,
-               "observations[0].sigma_us");
-  expect_error([] { broadcast_observations({{1, "arm", 5.0}, {1, "arm", 6.0}}, "arm", "base"); },
-               ErrorCode::kInvalidArgument, "receipts[1].broadcast_id");
-  expect_error([] { broadcast_observations({{1, "arm", 5.0}, {2, "base", 6.0}}, "arm", "base"); },
-               ErrorCode::kFailedPrecondition, "receipts");
-  expect_error([] { broadcast_observations({{1, "arm", INFINITY}}, "arm", "base"); },
-               ErrorCode::kInvalidArgument, "receipts[0].t_device_us");
+  expect_error(
+      [] {
+        fit_linear_clock({{0, 1, 1}, {NAN, 1, 1}});
+      },
+      ErrorCode::kInvalidArgument, "observations[1].device_us");
+  expect_error([] { fit_linear_clock({{0, 1, -1}}); }, ErrorCode::kInvalidArgument, "observations[0].sigma_us");
+  expect_error(
+      [] {
+        broadcast_observations({{1, "arm", 5.0}, {1, "arm", 6.0}}, "arm", "base");
+      },
+      ErrorCode::kInvalidArgument, "receipts[1].broadcast_id");
+  expect_error(
+      [] {
+        broadcast_observations({{1, "arm", 5.0}, {2, "base", 6.0}}, "arm", "base");
+      },
+      ErrorCode::kFailedPrecondition, "receipts");
+  expect_error(
+      [] {
+        broadcast_observations({{1, "arm", INFINITY}}, "arm", "base");
+      },
+      ErrorCode::kInvalidArgument, "receipts[0].t_device_us");
   expect_error([] { lower_envelope({{0, 1, 1}}, 0.0); }, ErrorCode::kInvalidArgument, "bin_us");
   expect_error([] { fit_linear_clock({{0, 1, 1}}, {.max_iterations = 0}); }, ErrorCode::kInvalidArgument, "options");
 }

@@ -24,8 +24,8 @@ struct Scene {
   double whistle_hz = 0.0;  // a tone that never stops (a fan, a monitor's whine)
   double whistle_amplitude = 6000.0;
   double noise_sigma = 300.0;
-  bool clicks = false;        // a 1 ms full-scale click every 0.4 s
-  bool noise_burst = false;   // broadband noise, 10x louder, from 1.0 to 2.0 s
+  bool clicks = false;       // a 1 ms full-scale click every 0.4 s
+  bool noise_burst = false;  // broadband noise, 10x louder, from 1.0 to 2.0 s
 };
 
 AudioPcm render(const Scene& scene, unsigned seed) {

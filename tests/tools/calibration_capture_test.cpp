@@ -18,7 +18,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path fresh_dir(const std::string& name) { return posefuse::testing::fresh_scratch_dir("posefuse_calibration_capture_test", name); }
+fs::path fresh_dir(const std::string& name) {
+  return posefuse::testing::fresh_scratch_dir("posefuse_calibration_capture_test", name);
+}
 
 sim::PanelCaptureRig rig() {
   sim::PanelCaptureRig r;
@@ -35,7 +37,8 @@ TEST(CalibrationCaptureFiles, TheWrittenFolderCalibratesExactlyAsInMemory) {
   const sim::PanelCaptureResult capture = sim::simulate_panel_capture({}, rig());
   const fs::path dir = fresh_dir("good");
   tools::write_calibration_capture(capture, dir);
-  for (const char* file : {"capture.txt", "markers.csv", "imu.csv", "truth.json", "pose_0_ir.png", "pose_3_depth.png"}) {
+  for (const char* file :
+       {"capture.txt", "markers.csv", "imu.csv", "truth.json", "pose_0_ir.png", "pose_3_depth.png"}) {
     EXPECT_TRUE(fs::exists(dir / file)) << file;
   }
   const calib::CaptureCalibration in_memory = calib::calibrate_capture(capture.capture);
@@ -70,7 +73,8 @@ TEST(CalibrationCaptureFiles, RefusalsNameTheFile) {
   }
   session::write_file_bytes(dir / "markers.csv", markers);
   fs::remove(dir / "pose_2_depth.png");
-  expect_error([&] { tools::calibrate_capture_directory(dir); }, ErrorCode::kNotFound, (dir / "pose_2_depth.png").string());
+  expect_error([&] { tools::calibrate_capture_directory(dir); }, ErrorCode::kNotFound,
+               (dir / "pose_2_depth.png").string());
 }
 
 TEST(CalibrationCaptureFiles, PosefuseSimWritesTheCaptureOfTheSessionsRig) {

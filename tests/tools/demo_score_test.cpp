@@ -25,7 +25,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path fresh_dir(const std::string& name) { return posefuse::testing::fresh_scratch_dir("posefuse_demo_score_test", name); }
+fs::path fresh_dir(const std::string& name) {
+  return posefuse::testing::fresh_scratch_dir("posefuse_demo_score_test", name);
+}
 
 // The simulator's chunks straight into the pipeline.
 class PipelineChunkSink : public session::ChunkSink {
@@ -122,7 +124,7 @@ TEST(DemoScore, ProtocolWithBothArmsAgreesWithTheTruth) {
     ASSERT_NE(r.calibration_value(prefix + "r"), nullptr) << arm;
     EXPECT_LT(std::abs(r.calibration_value(prefix + "r")->error), 0.01) << arm;
     EXPECT_LT(r.calibration_value(prefix + "A_from_F")->error, 20.0) << arm;
-    EXPECT_LT(std::abs(r.calibration_value(prefix + "d_ul")->error), 0.04) << arm;  // measured 9 / 27 mm
+    EXPECT_LT(std::abs(r.calibration_value(prefix + "d_ul")->error), 0.04) << arm;   // measured 9 / 27 mm
     EXPECT_LT(std::abs(r.calibration_value(prefix + "d_sw")->error), 0.015) << arm;  // measured 0.7 / 3.4 mm
     EXPECT_LT(std::abs(r.calibration_value(prefix + "d_se")->error), 0.025) << arm;  // measured 12.6 / 2.5 mm
   }

@@ -188,7 +188,8 @@ TEST(SimOptionsFile, BvhJointMapIsBuiltInOrAFileWhoseErrorsNameItsLine) {
   std::ofstream(map) << "pelvis = Hips\nleft_hip = Hips\n";
   const Error e = error_of("bvh_joint_map = " + map.string() + "\n");
   EXPECT_EQ(e.field(), map.string() + ":2");
-  EXPECT_NE(std::string(e.what()).find("BVH joint 'Hips' already drives 'pelvis' (line 1)"), std::string::npos) << e.what();
+  EXPECT_NE(std::string(e.what()).find("BVH joint 'Hips' already drives 'pelvis' (line 1)"), std::string::npos)
+      << e.what();
   const Error missing = error_of("bvh_joint_map = " + (dir / "none.map").string() + "\n");
   EXPECT_EQ(missing.code(), ErrorCode::kNotFound);
   EXPECT_EQ(missing.field(), (dir / "none.map").string());

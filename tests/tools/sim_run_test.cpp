@@ -28,7 +28,9 @@ namespace fs = std::filesystem;
 
 namespace {
 
-fs::path fresh_dir(const std::string& name) { return posefuse::testing::fresh_scratch_dir("posefuse_sim_run_test", name); }
+fs::path fresh_dir(const std::string& name) {
+  return posefuse::testing::fresh_scratch_dir("posefuse_sim_run_test", name);
+}
 
 // A small, fast session: quarter-resolution depth, small colour.
 sim::SimSessionOptions small_options() {
@@ -224,9 +226,9 @@ TEST(SimRun, GtHasTheClientResultFilesColumns) {
   writer.finish();
 
   namespace layout = session::result_layout;
-  for (const char* name : {layout::kSmplJointsCsv, layout::kCameraJointsCsv, layout::kForearmsCsv,
-                           layout::kImuPositionsCsv, "imu_orientations/imu_left.csv",
-                           "forearm_orientations/imu_left.csv"}) {
+  for (const char* name :
+       {layout::kSmplJointsCsv, layout::kCameraJointsCsv, layout::kForearmsCsv, layout::kImuPositionsCsv,
+        "imu_orientations/imu_left.csv", "forearm_orientations/imu_left.csv"}) {
     ASSERT_TRUE(fs::exists(gt / name)) << name;
     ASSERT_TRUE(fs::exists(client_dir / name)) << name;
     EXPECT_EQ(first_line(gt / name), first_line(client_dir / name)) << name;
@@ -275,8 +277,8 @@ TEST(SimRun, StrapPixelsLieOnTheProjectedForearm) {
     const sim::SimFrameTruth& gt = truth.frames[static_cast<std::size_t>(frame++)];
     ASSERT_EQ(gt.t_us, chunk.color().t_us());
     const std::string& bytes = chunk.color().data();
-    const cv::Mat image = cv::imdecode(cv::Mat(1, static_cast<int>(bytes.size()), CV_8U, const_cast<char*>(bytes.data())),
-                                       cv::IMREAD_COLOR);
+    const cv::Mat image = cv::imdecode(
+        cv::Mat(1, static_cast<int>(bytes.size()), CV_8U, const_cast<char*>(bytes.data())), cv::IMREAD_COLOR);
     ASSERT_FALSE(image.empty());
     const auto pelvis_uv = color_camera.project(C_from_K * gt.smpl_joints_K.col(body::kPelvis));
     ASSERT_TRUE(pelvis_uv);
@@ -290,8 +292,10 @@ TEST(SimRun, StrapPixelsLieOnTheProjectedForearm) {
         // Distance to each projected forearm (elbow -> wrist) and position along it.
         bool on_a_forearm = false;
         for (int arm = 0; arm < 2; ++arm) {
-          const Eigen::Vector3d elbow = C_from_K * gt.smpl_joints_K.col(arm == 0 ? body::kLeftElbow : body::kRightElbow);
-          const Eigen::Vector3d wrist = C_from_K * gt.smpl_joints_K.col(arm == 0 ? body::kLeftWrist : body::kRightWrist);
+          const Eigen::Vector3d elbow =
+              C_from_K * gt.smpl_joints_K.col(arm == 0 ? body::kLeftElbow : body::kRightElbow);
+          const Eigen::Vector3d wrist =
+              C_from_K * gt.smpl_joints_K.col(arm == 0 ? body::kLeftWrist : body::kRightWrist);
           const auto e = color_camera.project(elbow), w = color_camera.project(wrist);
           if (!e || !w) continue;
           const Eigen::Vector2d d = *w - *e, q = Eigen::Vector2d(col, row) - *e;

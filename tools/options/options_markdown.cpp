@@ -21,14 +21,16 @@ std::string code(const std::string& text) { return "`" + text + "`"; }
 std::string options_markdown(const std::vector<std::unique_ptr<session::Stage>>& stages) {
   std::string md;
   md += "# Session options\n\n";
-  md += "Generated from the stages' option tables (`core/session/stages/*_options.cpp`) by `posefuse-options-doc`; "
-        "do not edit it by hand. Regenerate it from the repository root with\n\n";
+  md +=
+      "Generated from the stages' option tables (`core/session/stages/*_options.cpp`) by `posefuse-options-doc`; "
+      "do not edit it by hand. Regenerate it from the repository root with\n\n";
   md += "    " + std::string(kRegenerateOptionsDoc) + "\n\n";
   md += "(the test `options_doc_matches_tables` fails while this file differs from the tables).\n\n";
-  md += "The keys the pipeline's stages read from `SessionHeader.options`, all text. `posefuse fit` and "
-        "`posefuse upload` set one with `--option KEY=VALUE`; `posefuse info` lists them as the server has them. "
-        "A key that is not set takes its default; a value the table does not allow ends the session with "
-        "`INVALID_ARGUMENT` naming `header.options[KEY]`.\n";
+  md +=
+      "The keys the pipeline's stages read from `SessionHeader.options`, all text. `posefuse fit` and "
+      "`posefuse upload` set one with `--option KEY=VALUE`; `posefuse info` lists them as the server has them. "
+      "A key that is not set takes its default; a value the table does not allow ends the session with "
+      "`INVALID_ARGUMENT` naming `header.options[KEY]`.\n";
   for (const auto& stage : stages) {
     if (stage->options().empty()) continue;
     md += "\n## " + std::string(stage->name()) + "\n\n";

@@ -18,16 +18,17 @@ namespace posefuse::tools {
 namespace {
 
 namespace fs = std::filesystem;
-using session::format_double;
 using geometry::Quat;
 using geometry::Vec3;
+using session::format_double;
 constexpr double kDeg = 3.14159265358979323846 / 180.0;
 
 std::string image_name(std::size_t pose, const char* kind) {
   return "pose_" + std::to_string(pose) + "_" + kind + ".png";
 }
 
-void write_png16(const std::vector<std::uint16_t>& pixels, const geometry::PinholeCamera& camera, const fs::path& path) {
+void write_png16(const std::vector<std::uint16_t>& pixels, const geometry::PinholeCamera& camera,
+                 const fs::path& path) {
   const cv::Mat image(camera.height, camera.width, CV_16UC1, const_cast<std::uint16_t*>(pixels.data()));
   if (!cv::imwrite(path.string(), image)) throw Error(ErrorCode::kInternal, path.string(), "could not write the PNG");
 }
@@ -42,13 +43,15 @@ std::vector<std::uint16_t> read_png16(const fs::path& path, const geometry::Pinh
   }
   std::vector<std::uint16_t> out(static_cast<std::size_t>(camera.width) * static_cast<std::size_t>(camera.height));
   for (int row = 0; row < image.rows; ++row) {
-    std::copy_n(image.ptr<std::uint16_t>(row), camera.width, out.begin() + static_cast<std::ptrdiff_t>(row) * camera.width);
+    std::copy_n(image.ptr<std::uint16_t>(row), camera.width,
+                out.begin() + static_cast<std::ptrdiff_t>(row) * camera.width);
   }
   return out;
 }
 
 // Data lines of a CSV with a fixed header, split at commas; `where` is "file:line".
-std::vector<std::pair<std::string, std::vector<std::string>>> csv_rows(const fs::path& path, const std::string& header) {
+std::vector<std::pair<std::string, std::vector<std::string>>> csv_rows(const fs::path& path,
+                                                                       const std::string& header) {
   std::istringstream in(session::read_file_bytes(path, path.string()));
   std::string line;
   if (!std::getline(in, line) || line != header) throw_invalid(path.string() + ":1", "header must be '" + header + "'");
@@ -60,7 +63,8 @@ std::vector<std::pair<std::string, std::vector<std::string>>> csv_rows(const fs:
     std::stringstream cells_in(line);
     for (std::string cell; std::getline(cells_in, cell, ',');) cells.push_back(cell);
     const std::string where = path.string() + ":" + std::to_string(number);
-    if (cells.size() != columns) throw_invalid(where, std::to_string(cells.size()) + " columns, expected " + std::to_string(columns));
+    if (cells.size() != columns)
+      throw_invalid(where, std::to_string(cells.size()) + " columns, expected " + std::to_string(columns));
     rows.emplace_back(where, std::move(cells));
   }
   return rows;
@@ -68,7 +72,8 @@ std::vector<std::pair<std::string, std::vector<std::string>>> csv_rows(const fs:
 
 std::size_t pose_index(const std::string& text, const std::string& where, std::size_t poses) {
   const std::uint64_t pose = session::parse_uint64(text, where + ":pose");
-  if (pose >= poses) throw_invalid(where + ":pose", "is " + text + ", capture.txt has " + std::to_string(poses) + " poses");
+  if (pose >= poses)
+    throw_invalid(where + ":pose", "is " + text + ", capture.txt has " + std::to_string(poses) + " poses");
   return static_cast<std::size_t>(pose);
 }
 
@@ -88,11 +93,13 @@ void write_preview(const calib::CalibrationCapture& capture, const fs::path& pat
     const calib::CapturePose& pose = capture.poses[i];
     for (int row = 0; row < h; ++row) {
       for (int col = 0; col < w; ++col) {
-        const std::size_t p = static_cast<std::size_t>(row) * static_cast<std::size_t>(w) + static_cast<std::size_t>(col);
+        const std::size_t p =
+            static_cast<std::size_t>(row) * static_cast<std::size_t>(w) + static_cast<std::size_t>(col);
         const int x = static_cast<int>(i) * w + col;
         sheet.at<std::uint8_t>(row, x) = cv::saturate_cast<std::uint8_t>(255.0 * std::pow(pose.ir[p] / 65535.0, 0.4));
         const double z = pose.depth_mm[p];
-        sheet.at<std::uint8_t>(h + row, x) = z == 0 ? 0 : cv::saturate_cast<std::uint8_t>(40 + 215 * (1.0 - z / 4500.0));
+        sheet.at<std::uint8_t>(h + row, x) =
+            z == 0 ? 0 : cv::saturate_cast<std::uint8_t>(40 + 215 * (1.0 - z / 4500.0));
       }
     }
   }
@@ -106,9 +113,17 @@ void write_calibration_capture(const sim::PanelCaptureResult& result, const fs::
   const calib::CalibrationCapture& capture = result.capture;
   const geometry::PinholeCamera& c = capture.camera;
   std::string text = "# posefuse calibration-panel capture (docs/simulator.md)\n";
-  for (const auto& [key, value] : std::vector<std::pair<std::string, double>>{
-           {"width", c.width}, {"height", c.height}, {"fx", c.fx}, {"fy", c.fy}, {"cx", c.cx}, {"cy", c.cy},
-           {"k1", c.k1}, {"k2", c.k2}, {"k3", c.k3}, {"poses", static_cast<double>(capture.poses.size())}}) {
+  for (const auto& [key, value] :
+       std::vector<std::pair<std::string, double>>{{"width", c.width},
+                                                   {"height", c.height},
+                                                   {"fx", c.fx},
+                                                   {"fy", c.fy},
+                                                   {"cx", c.cx},
+                                                   {"cy", c.cy},
+                                                   {"k1", c.k1},
+                                                   {"k2", c.k2},
+                                                   {"k3", c.k3},
+                                                   {"poses", static_cast<double>(capture.poses.size())}}) {
     text += key + " = " + format_double(value) + "\n";
   }
   session::write_file_bytes(directory / "capture.txt", text);
@@ -136,10 +151,11 @@ void write_calibration_capture(const sim::PanelCaptureResult& result, const fs::
   session::write_file_bytes(directory / "markers.csv", markers);
   session::write_file_bytes(directory / "imu.csv", imu);
   const sim::PanelCaptureTruth& t = result.truth;
-  std::string json = "{\n  \"K_from_E\": " + sim::json_quat(t.K_from_E) + ",\n  \"E_origin_K\": " + sim::json_vec(t.E_origin_K) +
-                     ",\n  \"K_from_B\": " + sim::json_quat(t.K_from_B) + ",\n  \"K_from_W\": " + sim::json_quat(t.K_from_W) +
-                     ",\n  \"P_from_panel_imu\": " + sim::json_quat(t.P_from_panel_imu) +
-                     ",\n  \"marker_noise_m\": " + format_double(t.marker_noise_m) + ",\n  \"poses\": [";
+  std::string json =
+      "{\n  \"K_from_E\": " + sim::json_quat(t.K_from_E) + ",\n  \"E_origin_K\": " + sim::json_vec(t.E_origin_K) +
+      ",\n  \"K_from_B\": " + sim::json_quat(t.K_from_B) + ",\n  \"K_from_W\": " + sim::json_quat(t.K_from_W) +
+      ",\n  \"P_from_panel_imu\": " + sim::json_quat(t.P_from_panel_imu) +
+      ",\n  \"marker_noise_m\": " + format_double(t.marker_noise_m) + ",\n  \"poses\": [";
   for (std::size_t i = 0; i < t.K_from_P.size(); ++i) {
     json += std::string(i ? "," : "") + "\n    {\"K_from_P\": " + sim::json_quat(t.K_from_P[i].X_from_P) +
             ", \"P_origin_K\": " + sim::json_vec(t.K_from_P[i].origin_X) + "}";
@@ -169,8 +185,17 @@ calib::CalibrationCapture read_calibration_capture(const fs::path& directory) {
     return it->second;
   };
   calib::CalibrationCapture capture;
-  capture.camera = {static_cast<int>(value("width")), static_cast<int>(value("height")), value("fx"), value("fy"),
-                    value("cx"), value("cy"), value("k1"), value("k2"), value("k3"), 0.0, 0.0};
+  capture.camera = {static_cast<int>(value("width")),
+                    static_cast<int>(value("height")),
+                    value("fx"),
+                    value("fy"),
+                    value("cx"),
+                    value("cy"),
+                    value("k1"),
+                    value("k2"),
+                    value("k3"),
+                    0.0,
+                    0.0};
   geometry::validate(capture.camera, header_path.string());
   const double poses = value("poses");
   if (!(poses >= 0 && poses <= 1000) || poses != std::floor(poses)) {
@@ -186,24 +211,28 @@ calib::CalibrationCapture read_calibration_capture(const fs::path& directory) {
     const std::size_t pose = pose_index(cells[0], where, capture.poses.size());
     const std::uint64_t marker = session::parse_uint64(cells[1], where + ":marker");
     if (marker > 3) throw_invalid(where + ":marker", "is " + cells[1] + ", must be 0..3");
-    capture.poses[pose].markers_E[marker] = Vec3(session::parse_double(cells[2], where + ":x_m"),
-                                                 session::parse_double(cells[3], where + ":y_m"),
-                                                 session::parse_double(cells[4], where + ":z_m"));
+    capture.poses[pose].markers_E[marker] =
+        Vec3(session::parse_double(cells[2], where + ":x_m"), session::parse_double(cells[3], where + ":y_m"),
+             session::parse_double(cells[4], where + ":z_m"));
     have[pose][marker] = true;
   }
   for (std::size_t i = 0; i < have.size(); ++i) {
     for (std::size_t m = 0; m < 4; ++m) {
-      if (!have[i][m]) throw_invalid((directory / "markers.csv").string(), "pose " + std::to_string(i) + " has no marker " + std::to_string(m));
+      if (!have[i][m])
+        throw_invalid((directory / "markers.csv").string(),
+                      "pose " + std::to_string(i) + " has no marker " + std::to_string(m));
     }
   }
   for (const auto& [where, cells] : csv_rows(directory / "imu.csv", kImuHeader)) {
     calib::CapturePose& pose = capture.poses[pose_index(cells[0], where, capture.poses.size())];
-    if (cells[1] != "panel" && cells[1] != "base") throw_invalid(where + ":device", "is '" + cells[1] + "', expected panel or base");
+    if (cells[1] != "panel" && cells[1] != "base")
+      throw_invalid(where + ":device", "is '" + cells[1] + "', expected panel or base");
     imu::ImuSample s;
     s.t_us = session::parse_int64(cells[2], where + ":t_us");
     std::array<Vec3*, 3> vectors = {&s.gyr_rad_s, &s.acc_m_s2, &s.mag_uT};
     for (std::size_t k = 0; k < 9; ++k) {
-      (*vectors[k / 3])[static_cast<Eigen::Index>(k % 3)] = session::parse_double(cells[3 + k], where + ":" + std::to_string(k + 3));
+      (*vectors[k / 3])[static_cast<Eigen::Index>(k % 3)] =
+          session::parse_double(cells[3 + k], where + ":" + std::to_string(k + 3));
     }
     (cells[1] == "panel" ? pose.panel_imu : pose.base_imu).push_back(s);
   }
@@ -222,15 +251,15 @@ calib::CaptureCalibration calibrate_capture_directory(const fs::path& directory)
     char rest[64] = {};
     if (std::sscanf(field.c_str(), "poses[%zu].%63s", &pose, rest) == 2) {
       const std::string part = rest;
-      const fs::path file = part.rfind("ir", 0) == 0      ? directory / image_name(pose, "ir")
-                            : part.rfind("depth", 0) == 0 ? directory / image_name(pose, "depth")
+      const fs::path file = part.rfind("ir", 0) == 0                ? directory / image_name(pose, "ir")
+                            : part.rfind("depth", 0) == 0           ? directory / image_name(pose, "depth")
                             : part.find("imu") != std::string::npos ? directory / "imu.csv"
                                                                     : directory / image_name(pose, "ir");
       throw Error(error.code(), file.string() + ": " + part, message);
     }
     const fs::path file = field.rfind("mocap", 0) == 0 || field.rfind("markers", 0) == 0 ? directory / "markers.csv"
-                          : field == "readings" ? directory / "imu.csv"
-                                                : directory;
+                          : field == "readings"                                          ? directory / "imu.csv"
+                                                                                         : directory;
     throw Error(error.code(), file.string() + ": " + field, message);
   }
 }
@@ -244,19 +273,21 @@ std::string calibration_report(const calib::CaptureCalibration& r) {
                   "pose %zu: panel at %.3f m, board RMS %.2f mm, axis skew %.2f deg, X/Y gap %.2f mm, markers %.2f px, "
                   "points x/y/board %d/%d/%d\n",
                   i, seen.pose.origin_X.norm(), 1e3 * seen.board_rms_m, seen.axis_skew_rad / kDeg,
-                  1e3 * seen.intersection_gap_m, seen.marker_residual_px, seen.x_points, seen.y_points, seen.board_points);
+                  1e3 * seen.intersection_gap_m, seen.marker_residual_px, seen.x_points, seen.y_points,
+                  seen.board_points);
     out += line;
   }
   std::snprintf(line, sizeof line, "panel turned up to %.1f deg between poses\n", r.pose_spread_rad / kDeg);
   out += line;
   out += "K_from_E (w x y z) = " + quat_text(r.mocap.K_from_E) + "   (eq. 4)\n";
-  out += "E_origin_K (m) = " + format_double(r.mocap.E_origin_K.x()) + " " + format_double(r.mocap.E_origin_K.y()) + " " +
-         format_double(r.mocap.E_origin_K.z()) + "   (eq. 5)\n";
+  out += "E_origin_K (m) = " + format_double(r.mocap.E_origin_K.x()) + " " + format_double(r.mocap.E_origin_K.y()) +
+         " " + format_double(r.mocap.E_origin_K.z()) + "   (eq. 5)\n";
   std::snprintf(line, sizeof line, "mocap markers reprojected: %.2f px RMS over %d poses\n", r.mocap.marker_residual_px,
                 r.mocap.poses);
   out += line;
   out += "K_from_B (w x y z) = " + quat_text(r.base.K_from_B) + "   (eq. 8)\n";
-  std::snprintf(line, sizeof line, "eq. 8 spread over %d readings: %.2f deg RMS\n", r.base.readings, r.base.spread_rad / kDeg);
+  std::snprintf(line, sizeof line, "eq. 8 spread over %d readings: %.2f deg RMS\n", r.base.readings,
+                r.base.spread_rad / kDeg);
   out += line;
   out += "K_from_W (w x y z) = " + quat_text(r.K_from_W) + "   (eq. 7, mean base IMU orientation of the capture)\n";
   out += std::string(session::kForearmKFromBKey) + " = " + quat_text(r.base.K_from_B) + "\n";

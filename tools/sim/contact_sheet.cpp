@@ -8,17 +8,17 @@
 #include "common/error.hpp"
 #include "raycast/depth_camera.hpp"
 #include "session/image_codec.hpp"
-#include "session/session_inputs.hpp"
 #include "session/imu_batch.hpp"
+#include "session/session_inputs.hpp"
 
 namespace posefuse::tools {
 namespace {
 
 // Kinect v2 bones (JointType pairs) for the overlay.
-const std::vector<std::pair<int, int>> kBones = {
-    {0, 1}, {1, 20}, {20, 2}, {2, 3}, {20, 4}, {4, 5}, {5, 6}, {6, 7}, {7, 21}, {6, 22},
-    {20, 8}, {8, 9}, {9, 10}, {10, 11}, {11, 23}, {10, 24}, {0, 12}, {12, 13}, {13, 14},
-    {14, 15}, {0, 16}, {16, 17}, {17, 18}, {18, 19}};
+const std::vector<std::pair<int, int>> kBones = {{0, 1},   {1, 20},  {20, 2},  {2, 3},   {20, 4},  {4, 5},
+                                                 {5, 6},   {6, 7},   {7, 21},  {6, 22},  {20, 8},  {8, 9},
+                                                 {9, 10},  {10, 11}, {11, 23}, {10, 24}, {0, 12},  {12, 13},
+                                                 {13, 14}, {14, 15}, {0, 16},  {16, 17}, {17, 18}, {18, 19}};
 
 std::int64_t distance(std::int64_t a, std::int64_t b) { return a > b ? a - b : b - a; }
 
@@ -72,8 +72,8 @@ cv::Mat plot(const std::vector<imu::ImuSample>& samples, int which, const std::s
     for (std::size_t i = 1; i < samples.size(); ++i) {
       const double a = value(samples[i - 1])[axis], b = value(samples[i])[axis];
       if (!std::isfinite(a) || !std::isfinite(b)) continue;
-      cv::line(image, point(static_cast<double>(samples[i - 1].t_us), a), point(static_cast<double>(samples[i].t_us), b),
-               colours[axis], 1, cv::LINE_AA);
+      cv::line(image, point(static_cast<double>(samples[i - 1].t_us), a),
+               point(static_cast<double>(samples[i].t_us), b), colours[axis], 1, cv::LINE_AA);
     }
   }
   char range[96];
@@ -137,7 +137,8 @@ cv::Mat ContactSheetRecorder::render() const {
     for (int j = 0; j < skeleton_->joints_size(); ++j) {
       if (!pixels[static_cast<std::size_t>(j)]) continue;
       const bool tracked = skeleton_->joints(j).state() == v1::SkeletonJoint::TRACKED;
-      cv::circle(overlay, *pixels[static_cast<std::size_t>(j)], 3, tracked ? cv::Scalar(0, 255, 255) : cv::Scalar(0, 0, 255), -1);
+      cv::circle(overlay, *pixels[static_cast<std::size_t>(j)], 3,
+                 tracked ? cv::Scalar(0, 255, 255) : cv::Scalar(0, 0, 255), -1);
     }
   }
   label(overlay, "skeleton (yellow tracked, red inferred)");

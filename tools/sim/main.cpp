@@ -1,9 +1,9 @@
 // posefuse-sim: generates a synthetic recording with ground truth (docs/simulator.md).
+#include <unistd.h>
 #include <chrono>
 #include <cstdio>
 #include <iostream>
 #include <string>
-#include <unistd.h>
 
 #include "common/error.hpp"
 #include "session/file_bytes.hpp"
@@ -15,7 +15,8 @@ namespace {
 
 const char* const kUsage =
     "usage: posefuse-sim (--out DIR | --chunk-file FILE) [--options FILE] [--seed N] [--duration S|clip]\n"
-    "                    [--gt DIR] [--contact-sheet PNG] [--threads N] [--bvh-joint-map FILE|mocap21|cmu31] [--quiet]\n"
+    "                    [--gt DIR] [--contact-sheet PNG] [--threads N] [--bvh-joint-map FILE|mocap21|cmu31] "
+    "[--quiet]\n"
     "       posefuse-sim --list-options\n"
     "       posefuse-sim calibrate DIR   (frame calibration, paper 1 II-F, of a calibration_capture/ folder)\n"
     "Writes a simulated session (recording directory with gt/ inside, or a chunk file with\n"
@@ -86,9 +87,9 @@ int main(int argc, char** argv) {
       if (!tty && decile == last_decile && p.frames_done < p.frames_total) return;  // logs: every 10 %
       last_decile = decile;
       const double eta = fraction > 0 ? elapsed * (1 - fraction) / fraction : 0;
-      std::fprintf(stderr, "%sposefuse-sim: frame %lld/%lld (%.0f %%), %.1f s elapsed, ETA %.1f s%s",
-                   tty ? "\r" : "", static_cast<long long>(p.frames_done), static_cast<long long>(p.frames_total),
-                   100 * fraction, elapsed, eta, tty ? "" : "\n");
+      std::fprintf(stderr, "%sposefuse-sim: frame %lld/%lld (%.0f %%), %.1f s elapsed, ETA %.1f s%s", tty ? "\r" : "",
+                   static_cast<long long>(p.frames_done), static_cast<long long>(p.frames_total), 100 * fraction,
+                   elapsed, eta, tty ? "" : "\n");
     };
     const tools::SimRunResult result = tools::run_simulation(request, progress);
     for (const std::string& warning : result.warnings) std::cerr << "posefuse-sim: warning: " << warning << '\n';

@@ -11,14 +11,15 @@
 
 namespace posefuse::tools {
 
-SimRunResult run_simulation(const SimRunRequest& request, const std::function<void(const sim::SimProgress&)>& progress) {
+SimRunResult run_simulation(const SimRunRequest& request,
+                            const std::function<void(const sim::SimProgress&)>& progress) {
   if (request.out_directory.has_value() == request.chunk_file.has_value()) {
     throw Error(ErrorCode::kInvalidArgument, "--out/--chunk-file", "give exactly one of the two");
   }
   sim::validate(request.options);
   if (request.options.panel_capture.enabled) sim::validate(request.options.panel_capture);
   SimRunResult result;
-  result.gt_directory = request.gt_directory ? *request.gt_directory
+  result.gt_directory = request.gt_directory    ? *request.gt_directory
                         : request.out_directory ? *request.out_directory / "gt"
                                                 : std::filesystem::path(request.chunk_file->string() + ".gt");
   if (std::filesystem::exists(result.gt_directory) && !std::filesystem::is_empty(result.gt_directory)) {
@@ -54,9 +55,11 @@ SimRunResult run_simulation(const SimRunRequest& request, const std::function<vo
     rig.imu_rate_hz = request.options.imu.rate_hz;
     rig.imu = request.options.imu.synth;
     rig.seed = request.options.seed;
-    result.calibration_capture = request.out_directory ? *request.out_directory / "calibration_capture"
-                                                       : std::filesystem::path(request.chunk_file->string() + ".calibration_capture");
-    write_calibration_capture(sim::simulate_panel_capture(request.options.panel_capture, rig), *result.calibration_capture);
+    result.calibration_capture = request.out_directory
+                                     ? *request.out_directory / "calibration_capture"
+                                     : std::filesystem::path(request.chunk_file->string() + ".calibration_capture");
+    write_calibration_capture(sim::simulate_panel_capture(request.options.panel_capture, rig),
+                              *result.calibration_capture);
   }
   result.chunks = truth.chunks;
   result.warnings = truth.warnings;

@@ -28,13 +28,13 @@ inline constexpr const char* kFitStartVelocityGainKey = "fit.start_velocity_gain
 
 // What the options say, as the stage uses it. The defaults are the table's (read_body_fit_options).
 struct BodyFitOptions {
-  double calibration_s = 0;             // fit.calibration_s
+  double calibration_s = 0;              // fit.calibration_s
   std::optional<std::uint32_t> body_id;  // fit.body_id; none: the first skeleton's
-  fit::PoseSmoothingOptions smoothing;  // window_frames: fit.smoothing_frames
-  double imu_wait_s = 0;                // fit.imu_wait_s
-  double lost_energy = 0;               // fit.lost_energy
-  bool fine_shape = false;              // fit.fine_shape
-  double skeleton_start_energy = 0;     // fit.skeleton_start_energy
+  fit::PoseSmoothingOptions smoothing;   // window_frames: fit.smoothing_frames
+  double imu_wait_s = 0;                 // fit.imu_wait_s
+  double lost_energy = 0;                // fit.lost_energy
+  bool fine_shape = false;               // fit.fine_shape
+  double skeleton_start_energy = 0;      // fit.skeleton_start_energy
   // max_iterations, lambda_imu, freeze_contour_after, joint_step_stop_max_damping and
   // project_steps_onto_limits from the options, the rest fit::FitOptions' own defaults.
   fit::FitOptions fit;

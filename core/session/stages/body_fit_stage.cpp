@@ -70,7 +70,6 @@ fit::TrackedSkeleton tracked_skeleton_from(const Skeleton& skeleton) {
   return out;
 }
 
-
 BodyFitStage::BodyFitStage() = default;
 BodyFitStage::~BodyFitStage() = default;
 
@@ -96,9 +95,10 @@ void BodyFitStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) 
   if (!enabled_) return;
   options_ = read_body_fit_options(header);
   body_id_ = options_.body_id;
-  arm_imus_ = static_cast<int>(std::count_if(header.imu_devices().begin(), header.imu_devices().end(), [](const auto& d) {
-    return d.role() == v1::ImuDevice::ARM_LEFT || d.role() == v1::ImuDevice::ARM_RIGHT;
-  }));
+  arm_imus_ =
+      static_cast<int>(std::count_if(header.imu_devices().begin(), header.imu_devices().end(), [](const auto& d) {
+        return d.role() == v1::ImuDevice::ARM_LEFT || d.role() == v1::ImuDevice::ARM_RIGHT;
+      }));
   const body::Sex sex = header.sex() == v1::SessionHeader::FEMALE ? body::Sex::kFemale : body::Sex::kMale;
   const raycast::DepthIntrinsics depth = session_cameras(header).depth;
   depth_width_ = depth.width;
@@ -174,17 +174,20 @@ std::optional<Eigen::Quaterniond> BodyFitStage::K_from_F_at(fit::ArmSide side, s
   const auto it = K_from_F_.find(arm_of(side));
   if (it == K_from_F_.end() || it->second.empty()) return std::nullopt;
   const auto& samples = it->second;
-  const auto after = std::lower_bound(samples.begin(), samples.end(), t_us,
-                                      [](const auto& s, std::int64_t t) { return s.first < t; });
+  const auto after =
+      std::lower_bound(samples.begin(), samples.end(), t_us, [](const auto& s, std::int64_t t) { return s.first < t; });
   const std::pair<std::int64_t, Eigen::Quaterniond>* best = nullptr;
   if (after != samples.end()) best = &*after;
-  if (after != samples.begin() && (!best || t_us - std::prev(after)->first < best->first - t_us)) best = &*std::prev(after);
+  if (after != samples.begin() && (!best || t_us - std::prev(after)->first < best->first - t_us))
+    best = &*std::prev(after);
   if (!best || std::llabs(best->first - t_us) > kForearmToleranceUs) return std::nullopt;
   return best->second;
 }
 
 void BodyFitStage::fit_ready(bool all, StageOutput& out) {
-  const fit::ForearmOrientationAt K_from_F = [this](fit::ArmSide side, std::int64_t t_us) { return K_from_F_at(side, t_us); };
+  const fit::ForearmOrientationAt K_from_F = [this](fit::ArmSide side, std::int64_t t_us) {
+    return K_from_F_at(side, t_us);
+  };
   while (!queue_.empty()) {
     const std::int64_t t = queue_.front().t_us;
     int covered = 0;
@@ -192,7 +195,8 @@ void BodyFitStage::fit_ready(bool all, StageOutput& out) {
     const bool waited = static_cast<double>(queue_.back().t_us - t) * 1e-6 >= options_.imu_wait_s;
     if (!all && covered < arm_imus_ && !waited) return;
     QueuedBodyFitFrame& queued = queue_.front();
-    BodyFitFrame frame{queued.t_us, fit::unpack_body_pixels(queued.frame), std::move(queued.skeleton), queued.assemble_s};
+    BodyFitFrame frame{queued.t_us, fit::unpack_body_pixels(queued.frame), std::move(queued.skeleton),
+                       queued.assemble_s};
     queue_.pop_front();
     fit::BodyTracker::Output fitted = tracker_->fit(frame, K_from_F);
     const int orientations = (K_from_F(fit::ArmSide::kLeft, t) ? 1 : 0) + (K_from_F(fit::ArmSide::kRight, t) ? 1 : 0);
@@ -225,17 +229,20 @@ void BodyFitStage::finish(StageOutput& out) {
   hand_on(tracker_->flush([this](fit::ArmSide side, std::int64_t t_us) { return K_from_F_at(side, t_us); }), out);
   const std::uint64_t fitted = tracker_->frames_fitted();
   if (frames_without_skeleton_ > 0) {
-    out.warn("FIT_NO_SKELETON", "skeleton",
-             std::to_string(frames_without_skeleton_) + " depth frames had no skeleton of the fitted person: not fitted");
+    out.warn(
+        "FIT_NO_SKELETON", "skeleton",
+        std::to_string(frames_without_skeleton_) + " depth frames had no skeleton of the fitted person: not fitted");
   }
   if (frames_without_imu_ > 0) {
-    out.warn("FIT_NO_IMU", "fit", std::to_string(frames_without_imu_) + " of " + std::to_string(fitted) +
-                                      " frames fitted without the forearm orientation of every arm IMU (none within " +
-                                      format_double(options_.imu_wait_s) + " s of camera time, fit.imu_wait_s)");
+    out.warn("FIT_NO_IMU", "fit",
+             std::to_string(frames_without_imu_) + " of " + std::to_string(fitted) +
+                 " frames fitted without the forearm orientation of every arm IMU (none within " +
+                 format_double(options_.imu_wait_s) + " s of camera time, fit.imu_wait_s)");
   }
   if (tracker_->frames_lost() > 0) {
-    out.warn("FIT_LOST", "fit", "tracking lost (energy above " + format_double(options_.lost_energy) + ") in " +
-                                    std::to_string(tracker_->frames_lost()) + " of " + std::to_string(fitted) + " frames");
+    out.warn("FIT_LOST", "fit",
+             "tracking lost (energy above " + format_double(options_.lost_energy) + ") in " +
+                 std::to_string(tracker_->frames_lost()) + " of " + std::to_string(fitted) + " frames");
   }
   report_shape(out);
   out.hand_on(FramesDone{FrameSource::kBodyFit, INT64_MAX});
@@ -247,7 +254,9 @@ void BodyFitStage::report_shape(StageOutput& out) const {
   v1::BodyShape& shape = *out.calibration().mutable_body_shape();
   shape.clear_betas();
   for (int i = 0; i < fitted->beta.size(); ++i) shape.add_betas(fitted->beta[i]);
-  const auto length = [&](int a, int b) { return (fitted->rest_joints_K.col(a) - fitted->rest_joints_K.col(b)).norm(); };
+  const auto length = [&](int a, int b) {
+    return (fitted->rest_joints_K.col(a) - fitted->rest_joints_K.col(b)).norm();
+  };
   shape.set_upper_arm_length_left_m(length(body::kLeftShoulder, body::kLeftElbow));
   shape.set_upper_arm_length_right_m(length(body::kRightShoulder, body::kRightElbow));
   shape.set_forearm_length_left_m(length(body::kLeftElbow, body::kLeftWrist));

@@ -101,7 +101,7 @@ class BodyFitStage : public Stage {
 
   std::optional<std::int64_t> last_frame_t_us_;
   std::optional<std::int64_t> last_camera_t_us_;  // any camera frame
-  std::deque<QueuedBodyFitFrame> queue_;  // personalised, waiting for forearm orientations
+  std::deque<QueuedBodyFitFrame> queue_;          // personalised, waiting for forearm orientations
 
   // Forearm orientations by arm (v1::Arm), camera clock.
   std::map<int, std::deque<std::pair<std::int64_t, Eigen::Quaterniond>>> K_from_F_;

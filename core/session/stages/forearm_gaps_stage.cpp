@@ -29,7 +29,7 @@ void ForearmGapsStage::start_arm(const ArmTrackStart& start, StageOutput& /*out*
   early_elbows_.erase(start.arm);
   if (start.tracked) {
     arm.tracker = std::make_unique<forearm::GapTracker>(start.device_id, start.model, start.has_model, start.K_from_W,
-                                                         start.smoother);
+                                                        start.smoother);
     if (start.fit_anchor) {
       arm.tracker->use_fit_anchor(*start.fit_anchor);
       for (const forearm::FitElbow& elbow : early) arm.tracker->add_fit_elbow(elbow);
@@ -39,12 +39,14 @@ void ForearmGapsStage::start_arm(const ArmTrackStart& start, StageOutput& /*out*
 }
 
 void ForearmGapsStage::add_track(const ArmTrack& track, StageOutput& out) {
-  const auto arm = std::find_if(arms_.begin(), arms_.end(), [&](const Arm& a) { return a.device_id == track.device_id; });
+  const auto arm =
+      std::find_if(arms_.begin(), arms_.end(), [&](const Arm& a) { return a.device_id == track.device_id; });
   if (arm == arms_.end() || !arm->tracker) return;
   arm->tracker->add_samples(track.samples);
   if (!track.frames.empty()) {
     ArmFrameEstimates estimates{arm->device_id, arm->arm, {}};
-    for (const forearm::TrackedArmFrame& frame : track.frames) estimates.frames.push_back(arm->tracker->add_frame(frame));
+    for (const forearm::TrackedArmFrame& frame : track.frames)
+      estimates.frames.push_back(arm->tracker->add_frame(frame));
     out.hand_on(std::move(estimates));
   }
   hand_on(*arm, arm->tracker->recover_ready(false), out);

@@ -130,9 +130,9 @@ ForearmOptions read_forearm_options(const v1::SessionHeader& header) {
     out.buzzer_tone_hz = options.real(kForearmBuzzerHzKey);
     const double nyquist_hz = header.audio_sample_rate_hz() / 2.0;
     if (nyquist_hz > 0.0 && !(*out.buzzer_tone_hz < nyquist_hz)) {
-      throw_invalid(option_field(kForearmBuzzerHzKey),
-                    "is " + session::quoted(format_double(*out.buzzer_tone_hz)) + ", must be below " +
-                        format_double(nyquist_hz) + " Hz (half the audio rate) or 'auto'");
+      throw_invalid(option_field(kForearmBuzzerHzKey), "is " + session::quoted(format_double(*out.buzzer_tone_hz)) +
+                                                           ", must be below " + format_double(nyquist_hz) +
+                                                           " Hz (half the audio rate) or 'auto'");
     }
   }
 
@@ -143,7 +143,8 @@ ForearmOptions read_forearm_options(const v1::SessionHeader& header) {
   out.axis_correction.gain_F = options.real(kForearmAxisCorrectionGainFKey);
   if (const double sum = out.axis_correction.gain_K + out.axis_correction.gain_F; !(sum > 0.0 && sum <= 1.0)) {
     // Named after the gain the header set (gain_F when only it was).
-    const bool only_F_given = options.given(kForearmAxisCorrectionGainFKey) && !options.given(kForearmAxisCorrectionGainKKey);
+    const bool only_F_given =
+        options.given(kForearmAxisCorrectionGainFKey) && !options.given(kForearmAxisCorrectionGainKKey);
     throw_invalid(option_field(only_F_given ? kForearmAxisCorrectionGainFKey : kForearmAxisCorrectionGainKKey),
                   std::string("the sum of ") + kForearmAxisCorrectionGainKKey + " and " +
                       kForearmAxisCorrectionGainFKey + " is " + format_double(sum) + ", must be in (0, 1]");

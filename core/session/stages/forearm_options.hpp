@@ -28,16 +28,16 @@ inline constexpr const char* kForearmAxisCorrectionMaxDegKey = "forearm.axis_cor
 
 // What the options say, as the stage uses it. The defaults are the table's (read_forearm_options).
 struct ForearmOptions {
-  std::optional<Eigen::Quaterniond> K_from_B;  // forearm.K_from_B; none: no camera alignment (eq. 7)
-  double calibration_s = 0;                    // forearm.calibration_s
-  bool pose_orientation = false;               // forearm.calibration_orientation = pose
-  std::optional<std::uint32_t> body_id;        // forearm.body_id; none: the first body in the stream
-  bool axis_from_depth = false;                // forearm.axis = depth
-  bool upper_arm_from_depth = false;           // forearm.upper_arm = depth
-  forearm::GapSmootherOptions smoother;        // use_shoulder_sphere: forearm.shoulder_sphere = on
-  std::optional<double> buzzer_tone_hz;        // forearm.buzzer_hz; none: auto
-  bool fit_anchor = false;                     // forearm.gap_anchor = auto and fit.enabled
-  bool axis_correction_on = false;             // forearm.axis_correction = auto
+  std::optional<Eigen::Quaterniond> K_from_B;            // forearm.K_from_B; none: no camera alignment (eq. 7)
+  double calibration_s = 0;                              // forearm.calibration_s
+  bool pose_orientation = false;                         // forearm.calibration_orientation = pose
+  std::optional<std::uint32_t> body_id;                  // forearm.body_id; none: the first body in the stream
+  bool axis_from_depth = false;                          // forearm.axis = depth
+  bool upper_arm_from_depth = false;                     // forearm.upper_arm = depth
+  forearm::GapSmootherOptions smoother;                  // use_shoulder_sphere: forearm.shoulder_sphere = on
+  std::optional<double> buzzer_tone_hz;                  // forearm.buzzer_hz; none: auto
+  bool fit_anchor = false;                               // forearm.gap_anchor = auto and fit.enabled
+  bool axis_correction_on = false;                       // forearm.axis_correction = auto
   forearm::VisualAxisCorrectionOptions axis_correction;  // forearm.axis_correction_gain_K, _gain_F, _max_deg
 };
 

@@ -55,14 +55,16 @@ void ForearmStage::start(const v1::SessionHeader& header, StageOutput& out) {
     if (d.role() == v1::ImuDevice::BASE && base_id_.empty()) base_id_ = d.device_id();
     if (device.side || d.device_id() == base_id_) devices_.push_back(std::move(device));
   }
-  const bool has_arm = std::any_of(devices_.begin(), devices_.end(), [](const Device& d) { return d.side.has_value(); });
+  const bool has_arm =
+      std::any_of(devices_.begin(), devices_.end(), [](const Device& d) { return d.side.has_value(); });
   if (!has_arm) return;  // nothing to do: no arm IMU
   options_ = read_forearm_options(header);
   body_id_ = options_.body_id;
 
   if (base_id_.empty()) {
-    out.warn("FOREARM_NO_BASE_IMU", "header.imu_devices",
-             "no BASE IMU: neither the clocks (buzzer) nor the camera alignment (eq. 7) can be found; no forearm results");
+    out.warn(
+        "FOREARM_NO_BASE_IMU", "header.imu_devices",
+        "no BASE IMU: neither the clocks (buzzer) nor the camera alignment (eq. 7) can be found; no forearm results");
     return;
   }
   if (!options_.K_from_B) {
@@ -95,7 +97,8 @@ void ForearmStage::on_value(const StageValue& value, StageOutput& out) {
   for (Device& device : devices_) {
     if (device.id != orientations->device_id) continue;
     for (std::size_t i = 0; i < orientations->samples.size(); ++i) {
-      device.imu.push_back({orientations->samples[i].t_us, orientations->W_from_A[i], orientations->samples[i].acc_m_s2});
+      device.imu.push_back(
+          {orientations->samples[i].t_us, orientations->W_from_A[i], orientations->samples[i].acc_m_s2});
     }
   }
   advance(out);
@@ -124,7 +127,8 @@ void ForearmStage::hand_on_frames_done(bool all, StageOutput& out) {
   // stage's frames: past the window and kCalibrationGraceS they are no longer waited for (their
   // estimates, if the calibration comes, are late for the frame merge, which counts them).
   const bool waiting_for_calibration =
-      first_frame_us_ && *last_camera_frame_us_ <= *first_frame_us_ + seconds_to_us(options_.calibration_s + kCalibrationGraceS);
+      first_frame_us_ &&
+      *last_camera_frame_us_ <= *first_frame_us_ + seconds_to_us(options_.calibration_s + kCalibrationGraceS);
   for (const Device& device : devices_) {
     if (all || !device.side || device.calibration_failed) continue;
     if (!device.tracker) {
@@ -172,11 +176,13 @@ void ForearmStage::advance(StageOutput& out) {
 void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleton) {
   // The SDK's joints only say where to look; the axes and the strap are the images'.
   const forearm::DepthImageView depth =
-      frame.depth_mm.empty() ? forearm::DepthImageView{}
-                             : forearm::DepthImageView{frame.depth_mm.cols, frame.depth_mm.rows, frame.depth_mm.ptr<std::uint16_t>()};
+      frame.depth_mm.empty()
+          ? forearm::DepthImageView{}
+          : forearm::DepthImageView{frame.depth_mm.cols, frame.depth_mm.rows, frame.depth_mm.ptr<std::uint16_t>()};
   const forearm::GrayImageView gray =
-      frame.color_gray.empty() ? forearm::GrayImageView{}
-                               : forearm::GrayImageView{frame.color_gray.cols, frame.color_gray.rows, frame.color_gray.ptr<std::uint8_t>()};
+      frame.color_gray.empty()
+          ? forearm::GrayImageView{}
+          : forearm::GrayImageView{frame.color_gray.cols, frame.color_gray.rows, frame.color_gray.ptr<std::uint8_t>()};
   for (Device& device : devices_) {
     if (!device.side || device.calibration_failed) continue;
     const geometry::KinectArmJoints j = arm_joints(*device.side);
@@ -187,7 +193,8 @@ void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleto
     arm.elbow_K = joints[j.elbow].p_K;
     arm.wrist_K = joints[j.wrist].p_K;
     arm.shoulder_tracked = joints[j.shoulder].state == JointState::kTracked;
-    arm.forearm_tracked = joints[j.elbow].state == JointState::kTracked && joints[j.wrist].state == JointState::kTracked;
+    arm.forearm_tracked =
+        joints[j.elbow].state == JointState::kTracked && joints[j.wrist].state == JointState::kTracked;
     arm.sdk_elbow_K = arm.elbow_K;
     arm.sdk_elbow_seen = joints[j.elbow].state != JointState::kNotTracked;
     arm.K_from_wrist_sdk = joints[j.wrist].orientation;
@@ -220,7 +227,8 @@ void ForearmStage::try_calibrate(bool finishing, StageOutput& out) {
     }
     return;
   }
-  const Device& base = *std::find_if(devices_.begin(), devices_.end(), [&](const Device& d) { return d.id == base_id_; });
+  const Device& base =
+      *std::find_if(devices_.begin(), devices_.end(), [&](const Device& d) { return d.id == base_id_; });
   if (base.imu.empty()) {
     if (finishing) out.warn("FOREARM_NO_BASE_IMU", "imu", "the base IMU '" + base_id_ + "' sent no samples");
     return;
@@ -316,7 +324,7 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
     held.push_back(used[device.calibration->first_frame + i].K_from_F_sdk);
   }
   device.tracker = std::make_unique<forearm::ForearmTrack>(*device.side, device.calibration->model, has_model,
-                                                          *K_from_W_, mean_rotation(held));
+                                                           *K_from_W_, mean_rotation(held));
   if (options_.axis_correction_on && options_.axis_from_depth && has_model) {
     device.tracker->use_axis_correction(options_.axis_correction);
   }
@@ -394,8 +402,8 @@ void ForearmStage::finish(StageOutput& out) {
   if (const std::optional<double> tone_hz = clocks_->buzzer_tone_hz()) report.set_buzzer_tone_hz(*tone_hz);
   for (const Device& device : devices_) {
     if (clock_map_ && clock_map_->has(device.id)) {
-      const double first_us = static_cast<double>(
-          device.first_device_us.value_or(device.imu.empty() ? 0 : device.imu.front().t_device_us));
+      const double first_us =
+          static_cast<double>(device.first_device_us.value_or(device.imu.empty() ? 0 : device.imu.front().t_device_us));
       const sync::LinearClock& clock = clock_map_->camera_from(device.id);
       (*report.mutable_clock_offset_us())[device.id] = std::llround(clock.to_reference_us(first_us) - first_us);
       (*report.mutable_clock_offset_sigma_us())[device.id] = clock.sigma_us(first_us);

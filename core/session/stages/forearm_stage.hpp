@@ -43,9 +43,9 @@
 #include <vector>
 
 #include "forearm/forearm_model.hpp"
+#include "forearm/forearm_track.hpp"
 #include "forearm/strap_detection.hpp"
 #include "session/pipeline_stage.hpp"
-#include "forearm/forearm_track.hpp"
 #include "session/stages/forearm_options.hpp"
 #include "session/stages/stream_clocks.hpp"
 
@@ -78,11 +78,11 @@ class ForearmStage : public Stage {
   };
   struct Device {
     std::string id;
-    std::optional<forearm::Side> side;  // none: the base IMU
-    std::vector<ImuRecord> imu;  // device clock, as received
+    std::optional<forearm::Side> side;            // none: the base IMU
+    std::vector<ImuRecord> imu;                   // device clock, as received
     std::optional<std::int64_t> first_device_us;  // first sample handed to the tracker
     std::optional<std::int64_t> last_camera_us;   // last sample handed to the tracker, camera clock
-    std::vector<forearm::ArmFrame> frames;  // camera frames until calibration
+    std::vector<forearm::ArmFrame> frames;        // camera frames until calibration
     std::optional<forearm::ForearmCalibration> calibration;
     bool calibration_failed = false;
     std::uint32_t strap_frames = 0;

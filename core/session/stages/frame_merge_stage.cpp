@@ -36,8 +36,9 @@ void FrameMergeStage::finish(StageOutput& out) {
   }
   if (merger_.late_parts() > 0) {
     out.warn("MERGE_LATE_ESTIMATE", "frames",
-             std::to_string(merger_.late_parts()) + " per-frame estimates came after their frame had been sent "
-                                                    "(not in the FrameResults)");
+             std::to_string(merger_.late_parts()) +
+                 " per-frame estimates came after their frame had been sent "
+                 "(not in the FrameResults)");
   }
 }
 

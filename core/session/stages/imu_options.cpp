@@ -24,8 +24,9 @@ const OptionTable& imu_option_table() {
          .description = "heading: time constant of the magnetometer correction"},
         {.key = kImuMagCalibrationKeys,
          .type = OptionType::kMagCalibration,
-         .description = "magnetometer calibration made before the session (paper 1 eq. 3): the hard-iron centre (uT) and "
-                        "the 3x3 correction row by row; applied to the device's readings before the filter"},
+         .description =
+             "magnetometer calibration made before the session (paper 1 eq. 3): the hard-iron centre (uT) and "
+             "the 3x3 correction row by row; applied to the device's readings before the filter"},
     };
   }();
   return table;

@@ -62,9 +62,8 @@ void ImuOrientationStage::finish(StageOutput& out) {
                "device '" + id + "' sent no samples; no orientation or gyro bias for it");
       continue;
     }
-    calibration.set_mag_field_ut(device.filter.mag_ref_norm_uT() > 0.0
-                                     ? device.filter.mag_ref_norm_uT()
-                                     : std::numeric_limits<double>::quiet_NaN());
+    calibration.set_mag_field_ut(device.filter.mag_ref_norm_uT() > 0.0 ? device.filter.mag_ref_norm_uT()
+                                                                       : std::numeric_limits<double>::quiet_NaN());
     *calibration.mutable_gyro_bias_rad_s() = to_proto(device.filter.gyro_bias_rad_s());
   }
 }

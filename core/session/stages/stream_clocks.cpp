@@ -24,7 +24,10 @@ constexpr double kToneTolerance = 0.1;
 
 StreamClocks::StreamClocks(std::string base_device, double audio_sample_rate_hz, unsigned audio_channels,
                            std::optional<double> buzzer_tone_hz)
-    : base_(std::move(base_device)), channels_(audio_channels), auto_tone_(!buzzer_tone_hz), nominal_tone_hz_(buzzer_tone_hz.value_or(0.0)) {
+    : base_(std::move(base_device)),
+      channels_(audio_channels),
+      auto_tone_(!buzzer_tone_hz),
+      nominal_tone_hz_(buzzer_tone_hz.value_or(0.0)) {
   // A header without a usable audio rate has no audio to scan.
   if (!std::isfinite(audio_sample_rate_hz) || audio_sample_rate_hz <= 0.0) return;
   // The tone is always measured (sync/tone_stop_scanner.hpp, find_tone): within kToneTolerance
@@ -66,7 +69,8 @@ void StreamClocks::add(const ClockEvent& event) {
   if (event.kind == ClockEvent::Kind::kBuzzerStop && event.device_id == base_) {
     base_stops_us_.insert(std::upper_bound(base_stops_us_.begin(), base_stops_us_.end(), event.t_us), event.t_us);
   } else if (event.kind == ClockEvent::Kind::kBleReceipt) {
-    receipts_.push_back({static_cast<std::int64_t>(event.ble_sequence), event.device_id, static_cast<double>(event.t_us)});
+    receipts_.push_back(
+        {static_cast<std::int64_t>(event.ble_sequence), event.device_id, static_cast<double>(event.t_us)});
   }
 }
 
@@ -81,8 +85,7 @@ std::vector<sync::ClockObservation> StreamClocks::paired_stops(std::size_t first
   used[first_heard] = true;
   for (std::size_t e = 1; e < base_stops_us_.size(); ++e) {
     const double predicted_us = first_only.to_reference_us(static_cast<double>(base_stops_us_[e]));
-    const double tolerance_us =
-        kPairToleranceUs + kPairDriftBound * static_cast<double>(base_stops_us_[e] - first_us);
+    const double tolerance_us = kPairToleranceUs + kPairDriftBound * static_cast<double>(base_stops_us_[e] - first_us);
     std::optional<std::size_t> best;
     for (std::size_t k = first_heard + 1; k < heard.size(); ++k) {
       const double distance = std::abs(heard[k].t_camera_us - predicted_us);
@@ -128,17 +131,18 @@ std::optional<sync::ClockMap> StreamClocks::try_build(const std::vector<std::str
 
 StreamClocks::Missing StreamClocks::why_not(const std::vector<std::string>& devices) const {
   if (base_stops_us_.empty()) {
-    return {"sync_event", "no BUZZER_STOP event from the base IMU '" + base_ + "': its clock cannot be mapped "
-                          "onto the camera's (paper 1, II-G.1)"};
+    return {"sync_event", "no BUZZER_STOP event from the base IMU '" + base_ +
+                              "': its clock cannot be mapped "
+                              "onto the camera's (paper 1, II-G.1)"};
   }
   if (!audio_seen_) return {"audio", "no camera audio: the buzzer stop cannot be heard"};
   if (heard_stops().empty()) {
     const auto hz = [](double f) { return std::to_string(static_cast<int>(std::lround(f))) + " Hz"; };
     if (!buzzer_tone_hz()) {
       const sync::ToneSearchOptions& band = tone_band_;
-      std::string message = "no buzzer tone found in the audio: no tone between " + hz(band.min_hz) + " and " +
-                            hz(band.max_hz) + " sounds and stops (forearm.buzzer_hz = " +
-                            (auto_tone_ ? std::string("auto") : hz(nominal_tone_hz_)) + ")";
+      std::string message =
+          "no buzzer tone found in the audio: no tone between " + hz(band.min_hz) + " and " + hz(band.max_hz) +
+          " sounds and stops (forearm.buzzer_hz = " + (auto_tone_ ? std::string("auto") : hz(nominal_tone_hz_)) + ")";
       if (const std::optional<double>& other = tone_stops_->heard_outside_hz()) {
         message += "; a tone that stops was heard at " + hz(*other) + ": set forearm.buzzer_hz to it or to 'auto'";
       }

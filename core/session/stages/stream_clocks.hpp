@@ -56,9 +56,7 @@ class StreamClocks {
   std::optional<double> buzzer_tone_hz() const;
   // Sync inputs so far (BLE receipts, later buzzer stops and tone stops heard): when it grows,
   // a later try_build() refits offsets and drifts over everything.
-  std::size_t sync_input_count() const {
-    return receipts_.size() + base_stops_us_.size() + heard_stops().size();
-  }
+  std::size_t sync_input_count() const { return receipts_.size() + base_stops_us_.size() + heard_stops().size(); }
   std::size_t receipt_count() const { return receipts_.size(); }
   // Buzzer stops after the first paired with a heard stop in the last try_build().
   std::size_t later_stops_used() const { return later_stops_used_; }
@@ -70,8 +68,8 @@ class StreamClocks {
 
   std::string base_;
   unsigned channels_ = 0;
-  bool auto_tone_ = false;         // forearm.buzzer_hz = auto
-  double nominal_tone_hz_ = 0.0;   // else the frequency given
+  bool auto_tone_ = false;             // forearm.buzzer_hz = auto
+  double nominal_tone_hz_ = 0.0;       // else the frequency given
   sync::ToneSearchOptions tone_band_;  // where the tone is searched
   bool audio_seen_ = false;
   std::vector<std::int64_t> base_stops_us_;  // BUZZER_STOP events of the base, base clock, sorted
