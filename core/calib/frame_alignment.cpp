@@ -4,22 +4,11 @@
 #include <string>
 
 #include "common/error.hpp"
+#include "geometry/rotation_mean.hpp"
 
 namespace posefuse::calib {
 
 namespace {
-
-Quat chordal_mean(const std::vector<Quat>& rotations) {
-  Eigen::Vector4d sum = Eigen::Vector4d::Zero();
-  for (const Quat& q : rotations) sum += geometry::to_wxyz(geometry::same_hemisphere(q, rotations.front()));
-  return geometry::from_wxyz(sum.normalized());
-}
-
-double rms_angle(const std::vector<Quat>& rotations, const Quat& mean) {
-  double sum_sq = 0.0;
-  for (const Quat& q : rotations) sum_sq += std::pow(geometry::angle_between(q, mean), 2);
-  return std::sqrt(sum_sq / static_cast<double>(rotations.size()));
-}
 
 double reprojection_rms_px(const MocapToCamera& m, const std::array<Vec3, 4>& markers_E, const PanelInCamera& seen,
                            const PinholeCamera& camera) {
@@ -69,7 +58,7 @@ MocapToCamera mocap_to_camera(const std::vector<std::array<Vec3, 4>>& markers_E,
     origin_sum += single.back().E_origin_K;
   }
   MocapToCamera out;
-  out.K_from_E = chordal_mean(rotations);
+  out.K_from_E = geometry::chordal_mean(rotations);
   out.E_origin_K = origin_sum / static_cast<double>(seen.size());
   out.poses = static_cast<int>(seen.size());
   double origin_spread_sq = 0.0, residual_sq = 0.0;
@@ -79,7 +68,7 @@ MocapToCamera mocap_to_camera(const std::vector<std::array<Vec3, 4>>& markers_E,
         std::pow(reprojection_rms_px(out, markers_E[i], seen[i], camera), 2) / static_cast<double>(seen.size());
   }
   out.marker_residual_px = std::sqrt(residual_sq);
-  const double rotation_spread = rms_angle(rotations, out.K_from_E);
+  const double rotation_spread = geometry::rms_angle_rad(rotations, out.K_from_E);
   if (rotation_spread > max_spread_rad || std::sqrt(origin_spread_sq) > max_spread_m) {
     throw_precondition("mocap.poses", "the panel poses disagree: " + std::to_string(rotation_spread * 180 / EIGEN_PI) +
                                           " degrees and " + std::to_string(std::sqrt(origin_spread_sq) * 1e3) +
@@ -100,8 +89,8 @@ BaseImuAlignment base_imu_in_camera(const std::vector<PanelImuReading>& readings
         (readings[i].K_from_P * readings[i].W_from_P.conjugate() * readings[i].W_from_B).normalized());  // eq. 8
   }
   BaseImuAlignment out;
-  out.K_from_B = chordal_mean(per_reading);
-  out.spread_rad = rms_angle(per_reading, out.K_from_B);
+  out.K_from_B = geometry::chordal_mean(per_reading);
+  out.spread_rad = geometry::rms_angle_rad(per_reading, out.K_from_B);
   out.readings = static_cast<int>(readings.size());
   if (out.spread_rad > max_spread_rad) {
     throw_precondition("readings", "the eq. 8 results spread " + std::to_string(out.spread_rad * 180 / EIGEN_PI) +

@@ -6,7 +6,9 @@
 #include <string>
 
 #include "common/error.hpp"
+#include "common/number_text.hpp"
 #include "geometry/quaternion.hpp"
+#include "geometry/rotation_mean.hpp"
 
 namespace posefuse::forearm {
 
@@ -125,7 +127,6 @@ ForearmCalibration calibrate_forearm(const std::vector<CalibrationFrame>& frames
   ForearmCalibration out;
   out.first_frame = best_first;
   out.frame_count = best_count;
-  Eigen::Vector4d quat_sum = Eigen::Vector4d::Zero();
   std::vector<Quat> per_frame;
   std::vector<double> wrist_distances;
   const double n = static_cast<double>(best_count);
@@ -138,20 +139,25 @@ ForearmCalibration calibrate_forearm(const std::vector<CalibrationFrame>& frames
     out.model.d_se_m += along / n;
     wrist_distances.push_back((f.wrist_K - core_point).norm());
     out.model.d_ul_m += (f.elbow_K - f.shoulder_K).norm() / n;
-    const Quat q = F_from_A_calibration(f.K_from_F_sdk.normalized(), K_from_W, f.W_from_A.normalized());
-    per_frame.push_back(per_frame.empty() ? q : geometry::same_hemisphere(q, per_frame.front()));
-    quat_sum += geometry::to_wxyz(per_frame.back());
+    per_frame.push_back(F_from_A_calibration(f.K_from_F_sdk.normalized(), K_from_W, f.W_from_A.normalized()));
   }
   out.model.d_sw_m = hold_wrist_distance(std::move(wrist_distances));
-  // Normalised mean of hemisphere-aligned quaternions: the chordal mean, fine for the small
-  // spread of a held pose.
-  out.model.F_from_A = geometry::from_wxyz(quat_sum.normalized());
-  double spread_sq = 0.0;
-  for (const Quat& q : per_frame) {
-    const double a = geometry::angle_between(q, out.model.F_from_A);
-    spread_sq += a * a / n;
+  out.model.F_from_A = geometry::chordal_mean(per_frame);
+  out.F_from_A_spread_rad = geometry::rms_angle_rad(per_frame, out.model.F_from_A);
+  const std::string hold = "the calibration hold of " + std::to_string(best_count) + " frames ";
+  if (!(out.model.d_ul_m >= options.min_upper_arm_m && out.model.d_ul_m <= options.max_upper_arm_m)) {
+    throw_precondition("frames", hold + "has an upper arm (shoulder to elbow) of " +
+                                     fixed_text(100.0 * out.model.d_ul_m, 1) + " cm, outside " +
+                                     fixed_text(100.0 * options.min_upper_arm_m, 0) + "-" +
+                                     fixed_text(100.0 * options.max_upper_arm_m, 0) + " cm: not an arm in the pose");
   }
-  out.F_from_A_spread_rad = std::sqrt(spread_sq);
+  if (!(out.F_from_A_spread_rad <= options.max_F_from_A_spread_rad)) {
+    constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
+    throw_precondition("frames", hold + "gives mountings (eq. 9) spread " +
+                                     fixed_text(out.F_from_A_spread_rad * kDegPerRad, 1) + " deg RMS, above " +
+                                     fixed_text(options.max_F_from_A_spread_rad * kDegPerRad, 0) +
+                                     ": the skeleton did not show one pose while the IMU was still");
+  }
   return out;
 }
 

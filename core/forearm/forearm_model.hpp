@@ -41,6 +41,16 @@ struct CalibrationOptions {
   double still_angle_rad = 3.0 * 3.14159265358979323846 / 180.0;
   double still_radius_m = 0.05;
   int min_still_frames = 15;  // half a second at 30 Hz
+  // A still run that cannot be a human arm holding the calibration pose is refused, however
+  // long (docs/forearm.md "Refused calibrations"):
+  // - its upper arm (shoulder to elbow, d_ul) outside [min_upper_arm_m, max_upper_arm_m]: the
+  //   humerus lengths of a 5-year-old to the tallest adults, widened by the camera's joint error;
+  // - its per-frame eq. 9 results spread (RMS) beyond max_F_from_A_spread_rad: with the IMU
+  //   still, the skeleton's forearm orientations disagree, so it did not show one pose; no
+  //   mounting made from it can be trusted to the 15 degrees a confident sample must meet.
+  double min_upper_arm_m = 0.15;
+  double max_upper_arm_m = 0.50;
+  double max_F_from_A_spread_rad = 15.0 * 3.14159265358979323846 / 180.0;
 };
 
 struct ForearmCalibration {
@@ -52,7 +62,8 @@ struct ForearmCalibration {
 
 // Averages r, d_se, d_sw, d_ul and eq. 9 over the longest run of still frames. Throws
 // posefuse::Error: kInvalidArgument "frames[i].*" (non-finite, out-of-order), kFailedPrecondition
-// "frames" when no still run reaches min_still_frames ("too short a calibration").
+// "frames" when no still run reaches min_still_frames ("too short a calibration") or the run is
+// refused (its upper arm length or its spread, named with the bound it breaks).
 ForearmCalibration calibrate_forearm(const std::vector<CalibrationFrame>& frames, const Quat& K_from_W,
                                      const CalibrationOptions& options = {});
 

@@ -4,9 +4,11 @@
 
 #include "body/smpl_model.hpp"
 #include "common/error.hpp"
+#include "forearm/arm_calibration.hpp"
 #include "forearm/arm_frame_measurement.hpp"
 #include "forearm/calibration_frames.hpp"
 #include "forearm/forearm_orientation.hpp"
+#include "geometry/rotation_mean.hpp"
 #include "session/option_table.hpp"
 #include "session/stages/proto_values.hpp"
 #include "session/text_fields.hpp"
@@ -17,13 +19,6 @@ namespace {
 
 using forearm::Quat;
 using forearm::Vec3;
-
-// Chordal mean of hemisphere-aligned unit quaternions (fine for the small spread of a hold).
-Quat mean_rotation(const std::vector<Quat>& rotations) {
-  Eigen::Vector4d sum = Eigen::Vector4d::Zero();
-  for (const Quat& q : rotations) sum += geometry::to_wxyz(geometry::same_hemisphere(q, rotations.front()));
-  return geometry::from_wxyz(sum.normalized());
-}
 
 // How long past the calibration window the frames waiting for it hold the frame merge.
 constexpr double kCalibrationGraceS = 10.0;
@@ -249,7 +244,7 @@ void ForearmStage::try_calibrate(bool finishing, StageOutput& out) {
   }
   std::vector<Quat> W_from_B;
   for (const ImuRecord& r : base.imu) W_from_B.push_back(r.W_from_A);
-  K_from_W_ = (*options_.K_from_B * mean_rotation(W_from_B).conjugate()).normalized();  // eq. 7
+  K_from_W_ = (*options_.K_from_B * geometry::chordal_mean(W_from_B).conjugate()).normalized();  // eq. 7
   calibrated_ = true;
   for (Device& device : devices_) {
     if (device.side) calibrate_arm(device, out);
@@ -288,43 +283,32 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
                  " calibration frames (need " + std::to_string(calibration_options_.min_still_frames) +
                  "): the calibration pose's roll comes from the SDK shoulder");
   }
-  const std::vector<forearm::CalibrationFrame>& with_strap = selected.with_strap;
-  const std::vector<forearm::CalibrationFrame>& without_strap = selected.without_strap;
-  const std::size_t not_raised = selected.not_raised;
-  device.strap_frames = static_cast<std::uint32_t>(with_strap.size());
-  bool has_model = true;
+  device.strap_frames = static_cast<std::uint32_t>(selected.with_strap.size());
+  forearm::ArmCalibration calibrated;
   try {
-    device.calibration = forearm::calibrate_forearm(with_strap, *K_from_W_, calibration_options_);
-  } catch (const Error& strap_error) {
-    try {
-      device.calibration = forearm::calibrate_forearm(without_strap, *K_from_W_, calibration_options_);
-      has_model = false;
-      out.warn("FOREARM_STRAP_NOT_SEEN", field + ".strap",
-               "the strap was seen in " + std::to_string(with_strap.size()) + " of " +
-                   std::to_string(without_strap.size()) + " calibration frames (" + strap_error.what() +
-                   "): forearm orientation only, no IMU positions");
-    } catch (const Error& error) {
-      device.calibration_failed = true;
-      device.frames.clear();
-      ArmTrackStart refused;
-      refused.device_id = device.id;
-      refused.arm = *device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT;
-      out.hand_on(std::move(refused));
-      out.warn("FOREARM_CALIBRATION", field + ".calibration",
-               std::string("no usable calibration pose (paper 1, II-H) in the first ") +
-                   format_double(options_.calibration_s) + " s: " + error.what() + " (" + std::to_string(not_raised) +
-                   " tracked frames skipped: forearm not raised, paper 1 Fig. 3b); no results for this arm");
-      return;
-    }
+    calibrated = forearm::calibrate_arm(selected, *K_from_W_, calibration_options_);
+  } catch (const Error& error) {
+    device.calibration_failed = true;
+    device.frames.clear();
+    ArmTrackStart refused;
+    refused.device_id = device.id;
+    refused.arm = *device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT;
+    out.hand_on(std::move(refused));
+    out.warn("FOREARM_CALIBRATION", field + ".calibration",
+             std::string("no usable calibration pose (paper 1, II-H) in the first ") +
+                 format_double(options_.calibration_s) + " s: " + error.what() + " (" +
+                 std::to_string(selected.not_raised) +
+                 " tracked frames skipped: forearm not raised, paper 1 Fig. 3b); no results for this arm");
+    return;
   }
-  device.has_model = has_model;
-  const std::vector<forearm::CalibrationFrame>& used = has_model ? with_strap : without_strap;
-  std::vector<Quat> held;
-  for (std::size_t i = 0; i < device.calibration->frame_count; ++i) {
-    held.push_back(used[device.calibration->first_frame + i].K_from_F_sdk);
+  if (!calibrated.has_model) {
+    out.warn("FOREARM_STRAP_NOT_SEEN", field + ".strap",
+             calibrated.strap_not_seen + ": forearm orientation only, no IMU positions");
   }
+  device.calibration = calibrated.calibration;
+  const bool has_model = device.has_model = calibrated.has_model;
   device.tracker = std::make_unique<forearm::ForearmTrack>(*device.side, device.calibration->model, has_model,
-                                                           *K_from_W_, mean_rotation(held));
+                                                           *K_from_W_, calibrated.K_from_F_held);
   if (options_.axis_correction_on && options_.axis_from_depth && has_model) {
     device.tracker->use_axis_correction(options_.axis_correction);
   }

@@ -12,7 +12,7 @@
 //     K_from_W = K_from_B * (mean W_from_B of the base IMU)^-1, K_from_B from the option
 //     forearm.K_from_B (the rig's eq. 8 calibration, core/calib).
 //  2. When the camera clock passes forearm.calibration_s after the first skeleton frame, each
-//     arm is calibrated (II-H, forearm_model.hpp calibrate_forearm): r, d_se, d_sw, d_ul and
+//     arm is calibrated (II-H, forearm/arm_calibration.hpp): r, d_se, d_sw, d_ul and
 //     eq. 9 over the longest still run. The forearm orientation in the pose comes from the
 //     skeleton: the shoulder-elbow-wrist plane with the palm towards the camera
 //     (forearm.calibration_orientation = pose, forearm_orientation.hpp), or from the SDK's
@@ -33,7 +33,8 @@
 // camera frame, FramesDone: every ArmTrack frame up to then has been handed on.
 // Problems that stop an arm are warnings naming them (the rest of the session goes on):
 // FOREARM_NO_BASE_IMU, FOREARM_NO_CAMERA_ALIGNMENT, FOREARM_NO_SYNC (no buzzer event, the stop
-// not heard, no shared BLE broadcast), FOREARM_CALIBRATION (too short or no calibration hold),
+// not heard, no shared BLE broadcast), FOREARM_CALIBRATION (too short or no calibration hold, or
+// one no arm in the pose gives: forearm_model.hpp CalibrationOptions),
 // FOREARM_STRAP_NOT_SEEN (no positions: orientation only).
 #include <deque>
 #include <map>
