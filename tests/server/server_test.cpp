@@ -2,6 +2,7 @@
 // No timing assertions: waits are for conditions, with generous deadlines only against hangs.
 #include <algorithm>
 #include <chrono>
+#include <cmath>
 #include <map>
 #include <string>
 #include <thread>
@@ -457,6 +458,23 @@ TEST(ServerOptions, BadValuesNameTheFlag) {
     EXPECT_EQ(rejected_flag(options), "--max-upload-mb") << mb;
   }
   EXPECT_EQ(rejected_flag(ServerOptions{}), "");
+}
+
+TEST(ServerOptions, StreamRateOptionsNameTheFlag) {
+  for (const double rate : {-0.1, std::nan(""), HUGE_VAL}) {
+    ServerOptions options;
+    options.min_stream_rate = rate;
+    EXPECT_EQ(rejected_flag(options), "--min-stream-rate") << rate;
+  }
+  // A grace of 0 would end every session before its first data chunk arrived.
+  for (const double grace_s : {0.0, -1.0, std::nan(""), HUGE_VAL}) {
+    ServerOptions options;
+    options.stream_rate_grace_s = grace_s;
+    EXPECT_EQ(rejected_flag(options), "--stream-rate-grace-s") << grace_s;
+  }
+  ServerOptions off;
+  off.min_stream_rate = 0.0;  // disables the rule
+  EXPECT_EQ(rejected_flag(off), "");
 }
 
 TEST(ServerOptions, JobStoreRolesAndLeasesThatCannotWorkNameTheFlag) {
