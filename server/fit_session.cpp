@@ -2,6 +2,7 @@
 
 #include "server/log.hpp"
 #include "server/status.hpp"
+#include "server/stream_rate.hpp"
 #include "session/stages/default_stages.hpp"
 
 namespace posefuse::server {
@@ -70,6 +71,7 @@ void FitSession::OnReadDone(bool ok) {
 void FitSession::schedule_locked() {
   if (worker_scheduled_ || finished_) return;
   worker_scheduled_ = true;
+  worker_scheduled_at_ = Clock::now();
   pool_.submit([self = shared_from_this()] { self->work(); });
 }
 
@@ -79,13 +81,14 @@ void FitSession::work() {
     bool input_ended = false;
     {
       std::lock_guard lock(mu_);
+      stream_time_us_ = pipeline_->stream_time_us();
       if (finished_ || final_status_) {
-        worker_scheduled_ = false;
+        worker_returns_locked();
         return;
       }
       if (outbox_.size() >= options_.max_queued_results) {
         worker_waits_for_writes_ = true;
-        worker_scheduled_ = false;
+        worker_returns_locked();
         return;
       }
       if (!inbox_.empty()) {
@@ -98,7 +101,7 @@ void FitSession::work() {
       } else if (input_closed_) {
         input_ended = true;
       } else {
-        worker_scheduled_ = false;
+        worker_returns_locked();
         return;
       }
     }
@@ -121,11 +124,17 @@ void FitSession::work() {
     }
     if (status) {
       std::lock_guard lock(mu_);
-      worker_scheduled_ = false;
+      stream_time_us_ = pipeline_->stream_time_us();
+      worker_returns_locked();
       finish_after_writes_locked(std::move(*status));
       return;
     }
   }
+}
+
+void FitSession::worker_returns_locked() {
+  worker_scheduled_ = false;
+  server_busy_ += Clock::now() - worker_scheduled_at_;
 }
 
 void FitSession::enqueue_result(v1::FitResult&& result) {
@@ -202,10 +211,20 @@ void FitSession::OnCancel() {
 
 void FitSession::check_idle(Clock::time_point now) {
   std::lock_guard lock(mu_);
-  if (finished_ || final_status_) return;
+  if (finished_) return;
+  const bool idle_for_timeout = now - last_read_at_ >= std::chrono::duration<double>(options_.idle_timeout_s);
+  if (final_status_) {
+    // Decided, but the results before the status are still going out: a client that stopped
+    // taking them must not keep the slot either.
+    if (write_pending_ && idle_for_timeout) context_->TryCancel();
+    return;
+  }
   const bool waiting_for_client = (read_pending_ && inbox_.empty() && !worker_scheduled_) || write_pending_;
   if (!waiting_for_client) return;
-  if (now - last_read_at_ < std::chrono::duration<double>(options_.idle_timeout_s)) return;
+  if (!idle_for_timeout) {
+    check_stream_rate_locked(now);
+    return;
+  }
   log_event("info", "session_idle", {{"session", std::to_string(id_)}});
   final_status_ =
       grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED,
@@ -217,6 +236,22 @@ void FitSession::check_idle(Clock::time_point now) {
   } else {
     finish_now_locked(*final_status_);
   }
+}
+
+void FitSession::check_stream_rate_locked(Clock::time_point now) {
+  // Judged only once every chunk read has been processed, so that stream_time_us_ is what the
+  // client has delivered and the server's busy time is all counted.
+  if (worker_scheduled_ || !inbox_.empty()) return;
+  const StreamRateRule rule{options_.min_stream_rate, options_.stream_rate_grace_s};
+  const double client_s = std::chrono::duration<double>(now - started_at_ - server_busy_).count();
+  const auto shortfall = stream_rate_shortfall(rule, client_s, static_cast<double>(stream_time_us_) * 1e-6);
+  if (!shortfall) return;
+  log_event("info", "session_too_slow",
+            {{"session", std::to_string(id_)},
+             {"rate", std::to_string(shortfall->rate)},
+             {"required_rate", std::to_string(shortfall->required_rate)}});
+  // Like the end of the stream: the results of every chunk processed go out first.
+  finish_after_writes_locked(grpc::Status(grpc::StatusCode::DEADLINE_EXCEEDED, describe(*shortfall, rule)));
 }
 
 void FitSession::OnDone() {

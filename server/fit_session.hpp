@@ -14,7 +14,10 @@
 //
 // Ending: the end marker processed -> OK after the last result is sent; a session-ending
 // posefuse::Error -> its status (after the results before it); client cancellation -> work stops
-// and the call finishes CANCELLED; no chunk for idle_timeout_s -> DEADLINE_EXCEEDED.
+// and the call finishes CANCELLED; no chunk for idle_timeout_s -> DEADLINE_EXCEEDED; data that
+// advances slower than min_stream_rate x real time after stream_rate_grace_s (stream_rate.hpp)
+// -> DEADLINE_EXCEEDED after the results before it. A session whose status is decided but whose
+// client stops taking the results before it is cancelled after idle_timeout_s as well.
 #include <chrono>
 #include <cstdint>
 #include <deque>
@@ -46,6 +49,7 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
   void OnWriteDone(bool ok) override;
   void OnCancel() override;
   void OnDone() override;
+  // The idle timeout and the minimum stream rate (called by the registry's monitor).
   void check_idle(std::chrono::steady_clock::time_point now) override;
 
   // Use start(); public only for make_shared.
@@ -65,6 +69,10 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
   void finish_after_writes_locked(grpc::Status status);
   void finish_now_locked(grpc::Status status);
   void clear_inbox_locked();
+  // The worker task returns; its time since schedule_locked was the server's, not the client's.
+  void worker_returns_locked();
+  // Ends the session if its client has fallen below the minimum stream rate.
+  void check_stream_rate_locked(Clock::time_point now);
 
   grpc::CallbackServerContext* const context_;
   const std::uint64_t id_;
@@ -81,6 +89,11 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
   bool input_closed_ = false;  // the client half-closed (or the read side failed)
   std::deque<v1::SessionChunk> inbox_;
   bool worker_scheduled_ = false;
+  Clock::time_point worker_scheduled_at_;
+  // Wall time the worker was scheduled or running: the server's share of the session's time,
+  // which the minimum stream rate does not charge to the client.
+  Clock::duration server_busy_{};
+  std::int64_t stream_time_us_ = 0;  // the pipeline's, as of the worker's last chunk
   bool worker_waits_for_writes_ = false;
   std::deque<v1::FitResult> outbox_;
   v1::FitResult write_buffer_;

@@ -16,6 +16,7 @@ namespace {
 constexpr const char* kUsage =
     "usage: posefuse-server [--config FILE] [--listen HOST:PORT] [--workers N] [--max-sessions N]\n"
     "                       [--max-message-mb MB] [--idle-timeout-s S] [--max-queued-chunks N]\n"
+    "                       [--min-stream-rate R] [--stream-rate-grace-s S]\n"
     "                       [--shutdown-grace-s S] [--data-dir DIR] [--recordings-root DIR]\n"
     "                       [--max-jobs N] [--max-upload-mb MB] [--metrics-listen HOST:PORT]\n"
     "                       [--tls-cert FILE --tls-key FILE [--tls-client-ca FILE]]\n"
@@ -25,9 +26,11 @@ constexpr const char* kUsage =
     "defaults: --listen 127.0.0.1:50051 --workers <cores> --max-sessions 16 --max-message-mb 16\n"
     "          --idle-timeout-s 60 --max-queued-chunks 8 --shutdown-grace-s 10 --max-jobs 1\n"
     "          --max-upload-mb 8192 --role both --job-lease-s 30 --job-heartbeat-s 10\n"
-    "          --job-max-attempts 3\n"
+    "          --job-max-attempts 3 --min-stream-rate 0.5 --stream-rate-grace-s 60\n"
     "batch jobs are off without --data-dir; SubmitJob by reference needs --recordings-root\n"
     "the job store is DIR/jobs.sqlite unless --job-store names a PostgreSQL database\n"
+    "a Fit stream whose data advances slower than --min-stream-rate x real time after\n"
+    "--stream-rate-grace-s ends DEADLINE_EXCEEDED (0 disables)\n"
     "plaintext without --tls-cert; no token needed without --tokens-file (docs/server.md)\n"
     "--config FILE: 'key = value' lines, keys as the flags without '--' (max-sessions = 4),\n"
     "               '#' starts a comment line; flags given on the command line win\n";

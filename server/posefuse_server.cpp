@@ -34,6 +34,12 @@ void validate_options(const ServerOptions& o) {
   if (!(o.idle_timeout_s > 0.0 && std::isfinite(o.idle_timeout_s))) {
     throw_invalid("--idle-timeout-s", "must be a positive number of seconds");
   }
+  if (!(o.min_stream_rate >= 0.0 && std::isfinite(o.min_stream_rate))) {
+    throw_invalid("--min-stream-rate", "must be >= 0 (seconds of recording per wall second; 0 disables)");
+  }
+  if (!(o.stream_rate_grace_s > 0.0 && std::isfinite(o.stream_rate_grace_s))) {
+    throw_invalid("--stream-rate-grace-s", "must be a positive number of seconds");
+  }
   if (o.max_queued_chunks == 0) throw_invalid("--max-queued-chunks", "must be at least 1");
   if (o.max_queued_results == 0) throw_invalid("--max-queued-results", "must be at least 1");
   if (o.max_jobs == 0) throw_invalid("--max-jobs", "must be at least 1");
@@ -168,6 +174,8 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
              {"max_sessions", std::to_string(options_.max_sessions)},
              {"max_message_mb", std::to_string(options_.max_message_mb)},
              {"idle_timeout_s", std::to_string(options_.idle_timeout_s)},
+             {"min_stream_rate", std::to_string(options_.min_stream_rate)},
+             {"stream_rate_grace_s", std::to_string(options_.stream_rate_grace_s)},
              {"role", options_.role},
              {"job_store", !jobs_                       ? "off"
                            : options_.job_store.empty() ? "sqlite"

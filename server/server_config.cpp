@@ -27,6 +27,8 @@ void set_server_option(ServerOptions& o, const std::string& key, const std::stri
   else if (key == "max-sessions") o.max_sessions = count();
   else if (key == "max-message-mb") o.max_message_mb = number();
   else if (key == "idle-timeout-s") o.idle_timeout_s = number();
+  else if (key == "min-stream-rate") o.min_stream_rate = number();
+  else if (key == "stream-rate-grace-s") o.stream_rate_grace_s = number();
   else if (key == "max-queued-chunks") o.max_queued_chunks = count();
   else if (key == "shutdown-grace-s") o.shutdown_grace_s = number();
   else if (key == "data-dir") o.data_dir = value;

@@ -14,6 +14,11 @@ struct ServerOptions {
   unsigned max_queued_chunks = 8;          // per session: read but not yet processed
   unsigned max_queued_results = 64;        // per session: computed but not yet sent
   double shutdown_grace_s = 10.0;          // calls in flight get this long to finish
+  // Minimum stream rate (server/stream_rate.hpp): after stream_rate_grace_s of waiting for its
+  // client, a Fit stream must have delivered at least min_stream_rate seconds of recording per
+  // wall second or it is ended; 0 disables. 0.5 lets a live session lag to half real time.
+  double min_stream_rate = 0.5;
+  double stream_rate_grace_s = 60.0;
   // Batch jobs: off unless data_dir is set (job store: <data_dir>/jobs.sqlite unless job_store
   // names a PostgreSQL database; data_dir then holds only uploads in transit).
   std::string data_dir;

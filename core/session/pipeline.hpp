@@ -62,6 +62,8 @@ class SessionPipeline {
   std::uint64_t item_errors() const { return item_errors_; }
   std::uint64_t warnings() const { return warnings_; }
   std::uint64_t depth_frames() const { return depth_frames_; }
+  // Stream time of the data accepted so far (SessionValidator::stream_time_us).
+  std::int64_t stream_time_us() const { return validator_.stream_time_us(); }
 
  private:
   class Output;

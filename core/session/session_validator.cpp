@@ -1,5 +1,6 @@
 #include "session/session_validator.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <set>
@@ -346,10 +347,12 @@ void SessionValidator::check_order(const v1::SessionChunk& chunk, const std::str
     case v1::SessionChunk::kDepth:
       require_timestamp_after(chunk.depth().t_us(), last_depth_t_us_, field + ".depth.t_us");
       last_depth_t_us_ = chunk.depth().t_us();
+      note_stream_time("depth", *last_depth_t_us_, *last_depth_t_us_);
       break;
     case v1::SessionChunk::kBodyIndex:
       require_timestamp_after(chunk.body_index().t_us(), last_body_index_t_us_, field + ".body_index.t_us");
       last_body_index_t_us_ = chunk.body_index().t_us();
+      note_stream_time("body_index", *last_body_index_t_us_, *last_body_index_t_us_);
       break;
     case v1::SessionChunk::kSkeleton: {
       const auto it = last_skeleton_t_us_.find(chunk.skeleton().body_id());
@@ -357,11 +360,14 @@ void SessionValidator::check_order(const v1::SessionChunk& chunk, const std::str
       if (it != last_skeleton_t_us_.end()) last = it->second;
       require_timestamp_after(chunk.skeleton().t_us(), last, field + ".skeleton.t_us");
       last_skeleton_t_us_[chunk.skeleton().body_id()] = chunk.skeleton().t_us();
+      note_stream_time("skeleton/" + std::to_string(chunk.skeleton().body_id()), chunk.skeleton().t_us(),
+                       chunk.skeleton().t_us());
       break;
     }
     case v1::SessionChunk::kColor:
       require_timestamp_after(chunk.color().t_us(), last_color_t_us_, field + ".color.t_us");
       last_color_t_us_ = chunk.color().t_us();
+      note_stream_time("color", *last_color_t_us_, *last_color_t_us_);
       break;
     case v1::SessionChunk::kImu: {
       const v1::ImuBatch& batch = chunk.imu();
@@ -371,11 +377,13 @@ void SessionValidator::check_order(const v1::SessionChunk& chunk, const std::str
       // Within the batch validate_imu_stream already checked the order.
       require_timestamp_after(batch.t_us(0), last, field + ".imu[0].t_us");
       last_imu_t_us_[batch.device_id()] = batch.t_us(batch.t_us_size() - 1);
+      note_stream_time("imu/" + batch.device_id(), batch.t_us(0), batch.t_us(batch.t_us_size() - 1));
       break;
     }
     case v1::SessionChunk::kAudio:
       require_timestamp_after(chunk.audio().t_us(), last_audio_t_us_, field + ".audio.t_us");
       last_audio_t_us_ = chunk.audio().t_us();
+      note_stream_time("audio", *last_audio_t_us_, *last_audio_t_us_);
       break;
     case v1::SessionChunk::kSyncEvent: {
       const v1::SyncEvent& event = chunk.sync_event();
@@ -386,10 +394,17 @@ void SessionValidator::check_order(const v1::SessionChunk& chunk, const std::str
                                                       event.device_id() + "' (" + std::to_string(it->second) + " us)");
       }
       last_sync_t_us_[event.device_id()] = event.t_us();
+      note_stream_time("sync/" + event.device_id(), event.t_us(), event.t_us());
       break;
     }
     default: break;
   }
+}
+
+void SessionValidator::note_stream_time(const std::string& stream, std::int64_t first, std::int64_t last) {
+  // Both lie within +-2^53 us (require_timestamp_in_range), so the difference cannot overflow.
+  const std::int64_t stream_first = first_t_us_.try_emplace(stream, first).first->second;
+  stream_time_us_ = std::max(stream_time_us_, last - stream_first);
 }
 
 void SessionValidator::count(const v1::SessionChunk& chunk) {

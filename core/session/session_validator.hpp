@@ -62,11 +62,21 @@ class SessionValidator {
   std::uint64_t chunks_checked() const { return index_; }
   // Counts of what has been checked so far, as the end marker should report them.
   const v1::EndOfSession& counts() const { return counts_; }
+  // How far the accepted data has advanced in time: the longest span, newest minus first
+  // timestamp, of any one stream (depth, a skeleton body, an IMU device, ...). Per stream,
+  // because streams run on their own clocks (an IMU's device clock may be years away from the
+  // camera's), so a span across streams would measure the clocks' offset, not the recording.
+  // Only accepted chunks count and each stream's timestamps only grow, so a rejected chunk (out
+  // of order, outside +-2^53 us) adds nothing; at most 2^54 us. The server's minimum stream
+  // rate compares it with wall time (server/stream_rate.hpp).
+  std::int64_t stream_time_us() const { return stream_time_us_; }
 
  private:
   void check_order(const v1::SessionChunk& chunk, const std::string& field);
   void count(const v1::SessionChunk& chunk);
   void check_end(const v1::EndOfSession& end, const std::string& field) const;
+  // An accepted chunk of `stream` with timestamps first..last (first <= last).
+  void note_stream_time(const std::string& stream, std::int64_t first, std::int64_t last);
 
   std::uint64_t index_ = 0;
   std::optional<v1::SessionHeader> header_;
@@ -78,6 +88,9 @@ class SessionValidator {
   std::map<std::uint32_t, std::int64_t> last_skeleton_t_us_;  // by body_id
   std::map<std::string, std::int64_t> last_imu_t_us_;         // by device_id
   std::map<std::string, std::int64_t> last_sync_t_us_;        // by device_id
+  // First accepted timestamp per stream ("depth", "skeleton/1", "imu/<device_id>", ...).
+  std::map<std::string, std::int64_t> first_t_us_;
+  std::int64_t stream_time_us_ = 0;
 };
 
 }  // namespace posefuse::session

@@ -66,6 +66,13 @@ TEST_F(ConfigTest, JobStoreRoleAndLeaseKeys) {
   EXPECT_EQ(line.options.job_max_attempts, 5u);
 }
 
+TEST_F(ConfigTest, StreamRateKeys) {
+  const std::string path = write_config("min-stream-rate = 0\n");
+  const CommandLine line = parse_server_command_line({"--config", path, "--stream-rate-grace-s=5"});
+  EXPECT_DOUBLE_EQ(line.options.min_stream_rate, 0.0);
+  EXPECT_DOUBLE_EQ(line.options.stream_rate_grace_s, 5.0);
+}
+
 TEST_F(ConfigTest, UnknownKeyIsAnErrorNamingTheFileAndLine) {
   const std::string path = write_config("workers = 2\n\nmax_sessions = 4\n");
   const std::string message = error_of({"--config", path});

@@ -1,7 +1,9 @@
 // posefuse-server in process on 127.0.0.1:0, driven over a real gRPC channel.
 // No timing assertions: waits are for conditions, with generous deadlines only against hangs.
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <cmath>
 #include <map>
 #include <string>
 #include <thread>
@@ -283,6 +285,88 @@ TEST_F(ServerTest, IdleStreamIsEndedWithDeadlineExceeded) {
   EXPECT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
 }
 
+// Small rate options so that these tests are short: after 0.5 s a session must have delivered
+// half as much recording as the wall time it took.
+ServerOptions stream_rate_options() {
+  ServerOptions options;
+  options.min_stream_rate = 0.5;
+  options.stream_rate_grace_s = 0.5;
+  return options;
+}
+
+TEST_F(ServerTest, SlowSenderIsEndedWithDeadlineExceededAfterItsResults) {
+  start(stream_rate_options());
+  // Batches of 4 IMU samples at 80 Hz: 50 ms of recording each, sent every 250 ms (0.2x real
+  // time), far below the 0.5x required; the idle timeout (60 s) never comes into it.
+  demo::DemoSessionOptions session_options;
+  session_options.imu_samples_per_batch = 4;
+  const auto chunks = demo::make_demo_session(session_options);
+  std::vector<v1::SessionChunk> trickle{chunks[0]};
+  for (int n = 0; n < 150; ++n) trickle.push_back(chunks[nth_index(chunks, v1::SessionChunk::kImu, n)]);
+
+  grpc::ClientContext context;
+  set_test_deadline(context);
+  auto stream = stub_->Fit(&context);
+  std::atomic<bool> ended{false};
+  std::atomic<std::size_t> batches_written{0};
+  std::thread sender([&] {
+    for (std::size_t i = 0; i < trickle.size() && !ended; ++i) {
+      if (!stream->Write(trickle[i])) return;
+      if (i > 0) ++batches_written;
+      if (i >= 2) std::this_thread::sleep_for(std::chrono::milliseconds(250));  // the first two at once
+    }
+  });
+  CallResult call;
+  v1::FitResult result;
+  while (stream->Read(&result)) call.results.push_back(result);
+  ended = true;
+  sender.join();
+  call.status = stream->Finish();
+
+  EXPECT_EQ(call.status.error_code(), grpc::StatusCode::DEADLINE_EXCEEDED) << call.status.error_message();
+  const std::string& message = call.status.error_message();
+  EXPECT_NE(message.find("x real time), below the required 0.5x"), std::string::npos) << message;
+  EXPECT_NE(message.find("--min-stream-rate"), std::string::npos) << message;
+  // Ended long before the trickle ran out, with an orientation for every batch the server took:
+  // each batch sent at least up to the one that may have been in flight when the status came.
+  EXPECT_LT(batches_written.load(), trickle.size() - 1);
+  std::size_t orientation_batches = 0;
+  for (const auto& r : call.results) {
+    if (!r.has_imu_orientations()) continue;
+    ++orientation_batches;
+    EXPECT_EQ(r.imu_orientations().t_us_size(), 4);
+  }
+  EXPECT_GE(orientation_batches, 2u);
+  EXPECT_GE(orientation_batches + 1, batches_written.load());
+  EXPECT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
+}
+
+TEST_F(ServerTest, SenderAtRealTimeOrFasterKeepsTheMinimumStreamRate) {
+  start(stream_rate_options());
+  const auto chunks = demo::make_demo_session();
+  // The first 1.5 s of camera frames as a live camera sends them (30 Hz), three grace periods,
+  // then the rest as fast as the server takes it, as an upload of a finished recording does.
+  grpc::ClientContext context;
+  set_test_deadline(context);
+  auto stream = stub_->Fit(&context);
+  std::thread sender([&] {
+    int depth_frames = 0;
+    for (const auto& chunk : chunks) {
+      if (!stream->Write(chunk)) return;
+      if (chunk.has_depth() && ++depth_frames <= 45) std::this_thread::sleep_for(std::chrono::microseconds(33'333));
+    }
+    stream->WritesDone();
+  });
+  CallResult call;
+  v1::FitResult result;
+  while (stream->Read(&result)) call.results.push_back(result);
+  sender.join();
+  call.status = stream->Finish();
+  ASSERT_TRUE(call.status.ok()) << call.status.error_message();
+  EXPECT_EQ(call.orientation_samples().at(demo::kArmDevice), 800u);
+  ASSERT_TRUE(call.results.back().has_summary());
+}
+
 TEST_F(ServerTest, HealthSaysServing) {
   start();
   grpc::health::v1::HealthCheckResponse response;
@@ -457,6 +541,23 @@ TEST(ServerOptions, BadValuesNameTheFlag) {
     EXPECT_EQ(rejected_flag(options), "--max-upload-mb") << mb;
   }
   EXPECT_EQ(rejected_flag(ServerOptions{}), "");
+}
+
+TEST(ServerOptions, StreamRateOptionsNameTheFlag) {
+  for (const double rate : {-0.1, std::nan(""), HUGE_VAL}) {
+    ServerOptions options;
+    options.min_stream_rate = rate;
+    EXPECT_EQ(rejected_flag(options), "--min-stream-rate") << rate;
+  }
+  // A grace of 0 would end every session before its first data chunk arrived.
+  for (const double grace_s : {0.0, -1.0, std::nan(""), HUGE_VAL}) {
+    ServerOptions options;
+    options.stream_rate_grace_s = grace_s;
+    EXPECT_EQ(rejected_flag(options), "--stream-rate-grace-s") << grace_s;
+  }
+  ServerOptions off;
+  off.min_stream_rate = 0.0;  // disables the rule
+  EXPECT_EQ(rejected_flag(off), "");
 }
 
 TEST(ServerOptions, JobStoreRolesAndLeasesThatCannotWorkNameTheFlag) {

@@ -287,6 +287,40 @@ TEST(SessionValidator, SkeletonOrderIsPerBody) {
   expect_invalid(session, chunk_field(i, ".skeleton.t_us"));
 }
 
+TEST(SessionValidator, StreamTimeIsTheLongestSpanWithinOneStream) {
+  const auto session = make_session();
+  SessionValidator validator;
+  validator.check(session[0]);
+  EXPECT_EQ(validator.stream_time_us(), 0);
+  for (std::size_t i = 1; i < session.size(); ++i) validator.check(session[i]);
+  // The fixture's longest stream is an IMU's: 70 samples at 80 Hz. Its devices' clocks start
+  // up to 4 s apart (wrist_l at 0.95 s, wrist_r at 5 s), which must not count as recording.
+  EXPECT_EQ(validator.stream_time_us(), 69 * 12'500);
+}
+
+TEST(SessionValidator, RejectedTimestampsAddNoStreamTime) {
+  const auto session = make_session();
+  const std::size_t last_depth = index_of(session, SessionChunk::kDepth, 2);
+  SessionValidator validator;
+  for (std::size_t i = 0; i <= last_depth; ++i) validator.check(session[i]);
+  const std::int64_t before = validator.stream_time_us();
+  ASSERT_GT(before, 0);
+  SessionChunk chunk = session[last_depth];
+  // Backwards, and beyond +-2^53 us either way: refused, so the stream time stays.
+  for (const std::int64_t t_us : {session[last_depth].depth().t_us() - 1'000'000, kMaxAbsTimestampUs + 1,
+                                  std::numeric_limits<std::int64_t>::max(), -kMaxAbsTimestampUs - 1}) {
+    SCOPED_TRACE(t_us);
+    chunk.mutable_depth()->set_t_us(t_us);
+    EXPECT_THROW(validator.check(chunk), Error);
+    EXPECT_EQ(validator.stream_time_us(), before);
+  }
+  // A jump forward the validator accepts does count, but no further than the +-2^53 us range.
+  chunk.mutable_depth()->set_t_us(kMaxAbsTimestampUs);
+  validator.check(chunk);
+  EXPECT_EQ(validator.stream_time_us(),
+            kMaxAbsTimestampUs - session[index_of(session, SessionChunk::kDepth)].depth().t_us());
+}
+
 TEST(SessionValidator, UnknownEnumValues) {
   auto session = make_session();
   const std::size_t depth = index_of(session, SessionChunk::kDepth);
