@@ -16,30 +16,12 @@ using namespace posefuse::forearm::testing;
 using posefuse::testing::expect_error;
 constexpr double kDeg = std::numbers::pi / 180.0;
 
-// 40 frames of the pose of t = 0.3 s held still: exact joints, strap and IMU.
-std::vector<CalibrationFrame> held_pose(const ArmMotion& motion) {
-  std::vector<CalibrationFrame> frames;
-  for (int k = 0; k < 40; ++k) {
-    const Quat K_from_F = motion.K_from_F(0.3);
-    CalibrationFrame f;
-    f.t_us = k * 33'333;
-    f.shoulder_K = motion.shoulder(0.3);
-    f.elbow_K = motion.elbow(0.3);
-    f.wrist_K = motion.wrist(0.3);
-    f.strap_K = motion.imu_position(0.3);
-    f.K_from_F_sdk = K_from_F;
-    f.W_from_A = motion.K_from_W.conjugate() * K_from_F * motion.model.F_from_A;
-    frames.push_back(f);
-  }
-  return frames;
-}
-
 // The shoulder-elbow distance of the hold is d_ul: 7 cm (the shoulder taken at the elbow, as
 // a garbled skeleton gives) and 60 cm are no arm; the bounds themselves are arms.
 TEST(ArmCalibration, AnUpperArmNoHumanHasIsRefusedByItsLength) {
   const ArmMotion motion;
   const auto with_upper_arm = [&](double length_m) {
-    std::vector<CalibrationFrame> frames = held_pose(motion);
+    std::vector<CalibrationFrame> frames = held_pose_frames(motion);
     for (CalibrationFrame& f : frames) {
       f.shoulder_K = f.elbow_K + length_m * (motion.shoulder(0.3) - motion.elbow(0.3)).normalized();
     }
@@ -59,7 +41,7 @@ TEST(ArmCalibration, AnUpperArmNoHumanHasIsRefusedByItsLength) {
 TEST(ArmCalibration, AHoldWhoseMountingsSpreadIsRefusedBySpread) {
   const ArmMotion motion;
   const auto with_spread = [&](double angle_rad) {
-    std::vector<CalibrationFrame> frames = held_pose(motion);
+    std::vector<CalibrationFrame> frames = held_pose_frames(motion);
     for (std::size_t k = 0; k < frames.size(); ++k) {
       const double sign = k % 2 == 0 ? 1.0 : -1.0;
       frames[k].K_from_F_sdk =
@@ -79,7 +61,7 @@ TEST(ArmCalibration, AHoldWhoseMountingsSpreadIsRefusedBySpread) {
 TEST(ArmCalibration, TooFewStrapFramesGiveOrientationOnly) {
   const ArmMotion motion;
   CalibrationFrames frames;
-  frames.without_strap = held_pose(motion);
+  frames.without_strap = held_pose_frames(motion);
   frames.with_strap.assign(frames.without_strap.begin(), frames.without_strap.begin() + 5);
   const ArmCalibration orientation_only = calibrate_arm(frames, motion.K_from_W, {});
   EXPECT_FALSE(orientation_only.has_model);
@@ -99,7 +81,7 @@ TEST(ArmCalibration, TooFewStrapFramesGiveOrientationOnly) {
 TEST(ArmCalibration, NoHoldIsRefusedWithTheReason) {
   const ArmMotion motion;
   CalibrationFrames frames;
-  const std::vector<CalibrationFrame> held = held_pose(motion);
+  const std::vector<CalibrationFrame> held = held_pose_frames(motion);
   frames.without_strap.assign(held.begin(), held.begin() + 10);
   expect_error([&] { calibrate_arm(frames, motion.K_from_W, {}); }, ErrorCode::kFailedPrecondition, "frames",
                "held still for 10 frames; need 15");

@@ -116,20 +116,9 @@ TEST(ForearmModel, StillHoldFollowsTheImuWhileSdkJointsWander) {
 // sideways still ends it.
 TEST(ForearmModel, StillHoldKeepsTheRunWhenTheWristMovesAlongTheForearm) {
   const ArmMotion motion;
-  std::vector<CalibrationFrame> frames;
-  for (int k = 0; k < 40; ++k) {
-    const Quat K_from_F = motion.K_from_F(0.3);
-    const Vec3 along = (motion.wrist(0.3) - motion.elbow(0.3)).normalized();
-    CalibrationFrame f;
-    f.t_us = k * 33'333;
-    f.shoulder_K = motion.shoulder(0.3);
-    f.elbow_K = motion.elbow(0.3);
-    f.wrist_K = motion.wrist(0.3) + ((k % 3 == 1) ? 0.11 : 0.0) * along;
-    f.strap_K = motion.imu_position(0.3);
-    f.K_from_F_sdk = K_from_F;
-    f.W_from_A = motion.K_from_W.conjugate() * K_from_F * motion.model.F_from_A;
-    frames.push_back(f);
-  }
+  std::vector<CalibrationFrame> frames = held_pose_frames(motion);
+  const Vec3 along = (motion.wrist(0.3) - motion.elbow(0.3)).normalized();
+  for (std::size_t k = 0; k < frames.size(); ++k) frames[k].wrist_K += ((k % 3 == 1) ? 0.11 : 0.0) * along;
   const ForearmCalibration c = calibrate_forearm(frames, motion.K_from_W);
   EXPECT_EQ(c.frame_count, 40u);
   // d_sw from the nearer group (the hand's widening), not the mean (3.7 cm long here).
@@ -146,19 +135,8 @@ TEST(ForearmModel, WristDistanceOfAHoldUsesTheNearerGroup) {
   const ArmMotion motion;
   const Vec3 along = (motion.wrist(0.3) - motion.elbow(0.3)).normalized();
   const auto frames_with = [&](auto wrist_offset_m) {
-    std::vector<CalibrationFrame> frames;
-    for (int k = 0; k < 40; ++k) {
-      const Quat K_from_F = motion.K_from_F(0.3);
-      CalibrationFrame f;
-      f.t_us = k * 33'333;
-      f.shoulder_K = motion.shoulder(0.3);
-      f.elbow_K = motion.elbow(0.3);
-      f.wrist_K = motion.wrist(0.3) + wrist_offset_m(k) * along;
-      f.strap_K = motion.imu_position(0.3);
-      f.K_from_F_sdk = K_from_F;
-      f.W_from_A = motion.K_from_W.conjugate() * K_from_F * motion.model.F_from_A;
-      frames.push_back(f);
-    }
+    std::vector<CalibrationFrame> frames = held_pose_frames(motion);
+    for (std::size_t k = 0; k < frames.size(); ++k) frames[k].wrist_K += wrist_offset_m(static_cast<int>(k)) * along;
     return frames;
   };
   const auto one_far = frames_with([](int k) { return k == 17 ? 0.08 : 0.0; });

@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "forearm/forearm_model.hpp"
 #include "forearm/gap_input.hpp"
 #include "geometry/quaternion.hpp"
 
@@ -164,6 +165,25 @@ inline GapErrors gap_errors(const ArmMotion& motion, const RecoveredGap& gap) {
   }
   e.rms_m = std::sqrt(sum_sq / static_cast<double>(gap.t_us.size()));
   return e;
+}
+
+// `count` camera frames (30 Hz) of the pose of time t held still: exact joints, strap, SDK
+// forearm orientation and arm IMU (a calibration hold, paper 1 II-H).
+inline std::vector<CalibrationFrame> held_pose_frames(const ArmMotion& motion, double t = 0.3, int count = 40) {
+  std::vector<CalibrationFrame> frames;
+  for (int k = 0; k < count; ++k) {
+    const Quat K_from_F = motion.K_from_F(t);
+    CalibrationFrame f;
+    f.t_us = k * 33'333;
+    f.shoulder_K = motion.shoulder(t);
+    f.elbow_K = motion.elbow(t);
+    f.wrist_K = motion.wrist(t);
+    f.strap_K = motion.imu_position(t);
+    f.K_from_F_sdk = K_from_F;
+    f.W_from_A = motion.K_from_W.conjugate() * K_from_F * motion.model.F_from_A;
+    frames.push_back(f);
+  }
+  return frames;
 }
 
 }  // namespace posefuse::forearm::testing

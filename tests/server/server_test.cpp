@@ -4,6 +4,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <functional>
 #include <map>
 #include <string>
 #include <thread>
@@ -58,14 +59,17 @@ class ServerTest : public ::testing::Test {
     stub_ = v1::PoseFuse::NewStub(channel_);
   }
 
-  // Sends `chunks` (while receiving) and returns the status and every result.
-  CallResult fit(const std::vector<v1::SessionChunk>& chunks) {
+  // Sends `chunks` (while receiving) and returns the status and every result; `after_write`
+  // runs after each chunk is written (a client's pace).
+  CallResult fit(const std::vector<v1::SessionChunk>& chunks,
+                 const std::function<void(const v1::SessionChunk&)>& after_write = {}) {
     grpc::ClientContext context;
     set_test_deadline(context);
     auto stream = stub_->Fit(&context);
     std::thread sender([&] {
       for (const auto& chunk : chunks) {
         if (!stream->Write(chunk)) return;
+        if (after_write) after_write(chunk);
       }
       stream->WritesDone();
     });
@@ -346,22 +350,10 @@ TEST_F(ServerTest, SenderAtRealTimeOrFasterKeepsTheMinimumStreamRate) {
   const auto chunks = demo::make_demo_session();
   // The first 1.5 s of camera frames as a live camera sends them (30 Hz), three grace periods,
   // then the rest as fast as the server takes it, as an upload of a finished recording does.
-  grpc::ClientContext context;
-  set_test_deadline(context);
-  auto stream = stub_->Fit(&context);
-  std::thread sender([&] {
-    int depth_frames = 0;
-    for (const auto& chunk : chunks) {
-      if (!stream->Write(chunk)) return;
-      if (chunk.has_depth() && ++depth_frames <= 45) std::this_thread::sleep_for(std::chrono::microseconds(33'333));
-    }
-    stream->WritesDone();
+  int depth_frames = 0;
+  const CallResult call = fit(chunks, [&](const v1::SessionChunk& chunk) {
+    if (chunk.has_depth() && ++depth_frames <= 45) std::this_thread::sleep_for(std::chrono::microseconds(33'333));
   });
-  CallResult call;
-  v1::FitResult result;
-  while (stream->Read(&result)) call.results.push_back(result);
-  sender.join();
-  call.status = stream->Finish();
   ASSERT_TRUE(call.status.ok()) << call.status.error_message();
   EXPECT_EQ(call.orientation_samples().at(demo::kArmDevice), 800u);
   ASSERT_TRUE(call.results.back().has_summary());
