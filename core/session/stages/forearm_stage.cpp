@@ -10,6 +10,8 @@
 #include "forearm/forearm_orientation.hpp"
 #include "geometry/rotation_mean.hpp"
 #include "session/option_table.hpp"
+#include "session/stages/forearm_inputs.hpp"
+#include "session/stages/forearm_report.hpp"
 #include "session/stages/proto_values.hpp"
 #include "session/text_fields.hpp"
 
@@ -24,10 +26,6 @@ using forearm::Vec3;
 constexpr double kCalibrationGraceS = 10.0;
 
 std::int64_t seconds_to_us(double s) { return static_cast<std::int64_t>(std::llround(s * 1e6)); }
-
-geometry::KinectArmJoints arm_joints(forearm::Side side) {
-  return side == forearm::Side::kLeft ? geometry::kLeftArmJoints : geometry::kRightArmJoints;
-}
 
 }  // namespace
 
@@ -170,29 +168,11 @@ void ForearmStage::advance(StageOutput& out) {
 
 void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleton) {
   // The SDK's joints only say where to look; the axes and the strap are the images'.
-  const forearm::DepthImageView depth =
-      frame.depth_mm.empty()
-          ? forearm::DepthImageView{}
-          : forearm::DepthImageView{frame.depth_mm.cols, frame.depth_mm.rows, frame.depth_mm.ptr<std::uint16_t>()};
-  const forearm::GrayImageView gray =
-      frame.color_gray.empty()
-          ? forearm::GrayImageView{}
-          : forearm::GrayImageView{frame.color_gray.cols, frame.color_gray.rows, frame.color_gray.ptr<std::uint8_t>()};
+  const geometry::DepthImageView depth = depth_view(frame.depth_mm);
+  const geometry::GrayImageView gray = gray_view(frame.color_gray);
   for (Device& device : devices_) {
     if (!device.side || device.calibration_failed) continue;
-    const geometry::KinectArmJoints j = arm_joints(*device.side);
-    const auto& joints = skeleton.joints;
-    forearm::ArmFrame arm;
-    arm.t_us = frame.t_us;
-    arm.shoulder_K = joints[j.shoulder].p_K;
-    arm.elbow_K = joints[j.elbow].p_K;
-    arm.wrist_K = joints[j.wrist].p_K;
-    arm.shoulder_tracked = joints[j.shoulder].state == JointState::kTracked;
-    arm.forearm_tracked =
-        joints[j.elbow].state == JointState::kTracked && joints[j.wrist].state == JointState::kTracked;
-    arm.sdk_elbow_K = arm.elbow_K;
-    arm.sdk_elbow_seen = joints[j.elbow].state != JointState::kNotTracked;
-    arm.K_from_wrist_sdk = joints[j.wrist].orientation;
+    forearm::ArmFrame arm = arm_frame_from_skeleton(skeleton, *device.side, frame.t_us);
     if (cameras_) {
       forearm::measure_arm_frame(arm, depth, gray, *cameras_,
                                  {options_.axis_from_depth, options_.upper_arm_from_depth, !device.tracker});
@@ -206,8 +186,7 @@ void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleto
 }
 
 void ForearmStage::try_calibrate(bool finishing, StageOutput& out) {
-  const std::int64_t window_end_us =
-      first_frame_us_ ? *first_frame_us_ + static_cast<std::int64_t>(std::llround(options_.calibration_s * 1e6)) : 0;
+  const std::int64_t window_end_us = first_frame_us_ ? *first_frame_us_ + seconds_to_us(options_.calibration_s) : 0;
   if (!finishing && (!first_frame_us_ || last_frame_us_ < window_end_us)) return;
   const std::vector<std::string> arm_ids = arm_device_ids();
   if (!clock_map_) {
@@ -268,8 +247,7 @@ std::optional<Quat> ForearmStage::W_from_A_at(const Device& device, std::int64_t
 
 void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
   const std::string field = "forearm[" + device.id + "]";
-  const std::int64_t window_end_us =
-      *first_frame_us_ + static_cast<std::int64_t>(std::llround(options_.calibration_s * 1e6));
+  const std::int64_t window_end_us = *first_frame_us_ + seconds_to_us(options_.calibration_s);
   forearm::CalibrationFrameOptions frame_options;
   frame_options.pose_orientation = options_.pose_orientation;
   frame_options.upper_arm_from_depth = options_.upper_arm_from_depth;
@@ -388,25 +366,11 @@ void ForearmStage::finish(StageOutput& out) {
     if (clock_map_ && clock_map_->has(device.id)) {
       const double first_us =
           static_cast<double>(device.first_device_us.value_or(device.imu.empty() ? 0 : device.imu.front().t_device_us));
-      const sync::LinearClock& clock = clock_map_->camera_from(device.id);
-      (*report.mutable_clock_offset_us())[device.id] = std::llround(clock.to_reference_us(first_us) - first_us);
-      (*report.mutable_clock_offset_sigma_us())[device.id] = clock.sigma_us(first_us);
-      (*report.mutable_clock_drift_ppm())[device.id] = clock.drift * 1e6;
+      report_clock(device.id, clock_map_->camera_from(device.id), first_us, report);
     }
-    if (!device.side || !device.calibration) continue;
-    const forearm::ForearmCalibration& c = *device.calibration;
-    v1::ForearmModel& model = *report.add_forearms();
-    model.set_arm(*device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT);
-    model.set_device_id(device.id);
-    model.set_r_m(device.has_model ? c.model.r_m : 0.0);
-    model.set_d_se_m(device.has_model ? c.model.d_se_m : 0.0);
-    model.set_d_sw_m(device.has_model ? c.model.d_sw_m : 0.0);
-    model.set_d_ul_m(c.model.d_ul_m);
-    *model.mutable_a_from_f() = to_proto(Quat(c.model.F_from_A.conjugate()));
-    model.set_estimated(true);
-    model.set_calibration_frames(static_cast<std::uint32_t>(c.frame_count));
-    model.set_a_from_f_spread_rad(c.F_from_A_spread_rad);
-    model.set_strap_frames(device.strap_frames);
+    if (device.side && device.calibration) {
+      report_forearm_model(device.id, *device.side, *device.calibration, device.has_model, device.strap_frames, report);
+    }
   }
   if (K_from_W_) *report.mutable_k_from_w() = to_proto(*K_from_W_);
 }
