@@ -24,6 +24,8 @@ void ResultWriter::write(const v1::FitResult& result) {
     case v1::FitResult::kFrame: files_.write_frame(result.frame()); break;
     case v1::FitResult::kRecoveredSegment: files_.write_segment(result.recovered_segment()); break;
     case v1::FitResult::kCalibration: files_.write_calibration(result.calibration()); break;
+    case v1::FitResult::kJointAngles: files_.write_angles(result.joint_angles()); break;
+    case v1::FitResult::kRepetitions: files_.write_repetitions(result.repetitions()); break;
     case v1::FitResult::kSummary:
       summary_ = result.summary();
       have_summary_ = true;

@@ -9,6 +9,7 @@
 
 #include "common/error.hpp"
 #include "eval/orientation_error.hpp"
+#include "measures/joint_angles.hpp"
 #include "session/result_files.hpp"
 #include "session/text_fields.hpp"
 
@@ -287,6 +288,75 @@ void score_joints(const std::string& stream, const std::vector<session::JointRow
   if (unmatched > 0) report.notes.push_back(stream + ": " + std::to_string(unmatched) + " joint rows without truth");
 }
 
+void score_joint_angles(const session::ResultDirectory& result, const session::ResultDirectory& truth,
+                        const ScoreOptions& options, ScoreReport& report) {
+  std::vector<std::int64_t> truth_times;
+  for (const auto& row : truth.joint_angles) truth_times.push_back(row.t_us);
+  std::vector<std::int64_t> result_times;
+  const auto count = static_cast<std::size_t>(measures::kAngleCount);
+  std::vector<std::vector<double>> errors(count);
+  std::vector<std::size_t> undefined(count, 0);
+  std::size_t unmatched = 0;
+  for (const auto& row : result.joint_angles) {
+    result_times.push_back(row.t_us);
+    const auto f = nearest(truth_times, row.t_us, options.tolerance_us);
+    if (!f) {
+      ++unmatched;
+      continue;
+    }
+    const session::AngleRow& want = truth.joint_angles[*f];
+    for (std::size_t a = 0; a < count; ++a) {
+      // Truth with confidence 0 is a held plane of elevation (gimbal lock): not a value to score.
+      if (!want.deg[a] || want.confidence[a] <= 0.0) continue;
+      if (!row.deg[a]) {
+        ++undefined[a];
+        continue;
+      }
+      errors[a].push_back(std::abs(std::remainder(*row.deg[a] - *want.deg[a], 360.0)));
+    }
+  }
+  if (unmatched == result.joint_angles.size()) {
+    throw_unmatched(layout::kJointAnglesCsv, result_times, truth_times, options);
+  }
+  for (std::size_t a = 0; a < count; ++a) {
+    if (errors[a].empty() && undefined[a] == 0) continue;
+    report.joint_angles.push_back({std::string(measures::angle_name(static_cast<measures::Angle>(a))),
+                                   summarize_errors(errors[a]), undefined[a], unmatched});
+  }
+}
+
+void score_repetitions(const session::ResultDirectory& result, const session::ResultDirectory& truth,
+                       ScoreReport& report) {
+  RepetitionScore score;
+  std::vector<const session::RepetitionRow*> mine, theirs;
+  for (const auto& r : result.repetitions) {
+    score.result_angle = r.angle;
+    if (r.counted) mine.push_back(&r);
+  }
+  for (const auto& r : truth.repetitions) {
+    score.truth_angle = r.angle;
+    if (r.counted) theirs.push_back(&r);
+  }
+  score.result_count = mine.size();
+  score.truth_count = theirs.size();
+  std::vector<double> range_errors;
+  for (const session::RepetitionRow* want : theirs) {
+    const session::RepetitionRow* best = nullptr;
+    double best_overlap = 0.0;
+    for (const session::RepetitionRow* got : mine) {
+      const double overlap = std::min(got->t_end_s, want->t_end_s) - std::max(got->t_start_s, want->t_start_s);
+      if (overlap > best_overlap) {
+        best_overlap = overlap;
+        best = got;
+      }
+    }
+    if (best) range_errors.push_back(std::abs(best->range_deg - want->range_deg));
+  }
+  score.matched = range_errors.size();
+  score.range_deg = summarize_errors(range_errors);
+  report.repetitions = score;
+}
+
 geometry::Quat quat_of(const v1::Quaternion& q) { return geometry::Quat(q.w(), q.x(), q.y(), q.z()); }
 geometry::Vec3 vec_of(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 
@@ -425,6 +495,14 @@ ScoreReport score_results(const session::ResultDirectory& result, const session:
     require_truth(truth, layout::kCameraJointsCsv);
     score_joints(layout::kCameraJointsCsv, result.camera_joints, truth.camera_joints, camera_groups(), options, report);
   }
+  if (!result.joint_angles.empty()) {
+    require_truth(truth, layout::kJointAnglesCsv);
+    score_joint_angles(result, truth, options, report);
+  }
+  if (result.has(layout::kRepetitionsCsv)) {
+    require_truth(truth, layout::kRepetitionsCsv);
+    score_repetitions(result, truth, report);
+  }
   score_calibration(result, truth, report);
   for (const std::string& file : truth.files) {
     if (!result.has(file) && file.find('/') == std::string::npos) report.notes.push_back(file + ": not in the results");
@@ -476,6 +554,23 @@ std::string format_score_report(const ScoreReport& report) {
       t.add({s.name, s.unit, angle ? "" : fixed(s.result, decimals), angle ? "" : fixed(s.truth, decimals),
              fixed(s.error, decimals)});
     }
+    out << t.str() << "\n";
+  }
+  if (!report.joint_angles.empty()) {
+    out << "ISB joint angle error (deg)\n";
+    Table t({"angle", "n", "RMS", "max", "undefined", "unmatched"});
+    for (const auto& s : report.joint_angles) {
+      t.add({s.angle, std::to_string(s.deg.count), fixed(s.deg.rms, 2), fixed(s.deg.max, 2),
+             std::to_string(s.result_undefined), std::to_string(s.unmatched)});
+    }
+    out << t.str() << "\n";
+  }
+  if (report.repetitions) {
+    const RepetitionScore& r = *report.repetitions;
+    out << "Repetitions (counted) and range of motion per repetition (deg)\n";
+    Table t({"angle", "true angle", "count", "true count", "matched", "ROM error RMS", "ROM error max"});
+    t.add({r.result_angle, r.truth_angle, std::to_string(r.result_count), std::to_string(r.truth_count),
+           std::to_string(r.matched), fixed(r.range_deg.rms, 2), fixed(r.range_deg.max, 2)});
     out << t.str() << "\n";
   }
   for (const std::string& note : report.notes) out << "note: " << note << "\n";

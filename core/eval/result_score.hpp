@@ -14,6 +14,8 @@
 //    recovered_segments.csv: the recovered trajectory (PAPER, SMOOTHER) interpolated linearly
 //    at every truth frame inside its segment;
 //  - smpl_joints.csv, camera_joints.csv: mean and max joint error per joint group;
+//  - joint_angles.csv: per ISB angle RMS and max error; repetitions.csv: counts and per
+//    repetition range-of-motion error;
 //  - calibration.json: K_from_W angle, per arm r, d_se, d_sw, d_ul and A_from_F, per device the
 //    clock offset and gyro bias.
 // Errors (posefuse::Error): no result files at all (kNotFound); a stream in the results whose
@@ -23,6 +25,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -67,11 +70,32 @@ struct CalibrationScore {
   double error = 0.0;  // result - truth, or the angle between the two rotations
 };
 
+// joint_angles.csv: per ISB angle, |result - truth| (wrapped to 180 deg) over the frames where
+// both define it and the truth's is not held (confidence 0: the gimbal-locked plane of
+// elevation); frames where only the truth defines it are counted as undefined.
+struct JointAngleScore {
+  std::string angle;  // measures::angle_name
+  ErrorSummary deg;
+  std::size_t result_undefined = 0;
+  std::size_t unmatched = 0;  // result frames with no truth frame within the tolerance
+};
+
+// repetitions.csv: counted repetitions against the truth's, each true repetition matched to the
+// counted result repetition that overlaps it most in time.
+struct RepetitionScore {
+  std::string result_angle, truth_angle;
+  std::size_t result_count = 0, truth_count = 0;
+  std::size_t matched = 0;
+  ErrorSummary range_deg;  // |range - true range| over matched repetitions
+};
+
 struct ScoreReport {
   std::vector<AngleScore> orientations;
   std::vector<PositionScore> positions;
   std::vector<JointGroupScore> joints;
   std::vector<CalibrationScore> calibration;
+  std::vector<JointAngleScore> joint_angles;
+  std::optional<RepetitionScore> repetitions;
   std::vector<std::string> notes;
 
   const AngleScore* orientation(const std::string& stream, const std::string& key) const;

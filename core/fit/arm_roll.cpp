@@ -6,24 +6,18 @@
 #include <string>
 
 #include "common/error.hpp"
+#include "geometry/axis_angles.hpp"
+#include "measures/joint_angles.hpp"
 
 namespace posefuse::fit {
 namespace {
 
+using geometry::perpendicular;
+using geometry::signed_angle;
+
 void require_unit(const Eigen::Quaterniond& q, const char* field) {
   if (!q.coeffs().allFinite() || std::abs(q.norm() - 1.0) > 1e-6)
     throw_invalid(field, "must be a finite unit quaternion, norm " + std::to_string(q.norm()));
-}
-
-// Component of v perpendicular to the unit axis a, normalised (zero when v is along a).
-Eigen::Vector3d perpendicular(const Eigen::Vector3d& v, const Eigen::Vector3d& a) {
-  const Eigen::Vector3d p = v - v.dot(a) * a;
-  return p.norm() > 1e-12 ? Eigen::Vector3d(p.normalized()) : Eigen::Vector3d::Zero();
-}
-
-// Signed angle about the unit axis a from u to v (both perpendicular to a).
-double signed_angle(const Eigen::Vector3d& u, const Eigen::Vector3d& v, const Eigen::Vector3d& a) {
-  return std::atan2(a.dot(u.cross(v)), u.dot(v));
 }
 
 }  // namespace
@@ -61,14 +55,9 @@ ForearmRoll forearm_roll(const JointPose& pose, ArmSide side, const Eigen::Quate
   out.roll_rad = signed_angle(thumb_model, thumb_imu, a);
   out.K_from_forearm = Eigen::AngleAxisd(out.roll_rad, a).toRotationMatrix() * pose.K_from_joint[elbow];
 
-  const Eigen::Vector3d upper = pose.positions_K.col(elbow) - pose.positions_K.col(shoulder);
-  const double flexion = std::atan2(upper.cross(a).norm(), upper.dot(a));
-  if (upper.norm() > 1e-6 && flexion >= options.min_elbow_flexion_deg * std::numbers::pi / 180) {
-    const Eigen::Vector3d neutral_thumb = perpendicular(-upper, a);
-    // A positive turn about the forearm axis moves the left thumb medially (pronation) and the
-    // right thumb laterally (supination).
-    out.pronation_rad = (left ? 1.0 : -1.0) * signed_angle(neutral_thumb, thumb_imu, a);
-  }
+  out.pronation_rad =
+      measures::pronation_rad(pose.positions_K.col(shoulder), pose.positions_K.col(elbow), pose.positions_K.col(wrist),
+                              thumb_imu, left, options.min_elbow_flexion_deg);
   return out;
 }
 

@@ -30,6 +30,13 @@ namespace posefuse::fit {
 
 enum class ArmSide { kLeft, kRight };
 
+// Paper 1's F (x dorsal, y along the forearm): z is the thumb side on the right forearm and the
+// little-finger side on the left (core/sim/forearm_strap.hpp).
+inline Eigen::Vector3d thumb_axis_F(ArmSide side) {
+  return side == ArmSide::kLeft ? Eigen::Vector3d(-Eigen::Vector3d::UnitZ())
+                                : Eigen::Vector3d(Eigen::Vector3d::UnitZ());
+}
+
 struct ArmRollOptions {
   Eigen::Vector3d along_F = Eigen::Vector3d::UnitY();  // elbow -> wrist, in F
   Eigen::Vector3d thumb_F = Eigen::Vector3d::UnitX();  // radial (thumb) side, in F

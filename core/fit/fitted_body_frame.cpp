@@ -29,9 +29,7 @@ FittedForearm fitted_forearm(const JointPose& pose, ArmSide side, const Eigen::Q
   forearm.confidence = confidence_of(skeleton, left ? kWristLeft : kWristRight);
   try {
     ArmRollOptions roll_options;
-    // Paper 1's F (x dorsal, y along the forearm): z is the thumb side on the right forearm and
-    // the little-finger side on the left (core/sim/forearm_strap.hpp).
-    roll_options.thumb_F = left ? Eigen::Vector3d(-Eigen::Vector3d::UnitZ()) : Eigen::Vector3d::UnitZ();
+    roll_options.thumb_F = thumb_axis_F(side);
     const ForearmRoll roll = forearm_roll(pose, side, K_from_F, Eigen::Quaterniond::Identity(), roll_options);
     if (roll.pronation_rad) forearm.pronation_rad = *roll.pronation_rad;
   } catch (const Error&) {
@@ -57,6 +55,7 @@ FittedBodyFrame make_fitted_body_frame(const Eigen::Matrix3Xd& rest_joints, cons
   for (int j = 0; j < body::kNumJoints; ++j) {
     out.smpl_joints.push_back({pose.positions_K.col(j), smpl_confidence[static_cast<size_t>(j)]});
   }
+  for (int j = 0; j < body::kNumJoints; ++j) out.K_from_joint.emplace_back(pose.K_from_joint[static_cast<size_t>(j)]);
   for (int j = 0; j < kKinectJointCount; ++j) {
     out.camera_joints.push_back({camera_joints.col(j), confidence_of(skeleton, j)});
   }

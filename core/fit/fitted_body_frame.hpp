@@ -28,12 +28,13 @@ struct FittedForearm {
 
 struct FittedBodyFrame {
   std::int64_t t_us = 0;
-  double energy = 0.0;                     // paper 2 eq. 4, the winning start's
-  bool lost = false;                       // energy above the tracker's lost_energy
-  bool imu_used = false;                   // a forearm direction entered the fit (imu term, eq. 9-11)
-  std::vector<FittedJoint> smpl_joints;    // body::kNumJoints
-  std::vector<FittedJoint> camera_joints;  // kKinectJointCount
-  std::vector<FittedForearm> forearms;     // left then right, those with an orientation
+  double energy = 0.0;                           // paper 2 eq. 4, the winning start's
+  bool lost = false;                             // energy above the tracker's lost_energy
+  bool imu_used = false;                         // a forearm direction entered the fit (imu term, eq. 9-11)
+  std::vector<FittedJoint> smpl_joints;          // body::kNumJoints
+  std::vector<FittedJoint> camera_joints;        // kKinectJointCount
+  std::vector<Eigen::Quaterniond> K_from_joint;  // global rotation per SMPL joint (rest T-pose: identity)
+  std::vector<FittedForearm> forearms;           // left then right, those with an orientation
 };
 
 // The forearm orientations K_from_F (paper 1's F: y from elbow to wrist) at one frame.

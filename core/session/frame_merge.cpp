@@ -38,6 +38,7 @@ FrameEstimate merge_frame(const FrameParts& parts) {
     const FrameEstimate& fit = parts.fit->estimate;
     merged.smpl_joints = fit.smpl_joints;
     merged.camera_joints = fit.camera_joints;
+    merged.smpl_rotations = fit.smpl_rotations;
     merged.fit_energy = fit.fit_energy;
     if (parts.fit->lost) {
       for (auto* joints : {&merged.smpl_joints, &merged.camera_joints}) {

@@ -1,5 +1,7 @@
 #include "session/result_encoder.hpp"
 
+#include <cmath>
+
 #include "session/stages/proto_values.hpp"
 
 namespace posefuse::session {
@@ -72,6 +74,56 @@ void encode(const FrameEstimate& value, v1::FitResult& result) {
     out.set_source(p.source);
   }
   frame.set_fit_energy(value.fit_energy);
+  for (const geometry::Quat& q : value.smpl_rotations) *frame.add_smpl_joint_rotations() = to_proto(q);
+}
+
+// measures::Angle i is JointAngleKind i + 1 (results.proto keeps the same order).
+v1::JointAngleKind angle_kind(measures::Angle angle) {
+  return static_cast<v1::JointAngleKind>(static_cast<int>(angle) + 1);
+}
+
+void encode(const FrameAngles& value, v1::FitResult& result) {
+  v1::FrameAngles& frame = *result.mutable_joint_angles();
+  frame.set_t_us(value.t_us);
+  for (int i = 0; i < measures::kAngleCount; ++i) {
+    const measures::AngleValue& a = value.angles[static_cast<std::size_t>(i)];
+    v1::JointAngle& out = *frame.add_angles();
+    out.set_kind(angle_kind(static_cast<measures::Angle>(i)));
+    out.set_defined(a.defined);
+    out.set_held(a.held);
+    if (a.defined) out.set_deg(a.deg);
+    out.set_confidence(a.defined ? a.confidence : 0.0);
+    out.set_source(a.source == measures::AngleSource::kBodyModelAndImu ? v1::FUSED
+                   : a.source == measures::AngleSource::kBodyModel     ? value.joints_source
+                                                                       : v1::SOURCE_UNSPECIFIED);
+  }
+}
+
+std::int64_t to_us(double t_s) { return std::llround(t_s * 1e6); }
+
+void encode(const Repetitions& value, v1::FitResult& result) {
+  v1::RepetitionSummary& out = *result.mutable_repetitions();
+  const measures::RepetitionSummary& s = value.repetitions.summary;
+  out.set_angle(angle_kind(value.repetitions.angle));
+  out.set_angle_detected(value.repetitions.detected);
+  for (const measures::Repetition& r : s.repetitions) {
+    v1::Repetition& rep = *out.add_repetitions();
+    rep.set_t_start_us(to_us(r.t_start_s));
+    rep.set_t_peak_us(to_us(r.t_peak_s));
+    rep.set_t_end_us(to_us(r.t_end_s));
+    rep.set_min_deg(r.min_deg);
+    rep.set_max_deg(r.max_deg);
+    rep.set_range_deg(r.range_deg);
+    rep.set_peak_speed_deg_s(r.peak_speed_deg_s);
+    rep.set_duration_s(r.duration_s);
+    rep.set_partial(r.partial);
+  }
+  out.set_count(static_cast<std::uint32_t>(s.count));
+  out.set_mean_range_deg(s.mean_range_deg);
+  out.set_range_spread_deg(s.range_spread_deg);
+  out.set_mean_duration_s(s.mean_duration_s);
+  out.set_duration_spread_s(s.duration_spread_s);
+  out.set_mean_peak_speed_deg_s(s.mean_peak_speed_deg_s);
 }
 
 }  // namespace
@@ -87,6 +139,8 @@ const char* value_kind_name(ValueKind kind) {
     case ValueKind::kRecoveredSegment: return "recovered_segment";
     case ValueKind::kFramesDone: return "frames_done";
     case ValueKind::kFrameEstimate: return "frame_estimate";
+    case ValueKind::kFrameAngles: return "frame_angles";
+    case ValueKind::kRepetitions: return "repetitions";
   }
   return "(unknown value kind)";
 }
@@ -98,7 +152,8 @@ std::optional<v1::FitResult> encode_value(const StageValue& value) {
       [&](const auto& v) {
         using T = std::decay_t<decltype(v)>;
         if constexpr (std::is_same_v<T, ImuOrientations> || std::is_same_v<T, ForearmOrientations> ||
-                      std::is_same_v<T, RecoveredSegment> || std::is_same_v<T, FrameEstimate>) {
+                      std::is_same_v<T, RecoveredSegment> || std::is_same_v<T, FrameEstimate> ||
+                      std::is_same_v<T, FrameAngles> || std::is_same_v<T, Repetitions>) {
           encode(v, result);
         } else {
           for_client = false;  // between stages only

@@ -1,7 +1,10 @@
 #include "session/result_files.hpp"
 
+#include <cstdio>
+
 #include "body/smpl_model.hpp"
 #include "common/error.hpp"
+#include "measures/joint_angles.hpp"
 #include "session/directory_layout.hpp"
 #include "session/file_bytes.hpp"
 #include "session/json_message.hpp"
@@ -33,7 +36,27 @@ void write_joints(CsvWriter& csv, std::int64_t t_us, const Joints& joints, const
   }
 }
 
+// Seconds with exactly the microseconds of t_us ("12.033333").
+std::string time_s(std::int64_t t_us) {
+  char text[32];
+  const std::int64_t magnitude = t_us < 0 ? -t_us : t_us;
+  std::snprintf(text, sizeof text, "%s%lld.%06lld", t_us < 0 ? "-" : "", static_cast<long long>(magnitude / 1000000),
+                static_cast<long long>(magnitude % 1000000));
+  return text;
+}
+
 }  // namespace
+
+namespace result_layout {
+std::vector<std::string> joint_angle_columns() {
+  std::vector<std::string> columns{"t_s"};
+  for (int i = 0; i < measures::kAngleCount; ++i)
+    columns.emplace_back(measures::angle_name(static_cast<measures::Angle>(i)));
+  for (int i = 0; i < measures::kAngleCount; ++i)
+    columns.push_back(std::string(measures::angle_name(static_cast<measures::Angle>(i))) + "_confidence");
+  return columns;
+}
+}  // namespace result_layout
 
 ResultFiles::ResultFiles(const std::filesystem::path& directory) : directory_(directory) {
   std::error_code error;
@@ -155,6 +178,43 @@ void ResultFiles::write_segment(const v1::RecoveredSegment& segment) {
   ++recovered_segments_;
 }
 
+void ResultFiles::write_angles(const v1::FrameAngles& angles) {
+  if (angles.angles_size() != measures::kAngleCount) {
+    throw Error(
+        ErrorCode::kInvalidArgument, "joint_angles.angles",
+        "has " + std::to_string(angles.angles_size()) + " angles, expected " + std::to_string(measures::kAngleCount));
+  }
+  std::vector<std::string> row{time_s(angles.t_us())};
+  for (int i = 0; i < measures::kAngleCount; ++i) {
+    const v1::JointAngle& a = angles.angles(i);
+    if (a.kind() != static_cast<v1::JointAngleKind>(i + 1)) {
+      throw Error(ErrorCode::kInvalidArgument, "joint_angles.angles[" + std::to_string(i) + "].kind",
+                  "is " + v1::JointAngleKind_Name(a.kind()) + ", expected " +
+                      v1::JointAngleKind_Name(static_cast<v1::JointAngleKind>(i + 1)));
+    }
+    row.push_back(a.defined() ? format_double(a.deg()) : "");
+  }
+  for (const v1::JointAngle& a : angles.angles()) row.push_back(format_double(a.defined() ? a.confidence() : 0.0));
+  opened_file(angles_, result_layout::kJointAnglesCsv, result_layout::joint_angle_columns()).row(row);
+}
+
+void ResultFiles::write_repetitions(const v1::RepetitionSummary& summary) {
+  const std::string angle = summary.angle() == v1::JOINT_ANGLE_UNSPECIFIED
+                                ? std::string("unspecified")
+                                : std::string(measures::angle_name(static_cast<measures::Angle>(summary.angle() - 1)));
+  CsvWriter csv(directory_ / result_layout::kRepetitionsCsv, result_layout::kRepetitionColumns);
+  int index = 0;
+  for (const v1::Repetition& r : summary.repetitions()) {
+    csv.row({angle, std::to_string(index++), time_s(r.t_start_us()), time_s(r.t_peak_us()), time_s(r.t_end_us()),
+             format_double(r.min_deg()), format_double(r.max_deg()), format_double(r.range_deg()),
+             format_double(r.peak_speed_deg_s()), format_double(r.duration_s()), r.partial() ? "0" : "1"});
+  }
+  csv.close();
+  v1::RepetitionSummary totals = summary;
+  totals.clear_repetitions();
+  write_file_bytes(directory_ / result_layout::kRepetitionSummaryJson, message_to_json(totals));
+}
+
 void ResultFiles::write_calibration(const v1::CalibrationReport& report) {
   write_file_bytes(directory_ / result_layout::kCalibrationJson, message_to_json(report));
 }
@@ -162,7 +222,7 @@ void ResultFiles::write_calibration(const v1::CalibrationReport& report) {
 void ResultFiles::close() {
   for (auto& [device, csv] : orientations_) csv->close();
   for (auto& [device, csv] : forearm_orientations_) csv->close();
-  for (auto* file : {&smpl_joints_, &camera_joints_, &forearms_, &imu_positions_, &segments_}) {
+  for (auto* file : {&smpl_joints_, &camera_joints_, &forearms_, &imu_positions_, &segments_, &angles_}) {
     if (*file) (*file)->close();
   }
 }

@@ -15,6 +15,14 @@
 //                                     imu_z_m,elbow_x_m,elbow_y_m,elbow_z_m,wrist_x_m,wrist_y_m,
 //                                     wrist_z_m,w,x,y,z  (one row per recovered sample; method
 //                                     PAPER or SMOOTHER; p_K and K_from_F as w x y z)
+//   joint_angles.csv                  t_s,<angle>...,<angle>_confidence...  one row per frame with a
+//                                     fitted body; one column per ISB angle (measures/joint_angles.hpp
+//                                     names, degrees), empty where undefined; then each angle's
+//                                     confidence (0 where held or undefined). t_s: camera clock, s
+//   repetitions.csv                   angle,repetition,t_start_s,t_peak_s,t_end_s,min_deg,max_deg,
+//                                     range_deg,peak_speed_deg_s,duration_s,counted  (one row per
+//                                     repetition, partial ones with counted 0)
+//   repetition_summary.json           RepetitionSummary without its repetitions (count, means, spreads)
 //   calibration.json                  CalibrationReport (protobuf JSON, .proto field names)
 // t_us of frame files is the camera clock; enums are written by name (LEFT, FUSED, ...).
 // A frame, forearm or segment file is created when the first result that has such entries
@@ -40,6 +48,14 @@ inline const char* const kCameraJointsCsv = "camera_joints.csv";
 inline const char* const kForearmsCsv = "forearms.csv";
 inline const char* const kImuPositionsCsv = "imu_positions.csv";
 inline const char* const kCalibrationJson = "calibration.json";
+inline const char* const kJointAnglesCsv = "joint_angles.csv";
+inline const char* const kRepetitionsCsv = "repetitions.csv";
+inline const char* const kRepetitionSummaryJson = "repetition_summary.json";
+inline const std::vector<std::string> kRepetitionColumns = {
+    "angle",   "repetition", "t_start_s",        "t_peak_s",   "t_end_s", "min_deg",
+    "max_deg", "range_deg",  "peak_speed_deg_s", "duration_s", "counted"};
+// t_s, one column per angle, then one confidence column per angle.
+std::vector<std::string> joint_angle_columns();
 inline const std::vector<std::string> kOrientationColumns = {"t_us", "w", "x", "y", "z"};
 inline const std::vector<std::string> kForearmOrientationColumns = {"t_us", "w", "x", "y", "z", "pronation_rad"};
 inline const std::vector<std::string> kJointColumns = {"t_us", "joint", "joint_name", "x_m",
@@ -65,6 +81,9 @@ class ResultFiles {
   void write_frame(const v1::FrameResult& frame);
   // kInvalidArgument for an unsafe device id.
   void write_segment(const v1::RecoveredSegment& segment);
+  // kInvalidArgument for a frame whose angles are not every JointAngleKind in order.
+  void write_angles(const v1::FrameAngles& angles);
+  void write_repetitions(const v1::RepetitionSummary& summary);
   void write_calibration(const v1::CalibrationReport& report);
   // Flushes and closes every file; kDataLoss when something could not be written.
   void close();
@@ -82,7 +101,7 @@ class ResultFiles {
   std::filesystem::path directory_;
   std::map<std::string, std::unique_ptr<CsvWriter>> orientations_;
   std::map<std::string, std::unique_ptr<CsvWriter>> forearm_orientations_;
-  std::optional<CsvWriter> smpl_joints_, camera_joints_, forearms_, imu_positions_, segments_;
+  std::optional<CsvWriter> smpl_joints_, camera_joints_, forearms_, imu_positions_, segments_, angles_;
   std::uint64_t orientation_samples_ = 0;
   std::uint64_t forearm_samples_ = 0;
   std::uint64_t frames_ = 0;

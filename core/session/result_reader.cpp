@@ -6,6 +6,7 @@
 
 #include "body/smpl_model.hpp"
 #include "common/error.hpp"
+#include "measures/joint_angles.hpp"
 #include "session/directory_layout.hpp"
 #include "session/file_bytes.hpp"
 #include "session/json_message.hpp"
@@ -204,6 +205,47 @@ std::vector<RecoveredRow> read_recovered(ResultDirectory& out) {
       });
 }
 
+std::vector<AngleRow> read_angles(ResultDirectory& out) {
+  const std::vector<std::string> columns = result_layout::joint_angle_columns();
+  const auto count = static_cast<std::size_t>(measures::kAngleCount);
+  return read_rows<AngleRow>(out, result_layout::kJointAnglesCsv, columns, [&](ResultCsv& csv, const auto& rows) {
+    AngleRow row;
+    row.t_us = std::llround(csv.number(0) * 1e6);
+    if (!rows.empty() && row.t_us <= rows.back().t_us) {
+      throw_invalid(csv.field(0), "is not after the previous row's t_s");
+    }
+    for (std::size_t a = 0; a < count; ++a) {
+      if (csv.text(1 + a).empty()) {
+        row.deg.emplace_back();
+      } else {
+        row.deg.emplace_back(csv.number(1 + a));
+      }
+      row.confidence.push_back(csv.number(1 + count + a));
+    }
+    return row;
+  });
+}
+
+std::vector<RepetitionRow> read_repetitions(ResultDirectory& out) {
+  return read_rows<RepetitionRow>(out, result_layout::kRepetitionsCsv, result_layout::kRepetitionColumns,
+                                  [](ResultCsv& csv, const auto&) {
+                                    RepetitionRow row;
+                                    row.angle = csv.text(0);
+                                    row.t_start_s = csv.number(2);
+                                    row.t_peak_s = csv.number(3);
+                                    row.t_end_s = csv.number(4);
+                                    row.min_deg = csv.number(5);
+                                    row.max_deg = csv.number(6);
+                                    row.range_deg = csv.number(7);
+                                    row.peak_speed_deg_s = csv.number(8);
+                                    row.duration_s = csv.number(9);
+                                    const std::string counted = csv.text(10);
+                                    if (counted != "0" && counted != "1") throw_invalid(csv.field(10), "is not 0 or 1");
+                                    row.counted = counted == "1";
+                                    return row;
+                                  });
+}
+
 }  // namespace
 
 ResultDirectory read_result_files(const fs::path& directory) {
@@ -220,6 +262,8 @@ ResultDirectory read_result_files(const fs::path& directory) {
   out.forearms = read_forearms(out);
   out.imu_positions = read_imu_positions(out);
   out.recovered = read_recovered(out);
+  out.joint_angles = read_angles(out);
+  out.repetitions = read_repetitions(out);
   if (fs::exists(directory / result_layout::kCalibrationJson)) {
     out.files.insert(result_layout::kCalibrationJson);
     v1::CalibrationReport report;

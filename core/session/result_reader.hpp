@@ -65,6 +65,21 @@ struct RecoveredRow {
   geometry::Quat K_from_F = geometry::Quat::Identity();
 };
 
+// One row of joint_angles.csv: degrees per measures::Angle, none where undefined.
+struct AngleRow {
+  std::int64_t t_us = 0;                   // from t_s, rounded to the microsecond
+  std::vector<std::optional<double>> deg;  // measures::kAngleCount
+  std::vector<double> confidence;          // measures::kAngleCount
+};
+
+// One row of repetitions.csv.
+struct RepetitionRow {
+  std::string angle;  // measures::angle_name
+  double t_start_s = 0, t_peak_s = 0, t_end_s = 0;
+  double min_deg = 0, max_deg = 0, range_deg = 0, peak_speed_deg_s = 0, duration_s = 0;
+  bool counted = false;
+};
+
 struct ResultDirectory {
   std::filesystem::path directory;
   std::set<std::string> files;  // the layout's files that were present, e.g. "imu_positions.csv",
@@ -75,6 +90,8 @@ struct ResultDirectory {
   std::vector<ForearmRow> forearms;
   std::vector<ImuPositionRow> imu_positions;
   std::vector<RecoveredRow> recovered;
+  std::vector<AngleRow> joint_angles;  // t_us strictly increasing
+  std::vector<RepetitionRow> repetitions;
   std::optional<v1::CalibrationReport> calibration;
 
   bool has(const std::string& file) const { return files.count(file) > 0; }

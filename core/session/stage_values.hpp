@@ -13,6 +13,8 @@
 #include "forearm/gap_tracker.hpp"
 #include "geometry/quaternion.hpp"
 #include "imu/imu_sample.hpp"
+#include "measures/angle_series.hpp"
+#include "measures/joint_angles.hpp"
 #include "posefuse/v1/results.pb.h"
 
 namespace posefuse::session {
@@ -79,8 +81,9 @@ struct ImuPositionEstimate {
 // FrameResult.
 struct FrameEstimate {
   std::int64_t t_us = 0;
-  std::vector<JointEstimate> smpl_joints;    // 24 or none
-  std::vector<JointEstimate> camera_joints;  // 25 or none
+  std::vector<JointEstimate> smpl_joints;      // 24 or none
+  std::vector<JointEstimate> camera_joints;    // 25 or none
+  std::vector<geometry::Quat> smpl_rotations;  // K_from_joint, 24 with a body fit, else none
   std::vector<ForearmEstimate> forearms;
   std::vector<ImuPositionEstimate> imu_positions;
   double fit_energy = 0.0;  // paper 2 eq. 4; 0 without a fit
@@ -116,8 +119,23 @@ struct FramesDone {
   std::int64_t up_to_t_us = 0;
 };
 
-using StageValue = std::variant<ImuOrientations, ForearmOrientations, ArmTrackStart, ArmTrack, FittedFrame,
-                                ArmFrameEstimates, RecoveredSegment, FramesDone, FrameEstimate>;
+// The measures stage's ISB joint angles of one frame with a fitted body (measures/joint_angles.hpp).
+// To the client: a FrameAngles.
+struct FrameAngles {
+  std::int64_t t_us = 0;
+  measures::JointAngles angles{};
+  v1::Source joints_source = v1::SOURCE_UNSPECIFIED;  // of the frame's SMPL joints
+};
+
+// Once, after the last frame: the repetitions of one angle, times in camera-clock seconds. To the
+// client: a RepetitionSummary.
+struct Repetitions {
+  measures::SessionRepetitions repetitions;
+};
+
+using StageValue =
+    std::variant<ImuOrientations, ForearmOrientations, ArmTrackStart, ArmTrack, FittedFrame, ArmFrameEstimates,
+                 RecoveredSegment, FramesDone, FrameEstimate, FrameAngles, Repetitions>;
 
 // The kinds, in StageValue's order, for the stages' consumes() and produces().
 enum class ValueKind {
@@ -129,7 +147,9 @@ enum class ValueKind {
   kArmFrameEstimates,
   kRecoveredSegment,
   kFramesDone,
-  kFrameEstimate
+  kFrameEstimate,
+  kFrameAngles,
+  kRepetitions
 };
 inline ValueKind kind_of(const StageValue& value) { return static_cast<ValueKind>(value.index()); }
 const char* value_kind_name(ValueKind kind);

@@ -4,8 +4,10 @@
 
 #include "common/error.hpp"
 #include "session/file_bytes.hpp"
+#include "session/result_encoder.hpp"
 #include "session/result_files.hpp"
 #include "session/text_fields.hpp"
+#include "sim/angle_truth.hpp"
 
 namespace posefuse::sim {
 namespace {
@@ -181,6 +183,14 @@ void write_ground_truth(const SimTruth& truth, const std::filesystem::path& dire
     }
     files.write_frame(result);
   }
+  const AngleTruth angles = angle_truth(truth);
+  for (std::size_t f = 0; f < truth.frames.size(); ++f) {
+    const auto result =
+        session::encode_value(session::FrameAngles{truth.frames[f].t_us, angles.frames[f], v1::GROUND_TRUTH});
+    files.write_angles(result->joint_angles());
+  }
+  if (angles.repetitions)
+    files.write_repetitions(session::encode_value(session::Repetitions{*angles.repetitions})->repetitions());
   for (const SimDeviceTruth& device : truth.devices) {
     v1::ImuOrientationBatch batch;
     batch.set_device_id(device.device_id);

@@ -10,6 +10,8 @@
 //   occlusion.csv                t_us,arm,forearm_visible_fraction,forearm_occluded,strap_visible
 //   imu_samples/<device_id>.csv  t_device_us,t_camera_us,lost,bias_gx,bias_gy,bias_gz
 //   truth.json                   frames, clocks, mountings, IMU error draws, sync truth
+// Also in the result layout: joint_angles.csv and repetitions.csv (sim/angle_truth.hpp: the true
+// angles from the true joints, vertical and forearm frames).
 #include <filesystem>
 
 #include "sim/sim_session.hpp"

@@ -29,8 +29,14 @@ struct FixtureSpec {
   bool with_joints = true;
   bool with_segment = true;
   v1::Source source = v1::GROUND_TRUTH;
-  int frames = 10;  // camera frames at 30 Hz; forearm samples at 80 Hz over the same span
+  int frames = 10;                // camera frames at 30 Hz; forearm samples at 80 Hz over the same span
+  double angle_offset_deg = 0.0;  // added to every joint angle and repetition range
+  bool right_pronation_defined = true;
+  bool with_repetitions = true;  // two counted repetitions of right_elbow_flexion and a partial one
 };
+
+// Joint angle a at time t (deg): distinct per angle, changing over time.
+inline double fixture_angle_deg(int a, double t_s) { return 10.0 * a + 30.0 * t_s; }
 
 inline geometry::Quat fixture_K_from_F(double t_s) {
   return geometry::quat_from_rotation_vector(geometry::Vec3(0.3 * t_s, 0.1, -0.2));
@@ -81,6 +87,39 @@ inline void write_fixture(const std::filesystem::path& dir, const FixtureSpec& s
     *position.mutable_position_m() = to_proto(fixture_imu_K(t) + shift);
     position.set_source(f < spec.frames / 2 ? v1::VISUAL : v1::PREDICTED);
     files.write_frame(frame);
+  }
+  for (int f = 0; f < spec.frames; ++f) {
+    const double t = f / 30.0;
+    v1::FrameAngles angles;
+    angles.set_t_us(spec.t0_us + static_cast<std::int64_t>(t * 1e6));
+    for (int a = 0; a < 15; ++a) {
+      v1::JointAngle& angle = *angles.add_angles();
+      angle.set_kind(static_cast<v1::JointAngleKind>(a + 1));
+      angle.set_defined(a != 13 || spec.right_pronation_defined);  // 13: right_pronation
+      angle.set_deg(fixture_angle_deg(a, t) + spec.angle_offset_deg);
+      angle.set_confidence(a == 3 ? 0.0 : 1.0);  // 3: left_plane_of_elevation, held
+      angle.set_held(a == 3);
+      angle.set_source(spec.source);
+    }
+    files.write_angles(angles);
+  }
+  if (spec.with_repetitions) {
+    v1::RepetitionSummary summary;
+    summary.set_angle(v1::RIGHT_ELBOW_FLEXION);
+    summary.set_angle_detected(true);
+    for (int r = 0; r < 3; ++r) {
+      v1::Repetition& rep = *summary.add_repetitions();
+      rep.set_t_start_us(spec.t0_us + r * 2'000'000);
+      rep.set_t_peak_us(spec.t0_us + r * 2'000'000 + 1'000'000);
+      rep.set_t_end_us(spec.t0_us + (r + 1) * 2'000'000);
+      rep.set_min_deg(20);
+      rep.set_max_deg(60 + 10 * r + spec.angle_offset_deg);
+      rep.set_range_deg(40 + 10 * r + spec.angle_offset_deg);
+      rep.set_duration_s(2.0);
+      rep.set_partial(r == 2);
+    }
+    summary.set_count(2);
+    files.write_repetitions(summary);
   }
   if (spec.with_segment) {  // frames 5..9 recovered, samples every 12.5 ms
     v1::RecoveredSegment segment;

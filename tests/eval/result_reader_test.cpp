@@ -53,6 +53,29 @@ TEST(ResultReader, ReadsBackWhatResultFilesWrote) {
   EXPECT_EQ(r.recovered.front().method, v1::RecoveredSegment::SMOOTHER);
   ASSERT_TRUE(r.calibration.has_value());
   EXPECT_DOUBLE_EQ(r.calibration->forearms(0).r_m(), 0.035);
+  ASSERT_EQ(r.joint_angles.size(), 10u);
+  EXPECT_EQ(r.joint_angles[4].t_us, 1000 + static_cast<std::int64_t>(4 / 30.0 * 1e6));
+  ASSERT_EQ(r.joint_angles[4].deg.size(), 15u);
+  EXPECT_NEAR(*r.joint_angles[4].deg[7], result_fixture::fixture_angle_deg(7, 4 / 30.0), 1e-9);
+  EXPECT_DOUBLE_EQ(r.joint_angles[4].confidence[3], 0.0);
+  ASSERT_EQ(r.repetitions.size(), 3u);
+  EXPECT_EQ(r.repetitions[1].angle, "right_elbow_flexion");
+  EXPECT_DOUBLE_EQ(r.repetitions[1].range_deg, 50.0);
+  EXPECT_DOUBLE_EQ(r.repetitions[1].t_start_s, 2.001);
+  EXPECT_TRUE(r.repetitions[1].counted);
+  EXPECT_FALSE(r.repetitions[2].counted);
+}
+
+TEST(ResultReader, UndefinedAnglesAreEmptyCellsReadAsNone) {
+  const auto dir = result_fixture::fresh_result_dir("undefined_angles");
+  result_fixture::FixtureSpec spec;
+  spec.right_pronation_defined = false;
+  result_fixture::write_fixture(dir, spec);
+  const session::ResultDirectory r = session::read_result_files(dir);
+  ASSERT_EQ(r.joint_angles.size(), 10u);
+  EXPECT_FALSE(r.joint_angles[0].deg[13].has_value());
+  EXPECT_DOUBLE_EQ(r.joint_angles[0].confidence[13], 0.0);
+  EXPECT_TRUE(r.joint_angles[0].deg[12].has_value());
 }
 
 TEST(ResultReader, NamesWhatIsWrong) {

@@ -92,6 +92,35 @@ TEST(ResultScore, KnownOffsetsComeBackAsErrors) {
   EXPECT_NE(table.find("K_from_W"), std::string::npos);
 }
 
+TEST(ResultScore, JointAnglesAndRepetitions) {
+  FixtureSpec result, truth;
+  result.angle_offset_deg = 3.0;
+  result.right_pronation_defined = false;
+  const Pair p = write_pair("angles", result, truth);
+  const eval::ScoreReport r = eval::score_directories(p.result, p.truth);
+  ASSERT_EQ(r.joint_angles.size(), 14u);  // left_plane_of_elevation is held in the truth: not scored
+  for (const eval::JointAngleScore& s : r.joint_angles) {
+    SCOPED_TRACE(s.angle);
+    EXPECT_NE(s.angle, "left_plane_of_elevation");
+    if (s.angle == "right_pronation") {
+      EXPECT_EQ(s.deg.count, 0u);
+      EXPECT_EQ(s.result_undefined, 10u);
+      continue;
+    }
+    EXPECT_EQ(s.deg.count, 10u);
+    EXPECT_NEAR(s.deg.rms, 3.0, 1e-9);
+    EXPECT_NEAR(s.deg.max, 3.0, 1e-9);
+  }
+  ASSERT_TRUE(r.repetitions.has_value());
+  EXPECT_EQ(r.repetitions->result_count, 2u);  // the partial one is not counted
+  EXPECT_EQ(r.repetitions->truth_count, 2u);
+  EXPECT_EQ(r.repetitions->matched, 2u);
+  EXPECT_NEAR(r.repetitions->range_deg.rms, 3.0, 1e-9);
+  const std::string text = eval::format_score_report(r);
+  EXPECT_NE(text.find("ISB joint angle error"), std::string::npos);
+  EXPECT_NE(text.find("right_elbow_flexion"), std::string::npos);
+}
+
 TEST(ResultScore, IdenticalDirectoriesScoreZero) {
   const Pair p = write_pair("same", {}, {});
   const eval::ScoreReport r = eval::score_directories(p.result, p.truth);

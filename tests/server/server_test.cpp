@@ -422,13 +422,16 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   v1::ServerInfo info;
   ASSERT_TRUE(stub_->GetServerInfo(&context, {}, &info).ok());
   EXPECT_EQ(info.api_version(), "posefuse.v1");
-  ASSERT_EQ(info.stages_size(), 5);
+  ASSERT_EQ(info.stages_size(), 6);
   EXPECT_EQ(info.stages(0).name(), "imu_orientation");
   EXPECT_EQ(info.stages(1).name(), "forearm");
   EXPECT_EQ(info.stages(2).name(), "body_fit");
   EXPECT_EQ(info.stages(3).name(), "forearm_gaps");
   EXPECT_EQ(info.stages(4).name(), "frame_merge");
-  ASSERT_EQ(info.options_size(), 30);
+  EXPECT_EQ(info.stages(5).name(), "measures");
+  ASSERT_EQ(info.options_size(), 38);
+  EXPECT_EQ(info.options(30).key(), "measures.repetition_angle");
+  EXPECT_EQ(info.options(30).default_value(), "auto");
   EXPECT_EQ(info.options(16).key(), "fit.enabled");
   EXPECT_EQ(info.options(16).default_value(), "false");
   EXPECT_EQ(info.options(23).key(), "fit.fine_shape");

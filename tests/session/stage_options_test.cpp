@@ -41,7 +41,7 @@ void expect_field(const std::function<void()>& read, const std::string& key) {
 
 TEST(StageOptions, EveryKeyIsDeclaredOnceUnderItsStagesPrefix) {
   const std::map<std::string, std::string> prefix{
-      {"imu_orientation", "imu."}, {"forearm", "forearm."}, {"body_fit", "fit."}};
+      {"imu_orientation", "imu."}, {"forearm", "forearm."}, {"body_fit", "fit."}, {"measures", "measures."}};
   std::set<std::string> keys;
   for (const auto& stage : make_default_stages()) {
     for (const OptionSpec& option : stage->options()) {
@@ -54,7 +54,7 @@ TEST(StageOptions, EveryKeyIsDeclaredOnceUnderItsStagesPrefix) {
       }
     }
   }
-  EXPECT_EQ(keys.size(), 30u);
+  EXPECT_EQ(keys.size(), 38u);
 }
 
 TEST(StageOptions, DefaultsAreValidAndTheLibrariesOwn) {

@@ -15,6 +15,7 @@
 #include "common/error.hpp"
 #include "geometry/quaternion.hpp"
 #include "session/session_validator.hpp"
+#include "sim/angle_truth.hpp"
 #include "sim/sim_session.hpp"
 #include "test_camera.hpp"
 #include "test_rigs.hpp"
@@ -276,4 +277,30 @@ TEST(SimSessionTruth, DurationClipPlaysTheWholeClipAndReportsItsGlitches) {
     EXPECT_NE(std::string(e.what()).find("0.75"), std::string::npos) << e.what();
   }
   std::filesystem::remove(path);
+}
+
+// gt/'s joint angles and repetitions come from the true pose: arm raising with both arms, three
+// times, reads three counted repetitions of an elevation from the rest (8 deg out) to 150 deg.
+TEST(SimSessionTruth, AngleTruthCountsTheScriptedRepetitions) {
+  SimSessionOptions o = small(false);
+  o.motion = "arm_raising";
+  o.motion_options.exercise.arm = ExerciseArm::kBoth;
+  o.motion_options.exercise.repetitions = 3;
+  o.duration_from_motion = true;
+  ValidatingSink sink;
+  const SimTruth truth = simulate_session(with_session_duration(o), sink);
+  const AngleTruth angles = angle_truth(truth);
+  ASSERT_EQ(angles.frames.size(), truth.frames.size());
+  ASSERT_TRUE(angles.repetitions.has_value());
+  EXPECT_EQ(angles.repetitions->summary.count, 3);
+  for (const measures::Repetition& r : angles.repetitions->summary.repetitions) {
+    if (r.partial) continue;
+    EXPECT_NEAR(r.max_deg, 150, 1.0);
+    EXPECT_NEAR(r.min_deg, 8, 1.0);
+  }
+  // The straight arm: elbow flexion near 0, so no humerus axial rotation anywhere.
+  for (const measures::JointAngles& a : angles.frames) {
+    EXPECT_FALSE(a[static_cast<int>(measures::Angle::kRightHumerusAxialRotation)].defined);
+    EXPECT_LT(a[static_cast<int>(measures::Angle::kRightElbowFlexion)].deg, 15);
+  }
 }

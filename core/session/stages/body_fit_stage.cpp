@@ -53,6 +53,7 @@ FittedFrame fitted_frame_from(const fit::FittedBodyFrame& fitted) {
   const v1::Source source = fitted.imu_used ? v1::FUSED : v1::VISUAL;
   for (const fit::FittedJoint& j : fitted.smpl_joints) frame.smpl_joints.push_back({j.p_K, source, j.confidence});
   for (const fit::FittedJoint& j : fitted.camera_joints) frame.camera_joints.push_back({j.p_K, source, j.confidence});
+  frame.smpl_rotations = fitted.K_from_joint;
   for (const fit::FittedForearm& f : fitted.forearms) {
     frame.forearms.push_back({arm_of(f.side), f.K_from_F, f.pronation_rad, v1::FUSED, f.confidence});
   }

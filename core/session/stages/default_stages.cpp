@@ -5,6 +5,7 @@
 #include "session/stages/forearm_stage.hpp"
 #include "session/stages/frame_merge_stage.hpp"
 #include "session/stages/imu_orientation_stage.hpp"
+#include "session/stages/measures_stage.hpp"
 
 namespace posefuse::session {
 
@@ -17,6 +18,8 @@ std::vector<std::unique_ptr<Stage>> make_default_stages() {
   // The gaps see the fit's elbows as an earlier result; the merge sees every per-frame estimate.
   stages.push_back(std::make_unique<ForearmGapsStage>());
   stages.push_back(std::make_unique<FrameMergeStage>());
+  // Joint angles and repetitions from the merged frames' fitted joints and forearm orientations.
+  stages.push_back(std::make_unique<MeasuresStage>());
   return stages;
 }
 

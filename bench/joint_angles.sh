@@ -1,0 +1,76 @@
+#!/usr/bin/env bash
+# ISB joint angles and repetitions (docs/measures.md) through the real server and client, scored
+# against the simulator's true angles (posefuse-score): per angle the RMS and max error pooled
+# over the sessions, and per session the repetitions counted against the truth's and the range
+# of motion error per repetition.
+#   bench/joint_angles.sh [BUILD_DIR] [MOTION:SEED:SPEED ...]
+# Default sessions: the scripted exercises at seeds 61 and 62 and speeds 0.8 and 1.25 (nothing in
+# the measures was chosen on them: its bounds are geometric, docs/measures.md), both arms, three
+# repetitions, a subject unlike the template (female, betas 1.5,-1,0.5, clothing on), body fit on.
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=${1:-$root/build}
+shift || true
+specs=("$@")
+if [ ${#specs[@]} -eq 0 ]; then
+  specs=(arm_raising:61:0.8 arm_raising:62:1.25 shoulder_lift:61:1.25 shoulder_lift:62:0.8
+         forearm_rolling:61:0.8 forearm_rolling:62:1.25 hair_combing:61:1.25 hair_combing:62:0.8
+         torso_tilt:61:0.8 torso_tilt:62:1.25 forearm_protocol:61:1.0 forearm_protocol:62:1.0)
+fi
+work=$(mktemp -d)
+server_pid=
+cleanup() {
+  [ -n "$server_pid" ] && kill "$server_pid" 2>/dev/null || true
+  rm -rf "$work"
+}
+trap cleanup EXIT
+"$build/server/posefuse-server" --listen 127.0.0.1:0 >"$work/server.log" 2>&1 &
+server_pid=$!
+for _ in $(seq 100); do
+  port=$(sed -n 's/.*event=server_start.* port=\([0-9]*\).*/\1/p' "$work/server.log" | head -1)
+  [ -n "$port" ] && break
+  sleep 0.1
+done
+[ -n "$port" ] || { echo "server did not start: $(cat "$work/server.log")" >&2; exit 1; }
+for spec in "${specs[@]}"; do
+  IFS=: read -r motion seed speed <<<"$spec"
+  name="$motion-$seed-$speed"
+  printf 'motion = %s\nspeed = %s\narm = both\nrepetitions = 3\nsex = female\nbetas = 1.5,-1,0.5\nclothing = true\n' \
+    "$motion" "$speed" >"$work/$name.options"
+  "$build/tools/sim/posefuse-sim" --options "$work/$name.options" --seed "$seed" --duration clip --quiet \
+    --chunk-file "$work/$name.pfchunks" --gt "$work/$name.gt" >/dev/null
+  "$build/client/posefuse" fit "$work/$name.pfchunks" --server "127.0.0.1:$port" --out "$work/$name.out" \
+    --option fit.enabled=true >/dev/null
+  "$build/tools/score/posefuse-score" "$work/$name.out" "$work/$name.gt" >"$work/$name.score"
+done
+python3 - "$work" "${specs[@]}" <<'PY'
+import math, re, sys
+work, specs = sys.argv[1], sys.argv[2:]
+pooled = {}  # angle -> [sum n*rms^2, n, max]
+sessions = []
+for spec in specs:
+    motion, seed, speed = spec.split(":")
+    name = f"{motion}-{seed}-{speed}"
+    text = open(f"{work}/{name}.score").read()
+    section = text.split("ISB joint angle error (deg)\n", 1)[1].split("\n\n", 1)[0] if "ISB joint" in text else ""
+    for line in section.splitlines()[1:]:
+        f = line.split()
+        angle, n, rms, mx = f[0], int(f[1]), float(f[2]), float(f[3])
+        if n == 0: continue
+        p = pooled.setdefault(angle, [0.0, 0, 0.0])
+        p[0] += n * rms * rms; p[1] += n; p[2] = max(p[2], mx)
+    m = re.search(r"Repetitions.*\n.*\n(\S+)\s+(\S+)\s+(\d+)\s+(\d+)\s+(\d+)\s+([\d.]+)\s+([\d.]+)", text)
+    sessions.append((name, m.groups() if m else None))
+print("Joint angle error, pooled over the sessions (deg)")
+print(f"{'angle':30s} {'frames':>7s} {'RMS':>6s} {'max':>6s}")
+for angle, (s, n, mx) in pooled.items():
+    print(f"{angle:30s} {n:7d} {math.sqrt(s / n):6.2f} {mx:6.2f}")
+print()
+print("Repetitions per session (counted; ROM error per matched repetition, deg)")
+print(f"{'session':26s} {'angle':24s} {'true angle':24s} {'count':>5s} {'true':>5s} {'ROM RMS':>8s} {'ROM max':>8s}")
+for name, g in sessions:
+    if g is None:
+        print(f"{name:26s} (no repetitions in the results)"); continue
+    angle, true_angle, count, true_count, matched, rms, mx = g
+    print(f"{name:26s} {angle:24s} {true_angle:24s} {count:>5s} {true_count:>5s} {float(rms):8.2f} {float(mx):8.2f}")
+PY

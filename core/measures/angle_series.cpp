@@ -1,0 +1,41 @@
+#include "measures/angle_series.hpp"
+
+#include <limits>
+
+namespace posefuse::measures {
+
+AngleSeries::AngleSeries(std::optional<Angle> angle) : named_(angle) {
+  if (angle) {
+    candidates_ = {*angle};
+  } else {
+    candidates_ = {Angle::kLeftElevation, Angle::kRightElevation, Angle::kLeftElbowFlexion, Angle::kRightElbowFlexion,
+                   Angle::kLeftPronation, Angle::kRightPronation, Angle::kThoraxFlexion};
+  }
+  series_deg_.assign(candidates_.size(), {});
+}
+
+bool AngleSeries::add(double t_s, const JointAngles& angles) {
+  if (!t_s_.empty() && !(t_s > t_s_.back())) return false;
+  t_s_.push_back(t_s);
+  for (std::size_t c = 0; c < candidates_.size(); ++c) {
+    const AngleValue& a = angles[static_cast<std::size_t>(candidates_[c])];
+    series_deg_[c].push_back(a.defined && !a.held ? a.deg : std::numeric_limits<double>::quiet_NaN());
+  }
+  return true;
+}
+
+std::optional<SessionRepetitions> AngleSeries::repetitions(const RepetitionOptions& options) const {
+  if (t_s_.empty()) return std::nullopt;
+  int chosen = 0;
+  if (!named_) {
+    chosen = dominant_series(series_deg_);
+    if (chosen < 0) return std::nullopt;
+  }
+  SessionRepetitions out;
+  out.angle = candidates_[static_cast<std::size_t>(chosen)];
+  out.detected = !named_;
+  out.summary = segment_repetitions(t_s_, series_deg_[static_cast<std::size_t>(chosen)], options);
+  return out;
+}
+
+}  // namespace posefuse::measures

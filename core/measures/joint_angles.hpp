@@ -1,0 +1,96 @@
+#pragma once
+// ISB joint angles (Wu et al. 2005, J Biomech 38:981) of one posed upper body: thorax relative to
+// vertical, humerothoracic Y-X-Y per arm, elbow flexion, forearm pronation / supination relative
+// to the humerus, shoulder girdle elevation. docs/measures.md, "Joint angles" gives every
+// segment frame's construction (with a figure), the zero and sign of every angle and how the
+// Y-X-Y gimbal lock is handled.
+//
+// The segment frames come from the 24 SMPL joints alone: the body model has no roll DOF in the
+// arms (docs/fitting.md), so the humerus' axial rotation is read from the plane of the upper arm
+// and the forearm (ISB's second humerus frame), and pronation from the wrist IMU's thumb axis.
+// Where the geometry cannot give an angle (elbow nearly straight: no plane; arm nearly down: no
+// plane of elevation) the angle is marked undefined or held, with confidence 0, never guessed.
+#include <Eigen/Core>
+#include <array>
+#include <optional>
+#include <string_view>
+
+namespace posefuse::measures {
+
+enum class Angle : int {
+  kThoraxFlexion,        // forward flexion +, about the thorax's lateral axis (ISB Z-X-Y, 1st)
+  kThoraxLateralTilt,    // to the right +                                          (2nd)
+  kThoraxAxialRotation,  // to the left +                                           (3rd)
+  kLeftPlaneOfElevation,
+  kLeftElevation,
+  kLeftHumerusAxialRotation,
+  kLeftElbowFlexion,
+  kLeftPronation,
+  kLeftGirdleElevation,
+  kRightPlaneOfElevation,      // humerothoracic Y-X-Y 1st: 0 abduction, 90 forward flexion
+  kRightElevation,             // 2nd, as a positive angle: 0 arm down, 90 horizontal, 180 overhead
+  kRightHumerusAxialRotation,  // 3rd: internal rotation +
+  kRightElbowFlexion,          // 0 straight
+  kRightPronation,             // 0 neutral (thumb to the shoulder side), pronation +
+  kRightGirdleElevation,       // clavicle line above the thorax's transverse plane, elevation +
+  kCount
+};
+inline constexpr int kAngleCount = static_cast<int>(Angle::kCount);
+
+// Stable snake_case names (CSV columns, proto enum names), e.g. "right_elbow_flexion".
+std::string_view angle_name(Angle angle);
+
+// Where an angle's inputs came from.
+enum class AngleSource { kNone, kBodyModel, kBodyModelAndImu };
+
+struct AngleValue {
+  double deg = 0.0;
+  bool defined = false;     // false: the geometry gives no value (deg is meaningless)
+  bool held = false;        // the plane of elevation kept from the last frame (gimbal lock)
+  double confidence = 0.0;  // 0..1
+  AngleSource source = AngleSource::kNone;
+};
+
+using JointAngles = std::array<AngleValue, kAngleCount>;
+
+// One arm's pronation from the forearm IMU (fit/arm_roll.hpp) with its confidence.
+struct PronationInput {
+  double rad = 0.0;
+  double confidence = 0.0;
+};
+
+struct PosedUpperBody {
+  Eigen::Matrix3Xd smpl_joints_K;                   // 3 x 24, SMPL order
+  std::array<double, 24> joint_confidence{};        // 0..1 per SMPL joint
+  Eigen::Vector3d up_K = Eigen::Vector3d::UnitY();  // against gravity, in K
+  double up_confidence = 1.0;                       // < 1 where up is assumed, not measured
+  // The subject's reference front: the horizontal direction the thorax's axial rotation is
+  // measured from. Default: facing the camera (K's -z).
+  Eigen::Vector3d front_K = -Eigen::Vector3d::UnitZ();
+  std::optional<PronationInput> left_pronation, right_pronation;
+};
+
+struct JointAngleOptions {
+  // Below this elbow flexion the upper arm and forearm span no plane: no humerus axial rotation
+  // (and no pronation, fit/arm_roll.hpp uses the same bound).
+  double min_elbow_flexion_deg = 15.0;
+  // Below this elevation (or above 180 minus it) the Y-X-Y plane of elevation is gimbal locked:
+  // it is held at its last defined value and the axial rotation takes the whole turn about y.
+  double min_elevation_for_plane_deg = 15.0;
+};
+
+// `previous`: the last frame's angles of the same session (for the held plane of elevation), or
+// null. Throws posefuse::Error (kInvalidArgument) "smpl_joints_K" for a wrong size or non-finite
+// joints, "up_K" / "front_K" for zero, non-finite or parallel references, "joint_angle_options.*".
+JointAngles joint_angles(const PosedUpperBody& body, const JointAngleOptions& options = {},
+                         const JointAngles* previous = nullptr);
+
+// Pronation (+) / supination (-) of a forearm from the neutral position, in which the thumb
+// points to the shoulder side of the elbow's flexion plane (thumb up with the upper arm hanging
+// and the elbow bent 90 degrees); nullopt where the elbow is straighter than
+// `min_elbow_flexion_deg` (no flexion plane). `thumb_K`: the forearm's radial (thumb) direction.
+std::optional<double> pronation_rad(const Eigen::Vector3d& shoulder_K, const Eigen::Vector3d& elbow_K,
+                                    const Eigen::Vector3d& wrist_K, const Eigen::Vector3d& thumb_K, bool left_arm,
+                                    double min_elbow_flexion_deg);
+
+}  // namespace posefuse::measures

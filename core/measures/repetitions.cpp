@@ -1,0 +1,298 @@
+#include "measures/repetitions.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstddef>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include "common/error.hpp"
+
+namespace posefuse::measures {
+namespace {
+
+// The shortest text that reads back as the same double, so that a message quotes the offending
+// value as the caller wrote it ("3.1", not "3.100000").
+std::string text(double value) {
+  char buffer[64];
+  const auto [end, error] = std::to_chars(buffer, buffer + sizeof buffer, value);
+  return error == std::errc{} ? std::string(buffer, end) : std::string("(unprintable)");
+}
+
+std::string element(const char* name, std::size_t i, double value) {
+  return std::string(name) + "[" + std::to_string(i) + "] = " + text(value);
+}
+
+void check_series(const std::vector<double>& t_s, const std::vector<double>& angle_deg) {
+  if (angle_deg.size() != t_s.size()) {
+    throw_invalid("angle_deg", "has " + std::to_string(angle_deg.size()) + " samples but t_s has " +
+                                   std::to_string(t_s.size()) + "; they must pair up one to one");
+  }
+  for (std::size_t i = 0; i < t_s.size(); ++i) {
+    if (!std::isfinite(t_s[i])) throw_invalid("t_s", element("t_s", i, t_s[i]) + " is not a finite time");
+    // `!(a > b)` rather than `a <= b`: the same test, and it reads as the rule it enforces.
+    if (i > 0 && !(t_s[i] > t_s[i - 1])) {
+      throw_invalid("t_s", element("t_s", i, t_s[i]) + " is not after " + element("t_s", i - 1, t_s[i - 1]));
+    }
+    if (std::isinf(angle_deg[i])) {
+      throw_invalid("angle_deg",
+                    element("angle_deg", i, angle_deg[i]) + " is infinite (a missing sample is marked with NaN)");
+    }
+  }
+}
+
+void check_options(const RepetitionOptions& options) {
+  const std::string prefix = "repetition_options.";
+  if (!(std::isfinite(options.hysteresis_deg) && options.hysteresis_deg > 0)) {
+    throw_invalid(prefix + "hysteresis_deg",
+                  "hysteresis_deg = " + text(options.hysteresis_deg) + " is not a positive, finite angle");
+  }
+  // A swing smaller than the hysteresis never makes a turning point, so such a bound would be
+  // meaningless rather than lenient.
+  if (!(std::isfinite(options.min_amplitude_deg) && options.min_amplitude_deg >= options.hysteresis_deg)) {
+    throw_invalid(prefix + "min_amplitude_deg",
+                  "min_amplitude_deg = " + text(options.min_amplitude_deg) +
+                      " is not a finite angle of at least hysteresis_deg = " + text(options.hysteresis_deg));
+  }
+  if (!(std::isfinite(options.min_duration_s) && options.min_duration_s >= 0)) {
+    throw_invalid(prefix + "min_duration_s",
+                  "min_duration_s = " + text(options.min_duration_s) + " is not a finite, non-negative duration");
+  }
+  // Infinite is allowed: no upper bound.
+  if (!(options.max_duration_s >= options.min_duration_s)) {
+    throw_invalid(prefix + "max_duration_s", "max_duration_s = " + text(options.max_duration_s) +
+                                                 " is not at least min_duration_s = " + text(options.min_duration_s));
+  }
+  // Infinite is allowed: never cut.
+  if (!(options.max_gap_s >= 0)) {
+    throw_invalid(prefix + "max_gap_s", "max_gap_s = " + text(options.max_gap_s) + " is not a non-negative duration");
+  }
+}
+
+// A stretch of the series with no cut in it: the indices of its finite samples, in time order.
+using Piece = std::vector<std::size_t>;
+
+// Missing samples are skipped; wherever two consecutive finite samples are more than `max_gap_s`
+// apart (a NaN stretch, or a jump in the timestamps) the series is cut, because what the angle did
+// in between is unknown.
+std::vector<Piece> split_at_gaps(const std::vector<double>& t_s, const std::vector<double>& angle_deg,
+                                 double max_gap_s) {
+  std::vector<Piece> pieces;
+  Piece current;
+  for (std::size_t i = 0; i < t_s.size(); ++i) {
+    if (std::isnan(angle_deg[i])) continue;
+    if (!current.empty() && t_s[i] - t_s[current.back()] > max_gap_s) {
+      pieces.push_back(current);
+      current.clear();
+    }
+    current.push_back(i);
+  }
+  if (!current.empty()) pieces.push_back(current);
+  return pieces;
+}
+
+// Positions in `piece` (not indices in the series) of its troughs, found with hysteresis. Only
+// troughs are returned: each repetition runs from one trough to the next, and its peak is simply
+// its highest sample.
+std::vector<std::size_t> find_troughs(const Piece& piece, const std::vector<double>& angle_deg, double hysteresis_deg) {
+  const auto angle = [&](std::size_t position) { return angle_deg[piece[position]]; };
+  enum class Heading { kUnknown, kRising, kFalling };
+  Heading heading = Heading::kUnknown;
+  std::size_t low = 0, high = 0;  // the running minimum and maximum since the last turn
+  std::vector<std::size_t> troughs;
+  for (std::size_t p = 1; p < piece.size(); ++p) {
+    const double value = angle(p);
+    switch (heading) {
+      case Heading::kUnknown:
+        // Before the first turn either end may come first; whichever reversal reaches the
+        // hysteresis first decides.
+        if (value < angle(low)) low = p;
+        if (value > angle(high)) high = p;
+        if (value - angle(low) >= hysteresis_deg) {
+          troughs.push_back(low);
+          heading = Heading::kRising;
+          high = p;
+        } else if (angle(high) - value >= hysteresis_deg) {
+          heading = Heading::kFalling;
+          low = p;
+        }
+        break;
+      case Heading::kRising:
+        if (value > angle(high)) {
+          high = p;
+        } else if (angle(high) - value >= hysteresis_deg) {
+          heading = Heading::kFalling;  // the peak at `high` is confirmed
+          low = p;
+        }
+        break;
+      case Heading::kFalling:
+        if (value < angle(low)) {
+          low = p;
+        } else if (value - angle(low) >= hysteresis_deg) {
+          troughs.push_back(low);
+          heading = Heading::kRising;
+          high = p;
+        }
+        break;
+    }
+  }
+  // A recording usually stops at rest, where nothing rises again to confirm the last trough. A
+  // final descent that has come back to within the hysteresis of the trough its cycle started
+  // from has ended that cycle, so its lowest point is taken as a trough; one that has not is a
+  // repetition cut by the end of the piece.
+  if (heading == Heading::kFalling && !troughs.empty() && angle(low) <= angle(troughs.back()) + hysteresis_deg) {
+    troughs.push_back(low);
+  }
+  return troughs;
+}
+
+// |d angle / dt| at each position of `piece`: central differences over the neighbouring finite
+// samples (across a bridged gap too), one-sided at the ends of the piece, 0 for a lone sample.
+std::vector<double> speeds(const Piece& piece, const std::vector<double>& t_s, const std::vector<double>& angle_deg) {
+  std::vector<double> result(piece.size(), 0.0);
+  if (piece.size() < 2) return result;
+  for (std::size_t p = 0; p < piece.size(); ++p) {
+    const std::size_t before = piece[p == 0 ? p : p - 1];
+    const std::size_t after = piece[p + 1 == piece.size() ? p : p + 1];
+    result[p] = std::abs((angle_deg[after] - angle_deg[before]) / (t_s[after] - t_s[before]));
+  }
+  return result;
+}
+
+// The repetition spanning positions [first, last] of `piece`, not yet judged.
+Repetition describe(const Piece& piece, const std::vector<double>& t_s, const std::vector<double>& angle_deg,
+                    const std::vector<double>& piece_speeds, std::size_t first, std::size_t last) {
+  Repetition rep;
+  rep.t_start_s = t_s[piece[first]];
+  rep.t_end_s = t_s[piece[last]];
+  rep.duration_s = rep.t_end_s - rep.t_start_s;
+  rep.min_deg = rep.max_deg = angle_deg[piece[first]];
+  rep.t_peak_s = rep.t_start_s;
+  for (std::size_t p = first; p <= last; ++p) {
+    const double value = angle_deg[piece[p]];
+    rep.min_deg = std::min(rep.min_deg, value);
+    if (value > rep.max_deg) {
+      rep.max_deg = value;
+      rep.t_peak_s = t_s[piece[p]];
+    }
+    rep.peak_speed_deg_s = std::max(rep.peak_speed_deg_s, piece_speeds[p]);
+  }
+  rep.range_deg = rep.max_deg - rep.min_deg;
+  return rep;
+}
+
+// Whether a trough -> peak -> trough cycle is a complete repetition: both swings large enough and
+// a plausible duration.
+bool is_complete(const Repetition& cycle, double start_deg, double end_deg, const RepetitionOptions& options) {
+  const bool rise_ok = cycle.max_deg - start_deg >= options.min_amplitude_deg;
+  const bool fall_ok = cycle.max_deg - end_deg >= options.min_amplitude_deg;
+  const bool duration_ok = cycle.duration_s >= options.min_duration_s && cycle.duration_s <= options.max_duration_s;
+  return rise_ok && fall_ok && duration_ok;
+}
+
+// Appends the repetitions of one piece: the cycles between its troughs, and, as partial ones,
+// the motion before its first trough and after its last, when that motion is a real reversal
+// (at least the hysteresis) rather than noise.
+void add_piece(const Piece& piece, const std::vector<double>& t_s, const std::vector<double>& angle_deg,
+               const RepetitionOptions& options, std::vector<Repetition>& out) {
+  const std::vector<std::size_t> troughs = find_troughs(piece, angle_deg, options.hysteresis_deg);
+  const std::vector<double> piece_speeds = speeds(piece, t_s, angle_deg);
+  const auto add_cut_motion = [&](std::size_t first, std::size_t last) {
+    Repetition rep = describe(piece, t_s, angle_deg, piece_speeds, first, last);
+    if (rep.range_deg < options.hysteresis_deg) return;
+    rep.partial = true;
+    out.push_back(rep);
+  };
+  const std::size_t end = piece.size() - 1;
+  if (troughs.empty()) {
+    add_cut_motion(0, end);
+    return;
+  }
+  add_cut_motion(0, troughs.front());
+  for (std::size_t j = 0; j + 1 < troughs.size(); ++j) {
+    Repetition cycle = describe(piece, t_s, angle_deg, piece_speeds, troughs[j], troughs[j + 1]);
+    cycle.partial = !is_complete(cycle, angle_deg[piece[troughs[j]]], angle_deg[piece[troughs[j + 1]]], options);
+    out.push_back(cycle);
+  }
+  add_cut_motion(troughs.back(), end);
+}
+
+double mean(const std::vector<double>& values) {
+  if (values.empty()) return 0.0;
+  double sum = 0.0;
+  for (double v : values) sum += v;
+  return sum / static_cast<double>(values.size());
+}
+
+// Sample standard deviation (n - 1); 0 for fewer than two values, where there is no spread to see.
+double spread(const std::vector<double>& values) {
+  if (values.size() < 2) return 0.0;
+  const double m = mean(values);
+  double sum_sq = 0.0;
+  for (double v : values) sum_sq += (v - m) * (v - m);
+  return std::sqrt(sum_sq / static_cast<double>(values.size() - 1));
+}
+
+void summarize(RepetitionSummary& summary) {
+  std::vector<double> ranges, durations, peak_speeds;
+  for (const Repetition& rep : summary.repetitions) {
+    if (rep.partial) continue;
+    ranges.push_back(rep.range_deg);
+    durations.push_back(rep.duration_s);
+    peak_speeds.push_back(rep.peak_speed_deg_s);
+  }
+  summary.count = static_cast<int>(ranges.size());
+  summary.mean_range_deg = mean(ranges);
+  summary.range_spread_deg = spread(ranges);
+  summary.mean_duration_s = mean(durations);
+  summary.duration_spread_s = spread(durations);
+  summary.mean_peak_speed_deg_s = mean(peak_speeds);
+}
+
+// Linear interpolation between the closest ranks of `sorted` (p in [0, 1]).
+double percentile(const std::vector<double>& sorted, double p) {
+  const double position = p * static_cast<double>(sorted.size() - 1);
+  const auto below = static_cast<std::size_t>(std::floor(position));
+  const std::size_t above = std::min(below + 1, sorted.size() - 1);
+  const double fraction = position - static_cast<double>(below);
+  return sorted[below] + fraction * (sorted[above] - sorted[below]);
+}
+
+}  // namespace
+
+RepetitionSummary segment_repetitions(const std::vector<double>& t_s, const std::vector<double>& angle_deg,
+                                      const RepetitionOptions& options) {
+  check_series(t_s, angle_deg);
+  check_options(options);
+  RepetitionSummary summary;
+  for (const Piece& piece : split_at_gaps(t_s, angle_deg, options.max_gap_s)) {
+    add_piece(piece, t_s, angle_deg, options, summary.repetitions);
+  }
+  summarize(summary);
+  return summary;
+}
+
+int dominant_series(const std::vector<std::vector<double>>& angle_series_deg) {
+  int best = -1;
+  double best_spread = 0.0;
+  for (std::size_t s = 0; s < angle_series_deg.size(); ++s) {
+    std::vector<double> finite;
+    for (double v : angle_series_deg[s]) {
+      if (std::isfinite(v)) finite.push_back(v);
+    }
+    if (finite.size() < 2) continue;
+    std::sort(finite.begin(), finite.end());
+    // Percentiles rather than max - min, so that a few outliers (a tracking glitch) cannot make a
+    // still joint look like the one that moves.
+    const double series_spread = percentile(finite, 0.95) - percentile(finite, 0.05);
+    if (best < 0 || series_spread > best_spread) {  // ties go to the first
+      best = static_cast<int>(s);
+      best_spread = series_spread;
+    }
+  }
+  return best;
+}
+
+}  // namespace posefuse::measures

@@ -1,0 +1,72 @@
+#pragma once
+// Repetitions of an exercise and the range of motion of each, segmented on one joint angle over
+// time (docs/measures.md, "Repetitions").
+//
+// A repetition is one excursion of the angle away from its resting end and back: a trough, the
+// next peak, the next trough (for an angle whose rest is its low end, e.g. elbow flexion or
+// shoulder elevation). Turning points are found with hysteresis: a peak is confirmed once the
+// angle has fallen `hysteresis_deg` below the running maximum, a trough once it has risen that
+// much above the running minimum, so noise smaller than the hysteresis never makes a turn.
+// A trough -> peak -> trough cycle counts when both of its swings are at least
+// `min_amplitude_deg` and its duration lies within [min_duration_s, max_duration_s]; a cycle cut by
+// the start or the end of the series, by missing samples (NaN) longer than `max_gap_s`, or that
+// falls short of the amplitude or duration bounds is kept as partial: reported, not counted.
+//
+// In detail:
+// - Missing samples (NaN) are skipped. Wherever two consecutive finite samples are more than
+//   `max_gap_s` apart (a NaN stretch, or a jump in the timestamps) the series is cut, and each
+//   piece is segmented on its own: a cycle spanning the cut ends up as two partial pieces.
+// - The motion before a piece's first trough and after its last one is reported as a partial
+//   repetition when its range reaches `hysteresis_deg` (smaller is noise, not reported).
+// - A recording usually stops at rest, where nothing rises again to confirm the last trough: a
+//   final descent that has come back to within `hysteresis_deg` of the trough its cycle started
+//   from ends that cycle at its lowest sample; one that has not is partial.
+#include <vector>
+
+namespace posefuse::measures {
+
+struct RepetitionOptions {
+  double hysteresis_deg = 5.0;      // smallest reversal that makes a turning point
+  double min_amplitude_deg = 20.0;  // both swings of a counted repetition at least this
+  double min_duration_s = 0.5;      // trough to trough
+  double max_duration_s = 30.0;     // may be infinite: no upper bound
+  double max_gap_s = 0.5;           // missing (NaN) stretches longer than this cut the series;
+                                    // may be infinite: never cut
+};
+
+struct Repetition {
+  double t_start_s = 0, t_end_s = 0;  // the troughs that bound it (series time, seconds)
+  double t_peak_s = 0;                // its highest sample (the first of equals)
+  double min_deg = 0, max_deg = 0;    // over the repetition
+  double range_deg = 0;               // max - min
+  double peak_speed_deg_s = 0;        // largest |d angle / dt| at its samples (central differences
+                                      // over the neighbouring finite samples; one-sided at a cut)
+  double duration_s = 0;              // t_end - t_start
+  bool partial = false;               // reported, not counted
+};
+
+struct RepetitionSummary {
+  std::vector<Repetition> repetitions;  // in time order, partial ones included
+  int count = 0;                        // complete repetitions only
+  // Over the counted repetitions (0 when none; spread is the sample standard deviation, 0 for one).
+  double mean_range_deg = 0, range_spread_deg = 0;
+  double mean_duration_s = 0, duration_spread_s = 0;
+  double mean_peak_speed_deg_s = 0;
+};
+
+// `t_s` strictly increasing, same size as `angle_deg`; NaN marks a missing sample. Throws
+// posefuse::Error (kInvalidArgument, field "t_s" / "angle_deg" / "repetition_options.*") for
+// mismatched sizes, non-increasing or non-finite times, infinite angles and bad options:
+// hysteresis_deg not positive, min_amplitude_deg below hysteresis_deg, min_duration_s negative,
+// max_duration_s below min_duration_s (named as "repetition_options.max_duration_s"), max_gap_s
+// negative, or any of them NaN. An empty or all-NaN series has no repetitions.
+RepetitionSummary segment_repetitions(const std::vector<double>& t_s, const std::vector<double>& angle_deg,
+                                      const RepetitionOptions& options = {});
+
+// Index of the series that moves most: the largest spread between its 5th and 95th percentiles
+// of finite samples (the exercise's dominant angle), so that a few outliers cannot make a still
+// joint win; percentiles interpolate linearly between ranks, the first of equal spreads wins.
+// -1 when no series has two finite samples.
+int dominant_series(const std::vector<std::vector<double>>& angle_series_deg);
+
+}  // namespace posefuse::measures

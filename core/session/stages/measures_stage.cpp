@@ -1,0 +1,109 @@
+#include "session/stages/measures_stage.hpp"
+
+#include <cmath>
+#include <string>
+
+#include "common/error.hpp"
+#include "fit/arm_roll.hpp"
+#include "session/stages/body_fit_options.hpp"
+
+namespace posefuse::session {
+namespace {
+
+// Half confidence for the thorax angles while the vertical is the camera's y, not measured.
+constexpr double kAssumedVerticalConfidence = 0.5;
+
+std::optional<measures::PronationInput> pronation_of(const FrameEstimate& frame, v1::Arm arm, double min_flexion_deg) {
+  const bool left = arm == v1::LEFT;
+  for (const ForearmEstimate& forearm : frame.forearms) {
+    if (forearm.arm != arm || forearm.source == v1::SOURCE_UNSPECIFIED) continue;
+    const auto& J = frame.smpl_joints;
+    const int shoulder = left ? 16 : 17, elbow = left ? 18 : 19, wrist = left ? 20 : 21;  // SMPL order
+    const geometry::Vec3 thumb_K =
+        forearm.K_from_F * fit::thumb_axis_F(left ? fit::ArmSide::kLeft : fit::ArmSide::kRight);
+    const std::optional<double> rad =
+        measures::pronation_rad(J[shoulder].p_K, J[elbow].p_K, J[wrist].p_K, thumb_K, left, min_flexion_deg);
+    if (!rad) return std::nullopt;
+    return measures::PronationInput{*rad, forearm.confidence};
+  }
+  return std::nullopt;
+}
+
+}  // namespace
+
+std::string_view MeasuresStage::description() const {
+  return "ISB joint angles of the fitted body per frame and the repetitions of the dominant angle";
+}
+
+const OptionTable& MeasuresStage::options() const { return measures_option_table(); }
+
+void MeasuresStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) {
+  options_ = read_measures_options(header);
+  fit_enabled_ = body_fit_enabled(header);
+  series_ = measures::AngleSeries(options_.repetition_angle);
+}
+
+void MeasuresStage::on_value(const StageValue& value, StageOutput& out) {
+  if (const auto* start = std::get_if<ArmTrackStart>(&value)) {
+    // W is z up (docs/architecture.md, "Frames"); every tracked arm carries the same K_from_W.
+    if (start->tracked && !up_K_) up_K_ = start->K_from_W * geometry::Vec3::UnitZ();
+  } else if (const auto* frame = std::get_if<FrameEstimate>(&value)) {
+    add_frame(*frame, out);
+  }
+}
+
+void MeasuresStage::add_frame(const FrameEstimate& frame, StageOutput& out) {
+  if (frame.smpl_joints.size() != 24) return;  // no body fit at this frame
+  measures::PosedUpperBody body;
+  body.smpl_joints_K.resize(3, 24);
+  for (int j = 0; j < 24; ++j) {
+    body.smpl_joints_K.col(j) = frame.smpl_joints[static_cast<std::size_t>(j)].p_K;
+    body.joint_confidence[static_cast<std::size_t>(j)] = frame.smpl_joints[static_cast<std::size_t>(j)].confidence;
+  }
+  if (up_K_) {
+    body.up_K = *up_K_;
+  } else {
+    body.up_confidence = kAssumedVerticalConfidence;
+    if (!warned_vertical_) {
+      out.warn("MEASURES_VERTICAL_ASSUMED", "joint_angles.thorax",
+               "no world orientation yet (no calibrated arm IMU): the thorax angles take the camera's y as vertical, "
+               "at half confidence");
+      warned_vertical_ = true;
+    }
+  }
+  const double min_flexion = options_.angles.min_elbow_flexion_deg;
+  body.left_pronation = pronation_of(frame, v1::LEFT, min_flexion);
+  body.right_pronation = pronation_of(frame, v1::RIGHT, min_flexion);
+
+  FrameAngles angles;
+  angles.t_us = frame.t_us;
+  angles.joints_source = frame.smpl_joints.front().source;
+  try {
+    angles.angles = measures::joint_angles(body, options_.angles, previous_ ? &*previous_ : nullptr);
+  } catch (const Error& e) {
+    // A fit whose joints span no segment frame: that frame has no angles; the session goes on.
+    if (skipped_frames_++ == 0) first_skip_ = std::to_string(frame.t_us) + " us: " + e.what();
+    return;
+  }
+  previous_ = angles.angles;
+
+  series_.add(static_cast<double>(frame.t_us) * 1e-6, angles.angles);  // the merge sends frames in time order
+  out.hand_on(std::move(angles));
+}
+
+void MeasuresStage::finish(StageOutput& out) {
+  if (skipped_frames_ > 0) {
+    out.warn("MEASURES_FRAME_SKIPPED", "joint_angles",
+             std::to_string(skipped_frames_) + " fitted frames have no joint angles; the first at " + first_skip_);
+  }
+  if (series_.frames() == 0) {
+    // With the fit off there are no angles by design (docs/measures.md); say so only when it was on.
+    if (fit_enabled_)
+      out.warn("MEASURES_NO_BODY_FIT", "joint_angles",
+               "fit.enabled is true but no frame had a fitted body: no joint angles or repetitions");
+    return;
+  }
+  if (auto repetitions = series_.repetitions(options_.repetitions)) out.hand_on(Repetitions{std::move(*repetitions)});
+}
+
+}  // namespace posefuse::session

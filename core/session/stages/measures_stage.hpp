@@ -1,0 +1,50 @@
+#pragma once
+// Pipeline stage, after the frame merge: the clinical measures of the fitted body
+// (docs/measures.md). A thin adapter over measures/joint_angles.hpp and measures/repetitions.hpp.
+//
+// Consumes every FrameEstimate with 24 SMPL joints (a body fit) and hands on its ISB joint angles
+// (FrameAngles); pronation comes from the frame's forearm orientation K_from_F (the wrist IMU)
+// turned into the fitted arm. The vertical is the world's z mapped by the forearm stage's
+// K_from_W (ArmTrackStart); until one is known, K's y (a level camera), at half confidence for
+// the thorax angles, with warning MEASURES_VERTICAL_ASSUMED. After the last frame it segments
+// repetitions on measures.repetition_angle (auto: the arm or trunk angle that moves most) and
+// hands on a Repetitions value. Warnings: MEASURES_NO_BODY_FIT, fit.enabled but no frame had a
+// fitted body (with the fit off there are no angles, by design, and no warning);
+// MEASURES_FRAME_SKIPPED, fitted frames whose joints span no segment frame (counted, the first
+// named), which get no angles while the session goes on.
+// Holds: the candidate angles' series, 8 bytes per angle per frame (7 angles with auto: about
+// 6 MB per session-hour at 30 Hz), and the last frame's angles.
+#include <array>
+#include <optional>
+#include <vector>
+
+#include "session/pipeline_stage.hpp"
+#include "session/stages/measures_options.hpp"
+
+namespace posefuse::session {
+
+class MeasuresStage : public Stage {
+ public:
+  std::string_view name() const override { return "measures"; }
+  std::string_view description() const override;
+  const OptionTable& options() const override;
+  std::vector<ValueKind> consumes() const override { return {ValueKind::kArmTrackStart, ValueKind::kFrameEstimate}; }
+  std::vector<ValueKind> produces() const override { return {ValueKind::kFrameAngles, ValueKind::kRepetitions}; }
+  void start(const v1::SessionHeader& header, StageOutput& out) override;
+  void on_value(const StageValue& value, StageOutput& out) override;
+  void finish(StageOutput& out) override;
+
+ private:
+  void add_frame(const FrameEstimate& frame, StageOutput& out);
+
+  MeasuresOptions options_;
+  std::optional<geometry::Vec3> up_K_;  // from K_from_W once known
+  bool warned_vertical_ = false;
+  bool fit_enabled_ = false;
+  std::size_t skipped_frames_ = 0;  // fitted frames whose joints gave no segment frames
+  std::string first_skip_;
+  std::optional<measures::JointAngles> previous_;
+  measures::AngleSeries series_;
+};
+
+}  // namespace posefuse::session

@@ -1,0 +1,242 @@
+// ISB joint angles: exact on constructed skeletons (every angle set and read back, a tilted
+// camera, the left side mirrored), on the built-in template posed by its own DOFs, the gimbal lock
+// and the straight elbow, and bad input.
+#include "measures/joint_angles.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Geometry>
+#include <numbers>
+#include <random>
+#include <set>
+#include <string>
+
+#include "body/pose_parameters.hpp"
+#include "body/template_generator.hpp"
+#include "common/error.hpp"
+#include "constructed_skeleton.hpp"
+#include "fit/joint_kinematics.hpp"
+
+namespace posefuse::measures {
+namespace {
+
+using testing::ArmPose;
+using testing::build;
+using testing::Built;
+using testing::kRad;
+using testing::Rx;
+using testing::Ry;
+using testing::Rz;
+
+double deg(const JointAngles& a, Angle angle) { return a[static_cast<int>(angle)].deg; }
+bool defined(const JointAngles& a, Angle angle) { return a[static_cast<int>(angle)].defined; }
+
+void expect_arm(const JointAngles& a, bool left, const ArmPose& want, double tolerance_deg) {
+  const int base = static_cast<int>(left ? Angle::kLeftPlaneOfElevation : Angle::kRightPlaneOfElevation);
+  const char* side = left ? "left" : "right";
+  EXPECT_NEAR(a[base + 0].deg, want.plane_deg, tolerance_deg) << side << " plane";
+  EXPECT_NEAR(a[base + 1].deg, want.elevation_deg, tolerance_deg) << side << " elevation";
+  EXPECT_NEAR(a[base + 2].deg, want.axial_deg, tolerance_deg) << side << " axial";
+  EXPECT_NEAR(a[base + 3].deg, want.elbow_deg, tolerance_deg) << side << " elbow";
+  EXPECT_NEAR(a[base + 5].deg, want.girdle_deg, tolerance_deg) << side << " girdle";
+}
+
+TEST(JointAngles, EveryAngleReadBackOnConstructedSkeletons) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> u(0, 1);
+  for (int trial = 0; trial < 200; ++trial) {
+    const Eigen::Matrix3d K_from_G =
+        Eigen::Quaterniond(Eigen::Vector4d::NullaryExpr([&](Eigen::Index) { return u(rng) - 0.5; }).normalized())
+            .toRotationMatrix();
+    const auto random_arm = [&] {
+      return ArmPose{-60 + 180 * u(rng), 20 + 140 * u(rng),  -80 + 160 * u(rng),
+                     20 + 120 * u(rng),  -80 + 160 * u(rng), -10 + 40 * u(rng)};
+    };
+    const ArmPose left = random_arm(), right = random_arm();
+    const double flexion = -20 + 80 * u(rng), tilt = -30 + 60 * u(rng), axial = -40 + 80 * u(rng);
+    Built b = build(K_from_G, flexion, tilt, axial, left, right);
+    const auto& J = b.body.smpl_joints_K;
+    b.body.left_pronation =
+        PronationInput{*pronation_rad(J.col(16), J.col(18), J.col(20), b.left_thumb_K, true, 15), 1};
+    b.body.right_pronation =
+        PronationInput{*pronation_rad(J.col(17), J.col(19), J.col(21), b.right_thumb_K, false, 15), 1};
+    const JointAngles a = joint_angles(b.body);
+    SCOPED_TRACE(trial);
+    EXPECT_NEAR(deg(a, Angle::kThoraxFlexion), flexion, 1e-6);
+    EXPECT_NEAR(deg(a, Angle::kThoraxLateralTilt), tilt, 1e-6);
+    EXPECT_NEAR(deg(a, Angle::kThoraxAxialRotation), axial, 1e-6);
+    expect_arm(a, true, left, 1e-6);
+    expect_arm(a, false, right, 1e-6);
+    EXPECT_NEAR(deg(a, Angle::kLeftPronation), left.pronation_deg, 1e-6);
+    EXPECT_NEAR(deg(a, Angle::kRightPronation), right.pronation_deg, 1e-6);
+    for (const AngleValue& v : a) {
+      EXPECT_TRUE(v.defined);
+      EXPECT_FALSE(v.held);
+      EXPECT_DOUBLE_EQ(v.confidence, 1.0);
+    }
+    EXPECT_EQ(a[static_cast<int>(Angle::kRightPronation)].source, AngleSource::kBodyModelAndImu);
+    EXPECT_EQ(a[static_cast<int>(Angle::kRightElbowFlexion)].source, AngleSource::kBodyModel);
+  }
+}
+
+// The built-in template posed through its own DOFs (SMPL T-pose: arms along x, palms down), facing
+// the camera: the analytic poses.
+struct TemplatePose {
+  PosedUpperBody body;
+  fit::JointPose joints;
+};
+
+TemplatePose pose_template(std::initializer_list<std::pair<const char*, double>> degrees) {
+  static const auto model = body::make_template(body::Sex::kFemale);
+  static const Eigen::Matrix3Xd rest = fit::rest_joints(*model, Eigen::VectorXd());
+  const body::PoseLayout layout = body::PoseLayout::all_joints();
+  Eigen::VectorXd theta = layout.zero();
+  theta[layout.index_of("translation_z")] = 2.5;
+  theta[layout.index_of("pelvis_y")] = std::numbers::pi;  // face the camera (K: z away from it)
+  for (const auto& [name, d] : degrees) theta[layout.index_of(name)] += d * kRad;
+  TemplatePose out;
+  out.joints = fit::pose_joints(rest, layout, theta);
+  out.body.smpl_joints_K = out.joints.positions_K;
+  out.body.joint_confidence.fill(1.0);
+  return out;
+}
+
+TEST(JointAngles, TemplateElbowAt90WithTheArmHanging) {
+  // Right arm lowered from the T-pose to hang, elbow bent 90 degrees, forearm forward.
+  const TemplatePose p = pose_template({{"right_shoulder_z", 90}, {"right_elbow_y", 90}});
+  const JointAngles a = joint_angles(p.body);
+  EXPECT_NEAR(deg(a, Angle::kRightElbowFlexion), 90, 0.5);
+  EXPECT_NEAR(deg(a, Angle::kRightElevation), 0, 0.5);
+  EXPECT_NEAR(deg(a, Angle::kRightHumerusAxialRotation), 0, 0.5);
+  EXPECT_TRUE(a[static_cast<int>(Angle::kRightPlaneOfElevation)].held);  // gimbal lock at 0 elevation
+  EXPECT_NEAR(deg(a, Angle::kThoraxFlexion), 0, 0.5);
+  EXPECT_NEAR(deg(a, Angle::kThoraxLateralTilt), 0, 0.5);
+  EXPECT_NEAR(deg(a, Angle::kThoraxAxialRotation), 0, 0.5);
+  // The untouched left arm is in the T-pose: abducted 90 in the frontal plane, elbow straight.
+  EXPECT_NEAR(deg(a, Angle::kLeftElevation), 90, 0.5);
+  EXPECT_NEAR(deg(a, Angle::kLeftPlaneOfElevation), 0, 0.5);
+  EXPECT_NEAR(deg(a, Angle::kLeftElbowFlexion), 0, 0.5);
+  EXPECT_FALSE(defined(a, Angle::kLeftHumerusAxialRotation));  // straight elbow: no humerus plane
+}
+
+TEST(JointAngles, TemplateShoulderAbducted90InTheScapularPlane) {
+  // 30 degrees forward of the frontal plane, elbow bent 90 with the forearm horizontal.
+  const TemplatePose p = pose_template({{"right_shoulder_y", 30}, {"right_elbow_y", 90}});
+  const JointAngles a = joint_angles(p.body);
+  EXPECT_NEAR(deg(a, Angle::kRightPlaneOfElevation), 30, 0.5);
+  EXPECT_NEAR(deg(a, Angle::kRightElevation), 90, 0.5);
+  EXPECT_NEAR(deg(a, Angle::kRightHumerusAxialRotation), 0, 0.5);
+  EXPECT_NEAR(deg(a, Angle::kRightElbowFlexion), 90, 0.5);
+  // The same on the left (mirrored DOF signs) reads the same angles.
+  const TemplatePose q = pose_template({{"left_shoulder_y", -30}, {"left_elbow_y", -90}});
+  const JointAngles b = joint_angles(q.body);
+  EXPECT_NEAR(deg(b, Angle::kLeftPlaneOfElevation), 30, 0.5);
+  EXPECT_NEAR(deg(b, Angle::kLeftElevation), 90, 0.5);
+  EXPECT_NEAR(deg(b, Angle::kLeftHumerusAxialRotation), 0, 0.5);
+  EXPECT_NEAR(deg(b, Angle::kLeftElbowFlexion), 90, 0.5);
+}
+
+TEST(JointAngles, TemplateForearmPronated60) {
+  const TemplatePose p = pose_template({{"right_shoulder_z", 90}, {"right_elbow_y", 90}});
+  const auto& J = p.body.smpl_joints_K;
+  // Neutral thumb up (towards the shoulder side); pronation turns the right thumb medially (to
+  // the subject's left, K's -x for a subject facing the camera).
+  const Eigen::Vector3d fore = (J.col(21) - J.col(19)).normalized();
+  const Eigen::Vector3d thumb = Eigen::AngleAxisd(60 * kRad, -fore) * Eigen::Vector3d::UnitY();
+  EXPECT_LT(thumb.x(), 0);  // medial
+  const std::optional<double> pronation = pronation_rad(J.col(17), J.col(19), J.col(21), thumb, false, 15);
+  ASSERT_TRUE(pronation.has_value());
+  EXPECT_NEAR(*pronation / kRad, 60, 0.5);
+}
+
+TEST(JointAngles, GimbalLockHoldsThePlaneAndKeepsTheTurnAboutVertical) {
+  const Eigen::Matrix3d K_from_G = Eigen::Matrix3d::Identity();
+  ArmPose right{40, 60, 10, 90, 0, 0};
+  const Built moving = build(K_from_G, 0, 0, 0, right, right);
+  const JointAngles before = joint_angles(moving.body);
+  ASSERT_NEAR(deg(before, Angle::kRightPlaneOfElevation), 40, 1e-6);
+
+  // Arm down to 5 degrees: the plane is held at 40, the humerus' turn about the vertical (plane
+  // + axial = 55) is kept whole.
+  ArmPose low{15, 5, 40, 90, 0, 0};
+  const Built locked = build(K_from_G, 0, 0, 0, low, low);
+  const JointAngles a = joint_angles(locked.body, {}, &before);
+  const AngleValue& plane = a[static_cast<int>(Angle::kRightPlaneOfElevation)];
+  EXPECT_TRUE(plane.held);
+  EXPECT_DOUBLE_EQ(plane.deg, 40);
+  EXPECT_DOUBLE_EQ(plane.confidence, 0);
+  EXPECT_NEAR(deg(a, Angle::kRightHumerusAxialRotation), 15, 1e-6);  // 15 + 40 - 40
+  EXPECT_NEAR(deg(a, Angle::kRightElevation), 5, 1e-6);
+  // Without a previous frame the plane is held at 0.
+  const JointAngles first = joint_angles(locked.body);
+  EXPECT_DOUBLE_EQ(first[static_cast<int>(Angle::kRightPlaneOfElevation)].deg, 0);
+  EXPECT_NEAR(deg(first, Angle::kRightHumerusAxialRotation), 55, 1e-6);
+}
+
+TEST(JointAngles, StraightElbowLeavesAxialRotationAndPronationUndefined) {
+  ArmPose straight{20, 70, 30, 5, 0, 0};
+  Built b = build(Eigen::Matrix3d::Identity(), 0, 0, 0, straight, straight);
+  b.body.right_pronation = PronationInput{0.3, 1.0};
+  const JointAngles a = joint_angles(b.body);
+  EXPECT_FALSE(defined(a, Angle::kRightHumerusAxialRotation));
+  EXPECT_FALSE(defined(a, Angle::kRightPronation));
+  EXPECT_DOUBLE_EQ(a[static_cast<int>(Angle::kRightPronation)].confidence, 0);
+  EXPECT_NEAR(deg(a, Angle::kRightElevation), 70, 1e-6);
+  EXPECT_NEAR(deg(a, Angle::kRightPlaneOfElevation), 20, 1e-6);
+  const auto& J = b.body.smpl_joints_K;
+  EXPECT_FALSE(pronation_rad(J.col(17), J.col(19), J.col(21), Eigen::Vector3d::UnitY(), false, 15).has_value());
+}
+
+TEST(JointAngles, ConfidenceFollowsTheJointsAndTheVertical) {
+  Built b = build(Eigen::Matrix3d::Identity(), 0, 0, 0, ArmPose{0, 45, 0, 45, 0, 0}, ArmPose{0, 45, 0, 45, 0, 0});
+  b.body.joint_confidence[21] = 0.5;  // right wrist inferred
+  b.body.up_confidence = 0.5;         // vertical assumed
+  const JointAngles a = joint_angles(b.body);
+  EXPECT_DOUBLE_EQ(a[static_cast<int>(Angle::kRightElbowFlexion)].confidence, 0.5);
+  EXPECT_DOUBLE_EQ(a[static_cast<int>(Angle::kLeftElbowFlexion)].confidence, 1.0);
+  EXPECT_DOUBLE_EQ(a[static_cast<int>(Angle::kThoraxFlexion)].confidence, 0.5);
+  EXPECT_DOUBLE_EQ(a[static_cast<int>(Angle::kRightElevation)].confidence, 1.0);
+}
+
+TEST(JointAngles, BadInputNamesTheField) {
+  Built b = build(Eigen::Matrix3d::Identity(), 0, 0, 0, ArmPose{0, 45, 0, 45, 0, 0}, ArmPose{0, 45, 0, 45, 0, 0});
+  const auto field_of = [](const PosedUpperBody& body, const JointAngleOptions& options = {}) {
+    try {
+      joint_angles(body, options);
+    } catch (const Error& e) {
+      return e.field();
+    }
+    return std::string("no error");
+  };
+  PosedUpperBody short_body = b.body;
+  short_body.smpl_joints_K.conservativeResize(3, 23);
+  EXPECT_EQ(field_of(short_body), "smpl_joints_K");
+  PosedUpperBody nan_body = b.body;
+  nan_body.smpl_joints_K(0, 19) = std::nan("");
+  EXPECT_EQ(field_of(nan_body), "smpl_joints_K");
+  PosedUpperBody flat = b.body;
+  flat.front_K = flat.up_K;
+  EXPECT_EQ(field_of(flat), "front_K");
+  PosedUpperBody zero_up = b.body;
+  zero_up.up_K.setZero();
+  EXPECT_EQ(field_of(zero_up), "up_K");
+  PosedUpperBody collapsed = b.body;
+  collapsed.smpl_joints_K.col(19) = collapsed.smpl_joints_K.col(17);
+  EXPECT_EQ(field_of(collapsed), "smpl_joints_K");
+  JointAngleOptions bad;
+  bad.min_elevation_for_plane_deg = 0;
+  EXPECT_EQ(field_of(b.body, bad), "joint_angle_options.min_elevation_for_plane_deg");
+}
+
+TEST(JointAngles, NamesAreUniqueSnakeCase) {
+  std::set<std::string> names;
+  for (int i = 0; i < kAngleCount; ++i) {
+    const std::string name(angle_name(static_cast<Angle>(i)));
+    EXPECT_EQ(name.find_first_not_of("abcdefghijklmnopqrstuvwxyz_"), std::string::npos) << name;
+    names.insert(name);
+  }
+  EXPECT_EQ(names.size(), static_cast<size_t>(kAngleCount));
+}
+
+}  // namespace
+}  // namespace posefuse::measures

@@ -1,0 +1,507 @@
+// Repetitions and their range of motion on one joint angle (measures/repetitions.hpp).
+#include "measures/repetitions.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstddef>
+#include <functional>
+#include <limits>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "common/error.hpp"
+
+namespace posefuse::measures {
+namespace {
+
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kNaN = std::numeric_limits<double>::quiet_NaN();
+constexpr double kInf = std::numeric_limits<double>::infinity();
+constexpr double kDt = 0.01;  // 100 Hz
+
+struct Cycle {
+  double amplitude_deg;
+  double period_s;
+};
+
+// One excursion from rest and back: amplitude / 2 * (1 - cos), 0 at both ends, the peak halfway.
+double lift(const Cycle& cycle, double phase_s) {
+  return cycle.amplitude_deg / 2 * (1 - std::cos(2 * kPi * phase_s / cycle.period_s));
+}
+
+// The peak of |d lift / dt|, a quarter of the way through.
+double analytic_peak_speed(const Cycle& cycle) { return cycle.amplitude_deg / 2 * 2 * kPi / cycle.period_s; }
+
+struct Series {
+  std::vector<double> t_s, angle_deg;
+};
+
+// The cycles back to back, sampled at 100 Hz from t = 0 to the end of the last one (both troughs
+// included). Sample k sits at exactly k * kDt; the troughs fall on samples when the periods are
+// multiples of kDt.
+Series exercise(const std::vector<Cycle>& cycles) {
+  Series series;
+  double cycle_start_s = 0;
+  std::size_t k = 0;
+  for (std::size_t c = 0; c < cycles.size(); ++c) {
+    const double cycle_end_s = cycle_start_s + cycles[c].period_s;
+    const bool last = c + 1 == cycles.size();
+    for (;; ++k) {
+      const double t = static_cast<double>(k) * kDt;
+      // Half a sample of slack so that rounding in k * kDt never drops or doubles a trough.
+      if (last ? t > cycle_end_s + kDt / 2 : t >= cycle_end_s - kDt / 2) break;
+      series.t_s.push_back(t);
+      series.angle_deg.push_back(lift(cycles[c], t - cycle_start_s));
+    }
+    cycle_start_s = cycle_end_s;
+  }
+  return series;
+}
+
+// Samples with t in [from_s, to_s] become missing.
+void blank(Series& series, double from_s, double to_s) {
+  for (std::size_t i = 0; i < series.t_s.size(); ++i) {
+    if (series.t_s[i] >= from_s - 1e-9 && series.t_s[i] <= to_s + 1e-9) series.angle_deg[i] = kNaN;
+  }
+}
+
+// Drops the samples after `to_s`.
+void cut_after(Series& series, double to_s) {
+  while (!series.t_s.empty() && series.t_s.back() > to_s + 1e-9) {
+    series.t_s.pop_back();
+    series.angle_deg.pop_back();
+  }
+}
+
+RepetitionSummary segment(const Series& series, const RepetitionOptions& options = {}) {
+  return segment_repetitions(series.t_s, series.angle_deg, options);
+}
+
+// Five identical 90 deg, 2 s cycles: five counted repetitions bounded by the troughs, each with its
+// range, peak and peak speed as the formula gives them.
+TEST(Repetitions, CleanCyclesAreEachCountedWithTheirRangeTimesAndSpeed) {
+  const Cycle cycle{90, 2};
+  const RepetitionSummary summary = segment(exercise(std::vector<Cycle>(5, cycle)));
+  ASSERT_EQ(summary.count, 5);
+  ASSERT_EQ(summary.repetitions.size(), 5u);
+  for (std::size_t k = 0; k < 5; ++k) {
+    const Repetition& rep = summary.repetitions[k];
+    SCOPED_TRACE("repetition " + std::to_string(k));
+    EXPECT_FALSE(rep.partial);
+    EXPECT_NEAR(rep.t_start_s, 2.0 * static_cast<double>(k), 1e-9);
+    EXPECT_NEAR(rep.t_end_s, 2.0 * static_cast<double>(k + 1), 1e-9);
+    EXPECT_NEAR(rep.t_peak_s, 2.0 * static_cast<double>(k) + 1, 1e-9);
+    EXPECT_NEAR(rep.duration_s, 2.0, 1e-9);
+    EXPECT_NEAR(rep.min_deg, 0.0, 0.1);
+    EXPECT_NEAR(rep.max_deg, 90.0, 0.1);
+    EXPECT_NEAR(rep.range_deg, 90.0, 0.1);
+    EXPECT_NEAR(rep.peak_speed_deg_s, analytic_peak_speed(cycle), 0.01 * analytic_peak_speed(cycle));
+  }
+  EXPECT_NEAR(summary.mean_range_deg, 90.0, 0.1);
+  EXPECT_NEAR(summary.range_spread_deg, 0.0, 1e-6);
+  EXPECT_NEAR(summary.mean_duration_s, 2.0, 1e-9);
+  EXPECT_NEAR(summary.duration_spread_s, 0.0, 1e-6);
+  EXPECT_NEAR(summary.mean_peak_speed_deg_s, analytic_peak_speed(cycle), 0.01 * analytic_peak_speed(cycle));
+}
+
+// Cycles of different sizes and paces: each keeps its own range, duration and speed, and the
+// summary's means and sample spreads are theirs.
+TEST(Repetitions, VaryingAmplitudesAndPeriodsAreMeasuredOneByOne) {
+  const std::vector<Cycle> cycles = {{60, 1.5}, {90, 2.0}, {40, 3.0}, {120, 2.5}};
+  const RepetitionSummary summary = segment(exercise(cycles));
+  ASSERT_EQ(summary.count, 4);
+  ASSERT_EQ(summary.repetitions.size(), 4u);
+  double start_s = 0;
+  for (std::size_t k = 0; k < cycles.size(); ++k) {
+    const Repetition& rep = summary.repetitions[k];
+    SCOPED_TRACE("repetition " + std::to_string(k));
+    EXPECT_FALSE(rep.partial);
+    EXPECT_NEAR(rep.t_start_s, start_s, 1e-9);
+    EXPECT_NEAR(rep.t_peak_s, start_s + cycles[k].period_s / 2, 1e-9);
+    EXPECT_NEAR(rep.duration_s, cycles[k].period_s, 1e-9);
+    EXPECT_NEAR(rep.range_deg, cycles[k].amplitude_deg, 0.1);
+    EXPECT_NEAR(rep.peak_speed_deg_s, analytic_peak_speed(cycles[k]), 0.01 * analytic_peak_speed(cycles[k]));
+    start_s += cycles[k].period_s;
+  }
+  // Ranges 60, 90, 40, 120: mean 77.5, sample spread sqrt(3675 / 3) = 35. Durations 1.5, 2, 3, 2.5:
+  // mean 2.25, sample spread sqrt(1.25 / 3).
+  EXPECT_NEAR(summary.mean_range_deg, 77.5, 0.1);
+  EXPECT_NEAR(summary.range_spread_deg, 35.0, 0.1);
+  EXPECT_NEAR(summary.mean_duration_s, 2.25, 1e-9);
+  EXPECT_NEAR(summary.duration_spread_s, std::sqrt(1.25 / 3), 1e-9);
+  double mean_speed = 0;
+  for (const Cycle& cycle : cycles) mean_speed += analytic_peak_speed(cycle) / 4;
+  EXPECT_NEAR(summary.mean_peak_speed_deg_s, mean_speed, 0.01 * mean_speed);
+}
+
+// Noise whose peak-to-peak is below the hysteresis (4 deg against 5) never makes a turn: the
+// count, the ranges and the trough times stay. With the hysteresis below the noise the same
+// series falls apart, which shows that the hysteresis is what holds it together.
+TEST(Repetitions, NoiseBelowTheHysteresisDoesNotChangeTheCount) {
+  Series series = exercise(std::vector<Cycle>(5, Cycle{90, 2}));
+  std::mt19937 rng(20240611);
+  std::uniform_real_distribution<double> noise(-2.0, 2.0);
+  for (double& a : series.angle_deg) a += noise(rng);
+
+  const RepetitionSummary summary = segment(series);
+  ASSERT_EQ(summary.count, 5);
+  ASSERT_EQ(summary.repetitions.size(), 5u);
+  for (std::size_t k = 0; k < 5; ++k) {
+    const Repetition& rep = summary.repetitions[k];
+    SCOPED_TRACE("repetition " + std::to_string(k));
+    EXPECT_FALSE(rep.partial);
+    EXPECT_NEAR(rep.range_deg, 90.0, 4.0);
+    // Within 4 deg of the bottom, 45 (1 - cos(pi t)) stays within 0.14 s of the trough.
+    EXPECT_NEAR(rep.t_start_s, 2.0 * static_cast<double>(k), 0.15);
+    EXPECT_NEAR(rep.t_end_s, 2.0 * static_cast<double>(k + 1), 0.15);
+    EXPECT_NEAR(rep.t_peak_s, 2.0 * static_cast<double>(k) + 1, 0.15);
+  }
+
+  RepetitionOptions twitchy;
+  twitchy.hysteresis_deg = 1.0;
+  const RepetitionSummary noisy = segment(series, twitchy);
+  EXPECT_LT(noisy.count, 5);
+  EXPECT_GT(noisy.repetitions.size(), 5u);
+}
+
+// A recording usually ends at rest, with noise that never rises by the hysteresis: the last
+// descent still ends the last repetition.
+TEST(Repetitions, ARestingEndWithNoiseEndsTheLastRepetition) {
+  Series series = exercise({{90, 2}, {90, 2}});
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> noise(-1.5, 1.5);
+  for (int k = 1; k <= 150; ++k) {  // 1.5 s of rest after the last trough
+    series.t_s.push_back(4.0 + k * kDt);
+    series.angle_deg.push_back(0.0);
+  }
+  for (double& a : series.angle_deg) a += noise(rng);
+  const RepetitionSummary summary = segment(series);
+  EXPECT_EQ(summary.count, 2);
+  ASSERT_EQ(summary.repetitions.size(), 2u);
+  EXPECT_FALSE(summary.repetitions[1].partial);
+  EXPECT_NEAR(summary.repetitions[1].range_deg, 90.0, 3.0);
+}
+
+// A swing of 10 deg between two repetitions turns (it is above the 5 deg hysteresis) but is below
+// the 20 deg minimum amplitude: reported as partial, not counted, and the repetitions around it
+// keep their own bounds.
+TEST(Repetitions, AWiggleBelowTheMinimumAmplitudeIsPartial) {
+  const RepetitionSummary summary = segment(exercise({{90, 2}, {10, 1}, {90, 2}}));
+  EXPECT_EQ(summary.count, 2);
+  ASSERT_EQ(summary.repetitions.size(), 3u);
+  EXPECT_FALSE(summary.repetitions[0].partial);
+  EXPECT_TRUE(summary.repetitions[1].partial);
+  EXPECT_FALSE(summary.repetitions[2].partial);
+  EXPECT_NEAR(summary.repetitions[1].t_start_s, 2.0, 1e-9);
+  EXPECT_NEAR(summary.repetitions[1].t_end_s, 3.0, 1e-9);
+  EXPECT_NEAR(summary.repetitions[1].range_deg, 10.0, 0.1);
+  EXPECT_NEAR(summary.mean_range_deg, 90.0, 0.1);  // the wiggle is left out of the summary
+  EXPECT_NEAR(summary.mean_duration_s, 2.0, 1e-9);
+}
+
+// A wiggle smaller than the hysteresis is no turn at all: it is part of the repetition around it.
+TEST(Repetitions, AWiggleBelowTheHysteresisIsNoRepetition) {
+  const RepetitionSummary summary = segment(exercise({{90, 2}, {3, 1}, {90, 2}}));
+  EXPECT_EQ(summary.count, 2);
+  EXPECT_EQ(summary.repetitions.size(), 2u);
+}
+
+// The duration bounds: a 0.3 s flick is too fast, a 3 s cycle too slow once max_duration_s is 2.5.
+TEST(Repetitions, CyclesOutsideTheDurationBoundsArePartial) {
+  RepetitionOptions options;
+  options.max_duration_s = 2.5;
+  const RepetitionSummary summary = segment(exercise({{90, 2}, {60, 0.3}, {90, 3}, {90, 2}}), options);
+  EXPECT_EQ(summary.count, 2);
+  ASSERT_EQ(summary.repetitions.size(), 4u);
+  EXPECT_FALSE(summary.repetitions[0].partial);
+  EXPECT_TRUE(summary.repetitions[1].partial);
+  EXPECT_NEAR(summary.repetitions[1].duration_s, 0.3, 1e-9);
+  EXPECT_TRUE(summary.repetitions[2].partial);
+  EXPECT_NEAR(summary.repetitions[2].duration_s, 3.0, 1e-9);
+  EXPECT_FALSE(summary.repetitions[3].partial);
+  EXPECT_NEAR(summary.mean_duration_s, 2.0, 1e-9);
+}
+
+// A series cut at the top of its fourth repetition, or halfway down from it: three counted, and
+// the fourth reported as partial from its trough to the last sample.
+TEST(Repetitions, ASeriesCutMidRepetitionEndsWithAPartialOne) {
+  for (double cut_s : {7.0, 7.5}) {
+    SCOPED_TRACE("cut at " + std::to_string(cut_s) + " s");
+    Series series = exercise(std::vector<Cycle>(4, Cycle{90, 2}));
+    cut_after(series, cut_s);
+    const RepetitionSummary summary = segment(series);
+    EXPECT_EQ(summary.count, 3);
+    ASSERT_EQ(summary.repetitions.size(), 4u);
+    const Repetition& last = summary.repetitions.back();
+    EXPECT_TRUE(last.partial);
+    EXPECT_NEAR(last.t_start_s, 6.0, 1e-9);
+    EXPECT_NEAR(last.t_end_s, cut_s, 1e-9);
+    EXPECT_NEAR(last.t_peak_s, 7.0, 1e-9);
+    EXPECT_NEAR(last.range_deg, 90.0, 0.1);
+    EXPECT_NEAR(summary.mean_range_deg, 90.0, 0.1);
+  }
+}
+
+// A final rise that never comes back is partial when it reaches the hysteresis, and nothing when
+// it does not.
+TEST(Repetitions, AFinalRiseIsPartialOnlyWhenItReachesTheHysteresis) {
+  Series series = exercise({{90, 2}, {90, 2}, {90, 2}});
+  cut_after(series, 4.5);  // halfway up the third: 45 deg
+  RepetitionSummary summary = segment(series);
+  EXPECT_EQ(summary.count, 2);
+  ASSERT_EQ(summary.repetitions.size(), 3u);
+  EXPECT_TRUE(summary.repetitions[2].partial);
+  EXPECT_NEAR(summary.repetitions[2].range_deg, 45.0, 0.1);
+
+  series = exercise({{90, 2}, {90, 2}, {90, 2}});
+  cut_after(series, 4.1);  // 45 (1 - cos(0.1 pi)) = 2.2 deg up the third
+  summary = segment(series);
+  EXPECT_EQ(summary.count, 2);
+  EXPECT_EQ(summary.repetitions.size(), 2u);
+}
+
+// Motion before the first trough: a series that starts at the top of a repetition reports its
+// descent as partial; one that starts a little above rest reports nothing for it.
+TEST(Repetitions, LeadingMotionBeforeTheFirstTroughIsPartial) {
+  Series series = exercise(std::vector<Cycle>(3, Cycle{90, 2}));
+  Series from_peak, near_rest;
+  for (std::size_t i = 0; i < series.t_s.size(); ++i) {
+    if (series.t_s[i] >= 1.0 - 1e-9) {
+      from_peak.t_s.push_back(series.t_s[i]);
+      from_peak.angle_deg.push_back(series.angle_deg[i]);
+    }
+    if (series.t_s[i] >= 1.9 - 1e-9) {  // 2.2 deg above the trough at 2 s
+      near_rest.t_s.push_back(series.t_s[i]);
+      near_rest.angle_deg.push_back(series.angle_deg[i]);
+    }
+  }
+  RepetitionSummary summary = segment(from_peak);
+  EXPECT_EQ(summary.count, 2);
+  ASSERT_EQ(summary.repetitions.size(), 3u);
+  EXPECT_TRUE(summary.repetitions[0].partial);
+  EXPECT_NEAR(summary.repetitions[0].t_start_s, 1.0, 1e-9);
+  EXPECT_NEAR(summary.repetitions[0].t_end_s, 2.0, 1e-9);
+  EXPECT_NEAR(summary.repetitions[0].range_deg, 90.0, 0.1);
+  EXPECT_FALSE(summary.repetitions[1].partial);
+  EXPECT_NEAR(summary.repetitions[1].t_start_s, 2.0, 1e-9);
+
+  summary = segment(near_rest);
+  EXPECT_EQ(summary.count, 2);
+  ASSERT_EQ(summary.repetitions.size(), 2u);
+  EXPECT_NEAR(summary.repetitions[0].t_start_s, 2.0, 1e-9);
+}
+
+// One second missing across the peak of the second repetition (more than max_gap_s = 0.5): the
+// series is cut there and that repetition becomes two partial halves; the others still count.
+TEST(Repetitions, AGapLongerThanMaxGapSplitsARepetitionIntoPartials) {
+  Series series = exercise(std::vector<Cycle>(3, Cycle{90, 2}));
+  blank(series, 2.5, 3.5);
+  const RepetitionSummary summary = segment(series);
+  EXPECT_EQ(summary.count, 2);
+  ASSERT_EQ(summary.repetitions.size(), 4u);
+  const Repetition& before = summary.repetitions[1];
+  const Repetition& after = summary.repetitions[2];
+  EXPECT_FALSE(summary.repetitions[0].partial);
+  EXPECT_TRUE(before.partial);
+  EXPECT_NEAR(before.t_start_s, 2.0, 1e-9);
+  EXPECT_NEAR(before.t_end_s, 2.49, 1e-9);  // the last sample before the gap
+  EXPECT_NEAR(before.range_deg, lift({90, 2}, 0.49), 0.1);
+  EXPECT_TRUE(after.partial);
+  EXPECT_NEAR(after.t_start_s, 3.51, 1e-9);  // the first sample after it
+  EXPECT_NEAR(after.t_end_s, 4.0, 1e-9);
+  EXPECT_FALSE(summary.repetitions[3].partial);
+  EXPECT_NEAR(summary.repetitions[3].t_start_s, 4.0, 1e-9);
+
+  // The same gap is bridged once max_gap_s allows it.
+  RepetitionOptions lenient;
+  lenient.max_gap_s = 2.0;
+  EXPECT_EQ(segment(series, lenient).count, 3);
+}
+
+// A jump in the timestamps is missing data too, with or without NaN samples marking it.
+TEST(Repetitions, AJumpInTimeCutsTheSeriesLikeAGap) {
+  Series series = exercise(std::vector<Cycle>(3, Cycle{90, 2}));
+  Series jumped;
+  for (std::size_t i = 0; i < series.t_s.size(); ++i) {
+    if (series.t_s[i] > 2.5 + 1e-9 && series.t_s[i] < 3.5 - 1e-9) continue;
+    jumped.t_s.push_back(series.t_s[i]);
+    jumped.angle_deg.push_back(series.angle_deg[i]);
+  }
+  const RepetitionSummary summary = segment(jumped);
+  EXPECT_EQ(summary.count, 2);
+  EXPECT_EQ(summary.repetitions.size(), 4u);
+}
+
+// Short stretches of missing samples (0.2 s here, and single samples) are stepped over: the count
+// stays, and the range is that of the samples that are there.
+TEST(Repetitions, ShortGapsAreBridged) {
+  Series series = exercise(std::vector<Cycle>(3, Cycle{90, 2}));
+  blank(series, 2.9, 3.1);          // across the second peak
+  blank(series, 0.5, 0.5);          // where the first is fastest
+  blank(series, 4.0, 4.0);          // the third's trough
+  series.angle_deg.front() = kNaN;  // missing ends are simply not there
+  series.angle_deg.back() = kNaN;
+  const RepetitionSummary summary = segment(series);
+  ASSERT_EQ(summary.count, 3);
+  ASSERT_EQ(summary.repetitions.size(), 3u);
+  EXPECT_NEAR(summary.repetitions[0].t_start_s, 0.01, 1e-9);
+  EXPECT_NEAR(summary.repetitions[0].range_deg, 90.0, 0.1);
+  // Central differences across the missing sample still give the peak speed.
+  EXPECT_NEAR(summary.repetitions[0].peak_speed_deg_s, analytic_peak_speed({90, 2}),
+              0.01 * analytic_peak_speed({90, 2}));
+  EXPECT_NEAR(summary.repetitions[1].range_deg, lift({90, 2}, 0.89), 0.1);  // highest sample left
+  EXPECT_FALSE(summary.repetitions[1].partial);
+}
+
+// Peak speed is read from central differences: on a 60 deg/s up-and-down ramp sampled at 10 Hz
+// it is exactly 60, and a one-sample glitch of +10 deg at t = 0.3 s shows as (28 - 6) / 0.2 =
+// 110 deg/s beside it (a one-sided difference would give 160).
+TEST(Repetitions, PeakSpeedIsTheLargestCentralDifference) {
+  std::vector<double> t, ramp;
+  for (int i = 0; i <= 20; ++i) {
+    t.push_back(0.1 * i);
+    ramp.push_back(i <= 10 ? 6.0 * i : 6.0 * (20 - i));
+  }
+  RepetitionSummary summary = segment_repetitions(t, ramp);
+  ASSERT_EQ(summary.count, 1);
+  EXPECT_NEAR(summary.repetitions[0].peak_speed_deg_s, 60.0, 1e-9);
+  EXPECT_NEAR(summary.repetitions[0].range_deg, 60.0, 1e-9);
+
+  ramp[3] += 10;
+  summary = segment_repetitions(t, ramp);
+  ASSERT_EQ(summary.count, 1);
+  EXPECT_NEAR(summary.repetitions[0].peak_speed_deg_s, 110.0, 1e-9);
+}
+
+TEST(Repetitions, EmptyStillAndMissingSeriesHaveNoRepetitions) {
+  EXPECT_EQ(segment_repetitions({}, {}).repetitions.size(), 0u);
+  EXPECT_EQ(segment_repetitions({0.0}, {30.0}).repetitions.size(), 0u);
+  EXPECT_EQ(segment_repetitions({0.0, 0.1, 0.2}, {kNaN, kNaN, kNaN}).repetitions.size(), 0u);
+  const RepetitionSummary still = segment_repetitions({0.0, 0.1, 0.2, 0.3}, {10.0, 12.0, 11.0, 13.0});
+  EXPECT_EQ(still.repetitions.size(), 0u);
+  EXPECT_EQ(still.count, 0);
+  EXPECT_EQ(still.mean_range_deg, 0.0);
+  EXPECT_EQ(still.mean_peak_speed_deg_s, 0.0);
+}
+
+// One counted repetition has a mean but no spread.
+TEST(Repetitions, OneRepetitionHasNoSpread) {
+  const RepetitionSummary summary = segment(exercise({{70, 2}}));
+  ASSERT_EQ(summary.count, 1);
+  EXPECT_NEAR(summary.mean_range_deg, 70.0, 0.1);
+  EXPECT_EQ(summary.range_spread_deg, 0.0);
+  EXPECT_EQ(summary.duration_spread_s, 0.0);
+}
+
+// Runs `call`, which must throw posefuse::Error (invalid argument) naming `field` and saying
+// `words` somewhere in its message.
+void expect_invalid(const std::function<void()>& call, const std::string& field, const std::string& words) {
+  try {
+    call();
+    ADD_FAILURE() << "no error; expected one on " << field;
+  } catch (const Error& e) {
+    EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument) << e.what();
+    EXPECT_EQ(e.field(), field) << e.what();
+    EXPECT_NE(std::string(e.what()).find(words), std::string::npos) << e.what();
+  }
+}
+
+TEST(Repetitions, BadSeriesAreRefusedNamingTheField) {
+  const std::vector<double> t = {0.0, 0.1, 0.2, 0.3};
+  const std::vector<double> a = {0.0, 10.0, 20.0, 10.0};
+  expect_invalid([&] { segment_repetitions(t, {0.0, 10.0, 20.0}); }, "angle_deg", "has 3 samples but t_s has 4");
+  expect_invalid(
+      [&] {
+        segment_repetitions({0.0, 0.1, 0.05, 0.3}, a);
+      },
+      "t_s", "t_s[2] = 0.05 is not after t_s[1] = 0.1");
+  expect_invalid(
+      [&] {
+        segment_repetitions({0.0, 0.1, 0.1, 0.3}, a);
+      },
+      "t_s", "t_s[2] = 0.1 is not after t_s[1] = 0.1");
+  expect_invalid([&] { segment_repetitions({0.0, kNaN, 0.2, 0.3}, a); }, "t_s", "t_s[1] = nan is not a finite time");
+  expect_invalid([&] { segment_repetitions({0.0, 0.1, 0.2, kInf}, a); }, "t_s", "t_s[3] = inf");
+  expect_invalid(
+      [&] {
+        segment_repetitions(t, {0.0, kInf, 20.0, 10.0});
+      },
+      "angle_deg", "angle_deg[1] = inf is infinite");
+  expect_invalid([&] { segment_repetitions(t, {0.0, 10.0, -kInf, 10.0}); }, "angle_deg", "angle_deg[2] = -inf");
+}
+
+TEST(Repetitions, BadOptionsAreRefusedNamingTheOption) {
+  const Series series = exercise({{90, 2}});
+  const auto with = [&](const std::function<void(RepetitionOptions&)>& change) {
+    RepetitionOptions options;
+    change(options);
+    return [series, options] { segment_repetitions(series.t_s, series.angle_deg, options); };
+  };
+  expect_invalid(with([](RepetitionOptions& o) { o.hysteresis_deg = -1; }), "repetition_options.hysteresis_deg",
+                 "hysteresis_deg = -1 is not a positive");
+  expect_invalid(with([](RepetitionOptions& o) { o.hysteresis_deg = 0; }), "repetition_options.hysteresis_deg",
+                 "hysteresis_deg = 0");
+  expect_invalid(with([](RepetitionOptions& o) { o.hysteresis_deg = kNaN; }), "repetition_options.hysteresis_deg",
+                 "nan");
+  expect_invalid(with([](RepetitionOptions& o) { o.min_amplitude_deg = 4; }), "repetition_options.min_amplitude_deg",
+                 "min_amplitude_deg = 4 is not a finite angle of at least hysteresis_deg = 5");
+  expect_invalid(with([](RepetitionOptions& o) { o.min_duration_s = -0.5; }), "repetition_options.min_duration_s",
+                 "min_duration_s = -0.5");
+  expect_invalid(with([](RepetitionOptions& o) {
+                   o.min_duration_s = 5;
+                   o.max_duration_s = 2;
+                 }),
+                 "repetition_options.max_duration_s", "max_duration_s = 2 is not at least min_duration_s = 5");
+  expect_invalid(with([](RepetitionOptions& o) { o.max_gap_s = -1; }), "repetition_options.max_gap_s",
+                 "max_gap_s = -1");
+  expect_invalid(with([](RepetitionOptions& o) { o.max_gap_s = kNaN; }), "repetition_options.max_gap_s",
+                 "max_gap_s = nan");
+
+  // The edges that are allowed: min_amplitude equal to the hysteresis, no upper bound on duration
+  // or gap.
+  RepetitionOptions edges;
+  edges.min_amplitude_deg = edges.hysteresis_deg;
+  edges.max_duration_s = kInf;
+  edges.max_gap_s = kInf;
+  EXPECT_EQ(segment(series, edges).count, 1);
+}
+
+// The exercise's joint is the one whose angle moves most; a still joint with noise loses to it,
+// missing samples are ignored.
+TEST(DominantSeries, PicksTheSeriesThatMoves) {
+  Series moving = exercise(std::vector<Cycle>(3, Cycle{90, 2}));
+  moving.angle_deg[10] = kNaN;
+  std::vector<double> still(moving.angle_deg.size(), 40.0);
+  std::vector<double> small(moving.angle_deg.size());
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> noise(-3.0, 3.0);
+  for (double& a : still) a += noise(rng);
+  for (std::size_t i = 0; i < small.size(); ++i) small[i] = 20 + 0.2 * moving.angle_deg[i];
+  EXPECT_EQ(dominant_series({still, moving.angle_deg, small}), 1);
+  EXPECT_EQ(dominant_series({moving.angle_deg, still}), 0);
+  EXPECT_EQ(dominant_series({still, small}), 1);
+}
+
+// The spread is between the 5th and 95th percentiles: a few outliers (under 5% of the samples)
+// do not make a still joint dominant; more than 5% of them do.
+TEST(DominantSeries, OutliersBelowFivePercentDoNotCount) {
+  std::vector<double> ramp(101);
+  for (int i = 0; i <= 100; ++i) ramp[i] = i;  // 5th-95th: 5 to 95
+  std::vector<double> few_glitches(101, 0.0), many_glitches(101, 0.0);
+  for (int i = 0; i < 4; ++i) few_glitches[i * 25] = 1000;   // 4 of 101: the 95th is still 0
+  for (int i = 0; i < 6; ++i) many_glitches[i * 16] = 1000;  // 6 of 101: the 95th is 1000
+  EXPECT_EQ(dominant_series({few_glitches, ramp}), 1);
+  EXPECT_EQ(dominant_series({many_glitches, ramp}), 0);
+}
+
+TEST(DominantSeries, NoneWithoutTwoFiniteSamples) {
+  EXPECT_EQ(dominant_series({}), -1);
+  EXPECT_EQ(dominant_series({{}, {kNaN, kNaN, kNaN}, {5.0}, {kNaN, 7.0, kInf}}), -1);
+  // Two finite samples are enough, even if they do not move; the first of equals wins.
+  EXPECT_EQ(dominant_series({{kNaN}, {1.0, 1.0}, {2.0, 2.0}}), 1);
+}
+
+}  // namespace
+}  // namespace posefuse::measures

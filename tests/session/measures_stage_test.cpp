@@ -1,0 +1,184 @@
+// The measures stage on frames whose angles are known: the angles handed on and encoded, the
+// vertical from K_from_W (else assumed, with a warning), pronation from the frame's forearm
+// orientation, the repetitions after the last frame, and a session without a body fit.
+#include "session/stages/measures_stage.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
+#include <numbers>
+#include <string>
+
+#include "../measures/constructed_skeleton.hpp"
+#include "collecting_output.hpp"
+#include "common/error.hpp"
+
+namespace posefuse::session {
+namespace {
+
+// The constructed subject's G (x front, y up, z right) for a subject facing a level camera:
+// front = K's -z, right = K's x.
+Eigen::Matrix3d facing_camera() {
+  Eigen::Matrix3d K_from_G;
+  K_from_G << 0, 0, 1, 0, 1, 0, -1, 0, 0;
+  return K_from_G;
+}
+
+using measures::Angle;
+using measures::testing::ArmPose;
+
+// A frame of an elbow-flexion exercise: right elbow 20 + 80 (1 - cos) / 2 deg, `cycles` per
+// `period_s`, with the camera tilted 10 deg (K_from_G) and the right forearm pronated 30 deg.
+FrameEstimate exercise_frame(double t_s, double period_s, const Eigen::Matrix3d& K_from_G) {
+  const double elbow = 20 + 80 * (1 - std::cos(2 * std::numbers::pi * t_s / period_s)) / 2;
+  const ArmPose right{30, 40, 10, elbow, 30, 0};
+  const ArmPose left{0, 20, 0, 30, 0, 0};
+  const measures::testing::Built b = measures::testing::build(K_from_G, 5, 0, 0, left, right);
+  FrameEstimate frame;
+  frame.t_us = std::llround(t_s * 1e6);
+  for (int j = 0; j < 24; ++j) frame.smpl_joints.push_back({b.body.smpl_joints_K.col(j), v1::FUSED, 1.0});
+  // K_from_F whose z (the right thumb axis) is the constructed thumb and y the forearm.
+  const auto& J = b.body.smpl_joints_K;
+  Eigen::Matrix3d K_from_F;
+  K_from_F.col(1) = (J.col(21) - J.col(19)).normalized();
+  K_from_F.col(2) = b.right_thumb_K.normalized();
+  K_from_F.col(0) = K_from_F.col(1).cross(K_from_F.col(2));
+  frame.forearms.push_back({v1::RIGHT, geometry::Quat(K_from_F), 0.0, v1::FUSED, 0.8});
+  return frame;
+}
+
+TEST(MeasuresStage, AnglesRepetitionsAndTheVertical) {
+  const Eigen::Matrix3d K_from_G =
+      Eigen::AngleAxisd(10 * std::numbers::pi / 180, Eigen::Vector3d::UnitX()).toRotationMatrix() * facing_camera();
+  MeasuresStage stage;
+  testing::CollectingOutput out;
+  stage.start(v1::SessionHeader(), out);
+  // W's z (up) is G's y: K_from_W maps z_W onto K_from_G * y.
+  ArmTrackStart start;
+  start.tracked = true;
+  start.K_from_W = geometry::Quat::FromTwoVectors(geometry::Vec3::UnitZ(), K_from_G * geometry::Vec3::UnitY());
+  stage.on_value(start, out);
+  const double period_s = 2.0;
+  for (int f = 0; f < 30 * 9; ++f) stage.on_value(exercise_frame(f / 30.0, period_s, K_from_G), out);
+  stage.finish(out);
+  EXPECT_TRUE(out.warnings.empty()) << out.warnings.front();
+
+  int frames = 0;
+  const v1::RepetitionSummary* summary = nullptr;
+  for (const v1::FitResult& r : out.results) {
+    if (r.has_joint_angles()) {
+      ++frames;
+      const v1::FrameAngles& a = r.joint_angles();
+      ASSERT_EQ(a.angles_size(), measures::kAngleCount);
+      EXPECT_EQ(a.angles(static_cast<int>(Angle::kRightElbowFlexion)).kind(), v1::RIGHT_ELBOW_FLEXION);
+      EXPECT_NEAR(a.angles(static_cast<int>(Angle::kThoraxFlexion)).deg(), 5, 1e-6);
+      EXPECT_NEAR(a.angles(static_cast<int>(Angle::kRightPlaneOfElevation)).deg(), 30, 1e-6);
+      EXPECT_NEAR(a.angles(static_cast<int>(Angle::kRightElevation)).deg(), 40, 1e-6);
+      const v1::JointAngle& pronation = a.angles(static_cast<int>(Angle::kRightPronation));
+      EXPECT_TRUE(pronation.defined());
+      EXPECT_NEAR(pronation.deg(), 30, 1e-6);
+      EXPECT_DOUBLE_EQ(pronation.confidence(), 0.8);
+      EXPECT_FALSE(a.angles(static_cast<int>(Angle::kLeftPronation)).defined());  // no left IMU
+      EXPECT_EQ(a.angles(static_cast<int>(Angle::kRightElevation)).source(), v1::FUSED);
+    }
+    if (r.has_repetitions()) summary = &r.repetitions();
+  }
+  EXPECT_EQ(frames, 270);
+  ASSERT_NE(summary, nullptr);
+  EXPECT_EQ(summary->angle(), v1::RIGHT_ELBOW_FLEXION);
+  EXPECT_TRUE(summary->angle_detected());
+  EXPECT_EQ(summary->count(), 4u);  // 9 s of a 2 s period: four whole cycles and a partial one
+  EXPECT_NEAR(summary->mean_range_deg(), 80, 0.5);
+  EXPECT_NEAR(summary->mean_duration_s(), 2.0, 0.05);
+}
+
+TEST(MeasuresStage, WithoutKFromWTheVerticalIsAssumedAndSaid) {
+  MeasuresStage stage;
+  testing::CollectingOutput out;
+  stage.start(v1::SessionHeader(), out);
+  stage.on_value(exercise_frame(0, 2, facing_camera()), out);
+  ASSERT_EQ(out.warnings.size(), 1u);
+  EXPECT_EQ(out.warnings[0].rfind("MEASURES_VERTICAL_ASSUMED", 0), 0u);
+  ASSERT_FALSE(out.results.empty());
+  const v1::FrameAngles& a = out.results[0].joint_angles();
+  EXPECT_DOUBLE_EQ(a.angles(static_cast<int>(Angle::kThoraxFlexion)).confidence(), 0.5);
+  EXPECT_NEAR(a.angles(static_cast<int>(Angle::kThoraxFlexion)).deg(), 5, 1e-6);
+}
+
+TEST(MeasuresStage, NamedAngleAndNoBodyFit) {
+  MeasuresStage stage;
+  testing::CollectingOutput out;
+  v1::SessionHeader header;
+  (*header.mutable_options())["measures.repetition_angle"] = "left_elevation";
+  stage.start(header, out);
+  for (int f = 0; f < 60; ++f) stage.on_value(exercise_frame(f / 30.0, 2, facing_camera()), out);
+  stage.finish(out);
+  const v1::FitResult& last = out.results.back();
+  ASSERT_TRUE(last.has_repetitions());
+  EXPECT_EQ(last.repetitions().angle(), v1::LEFT_ELEVATION);
+  EXPECT_FALSE(last.repetitions().angle_detected());
+  EXPECT_EQ(last.repetitions().count(), 0u);  // the left arm holds still
+
+  // Without a fitted frame: no angles; a warning only where the fit was asked for.
+  for (const bool fit_on : {false, true}) {
+    MeasuresStage no_fit;
+    testing::CollectingOutput none;
+    v1::SessionHeader fit_header;
+    if (fit_on) (*fit_header.mutable_options())["fit.enabled"] = "true";
+    no_fit.start(fit_header, none);
+    FrameEstimate camera_only;
+    camera_only.t_us = 1000;
+    no_fit.on_value(camera_only, none);
+    no_fit.finish(none);
+    EXPECT_TRUE(none.results.empty());
+    ASSERT_EQ(none.warnings.size(), fit_on ? 1u : 0u);
+    if (fit_on) {
+      EXPECT_EQ(none.warnings[0].rfind("MEASURES_NO_BODY_FIT", 0), 0u);
+    }
+  }
+}
+
+TEST(MeasuresStage, DegenerateJointsSkipTheFrameNotTheSession) {
+  MeasuresStage stage;
+  testing::CollectingOutput out;
+  stage.start(v1::SessionHeader(), out);
+  FrameEstimate collapsed = exercise_frame(0, 2, facing_camera());
+  for (JointEstimate& j : collapsed.smpl_joints) j.p_K = geometry::Vec3(0, 0, 2);  // no thorax frame
+  for (int f = 0; f < 3; ++f) {
+    collapsed.t_us = f * 33'333;
+    EXPECT_NO_THROW(stage.on_value(collapsed, out));
+  }
+  stage.on_value(exercise_frame(0.1, 2, facing_camera()), out);
+  stage.finish(out);
+  int angle_frames = 0;
+  for (const v1::FitResult& r : out.results) angle_frames += r.has_joint_angles();
+  EXPECT_EQ(angle_frames, 1);
+  bool counted = false;
+  for (const std::string& w : out.warnings)
+    counted |= w.rfind("MEASURES_FRAME_SKIPPED", 0) == 0 && w.find("3 fitted frames") != std::string::npos;
+  EXPECT_TRUE(counted);
+}
+
+TEST(MeasuresStage, BadOptionsNameTheOption) {
+  const auto field_of = [](const std::map<std::string, std::string>& options) {
+    v1::SessionHeader header;
+    for (const auto& [k, v] : options) (*header.mutable_options())[k] = v;
+    MeasuresStage stage;
+    testing::CollectingOutput out;
+    try {
+      stage.start(header, out);
+    } catch (const Error& e) {
+      return e.field();
+    }
+    return std::string("accepted");
+  };
+  EXPECT_EQ(field_of({{"measures.repetition_angle", "left_knee"}}), "header.options[measures.repetition_angle]");
+  EXPECT_EQ(field_of({{"measures.hysteresis_deg", "-1"}}), "header.options[measures.hysteresis_deg]");
+  EXPECT_EQ(field_of({{"measures.hysteresis_deg", "30"}}), "header.options[measures.min_amplitude_deg]");
+  EXPECT_EQ(field_of({{"measures.min_repetition_s", "40"}}), "header.options[measures.max_repetition_s]");
+  EXPECT_EQ(field_of({{"measures.min_elbow_flexion_deg", "90"}}), "header.options[measures.min_elbow_flexion_deg]");
+}
+
+}  // namespace
+}  // namespace posefuse::session
