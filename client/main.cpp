@@ -6,6 +6,7 @@
 //   posefuse demo-session OUT
 //   posefuse submit RECORDING_URI [--label TEXT] | jobs | watch JOB_ID | cancel JOB_ID
 //   posefuse results JOB_ID --out DIR          (all with --server ADDR)
+//   posefuse export RESULTS --format trc|mot|sto [--out FILE]
 // Every failure ends with one readable line on stderr and a non-zero exit status.
 #include <unistd.h>
 
@@ -21,6 +22,7 @@
 #include "client/recording.hpp"
 #include "common/error.hpp"
 #include "grpc/health/v1/health.grpc.pb.h"
+#include "opensim/export_results.hpp"
 #include "posefuse/v1/service.grpc.pb.h"
 #include "session/convert.hpp"
 
@@ -40,6 +42,11 @@ constexpr const char* kUsage =
     "  posefuse info --server HOST:PORT    versions, stages, options and limits\n"
     "  posefuse demo-session OUT           write the synthetic demo session (a directory, or a\n"
     "                                      chunk file when OUT ends in .pfchunks)\n"
+    "  posefuse export RESULTS --format trc|mot|sto [--out FILE]\n"
+    "                                      OpenSim files from a result directory: joint centres as\n"
+    "                                      markers (.trc), joint angles (.mot), IMU orientations for\n"
+    "                                      OpenSense (.sto); FILE defaults to RESULTS/markers.trc,\n"
+    "                                      joint_angles.mot, imu_orientations.sto (docs/exports.md)\n"
     "batch jobs (server started with --data-dir):\n"
     "  posefuse submit RECORDING_URI [--label TEXT]  a recording under the server's\n"
     "                                      --recordings-root; prints the job id\n"
@@ -424,6 +431,19 @@ int command_results(const Arguments& args) {
   return 0;
 }
 
+int command_export(const Arguments& args) {
+  check_flags(args, {"--format", "--out"});
+  require(args.positional.size() == 1, "export takes one RESULTS directory");
+  const auto format = posefuse::opensim::export_format(args.flag("--format", ""));
+  require(format.has_value(), "export needs --format trc, mot or sto");
+  const posefuse::opensim::ExportReport report =
+      posefuse::opensim::export_results(args.positional[0], *format, args.flag("--out", ""));
+  for (const std::string& warning : report.warnings)
+    std::fprintf(stderr, "posefuse: export: warning: %s\n", warning.c_str());
+  std::printf("%s: %s\n", report.file.string().c_str(), report.summary.c_str());
+  return 0;
+}
+
 int command_demo_session(const Arguments& args) {
   check_flags(args, {});
   require(args.positional.size() == 1, "demo-session takes OUT");
@@ -454,6 +474,7 @@ int main(int argc, char** argv) {
     if (command == "watch") return command_watch(args);
     if (command == "cancel") return command_cancel(args);
     if (command == "results") return command_results(args);
+    if (command == "export") return command_export(args);
     std::fprintf(stderr, "posefuse: unknown command '%s'\n%s", command.c_str(), kUsage);
     return kExitUsage;
   } catch (const Error& error) {

@@ -40,6 +40,19 @@ struct Thorax {
   double confidence = 0.0;
 };
 
+}  // namespace
+
+Eigen::Matrix3d K_from_G(const Eigen::Vector3d& up_K, const Eigen::Vector3d& front_K) {
+  const Eigen::Vector3d up = up_K.normalized();
+  Eigen::Matrix3d axes;  // columns: G's x, y, z in K
+  axes.col(0) = perpendicular(front_K, up);
+  axes.col(1) = up;
+  axes.col(2) = axes.col(0).cross(up);
+  return axes;
+}
+
+namespace {
+
 Thorax thorax_frame(const PosedUpperBody& body) {
   const auto& J = body.smpl_joints_K;
   const Eigen::Vector3d up = J.col(kNeck) - J.col(kSpine2);
@@ -51,13 +64,7 @@ Thorax thorax_frame(const PosedUpperBody& body) {
 }
 
 void thorax_angles(const PosedUpperBody& body, const Thorax& thorax, JointAngles& out) {
-  // Global frame G: y up, x the horizontal front, z = x cross y (to the subject's right).
-  const Eigen::Vector3d up = body.up_K.normalized();
-  Eigen::Matrix3d K_from_G;
-  K_from_G.col(0) = perpendicular(body.front_K, up);
-  K_from_G.col(1) = up;
-  K_from_G.col(2) = K_from_G.col(0).cross(up);
-  const Eigen::Matrix3d R = K_from_G.transpose() * thorax.K_from_T;
+  const Eigen::Matrix3d R = K_from_G(body.up_K, body.front_K).transpose() * thorax.K_from_T;
   // ISB Z-X-Y: R = Rz(a) Rx(b) Ry(c).
   const double a = std::atan2(-R(0, 1), R(1, 1));
   const double b = std::asin(std::clamp(R(2, 1), -1.0, 1.0));

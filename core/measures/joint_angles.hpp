@@ -79,6 +79,11 @@ struct JointAngleOptions {
   double min_elevation_for_plane_deg = 15.0;
 };
 
+// The global frame G of the thorax angles (and of the OpenSim exports' ground): y along up_K,
+// x the part of front_K perpendicular to it, z = x cross y (to the subject's right). The caller
+// checks that the two are not parallel (joint_angles does, naming them).
+Eigen::Matrix3d K_from_G(const Eigen::Vector3d& up_K, const Eigen::Vector3d& front_K);
+
 // `previous`: the last frame's angles of the same session (for the held plane of elevation), or
 // null. Throws posefuse::Error (kInvalidArgument) "smpl_joints_K" for a wrong size or non-finite
 // joints, "up_K" / "front_K" for zero, non-finite or parallel references, "joint_angle_options.*".

@@ -36,15 +36,6 @@ void write_joints(CsvWriter& csv, std::int64_t t_us, const Joints& joints, const
   }
 }
 
-// Seconds with exactly the microseconds of t_us ("12.033333").
-std::string time_s(std::int64_t t_us) {
-  char text[32];
-  const std::int64_t magnitude = t_us < 0 ? -t_us : t_us;
-  std::snprintf(text, sizeof text, "%s%lld.%06lld", t_us < 0 ? "-" : "", static_cast<long long>(magnitude / 1000000),
-                static_cast<long long>(magnitude % 1000000));
-  return text;
-}
-
 }  // namespace
 
 namespace result_layout {
@@ -184,7 +175,7 @@ void ResultFiles::write_angles(const v1::FrameAngles& angles) {
         ErrorCode::kInvalidArgument, "joint_angles.angles",
         "has " + std::to_string(angles.angles_size()) + " angles, expected " + std::to_string(measures::kAngleCount));
   }
-  std::vector<std::string> row{time_s(angles.t_us())};
+  std::vector<std::string> row{format_seconds(angles.t_us())};
   for (int i = 0; i < measures::kAngleCount; ++i) {
     const v1::JointAngle& a = angles.angles(i);
     if (a.kind() != static_cast<v1::JointAngleKind>(i + 1)) {
@@ -205,9 +196,10 @@ void ResultFiles::write_repetitions(const v1::RepetitionSummary& summary) {
   CsvWriter csv(directory_ / result_layout::kRepetitionsCsv, result_layout::kRepetitionColumns);
   int index = 0;
   for (const v1::Repetition& r : summary.repetitions()) {
-    csv.row({angle, std::to_string(index++), time_s(r.t_start_us()), time_s(r.t_peak_us()), time_s(r.t_end_us()),
-             format_double(r.min_deg()), format_double(r.max_deg()), format_double(r.range_deg()),
-             format_double(r.peak_speed_deg_s()), format_double(r.duration_s()), r.partial() ? "0" : "1"});
+    csv.row({angle, std::to_string(index++), format_seconds(r.t_start_us()), format_seconds(r.t_peak_us()),
+             format_seconds(r.t_end_us()), format_double(r.min_deg()), format_double(r.max_deg()),
+             format_double(r.range_deg()), format_double(r.peak_speed_deg_s()), format_double(r.duration_s()),
+             r.partial() ? "0" : "1"});
   }
   csv.close();
   v1::RepetitionSummary totals = summary;

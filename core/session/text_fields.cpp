@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 
 #include "common/error.hpp"
@@ -38,6 +39,14 @@ std::string format_float(float value) { return format_number(value); }
 
 double parse_double(std::string_view text, const std::string& field) {
   return parse_number<double>(text, field, "a number");
+}
+
+std::string format_seconds(std::int64_t t_us) {
+  char text[32];
+  const std::int64_t magnitude = t_us < 0 ? -t_us : t_us;
+  std::snprintf(text, sizeof text, "%s%lld.%06lld", t_us < 0 ? "-" : "", static_cast<long long>(magnitude / 1000000),
+                static_cast<long long>(magnitude % 1000000));
+  return text;
 }
 float parse_float(std::string_view text, const std::string& field) {
   return parse_number<float>(text, field, "a 32-bit float");

@@ -17,6 +17,8 @@ namespace posefuse::session {
 
 std::string format_double(double value);
 std::string format_float(float value);
+// Seconds with exactly the microseconds of t_us ("12.033333").
+std::string format_seconds(std::int64_t t_us);
 
 // Parse one whole field; throw posefuse::Error (kInvalidArgument) naming `field` otherwise.
 // "nan", "inf" and "-inf" parse (the validators decide whether they are allowed).

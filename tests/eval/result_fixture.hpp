@@ -1,6 +1,7 @@
 #pragma once
 // Small result directories written in code through session::ResultFiles (the writer the client
 // and the simulator's gt/ use), for the reader and score tests.
+#include <cmath>
 #include <filesystem>
 #include <string>
 
@@ -24,6 +25,7 @@ struct FixtureSpec {
   double position_offset_m = 0.0;         // IMU positions and joints moved along +z_K
   double r_m = 0.035;
   double K_from_W_angle_rad = 0.0;  // about z
+  bool level_camera = false;        // K_from_W also turns W's z (up) onto K's y, as a level camera
   std::int64_t clock_offset_us = -1'000'000;
   double buzzer_tone_hz = 2700.0;
   bool with_joints = true;
@@ -144,8 +146,10 @@ inline void write_fixture(const std::filesystem::path& dir, const FixtureSpec& s
   model.set_d_sw_m(0.10);
   model.set_d_ul_m(0.28);
   *model.mutable_a_from_f() = to_proto(geometry::Quat::Identity());
+  const geometry::Quat level =
+      geometry::quat_from_rotation_vector(geometry::Vec3(spec.level_camera ? -M_PI / 2 : 0, 0, 0));
   *report.mutable_k_from_w() =
-      to_proto(geometry::quat_from_rotation_vector(geometry::Vec3(0, 0, spec.K_from_W_angle_rad)));
+      to_proto(level * geometry::quat_from_rotation_vector(geometry::Vec3(0, 0, spec.K_from_W_angle_rad)));
   (*report.mutable_clock_offset_us())["imu_right"] = spec.clock_offset_us;
   report.set_buzzer_tone_hz(spec.buzzer_tone_hz);
   files.write_calibration(report);
