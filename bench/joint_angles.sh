@@ -4,6 +4,7 @@
 # over the sessions, and per session the repetitions counted against the truth's and the range
 # of motion error per repetition.
 #   bench/joint_angles.sh [BUILD_DIR] [MOTION:SEED:SPEED ...]
+# KEEP=DIR keeps each session's recording, results and gt/ under DIR (e.g. for posefuse report).
 # Default sessions: the scripted exercises at seeds 61 and 62 and speeds 0.8 and 1.25 (nothing in
 # the measures was chosen on them: its bounds are geometric, docs/measures.md), both arms, three
 # repetitions, a subject unlike the template (female, betas 1.5,-1,0.5, clothing on), body fit on.
@@ -17,11 +18,12 @@ if [ ${#specs[@]} -eq 0 ]; then
          forearm_rolling:61:0.8 forearm_rolling:62:1.25 hair_combing:61:1.25 hair_combing:62:0.8
          torso_tilt:61:0.8 torso_tilt:62:1.25 forearm_protocol:61:1.0 forearm_protocol:62:1.0)
 fi
-work=$(mktemp -d)
+work=${KEEP:-$(mktemp -d)}
+mkdir -p "$work"
 server_pid=
 cleanup() {
   [ -n "$server_pid" ] && kill "$server_pid" 2>/dev/null || true
-  rm -rf "$work"
+  [ -n "${KEEP:-}" ] || rm -rf "$work"
 }
 trap cleanup EXIT
 "$build/server/posefuse-server" --listen 127.0.0.1:0 >"$work/server.log" 2>&1 &
@@ -40,7 +42,7 @@ for spec in "${specs[@]}"; do
   "$build/tools/sim/posefuse-sim" --options "$work/$name.options" --seed "$seed" --duration clip --quiet \
     --chunk-file "$work/$name.pfchunks" --gt "$work/$name.gt" >/dev/null
   "$build/client/posefuse" fit "$work/$name.pfchunks" --server "127.0.0.1:$port" --out "$work/$name.out" \
-    --option fit.enabled=true >/dev/null
+    --option fit.enabled=true >/dev/null 2>"$work/$name.fit.log" || { cat "$work/$name.fit.log" >&2; exit 1; }
   "$build/tools/score/posefuse-score" "$work/$name.out" "$work/$name.gt" >"$work/$name.score"
 done
 python3 - "$work" "${specs[@]}" <<'PY'
@@ -55,22 +57,24 @@ for spec in specs:
     section = text.split("ISB joint angle error (deg)\n", 1)[1].split("\n\n", 1)[0] if "ISB joint" in text else ""
     for line in section.splitlines()[1:]:
         f = line.split()
+        if len(f) < 4 or not f[1].isdigit() or int(f[1]) == 0: continue
         angle, n, rms, mx = f[0], int(f[1]), float(f[2]), float(f[3])
-        if n == 0: continue
         p = pooled.setdefault(angle, [0.0, 0, 0.0])
         p[0] += n * rms * rms; p[1] += n; p[2] = max(p[2], mx)
-    m = re.search(r"Repetitions.*\n.*\n(\S+)\s+(\S+)\s+(\d+)\s+(\d+)\s+(\d+)\s+([\d.]+)\s+([\d.]+)", text)
+    m = re.search(r"Repetitions.*\n.*\n(\S+)\s+(\S+)\s+(\d+)\s+(\d+)\s+(\d+)\s+(\S+)\s+(\S+)", text)
     sessions.append((name, m.groups() if m else None))
-print("Joint angle error, pooled over the sessions (deg)")
-print(f"{'angle':30s} {'frames':>7s} {'RMS':>6s} {'max':>6s}")
+print("Joint angle error, pooled over the sessions (deg)\n")
+print("| angle | frames | RMS | max |")
+print("|---|---|---|---|")
 for angle, (s, n, mx) in pooled.items():
-    print(f"{angle:30s} {n:7d} {math.sqrt(s / n):6.2f} {mx:6.2f}")
+    print(f"| {angle} | {n} | {math.sqrt(s / n):.2f} | {mx:.2f} |")
 print()
-print("Repetitions per session (counted; ROM error per matched repetition, deg)")
-print(f"{'session':26s} {'angle':24s} {'true angle':24s} {'count':>5s} {'true':>5s} {'ROM RMS':>8s} {'ROM max':>8s}")
+print("Repetitions per session (counted; ROM error per matched repetition, deg)\n")
+print("| session | angle | true angle | count | true count | ROM error RMS | ROM error max |")
+print("|---|---|---|---|---|---|---|")
 for name, g in sessions:
     if g is None:
-        print(f"{name:26s} (no repetitions in the results)"); continue
+        print(f"| {name} | (no repetitions in the results) | | | | | |"); continue
     angle, true_angle, count, true_count, matched, rms, mx = g
-    print(f"{name:26s} {angle:24s} {true_angle:24s} {count:>5s} {true_count:>5s} {float(rms):8.2f} {float(mx):8.2f}")
+    print(f"| {name} | {angle} | {true_angle} | {count} | {true_count} | {rms} | {mx} |")
 PY

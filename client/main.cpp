@@ -7,6 +7,7 @@
 //   posefuse submit RECORDING_URI [--label TEXT] | jobs | watch JOB_ID | cancel JOB_ID
 //   posefuse results JOB_ID --out DIR          (all with --server ADDR)
 //   posefuse export RESULTS --format trc|mot|sto [--out FILE]
+//   posefuse report RESULTS [--out FILE]
 // Every failure ends with one readable line on stderr and a non-zero exit status.
 #include <unistd.h>
 
@@ -24,6 +25,7 @@
 #include "grpc/health/v1/health.grpc.pb.h"
 #include "opensim/export_results.hpp"
 #include "posefuse/v1/service.grpc.pb.h"
+#include "report/session_report.hpp"
 #include "session/convert.hpp"
 
 namespace {
@@ -47,6 +49,9 @@ constexpr const char* kUsage =
     "                                      markers (.trc), joint angles (.mot), IMU orientations for\n"
     "                                      OpenSense (.sto); FILE defaults to RESULTS/markers.trc,\n"
     "                                      joint_angles.mot, imu_orientations.sto (docs/exports.md)\n"
+    "  posefuse report RESULTS [--out FILE]  one self-contained HTML report: angles over time,\n"
+    "                                      range of motion per repetition, warnings, calibration\n"
+    "                                      (default FILE: RESULTS/report.html; docs/report.md)\n"
     "batch jobs (server started with --data-dir):\n"
     "  posefuse submit RECORDING_URI [--label TEXT]  a recording under the server's\n"
     "                                      --recordings-root; prints the job id\n"
@@ -444,6 +449,17 @@ int command_export(const Arguments& args) {
   return 0;
 }
 
+int command_report(const Arguments& args) {
+  check_flags(args, {"--out"});
+  require(args.positional.size() == 1, "report takes one RESULTS directory");
+  const std::filesystem::path results = args.positional[0];
+  const std::filesystem::path out = args.flag("--out", (results / "report.html").string());
+  const posefuse::report::ReportContents contents = posefuse::report::write_session_report(results, out);
+  std::printf("%s: %zu plots, %zu repetitions, %zu warnings\n", out.string().c_str(), contents.plots,
+              contents.repetitions, contents.warnings);
+  return 0;
+}
+
 int command_demo_session(const Arguments& args) {
   check_flags(args, {});
   require(args.positional.size() == 1, "demo-session takes OUT");
@@ -475,6 +491,7 @@ int main(int argc, char** argv) {
     if (command == "cancel") return command_cancel(args);
     if (command == "results") return command_results(args);
     if (command == "export") return command_export(args);
+    if (command == "report") return command_report(args);
     std::fprintf(stderr, "posefuse: unknown command '%s'\n%s", command.c_str(), kUsage);
     return kExitUsage;
   } catch (const Error& error) {

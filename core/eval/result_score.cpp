@@ -10,6 +10,7 @@
 #include "common/error.hpp"
 #include "eval/orientation_error.hpp"
 #include "measures/joint_angles.hpp"
+#include "measures/repetitions.hpp"
 #include "session/result_files.hpp"
 #include "session/text_fields.hpp"
 
@@ -336,6 +337,30 @@ void score_repetitions(const session::ResultDirectory& result, const session::Re
   for (const auto& r : truth.repetitions) {
     score.truth_angle = r.angle;
     if (r.counted) theirs.push_back(&r);
+  }
+  // Where the two picked different dominant angles (the two arms of a symmetric exercise), the
+  // truth's repetitions of the result's angle are the fair comparison: segment the true series
+  // of that angle with the default options.
+  std::vector<session::RepetitionRow> resegmented;
+  if (!score.result_angle.empty() && score.result_angle != score.truth_angle && !truth.joint_angles.empty()) {
+    for (int a = 0; a < measures::kAngleCount; ++a) {
+      if (measures::angle_name(static_cast<measures::Angle>(a)) != score.result_angle) continue;
+      std::vector<double> t_s, deg;
+      for (const session::AngleRow& row : truth.joint_angles) {
+        t_s.push_back(static_cast<double>(row.t_us) * 1e-6);
+        deg.push_back(row.deg[static_cast<std::size_t>(a)].value_or(std::numeric_limits<double>::quiet_NaN()));
+      }
+      for (const measures::Repetition& r : measures::segment_repetitions(t_s, deg).repetitions) {
+        resegmented.push_back({score.result_angle, r.t_start_s, r.t_peak_s, r.t_end_s, r.min_deg, r.max_deg,
+                               r.range_deg, r.peak_speed_deg_s, r.duration_s, !r.partial});
+      }
+      report.notes.push_back("repetitions: the truth's dominant angle is " + score.truth_angle +
+                             "; scored against the truth's " + score.result_angle + " (default options)");
+      score.truth_angle = score.result_angle;
+      theirs.clear();
+      for (const session::RepetitionRow& r : resegmented)
+        if (r.counted) theirs.push_back(&r);
+    }
   }
   score.result_count = mine.size();
   score.truth_count = theirs.size();

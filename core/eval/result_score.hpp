@@ -81,7 +81,9 @@ struct JointAngleScore {
 };
 
 // repetitions.csv: counted repetitions against the truth's, each true repetition matched to the
-// counted result repetition that overlaps it most in time.
+// counted result repetition that overlaps it most in time. Where the result's dominant angle is
+// not the truth's (e.g. the other arm of a symmetric exercise), the truth's joint_angles.csv
+// series of the result's angle is segmented (default options) and scored instead, with a note.
 struct RepetitionScore {
   std::string result_angle, truth_angle;
   std::size_t result_count = 0, truth_count = 0;

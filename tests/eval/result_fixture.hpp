@@ -35,6 +35,7 @@ struct FixtureSpec {
   double angle_offset_deg = 0.0;  // added to every joint angle and repetition range
   bool right_pronation_defined = true;
   bool with_repetitions = true;  // two counted repetitions of right_elbow_flexion and a partial one
+  v1::JointAngleKind repetition_angle = v1::RIGHT_ELBOW_FLEXION;
 };
 
 // Joint angle a at time t (deg): distinct per angle, changing over time.
@@ -107,7 +108,7 @@ inline void write_fixture(const std::filesystem::path& dir, const FixtureSpec& s
   }
   if (spec.with_repetitions) {
     v1::RepetitionSummary summary;
-    summary.set_angle(v1::RIGHT_ELBOW_FLEXION);
+    summary.set_angle(spec.repetition_angle);
     summary.set_angle_detected(true);
     for (int r = 0; r < 3; ++r) {
       v1::Repetition& rep = *summary.add_repetitions();

@@ -92,6 +92,24 @@ TEST(ResultScore, KnownOffsetsComeBackAsErrors) {
   EXPECT_NE(table.find("K_from_W"), std::string::npos);
 }
 
+TEST(ResultScore, RepetitionsOnAnotherDominantAngleAreScoredOnTheTruthsSeriesOfThatAngle) {
+  FixtureSpec result, truth;
+  truth.repetition_angle = v1::LEFT_ELBOW_FLEXION;
+  const Pair p = write_pair("other_angle", result, truth);
+  const eval::ScoreReport r = eval::score_directories(p.result, p.truth);
+  ASSERT_TRUE(r.repetitions.has_value());
+  EXPECT_EQ(r.repetitions->result_angle, "right_elbow_flexion");
+  EXPECT_EQ(r.repetitions->truth_angle, "right_elbow_flexion");
+  // The fixture's true right elbow flexion rises steadily: no repetition, where the truth's
+  // left_elbow_flexion rows would have matched two.
+  EXPECT_EQ(r.repetitions->truth_count, 0u);
+  EXPECT_EQ(r.repetitions->matched, 0u);
+  bool noted = false;
+  for (const std::string& note : r.notes)
+    noted = noted || note.find("dominant angle is left_elbow_flexion") != std::string::npos;
+  EXPECT_TRUE(noted);
+}
+
 TEST(ResultScore, JointAnglesAndRepetitions) {
   FixtureSpec result, truth;
   result.angle_offset_deg = 3.0;
