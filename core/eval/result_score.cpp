@@ -295,7 +295,7 @@ void score_joint_angles(const session::ResultDirectory& result, const session::R
   for (const auto& row : truth.joint_angles) truth_times.push_back(row.t_us);
   std::vector<std::int64_t> result_times;
   const auto count = static_cast<std::size_t>(measures::kAngleCount);
-  std::vector<std::vector<double>> errors(count);
+  std::vector<std::vector<double>> errors(count), confident_errors(count);
   std::vector<std::size_t> undefined(count, 0);
   std::size_t unmatched = 0;
   for (const auto& row : result.joint_angles) {
@@ -314,6 +314,7 @@ void score_joint_angles(const session::ResultDirectory& result, const session::R
         continue;
       }
       errors[a].push_back(std::abs(std::remainder(*row.deg[a] - *want.deg[a], 360.0)));
+      if (row.confidence[a] >= measures::kConfidentAt) confident_errors[a].push_back(errors[a].back());
     }
   }
   if (unmatched == result.joint_angles.size()) {
@@ -322,7 +323,8 @@ void score_joint_angles(const session::ResultDirectory& result, const session::R
   for (std::size_t a = 0; a < count; ++a) {
     if (errors[a].empty() && undefined[a] == 0) continue;
     report.joint_angles.push_back({std::string(measures::angle_name(static_cast<measures::Angle>(a))),
-                                   summarize_errors(errors[a]), undefined[a], unmatched});
+                                   summarize_errors(errors[a]), summarize_errors(confident_errors[a]), undefined[a],
+                                   unmatched});
   }
 }
 
@@ -583,9 +585,10 @@ std::string format_score_report(const ScoreReport& report) {
   }
   if (!report.joint_angles.empty()) {
     out << "ISB joint angle error (deg)\n";
-    Table t({"angle", "n", "RMS", "max", "undefined", "unmatched"});
+    Table t({"angle", "n", "RMS", "max", "confident n", "confident RMS", "confident max", "undefined", "unmatched"});
     for (const auto& s : report.joint_angles) {
       t.add({s.angle, std::to_string(s.deg.count), fixed(s.deg.rms, 2), fixed(s.deg.max, 2),
+             std::to_string(s.confident_deg.count), fixed(s.confident_deg.rms, 2), fixed(s.confident_deg.max, 2),
              std::to_string(s.result_undefined), std::to_string(s.unmatched)});
     }
     out << t.str() << "\n";

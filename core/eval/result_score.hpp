@@ -76,6 +76,7 @@ struct CalibrationScore {
 struct JointAngleScore {
   std::string angle;  // measures::angle_name
   ErrorSummary deg;
+  ErrorSummary confident_deg;  // the samples the result gives confidence >= measures::kConfidentAt
   std::size_t result_undefined = 0;
   std::size_t unmatched = 0;  // result frames with no truth frame within the tolerance
 };

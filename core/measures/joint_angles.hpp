@@ -53,6 +53,10 @@ struct AngleValue {
 
 using JointAngles = std::array<AngleValue, kAngleCount>;
 
+// A value at or above this confidence is one to act on: the bound of a confident forearm sample
+// (docs/forearm.md), used by the report's plots and posefuse-score's confident errors.
+inline constexpr double kConfidentAt = 0.5;
+
 // One arm's pronation from the forearm IMU (fit/arm_roll.hpp) with its confidence.
 struct PronationInput {
   double rad = 0.0;

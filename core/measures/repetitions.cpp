@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstddef>
+#include <limits>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -195,9 +196,14 @@ bool is_complete(const Repetition& cycle, double start_deg, double end_deg, cons
 // Appends the repetitions of one piece: the cycles between its troughs, and, as partial ones,
 // the motion before its first trough and after its last, when that motion is a real reversal
 // (at least the hysteresis) rather than noise.
+// Only troughs in the resting half of the motion (at most `rest_limit_deg`) bound repetitions:
+// a dip while the limb is held away from rest (a wobble at the top of a raise) is part of the
+// repetition, not the end of one.
 void add_piece(const Piece& piece, const std::vector<double>& t_s, const std::vector<double>& angle_deg,
-               const RepetitionOptions& options, std::vector<Repetition>& out) {
-  const std::vector<std::size_t> troughs = find_troughs(piece, angle_deg, options.hysteresis_deg);
+               const RepetitionOptions& options, double rest_limit_deg, std::vector<Repetition>& out) {
+  std::vector<std::size_t> troughs;
+  for (const std::size_t trough : find_troughs(piece, angle_deg, options.hysteresis_deg))
+    if (angle_deg[piece[trough]] <= rest_limit_deg) troughs.push_back(trough);
   const std::vector<double> piece_speeds = speeds(piece, t_s, angle_deg);
   const auto add_cut_motion = [&](std::size_t first, std::size_t last) {
     Repetition rep = describe(piece, t_s, angle_deg, piece_speeds, first, last);
@@ -260,6 +266,18 @@ double percentile(const std::vector<double>& sorted, double p) {
   return sorted[below] + fraction * (sorted[above] - sorted[below]);
 }
 
+// The middle of the series' range of motion, between its 5th and 95th percentiles (as
+// dominant_series, so that a glitch cannot move it); +inf for fewer than two finite samples.
+double resting_half_limit(const std::vector<double>& angle_deg) {
+  std::vector<double> finite;
+  for (double v : angle_deg) {
+    if (std::isfinite(v)) finite.push_back(v);
+  }
+  if (finite.size() < 2) return std::numeric_limits<double>::infinity();
+  std::sort(finite.begin(), finite.end());
+  return 0.5 * (percentile(finite, 0.05) + percentile(finite, 0.95));
+}
+
 }  // namespace
 
 RepetitionSummary segment_repetitions(const std::vector<double>& t_s, const std::vector<double>& angle_deg,
@@ -267,8 +285,9 @@ RepetitionSummary segment_repetitions(const std::vector<double>& t_s, const std:
   check_series(t_s, angle_deg);
   check_options(options);
   RepetitionSummary summary;
+  const double rest_limit_deg = resting_half_limit(angle_deg);
   for (const Piece& piece : split_at_gaps(t_s, angle_deg, options.max_gap_s)) {
-    add_piece(piece, t_s, angle_deg, options, summary.repetitions);
+    add_piece(piece, t_s, angle_deg, options, rest_limit_deg, summary.repetitions);
   }
   summarize(summary);
   return summary;

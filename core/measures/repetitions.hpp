@@ -7,6 +7,10 @@
 // shoulder elevation). Turning points are found with hysteresis: a peak is confirmed once the
 // angle has fallen `hysteresis_deg` below the running maximum, a trough once it has risen that
 // much above the running minimum, so noise smaller than the hysteresis never makes a turn.
+// Only troughs in the resting half of the motion bound repetitions: at most the middle of the
+// series' range (halfway between its 5th and 95th percentiles). A dip while the limb is held
+// away from rest (a wobble at the top of a raise, the strokes of hair combing) belongs to the
+// repetition it happens in instead of splitting it into partial pieces.
 // A trough -> peak -> trough cycle counts when both of its swings are at least
 // `min_amplitude_deg` and its duration lies within [min_duration_s, max_duration_s]; a cycle cut by
 // the start or the end of the series, by missing samples (NaN) longer than `max_gap_s`, or that

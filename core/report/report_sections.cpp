@@ -201,7 +201,8 @@ std::string calibration_table(const session::ResultDirectory& results) {
                     " right; forearm " + cm(b.forearm_length_left_m()) + " left, " + cm(b.forearm_length_right_m()) +
                     " right; shoulder width " + cm(b.shoulder_width_m()) + "; torso " + cm(b.torso_length_m())});
   } else {
-    out += row({"body shape", "not estimated (the body fit did not run)"});
+    out +=
+        row({"body shape", "not estimated: the body fit did not run, or fitted the template shape (warnings say why)"});
   }
   return out + "</table>\n";
 }

@@ -5,11 +5,11 @@
 #include <string>
 #include <vector>
 
+#include "measures/joint_angles.hpp"
+
 namespace posefuse::report {
 
-// The confidence from which a value counts as confident: the same 0.5 as a confident forearm
-// sample (docs/forearm.md).
-inline constexpr double kConfidentAt = 0.5;
+using measures::kConfidentAt;
 
 struct PlotSeries {
   std::string label;

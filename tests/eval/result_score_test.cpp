@@ -128,6 +128,8 @@ TEST(ResultScore, JointAnglesAndRepetitions) {
     EXPECT_EQ(s.deg.count, 10u);
     EXPECT_NEAR(s.deg.rms, 3.0, 1e-9);
     EXPECT_NEAR(s.deg.max, 3.0, 1e-9);
+    EXPECT_EQ(s.confident_deg.count, 10u);  // the fixture's result has confidence 1
+    EXPECT_NEAR(s.confident_deg.rms, 3.0, 1e-9);
   }
   ASSERT_TRUE(r.repetitions.has_value());
   EXPECT_EQ(r.repetitions->result_count, 2u);  // the partial one is not counted
