@@ -67,6 +67,7 @@ echo "demo: posefuse-server on $address is $("$client_bin" health --server "$add
 
 results="$demo_dir/results"
 "$client_bin" fit "$session" --server "$address" --out "$results" --option fit.enabled=true
+"$client_bin" report "$results"
 
 stop_server
 trap - EXIT
@@ -80,6 +81,9 @@ echo "  recovered_segments.csv      forearm trajectories recovered through occlu
 echo "  calibration.json            per IMU gyro bias and field; forearm model; clock offsets"
 echo "  summary.json                counts and durations"
 echo "  warnings.txt                warnings and per-chunk errors (empty when none)"
+echo "  joint_angles.csv            ISB joint angles per frame, with confidences (docs/measures.md)"
+echo "  repetitions.csv             repetitions and the range of motion of each"
+echo "  report.html                 the session report to open in a browser (docs/report.md)"
 echo "Ground truth of the simulated session (same files and columns): $demo_dir/gt"
 echo "  session: $session; server log: $server_log"
 echo
