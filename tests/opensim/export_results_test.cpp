@@ -2,23 +2,15 @@
 // under its default name, a failed export leaves no file, and errors name what is missing.
 #include <gtest/gtest.h>
 
-#include <fstream>
 #include <string>
 
 #include "../eval/result_fixture.hpp"
 #include "../imu/expect_error.hpp"
+#include "../text_search.hpp"
 #include "opensim/export_results.hpp"
 
 using namespace posefuse;
-
-namespace {
-
-std::string read_text(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-}  // namespace
+using posefuse::testing::read_text;
 
 TEST(ExportResults, WritesEachFormatUnderItsDefaultName) {
   const auto dir = result_fixture::fresh_result_dir("export_all");

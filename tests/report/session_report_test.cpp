@@ -7,24 +7,14 @@
 
 #include "../eval/result_fixture.hpp"
 #include "../imu/expect_error.hpp"
+#include "../text_search.hpp"
 #include "report/session_report.hpp"
 
 using namespace posefuse;
+using posefuse::testing::count_occurrences;
+using posefuse::testing::read_text;
 
-namespace {
-
-std::size_t count(const std::string& text, const std::string& part) {
-  std::size_t n = 0;
-  for (auto at = text.find(part); at != std::string::npos; at = text.find(part, at + part.size())) ++n;
-  return n;
-}
-
-std::string read_text(const std::filesystem::path& file) {
-  std::ifstream in(file);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-}  // namespace
+namespace {}  // namespace
 
 TEST(SessionReport, HoldsThePlotsTablesWarningsAndCalibration) {
   const auto dir = result_fixture::fresh_result_dir("report_all");
@@ -37,10 +27,10 @@ TEST(SessionReport, HoldsThePlotsTablesWarningsAndCalibration) {
   EXPECT_EQ(contents.repetitions, 3u);
   EXPECT_EQ(contents.warnings, 2u);
   const std::string html = read_text(dir / "report.html");
-  EXPECT_EQ(count(html, "<svg class=\"plot\""), 5u);
+  EXPECT_EQ(count_occurrences(html, "<svg class=\"plot\""), 5u);
   EXPECT_NE(html.find("<table id=\"repetitions\">"), std::string::npos);
-  EXPECT_EQ(count(html, "<tr class=\"counted\">"), 2u);
-  EXPECT_EQ(count(html, "<tr class=\"partial\">"), 1u);
+  EXPECT_EQ(count_occurrences(html, "<tr class=\"counted\">"), 2u);
+  EXPECT_EQ(count_occurrences(html, "<tr class=\"partial\">"), 1u);
   EXPECT_NE(html.find("<table id=\"repetition-summary\">"), std::string::npos);
   EXPECT_NE(html.find("<td>right_elbow_flexion</td><td>2</td><td>45.0</td><td>7.1</td>"), std::string::npos);
   EXPECT_NE(html.find("<table id=\"calibration\">"), std::string::npos);
@@ -49,9 +39,9 @@ TEST(SessionReport, HoldsThePlotsTablesWarningsAndCalibration) {
   // The held left plane of elevation (confidence 0) is drawn faint; the right arm's IMU is
   // PREDICTED for the second half of the frames: one occluded stretch per right-arm plot.
   EXPECT_NE(html.find("line unconfident"), std::string::npos);
-  EXPECT_EQ(count(html, "<rect class=\"shade shade-occluded\""), 2u * 2u);  // stretch + legend, 2 plots
-  EXPECT_EQ(count(html, "<script"), 0u);
-  EXPECT_EQ(count(html, "<img"), 0u);
+  EXPECT_EQ(count_occurrences(html, "<rect class=\"shade shade-occluded\""), 2u * 2u);  // stretch + legend, 2 plots
+  EXPECT_EQ(count_occurrences(html, "<script"), 0u);
+  EXPECT_EQ(count_occurrences(html, "<img"), 0u);
 }
 
 TEST(SessionReport, SaysWhatIsMissing) {

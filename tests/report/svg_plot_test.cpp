@@ -5,18 +5,14 @@
 #include <cmath>
 #include <string>
 
+#include "../text_search.hpp"
 #include "report/html_text.hpp"
 #include "report/svg_plot.hpp"
 
 using namespace posefuse::report;
+using posefuse::testing::count_occurrences;
 
 namespace {
-
-std::size_t count(const std::string& text, const std::string& part) {
-  std::size_t n = 0;
-  for (auto at = text.find(part); at != std::string::npos; at = text.find(part, at + part.size())) ++n;
-  return n;
-}
 
 PlotSpec one_series(std::vector<double> value, std::vector<double> confidence) {
   PlotSpec spec{"plot-x", "Title", 0.0, static_cast<double>(value.size() - 1), {}, {}};
@@ -30,9 +26,9 @@ PlotSpec one_series(std::vector<double> value, std::vector<double> confidence) {
 
 TEST(SvgPlot, ConfidentRunIsOnePath) {
   const std::string svg = svg_plot(one_series({10, 20, 30, 40}, {1, 1, 1, 1}));
-  EXPECT_EQ(count(svg, "<path class=\"line confident\""), 1u);
-  EXPECT_EQ(count(svg, "<path class=\"line unconfident\""), 0u);
-  EXPECT_EQ(count(svg, " L"), 3u);
+  EXPECT_EQ(count_occurrences(svg, "<path class=\"line confident\""), 1u);
+  EXPECT_EQ(count_occurrences(svg, "<path class=\"line unconfident\""), 0u);
+  EXPECT_EQ(count_occurrences(svg, " L"), 3u);
   EXPECT_NE(svg.find("<svg class=\"plot\" id=\"plot-x\""), std::string::npos);
 }
 
@@ -40,16 +36,16 @@ TEST(SvgPlot, AGapEndsThePathAndLowConfidenceGetsItsOwn) {
   const double nan = std::nan("");
   // Confident 0-1, gap at 2, confident 3-4, unconfident 5-6 (joined to 4), a single point at 8.
   const std::string svg = svg_plot(one_series({1, 2, nan, 4, 5, 6, 7, nan, 9}, {1, 1, 1, 1, 1, 0.2, 0.2, 1, 1}));
-  EXPECT_EQ(count(svg, "<path class=\"line confident\""), 2u);
-  EXPECT_EQ(count(svg, "<path class=\"line unconfident\""), 1u);  // a lone point draws no line
+  EXPECT_EQ(count_occurrences(svg, "<path class=\"line confident\""), 2u);
+  EXPECT_EQ(count_occurrences(svg, "<path class=\"line unconfident\""), 1u);  // a lone point draws no line
 }
 
 TEST(SvgPlot, ShadesAreDrawnAndListedInTheLegend) {
   PlotSpec spec = one_series({0, 10, 20}, {1, 1, 1});
   spec.shades = {{0.5, 1.5, "occluded"}, {1.6, 1.8, "occluded"}, {0.0, 0.2, "lost"}};
   const std::string svg = svg_plot(spec);
-  EXPECT_EQ(count(svg, "class=\"shade shade-occluded\""), 3u);  // two stretches and the legend key
-  EXPECT_EQ(count(svg, "class=\"shade shade-lost\""), 2u);
+  EXPECT_EQ(count_occurrences(svg, "class=\"shade shade-occluded\""), 3u);  // two stretches and the legend key
+  EXPECT_EQ(count_occurrences(svg, "class=\"shade shade-lost\""), 2u);
   EXPECT_NE(svg.find(">flexion</text>"), std::string::npos);
 }
 
