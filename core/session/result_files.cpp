@@ -121,6 +121,10 @@ void ResultFiles::write_frame(const v1::FrameResult& frame) {
     throw Error(ErrorCode::kInvalidArgument, "frame.camera_joints",
                 "has " + std::to_string(frame.camera_joints_size()) + " joints, at most 25");
   }
+  if (frame.smpl_joint_rotations_size() != 0 && frame.smpl_joint_rotations_size() != body::kNumJoints) {
+    throw Error(ErrorCode::kInvalidArgument, "frame.smpl_joint_rotations",
+                "has " + std::to_string(frame.smpl_joint_rotations_size()) + " rotations, not 0 or 24");
+  }
   for (const auto& position : frame.imu_positions()) {
     require_device_id(position.device_id(), "frame.imu_positions.device_id");
   }
@@ -128,6 +132,12 @@ void ResultFiles::write_frame(const v1::FrameResult& frame) {
   if (frame.smpl_joints_size() > 0) {
     write_joints(opened_file(smpl_joints_, result_layout::kSmplJointsCsv, result_layout::kJointColumns), t,
                  frame.smpl_joints(), body::smpl_joint_names().data());
+  }
+  for (int j = 0; j < frame.smpl_joint_rotations_size(); ++j) {
+    const v1::Quaternion& q = frame.smpl_joint_rotations(j);
+    opened_file(smpl_rotations_, result_layout::kSmplJointRotationsCsv, result_layout::kJointRotationColumns)
+        .row({std::to_string(t), std::to_string(j), body::smpl_joint_names()[static_cast<std::size_t>(j)],
+              format_double(q.w()), format_double(q.x()), format_double(q.y()), format_double(q.z())});
   }
   if (frame.camera_joints_size() > 0) {
     write_joints(opened_file(camera_joints_, result_layout::kCameraJointsCsv, result_layout::kJointColumns), t,

@@ -9,6 +9,8 @@
 //   smpl_joints.csv                   t_us,joint,joint_name,x_m,y_m,z_m,source,confidence
 //                                     (24 rows per frame, SMPL order, p_K)
 //   camera_joints.csv                 the same columns, 25 rows per frame, Kinect v2 JointType order
+//   smpl_joint_rotations.csv          t_us,joint,joint_name,w,x,y,z  the fitted model's global joint
+//                                     rotations K_from_joint (24 rows per fitted frame, SMPL order)
 //   forearms.csv                      t_us,arm,qw,qx,qy,qz,pronation_rad,source,confidence  (K_from_F)
 //   imu_positions.csv                 t_us,device_id,x_m,y_m,z_m,source                   (p_K)
 //   recovered_segments.csv            device_id,method,t_start_us,t_end_us,t_us,imu_x_m,imu_y_m,
@@ -45,6 +47,7 @@ inline const char* const kForearmOrientationDir = "forearm_orientations";
 inline const char* const kRecoveredSegmentsCsv = "recovered_segments.csv";
 inline const char* const kSmplJointsCsv = "smpl_joints.csv";
 inline const char* const kCameraJointsCsv = "camera_joints.csv";
+inline const char* const kSmplJointRotationsCsv = "smpl_joint_rotations.csv";
 inline const char* const kForearmsCsv = "forearms.csv";
 inline const char* const kImuPositionsCsv = "imu_positions.csv";
 inline const char* const kCalibrationJson = "calibration.json";
@@ -60,6 +63,7 @@ inline const std::vector<std::string> kOrientationColumns = {"t_us", "w", "x", "
 inline const std::vector<std::string> kForearmOrientationColumns = {"t_us", "w", "x", "y", "z", "pronation_rad"};
 inline const std::vector<std::string> kJointColumns = {"t_us", "joint", "joint_name", "x_m",
                                                        "y_m",  "z_m",   "source",     "confidence"};
+inline const std::vector<std::string> kJointRotationColumns = {"t_us", "joint", "joint_name", "w", "x", "y", "z"};
 inline const std::vector<std::string> kForearmColumns = {"t_us", "arm",           "qw",     "qx",        "qy",
                                                          "qz",   "pronation_rad", "source", "confidence"};
 inline const std::vector<std::string> kImuPositionColumns = {"t_us", "device_id", "x_m", "y_m", "z_m", "source"};
@@ -101,7 +105,7 @@ class ResultFiles {
   std::filesystem::path directory_;
   std::map<std::string, std::unique_ptr<CsvWriter>> orientations_;
   std::map<std::string, std::unique_ptr<CsvWriter>> forearm_orientations_;
-  std::optional<CsvWriter> smpl_joints_, camera_joints_, forearms_, imu_positions_, segments_, angles_;
+  std::optional<CsvWriter> smpl_joints_, smpl_rotations_, camera_joints_, forearms_, imu_positions_, segments_, angles_;
   std::uint64_t orientation_samples_ = 0;
   std::uint64_t forearm_samples_ = 0;
   std::uint64_t frames_ = 0;

@@ -140,6 +140,28 @@ std::vector<JointRow> read_joints(ResultDirectory& out, const char* name, int jo
       });
 }
 
+std::vector<JointRotationRow> read_joint_rotations(ResultDirectory& out) {
+  std::int64_t previous = 0;
+  return read_rows<JointRotationRow>(
+      out, result_layout::kSmplJointRotationsCsv, result_layout::kJointRotationColumns,
+      [&](const ResultCsv& csv, const std::vector<JointRotationRow>& rows) {
+        JointRotationRow row;
+        row.t_us = csv.time_after(0, previous, rows.empty());
+        const std::int64_t joint = csv.int64(1);
+        if (joint < 0 || joint >= body::kNumJoints) {
+          throw_invalid(csv.field(1), std::to_string(joint) + " is not in 0.." + std::to_string(body::kNumJoints - 1));
+        }
+        row.joint = static_cast<int>(joint);
+        const char* name = body::smpl_joint_names()[static_cast<std::size_t>(row.joint)];
+        if (csv.text(2) != name) {
+          throw_invalid(csv.field(2), session::quoted(csv.text(2)) + " is not joint " + std::to_string(joint) +
+                                          "'s name " + session::quoted(name));
+        }
+        row.K_from_joint = csv.quat(3);
+        return row;
+      });
+}
+
 // Not in time order, even per arm: the forearm stage and, with `fit.enabled`, the body-fit stage
 // both report each frame's forearms, the body fit up to `fit.imu_wait_s` later. Sorted by
 // (arm, t_us) here, the rows of one frame kept in file order.
@@ -257,6 +279,7 @@ ResultDirectory read_result_files(const fs::path& directory) {
   out.imu_orientations = read_orientation_folder(out, result_layout::kImuOrientationDir, false);
   out.forearm_orientations = read_orientation_folder(out, result_layout::kForearmOrientationDir, true);
   out.smpl_joints = read_joints(out, result_layout::kSmplJointsCsv, body::kNumJoints, body::smpl_joint_names().data());
+  out.smpl_joint_rotations = read_joint_rotations(out);
   out.camera_joints = read_joints(out, result_layout::kCameraJointsCsv,
                                   static_cast<int>(layout::kKinectJointNames.size()), layout::kKinectJointNames.data());
   out.forearms = read_forearms(out);

@@ -41,6 +41,13 @@ struct JointRow {
   double confidence = 0.0;
 };
 
+// One row of smpl_joint_rotations.csv: a fitted joint's global rotation.
+struct JointRotationRow {
+  std::int64_t t_us = 0;
+  int joint = 0;  // SMPL order
+  geometry::Quat K_from_joint = geometry::Quat::Identity();
+};
+
 struct ForearmRow {
   std::int64_t t_us = 0;
   v1::Arm arm = v1::ARM_UNSPECIFIED;
@@ -87,6 +94,7 @@ struct ResultDirectory {
   std::map<std::string, std::vector<TimedOrientation>> imu_orientations;      // by device id, device clock
   std::map<std::string, std::vector<TimedOrientation>> forearm_orientations;  // by device id, camera clock
   std::vector<JointRow> smpl_joints, camera_joints;
+  std::vector<JointRotationRow> smpl_joint_rotations;  // t_us never goes back
   std::vector<ForearmRow> forearms;
   std::vector<ImuPositionRow> imu_positions;
   std::vector<RecoveredRow> recovered;

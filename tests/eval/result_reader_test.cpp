@@ -35,6 +35,11 @@ TEST(ResultReader, ReadsBackWhatResultFilesWrote) {
   EXPECT_TRUE(r.has("forearm_orientations/imu_right.csv"));
   EXPECT_TRUE(r.has("camera_joints.csv"));
   EXPECT_FALSE(r.has("smpl_joints.csv"));
+  ASSERT_EQ(r.smpl_joint_rotations.size(), 24u * 10u);
+  const session::JointRotationRow& rotation = r.smpl_joint_rotations[24 * 3 + 7];
+  EXPECT_EQ(rotation.joint, 7);
+  EXPECT_EQ(rotation.t_us, 1000 + static_cast<std::int64_t>(3 / 30.0 * 1e6));
+  EXPECT_LT(geometry::angle_between(rotation.K_from_joint, result_fixture::fixture_K_from_joint(7, 3 / 30.0)), 1e-6);
   ASSERT_EQ(r.forearm_orientations.at("imu_right").size(), 27u);
   const auto& first = r.forearm_orientations.at("imu_right").front();
   EXPECT_EQ(first.t_us, 1000);
@@ -96,6 +101,7 @@ TEST(ResultReader, NamesWhatIsWrong) {
       // one field too many
       {"imu_orientations/imu_right.csv", "\n5012500,", "\n5012500,2,", "imu_orientations/imu_right.csv:3"},
       {"calibration.json", "\"forearms\"", "\"forearm_models\"", "calibration.json"},
+      {"smpl_joint_rotations.csv", ",spine1,", ",spine,", "smpl_joint_rotations.csv:5:joint_name"},
   };
   const auto dir = result_fixture::fresh_result_dir("bad");
   for (const Case& c : cases) {
@@ -106,6 +112,15 @@ TEST(ResultReader, NamesWhatIsWrong) {
   }
   posefuse::testing::expect_error([&] { session::read_result_files(dir / "absent"); }, ErrorCode::kNotFound,
                                   (dir / "absent").string());
+}
+
+TEST(ResultFiles, RefusesAFrameWithSomeButNotAllJointRotations) {
+  session::ResultFiles files(result_fixture::fresh_result_dir("rotations"));
+  v1::FrameResult frame;
+  frame.set_t_us(1);
+  frame.add_smpl_joint_rotations()->set_w(1.0);
+  posefuse::testing::expect_error([&] { files.write_frame(frame); }, ErrorCode::kInvalidArgument,
+                                  "frame.smpl_joint_rotations", "has 1 rotations, not 0 or 24");
 }
 
 // Result directories written before the frame merge have two stages' rows in forearms.csv (the
