@@ -257,6 +257,16 @@ void summarize(RepetitionSummary& summary) {
   summary.mean_peak_speed_deg_s = mean(peak_speeds);
 }
 
+// The finite values of a series, in ascending order.
+std::vector<double> sorted_finite(const std::vector<double>& series) {
+  std::vector<double> finite;
+  for (double v : series) {
+    if (std::isfinite(v)) finite.push_back(v);
+  }
+  std::sort(finite.begin(), finite.end());
+  return finite;
+}
+
 // Linear interpolation between the closest ranks of `sorted` (p in [0, 1]).
 double percentile(const std::vector<double>& sorted, double p) {
   const double position = p * static_cast<double>(sorted.size() - 1);
@@ -269,12 +279,8 @@ double percentile(const std::vector<double>& sorted, double p) {
 // The middle of the series' range of motion, between its 5th and 95th percentiles (as
 // dominant_series, so that a glitch cannot move it); +inf for fewer than two finite samples.
 double resting_half_limit(const std::vector<double>& angle_deg) {
-  std::vector<double> finite;
-  for (double v : angle_deg) {
-    if (std::isfinite(v)) finite.push_back(v);
-  }
+  const std::vector<double> finite = sorted_finite(angle_deg);
   if (finite.size() < 2) return std::numeric_limits<double>::infinity();
-  std::sort(finite.begin(), finite.end());
   return 0.5 * (percentile(finite, 0.05) + percentile(finite, 0.95));
 }
 
@@ -297,12 +303,8 @@ int dominant_series(const std::vector<std::vector<double>>& angle_series_deg) {
   int best = -1;
   double best_spread = 0.0;
   for (std::size_t s = 0; s < angle_series_deg.size(); ++s) {
-    std::vector<double> finite;
-    for (double v : angle_series_deg[s]) {
-      if (std::isfinite(v)) finite.push_back(v);
-    }
+    const std::vector<double> finite = sorted_finite(angle_series_deg[s]);
     if (finite.size() < 2) continue;
-    std::sort(finite.begin(), finite.end());
     // Percentiles rather than max - min, so that a few outliers (a tracking glitch) cannot make a
     // still joint look like the one that moves.
     const double series_spread = percentile(finite, 0.95) - percentile(finite, 0.05);

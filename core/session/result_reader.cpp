@@ -118,48 +118,43 @@ std::vector<Row> read_rows(ResultDirectory& out, const char* name, const std::ve
   return rows;
 }
 
+// Columns 1 and 2 of a joint file: the joint's index and its name, which must agree.
+int joint_of(const ResultCsv& csv, int joint_count, const char* const* names) {
+  const std::int64_t joint = csv.int64(1);
+  if (joint < 0 || joint >= joint_count) {
+    throw_invalid(csv.field(1), std::to_string(joint) + " is not in 0.." + std::to_string(joint_count - 1));
+  }
+  if (csv.text(2) != names[joint]) {
+    throw_invalid(csv.field(2), session::quoted(csv.text(2)) + " is not joint " + std::to_string(joint) + "'s name " +
+                                    session::quoted(names[joint]));
+  }
+  return static_cast<int>(joint);
+}
+
 std::vector<JointRow> read_joints(ResultDirectory& out, const char* name, int joint_count, const char* const* names) {
   std::int64_t previous = 0;
-  return read_rows<JointRow>(
-      out, name, result_layout::kJointColumns, [&](const ResultCsv& csv, const std::vector<JointRow>& rows) {
-        JointRow row;
-        row.t_us = csv.time_after(0, previous, rows.empty());
-        const std::int64_t joint = csv.int64(1);
-        if (joint < 0 || joint >= joint_count) {
-          throw_invalid(csv.field(1), std::to_string(joint) + " is not in 0.." + std::to_string(joint_count - 1));
-        }
-        row.joint = static_cast<int>(joint);
-        if (csv.text(2) != names[row.joint]) {
-          throw_invalid(csv.field(2), session::quoted(csv.text(2)) + " is not joint " + std::to_string(joint) +
-                                          "'s name " + session::quoted(names[row.joint]));
-        }
-        row.p_K = csv.vec3(3);
-        row.source = csv.source(6);
-        row.confidence = csv.number(7);
-        return row;
-      });
+  return read_rows<JointRow>(out, name, result_layout::kJointColumns,
+                             [&](const ResultCsv& csv, const std::vector<JointRow>& rows) {
+                               JointRow row;
+                               row.t_us = csv.time_after(0, previous, rows.empty());
+                               row.joint = joint_of(csv, joint_count, names);
+                               row.p_K = csv.vec3(3);
+                               row.source = csv.source(6);
+                               row.confidence = csv.number(7);
+                               return row;
+                             });
 }
 
 std::vector<JointRotationRow> read_joint_rotations(ResultDirectory& out) {
   std::int64_t previous = 0;
-  return read_rows<JointRotationRow>(
-      out, result_layout::kSmplJointRotationsCsv, result_layout::kJointRotationColumns,
-      [&](const ResultCsv& csv, const std::vector<JointRotationRow>& rows) {
-        JointRotationRow row;
-        row.t_us = csv.time_after(0, previous, rows.empty());
-        const std::int64_t joint = csv.int64(1);
-        if (joint < 0 || joint >= body::kNumJoints) {
-          throw_invalid(csv.field(1), std::to_string(joint) + " is not in 0.." + std::to_string(body::kNumJoints - 1));
-        }
-        row.joint = static_cast<int>(joint);
-        const char* name = body::smpl_joint_names()[static_cast<std::size_t>(row.joint)];
-        if (csv.text(2) != name) {
-          throw_invalid(csv.field(2), session::quoted(csv.text(2)) + " is not joint " + std::to_string(joint) +
-                                          "'s name " + session::quoted(name));
-        }
-        row.K_from_joint = csv.quat(3);
-        return row;
-      });
+  return read_rows<JointRotationRow>(out, result_layout::kSmplJointRotationsCsv, result_layout::kJointRotationColumns,
+                                     [&](const ResultCsv& csv, const std::vector<JointRotationRow>& rows) {
+                                       JointRotationRow row;
+                                       row.t_us = csv.time_after(0, previous, rows.empty());
+                                       row.joint = joint_of(csv, body::kNumJoints, body::smpl_joint_names().data());
+                                       row.K_from_joint = csv.quat(3);
+                                       return row;
+                                     });
 }
 
 // Not in time order, even per arm: the forearm stage and, with `fit.enabled`, the body-fit stage
