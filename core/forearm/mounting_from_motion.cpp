@@ -1,0 +1,194 @@
+#include "forearm/mounting_from_motion.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <numbers>
+
+namespace posefuse::forearm {
+
+namespace {
+
+constexpr double kPi = std::numbers::pi;
+
+double wrap(double angle) { return std::remainder(angle, 2.0 * kPi); }
+
+double deg(double rad) { return rad * 180.0 / kPi; }
+
+std::string fixed_text(double value, int decimals) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.*f", decimals, value);
+  return text;
+}
+
+std::string degrees_text(double rad) { return fixed_text(deg(rad), 0); }
+
+bool usable(const MountingFrame& f) {
+  return f.K_from_A.coeffs().allFinite() && f.K_from_A.norm() > 0.5 && f.forearm_K.allFinite() &&
+         f.forearm_K.norm() > 1e-6;
+}
+
+// Effective sample count of a series whose neighbours share their error (AR(1)): n (1-rho)/(1+rho).
+double effective_count(const std::vector<Eigen::Vector2d>& residuals) {
+  const std::size_t n = residuals.size();
+  double lag0 = 0.0, lag1 = 0.0;
+  for (std::size_t i = 0; i < n; ++i) {
+    lag0 += residuals[i].squaredNorm();
+    if (i > 0) lag1 += residuals[i].dot(residuals[i - 1]);
+  }
+  const double rho = lag0 > 0.0 ? std::clamp(lag1 / lag0, 0.0, 0.99) : 0.0;
+  return std::max(1.0, static_cast<double>(n) * (1.0 - rho) / (1.0 + rho));
+}
+
+double percentile(std::vector<double> values, double p) {
+  std::sort(values.begin(), values.end());
+  const double at = p * static_cast<double>(values.size() - 1);
+  const auto i = static_cast<std::size_t>(std::floor(at));
+  const std::size_t j = std::min(i + 1, values.size() - 1);
+  return values[i] + (at - static_cast<double>(i)) * (values[j] - values[i]);
+}
+
+// The middle of the shortest arc holding every angle: opposite the widest gap between them.
+double arc_centre(std::vector<double> angles) {
+  for (double& a : angles) a = std::fmod(std::fmod(a, 2.0 * kPi) + 2.0 * kPi, 2.0 * kPi);
+  std::sort(angles.begin(), angles.end());
+  double widest = angles.front() + 2.0 * kPi - angles.back();
+  double start = angles.front();  // the arc starts after the widest gap
+  for (std::size_t i = 1; i < angles.size(); ++i) {
+    if (angles[i] - angles[i - 1] > widest) {
+      widest = angles[i] - angles[i - 1];
+      start = angles[i];
+    }
+  }
+  return wrap(start + 0.5 * (2.0 * kPi - widest));
+}
+
+}  // namespace
+
+std::optional<Quat> K_from_neutral_forearm(const Vec3& upper_arm_K, const Vec3& forearm_K, Side side,
+                                           double min_flexion_rad) {
+  if (!upper_arm_K.allFinite() || !forearm_K.allFinite() || upper_arm_K.norm() < 1e-6 || forearm_K.norm() < 1e-6) {
+    return std::nullopt;
+  }
+  const Vec3 y = forearm_K.normalized();
+  const Vec3 normal = upper_arm_K.normalized().cross(y);
+  // |sin| of the flexion: a folded elbow (near 180 degrees) has no plane either.
+  if (normal.norm() < std::sin(min_flexion_rad)) return std::nullopt;
+  const Vec3 x = (side == Side::kRight ? 1.0 : -1.0) * normal.normalized();
+  Eigen::Matrix3d K_from_N;
+  K_from_N.col(0) = x;
+  K_from_N.col(1) = y;
+  K_from_N.col(2) = x.cross(y);
+  return Quat(K_from_N).normalized();
+}
+
+std::optional<MountingEstimate> estimate_mounting(const std::vector<MountingFrame>& all_frames, Side side,
+                                                  const MountingFromMotionOptions& options, std::string& why_not) {
+  std::vector<MountingFrame> frames;
+  for (const MountingFrame& f : all_frames) {
+    if (usable(f)) frames.push_back(f);
+  }
+  std::sort(frames.begin(), frames.end(),
+            [](const MountingFrame& a, const MountingFrame& b) { return a.t_us < b.t_us; });
+  if (frames.size() < options.min_frames) {
+    why_not = "the forearm axis was measured at " + std::to_string(frames.size()) + " frames; need " +
+              std::to_string(options.min_frames);
+    return std::nullopt;
+  }
+
+  // The axis in A.
+  Vec3 sum_A = Vec3::Zero(), sum_K = Vec3::Zero();
+  for (const MountingFrame& f : frames) {
+    sum_A += f.K_from_A.normalized().conjugate() * f.forearm_K.normalized();
+    sum_K += f.forearm_K.normalized();
+  }
+  const double n = static_cast<double>(frames.size());
+  if (sum_A.norm() < 1e-9 * n) {
+    why_not = "the forearm axes seen by the camera, turned into the IMU's frame, have no mean direction";
+    return std::nullopt;
+  }
+  const Vec3 y_A = sum_A.normalized();
+  const Quat A_from_B = Quat::FromTwoVectors(Vec3::UnitY(), y_A);  // B: any frame with y along y_A
+  const Vec3 e1 = A_from_B * Vec3::UnitX(), e2 = A_from_B * Vec3::UnitZ();
+  std::vector<Eigen::Vector2d> residuals;
+  double residual_sq = 0.0, spread_sq = 0.0;
+  const Vec3 mean_K = sum_K.normalized();
+  for (const MountingFrame& f : frames) {
+    const Vec3 a = f.K_from_A.normalized().conjugate() * f.forearm_K.normalized();
+    residuals.emplace_back(a.dot(e1), a.dot(e2));
+    residual_sq += residuals.back().squaredNorm();
+    const double turned = std::acos(std::clamp(mean_K.dot(f.forearm_K.normalized()), -1.0, 1.0));
+    spread_sq += turned * turned;
+  }
+  const double residual_rms = std::sqrt(residual_sq / n);
+  if (residual_rms > options.max_axis_residual_rad) {
+    why_not = "the forearm axes seen by the camera, turned into the IMU's frame, scatter " +
+              degrees_text(residual_rms) + " deg RMS (bound " + degrees_text(options.max_axis_residual_rad) +
+              " deg; the forearm turned " + degrees_text(std::sqrt(spread_sq / n)) +
+              " deg RMS in the camera): the IMU does not turn with this forearm";
+    return std::nullopt;
+  }
+  MountingEstimate estimate;
+  estimate.frames = frames.size();
+  estimate.seconds = 1e-6 * static_cast<double>(frames.back().t_us - frames.front().t_us);
+  estimate.axis_spread_rad = std::sqrt(spread_sq / n);
+  estimate.axis_rms_rad = residual_rms / std::sqrt(effective_count(residuals));
+
+  // The roll: psi with A_from_F = A_from_B * Ry(psi). The nominal mounting is A_from_F = I.
+  const double nominal_psi = twist_about_y(A_from_B.conjugate());
+  std::vector<double> phi;
+  for (const MountingFrame& f : frames) {
+    if (!f.upper_arm_K) continue;
+    const std::optional<Quat> K_from_N =
+        K_from_neutral_forearm(*f.upper_arm_K, f.forearm_K, side, options.min_flexion_rad);
+    if (!K_from_N) continue;
+    phi.push_back(twist_about_y((f.K_from_A.normalized() * A_from_B).conjugate() * *K_from_N));
+  }
+  estimate.hinge_frames = phi.size();
+  double psi = nominal_psi;
+  estimate.roll_rms_rad = options.nominal_roll_rms_rad;
+  estimate.roll_limit = "no frame with the elbow flexed by " + degrees_text(options.min_flexion_rad) +
+                        " deg or more and the upper arm measured: the roll is the nominal mounting's (+-" +
+                        degrees_text(options.nominal_roll_rms_rad) + " deg RMS)";
+  if (phi.size() >= options.min_frames) {
+    const double centre = arc_centre(phi);
+    std::vector<double> deviation, step;
+    for (std::size_t i = 0; i < phi.size(); ++i) {
+      deviation.push_back(wrap(phi[i] - centre));
+      if (i > 0) step.push_back(wrap(phi[i] - phi[i - 1]));
+    }
+    const double low = percentile(deviation, 0.025), high = percentile(deviation, 0.975);
+    // Frame-to-frame noise widens the seen span; the forearm turned at least the span less it.
+    double step_sq = 0.0;
+    for (double s : step) step_sq += s * s;
+    const double noise = step.empty() ? 0.0 : std::sqrt(step_sq / static_cast<double>(step.size()) / 2.0);
+    estimate.twist_span_rad = std::max(0.0, high - low - 4.0 * noise);
+    const double width = 2.0 * options.max_twist_rad - estimate.twist_span_rad;
+    if (width <= 0.0) {
+      estimate.roll_limit = "the hinge plane turned " + degrees_text(high - low) +
+                            " deg about the forearm, more than a forearm can: the IMU slipped or is not on this "
+                            "arm; the roll is the nominal mounting's";
+    } else {
+      // Every hinge frame: psi within max_twist of phi; the feasible interval's middle.
+      const double middle = wrap(centre + 0.5 * (low + high));
+      const double from_middle = std::clamp(wrap(nominal_psi - middle), -0.5 * width, 0.5 * width);
+      psi = wrap(middle + from_middle);
+      const double interval_rms = width / std::sqrt(12.0);
+      estimate.roll_rms_rad = 1.0 / std::sqrt(1.0 / (interval_rms * interval_rms) +
+                                              1.0 / (options.nominal_roll_rms_rad * options.nominal_roll_rms_rad));
+      estimate.roll_from_hinge = true;
+      estimate.roll_limit = "the forearm turned " + degrees_text(estimate.twist_span_rad) + " deg of the " +
+                            degrees_text(2.0 * options.max_twist_rad) + " deg it can: the roll is known to +-" +
+                            degrees_text(0.5 * width) + " deg";
+    }
+  } else if (!phi.empty()) {
+    estimate.roll_limit = "the elbow was flexed at " + std::to_string(phi.size()) + " frames (need " +
+                          std::to_string(options.min_frames) + "): the roll is the nominal mounting's (+-" +
+                          degrees_text(options.nominal_roll_rms_rad) + " deg RMS)";
+  }
+  const Quat A_from_F = (A_from_B * Quat(Eigen::AngleAxisd(psi, Vec3::UnitY()))).normalized();
+  estimate.F_from_A = A_from_F.conjugate();
+  return estimate;
+}
+
+}  // namespace posefuse::forearm

@@ -1,0 +1,17 @@
+#include "forearm/orientation_uncertainty.hpp"
+
+#include <cmath>
+
+namespace posefuse::forearm {
+
+double orientation_rms_rad(double axis_rms_rad, double roll_rms_rad, double filter_rms_rad) {
+  return std::sqrt(axis_rms_rad * axis_rms_rad + roll_rms_rad * roll_rms_rad + filter_rms_rad * filter_rms_rad);
+}
+
+double confidence_from_rms_rad(double rms_rad) {
+  if (!(rms_rad >= 0.0)) return 0.0;
+  const double bound_ratio = kBound99OverRms * rms_rad / kConfidentErrorBoundRad;
+  return std::exp2(-bound_ratio * bound_ratio);
+}
+
+}  // namespace posefuse::forearm

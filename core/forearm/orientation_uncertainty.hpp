@@ -1,0 +1,25 @@
+#pragma once
+// A forearm orientation's uncertainty and the confidence derived from it (docs/forearm.md
+// "Uncertainty and confidence").
+//
+// The uncertainty is the predicted RMS angle of the orientation's error: the mounting's axis and
+// roll RMS and the orientation filter's, as independent errors. The confidence is 0.5 where the
+// error's 99 % bound reaches kConfidentErrorBoundRad: for an isotropic 3-D error of RMS angle u
+// that bound is 1.944 u (the chi distribution with 3 degrees of freedom), so a sample with
+// confidence >= 0.5 is predicted within 15 degrees at least 99 % of the time.
+namespace posefuse::forearm {
+
+inline constexpr double kConfidentErrorBoundRad = 15.0 * 3.14159265358979323846 / 180.0;
+inline constexpr double kBound99OverRms = 1.944;
+// The causal orientation filter's held-out RMS error on BROAD (docs/benchmarks.md "IMU
+// orientation on BROAD", leave-one-trial-out: 1.92 degrees).
+inline constexpr double kFilterRmsRad = 1.92 * 3.14159265358979323846 / 180.0;
+
+// sqrt(axis^2 + roll^2 + filter^2), rad.
+double orientation_rms_rad(double axis_rms_rad, double roll_rms_rad, double filter_rms_rad = kFilterRmsRad);
+
+// 2^-((1.944 u / 15 deg)^2): 1 at u = 0, 0.5 where the 99 % bound is 15 degrees, falling fast
+// beyond. NaN or negative u gives 0.
+double confidence_from_rms_rad(double rms_rad);
+
+}  // namespace posefuse::forearm
