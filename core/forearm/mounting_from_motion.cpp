@@ -2,8 +2,10 @@
 
 #include <algorithm>
 #include <cmath>
-#include <cstdio>
 #include <numbers>
+
+#include "common/number_text.hpp"
+#include "common/percentile.hpp"
 
 namespace posefuse::forearm {
 
@@ -14,12 +16,6 @@ constexpr double kPi = std::numbers::pi;
 double wrap(double angle) { return std::remainder(angle, 2.0 * kPi); }
 
 double deg(double rad) { return rad * 180.0 / kPi; }
-
-std::string fixed_text(double value, int decimals) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.*f", decimals, value);
-  return text;
-}
 
 std::string degrees_text(double rad) { return fixed_text(deg(rad), 0); }
 
@@ -38,14 +34,6 @@ double effective_count(const std::vector<Eigen::Vector2d>& residuals) {
   }
   const double rho = lag0 > 0.0 ? std::clamp(lag1 / lag0, 0.0, 0.99) : 0.0;
   return std::max(1.0, static_cast<double>(n) * (1.0 - rho) / (1.0 + rho));
-}
-
-double percentile(std::vector<double> values, double p) {
-  std::sort(values.begin(), values.end());
-  const double at = p * static_cast<double>(values.size() - 1);
-  const auto i = static_cast<std::size_t>(std::floor(at));
-  const std::size_t j = std::min(i + 1, values.size() - 1);
-  return values[i] + (at - static_cast<double>(i)) * (values[j] - values[i]);
 }
 
 // The middle of the shortest arc holding every angle: opposite the widest gap between them.
@@ -96,10 +84,12 @@ std::optional<MountingEstimate> estimate_mounting(const std::vector<MountingFram
     return std::nullopt;
   }
 
-  // The axis in A.
+  // The axis in A: each frame's forearm direction turned into A.
+  std::vector<Vec3> axis_A;
   Vec3 sum_A = Vec3::Zero(), sum_K = Vec3::Zero();
   for (const MountingFrame& f : frames) {
-    sum_A += f.K_from_A.normalized().conjugate() * f.forearm_K.normalized();
+    axis_A.push_back(f.K_from_A.normalized().conjugate() * f.forearm_K.normalized());
+    sum_A += axis_A.back();
     sum_K += f.forearm_K.normalized();
   }
   const double n = static_cast<double>(frames.size());
@@ -113,11 +103,10 @@ std::optional<MountingEstimate> estimate_mounting(const std::vector<MountingFram
   std::vector<Eigen::Vector2d> residuals;
   double residual_sq = 0.0, spread_sq = 0.0;
   const Vec3 mean_K = sum_K.normalized();
-  for (const MountingFrame& f : frames) {
-    const Vec3 a = f.K_from_A.normalized().conjugate() * f.forearm_K.normalized();
-    residuals.emplace_back(a.dot(e1), a.dot(e2));
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    residuals.emplace_back(axis_A[i].dot(e1), axis_A[i].dot(e2));
     residual_sq += residuals.back().squaredNorm();
-    const double turned = std::acos(std::clamp(mean_K.dot(f.forearm_K.normalized()), -1.0, 1.0));
+    const double turned = std::acos(std::clamp(mean_K.dot(frames[i].forearm_K.normalized()), -1.0, 1.0));
     spread_sq += turned * turned;
   }
   const double residual_rms = std::sqrt(residual_sq / n);
@@ -157,6 +146,7 @@ std::optional<MountingEstimate> estimate_mounting(const std::vector<MountingFram
       deviation.push_back(wrap(phi[i] - centre));
       if (i > 0) step.push_back(wrap(phi[i] - phi[i - 1]));
     }
+    std::sort(deviation.begin(), deviation.end());
     const double low = percentile(deviation, 0.025), high = percentile(deviation, 0.975);
     // Frame-to-frame noise widens the seen span; the forearm turned at least the span less it.
     double step_sq = 0.0;

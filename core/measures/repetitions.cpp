@@ -1,4 +1,5 @@
 #include "measures/repetitions.hpp"
+#include "common/percentile.hpp"
 
 #include <algorithm>
 #include <charconv>
@@ -265,15 +266,6 @@ std::vector<double> sorted_finite(const std::vector<double>& series) {
   }
   std::sort(finite.begin(), finite.end());
   return finite;
-}
-
-// Linear interpolation between the closest ranks of `sorted` (p in [0, 1]).
-double percentile(const std::vector<double>& sorted, double p) {
-  const double position = p * static_cast<double>(sorted.size() - 1);
-  const auto below = static_cast<std::size_t>(std::floor(position));
-  const std::size_t above = std::min(below + 1, sorted.size() - 1);
-  const double fraction = position - static_cast<double>(below);
-  return sorted[below] + fraction * (sorted[above] - sorted[below]);
 }
 
 // The middle of the series' range of motion, between its 5th and 95th percentiles (as

@@ -40,7 +40,7 @@ ArmAt arm_at(int i, Side side, double tau, double flexion) {
 std::vector<MountingFrame> frames_of(Side side, const Quat& F_from_A, int count, double twist_amplitude, double flexion,
                                      double noise_rad = 0.0, unsigned seed = 1) {
   std::mt19937 rng(seed);
-  std::normal_distribution<double> normal(0.0, noise_rad);
+  std::normal_distribution<double> normal(0.0, noise_rad > 0 ? noise_rad : 1.0);  // drawn only with noise
   std::vector<MountingFrame> frames;
   for (int i = 0; i < count; ++i) {
     const double tau = twist_amplitude * std::sin(2 * kPi * i / 150.0);
