@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Paper 1's calibration (forearm/arm_calibration.hpp) on simulated sessions: per session and arm,
 # the hold taken (frames, eq. 9 spread, upper arm d_ul) or the reason it was refused, and the
-# forearm orientation error of what the stage streamed (posefuse-score, deg RMS / max).
+# forearm orientation error of what the stage streamed (posefuse-score, deg RMS / max; for a
+# refused hold, of the mounting from motion the stage falls back to).
 #   bench/calibration_refusals.sh [BUILD_DIR] [MOTION:SEED:SPEED ...]
 # Default sessions: seeds 41-43 (used to choose nothing) of the calibration pose and paper 1's
 # protocol at speeds 0.8 and 1.2, and exercises without the pose (arm_raising, shoulder_lift,
@@ -36,7 +37,10 @@ errors = {}
 for line in open(score):
     m = re.match(r"forearm_orientations/imu_(left|right)\.csv\s+\S+\s+\d+\s+([\d.]+)\s+([\d.]+)", line)
     if m: errors[m.group(1).upper()] = f"{float(m.group(2)):.1f}/{float(m.group(3)):.1f}"
-calibrated = {f["arm"]: f for f in json.load(open(out + "/calibration.json")).get("forearms", [])}
+calibrated = {f["arm"]: f for f in json.load(open(out + "/calibration.json")).get("forearms", [])
+              if f.get("mounting_source", "CALIBRATION_POSE") == "CALIBRATION_POSE"}
+from_motion = {f["arm"] for f in json.load(open(out + "/calibration.json")).get("forearms", [])
+               if f.get("mounting_source") == "MOTION"}
 refusals = {}
 for line in open(out + "/warnings.txt"):
     m = re.match(r"warning \[FOREARM_CALIBRATION\] forearm\[imu_(left|right)\]\.calibration: .*? s: frames: (.*?) \(\d+ tracked", line)
@@ -48,6 +52,7 @@ for arm in ("LEFT", "RIGHT"):
                 f"upper arm {100 * f['d_ul_m']:.1f} cm")
     else:
         what = refusals.get(arm, "no calibration")
+        if arm in from_motion: what += " (mounting from motion: bench/forearm_anywhere.sh)"
     print(f"{name:26s} {arm:5s} {errors.get(arm, '-'):9s} {what}")
 PY
 done

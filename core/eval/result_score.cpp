@@ -9,6 +9,7 @@
 
 #include "common/error.hpp"
 #include "eval/orientation_error.hpp"
+#include "forearm/orientation_uncertainty.hpp"
 #include "measures/joint_angles.hpp"
 #include "measures/repetitions.hpp"
 #include "session/result_files.hpp"
@@ -21,6 +22,10 @@ namespace {
 namespace fs = std::filesystem;
 namespace layout = session::result_layout;
 constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
+// A confident forearm orientation (forearm/orientation_uncertainty.hpp): confidence >= 0.5 means
+// predicted within 15 degrees.
+constexpr double kConfidentAt = 0.5;
+constexpr double kConfidentBoundDeg = forearm::kConfidentErrorBoundRad * kDegPerRad;
 
 // Index of the element of sorted `times` nearest to t, if within the tolerance.
 std::optional<std::size_t> nearest(const std::vector<std::int64_t>& times, std::int64_t t, std::int64_t tolerance_us) {
@@ -56,13 +61,36 @@ void require_truth(const session::ResultDirectory& truth, const std::string& fil
   }
 }
 
+// A row's confidence and predicted error, where its file has them.
+std::optional<double> confidence_of(const session::TimedOrientation& r) { return r.confidence; }
+std::optional<double> confidence_of(const session::ForearmRow& r) { return r.confidence; }
+std::optional<double> uncertainty_of(const session::TimedOrientation& r) { return r.uncertainty_rad; }
+std::optional<double> uncertainty_of(const session::ForearmRow&) { return std::nullopt; }
+
+template <typename Row>
+void score_confidence(const Row& r, double error_deg, std::int64_t first_t_us, AngleScore& score,
+                      std::vector<double>& confident_errors) {
+  if (const std::optional<double> confidence = confidence_of(r)) {
+    ++score.with_confidence;
+    if (*confidence >= kConfidentAt) {
+      confident_errors.push_back(error_deg);
+      score.confident_beyond_15_deg += error_deg > kConfidentBoundDeg;
+      if (!score.first_confident_s) score.first_confident_s = 1e-6 * static_cast<double>(r.t_us - first_t_us);
+    }
+  }
+  if (const std::optional<double> u = uncertainty_of(r)) {
+    ++score.with_uncertainty;
+    score.within_predicted_bound += error_deg <= forearm::kBound99OverRms * *u * kDegPerRad;
+  }
+}
+
 // Scores one orientation stream: result rows against truth rows matched in time.
 template <typename Row, typename GetQuat>
 AngleScore score_angles(const std::string& stream, const std::string& key, const std::vector<Row>& result,
                         const std::vector<Row>& truth, GetQuat quat_of, bool heading, const ScoreOptions& options) {
   std::vector<std::int64_t> truth_times, result_times;
   for (const Row& r : truth) truth_times.push_back(r.t_us);
-  std::vector<double> errors, heading_errors;
+  std::vector<double> errors, heading_errors, confident_errors;
   AngleScore score{stream, key, {}, {}, 0};
   for (const Row& r : result) {
     result_times.push_back(r.t_us);
@@ -73,10 +101,12 @@ AngleScore score_angles(const std::string& stream, const std::string& key, const
     }
     errors.push_back(paper_orientation_error_deg(quat_of(r), quat_of(truth[*i])));
     if (heading) heading_errors.push_back(orientation_error(quat_of(r), quat_of(truth[*i])).heading_rad * kDegPerRad);
+    score_confidence(r, errors.back(), result.front().t_us, score, confident_errors);
   }
   if (!result.empty() && errors.empty()) throw_unmatched(stream + " (" + key + ")", result_times, truth_times, options);
   score.deg = summarize_errors(errors);
   score.heading_deg = summarize_errors(heading_errors);
+  score.confident_deg = summarize_errors(confident_errors);
   return score;
 }
 
@@ -439,6 +469,7 @@ class Table {
  public:
   explicit Table(std::vector<std::string> header) { rows_.push_back(std::move(header)); }
   void add(std::vector<std::string> row) { rows_.push_back(std::move(row)); }
+  std::size_t rows() const { return rows_.size() - 1; }
   std::string str() const {
     std::vector<std::size_t> width(rows_.front().size(), 0);
     for (const auto& row : rows_) {
@@ -554,6 +585,19 @@ std::string format_score_report(const ScoreReport& report) {
              s.heading_deg.count ? fixed(s.heading_deg.rms, 2) : "", std::to_string(s.unmatched)});
     }
     out << t.str() << "\n";
+    Table c({"stream", "key", "n", "confident", "confident RMS", "confident max", "confident > 15", "within 99 % bound",
+             "first confident (s)"});
+    for (const auto& s : report.orientations) {
+      if (!s.with_confidence) continue;
+      c.add({s.stream, s.key, std::to_string(s.with_confidence), std::to_string(s.confident_deg.count),
+             s.confident_deg.count ? fixed(s.confident_deg.rms, 2) : "-",
+             s.confident_deg.count ? fixed(s.confident_deg.max, 2) : "-", std::to_string(s.confident_beyond_15_deg),
+             s.with_uncertainty ? std::to_string(s.within_predicted_bound) + "/" + std::to_string(s.with_uncertainty)
+                                : "-",
+             s.first_confident_s ? fixed(*s.first_confident_s, 1) : "never"});
+    }
+    if (c.rows() > 0)
+      out << "Confidence of the forearm orientations (confident: >= 0.5, predicted within 15 deg)\n" << c.str() << "\n";
   }
   if (!report.positions.empty()) {
     out << "IMU position error (m)\n";

@@ -44,6 +44,15 @@ struct AngleScore {
   ErrorSummary deg;          // eqs. 14-15
   ErrorSummary heading_deg;  // imu_orientations only (count 0 otherwise)
   std::size_t unmatched = 0;
+  // Rows that carry a confidence (forearm orientations): those with confidence >= 0.5 and their
+  // errors, how many of them are beyond 15 degrees, the rows whose error lies within the 99 %
+  // bound of their predicted RMS (forearm/orientation_uncertainty.hpp) out of those with one,
+  // and the seconds from the first row to the first confident one.
+  std::size_t with_confidence = 0;
+  ErrorSummary confident_deg;
+  std::size_t confident_beyond_15_deg = 0;
+  std::size_t with_uncertainty = 0, within_predicted_bound = 0;
+  std::optional<double> first_confident_s;
 };
 
 struct PositionScore {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "common/error.hpp"
 #include "forearm/forearm_model.hpp"
@@ -23,8 +24,23 @@ std::int64_t microseconds(double seconds) { return static_cast<std::int64_t>(std
 }  // namespace
 
 ForearmTrack::ForearmTrack(Side side, const ForearmModel& model, bool has_model, const Quat& K_from_W,
-                           const Quat& K_from_F_reference)
-    : side_(side), model_(model), has_model_(has_model), K_from_W_(K_from_W), K_from_F_reference_(K_from_F_reference) {}
+                           const std::optional<Quat>& K_from_F_reference, double orientation_rms_rad)
+    : side_(side),
+      model_(model),
+      has_model_(has_model),
+      K_from_W_(K_from_W),
+      K_from_F_reference_(K_from_F_reference),
+      orientation_rms_rad_(orientation_rms_rad) {}
+
+void ForearmTrack::set_mounting(const Quat& F_from_A, double orientation_rms_rad) {
+  model_.F_from_A = F_from_A.normalized();
+  orientation_rms_rad_ = orientation_rms_rad;
+}
+
+double ForearmTrack::pronation(const Quat& K_from_F) const {
+  if (!K_from_F_reference_) return std::numeric_limits<double>::quiet_NaN();
+  return pronation_angle(*K_from_F_reference_, K_from_F, side_);
+}
 
 void ForearmTrack::use_axis_correction(const VisualAxisCorrectionOptions& options) {
   if (!arm_.empty())
@@ -48,11 +64,15 @@ std::optional<std::int64_t> ForearmTrack::oldest_queued_us() const {
 void ForearmTrack::add_imu(const std::vector<std::int64_t>& t_us, const std::vector<Quat>& W_from_A,
                            const std::vector<Vec3>& specific_force_A) {
   for (std::size_t i = 0; i < t_us.size(); ++i) {
-    if (!arm_.empty() && t_us[i] <= arm_.back().t_us) continue;  // clock mapping kept monotonic
-    const ForearmSample s = forearm_sample(K_from_W_, W_from_A[i], model_.F_from_A, K_from_F_reference_, side_);
-    arm_.push_back({t_us[i], s.K_from_A, specific_force_A[i]});
-    K_from_F_imu_.push_back(K_from_F_imu_.empty() ? s.K_from_F
-                                                  : geometry::same_hemisphere(s.K_from_F, K_from_F_imu_.back()));
+    if (!arm_.empty() && t_us[i] <= arm_.back().t_us) continue;                        // clock mapping kept monotonic
+    const Quat K_from_A = (K_from_W_ * W_from_A[i]).normalized();                      // eq. 11
+    const Quat K_from_F = K_from_F_from_imu(K_from_W_, W_from_A[i], model_.F_from_A);  // eq. 11
+    arm_.push_back({t_us[i], K_from_A, specific_force_A[i]});
+    K_from_A_imu_.push_back(K_from_A_imu_.empty() ? K_from_A
+                                                  : geometry::same_hemisphere(K_from_A, K_from_A_imu_.back()));
+    K_from_F_imu_.push_back(K_from_F_imu_.empty() ? K_from_F
+                                                  : geometry::same_hemisphere(K_from_F, K_from_F_imu_.back()));
+    orientation_rms_rad_of_.push_back(orientation_rms_rad_);
   }
 }
 
@@ -67,7 +87,7 @@ void ForearmTrack::settle_orientations_up_to(std::int64_t t_us) {
 void ForearmTrack::take_settled(std::vector<SettledArmSample>& out) {
   for (; settled_taken_ < K_from_F_.size(); ++settled_taken_) {
     const Quat& K_from_F = K_from_F_[settled_taken_];
-    out.push_back({arm_[settled_taken_], K_from_F, pronation_angle(K_from_F_reference_, K_from_F, side_)});
+    out.push_back({arm_[settled_taken_], K_from_F, pronation(K_from_F), orientation_rms_rad_of_[settled_taken_]});
   }
 }
 
@@ -170,8 +190,12 @@ ForearmTrack::Confirmation ForearmTrack::confirm_detection(bool all, std::int64_
 }
 
 TrackedArmFrame ForearmTrack::track_frame(const ArmFrame& frame, const TrackSample& sample) {
-  TrackedArmFrame tracked{frame, sample, K_from_F_at(frame.t_us), 0.0};
-  tracked.pronation_rad = pronation_angle(K_from_F_reference_, tracked.K_from_F, side_);
+  TrackedArmFrame tracked{frame, sample, K_from_F_at(frame.t_us), 0.0, 0.0, Quat::Identity()};
+  tracked.pronation_rad = pronation(tracked.K_from_F);
+  tracked.K_from_A = slerp_at(frame.t_us, [this](std::size_t i) { return K_from_A_imu_[i]; });
+  const std::size_t i = index_at_or_before(arm_, frame.t_us);
+  const std::size_t before = i == kNoIndex ? 0 : i, after = std::min(before + 1, arm_.size() - 1);
+  tracked.orientation_rms_rad = std::max(orientation_rms_rad_of_[before], orientation_rms_rad_of_[after]);
   if (track_.empty() || frame.t_us > track_.back().t_us) track_.push_back(sample);
   if (sample.visible) {
     ++visible_frames_;

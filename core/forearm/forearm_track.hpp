@@ -37,8 +37,8 @@ struct ArmFrame {
   bool sdk_elbow_seen = false;
   Quat K_from_wrist_sdk = Quat(0, 0, 0, 0);  // zero when the SDK gave none
   std::optional<Vec3> strap_K;               // strap seen (II-I)
-  // Upper arm direction (shoulder -> elbow) measured in depth, calibration frames only
-  // (upper_arm_depth.hpp).
+  // Upper arm direction (shoulder -> elbow) measured in depth (upper_arm_depth.hpp), while the
+  // arm's mounting is still being estimated (calibration pose or motion).
   std::optional<Vec3> upper_arm_direction_K;
 };
 
@@ -46,7 +46,9 @@ struct ArmFrame {
 struct SettledArmSample {
   ArmSample sample;  // K_from_A as the gaps integrate it (axis-corrected)
   Quat K_from_F = Quat::Identity();
-  double pronation_rad = 0.0;
+  double pronation_rad = 0.0;  // NaN without the calibration pose (no reference)
+  // Predicted RMS angle of K_from_F's error (orientation_uncertainty.hpp).
+  double orientation_rms_rad = 0.0;
 };
 
 // A camera frame once tracked: the strap's IMU position when visible, and the forearm
@@ -55,7 +57,9 @@ struct TrackedArmFrame {
   ArmFrame frame;
   TrackSample visual;  // visual.visible: the strap position passed every test
   Quat K_from_F = Quat::Identity();
-  double pronation_rad = 0.0;
+  double pronation_rad = 0.0;        // NaN without the calibration pose (no reference)
+  double orientation_rms_rad = 0.0;  // the larger of the two samples' around the frame
+  Quat K_from_A = Quat::Identity();  // eq. 11 at the frame's time, before any axis correction
 };
 
 struct ForearmTrackOutput {
@@ -66,9 +70,15 @@ struct ForearmTrackOutput {
 class ForearmTrack {
  public:
   // `has_model` false: the strap was never seen in the calibration, so r and d_se are unknown
-  // and no frame is visible (orientations only).
+  // and no frame is visible (orientations only). K_from_F_reference: the forearm in the
+  // calibration pose, the zero of the pronation angle; none (a mounting from motion): the
+  // pronation angle is NaN. orientation_rms_rad: the predicted RMS error of every K_from_F.
   ForearmTrack(Side side, const ForearmModel& model, bool has_model, const Quat& K_from_W,
-               const Quat& K_from_F_reference);
+               const std::optional<Quat>& K_from_F_reference, double orientation_rms_rad);
+
+  // A refined mounting (from motion) for the IMU samples added from now on; those before keep
+  // theirs, each sample carrying the RMS error it was made with.
+  void set_mounting(const Quat& F_from_A, double orientation_rms_rad);
 
   // Turn every K_from_F (and the K_from_A the gaps integrate with) towards the depth-measured
   // forearm axis of the visible frames; call before the first IMU sample. The orientations then
@@ -106,6 +116,7 @@ class ForearmTrack {
   Quat K_from_F_sample(std::size_t i) const;
   Quat K_from_F_at(std::int64_t t_us) const;
   Quat K_from_F_imu_at(std::int64_t t_us) const;
+  double pronation(const Quat& K_from_F) const;
   template <class SampleAt>
   Quat slerp_at(std::int64_t t_us, const SampleAt& sample_at) const;
   void settle_orientations_up_to(std::int64_t t_us);
@@ -115,13 +126,16 @@ class ForearmTrack {
   ForearmModel model_;
   bool has_model_;
   Quat K_from_W_;
-  Quat K_from_F_reference_;
+  std::optional<Quat> K_from_F_reference_;
+  double orientation_rms_rad_;
 
   // Every IMU sample; K_from_A is eq. 11's until the sample is settled, then corrected.
   std::vector<ArmSample> arm_;
-  std::vector<Quat> K_from_F_imu_;  // eq. 11, before the axis correction
-  std::vector<Quat> K_from_F_;      // settled (corrected), one per settled sample
-  std::size_t settled_taken_ = 0;   // of K_from_F_, returned by process()
+  std::vector<Quat> K_from_F_imu_;              // eq. 11, before the axis correction
+  std::vector<Quat> K_from_A_imu_;              // eq. 11, before the axis correction
+  std::vector<double> orientation_rms_rad_of_;  // per sample
+  std::vector<Quat> K_from_F_;                  // settled (corrected), one per settled sample
+  std::size_t settled_taken_ = 0;               // of K_from_F_, returned by process()
   std::optional<VisualAxisCorrection> axis_correction_;
   std::vector<TrackSample> track_;
   std::deque<ArmFrame> frames_;  // queued, not yet tracked

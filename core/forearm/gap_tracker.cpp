@@ -65,7 +65,8 @@ ArmFrameEstimate GapTracker::add_frame(const TrackedArmFrame& tracked) {
   const ArmFrame& frame = tracked.frame;
   const TrackSample& sample = tracked.visual;
   const Quat& K_from_F = tracked.K_from_F;
-  ArmFrameEstimate estimate{frame.t_us, K_from_F, tracked.pronation_rad, Vec3::Zero(), PositionSource::kNone};
+  ArmFrameEstimate estimate{
+      frame.t_us, K_from_F, tracked.pronation_rad, Vec3::Zero(), PositionSource::kNone, tracked.orientation_rms_rad};
   if (track_.empty() || frame.t_us > track_.back().t_us) track_.push_back(sample);
   if (frame.shoulder_tracked && (shoulder_.empty() || frame.t_us > shoulder_.back().t_us)) {
     shoulder_.push_back({frame.t_us, frame.shoulder_K});

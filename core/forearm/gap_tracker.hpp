@@ -57,9 +57,10 @@ enum class PositionSource { kNone, kVisual, kPredicted };
 struct ArmFrameEstimate {
   std::int64_t t_us = 0;
   Quat K_from_F = Quat::Identity();
-  double pronation_rad = 0.0;
+  double pronation_rad = 0.0;  // NaN without the calibration pose
   Vec3 imu_K = Vec3::Zero();
   PositionSource source = PositionSource::kNone;
+  double orientation_rms_rad = 0.0;  // K_from_F's predicted RMS error (orientation_uncertainty.hpp)
 };
 
 // A gap's recovered trajectory, one sample per recovered time.

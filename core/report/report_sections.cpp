@@ -179,6 +179,11 @@ std::string calibration_table(const session::ResultDirectory& results) {
     std::string text;
     if (!m.estimated()) {
       text = "not calibrated: no forearm orientation or pronation for this arm (warnings say why)";
+    } else if (m.mounting_source() == v1::ForearmModel::MOTION) {
+      text = "no calibration pose: IMU mounting estimated from " + std::to_string(m.mounting_frames()) +
+             " frames of the session's motion, forearm orientation predicted within " +
+             fixed(m.orientation_uncertainty_rad() * 180.0 / M_PI, 1) + " deg RMS (" + m.roll_limit() +
+             "); no pronation relative to the calibration pose";
     } else {
       text = "calibration hold of " + std::to_string(m.calibration_frames()) + " frames, spread " +
              fixed(m.a_from_f_spread_rad() * 180.0 / M_PI, 1) + " deg; upper arm " + cm(m.d_ul_m()) +

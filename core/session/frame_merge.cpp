@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "forearm/orientation_uncertainty.hpp"
+
 namespace posefuse::session {
 
 namespace {
@@ -48,7 +50,8 @@ FrameEstimate merge_frame(const FrameParts& parts) {
   }
   for (const FrameParts::Arm& arm : parts.arms) {
     const forearm::ArmFrameEstimate& e = arm.estimate;
-    merged.forearms.push_back({arm.arm, e.K_from_F, e.pronation_rad, v1::FUSED, 1.0});
+    merged.forearms.push_back(
+        {arm.arm, e.K_from_F, e.pronation_rad, v1::FUSED, forearm::confidence_from_rms_rad(e.orientation_rms_rad)});
     const auto recovered = std::find_if(parts.recovered.begin(), parts.recovered.end(),
                                         [&](const FrameParts::Recovered& r) { return r.device_id == arm.device_id; });
     if (e.source == forearm::PositionSource::kVisual) {

@@ -7,7 +7,8 @@
 //  - each arm's forearm orientation and pronation: the forearm stage's (paper 1 eq. 11, from the
 //    IMU) wherever it tracks the arm; the fit's copy, the same IMU orientation turned onto the
 //    fitted forearm, was 1-4.6 deg worse on the body render's protocol (docs/forearm.md). The
-//    fit's only for an arm the forearm stage does not track;
+//    fit's only for an arm the forearm stage does not track. The forearm stage's confidence is
+//    its predicted error's (forearm/orientation_uncertainty.hpp);
 //  - each arm IMU's position: VISUAL (the strap seen, eq. 10) where the forearm stage has it,
 //    else RECOVERED where a gap's smoother trajectory covering the frame has arrived, else the
 //    live PREDICTED estimate, else none.

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "forearm/orientation_uncertainty.hpp"
 #include "session/stages/proto_values.hpp"
 
 namespace posefuse::session {
@@ -27,6 +28,8 @@ void encode(const ForearmOrientations& value, v1::FitResult& result) {
     batch.add_t_us(value.t_us[i]);
     for (const double v : geometry::to_wxyz(value.K_from_F[i])) batch.add_k_from_f(v);
     batch.add_pronation_rad(value.pronation_rad[i]);
+    batch.add_uncertainty_rad(value.orientation_rms_rad[i]);
+    batch.add_confidence(forearm::confidence_from_rms_rad(value.orientation_rms_rad[i]));
   }
 }
 

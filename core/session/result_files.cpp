@@ -82,10 +82,13 @@ void ResultFiles::write_orientations(const v1::ImuOrientationBatch& batch) {
 
 void ResultFiles::write_forearm_orientations(const v1::ForearmOrientationBatch& batch) {
   require_device_id(batch.device_id(), "forearm_orientations.device_id");
-  if (batch.k_from_f_size() != 4 * batch.t_us_size() || batch.pronation_rad_size() != batch.t_us_size()) {
+  if (batch.k_from_f_size() != 4 * batch.t_us_size() || batch.pronation_rad_size() != batch.t_us_size() ||
+      batch.uncertainty_rad_size() != batch.t_us_size() || batch.confidence_size() != batch.t_us_size()) {
     throw Error(ErrorCode::kInvalidArgument, "forearm_orientations.K_from_F",
-                "has " + std::to_string(batch.k_from_f_size()) + " values and " +
-                    std::to_string(batch.pronation_rad_size()) + " angles for " + std::to_string(batch.t_us_size()) +
+                "has " + std::to_string(batch.k_from_f_size()) + " values, " +
+                    std::to_string(batch.pronation_rad_size()) + " angles, " +
+                    std::to_string(batch.uncertainty_rad_size()) + " uncertainties and " +
+                    std::to_string(batch.confidence_size()) + " confidences for " + std::to_string(batch.t_us_size()) +
                     " samples");
   }
   auto& csv = forearm_orientations_[batch.device_id()];
@@ -101,7 +104,8 @@ void ResultFiles::write_forearm_orientations(const v1::ForearmOrientationBatch& 
   for (int i = 0; i < batch.t_us_size(); ++i) {
     csv->row({std::to_string(batch.t_us(i)), format_double(batch.k_from_f(4 * i)),
               format_double(batch.k_from_f(4 * i + 1)), format_double(batch.k_from_f(4 * i + 2)),
-              format_double(batch.k_from_f(4 * i + 3)), format_double(batch.pronation_rad(i))});
+              format_double(batch.k_from_f(4 * i + 3)), format_double(batch.pronation_rad(i)),
+              format_double(batch.uncertainty_rad(i)), format_double(batch.confidence(i))});
   }
   forearm_samples_ += static_cast<std::uint64_t>(batch.t_us_size());
 }

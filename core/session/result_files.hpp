@@ -60,7 +60,11 @@ inline const std::vector<std::string> kRepetitionColumns = {
 // t_s, one column per angle, then one confidence column per angle.
 std::vector<std::string> joint_angle_columns();
 inline const std::vector<std::string> kOrientationColumns = {"t_us", "w", "x", "y", "z"};
-inline const std::vector<std::string> kForearmOrientationColumns = {"t_us", "w", "x", "y", "z", "pronation_rad"};
+inline const std::vector<std::string> kForearmOrientationColumns = {
+    "t_us", "w", "x", "y", "z", "pronation_rad", "uncertainty_rad", "confidence"};
+// forearm_orientations/<id>.csv as written before each sample carried its uncertainty; still read.
+inline const std::vector<std::string> kForearmOrientationColumnsWithoutUncertainty = {"t_us", "w", "x",
+                                                                                      "y",    "z", "pronation_rad"};
 inline const std::vector<std::string> kJointColumns = {"t_us", "joint", "joint_name", "x_m",
                                                        "y_m",  "z_m",   "source",     "confidence"};
 inline const std::vector<std::string> kJointRotationColumns = {"t_us", "joint", "joint_name", "w", "x", "y", "z"};

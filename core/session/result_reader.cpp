@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 #include <utility>
 
 #include "body/smpl_model.hpp"
@@ -31,6 +32,13 @@ class ResultCsv {
   double number(std::size_t c) const {
     const double v = parse_double(csv_.at(c), csv_.field(c));
     if (!std::isfinite(v)) throw_invalid(csv_.field(c), "is " + session::quoted(csv_.at(c)) + ", not a finite number");
+    return v;
+  }
+  // A finite number or "nan" (a value the method could not give, e.g. pronation without a
+  // calibration pose).
+  double number_or_nan(std::size_t c) const {
+    const double v = parse_double(csv_.at(c), csv_.field(c));
+    if (std::isinf(v)) throw_invalid(csv_.field(c), "is " + session::quoted(csv_.at(c)) + ", not a number or nan");
     return v;
   }
   geometry::Vec3 vec3(std::size_t c) const { return {number(c), number(c + 1), number(c + 2)}; }
@@ -74,15 +82,36 @@ class ResultCsv {
   CsvReader csv_;
 };
 
+// The header row a forearm orientation file starts with: today's, or the layout before each
+// sample carried its uncertainty.
+bool has_uncertainty_columns(const fs::path& path) {
+  std::ifstream in(path);
+  std::string header;
+  std::getline(in, header);
+  if (!header.empty() && header.back() == '\r') header.pop_back();
+  std::string older;
+  for (const std::string& c : result_layout::kForearmOrientationColumnsWithoutUncertainty)
+    older += (older.empty() ? "" : ",") + c;
+  return header != older;
+}
+
 std::vector<TimedOrientation> read_orientations(const fs::path& path, const std::string& name, bool forearm) {
-  ResultCsv csv(path, name, forearm ? result_layout::kForearmOrientationColumns : result_layout::kOrientationColumns);
+  const bool uncertainty = forearm && has_uncertainty_columns(path);
+  ResultCsv csv(path, name,
+                !forearm      ? result_layout::kOrientationColumns
+                : uncertainty ? result_layout::kForearmOrientationColumns
+                              : result_layout::kForearmOrientationColumnsWithoutUncertainty);
   std::vector<TimedOrientation> rows;
   std::int64_t previous = 0;
   while (csv.next()) {
     TimedOrientation row;
     row.t_us = csv.time_after(0, previous, rows.empty());
     row.q = csv.quat(1);
-    if (forearm) row.pronation_rad = csv.number(5);
+    if (forearm) row.pronation_rad = csv.number_or_nan(5);
+    if (uncertainty) {
+      row.uncertainty_rad = csv.number(6);
+      row.confidence = csv.number(7);
+    }
     rows.push_back(row);
   }
   return rows;
@@ -167,7 +196,7 @@ std::vector<ForearmRow> read_forearms(ResultDirectory& out) {
                                                          row.arm = csv.arm(1);
                                                          row.t_us = csv.int64(0);
                                                          row.K_from_F = csv.quat(2);
-                                                         row.pronation_rad = csv.number(6);
+                                                         row.pronation_rad = csv.number_or_nan(6);
                                                          row.source = csv.source(7);
                                                          row.confidence = csv.number(8);
                                                          return row;

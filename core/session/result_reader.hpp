@@ -30,7 +30,10 @@ namespace posefuse::session {
 struct TimedOrientation {
   std::int64_t t_us = 0;
   geometry::Quat q = geometry::Quat::Identity();  // W_from_A (imu_orientations) or K_from_F
-  double pronation_rad = 0.0;                     // forearm_orientations only
+  // forearm_orientations only: NaN without a calibration pose; the predicted error and its
+  // confidence, none in files written before they were.
+  double pronation_rad = 0.0;
+  std::optional<double> uncertainty_rad, confidence;
 };
 
 struct JointRow {

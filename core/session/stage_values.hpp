@@ -34,7 +34,8 @@ struct ForearmOrientations {
   v1::Arm arm = v1::ARM_UNSPECIFIED;
   std::vector<std::int64_t> t_us;
   std::vector<geometry::Quat> K_from_F;
-  std::vector<double> pronation_rad;
+  std::vector<double> pronation_rad;        // NaN without the calibration pose
+  std::vector<double> orientation_rms_rad;  // predicted RMS error (forearm/orientation_uncertainty.hpp)
 };
 
 // The forearm stage's decision on one arm IMU once its calibration is over: tracked (with the
@@ -58,6 +59,19 @@ struct ArmTrack {
   std::vector<forearm::SettledArmSample> samples;
   std::vector<forearm::TrackedArmFrame> frames;
 };
+
+// The orientations of one arm's settled samples, as the forearm stage hands them on.
+inline ForearmOrientations forearm_orientations_of(const std::string& device_id, v1::Arm arm,
+                                                   const std::vector<forearm::SettledArmSample>& samples) {
+  ForearmOrientations out{device_id, arm, {}, {}, {}, {}};
+  for (const forearm::SettledArmSample& s : samples) {
+    out.t_us.push_back(s.sample.t_us);
+    out.K_from_F.push_back(s.K_from_F);
+    out.pronation_rad.push_back(s.pronation_rad);
+    out.orientation_rms_rad.push_back(s.orientation_rms_rad);
+  }
+  return out;
+}
 
 // Estimates as the client receives them in a FrameResult (results.proto), typed.
 struct JointEstimate {

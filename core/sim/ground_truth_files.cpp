@@ -209,6 +209,8 @@ void write_ground_truth(const SimTruth& truth, const std::filesystem::path& dire
       const Quat& q = device.K_from_F[i];
       for (double c : {q.w(), q.x(), q.y(), q.z()}) forearm.add_k_from_f(c);
       forearm.add_pronation_rad(device.pronation_rad[i]);
+      forearm.add_uncertainty_rad(0.0);  // the truth
+      forearm.add_confidence(1.0);
     }
     files.write_forearm_orientations(forearm);
   }

@@ -147,6 +147,8 @@ TEST_F(ClientTest, ForearmResultsGoToCsvFiles) {
     batch.add_t_us(1000 + 12500 * i);
     for (const double v : {1.0, 0.0, 0.0, 0.0}) batch.add_k_from_f(v);
     batch.add_pronation_rad(0.1 * i);
+    batch.add_uncertainty_rad(0.05);
+    batch.add_confidence(0.9);
   }
   writer.write(orientations);
   v1::FitResult frame;

@@ -68,6 +68,8 @@ inline void write_fixture(const std::filesystem::path& dir, const FixtureSpec& s
       forearm.add_t_us(spec.t0_us + dt_us);
       for (const double c : geometry::to_wxyz(fixture_K_from_F(t) * turn)) forearm.add_k_from_f(c);
       forearm.add_pronation_rad(0.1);
+      forearm.add_uncertainty_rad(0.05);
+      forearm.add_confidence(0.9);
     }
     files.write_orientations(orientations);
     files.write_forearm_orientations(forearm);

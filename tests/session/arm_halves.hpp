@@ -9,6 +9,7 @@
 
 #include "forearm/forearm_track.hpp"
 #include "forearm/gap_tracker.hpp"
+#include "forearm/orientation_uncertainty.hpp"
 #include "session/frame_merge.hpp"
 #include "session/pipeline_stage.hpp"
 
@@ -21,7 +22,7 @@ class ArmHalves {
             const forearm::GapSmootherOptions& smoother = {}, double live_elbow_time_constant_s = 0.05)
       : device_id_(std::move(device_id)),
         arm_(side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT),
-        track_(side, model, has_model, K_from_W, K_from_F_reference),
+        track_(side, model, has_model, K_from_W, K_from_F_reference, forearm::kPoseCalibrationRmsRad),
         gaps_(device_id_, model, has_model, K_from_W, smoother, live_elbow_time_constant_s) {}
 
   void use_axis_correction(const forearm::VisualAxisCorrectionOptions& options) { track_.use_axis_correction(options); }
@@ -35,13 +36,7 @@ class ArmHalves {
   void process(bool all, StageOutput& out) {
     forearm::ForearmTrackOutput tracked = track_.process(all);
     if (!tracked.samples.empty()) {
-      ForearmOrientations orientations{device_id_, arm_, {}, {}, {}};
-      for (const forearm::SettledArmSample& s : tracked.samples) {
-        orientations.t_us.push_back(s.sample.t_us);
-        orientations.K_from_F.push_back(s.K_from_F);
-        orientations.pronation_rad.push_back(s.pronation_rad);
-      }
-      out.hand_on(std::move(orientations));
+      out.hand_on(forearm_orientations_of(device_id_, arm_, tracked.samples));
     }
     gaps_.add_samples(tracked.samples);
     for (const forearm::TrackedArmFrame& frame : tracked.frames) {

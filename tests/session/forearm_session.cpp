@@ -10,6 +10,7 @@
 
 #include "../forearm/synthetic_images.hpp"
 #include "forearm/forearm_orientation.hpp"
+#include "forearm/orientation_uncertainty.hpp"
 #include "geometry/rotation_matrix.hpp"
 #include "session/image_codec.hpp"
 #include "session/text_fields.hpp"
@@ -36,8 +37,9 @@ sim::ScriptedMotion arm_motion(const ForearmSessionOptions& o) {
   sim::ScriptedMotion m;
   m.duration_s = o.duration_s;
   const double hold = o.hold_s;
-  m.angles = [hold](double t) {
+  m.angles = [hold, extension = o.elbow_extension_rad](double t) {
     sim::ArmAngles a = sim::calibration_pose_angles();
+    a.elbow_flexion_rad -= extension;
     const double u = t - hold;
     const double s = smooth_ramp(u / 1.0);
     a.shoulder_abduction_rad += s * -0.5 * std::sin(2 * pi * 0.35 * u);
@@ -240,7 +242,19 @@ ForearmSessionErrors evaluate_forearm_results(const ForearmSessionTruth& truth,
         e.orientation_max_rad = std::max(e.orientation_max_rad, angle);
         const double true_pronation =
             forearm::pronation_angle(truth.K_from_F_calibration, truth.K_from_F[k], forearm::Side::kRight);
-        e.pronation_max_rad = std::max(e.pronation_max_rad, std::abs(b.pronation_rad(i) - true_pronation));
+        if (std::isnan(b.pronation_rad(i))) {
+          ++e.pronation_nan;
+        } else {
+          e.pronation_max_rad = std::max(e.pronation_max_rad, std::abs(b.pronation_rad(i) - true_pronation));
+        }
+        if (i < b.confidence_size() && b.confidence(i) >= 0.5) {
+          ++e.confident_samples;
+          e.confident_beyond_15_deg += angle > forearm::kConfidentErrorBoundRad;
+          e.confident_max_rad = std::max(e.confident_max_rad, angle);
+        }
+        if (i < b.uncertainty_rad_size() && angle <= forearm::kBound99OverRms * b.uncertainty_rad(i)) {
+          ++e.within_predicted_bound;
+        }
         ++e.orientation_samples;
       }
     } else if (result.has_frame()) {

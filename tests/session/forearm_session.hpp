@@ -20,7 +20,10 @@ namespace posefuse::session::testing {
 
 struct ForearmSessionOptions {
   double duration_s = 9.0;
-  double hold_s = 3.0;             // calibration pose from t = 0 (camera clock)
+  double hold_s = 3.0;  // calibration pose from t = 0 (camera clock)
+  // The whole motion with the elbow this much straighter: 0.9 rad lowers the hold's forearm to
+  // 52 degrees from up, which is no calibration pose (paper 1 Fig. 3b: within 45 degrees).
+  double elbow_extension_rad = 0.0;
   double occlusion_begin_s = 5.5;  // strap hidden and elbow/wrist INFERRED in [begin, end)
   double occlusion_end_s = 6.4;
   bool strap_drawn = true;       // false: the strap is never seen
@@ -67,6 +70,11 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
 struct ForearmSessionErrors {
   std::size_t orientation_samples = 0;
   double orientation_rms_rad = 0.0, orientation_max_rad = 0.0, pronation_max_rad = 0.0;
+  std::size_t pronation_nan = 0;  // samples with no pronation (no calibration pose)
+  // Samples with confidence >= 0.5, those of them beyond 15 degrees and their largest error;
+  // samples whose error is within the 99 % bound of their predicted RMS (1.944 u).
+  std::size_t confident_samples = 0, confident_beyond_15_deg = 0, within_predicted_bound = 0;
+  double confident_max_rad = 0.0;
   std::size_t frames = 0, visible_frames = 0, predicted_frames = 0;
   double visible_rms_m = 0.0, predicted_max_m = 0.0;
   // Per RecoveredSegment method (PAPER, SMOOTHER): samples compared, RMS and maximum error.

@@ -12,6 +12,7 @@
 
 #include "body/smpl_model.hpp"
 #include "forearm/forearm_orientation.hpp"
+#include "forearm/orientation_uncertainty.hpp"
 #include "forearm_session.hpp"
 #include "session/pipeline.hpp"
 #include "session/stages/default_stages.hpp"
@@ -45,12 +46,13 @@ struct StageRun {
 // One pipeline run per options, shared by the tests that read it.
 const StageRun& run_session(const ForearmSessionOptions& options) {
   static std::map<std::string, std::unique_ptr<StageRun>> cache;
-  const std::string key =
-      std::to_string(options.strap_drawn) + std::to_string(options.buzzer) + std::to_string(options.camera_alignment) +
-      std::to_string(options.hold_s) + std::to_string(options.elbow_bias_m.norm()) + options.axis +
-      std::to_string(options.shoulder_bias_m.norm()) + std::to_string(options.upper_arm_drawn) + options.upper_arm +
-      "/" + std::to_string(options.ble_repeat_s) + "/" + std::to_string(options.arm_clock_drift) + "/" +
-      std::to_string(options.buzzer_tone_hz) + "/" + options.buzzer_hz_option;
+  const std::string key = std::to_string(options.strap_drawn) + std::to_string(options.buzzer) +
+                          std::to_string(options.camera_alignment) + std::to_string(options.hold_s) +
+                          std::to_string(options.elbow_bias_m.norm()) + options.axis +
+                          std::to_string(options.shoulder_bias_m.norm()) + std::to_string(options.upper_arm_drawn) +
+                          options.upper_arm + "/" + std::to_string(options.ble_repeat_s) + "/" +
+                          std::to_string(options.arm_clock_drift) + "/" + std::to_string(options.buzzer_tone_hz) + "/" +
+                          options.buzzer_hz_option + "/" + std::to_string(options.elbow_extension_rad);
   auto& slot = cache[key];
   if (!slot) {
     slot = std::make_unique<StageRun>();
@@ -444,12 +446,83 @@ TEST(ForearmStage, AxisCorrectionCanBeTurnedOff) {
   }
 }
 
-TEST(ForearmStage, TooShortCalibrationIsNamed) {
+TEST(ForearmStage, ImuOrientationsThatDisagreeWithTheCameraGiveNoMounting) {
   ForearmSessionOptions options;
-  options.hold_s = -1.0;  // already moving at full speed at t = 0: no 15-frame still run
+  // Already moving at full speed at t = 0: no still hold, and the IMU's orientation filter,
+  // started in motion, is tens of degrees off for the whole 9 s, so the forearm axes seen by the
+  // camera do not keep one direction in the IMU's frame.
+  options.hold_s = -1.0;
   const StageRun& r = run_session(options);
   EXPECT_TRUE(has_warning(r, "FOREARM_CALIBRATION", "forearm[arm_r].calibration", "held still for"));
+  EXPECT_TRUE(has_warning(r, "FOREARM_MOUNTING_NOT_OBSERVABLE", "forearm[arm_r].mounting", "scatter"));
   EXPECT_EQ(count(r, v1::FitResult::kForearmOrientations), 0u);
+}
+
+TEST(ForearmStage, NoCalibrationPoseIsNamedAndTheMountingComesFromMotion) {
+  ForearmSessionOptions options;
+  options.elbow_extension_rad = 0.9;  // held still, but not in the calibration pose
+  const StageRun& r = run_session(options);
+  EXPECT_TRUE(has_warning(r, "FOREARM_CALIBRATION", "forearm[arm_r].calibration", "forearm not raised"));
+  EXPECT_TRUE(
+      has_warning(r, "FOREARM_CALIBRATION", "forearm[arm_r].calibration", "estimated from the session's motion"));
+  EXPECT_TRUE(has_warning(r, "FOREARM_MOUNTING_FROM_MOTION", "forearm[arm_r].mounting", "roll +-"));
+  const testing::ForearmSessionErrors e = testing::evaluate_forearm_results(r.truth, r.sink.results);
+  std::printf(
+      "mounting from motion: %zu samples, RMS %.2f deg, max %.2f deg; %zu confident (max %.2f deg), %zu "
+      "within their predicted 99 %% bound\n",
+      e.orientation_samples, e.orientation_rms_rad / kDeg, e.orientation_max_rad / kDeg, e.confident_samples,
+      e.confident_max_rad / kDeg, e.within_predicted_bound);
+  ASSERT_GT(e.orientation_samples, 50u);
+  // No calibration pose: no pronation relative to it.
+  EXPECT_EQ(e.pronation_nan, e.orientation_samples);
+  // Never a confident sample beyond 15 degrees; the predicted error brackets the actual one.
+  EXPECT_EQ(e.confident_beyond_15_deg, 0u);
+  EXPECT_GE(static_cast<double>(e.within_predicted_bound), 0.95 * static_cast<double>(e.orientation_samples));
+  // No strap model: orientations only.
+  for (const auto& result : r.sink.results) {
+    if (result.has_frame()) {
+      EXPECT_EQ(result.frame().imu_positions_size(), 0);
+    }
+  }
+  // The report says where the mounting came from and how well it is known.
+  const v1::FitResult* summary = nullptr;
+  for (const auto& result : r.sink.results) {
+    if (result.has_calibration()) summary = &result;
+  }
+  ASSERT_NE(summary, nullptr);
+  ASSERT_EQ(summary->calibration().forearms_size(), 1);
+  const v1::ForearmModel& model = summary->calibration().forearms(0);
+  EXPECT_EQ(model.mounting_source(), v1::ForearmModel::MOTION);
+  EXPECT_GT(model.mounting_frames(), 15u);
+  EXPECT_GT(model.roll_uncertainty_rad(), 0.0);
+  EXPECT_FALSE(model.roll_limit().empty());
+  const double predicted = forearm::orientation_rms_rad(model.axis_uncertainty_rad(), model.roll_uncertainty_rad());
+  EXPECT_NEAR(model.orientation_uncertainty_rad(), predicted, 1e-12);
+}
+
+TEST(ForearmStage, CalibratedSamplesCarryThePoseCalibrationsUncertainty) {
+  const StageRun& r = run_session({});
+  std::size_t samples = 0, frames = 0;
+  for (const auto& result : r.sink.results) {
+    if (result.has_forearm_orientations()) {
+      const v1::ForearmOrientationBatch& b = result.forearm_orientations();
+      ASSERT_EQ(b.uncertainty_rad_size(), b.t_us_size());
+      ASSERT_EQ(b.confidence_size(), b.t_us_size());
+      for (int i = 0; i < b.t_us_size(); ++i, ++samples) {
+        EXPECT_DOUBLE_EQ(b.uncertainty_rad(i), forearm::kPoseCalibrationRmsRad);
+        EXPECT_DOUBLE_EQ(b.confidence(i), forearm::confidence_from_rms_rad(forearm::kPoseCalibrationRmsRad));
+      }
+    } else if (result.has_frame()) {
+      for (const v1::ForearmOrientation& f : result.frame().forearms()) {
+        EXPECT_DOUBLE_EQ(f.confidence(), forearm::confidence_from_rms_rad(forearm::kPoseCalibrationRmsRad));
+        ++frames;
+      }
+    }
+  }
+  EXPECT_GT(samples, 50u);
+  EXPECT_GT(frames, 50u);
+  // Confident: its 99 % bound is below 15 degrees.
+  EXPECT_GT(forearm::confidence_from_rms_rad(forearm::kPoseCalibrationRmsRad), 0.5);
 }
 
 TEST(ForearmStage, StrapNeverSeenGivesOrientationOnly) {

@@ -219,6 +219,8 @@ TEST(SimRun, GtHasTheClientResultFilesColumns) {
   forearm.mutable_forearm_orientations()->add_t_us(0);
   for (double c : {1.0, 0.0, 0.0, 0.0}) forearm.mutable_forearm_orientations()->add_k_from_f(c);
   forearm.mutable_forearm_orientations()->add_pronation_rad(0.0);
+  forearm.mutable_forearm_orientations()->add_uncertainty_rad(0.0);
+  forearm.mutable_forearm_orientations()->add_confidence(1.0);
   writer.write(forearm);
   v1::FitResult calibration;
   calibration.mutable_calibration()->add_forearms()->set_arm(v1::LEFT);

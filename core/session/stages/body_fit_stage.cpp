@@ -7,6 +7,7 @@
 
 #include "body/template_generator.hpp"
 #include "common/thread_cpu_time.hpp"
+#include "forearm/orientation_uncertainty.hpp"
 #include "session/stages/proto_values.hpp"
 #include "session/text_fields.hpp"
 
@@ -16,6 +17,9 @@ namespace {
 
 // A forearm orientation further than this from the frame is not used.
 constexpr std::int64_t kForearmToleranceUs = 20'000;
+// The imu term uses a forearm orientation only where it is predicted within 15 degrees
+// (forearm/orientation_uncertainty.hpp): a mounting not yet known must not pull the fit.
+constexpr double kMinForearmConfidence = 0.5;
 // Forearm orientations kept behind the oldest queued frame.
 constexpr std::int64_t kForearmHistoryUs = 1'000'000;
 
@@ -159,7 +163,8 @@ void BodyFitStage::on_value(const StageValue& value, StageOutput& out) {
     const Eigen::Quaterniond& q = batch->K_from_F[i];
     if (!q.coeffs().allFinite() || std::abs(q.norm() - 1.0) > 1e-3) continue;
     if (!samples.empty() && batch->t_us[i] <= samples.back().first) continue;
-    samples.emplace_back(batch->t_us[i], q.normalized());
+    const bool confident = forearm::confidence_from_rms_rad(batch->orientation_rms_rad[i]) >= kMinForearmConfidence;
+    samples.emplace_back(batch->t_us[i], confident ? std::optional<Eigen::Quaterniond>(q.normalized()) : std::nullopt);
   }
   if (tracker_->personalised()) fit_ready(false, out);
 }
@@ -177,7 +182,7 @@ std::optional<Eigen::Quaterniond> BodyFitStage::K_from_F_at(fit::ArmSide side, s
   const auto& samples = it->second;
   const auto after =
       std::lower_bound(samples.begin(), samples.end(), t_us, [](const auto& s, std::int64_t t) { return s.first < t; });
-  const std::pair<std::int64_t, Eigen::Quaterniond>* best = nullptr;
+  const std::pair<std::int64_t, std::optional<Eigen::Quaterniond>>* best = nullptr;
   if (after != samples.end()) best = &*after;
   if (after != samples.begin() && (!best || t_us - std::prev(after)->first < best->first - t_us))
     best = &*std::prev(after);

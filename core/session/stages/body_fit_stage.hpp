@@ -104,7 +104,9 @@ class BodyFitStage : public Stage {
   std::deque<QueuedBodyFitFrame> queue_;          // personalised, waiting for forearm orientations
 
   // Forearm orientations by arm (v1::Arm), camera clock.
-  std::map<int, std::deque<std::pair<std::int64_t, Eigen::Quaterniond>>> K_from_F_;
+  // Per arm: each forearm sample's time and orientation, none where its confidence is below
+  // kMinForearmConfidence (it still tells that the forearm stage has reached that time).
+  std::map<int, std::deque<std::pair<std::int64_t, std::optional<Eigen::Quaterniond>>>> K_from_F_;
   bool record_stats_ = false;
 };
 

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "forearm/orientation_uncertainty.hpp"
 #include "session/stages/proto_values.hpp"
 
 namespace posefuse::session {
@@ -28,6 +29,25 @@ void report_forearm_model(const std::string& device_id, forearm::Side side, cons
   model.set_calibration_frames(static_cast<std::uint32_t>(c.frame_count));
   model.set_a_from_f_spread_rad(c.F_from_A_spread_rad);
   model.set_strap_frames(strap_frames);
+  model.set_mounting_source(v1::ForearmModel::CALIBRATION_POSE);
+  model.set_orientation_uncertainty_rad(forearm::kPoseCalibrationRmsRad);
+}
+
+void report_motion_mounting(const std::string& device_id, forearm::Side side, const forearm::MountingEstimate& m,
+                            v1::CalibrationReport& report) {
+  v1::ForearmModel& model = *report.add_forearms();
+  model.set_arm(side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT);
+  model.set_device_id(device_id);
+  *model.mutable_a_from_f() = to_proto(forearm::Quat(m.F_from_A.conjugate()));
+  model.set_estimated(true);
+  model.set_mounting_source(v1::ForearmModel::MOTION);
+  model.set_orientation_uncertainty_rad(forearm::orientation_rms_rad(m.axis_rms_rad, m.roll_rms_rad));
+  model.set_axis_uncertainty_rad(m.axis_rms_rad);
+  model.set_roll_uncertainty_rad(m.roll_rms_rad);
+  model.set_mounting_frames(static_cast<std::uint32_t>(m.frames));
+  model.set_hinge_frames(static_cast<std::uint32_t>(m.hinge_frames));
+  model.set_mounting_seconds(m.seconds);
+  model.set_roll_limit(m.roll_limit);
 }
 
 }  // namespace posefuse::session

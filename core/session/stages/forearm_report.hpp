@@ -6,6 +6,7 @@
 
 #include "forearm/forearm_model.hpp"
 #include "forearm/forearm_orientation.hpp"
+#include "forearm/mounting_from_motion.hpp"
 #include "posefuse/v1/results.pb.h"
 #include "sync/linear_clock.hpp"
 
@@ -19,5 +20,9 @@ void report_clock(const std::string& device_id, const sync::LinearClock& camera_
 // has_model: the strap was seen (r, d_se, d_sw known); without it those are reported as 0.
 void report_forearm_model(const std::string& device_id, forearm::Side side, const forearm::ForearmCalibration& c,
                           bool has_model, std::uint32_t strap_frames, v1::CalibrationReport& report);
+
+// An arm whose mounting came from motion (no strap model: r, d_se, d_sw reported as 0).
+void report_motion_mounting(const std::string& device_id, forearm::Side side, const forearm::MountingEstimate& m,
+                            v1::CalibrationReport& report);
 
 }  // namespace posefuse::session

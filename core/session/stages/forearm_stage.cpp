@@ -1,13 +1,17 @@
 #include "session/stages/forearm_stage.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <numbers>
 
 #include "body/smpl_model.hpp"
 #include "common/error.hpp"
+#include "common/number_text.hpp"
 #include "forearm/arm_calibration.hpp"
 #include "forearm/arm_frame_measurement.hpp"
 #include "forearm/calibration_frames.hpp"
 #include "forearm/forearm_orientation.hpp"
+#include "forearm/orientation_uncertainty.hpp"
 #include "geometry/rotation_mean.hpp"
 #include "session/option_table.hpp"
 #include "session/stages/forearm_inputs.hpp"
@@ -24,6 +28,11 @@ using forearm::Vec3;
 
 // How long past the calibration window the frames waiting for it hold the frame merge.
 constexpr double kCalibrationGraceS = 10.0;
+// A mounting from motion is re-estimated once this many new frames (a second at 30 Hz) or a
+// tenth more have been tracked.
+constexpr std::size_t kMinNewMountingFrames = 30;
+
+double degrees(double rad) { return rad * 180.0 / std::numbers::pi; }
 
 std::int64_t seconds_to_us(double s) { return static_cast<std::int64_t>(std::llround(s * 1e6)); }
 
@@ -133,13 +142,15 @@ void ForearmStage::hand_on_frames_done(bool all, StageOutput& out) {
   out.hand_on(FramesDone{FrameSource::kForearm, up_to});
 }
 
-void ForearmStage::hand_on_track(const Device& device, forearm::ForearmTrackOutput&& track, StageOutput& out) {
+void ForearmStage::hand_on_track(Device& device, forearm::ForearmTrackOutput&& track, StageOutput& out) {
   const v1::Arm arm = *device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT;
-  ForearmOrientations orientations{device.id, arm, {}, {}, {}};
-  for (const forearm::SettledArmSample& s : track.samples) {
-    orientations.t_us.push_back(s.sample.t_us);
-    orientations.K_from_F.push_back(s.K_from_F);
-    orientations.pronation_rad.push_back(s.pronation_rad);
+  ForearmOrientations orientations = forearm_orientations_of(device.id, arm, track.samples);
+  if (device.from_motion) {
+    for (const forearm::TrackedArmFrame& t : track.frames) {
+      if (!t.frame.axis_from_depth) continue;
+      device.mounting_frames.push_back(
+          {t.frame.t_us, t.K_from_A, t.frame.wrist_K - t.frame.elbow_K, t.frame.upper_arm_direction_K});
+    }
   }
   // The track first: the gaps' live estimate of these frames uses the fit's frames up to the
   // last call, as the fit's frames that these orientations complete come after it.
@@ -163,7 +174,9 @@ void ForearmStage::on_clock_event(const ClockEvent& event, StageOutput& out) {
 
 void ForearmStage::advance(StageOutput& out) {
   if (!calibrated_) try_calibrate(false, out);
-  if (calibrated_) feed_trackers(false, out);
+  if (!calibrated_) return;
+  estimate_motion_mountings(false, out);
+  feed_trackers(false, out);
 }
 
 void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleton) {
@@ -174,8 +187,9 @@ void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleto
     if (!device.side || device.calibration_failed) continue;
     forearm::ArmFrame arm = arm_frame_from_skeleton(skeleton, *device.side, frame.t_us);
     if (cameras_) {
-      forearm::measure_arm_frame(arm, depth, gray, *cameras_,
-                                 {options_.axis_from_depth, options_.upper_arm_from_depth, !device.tracker});
+      forearm::measure_arm_frame(
+          arm, depth, gray, *cameras_,
+          {options_.axis_from_depth, options_.upper_arm_from_depth, !device.tracker || device.from_motion});
     }
     if (device.tracker) {
       device.tracker->add_frame(arm);
@@ -231,18 +245,21 @@ void ForearmStage::try_calibrate(bool finishing, StageOutput& out) {
 }
 
 std::optional<Quat> ForearmStage::W_from_A_at(const Device& device, std::int64_t t_camera_us) const {
-  // Samples are few (the calibration window): map them as needed.
   const auto camera_us = [&](const ImuRecord& r) {
     return clock_map_->to_camera_us(device.id, static_cast<double>(r.t_device_us));
   };
   const double t = static_cast<double>(t_camera_us);
-  for (std::size_t i = 0; i + 1 < device.imu.size(); ++i) {
-    const double t0 = camera_us(device.imu[i]), t1 = camera_us(device.imu[i + 1]);
-    if (t0 <= t && t <= t1 && t1 > t0) {
-      return device.imu[i].W_from_A.slerp((t - t0) / (t1 - t0), device.imu[i + 1].W_from_A).normalized();
-    }
+  // The samples are in device-clock order, and the clock map keeps that order.
+  const auto after =
+      std::partition_point(device.imu.begin(), device.imu.end(), [&](const ImuRecord& r) { return camera_us(r) < t; });
+  if (after == device.imu.end() || after == device.imu.begin()) {
+    if (after != device.imu.end() && camera_us(*after) == t) return after->W_from_A;
+    return std::nullopt;
   }
-  return std::nullopt;
+  const auto before = std::prev(after);
+  const double t0 = camera_us(*before), t1 = camera_us(*after);
+  if (!(t1 > t0)) return std::nullopt;
+  return before->W_from_A.slerp((t - t0) / (t1 - t0), after->W_from_A).normalized();
 }
 
 void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
@@ -266,17 +283,13 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
   try {
     calibrated = forearm::calibrate_arm(selected, *K_from_W_, calibration_options_);
   } catch (const Error& error) {
-    device.calibration_failed = true;
-    device.frames.clear();
-    ArmTrackStart refused;
-    refused.device_id = device.id;
-    refused.arm = *device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT;
-    out.hand_on(std::move(refused));
+    device.from_motion = true;
     out.warn("FOREARM_CALIBRATION", field + ".calibration",
              std::string("no usable calibration pose (paper 1, II-H) in the first ") +
                  format_double(options_.calibration_s) + " s: " + error.what() + " (" +
                  std::to_string(selected.not_raised) +
-                 " tracked frames skipped: forearm not raised, paper 1 Fig. 3b); no results for this arm");
+                 " tracked frames skipped: forearm not raised, paper 1 Fig. 3b); the IMU's mounting is estimated "
+                 "from the session's motion instead, with no pronation relative to the calibration pose");
     return;
   }
   if (!calibrated.has_model) {
@@ -285,8 +298,9 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
   }
   device.calibration = calibrated.calibration;
   const bool has_model = device.has_model = calibrated.has_model;
-  device.tracker = std::make_unique<forearm::ForearmTrack>(*device.side, device.calibration->model, has_model,
-                                                           *K_from_W_, calibrated.K_from_F_held);
+  device.tracker =
+      std::make_unique<forearm::ForearmTrack>(*device.side, device.calibration->model, has_model, *K_from_W_,
+                                              calibrated.K_from_F_held, forearm::kPoseCalibrationRmsRad);
   if (options_.axis_correction_on && options_.axis_from_depth && has_model) {
     device.tracker->use_axis_correction(options_.axis_correction);
   }
@@ -302,6 +316,85 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
   start.smoother = options_.smoother;
   if (options_.fit_anchor) start.fit_anchor = forearm::FitAnchorOptions{};
   out.hand_on(std::move(start));
+}
+
+std::vector<forearm::MountingFrame> ForearmStage::buffered_mounting_frames(const Device& device) const {
+  std::vector<forearm::MountingFrame> frames;
+  for (const forearm::ArmFrame& f : device.frames) {
+    if (!f.axis_from_depth) continue;  // the SDK's forearm carries its joints' bias
+    const std::optional<Quat> W_from_A = W_from_A_at(device, f.t_us);
+    if (!W_from_A) continue;
+    frames.push_back({f.t_us, (*K_from_W_ * *W_from_A).normalized(), f.wrist_K - f.elbow_K, f.upper_arm_direction_K});
+  }
+  return frames;
+}
+
+void ForearmStage::estimate_motion_mountings(bool finishing, StageOutput& out) {
+  for (Device& device : devices_) {
+    if (!device.from_motion) continue;
+    // Each estimate uses every frame so far; re-estimating once the frames have grown by a tenth
+    // keeps the work linear in the session's length.
+    const std::size_t seen = device.tracker ? device.mounting_frames.size() : device.frames.size();
+    const std::size_t due =
+        device.frames_at_last_estimate + std::max(kMinNewMountingFrames, device.frames_at_last_estimate / 10);
+    if (seen == device.frames_at_last_estimate || (!finishing && seen < due)) continue;
+    device.frames_at_last_estimate = seen;
+    std::string why_not;
+    const std::optional<forearm::MountingEstimate> estimate =
+        forearm::estimate_mounting(device.tracker ? device.mounting_frames : buffered_mounting_frames(device),
+                                   *device.side, forearm::MountingFromMotionOptions{}, why_not);
+    if (!estimate) {
+      device.mounting_why_not = why_not;
+      continue;
+    }
+    const double rms_rad = forearm::orientation_rms_rad(estimate->axis_rms_rad, estimate->roll_rms_rad);
+    device.mounting = estimate;
+    if (device.tracker) {
+      device.tracker->set_mounting(device.mounting->F_from_A, rms_rad);
+    } else {
+      start_motion_track(device, *device.mounting, out);
+    }
+  }
+  if (!finishing) return;
+  for (Device& device : devices_) {
+    if (!device.from_motion || device.tracker) continue;
+    device.frames.clear();
+    ArmTrackStart refused;
+    refused.device_id = device.id;
+    refused.arm = *device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT;
+    out.hand_on(std::move(refused));
+    out.warn("FOREARM_MOUNTING_NOT_OBSERVABLE", "forearm[" + device.id + "].mounting",
+             "no calibration pose and the session's motion does not show the IMU's mounting: " +
+                 (device.mounting_why_not.empty() ? std::string("no frame with the forearm measured in depth")
+                                                  : device.mounting_why_not) +
+                 "; no results for this arm");
+  }
+}
+
+void ForearmStage::start_motion_track(Device& device, const forearm::MountingEstimate& estimate, StageOutput& out) {
+  const double rms_rad = forearm::orientation_rms_rad(estimate.axis_rms_rad, estimate.roll_rms_rad);
+  forearm::ForearmModel model;
+  model.F_from_A = estimate.F_from_A;
+  device.tracker =
+      std::make_unique<forearm::ForearmTrack>(*device.side, model, false, *K_from_W_, std::nullopt, rms_rad);
+  for (const forearm::ArmFrame& f : device.frames) device.tracker->add_frame(f);
+  device.frames.clear();
+  ArmTrackStart start;
+  start.device_id = device.id;
+  start.arm = *device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT;
+  start.tracked = true;
+  start.model = model;
+  start.has_model = false;
+  start.K_from_W = *K_from_W_;
+  start.smoother = options_.smoother;
+  out.hand_on(std::move(start));
+  out.warn("FOREARM_MOUNTING_FROM_MOTION", "forearm[" + device.id + "].mounting",
+           "first estimate from " + std::to_string(estimate.frames) + " frames over " +
+               fixed_text(estimate.seconds, 1) + " s: forearm axis +-" + fixed_text(degrees(estimate.axis_rms_rad), 1) +
+               " deg RMS, roll +-" + fixed_text(degrees(estimate.roll_rms_rad), 1) + " deg RMS (" +
+               estimate.roll_limit +
+               "); refined as the session goes on, each orientation with its predicted error and confidence; no IMU "
+               "positions (no strap model)");
 }
 
 std::vector<std::string> ForearmStage::arm_device_ids() const {
@@ -358,7 +451,12 @@ void ForearmStage::finish(StageOutput& out) {
     return;
   }
   if (!calibrated_) try_calibrate(true, out);
-  if (calibrated_) feed_trackers(true, out);
+  if (calibrated_) {
+    estimate_motion_mountings(false, out);
+    feed_trackers(true, out);
+    estimate_motion_mountings(true, out);  // an arm still without a mounting: the last chance, or named
+    feed_trackers(true, out);
+  }
   hand_on_frames_done(true, out);
   v1::CalibrationReport& report = out.calibration();
   if (const std::optional<double> tone_hz = clocks_->buzzer_tone_hz()) report.set_buzzer_tone_hz(*tone_hz);
@@ -370,6 +468,8 @@ void ForearmStage::finish(StageOutput& out) {
     }
     if (device.side && device.calibration) {
       report_forearm_model(device.id, *device.side, *device.calibration, device.has_model, device.strap_frames, report);
+    } else if (device.side && device.tracker && device.mounting) {
+      report_motion_mounting(device.id, *device.side, *device.mounting, report);
     }
   }
   if (K_from_W_) *report.mutable_k_from_w() = to_proto(*K_from_W_);

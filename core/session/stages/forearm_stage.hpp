@@ -31,6 +31,12 @@
 //     gaps are the forearm_gaps stage's, after the body fit (forearm_gaps_stage.hpp).
 // Hands on per arm an ArmTrackStart once its calibration is over (tracked or not) and, at every
 // camera frame, FramesDone: every ArmTrack frame up to then has been handed on.
+//  4. An arm whose calibration pose is missing or refused is not given up: its mounting F_from_A
+//     is estimated from the session's natural motion (forearm/mounting_from_motion.hpp, warning
+//     FOREARM_MOUNTING_FROM_MOTION with the estimate and what limits it). Its orientations carry
+//     the estimate's predicted error and confidence, grow more certain as the estimate is
+//     refined, and have no pronation relative to a calibration pose (NaN); no strap model, so no
+//     IMU positions. FOREARM_MOUNTING_NOT_OBSERVABLE names an arm for which motion gave none.
 // Problems that stop an arm are warnings naming them (the rest of the session goes on):
 // FOREARM_NO_BASE_IMU, FOREARM_NO_CAMERA_ALIGNMENT, FOREARM_NO_SYNC (no buzzer event, the stop
 // not heard, no shared BLE broadcast), FOREARM_CALIBRATION (too short or no calibration hold, or
@@ -45,6 +51,7 @@
 
 #include "forearm/forearm_model.hpp"
 #include "forearm/forearm_track.hpp"
+#include "forearm/mounting_from_motion.hpp"
 #include "forearm/strap_detection.hpp"
 #include "session/pipeline_stage.hpp"
 #include "session/stages/forearm_options.hpp"
@@ -89,6 +96,14 @@ class ForearmStage : public Stage {
     std::uint32_t strap_frames = 0;
     bool has_model = false;
     std::unique_ptr<forearm::ForearmTrack> tracker;
+    // No usable calibration pose: the mounting is estimated from the session's motion
+    // (forearm/mounting_from_motion.hpp), first from the frames buffered so far, then refined
+    // from every tracked frame (mounting_frames) as they grow.
+    bool from_motion = false;
+    std::vector<forearm::MountingFrame> mounting_frames;
+    std::size_t frames_at_last_estimate = 0;
+    std::optional<forearm::MountingEstimate> mounting;
+    std::string mounting_why_not;
   };
 
   // Calibrates once the calibration window has passed, then feeds the trackers.
@@ -100,10 +115,15 @@ class ForearmStage : public Stage {
   void refit_clocks(bool finishing);
   void feed_trackers(bool all, StageOutput& out);
   // The arm's new settled samples and tracked frames, handed on.
-  void hand_on_track(const Device& device, forearm::ForearmTrackOutput&& track, StageOutput& out);
+  void hand_on_track(Device& device, forearm::ForearmTrackOutput&& track, StageOutput& out);
   // FramesDone: every frame up to the oldest one still held (all at the end or when inactive).
   void hand_on_frames_done(bool all, StageOutput& out);
   std::optional<forearm::Quat> W_from_A_at(const Device& device, std::int64_t t_camera_us) const;
+  // Mountings from motion: the first estimate starts the arm's tracker (orientation only, no
+  // pronation reference), later ones refine it; at the end, an arm with none is named.
+  void estimate_motion_mountings(bool finishing, StageOutput& out);
+  void start_motion_track(Device& device, const forearm::MountingEstimate& estimate, StageOutput& out);
+  std::vector<forearm::MountingFrame> buffered_mounting_frames(const Device& device) const;
 
   bool active_ = false;
   std::vector<Device> devices_;  // header order

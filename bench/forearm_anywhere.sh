@@ -1,0 +1,75 @@
+#!/usr/bin/env bash
+# Forearm orientation on any session (docs/forearm.md "Mounting from motion"): paper 1's scripted
+# exercises, most of which never show the calibration pose, at several speeds and seeds, both
+# arms, the body render and the full IMU error model, through SessionPipeline (bench_sim_forearm
+# replay) and scored by posefuse-score against the simulator's truth. Per session and arm:
+#   mounting   where A_from_F came from (pose: paper 1's calibration; motion; none)
+#   RMS/max    forearm orientation error over the samples emitted (deg)
+#   emitted    samples emitted / samples the arm IMU took (gt)
+#   confident  samples with confidence >= 0.5 / emitted; their max error; how many beyond 15 deg
+#   bound      samples within the 99 % bound of their predicted error / emitted
+#   first      seconds from the first emitted sample to the first confident one
+#   A_from_F   the mounting's error against the truth (deg)
+#   bench/forearm_anywhere.sh [BUILD_DIR] [MOTION:SEED:SPEED ...]
+# Default: the 11 exercises at speeds 0.7, 1.0, 1.3 on seeds 51 and 52, 20 s. Nothing was chosen
+# on these seeds (the pose calibration's uncertainty comes from seeds 41 and 43,
+# bench/calibration_refusals.sh; the mounting-from-motion constants are principles).
+set -euo pipefail
+root=$(cd "$(dirname "$0")/.." && pwd)
+build=${1:-$root/build}
+shift || true
+specs=("$@")
+if [ ${#specs[@]} -eq 0 ]; then
+  for seed in 51 52; do
+    for speed in 0.7 1.0 1.3; do
+      for motion in calibration_pose forearm_protocol forearm_behind_head forearm_in_front_of_belly \
+        forearm_behind_back arm_raising shoulder_lift forearm_rolling hair_combing torso_tilt air_punching; do
+        specs+=("$motion:$seed:$speed")
+      done
+    done
+  done
+fi
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+printf '%-34s %-5s %-8s %-10s %-8s %-16s %-7s %-6s %s\n' session arm mounting "RMS/max" emitted confident bound first A_from_F
+for spec in "${specs[@]}"; do
+  IFS=: read -r motion seed speed <<<"$spec"
+  name="$motion-$seed-$speed"
+  printf 'motion = %s\nspeed = %s\narm = both\n' "$motion" "$speed" >"$work/$name.options"
+  "$build/tools/sim/posefuse-sim" --options "$work/$name.options" --seed "$seed" --duration 20 --quiet \
+    --chunk-file "$work/$name.pfchunks" --gt "$work/$name.gt" >/dev/null
+  "$build/bench/bench_sim_forearm" replay "$work/$name.pfchunks" "$work/$name.gt" "$work/$name.out" >"$work/$name.score"
+  python3 - "$name" "$work/$name.out" "$work/$name.gt" "$work/$name.score" <<'PY'
+import json, os, re, sys
+name, out, gt, score = sys.argv[1:]
+rows, conf, mounting_error = {}, {}, {}
+for line in open(score):
+    f = line.split()
+    if len(f) in (6, 9) and re.match(r"forearm_orientations/imu_(left|right)\.csv$", f[0]):
+        arm = f[1].split("_")[1].upper()
+        (conf if len(f) == 9 else rows)[arm] = f
+    m = re.match(r"(LEFT|RIGHT) A_from_F\s+deg\s+([\d.]+)", line)
+    if m: mounting_error[m.group(1)] = float(m.group(2))
+sources = {f["arm"]: f.get("mounting_source", "CALIBRATION_POSE")
+           for f in json.load(open(out + "/calibration.json")).get("forearms", [])}
+for arm in ("LEFT", "RIGHT"):
+    truth = os.path.join(gt, "forearm_orientations", f"imu_{arm.lower()}.csv")
+    taken = sum(1 for _ in open(truth)) - 1 if os.path.exists(truth) else 0
+    mounting = {"CALIBRATION_POSE": "pose", "MOTION": "motion"}.get(sources.get(arm), "none")
+    if arm not in rows:
+        print(f"{name:34s} {arm:5s} {mounting:8s} {'-':10s} {'0':8s}")
+        continue
+    n = int(rows[arm][2])
+    error = f"{float(rows[arm][3]):.1f}/{float(rows[arm][4]):.1f}"
+    emitted = f"{100 * n / taken:.0f}%" if taken else "-"
+    c = conf.get(arm)
+    if c:
+        confident = f"{100 * int(c[3]) / n:.0f}% {c[5]} {c[6]}"
+        bound = f"{100 * int(c[7].split('/')[0]) / max(1, int(c[7].split('/')[1])):.0f}%"
+        first = c[8]
+    else:
+        confident, bound, first = "-", "-", "-"
+    a = f"{mounting_error[arm]:.1f}" if arm in mounting_error else "-"
+    print(f"{name:34s} {arm:5s} {mounting:8s} {error:10s} {emitted:8s} {confident:16s} {bound:7s} {first:6s} {a}")
+PY
+done

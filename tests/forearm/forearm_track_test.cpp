@@ -1,0 +1,73 @@
+// ForearmTrack's per-sample uncertainty and its pronation without a calibration pose.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+#include "forearm/forearm_track.hpp"
+#include "forearm/orientation_uncertainty.hpp"
+#include "geometry/quaternion.hpp"
+
+namespace posefuse::forearm {
+namespace {
+
+constexpr double kDeg = std::numbers::pi / 180.0;
+
+Quat about_z(double rad) { return Quat(Eigen::AngleAxisd(rad, Vec3::UnitZ())); }
+
+// n samples 10 ms apart from t0, the IMU turning slowly about K's z.
+void add_samples(ForearmTrack& track, std::int64_t t0_us, int n) {
+  std::vector<std::int64_t> t_us;
+  std::vector<Quat> W_from_A;
+  std::vector<Vec3> force;
+  for (int i = 0; i < n; ++i) {
+    t_us.push_back(t0_us + 10'000 * i);
+    W_from_A.push_back(about_z(0.01 * (t0_us / 10'000 + i)));
+    force.push_back(Vec3(0, 0, kGravity));
+  }
+  track.add_imu(t_us, W_from_A, force);
+}
+
+TEST(ForearmTrack, WithoutACalibrationPoseThePronationIsNaN) {
+  ForearmTrack track(Side::kRight, ForearmModel{}, false, Quat::Identity(), std::nullopt, 20.0 * kDeg);
+  add_samples(track, 0, 10);
+  ArmFrame frame;
+  frame.t_us = 45'000;
+  track.add_frame(frame);
+  const ForearmTrackOutput out = track.process(true);
+  ASSERT_EQ(out.samples.size(), 10u);
+  for (const SettledArmSample& s : out.samples) {
+    EXPECT_TRUE(std::isnan(s.pronation_rad));
+    EXPECT_DOUBLE_EQ(s.orientation_rms_rad, 20.0 * kDeg);
+  }
+  ASSERT_EQ(out.frames.size(), 1u);
+  EXPECT_TRUE(std::isnan(out.frames[0].pronation_rad));
+  // K_from_A at the frame: halfway between the samples at 40 and 50 ms.
+  EXPECT_LT(geometry::angle_between(out.frames[0].K_from_A, about_z(0.045)), 1e-9);
+}
+
+TEST(ForearmTrack, ARefinedMountingAppliesToLaterSamplesWithItsUncertainty) {
+  ForearmTrack track(Side::kLeft, ForearmModel{}, false, Quat::Identity(), Quat::Identity(), 20.0 * kDeg);
+  add_samples(track, 0, 5);
+  const Quat F_from_A = Quat(Eigen::AngleAxisd(0.3, Vec3::UnitY()));
+  track.set_mounting(F_from_A, 4.0 * kDeg);
+  add_samples(track, 50'000, 5);
+  ArmFrame between;  // the frame between the two mountings takes the larger uncertainty
+  between.t_us = 45'000;
+  track.add_frame(between);
+  const ForearmTrackOutput out = track.process(true);
+  ASSERT_EQ(out.samples.size(), 10u);
+  for (std::size_t i = 0; i < out.samples.size(); ++i) {
+    const SettledArmSample& s = out.samples[i];
+    const bool refined = i >= 5;
+    EXPECT_DOUBLE_EQ(s.orientation_rms_rad, (refined ? 4.0 : 20.0) * kDeg) << i;
+    const Quat expected = (s.sample.K_from_A * (refined ? F_from_A.conjugate() : Quat::Identity())).normalized();
+    EXPECT_LT(geometry::angle_between(s.K_from_F, expected), 1e-9) << i;
+    EXPECT_TRUE(std::isfinite(s.pronation_rad));
+  }
+  ASSERT_EQ(out.frames.size(), 1u);
+  EXPECT_DOUBLE_EQ(out.frames[0].orientation_rms_rad, 20.0 * kDeg);
+}
+
+}  // namespace
+}  // namespace posefuse::forearm
