@@ -22,9 +22,6 @@ namespace {
 namespace fs = std::filesystem;
 namespace layout = session::result_layout;
 constexpr double kDegPerRad = 180.0 / 3.14159265358979323846;
-// A confident forearm orientation (forearm/orientation_uncertainty.hpp): confidence >= 0.5 means
-// predicted within 15 degrees.
-constexpr double kConfidentAt = 0.5;
 constexpr double kConfidentBoundDeg = forearm::kConfidentErrorBoundRad * kDegPerRad;
 
 // Index of the element of sorted `times` nearest to t, if within the tolerance.
@@ -72,7 +69,7 @@ void score_confidence(const Row& r, double error_deg, std::int64_t first_t_us, A
                       std::vector<double>& confident_errors) {
   if (const std::optional<double> confidence = confidence_of(r)) {
     ++score.with_confidence;
-    if (*confidence >= kConfidentAt) {
+    if (*confidence >= forearm::kConfidentAt) {
       confident_errors.push_back(error_deg);
       score.confident_beyond_15_deg += error_deg > kConfidentBoundDeg;
       if (!score.first_confident_s) score.first_confident_s = 1e-6 * static_cast<double>(r.t_us - first_t_us);
@@ -439,10 +436,13 @@ void score_calibration(const session::ResultDirectory& result, const session::Re
       continue;
     }
     const std::string arm = v1::Arm_Name(f.arm()) + " ";
-    add(arm + "r", "m", f.r_m(), t->r_m());
-    add(arm + "d_se", "m", f.d_se_m(), t->d_se_m());
-    add(arm + "d_sw", "m", f.d_sw_m(), t->d_sw_m());
-    add(arm + "d_ul", "m", f.d_ul_m(), t->d_ul_m());
+    // A mounting from motion has no strap model: r, d_se, d_sw and d_ul are not estimated.
+    if (f.mounting_source() != v1::ForearmModel::MOTION) {
+      add(arm + "r", "m", f.r_m(), t->r_m());
+      add(arm + "d_se", "m", f.d_se_m(), t->d_se_m());
+      add(arm + "d_sw", "m", f.d_sw_m(), t->d_sw_m());
+      add(arm + "d_ul", "m", f.d_ul_m(), t->d_ul_m());
+    }
     add_angle(arm + "A_from_F", f.a_from_f(), t->a_from_f());
   }
   // 0 means none measured (no audio) or, in gt/, no buzzer.

@@ -10,6 +10,8 @@
 namespace posefuse::forearm {
 
 inline constexpr double kConfidentErrorBoundRad = 15.0 * 3.14159265358979323846 / 180.0;
+// A sample with at least this confidence is predicted within kConfidentErrorBoundRad.
+inline constexpr double kConfidentAt = 0.5;
 inline constexpr double kBound99OverRms = 1.944;
 // The causal orientation filter's held-out RMS error on BROAD (docs/benchmarks.md "IMU
 // orientation on BROAD", leave-one-trial-out: 1.92 degrees).

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <string>
 #include <utility>
 
@@ -18,8 +19,7 @@ namespace {
 // A forearm orientation further than this from the frame is not used.
 constexpr std::int64_t kForearmToleranceUs = 20'000;
 // The imu term uses a forearm orientation only where it is predicted within 15 degrees
-// (forearm/orientation_uncertainty.hpp): a mounting not yet known must not pull the fit.
-constexpr double kMinForearmConfidence = 0.5;
+// (forearm::kConfidentAt): a mounting not yet known must not pull the fit.
 // Forearm orientations kept behind the oldest queued frame.
 constexpr std::int64_t kForearmHistoryUs = 1'000'000;
 
@@ -163,7 +163,10 @@ void BodyFitStage::on_value(const StageValue& value, StageOutput& out) {
     const Eigen::Quaterniond& q = batch->K_from_F[i];
     if (!q.coeffs().allFinite() || std::abs(q.norm() - 1.0) > 1e-3) continue;
     if (!samples.empty() && batch->t_us[i] <= samples.back().first) continue;
-    const bool confident = forearm::confidence_from_rms_rad(batch->orientation_rms_rad[i]) >= kMinForearmConfidence;
+    // A sample without a predicted error is not confident (confidence_from_rms_rad(NaN) = 0).
+    const double rms_rad = i < batch->orientation_rms_rad.size() ? batch->orientation_rms_rad[i]
+                                                                  : std::numeric_limits<double>::quiet_NaN();
+    const bool confident = forearm::confidence_from_rms_rad(rms_rad) >= forearm::kConfidentAt;
     samples.emplace_back(batch->t_us[i], confident ? std::optional<Eigen::Quaterniond>(q.normalized()) : std::nullopt);
   }
   if (tracker_->personalised()) fit_ready(false, out);

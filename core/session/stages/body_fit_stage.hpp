@@ -105,7 +105,7 @@ class BodyFitStage : public Stage {
 
   // Forearm orientations by arm (v1::Arm), camera clock.
   // Per arm: each forearm sample's time and orientation, none where its confidence is below
-  // kMinForearmConfidence (it still tells that the forearm stage has reached that time).
+  // forearm::kConfidentAt (it still tells that the forearm stage has reached that time).
   std::map<int, std::deque<std::pair<std::int64_t, std::optional<Eigen::Quaterniond>>>> K_from_F_;
   bool record_stats_ = false;
 };
