@@ -165,7 +165,7 @@ void BodyFitStage::on_value(const StageValue& value, StageOutput& out) {
     if (!samples.empty() && batch->t_us[i] <= samples.back().first) continue;
     // A sample without a predicted error is not confident (confidence_from_rms_rad(NaN) = 0).
     const double rms_rad = i < batch->orientation_rms_rad.size() ? batch->orientation_rms_rad[i]
-                                                                  : std::numeric_limits<double>::quiet_NaN();
+                                                                 : std::numeric_limits<double>::quiet_NaN();
     const bool confident = forearm::confidence_from_rms_rad(rms_rad) >= forearm::kConfidentAt;
     samples.emplace_back(batch->t_us[i], confident ? std::optional<Eigen::Quaterniond>(q.normalized()) : std::nullopt);
   }
