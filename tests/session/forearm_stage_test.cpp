@@ -478,6 +478,16 @@ TEST(ForearmStage, NoCalibrationPoseIsNamedAndTheMountingComesFromMotion) {
   // Never a confident sample beyond 15 degrees; the predicted error brackets the actual one.
   EXPECT_EQ(e.confident_beyond_15_deg, 0u);
   EXPECT_GE(static_cast<double>(e.within_predicted_bound), 0.95 * static_cast<double>(e.orientation_samples));
+  // Refined as the frames accumulate: the hinge frames narrow the roll, so the last samples are
+  // predicted better than the first.
+  std::vector<double> uncertainty;
+  for (const auto& result : r.sink.results) {
+    if (!result.has_forearm_orientations()) continue;
+    for (const double u : result.forearm_orientations().uncertainty_rad()) uncertainty.push_back(u);
+  }
+  ASSERT_FALSE(uncertainty.empty());
+  std::printf("predicted RMS: first %.1f deg, last %.1f deg\n", uncertainty.front() / kDeg, uncertainty.back() / kDeg);
+  EXPECT_LT(uncertainty.back(), uncertainty.front());
   // No strap model: orientations only.
   for (const auto& result : r.sink.results) {
     if (result.has_frame()) {

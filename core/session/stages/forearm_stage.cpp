@@ -379,6 +379,7 @@ void ForearmStage::start_motion_track(Device& device, const forearm::MountingEst
       std::make_unique<forearm::ForearmTrack>(*device.side, model, false, *K_from_W_, std::nullopt, rms_rad);
   for (const forearm::ArmFrame& f : device.frames) device.tracker->add_frame(f);
   device.frames.clear();
+  device.frames_at_last_estimate = 0;  // from now on counted in tracked frames (mounting_frames)
   ArmTrackStart start;
   start.device_id = device.id;
   start.arm = *device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT;
