@@ -11,8 +11,11 @@
 #   first      seconds from the first emitted sample to the first confident one
 #   A_from_F   the mounting's error against the truth (deg)
 #   bench/forearm_anywhere.sh [BUILD_DIR] [MOTION:SEED:SPEED ...]
-# Default: the 11 exercises at speeds 0.7, 1.0, 1.3 on seeds 51 and 52, 20 s. Nothing was chosen
-# on these seeds (the pose calibration's uncertainty comes from seeds 41 and 43,
+#   MOTION: an exercise name, or a BVH clip's path (its whole length, as it is) or a path with
+#   "+pose" appended (paper 1's calibration pose first: sim calibration_prefix).
+# Default: the 11 exercises at speeds 0.7, 1.0, 1.3 on seeds 51 and 52, 20 s, then every clip in
+# ../shared/data/mocap with and without the pose, seed 51, speed 1. Nothing was chosen on these
+# seeds (the pose calibration's uncertainty comes from seeds 41 and 43,
 # bench/calibration_refusals.sh; the mounting-from-motion constants are principles).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -28,15 +31,24 @@ if [ ${#specs[@]} -eq 0 ]; then
       done
     done
   done
+  for clip in "$root"/../shared/data/mocap/*.bvh; do specs+=("$clip:51:1.0" "$clip+pose:51:1.0"); done
 fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 printf '%-34s %-5s %-8s %-10s %-8s %-16s %-7s %-6s %s\n' session arm mounting "RMS/max" emitted confident bound first A_from_F
 for spec in "${specs[@]}"; do
   IFS=: read -r motion seed speed <<<"$spec"
-  name="$motion-$seed-$speed"
-  printf 'motion = %s\nspeed = %s\narm = both\n' "$motion" "$speed" >"$work/$name.options"
-  "$build/tools/sim/posefuse-sim" --options "$work/$name.options" --seed "$seed" --duration 20 --quiet \
+  if [[ "$motion" == *.bvh || "$motion" == *.bvh+pose ]]; then
+    clip=${motion%+pose}
+    name="$(basename "$clip" .bvh)$([[ "$motion" == *+pose ]] && echo +pose)-$seed-$speed"
+    prefix=$([[ "$motion" == *+pose ]] && echo true || echo false)
+    printf 'motion = bvh\nbvh_path = %s\ncalibration_prefix = %s\nspeed = %s\narm = both\nduration_s = clip\n' \
+      "$clip" "$prefix" "$speed" >"$work/$name.options"
+  else
+    name="$motion-$seed-$speed"
+    printf 'motion = %s\nspeed = %s\narm = both\nduration_s = 20\n' "$motion" "$speed" >"$work/$name.options"
+  fi
+  "$build/tools/sim/posefuse-sim" --options "$work/$name.options" --seed "$seed" --quiet \
     --chunk-file "$work/$name.pfchunks" --gt "$work/$name.gt" >/dev/null
   "$build/bench/bench_sim_forearm" replay "$work/$name.pfchunks" "$work/$name.gt" "$work/$name.out" >"$work/$name.score"
   python3 - "$name" "$work/$name.out" "$work/$name.gt" "$work/$name.score" <<'PY'

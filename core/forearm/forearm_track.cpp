@@ -37,8 +37,13 @@ void ForearmTrack::set_mounting(const Quat& F_from_A, double orientation_rms_rad
   orientation_rms_rad_ = orientation_rms_rad;
 }
 
-double ForearmTrack::pronation(const Quat& K_from_F) const {
-  if (!K_from_F_reference_) return std::numeric_limits<double>::quiet_NaN();
+void ForearmTrack::set_pronation_reference(const Quat& K_from_F_reference) {
+  K_from_F_reference_ = K_from_F_reference.normalized();
+  reference_from_ = arm_.size();
+}
+
+double ForearmTrack::pronation(std::size_t i, const Quat& K_from_F) const {
+  if (!K_from_F_reference_ || i < reference_from_) return std::numeric_limits<double>::quiet_NaN();
   return pronation_angle(*K_from_F_reference_, K_from_F, side_);
 }
 
@@ -87,7 +92,8 @@ void ForearmTrack::settle_orientations_up_to(std::int64_t t_us) {
 void ForearmTrack::take_settled(std::vector<SettledArmSample>& out) {
   for (; settled_taken_ < K_from_F_.size(); ++settled_taken_) {
     const Quat& K_from_F = K_from_F_[settled_taken_];
-    out.push_back({arm_[settled_taken_], K_from_F, pronation(K_from_F), orientation_rms_rad_of_[settled_taken_]});
+    out.push_back(
+        {arm_[settled_taken_], K_from_F, pronation(settled_taken_, K_from_F), orientation_rms_rad_of_[settled_taken_]});
   }
 }
 
@@ -191,10 +197,10 @@ ForearmTrack::Confirmation ForearmTrack::confirm_detection(bool all, std::int64_
 
 TrackedArmFrame ForearmTrack::track_frame(const ArmFrame& frame, const TrackSample& sample) {
   TrackedArmFrame tracked{frame, sample, K_from_F_at(frame.t_us), 0.0, 0.0, Quat::Identity()};
-  tracked.pronation_rad = pronation(tracked.K_from_F);
   tracked.K_from_A = slerp_at(frame.t_us, [this](std::size_t i) { return K_from_A_imu_[i]; });
   const std::size_t i = index_at_or_before(arm_, frame.t_us);
   const std::size_t before = i == kNoIndex ? 0 : i, after = std::min(before + 1, arm_.size() - 1);
+  tracked.pronation_rad = pronation(before, tracked.K_from_F);
   tracked.orientation_rms_rad = std::max(orientation_rms_rad_of_[before], orientation_rms_rad_of_[after]);
   if (track_.empty() || frame.t_us > track_.back().t_us) track_.push_back(sample);
   if (sample.visible) {

@@ -79,6 +79,9 @@ class ForearmTrack {
   // A refined mounting (from motion) for the IMU samples added from now on; those before keep
   // theirs, each sample carrying the RMS error it was made with.
   void set_mounting(const Quat& F_from_A, double orientation_rms_rad);
+  // The calibration pose found later in the session: the pronation angle's zero for the IMU
+  // samples added from now on (those before keep NaN).
+  void set_pronation_reference(const Quat& K_from_F_reference);
 
   // Turn every K_from_F (and the K_from_A the gaps integrate with) towards the depth-measured
   // forearm axis of the visible frames; call before the first IMU sample. The orientations then
@@ -116,7 +119,8 @@ class ForearmTrack {
   Quat K_from_F_sample(std::size_t i) const;
   Quat K_from_F_at(std::int64_t t_us) const;
   Quat K_from_F_imu_at(std::int64_t t_us) const;
-  double pronation(const Quat& K_from_F) const;
+  // NaN for samples before the reference's first one (sample index i).
+  double pronation(std::size_t i, const Quat& K_from_F) const;
   template <class SampleAt>
   Quat slerp_at(std::int64_t t_us, const SampleAt& sample_at) const;
   void settle_orientations_up_to(std::int64_t t_us);
@@ -127,6 +131,7 @@ class ForearmTrack {
   bool has_model_;
   Quat K_from_W_;
   std::optional<Quat> K_from_F_reference_;
+  std::size_t reference_from_ = 0;  // the first sample whose pronation uses it
   double orientation_rms_rad_;
 
   // Every IMU sample; K_from_A is eq. 11's until the sample is settled, then corrected.

@@ -13,6 +13,8 @@ inline constexpr double kConfidentErrorBoundRad = 15.0 * 3.14159265358979323846 
 // A sample with at least this confidence is predicted within kConfidentErrorBoundRad.
 inline constexpr double kConfidentAt = 0.5;
 inline constexpr double kBound99OverRms = 1.944;
+// The same for a direction's error (2-D isotropic, the Rayleigh distribution): sqrt(ln 100).
+inline constexpr double kDirectionBound99OverRms = 2.146;
 // The causal orientation filter's held-out RMS error on BROAD (docs/benchmarks.md "IMU
 // orientation on BROAD", leave-one-trial-out: 1.92 degrees).
 inline constexpr double kFilterRmsRad = 1.92 * 3.14159265358979323846 / 180.0;

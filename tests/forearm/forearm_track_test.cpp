@@ -69,5 +69,24 @@ TEST(ForearmTrack, ARefinedMountingAppliesToLaterSamplesWithItsUncertainty) {
   EXPECT_DOUBLE_EQ(out.frames[0].orientation_rms_rad, 20.0 * kDeg);
 }
 
+TEST(ForearmTrack, APronationReferenceFoundLaterAppliesFromItsSample) {
+  ForearmTrack track(Side::kRight, ForearmModel{}, false, Quat::Identity(), std::nullopt, 20.0 * kDeg);
+  add_samples(track, 0, 5);
+  track.set_pronation_reference(Quat::Identity());
+  add_samples(track, 50'000, 5);
+  ArmFrame before, after;
+  before.t_us = 25'000;
+  after.t_us = 75'000;
+  track.add_frame(before);
+  track.add_frame(after);
+  const ForearmTrackOutput out = track.process(true);
+  ASSERT_EQ(out.samples.size(), 10u);
+  for (std::size_t i = 0; i < out.samples.size(); ++i) EXPECT_EQ(std::isnan(out.samples[i].pronation_rad), i < 5) << i;
+  ASSERT_EQ(out.frames.size(), 2u);
+  EXPECT_TRUE(std::isnan(out.frames[0].pronation_rad));
+  // Turned about K's z (= F's z here) only: no twist about y, so no pronation.
+  EXPECT_NEAR(out.frames[1].pronation_rad, 0.0, 1e-9);
+}
+
 }  // namespace
 }  // namespace posefuse::forearm

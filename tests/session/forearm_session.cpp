@@ -36,12 +36,13 @@ double smooth_ramp(double x) {
 sim::ScriptedMotion arm_motion(const ForearmSessionOptions& o) {
   sim::ScriptedMotion m;
   m.duration_s = o.duration_s;
-  const double hold = o.hold_s;
-  m.angles = [hold, extension = o.elbow_extension_rad](double t) {
+  const double hold = o.hold_s, before = o.motion_before_hold_s;
+  m.angles = [hold, before, extension = o.elbow_extension_rad](double t) {
     sim::ArmAngles a = sim::calibration_pose_angles();
     a.elbow_flexion_rad -= extension;
-    const double u = t - hold;
-    const double s = smooth_ramp(u / 1.0);
+    const bool first_motion = before > 0.0 && t < before;
+    const double u = first_motion ? t : t - before - hold;
+    const double s = first_motion ? smooth_ramp(t / 1.0) * smooth_ramp((before - t) / 1.0) : smooth_ramp(u / 1.0);
     a.shoulder_abduction_rad += s * -0.5 * std::sin(2 * pi * 0.35 * u);
     a.shoulder_flexion_rad += s * 0.4 * std::sin(2 * pi * 0.3 * u);
     a.elbow_flexion_rad += s * 0.6 * std::sin(2 * pi * 0.45 * u);

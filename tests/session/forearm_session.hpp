@@ -20,7 +20,10 @@ namespace posefuse::session::testing {
 
 struct ForearmSessionOptions {
   double duration_s = 9.0;
-  double hold_s = 3.0;  // calibration pose from t = 0 (camera clock)
+  double hold_s = 3.0;  // calibration pose from t = motion_before_hold_s (camera clock)
+  // The motion (from rest, ending at rest) for this long before the hold: a calibration pose
+  // later in the session.
+  double motion_before_hold_s = 0.0;
   // The whole motion with the elbow this much straighter: 0.9 rad lowers the hold's forearm to
   // 52 degrees from up, which is no calibration pose (paper 1 Fig. 3b: within 45 degrees).
   double elbow_extension_rad = 0.0;

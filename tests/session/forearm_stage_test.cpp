@@ -46,13 +46,14 @@ struct StageRun {
 // One pipeline run per options, shared by the tests that read it.
 const StageRun& run_session(const ForearmSessionOptions& options) {
   static std::map<std::string, std::unique_ptr<StageRun>> cache;
-  const std::string key = std::to_string(options.strap_drawn) + std::to_string(options.buzzer) +
-                          std::to_string(options.camera_alignment) + std::to_string(options.hold_s) +
-                          std::to_string(options.elbow_bias_m.norm()) + options.axis +
-                          std::to_string(options.shoulder_bias_m.norm()) + std::to_string(options.upper_arm_drawn) +
-                          options.upper_arm + "/" + std::to_string(options.ble_repeat_s) + "/" +
-                          std::to_string(options.arm_clock_drift) + "/" + std::to_string(options.buzzer_tone_hz) + "/" +
-                          options.buzzer_hz_option + "/" + std::to_string(options.elbow_extension_rad);
+  const std::string key =
+      std::to_string(options.strap_drawn) + std::to_string(options.buzzer) + std::to_string(options.camera_alignment) +
+      std::to_string(options.hold_s) + std::to_string(options.elbow_bias_m.norm()) + options.axis +
+      std::to_string(options.shoulder_bias_m.norm()) + std::to_string(options.upper_arm_drawn) + options.upper_arm +
+      "/" + std::to_string(options.ble_repeat_s) + "/" + std::to_string(options.arm_clock_drift) + "/" +
+      std::to_string(options.buzzer_tone_hz) + "/" + options.buzzer_hz_option + "/" +
+      std::to_string(options.elbow_extension_rad) + "/" + std::to_string(options.motion_before_hold_s) + "/" +
+      std::to_string(options.duration_s) + "/" + std::to_string(options.occlusion_begin_s);
   auto& slot = cache[key];
   if (!slot) {
     slot = std::make_unique<StageRun>();
@@ -443,6 +444,53 @@ TEST(ForearmStage, AxisCorrectionCanBeTurnedOff) {
   for (const auto& [correction, e] : errors) {
     EXPECT_LT(e.orientation_rms_rad, 3.0 * kDeg) << correction;
     EXPECT_LT(e.orientation_max_rad, 6.0 * kDeg) << correction;
+  }
+}
+
+TEST(ForearmStage, ACalibrationPoseLaterInTheSessionReplacesTheMountingFromMotion) {
+  ForearmSessionOptions options;
+  options.motion_before_hold_s = 4.5;  // past forearm.calibration_s (4 s): no pose at the start
+  options.hold_s = 3.0;                // the pose from 4.5 to 7.5 s
+  options.duration_s = 12.0;
+  options.occlusion_begin_s = 9.5;
+  options.occlusion_end_s = 10.2;
+  const StageRun& r = run_session(options);
+  EXPECT_TRUE(has_warning(r, "FOREARM_CALIBRATION", "forearm[arm_r].calibration", "from the session's motion"));
+  EXPECT_TRUE(has_warning(r, "FOREARM_MOUNTING_FROM_MOTION", "forearm[arm_r].mounting", "first estimate"));
+  EXPECT_TRUE(has_warning(r, "FOREARM_CALIBRATION_LATER", "forearm[arm_r].calibration", "the calibration pose at"));
+  // Before the pose: no pronation, not confident; after it: the pose's mounting, confident,
+  // with pronation.
+  std::size_t before = 0, after = 0;
+  double after_max_error = 0.0;
+  for (const auto& result : r.sink.results) {
+    if (!result.has_forearm_orientations()) continue;
+    const v1::ForearmOrientationBatch& b = result.forearm_orientations();
+    for (int i = 0; i < b.t_us_size(); ++i) {
+      if (std::isnan(b.pronation_rad(i))) {
+        ++before;
+        EXPECT_LT(b.confidence(i), 0.5);
+      } else {
+        ++after;
+        EXPECT_DOUBLE_EQ(b.uncertainty_rad(i), forearm::kPoseCalibrationRmsRad);
+      }
+    }
+  }
+  const testing::ForearmSessionErrors e = testing::evaluate_forearm_results(r.truth, r.sink.results);
+  after_max_error = e.confident_max_rad;
+  std::printf(
+      "later pose: %zu samples before it, %zu after; confident max error %.2f deg, pronation max error %.2f deg\n",
+      before, after, after_max_error / kDeg, e.pronation_max_rad / kDeg);
+  EXPECT_GT(before, 100u);
+  EXPECT_GT(after, 100u);
+  EXPECT_EQ(e.confident_beyond_15_deg, 0u);
+  EXPECT_LT(after_max_error, 6.0 * kDeg);
+  EXPECT_LT(e.pronation_max_rad, 6.0 * kDeg);
+  // The report: the pose's mounting.
+  for (const auto& result : r.sink.results) {
+    if (result.has_calibration()) {
+      ASSERT_EQ(result.calibration().forearms_size(), 1);
+      EXPECT_EQ(result.calibration().forearms(0).mounting_source(), v1::ForearmModel::CALIBRATION_POSE);
+    }
   }
 }
 

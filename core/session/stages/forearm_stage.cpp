@@ -145,11 +145,22 @@ void ForearmStage::hand_on_frames_done(bool all, StageOutput& out) {
 void ForearmStage::hand_on_track(Device& device, forearm::ForearmTrackOutput&& track, StageOutput& out) {
   const v1::Arm arm = *device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT;
   ForearmOrientations orientations = forearm_orientations_of(device.id, arm, track.samples);
-  if (device.from_motion) {
+  if (device.from_motion && !device.later_pose) {
+    const std::int64_t keep_us = seconds_to_us(options_.calibration_s);
     for (const forearm::TrackedArmFrame& t : track.frames) {
+      device.recent_frames.emplace_back(t.frame, (K_from_W_->conjugate() * t.K_from_A).normalized());
+      ++device.frames_since_pose_search;
       if (!t.frame.axis_from_depth) continue;
       device.mounting_frames.push_back(
           {t.frame.t_us, t.K_from_A, t.frame.wrist_K - t.frame.elbow_K, t.frame.upper_arm_direction_K});
+    }
+    while (!device.recent_frames.empty() &&
+           device.recent_frames.front().first.t_us < device.recent_frames.back().first.t_us - keep_us) {
+      device.recent_frames.pop_front();
+    }
+    if (device.frames_since_pose_search >= kMinNewMountingFrames && !device.recent_frames.empty()) {
+      device.frames_since_pose_search = 0;
+      search_later_pose(device, out);
     }
   }
   // The track first: the gaps' live estimate of these frames uses the fit's frames up to the
@@ -265,13 +276,9 @@ std::optional<Quat> ForearmStage::W_from_A_at(const Device& device, std::int64_t
 void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
   const std::string field = "forearm[" + device.id + "]";
   const std::int64_t window_end_us = *first_frame_us_ + seconds_to_us(options_.calibration_s);
-  forearm::CalibrationFrameOptions frame_options;
-  frame_options.pose_orientation = options_.pose_orientation;
-  frame_options.upper_arm_from_depth = options_.upper_arm_from_depth;
-  frame_options.min_upper_arm_frames = static_cast<std::size_t>(calibration_options_.min_still_frames);
   const forearm::CalibrationFrames selected = forearm::select_calibration_frames(
       device.frames, window_end_us, *K_from_W_ * Vec3::UnitZ(),
-      [&](std::int64_t t_us) { return W_from_A_at(device, t_us); }, frame_options);
+      [&](std::int64_t t_us) { return W_from_A_at(device, t_us); }, calibration_frame_options());
   if (options_.pose_orientation && options_.upper_arm_from_depth && !selected.depth_upper_arm) {
     out.warn("FOREARM_UPPER_ARM_NOT_SEEN", field + ".upper_arm",
              "the upper arm was measured in the depth image at " + std::to_string(selected.upper_arm_frames) +
@@ -318,6 +325,57 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
   out.hand_on(std::move(start));
 }
 
+forearm::CalibrationFrameOptions ForearmStage::calibration_frame_options() const {
+  forearm::CalibrationFrameOptions frame_options;
+  frame_options.pose_orientation = options_.pose_orientation;
+  frame_options.upper_arm_from_depth = options_.upper_arm_from_depth;
+  frame_options.min_upper_arm_frames = static_cast<std::size_t>(calibration_options_.min_still_frames);
+  return frame_options;
+}
+
+void ForearmStage::search_later_pose(Device& device, StageOutput& out) {
+  std::vector<forearm::ArmFrame> frames;
+  for (const auto& [frame, W_from_A] : device.recent_frames) frames.push_back(frame);
+  const auto W_from_A_at = [&](std::int64_t t_us) -> std::optional<Quat> {
+    const auto at = std::lower_bound(device.recent_frames.begin(), device.recent_frames.end(), t_us,
+                                     [](const auto& f, std::int64_t t) { return f.first.t_us < t; });
+    if (at == device.recent_frames.end() || at->first.t_us != t_us) return std::nullopt;
+    return at->second;
+  };
+  const forearm::CalibrationFrames selected = forearm::select_calibration_frames(
+      frames, frames.back().t_us, *K_from_W_ * Vec3::UnitZ(), W_from_A_at, calibration_frame_options());
+  forearm::ArmCalibration calibrated;
+  try {
+    calibrated = forearm::calibrate_arm(selected, *K_from_W_, calibration_options_);
+  } catch (const Error&) {
+    return;  // no pose here (yet)
+  }
+  // A pose whose forearm axis in A disagrees with the motion's beyond both their 99 % bounds is
+  // not the pose it seems (a passing arm that happened to hold still).
+  const Quat& pose_F_from_A = calibrated.calibration.model.F_from_A;
+  if (device.mounting) {
+    const Vec3 pose_axis = pose_F_from_A.conjugate() * Vec3::UnitY();
+    const Vec3 motion_axis = device.mounting->F_from_A.conjugate() * Vec3::UnitY();
+    const double disagreement = std::acos(std::clamp(pose_axis.dot(motion_axis), -1.0, 1.0));
+    const double bound = forearm::kDirectionBound99OverRms * device.mounting->axis_rms_rad +
+                         forearm::kBound99OverRms * forearm::kPoseCalibrationRmsRad;
+    if (disagreement > bound) return;
+  }
+  device.later_pose = true;
+  device.recent_frames.clear();
+  device.calibration = calibrated.calibration;
+  device.has_model = false;  // the gap recovery started without a strap model
+  device.tracker->set_mounting(pose_F_from_A, forearm::kPoseCalibrationRmsRad);
+  device.tracker->set_pronation_reference(calibrated.K_from_F_held);
+  out.warn("FOREARM_CALIBRATION_LATER", "forearm[" + device.id + "].calibration",
+           "the calibration pose at " +
+               fixed_text(1e-6 * static_cast<double>(frames.back().t_us - *first_frame_us_), 1) + " s (" +
+               std::to_string(calibrated.calibration.frame_count) + " frames, eq. 9 spread " +
+               fixed_text(degrees(calibrated.calibration.F_from_A_spread_rad), 1) +
+               " deg): its mounting replaces the one from motion, and pronation relative to it is given, from then "
+               "on; IMU positions still need the pose within forearm.calibration_s of the start");
+}
+
 std::vector<forearm::MountingFrame> ForearmStage::buffered_mounting_frames(const Device& device) const {
   std::vector<forearm::MountingFrame> frames;
   for (const forearm::ArmFrame& f : device.frames) {
@@ -331,7 +389,7 @@ std::vector<forearm::MountingFrame> ForearmStage::buffered_mounting_frames(const
 
 void ForearmStage::estimate_motion_mountings(bool finishing, StageOutput& out) {
   for (Device& device : devices_) {
-    if (!device.from_motion) continue;
+    if (!device.from_motion || device.later_pose) continue;
     // Each estimate uses every frame so far; re-estimating once the frames have grown by a tenth
     // keeps the work linear in the session's length.
     const std::size_t seen = device.tracker ? device.mounting_frames.size() : device.frames.size();

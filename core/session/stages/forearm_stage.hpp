@@ -33,7 +33,8 @@
 // camera frame, FramesDone: every ArmTrack frame up to then has been handed on.
 //  4. An arm whose calibration pose is missing or refused is not given up: its mounting F_from_A
 //     is estimated from the session's natural motion (forearm/mounting_from_motion.hpp, warning
-//     FOREARM_MOUNTING_FROM_MOTION with the estimate and what limits it). Its orientations carry
+//     FOREARM_MOUNTING_FROM_MOTION with the estimate and what limits it), until a calibration pose
+//     later in the session replaces it (FOREARM_CALIBRATION_LATER; pronation from then on). Its orientations carry
 //     the estimate's predicted error and confidence, grow more certain as the estimate is
 //     refined, and have no pronation relative to a calibration pose (NaN); no strap model, so no
 //     IMU positions. FOREARM_MOUNTING_NOT_OBSERVABLE names an arm for which motion gave none.
@@ -49,6 +50,7 @@
 #include <string>
 #include <vector>
 
+#include "forearm/calibration_frames.hpp"
 #include "forearm/forearm_model.hpp"
 #include "forearm/forearm_track.hpp"
 #include "forearm/mounting_from_motion.hpp"
@@ -104,6 +106,11 @@ class ForearmStage : public Stage {
     std::size_t frames_at_last_estimate = 0;
     std::optional<forearm::MountingEstimate> mounting;
     std::string mounting_why_not;
+    // The calibration pose searched for in the last forearm.calibration_s of tracked frames (with
+    // the IMU's W_from_A at each); once found, its mounting replaces the one from motion.
+    std::deque<std::pair<forearm::ArmFrame, forearm::Quat>> recent_frames;
+    std::size_t frames_since_pose_search = 0;
+    bool later_pose = false;
   };
 
   // Calibrates once the calibration window has passed, then feeds the trackers.
@@ -124,6 +131,10 @@ class ForearmStage : public Stage {
   void estimate_motion_mountings(bool finishing, StageOutput& out);
   void start_motion_track(Device& device, const forearm::MountingEstimate& estimate, StageOutput& out);
   std::vector<forearm::MountingFrame> buffered_mounting_frames(const Device& device) const;
+  // A calibration pose among the recent tracked frames of an arm whose mounting came from motion:
+  // taken when calibrate_arm accepts it and its forearm axis agrees with the motion's estimate.
+  void search_later_pose(Device& device, StageOutput& out);
+  forearm::CalibrationFrameOptions calibration_frame_options() const;
 
   bool active_ = false;
   std::vector<Device> devices_;  // header order
