@@ -40,8 +40,9 @@ for spec in "${specs[@]}"; do
   IFS=: read -r motion seed speed <<<"$spec"
   if [[ "$motion" == *.bvh || "$motion" == *.bvh+pose ]]; then
     clip=${motion%+pose}
-    name="$(basename "$clip" .bvh)$([[ "$motion" == *+pose ]] && echo +pose)-$seed-$speed"
-    prefix=$([[ "$motion" == *+pose ]] && echo true || echo false)
+    prefix=false
+    if [[ "$motion" == *+pose ]]; then prefix=true; fi
+    name="$(basename "$clip" .bvh)$([ "$prefix" = true ] && echo +pose || true)-$seed-$speed"
     printf 'motion = bvh\nbvh_path = %s\ncalibration_prefix = %s\nspeed = %s\narm = both\nduration_s = clip\n' \
       "$clip" "$prefix" "$speed" >"$work/$name.options"
   else

@@ -36,6 +36,45 @@ double effective_count(const std::vector<Eigen::Vector2d>& residuals) {
   return std::max(1.0, static_cast<double>(n) * (1.0 - rho) / (1.0 + rho));
 }
 
+// The forearm axis in A fitted to frames: the normalised sum of each frame's forearm direction
+// turned into A, the residuals (in a plane normal to it), their RMS angle, and how far the
+// forearm turned in K (RMS angle from its mean direction).
+struct AxisFit {
+  bool defined = false;
+  Vec3 y_A = Vec3::UnitY();
+  std::vector<Eigen::Vector2d> residuals;
+  double residual_rms = 0.0;
+  double spread_rms = 0.0;
+};
+
+AxisFit fit_axis(const std::vector<MountingFrame>& frames) {
+  AxisFit fit;
+  std::vector<Vec3> axis_A;
+  Vec3 sum_A = Vec3::Zero(), sum_K = Vec3::Zero();
+  for (const MountingFrame& f : frames) {
+    axis_A.push_back(f.K_from_A.normalized().conjugate() * f.forearm_K.normalized());
+    sum_A += axis_A.back();
+    sum_K += f.forearm_K.normalized();
+  }
+  const double n = static_cast<double>(frames.size());
+  if (frames.empty() || sum_A.norm() < 1e-9 * n) return fit;
+  fit.defined = true;
+  fit.y_A = sum_A.normalized();
+  const Quat A_from_B = Quat::FromTwoVectors(Vec3::UnitY(), fit.y_A);
+  const Vec3 e1 = A_from_B * Vec3::UnitX(), e2 = A_from_B * Vec3::UnitZ();
+  const Vec3 mean_K = sum_K.normalized();
+  double residual_sq = 0.0, spread_sq = 0.0;
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    fit.residuals.emplace_back(axis_A[i].dot(e1), axis_A[i].dot(e2));
+    residual_sq += fit.residuals.back().squaredNorm();
+    const double turned = std::acos(std::clamp(mean_K.dot(frames[i].forearm_K.normalized()), -1.0, 1.0));
+    spread_sq += turned * turned;
+  }
+  fit.residual_rms = std::sqrt(residual_sq / n);
+  fit.spread_rms = std::sqrt(spread_sq / n);
+  return fit;
+}
+
 // The middle of the shortest arc holding every angle: opposite the widest gap between them.
 double arc_centre(std::vector<double> angles) {
   for (double& a : angles) a = std::fmod(std::fmod(a, 2.0 * kPi) + 2.0 * kPi, 2.0 * kPi);
@@ -84,44 +123,55 @@ std::optional<MountingEstimate> estimate_mounting(const std::vector<MountingFram
     return std::nullopt;
   }
 
-  // The axis in A: each frame's forearm direction turned into A.
-  std::vector<Vec3> axis_A;
-  Vec3 sum_A = Vec3::Zero(), sum_K = Vec3::Zero();
-  for (const MountingFrame& f : frames) {
-    axis_A.push_back(f.K_from_A.normalized().conjugate() * f.forearm_K.normalized());
-    sum_A += axis_A.back();
-    sum_K += f.forearm_K.normalized();
-  }
-  const double n = static_cast<double>(frames.size());
-  if (sum_A.norm() < 1e-9 * n) {
+  AxisFit fit = fit_axis(frames);
+  if (!fit.defined) {
     why_not = "the forearm axes seen by the camera, turned into the IMU's frame, have no mean direction";
     return std::nullopt;
   }
-  const Vec3 y_A = sum_A.normalized();
+  std::size_t outliers = 0;
+  if (fit.residual_rms > options.max_axis_residual_rad) {
+    // Some frames' forearm axis may be poor (the forearm pointing at the camera, merged with the
+    // body) or the IMU's orientation momentarily wrong: keep the frames a robust 3-sigma rule
+    // (median + 3 x 1.4826 MAD of the residual angles) accepts, if they are a majority.
+    std::vector<double> angle;
+    for (const Eigen::Vector2d& r : fit.residuals) angle.push_back(r.norm());
+    std::vector<double> sorted = angle;
+    std::sort(sorted.begin(), sorted.end());
+    const double median = percentile(sorted, 0.5);
+    std::vector<double> deviation;
+    for (double a : angle) deviation.push_back(std::abs(a - median));
+    std::sort(deviation.begin(), deviation.end());
+    const double cut = median + 3.0 * 1.4826 * percentile(deviation, 0.5);
+    std::vector<MountingFrame> inliers;
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      if (angle[i] <= cut) inliers.push_back(frames[i]);
+    }
+    const AxisFit inlier_fit =
+        2 * inliers.size() > frames.size() && inliers.size() >= options.min_frames ? fit_axis(inliers) : AxisFit{};
+    // The agreeing frames must show the IMU turning with the forearm: their axes in A scatter at
+    // most half as much as the forearm turned in K (the IMU's rotation explains at least three
+    // quarters of it). A still IMU's axes in A scatter exactly as much as the forearm turned.
+    if (!inlier_fit.defined || inlier_fit.residual_rms > options.max_axis_residual_rad ||
+        inlier_fit.residual_rms > 0.5 * inlier_fit.spread_rms) {
+      why_not = "the forearm axes seen by the camera, turned into the IMU's frame, scatter " +
+                degrees_text(fit.residual_rms) + " deg RMS (bound " + degrees_text(options.max_axis_residual_rad) +
+                " deg; the forearm turned " + degrees_text(fit.spread_rms) +
+                " deg RMS in the camera) and no majority of the frames agrees: the IMU does not turn with this "
+                "forearm, or its orientation or the camera's forearm axis is wrong";
+      return std::nullopt;
+    }
+    outliers = frames.size() - inliers.size();
+    frames = std::move(inliers);
+    fit = inlier_fit;
+  }
+  const Vec3& y_A = fit.y_A;
   const Quat A_from_B = Quat::FromTwoVectors(Vec3::UnitY(), y_A);  // B: any frame with y along y_A
-  const Vec3 e1 = A_from_B * Vec3::UnitX(), e2 = A_from_B * Vec3::UnitZ();
-  std::vector<Eigen::Vector2d> residuals;
-  double residual_sq = 0.0, spread_sq = 0.0;
-  const Vec3 mean_K = sum_K.normalized();
-  for (std::size_t i = 0; i < frames.size(); ++i) {
-    residuals.emplace_back(axis_A[i].dot(e1), axis_A[i].dot(e2));
-    residual_sq += residuals.back().squaredNorm();
-    const double turned = std::acos(std::clamp(mean_K.dot(frames[i].forearm_K.normalized()), -1.0, 1.0));
-    spread_sq += turned * turned;
-  }
-  const double residual_rms = std::sqrt(residual_sq / n);
-  if (residual_rms > options.max_axis_residual_rad) {
-    why_not = "the forearm axes seen by the camera, turned into the IMU's frame, scatter " +
-              degrees_text(residual_rms) + " deg RMS (bound " + degrees_text(options.max_axis_residual_rad) +
-              " deg; the forearm turned " + degrees_text(std::sqrt(spread_sq / n)) +
-              " deg RMS in the camera): the IMU does not turn with this forearm";
-    return std::nullopt;
-  }
   MountingEstimate estimate;
   estimate.frames = frames.size();
+  estimate.outlier_frames = outliers;
   estimate.seconds = 1e-6 * static_cast<double>(frames.back().t_us - frames.front().t_us);
-  estimate.axis_spread_rad = std::sqrt(spread_sq / n);
-  estimate.axis_rms_rad = residual_rms / std::sqrt(effective_count(residuals));
+  estimate.axis_spread_rad = fit.spread_rms;
+  estimate.axis_rms_rad = fit.residual_rms / std::sqrt(effective_count(fit.residuals));
 
   // The roll: psi with A_from_F = A_from_B * Ry(psi). The nominal mounting is A_from_F = I.
   const double nominal_psi = twist_about_y(A_from_B.conjugate());

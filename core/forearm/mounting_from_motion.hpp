@@ -56,17 +56,21 @@ struct MountingEstimate {
   double axis_rms_rad = 0.0;  // predicted RMS angle error of y_F's direction in A
   double roll_rms_rad = 0.0;  // predicted RMS error of the roll about y_F
   std::size_t frames = 0;
-  std::size_t hinge_frames = 0;  // frames with the elbow flexed and the upper arm measured
-  double seconds = 0.0;          // first to last frame used
-  double axis_spread_rad = 0.0;  // how much the forearm turned in K: RMS angle from its mean direction
-  double twist_span_rad = 0.0;   // the roll minus pronation seen over the hinge frames (noise removed)
-  bool roll_from_hinge = false;  // the hinge frames bound the roll (else the nominal mounting alone)
-  std::string roll_limit;        // what limits the roll, in words
+  std::size_t outlier_frames = 0;  // frames left out: their axis in A beyond the robust 3-sigma rule
+  std::size_t hinge_frames = 0;    // frames with the elbow flexed and the upper arm measured
+  double seconds = 0.0;            // first to last frame used
+  double axis_spread_rad = 0.0;    // how much the forearm turned in K: RMS angle from its mean direction
+  double twist_span_rad = 0.0;     // the roll minus pronation seen over the hinge frames (noise removed)
+  bool roll_from_hinge = false;    // the hinge frames bound the roll (else the nominal mounting alone)
+  std::string roll_limit;          // what limits the roll, in words
 };
 
-// Frames in any order; non-finite ones and those with a zero forearm are skipped. Returns none,
-// with `why_not` set, when fewer than min_frames remain or the axes in A scatter beyond
-// max_axis_residual_rad (the IMU does not turn with this forearm).
+// Frames in any order; non-finite ones and those with a zero forearm are skipped. When the axes
+// in A scatter beyond max_axis_residual_rad, the frames within median + 3 x 1.4826 MAD of the
+// residual angles are kept if they are a majority and scatter less (outlier_frames counts the
+// rest). Returns none, with `why_not` set, when fewer than min_frames remain or no majority of
+// frames agrees (the IMU does not turn with this forearm, or its orientation or the camera's
+// forearm axis is wrong).
 std::optional<MountingEstimate> estimate_mounting(const std::vector<MountingFrame>& frames, Side side,
                                                   const MountingFromMotionOptions& options, std::string& why_not);
 

@@ -149,6 +149,21 @@ TEST(MountingFromMotion, AnImuThatDoesNotTurnWithTheForearmIsRefused) {
   EXPECT_NE(why.find("scatter"), std::string::npos) << why;
 }
 
+TEST(MountingFromMotion, AMinorityOfFramesWithAWrongForearmAxisIsLeftOut) {
+  const Quat F_from_A = rot(10 * kDeg, Vec3::UnitY());
+  std::vector<MountingFrame> frames = frames_of(Side::kRight, F_from_A, 300, 60 * kDeg, 70 * kDeg);
+  // Every third frame's forearm axis 40 degrees off (foreshortened towards the camera).
+  for (std::size_t i = 0; i < frames.size(); i += 3)
+    frames[i].forearm_K = rot(40 * kDeg, Vec3::UnitX()) * frames[i].forearm_K;
+  std::string why;
+  const std::optional<MountingEstimate> e = estimate_mounting(frames, Side::kRight, {}, why);
+  ASSERT_TRUE(e) << why;
+  EXPECT_EQ(e->outlier_frames, 100u);
+  EXPECT_EQ(e->frames, 200u);
+  const Vec3 true_axis = F_from_A.conjugate() * Vec3::UnitY(), axis = e->F_from_A.conjugate() * Vec3::UnitY();
+  EXPECT_LT(std::acos(std::min(1.0, true_axis.dot(axis))), 1e-9);
+}
+
 TEST(MountingFromMotion, TooFewUsableFramesAreNamed) {
   std::vector<MountingFrame> frames = frames_of(Side::kRight, Quat::Identity(), 20, 30 * kDeg, 60 * kDeg);
   for (std::size_t i = 0; i < 10; ++i) frames[i].forearm_K = Vec3(NAN, 0, 0);

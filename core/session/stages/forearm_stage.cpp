@@ -449,9 +449,12 @@ void ForearmStage::start_motion_track(Device& device, const forearm::MountingEst
   out.hand_on(std::move(start));
   out.warn("FOREARM_MOUNTING_FROM_MOTION", "forearm[" + device.id + "].mounting",
            "first estimate from " + std::to_string(estimate.frames) + " frames over " +
-               fixed_text(estimate.seconds, 1) + " s: forearm axis +-" + fixed_text(degrees(estimate.axis_rms_rad), 1) +
-               " deg RMS, roll +-" + fixed_text(degrees(estimate.roll_rms_rad), 1) + " deg RMS (" +
-               estimate.roll_limit +
+               fixed_text(estimate.seconds, 1) + " s" +
+               (estimate.outlier_frames
+                    ? " (" + std::to_string(estimate.outlier_frames) + " more left out: their forearm axis disagreed)"
+                    : std::string()) +
+               ": forearm axis +-" + fixed_text(degrees(estimate.axis_rms_rad), 1) + " deg RMS, roll +-" +
+               fixed_text(degrees(estimate.roll_rms_rad), 1) + " deg RMS (" + estimate.roll_limit +
                "); refined as the session goes on, each orientation with its predicted error and confidence; no IMU "
                "positions (no strap model)");
 }
