@@ -85,6 +85,7 @@ void ForearmTrack::settle_orientations_up_to(std::int64_t t_us) {
   const AxisCorrection correction = axis_correction();
   for (std::size_t i = K_from_F_.size(); i < arm_.size() && arm_[i].t_us <= t_us; ++i) {
     K_from_F_.push_back(K_from_F_sample(i));
+    settled_rms_rad_.push_back(std::max(orientation_rms_rad_of_[i], observed_rms_rad_));
     arm_[i].K_from_A = correction.K_from_A(arm_[i].K_from_A);
   }
 }
@@ -93,7 +94,7 @@ void ForearmTrack::take_settled(std::vector<SettledArmSample>& out) {
   for (; settled_taken_ < K_from_F_.size(); ++settled_taken_) {
     const Quat& K_from_F = K_from_F_[settled_taken_];
     out.push_back(
-        {arm_[settled_taken_], K_from_F, pronation(settled_taken_, K_from_F), orientation_rms_rad_of_[settled_taken_]});
+        {arm_[settled_taken_], K_from_F, pronation(settled_taken_, K_from_F), settled_rms_rad_[settled_taken_]});
   }
 }
 
@@ -141,9 +142,9 @@ ForearmTrackOutput ForearmTrack::process(bool all) {
   }
   // Orientations before the next queued frame have seen every frame before them; without a
   // queued frame they wait for one at most kMaxOrientationWaitS (IMU time), at the end not at
-  // all, and without the axis correction not at all.
+  // all.
   if (!arm_.empty()) {
-    if (all || !axis_correction_) {
+    if (all) {
       settle_orientations_up_to(arm_.back().t_us);
     } else if (!frames_.empty()) {
       settle_orientations_up_to(frames_.front().t_us - 1);
@@ -201,7 +202,18 @@ TrackedArmFrame ForearmTrack::track_frame(const ArmFrame& frame, const TrackSamp
   const std::size_t i = index_at_or_before(arm_, frame.t_us);
   const std::size_t before = i == kNoIndex ? 0 : i, after = std::min(before + 1, arm_.size() - 1);
   tracked.pronation_rad = pronation(before, tracked.K_from_F);
-  tracked.orientation_rms_rad = std::max(orientation_rms_rad_of_[before], orientation_rms_rad_of_[after]);
+  // The camera's forearm axis against the orientation's: a direction error d of an isotropic
+  // 3-D rotation error has RMS sqrt(2/3) of the rotation's, so the orientation's error is at
+  // least about d / sqrt(2/3) RMS, whatever the model predicts; it holds until the next axis.
+  if (frame.axis_from_depth && frame.forearm_tracked) {
+    const Vec3 axis_K = frame.wrist_K - frame.elbow_K;
+    if (axis_K.norm() > 0.0 && axis_K.allFinite()) {
+      const double d = std::acos(std::clamp((tracked.K_from_F * Vec3::UnitY()).dot(axis_K.normalized()), -1.0, 1.0));
+      observed_rms_rad_ = d / std::sqrt(2.0 / 3.0);
+    }
+  }
+  tracked.orientation_rms_rad =
+      std::max({orientation_rms_rad_of_[before], orientation_rms_rad_of_[after], observed_rms_rad_});
   if (track_.empty() || frame.t_us > track_.back().t_us) track_.push_back(sample);
   if (sample.visible) {
     ++visible_frames_;

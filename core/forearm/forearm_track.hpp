@@ -47,7 +47,8 @@ struct SettledArmSample {
   ArmSample sample;  // K_from_A as the gaps integrate it (axis-corrected)
   Quat K_from_F = Quat::Identity();
   double pronation_rad = 0.0;  // NaN without the calibration pose (no reference)
-  // Predicted RMS angle of K_from_F's error (orientation_uncertainty.hpp).
+  // Predicted RMS angle of K_from_F's error (orientation_uncertainty.hpp), at least what the
+  // camera's last forearm axis before it showed.
   double orientation_rms_rad = 0.0;
 };
 
@@ -84,10 +85,10 @@ class ForearmTrack {
   void set_pronation_reference(const Quat& K_from_F_reference);
 
   // Turn every K_from_F (and the K_from_A the gaps integrate with) towards the depth-measured
-  // forearm axis of the visible frames; call before the first IMU sample. The orientations then
+  // forearm axis of the visible frames; call before the first IMU sample. The orientations
   // wait for the camera frames up to their time (at most 1 s of IMU time when no frame is
-  // queued), so each gets the correction of the frames before it whatever order the streams
-  // arrive in; without it every sample is settled at once.
+  // queued) in any case, so each gets the correction and the camera check of the frames before
+  // it whatever order the streams arrive in.
   void use_axis_correction(const VisualAxisCorrectionOptions& options);
 
   // Arm IMU samples on the camera clock, in time order (earlier or equal times are dropped).
@@ -138,7 +139,9 @@ class ForearmTrack {
   std::vector<ArmSample> arm_;
   std::vector<Quat> K_from_F_imu_;              // eq. 11, before the axis correction
   std::vector<Quat> K_from_A_imu_;              // eq. 11, before the axis correction
-  std::vector<double> orientation_rms_rad_of_;  // per sample
+  std::vector<double> orientation_rms_rad_of_;  // per sample, the mounting's and the filter's
+  std::vector<double> settled_rms_rad_;         // per settled sample: at least the camera's observed
+  double observed_rms_rad_ = 0.0;               // the last camera forearm axis's disagreement, as a 3-D RMS
   std::vector<Quat> K_from_F_;                  // settled (corrected), one per settled sample
   std::size_t settled_taken_ = 0;               // of K_from_F_, returned by process()
   std::optional<VisualAxisCorrection> axis_correction_;

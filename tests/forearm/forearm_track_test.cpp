@@ -88,5 +88,35 @@ TEST(ForearmTrack, APronationReferenceFoundLaterAppliesFromItsSample) {
   EXPECT_NEAR(out.frames[1].pronation_rad, 0.0, 1e-9);
 }
 
+TEST(ForearmTrack, TheCamerasForearmAxisRaisesTheUncertaintyOfTheSamplesAfterIt) {
+  // The IMU says the forearm's y is K's y; the camera's depth axis, at 35 ms, is 30 degrees off.
+  ForearmTrack track(Side::kRight, ForearmModel{}, false, Quat::Identity(), Quat::Identity(), 2.0 * kDeg);
+  std::vector<std::int64_t> t_us;
+  std::vector<Quat> W_from_A;
+  std::vector<Vec3> force;
+  for (int i = 0; i < 10; ++i) {
+    t_us.push_back(10'000 * i);
+    W_from_A.push_back(Quat::Identity());
+    force.push_back(Vec3(0, kGravity, 0));
+  }
+  track.add_imu(t_us, W_from_A, force);
+  ArmFrame seen;
+  seen.t_us = 35'000;
+  seen.axis_from_depth = true;
+  seen.forearm_tracked = true;
+  seen.elbow_K = Vec3(0, 0, 2);
+  seen.wrist_K = seen.elbow_K + 0.25 * Vec3(std::sin(30 * kDeg), std::cos(30 * kDeg), 0);
+  track.add_frame(seen);
+  const ForearmTrackOutput out = track.process(true);
+  ASSERT_EQ(out.samples.size(), 10u);
+  const double observed = 30 * kDeg / std::sqrt(2.0 / 3.0);
+  for (std::size_t i = 0; i < out.samples.size(); ++i) {
+    EXPECT_NEAR(out.samples[i].orientation_rms_rad, i < 4 ? 2.0 * kDeg : observed, 1e-9) << i;
+  }
+  ASSERT_EQ(out.frames.size(), 1u);
+  EXPECT_NEAR(out.frames[0].orientation_rms_rad, observed, 1e-9);
+  EXPECT_LT(confidence_from_rms_rad(observed), 0.01);
+}
+
 }  // namespace
 }  // namespace posefuse::forearm

@@ -471,7 +471,7 @@ TEST(ForearmStage, ACalibrationPoseLaterInTheSessionReplacesTheMountingFromMotio
         EXPECT_LT(b.confidence(i), 0.5);
       } else {
         ++after;
-        EXPECT_DOUBLE_EQ(b.uncertainty_rad(i), forearm::kPoseCalibrationRmsRad);
+        EXPECT_GE(b.uncertainty_rad(i), forearm::kPoseCalibrationRmsRad);
       }
     }
   }
@@ -558,25 +558,29 @@ TEST(ForearmStage, NoCalibrationPoseIsNamedAndTheMountingComesFromMotion) {
   EXPECT_NEAR(model.orientation_uncertainty_rad(), predicted, 1e-12);
 }
 
+// Every sample carries at least the pose calibration's uncertainty, more where the camera's
+// forearm axis showed a larger error, and the confidence of what it carries.
 TEST(ForearmStage, CalibratedSamplesCarryThePoseCalibrationsUncertainty) {
   const StageRun& r = run_session({});
-  std::size_t samples = 0, frames = 0;
+  std::size_t samples = 0, frames = 0, raised = 0;
   for (const auto& result : r.sink.results) {
     if (result.has_forearm_orientations()) {
       const v1::ForearmOrientationBatch& b = result.forearm_orientations();
       ASSERT_EQ(b.uncertainty_rad_size(), b.t_us_size());
       ASSERT_EQ(b.confidence_size(), b.t_us_size());
       for (int i = 0; i < b.t_us_size(); ++i, ++samples) {
-        EXPECT_DOUBLE_EQ(b.uncertainty_rad(i), forearm::kPoseCalibrationRmsRad);
-        EXPECT_DOUBLE_EQ(b.confidence(i), forearm::confidence_from_rms_rad(forearm::kPoseCalibrationRmsRad));
+        EXPECT_GE(b.uncertainty_rad(i), forearm::kPoseCalibrationRmsRad);
+        raised += b.uncertainty_rad(i) > forearm::kPoseCalibrationRmsRad;
+        EXPECT_DOUBLE_EQ(b.confidence(i), forearm::confidence_from_rms_rad(b.uncertainty_rad(i)));
       }
     } else if (result.has_frame()) {
       for (const v1::ForearmOrientation& f : result.frame().forearms()) {
-        EXPECT_DOUBLE_EQ(f.confidence(), forearm::confidence_from_rms_rad(forearm::kPoseCalibrationRmsRad));
+        EXPECT_LE(f.confidence(), forearm::confidence_from_rms_rad(forearm::kPoseCalibrationRmsRad));
         ++frames;
       }
     }
   }
+  std::printf("%zu of %zu samples above the pose's uncertainty (the camera's axis showed more)\n", raised, samples);
   EXPECT_GT(samples, 50u);
   EXPECT_GT(frames, 50u);
   // Confident: its 99 % bound is below 15 degrees.
