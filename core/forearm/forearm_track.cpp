@@ -23,6 +23,8 @@ std::int64_t microseconds(double seconds) { return static_cast<std::int64_t>(std
 
 }  // namespace
 
+double camera_observed_rms_rad(double disagreement_rad) { return disagreement_rad / std::sqrt(2.0 / 3.0); }
+
 ForearmTrack::ForearmTrack(Side side, const ForearmModel& model, bool has_model, const Quat& K_from_W,
                            const std::optional<Quat>& K_from_F_reference, double orientation_rms_rad)
     : side_(side),
@@ -202,14 +204,11 @@ TrackedArmFrame ForearmTrack::track_frame(const ArmFrame& frame, const TrackSamp
   const std::size_t i = index_at_or_before(arm_, frame.t_us);
   const std::size_t before = i == kNoIndex ? 0 : i, after = std::min(before + 1, arm_.size() - 1);
   tracked.pronation_rad = pronation(before, tracked.K_from_F);
-  // The camera's forearm axis against the orientation's: a direction error d of an isotropic
-  // 3-D rotation error has RMS sqrt(2/3) of the rotation's, so the orientation's error is at
-  // least about d / sqrt(2/3) RMS, whatever the model predicts; it holds until the next axis.
   if (frame.axis_from_depth && frame.forearm_tracked) {
     const Vec3 axis_K = frame.wrist_K - frame.elbow_K;
     if (axis_K.norm() > 0.0 && axis_K.allFinite()) {
       const double d = std::acos(std::clamp((tracked.K_from_F * Vec3::UnitY()).dot(axis_K.normalized()), -1.0, 1.0));
-      observed_rms_rad_ = d / std::sqrt(2.0 / 3.0);
+      observed_rms_rad_ = camera_observed_rms_rad(d);
     }
   }
   tracked.orientation_rms_rad =

@@ -16,6 +16,7 @@
 
 #include "forearm/forearm_orientation.hpp"
 #include "forearm/forearm_types.hpp"
+#include "forearm/orientation_uncertainty.hpp"
 #include "forearm/visual_axis_correction.hpp"
 
 namespace posefuse::forearm {
@@ -67,6 +68,14 @@ struct ForearmTrackOutput {
   std::vector<SettledArmSample> samples;  // settled since the last call, in time order
   std::vector<TrackedArmFrame> frames;    // tracked since the last call, in time order
 };
+
+// The camera's depth-measured forearm axis against an orientation's y axis, d apart: a direction
+// error of an isotropic 3-D rotation error of RMS u has RMS sqrt(2/3) u, so the orientation is
+// off by about d / sqrt(2/3) RMS at least, whatever its model predicts. Each sample's uncertainty
+// is at least this (the last frame's with a depth axis). The depth axis's own error is not taken
+// off: this errs towards less confidence, and never lets a persistent filter error through as
+// "typical" noise.
+double camera_observed_rms_rad(double disagreement_rad);
 
 class ForearmTrack {
  public:
@@ -141,7 +150,7 @@ class ForearmTrack {
   std::vector<Quat> K_from_A_imu_;              // eq. 11, before the axis correction
   std::vector<double> orientation_rms_rad_of_;  // per sample, the mounting's and the filter's
   std::vector<double> settled_rms_rad_;         // per settled sample: at least the camera's observed
-  double observed_rms_rad_ = 0.0;               // the last camera forearm axis's disagreement, as a 3-D RMS
+  double observed_rms_rad_ = 0.0;               // what the last camera forearm axis showed
   std::vector<Quat> K_from_F_;                  // settled (corrected), one per settled sample
   std::size_t settled_taken_ = 0;               // of K_from_F_, returned by process()
   std::optional<VisualAxisCorrection> axis_correction_;
