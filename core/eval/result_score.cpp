@@ -88,7 +88,9 @@ AngleScore score_angles(const std::string& stream, const std::string& key, const
   std::vector<std::int64_t> truth_times, result_times;
   for (const Row& r : truth) truth_times.push_back(r.t_us);
   std::vector<double> errors, heading_errors, confident_errors;
-  AngleScore score{stream, key, {}, {}, 0};
+  AngleScore score;
+  score.stream = stream;
+  score.key = key;
   for (const Row& r : result) {
     result_times.push_back(r.t_us);
     const auto i = nearest(truth_times, r.t_us, options.tolerance_us);

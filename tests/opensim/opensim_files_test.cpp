@@ -217,9 +217,9 @@ TEST(StoFile, WritesEachImuInTheGroundOnTheCameraClockAtCommonTimes) {
   (*results.calibration->mutable_clock_offset_us())["wrist2"] = -2'000;
   const auto W_from_A = [](double t_s) { return geometry::quat_from_rotation_vector({0.5 * t_s, 0.2, -0.1}); };
   for (int i = 0; i < 100; ++i) {  // 100 Hz; the second IMU at 50 Hz, starting later
-    results.imu_orientations["imu_r"].push_back({i * 10'000, W_from_A(i * 0.01), 0.0});
+    results.imu_orientations["imu_r"].push_back({i * 10'000, W_from_A(i * 0.01), 0.0, {}, {}});
     if (i % 2 == 0 && i >= 20)
-      results.imu_orientations["wrist2"].push_back({i * 10'000 + 5'000, W_from_A(i * 0.01), 0.0});
+      results.imu_orientations["wrist2"].push_back({i * 10'000 + 5'000, W_from_A(i * 0.01), 0.0, {}, {}});
   }
   const opensim::GroundFrame ground = opensim::ground_frame(results);
   std::ostringstream out;
@@ -258,7 +258,8 @@ TEST(StoFile, WritesEachImuInTheGroundOnTheCameraClockAtCommonTimes) {
 
 TEST(StoFile, WithoutCalibrationStaysInTheWorldOnTheDeviceClock) {
   session::ResultDirectory results;
-  results.imu_orientations["a"] = {{0, geometry::Quat::Identity(), 0.0}, {10'000, geometry::Quat::Identity(), 0.0}};
+  results.imu_orientations["a"] = {{0, geometry::Quat::Identity(), 0.0, {}, {}},
+                                   {10'000, geometry::Quat::Identity(), 0.0, {}, {}}};
   std::ostringstream out;
   const opensim::StoSummary summary = opensim::write_sto(results, opensim::ground_frame(results), out);
   EXPECT_FALSE(summary.camera_ground);
