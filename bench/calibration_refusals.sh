@@ -36,7 +36,9 @@ name, out, score = sys.argv[1:]
 errors = {}
 for line in open(score):
     m = re.match(r"forearm_orientations/imu_(left|right)\.csv\s+\S+\s+\d+\s+([\d.]+)\s+([\d.]+)", line)
-    if m: errors[m.group(1).upper()] = f"{float(m.group(2)):.1f}/{float(m.group(3)):.1f}"
+    # The orientation table comes first; posefuse-score's confidence table repeats the stream.
+    if m and m.group(1).upper() not in errors:
+        errors[m.group(1).upper()] = f"{float(m.group(2)):.1f}/{float(m.group(3)):.1f}"
 calibrated = {f["arm"]: f for f in json.load(open(out + "/calibration.json")).get("forearms", [])
               if f.get("mounting_source", "CALIBRATION_POSE") == "CALIBRATION_POSE"}
 from_motion = {f["arm"] for f in json.load(open(out + "/calibration.json")).get("forearms", [])
