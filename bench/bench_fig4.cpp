@@ -127,6 +127,7 @@ std::vector<session::ForearmOrientations> forearm_batches(const sim::CameraSessi
       batch.K_from_F.push_back(random_turn(rng, 3 * kDeg) * sim.truth[i].forearms[static_cast<size_t>(a)].K_from_F);
       batch.pronation_rad.push_back(0.0);
       batch.orientation_rms_rad.push_back(3 * kDeg);  // the turn's size: confident, as a calibrated arm's
+      batch.model_rms_rad.push_back(3 * kDeg);
     }
   }
   return out;

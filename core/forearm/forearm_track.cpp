@@ -95,8 +95,8 @@ void ForearmTrack::settle_orientations_up_to(std::int64_t t_us) {
 void ForearmTrack::take_settled(std::vector<SettledArmSample>& out) {
   for (; settled_taken_ < K_from_F_.size(); ++settled_taken_) {
     const Quat& K_from_F = K_from_F_[settled_taken_];
-    out.push_back(
-        {arm_[settled_taken_], K_from_F, pronation(settled_taken_, K_from_F), settled_rms_rad_[settled_taken_]});
+    out.push_back({arm_[settled_taken_], K_from_F, pronation(settled_taken_, K_from_F),
+                   settled_rms_rad_[settled_taken_], orientation_rms_rad_of_[settled_taken_]});
   }
 }
 

@@ -51,6 +51,8 @@ struct SettledArmSample {
   // Predicted RMS angle of K_from_F's error (orientation_uncertainty.hpp), at least what the
   // camera's last forearm axis before it showed.
   double orientation_rms_rad = 0.0;
+  // The same from the mounting and the filter alone, before the camera's check.
+  double model_rms_rad = 0.0;
 };
 
 // A camera frame once tracked: the strap's IMU position when visible, and the forearm

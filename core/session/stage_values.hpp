@@ -36,6 +36,7 @@ struct ForearmOrientations {
   std::vector<geometry::Quat> K_from_F;
   std::vector<double> pronation_rad;        // NaN without the calibration pose
   std::vector<double> orientation_rms_rad;  // predicted RMS error (forearm/orientation_uncertainty.hpp)
+  std::vector<double> model_rms_rad;        // the same before the camera's check (forearm_track.hpp)
 };
 
 // The forearm stage's decision on one arm IMU once its calibration is over: tracked (with the
@@ -63,12 +64,13 @@ struct ArmTrack {
 // The orientations of one arm's settled samples, as the forearm stage hands them on.
 inline ForearmOrientations forearm_orientations_of(const std::string& device_id, v1::Arm arm,
                                                    const std::vector<forearm::SettledArmSample>& samples) {
-  ForearmOrientations out{device_id, arm, {}, {}, {}, {}};
+  ForearmOrientations out{device_id, arm, {}, {}, {}, {}, {}};
   for (const forearm::SettledArmSample& s : samples) {
     out.t_us.push_back(s.sample.t_us);
     out.K_from_F.push_back(s.K_from_F);
     out.pronation_rad.push_back(s.pronation_rad);
     out.orientation_rms_rad.push_back(s.orientation_rms_rad);
+    out.model_rms_rad.push_back(s.model_rms_rad);
   }
   return out;
 }

@@ -112,6 +112,7 @@ TEST(ForearmTrack, TheCamerasForearmAxisRaisesTheUncertaintyOfTheSamplesAfterIt)
   const double observed = 30 * kDeg / std::sqrt(2.0 / 3.0);
   for (std::size_t i = 0; i < out.samples.size(); ++i) {
     EXPECT_NEAR(out.samples[i].orientation_rms_rad, i < 4 ? 2.0 * kDeg : observed, 1e-9) << i;
+    EXPECT_DOUBLE_EQ(out.samples[i].model_rms_rad, 2.0 * kDeg) << i;
   }
   ASSERT_EQ(out.frames.size(), 1u);
   EXPECT_NEAR(out.frames[0].orientation_rms_rad, observed, 1e-9);

@@ -204,9 +204,10 @@ TEST_F(PgReplicasTest, AKilledReplicasJobIsFinishedByAnotherAfterItsLeaseWithThe
   Replica a = start("a", "both", kShortLease);
   const std::string id = submit(a, "long.pfchunks").job_id();
   wait_running(a, id);
-  Replica b = start("b", "both", kShortLease);
+  // Killed before the other replica starts, so that a slow start cannot leave it time to finish.
   a.process->kill9();
   const auto killed_at = std::chrono::steady_clock::now();
+  Replica b = start("b", "both", kShortLease);
   const auto states = watch(b, id);
   ASSERT_FALSE(states.empty());
   EXPECT_EQ(states.back().state(), v1::Job::SUCCEEDED) << states.back().error_message();

@@ -235,6 +235,7 @@ void hand_truth_forearms(BodyFitStage& stage, StageOutput& out) {
       batch.K_from_F.push_back(session().truth[i].forearms[static_cast<size_t>(strap)].K_from_F);
       batch.pronation_rad.push_back(0.0);
       batch.orientation_rms_rad.push_back(0.0);  // the truth
+      batch.model_rms_rad.push_back(0.0);
     }
     stage.on_value(batch, out);
   }

@@ -163,9 +163,11 @@ void BodyFitStage::on_value(const StageValue& value, StageOutput& out) {
     const Eigen::Quaterniond& q = batch->K_from_F[i];
     if (!q.coeffs().allFinite() || std::abs(q.norm() - 1.0) > 1e-3) continue;
     if (!samples.empty() && batch->t_us[i] <= samples.back().first) continue;
-    // A sample without a predicted error is not confident (confidence_from_rms_rad(NaN) = 0).
-    const double rms_rad = i < batch->orientation_rms_rad.size() ? batch->orientation_rms_rad[i]
-                                                                 : std::numeric_limits<double>::quiet_NaN();
+    // The mounting's and the filter's predicted error, not the camera-checked one: the fit
+    // weighs the depth itself, and a camera check of the depth axis would count its noise twice.
+    // A sample without one is not confident.
+    const double rms_rad =
+        i < batch->model_rms_rad.size() ? batch->model_rms_rad[i] : std::numeric_limits<double>::quiet_NaN();
     const bool confident = forearm::confidence_from_rms_rad(rms_rad) >= forearm::kConfidentAt;
     samples.emplace_back(batch->t_us[i], confident ? std::optional<Eigen::Quaterniond>(q.normalized()) : std::nullopt);
   }
