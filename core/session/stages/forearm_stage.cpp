@@ -34,6 +34,13 @@ constexpr std::size_t kMinNewMountingFrames = 30;
 
 double degrees(double rad) { return rad * 180.0 / std::numbers::pi; }
 
+// One frame for the mounting from motion: the depth-fitted forearm and the IMU's K_from_A at its
+// time; none for a frame whose forearm is the SDK's (its joints' bias would enter the axis).
+std::optional<forearm::MountingFrame> mounting_frame(const forearm::ArmFrame& f, const Quat& K_from_A) {
+  if (!f.axis_from_depth) return std::nullopt;
+  return forearm::MountingFrame{f.t_us, K_from_A, f.wrist_K - f.elbow_K, f.upper_arm_direction_K};
+}
+
 std::int64_t seconds_to_us(double s) { return static_cast<std::int64_t>(std::llround(s * 1e6)); }
 
 }  // namespace
@@ -150,9 +157,7 @@ void ForearmStage::hand_on_track(Device& device, forearm::ForearmTrackOutput&& t
     for (const forearm::TrackedArmFrame& t : track.frames) {
       device.recent_frames.emplace_back(t.frame, (K_from_W_->conjugate() * t.K_from_A).normalized());
       ++device.frames_since_pose_search;
-      if (!t.frame.axis_from_depth) continue;
-      device.mounting_frames.push_back(
-          {t.frame.t_us, t.K_from_A, t.frame.wrist_K - t.frame.elbow_K, t.frame.upper_arm_direction_K});
+      if (const auto frame = mounting_frame(t.frame, t.K_from_A)) device.mounting_frames.push_back(*frame);
     }
     while (!device.recent_frames.empty() &&
            device.recent_frames.front().first.t_us < device.recent_frames.back().first.t_us - keep_us) {
@@ -379,10 +384,9 @@ void ForearmStage::search_later_pose(Device& device, StageOutput& out) {
 std::vector<forearm::MountingFrame> ForearmStage::buffered_mounting_frames(const Device& device) const {
   std::vector<forearm::MountingFrame> frames;
   for (const forearm::ArmFrame& f : device.frames) {
-    if (!f.axis_from_depth) continue;  // the SDK's forearm carries its joints' bias
     const std::optional<Quat> W_from_A = W_from_A_at(device, f.t_us);
     if (!W_from_A) continue;
-    frames.push_back({f.t_us, (*K_from_W_ * *W_from_A).normalized(), f.wrist_K - f.elbow_K, f.upper_arm_direction_K});
+    if (const auto frame = mounting_frame(f, (*K_from_W_ * *W_from_A).normalized())) frames.push_back(*frame);
   }
   return frames;
 }
