@@ -69,7 +69,8 @@ std::optional<std::int64_t> ForearmTrack::oldest_queued_us() const {
 }
 
 void ForearmTrack::add_imu(const std::vector<std::int64_t>& t_us, const std::vector<Quat>& W_from_A,
-                           const std::vector<Vec3>& specific_force_A) {
+                           const std::vector<Vec3>& specific_force_A,
+                           const std::vector<double>& filter_uncertainty_rad) {
   for (std::size_t i = 0; i < t_us.size(); ++i) {
     if (!arm_.empty() && t_us[i] <= arm_.back().t_us) continue;                        // clock mapping kept monotonic
     const Quat K_from_A = (K_from_W_ * W_from_A[i]).normalized();                      // eq. 11
@@ -79,7 +80,9 @@ void ForearmTrack::add_imu(const std::vector<std::int64_t>& t_us, const std::vec
                                                   : geometry::same_hemisphere(K_from_A, K_from_A_imu_.back()));
     K_from_F_imu_.push_back(K_from_F_imu_.empty() ? K_from_F
                                                   : geometry::same_hemisphere(K_from_F, K_from_F_imu_.back()));
-    orientation_rms_rad_of_.push_back(orientation_rms_rad_);
+    // The filter's own uncertainty (start-up, lost samples) adds to the mounting's, independently.
+    const double filter_rad = i < filter_uncertainty_rad.size() ? filter_uncertainty_rad[i] : 0.0;
+    orientation_rms_rad_of_.push_back(std::sqrt(orientation_rms_rad_ * orientation_rms_rad_ + filter_rad * filter_rad));
   }
 }
 

@@ -103,8 +103,10 @@ class ForearmTrack {
   void use_axis_correction(const VisualAxisCorrectionOptions& options);
 
   // Arm IMU samples on the camera clock, in time order (earlier or equal times are dropped).
+  // `filter_uncertainty_rad`, per sample or empty (none): the orientation filter's predicted
+  // error beyond its steady one, added to the mounting's in each sample's uncertainty.
   void add_imu(const std::vector<std::int64_t>& t_us, const std::vector<Quat>& W_from_A,
-               const std::vector<Vec3>& specific_force_A);
+               const std::vector<Vec3>& specific_force_A, const std::vector<double>& filter_uncertainty_rad = {});
   void add_frame(const ArmFrame& frame) { frames_.push_back(frame); }
   // Tracks the queued frames up to the last IMU sample (K_from_F interpolated, not extrapolated;
   // with `all`, every queued frame: end of session) and returns them with the samples settled.

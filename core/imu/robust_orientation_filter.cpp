@@ -28,6 +28,16 @@ constexpr double kCandidateTau_s = 1.0;
 // The earth's rotation rate (sidereal day): what a gyro at rest still senses.
 constexpr double kEarthRate_rad_s = 7.2921e-5;
 
+// A step longer than this many nominal steps lost at least one sample.
+constexpr double kGapSteps = 2.0;
+// How long the fastest recent turn bounds what a gap may hide: a movement's peak speed recurs
+// within about a second.
+constexpr double kPeakRateMemory_s = 1.0;
+// A body-worn IMU's distance from the joint that turns it (a wrist sensor from the elbow).
+constexpr double kLeverArm_m = 0.3;
+// Standard gravity: what a still accelerometer reads.
+constexpr double kGravity_m_s2 = 9.80665;
+
 // Rotates v by the unit quaternion q without building a matrix (v' = v + 2 w (u x v) + 2 u x (u x v)).
 Vec3 rotate(const Quat& q, const Vec3& v) {
   const Vec3 u(q.x(), q.y(), q.z());
@@ -128,7 +138,7 @@ Quat RobustOrientationFilter::update(const ImuSample& s) {
   } else {
     time_s_ += dt_s;
     init_weight_count_ += 1.0;
-    integrate_gyro(s.gyr_rad_s, dt_s);
+    integrate_step(s.gyr_rad_s, dt_s);
     update_rest_detection(s, dt_s);
     correct_inclination(s.acc_m_s2, dt_s);
   }
@@ -142,7 +152,8 @@ Quat RobustOrientationFilter::update(const ImuSample& s) {
   }
   if (dt_s > 0.0 && time_s_ > params_.init_s) {
     update_rest_bias(dt_s);
-    if (!at_rest()) {
+    // A correction that recovers from lost samples says nothing about the bias.
+    if (!at_rest() && !inclination_.recovering) {
       // Motion: the corrections the accelerometer keeps making about the horizontal axes are
       // the drift a residual bias causes: e_E ~ -correction / dt. They answer the drift through
       // the tau_acc_s low-pass, so the drift is compared with the bias error seen through an
@@ -175,10 +186,46 @@ void RobustOrientationFilter::update_gains(std::int64_t dt_us) {
   gains_.bias_motion = lowpass_gain(dt_s, params_.bias_motion_tau_s);
 }
 
-void RobustOrientationFilter::integrate_gyro(const Vec3& gyr_rad_s, double dt_s) {
+void RobustOrientationFilter::integrate_step(const Vec3& gyr_rad_s, double dt_s) {
+  const Vec3 rate = gyr_rad_s - bias_;
+  const bool gap = nominal_dt_s_ > 0.0 && dt_s > kGapSteps * nominal_dt_s_;
+  if (!gap) {
+    // The nominal step follows the steps that lost nothing; a first step that was a gap is
+    // replaced as soon as a regular one comes.
+    nominal_dt_s_ = (nominal_dt_s_ == 0.0 || dt_s < nominal_dt_s_ / kGapSteps)
+                        ? dt_s
+                        : nominal_dt_s_ + 0.1 * (dt_s - nominal_dt_s_);
+    integrate_gyro(rate, dt_s);
+  } else {
+    // The rates at the gap's ends bridge it (exact for a rate that changes linearly). A rate
+    // whose change is bounded by the fastest recent angular acceleration strays from that
+    // bridge by at most a quarter of it times the step squared; no turn exceeds the fastest
+    // recent rate over the missing time. The smaller bound is the error, in any direction:
+    // two thirds of its variance tilt, one third heading.
+    const double lost_s = dt_s - nominal_dt_s_;
+    ++gaps_;
+    lost_s_ += lost_s;
+    const double acceleration = std::max(peak_acceleration_rad_s2_, (rate - last_rate_rad_s_).norm() / dt_s);
+    const double turn_rad = std::min(3.14159265358979, std::max(rate.norm(), peak_rate_rad_s_) * lost_s);
+    const double bridge_rad = std::min(turn_rad, 0.25 * acceleration * dt_s * dt_s);
+    const double turn_var = turn_rad * turn_rad, bridge_var = bridge_rad * bridge_rad;
+    inclination_.add_gap(bridge_var * (2.0 / 3.0), turn_var * (2.0 / 3.0));
+    heading_.add_gap(bridge_var / 3.0, turn_var / 3.0);
+    integrate_gyro(0.5 * (rate + last_rate_rad_s_), dt_s);
+  }
+  // The fastest turn and the fastest change of turn of the last second or so: what may have
+  // happened unseen in a gap.
+  const double decay = 1.0 - std::min(1.0, dt_s / kPeakRateMemory_s);
+  peak_rate_rad_s_ = std::max(rate.norm(), peak_rate_rad_s_ * decay);
+  if (!gap)
+    peak_acceleration_rad_s2_ = std::max((rate - last_rate_rad_s_).norm() / dt_s, peak_acceleration_rad_s2_ * decay);
+  last_rate_rad_s_ = rate;
+}
+
+void RobustOrientationFilter::integrate_gyro(const Vec3& rate_rad_s, double dt_s) {
   // Exponential map of the bias-corrected rate over one step, as a short series (|w| dt << 1
   // at IMU rates; the 4th-order terms keep it exact to ~1e-12 up to 0.1 rad per step).
-  const Vec3 h = 0.5 * dt_s * (gyr_rad_s - bias_);
+  const Vec3 h = 0.5 * dt_s * rate_rad_s;
   const double h2 = h.squaredNorm();
   double c, s;
   if (h2 < 0.0025) {
@@ -251,8 +298,37 @@ void RobustOrientationFilter::correct_inclination(const Vec3& acc_m_s2, double d
   // back-and-forth movement is damped ~160x, where one 4 s stage would damp it only ~25x.
   double k = dt_s > 0.0 ? gains_.acc_stage : 1.0;
   if (time_s_ < params_.init_s) k = std::max(k, 1.0 / init_weight_count_);
-  acc_lp1_I_ += k * (rotate(I_from_A_, acc_m_s2) - acc_lp1_I_);
-  acc_lp_I_ += k * (acc_lp1_I_ - acc_lp_I_);
+  const Vec3 acc_I = rotate(I_from_A_, acc_m_s2);
+  const double acc_norm = acc_I.norm();
+  if (acc_norm > 1e-9) {
+    // This sample's tilt from the current vertical (its horizontal part, ~ the angle): its
+    // variance is the estimate's plus one sample's scatter, which is what is learned.
+    const Vec3 up_E = rotate(E_from_I_, acc_I) * (1.0 / acc_norm);
+    // A sample whose norm is off gravity's by d carries an acceleration of at least d, and a
+    // sensor kLeverArm_m from the joint that turns it at w with angular acceleration a one of
+    // about (w^2 + a) kLeverArm_m, whatever its norm: each may tilt it by up to asin(acc / g).
+    const double turning_acc = (last_rate_rad_s_.squaredNorm() + peak_acceleration_rad_s2_) * kLeverArm_m;
+    const double off_g = std::min(1.0, std::max(std::abs(acc_norm - kGravity_m_s2), turning_acc) / kGravity_m_s2);
+    const double prior_var = inclination_.gain_var_rad2;
+    const bool was_recovering = inclination_.recovering;
+    const double off_g_rad = std::asin(off_g);
+    // These accelerations last as long as the learned disturbances do.
+    k = inclination_.correct(k, acc_scatter_.sample_var_rad2(dt_s, off_g_rad * off_g_rad), 0.0, true,
+                             Eigen::Vector2d(up_E.x(), up_E.y()));
+    // The scatter is learned only while tracking after start-up: during a recovery the
+    // estimate's own error would pass for the accelerometer's.
+    if (!was_recovering && dt_s > 0.0 && time_s_ >= params_.init_s) {
+      acc_scatter_.learn(Eigen::Vector2d(up_E.x(), up_E.y()), prior_var, dt_s);
+    }
+  }
+  acc_lp1_I_ += k * (acc_I - acc_lp1_I_);
+  // During a recovery the vertical is the weighted mean the uncertainty describes (one stage);
+  // the second stage would keep weight on what the lost samples made wrong.
+  if (inclination_.recovering) {
+    acc_lp_I_ = acc_lp1_I_;
+  } else {
+    acc_lp_I_ += k * (acc_lp1_I_ - acc_lp_I_);
+  }
 
   // Rotate E_from_I so that the filtered vector becomes vertical: the smallest rotation taking
   // a = normalised E_from_I * acc_lp_I to +z, quaternion [w, a_y / 2w, -a_x / 2w, 0] with
@@ -370,6 +446,28 @@ void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
 
   double error_rad = 0.0;
   if (!heading_error(m_E, error_rad)) return;  // field vertical: no heading information
+  // As for the inclination: this sample's heading error has the estimate's variance plus one
+  // sample's scatter; the gain is the larger of the time constant's and the uncertainty's.
+  const double prior_var = heading_.gain_var_rad2;
+  const bool was_recovering = heading_.recovering;
+  // An inclination error of d turns the horizontal field by up to d tan(dip): while the
+  // inclination is uncertain, so is every sample's heading.
+  const double sin2_dip = std::min(0.99, mag_ref_sin_dip_ * mag_ref_sin_dip_);
+  const double tan2_dip = sin2_dip / (1.0 - sin2_dip);
+  // The inclination's uncertainty reaches every sample's heading alike; at start-up both are
+  // averaged from the same first samples and converge together.
+  const double tilt_var = time_s_ < params_.init_s ? 0.0 : inclination_.gain_var_rad2 * tan2_dip;
+  k = heading_.correct(k, mag_scatter_.sample_var_rad2(dt_s), tilt_var, !inclination_.recovering,
+                       Eigen::Vector2d(error_rad, 0.0));
+  // The inclination's error turns every sample's heading alike, so averaging does not shrink
+  // it: the heading stays at least as uncertain as the inclination's excess makes it.
+  const double tilt_excess_var = inclination_.excess_var_rad2() * tan2_dip;
+  heading_.reported_var_rad2 =
+      std::min(CorrectionUncertainty::kUnknownVarRad2,
+               std::max(heading_.reported_var_rad2, heading_.steady_var_rad2 + tilt_excess_var));
+  if (!was_recovering && dt_s > 0.0 && time_s_ >= params_.init_s) {
+    mag_scatter_.learn(Eigen::Vector2d(error_rad, 0.0), prior_var, dt_s);
+  }
   const double step_rad = k * error_rad;
   double c, s;
   half_angle_cos_sin(step_rad, c, s);

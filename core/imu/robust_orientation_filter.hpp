@@ -17,11 +17,24 @@
 // adopted after a while (moving to another room); the sensor-fixed offset (hard iron: what the
 // prior calibration left, or a magnet attached to the sensor) is estimated all the time by least
 // squares from the rotation, and a clearly better offset replaces the current one.
+// Lost samples: a step longer than two nominal steps is bridged with the mean of the rates at
+// its ends, and the rotation it cannot know (bounded by the fastest recent angular acceleration
+// and rate) is
+// added to the orientation's uncertainty. Until it has shrunk back, the inclination and heading
+// corrections take the gain a Kalman filter would give that uncertainty against one sample's
+// (measured) error, when it is larger than the time constant's: after a gap the estimate snaps
+// back to what the accelerometer and magnetometer say and then averages, as at start-up,
+// instead of decaying over tau_mag_s. The uncertainty is reported per sample
+// (orientation_uncertainty_rad).
 // Details and parameter guidance: docs/imu-robust.md.
+#include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <vector>
 
+#include "imu/correction_uncertainty.hpp"
 #include "imu/imu_sample.hpp"
+#include "imu/innovation_scatter.hpp"
 
 namespace posefuse::imu {
 
@@ -111,6 +124,25 @@ class RobustOrientationFilter {
   const Vec3& gyro_bias_rad_s() const { return bias_; }
   bool at_rest() const { return rest_s_ >= params_.rest_min_s; }
   bool mag_disturbed() const { return mag_disturbed_; }
+  // Predicted RMS error of the last sample's inclination and heading (rad) beyond steady
+  // tracking (whose error is measured on BROAD, docs/benchmarks.md): what start-up and lost
+  // samples leave uncorrected, from the measured scatter of the accelerometer about the
+  // vertical and of the magnetometer's heading; and at least the error the corrections keep
+  // showing (their innovations low-passed over 2 s: the lag a gyro bias the filter has not
+  // learned makes, tau_mag_s times the bias about the vertical, shows there).
+  double inclination_uncertainty_rad() const {
+    return std::max(std::sqrt(inclination_.excess_var_rad2()), acc_scatter_.persistent_rad());
+  }
+  double heading_uncertainty_rad() const {
+    return std::max(std::sqrt(heading_.excess_var_rad2()), mag_scatter_.persistent_rad());
+  }
+  double orientation_uncertainty_rad() const {
+    const double i = inclination_uncertainty_rad(), h = heading_uncertainty_rad();
+    return std::sqrt(i * i + h * h);
+  }
+  // Steps that lost samples (longer than two nominal steps), and the time they lost.
+  std::uint64_t gaps() const { return gaps_; }
+  double lost_s() const { return lost_s_; }
   const Vec3& hard_iron_uT() const { return hard_iron_uT_; }
   double mag_ref_norm_uT() const { return mag_ref_norm_; }
   double mag_ref_dip_rad() const { return std::asin(mag_ref_sin_dip_); }
@@ -122,11 +154,14 @@ class RobustOrientationFilter {
   void reset_keeping_calibration(bool flip_gyro = false);
 
  private:
-  void integrate_gyro(const Vec3& gyr_rad_s, double dt_s);
+  void integrate_gyro(const Vec3& rate_rad_s, double dt_s);  // bias-corrected rate
   void update_rest_detection(const ImuSample& s, double dt_s);
   void correct_inclination(const Vec3& acc_m_s2, double dt_s);
   void correct_heading(const Vec3& mag_uT, const Quat& E_from_A, double dt_s, double gyr_sq_rad2_s2);
   void update_gains(std::int64_t dt_us);
+  // Integrates the step; a step that lost samples is bridged and its unknown rotation joins
+  // the uncertainty.
+  void integrate_step(const Vec3& gyr_rad_s, double dt_s);
   void update_rest_bias(double dt_s);
   void update_hard_iron_fit(const Vec3& mag_uT, double dt_s);
   void reset_hard_iron_fit();
@@ -159,6 +194,24 @@ class RobustOrientationFilter {
   std::int64_t last_t_us_ = 0;
   double time_s_ = 0.0;
   double init_weight_count_ = 0.0;  // samples seen during start-up, for equal-weight averaging
+
+  // Lost samples.
+  double nominal_dt_s_ = 0.0;
+  Vec3 last_rate_rad_s_ = Vec3::Zero();    // bias-corrected rate of the previous sample
+  double peak_rate_rad_s_ = 0.0;           // the largest recent |rate|, decaying over a second
+  double peak_acceleration_rad_s2_ = 0.0;  // the same for |d rate / dt|
+  std::uint64_t gaps_ = 0;
+  double lost_s_ = 0.0;
+  // The inclination's and the heading's uncertainty (start-up: unknown).
+  CorrectionUncertainty inclination_, heading_;
+  // One sample's error, learned while tracking: the accelerometer's tilt from the vertical and
+  // the magnetometer's heading error, beyond the estimate's own uncertainty.
+  InnovationScatter acc_scatter_{kScatterTau_s, kMinSampleSigma_rad};
+  InnovationScatter mag_scatter_{kScatterTau_s, kMinSampleSigma_rad};
+  // Learning time of the scatter (and the longest correlation it tells); the sensors' noise
+  // (about a degree for MEMS accelerometers and magnetometers at body-worn rates).
+  static constexpr double kScatterTau_s = 2.0;
+  static constexpr double kMinSampleSigma_rad = 3.14159265358979 / 180.0;
 
   // Inclination.
   Vec3 acc_lp1_I_ = Vec3::Zero();              // first low-pass stage

@@ -25,6 +25,9 @@ struct ImuOrientations {
   std::string device_id;
   std::vector<imu::ImuSample> samples;
   std::vector<geometry::Quat> W_from_A;  // one per sample
+  // The filter's predicted RMS error of each sample beyond its steady error: start-up and lost
+  // samples (imu::RobustOrientationFilter::orientation_uncertainty_rad), rad.
+  std::vector<double> uncertainty_rad;
 };
 
 // The forearm stage's forearm orientation K_from_F (paper 1 eq. 11) and pronation angle for

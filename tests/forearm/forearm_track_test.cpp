@@ -69,6 +69,32 @@ TEST(ForearmTrack, ARefinedMountingAppliesToLaterSamplesWithItsUncertainty) {
   EXPECT_DOUBLE_EQ(out.frames[0].orientation_rms_rad, 20.0 * kDeg);
 }
 
+TEST(ForearmTrack, TheOrientationFiltersOwnUncertaintyAddsToTheMountings) {
+  // The filter lost samples before the third: it predicts 30 degrees beyond its steady error
+  // there, then less. Each sample's uncertainty is the mounting's and the filter's together.
+  ForearmTrack track(Side::kRight, ForearmModel{}, false, Quat::Identity(), Quat::Identity(), 4.0 * kDeg);
+  const std::vector<double> filter_deg = {0.0, 0.0, 30.0, 10.0, 0.0};
+  std::vector<std::int64_t> t_us;
+  std::vector<Quat> W_from_A;
+  std::vector<Vec3> force;
+  std::vector<double> filter_rad;
+  for (std::size_t i = 0; i < filter_deg.size(); ++i) {
+    t_us.push_back(10'000 * static_cast<std::int64_t>(i));
+    W_from_A.push_back(about_z(0.01 * static_cast<double>(i)));
+    force.push_back(Vec3(0, 0, kGravity));
+    filter_rad.push_back(filter_deg[i] * kDeg);
+  }
+  track.add_imu(t_us, W_from_A, force, filter_rad);
+  const ForearmTrackOutput out = track.process(true);
+  ASSERT_EQ(out.samples.size(), filter_deg.size());
+  for (std::size_t i = 0; i < filter_deg.size(); ++i) {
+    EXPECT_NEAR(out.samples[i].orientation_rms_rad, std::hypot(4.0, filter_deg[i]) * kDeg, 1e-12) << i;
+    EXPECT_DOUBLE_EQ(out.samples[i].model_rms_rad, out.samples[i].orientation_rms_rad) << i;
+  }
+  EXPECT_LT(confidence_from_rms_rad(out.samples[2].orientation_rms_rad), 0.01);
+  EXPECT_GT(confidence_from_rms_rad(out.samples[4].orientation_rms_rad), 0.5);
+}
+
 TEST(ForearmTrack, APronationReferenceFoundLaterAppliesFromItsSample) {
   ForearmTrack track(Side::kRight, ForearmModel{}, false, Quat::Identity(), std::nullopt, 20.0 * kDeg);
   add_samples(track, 0, 5);

@@ -104,8 +104,29 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
   base_trajectory.W_from_A.assign(base_poses, W_from_B);
   const sim::ImuDeviceResult base_imu = sim::simulate_imu_device(sim::SensorKinematics(base_trajectory), base_device,
                                                                  imu_options(o.seed + 1), 0.0, o.duration_s);
-  const sim::ImuDeviceResult arm_imu = sim::simulate_imu_device(sim::SensorKinematics(sim::imu_trajectory(arm, motion)),
-                                                                arm_device, imu_options(o.seed + 2), 0.0, o.duration_s);
+  sim::ImuDeviceResult arm_imu = sim::simulate_imu_device(sim::SensorKinematics(sim::imu_trajectory(arm, motion)),
+                                                          arm_device, imu_options(o.seed + 2), 0.0, o.duration_s);
+  if (o.arm_imu_lost_s > 0.0) {
+    for (v1::ImuBatch& batch : arm_imu.batches) {
+      v1::ImuBatch kept = batch;
+      kept.clear_t_us();
+      kept.clear_gyr_rad_s();
+      kept.clear_acc_m_s2();
+      kept.clear_mag_ut();
+      for (int i = 0; i < batch.t_us_size(); ++i) {
+        const double t_camera_s = arm_device.clock.to_camera_s(batch.t_us(i));
+        if (t_camera_s >= o.arm_imu_lost_from_s && t_camera_s < o.arm_imu_lost_from_s + o.arm_imu_lost_s) continue;
+        kept.add_t_us(batch.t_us(i));
+        for (int k = 0; k < 3; ++k) {
+          kept.add_gyr_rad_s(batch.gyr_rad_s(3 * i + k));
+          kept.add_acc_m_s2(batch.acc_m_s2(3 * i + k));
+          if (batch.mag_ut_size() > 0) kept.add_mag_ut(batch.mag_ut(3 * i + k));
+        }
+      }
+      batch = std::move(kept);
+    }
+    std::erase_if(arm_imu.batches, [](const v1::ImuBatch& b) { return b.t_us_size() == 0; });
+  }
 
   std::vector<TimedChunk> timed;
   SimChunkCounts counts;

@@ -49,6 +49,9 @@ struct ForearmSessionOptions {
   double buzzer_tone_hz = 2700.0;  // the base IMU's buzzer
   std::string buzzer_hz_option;    // the stage's forearm.buzzer_hz; empty: not set (2700)
   std::uint64_t seed = 7;
+  // The arm IMU's samples in [arm_imu_lost_from_s, + arm_imu_lost_s) camera time are lost.
+  double arm_imu_lost_from_s = 0.0;
+  double arm_imu_lost_s = 0.0;
 };
 
 struct ForearmSessionTruth {

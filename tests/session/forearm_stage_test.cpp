@@ -53,7 +53,8 @@ const StageRun& run_session(const ForearmSessionOptions& options) {
       "/" + std::to_string(options.ble_repeat_s) + "/" + std::to_string(options.arm_clock_drift) + "/" +
       std::to_string(options.buzzer_tone_hz) + "/" + options.buzzer_hz_option + "/" +
       std::to_string(options.elbow_extension_rad) + "/" + std::to_string(options.motion_before_hold_s) + "/" +
-      std::to_string(options.duration_s) + "/" + std::to_string(options.occlusion_begin_s);
+      std::to_string(options.duration_s) + "/" + std::to_string(options.occlusion_begin_s) + "/" +
+      std::to_string(options.arm_imu_lost_from_s) + "/" + std::to_string(options.arm_imu_lost_s);
   auto& slot = cache[key];
   if (!slot) {
     slot = std::make_unique<StageRun>();
@@ -492,6 +493,34 @@ TEST(ForearmStage, ACalibrationPoseLaterInTheSessionReplacesTheMountingFromMotio
       EXPECT_EQ(result.calibration().forearms(0).mounting_source(), v1::ForearmModel::CALIBRATION_POSE);
     }
   }
+}
+
+TEST(ForearmStage, LostArmImuSamplesLowerTheConfidenceUntilTheFilterHasRecovered) {
+  // 0.4 s of the arm IMU's samples lost in motion after the calibration: the samples after the
+  // gap carry the orientation filter's uncertainty, and none is confident beyond 15 degrees.
+  ForearmSessionOptions options;
+  options.arm_imu_lost_from_s = 4.0;
+  options.arm_imu_lost_s = 0.4;
+  const StageRun& r = run_session(options);
+  double before = 0.0, after = 0.0, late = 0.0;
+  for (const auto& result : r.sink.results) {
+    if (!result.has_forearm_orientations()) continue;
+    const auto& b = result.forearm_orientations();
+    for (int i = 0; i < b.t_us_size(); ++i) {
+      const double t_s = 1e-6 * static_cast<double>(b.t_us(i));
+      ASSERT_FALSE(t_s > 4.01 && t_s < 4.39) << "a sample inside the lost stretch at " << t_s << " s";
+      if (t_s > 3.5 && t_s < 4.0) before = std::max(before, b.uncertainty_rad(i));
+      if (t_s > 4.4 && t_s < 4.6) after = std::max(after, b.uncertainty_rad(i));
+      if (t_s > 7.0) late = std::max(late, b.uncertainty_rad(i));
+    }
+  }
+  std::printf("lost 0.4 s of arm IMU samples: uncertainty before %.1f deg, after %.1f deg, from 7 s %.1f deg\n",
+              before / kDeg, after / kDeg, late / kDeg);
+  EXPECT_GT(after, 1.5 * before);
+  EXPECT_LT(late, after);
+  const testing::ForearmSessionErrors e = testing::evaluate_forearm_results(r.truth, r.sink.results);
+  EXPECT_EQ(e.confident_beyond_15_deg, 0u);
+  EXPECT_GE(static_cast<double>(e.within_predicted_bound), 0.95 * static_cast<double>(e.orientation_samples));
 }
 
 TEST(ForearmStage, ImuOrientationsThatDisagreeWithTheCameraGiveNoMounting) {

@@ -106,8 +106,9 @@ void ForearmStage::on_value(const StageValue& value, StageOutput& out) {
   for (Device& device : devices_) {
     if (device.id != orientations->device_id) continue;
     for (std::size_t i = 0; i < orientations->samples.size(); ++i) {
-      device.imu.push_back(
-          {orientations->samples[i].t_us, orientations->W_from_A[i], orientations->samples[i].acc_m_s2});
+      const double uncertainty_rad = i < orientations->uncertainty_rad.size() ? orientations->uncertainty_rad[i] : 0.0;
+      device.imu.push_back({orientations->samples[i].t_us, orientations->W_from_A[i], orientations->samples[i].acc_m_s2,
+                            uncertainty_rad});
     }
   }
   advance(out);
@@ -492,6 +493,7 @@ void ForearmStage::feed_trackers(bool all, StageOutput& out) {
     std::vector<std::int64_t> t_us;
     std::vector<Quat> W_from_A;
     std::vector<Vec3> force;
+    std::vector<double> filter_uncertainty_rad;
     for (const ImuRecord& r : device.imu) {
       std::int64_t t = std::llround(clock_map_->to_camera_us(device.id, static_cast<double>(r.t_device_us)));
       // A refitted clock may map a sample a little before the last one handed over (a fraction
@@ -501,12 +503,13 @@ void ForearmStage::feed_trackers(bool all, StageOutput& out) {
       t_us.push_back(t);
       W_from_A.push_back(r.W_from_A);
       force.push_back(r.specific_force_A);
+      filter_uncertainty_rad.push_back(r.filter_uncertainty_rad);
     }
     if (!device.imu.empty()) {
       if (!device.first_device_us) device.first_device_us = device.imu.front().t_device_us;
       device.imu.clear();
     }
-    device.tracker->add_imu(t_us, W_from_A, force);
+    device.tracker->add_imu(t_us, W_from_A, force, filter_uncertainty_rad);
     hand_on_track(device, device.tracker->process(all), out);
   }
 }

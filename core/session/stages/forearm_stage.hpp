@@ -85,6 +85,7 @@ class ForearmStage : public Stage {
     std::int64_t t_device_us = 0;
     forearm::Quat W_from_A;
     forearm::Vec3 specific_force_A;
+    double filter_uncertainty_rad = 0.0;  // ImuOrientations::uncertainty_rad
   };
   struct Device {
     std::string id;

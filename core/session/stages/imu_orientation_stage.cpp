@@ -35,13 +35,15 @@ void ImuOrientationStage::on_imu(const ImuBlock& block, StageOutput& out) {
     throw Error(ErrorCode::kInternal, "imu.device_id", "'" + block.device_id + "' has no filter");
   }
   Device& device = it->second;
-  ImuOrientations orientations{block.device_id, block.samples, {}};
+  ImuOrientations orientations{block.device_id, block.samples, {}, {}};
   orientations.W_from_A.reserve(block.samples.size());
+  orientations.uncertainty_rad.reserve(block.samples.size());
   for (imu::ImuSample& sample : orientations.samples) {
     if (device.mag_calibration) sample.mag_uT = device.mag_calibration->apply(sample.mag_uT);  // eq. 3
     const imu::Quat W_from_A = geometry::same_hemisphere(device.filter.update(sample), device.last_W_from_A);
     device.last_W_from_A = W_from_A;
     orientations.W_from_A.push_back(W_from_A);
+    orientations.uncertainty_rad.push_back(device.filter.orientation_uncertainty_rad());
   }
   device.samples += block.samples.size();
   out.hand_on(std::move(orientations));
