@@ -41,7 +41,8 @@ double CorrectionUncertainty::correct(double tau_gain, double sample_var_rad2, d
   const double error_excess = std::max(0.0, error_var_rad2 - shared_var_rad2);
   const double evidence_gain = error_excess / (error_excess + sample_var_rad2);
   error_mean_rad += evidence_gain * (innovation_rad - error_mean_rad);
-  error_var_rad2 -= evidence_gain * error_excess;
+  // Never below steady tracking's own: the error keeps moving, so the samples keep being heard.
+  error_var_rad2 = std::max(error_var_rad2 - evidence_gain * error_excess, steady_var_rad2);
   error_mean_rad -= k * innovation_rad;
   // The recovery ends when what the gap left is no more than steady tracking's own error; not
   // merely because the samples say little for now (an arm still swinging).
