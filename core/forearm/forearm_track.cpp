@@ -8,6 +8,7 @@
 #include "forearm/forearm_model.hpp"
 #include "forearm/live_gap.hpp"
 #include "forearm/occlusion_tests.hpp"
+#include "forearm/orientation_uncertainty.hpp"
 #include "forearm/time_series.hpp"
 
 namespace posefuse::forearm {
@@ -201,8 +202,31 @@ ForearmTrack::Confirmation ForearmTrack::confirm_detection(bool all, std::int64_
   return all ? Confirmation::kLone : Confirmation::kWait;
 }
 
+void ForearmTrack::flag_orientation_step(TrackedArmFrame& tracked) {
+  // With one mounting, K_from_F follows the IMU and the mounting it implies stays put; a change
+  // (a new mounting estimate, a later pose, an axis correction, a wrong sample) shows as a step.
+  // A step within the 99 % bound of the larger of the two frames' uncertainties is what they
+  // allow (an uncertain mounting giving way to a better one); beyond it, the frames disagree.
+  const Quat A_from_F = (tracked.K_from_A.conjugate() * tracked.K_from_F).normalized();
+  const double rms_rad = tracked.orientation_rms_rad;
+  if (last_frame_A_from_F_) {
+    const double step_rad = geometry::angle_between(*last_frame_A_from_F_, A_from_F);
+    if (step_rad > kBound99OverRms * std::max(rms_rad, last_frame_rms_rad_)) {
+      tracked.orientation_step_rad = step_rad;
+      tracked.orientation_rms_rad = std::max(rms_rad, step_rad);
+      ++orientation_steps_;
+      if (step_rad > largest_step_rad_) {
+        largest_step_rad_ = step_rad;
+        largest_step_us_ = tracked.frame.t_us;
+      }
+    }
+  }
+  last_frame_A_from_F_ = A_from_F;
+  last_frame_rms_rad_ = rms_rad;
+}
+
 TrackedArmFrame ForearmTrack::track_frame(const ArmFrame& frame, const TrackSample& sample) {
-  TrackedArmFrame tracked{frame, sample, K_from_F_at(frame.t_us), 0.0, 0.0, Quat::Identity()};
+  TrackedArmFrame tracked{frame, sample, K_from_F_at(frame.t_us), 0.0, 0.0, Quat::Identity(), 0.0};
   tracked.K_from_A = slerp_at(frame.t_us, [this](std::size_t i) { return K_from_A_imu_[i]; });
   const std::size_t i = index_at_or_before(arm_, frame.t_us);
   const std::size_t before = i == kNoIndex ? 0 : i, after = std::min(before + 1, arm_.size() - 1);
@@ -216,6 +240,7 @@ TrackedArmFrame ForearmTrack::track_frame(const ArmFrame& frame, const TrackSamp
   }
   tracked.orientation_rms_rad =
       std::max({orientation_rms_rad_of_[before], orientation_rms_rad_of_[after], observed_rms_rad_});
+  flag_orientation_step(tracked);
   if (track_.empty() || frame.t_us > track_.back().t_us) track_.push_back(sample);
   if (sample.visible) {
     ++visible_frames_;

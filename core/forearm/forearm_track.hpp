@@ -64,6 +64,10 @@ struct TrackedArmFrame {
   double pronation_rad = 0.0;        // NaN without the calibration pose (no reference)
   double orientation_rms_rad = 0.0;  // the larger of the two samples' around the frame
   Quat K_from_A = Quat::Identity();  // eq. 11 at the frame's time, before any axis correction
+  // The mounting this frame's K_from_F implies (K_from_A^-1 K_from_F, any axis correction in it)
+  // moved this far from the previous frame's, more than either frame's uncertainty allows (the
+  // 99 % bound); 0 otherwise. Such a frame's orientation_rms_rad is raised to the step.
+  double orientation_step_rad = 0.0;
 };
 
 struct ForearmTrackOutput {
@@ -115,6 +119,11 @@ class ForearmTrack {
   AxisCorrection axis_correction() const;  // identity without it
   std::uint64_t axis_correction_frames() const;
   std::uint64_t visible_frames() const { return visible_frames_; }
+  // Frames flagged for an orientation step (TrackedArmFrame::orientation_step_rad), the largest
+  // step and its frame's time.
+  std::uint64_t orientation_steps() const { return orientation_steps_; }
+  double largest_orientation_step_rad() const { return largest_step_rad_; }
+  std::int64_t largest_orientation_step_us() const { return largest_step_us_; }
   // Detections with no other within 500 ms before or after them: counted, and treated as
   // occluded.
   std::uint64_t lone_detections() const { return lone_detections_; }
@@ -129,6 +138,7 @@ class ForearmTrack {
   // queued frame within the window after it is accepted too.
   enum class Confirmation { kConfirmed, kLone, kWait };
   Confirmation confirm_detection(bool all, std::int64_t window_us) const;
+  void flag_orientation_step(TrackedArmFrame& tracked);
   TrackedArmFrame track_frame(const ArmFrame& frame, const TrackSample& sample);
   Quat K_from_F_sample(std::size_t i) const;
   Quat K_from_F_at(std::int64_t t_us) const;
@@ -154,9 +164,15 @@ class ForearmTrack {
   std::vector<Quat> K_from_A_imu_;              // eq. 11, before the axis correction
   std::vector<double> orientation_rms_rad_of_;  // per sample, the mounting's and the filter's
   std::vector<double> settled_rms_rad_;         // per settled sample: at least the camera's observed
-  double observed_rms_rad_ = 0.0;               // what the last camera forearm axis showed
-  std::vector<Quat> K_from_F_;                  // settled (corrected), one per settled sample
-  std::size_t settled_taken_ = 0;               // of K_from_F_, returned by process()
+  // The previous frame's implied mounting and uncertainty, and the frames flagged for a step.
+  std::optional<Quat> last_frame_A_from_F_;
+  double last_frame_rms_rad_ = 0.0;
+  std::uint64_t orientation_steps_ = 0;
+  double largest_step_rad_ = 0.0;
+  std::int64_t largest_step_us_ = 0;
+  double observed_rms_rad_ = 0.0;  // what the last camera forearm axis showed
+  std::vector<Quat> K_from_F_;     // settled (corrected), one per settled sample
+  std::size_t settled_taken_ = 0;  // of K_from_F_, returned by process()
   std::optional<VisualAxisCorrection> axis_correction_;
   std::vector<TrackSample> track_;
   std::deque<ArmFrame> frames_;  // queued, not yet tracked

@@ -95,6 +95,49 @@ TEST(ForearmTrack, TheOrientationFiltersOwnUncertaintyAddsToTheMountings) {
   EXPECT_GT(confidence_from_rms_rad(out.samples[4].orientation_rms_rad), 0.5);
 }
 
+// Ten samples, the mounting replaced by one turned `turn_rad` at 50 ms; frames every 10 ms
+// from 5 ms. Returns the tracked frames.
+std::vector<TrackedArmFrame> frames_across_a_mounting_change(ForearmTrack& track, double turn_rad,
+                                                             double rms_after_rad) {
+  add_samples(track, 0, 5);
+  track.set_mounting(Quat(Eigen::AngleAxisd(turn_rad, Vec3::UnitX())), rms_after_rad);
+  add_samples(track, 50'000, 5);
+  for (std::int64_t t = 5'000; t < 90'000; t += 10'000) {
+    ArmFrame frame;
+    frame.t_us = t;
+    track.add_frame(frame);
+  }
+  return track.process(true).frames;
+}
+
+TEST(ForearmTrack, AConfidentOrientationThatStepsIsFlaggedAndNotConfident) {
+  ForearmTrack track(Side::kRight, ForearmModel{}, false, Quat::Identity(), Quat::Identity(), 4.0 * kDeg);
+  const std::vector<TrackedArmFrame> frames = frames_across_a_mounting_change(track, 30.0 * kDeg, 4.0 * kDeg);
+  ASSERT_EQ(frames.size(), 9u);
+  // The frame at 45 ms lies between the last old and the first new sample: the 30 degrees come
+  // in two halves, at 45 and at 55 ms, each beyond 1.944 x 4 degrees.
+  EXPECT_EQ(track.orientation_steps(), 2u);
+  for (const TrackedArmFrame& f : frames) {
+    const bool step = f.frame.t_us == 45'000 || f.frame.t_us == 55'000;
+    EXPECT_EQ(f.orientation_step_rad > 0.0, step) << f.frame.t_us;
+    if (step) {
+      EXPECT_NEAR(f.orientation_step_rad, 15.0 * kDeg, 0.5 * kDeg) << f.frame.t_us;
+      EXPECT_GE(f.orientation_rms_rad, f.orientation_step_rad);
+      EXPECT_LT(confidence_from_rms_rad(f.orientation_rms_rad), 0.5);
+    }
+  }
+  EXPECT_NEAR(track.largest_orientation_step_rad(), 15.0 * kDeg, 0.5 * kDeg);
+}
+
+TEST(ForearmTrack, AnUncertainMountingGivingWayToABetterOneIsNoStep) {
+  // 30 degrees of uncertainty before: a 20 degree change is within what it allows.
+  ForearmTrack track(Side::kRight, ForearmModel{}, false, Quat::Identity(), Quat::Identity(), 30.0 * kDeg);
+  const std::vector<TrackedArmFrame> frames = frames_across_a_mounting_change(track, 20.0 * kDeg, 4.0 * kDeg);
+  ASSERT_EQ(frames.size(), 9u);
+  EXPECT_EQ(track.orientation_steps(), 0u);
+  for (const TrackedArmFrame& f : frames) EXPECT_EQ(f.orientation_step_rad, 0.0) << f.frame.t_us;
+}
+
 TEST(ForearmTrack, APronationReferenceFoundLaterAppliesFromItsSample) {
   ForearmTrack track(Side::kRight, ForearmModel{}, false, Quat::Identity(), std::nullopt, 20.0 * kDeg);
   add_samples(track, 0, 5);

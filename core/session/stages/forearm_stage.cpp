@@ -527,6 +527,16 @@ void ForearmStage::finish(StageOutput& out) {
     feed_trackers(true, out);
   }
   hand_on_frames_done(true, out);
+  for (const Device& device : devices_) {
+    if (!device.tracker || device.tracker->orientation_steps() == 0) continue;
+    out.warn("FOREARM_ORIENTATION_STEP", "forearm[" + device.id + "].orientation",
+             std::to_string(device.tracker->orientation_steps()) +
+                 " frames changed the mounting their orientation implies by more than their uncertainty allows "
+                 "(largest " +
+                 fixed_text(degrees(device.tracker->largest_orientation_step_rad()), 1) + " deg at " +
+                 fixed_text(1e-6 * static_cast<double>(device.tracker->largest_orientation_step_us()), 2) +
+                 " s camera time); their uncertainty is raised to the step, so they are not confident");
+  }
   v1::CalibrationReport& report = out.calibration();
   if (const std::optional<double> tone_hz = clocks_->buzzer_tone_hz()) report.set_buzzer_tone_hz(*tone_hz);
   for (const Device& device : devices_) {
