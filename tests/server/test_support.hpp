@@ -2,6 +2,7 @@
 // Small helpers shared by the server, job and client tests.
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <filesystem>
 #include <map>
@@ -20,8 +21,7 @@ class TempDir {
  public:
   TempDir()
       : path_(std::filesystem::temp_directory_path() /
-              ("posefuse_test_" + std::to_string(::getpid()) + "_" +
-               ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
+              ("posefuse_test_" + std::to_string(::getpid()) + "_" + test_name())) {
     std::filesystem::remove_all(path_);
     std::filesystem::create_directories(path_);
   }
@@ -31,6 +31,14 @@ class TempDir {
   const std::filesystem::path& path() const { return path_; }
 
  private:
+  // One path component: a parameterised test's name ("Name/sqlite") would otherwise nest a
+  // folder that removing the inner one leaves behind.
+  static std::string test_name() {
+    std::string name = ::testing::UnitTest::GetInstance()->current_test_info()->name();
+    std::replace(name.begin(), name.end(), '/', '_');
+    return name;
+  }
+
   std::filesystem::path path_;
 };
 
