@@ -84,6 +84,7 @@ void ForearmTrack::add_imu(const std::vector<std::int64_t>& t_us, const std::vec
     // The filter's own uncertainty (start-up, lost samples) adds to the mounting's, independently.
     const double filter_rad = i < filter_uncertainty_rad.size() ? filter_uncertainty_rad[i] : 0.0;
     orientation_rms_rad_of_.push_back(std::sqrt(orientation_rms_rad_ * orientation_rms_rad_ + filter_rad * filter_rad));
+    mounting_rms_rad_of_.push_back(orientation_rms_rad_);
   }
 }
 
@@ -100,7 +101,7 @@ void ForearmTrack::take_settled(std::vector<SettledArmSample>& out) {
   for (; settled_taken_ < K_from_F_.size(); ++settled_taken_) {
     const Quat& K_from_F = K_from_F_[settled_taken_];
     out.push_back({arm_[settled_taken_], K_from_F, pronation(settled_taken_, K_from_F),
-                   settled_rms_rad_[settled_taken_], orientation_rms_rad_of_[settled_taken_]});
+                   settled_rms_rad_[settled_taken_], mounting_rms_rad_of_[settled_taken_]});
   }
 }
 

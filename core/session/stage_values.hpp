@@ -39,7 +39,7 @@ struct ForearmOrientations {
   std::vector<geometry::Quat> K_from_F;
   std::vector<double> pronation_rad;        // NaN without the calibration pose
   std::vector<double> orientation_rms_rad;  // predicted RMS error (forearm/orientation_uncertainty.hpp)
-  std::vector<double> model_rms_rad;        // the same before the camera's check (forearm_track.hpp)
+  std::vector<double> model_rms_rad;        // the mounting's alone (SettledArmSample::model_rms_rad)
 };
 
 // The forearm stage's decision on one arm IMU once its calibration is over: tracked (with the
