@@ -2,13 +2,15 @@
 
 #include <algorithm>
 
+#include "imu/lowpass_gain.hpp"
+
 namespace posefuse::imu {
 
 InnovationScatter::InnovationScatter(double tau_s, double min_sigma_rad)
     : tau_s_(tau_s), min_var_rad2_(min_sigma_rad * min_sigma_rad) {}
 
 void InnovationScatter::learn(const Eigen::Vector2d& innovation_rad, double estimate_var_rad2, double dt_s) {
-  const double g = dt_s / (tau_s_ + dt_s);
+  const double g = lowpass_gain(dt_s, tau_s_);
   scatter_rad2_ += g * (std::max(0.0, innovation_rad.squaredNorm() - estimate_var_rad2) - scatter_rad2_);
   lowpass_rad_ += g * (innovation_rad - lowpass_rad_);
   lowpass_var_rad2_ += g * (lowpass_rad_.squaredNorm() - lowpass_var_rad2_);

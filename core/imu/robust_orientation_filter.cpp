@@ -9,14 +9,11 @@
 #include <Eigen/Eigenvalues>
 
 #include "common/error.hpp"
+#include "imu/lowpass_gain.hpp"
 
 namespace posefuse::imu {
 
 namespace {
-
-// Gain of a first-order low-pass with time constant tau for one step of dt (backward Euler:
-// stable for any dt, no exp() per sample).
-double lowpass_gain(double dt_s, double tau_s) { return dt_s / (tau_s + dt_s); }
 
 // Brings a quaternion that is already almost unit back to unit length (first-order Newton step
 // on |q| = 1, no square root; the per-step rounding drift is ~1e-16).
