@@ -516,6 +516,7 @@ TEST(ForearmStage, LostArmImuSamplesLowerTheConfidenceUntilTheFilterHasRecovered
   }
   std::printf("lost 0.4 s of arm IMU samples: uncertainty before %.1f deg, after %.1f deg, from 7 s %.1f deg\n",
               before / kDeg, after / kDeg, late / kDeg);
+  EXPECT_TRUE(has_warning(r, "IMU_SAMPLES_LOST", "imu[arm_r]", "lost samples 1 times"));
   EXPECT_GT(after, 1.5 * before);
   EXPECT_LT(late, after);
   const testing::ForearmSessionErrors e = testing::evaluate_forearm_results(r.truth, r.sink.results);

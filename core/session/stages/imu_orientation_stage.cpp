@@ -4,6 +4,7 @@
 #include <limits>
 
 #include "common/error.hpp"
+#include "common/number_text.hpp"
 #include "geometry/quaternion.hpp"
 #include "session/stages/imu_options.hpp"
 #include "session/stages/proto_values.hpp"
@@ -63,6 +64,13 @@ void ImuOrientationStage::finish(StageOutput& out) {
       out.warn("IMU_NO_SAMPLES", "header.imu_devices[" + std::to_string(i) + "]",
                "device '" + id + "' sent no samples; no orientation or gyro bias for it");
       continue;
+    }
+    if (device.filter.gaps() > 0) {
+      out.warn("IMU_SAMPLES_LOST", "imu[" + id + "]",
+               "device '" + id + "' lost samples " + std::to_string(device.filter.gaps()) + " times (" +
+                   fixed_text(device.filter.lost_s(), 2) +
+                   " s in all); its orientations after each are uncertain until the filter has recovered "
+                   "(forearm orientations carry that uncertainty, docs/imu-robust.md)");
     }
     calibration.set_mag_field_ut(device.filter.mag_ref_norm_uT() > 0.0 ? device.filter.mag_ref_norm_uT()
                                                                        : std::numeric_limits<double>::quiet_NaN());
