@@ -239,8 +239,10 @@ TEST_F(PgReplicasTest, WatchAndCancelOnAnApiReplicaFollowAndStopAJobOnAWorker) {
     const grpc::Status status = worker.stub->GetServerInfo(&context, {}, &info);
     EXPECT_EQ(status.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << status.error_message();
   }
-  // Followed: progress from the worker reaches a watcher on the API replica.
-  const std::string watched = submit(api, "short.pfchunks").job_id();
+  // Followed: progress from the worker reaches a watcher on the API replica. The long recording,
+  // because a watcher reads the state a notification points at, and a short job can be done
+  // before its first notification is read.
+  const std::string watched = submit(api, "long.pfchunks").job_id();
   const auto states = watch(api, watched);
   ASSERT_GE(states.size(), 3u);
   EXPECT_EQ(states.back().state(), v1::Job::SUCCEEDED);
