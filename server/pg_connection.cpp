@@ -56,7 +56,23 @@ void check_conninfo(const std::string& conninfo, const std::string& field) {
   PQconninfoFree(options);
 }
 
-PgConnection::PgConnection(const std::string& conninfo) : conn_(PQconnectdb(conninfo.c_str())) {
+namespace {
+
+// libpq's defaults wait for ever: a connect to a host that is gone, and a LISTEN connection to a
+// database that vanished without closing TCP (only the kernel's two-hour keepalive notices).
+// These come before the conninfo, which overrides any of them (expand_dbname).
+PGconn* connect_with_defaults(const std::string& conninfo) {
+  const char* const keywords[] = {
+      "connect_timeout", "keepalives", "keepalives_idle", "keepalives_interval", "keepalives_count", "dbname", nullptr};
+  const char* const values[] = {
+      kPgConnectTimeoutS, "1",    kPgKeepalivesIdleS, kPgKeepalivesIntervalS, kPgKeepalivesCount,
+      conninfo.c_str(),   nullptr};
+  return PQconnectdbParams(keywords, values, /*expand_dbname=*/1);
+}
+
+}  // namespace
+
+PgConnection::PgConnection(const std::string& conninfo) : conn_(connect_with_defaults(conninfo)) {
   if (!conn_ || PQstatus(conn_) != CONNECTION_OK) {
     const std::string reason = conn_ ? trimmed(PQerrorMessage(conn_)) : "out of memory";
     PQfinish(conn_);

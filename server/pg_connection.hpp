@@ -37,9 +37,17 @@ std::string pg_bytea(const PGresult* result, int row, int column);
 // `field` with libpq's reason.
 void check_conninfo(const std::string& conninfo, const std::string& field);
 
+// What every connection gets unless its conninfo says otherwise: a connect gives up after 10 s,
+// and a peer that stopped answering is noticed after 30 s idle plus 3 unanswered probes 10 s
+// apart (TCP only; a Unix socket needs none).
+inline constexpr const char* kPgConnectTimeoutS = "10";
+inline constexpr const char* kPgKeepalivesIdleS = "30";
+inline constexpr const char* kPgKeepalivesIntervalS = "10";
+inline constexpr const char* kPgKeepalivesCount = "3";
+
 class PgConnection {
  public:
-  // Connects; throws StoreUnavailable naming libpq's reason.
+  // Connects (with the defaults above); throws StoreUnavailable naming libpq's reason.
   explicit PgConnection(const std::string& conninfo);
   ~PgConnection();
   PgConnection(const PgConnection&) = delete;

@@ -306,6 +306,33 @@ TEST_F(PgJobStoreTest, StartingTogetherMigratesOnceAndReopeningKeepsTheJobs) {
   EXPECT_EQ(reopened.get(id)->job.label(), "kept");
 }
 
+// The value libpq uses for `keyword` on an open connection.
+std::string option_in_use(PgConnection& connection, const std::string& keyword) {
+  PQconninfoOption* options = PQconninfo(connection.raw());
+  std::string value = "(absent)";
+  for (PQconninfoOption* o = options; o && o->keyword; ++o) {
+    if (keyword == o->keyword) value = o->val ? o->val : "(unset)";
+  }
+  PQconninfoFree(options);
+  return value;
+}
+
+TEST_F(PgJobStoreTest, ConnectionsGiveUpAndNoticeADeadPeerUnlessTheConninfoSaysOtherwise) {
+  PgConnection defaults(conninfo_);
+  EXPECT_EQ(option_in_use(defaults, "connect_timeout"), kPgConnectTimeoutS);
+  EXPECT_EQ(option_in_use(defaults, "keepalives"), "1");
+  EXPECT_EQ(option_in_use(defaults, "keepalives_idle"), kPgKeepalivesIdleS);
+  EXPECT_EQ(option_in_use(defaults, "keepalives_interval"), kPgKeepalivesIntervalS);
+  EXPECT_EQ(option_in_use(defaults, "keepalives_count"), kPgKeepalivesCount);
+  // The conninfo's own settings win, and the rest of it (database, socket) still applies.
+  PgConnection own(conninfo_ + " keepalives_idle=7 connect_timeout=3");
+  EXPECT_EQ(option_in_use(own, "keepalives_idle"), "7");
+  EXPECT_EQ(option_in_use(own, "connect_timeout"), "3");
+  EXPECT_EQ(option_in_use(own, "keepalives_count"), kPgKeepalivesCount);
+  EXPECT_EQ(option_in_use(own, "dbname"), option_in_use(defaults, "dbname"));
+  EXPECT_EQ(own.exec("SELECT 1").get() != nullptr, true);
+}
+
 TEST_F(PgJobStoreTest, AnUnreachableDatabaseIsStoreUnavailableAndABadConninfoNamesTheFlag) {
   try {
     PgJobStore store("host=/nonexistent/socket/dir dbname=x");
