@@ -8,6 +8,8 @@ double orientation_rms_rad(double axis_rms_rad, double roll_rms_rad, double filt
   return std::sqrt(axis_rms_rad * axis_rms_rad + roll_rms_rad * roll_rms_rad + filter_rms_rad * filter_rms_rad);
 }
 
+double imu_orientation_rms_rad(double beyond_steady_rad) { return std::hypot(kFilterRmsRad, beyond_steady_rad); }
+
 double confidence_from_rms_rad(double rms_rad) {
   if (!(rms_rad >= 0.0)) return 0.0;
   const double bound_ratio = kBound99OverRms * rms_rad / kConfidentErrorBoundRad;

@@ -25,6 +25,10 @@ inline constexpr double kFilterRmsRad = 1.92 * 3.14159265358979323846 / 180.0;
 // trusted beyond what one was measured to give. Sessions reported against it use other seeds.
 inline constexpr double kPoseCalibrationRmsRad = 5.6 * 3.14159265358979323846 / 180.0;
 
+// An IMU orientation's predicted RMS error: sqrt(kFilterRmsRad^2 + beyond_steady^2), where
+// beyond_steady is imu::RobustOrientationFilter::orientation_uncertainty_rad(), rad.
+double imu_orientation_rms_rad(double beyond_steady_rad);
+
 // sqrt(axis^2 + roll^2 + filter^2), rad.
 double orientation_rms_rad(double axis_rms_rad, double roll_rms_rad, double filter_rms_rad = kFilterRmsRad);
 

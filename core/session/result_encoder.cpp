@@ -17,6 +17,10 @@ void encode(const ImuOrientations& value, v1::FitResult& result) {
   for (std::size_t i = 0; i < value.samples.size() && i < value.W_from_A.size(); ++i) {
     batch.add_t_us(value.samples[i].t_us);
     for (const double v : geometry::to_wxyz(value.W_from_A[i])) batch.add_w_from_a(v);
+    const double beyond_steady_rad = i < value.uncertainty_rad.size() ? value.uncertainty_rad[i] : 0.0;
+    const double rms_rad = forearm::imu_orientation_rms_rad(beyond_steady_rad);
+    batch.add_uncertainty_rad(rms_rad);
+    batch.add_confidence(forearm::confidence_from_rms_rad(rms_rad));
   }
 }
 

@@ -62,9 +62,12 @@ ResultFiles::~ResultFiles() = default;
 
 void ResultFiles::write_orientations(const v1::ImuOrientationBatch& batch) {
   require_device_id(batch.device_id(), "imu_orientations.device_id");
-  if (batch.w_from_a_size() != 4 * batch.t_us_size()) {
+  if (batch.w_from_a_size() != 4 * batch.t_us_size() || batch.uncertainty_rad_size() != batch.t_us_size() ||
+      batch.confidence_size() != batch.t_us_size()) {
     throw Error(ErrorCode::kInvalidArgument, "imu_orientations.W_from_A",
-                "has " + std::to_string(batch.w_from_a_size()) + " values for " + std::to_string(batch.t_us_size()) +
+                "has " + std::to_string(batch.w_from_a_size()) + " values, " +
+                    std::to_string(batch.uncertainty_rad_size()) + " uncertainties and " +
+                    std::to_string(batch.confidence_size()) + " confidences for " + std::to_string(batch.t_us_size()) +
                     " samples");
   }
   auto& csv = orientations_[batch.device_id()];
@@ -75,7 +78,8 @@ void ResultFiles::write_orientations(const v1::ImuOrientationBatch& batch) {
   for (int i = 0; i < batch.t_us_size(); ++i) {
     csv->row({std::to_string(batch.t_us(i)), format_double(batch.w_from_a(4 * i)),
               format_double(batch.w_from_a(4 * i + 1)), format_double(batch.w_from_a(4 * i + 2)),
-              format_double(batch.w_from_a(4 * i + 3))});
+              format_double(batch.w_from_a(4 * i + 3)), format_double(batch.uncertainty_rad(i)),
+              format_double(batch.confidence(i))});
   }
   orientation_samples_ += static_cast<std::uint64_t>(batch.t_us_size());
 }

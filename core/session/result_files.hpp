@@ -3,9 +3,11 @@
 // streamed back by the server) and for the simulator's ground truth (gt/), so that a result
 // directory can be scored against a gt/ directory file by file, column by column.
 //
-//   imu_orientations/<device_id>.csv  t_us,w,x,y,z            W_from_A per IMU sample (device clock)
-//   forearm_orientations/<device_id>.csv  t_us,w,x,y,z,pronation_rad  K_from_F per arm IMU sample
-//                                     (camera clock; pronation + / supination -)
+//   imu_orientations/<device_id>.csv  t_us,w,x,y,z,uncertainty_rad,confidence  W_from_A per IMU
+//                                     sample (device clock) with its predicted RMS error
+//   forearm_orientations/<device_id>.csv  t_us,w,x,y,z,pronation_rad,uncertainty_rad,confidence
+//                                     K_from_F per arm IMU sample (camera clock; pronation + /
+//                                     supination -)
 //   smpl_joints.csv                   t_us,joint,joint_name,x_m,y_m,z_m,source,confidence
 //                                     (24 rows per frame, SMPL order, p_K)
 //   camera_joints.csv                 the same columns, 25 rows per frame, Kinect v2 JointType order
@@ -59,7 +61,10 @@ inline const std::vector<std::string> kRepetitionColumns = {
     "max_deg", "range_deg",  "peak_speed_deg_s", "duration_s", "counted"};
 // t_s, one column per angle, then one confidence column per angle.
 std::vector<std::string> joint_angle_columns();
-inline const std::vector<std::string> kOrientationColumns = {"t_us", "w", "x", "y", "z"};
+inline const std::vector<std::string> kOrientationColumns = {"t_us",      "w", "x", "y", "z", "uncertainty_rad",
+                                                             "confidence"};
+// imu_orientations/<id>.csv as written before each sample carried its uncertainty; still read.
+inline const std::vector<std::string> kOrientationColumnsWithoutUncertainty = {"t_us", "w", "x", "y", "z"};
 inline const std::vector<std::string> kForearmOrientationColumns = {
     "t_us", "w", "x", "y", "z", "pronation_rad", "uncertainty_rad", "confidence"};
 // forearm_orientations/<id>.csv as written before each sample carried its uncertainty; still read.

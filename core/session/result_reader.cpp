@@ -82,25 +82,26 @@ class ResultCsv {
   CsvReader csv_;
 };
 
-// The header row a forearm orientation file starts with: today's, or the layout before each
-// sample carried its uncertainty.
-bool has_uncertainty_columns(const fs::path& path) {
+// Whether an orientation file's header row is not `older`, the layout before each sample carried
+// its uncertainty.
+bool has_uncertainty_columns(const fs::path& path, const std::vector<std::string>& older_columns) {
   std::ifstream in(path);
   std::string header;
   std::getline(in, header);
   if (!header.empty() && header.back() == '\r') header.pop_back();
   std::string older;
-  for (const std::string& c : result_layout::kForearmOrientationColumnsWithoutUncertainty)
-    older += (older.empty() ? "" : ",") + c;
+  for (const std::string& c : older_columns) older += (older.empty() ? "" : ",") + c;
   return header != older;
 }
 
 std::vector<TimedOrientation> read_orientations(const fs::path& path, const std::string& name, bool forearm) {
-  const bool uncertainty = forearm && has_uncertainty_columns(path);
-  ResultCsv csv(path, name,
-                !forearm      ? result_layout::kOrientationColumns
-                : uncertainty ? result_layout::kForearmOrientationColumns
-                              : result_layout::kForearmOrientationColumnsWithoutUncertainty);
+  namespace layout = result_layout;
+  const std::vector<std::string>& older =
+      forearm ? layout::kForearmOrientationColumnsWithoutUncertainty : layout::kOrientationColumnsWithoutUncertainty;
+  const bool uncertainty = has_uncertainty_columns(path, older);
+  const std::vector<std::string>& today = forearm ? layout::kForearmOrientationColumns : layout::kOrientationColumns;
+  ResultCsv csv(path, name, uncertainty ? today : older);
+  const int uncertainty_column = forearm ? 6 : 5;
   std::vector<TimedOrientation> rows;
   std::int64_t previous = 0;
   while (csv.next()) {
@@ -109,8 +110,8 @@ std::vector<TimedOrientation> read_orientations(const fs::path& path, const std:
     row.q = csv.quat(1);
     if (forearm) row.pronation_rad = csv.number_or_nan(5);
     if (uncertainty) {
-      row.uncertainty_rad = csv.number(6);
-      row.confidence = csv.number(7);
+      row.uncertainty_rad = csv.number(uncertainty_column);
+      row.confidence = csv.number(uncertainty_column + 1);
     }
     rows.push_back(row);
   }

@@ -30,9 +30,9 @@ namespace posefuse::session {
 struct TimedOrientation {
   std::int64_t t_us = 0;
   geometry::Quat q = geometry::Quat::Identity();  // W_from_A (imu_orientations) or K_from_F
-  // forearm_orientations only: NaN without a calibration pose; the predicted error and its
-  // confidence, none in files written before they were.
+  // forearm_orientations only: NaN without a calibration pose.
   double pronation_rad = 0.0;
+  // The predicted error and its confidence; none in files written before they were.
   std::optional<double> uncertainty_rad, confidence;
 };
 

@@ -198,6 +198,8 @@ void write_ground_truth(const SimTruth& truth, const std::filesystem::path& dire
       batch.add_t_us(device.t_device_us[i]);
       const Quat& q = device.W_from_A[i];
       for (double c : {q.w(), q.x(), q.y(), q.z()}) batch.add_w_from_a(c);
+      batch.add_uncertainty_rad(0.0);  // the truth
+      batch.add_confidence(1.0);
     }
     files.write_orientations(batch);
     if (device.K_from_F.empty()) continue;

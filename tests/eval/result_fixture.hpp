@@ -65,6 +65,8 @@ inline void write_fixture(const std::filesystem::path& dir, const FixtureSpec& s
       const auto dt_us = static_cast<std::int64_t>(t * 1e6);
       orientations.add_t_us(spec.device_t0_us + dt_us);
       for (const double c : geometry::to_wxyz(fixture_K_from_F(t) * turn)) orientations.add_w_from_a(c);
+      orientations.add_uncertainty_rad(0.04);
+      orientations.add_confidence(0.95);
       forearm.add_t_us(spec.t0_us + dt_us);
       for (const double c : geometry::to_wxyz(fixture_K_from_F(t) * turn)) forearm.add_k_from_f(c);
       forearm.add_pronation_rad(0.1);

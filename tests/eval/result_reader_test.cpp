@@ -45,7 +45,12 @@ TEST(ResultReader, ReadsBackWhatResultFilesWrote) {
   EXPECT_EQ(first.t_us, 1000);
   EXPECT_NEAR(geometry::angle_between(first.q, result_fixture::fixture_K_from_F(0.0)), 0.0, 1e-12);
   EXPECT_DOUBLE_EQ(first.pronation_rad, 0.1);
-  EXPECT_EQ(r.imu_orientations.at("imu_right").front().t_us, spec.device_t0_us);
+  EXPECT_EQ(first.uncertainty_rad, 0.05);
+  EXPECT_EQ(first.confidence, 0.9);
+  const auto& imu = r.imu_orientations.at("imu_right").front();
+  EXPECT_EQ(imu.t_us, spec.device_t0_us);
+  EXPECT_EQ(imu.uncertainty_rad, 0.04);
+  EXPECT_EQ(imu.confidence, 0.95);
   ASSERT_EQ(r.camera_joints.size(), 250u);
   EXPECT_EQ(r.camera_joints[24].joint, 24);
   EXPECT_EQ(r.camera_joints[24].source, v1::GROUND_TRUTH);
@@ -69,6 +74,37 @@ TEST(ResultReader, ReadsBackWhatResultFilesWrote) {
   EXPECT_DOUBLE_EQ(r.repetitions[1].t_start_s, 2.001);
   EXPECT_TRUE(r.repetitions[1].counted);
   EXPECT_FALSE(r.repetitions[2].counted);
+}
+
+// The last `n` comma-separated columns dropped from every line of a file.
+void drop_last_columns(const std::filesystem::path& file, int n) {
+  std::ifstream in(file);
+  std::string out, line;
+  while (std::getline(in, line)) {
+    for (int k = 0; k < n; ++k) line.erase(line.rfind(','));
+    out += line + "\n";
+  }
+  in.close();
+  std::ofstream(file) << out;
+}
+
+TEST(ResultReader, OrientationFilesWithoutTheUncertaintyColumnsStillRead) {
+  // As written before each sample carried its predicted error: the orientations read, with none.
+  const auto dir = result_fixture::fresh_result_dir("without_uncertainty");
+  result_fixture::write_fixture(dir, {});
+  drop_last_columns(dir / "imu_orientations" / "imu_right.csv", 2);
+  drop_last_columns(dir / "forearm_orientations" / "imu_right.csv", 2);
+  const session::ResultDirectory r = session::read_result_files(dir);
+  for (const auto* rows : {&r.imu_orientations.at("imu_right"), &r.forearm_orientations.at("imu_right")}) {
+    ASSERT_EQ(rows->size(), 27u);
+    EXPECT_FALSE(rows->front().uncertainty_rad.has_value());
+    EXPECT_FALSE(rows->back().confidence.has_value());
+  }
+  EXPECT_DOUBLE_EQ(r.forearm_orientations.at("imu_right").back().pronation_rad, 0.1);
+  // One column short of either layout is named.
+  drop_last_columns(dir / "imu_orientations" / "imu_right.csv", 1);
+  posefuse::testing::expect_error([&] { session::read_result_files(dir); }, ErrorCode::kInvalidArgument,
+                                  "imu_orientations/imu_right.csv:1");
 }
 
 TEST(ResultReader, UndefinedAnglesAreEmptyCellsReadAsNone) {

@@ -153,6 +153,9 @@ function orientationSamplesByDevice(results) {
     if (result.result === 'imu_orientations') {
       const batch = result.imu_orientations;
       assert.equal(batch.W_from_A.length, 4 * batch.t_us.length, 'W_from_A holds 4 values per sample');
+      assert.equal(batch.uncertainty_rad.length, batch.t_us.length, 'an uncertainty per sample');
+      assert.equal(batch.confidence.length, batch.t_us.length, 'a confidence per sample');
+      for (const c of batch.confidence) assert.ok(c >= 0 && c <= 1, `confidence ${c} is in [0, 1]`);
       counts[batch.device_id] = (counts[batch.device_id] || 0) + batch.t_us.length;
     }
   }

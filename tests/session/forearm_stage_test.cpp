@@ -9,6 +9,7 @@
 #include <map>
 #include <numbers>
 #include <set>
+#include <vector>
 
 #include "body/smpl_model.hpp"
 #include "forearm/forearm_orientation.hpp"
@@ -519,6 +520,28 @@ TEST(ForearmStage, LostArmImuSamplesLowerTheConfidenceUntilTheFilterHasRecovered
   EXPECT_TRUE(has_warning(r, "IMU_SAMPLES_LOST", "imu[arm_r]", "lost samples 1 times"));
   EXPECT_GT(after, 1.5 * before);
   EXPECT_LT(late, after);
+  // The arm IMU's own orientations (device clock) carry it too: the sample after the gap is
+  // less certain, and less confident, than the one before it.
+  std::vector<std::int64_t> t_us;
+  std::vector<double> uncertainty_rad, confidence;
+  for (const auto& result : r.sink.results) {
+    if (!result.has_imu_orientations() || result.imu_orientations().device_id() != "arm_r") continue;
+    const auto& b = result.imu_orientations();
+    ASSERT_EQ(b.uncertainty_rad_size(), b.t_us_size());
+    ASSERT_EQ(b.confidence_size(), b.t_us_size());
+    t_us.insert(t_us.end(), b.t_us().begin(), b.t_us().end());
+    uncertainty_rad.insert(uncertainty_rad.end(), b.uncertainty_rad().begin(), b.uncertainty_rad().end());
+    confidence.insert(confidence.end(), b.confidence().begin(), b.confidence().end());
+  }
+  std::size_t gap = 0;
+  for (std::size_t i = 1; i < t_us.size(); ++i) {
+    if (t_us[i] - t_us[i - 1] > 300'000) gap = i;
+  }
+  ASSERT_GT(gap, 0u) << "no 0.4 s gap in arm_r's orientations";
+  std::printf("arm_r's IMU orientation across the gap: uncertainty %.1f -> %.1f deg, confidence %.2f -> %.2f\n",
+              uncertainty_rad[gap - 1] / kDeg, uncertainty_rad[gap] / kDeg, confidence[gap - 1], confidence[gap]);
+  EXPECT_GT(uncertainty_rad[gap], 1.5 * uncertainty_rad[gap - 1]);
+  EXPECT_LT(confidence[gap], confidence[gap - 1]);
   const testing::ForearmSessionErrors e = testing::evaluate_forearm_results(r.truth, r.sink.results);
   EXPECT_EQ(e.confident_beyond_15_deg, 0u);
   EXPECT_GE(static_cast<double>(e.within_predicted_bound), 0.95 * static_cast<double>(e.orientation_samples));

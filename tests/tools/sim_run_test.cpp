@@ -213,6 +213,8 @@ TEST(SimRun, GtHasTheClientResultFilesColumns) {
   orientations.mutable_imu_orientations()->set_device_id("imu_left");
   orientations.mutable_imu_orientations()->add_t_us(0);
   for (double c : {1.0, 0.0, 0.0, 0.0}) orientations.mutable_imu_orientations()->add_w_from_a(c);
+  orientations.mutable_imu_orientations()->add_uncertainty_rad(0.0);
+  orientations.mutable_imu_orientations()->add_confidence(1.0);
   writer.write(orientations);
   v1::FitResult forearm;
   forearm.mutable_forearm_orientations()->set_device_id("imu_left");

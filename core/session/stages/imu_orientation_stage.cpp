@@ -70,7 +70,7 @@ void ImuOrientationStage::finish(StageOutput& out) {
                "device '" + id + "' lost samples " + std::to_string(device.filter.gaps()) + " times (" +
                    fixed_text(device.filter.lost_s(), 2) +
                    " s in all); its orientations after each are uncertain until the filter has recovered "
-                   "(forearm orientations carry that uncertainty, docs/imu-robust.md)");
+                   "(its orientations and forearm orientations carry that uncertainty, docs/imu-robust.md)");
     }
     calibration.set_mag_field_ut(device.filter.mag_ref_norm_uT() > 0.0 ? device.filter.mag_ref_norm_uT()
                                                                        : std::numeric_limits<double>::quiet_NaN());
