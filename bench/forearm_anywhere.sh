@@ -11,6 +11,9 @@
 #   bound      samples within the 99 % bound of their predicted error / emitted
 #   first      seconds from the first emitted sample to the first confident one
 #   A_from_F   the mounting's error against the truth (deg)
+# Then, from the same runs, per session and IMU: the orientation filter's W_from_A against the
+# truth (RMS/max), its confident samples and their max error and count beyond 15 deg, and the
+# samples within the 99 % bound of their predicted error (imu_orientations/<id>.csv).
 #   bench/forearm_anywhere.sh [BUILD_DIR] [MOTION:SEED:SPEED ...]
 #   MOTION: an exercise name, or a BVH clip's path (its whole length, as it is) or a path with
 #   "+pose" appended (paper 1's calibration pose first: sim calibration_prefix).
@@ -57,12 +60,15 @@ for spec in "${specs[@]}"; do
   # (80 Hz): a sample whose mapped camera time is a few ms off (an arm clock's drift, which one
   # BLE burst cannot show) is scored with that error in it, not left out.
   "$build/tools/score/posefuse-score" "$work/$name.out" "$work/$name.gt" --tolerance-us 6250 >"$work/$name.score"
-  python3 - "$name" "$work/$name.out" "$work/$name.gt" "$work/$name.score" <<'PY'
+  python3 - "$name" "$work/$name.out" "$work/$name.gt" "$work/$name.score" "$work/imu_rows" <<'PY'
 import json, os, re, sys
-name, out, gt, score = sys.argv[1:]
+name, out, gt, score, imu_rows = sys.argv[1:]
 rows, conf, mounting_error = {}, {}, {}
+imu = {}
 for line in open(score):
     f = line.split()
+    if len(f) in (7, 9) and f[0].startswith("imu_orientations/"):
+        imu.setdefault(f[1], {})["conf" if len(f) == 9 else "rows"] = f
     if len(f) in (6, 9) and re.match(r"forearm_orientations/imu_(left|right)\.csv$", f[0]):
         arm = f[1].split("_")[1].upper()
         (conf if len(f) == 9 else rows)[arm] = f
@@ -89,5 +95,15 @@ for arm in ("LEFT", "RIGHT"):
         confident, bound, first = "-", "-", "-"
     a = f"{mounting_error[arm]:.1f}" if arm in mounting_error else "-"
     print(f"{name:34s} {arm:5s} {mounting:8s} {error:10s} {emitted:8s} {confident:16s} {bound:7s} {first:6s} {a}")
+with open(imu_rows, "a") as o:
+    for device, f in sorted(imu.items()):
+        r, c = f["rows"], f["conf"]
+        n = int(r[2])
+        within, scored = (int(x) for x in c[7].split("/"))
+        o.write(f"{name:34s} {device:10s} {float(r[3]):.1f}/{float(r[4]):.1f}".ljust(58) +
+                f"{100 * int(c[3]) / n:.0f}% {c[5]} {c[6]}".ljust(18) + f"{100 * within / max(1, scored):.1f}%\n")
 PY
 done
+echo
+printf '%-34s %-10s %-11s %-17s %s\n' session imu "RMS/max" confident bound
+cat "$work/imu_rows"

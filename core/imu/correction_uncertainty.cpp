@@ -26,10 +26,10 @@ double CorrectionUncertainty::excess_var_rad2() const {
   return std::max(0.0, std::min(reported_var_rad2, evidence) - steady_var_rad2);
 }
 
-double CorrectionUncertainty::correct(double tau_gain, double sample_var_rad2, double shared_var_rad2, bool may_end,
-                                      const Eigen::Vector2d& innovation_rad) {
+double CorrectionUncertainty::correct(double tau_gain, double min_gain, double sample_var_rad2, double shared_var_rad2,
+                                      bool may_end, const Eigen::Vector2d& innovation_rad) {
   steady_var_rad2 = after_correction(steady_var_rad2, tau_gain, sample_var_rad2, shared_var_rad2);
-  double k = tau_gain;
+  double k = std::max(tau_gain, min_gain);
   if (recovering) {
     const double excess = std::max(0.0, gain_var_rad2 - shared_var_rad2);
     k = std::max(k, excess / (excess + sample_var_rad2));

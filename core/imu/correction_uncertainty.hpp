@@ -35,14 +35,17 @@ struct CorrectionUncertainty {
   // this quantity. Starts a recovery.
   void add_gap(double bridge_var_rad2, double turn_var_rad2);
 
-  // One correction: returns its gain, the time constant's or, while recovering, a Kalman
-  // filter's for gain_var against one sample's error variance if larger. The recovery ends (if
+  // One correction: returns its gain, the larger of the time constant's `tau_gain`, `min_gain`
+  // (what the filter takes at least: the start-up's equal-weight averaging, a fast pull after a
+  // new magnetic reference) and, while recovering, a Kalman filter's for gain_var against one
+  // sample's error variance. The shadow follows `tau_gain` alone: steady tracking's error, so
+  // that what a start-up or a pull leaves counts as excess. The recovery ends (if
   // `may_end`) once gain_var is back within twice steady_var. `shared_var_rad2` is an error every sample shares (no
   // averaging removes it): only the uncertainty beyond it asks for a faster gain, and it stays,
   // so a later, better sample still finds the error it left.
   // `innovation_rad`: this sample's innovation (the tilt's two horizontal components, or the
   // heading and 0), from which the correction takes the returned gain's share.
-  double correct(double tau_gain, double sample_var_rad2, double shared_var_rad2, bool may_end,
+  double correct(double tau_gain, double min_gain, double sample_var_rad2, double shared_var_rad2, bool may_end,
                  const Eigen::Vector2d& innovation_rad);
 
   // Predicted RMS error^2 beyond steady tracking.

@@ -293,8 +293,12 @@ void RobustOrientationFilter::correct_inclination(const Vec3& acc_m_s2, double d
   // average out there, gravity does not.
   // Two first-order stages of tau_acc_s / 2 each: -40 dB/decade, so at the default 4 s a 1 Hz
   // back-and-forth movement is damped ~160x, where one 4 s stage would damp it only ~25x.
-  double k = dt_s > 0.0 ? gains_.acc_stage : 1.0;
-  if (time_s_ < params_.init_s) k = std::max(k, 1.0 / init_weight_count_);
+  // The time constant's gain; a sample without a step in time, and the start-up's equal-weight
+  // averaging, take more (min_gain), which steady tracking would not.
+  const double tau_gain = dt_s > 0.0 ? gains_.acc_stage : 0.0;
+  double min_gain = dt_s > 0.0 ? 0.0 : 1.0;
+  if (time_s_ < params_.init_s) min_gain = std::max(min_gain, 1.0 / init_weight_count_);
+  double k = std::max(tau_gain, min_gain);
   const Vec3 acc_I = rotate(I_from_A_, acc_m_s2);
   const double acc_norm = acc_I.norm();
   if (acc_norm > 1e-9) {
@@ -310,7 +314,7 @@ void RobustOrientationFilter::correct_inclination(const Vec3& acc_m_s2, double d
     const bool was_recovering = inclination_.recovering;
     const double off_g_rad = std::asin(off_g);
     // These accelerations last as long as the learned disturbances do.
-    k = inclination_.correct(k, acc_scatter_.sample_var_rad2(dt_s, off_g_rad * off_g_rad), 0.0, true,
+    k = inclination_.correct(tau_gain, min_gain, acc_scatter_.sample_var_rad2(dt_s, off_g_rad * off_g_rad), 0.0, true,
                              Eigen::Vector2d(up_E.x(), up_E.y()));
     // The scatter is learned only while tracking after start-up: during a recovery the
     // estimate's own error would pass for the accelerometer's.
@@ -382,13 +386,15 @@ void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
   if (norm < 1e-6) return;
   const double sin_dip = -m_E.z() / norm;  // positive when the field points down
 
-  double k = dt_s > 0.0 ? gains_.mag : 1.0;
+  // As for the inclination: the time constant's gain, and what a start-up or a fast pull takes.
+  const double tau_gain = dt_s > 0.0 ? gains_.mag : 0.0;
+  double min_gain = dt_s > 0.0 ? 0.0 : 1.0;
   if (time_s_ < params_.init_s && !mag_ref_valid_) {
     // Start-up: learn the reference as the plain mean and converge the heading fast.
     mag_init_count_ += 1.0;
     mag_ref_norm_ += (norm - mag_ref_norm_) / mag_init_count_;
     mag_ref_sin_dip_ += (sin_dip - mag_ref_sin_dip_) / mag_init_count_;
-    k = std::max(k, 1.0 / mag_init_count_);
+    min_gain = std::max(min_gain, 1.0 / mag_init_count_);
     mag_disturbed_ = false;
   } else {
     mag_ref_valid_ = true;
@@ -436,7 +442,7 @@ void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
     mag_ref_norm_ += kr * (norm - mag_ref_norm_);
     mag_ref_sin_dip_ += kr * (sin_dip - mag_ref_sin_dip_);
     if (mag_recover_left_s_ > 0.0) {
-      k = std::max(k, gains_.mag_recover);
+      min_gain = std::max(min_gain, gains_.mag_recover);
       mag_recover_left_s_ -= dt_s;
     }
   }
@@ -449,13 +455,12 @@ void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
   const bool was_recovering = heading_.recovering;
   // An inclination error of d turns the horizontal field by up to d tan(dip): while the
   // inclination is uncertain, so is every sample's heading.
-  const double sin2_dip = std::min(0.99, mag_ref_sin_dip_ * mag_ref_sin_dip_);
-  const double tan2_dip = sin2_dip / (1.0 - sin2_dip);
+  const double tan2_dip = this->tan2_dip();
   // The inclination's uncertainty reaches every sample's heading alike; at start-up both are
   // averaged from the same first samples and converge together.
   const double tilt_var = time_s_ < params_.init_s ? 0.0 : inclination_.gain_var_rad2 * tan2_dip;
-  k = heading_.correct(k, mag_scatter_.sample_var_rad2(dt_s), tilt_var, !inclination_.recovering,
-                       Eigen::Vector2d(error_rad, 0.0));
+  const double k = heading_.correct(tau_gain, min_gain, mag_scatter_.sample_var_rad2(dt_s), tilt_var,
+                                    !inclination_.recovering, Eigen::Vector2d(error_rad, 0.0));
   // The inclination's error turns every sample's heading alike, so averaging does not shrink
   // it: the heading stays at least as uncertain as the inclination's excess makes it.
   const double tilt_excess_var = inclination_.excess_var_rad2() * tan2_dip;

@@ -133,8 +133,11 @@ class RobustOrientationFilter {
   double inclination_uncertainty_rad() const {
     return std::max(std::sqrt(inclination_.excess_var_rad2()), acc_scatter_.persistent_rad());
   }
+  // At least what the inclination's excess turns the horizontal field by (d tan(dip)): every
+  // sample's heading shares it, so no agreement of the samples can show it.
   double heading_uncertainty_rad() const {
-    return std::max(std::sqrt(heading_.excess_var_rad2()), mag_scatter_.persistent_rad());
+    const double tilt_rad = std::sqrt(inclination_.excess_var_rad2() * tan2_dip());
+    return std::max({std::sqrt(heading_.excess_var_rad2()), mag_scatter_.persistent_rad(), tilt_rad});
   }
   double orientation_uncertainty_rad() const {
     const double i = inclination_uncertainty_rad(), h = heading_uncertainty_rad();
@@ -154,6 +157,12 @@ class RobustOrientationFilter {
   void reset_keeping_calibration(bool flip_gyro = false);
 
  private:
+  // tan^2 of the reference field's dip (sin^2 capped at 0.99, 84 degrees): how much an
+  // inclination error turns the horizontal field.
+  double tan2_dip() const {
+    const double sin2_dip = std::min(0.99, mag_ref_sin_dip_ * mag_ref_sin_dip_);
+    return sin2_dip / (1.0 - sin2_dip);
+  }
   void integrate_gyro(const Vec3& rate_rad_s, double dt_s);  // bias-corrected rate
   void update_rest_detection(const ImuSample& s, double dt_s);
   void correct_inclination(const Vec3& acc_m_s2, double dt_s);

@@ -50,12 +50,26 @@ TEST(InnovationScatter, ABiasShowsAsPersistentAndTheEstimatesOwnVarianceIsNotSca
   EXPECT_NEAR(explained.scatter_rad2(), 1.0 * kDeg * kDeg, 1e-12);
 }
 
+TEST(CorrectionUncertainty, AStartUpsAveragingIsExcessOverSteadyTracking) {
+  // From an unknown estimate, equal-weight averaging of n samples (min_gain 1/n) leaves one
+  // sample's variance over n; steady tracking, following the time constant's small gain from no
+  // error, holds far less, so nearly all of it is reported as excess.
+  CorrectionUncertainty u;
+  const double tau_gain = 0.005, sample_var = 100.0 * kDeg * kDeg;
+  for (int n = 1; n <= 80; ++n) {
+    EXPECT_DOUBLE_EQ(u.correct(tau_gain, 1.0 / n, sample_var, 0.0, true, Eigen::Vector2d::Zero()), 1.0 / n);
+  }
+  EXPECT_NEAR(u.reported_var_rad2, sample_var / 80.0, 1e-12);
+  EXPECT_LT(u.steady_var_rad2, 0.25 * sample_var / 80.0);
+  EXPECT_GT(u.excess_var_rad2(), 0.75 * u.reported_var_rad2);
+}
+
 TEST(CorrectionUncertainty, SteadyTrackingHasNoExcessAndTakesTheTimeConstantsGain) {
   CorrectionUncertainty u;
   u.gain_var_rad2 = u.reported_var_rad2 = u.error_var_rad2 = 0.0;
   const double tau_gain = 0.005, sample_var = 4.0 * kDeg * kDeg;
   for (int i = 0; i < 5000; ++i) {
-    EXPECT_DOUBLE_EQ(u.correct(tau_gain, sample_var, 0.0, true, Eigen::Vector2d::Zero()), tau_gain);
+    EXPECT_DOUBLE_EQ(u.correct(tau_gain, 0.0, sample_var, 0.0, true, Eigen::Vector2d::Zero()), tau_gain);
   }
   // The Joseph form's fixed point for a fixed gain: k R / (2 - k).
   EXPECT_NEAR(u.reported_var_rad2, tau_gain * sample_var / (2.0 - tau_gain), 1e-9);
@@ -70,10 +84,10 @@ TEST(CorrectionUncertainty, AGapRecoversWithKalmanGainsUntilBackToSteady) {
   ASSERT_TRUE(u.recovering);
   EXPECT_NEAR(std::sqrt(u.excess_var_rad2()), 40.0 * kDeg, 0.01 * kDeg);
   // The first sample takes nearly all of it: 400 / (400 + 4).
-  EXPECT_NEAR(u.correct(tau_gain, sample_var, 0.0, true, Eigen::Vector2d(20.0 * kDeg, 0.0)), 400.0 / 404.0, 1e-9);
+  EXPECT_NEAR(u.correct(tau_gain, 0.0, sample_var, 0.0, true, Eigen::Vector2d(20.0 * kDeg, 0.0)), 400.0 / 404.0, 1e-9);
   int steps = 1;
   while (u.recovering && steps < 100000) {
-    u.correct(tau_gain, sample_var, 0.0, true, Eigen::Vector2d::Zero());
+    u.correct(tau_gain, 0.0, sample_var, 0.0, true, Eigen::Vector2d::Zero());
     ++steps;
   }
   EXPECT_FALSE(u.recovering);
@@ -90,7 +104,7 @@ TEST(CorrectionUncertainty, AnErrorTheSamplesShowIsReportedUntilItIsCorrected) {
   // degrees off: every sample shows it (noise-free here) and each correction takes k of it.
   double error = 30.0 * kDeg;
   for (int i = 0; i < 2000; ++i) {
-    const double k = u.correct(0.005, 4.0 * kDeg * kDeg, 0.0, true, Eigen::Vector2d(error, 0.0));
+    const double k = u.correct(0.005, 0.0, 4.0 * kDeg * kDeg, 0.0, true, Eigen::Vector2d(error, 0.0));
     error -= k * error;
     const double reported = std::sqrt(u.excess_var_rad2());
     if (i > 10) {
@@ -105,11 +119,11 @@ TEST(CorrectionUncertainty, ASharedErrorIsNotAveragedAwayAndIsTakenOnceItShrinks
   u.gain_var_rad2 = u.reported_var_rad2 = u.error_var_rad2 = u.steady_var_rad2 = 0.0;
   u.add_gap(std::pow(30.0 * kDeg, 2), std::pow(30.0 * kDeg, 2));
   const double shared = std::pow(25.0 * kDeg, 2);
-  for (int i = 0; i < 500; ++i) u.correct(0.0005, 1.0 * kDeg * kDeg, shared, false, Eigen::Vector2d::Zero());
+  for (int i = 0; i < 500; ++i) u.correct(0.0005, 0.0, 1.0 * kDeg * kDeg, shared, false, Eigen::Vector2d::Zero());
   EXPECT_GE(u.gain_var_rad2, shared);  // averaging many samples does not remove what they share
   EXPECT_TRUE(u.recovering);           // and the recovery waits (may_end false)
   // Once the shared error is gone, the next sample takes what it left.
-  EXPECT_GT(u.correct(0.0005, 1.0 * kDeg * kDeg, 0.0, true, Eigen::Vector2d::Zero()), 0.9);
+  EXPECT_GT(u.correct(0.0005, 0.0, 1.0 * kDeg * kDeg, 0.0, true, Eigen::Vector2d::Zero()), 0.9);
 }
 
 }  // namespace
