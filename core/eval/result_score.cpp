@@ -599,7 +599,7 @@ std::string format_score_report(const ScoreReport& report) {
              s.first_confident_s ? fixed(*s.first_confident_s, 1) : "never"});
     }
     if (c.rows() > 0)
-      out << "Confidence of the forearm orientations (confident: >= 0.5, predicted within 15 deg)\n" << c.str() << "\n";
+      out << "Confidence of the orientations (confident: >= 0.5, predicted within 15 deg)\n" << c.str() << "\n";
   }
   if (!report.positions.empty()) {
     out << "IMU position error (m)\n";
