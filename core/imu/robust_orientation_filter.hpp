@@ -133,10 +133,13 @@ class RobustOrientationFilter {
   double inclination_uncertainty_rad() const {
     return std::max(std::sqrt(inclination_.excess_var_rad2()), acc_scatter_.persistent_rad());
   }
-  // At least what the inclination's excess turns the horizontal field by (d tan(dip)): every
-  // sample's heading shares it, so no agreement of the samples can show it.
+  // At least what the inclination's error turns the horizontal field by (up to d tan(dip)):
+  // every sample's heading shares it, so no agreement of the samples can show it. That includes
+  // the tilt the accelerometer keeps showing: an unlearned horizontal gyro bias holds the
+  // inclination off, and the magnetometer, read through that inclination, then agrees with a
+  // heading that is off too.
   double heading_uncertainty_rad() const {
-    const double tilt_rad = std::sqrt(inclination_.excess_var_rad2() * tan2_dip());
+    const double tilt_rad = inclination_uncertainty_rad() * std::sqrt(tan2_dip());
     return std::max({std::sqrt(heading_.excess_var_rad2()), mag_scatter_.persistent_rad(), tilt_rad});
   }
   double orientation_uncertainty_rad() const {
