@@ -37,7 +37,7 @@ constexpr const char* kUsage =
     "usage:\n"
     "  posefuse fit RECORDING --server HOST:PORT --out DIR   stream a recording, write results\n"
     "      [--option KEY=VALUE ...]        set a stage option in the recording's header for this\n"
-    "                                      call (e.g. --option fit.enabled=true; posefuse info\n"
+    "                                      call (e.g. --option fit.enabled=false; posefuse info\n"
     "                                      lists them); fit and upload take it\n"
     "  posefuse convert IN OUT             recording directory <-> chunk file (.pfchunks)\n"
     "  posefuse health --server HOST:PORT  exit 0 when the server is SERVING\n"

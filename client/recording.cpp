@@ -70,7 +70,7 @@ std::pair<std::string, std::string> parse_header_option(const std::string& text)
   const auto eq = text.find('=');
   if (eq == std::string::npos || eq == 0) {
     throw Error(ErrorCode::kInvalidArgument, "--option",
-                "is '" + text + "', expected KEY=VALUE (e.g. fit.enabled=true)");
+                "is '" + text + "', expected KEY=VALUE (e.g. fit.enabled=false)");
   }
   for (const unsigned char c : text) {
     if (c <= ' ' || c == 0x7f) {

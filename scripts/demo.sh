@@ -8,8 +8,8 @@
 # The demo session comes from the simulator (posefuse-sim, docs/simulator.md): a short take of
 # paper 1's forearm protocol (calibration pose, forearm behind the head, in front of the belly,
 # behind the back) on built-in defaults, with its ground truth in gt/ beside the results. The
-# client turns the body-model fit on for this call (--option fit.enabled=true; off by default
-# in the server), so the results have SMPL and camera joints as well as the forearm results.
+# server fits the body model by default (fit.enabled), so the results have SMPL and camera
+# joints, joint angles and repetitions as well as the forearm results.
 #   DEMO_DURATION_S=25 scripts/demo.sh   session length in seconds (default 20)
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
@@ -66,7 +66,7 @@ done
 echo "demo: posefuse-server on $address is $("$client_bin" health --server "$address")"
 
 results="$demo_dir/results"
-"$client_bin" fit "$session" --server "$address" --out "$results" --option fit.enabled=true
+"$client_bin" fit "$session" --server "$address" --out "$results"
 "$client_bin" report "$results"
 
 stop_server

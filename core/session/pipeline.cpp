@@ -39,6 +39,11 @@ class SessionPipeline::Output : public StageOutput {
     pipeline_.current_stage_ = emitter;
   }
   void warn(const std::string& code, const std::string& field, const std::string& message) override {
+    const std::uint64_t raised = ++pipeline_.warnings_per_kind_[{code, field}];
+    if (raised > pipeline_.options_.max_warnings_per_kind) return;
+    list(code, field, message);
+  }
+  void list(const std::string& code, const std::string& field, const std::string& message) {
     v1::FitResult result;
     v1::Warning& warning = *result.mutable_warning();
     warning.set_code(code);
@@ -181,6 +186,7 @@ void SessionPipeline::end_session() {
     timed(*stages_[i], [&] { stages_[i]->finish(*output_); });
   }
   current_stage_ = stages_.size();  // the pipeline's own results go to no stage
+  warn_unlisted_repeats();
   v1::FitResult calibration;
   *calibration.mutable_calibration() = output_->calibration();
   output_->emit(std::move(calibration));
@@ -200,6 +206,17 @@ void SessionPipeline::end_session() {
   summary.set_processing_duration_s(
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started_at_).count());
   output_->emit(std::move(result));
+}
+
+void SessionPipeline::warn_unlisted_repeats() {
+  for (const auto& [kind, raised] : warnings_per_kind_) {
+    if (raised <= options_.max_warnings_per_kind) continue;
+    const auto& [code, field] = kind;
+    output_->list(code, field,
+                  std::to_string(raised - options_.max_warnings_per_kind) + " more " + code + " warnings for " + field +
+                      " were not listed (" + std::to_string(raised) + " in all; the first " +
+                      std::to_string(options_.max_warnings_per_kind) + " are)");
+  }
 }
 
 void SessionPipeline::close() {

@@ -16,7 +16,9 @@
 // later stages that consume its kind at once, and to the client as a FitResult
 // (result_encoder.hpp); the pipeline refuses, at construction, a stage order in which a stage
 // consumes what no earlier stage produces: data flows one way, and no stage waits for a later one.
-// Results a stage emits (warnings) go to the client. Progress results are emitted every
+// Results a stage emits (warnings) go to the client, at most max_warnings_per_kind of one code
+// and field (a problem that repeats every frame is listed that often, then counted: one warning
+// after the stages finish says how many more were not listed). Progress results are emitted every
 // progress_every_chunks chunks. After the end marker the assembler hands on what waits and its
 // warnings, the stages finish in order, then the pipeline sends one CalibrationReport, a last
 // Progress and the Summary.
@@ -25,9 +27,12 @@
 #include <chrono>
 #include <cstdint>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <set>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "common/error.hpp"
@@ -40,6 +45,8 @@ namespace posefuse::session {
 struct PipelineOptions {
   std::uint64_t progress_every_chunks = 64;
   std::uint64_t max_item_errors = 100;
+  // Warnings listed per code and field; the rest are counted (see above).
+  std::uint64_t max_warnings_per_kind = 10;
   // Called after every stage call (start, on_chunk, finish) with the stage's name and the wall
   // time it took, for metrics. May be empty.
   std::function<void(std::string_view stage, double seconds)> on_stage_time;
@@ -73,6 +80,8 @@ class SessionPipeline {
   // Hands each input to every stage in order.
   void deliver(const std::vector<SessionInput>& inputs);
   void end_session();
+  // One warning per code and field whose repeats were not listed, saying how many.
+  void warn_unlisted_repeats();
   void emit_progress();
   void note_camera_time(const v1::SessionChunk& chunk);
   // Runs `call` on `stage`, reporting its duration to options_.on_stage_time.
@@ -90,6 +99,8 @@ class SessionPipeline {
   std::uint64_t index_ = 0;  // chunks received, accepted or not
   std::uint64_t item_errors_ = 0;
   std::uint64_t warnings_ = 0;
+  // Warnings raised per (code, field), listed or not.
+  std::map<std::pair<std::string, std::string>, std::uint64_t> warnings_per_kind_;
   std::uint64_t depth_frames_ = 0;
   std::uint64_t recovered_segments_ = 0;
   std::uint64_t frames_fitted_ = 0;

@@ -433,7 +433,7 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   EXPECT_EQ(info.options(30).key(), "measures.repetition_angle");
   EXPECT_EQ(info.options(30).default_value(), "auto");
   EXPECT_EQ(info.options(16).key(), "fit.enabled");
-  EXPECT_EQ(info.options(16).default_value(), "false");
+  EXPECT_EQ(info.options(16).default_value(), "true");
   EXPECT_EQ(info.options(23).key(), "fit.fine_shape");
   EXPECT_EQ(info.options(24).key(), "fit.lambda_imu");
   EXPECT_EQ(info.options(25).key(), "fit.skeleton_start_energy");

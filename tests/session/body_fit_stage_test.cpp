@@ -339,8 +339,9 @@ TEST(BodyFitStage, FineShapeTuningSetsWhatTheSkeletonCannotSeeAndCanBeTurnedOff)
   for (int b : {6, 7, 8}) EXPECT_NEAR(shape.betas(b), 0.0, 1e-9) << "beta " << b;
 }
 
-TEST(BodyFitStage, OffUnlessEnabled) {
+TEST(BodyFitStage, OffWhenTheHeaderSaysSo) {
   v1::SessionHeader header = session().header;
+  (*header.mutable_options())["fit.enabled"] = "false";
   const Output out = run(header, [](const v1::SessionChunk&) { return true; });
   EXPECT_TRUE(out.results.empty());
   EXPECT_TRUE(out.warnings.empty());

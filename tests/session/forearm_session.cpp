@@ -229,6 +229,7 @@ std::vector<v1::SessionChunk> make_forearm_session(const ForearmSessionOptions& 
   (*h.mutable_options())["forearm.calibration_s"] = format_double(o.calibration_s);
   (*h.mutable_options())["forearm.axis"] = o.axis;
   (*h.mutable_options())["forearm.upper_arm"] = o.upper_arm;
+  (*h.mutable_options())["fit.enabled"] = o.body_fit ? "true" : "false";
   if (!o.buzzer_hz_option.empty()) (*h.mutable_options())["forearm.buzzer_hz"] = o.buzzer_hz_option;
   return assemble_session(std::move(header), std::move(timed), frames, counts);
 }

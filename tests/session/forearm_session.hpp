@@ -52,6 +52,8 @@ struct ForearmSessionOptions {
   // The arm IMU's samples in [arm_imu_lost_from_s, + arm_imu_lost_s) camera time are lost.
   double arm_imu_lost_from_s = 0.0;
   double arm_imu_lost_s = 0.0;
+  // The body fit (fit.enabled): off, since these frames hold a cylinder arm, not a body.
+  bool body_fit = false;
 };
 
 struct ForearmSessionTruth {

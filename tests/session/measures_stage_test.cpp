@@ -125,7 +125,7 @@ TEST(MeasuresStage, NamedAngleAndNoBodyFit) {
     MeasuresStage no_fit;
     testing::CollectingOutput none;
     v1::SessionHeader fit_header;
-    if (fit_on) (*fit_header.mutable_options())["fit.enabled"] = "true";
+    (*fit_header.mutable_options())["fit.enabled"] = fit_on ? "true" : "false";
     no_fit.start(fit_header, none);
     FrameEstimate camera_only;
     camera_only.t_us = 1000;

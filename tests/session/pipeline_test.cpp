@@ -422,6 +422,41 @@ TEST(SessionPipeline, PluggedStageSeesChunksInOrderAndStageErrorsAreItemErrors) 
   EXPECT_EQ(sink.results.back().summary().item_errors(), 1u);
 }
 
+// A stage with a problem on every depth frame (300 in the demo session) and one other.
+class EveryFrameWarningStage : public Stage {
+ public:
+  std::string_view name() const override { return "every_frame_warning"; }
+  std::string_view description() const override { return "test stage"; }
+  void start(const v1::SessionHeader&, StageOutput&) override {}
+  void on_camera_frame(const CameraFrame& frame, StageOutput& out) override {
+    if (!frame.depth_mm.empty()) out.warn("TEST_EVERY_FRAME", "frame.depth_mm", "t_us=" + std::to_string(frame.t_us));
+  }
+  void finish(StageOutput& out) override { out.warn("TEST_ONCE", "stage", "once"); }
+};
+
+TEST(SessionPipeline, AWarningThatRepeatsEveryFrameIsListedTenTimesThenCounted) {
+  std::vector<std::unique_ptr<Stage>> stages;
+  stages.push_back(std::make_unique<EveryFrameWarningStage>());
+  CollectingSink sink;
+  SessionPipeline pipeline(std::move(stages), sink);
+  for (const auto& chunk : demo::make_demo_session()) pipeline.push(chunk);
+  pipeline.close();
+
+  const auto warnings = sink.of(v1::FitResult::kWarning);
+  std::vector<std::string> every_frame;
+  for (const v1::FitResult& r : warnings) {
+    if (r.warning().code() == "TEST_EVERY_FRAME") every_frame.push_back(r.warning().message());
+  }
+  ASSERT_EQ(every_frame.size(), 11u);  // the first ten, then how many more
+  EXPECT_EQ(every_frame.front(), "t_us=10000000");
+  EXPECT_EQ(every_frame.back(),
+            "290 more TEST_EVERY_FRAME warnings for frame.depth_mm were not listed (300 in all; the first 10 are)");
+  EXPECT_EQ(std::count_if(warnings.begin(), warnings.end(),
+                          [](const v1::FitResult& r) { return r.warning().code() == "TEST_ONCE"; }),
+            1);
+  EXPECT_EQ(sink.results.back().summary().warnings(), warnings.size());
+}
+
 // Data flows one way: a stage that reads what only a later stage hands on (here the forearm
 // orientations, put before the forearm stage) is refused when the pipeline is built, naming it.
 class ForearmReaderStage : public Stage {

@@ -74,11 +74,11 @@ TEST(StageOptions, DefaultsAreValidAndTheLibrariesOwn) {
   EXPECT_EQ(forearm.K_from_B, std::nullopt);
   EXPECT_EQ(forearm.body_id, std::nullopt);
   EXPECT_FALSE(forearm.smoother.use_shoulder_sphere);  // 'off' (the table says why)
-  EXPECT_FALSE(forearm.fit_anchor);                    // 'auto' without the body fit
+  EXPECT_TRUE(forearm.fit_anchor);                     // 'auto' with the body fit (on by default)
   EXPECT_TRUE(forearm.axis_from_depth && forearm.upper_arm_from_depth && forearm.pose_orientation &&
               forearm.axis_correction_on);
 
-  EXPECT_FALSE(body_fit_enabled(none));
+  EXPECT_TRUE(body_fit_enabled(none));
   const BodyFitOptions fit = read_body_fit_options(none);
   const fit::FitOptions fit_defaults;
   EXPECT_EQ(fit.fit.max_iterations, fit_defaults.max_iterations);

@@ -22,8 +22,9 @@ const OptionTable& body_fit_option_table() {
     return OptionTable{
         {.key = kFitEnabledKey,
          .type = OptionType::kBool,
-         .default_value = "false",
-         .description = "run the body-model fit (about 9-12 ms per depth frame on one core: off by default)"},
+         .default_value = "true",
+         .description = "run the body-model fit (paper 2; about 9-12 ms per depth frame on one core; false: IMU "
+                        "orientations, forearms and the camera skeleton only)"},
         // The upper bound (as fit.imu_wait_s's) bounds the frames kept: at 30 Hz 900
         // personalisation frames per session at most.
         {.key = kFitCalibrationSKey,
