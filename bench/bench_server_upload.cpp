@@ -21,9 +21,6 @@
 //     ImuBatch: its send -> its arrival; the pipeline has no per-depth-frame result yet), median
 //     and p95 over all sessions; how long after the last chunk the call ended; the server's
 //     VmRSS above idle at steady state, per session.
-#include <fcntl.h>
-#include <signal.h>
-#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -33,18 +30,17 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
 #include <map>
 #include <mutex>
 #include <string>
 #include <thread>
 #include <vector>
 
+#include "bench/loopback_server.hpp"
 #include "body/pose_parameters.hpp"
 #include "client/demo_session.hpp"
 #include "client/fit_call.hpp"
 #include "posefuse/v1/service.grpc.pb.h"
-#include "server/posefuse_server.hpp"
 #include "session/image_codec.hpp"
 #include "session/text_fields.hpp"
 #include "sim/camera_session.hpp"
@@ -54,69 +50,9 @@ namespace {
 using namespace posefuse;
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-
-// ---------------------------------------------------------------------------------------------
-// The server process
-
-struct ServerProcess {
-  pid_t pid = 0;
-  int port = 0;
-};
-
-// Forks; the child serves on 127.0.0.1:0 until SIGTERM, its logs going to /dev/null.
-ServerProcess start_server_process(const fs::path& data_dir) {
-  int fds[2];
-  if (pipe(fds) != 0) std::abort();
-  const pid_t pid = fork();
-  if (pid == 0) {
-    close(fds[0]);
-    const int null_fd = open("/dev/null", O_WRONLY);
-    dup2(null_fd, STDERR_FILENO);
-    sigset_t stop;
-    sigemptyset(&stop);
-    sigaddset(&stop, SIGTERM);
-    pthread_sigmask(SIG_BLOCK, &stop, nullptr);  // before the server's threads inherit the mask
-    int port = 0;
-    {
-      server::ServerOptions options;
-      options.listen = "127.0.0.1:0";
-      options.max_sessions = 256;
-      options.data_dir = data_dir.string();
-      options.max_upload_mb = 1 << 16;
-      server::PoseFuseServer server(options);
-      port = server.port();
-      if (write(fds[1], &port, sizeof port) != sizeof port) _exit(1);
-      int signal_number = 0;
-      sigwait(&stop, &signal_number);
-      server.shutdown();
-    }
-    _exit(0);
-  }
-  close(fds[1]);
-  int port = 0;
-  if (read(fds[0], &port, sizeof port) != sizeof port) {
-    std::fprintf(stderr, "bench: the server process did not start\n");
-    std::exit(1);
-  }
-  close(fds[0]);
-  return {pid, port};
-}
-
-void stop_server_process(const ServerProcess& server) {
-  kill(server.pid, SIGTERM);
-  int status = 0;
-  waitpid(server.pid, &status, 0);
-}
-
-// VmRSS of a process, MiB.
-double rss_mib(pid_t pid) {
-  std::ifstream status("/proc/" + std::to_string(pid) + "/status");
-  std::string line;
-  while (std::getline(status, line)) {
-    if (line.rfind("VmRSS:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
-  }
-  return NAN;
-}
+using bench::new_stub;
+using bench::rss_mib;
+using bench::ServerProcess;
 
 // Samples a process's VmRSS every 5 ms while alive; peak() is the largest seen.
 class RssMonitor {
@@ -297,31 +233,11 @@ double run_upload(v1::PoseFuse::Stub& stub, const Session& session, std::string&
   return std::chrono::duration<double>(Clock::now() - start).count();
 }
 
-std::unique_ptr<v1::PoseFuse::Stub> new_stub(int port) {
-  grpc::ChannelArguments arguments;
-  arguments.SetMaxSendMessageSize(64 << 20);
-  arguments.SetInt(GRPC_ARG_USE_LOCAL_SUBCHANNEL_POOL, 1);  // a connection of its own
-  return v1::PoseFuse::NewStub(
-      grpc::CreateCustomChannel("127.0.0.1:" + std::to_string(port), grpc::InsecureChannelCredentials(), arguments));
-}
-
 double percentile(std::vector<double> values, double p) {
   if (values.empty()) return NAN;
   std::sort(values.begin(), values.end());
   const auto index = static_cast<std::size_t>(std::ceil(p * static_cast<double>(values.size()))) - 1;
   return values[std::min(index, values.size() - 1)];
-}
-
-std::vector<int> parse_list(const std::string& text) {
-  std::vector<int> values;
-  std::size_t start = 0;
-  while (start <= text.size()) {
-    const std::size_t comma = std::min(text.find(',', start), text.size());
-    values.push_back(
-        static_cast<int>(session::parse_uint64(std::string_view(text).substr(start, comma - start), "--sessions")));
-    start = comma + 1;
-  }
-  return values;
 }
 
 }  // namespace
@@ -333,7 +249,7 @@ int main(int argc, char** argv) {
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--duration-s") duration_s = session::parse_double(argv[i + 1], flag);
-    else if (flag == "--sessions") concurrency = parse_list(argv[i + 1]);
+    else if (flag == "--sessions") concurrency = bench::parse_int_list(argv[i + 1], flag);
     else if (flag == "--repeats") repeats = static_cast<int>(session::parse_uint64(argv[i + 1], flag));
     else {
       std::fprintf(stderr, "usage: bench_server_upload [--duration-s S] [--sessions N,N] [--repeats R]\n");
@@ -348,11 +264,15 @@ int main(int argc, char** argv) {
   // calls does not hide what the sessions of that row take.
   std::vector<ServerProcess> servers;
   for (std::size_t i = 0; i <= concurrency.size(); ++i) {
-    servers.push_back(start_server_process(data_dir / std::to_string(i)));
+    server::ServerOptions options;
+    options.max_sessions = 256;
+    options.data_dir = (data_dir / std::to_string(i)).string();
+    options.max_upload_mb = 1 << 16;
+    servers.push_back(bench::start_server_process(options));
   }
   const ServerProcess& server = servers[0];
   auto stop_all = [&] {
-    for (const auto& s : servers) stop_server_process(s);
+    for (const auto& s : servers) bench::stop_server_process(s);
   };
 
   demo::DemoSessionOptions probe;
@@ -366,14 +286,7 @@ int main(int argc, char** argv) {
   const double idle_rss = rss_mib(server.pid);
 
   std::printf("posefuse-server over loopback (server in its own process, %u CPUs here, load %s)\n",
-              std::thread::hardware_concurrency(),
-              [] {
-                std::ifstream load("/proc/loadavg");
-                std::string first;
-                load >> first;
-                return first;
-              }()
-                  .c_str());
+              std::thread::hardware_concurrency(), bench::load_average().c_str());
   std::printf(
       "session: %.0f s, %d depth frames 512x424 at 30 Hz + body index + skeleton, "
       "2 IMUs at 80 Hz; server idle VmRSS %.1f MiB\n\n",
