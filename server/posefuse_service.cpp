@@ -33,10 +33,10 @@ PoseFuseService::PoseFuseService(const ServerOptions& options, WorkerPool& pool,
                                  Metrics& metrics, JobRunner* jobs, const BearerTokens* tokens)
     : options_(options), pool_(pool), registry_(registry), metrics_(metrics), jobs_(jobs), tokens_(tokens) {
   if (jobs_) {
-    submit_context_.emplace(
-        SubmitJobContext{*jobs_, pool_, registry_, options_.recordings_root, upload_spool_dir(options_.data_dir),
-                         static_cast<std::uint64_t>(options_.max_upload_mb * 1024 * 1024),
-                         std::chrono::duration<double>(options_.idle_timeout_s), options_.max_sessions});
+    submit_context_.emplace(SubmitJobContext{
+        *jobs_, pool_, registry_, options_.recordings_root, tokens_ && tokens_->names_tenants(),
+        upload_spool_dir(options_.data_dir), static_cast<std::uint64_t>(options_.max_upload_mb * 1024 * 1024),
+        std::chrono::duration<double>(options_.idle_timeout_s), options_.max_sessions});
   }
 }
 

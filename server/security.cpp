@@ -1,5 +1,7 @@
 #include "server/security.hpp"
 
+#include <algorithm>
+
 #include "common/error.hpp"
 #include "server/log.hpp"
 #include "server/text_lines.hpp"
@@ -24,9 +26,10 @@ bool valid_token_characters(const std::string& token) {
   return true;
 }
 
-// A tenant names who owns jobs: a plain name that is safe in logs and file names.
+// A tenant names who owns jobs and its folder of the recordings root: a plain name that is safe
+// in logs and as one path component.
 bool valid_tenant(const std::string& tenant) {
-  if (tenant.empty() || tenant.size() > 64) return false;
+  if (tenant.empty() || tenant.size() > 64 || tenant == "." || tenant == "..") return false;
   for (const char c : tenant) {
     const bool ok =
         (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '.' || c == '-';
@@ -95,7 +98,8 @@ BearerTokens BearerTokens::load(const std::string& path) {
     // The messages name the line, never the token.
     const std::string where = "'" + path + "' line " + std::to_string(line.number);
     if (gap != std::string::npos && !valid_tenant(tenant)) {
-      throw_invalid(flag, where + ": the tenant after the token must match [A-Za-z0-9_.-]{1,64}");
+      throw_invalid(flag,
+                    where + ": the tenant after the token must match [A-Za-z0-9_.-]{1,64} and not be '.' or '..'");
     }
     if (!valid_token_characters(token)) {
       throw_invalid(flag, where + ": a token may hold only visible ASCII characters, no spaces");
@@ -111,6 +115,10 @@ BearerTokens BearerTokens::load(const std::string& path) {
 }
 
 BearerTokens::BearerTokens(std::vector<AcceptedToken> tokens) : tokens_(std::move(tokens)) {}
+
+bool BearerTokens::names_tenants() const {
+  return std::any_of(tokens_.begin(), tokens_.end(), [](const AcceptedToken& t) { return !t.tenant.empty(); });
+}
 
 std::optional<std::string> BearerTokens::tenant_of(std::string_view token) const {
   const AcceptedToken* match = nullptr;

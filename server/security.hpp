@@ -39,7 +39,7 @@ struct AcceptedToken {
 class BearerTokens {
  public:
   // One token per line, optionally followed by whitespace and its tenant
-  // ([A-Za-z0-9_.-]{1,64}); blank lines and lines starting with '#' are skipped; surrounding
+  // ([A-Za-z0-9_.-]{1,64}, not "." or ".."); blank lines and lines starting with '#' are skipped; surrounding
   // whitespace is trimmed. Throws posefuse::Error (field "--tokens-file") for an unreadable
   // file, no tokens, a token that is too short or has characters not allowed in metadata, or a
   // bad tenant name.
@@ -47,6 +47,9 @@ class BearerTokens {
   explicit BearerTokens(std::vector<AcceptedToken> tokens);
 
   std::size_t size() const { return tokens_.size(); }
+  // True when some token has a tenant: then each tenant's jobs by reference read only its own
+  // folder of the recordings root, and tokens without a tenant cannot submit by reference.
+  bool names_tenants() const;
   // OK when the call carries `authorization: Bearer <accepted token>`, with that token's tenant
   // in `tenant`; UNAUTHENTICATED with a message that says what is missing otherwise (never
   // echoing what was sent).

@@ -303,7 +303,9 @@ TEST_F(SecurityTest, TokensFileMapsTokensToTenants) {
   EXPECT_EQ(tokens.tenant_of(kToken), "clinic-a");
   EXPECT_EQ(tokens.tenant_of(kOtherToken), "");  // listed without a tenant: the shared one
   EXPECT_EQ(tokens.tenant_of(std::string(kToken) + " clinic-a"), std::nullopt);
-  for (const char* tenant : {"clinic a", "../clinic", "cl!nic"}) {
+  EXPECT_TRUE(tokens.names_tenants());
+  // A tenant is also a folder name of the recordings root: "." and ".." are not names.
+  for (const char* tenant : {"clinic a", "../clinic", "cl!nic", ".", ".."}) {
     std::ofstream(path) << kToken << " " << tenant << "\n";
     try {
       BearerTokens::load(path.string());

@@ -1,7 +1,7 @@
 // Tenants (docs/server.md "Security"): a tokens file maps each token to a tenant, every job
-// belongs to the tenant that submitted it, and every job call sees only the caller's jobs; a job
-// of another tenant is answered exactly like a missing one. Through the real server on
-// loopback.
+// belongs to the tenant that submitted it, every job call sees only the caller's jobs, and a job
+// by reference reads only the caller's folder of the recordings root; a job or a recording of
+// another tenant is answered exactly like a missing one. Through the real server on loopback.
 #include <fstream>
 #include <string>
 
@@ -15,16 +15,38 @@ namespace {
 
 constexpr const char* kClinicA = "0123456789abcdef0123456789abcdef";
 constexpr const char* kClinicB = "fedcba9876543210fedcba9876543210";
+constexpr const char* kClinicC = "0000111122223333444455556666777";  // a tenant without a folder
+constexpr const char* kNoTenant = "99998888777766665555444433332222";
 
 class TenantsTest : public JobsTest {
  protected:
+  // The recordings root holds a folder per tenant: clinic-a's has the demo session, clinic-b's
+  // is empty, clinic-c has none; the demo session also lies at the root itself.
   void start_with_tenants() {
-    std::ofstream(dir_ / "tokens") << "# token tenant\n" << kClinicA << " clinic-a\n" << kClinicB << "\tclinic-b\n";
+    std::ofstream(dir_ / "tokens") << "# token tenant\n"
+                                   << kClinicA << " clinic-a\n"
+                                   << kClinicB << "\tclinic-b\n"
+                                   << kClinicC << " clinic-c\n"
+                                   << kNoTenant << "\n";
+    fs::create_directories(dir_ / "recordings" / "clinic-a");
+    fs::create_directories(dir_ / "recordings" / "clinic-b");
+    fs::copy_file(dir_ / "recordings" / "demo.pfchunks", dir_ / "recordings" / "clinic-a" / "demo.pfchunks");
     ServerOptions options;
     options.tokens_file = (dir_ / "tokens").string();
     start(options);
     clinic_a_ = stub_for(kClinicA);
     clinic_b_ = stub_for(kClinicB);
+  }
+
+  static grpc::Status submit_as(v1::PoseFuse::Stub& stub, const std::string& uri, v1::Job& job) {
+    grpc::ClientContext context;
+    set_test_deadline(context);
+    auto writer = stub.SubmitJob(&context, &job);
+    v1::SubmitJobRequest request;
+    request.mutable_spec()->set_recording_uri(uri);
+    writer->Write(request);
+    writer->WritesDone();
+    return writer->Finish();
   }
 
   std::unique_ptr<v1::PoseFuse::Stub> stub_for(const std::string& token) const {
@@ -66,27 +88,24 @@ class TenantsTest : public JobsTest {
     return status;
   }
 
+  // Submits `uri` as the stub's tenant and watches the job to its end: its last state.
+  static v1::Job run_as(v1::PoseFuse::Stub& stub, const std::string& uri) {
+    v1::Job job;
+    const grpc::Status submitted = submit_as(stub, uri, job);
+    EXPECT_TRUE(submitted.ok()) << submitted.error_message();
+    std::vector<v1::Job> states;
+    EXPECT_TRUE(watch_to_end(stub, job.job_id(), states).ok());
+    return states.empty() ? job : states.back();
+  }
+
   std::unique_ptr<v1::PoseFuse::Stub> clinic_a_, clinic_b_;
 };
 
 TEST_F(TenantsTest, JobsAreSeenOnlyByTheirTenant) {
   start_with_tenants();
-  v1::Job job;
-  {
-    grpc::ClientContext context;
-    set_test_deadline(context);
-    auto writer = clinic_a_->SubmitJob(&context, &job);
-    v1::SubmitJobRequest request;
-    request.mutable_spec()->set_recording_uri("demo.pfchunks");
-    writer->Write(request);
-    writer->WritesDone();
-    const grpc::Status status = writer->Finish();
-    ASSERT_TRUE(status.ok()) << status.error_message();
-  }
+  const v1::Job job = run_as(*clinic_a_, "demo.pfchunks");
+  EXPECT_EQ(job.state(), v1::Job::SUCCEEDED) << job.error_message();
   std::vector<v1::Job> states;
-  ASSERT_TRUE(watch_to_end(*clinic_a_, job.job_id(), states).ok());
-  ASSERT_FALSE(states.empty());
-  EXPECT_EQ(states.back().state(), v1::Job::SUCCEEDED);
 
   // The owner sees it everywhere.
   v1::Job seen;
@@ -113,6 +132,50 @@ TEST_F(TenantsTest, JobsAreSeenOnlyByTheirTenant) {
     request.set_job_id(job.job_id());
     EXPECT_EQ(clinic_b_->CancelJob(&context, request, &none).error_code(), grpc::StatusCode::NOT_FOUND);
   }
+}
+
+TEST_F(TenantsTest, RecordingOfAnotherTenantIsAnsweredLikeAMissingOne) {
+  start_with_tenants();
+  // clinic-b's own folder links to clinic-a's recording and to a recording that does not exist.
+  fs::create_symlink("../clinic-a/demo.pfchunks", dir_ / "recordings" / "clinic-b" / "link.pfchunks");
+  fs::create_symlink("../clinic-a/none.pfchunks", dir_ / "recordings" / "clinic-b" / "dangling.pfchunks");
+
+  // The owner runs it.
+  const v1::Job job = run_as(*clinic_a_, "demo.pfchunks");
+  EXPECT_EQ(job.state(), v1::Job::SUCCEEDED) << job.error_message();
+
+  // Every way the other tenant can name it is answered as the same name of a missing recording.
+  const auto expect_same = [&](v1::PoseFuse::Stub& stub, const std::string& existing, const std::string& missing,
+                               grpc::StatusCode code) {
+    v1::Job none;
+    const grpc::Status there = submit_as(stub, existing, none);
+    const grpc::Status absent = submit_as(stub, missing, none);
+    EXPECT_EQ(there.error_code(), code) << existing << ": " << there.error_message();
+    EXPECT_EQ(there.error_code(), absent.error_code()) << existing;
+    EXPECT_EQ(there.error_message(), absent.error_message()) << existing;
+    EXPECT_EQ(there.error_message().rfind("spec.recording_uri: ", 0), 0u) << there.error_message();
+  };
+  expect_same(*clinic_b_, "demo.pfchunks", "none.pfchunks", grpc::StatusCode::NOT_FOUND);
+  expect_same(*clinic_b_, "/clinic-a/demo.pfchunks", "/clinic-a/none.pfchunks", grpc::StatusCode::NOT_FOUND);
+  expect_same(*clinic_b_, "file://clinic-a/demo.pfchunks", "file://clinic-a/none.pfchunks",
+              grpc::StatusCode::NOT_FOUND);
+  expect_same(*clinic_b_, "../clinic-a/demo.pfchunks", "../clinic-a/none.pfchunks", grpc::StatusCode::INVALID_ARGUMENT);
+  expect_same(*clinic_b_, "x/../../clinic-a/demo.pfchunks", "x/../../clinic-a/none.pfchunks",
+              grpc::StatusCode::INVALID_ARGUMENT);
+  expect_same(*clinic_b_, "link.pfchunks", "dangling.pfchunks", grpc::StatusCode::INVALID_ARGUMENT);
+  // A tenant whose folder does not exist, and a recording at the root outside every folder.
+  const auto clinic_c = stub_for(kClinicC);
+  expect_same(*clinic_c, "demo.pfchunks", "none.pfchunks", grpc::StatusCode::NOT_FOUND);
+  expect_same(*clinic_a_, "../demo.pfchunks", "../none.pfchunks", grpc::StatusCode::INVALID_ARGUMENT);
+  EXPECT_EQ(listed(*clinic_b_), 0);
+  EXPECT_EQ(listed(*clinic_c), 0);
+
+  // A token without a tenant has no folder once tenants exist: it may upload, not name files.
+  v1::Job none;
+  const grpc::Status untenanted = submit_as(*stub_for(kNoTenant), "demo.pfchunks", none);
+  EXPECT_EQ(untenanted.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << untenanted.error_message();
+  EXPECT_EQ(untenanted.error_message().rfind("spec.recording_uri: this token has no tenant", 0), 0u)
+      << untenanted.error_message();
 }
 
 }  // namespace
