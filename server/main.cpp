@@ -15,7 +15,8 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: posefuse-server [--config FILE] [--listen HOST:PORT] [--workers N] [--max-sessions N]\n"
-    "                       [--max-message-mb MB] [--idle-timeout-s S] [--max-queued-chunks N]\n"
+    "                       [--tenant-max-sessions N] [--max-message-mb MB] [--idle-timeout-s S] [--max-queued-chunks "
+    "N]\n"
     "                       [--min-stream-rate R] [--stream-rate-grace-s S]\n"
     "                       [--shutdown-grace-s S] [--data-dir DIR] [--recordings-root DIR]\n"
     "                       [--max-jobs N] [--max-upload-mb MB] [--metrics-listen HOST:PORT]\n"
@@ -32,6 +33,8 @@ constexpr const char* kUsage =
     "a Fit stream whose data advances slower than --min-stream-rate x real time after\n"
     "--stream-rate-grace-s ends DEADLINE_EXCEEDED (0 disables)\n"
     "plaintext without --tls-cert; no token needed without --tokens-file (docs/server.md)\n"
+    "--tenant-max-sessions 0 (the default) splits --max-sessions evenly between the tenants\n"
+    "of --tokens-file\n"
     "--config FILE: 'key = value' lines, keys as the flags without '--' (max-sessions = 4),\n"
     "               '#' starts a comment line; flags given on the command line win\n";
 

@@ -120,6 +120,14 @@ bool BearerTokens::names_tenants() const {
   return std::any_of(tokens_.begin(), tokens_.end(), [](const AcceptedToken& t) { return !t.tenant.empty(); });
 }
 
+std::vector<std::string> BearerTokens::tenants() const {
+  std::vector<std::string> names;
+  for (const AcceptedToken& accepted : tokens_) {
+    if (std::find(names.begin(), names.end(), accepted.tenant) == names.end()) names.push_back(accepted.tenant);
+  }
+  return names;
+}
+
 std::optional<std::string> BearerTokens::tenant_of(std::string_view token) const {
   const AcceptedToken* match = nullptr;
   for (const AcceptedToken& candidate : tokens_) {

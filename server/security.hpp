@@ -50,6 +50,8 @@ class BearerTokens {
   // True when some token has a tenant: then each tenant's jobs by reference read only its own
   // folder of the recordings root, and tokens without a tenant cannot submit by reference.
   bool names_tenants() const;
+  // The distinct tenants of the accepted tokens ("" among them for tokens without one).
+  std::vector<std::string> tenants() const;
   // OK when the call carries `authorization: Bearer <accepted token>`, with that token's tenant
   // in `tenant`; UNAUTHENTICATED with a message that says what is missing otherwise (never
   // echoing what was sent).

@@ -25,6 +25,7 @@ void set_server_option(ServerOptions& o, const std::string& key, const std::stri
   if (key == "listen") o.listen = value;
   else if (key == "workers") o.workers = count();
   else if (key == "max-sessions") o.max_sessions = count();
+  else if (key == "tenant-max-sessions") o.tenant_max_sessions = count();
   else if (key == "max-message-mb") o.max_message_mb = number();
   else if (key == "idle-timeout-s") o.idle_timeout_s = number();
   else if (key == "min-stream-rate") o.min_stream_rate = number();

@@ -64,15 +64,13 @@ void SubmitJobCall::read_spec_locked(bool ok) {
     finish_locked(to_status(error));
     return;
   }
-  slot_ = context_.registry.try_admit();
-  if (!slot_) {
-    log_event("info", "upload_refused", {{"reason", "max_sessions"}});
-    finish_locked(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                               "server busy: " + std::to_string(context_.max_sessions) +
-                                   " sessions and uploads are running (--max-sessions); retry "
-                                   "later"));
+  const Admission admission = context_.registry.try_admit(tenant_);
+  if (!admission.id) {
+    log_event("info", "upload_refused", {{"reason", admission.tenant_full ? "tenant_max_sessions" : "max_sessions"}});
+    finish_locked(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, context_.registry.busy_message(admission)));
     return;
   }
+  slot_ = admission.id;
   context_.registry.watch(*slot_, weak_from_this());
   try {
     spool_ = std::make_unique<UploadSpool>(context_.spool_dir / (random_hex_id() + ".pfchunks"),

@@ -43,7 +43,6 @@ struct SubmitJobContext {
   std::filesystem::path spool_dir;  // by upload: where the chunk files go
   std::uint64_t max_upload_bytes;
   std::chrono::duration<double> idle_timeout;
-  unsigned max_sessions;  // for the RESOURCE_EXHAUSTED message
 };
 
 class SubmitJobCall : public grpc::ServerReadReactor<v1::SubmitJobRequest>,

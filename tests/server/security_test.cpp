@@ -304,6 +304,7 @@ TEST_F(SecurityTest, TokensFileMapsTokensToTenants) {
   EXPECT_EQ(tokens.tenant_of(kOtherToken), "");  // listed without a tenant: the shared one
   EXPECT_EQ(tokens.tenant_of(std::string(kToken) + " clinic-a"), std::nullopt);
   EXPECT_TRUE(tokens.names_tenants());
+  EXPECT_EQ(tokens.tenants(), (std::vector<std::string>{"clinic-a", ""}));
   // A tenant is also a folder name of the recordings root: "." and ".." are not names.
   for (const char* tenant : {"clinic a", "../clinic", "cl!nic", ".", ".."}) {
     std::ofstream(path) << kToken << " " << tenant << "\n";

@@ -4,10 +4,13 @@
 // another tenant is answered exactly like a missing one. Through the real server on loopback.
 #include <fstream>
 #include <string>
+#include <thread>
 
 #include <gtest/gtest.h>
 
 #include "client/channel_security.hpp"
+#include "client/fit_call.hpp"
+#include "server/session_registry.hpp"
 #include "tests/server/jobs_fixture.hpp"
 
 namespace posefuse::server {
@@ -22,7 +25,7 @@ class TenantsTest : public JobsTest {
  protected:
   // The recordings root holds a folder per tenant: clinic-a's has the demo session, clinic-b's
   // is empty, clinic-c has none; the demo session also lies at the root itself.
-  void start_with_tenants() {
+  void start_with_tenants(ServerOptions options = {}) {
     std::ofstream(dir_ / "tokens") << "# token tenant\n"
                                    << kClinicA << " clinic-a\n"
                                    << kClinicB << "\tclinic-b\n"
@@ -31,7 +34,6 @@ class TenantsTest : public JobsTest {
     fs::create_directories(dir_ / "recordings" / "clinic-a");
     fs::create_directories(dir_ / "recordings" / "clinic-b");
     fs::copy_file(dir_ / "recordings" / "demo.pfchunks", dir_ / "recordings" / "clinic-a" / "demo.pfchunks");
-    ServerOptions options;
     options.tokens_file = (dir_ / "tokens").string();
     start(options);
     clinic_a_ = stub_for(kClinicA);
@@ -176,6 +178,71 @@ TEST_F(TenantsTest, RecordingOfAnotherTenantIsAnsweredLikeAMissingOne) {
   EXPECT_EQ(untenanted.error_code(), grpc::StatusCode::FAILED_PRECONDITION) << untenanted.error_message();
   EXPECT_EQ(untenanted.error_message().rfind("spec.recording_uri: this token has no tenant", 0), 0u)
       << untenanted.error_message();
+}
+
+TEST_F(TenantsTest, OneTenantCannotTakeEverySessionSlot) {
+  // Eight slots and four tenants (clinic-a, -b, -c and the tokens without one): two each by
+  // default.
+  ServerOptions options;
+  options.max_sessions = 8;
+  start_with_tenants(options);
+  const auto chunks = demo::make_demo_session();
+  const std::string address = "127.0.0.1:" + std::to_string(server_->port());
+  const auto fit_as = [&](const char* token) {
+    client::ChannelSecurity security;
+    security.bearer_token = token;
+    client::ResultWriter writer(dir_ / "results" / token);
+    return client::run_fit(client::make_channel(address, security), dir_ / "recordings" / "demo.pfchunks", writer);
+  };
+
+  // clinic-a holds its two slots with streams that have sent their header.
+  posefuse::test::HeldFit first(*clinic_a_, chunks[0]), second(*clinic_a_, chunks[0]);
+  ASSERT_TRUE(first.sent());
+  ASSERT_TRUE(second.sent());
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (server_->registry().active() != 2 && std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_EQ(server_->registry().active(), 2u);
+
+  // Its third Fit and an upload are refused, naming the per-tenant limit.
+  const std::string busy =
+      "tenant busy: 2 sessions and uploads of this tenant are running, its limit (--tenant-max-sessions); retry later";
+  const client::FitOutcome third = fit_as(kClinicA);
+  EXPECT_EQ(third.status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << third.status.error_message();
+  EXPECT_EQ(third.status.error_message(), busy);
+  {
+    grpc::ClientContext context;
+    set_test_deadline(context);
+    v1::Job job;
+    auto writer = clinic_a_->SubmitJob(&context, &job);
+    v1::SubmitJobRequest request;
+    request.mutable_spec()->set_upload(true);
+    writer->Write(request);
+    writer->WritesDone();
+    const grpc::Status upload = writer->Finish();
+    EXPECT_EQ(upload.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << upload.error_message();
+    EXPECT_EQ(upload.error_message(), busy);
+  }
+
+  // Another clinic's whole session runs meanwhile.
+  const client::FitOutcome other = fit_as(kClinicB);
+  EXPECT_TRUE(other.status.ok()) << other.status.error_message();
+  EXPECT_GT(other.results_received, 0u);
+
+  // Once clinic-a's streams end, it is admitted again.
+  EXPECT_EQ(first.cancel().error_code(), grpc::StatusCode::CANCELLED);
+  EXPECT_EQ(second.cancel().error_code(), grpc::StatusCode::CANCELLED);
+  ASSERT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
+  const client::FitOutcome again = fit_as(kClinicA);
+  EXPECT_TRUE(again.status.ok()) << again.status.error_message();
+}
+
+TEST(SessionSlots, TheDefaultPerTenantLimitSplitsTheSlotsEvenly) {
+  EXPECT_EQ(fair_share_of_sessions(16, 0), 16u);  // no tokens file
+  EXPECT_EQ(fair_share_of_sessions(16, 1), 16u);
+  EXPECT_EQ(fair_share_of_sessions(16, 3), 5u);
+  EXPECT_EQ(fair_share_of_sessions(2, 4), 1u);  // every tenant gets a slot
 }
 
 }  // namespace
