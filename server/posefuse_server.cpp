@@ -85,6 +85,16 @@ void validate_options(const ServerOptions& o) {
   if (!o.tls_client_ca.empty() && o.tls_cert.empty()) {
     throw_invalid("--tls-client-ca", "needs --tls-cert and --tls-key (mutual TLS is TLS first)");
   }
+  // Recordings are patient data: beyond this machine only over TLS, and only to token holders.
+  if (!o.insecure && !listens_on_loopback_only(o.listen) && (o.tls_cert.empty() || o.tokens_file.empty())) {
+    const std::string missing = o.tls_cert.empty() && o.tokens_file.empty() ? "--tls-cert/--tls-key and --tokens-file"
+                                : o.tls_cert.empty()                        ? "--tls-cert/--tls-key"
+                                                                            : "--tokens-file";
+    throw_invalid("--listen", "'" + o.listen +
+                                  "' is not a loopback address, and serving beyond this machine needs TLS "
+                                  "(--tls-cert, --tls-key) and tokens (--tokens-file); missing: " +
+                                  missing + ". Give them, or --insecure to serve without");
+  }
 }
 
 PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store) : options_(std::move(options)) {
@@ -194,6 +204,9 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
             {{"transport", transport_mode(options_)},
              {"auth", tokens_ ? "bearer_token" : "none"},
              {"tokens", std::to_string(tokens_ ? tokens_->size() : 0)}});
+  if (options_.insecure && !listens_on_loopback_only(options_.listen) && (!tokens_ || options_.tls_cert.empty())) {
+    log_event("warning", "insecure_listen", {{"listen", options_.listen}});
+  }
 }
 
 PoseFuseServer::~PoseFuseServer() { shutdown(); }

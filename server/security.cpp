@@ -1,5 +1,8 @@
 #include "server/security.hpp"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+
 #include <algorithm>
 
 #include "common/error.hpp"
@@ -115,6 +118,22 @@ BearerTokens BearerTokens::load(const std::string& path) {
 }
 
 BearerTokens::BearerTokens(std::vector<AcceptedToken> tokens) : tokens_(std::move(tokens)) {}
+
+bool listens_on_loopback_only(const std::string& listen) {
+  if (listen.rfind("unix:", 0) == 0 || listen.rfind("unix-abstract:", 0) == 0) return true;
+  const std::size_t colon = listen.rfind(':');
+  std::string host = colon == std::string::npos ? listen : listen.substr(0, colon);
+  if (host.size() >= 2 && host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
+  if (host == "localhost") return true;
+  in_addr v4{};
+  if (::inet_pton(AF_INET, host.c_str(), &v4) == 1) return (ntohl(v4.s_addr) >> 24) == 127;
+  in6_addr v6{};
+  if (::inet_pton(AF_INET6, host.c_str(), &v6) == 1) {
+    if (IN6_IS_ADDR_LOOPBACK(&v6)) return true;
+    return IN6_IS_ADDR_V4MAPPED(&v6) && v6.s6_addr[12] == 127;
+  }
+  return false;
+}
 
 bool BearerTokens::names_tenants() const {
   return std::any_of(tokens_.begin(), tokens_.end(), [](const AcceptedToken& t) { return !t.tenant.empty(); });

@@ -23,6 +23,11 @@ std::string read_security_file(const std::string& path, const std::string& flag)
 // naming the flag for an unreadable file or one that is not PEM of the expected kind.
 std::shared_ptr<grpc::ServerCredentials> make_server_credentials(const ServerOptions& options);
 
+// True when the --listen address `listen` (HOST:PORT, [IPV6]:PORT or unix:PATH) can be reached
+// from this machine only: a 127.0.0.0/8 or ::1 address, localhost, or a Unix socket. Any other
+// host, a name or an empty one (every interface) included, is beyond loopback.
+bool listens_on_loopback_only(const std::string& listen);
+
 // "plaintext", "tls" or "mutual-tls": what the server logs at start.
 std::string transport_mode(const ServerOptions& options);
 

@@ -40,6 +40,10 @@ struct ServerOptions {
   std::string tls_key;
   std::string tls_client_ca;
   std::string tokens_file;
+  // Serve plaintext or without tokens on an address beyond loopback (validate_options refuses
+  // that otherwise): for a TLS-terminating proxy on a private network, or a port that serves
+  // health only.
+  bool insecure = false;
 };
 
 }  // namespace posefuse::server

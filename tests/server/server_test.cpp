@@ -527,6 +527,11 @@ TEST(ServerOptions, BadValuesNameTheFlag) {
   options = ServerOptions{};
   options.tenant_max_sessions = options.max_sessions + 1;
   EXPECT_EQ(rejected_flag(options), "--tenant-max-sessions");
+  options = ServerOptions{};
+  options.listen = "0.0.0.0:0";
+  EXPECT_EQ(rejected_flag(options), "--listen");
+  options.insecure = true;
+  EXPECT_EQ(rejected_flag(options), "");
   for (const double mb : {0.0, -1.0, 2e6, std::nan("")}) {
     options = ServerOptions{};
     options.max_upload_mb = mb;
