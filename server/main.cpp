@@ -15,9 +15,8 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: posefuse-server [--config FILE] [--listen HOST:PORT] [--workers N] [--max-sessions N]\n"
-    "                       [--tenant-max-sessions N] [--max-message-mb MB] [--idle-timeout-s S] [--max-queued-chunks "
-    "N]\n"
-    "                       [--min-stream-rate R] [--stream-rate-grace-s S]\n"
+    "                       [--tenant-max-sessions N] [--max-message-mb MB] [--idle-timeout-s S]\n"
+    "                       [--max-queued-chunks N] [--min-stream-rate R] [--stream-rate-grace-s S]\n"
     "                       [--shutdown-grace-s S] [--data-dir DIR] [--recordings-root DIR]\n"
     "                       [--max-jobs N] [--max-upload-mb MB] [--metrics-listen HOST:PORT]\n"
     "                       [--tls-cert FILE --tls-key FILE [--tls-client-ca FILE]]\n"
