@@ -75,21 +75,36 @@ podman build --pull=never --runtime runc --network=host -f "$root/docker/Dockerf
 echo "container_image: built $tag in $(( $(date +%s) - start )) s," \
   "$(podman image inspect --format '{{.Size}}' "$tag") bytes"
 
-# 5. Start it as documented (its own CMD, --listen 0.0.0.0:50051) with the port published on a
-# loopback port that podman picks free.
-container=$(podman run -d "${run_opts[@]}" -p 127.0.0.1::50051 "$tag") ||
-  fail "podman run -d $tag failed"
-stop() { podman rm -f "$container" >/dev/null 2>&1 || true; }
+# 5. Start it as documented (its own CMD: --listen 0.0.0.0:50051 with TLS and tokens from
+# /etc/posefuse/tls and /etc/posefuse/tokens) with the port published on a loopback port that
+# podman picks free. A throwaway CA, a server certificate for 127.0.0.1 and a token, made here.
+secrets=$(mktemp -d)
+stop() { rm -rf "$secrets"; }
 trap stop EXIT
+mkdir -p "$secrets/tls" "$secrets/tokens"
+ec=(-newkey ec -pkeyopt ec_paramgen_curve:prime256v1 -nodes)
+{ openssl req -x509 "${ec[@]}" -days 2 -subj /CN=container-image-ca -keyout "$secrets/ca.key" -out "$secrets/ca.crt" &&
+  openssl req -new "${ec[@]}" -subj /CN=posefuse -keyout "$secrets/tls/tls.key" -out "$secrets/server.csr" &&
+  printf 'subjectAltName=IP:127.0.0.1\nextendedKeyUsage=serverAuth\n' >"$secrets/server.ext" &&
+  openssl x509 -req -days 2 -in "$secrets/server.csr" -CA "$secrets/ca.crt" -CAkey "$secrets/ca.key" \
+    -CAcreateserial -extfile "$secrets/server.ext" -out "$secrets/tls/tls.crt" &&
+  openssl rand -hex 32 >"$secrets/tokens/tokens"; } >"$secrets/openssl.log" 2>&1 ||
+  fail "openssl could not make the test certificate and token ($(tail -1 "$secrets/openssl.log"))"
+chmod -R a+rX "$secrets"  # the server runs as uid 10001
+container=$(podman run -d "${run_opts[@]}" -p 127.0.0.1::50051 \
+  -v "$secrets/tls:/etc/posefuse/tls:ro" -v "$secrets/tokens:/etc/posefuse/tokens:ro" "$tag") ||
+  fail "podman run -d $tag failed"
+stop() { podman rm -f "$container" >/dev/null 2>&1 || true; rm -rf "$secrets"; }
 address=$(podman port "$container" 50051/tcp) || fail "podman port: no published port for 50051"
 echo "container_image: server container ${container:0:12} on $address"
 
 # 6. Health (and a short fit) with the image's own client, from a second container on the host's
 # network so it reaches the published port. The server takes a moment to listen: retry for 30 s.
-client=(podman run --rm "${run_opts[@]}" --network=host --entrypoint /bin/sh "$tag" -c)
+client=(podman run --rm "${run_opts[@]}" --network=host -v "$secrets:/secrets:ro" --entrypoint /bin/sh "$tag" -c)
+secured="--tls-ca /secrets/ca.crt --token-file /secrets/tokens/tokens"
 healthy=no
 for _ in $(seq 1 30); do
-  if "${client[@]}" "/usr/local/bin/posefuse health --server $address"; then healthy=yes; break; fi
+  if "${client[@]}" "/usr/local/bin/posefuse health --server $address $secured"; then healthy=yes; break; fi
   [ "$(podman inspect --format '{{.State.Running}}' "$container")" = true ] || break
   sleep 1
 done
@@ -98,6 +113,6 @@ if [ "$healthy" != yes ]; then
   fail "the server in $tag did not answer posefuse health on $address (its log is above)"
 fi
 "${client[@]}" "/usr/local/bin/posefuse demo-session /tmp/demo.pfchunks &&
-  /usr/local/bin/posefuse fit /tmp/demo.pfchunks --server $address --out /tmp/results && ls /tmp/results" ||
+  /usr/local/bin/posefuse fit /tmp/demo.pfchunks --server $address $secured --out /tmp/results && ls /tmp/results" ||
   fail "posefuse fit of the demo session through $address failed"
 echo "container_image: ok: $tag built, started, healthy and fitted the demo session"

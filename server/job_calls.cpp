@@ -11,8 +11,6 @@ namespace posefuse::server {
 
 namespace {
 
-namespace fs = std::filesystem;
-
 // Streams messages from a queue, one write at a time; the last one finishes the call. Owned by a
 // shared_ptr (self_) until OnDone, so that listeners holding a weak_ptr never see it destroyed.
 template <class Message>
@@ -168,27 +166,6 @@ class JobResults : public QueuedWriter<v1::FitResult> {
 };
 
 }  // namespace
-
-fs::path resolve_recording(const std::string& uri, const fs::path& root) {
-  if (root.empty()) {
-    throw Error(ErrorCode::kFailedPrecondition, "spec.recording_uri",
-                "the server was started without --recordings-root; submit by reference is off");
-  }
-  std::string path = uri;
-  if (path.rfind("file://", 0) == 0) path = path.substr(7);
-  if (path.empty()) throw_invalid("spec.recording_uri", "is empty");
-  const fs::path canonical_root = fs::weakly_canonical(root);
-  const fs::path resolved = fs::weakly_canonical(canonical_root / fs::path(path).relative_path());
-  const auto [root_end, unused] =
-      std::mismatch(canonical_root.begin(), canonical_root.end(), resolved.begin(), resolved.end());
-  if (root_end != canonical_root.end()) {
-    throw_invalid("spec.recording_uri", "'" + uri + "' is outside the server's recordings root");
-  }
-  if (!fs::exists(resolved)) {
-    throw Error(ErrorCode::kNotFound, "spec.recording_uri", "'" + uri + "' does not exist");
-  }
-  return resolved;
-}
 
 grpc::ServerWriteReactor<v1::Job>* watch_job(JobRunner& runner, const std::string& job_id, const std::string& tenant) {
   auto watcher = std::make_shared<WatchJob>(runner, job_id);

@@ -15,12 +15,12 @@ namespace {
 
 constexpr const char* kUsage =
     "usage: posefuse-server [--config FILE] [--listen HOST:PORT] [--workers N] [--max-sessions N]\n"
-    "                       [--max-message-mb MB] [--idle-timeout-s S] [--max-queued-chunks N]\n"
-    "                       [--min-stream-rate R] [--stream-rate-grace-s S]\n"
+    "                       [--tenant-max-sessions N] [--max-message-mb MB] [--idle-timeout-s S]\n"
+    "                       [--max-queued-chunks N] [--min-stream-rate R] [--stream-rate-grace-s S]\n"
     "                       [--shutdown-grace-s S] [--data-dir DIR] [--recordings-root DIR]\n"
     "                       [--max-jobs N] [--max-upload-mb MB] [--metrics-listen HOST:PORT]\n"
     "                       [--tls-cert FILE --tls-key FILE [--tls-client-ca FILE]]\n"
-    "                       [--tokens-file FILE] [--job-store postgresql://...]\n"
+    "                       [--tokens-file FILE] [--insecure] [--job-store postgresql://...]\n"
     "                       [--role api|worker|both] [--job-lease-s S] [--job-heartbeat-s S]\n"
     "                       [--job-max-attempts N]\n"
     "defaults: --listen 127.0.0.1:50051 --workers <cores> --max-sessions 16 --max-message-mb 16\n"
@@ -32,6 +32,10 @@ constexpr const char* kUsage =
     "a Fit stream whose data advances slower than --min-stream-rate x real time after\n"
     "--stream-rate-grace-s ends DEADLINE_EXCEEDED (0 disables)\n"
     "plaintext without --tls-cert; no token needed without --tokens-file (docs/server.md)\n"
+    "a --listen address beyond loopback needs --tls-cert, --tls-key and --tokens-file,\n"
+    "or --insecure to serve without them\n"
+    "--tenant-max-sessions 0 (the default) splits --max-sessions evenly between the tenants\n"
+    "of --tokens-file\n"
     "--config FILE: 'key = value' lines, keys as the flags without '--' (max-sessions = 4),\n"
     "               '#' starts a comment line; flags given on the command line win\n";
 

@@ -28,6 +28,10 @@ std::chrono::milliseconds seconds_to_ms(double seconds) {
 void validate_options(const ServerOptions& o) {
   if (o.listen.empty()) throw_invalid("--listen", "is empty; expected host:port");
   if (o.max_sessions == 0) throw_invalid("--max-sessions", "must be at least 1");
+  if (o.tenant_max_sessions > o.max_sessions) {
+    throw_invalid("--tenant-max-sessions", "is " + std::to_string(o.tenant_max_sessions) + ", above --max-sessions (" +
+                                               std::to_string(o.max_sessions) + "); 0 splits those evenly");
+  }
   if (!(o.max_message_mb > 0.0 && o.max_message_mb <= 1024.0)) {
     throw_invalid("--max-message-mb", "is " + std::to_string(o.max_message_mb) + ", must be in (0, 1024]");
   }
@@ -81,6 +85,16 @@ void validate_options(const ServerOptions& o) {
   if (!o.tls_client_ca.empty() && o.tls_cert.empty()) {
     throw_invalid("--tls-client-ca", "needs --tls-cert and --tls-key (mutual TLS is TLS first)");
   }
+  // Recordings are patient data: beyond this machine only over TLS, and only to token holders.
+  if (!o.insecure && !listens_on_loopback_only(o.listen) && (o.tls_cert.empty() || o.tokens_file.empty())) {
+    const std::string missing = o.tls_cert.empty() && o.tokens_file.empty() ? "--tls-cert/--tls-key and --tokens-file"
+                                : o.tls_cert.empty()                        ? "--tls-cert/--tls-key"
+                                                                            : "--tokens-file";
+    throw_invalid("--listen", "'" + o.listen +
+                                  "' is not a loopback address, and serving beyond this machine needs TLS "
+                                  "(--tls-cert, --tls-key) and tokens (--tokens-file); missing: " +
+                                  missing + ". Give them, or --insecure to serve without");
+  }
 }
 
 PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store) : options_(std::move(options)) {
@@ -95,7 +109,11 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
   // The idle check runs a few times per timeout, at most every 250 ms.
   const auto check_interval =
       std::chrono::milliseconds(static_cast<long>(std::clamp(options_.idle_timeout_s * 1000.0 / 4.0, 10.0, 250.0)));
-  registry_ = std::make_unique<SessionRegistry>(options_.max_sessions, check_interval);
+  const unsigned tenant_max_sessions =
+      options_.tenant_max_sessions > 0
+          ? options_.tenant_max_sessions
+          : fair_share_of_sessions(options_.max_sessions, tokens_ ? tokens_->tenants().size() : 1);
+  registry_ = std::make_unique<SessionRegistry>(options_.max_sessions, tenant_max_sessions, check_interval);
   if (!options_.data_dir.empty()) {
     std::error_code error;
     std::filesystem::create_directories(upload_spool_dir(options_.data_dir), error);
@@ -172,6 +190,7 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
              {"port", std::to_string(port_)},
              {"workers", std::to_string(workers)},
              {"max_sessions", std::to_string(options_.max_sessions)},
+             {"tenant_max_sessions", std::to_string(tenant_max_sessions)},
              {"max_message_mb", std::to_string(options_.max_message_mb)},
              {"idle_timeout_s", std::to_string(options_.idle_timeout_s)},
              {"min_stream_rate", std::to_string(options_.min_stream_rate)},
@@ -185,6 +204,9 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
             {{"transport", transport_mode(options_)},
              {"auth", tokens_ ? "bearer_token" : "none"},
              {"tokens", std::to_string(tokens_ ? tokens_->size() : 0)}});
+  if (options_.insecure && !listens_on_loopback_only(options_.listen) && (!tokens_ || options_.tls_cert.empty())) {
+    log_event("warning", "insecure_listen", {{"listen", options_.listen}});
+  }
 }
 
 PoseFuseServer::~PoseFuseServer() { shutdown(); }

@@ -33,10 +33,10 @@ PoseFuseService::PoseFuseService(const ServerOptions& options, WorkerPool& pool,
                                  Metrics& metrics, JobRunner* jobs, const BearerTokens* tokens)
     : options_(options), pool_(pool), registry_(registry), metrics_(metrics), jobs_(jobs), tokens_(tokens) {
   if (jobs_) {
-    submit_context_.emplace(
-        SubmitJobContext{*jobs_, pool_, registry_, options_.recordings_root, upload_spool_dir(options_.data_dir),
-                         static_cast<std::uint64_t>(options_.max_upload_mb * 1024 * 1024),
-                         std::chrono::duration<double>(options_.idle_timeout_s), options_.max_sessions});
+    submit_context_.emplace(SubmitJobContext{*jobs_, pool_, registry_, options_.recordings_root,
+                                             tokens_ && tokens_->names_tenants(), upload_spool_dir(options_.data_dir),
+                                             static_cast<std::uint64_t>(options_.max_upload_mb * 1024 * 1024),
+                                             std::chrono::duration<double>(options_.idle_timeout_s)});
   }
 }
 
@@ -50,19 +50,19 @@ grpc::Status PoseFuseService::authenticate(const grpc::CallbackServerContext* co
 }
 
 grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>* PoseFuseService::Fit(grpc::CallbackServerContext* context) {
-  std::string tenant;  // a Fit call keeps nothing: the same for every tenant
+  std::string tenant;  // a Fit call keeps nothing, but takes one of its tenant's session slots
   if (grpc::Status denied = authenticate(context, "Fit", tenant); !denied.ok()) {
     return new RefusedCall<grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>>(denied);
   }
-  const std::optional<std::uint64_t> id = registry_.try_admit();
-  if (!id) {
+  const Admission admission = registry_.try_admit(tenant);
+  if (!admission.id) {
     metrics_.session_refused();
-    log_event("info", "session_refused", {{"reason", "max_sessions"}, {"peer", context->peer()}});
+    log_event("info", "session_refused",
+              {{"reason", admission.tenant_full ? "tenant_max_sessions" : "max_sessions"}, {"peer", context->peer()}});
     return new RefusedCall<grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>>(
-        grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, "server busy: " + std::to_string(options_.max_sessions) +
-                                                               " sessions are running (--max-sessions); retry later"));
+        grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, registry_.busy_message(admission)));
   }
-  return FitSession::start(context, *id, options_, pool_, registry_, metrics_);
+  return FitSession::start(context, *admission.id, options_, pool_, registry_, metrics_);
 }
 
 grpc::ServerUnaryReactor* PoseFuseService::GetServerInfo(grpc::CallbackServerContext* context,

@@ -1,5 +1,10 @@
 #include "server/security.hpp"
 
+#include <arpa/inet.h>
+#include <netinet/in.h>
+
+#include <algorithm>
+
 #include "common/error.hpp"
 #include "server/log.hpp"
 #include "server/text_lines.hpp"
@@ -24,9 +29,10 @@ bool valid_token_characters(const std::string& token) {
   return true;
 }
 
-// A tenant names who owns jobs: a plain name that is safe in logs and file names.
+// A tenant names who owns jobs and its folder of the recordings root: a plain name that is safe
+// in logs and as one path component.
 bool valid_tenant(const std::string& tenant) {
-  if (tenant.empty() || tenant.size() > 64) return false;
+  if (tenant.empty() || tenant.size() > 64 || tenant == "." || tenant == "..") return false;
   for (const char c : tenant) {
     const bool ok =
         (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '.' || c == '-';
@@ -95,7 +101,8 @@ BearerTokens BearerTokens::load(const std::string& path) {
     // The messages name the line, never the token.
     const std::string where = "'" + path + "' line " + std::to_string(line.number);
     if (gap != std::string::npos && !valid_tenant(tenant)) {
-      throw_invalid(flag, where + ": the tenant after the token must match [A-Za-z0-9_.-]{1,64}");
+      throw_invalid(flag,
+                    where + ": the tenant after the token must match [A-Za-z0-9_.-]{1,64} and not be '.' or '..'");
     }
     if (!valid_token_characters(token)) {
       throw_invalid(flag, where + ": a token may hold only visible ASCII characters, no spaces");
@@ -111,6 +118,34 @@ BearerTokens BearerTokens::load(const std::string& path) {
 }
 
 BearerTokens::BearerTokens(std::vector<AcceptedToken> tokens) : tokens_(std::move(tokens)) {}
+
+bool listens_on_loopback_only(const std::string& listen) {
+  if (listen.rfind("unix:", 0) == 0 || listen.rfind("unix-abstract:", 0) == 0) return true;
+  const std::size_t colon = listen.rfind(':');
+  std::string host = colon == std::string::npos ? listen : listen.substr(0, colon);
+  if (host.size() >= 2 && host.front() == '[' && host.back() == ']') host = host.substr(1, host.size() - 2);
+  if (host == "localhost") return true;
+  in_addr v4{};
+  if (::inet_pton(AF_INET, host.c_str(), &v4) == 1) return (ntohl(v4.s_addr) >> 24) == 127;
+  in6_addr v6{};
+  if (::inet_pton(AF_INET6, host.c_str(), &v6) == 1) {
+    if (IN6_IS_ADDR_LOOPBACK(&v6)) return true;
+    return IN6_IS_ADDR_V4MAPPED(&v6) && v6.s6_addr[12] == 127;
+  }
+  return false;
+}
+
+bool BearerTokens::names_tenants() const {
+  return std::any_of(tokens_.begin(), tokens_.end(), [](const AcceptedToken& t) { return !t.tenant.empty(); });
+}
+
+std::vector<std::string> BearerTokens::tenants() const {
+  std::vector<std::string> names;
+  for (const AcceptedToken& accepted : tokens_) {
+    if (std::find(names.begin(), names.end(), accepted.tenant) == names.end()) names.push_back(accepted.tenant);
+  }
+  return names;
+}
 
 std::optional<std::string> BearerTokens::tenant_of(std::string_view token) const {
   const AcceptedToken* match = nullptr;

@@ -23,6 +23,11 @@ std::string read_security_file(const std::string& path, const std::string& flag)
 // naming the flag for an unreadable file or one that is not PEM of the expected kind.
 std::shared_ptr<grpc::ServerCredentials> make_server_credentials(const ServerOptions& options);
 
+// True when the --listen address `listen` (HOST:PORT, [IPV6]:PORT or unix:PATH) can be reached
+// from this machine only: a 127.0.0.0/8 or ::1 address, localhost, or a Unix socket. Any other
+// host, a name or an empty one (every interface) included, is beyond loopback.
+bool listens_on_loopback_only(const std::string& listen);
+
 // "plaintext", "tls" or "mutual-tls": what the server logs at start.
 std::string transport_mode(const ServerOptions& options);
 
@@ -39,7 +44,7 @@ struct AcceptedToken {
 class BearerTokens {
  public:
   // One token per line, optionally followed by whitespace and its tenant
-  // ([A-Za-z0-9_.-]{1,64}); blank lines and lines starting with '#' are skipped; surrounding
+  // ([A-Za-z0-9_.-]{1,64}, not "." or ".."); blank lines and lines starting with '#' are skipped; surrounding
   // whitespace is trimmed. Throws posefuse::Error (field "--tokens-file") for an unreadable
   // file, no tokens, a token that is too short or has characters not allowed in metadata, or a
   // bad tenant name.
@@ -47,6 +52,11 @@ class BearerTokens {
   explicit BearerTokens(std::vector<AcceptedToken> tokens);
 
   std::size_t size() const { return tokens_.size(); }
+  // True when some token has a tenant: then each tenant's jobs by reference read only its own
+  // folder of the recordings root, and tokens without a tenant cannot submit by reference.
+  bool names_tenants() const;
+  // The distinct tenants of the accepted tokens ("" among them for tokens without one).
+  std::vector<std::string> tenants() const;
   // OK when the call carries `authorization: Bearer <accepted token>`, with that token's tenant
   // in `tenant`; UNAUTHENTICATED with a message that says what is missing otherwise (never
   // echoing what was sent).

@@ -17,6 +17,12 @@ unsigned parse_count(const std::string& text, const std::string& field) {
   return static_cast<unsigned>(value);
 }
 
+bool parse_switch(const std::string& text, const std::string& field) {
+  if (text == "true") return true;
+  if (text == "false") return false;
+  throw_invalid(field, "is '" + text + "'; expected true or false");
+}
+
 }  // namespace
 
 void set_server_option(ServerOptions& o, const std::string& key, const std::string& value, const std::string& field) {
@@ -25,6 +31,7 @@ void set_server_option(ServerOptions& o, const std::string& key, const std::stri
   if (key == "listen") o.listen = value;
   else if (key == "workers") o.workers = count();
   else if (key == "max-sessions") o.max_sessions = count();
+  else if (key == "tenant-max-sessions") o.tenant_max_sessions = count();
   else if (key == "max-message-mb") o.max_message_mb = number();
   else if (key == "idle-timeout-s") o.idle_timeout_s = number();
   else if (key == "min-stream-rate") o.min_stream_rate = number();
@@ -45,6 +52,7 @@ void set_server_option(ServerOptions& o, const std::string& key, const std::stri
   else if (key == "tls-key") o.tls_key = value;
   else if (key == "tls-client-ca") o.tls_client_ca = value;
   else if (key == "tokens-file") o.tokens_file = value;
+  else if (key == "insecure") o.insecure = parse_switch(value, field);
   else
     throw_invalid(
         field, "unknown " + std::string(field.rfind("--", 0) == 0 ? "flag" : "key") + " (see posefuse-server --help)");
@@ -94,6 +102,8 @@ CommandLine parse_server_command_line(const std::vector<std::string>& arguments)
     if (const auto eq = flag.find('='); eq != std::string::npos) {
       value = flag.substr(eq + 1);
       flag.resize(eq);
+    } else if (flag == "--insecure") {
+      value = "true";  // a switch: the next argument is another flag
     } else if (i + 1 < arguments.size()) {
       value = arguments[++i];
     } else {

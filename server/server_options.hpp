@@ -9,11 +9,14 @@ struct ServerOptions {
   std::string listen = "127.0.0.1:50051";  // host:port; port 0 picks a free one
   unsigned workers = 0;                    // pipeline threads; 0 = one per CPU core
   unsigned max_sessions = 16;              // concurrent Fit calls; beyond: RESOURCE_EXHAUSTED
-  double max_message_mb = 16.0;            // largest message received, MiB
-  double idle_timeout_s = 60.0;            // a Fit stream silent this long is ended
-  unsigned max_queued_chunks = 8;          // per session: read but not yet processed
-  unsigned max_queued_results = 64;        // per session: computed but not yet sent
-  double shutdown_grace_s = 10.0;          // calls in flight get this long to finish
+  // Concurrent Fit calls and uploads of one tenant (docs/server.md "Security"); 0: max_sessions
+  // split evenly between the tokens file's tenants (fair_share_of_sessions).
+  unsigned tenant_max_sessions = 0;
+  double max_message_mb = 16.0;      // largest message received, MiB
+  double idle_timeout_s = 60.0;      // a Fit stream silent this long is ended
+  unsigned max_queued_chunks = 8;    // per session: read but not yet processed
+  unsigned max_queued_results = 64;  // per session: computed but not yet sent
+  double shutdown_grace_s = 10.0;    // calls in flight get this long to finish
   // Minimum stream rate (server/stream_rate.hpp): after stream_rate_grace_s of waiting for its
   // client, a Fit stream must have delivered at least min_stream_rate seconds of recording per
   // wall second or it is ended; 0 disables. 0.5 lets a live session lag to half real time.
@@ -37,6 +40,10 @@ struct ServerOptions {
   std::string tls_key;
   std::string tls_client_ca;
   std::string tokens_file;
+  // Serve plaintext or without tokens on an address beyond loopback (validate_options refuses
+  // that otherwise): for a TLS-terminating proxy on a private network, or a port that serves
+  // health only.
+  bool insecure = false;
 };
 
 }  // namespace posefuse::server

@@ -1,7 +1,7 @@
 #include "server/submit_job_call.hpp"
 
-#include "server/job_calls.hpp"
 #include "server/job_limits.hpp"
+#include "server/job_recording.hpp"
 #include "server/log.hpp"
 #include "server/random_id.hpp"
 #include "server/status.hpp"
@@ -48,7 +48,13 @@ void SubmitJobCall::read_spec_locked(bool ok) {
   try {
     validate_job_spec(spec_);
     if (spec_.source_case() == v1::JobSpec::kRecordingUri) {
-      const auto path = resolve_recording(spec_.recording_uri(), context_.recordings_root);
+      if (context_.tenant_folders && tenant_.empty()) {
+        throw Error(ErrorCode::kFailedPrecondition, "spec.recording_uri",
+                    "this token has no tenant, and with tenants in --tokens-file a job by reference "
+                    "reads only its tenant's folder of the recordings root; use a token with a "
+                    "tenant, or upload the recording");
+      }
+      const auto path = resolve_recording(spec_.recording_uri(), context_.recordings_root, tenant_);
       *response_ = context_.runner.submit(spec_, path.string(), tenant_);
       finish_locked(grpc::Status::OK);
       return;
@@ -58,15 +64,13 @@ void SubmitJobCall::read_spec_locked(bool ok) {
     finish_locked(to_status(error));
     return;
   }
-  slot_ = context_.registry.try_admit();
-  if (!slot_) {
-    log_event("info", "upload_refused", {{"reason", "max_sessions"}});
-    finish_locked(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED,
-                               "server busy: " + std::to_string(context_.max_sessions) +
-                                   " sessions and uploads are running (--max-sessions); retry "
-                                   "later"));
+  const Admission admission = context_.registry.try_admit(tenant_);
+  if (!admission.id) {
+    log_event("info", "upload_refused", {{"reason", admission.tenant_full ? "tenant_max_sessions" : "max_sessions"}});
+    finish_locked(grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, context_.registry.busy_message(admission)));
     return;
   }
+  slot_ = admission.id;
   context_.registry.watch(*slot_, weak_from_this());
   try {
     spool_ = std::make_unique<UploadSpool>(context_.spool_dir / (random_hex_id() + ".pfchunks"),

@@ -37,10 +37,12 @@ struct SubmitJobContext {
   WorkerPool& pool;
   SessionRegistry& registry;
   std::filesystem::path recordings_root;  // by reference: empty = off
-  std::filesystem::path spool_dir;        // by upload: where the chunk files go
+  // The tokens file names tenants: each submits by reference from its own folder of the root
+  // only, and the tenant "" (tokens without one) cannot (server/job_recording.hpp).
+  bool tenant_folders;
+  std::filesystem::path spool_dir;  // by upload: where the chunk files go
   std::uint64_t max_upload_bytes;
   std::chrono::duration<double> idle_timeout;
-  unsigned max_sessions;  // for the RESOURCE_EXHAUSTED message
 };
 
 class SubmitJobCall : public grpc::ServerReadReactor<v1::SubmitJobRequest>,

@@ -1,14 +1,30 @@
 #include "server/upload_spool.hpp"
 
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <system_error>
 
 #include "common/error.hpp"
+#include "session/recording_file.hpp"
 
 namespace posefuse::server {
 
 namespace {
 
 constexpr const char* kPartialSuffix = ".partial";
+
+// Waits until what `path` (a file or a directory) holds is on the disk. A full disk is
+// RESOURCE_EXHAUSTED, as the job store's own writes are.
+void sync_to_disk(const std::filesystem::path& path) {
+  const session::UniqueFd fd = session::open_path(path, "upload");
+  if (::fsync(fd.get()) != 0) {
+    const int error = errno;
+    throw Error(error == ENOSPC || error == EDQUOT ? ErrorCode::kResourceExhausted : ErrorCode::kInternal, "upload",
+                std::string("cannot write the spooled upload to disk: ") + std::strerror(error));
+  }
+}
 
 }  // namespace
 
@@ -67,10 +83,19 @@ const std::filesystem::path& UploadSpool::commit() {
   }
   writer_->finish();
   writer_.reset();
+  // The job row that names the file comes next and survives a crash: the file's bytes, then its
+  // name (the directory's entry), reach the disk before it.
+  sync_to_disk(partial_path_);
   std::error_code error;
   std::filesystem::rename(partial_path_, final_path_, error);
   if (error) {
     throw Error(ErrorCode::kInternal, "upload", "cannot move the spooled upload into place: " + error.message());
+  }
+  try {
+    sync_to_disk(final_path_.parent_path());
+  } catch (const Error&) {
+    std::filesystem::remove(final_path_, error);  // no job will name it
+    throw;
   }
   committed_ = true;
   return final_path_;

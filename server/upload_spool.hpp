@@ -34,7 +34,9 @@ class UploadSpool {
   // The next chunk of the upload. Throws posefuse::Error when the upload cannot go on.
   void add(const v1::SessionChunk& chunk);
   // The client has sent everything: throws kInvalidArgument (field "end") without an end marker;
-  // otherwise closes the file, moves it to final_path and returns that.
+  // otherwise closes the file, moves it to final_path, waits until both its bytes and its name
+  // are on the disk (fsync of the file, then of its folder) and returns final_path.
+  // kResourceExhausted when the disk is full, kInternal for other failures (nothing is left).
   const std::filesystem::path& commit();
 
   std::uint64_t chunks() const { return chunks_; }

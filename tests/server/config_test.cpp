@@ -40,7 +40,9 @@ TEST_F(ConfigTest, FileSetsEveryKindOfOptionAndFlagsOverrideItWhereverConfigStan
       "  workers=3  \n"
       "max-message-mb = 2.5\n"
       "data-dir = /var/lib/posefuse data # not a comment\n"
-      "max-upload-mb = 100\n");
+      "max-upload-mb = 100\n"
+      "tenant-max-sessions = 3\n"
+      "insecure = true\n");
   const CommandLine line = parse_server_command_line({"--workers", "5", "--config", path, "--listen=127.0.0.1:7000"});
   EXPECT_FALSE(line.help);
   EXPECT_EQ(line.config_file, path);
@@ -49,6 +51,8 @@ TEST_F(ConfigTest, FileSetsEveryKindOfOptionAndFlagsOverrideItWhereverConfigStan
   EXPECT_DOUBLE_EQ(line.options.max_message_mb, 2.5);
   EXPECT_EQ(line.options.data_dir, "/var/lib/posefuse data # not a comment");
   EXPECT_DOUBLE_EQ(line.options.max_upload_mb, 100.0);
+  EXPECT_EQ(line.options.tenant_max_sessions, 3u);
+  EXPECT_TRUE(line.options.insecure);
   EXPECT_EQ(line.options.max_sessions, ServerOptions{}.max_sessions);  // untouched default
 }
 
@@ -98,6 +102,12 @@ TEST_F(ConfigTest, FlagErrorsNameTheFlag) {
   EXPECT_EQ(error_of({"--workers"}).rfind("--workers: needs a value", 0), 0u);
   EXPECT_EQ(error_of({"stray"}).rfind("stray: unexpected argument", 0), 0u);
   EXPECT_TRUE(parse_server_command_line({"--help"}).help);
+  // --insecure is a switch: the next flag stays a flag.
+  const CommandLine line = parse_server_command_line({"--insecure", "--workers", "2"});
+  EXPECT_TRUE(line.options.insecure);
+  EXPECT_EQ(line.options.workers, 2u);
+  EXPECT_FALSE(parse_server_command_line({"--insecure=false"}).options.insecure);
+  EXPECT_EQ(error_of({"--insecure=yes"}).rfind("--insecure: is 'yes'; expected true or false", 0), 0u);
 }
 
 TEST(StructuredLog, OneLinePerEventWithQuotedValues) {

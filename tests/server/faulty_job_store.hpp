@@ -3,6 +3,7 @@
 // told to refuse: those throw what SqliteJobStore throws when the disk is full.
 #include <atomic>
 #include <filesystem>
+#include <functional>
 
 #include "common/error.hpp"
 #include "server/sqlite_job_store.hpp"
@@ -16,9 +17,12 @@ class FaultyJobStore : public JobStore {
   std::atomic<bool> refuse_creates{false};
   std::atomic<bool> refuse_updates{false};  // a running job's state, and cancelling
   std::atomic<bool> refuse_results{false};
+  // Called as a job row is about to be written (set before the server starts).
+  std::function<void()> before_create;
 
   v1::Job create(const v1::JobSpec& spec, const std::string& recording_path, const std::string& owner,
                  std::int64_t now_unix_us) override {
+    if (before_create) before_create();
     if (refuse_creates) disk_full();
     return store_.create(spec, recording_path, owner, now_unix_us);
   }

@@ -19,6 +19,7 @@
 #include "session/file_bytes.hpp"
 #include "tests/server/health_check.hpp"
 #include "tests/server/reflection_call.hpp"
+#include "tests/server/server_process.hpp"
 #include "tests/server/test_support.hpp"
 
 namespace posefuse::server {
@@ -303,7 +304,10 @@ TEST_F(SecurityTest, TokensFileMapsTokensToTenants) {
   EXPECT_EQ(tokens.tenant_of(kToken), "clinic-a");
   EXPECT_EQ(tokens.tenant_of(kOtherToken), "");  // listed without a tenant: the shared one
   EXPECT_EQ(tokens.tenant_of(std::string(kToken) + " clinic-a"), std::nullopt);
-  for (const char* tenant : {"clinic a", "../clinic", "cl!nic"}) {
+  EXPECT_TRUE(tokens.names_tenants());
+  EXPECT_EQ(tokens.tenants(), (std::vector<std::string>{"clinic-a", ""}));
+  // A tenant is also a folder name of the recordings root: "." and ".." are not names.
+  for (const char* tenant : {"clinic a", "../clinic", "cl!nic", ".", ".."}) {
     std::ofstream(path) << kToken << " " << tenant << "\n";
     try {
       BearerTokens::load(path.string());
@@ -314,6 +318,78 @@ TEST_F(SecurityTest, TokensFileMapsTokensToTenants) {
       EXPECT_EQ(std::string(error.what()).find(kToken), std::string::npos);  // never echoed
     }
   }
+}
+
+TEST(ListenAddress, OnlyLoopbackAddressesAndUnixSocketsStayOnThisMachine) {
+  for (const char* local : {"127.0.0.1:50051", "127.1.2.3:0", "localhost:50051", "[::1]:50051", "[::ffff:127.0.0.1]:1",
+                            "unix:/run/posefuse.sock", "unix-abstract:posefuse"}) {
+    EXPECT_TRUE(listens_on_loopback_only(local)) << local;
+  }
+  for (const char* beyond : {"0.0.0.0:50051", "[::]:50051", ":50051", "10.0.0.5:50051", "128.0.0.1:1",
+                             "posefuse.hospital.example:50051", "[::ffff:10.0.0.1]:1", "localhost.evil:1"}) {
+    EXPECT_FALSE(listens_on_loopback_only(beyond)) << beyond;
+  }
+}
+
+// The real posefuse-server executable started with --listen 0.0.0.0:0 and `flags`.
+class ListenBeyondLoopback : public SecurityTest {
+ protected:
+  std::unique_ptr<test::ServerProcess> run_server(std::vector<std::string> flags) {
+    flags.insert(flags.begin(), {"--listen", "0.0.0.0:0", "--workers", "1"});
+    return std::make_unique<test::ServerProcess>(POSEFUSE_SERVER_BINARY, flags, dir_.path() / "server.log");
+  }
+  // Exit status 2 and one line naming the missing flags.
+  void expect_refused(const std::vector<std::string>& flags, const std::string& missing) {
+    const auto server = run_server(flags);
+    EXPECT_EQ(server->wait_exit(), 2);
+    const std::string log = server->log();
+    EXPECT_EQ(log,
+              "posefuse-server: --listen: '0.0.0.0:0' is not a loopback address, and serving beyond this machine "
+              "needs TLS (--tls-cert, --tls-key) and tokens (--tokens-file); missing: " +
+                  missing + ". Give them, or --insecure to serve without\n");
+  }
+  std::vector<std::string> tls_flags() const {
+    return {"--tls-cert", certificates().file("server.crt"), "--tls-key", certificates().file("server.key")};
+  }
+  std::vector<std::string> token_flags() { return {"--tokens-file", token_options().tokens_file}; }
+};
+
+TEST_F(ListenBeyondLoopback, WithoutTlsOrTokensTheServerRefusesToStartNamingWhatIsMissing) {
+  expect_refused({}, "--tls-cert/--tls-key and --tokens-file");
+  expect_refused(token_flags(), "--tls-cert/--tls-key");
+  expect_refused(tls_flags(), "--tokens-file");
+  // The same from a config file.
+  std::ofstream(dir_.path() / "server.conf") << "listen = 0.0.0.0:0\n";
+  const auto server = std::make_unique<test::ServerProcess>(
+      POSEFUSE_SERVER_BINARY, std::vector<std::string>{"--config", (dir_.path() / "server.conf").string()},
+      dir_.path() / "server.log");
+  EXPECT_EQ(server->wait_exit(), 2);
+  // After the config file's own log line.
+  EXPECT_NE(server->log().find(" event=config file=", 0), std::string::npos) << server->log();
+  EXPECT_NE(server->log().find("\nposefuse-server: --listen: '0.0.0.0:0' is not a loopback address"), std::string::npos)
+      << server->log();
+}
+
+TEST_F(ListenBeyondLoopback, WithTlsAndTokensItServes) {
+  std::vector<std::string> flags = tls_flags();
+  const std::vector<std::string> tokens = token_flags();
+  flags.insert(flags.end(), tokens.begin(), tokens.end());
+  const auto server = run_server(flags);
+  address_ = "127.0.0.1:" + std::to_string(server->port());
+  client::ChannelSecurity security = trusting("ca");
+  security.bearer_token = kToken;
+  EXPECT_TRUE(server_info(security).ok());
+  EXPECT_EQ(server_info(trusting("ca")).error_code(), grpc::StatusCode::UNAUTHENTICATED);
+  EXPECT_EQ(server->terminate(), 0);
+}
+
+TEST_F(ListenBeyondLoopback, InsecureServesPlaintextWithoutTokensAndSaysSo) {
+  const auto server = run_server({"--insecure"});
+  address_ = "127.0.0.1:" + std::to_string(server->port());
+  EXPECT_TRUE(server_info({}).ok());
+  EXPECT_EQ(server->terminate(), 0);
+  EXPECT_NE(server->log().find(" level=warning event=insecure_listen listen=0.0.0.0:0"), std::string::npos)
+      << server->log();
 }
 
 TEST(ClientSecurity, TokenComesFromTheFileElseTheEnvironment) {

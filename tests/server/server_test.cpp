@@ -229,23 +229,17 @@ TEST_F(ServerTest, SessionsBeyondTheLimitAreRefusedWithResourceExhausted) {
   options.max_sessions = 2;
   start(options);
   const auto chunks = demo::make_demo_session();
-  grpc::ClientContext a, b;
-  set_test_deadline(a);
-  set_test_deadline(b);
-  auto stream_a = stub_->Fit(&a);
-  auto stream_b = stub_->Fit(&b);
-  ASSERT_TRUE(stream_a->Write(chunks[0]));
-  ASSERT_TRUE(stream_b->Write(chunks[0]));
+  posefuse::test::HeldFit a(*stub_, chunks[0]), b(*stub_, chunks[0]);
+  ASSERT_TRUE(a.sent());
+  ASSERT_TRUE(b.sent());
   ASSERT_TRUE(wait_for_active(2));
 
   const CallResult refused = fit(chunks);
   EXPECT_EQ(refused.status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED);
   EXPECT_TRUE(refused.results.empty());
 
-  a.TryCancel();
-  b.TryCancel();
-  EXPECT_EQ(stream_a->Finish().error_code(), grpc::StatusCode::CANCELLED);
-  EXPECT_EQ(stream_b->Finish().error_code(), grpc::StatusCode::CANCELLED);
+  EXPECT_EQ(a.cancel().error_code(), grpc::StatusCode::CANCELLED);
+  EXPECT_EQ(b.cancel().error_code(), grpc::StatusCode::CANCELLED);
 }
 
 TEST_F(ServerTest, ClientThatCancelsMidStreamFreesItsSlot) {
@@ -530,6 +524,14 @@ TEST(ServerOptions, BadValuesNameTheFlag) {
   ServerOptions options;
   options.max_sessions = 0;
   EXPECT_EQ(rejected_flag(options), "--max-sessions");
+  options = ServerOptions{};
+  options.tenant_max_sessions = options.max_sessions + 1;
+  EXPECT_EQ(rejected_flag(options), "--tenant-max-sessions");
+  options = ServerOptions{};
+  options.listen = "0.0.0.0:0";
+  EXPECT_EQ(rejected_flag(options), "--listen");
+  options.insecure = true;
+  EXPECT_EQ(rejected_flag(options), "");
   for (const double mb : {0.0, -1.0, 2e6, std::nan("")}) {
     options = ServerOptions{};
     options.max_upload_mb = mb;

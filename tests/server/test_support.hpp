@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "posefuse/v1/results.pb.h"
+#include "posefuse/v1/service.grpc.pb.h"
 
 namespace posefuse::test {
 
@@ -46,6 +47,28 @@ class TempDir {
 inline void set_test_deadline(grpc::ClientContext& context) {
   context.set_deadline(std::chrono::system_clock::now() + std::chrono::seconds(60));
 }
+
+// A Fit call that has sent its first chunk (the header) and so holds a session slot until
+// cancel() or the server ends it.
+class HeldFit {
+ public:
+  HeldFit(v1::PoseFuse::Stub& stub, const v1::SessionChunk& header) {
+    set_test_deadline(context_);
+    stream_ = stub.Fit(&context_);
+    sent_ = stream_->Write(header);
+  }
+  bool sent() const { return sent_; }
+  // Cancels the call: its status (CANCELLED unless the server ended it first).
+  grpc::Status cancel() {
+    context_.TryCancel();
+    return stream_->Finish();
+  }
+
+ private:
+  grpc::ClientContext context_;
+  std::unique_ptr<grpc::ClientReaderWriter<v1::SessionChunk, v1::FitResult>> stream_;
+  bool sent_ = false;
+};
 
 // Every message of a server stream, and its final status.
 template <class Message, class Reader>
