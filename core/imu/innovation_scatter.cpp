@@ -14,6 +14,9 @@ void InnovationScatter::learn(const Eigen::Vector2d& innovation_rad, double esti
   scatter_rad2_ += g * (std::max(0.0, innovation_rad.squaredNorm() - estimate_var_rad2) - scatter_rad2_);
   lowpass_rad_ += g * (innovation_rad - lowpass_rad_);
   lowpass_var_rad2_ += g * (lowpass_rad_.squaredNorm() - lowpass_var_rad2_);
+  learned_s_ += dt_s;
+  const double g_persistent = learned_s_ > 0.0 ? std::max(g, dt_s / learned_s_) : g;
+  persistent_rad_ += g_persistent * (innovation_rad - persistent_rad_);
 }
 
 double InnovationScatter::scatter_rad2() const { return std::max(scatter_rad2_, min_var_rad2_); }

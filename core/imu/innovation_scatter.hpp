@@ -25,15 +25,19 @@ class InnovationScatter {
   // to carry beyond the learned scatter, lasting as long.
   double sample_var_rad2(double dt_s, double extra_rad2 = 0.0) const;
   // The innovation low-passed over tau_s: an error the corrections keep showing (white noise
-  // averages out of it).
-  double persistent_rad() const { return lowpass_rad_.norm(); }
+  // averages out of it). Its first samples are averaged with equal weights, so an error the
+  // corrections show from the start (one a start-up's agreeing samples left) shows at once,
+  // not over tau_s from zero.
+  double persistent_rad() const { return persistent_rad_.norm(); }
 
  private:
   double tau_s_;
   double min_var_rad2_;
   double scatter_rad2_ = 0.0;
-  Eigen::Vector2d lowpass_rad_ = Eigen::Vector2d::Zero();  // the innovation low-passed over tau_s
-  double lowpass_var_rad2_ = 0.0;                          // and its mean square
+  Eigen::Vector2d lowpass_rad_ = Eigen::Vector2d::Zero();     // the innovation low-passed over tau_s
+  double lowpass_var_rad2_ = 0.0;                             // and its mean square
+  Eigen::Vector2d persistent_rad_ = Eigen::Vector2d::Zero();  // the same, averaged from the first sample
+  double learned_s_ = 0.0;                                    // time learned so far
 };
 
 }  // namespace posefuse::imu

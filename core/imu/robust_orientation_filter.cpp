@@ -297,7 +297,7 @@ void RobustOrientationFilter::correct_inclination(const Vec3& acc_m_s2, double d
   // averaging, take more (min_gain), which steady tracking would not.
   const double tau_gain = dt_s > 0.0 ? gains_.acc_stage : 0.0;
   double min_gain = dt_s > 0.0 ? 0.0 : 1.0;
-  if (time_s_ < params_.init_s) min_gain = std::max(min_gain, 1.0 / init_weight_count_);
+  if (in_start_up()) min_gain = std::max(min_gain, 1.0 / init_weight_count_);
   double k = std::max(tau_gain, min_gain);
   const Vec3 acc_I = rotate(I_from_A_, acc_m_s2);
   const double acc_norm = acc_I.norm();
@@ -318,7 +318,7 @@ void RobustOrientationFilter::correct_inclination(const Vec3& acc_m_s2, double d
                              Eigen::Vector2d(up_E.x(), up_E.y()));
     // The scatter is learned only while tracking after start-up: during a recovery the
     // estimate's own error would pass for the accelerometer's.
-    if (!was_recovering && dt_s > 0.0 && time_s_ >= params_.init_s) {
+    if (!was_recovering && dt_s > 0.0 && !in_start_up()) {
       acc_scatter_.learn(Eigen::Vector2d(up_E.x(), up_E.y()), prior_var, dt_s);
     }
   }
@@ -389,7 +389,7 @@ void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
   // As for the inclination: the time constant's gain, and what a start-up or a fast pull takes.
   const double tau_gain = dt_s > 0.0 ? gains_.mag : 0.0;
   double min_gain = dt_s > 0.0 ? 0.0 : 1.0;
-  if (time_s_ < params_.init_s && !mag_ref_valid_) {
+  if (in_start_up() && !mag_ref_valid_) {
     // Start-up: learn the reference as the plain mean and converge the heading fast.
     mag_init_count_ += 1.0;
     mag_ref_norm_ += (norm - mag_ref_norm_) / mag_init_count_;
@@ -458,7 +458,7 @@ void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
   const double tan2_dip = this->tan2_dip();
   // The inclination's uncertainty reaches every sample's heading alike; at start-up both are
   // averaged from the same first samples and converge together.
-  const double tilt_var = time_s_ < params_.init_s ? 0.0 : inclination_.gain_var_rad2 * tan2_dip;
+  const double tilt_var = in_start_up() ? 0.0 : inclination_.gain_var_rad2 * tan2_dip;
   const double k = heading_.correct(tau_gain, min_gain, mag_scatter_.sample_var_rad2(dt_s), tilt_var,
                                     !inclination_.recovering, Eigen::Vector2d(error_rad, 0.0));
   // The inclination's error turns every sample's heading alike, so averaging does not shrink
@@ -467,7 +467,7 @@ void RobustOrientationFilter::correct_heading(const Vec3& mag_uT, const Quat& E_
   heading_.reported_var_rad2 =
       std::min(CorrectionUncertainty::kUnknownVarRad2,
                std::max(heading_.reported_var_rad2, heading_.steady_var_rad2 + tilt_excess_var));
-  if (!was_recovering && dt_s > 0.0 && time_s_ >= params_.init_s) {
+  if (!was_recovering && dt_s > 0.0 && !in_start_up()) {
     mag_scatter_.learn(Eigen::Vector2d(error_rad, 0.0), prior_var, dt_s);
   }
   const double step_rad = k * error_rad;

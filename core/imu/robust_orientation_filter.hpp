@@ -130,7 +130,12 @@ class RobustOrientationFilter {
   // vertical and of the magnetometer's heading; and at least the error the corrections keep
   // showing (their innovations low-passed over 2 s: the lag a gyro bias the filter has not
   // learned makes, tau_mag_s times the bias about the vertical, shows there).
+  // During the start-up (init_s) the estimate is an equal-weight average of the first samples,
+  // and how far a sample scatters is learned only after it: the error is not known yet, and both
+  // are reported as unknown (pi/2 RMS each). A start in vigorous motion (a jumping jack) is 20
+  // degrees off in heading there while its first samples agree with each other.
   double inclination_uncertainty_rad() const {
+    if (in_start_up()) return std::sqrt(CorrectionUncertainty::kUnknownVarRad2);
     return std::max(std::sqrt(inclination_.excess_var_rad2()), acc_scatter_.persistent_rad());
   }
   // At least what the inclination's error turns the horizontal field by (up to d tan(dip)):
@@ -139,6 +144,7 @@ class RobustOrientationFilter {
   // inclination off, and the magnetometer, read through that inclination, then agrees with a
   // heading that is off too.
   double heading_uncertainty_rad() const {
+    if (in_start_up()) return std::sqrt(CorrectionUncertainty::kUnknownVarRad2);
     const double tilt_rad = inclination_uncertainty_rad() * std::sqrt(tan2_dip());
     return std::max({std::sqrt(heading_.excess_var_rad2()), mag_scatter_.persistent_rad(), tilt_rad});
   }
@@ -160,6 +166,7 @@ class RobustOrientationFilter {
   void reset_keeping_calibration(bool flip_gyro = false);
 
  private:
+  bool in_start_up() const { return time_s_ < params_.init_s; }
   // tan^2 of the reference field's dip (sin^2 capped at 0.99, 84 degrees): how much an
   // inclination error turns the horizontal field.
   double tan2_dip() const {
