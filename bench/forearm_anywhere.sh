@@ -15,6 +15,8 @@
 # truth (RMS/max), its confident samples and their max error and count beyond 15 deg, and the
 # samples within the 99 % bound of their predicted error (imu_orientations/<id>.csv).
 #   bench/forearm_anywhere.sh [BUILD_DIR] [MOTION:SEED:SPEED ...]
+#   REPLAY_OPTIONS="KEY=VALUE ..." sets header options for every replay (e.g. fit.enabled=false:
+#   the body fit is on by default and costs about 10 ms per frame).
 #   MOTION: an exercise name, or a BVH clip's path (its whole length, as it is) or a path with
 #   "+pose" appended (paper 1's calibration pose first: sim calibration_prefix).
 # Default: the 11 exercises at speeds 0.7, 1.0, 1.3 on seeds 51 and 52, 20 s, then every clip in
@@ -55,7 +57,10 @@ for spec in "${specs[@]}"; do
   fi
   "$build/tools/sim/posefuse-sim" --options "$work/$name.options" --seed "$seed" --quiet \
     --chunk-file "$work/$name.pfchunks" --gt "$work/$name.gt" >/dev/null
-  "$build/bench/bench_sim_forearm" replay "$work/$name.pfchunks" "$work/$name.gt" "$work/$name.out" >/dev/null
+  replay_options=()
+  for option in ${REPLAY_OPTIONS:-}; do replay_options+=(--option "$option"); done
+  "$build/bench/bench_sim_forearm" replay "$work/$name.pfchunks" "$work/$name.gt" "$work/$name.out" \
+    "${replay_options[@]}" >/dev/null
   # Every emitted sample against the truth sample nearest in time within half the IMU's period
   # (80 Hz): a sample whose mapped camera time is a few ms off (an arm clock's drift, which one
   # BLE burst cannot show) is scored with that error in it, not left out.
