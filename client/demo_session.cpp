@@ -177,7 +177,7 @@ v1::SessionHeader demo_header(const DemoSessionOptions& options) {
   *header.mutable_depth_intrinsics() = depth_intrinsics(options);
   header.set_depth_rate_hz(options.camera_rate_hz);
   (*header.mutable_options())["demo.generator"] =
-      "posefuse demo-session: synthetic placeholder until the simulator (issue 4) exists";
+      "posefuse demo-session: a small synthetic stream for tests (realistic sessions: posefuse-sim)";
   return header;
 }
 

@@ -1,7 +1,8 @@
 #pragma once
-// A small deterministic demo session made in code: a PLACEHOLDER until the simulator (issue 4,
-// core/sim) exists. It is not realistic data; it exercises every part of the stream so that the
-// demo, the client and the server tests have something to send.
+// A small deterministic session made in code. It is not realistic data (no body in its depth
+// frames, so the body fit skips them; realistic sessions come from the simulator, core/sim and
+// posefuse-sim); it exercises every part of the stream so that the client and server tests have
+// something small to send.
 //
 // Content (defaults): the header; 10 s of two 9-axis IMUs at 80 Hz, "arm_left" turning through
 // a smooth synthetic motion (yaw, pitch, roll sinusoids after 1.5 s of rest) and "base" at rest,

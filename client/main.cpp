@@ -464,7 +464,7 @@ int command_demo_session(const Arguments& args) {
   check_flags(args, {});
   require(args.positional.size() == 1, "demo-session takes OUT");
   const std::uint64_t chunks = posefuse::demo::write_demo_session(args.positional[0]);
-  std::printf("demo session (synthetic placeholder until the simulator exists): %llu chunks in %s\n",
+  std::printf("demo session (small and synthetic, for tests; realistic sessions: posefuse-sim): %llu chunks in %s\n",
               static_cast<unsigned long long>(chunks), args.positional[0].c_str());
   return 0;
 }
