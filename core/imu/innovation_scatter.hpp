@@ -34,10 +34,13 @@ class InnovationScatter {
   double tau_s_;
   double min_var_rad2_;
   double scatter_rad2_ = 0.0;
-  Eigen::Vector2d lowpass_rad_ = Eigen::Vector2d::Zero();     // the innovation low-passed over tau_s
-  double lowpass_var_rad2_ = 0.0;                             // and its mean square
-  Eigen::Vector2d persistent_rad_ = Eigen::Vector2d::Zero();  // the same, averaged from the first sample
-  double learned_s_ = 0.0;                                    // time learned so far
+  // The innovation low-passed over tau_s from zero, and its mean square: correlation_s relies on
+  // a first-order low-pass passing dt / (2 tau) of white noise, which an equal-weight start would
+  // not. The reported persistent error is a second low-pass that averages from the first sample.
+  Eigen::Vector2d lowpass_rad_ = Eigen::Vector2d::Zero();
+  double lowpass_var_rad2_ = 0.0;
+  Eigen::Vector2d persistent_rad_ = Eigen::Vector2d::Zero();
+  double learned_s_ = 0.0;  // time learned so far
 };
 
 }  // namespace posefuse::imu
