@@ -292,10 +292,11 @@ int command_info(const Arguments& args) {
   }
   const auto& limits = info.limits();
   std::printf(
-      "limits: max message %.1f MiB, %u sessions, %u queued chunks per session, "
+      "limits: max message %.1f MiB, %u sessions, %u queued chunks and %.0f MiB of memory per session, "
       "idle timeout %.0f s, %u workers\n",
       static_cast<double>(limits.max_message_bytes()) / (1024.0 * 1024.0), limits.max_sessions(),
-      limits.max_queued_chunks(), limits.idle_timeout_s(), limits.workers());
+      limits.max_queued_chunks(), static_cast<double>(limits.max_session_memory_bytes()) / (1024.0 * 1024.0),
+      limits.idle_timeout_s(), limits.workers());
   if (info.jobs_supported()) {
     std::printf("batch jobs: on, uploads up to %.0f MiB\n",
                 static_cast<double>(limits.max_upload_bytes()) / (1024.0 * 1024.0));

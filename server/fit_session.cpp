@@ -1,6 +1,7 @@
 #include "server/fit_session.hpp"
 
 #include "server/log.hpp"
+#include "server/session_memory.hpp"
 #include "server/status.hpp"
 #include "server/stream_rate.hpp"
 #include "session/stages/default_stages.hpp"
@@ -23,6 +24,9 @@ FitSession* FitSession::start(grpc::CallbackServerContext* context, std::uint64_
   session->self_ = session;
   session->sink_ = std::make_unique<Sink>(*session);
   session::PipelineOptions pipeline_options;
+  pipeline_options.max_held_bytes = session_memory_bytes(options);
+  pipeline_options.max_held_bytes_setting = "--max-session-memory-mb";
+  pipeline_options.queued_chunk_bytes = [owner = session.get()] { return owner->inbox_bytes_.load(); };
   pipeline_options.on_stage_time = [&metrics](std::string_view stage, double seconds) {
     metrics.stage_time(stage, seconds);
   };
@@ -43,6 +47,7 @@ FitSession::FitSession(grpc::CallbackServerContext* context, std::uint64_t id, c
 void FitSession::clear_inbox_locked() {
   metrics_.queued_chunks_add(-static_cast<std::int64_t>(inbox_.size()));
   inbox_.clear();
+  inbox_bytes_ = 0;
 }
 
 void FitSession::start_read_locked() {
@@ -61,6 +66,7 @@ void FitSession::OnReadDone(bool ok) {
     ++chunks_read_;
     metrics_.chunk_received();
     metrics_.queued_chunks_add(1);
+    inbox_bytes_ += read_buffer_.ByteSizeLong();
     inbox_.push_back(std::move(read_buffer_));
     read_buffer_.Clear();
     if (inbox_.size() < options_.max_queued_chunks) start_read_locked();
@@ -94,6 +100,7 @@ void FitSession::work() {
       if (!inbox_.empty()) {
         chunk = std::move(inbox_.front());
         inbox_.pop_front();
+        inbox_bytes_ -= chunk.ByteSizeLong();
         metrics_.queued_chunks_add(-1);
         if (!read_pending_ && !input_closed_ && inbox_.size() < options_.max_queued_chunks) {
           start_read_locked();

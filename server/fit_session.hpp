@@ -18,6 +18,7 @@
 // advances slower than min_stream_rate x real time after stream_rate_grace_s (stream_rate.hpp)
 // -> DEADLINE_EXCEEDED after the results before it. A session whose status is decided but whose
 // client stops taking the results before it is cancelled after idle_timeout_s as well.
+#include <atomic>
 #include <chrono>
 #include <cstdint>
 #include <deque>
@@ -88,6 +89,7 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
   bool read_pending_ = false;
   bool input_closed_ = false;  // the client half-closed (or the read side failed)
   std::deque<v1::SessionChunk> inbox_;
+  std::atomic<std::uint64_t> inbox_bytes_{0};  // for the session's memory budget (read unlocked)
   bool worker_scheduled_ = false;
   Clock::time_point worker_scheduled_at_;
   // Wall time the worker was scheduled or running: the server's share of the session's time,

@@ -286,6 +286,8 @@ void JobRunner::run_job(Running& running, JobRecord& record) {
     }
     auto source = open_job_recording(local, options_.recordings_root);
     session::PipelineOptions pipeline_options;
+    pipeline_options.max_held_bytes = options_.max_held_bytes;
+    pipeline_options.max_held_bytes_setting = "--max-session-memory-mb";
     pipeline_options.on_stage_time = [this](std::string_view stage, double seconds) {
       metrics_.stage_time(stage, seconds);
     };

@@ -38,6 +38,7 @@ struct JobRunnerOptions {
   std::chrono::milliseconds lease{30000};
   std::chrono::milliseconds heartbeat{10000};  // lease renewal, reaping and queue polling
   std::uint32_t max_attempts = 3;
+  std::uint64_t max_held_bytes = 0;  // a job's memory budget (session::PipelineOptions)
 };
 
 class JobRunner {

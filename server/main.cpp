@@ -16,7 +16,8 @@ namespace {
 constexpr const char* kUsage =
     "usage: posefuse-server [--config FILE] [--listen HOST:PORT] [--workers N] [--max-sessions N]\n"
     "                       [--tenant-max-sessions N] [--max-message-mb MB] [--idle-timeout-s S]\n"
-    "                       [--max-queued-chunks N] [--min-stream-rate R] [--stream-rate-grace-s S]\n"
+    "                       [--max-queued-chunks N] [--max-session-memory-mb MB]\n"
+    "                       [--min-stream-rate R] [--stream-rate-grace-s S]\n"
     "                       [--shutdown-grace-s S] [--data-dir DIR] [--recordings-root DIR]\n"
     "                       [--max-jobs N] [--max-upload-mb MB] [--metrics-listen HOST:PORT]\n"
     "                       [--tls-cert FILE --tls-key FILE [--tls-client-ca FILE]]\n"
@@ -36,6 +37,8 @@ constexpr const char* kUsage =
     "or --insecure to serve without them\n"
     "--tenant-max-sessions 0 (the default) splits --max-sessions evenly between the tenants\n"
     "of --tokens-file\n"
+    "--max-session-memory-mb 0 (the default): half this machine's memory split between\n"
+    "--max-sessions + --max-jobs; a session holding more ends RESOURCE_EXHAUSTED\n"
     "--config FILE: 'key = value' lines, keys as the flags without '--' (max-sessions = 4),\n"
     "               '#' starts a comment line; flags given on the command line win\n";
 

@@ -11,6 +11,7 @@
 #include "server/log.hpp"
 #include "server/pg_job_store.hpp"
 #include "server/security.hpp"
+#include "server/session_memory.hpp"
 #include "server/sqlite_job_store.hpp"
 #include "server/submit_job_call.hpp"
 #include "server/upload_spool.hpp"
@@ -45,6 +46,11 @@ void validate_options(const ServerOptions& o) {
     throw_invalid("--stream-rate-grace-s", "must be a positive number of seconds");
   }
   if (o.max_queued_chunks == 0) throw_invalid("--max-queued-chunks", "must be at least 1");
+  if (!(o.max_session_memory_mb >= 0.0 && o.max_session_memory_mb <= 1024.0 * 1024.0)) {
+    throw_invalid("--max-session-memory-mb",
+                  "is " + std::to_string(o.max_session_memory_mb) +
+                      ", must be in [0, 1048576] (MiB; 0: a share of this machine's memory)");
+  }
   if (o.max_queued_results == 0) throw_invalid("--max-queued-results", "must be at least 1");
   if (o.max_jobs == 0) throw_invalid("--max-jobs", "must be at least 1");
   if (!(o.max_upload_mb > 0.0 && o.max_upload_mb <= 1024.0 * 1024.0)) {
@@ -99,6 +105,11 @@ void validate_options(const ServerOptions& o) {
 
 PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store) : options_(std::move(options)) {
   validate_options(options_);
+  if (options_.max_session_memory_mb == 0.0) {
+    options_.max_session_memory_mb = static_cast<double>(default_session_memory_bytes(
+                                         usable_memory_bytes(), options_.max_sessions, options_.max_jobs)) /
+                                     (1 << 20);
+  }
   // Security files first: a bad one fails before any thread or port exists.
   const std::shared_ptr<grpc::ServerCredentials> credentials = make_server_credentials(options_);
   if (!options_.tokens_file.empty()) {
@@ -147,6 +158,7 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
     runner.lease = seconds_to_ms(options_.job_lease_s);
     runner.heartbeat = seconds_to_ms(options_.job_heartbeat_s);
     runner.max_attempts = options_.job_max_attempts;
+    runner.max_held_bytes = session_memory_bytes(options_);
     jobs_ = std::make_unique<JobRunner>(*job_store_, *pool_, metrics_, std::move(runner));
   }
   service_ = std::make_unique<PoseFuseService>(options_, *pool_, *registry_, metrics_, jobs_.get(), tokens_.get());
@@ -191,6 +203,7 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
              {"workers", std::to_string(workers)},
              {"max_sessions", std::to_string(options_.max_sessions)},
              {"tenant_max_sessions", std::to_string(tenant_max_sessions)},
+             {"max_session_memory_mb", std::to_string(std::lround(options_.max_session_memory_mb))},
              {"max_message_mb", std::to_string(options_.max_message_mb)},
              {"idle_timeout_s", std::to_string(options_.idle_timeout_s)},
              {"min_stream_rate", std::to_string(options_.min_stream_rate)},

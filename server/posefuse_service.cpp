@@ -7,6 +7,7 @@
 #include "server/job_limits.hpp"
 #include "server/log.hpp"
 #include "server/refused_call.hpp"
+#include "server/session_memory.hpp"
 #include "server/status.hpp"
 #include "session/option_table.hpp"
 #include "session/session_validator.hpp"
@@ -209,6 +210,7 @@ v1::ServerInfo server_info(const ServerOptions& options, unsigned workers, bool 
   limits.set_idle_timeout_s(options.idle_timeout_s);
   limits.set_workers(workers);
   limits.set_max_upload_bytes(static_cast<std::uint64_t>(options.max_upload_mb * 1024 * 1024));
+  limits.set_max_session_memory_bytes(session_memory_bytes(options));
   info.set_jobs_supported(jobs);
   return info;
 }

@@ -37,6 +37,7 @@ void set_server_option(ServerOptions& o, const std::string& key, const std::stri
   else if (key == "min-stream-rate") o.min_stream_rate = number();
   else if (key == "stream-rate-grace-s") o.stream_rate_grace_s = number();
   else if (key == "max-queued-chunks") o.max_queued_chunks = count();
+  else if (key == "max-session-memory-mb") o.max_session_memory_mb = number();
   else if (key == "shutdown-grace-s") o.shutdown_grace_s = number();
   else if (key == "data-dir") o.data_dir = value;
   else if (key == "recordings-root") o.recordings_root = value;

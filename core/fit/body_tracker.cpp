@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "common/error.hpp"
+#include "common/held_bytes.hpp"
 #include "common/thread_cpu_time.hpp"
 #include "fit/frame_fitter.hpp"
 #include "fit/frame_observation.hpp"
@@ -65,6 +66,8 @@ BodyTracker::Admitted BodyTracker::admit(BodyFitFrame&& frame) {
   Admitted out;
   if (!personalised_) {
     if (static_cast<double>(frame.t_us - *first_t_us_) * 1e-6 < options_.calibration_s) {
+      calibration_pixel_bytes_ +=
+          posefuse::held_bytes(frame.frame.depth_mm) + posefuse::held_bytes(frame.frame.body_index);
       calibration_frames_.push_back(std::move(frame));
       return out;
     }
@@ -80,6 +83,8 @@ BodyTracker::Admitted BodyTracker::personalise_now() {
   out.warnings = personalise();
   out.frames = std::move(calibration_frames_);
   calibration_frames_.clear();
+  calibration_frames_.shrink_to_fit();
+  calibration_pixel_bytes_ = 0;
   return out;
 }
 
@@ -295,6 +300,11 @@ std::optional<std::int64_t> BodyTracker::oldest_held_t_us() const {
   if (!calibration_frames_.empty()) oldest = calibration_frames_.front().t_us;
   if (!fitted_.empty()) oldest = std::min(oldest.value_or(fitted_.front().t_us), fitted_.front().t_us);
   return oldest;
+}
+
+std::size_t BodyTracker::held_bytes() const {
+  return posefuse::held_bytes(calibration_frames_) + calibration_pixel_bytes_ + posefuse::held_bytes(fitted_) +
+         posefuse::held_bytes(stats_);
 }
 
 std::optional<FittedShape> BodyTracker::shape() const {

@@ -110,6 +110,8 @@ class BodyTracker {
 
   // The oldest frame held (calibration frames, fitted frames smoothing has not released).
   std::optional<std::int64_t> oldest_held_t_us() const;
+  // The memory those frames and the frame statistics take (session::Stage::held_bytes).
+  std::size_t held_bytes() const;
   // After personalisation (or its refusal); none before.
   std::optional<FittedShape> shape() const;
 
@@ -137,6 +139,7 @@ class BodyTracker {
   std::unique_ptr<Work> work_;
   std::optional<std::int64_t> first_t_us_;
   std::vector<BodyFitFrame> calibration_frames_;
+  std::size_t calibration_pixel_bytes_ = 0;  // their images' buffers
   bool personalised_ = false;
   std::deque<Fitted> fitted_;
   std::optional<Eigen::VectorXd> previous_theta_;

@@ -5,6 +5,7 @@
 #include <limits>
 
 #include "common/error.hpp"
+#include "common/held_bytes.hpp"
 #include "forearm/forearm_model.hpp"
 #include "forearm/live_gap.hpp"
 #include "forearm/occlusion_tests.hpp"
@@ -67,6 +68,13 @@ std::uint64_t ForearmTrack::axis_correction_frames() const {
 std::optional<std::int64_t> ForearmTrack::oldest_queued_us() const {
   if (frames_.empty()) return std::nullopt;
   return frames_.front().t_us;
+}
+
+std::size_t ForearmTrack::held_bytes() const {
+  using posefuse::held_bytes;
+  return held_bytes(arm_) + held_bytes(K_from_F_imu_) + held_bytes(K_from_A_imu_) +
+         held_bytes(orientation_rms_rad_of_) + held_bytes(mounting_rms_rad_of_) + held_bytes(settled_rms_rad_) +
+         held_bytes(K_from_F_) + held_bytes(track_) + held_bytes(frames_);
 }
 
 void ForearmTrack::add_imu(const std::vector<std::int64_t>& t_us, const std::vector<Quat>& W_from_A,

@@ -133,6 +133,8 @@ class ForearmTrack {
   std::uint64_t lone_detections() const { return lone_detections_; }
   // The oldest frame not tracked yet (none: every frame added has been returned).
   std::optional<std::int64_t> oldest_queued_us() const;
+  // The memory the session's samples and the queued frames take (session::Stage::held_bytes).
+  std::size_t held_bytes() const;
 
  private:
   TrackSample visual_sample(const ArmFrame& frame) const;

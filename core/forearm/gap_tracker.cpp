@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "common/error.hpp"
+#include "common/held_bytes.hpp"
 #include "forearm/forearm_model.hpp"
 #include "forearm/gap_input.hpp"
 #include "forearm/paper_recovery.hpp"
@@ -170,6 +171,12 @@ std::vector<RecoveredGapSegment> GapTracker::finish() {
                              "): that gap cannot be recovered"});
   }
   return out;
+}
+
+std::size_t GapTracker::held_bytes() const {
+  using posefuse::held_bytes;
+  return held_bytes(arm_) + held_bytes(K_from_F_) + held_bytes(track_) + held_bytes(shoulder_) +
+         held_bytes(elbow_anchor_) + held_bytes(fit_elbows_) + held_bytes(pending_gaps_) + held_bytes(warnings_);
 }
 
 std::vector<ForearmWarning> GapTracker::take_warnings() {

@@ -117,6 +117,8 @@ class GapTracker {
   std::vector<ForearmWarning> take_warnings();
 
   std::uint64_t gaps() const { return gaps_; }
+  // The memory the session's samples take (session::Stage::held_bytes).
+  std::size_t held_bytes() const;
 
  private:
   void recover(std::int64_t t_start_us, std::int64_t t_end_us, std::vector<RecoveredGapSegment>& out);

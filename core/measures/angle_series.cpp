@@ -2,6 +2,8 @@
 
 #include <limits>
 
+#include "common/held_bytes.hpp"
+
 namespace posefuse::measures {
 
 AngleSeries::AngleSeries(std::optional<Angle> angle) : named_(angle) {
@@ -22,6 +24,12 @@ bool AngleSeries::add(double t_s, const JointAngles& angles) {
     series_deg_[c].push_back(a.defined && !a.held ? a.deg : std::numeric_limits<double>::quiet_NaN());
   }
   return true;
+}
+
+std::size_t AngleSeries::held_bytes() const {
+  std::size_t held = posefuse::held_bytes(t_s_) + posefuse::held_bytes(series_deg_);
+  for (const std::vector<double>& series : series_deg_) held += posefuse::held_bytes(series);
+  return held;
 }
 
 std::optional<SessionRepetitions> AngleSeries::repetitions(const RepetitionOptions& options) const {

@@ -26,6 +26,8 @@ class AngleSeries {
   // Frames in strictly increasing t_s; a frame not after the last is ignored (returns false).
   bool add(double t_s, const JointAngles& angles);
   std::size_t frames() const { return t_s_.size(); }
+  // The memory the series take (session::Stage::held_bytes).
+  std::size_t held_bytes() const;
 
   // None when no frame was added or no candidate was ever defined. Throws as
   // segment_repetitions for bad options.

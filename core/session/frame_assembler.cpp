@@ -5,6 +5,7 @@
 #include <utility>
 
 #include "common/error.hpp"
+#include "common/held_bytes.hpp"
 #include "session/image_codec.hpp"
 #include "session/imu_batch.hpp"
 #include "sync/broadcast_offsets.hpp"
@@ -219,6 +220,20 @@ void FrameAssembler::release_ready(std::vector<SessionInput>& ready, bool all) {
     if (!all && !(later_frame && color_passed) && pending_.size() <= options_.max_pending_frames) return;
     release_front(ready);
   }
+}
+
+namespace {
+std::size_t image_bytes(const cv::Mat& image) { return image.total() * image.elemSize(); }
+}  // namespace
+
+std::size_t FrameAssembler::held_bytes() const {
+  std::size_t held = posefuse::held_bytes(pending_) + posefuse::held_bytes(colors_);
+  for (const Pending& p : pending_) {
+    held += image_bytes(p.frame.depth_mm) + image_bytes(p.frame.body_index) + image_bytes(p.frame.color_gray) +
+            posefuse::held_bytes(p.frame.skeletons);
+  }
+  for (const Color& c : colors_) held += image_bytes(c.gray);
+  return held;
 }
 
 void FrameAssembler::finish(std::vector<SessionInput>& ready, std::vector<AssemblyWarning>& warnings) {

@@ -58,6 +58,8 @@ class FrameAssembler {
   void add(const v1::SessionChunk& chunk, cv::Mat decoded, const std::string& field, std::vector<SessionInput>& ready);
   // End of the stream: every waiting frame, then the session's warnings.
   void finish(std::vector<SessionInput>& ready, std::vector<AssemblyWarning>& warnings);
+  // The decoded images of the frames and colour frames waiting (a few; Stage::held_bytes).
+  std::size_t held_bytes() const;
 
  private:
   struct Pending {

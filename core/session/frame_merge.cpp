@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "common/held_bytes.hpp"
 #include "forearm/orientation_uncertainty.hpp"
 
 namespace posefuse::session {
@@ -81,24 +82,50 @@ FrameEstimate merge_fit_only(const FittedFrame& fit) {
   return merge_frame(parts);
 }
 
+namespace {
+
+std::size_t estimate_bytes(const FrameEstimate& e) {
+  return held_bytes(e.smpl_joints) + held_bytes(e.camera_joints) + held_bytes(e.smpl_rotations) +
+         held_bytes(e.forearms) + held_bytes(e.imu_positions);
+}
+
+// One held frame's memory: its map node and what its parts hold.
+std::size_t parts_bytes(const FrameParts& parts) {
+  return sizeof(std::pair<const std::int64_t, FrameParts>) + kMapNodeOverheadBytes +
+         (parts.fit ? estimate_bytes(parts.fit->estimate) : 0) + held_bytes(parts.arms) + held_bytes(parts.recovered);
+}
+
+}  // namespace
+
 FrameParts* FrameMerger::parts_at(std::int64_t t_us) {
   if (last_sent_us_ && t_us <= *last_sent_us_) {
     ++late_parts_;
     return nullptr;
   }
-  FrameParts& parts = held_[t_us];
+  const auto [it, created] = held_.try_emplace(t_us);
+  FrameParts& parts = it->second;
   parts.t_us = t_us;
+  if (created) held_bytes_ += parts_bytes(parts);
   if (!newest_us_ || t_us > *newest_us_) newest_us_ = t_us;
   return &parts;
 }
 
+template <class Change>
+void FrameMerger::change(FrameParts& parts, Change&& change) {
+  held_bytes_ -= parts_bytes(parts);
+  change(parts);
+  held_bytes_ += parts_bytes(parts);
+}
+
 void FrameMerger::add(const FittedFrame& frame) {
-  if (FrameParts* parts = parts_at(frame.estimate.t_us)) parts->fit = frame;
+  if (FrameParts* parts = parts_at(frame.estimate.t_us)) change(*parts, [&](FrameParts& p) { p.fit = frame; });
 }
 
 void FrameMerger::add(const ArmFrameEstimates& estimates) {
   for (const forearm::ArmFrameEstimate& e : estimates.frames) {
-    if (FrameParts* parts = parts_at(e.t_us)) parts->arms.push_back({estimates.device_id, estimates.arm, e});
+    if (FrameParts* parts = parts_at(e.t_us)) {
+      change(*parts, [&](FrameParts& p) { p.arms.push_back({estimates.device_id, estimates.arm, e}); });
+    }
   }
 }
 
@@ -107,7 +134,7 @@ void FrameMerger::add(const RecoveredSegment& segment) {
   for (auto it = held_.upper_bound(segment.segment.t_start_us);
        it != held_.end() && it->first < segment.segment.t_end_us; ++it) {
     if (const auto p = position_inside(segment.segment, it->first))
-      it->second.recovered.push_back({segment.device_id, *p});
+      change(it->second, [&](FrameParts& parts) { parts.recovered.push_back({segment.device_id, *p}); });
   }
 }
 
@@ -131,6 +158,7 @@ std::vector<FrameEstimate> FrameMerger::take_complete() {
     if (!complete) ++incomplete_frames_;
     out.push_back(merge_frame(oldest->second));
     last_sent_us_ = oldest->first;
+    held_bytes_ -= parts_bytes(oldest->second);
     held_.erase(oldest);
   }
   return out;
@@ -143,6 +171,7 @@ std::vector<FrameEstimate> FrameMerger::finish() {
     last_sent_us_ = t_us;
   }
   held_.clear();
+  held_bytes_ = 0;
   return out;
 }
 

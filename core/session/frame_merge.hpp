@@ -64,6 +64,7 @@ class FrameMerger {
   std::vector<FrameEstimate> finish();
 
   std::size_t frames_held() const { return held_.size(); }
+  std::size_t held_bytes() const { return held_bytes_; }  // the frames held (Stage::held_bytes)
   std::uint64_t incomplete_frames() const { return incomplete_frames_; }
   // Parts for a frame already sent (dropped: the client has that frame's result).
   std::uint64_t late_parts() const { return late_parts_; }
@@ -71,7 +72,11 @@ class FrameMerger {
  private:
   // The frame's parts; none for a frame already sent (counted as late).
   FrameParts* parts_at(std::int64_t t_us);
+  // Applies `change` to a held frame, keeping held_bytes_.
+  template <class Change>
+  void change(FrameParts& parts, Change&& change);
   std::map<std::int64_t, FrameParts> held_;
+  std::size_t held_bytes_ = 0;
   std::map<FrameSource, std::int64_t> done_up_to_us_;
   std::optional<std::int64_t> newest_us_;
   std::optional<std::int64_t> last_sent_us_;

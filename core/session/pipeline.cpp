@@ -1,8 +1,13 @@
 #include "session/pipeline.hpp"
 
+#include <algorithm>
+#include <functional>
 #include <set>
 #include <string>
 #include <utility>
+#include <vector>
+
+#include "common/number_text.hpp"
 
 #include "session/result_encoder.hpp"
 #include "session/stage_inputs.hpp"
@@ -139,6 +144,37 @@ void SessionPipeline::process_data_chunk(const v1::SessionChunk& chunk, const st
   note_camera_time(chunk);
   if (chunk.has_depth()) ++depth_frames_;
   deliver(ready);
+  check_memory_budget(field);
+}
+
+std::uint64_t SessionPipeline::held_bytes() const {
+  std::uint64_t held = assembler_ ? assembler_->held_bytes() : 0;
+  for (const auto& stage : stages_) held += stage->held_bytes();
+  return held;
+}
+
+void SessionPipeline::check_memory_budget(const std::string& field) const {
+  if (options_.max_held_bytes == 0) return;
+  const std::uint64_t queued = options_.queued_chunk_bytes ? options_.queued_chunk_bytes() : 0;
+  const std::uint64_t held = held_bytes() + queued;
+  if (held <= options_.max_held_bytes) return;
+  std::vector<std::pair<std::uint64_t, std::string>> holders;
+  holders.emplace_back(queued, "queued chunks");
+  if (assembler_) holders.emplace_back(assembler_->held_bytes(), "frame assembly");
+  for (const auto& stage : stages_) holders.emplace_back(stage->held_bytes(), std::string(stage->name()));
+  std::sort(holders.begin(), holders.end(), std::greater<>());
+  const auto mib = [](std::uint64_t bytes) { return fixed_text(static_cast<double>(bytes) / (1 << 20), 1) + " MiB"; };
+  std::string parts;
+  for (const auto& [bytes, holder] : holders) {
+    if (bytes < (1 << 20) / 10) continue;  // shown as 0.0 MiB
+    parts += (parts.empty() ? "" : ", ") + holder + " " + mib(bytes);
+  }
+  throw Error(ErrorCode::kResourceExhausted, field,
+              "the session holds " + mib(held) + " for later frames, beyond its memory budget of " +
+                  mib(options_.max_held_bytes) + " (" + options_.max_held_bytes_setting + "): " + parts +
+                  ". Stages keep frames by stream time (fit.calibration_s, fit.imu_wait_s, "
+                  "forearm.calibration_s), so a long window, large images or frames far closer together "
+                  "than a camera sends them fill it");
 }
 
 void SessionPipeline::deliver(const std::vector<SessionInput>& inputs) {

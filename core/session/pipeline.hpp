@@ -47,6 +47,15 @@ struct PipelineOptions {
   std::uint64_t max_item_errors = 100;
   // Warnings listed per code and field; the rest are counted (see above).
   std::uint64_t max_warnings_per_kind = 10;
+  // The session's memory budget: the most the stages and the frame assembler may hold at once
+  // (Stage::held_bytes), checked after every data chunk; beyond it the session ends with
+  // kResourceExhausted naming what holds the most. 0: no budget (tools on trusted recordings).
+  std::uint64_t max_held_bytes = 0;
+  // How the budget's error names the setting that sets it (the server's flag).
+  std::string max_held_bytes_setting = "max_held_bytes";
+  // The caller's chunks received but not pushed yet (the server's queue), counted in the budget
+  // as "queued chunks". May be empty; called on the pipeline's thread while others queue.
+  std::function<std::uint64_t()> queued_chunk_bytes;
   // Called after every stage call (start, on_chunk, finish) with the stage's name and the wall
   // time it took, for metrics. May be empty.
   std::function<void(std::string_view stage, double seconds)> on_stage_time;
@@ -71,6 +80,8 @@ class SessionPipeline {
   std::uint64_t depth_frames() const { return depth_frames_; }
   // Stream time of the data accepted so far (SessionValidator::stream_time_us).
   std::int64_t stream_time_us() const { return validator_.stream_time_us(); }
+  // What the stages and the frame assembler hold now (PipelineOptions::max_held_bytes).
+  std::uint64_t held_bytes() const;
 
  private:
   class Output;
@@ -84,6 +95,8 @@ class SessionPipeline {
   void warn_unlisted_repeats();
   void emit_progress();
   void note_camera_time(const v1::SessionChunk& chunk);
+  // Throws kResourceExhausted naming `field` when the session holds more than max_held_bytes.
+  void check_memory_budget(const std::string& field) const;
   // Runs `call` on `stage`, reporting its duration to options_.on_stage_time.
   template <class Call>
   void timed(Stage& stage, Call&& call);

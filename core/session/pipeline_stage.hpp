@@ -8,6 +8,7 @@
 // (frame results, recovered segments, warnings); it adds its part of the calibration report,
 // which the pipeline sends once after every stage has finished. Stages hold all their state
 // themselves (no globals), so many sessions run at once.
+#include <cstddef>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -72,6 +73,11 @@ class Stage {
   virtual void on_value(const StageValue& /*value*/, StageOutput& /*out*/) {}
   // After the end marker: emit what is left and add to out.calibration().
   virtual void finish(StageOutput& out) = 0;
+  // The memory the stage holds for later (frames waiting for calibration or for another stream,
+  // the history its end-of-session results need), for the session's memory budget
+  // (PipelineOptions::max_held_bytes). Asked after every data chunk, so it must be cheap
+  // (core/common/held_bytes.hpp).
+  virtual std::size_t held_bytes() const { return 0; }
 };
 
 }  // namespace posefuse::session

@@ -22,6 +22,7 @@
 #include "client/fit_call.hpp"
 #include "posefuse/v1/service.grpc.pb.h"
 #include "server/posefuse_server.hpp"
+#include "server/session_memory.hpp"
 #include "session/stage_inputs.hpp"
 #include "tests/server/health_check.hpp"
 #include "tests/server/reflection_call.hpp"
@@ -339,6 +340,48 @@ TEST_F(ServerTest, SlowSenderIsEndedWithDeadlineExceededAfterItsResults) {
   EXPECT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
 }
 
+// The memory bomb of a client that sends one camera frame again and again 10 us apart while
+// fit.calibration_s (stream time) keeps them all: the session's memory budget ends it.
+TEST_F(ServerTest, SessionHoldingMoreThanItsMemoryBudgetIsResourceExhaustedNamingTheFlag) {
+  ServerOptions options;
+  options.max_session_memory_mb = 8;
+  start(options);
+  demo::DemoSessionOptions session_options;
+  session_options.depth_width = 512;
+  session_options.depth_height = 424;
+  const auto chunks = demo::make_demo_session(session_options);
+  std::vector<v1::SessionChunk> bomb{chunks[0]};
+  (*bomb[0].mutable_header()->mutable_options())["fit.enabled"] = "true";
+  (*bomb[0].mutable_header()->mutable_options())["fit.calibration_s"] = "30";
+  const v1::SessionChunk depth = chunks[nth_index(chunks, v1::SessionChunk::kDepth, 0)];
+  const v1::SessionChunk body_index = chunks[nth_index(chunks, v1::SessionChunk::kBodyIndex, 0)];
+  const v1::SessionChunk skeleton = chunks[nth_index(chunks, v1::SessionChunk::kSkeleton, 0)];
+  ASSERT_EQ(depth.depth().t_us(), skeleton.skeleton().t_us());
+  constexpr int kFrames = 200;  // 124 MiB of calibration frames at 651 KiB each
+  for (int n = 0; n < kFrames; ++n) {
+    const std::int64_t t_us = depth.depth().t_us() + 10 * n;
+    bomb.push_back(depth);
+    bomb.back().mutable_depth()->set_t_us(t_us);
+    bomb.push_back(body_index);
+    bomb.back().mutable_body_index()->set_t_us(t_us);
+    bomb.push_back(skeleton);
+    bomb.back().mutable_skeleton()->set_t_us(t_us);
+  }
+  const CallResult call = fit(bomb);
+  EXPECT_EQ(call.status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << call.status.error_message();
+  const std::string& message = call.status.error_message();
+  EXPECT_NE(message.find("beyond its memory budget of 8.0 MiB (--max-session-memory-mb): body_fit"), std::string::npos)
+      << message;
+  EXPECT_TRUE(call.item_errors().empty());
+  EXPECT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
+
+  grpc::ClientContext context;
+  set_test_deadline(context);
+  v1::ServerInfo info;
+  ASSERT_TRUE(stub_->GetServerInfo(&context, {}, &info).ok());
+  EXPECT_EQ(info.limits().max_session_memory_bytes(), 8u << 20);
+}
+
 TEST_F(ServerTest, SenderAtRealTimeOrFasterKeepsTheMinimumStreamRate) {
   start(stream_rate_options());
   const auto chunks = demo::make_demo_session();
@@ -450,6 +493,9 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   EXPECT_EQ(info.limits().max_sessions(), 3u);
   EXPECT_EQ(info.limits().workers(), 2u);
   EXPECT_EQ(info.limits().max_upload_bytes(), 2u << 20);
+  // --max-session-memory-mb 0: half the memory split between 3 sessions and 1 job.
+  EXPECT_NEAR(static_cast<double>(info.limits().max_session_memory_bytes()),
+              static_cast<double>(default_session_memory_bytes(usable_memory_bytes(), 3, 1)), 1.0);
   EXPECT_FALSE(info.jobs_supported());
 }
 
@@ -536,6 +582,11 @@ TEST(ServerOptions, BadValuesNameTheFlag) {
     options = ServerOptions{};
     options.max_upload_mb = mb;
     EXPECT_EQ(rejected_flag(options), "--max-upload-mb") << mb;
+  }
+  for (const double mb : {-1.0, 2e6, std::nan("")}) {
+    options = ServerOptions{};
+    options.max_session_memory_mb = mb;
+    EXPECT_EQ(rejected_flag(options), "--max-session-memory-mb") << mb;
   }
   EXPECT_EQ(rejected_flag(ServerOptions{}), "");
 }

@@ -224,6 +224,72 @@ TEST(BodyFitStage, RunsInTheDefaultPipelineWhenEnabled) {
   EXPECT_EQ(summary->frames_fitted(), session().truth.size());
 }
 
+// fit.calibration_s counts stream time, so a client that sends one camera frame again and again
+// 10 us apart has every copy kept as a calibration frame. The session's memory budget ends it with
+// RESOURCE_EXHAUSTED naming what holds the memory and the setting, once the frames held pass it.
+TEST(SessionMemoryBudget, FramesFarCloserThanACameraSendsEndTheSessionNamingWhatHoldsThem) {
+  const v1::SessionHeader header = header_with({{"fit.calibration_s", "30"}});
+  std::vector<v1::SessionChunk> instant;  // the first depth frame's depth, body index and skeleton
+  std::int64_t t0 = 0;
+  for (const auto& chunk : session().chunks) {
+    if (chunk.has_depth() && instant.empty()) t0 = chunk.depth().t_us();
+    if (instant.empty() && !chunk.has_depth()) continue;
+    const std::int64_t t = chunk.has_depth()        ? chunk.depth().t_us()
+                           : chunk.has_body_index() ? chunk.body_index().t_us()
+                           : chunk.has_skeleton()   ? chunk.skeleton().t_us()
+                                                    : -1;
+    if (t == t0) instant.push_back(chunk);
+  }
+  ASSERT_EQ(instant.size(), 3u);
+  const std::size_t frame_bytes =
+      static_cast<std::size_t>(header.depth_intrinsics().width()) * header.depth_intrinsics().height() * 3;
+  constexpr std::uint64_t kBudget = 16 << 20;
+
+  struct Sink : ResultSink {
+    void emit(v1::FitResult&& result) override { results.push_back(std::move(result)); }
+    std::vector<v1::FitResult> results;
+  } sink;
+  PipelineOptions options;
+  options.max_held_bytes = kBudget;
+  options.max_held_bytes_setting = "--test-budget";
+  SessionPipeline pipeline(make_default_stages(), sink, options);
+  v1::SessionChunk first;
+  *first.mutable_header() = header;
+  pipeline.push(first);
+  std::optional<Error> ended;
+  int frames_sent = 0;
+  std::uint64_t held_before_last = 0;
+  while (!ended && frames_sent < 1000) {
+    held_before_last = pipeline.held_bytes();
+    try {
+      for (v1::SessionChunk chunk : instant) {
+        const std::int64_t t = t0 + 10 * frames_sent;
+        if (chunk.has_depth()) chunk.mutable_depth()->set_t_us(t);
+        if (chunk.has_body_index()) chunk.mutable_body_index()->set_t_us(t);
+        if (chunk.has_skeleton()) chunk.mutable_skeleton()->set_t_us(t);
+        pipeline.push(chunk);
+      }
+    } catch (const Error& error) {
+      ended = error;
+    }
+    ++frames_sent;
+  }
+  ASSERT_TRUE(ended) << "the budget never ended the session; held " << pipeline.held_bytes() << " bytes";
+  EXPECT_EQ(ended->code(), ErrorCode::kResourceExhausted);
+  const std::string message = ended->what();
+  EXPECT_NE(message.find("body_fit"), std::string::npos) << message;
+  EXPECT_NE(message.find("--test-budget"), std::string::npos) << message;
+  EXPECT_NE(message.find("16.0 MiB"), std::string::npos) << message;
+  EXPECT_EQ(message.find(" 0.0 MiB"), std::string::npos) << message;  // what holds next to nothing is left out
+  // Ended by the frame that passed the budget: every frame before it was kept.
+  EXPECT_LE(held_before_last, kBudget);
+  EXPECT_GE(static_cast<std::size_t>(frames_sent), kBudget / frame_bytes);
+  EXPECT_LE(static_cast<std::size_t>(frames_sent), kBudget / frame_bytes + 6);  // a few wait in the assembler
+  for (const auto& r : sink.results) {
+    EXPECT_FALSE(r.has_item_error()) << r.item_error().field() << ": " << r.item_error().message();
+  }
+}
+
 // The forearm stage's per-sample K_from_F, here the truth, one sample per frame, handed on as the
 // forearm stage hands them on: right, left.
 void hand_truth_forearms(BodyFitStage& stage, StageOutput& out) {

@@ -7,6 +7,7 @@
 #include <utility>
 
 #include "body/template_generator.hpp"
+#include "common/held_bytes.hpp"
 #include "common/thread_cpu_time.hpp"
 #include "forearm/orientation_uncertainty.hpp"
 #include "session/stages/proto_values.hpp"
@@ -88,6 +89,12 @@ const OptionTable& BodyFitStage::options() const { return body_fit_option_table(
 void BodyFitStage::record_frame_stats(bool on) {
   record_stats_ = on;
   if (tracker_) tracker_->record_frame_stats(on);
+}
+
+std::size_t BodyFitStage::held_bytes() const {
+  std::size_t held = posefuse::held_bytes(queue_) + queued_pixel_bytes_;
+  for (const auto& [arm, samples] : K_from_F_) held += posefuse::held_bytes(samples);
+  return tracker_ ? held + tracker_->held_bytes() : held;
 }
 
 const std::vector<BodyFitFrameStats>& BodyFitStage::frame_stats() const {
@@ -189,6 +196,7 @@ void BodyFitStage::enqueue(fit::BodyTracker::Admitted&& admitted, StageOutput& o
   for (const fit::FitWarning& w : admitted.warnings) out.warn(w.code, w.field, w.message);
   for (BodyFitFrame& frame : admitted.frames) {
     queue_.push_back({frame.t_us, fit::pack_body_pixels(frame.frame), std::move(frame.skeleton), frame.assemble_s});
+    queued_pixel_bytes_ += queue_.back().frame.bytes();
   }
 }
 
@@ -219,6 +227,7 @@ void BodyFitStage::fit_ready(bool all, StageOutput& out) {
     QueuedBodyFitFrame& queued = queue_.front();
     BodyFitFrame frame{queued.t_us, fit::unpack_body_pixels(queued.frame), std::move(queued.skeleton),
                        queued.assemble_s};
+    queued_pixel_bytes_ -= queued.frame.bytes();
     queue_.pop_front();
     fit::BodyTracker::Output fitted = tracker_->fit(frame, K_from_F);
     const int orientations = (K_from_F(fit::ArmSide::kLeft, t) ? 1 : 0) + (K_from_F(fit::ArmSide::kRight, t) ? 1 : 0);

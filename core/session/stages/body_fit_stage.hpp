@@ -70,6 +70,7 @@ class BodyFitStage : public Stage {
   void on_camera_frame(const CameraFrame& frame, StageOutput& out) override;
   void on_value(const StageValue& value, StageOutput& out) override;
   void finish(StageOutput& out) override;
+  std::size_t held_bytes() const override;
 
   // With `on`, every fitted frame from then on appends a BodyFitFrameStats (off by default: a
   // long session would grow the list without bound).
@@ -102,6 +103,7 @@ class BodyFitStage : public Stage {
   std::optional<std::int64_t> last_frame_t_us_;
   std::optional<std::int64_t> last_camera_t_us_;  // any camera frame
   std::deque<QueuedBodyFitFrame> queue_;          // personalised, waiting for forearm orientations
+  std::size_t queued_pixel_bytes_ = 0;            // their packed pixels (PackedBodyFrame::bytes)
 
   // Forearm orientations by arm (v1::Arm), camera clock.
   // Per arm: each forearm sample's time and orientation, none where its confidence is below

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "body/smpl_model.hpp"
+#include "common/held_bytes.hpp"
 
 namespace posefuse::session {
 
@@ -81,6 +82,13 @@ void ForearmGapsStage::hand_on(Arm& arm, std::vector<forearm::RecoveredGapSegmen
     out.hand_on(RecoveredSegment{arm.device_id, arm.arm, std::move(segment)});
   }
   for (const forearm::ForearmWarning& w : arm.tracker->take_warnings()) out.warn(w.code, w.field, w.message);
+}
+
+std::size_t ForearmGapsStage::held_bytes() const {
+  std::size_t held = 0;
+  for (const Arm& arm : arms_) held += arm.tracker ? arm.tracker->held_bytes() : 0;
+  for (const auto& [arm, elbows] : early_elbows_) held += posefuse::held_bytes(elbows);
+  return held;
 }
 
 void ForearmGapsStage::finish(StageOutput& out) {

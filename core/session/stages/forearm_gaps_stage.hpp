@@ -38,6 +38,7 @@ class ForearmGapsStage : public Stage {
   void start(const v1::SessionHeader& header, StageOutput& out) override;
   void on_value(const StageValue& value, StageOutput& out) override;
   void finish(StageOutput& out) override;
+  std::size_t held_bytes() const override;
 
  private:
   struct Arm {

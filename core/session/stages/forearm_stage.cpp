@@ -6,6 +6,7 @@
 
 #include "body/smpl_model.hpp"
 #include "common/error.hpp"
+#include "common/held_bytes.hpp"
 #include "common/number_text.hpp"
 #include "forearm/arm_calibration.hpp"
 #include "forearm/arm_frame_measurement.hpp"
@@ -512,6 +513,16 @@ void ForearmStage::feed_trackers(bool all, StageOutput& out) {
     device.tracker->add_imu(t_us, W_from_A, force, filter_uncertainty_rad);
     hand_on_track(device, device.tracker->process(all), out);
   }
+}
+
+std::size_t ForearmStage::held_bytes() const {
+  std::size_t held = 0;
+  for (const Device& device : devices_) {
+    held += posefuse::held_bytes(device.imu) + posefuse::held_bytes(device.frames) +
+            posefuse::held_bytes(device.mounting_frames) + posefuse::held_bytes(device.recent_frames);
+    if (device.tracker) held += device.tracker->held_bytes();
+  }
+  return held;
 }
 
 void ForearmStage::finish(StageOutput& out) {

@@ -79,6 +79,7 @@ class ForearmStage : public Stage {
   void on_audio(const AudioBlock& audio, StageOutput& out) override;
   void on_clock_event(const ClockEvent& event, StageOutput& out) override;
   void finish(StageOutput& out) override;
+  std::size_t held_bytes() const override;
 
  private:
   struct ImuRecord {

@@ -27,6 +27,7 @@ class FrameMergeStage : public Stage {
   // FramesDone for it has come by then).
   void on_camera_frame(const CameraFrame& frame, StageOutput& out) override;
   void finish(StageOutput& out) override;
+  std::size_t held_bytes() const override { return merger_.held_bytes(); }
 
  private:
   FrameMerger merger_;

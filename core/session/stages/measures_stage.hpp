@@ -33,6 +33,7 @@ class MeasuresStage : public Stage {
   void start(const v1::SessionHeader& header, StageOutput& out) override;
   void on_value(const StageValue& value, StageOutput& out) override;
   void finish(StageOutput& out) override;
+  std::size_t held_bytes() const override { return series_.held_bytes(); }
 
  private:
   void add_frame(const FrameEstimate& frame, StageOutput& out);
