@@ -10,11 +10,6 @@
 #include <thread>
 #include <vector>
 
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
-#include <unistd.h>
-
 #include <google/protobuf/descriptor.pb.h>
 #include <gtest/gtest.h>
 
@@ -24,6 +19,7 @@
 #include "server/posefuse_server.hpp"
 #include "session/stage_inputs.hpp"
 #include "tests/server/health_check.hpp"
+#include "tests/server/http_client.hpp"
 #include "tests/server/reflection_call.hpp"
 #include "tests/server/test_support.hpp"
 
@@ -463,28 +459,6 @@ TEST_F(ServerTest, JobCallsWithoutDataDirAreFailedPrecondition) {
   EXPECT_EQ(stub_->GetJob(&context, request, &job).error_code(), grpc::StatusCode::FAILED_PRECONDITION);
 }
 
-// A plain HTTP GET on loopback; returns the whole response (head and body).
-std::string http_get(int port, const std::string& path) {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_port = htons(static_cast<std::uint16_t>(port));
-  ::inet_pton(AF_INET, "127.0.0.1", &address.sin_addr);
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) {
-    ::close(fd);
-    return "";
-  }
-  const std::string request = "GET " + path + " HTTP/1.1\r\nHost: test\r\n\r\n";
-  ::send(fd, request.data(), request.size(), 0);
-  std::string response;
-  char buffer[4096];
-  for (ssize_t n; (n = ::recv(fd, buffer, sizeof buffer, 0)) > 0;) {
-    response.append(buffer, static_cast<std::size_t>(n));
-  }
-  ::close(fd);
-  return response;
-}
-
 TEST_F(ServerTest, MetricsEndpointCountsSessionsAndStageCalls) {
   ServerOptions options;
   options.metrics_listen = "127.0.0.1:0";
@@ -494,7 +468,7 @@ TEST_F(ServerTest, MetricsEndpointCountsSessionsAndStageCalls) {
   // The session's slot is released (and its end counted) right after the call.
   ASSERT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
 
-  const std::string response = http_get(server_->metrics_port(), "/metrics");
+  const std::string response = test::http_get(server_->metrics_port(), "/metrics");
   EXPECT_EQ(response.rfind("HTTP/1.1 200 OK\r\n", 0), 0u) << response;
   EXPECT_NE(response.find("\nposefuse_sessions_finished_total{status=\"OK\"} 1\n"), std::string::npos) << response;
   EXPECT_NE(response.find("\nposefuse_sessions_in_flight 0\n"), std::string::npos);
@@ -507,7 +481,7 @@ TEST_F(ServerTest, MetricsEndpointCountsSessionsAndStageCalls) {
       std::string::npos)
       << response;
   EXPECT_NE(response.find("\nposefuse_queued_chunks 0\n"), std::string::npos);
-  EXPECT_EQ(http_get(server_->metrics_port(), "/other").rfind("HTTP/1.1 404", 0), 0u);
+  EXPECT_EQ(test::http_get(server_->metrics_port(), "/other").rfind("HTTP/1.1 404", 0), 0u);
 }
 
 // The field of the error validate_options throws for `options` ("" when it accepts them).
