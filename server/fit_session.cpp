@@ -17,9 +17,10 @@ class FitSession::Sink : public session::ResultSink {
   FitSession& session_;
 };
 
-FitSession* FitSession::start(grpc::CallbackServerContext* context, std::uint64_t id, const ServerOptions& options,
-                              WorkerPool& pool, SessionRegistry& registry, Metrics& metrics) {
-  auto session = std::make_shared<FitSession>(context, id, options, pool, registry, metrics);
+FitSession* FitSession::start(grpc::CallbackServerContext* context, std::uint64_t id, std::string tenant,
+                              const ServerOptions& options, WorkerPool& pool, SessionRegistry& registry,
+                              Metrics& metrics) {
+  auto session = std::make_shared<FitSession>(context, id, std::move(tenant), options, pool, registry, metrics);
   session->self_ = session;
   session->sink_ = std::make_unique<Sink>(*session);
   session::PipelineOptions pipeline_options;
@@ -28,7 +29,7 @@ FitSession* FitSession::start(grpc::CallbackServerContext* context, std::uint64_
   };
   session->pipeline_ =
       std::make_unique<session::SessionPipeline>(session::make_default_stages(), *session->sink_, pipeline_options);
-  metrics.session_started();
+  metrics.session_started(session->tenant_);
   registry.watch(id, session);
   log_event("info", "session_start", {{"session", std::to_string(id)}, {"peer", context->peer()}});
   std::lock_guard lock(session->mu_);
@@ -36,9 +37,15 @@ FitSession* FitSession::start(grpc::CallbackServerContext* context, std::uint64_
   return session.get();
 }
 
-FitSession::FitSession(grpc::CallbackServerContext* context, std::uint64_t id, const ServerOptions& options,
-                       WorkerPool& pool, SessionRegistry& registry, Metrics& metrics)
-    : context_(context), id_(id), options_(options), pool_(pool), registry_(registry), metrics_(metrics) {}
+FitSession::FitSession(grpc::CallbackServerContext* context, std::uint64_t id, std::string tenant,
+                       const ServerOptions& options, WorkerPool& pool, SessionRegistry& registry, Metrics& metrics)
+    : context_(context),
+      id_(id),
+      tenant_(std::move(tenant)),
+      options_(options),
+      pool_(pool),
+      registry_(registry),
+      metrics_(metrics) {}
 
 void FitSession::clear_inbox_locked() {
   metrics_.queued_chunks_add(-static_cast<std::int64_t>(inbox_.size()));
@@ -188,7 +195,7 @@ void FitSession::finish_after_writes_locked(grpc::Status status) {
 void FitSession::finish_now_locked(grpc::Status status) {
   if (finished_) return;
   finished_ = true;
-  metrics_.session_finished(status_code_name(status.error_code()));
+  metrics_.session_finished(tenant_, status_code_name(status.error_code()));
   const double seconds = std::chrono::duration<double>(Clock::now() - started_at_).count();
   log_event("info", "session_end",
             {{"session", std::to_string(id_)},

@@ -42,8 +42,9 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
                    public std::enable_shared_from_this<FitSession> {
  public:
   // Starts the call; the returned reactor keeps itself alive until OnDone.
-  static FitSession* start(grpc::CallbackServerContext* context, std::uint64_t id, const ServerOptions& options,
-                           WorkerPool& pool, SessionRegistry& registry, Metrics& metrics);
+  // `tenant` is the caller's, for the metrics.
+  static FitSession* start(grpc::CallbackServerContext* context, std::uint64_t id, std::string tenant,
+                           const ServerOptions& options, WorkerPool& pool, SessionRegistry& registry, Metrics& metrics);
 
   void OnReadDone(bool ok) override;
   void OnWriteDone(bool ok) override;
@@ -53,8 +54,8 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
   void check_idle(std::chrono::steady_clock::time_point now) override;
 
   // Use start(); public only for make_shared.
-  FitSession(grpc::CallbackServerContext* context, std::uint64_t id, const ServerOptions& options, WorkerPool& pool,
-             SessionRegistry& registry, Metrics& metrics);
+  FitSession(grpc::CallbackServerContext* context, std::uint64_t id, std::string tenant, const ServerOptions& options,
+             WorkerPool& pool, SessionRegistry& registry, Metrics& metrics);
 
  private:
   class Sink;
@@ -76,6 +77,7 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
 
   grpc::CallbackServerContext* const context_;
   const std::uint64_t id_;
+  const std::string tenant_;
   const ServerOptions& options_;
   WorkerPool& pool_;
   SessionRegistry& registry_;
