@@ -69,6 +69,7 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
   // Sends `status` once every queued result is out; stops taking chunks.
   void finish_after_writes_locked(grpc::Status status);
   void finish_now_locked(grpc::Status status);
+  void log_session_error(const std::string& code, const std::string& field) const;
   void clear_inbox_locked();
   // The worker task returns; its time since schedule_locked was the server's, not the client's.
   void worker_returns_locked();
@@ -102,6 +103,14 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
   bool write_pending_ = false;
   std::optional<grpc::Status> final_status_;  // decided; sent once the outbox is empty
   bool finished_ = false;                     // Finish() was called
+  grpc::StatusCode finished_with_ = grpc::StatusCode::OK;
+  bool cancelled_by_server_ = false;  // the idle timeout cancelled the call, not the client
+  struct SessionError {
+    std::string code, field;
+  };
+  // The error of an input that ended without its end marker, logged in OnDone unless the
+  // client went away.
+  std::optional<SessionError> unended_input_error_;
   Clock::time_point last_read_at_ = Clock::now();
   std::uint64_t chunks_read_ = 0;  // for the log line
   std::uint64_t item_errors_ = 0;

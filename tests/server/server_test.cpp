@@ -6,6 +6,7 @@
 #include <cmath>
 #include <functional>
 #include <map>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -259,6 +260,57 @@ TEST_F(ServerTest, ClientThatCancelsMidStreamFreesItsSlot) {
   const CallResult call = fit(chunks);
   EXPECT_TRUE(call.status.ok()) << call.status.error_message();
   EXPECT_EQ(call.orientation_samples().at(demo::kArmDevice), 800u);
+}
+
+// The lines of `log` with `event`.
+std::vector<std::string> log_lines(const std::string& log, const std::string& event) {
+  std::vector<std::string> lines;
+  std::istringstream in(log);
+  for (std::string line; std::getline(in, line);) {
+    if (line.find(" event=" + event + " ") != std::string::npos) lines.push_back(line);
+  }
+  return lines;
+}
+
+TEST_F(ServerTest, ClientThatGoesAwayIsLoggedAndCountedAsCancelled) {
+  ServerOptions options;
+  options.metrics_listen = "127.0.0.1:0";
+  start(options);
+  auto chunks = demo::make_demo_session();
+  // Several calls: the client's cancellation and the failed read it brings reach the server in
+  // either order.
+  constexpr int kCalls = 12;
+  testing::internal::CaptureStderr();
+  for (int call = 0; call < kCalls; ++call) {
+    grpc::ClientContext context;
+    set_test_deadline(context);
+    auto stream = stub_->Fit(&context);
+    // Mid-session, the server waiting for the next chunk: the client cancels (as a client
+    // does that is stopped or loses its connection).
+    for (std::size_t i = 0; i < chunks.size() / 2; ++i) ASSERT_TRUE(stream->Write(chunks[i]));
+    v1::FitResult result;
+    ASSERT_TRUE(stream->Read(&result));
+    context.TryCancel();
+    EXPECT_EQ(stream->Finish().error_code(), grpc::StatusCode::CANCELLED);
+  }
+  // Unlike a client that ends its stream without the end marker: a bad request.
+  chunks.pop_back();
+  EXPECT_EQ(fit(chunks).status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  ASSERT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
+  const std::string log = testing::internal::GetCapturedStderr();
+
+  const std::vector<std::string> ends = log_lines(log, "session_end");
+  ASSERT_EQ(ends.size(), static_cast<std::size_t>(kCalls + 1)) << log;
+  for (int call = 0; call < kCalls; ++call) EXPECT_NE(ends[call].find(" status=CANCELLED "), std::string::npos) << log;
+  EXPECT_NE(ends.back().find(" status=INVALID_ARGUMENT "), std::string::npos) << log;
+  const std::vector<std::string> errors = log_lines(log, "session_error");
+  ASSERT_EQ(errors.size(), 1u) << log;
+  EXPECT_NE(errors[0].find(" field=end"), std::string::npos) << errors[0];
+  const std::string metrics = test::http_get(server_->metrics_port(), "/metrics");
+  for (const std::string& line : {"posefuse_sessions_finished_total{status=\"CANCELLED\"} " + std::to_string(kCalls),
+                                  std::string("posefuse_sessions_finished_total{status=\"INVALID_ARGUMENT\"} 1")}) {
+    EXPECT_NE(metrics.find("\n" + line + "\n"), std::string::npos) << line << " in\n" << metrics;
+  }
 }
 
 TEST_F(ServerTest, IdleStreamIsEndedWithDeadlineExceeded) {
