@@ -18,9 +18,10 @@ class FitSession::Sink : public session::ResultSink {
   FitSession& session_;
 };
 
-FitSession* FitSession::start(grpc::CallbackServerContext* context, std::uint64_t id, const ServerOptions& options,
-                              WorkerPool& pool, SessionRegistry& registry, Metrics& metrics) {
-  auto session = std::make_shared<FitSession>(context, id, options, pool, registry, metrics);
+FitSession* FitSession::start(grpc::CallbackServerContext* context, std::uint64_t id, std::string tenant,
+                              const ServerOptions& options, WorkerPool& pool, SessionRegistry& registry,
+                              Metrics& metrics) {
+  auto session = std::make_shared<FitSession>(context, id, std::move(tenant), options, pool, registry, metrics);
   session->self_ = session;
   session->sink_ = std::make_unique<Sink>(*session);
   session::PipelineOptions pipeline_options;
@@ -32,7 +33,7 @@ FitSession* FitSession::start(grpc::CallbackServerContext* context, std::uint64_
   };
   session->pipeline_ =
       std::make_unique<session::SessionPipeline>(session::make_default_stages(), *session->sink_, pipeline_options);
-  metrics.session_started();
+  metrics.session_started(session->tenant_);
   registry.watch(id, session);
   log_event("info", "session_start", {{"session", std::to_string(id)}, {"peer", context->peer()}});
   std::lock_guard lock(session->mu_);
@@ -40,9 +41,15 @@ FitSession* FitSession::start(grpc::CallbackServerContext* context, std::uint64_
   return session.get();
 }
 
-FitSession::FitSession(grpc::CallbackServerContext* context, std::uint64_t id, const ServerOptions& options,
-                       WorkerPool& pool, SessionRegistry& registry, Metrics& metrics)
-    : context_(context), id_(id), options_(options), pool_(pool), registry_(registry), metrics_(metrics) {}
+FitSession::FitSession(grpc::CallbackServerContext* context, std::uint64_t id, std::string tenant,
+                       const ServerOptions& options, WorkerPool& pool, SessionRegistry& registry, Metrics& metrics)
+    : context_(context),
+      id_(id),
+      tenant_(std::move(tenant)),
+      options_(options),
+      pool_(pool),
+      registry_(registry),
+      metrics_(metrics) {}
 
 void FitSession::clear_inbox_locked() {
   metrics_.queued_chunks_add(-static_cast<std::int64_t>(inbox_.size()));
@@ -122,8 +129,13 @@ void FitSession::work() {
       }
       if (pipeline_->ended()) status = grpc::Status::OK;
     } catch (const Error& error) {
-      log_event("info", "session_error",
-                {{"session", std::to_string(id_)}, {"code", error_code_name(error.code())}, {"field", error.field()}});
+      if (input_ended) {
+        // The input also ends so when the client goes away: OnDone tells which it was.
+        std::lock_guard lock(mu_);
+        unended_input_error_ = SessionError{error_code_name(error.code()), error.field()};
+      } else {
+        log_session_error(error_code_name(error.code()), error.field());
+      }
       status = to_status(error);
     } catch (const std::exception& error) {
       log_event("error", "session_internal_error", {{"session", std::to_string(id_)}});
@@ -192,17 +204,14 @@ void FitSession::finish_after_writes_locked(grpc::Status status) {
   if (!write_pending_ && outbox_.empty()) finish_now_locked(*final_status_);
 }
 
+void FitSession::log_session_error(const std::string& code, const std::string& field) const {
+  log_event("info", "session_error", {{"session", std::to_string(id_)}, {"code", code}, {"field", field}});
+}
+
 void FitSession::finish_now_locked(grpc::Status status) {
   if (finished_) return;
   finished_ = true;
-  metrics_.session_finished(status_code_name(status.error_code()));
-  const double seconds = std::chrono::duration<double>(Clock::now() - started_at_).count();
-  log_event("info", "session_end",
-            {{"session", std::to_string(id_)},
-             {"status", status_code_name(status.error_code())},
-             {"chunks", std::to_string(chunks_read_)},
-             {"item_errors", std::to_string(item_errors_)},
-             {"seconds", std::to_string(seconds)}});
+  finished_with_ = status.error_code();
   Finish(std::move(status));
 }
 
@@ -223,7 +232,10 @@ void FitSession::check_idle(Clock::time_point now) {
   if (final_status_) {
     // Decided, but the results before the status are still going out: a client that stopped
     // taking them must not keep the slot either.
-    if (write_pending_ && idle_for_timeout) context_->TryCancel();
+    if (write_pending_ && idle_for_timeout) {
+      cancelled_by_server_ = true;
+      context_->TryCancel();
+    }
     return;
   }
   const bool waiting_for_client = (read_pending_ && inbox_.empty() && !worker_scheduled_) || write_pending_;
@@ -239,6 +251,7 @@ void FitSession::check_idle(Clock::time_point now) {
   clear_inbox_locked();
   outbox_.clear();
   if (write_pending_) {
+    cancelled_by_server_ = true;
     context_->TryCancel();  // the pending write fails; OnWriteDone finishes the call
   } else {
     finish_now_locked(*final_status_);
@@ -266,6 +279,22 @@ void FitSession::OnDone() {
   {
     std::lock_guard lock(mu_);
     keep_until_return = std::move(self_);
+    // Known for certain only now (OnCancel and the failed read that a cancellation brings come
+    // in either order): a client that went away before its status is CANCELLED, whatever
+    // the server had decided meanwhile, such as the missing end marker of its cut-off stream.
+    const bool client_went_away = context_->IsCancelled() && !cancelled_by_server_;
+    const grpc::StatusCode code = client_went_away ? grpc::StatusCode::CANCELLED : finished_with_;
+    if (unended_input_error_ && !client_went_away) {
+      log_session_error(unended_input_error_->code, unended_input_error_->field);
+    }
+    metrics_.session_finished(tenant_, status_code_name(code));
+    const double seconds = std::chrono::duration<double>(Clock::now() - started_at_).count();
+    log_event("info", "session_end",
+              {{"session", std::to_string(id_)},
+               {"status", status_code_name(code)},
+               {"chunks", std::to_string(chunks_read_)},
+               {"item_errors", std::to_string(item_errors_)},
+               {"seconds", std::to_string(seconds)}});
   }
   registry_.release(id_);
 }

@@ -43,8 +43,9 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
                    public std::enable_shared_from_this<FitSession> {
  public:
   // Starts the call; the returned reactor keeps itself alive until OnDone.
-  static FitSession* start(grpc::CallbackServerContext* context, std::uint64_t id, const ServerOptions& options,
-                           WorkerPool& pool, SessionRegistry& registry, Metrics& metrics);
+  // `tenant` is the caller's, for the metrics.
+  static FitSession* start(grpc::CallbackServerContext* context, std::uint64_t id, std::string tenant,
+                           const ServerOptions& options, WorkerPool& pool, SessionRegistry& registry, Metrics& metrics);
 
   void OnReadDone(bool ok) override;
   void OnWriteDone(bool ok) override;
@@ -54,8 +55,8 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
   void check_idle(std::chrono::steady_clock::time_point now) override;
 
   // Use start(); public only for make_shared.
-  FitSession(grpc::CallbackServerContext* context, std::uint64_t id, const ServerOptions& options, WorkerPool& pool,
-             SessionRegistry& registry, Metrics& metrics);
+  FitSession(grpc::CallbackServerContext* context, std::uint64_t id, std::string tenant, const ServerOptions& options,
+             WorkerPool& pool, SessionRegistry& registry, Metrics& metrics);
 
  private:
   class Sink;
@@ -69,6 +70,7 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
   // Sends `status` once every queued result is out; stops taking chunks.
   void finish_after_writes_locked(grpc::Status status);
   void finish_now_locked(grpc::Status status);
+  void log_session_error(const std::string& code, const std::string& field) const;
   void clear_inbox_locked();
   // The worker task returns; its time since schedule_locked was the server's, not the client's.
   void worker_returns_locked();
@@ -77,6 +79,7 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
 
   grpc::CallbackServerContext* const context_;
   const std::uint64_t id_;
+  const std::string tenant_;
   const ServerOptions& options_;
   WorkerPool& pool_;
   SessionRegistry& registry_;
@@ -102,6 +105,14 @@ class FitSession : public grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResul
   bool write_pending_ = false;
   std::optional<grpc::Status> final_status_;  // decided; sent once the outbox is empty
   bool finished_ = false;                     // Finish() was called
+  grpc::StatusCode finished_with_ = grpc::StatusCode::OK;
+  bool cancelled_by_server_ = false;  // the idle timeout cancelled the call, not the client
+  struct SessionError {
+    std::string code, field;
+  };
+  // The error of an input that ended without its end marker, logged in OnDone unless the
+  // client went away.
+  std::optional<SessionError> unended_input_error_;
   Clock::time_point last_read_at_ = Clock::now();
   std::uint64_t chunks_read_ = 0;  // for the log line
   std::uint64_t item_errors_ = 0;

@@ -183,9 +183,10 @@ void JobRunner::reap_expired() {
     for (const ReapedJob& job : store_.reap(options_.max_attempts, now_unix_us())) {
       log_event("info", "job_lease_expired", {{"job", job.job_id}, {"state", v1::Job::State_Name(job.state)}});
       if (job.state == v1::Job::QUEUED) continue;
-      metrics_.job_finished(v1::Job::State_Name(job.state));
+      const std::optional<JobRecord> record = store_.get(job.job_id);
+      metrics_.job_finished(record ? record->owner : "", v1::Job::State_Name(job.state));
       // Finished without its worker: nothing reads its upload again.
-      if (const std::optional<JobRecord> record = store_.get(job.job_id)) drop_upload(*record);
+      if (record) drop_upload(*record);
     }
   } catch (const std::exception& error) {
     log_event("warning", "job_reap_failed", {{"error", error.what()}});
@@ -362,7 +363,7 @@ void JobRunner::run_job(Running& running, JobRecord& record) {
     publish(job);
   }
   drop_upload(record);
-  metrics_.job_finished(v1::Job::State_Name(job.state()));
+  metrics_.job_finished(record.owner, v1::Job::State_Name(job.state()));
   log_event("info", "job_end",
             {{"job", job_id}, {"state", v1::Job::State_Name(job.state())}, {"attempt", std::to_string(lease.attempt)}});
 }

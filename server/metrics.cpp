@@ -37,11 +37,38 @@ void increment(Map& map, std::string_view key) {
   ++it->second;
 }
 
+// Label values go out unescaped: tenant names are [A-Za-z0-9_.-] (server/security.hpp), status
+// and state names are enum names.
+std::string labels(std::string_view tenant, std::string_view name = {}, std::string_view value = {}) {
+  std::string out;
+  if (!tenant.empty()) out = "tenant=\"" + std::string(tenant) + "\"";
+  if (!name.empty()) {
+    if (!out.empty()) out += ',';
+    out += std::string(name) + "=\"" + std::string(value) + "\"";
+  }
+  return out;
+}
+
+template <class Counts>
+void samples(std::string& out, const char* name, const Counts& counts) {
+  for (const auto& [label_set, n] : counts) sample(out, name, label_set, static_cast<double>(n));
+}
+
 }  // namespace
 
-void Metrics::session_finished(std::string_view status) {
+void Metrics::session_started(std::string_view tenant) {
   std::lock_guard lock(mu_);
-  increment(sessions_finished_, status);
+  increment(sessions_started_, labels(tenant));
+}
+
+void Metrics::session_refused(std::string_view tenant) {
+  std::lock_guard lock(mu_);
+  increment(sessions_refused_, labels(tenant));
+}
+
+void Metrics::session_finished(std::string_view tenant, std::string_view status) {
+  std::lock_guard lock(mu_);
+  increment(sessions_finished_, labels(tenant, "status", status));
 }
 
 void Metrics::stage_time(std::string_view stage, double seconds) {
@@ -52,20 +79,15 @@ void Metrics::stage_time(std::string_view stage, double seconds) {
   it->second.seconds += seconds;
 }
 
-void Metrics::job_finished(std::string_view state) {
+void Metrics::job_finished(std::string_view tenant, std::string_view state) {
   std::lock_guard lock(mu_);
-  increment(jobs_finished_, state);
+  increment(jobs_finished_, labels(tenant, "state", state));
 }
 
 std::string Metrics::render(const Gauges& gauges) const {
   std::string out;
   header(out, "posefuse_sessions_in_flight", "gauge", "Fit calls running now.");
   sample(out, "posefuse_sessions_in_flight", "", gauges.sessions_in_flight);
-  header(out, "posefuse_sessions_started_total", "counter", "Fit calls admitted.");
-  sample(out, "posefuse_sessions_started_total", "", static_cast<double>(sessions_started_.load()));
-  header(out, "posefuse_sessions_refused_total", "counter",
-         "Fit calls refused with RESOURCE_EXHAUSTED (--max-sessions).");
-  sample(out, "posefuse_sessions_refused_total", "", static_cast<double>(sessions_refused_.load()));
   header(out, "posefuse_chunks_received_total", "counter", "Session chunks received by Fit calls.");
   sample(out, "posefuse_chunks_received_total", "", static_cast<double>(chunks_received_.load()));
   header(out, "posefuse_item_errors_total", "counter", "Chunks or items answered with ItemError.");
@@ -78,10 +100,16 @@ std::string Metrics::render(const Gauges& gauges) const {
   sample(out, "posefuse_workers", "", gauges.workers);
 
   std::lock_guard lock(mu_);
-  header(out, "posefuse_sessions_finished_total", "counter", "Fit calls finished, by status.");
-  for (const auto& [status, n] : sessions_finished_) {
-    sample(out, "posefuse_sessions_finished_total", "status=\"" + status + "\"", static_cast<double>(n));
-  }
+  // Tenant "" always has its line, so that a server without tenants shows its zeros.
+  header(out, "posefuse_sessions_started_total", "counter", "Fit calls admitted, by tenant.");
+  if (!sessions_started_.contains("")) sample(out, "posefuse_sessions_started_total", "", 0);
+  samples(out, "posefuse_sessions_started_total", sessions_started_);
+  header(out, "posefuse_sessions_refused_total", "counter",
+         "Fit calls refused with RESOURCE_EXHAUSTED (--max-sessions, --tenant-max-sessions), by tenant.");
+  if (!sessions_refused_.contains("")) sample(out, "posefuse_sessions_refused_total", "", 0);
+  samples(out, "posefuse_sessions_refused_total", sessions_refused_);
+  header(out, "posefuse_sessions_finished_total", "counter", "Fit calls finished, by tenant and status.");
+  samples(out, "posefuse_sessions_finished_total", sessions_finished_);
   header(out, "posefuse_stage_calls_total", "counter", "Pipeline stage calls, by stage.");
   for (const auto& [stage, totals] : stages_) {
     sample(out, "posefuse_stage_calls_total", "stage=\"" + stage + "\"", static_cast<double>(totals.calls));
@@ -90,10 +118,8 @@ std::string Metrics::render(const Gauges& gauges) const {
   for (const auto& [stage, totals] : stages_) {
     sample(out, "posefuse_stage_seconds_total", "stage=\"" + stage + "\"", totals.seconds);
   }
-  header(out, "posefuse_jobs_finished_total", "counter", "Batch jobs finished, by state.");
-  for (const auto& [state, n] : jobs_finished_) {
-    sample(out, "posefuse_jobs_finished_total", "state=\"" + state + "\"", static_cast<double>(n));
-  }
+  header(out, "posefuse_jobs_finished_total", "counter", "Batch jobs finished, by tenant and state.");
+  samples(out, "posefuse_jobs_finished_total", jobs_finished_);
   return out;
 }
 

@@ -1,7 +1,10 @@
 #pragma once
 // Server metrics in the Prometheus text exposition format (served by MetricsHttpServer).
 // Counters are updated from any thread; gauges that other objects own (sessions in flight,
-// worker queue) are passed in when rendering.
+// worker queue) are passed in when rendering. The Fit and job counters are kept per tenant: the
+// tenant names of the tokens file, which say which clinic but nothing about a patient; tenant
+// "" (no tokens file, or tokens without a tenant) is rendered without the label, as before
+// tenants existed.
 #include <atomic>
 #include <cstdint>
 #include <map>
@@ -13,15 +16,15 @@ namespace posefuse::server {
 
 class Metrics {
  public:
-  void session_started() { sessions_started_.fetch_add(1); }
-  void session_refused() { sessions_refused_.fetch_add(1); }
-  void session_finished(std::string_view status);  // gRPC status code name
+  void session_started(std::string_view tenant);
+  void session_refused(std::string_view tenant);
+  void session_finished(std::string_view tenant, std::string_view status);  // gRPC status code name
   void chunk_received() { chunks_received_.fetch_add(1); }
   void item_error() { item_errors_.fetch_add(1); }
   // Chunks read from clients and not yet processed, over all sessions.
   void queued_chunks_add(std::int64_t n) { queued_chunks_.fetch_add(n); }
   void stage_time(std::string_view stage, double seconds);
-  void job_finished(std::string_view state);
+  void job_finished(std::string_view tenant, std::string_view state);
 
   struct Gauges {
     unsigned sessions_in_flight = 0;
@@ -35,12 +38,16 @@ class Metrics {
     std::uint64_t calls = 0;
     double seconds = 0.0;
   };
-  std::atomic<std::uint64_t> sessions_started_{0}, sessions_refused_{0}, chunks_received_{0}, item_errors_{0};
+  // Counts by their Prometheus label set, e.g. `tenant="clinic-a",status="OK"`.
+  using Counts = std::map<std::string, std::uint64_t, std::less<>>;
+
+  std::atomic<std::uint64_t> chunks_received_{0}, item_errors_{0};
   std::atomic<std::int64_t> queued_chunks_{0};
   mutable std::mutex mu_;
-  std::map<std::string, std::uint64_t, std::less<>> sessions_finished_;  // by status
+  Counts sessions_started_, sessions_refused_;  // by tenant
+  Counts sessions_finished_;                    // by tenant and status
   std::map<std::string, StageTotals, std::less<>> stages_;
-  std::map<std::string, std::uint64_t, std::less<>> jobs_finished_;  // by state
+  Counts jobs_finished_;  // by tenant and state
 };
 
 }  // namespace posefuse::server

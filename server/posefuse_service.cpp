@@ -51,19 +51,19 @@ grpc::Status PoseFuseService::authenticate(const grpc::CallbackServerContext* co
 }
 
 grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>* PoseFuseService::Fit(grpc::CallbackServerContext* context) {
-  std::string tenant;  // a Fit call keeps nothing, but takes one of its tenant's session slots
+  std::string tenant;  // a Fit call keeps nothing, but takes one of its tenant's session slots and counts for it
   if (grpc::Status denied = authenticate(context, "Fit", tenant); !denied.ok()) {
     return new RefusedCall<grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>>(denied);
   }
   const Admission admission = registry_.try_admit(tenant);
   if (!admission.id) {
-    metrics_.session_refused();
+    metrics_.session_refused(tenant);
     log_event("info", "session_refused",
               {{"reason", admission.tenant_full ? "tenant_max_sessions" : "max_sessions"}, {"peer", context->peer()}});
     return new RefusedCall<grpc::ServerBidiReactor<v1::SessionChunk, v1::FitResult>>(
         grpc::Status(grpc::StatusCode::RESOURCE_EXHAUSTED, registry_.busy_message(admission)));
   }
-  return FitSession::start(context, *admission.id, options_, pool_, registry_, metrics_);
+  return FitSession::start(context, *admission.id, tenant, options_, pool_, registry_, metrics_);
 }
 
 grpc::ServerUnaryReactor* PoseFuseService::GetServerInfo(grpc::CallbackServerContext* context,

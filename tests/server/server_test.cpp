@@ -6,14 +6,10 @@
 #include <cmath>
 #include <functional>
 #include <map>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
-
-#include <arpa/inet.h>
-#include <netinet/in.h>
-#include <sys/socket.h>
-#include <unistd.h>
 
 #include <google/protobuf/descriptor.pb.h>
 #include <gtest/gtest.h>
@@ -25,6 +21,7 @@
 #include "server/session_memory.hpp"
 #include "session/stage_inputs.hpp"
 #include "tests/server/health_check.hpp"
+#include "tests/server/http_client.hpp"
 #include "tests/server/reflection_call.hpp"
 #include "tests/server/test_support.hpp"
 
@@ -264,6 +261,57 @@ TEST_F(ServerTest, ClientThatCancelsMidStreamFreesItsSlot) {
   const CallResult call = fit(chunks);
   EXPECT_TRUE(call.status.ok()) << call.status.error_message();
   EXPECT_EQ(call.orientation_samples().at(demo::kArmDevice), 800u);
+}
+
+// The lines of `log` with `event`.
+std::vector<std::string> log_lines(const std::string& log, const std::string& event) {
+  std::vector<std::string> lines;
+  std::istringstream in(log);
+  for (std::string line; std::getline(in, line);) {
+    if (line.find(" event=" + event + " ") != std::string::npos) lines.push_back(line);
+  }
+  return lines;
+}
+
+TEST_F(ServerTest, ClientThatGoesAwayIsLoggedAndCountedAsCancelled) {
+  ServerOptions options;
+  options.metrics_listen = "127.0.0.1:0";
+  start(options);
+  auto chunks = demo::make_demo_session();
+  // Several calls: the client's cancellation and the failed read it brings reach the server in
+  // either order.
+  constexpr int kCalls = 12;
+  testing::internal::CaptureStderr();
+  for (int call = 0; call < kCalls; ++call) {
+    grpc::ClientContext context;
+    set_test_deadline(context);
+    auto stream = stub_->Fit(&context);
+    // Mid-session, the server waiting for the next chunk: the client cancels (as a client
+    // does that is stopped or loses its connection).
+    for (std::size_t i = 0; i < chunks.size() / 2; ++i) ASSERT_TRUE(stream->Write(chunks[i]));
+    v1::FitResult result;
+    ASSERT_TRUE(stream->Read(&result));
+    context.TryCancel();
+    EXPECT_EQ(stream->Finish().error_code(), grpc::StatusCode::CANCELLED);
+  }
+  // Unlike a client that ends its stream without the end marker: a bad request.
+  chunks.pop_back();
+  EXPECT_EQ(fit(chunks).status.error_code(), grpc::StatusCode::INVALID_ARGUMENT);
+  ASSERT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
+  const std::string log = testing::internal::GetCapturedStderr();
+
+  const std::vector<std::string> ends = log_lines(log, "session_end");
+  ASSERT_EQ(ends.size(), static_cast<std::size_t>(kCalls + 1)) << log;
+  for (int call = 0; call < kCalls; ++call) EXPECT_NE(ends[call].find(" status=CANCELLED "), std::string::npos) << log;
+  EXPECT_NE(ends.back().find(" status=INVALID_ARGUMENT "), std::string::npos) << log;
+  const std::vector<std::string> errors = log_lines(log, "session_error");
+  ASSERT_EQ(errors.size(), 1u) << log;
+  EXPECT_NE(errors[0].find(" field=end"), std::string::npos) << errors[0];
+  const std::string metrics = test::http_get(server_->metrics_port(), "/metrics");
+  for (const std::string& line : {"posefuse_sessions_finished_total{status=\"CANCELLED\"} " + std::to_string(kCalls),
+                                  std::string("posefuse_sessions_finished_total{status=\"INVALID_ARGUMENT\"} 1")}) {
+    EXPECT_NE(metrics.find("\n" + line + "\n"), std::string::npos) << line << " in\n" << metrics;
+  }
 }
 
 TEST_F(ServerTest, IdleStreamIsEndedWithDeadlineExceeded) {
@@ -509,28 +557,6 @@ TEST_F(ServerTest, JobCallsWithoutDataDirAreFailedPrecondition) {
   EXPECT_EQ(stub_->GetJob(&context, request, &job).error_code(), grpc::StatusCode::FAILED_PRECONDITION);
 }
 
-// A plain HTTP GET on loopback; returns the whole response (head and body).
-std::string http_get(int port, const std::string& path) {
-  const int fd = ::socket(AF_INET, SOCK_STREAM, 0);
-  sockaddr_in address{};
-  address.sin_family = AF_INET;
-  address.sin_port = htons(static_cast<std::uint16_t>(port));
-  ::inet_pton(AF_INET, "127.0.0.1", &address.sin_addr);
-  if (::connect(fd, reinterpret_cast<sockaddr*>(&address), sizeof address) != 0) {
-    ::close(fd);
-    return "";
-  }
-  const std::string request = "GET " + path + " HTTP/1.1\r\nHost: test\r\n\r\n";
-  ::send(fd, request.data(), request.size(), 0);
-  std::string response;
-  char buffer[4096];
-  for (ssize_t n; (n = ::recv(fd, buffer, sizeof buffer, 0)) > 0;) {
-    response.append(buffer, static_cast<std::size_t>(n));
-  }
-  ::close(fd);
-  return response;
-}
-
 TEST_F(ServerTest, MetricsEndpointCountsSessionsAndStageCalls) {
   ServerOptions options;
   options.metrics_listen = "127.0.0.1:0";
@@ -540,7 +566,7 @@ TEST_F(ServerTest, MetricsEndpointCountsSessionsAndStageCalls) {
   // The session's slot is released (and its end counted) right after the call.
   ASSERT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
 
-  const std::string response = http_get(server_->metrics_port(), "/metrics");
+  const std::string response = test::http_get(server_->metrics_port(), "/metrics");
   EXPECT_EQ(response.rfind("HTTP/1.1 200 OK\r\n", 0), 0u) << response;
   EXPECT_NE(response.find("\nposefuse_sessions_finished_total{status=\"OK\"} 1\n"), std::string::npos) << response;
   EXPECT_NE(response.find("\nposefuse_sessions_in_flight 0\n"), std::string::npos);
@@ -553,7 +579,7 @@ TEST_F(ServerTest, MetricsEndpointCountsSessionsAndStageCalls) {
       std::string::npos)
       << response;
   EXPECT_NE(response.find("\nposefuse_queued_chunks 0\n"), std::string::npos);
-  EXPECT_EQ(http_get(server_->metrics_port(), "/other").rfind("HTTP/1.1 404", 0), 0u);
+  EXPECT_EQ(test::http_get(server_->metrics_port(), "/other").rfind("HTTP/1.1 404", 0), 0u);
 }
 
 // The field of the error validate_options throws for `options` ("" when it accepts them).

@@ -11,6 +11,7 @@
 #include "client/channel_security.hpp"
 #include "client/fit_call.hpp"
 #include "server/session_registry.hpp"
+#include "tests/server/http_client.hpp"
 #include "tests/server/jobs_fixture.hpp"
 
 namespace posefuse::server {
@@ -40,12 +41,14 @@ class TenantsTest : public JobsTest {
     clinic_b_ = stub_for(kClinicB);
   }
 
-  static grpc::Status submit_as(v1::PoseFuse::Stub& stub, const std::string& uri, v1::Job& job) {
+  static grpc::Status submit_as(v1::PoseFuse::Stub& stub, const std::string& uri, v1::Job& job,
+                                const std::string& label = "") {
     grpc::ClientContext context;
     set_test_deadline(context);
     auto writer = stub.SubmitJob(&context, &job);
     v1::SubmitJobRequest request;
     request.mutable_spec()->set_recording_uri(uri);
+    request.mutable_spec()->set_label(label);
     writer->Write(request);
     writer->WritesDone();
     return writer->Finish();
@@ -91,13 +94,22 @@ class TenantsTest : public JobsTest {
   }
 
   // Submits `uri` as the stub's tenant and watches the job to its end: its last state.
-  static v1::Job run_as(v1::PoseFuse::Stub& stub, const std::string& uri) {
+  static v1::Job run_as(v1::PoseFuse::Stub& stub, const std::string& uri, const std::string& label = "") {
     v1::Job job;
-    const grpc::Status submitted = submit_as(stub, uri, job);
+    const grpc::Status submitted = submit_as(stub, uri, job, label);
     EXPECT_TRUE(submitted.ok()) << submitted.error_message();
     std::vector<v1::Job> states;
     EXPECT_TRUE(watch_to_end(stub, job.job_id(), states).ok());
     return states.empty() ? job : states.back();
+  }
+
+  // The demo recording's whole Fit call with `token`.
+  client::FitOutcome fit_as(const char* token) const {
+    client::ChannelSecurity security;
+    security.bearer_token = token;
+    client::ResultWriter writer(dir_ / "results" / token);
+    return client::run_fit(client::make_channel("127.0.0.1:" + std::to_string(server_->port()), security),
+                           dir_ / "recordings" / "demo.pfchunks", writer);
   }
 
   std::unique_ptr<v1::PoseFuse::Stub> clinic_a_, clinic_b_;
@@ -187,13 +199,6 @@ TEST_F(TenantsTest, OneTenantCannotTakeEverySessionSlot) {
   options.max_sessions = 8;
   start_with_tenants(options);
   const auto chunks = demo::make_demo_session();
-  const std::string address = "127.0.0.1:" + std::to_string(server_->port());
-  const auto fit_as = [&](const char* token) {
-    client::ChannelSecurity security;
-    security.bearer_token = token;
-    client::ResultWriter writer(dir_ / "results" / token);
-    return client::run_fit(client::make_channel(address, security), dir_ / "recordings" / "demo.pfchunks", writer);
-  };
 
   // clinic-a holds its two slots with streams that have sent their header.
   posefuse::test::HeldFit first(*clinic_a_, chunks[0]), second(*clinic_a_, chunks[0]);
@@ -236,6 +241,52 @@ TEST_F(TenantsTest, OneTenantCannotTakeEverySessionSlot) {
   ASSERT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
   const client::FitOutcome again = fit_as(kClinicA);
   EXPECT_TRUE(again.status.ok()) << again.status.error_message();
+}
+
+// The metrics endpoint's answer once it contains `expected`, or its last answer after 30 s:
+// a job's end is counted just after its watchers learn of it.
+std::string scrape_until(int port, const std::string& expected) {
+  const auto give_up = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  std::string metrics = posefuse::test::http_get(port, "/metrics");
+  while (metrics.find(expected) == std::string::npos && std::chrono::steady_clock::now() < give_up) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    metrics = posefuse::test::http_get(port, "/metrics");
+  }
+  return metrics;
+}
+
+TEST_F(TenantsTest, MetricsCountEachTenantAndNameNoPatient) {
+  ServerOptions options;
+  options.metrics_listen = "127.0.0.1:0";
+  start_with_tenants(options);
+  for (int i = 0; i < 2; ++i) {
+    const client::FitOutcome fit = fit_as(kClinicA);
+    EXPECT_TRUE(fit.status.ok()) << fit.status.error_message();
+  }
+  const client::FitOutcome fit = fit_as(kClinicB);
+  EXPECT_TRUE(fit.status.ok()) << fit.status.error_message();
+  const std::string label = "knee-patient-4711";
+  EXPECT_EQ(run_as(*clinic_a_, "demo.pfchunks", label).state(), v1::Job::SUCCEEDED);
+  ASSERT_TRUE(server_->registry().wait_for_active_at_most(0, std::chrono::seconds(30)));
+
+  const std::string metrics = scrape_until(
+      server_->metrics_port(), "\nposefuse_jobs_finished_total{tenant=\"clinic-a\",state=\"SUCCEEDED\"} 1\n");
+  for (const char* line : {
+           "posefuse_sessions_started_total 0",
+           "posefuse_sessions_started_total{tenant=\"clinic-a\"} 2",
+           "posefuse_sessions_started_total{tenant=\"clinic-b\"} 1",
+           "posefuse_sessions_finished_total{tenant=\"clinic-a\",status=\"OK\"} 2",
+           "posefuse_sessions_finished_total{tenant=\"clinic-b\",status=\"OK\"} 1",
+           "posefuse_jobs_finished_total{tenant=\"clinic-a\",state=\"SUCCEEDED\"} 1",
+       }) {
+    EXPECT_NE(metrics.find("\n" + std::string(line) + "\n"), std::string::npos) << line << " in\n" << metrics;
+  }
+  EXPECT_EQ(metrics.find("tenant=\"clinic-c\""), std::string::npos) << "a tenant without calls has no lines";
+  // Tenant names only: no token, subject id, label or path.
+  for (const std::string& secret : {std::string(kClinicA), std::string(kClinicB), std::string("demo-subject"), label,
+                                    std::string("demo.pfchunks"), dir_.string()}) {
+    EXPECT_EQ(metrics.find(secret), std::string::npos) << secret;
+  }
 }
 
 TEST(SessionSlots, TheDefaultPerTenantLimitSplitsTheSlotsEvenly) {
