@@ -26,6 +26,10 @@ namespace posefuse::server {
 // that wraps it to inject faults.
 using JobStoreFactory = std::function<std::unique_ptr<JobStore>(const std::filesystem::path& data_dir)>;
 
+// The health service name of the batch jobs: SERVING while the job store takes writes,
+// NOT_SERVING while it does not (or cannot be opened); "" and posefuse.v1.PoseFuse stay SERVING.
+inline constexpr const char* kJobsHealthService = "posefuse.v1.PoseFuse.Jobs";
+
 class PoseFuseServer {
  public:
   // Binds and starts serving. Throws posefuse::Error (kInvalidArgument naming the option) for
@@ -54,6 +58,7 @@ class PoseFuseServer {
   std::unique_ptr<WorkerPool> pool_;
   std::unique_ptr<SessionRegistry> registry_;
   std::unique_ptr<JobStore> job_store_;
+  std::string job_store_problem_;  // why the store could not be opened at start ("" when it was)
   std::unique_ptr<JobRunner> jobs_;
   std::unique_ptr<BearerTokens> tokens_;  // null: no token needed
   std::unique_ptr<PoseFuseService> service_;
