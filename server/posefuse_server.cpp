@@ -52,6 +52,10 @@ void validate_options(const ServerOptions& o) {
     throw_invalid("--max-upload-mb",
                   "is " + std::to_string(o.max_upload_mb) + ", must be in (0, 1048576] (MiB; at most 1 TiB)");
   }
+  if (!(o.max_spool_mb > 0.0 && o.max_spool_mb <= 1024.0 * 1024.0)) {
+    throw_invalid("--max-spool-mb",
+                  "is " + std::to_string(o.max_spool_mb) + ", must be in (0, 1048576] (MiB; at most 1 TiB)");
+  }
   if (!(o.shutdown_grace_s >= 0.0 && std::isfinite(o.shutdown_grace_s))) {
     throw_invalid("--shutdown-grace-s", "must be >= 0 seconds");
   }
@@ -221,7 +225,8 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
 PoseFuseServer::~PoseFuseServer() { shutdown(); }
 
 std::string PoseFuseServer::render_metrics() const {
-  return metrics_.render({registry_->active(), pool_->queued(), static_cast<unsigned>(pool_->threads())});
+  return metrics_.render({registry_->active(), pool_->queued(), static_cast<unsigned>(pool_->threads()),
+                          service_->spool_quota().in_use()});
 }
 
 void PoseFuseServer::shutdown() {

@@ -41,6 +41,7 @@ class PoseFuseServer {
   int port() const { return port_; }
   const ServerOptions& options() const { return options_; }
   SessionRegistry& registry() { return *registry_; }
+  const SpoolQuota& spool_quota() const { return service_->spool_quota(); }
   JobRunner* jobs() { return jobs_.get(); }
   // The metrics endpoint's port, 0 when it is off.
   int metrics_port() const { return metrics_http_ ? metrics_http_->port() : 0; }

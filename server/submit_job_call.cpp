@@ -78,8 +78,9 @@ void SubmitJobCall::read_spec_locked(bool ok) {
   slot_ = admission.id;
   context_.registry.watch(*slot_, weak_from_this());
   try {
-    spool_ = std::make_unique<UploadSpool>(context_.spool_dir / (random_hex_id() + ".pfchunks"),
-                                           context_.max_upload_bytes, session::PipelineOptions{}.max_item_errors);
+    spool_ =
+        std::make_unique<UploadSpool>(context_.spool_dir / (random_hex_id() + ".pfchunks"), context_.max_upload_bytes,
+                                      session::PipelineOptions{}.max_item_errors, context_.spool_quota);
   } catch (const Error& error) {
     finish_locked(to_status(error));
     return;

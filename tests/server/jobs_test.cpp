@@ -178,6 +178,49 @@ TEST_F(JobsTest, OversizedUploadIsResourceExhaustedAndLeavesNoJobAndNoFile) {
   EXPECT_NE(status.error_message().find("--max-upload-mb"), std::string::npos);
 }
 
+// Two uploads at once that the spool quota cannot hold together: the one whose chunk would pass
+// it is refused, naming the flag, and leaves nothing; the other becomes a job and runs; once it
+// has given its bytes back the next upload fits.
+TEST_F(JobsTest, SpoolQuotaRefusesTheUploadThatWouldPassItAndTheOthersGoOn) {
+  const auto chunks = demo::make_demo_session();
+  std::uint64_t session_bytes = 0;  // as the spool counts them (upload_spool.cpp)
+  for (const auto& chunk : chunks) session_bytes += chunk.ByteSizeLong() + 10;
+  ServerOptions options;
+  options.max_spool_mb = 1.5 * static_cast<double>(session_bytes) / (1024.0 * 1024.0);
+  start(options);
+
+  // The first upload holds everything but its end marker, reserved in the quota.
+  const auto first = open_upload(chunks, chunks.size() - 1);
+  const std::uint64_t held = session_bytes - (chunks.back().ByteSizeLong() + 10);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (server_->spool_quota().in_use() < held && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_EQ(server_->spool_quota().in_use(), held);
+
+  v1::Job refused;
+  const grpc::Status status = upload(chunks, refused);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << status.error_message();
+  EXPECT_EQ(status.error_message().rfind("upload: the uploads in transit together would pass", 0), 0u)
+      << status.error_message();
+  EXPECT_NE(status.error_message().find("(--max-spool-mb)"), std::string::npos) << status.error_message();
+  EXPECT_EQ(server_->spool_quota().in_use(), held);  // the refused upload gave its bytes back
+  EXPECT_EQ(files_in_spool(), 1u);                   // the first upload's, nothing of the refused one
+
+  // The first upload is untouched: it completes and runs.
+  ASSERT_TRUE(first->send(chunks.back()));
+  const grpc::Status completed = first->close();
+  ASSERT_TRUE(completed.ok()) << completed.error_message();
+  EXPECT_EQ(watch(first->job.job_id()).back().state(), v1::Job::SUCCEEDED);
+  EXPECT_EQ(server_->spool_quota().in_use(), 0u);
+
+  v1::Job again;
+  const grpc::Status retried = upload(chunks, again);
+  ASSERT_TRUE(retried.ok()) << retried.error_message();
+  EXPECT_EQ(watch(again.job_id()).back().state(), v1::Job::SUCCEEDED);
+  EXPECT_EQ(job_count(), 2u);
+}
+
 TEST_F(JobsTest, UploadsThatCannotBeASessionAreInvalidArgumentNamingTheField) {
   start();
   const auto chunks = demo::make_demo_session();

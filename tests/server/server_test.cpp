@@ -536,6 +536,9 @@ TEST(ServerOptions, BadValuesNameTheFlag) {
     options = ServerOptions{};
     options.max_upload_mb = mb;
     EXPECT_EQ(rejected_flag(options), "--max-upload-mb") << mb;
+    options = ServerOptions{};
+    options.max_spool_mb = mb;
+    EXPECT_EQ(rejected_flag(options), "--max-spool-mb") << mb;
   }
   EXPECT_EQ(rejected_flag(ServerOptions{}), "");
 }
