@@ -1,8 +1,10 @@
 #include "server/job_calls.hpp"
 
 #include <deque>
+#include <iterator>
 #include <memory>
 #include <mutex>
+#include <vector>
 
 #include "server/job_limits.hpp"
 #include "server/status.hpp"
@@ -130,39 +132,71 @@ class WatchJob : public QueuedWriter<v1::Job> {
   std::int64_t last_update_time_us_ = 0;
 };
 
-class JobResults : public QueuedWriter<v1::FitResult> {
+// A finished job's results, read from the store page by page (kResultsPageSize): the next page
+// is read when the last result of the one before has been written.
+class JobResults : public grpc::ServerWriteReactor<v1::FitResult> {
  public:
-  void start(const std::shared_ptr<JobResults>& self, JobRunner& runner, const std::string& id,
-             const std::string& tenant) {
-    self_ = self;
+  JobResults(JobRunner& runner, std::string job_id) : runner_(runner), job_id_(std::move(job_id)) {}
+
+  void start(const std::string& tenant) {
     std::optional<JobRecord> record;
-    std::vector<v1::FitResult> results;
     try {
-      record = runner.store().get(id);
-      if (record && record->owner != tenant) record.reset();  // as if it did not exist
-      if (record && is_terminal(record->job.state())) results = runner.store().results(id);
+      record = runner_.store().get(job_id_);
     } catch (const Error& error) {  // the job store failed
-      finish(to_status(error));
+      Finish(to_status(error));
       return;
     }
-    if (!record) {
-      finish(grpc::Status(grpc::StatusCode::NOT_FOUND, "job_id: no job '" + id + "'"));
+    if (!record || record->owner != tenant) {  // another tenant's job: as if it did not exist
+      Finish(grpc::Status(grpc::StatusCode::NOT_FOUND, "job_id: no job '" + job_id_ + "'"));
       return;
     }
     if (!is_terminal(record->job.state())) {
-      finish(grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
-                          "job_id: job '" + id + "' is " + v1::Job::State_Name(record->job.state()) +
+      Finish(grpc::Status(grpc::StatusCode::FAILED_PRECONDITION,
+                          "job_id: job '" + job_id_ + "' is " + v1::Job::State_Name(record->job.state()) +
                               "; its results are complete when it has finished (WatchJob)"));
       return;
     }
-    if (results.empty()) {
-      finish(grpc::Status::OK);
+    write_next();
+  }
+
+  void OnWriteDone(bool ok) override {
+    if (!ok) {
+      Finish(grpc::Status(grpc::StatusCode::CANCELLED, "stream broken"));
       return;
     }
-    for (std::size_t i = 0; i < results.size(); ++i) {
-      push(std::move(results[i]), i + 1 == results.size());
-    }
+    write_next();
   }
+  void OnDone() override { delete this; }
+
+ private:
+  // One write is in flight at a time, so this runs on one thread at a time.
+  void write_next() {
+    if (page_.empty() && !last_page_read_) {
+      try {
+        std::vector<v1::FitResult> page = runner_.store().results(job_id_, next_, kResultsPageSize);
+        last_page_read_ = page.size() < kResultsPageSize;
+        next_ += page.size();
+        page_.assign(std::make_move_iterator(page.begin()), std::make_move_iterator(page.end()));
+      } catch (const Error& error) {  // the job store failed: the client sees the results were cut
+        Finish(to_status(error));
+        return;
+      }
+    }
+    if (page_.empty()) {
+      Finish(grpc::Status::OK);
+      return;
+    }
+    buffer_ = std::move(page_.front());
+    page_.pop_front();
+    StartWrite(&buffer_);
+  }
+
+  JobRunner& runner_;
+  const std::string job_id_;
+  std::deque<v1::FitResult> page_;
+  v1::FitResult buffer_;
+  std::uint64_t next_ = 0;  // the index of the next result to read
+  bool last_page_read_ = false;
 };
 
 }  // namespace
@@ -175,9 +209,9 @@ grpc::ServerWriteReactor<v1::Job>* watch_job(JobRunner& runner, const std::strin
 
 grpc::ServerWriteReactor<v1::FitResult>* job_results(JobRunner& runner, const std::string& job_id,
                                                      const std::string& tenant) {
-  auto writer = std::make_shared<JobResults>();
-  writer->start(writer, runner, job_id, tenant);
-  return writer.get();
+  auto* writer = new JobResults(runner, job_id);  // deletes itself in OnDone
+  writer->start(tenant);
+  return writer;
 }
 
 }  // namespace posefuse::server

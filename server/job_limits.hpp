@@ -17,6 +17,10 @@ inline constexpr std::size_t kDefaultPageSize = 50;
 inline constexpr std::size_t kMaxPageSize = 1000;
 inline constexpr std::size_t kMaxPageBytes = 1u << 20;
 
+// GetJobResults: results read from the store at a time; the next page is read once the last
+// one has been written to the client, so a call holds at most this many whatever the job made.
+inline constexpr std::size_t kResultsPageSize = 64;
+
 // Throws kInvalidArgument naming the field ("spec.label") for a spec beyond these limits.
 void validate_job_spec(const v1::JobSpec& spec);
 

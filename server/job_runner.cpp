@@ -130,13 +130,48 @@ JobRunner::~JobRunner() {
   store_.set_event_listener({});
 }
 
-void JobRunner::start() {
-  if (!options_.claims_jobs) return;
-  log_event("info", "job_worker_start",
-            {{"worker", worker_id_},
-             {"max_jobs", std::to_string(options_.max_running)},
-             {"lease_ms", std::to_string(options_.lease.count())}});
+void JobRunner::start(StoreHealthListener on_store_health) {
+  {
+    std::lock_guard lock(health_mu_);
+    on_store_health_ = std::move(on_store_health);
+  }
+  if (options_.claims_jobs) {
+    log_event("info", "job_worker_start",
+              {{"worker", worker_id_},
+               {"max_jobs", std::to_string(options_.max_running)},
+               {"lease_ms", std::to_string(options_.lease.count())}});
+  }
   dispatcher_ = std::thread([this] { dispatch_loop(); });
+}
+
+std::string JobRunner::store_problem() {
+  std::lock_guard lock(health_mu_);
+  return store_problem_;
+}
+
+bool JobRunner::probe_store() {
+  try {
+    store_.probe();
+    set_store_health("");
+    return true;
+  } catch (const std::exception& error) {
+    set_store_health(error.what());
+    return false;
+  }
+}
+
+void JobRunner::set_store_health(const std::string& problem) {
+  std::lock_guard lock(health_mu_);
+  const bool changed = !store_health_known_ || problem.empty() != store_problem_.empty();
+  store_problem_ = problem;
+  store_health_known_ = true;
+  if (!changed) return;
+  if (problem.empty()) {
+    log_event("info", "job_store_serving");
+  } else {
+    log_event("error", "job_store_not_serving", {{"error", problem}});
+  }
+  if (on_store_health_) on_store_health_(problem.empty());
 }
 
 void JobRunner::dispatch_loop() {
@@ -149,12 +184,25 @@ void JobRunner::dispatch_loop() {
       if (stopping_) return;
       wake_ = false;
     }
+    bool store_serving = store_problem().empty();
     if (Clock::now() >= next_heartbeat) {
       next_heartbeat = Clock::now() + options_.heartbeat;
-      renew_leases();
-      reap_expired();
+      store_serving = probe_store();
+      if (options_.claims_jobs) {
+        // Renewed even while the store fails: a lease that expired would make this worker's
+        // running jobs start over once it works again.
+        renew_leases();
+        if (store_serving) reap_expired();
+      }
     }
-    claim_more();
+    // Nothing is claimed while the store refuses writes: a claimed job could only fail.
+    if (options_.claims_jobs && store_serving) {
+      claim_more();
+    } else {
+      std::lock_guard lock(mu_);
+      queue_empty_ = true;  // nothing this runner can take up now (wait_idle)
+      idle_.notify_all();
+    }
   }
 }
 
@@ -329,6 +377,7 @@ void JobRunner::run_job(Running& running, JobRecord& record) {
   }
   if (abandoned) {
     log_event("warning", "job_abandoned", {{"job", job_id}, {"reason", abandoned->what()}});
+    if (!abandoned->lease_lost()) set_store_health("job_store: unavailable while job '" + job_id + "' was running");
     if (!abandoned->lease_lost()) handed_back = true;  // try to give it back at once
   }
   if (handed_back) {
@@ -345,6 +394,7 @@ void JobRunner::run_job(Running& running, JobRecord& record) {
     fail_job(job, status_code(store_failure->code()),
              std::string("the job store refused a write, the job's results are incomplete: ") + store_failure->what());
     log_event("error", "job_store_write_failed", {{"job", job_id}});
+    set_store_health(store_failure->what());
   }
   job.set_update_time_unix_us(now_unix_us());
   try {

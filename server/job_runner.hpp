@@ -6,6 +6,9 @@
 // number of runners on one shared store run every job exactly once at a time. Everything a job
 // produces is written to the store as it goes, through its lease.
 //
+// The heartbeat also probes the store with a small write (JobStore::probe): while it fails no
+// job is claimed and the jobs' health is NOT_SERVING (docs/server.md, "Job store").
+//
 // Watchers (WatchJob) and cancellation follow the store's events, so they work whichever
 // replica runs the job. Shutdown hands work back: running jobs stop between two chunks and are
 // released to the queue for another worker (or the next start).
@@ -46,8 +49,15 @@ class JobRunner {
   JobRunner(JobStore& store, WorkerPool& pool, Metrics& metrics, JobRunnerOptions options);
   ~JobRunner();  // hands running jobs back and waits for them
 
-  // Starts claiming (with claims_jobs). Call once, when the server serves.
-  void start();
+  // Whether the store takes writes: called on every change, from the dispatcher or a worker.
+  // The heartbeat's probe (JobStore::probe) decides it, and a job's store write that failed
+  // turns it off at once (until the next probe).
+  using StoreHealthListener = std::function<void(bool serving)>;
+  // Starts the heartbeat, and claiming with claims_jobs. Call once, when the server serves.
+  void start(StoreHealthListener on_store_health = {});
+  // Why the store does not take writes now (the last probe's or job write's error); empty
+  // while it does.
+  std::string store_problem();
   // Stores a new job of tenant `owner`; any worker on the store may run it.
   v1::Job submit(const v1::JobSpec& spec, const std::string& recording_path, const std::string& owner);
   // Cancels a queued or running job of tenant `owner` (a running one stops on its worker,
@@ -74,6 +84,9 @@ class JobRunner {
   };
 
   void dispatch_loop();
+  // Probes the store and reports its health; true when it takes writes.
+  bool probe_store();
+  void set_store_health(const std::string& problem);
   void renew_leases();
   void reap_expired();
   void claim_more();
@@ -100,6 +113,10 @@ class JobRunner {
   std::atomic<bool> stop_flag_{false};
   std::uint64_t next_token_ = 1;
   std::map<std::uint64_t, std::pair<std::string, Listener>> listeners_;
+  std::mutex health_mu_;  // orders the health listener's calls
+  StoreHealthListener on_store_health_;
+  std::string store_problem_;        // "" while the store takes writes
+  bool store_health_known_ = false;  // reported at least once
   std::thread dispatcher_;
 };
 

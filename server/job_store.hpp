@@ -76,7 +76,9 @@ class JobStore {
   virtual void update(const v1::Job& job) = 0;
   // Results in order; append continues the sequence (unfenced, as update).
   virtual void append_results(const std::string& job_id, const std::vector<v1::FitResult>& results) = 0;
-  virtual std::vector<v1::FitResult> results(const std::string& job_id) = 0;
+  // One page of a job's results, in order: at most `limit` from the `first` (0 = the first
+  // result). Callers read page by page, so that a job's results are never all in memory.
+  virtual std::vector<v1::FitResult> results(const std::string& job_id, std::uint64_t first, std::size_t limit) = 0;
 
   // Cancels a job of tenant `owner`: a QUEUED one becomes CANCELLED at once, a RUNNING one is
   // marked so that its worker stops it (kCancelRequested); a finished one is left alone. Returns
@@ -101,6 +103,11 @@ class JobStore {
   // max_attempts, FAILED (ABORTED, the message says why) when all are used up, CANCELLED when a
   // cancel was requested.
   virtual std::vector<ReapedJob> reap(std::uint32_t max_attempts, std::int64_t now_unix_us) = 0;
+
+  // A small write, made on every heartbeat: throws what a job's write would throw while the
+  // store cannot take writes (a full disk, PostgreSQL away), and returns once it can again.
+  // The jobs' health service follows it (docs/server.md, "Health and reflection").
+  virtual void probe() = 0;
 
   // Where events go (called from any thread, never while a store lock is held); set once
   // before use, cleared ({}) before the listener goes away. Clearing waits for a call in

@@ -14,6 +14,15 @@ class StoreUnavailable : public Error {
   explicit StoreUnavailable(const std::string& message) : Error(ErrorCode::kFailedPrecondition, "job_store", message) {}
 };
 
+// A store that can never open as configured (another server process holds the SQLite file,
+// a PostgreSQL schema newer than this binary): the server does not start. Any other failure to
+// open is a condition that may pass (a full disk, the database away), retried on the heartbeat.
+class StoreMisconfigured : public Error {
+ public:
+  StoreMisconfigured(const std::string& field, const std::string& message)
+      : Error(ErrorCode::kFailedPrecondition, field, message) {}
+};
+
 // A worker's write under a lease that no longer holds the job (it expired and another attempt
 // took the job, or the job was cancelled while the worker was away).
 class LeaseLost : public Error {

@@ -98,6 +98,8 @@ std::string Metrics::render(const Gauges& gauges) const {
   sample(out, "posefuse_worker_queue_depth", "", static_cast<double>(gauges.worker_queue));
   header(out, "posefuse_workers", "gauge", "Worker threads.");
   sample(out, "posefuse_workers", "", gauges.workers);
+  header(out, "posefuse_upload_spool_bytes", "gauge", "Bytes the uploads in transit hold, together (--max-spool-mb).");
+  sample(out, "posefuse_upload_spool_bytes", "", static_cast<double>(gauges.upload_spool_bytes));
 
   std::lock_guard lock(mu_);
   // Tenant "" always has its line, so that a server without tenants shows its zeros.

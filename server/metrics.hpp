@@ -30,6 +30,7 @@ class Metrics {
     unsigned sessions_in_flight = 0;
     std::size_t worker_queue = 0;
     unsigned workers = 0;
+    std::uint64_t upload_spool_bytes = 0;  // uploads in transit, together (server/spool_quota.hpp)
   };
   std::string render(const Gauges& gauges) const;
 

@@ -152,9 +152,11 @@ void PgJobStore::append_results(const std::string& job_id, const std::vector<v1:
   run(false, [&](PgConnection& c) { c.transaction([&] { insert_results(c, job_id, results); }); });
 }
 
-std::vector<v1::FitResult> PgJobStore::results(const std::string& job_id) {
+std::vector<v1::FitResult> PgJobStore::results(const std::string& job_id, std::uint64_t first, std::size_t limit) {
   return run(true, [&](PgConnection& c) {
-    PgResult rows = c.exec("SELECT result FROM results WHERE job_id = $1 ORDER BY seq", {pg_text(job_id)});
+    PgResult rows =
+        c.exec("SELECT result FROM results WHERE job_id = $1 AND seq >= $2 ORDER BY seq LIMIT $3",
+               {pg_text(job_id), pg_int(static_cast<std::int64_t>(first)), pg_int(static_cast<std::int64_t>(limit))});
     std::vector<v1::FitResult> results(static_cast<std::size_t>(PQntuples(rows.get())));
     for (int i = 0; i < PQntuples(rows.get()); ++i) {
       if (!results[static_cast<std::size_t>(i)].ParseFromString(pg_bytea(rows.get(), i, 0))) {
@@ -289,6 +291,12 @@ std::vector<ReapedJob> PgJobStore::reap(std::uint32_t max_attempts, std::int64_t
     });
     return reaped;
   });
+}
+
+// A round trip, not a write: PostgreSQL's failures are mostly the database being away, and a
+// write would need a table of its own in the shared schema.
+void PgJobStore::probe() {
+  run(false, [&](PgConnection& c) { c.exec("SELECT 1"); });
 }
 
 void PgJobStore::set_event_listener(std::function<void(const JobEvent&)> listener) {

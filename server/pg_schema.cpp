@@ -3,6 +3,7 @@
 #include <array>
 
 #include "common/error.hpp"
+#include "server/job_store_errors.hpp"
 
 namespace posefuse::server {
 
@@ -56,10 +57,10 @@ void migrate_pg_schema(PgConnection& connection) {
       version = static_cast<int>(pg_int64(current.get(), 0, 0));
     }
     if (version > pg_schema_version()) {
-      throw Error(ErrorCode::kFailedPrecondition, "--job-store",
-                  "the database's posefuse schema is version " + std::to_string(version) +
-                      ", newer than this posefuse-server knows (" + std::to_string(pg_schema_version()) +
-                      "): a newer server has migrated it; run that version or a newer one");
+      throw StoreMisconfigured("--job-store", "the database's posefuse schema is version " + std::to_string(version) +
+                                                  ", newer than this posefuse-server knows (" +
+                                                  std::to_string(pg_schema_version()) +
+                                                  "): a newer server has migrated it; run that version or a newer one");
     }
     for (; version < pg_schema_version(); ++version) {
       connection.exec_script(kMigrations[static_cast<std::size_t>(version)]);

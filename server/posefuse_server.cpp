@@ -8,6 +8,7 @@
 
 #include "common/error.hpp"
 #include "grpc/health/v1/health.pb.h"
+#include "server/deferred_job_store.hpp"
 #include "server/log.hpp"
 #include "server/pg_job_store.hpp"
 #include "server/security.hpp"
@@ -56,6 +57,10 @@ void validate_options(const ServerOptions& o) {
   if (!(o.max_upload_mb > 0.0 && o.max_upload_mb <= 1024.0 * 1024.0)) {
     throw_invalid("--max-upload-mb",
                   "is " + std::to_string(o.max_upload_mb) + ", must be in (0, 1048576] (MiB; at most 1 TiB)");
+  }
+  if (!(o.max_spool_mb > 0.0 && o.max_spool_mb <= 1024.0 * 1024.0)) {
+    throw_invalid("--max-spool-mb",
+                  "is " + std::to_string(o.max_spool_mb) + ", must be in (0, 1048576] (MiB; at most 1 TiB)");
   }
   if (!(o.shutdown_grace_s >= 0.0 && std::isfinite(o.shutdown_grace_s))) {
     throw_invalid("--shutdown-grace-s", "must be >= 0 seconds");
@@ -141,15 +146,19 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
     // Uploads fetched from a shared store for a job that this replica no longer runs.
     std::filesystem::remove_all(data_dir / "fetched", error);
     std::filesystem::create_directories(data_dir / "fetched", error);
-    if (make_store) {
-      job_store_ = make_store(data_dir);
-    } else if (!options_.job_store.empty()) {
-      // A connection per running job's writes, one for the dispatcher's claims and heartbeats,
-      // two for API calls and watchers' reads.
-      job_store_ = std::make_unique<PgJobStore>(options_.job_store, options_.max_jobs + 3);
-    } else {
-      job_store_ = std::make_unique<SqliteJobStore>(data_dir / "jobs.sqlite");
-    }
+    // A store that cannot be opened now (a full disk, PostgreSQL away) leaves the server up
+    // with the jobs' health NOT_SERVING; the heartbeat opens it once it can.
+    auto store = std::make_unique<DeferredJobStore>([this, data_dir, make_store]() -> std::unique_ptr<JobStore> {
+      if (make_store) return make_store(data_dir);
+      if (!options_.job_store.empty()) {
+        // A connection per running job's writes, one for the dispatcher's claims and heartbeats,
+        // two for API calls and watchers' reads.
+        return std::make_unique<PgJobStore>(options_.job_store, options_.max_jobs + 3);
+      }
+      return std::make_unique<SqliteJobStore>(data_dir / "jobs.sqlite");
+    });
+    job_store_problem_ = store->problem();
+    job_store_ = std::move(store);
     JobRunnerOptions runner;
     runner.max_running = options_.max_jobs;
     runner.claims_jobs = options_.role != "api";
@@ -196,7 +205,11 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
   grpc::HealthCheckServiceInterface& health = *server_->GetHealthCheckService();
   health.SetServingStatus(v1::PoseFuse::service_full_name(), true);
   health.SetServingStatus(true);
-  if (jobs_) jobs_->start();
+  // The jobs' own status follows the job store; Fit and the overall status do not depend on it.
+  if (jobs_) {
+    health.SetServingStatus(kJobsHealthService, job_store_problem_.empty());
+    jobs_->start([&health](bool serving) { health.SetServingStatus(kJobsHealthService, serving); });
+  }
   log_event("info", "server_start",
             {{"listen", options_.listen},
              {"port", std::to_string(port_)},
@@ -225,14 +238,16 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
 PoseFuseServer::~PoseFuseServer() { shutdown(); }
 
 std::string PoseFuseServer::render_metrics() const {
-  return metrics_.render({registry_->active(), pool_->queued(), static_cast<unsigned>(pool_->threads())});
+  return metrics_.render({registry_->active(), pool_->queued(), static_cast<unsigned>(pool_->threads()),
+                          service_->spool_quota().in_use()});
 }
 
 void PoseFuseServer::shutdown() {
   if (shut_down_) return;
   shut_down_ = true;
   log_event("info", "server_shutdown", {{"sessions", std::to_string(registry_->active())}});
-  server_->GetHealthCheckService()->SetServingStatus(false);
+  // Every service NOT_SERVING, and no later change (the job store's health) turns one back.
+  server_->GetHealthCheckService()->Shutdown();
   const auto grace =
       std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::duration<double>(options_.shutdown_grace_s));
   server_->Shutdown(std::chrono::system_clock::now() + grace);

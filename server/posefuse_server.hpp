@@ -26,6 +26,10 @@ namespace posefuse::server {
 // that wraps it to inject faults.
 using JobStoreFactory = std::function<std::unique_ptr<JobStore>(const std::filesystem::path& data_dir)>;
 
+// The health service name of the batch jobs: SERVING while the job store takes writes,
+// NOT_SERVING while it does not (or cannot be opened); "" and posefuse.v1.PoseFuse stay SERVING.
+inline constexpr const char* kJobsHealthService = "posefuse.v1.PoseFuse.Jobs";
+
 class PoseFuseServer {
  public:
   // Binds and starts serving. Throws posefuse::Error (kInvalidArgument naming the option) for
@@ -37,6 +41,7 @@ class PoseFuseServer {
   int port() const { return port_; }
   const ServerOptions& options() const { return options_; }
   SessionRegistry& registry() { return *registry_; }
+  const SpoolQuota& spool_quota() const { return service_->spool_quota(); }
   JobRunner* jobs() { return jobs_.get(); }
   // The metrics endpoint's port, 0 when it is off.
   int metrics_port() const { return metrics_http_ ? metrics_http_->port() : 0; }
@@ -54,6 +59,7 @@ class PoseFuseServer {
   std::unique_ptr<WorkerPool> pool_;
   std::unique_ptr<SessionRegistry> registry_;
   std::unique_ptr<JobStore> job_store_;
+  std::string job_store_problem_;  // why the store could not be opened at start ("" when it was)
   std::unique_ptr<JobRunner> jobs_;
   std::unique_ptr<BearerTokens> tokens_;  // null: no token needed
   std::unique_ptr<PoseFuseService> service_;

@@ -32,12 +32,18 @@ grpc::ServerUnaryReactor* finish_unary(grpc::CallbackServerContext* context, grp
 
 PoseFuseService::PoseFuseService(const ServerOptions& options, WorkerPool& pool, SessionRegistry& registry,
                                  Metrics& metrics, JobRunner* jobs, const BearerTokens* tokens)
-    : options_(options), pool_(pool), registry_(registry), metrics_(metrics), jobs_(jobs), tokens_(tokens) {
+    : options_(options),
+      pool_(pool),
+      registry_(registry),
+      metrics_(metrics),
+      jobs_(jobs),
+      tokens_(tokens),
+      spool_quota_(static_cast<std::uint64_t>(options_.max_spool_mb * 1024 * 1024)) {
   if (jobs_) {
     submit_context_.emplace(SubmitJobContext{*jobs_, pool_, registry_, options_.recordings_root,
                                              tokens_ && tokens_->names_tenants(), upload_spool_dir(options_.data_dir),
                                              static_cast<std::uint64_t>(options_.max_upload_mb * 1024 * 1024),
-                                             std::chrono::duration<double>(options_.idle_timeout_s)});
+                                             spool_quota_, std::chrono::duration<double>(options_.idle_timeout_s)});
   }
 }
 

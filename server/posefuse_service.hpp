@@ -12,6 +12,7 @@
 #include "server/security.hpp"
 #include "server/server_options.hpp"
 #include "server/session_registry.hpp"
+#include "server/spool_quota.hpp"
 #include "server/submit_job_call.hpp"
 #include "server/worker_pool.hpp"
 
@@ -41,6 +42,9 @@ class PoseFuseService final : public v1::PoseFuse::CallbackService {
   grpc::ServerWriteReactor<v1::FitResult>* GetJobResults(grpc::CallbackServerContext* context,
                                                          const v1::GetJobResultsRequest* request) override;
 
+  // The bytes that uploads in transit hold now, and their quota (--max-spool-mb).
+  const SpoolQuota& spool_quota() const { return spool_quota_; }
+
  private:
   const ServerOptions& options_;
   WorkerPool& pool_;
@@ -48,6 +52,7 @@ class PoseFuseService final : public v1::PoseFuse::CallbackService {
   Metrics& metrics_;
   JobRunner* jobs_;
   const BearerTokens* tokens_;
+  SpoolQuota spool_quota_;                          // the uploads in transit, together
   std::optional<SubmitJobContext> submit_context_;  // set when jobs are on
 
   // OK without tokens or with an accepted one; logs a refusal (peer and call, never the token).

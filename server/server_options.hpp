@@ -36,6 +36,7 @@ struct ServerOptions {
   std::string recordings_root;    // SubmitJob by reference reads only under this
   unsigned max_jobs = 1;          // jobs running at once
   double max_upload_mb = 8192.0;  // SubmitJob by upload: whole recording, MiB
+  double max_spool_mb = 16384.0;  // all uploads in transit together, MiB (server/spool_quota.hpp)
   std::string metrics_listen;     // IPv4 HOST:PORT for GET /metrics; empty = off
   // Security (docs/server.md "Security"): PEM files; TLS is on when tls_cert is set, mutual TLS
   // when tls_client_ca is set too. Bearer tokens are required when tokens_file is set.

@@ -100,9 +100,9 @@ SqliteJobStore::SqliteJobStore(const std::filesystem::path& path) : path_(path) 
   }
   if (::flock(lock_fd_, LOCK_EX | LOCK_NB) != 0) {
     ::close(lock_fd_);
-    throw Error(ErrorCode::kFailedPrecondition, path.string(),
-                "another posefuse-server process uses this job store (SQLite serves one process; "
-                "replicas share a PostgreSQL one: --job-store)");
+    throw StoreMisconfigured(path.string(),
+                             "another posefuse-server process uses this job store (SQLite serves one process; "
+                             "replicas share a PostgreSQL one: --job-store)");
   }
   if (sqlite3_open_v2(path.c_str(), &db_, SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_FULLMUTEX,
                       nullptr) != SQLITE_OK) {
@@ -136,6 +136,8 @@ SqliteJobStore::SqliteJobStore(const std::filesystem::path& path) : path_(path) 
         "CREATE TABLE IF NOT EXISTS results ("
         " job_id TEXT NOT NULL, seq INTEGER NOT NULL, result BLOB NOT NULL,"
         " PRIMARY KEY (job_id, seq))");
+    // One row that probe() rewrites on every heartbeat.
+    exec("CREATE TABLE IF NOT EXISTS heartbeat (id INTEGER PRIMARY KEY CHECK (id = 1), at_us INTEGER NOT NULL)");
   } catch (const Error& error) {
     sqlite3_close(db_);
     ::close(lock_fd_);
@@ -251,10 +253,10 @@ void SqliteJobStore::append_results_locked(const std::string& job_id, const std:
   }
 }
 
-std::vector<v1::FitResult> SqliteJobStore::results(const std::string& job_id) {
+std::vector<v1::FitResult> SqliteJobStore::results(const std::string& job_id, std::uint64_t first, std::size_t limit) {
   std::lock_guard lock(mu_);
-  Statement select(db_, "SELECT result FROM results WHERE job_id = ? ORDER BY seq");
-  select.bind(1, job_id);
+  Statement select(db_, "SELECT result FROM results WHERE job_id = ? AND seq >= ? ORDER BY seq LIMIT ?");
+  select.bind(1, job_id).bind(2, static_cast<std::int64_t>(first)).bind(3, static_cast<std::int64_t>(limit));
   std::vector<v1::FitResult> results;
   while (select.step()) {
     if (!results.emplace_back().ParseFromString(select.blob(0))) {
@@ -435,6 +437,14 @@ std::vector<ReapedJob> SqliteJobStore::reap(std::uint32_t max_attempts, std::int
     notify({job.state == v1::Job::QUEUED ? JobEvent::Kind::kQueued : JobEvent::Kind::kChanged, job.job_id});
   }
   return reaped;
+}
+
+void SqliteJobStore::probe() {
+  std::lock_guard lock(mu_);
+  Statement write(
+      db_, "INSERT INTO heartbeat (id, at_us) VALUES (1, ?) ON CONFLICT (id) DO UPDATE SET at_us = excluded.at_us");
+  write.bind(1, system_now_us());
+  write.step();
 }
 
 void SqliteJobStore::set_event_listener(std::function<void(const JobEvent&)> listener) {

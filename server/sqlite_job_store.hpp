@@ -29,7 +29,7 @@ class SqliteJobStore : public JobStore {
                             const std::vector<v1::Job::State>& states, const std::string& owner) override;
   void update(const v1::Job& job) override;
   void append_results(const std::string& job_id, const std::vector<v1::FitResult>& results) override;
-  std::vector<v1::FitResult> results(const std::string& job_id) override;
+  std::vector<v1::FitResult> results(const std::string& job_id, std::uint64_t first, std::size_t limit) override;
   std::optional<JobRecord> cancel(const std::string& job_id, const std::string& owner,
                                   std::int64_t now_unix_us) override;
   std::optional<JobRecord> claim(const std::string& worker, std::chrono::milliseconds lease,
@@ -39,6 +39,7 @@ class SqliteJobStore : public JobStore {
   void append_results(const JobLease& lease, const std::vector<v1::FitResult>& results) override;
   void release(const JobLease& lease, std::int64_t now_unix_us) override;
   std::vector<ReapedJob> reap(std::uint32_t max_attempts, std::int64_t now_unix_us) override;
+  void probe() override;
   void set_event_listener(std::function<void(const JobEvent&)> listener) override;
   std::string keep_upload(const std::filesystem::path& spooled) override;
   std::filesystem::path local_recording(const std::string& recording_path,

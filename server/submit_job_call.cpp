@@ -2,6 +2,7 @@
 
 #include "server/job_limits.hpp"
 #include "server/job_recording.hpp"
+#include "server/job_store_errors.hpp"
 #include "server/log.hpp"
 #include "server/random_id.hpp"
 #include "server/status.hpp"
@@ -60,6 +61,10 @@ void SubmitJobCall::read_spec_locked(bool ok) {
       return;
     }
     if (!spec_.upload()) throw_invalid("spec.source", "neither recording_uri nor upload is set");
+    // Refused before the client sends the recording, rather than after it.
+    if (const std::string problem = context_.runner.store_problem(); !problem.empty()) {
+      throw StoreUnavailable("the job store does not take writes now, retry later: " + problem);
+    }
   } catch (const Error& error) {
     finish_locked(to_status(error));
     return;
@@ -73,8 +78,9 @@ void SubmitJobCall::read_spec_locked(bool ok) {
   slot_ = admission.id;
   context_.registry.watch(*slot_, weak_from_this());
   try {
-    spool_ = std::make_unique<UploadSpool>(context_.spool_dir / (random_hex_id() + ".pfchunks"),
-                                           context_.max_upload_bytes, session::PipelineOptions{}.max_item_errors);
+    spool_ =
+        std::make_unique<UploadSpool>(context_.spool_dir / (random_hex_id() + ".pfchunks"), context_.max_upload_bytes,
+                                      session::PipelineOptions{}.max_item_errors, context_.spool_quota);
   } catch (const Error& error) {
     finish_locked(to_status(error));
     return;

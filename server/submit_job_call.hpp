@@ -42,6 +42,7 @@ struct SubmitJobContext {
   bool tenant_folders;
   std::filesystem::path spool_dir;  // by upload: where the chunk files go
   std::uint64_t max_upload_bytes;
+  SpoolQuota& spool_quota;  // the uploads in transit, together (--max-spool-mb)
   std::chrono::duration<double> idle_timeout;
 };
 

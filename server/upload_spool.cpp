@@ -4,6 +4,8 @@
 
 #include <cerrno>
 #include <cstring>
+#include <iomanip>
+#include <sstream>
 #include <system_error>
 
 #include "common/error.hpp"
@@ -26,6 +28,13 @@ void sync_to_disk(const std::filesystem::path& path) {
   }
 }
 
+// Bytes as MiB the way the flag was given: "8192", "0.75".
+std::string mib_text(std::uint64_t bytes) {
+  std::ostringstream text;
+  text << std::setprecision(6) << static_cast<double>(bytes) / (1024.0 * 1024.0);
+  return text.str();
+}
+
 }  // namespace
 
 std::filesystem::path UploadSpool::partial_path(const std::filesystem::path& final_path) {
@@ -34,15 +43,18 @@ std::filesystem::path UploadSpool::partial_path(const std::filesystem::path& fin
   return partial;
 }
 
-UploadSpool::UploadSpool(std::filesystem::path final_path, std::uint64_t max_bytes, std::uint64_t max_rejected_chunks)
+UploadSpool::UploadSpool(std::filesystem::path final_path, std::uint64_t max_bytes, std::uint64_t max_rejected_chunks,
+                         SpoolQuota& quota)
     : final_path_(std::move(final_path)),
       partial_path_(partial_path(final_path_)),
       max_bytes_(max_bytes),
       max_rejected_(max_rejected_chunks),
+      quota_(quota),
       writer_(std::make_unique<session::ChunkFileWriter>(partial_path_)) {}
 
 UploadSpool::~UploadSpool() {
   writer_.reset();
+  quota_.release(bytes_);
   if (!committed_) {
     std::error_code ignored;
     std::filesystem::remove(partial_path_, ignored);
@@ -70,10 +82,16 @@ void UploadSpool::add(const v1::SessionChunk& chunk) {
                       "); the last at " + field);
     }
   }
+  // After the checks above, which end the upload without writing the chunk.
+  if (!quota_.try_reserve(size)) {
+    throw Error(ErrorCode::kResourceExhausted, "upload",
+                "the uploads in transit together would pass the server's spool quota of " +
+                    mib_text(quota_.max_bytes()) + " MiB (--max-spool-mb) at " + field + "; retry later");
+  }
+  bytes_ += size;  // reserved: given back by the destructor, whatever happens next
   if (chunk.has_end()) ended_ = true;
   writer_->write(chunk);
   ++chunks_;
-  bytes_ += size;
 }
 
 const std::filesystem::path& UploadSpool::commit() {

@@ -12,12 +12,14 @@
 //    stops without the end marker;
 //  - a data chunk that fails validation is kept (the job reports it as an ItemError, as Fit
 //    does) but does not advance the validator.
-// Size: more than max_bytes in all is RESOURCE_EXHAUSTED (field "upload").
+// Size: more than max_bytes in all, or more than the spool quota leaves to the uploads in transit
+// together, is RESOURCE_EXHAUSTED (field "upload").
 #include <cstdint>
 #include <filesystem>
 #include <memory>
 
 #include "posefuse/v1/session.pb.h"
+#include "server/spool_quota.hpp"
 #include "session/chunk_file.hpp"
 #include "session/session_validator.hpp"
 
@@ -25,9 +27,11 @@ namespace posefuse::server {
 
 class UploadSpool {
  public:
-  // Writes to `<final_path>.partial` until commit().
-  UploadSpool(std::filesystem::path final_path, std::uint64_t max_bytes, std::uint64_t max_rejected_chunks);
-  ~UploadSpool();  // removes the partial file unless committed
+  // Writes to `<final_path>.partial` until commit(); each chunk's bytes are reserved in `quota`
+  // first.
+  UploadSpool(std::filesystem::path final_path, std::uint64_t max_bytes, std::uint64_t max_rejected_chunks,
+              SpoolQuota& quota);
+  ~UploadSpool();  // removes the partial file unless committed; gives the quota back
   UploadSpool(const UploadSpool&) = delete;
   UploadSpool& operator=(const UploadSpool&) = delete;
 
@@ -51,6 +55,7 @@ class UploadSpool {
   std::filesystem::path partial_path_;
   std::uint64_t max_bytes_;
   std::uint64_t max_rejected_;
+  SpoolQuota& quota_;
   std::unique_ptr<session::ChunkFileWriter> writer_;
   session::SessionValidator validator_;
   bool ended_ = false;

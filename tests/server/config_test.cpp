@@ -41,6 +41,7 @@ TEST_F(ConfigTest, FileSetsEveryKindOfOptionAndFlagsOverrideItWhereverConfigStan
       "max-message-mb = 2.5\n"
       "data-dir = /var/lib/posefuse data # not a comment\n"
       "max-upload-mb = 100\n"
+      "max-spool-mb = 300\n"
       "tenant-max-sessions = 3\n"
       "insecure = true\n");
   const CommandLine line = parse_server_command_line({"--workers", "5", "--config", path, "--listen=127.0.0.1:7000"});
@@ -51,6 +52,7 @@ TEST_F(ConfigTest, FileSetsEveryKindOfOptionAndFlagsOverrideItWhereverConfigStan
   EXPECT_DOUBLE_EQ(line.options.max_message_mb, 2.5);
   EXPECT_EQ(line.options.data_dir, "/var/lib/posefuse data # not a comment");
   EXPECT_DOUBLE_EQ(line.options.max_upload_mb, 100.0);
+  EXPECT_DOUBLE_EQ(line.options.max_spool_mb, 300.0);
   EXPECT_EQ(line.options.tenant_max_sessions, 3u);
   EXPECT_TRUE(line.options.insecure);
   EXPECT_EQ(line.options.max_sessions, ServerOptions{}.max_sessions);  // untouched default

@@ -1,6 +1,7 @@
 #pragma once
 // A JobStore for tests that passes every call to a real SQLite store, except the writes it is
-// told to refuse: those throw what SqliteJobStore throws when the disk is full.
+// told to refuse: those throw what SqliteJobStore throws when the disk is full. It also counts
+// how results are read.
 #include <atomic>
 #include <filesystem>
 #include <functional>
@@ -17,6 +18,11 @@ class FaultyJobStore : public JobStore {
   std::atomic<bool> refuse_creates{false};
   std::atomic<bool> refuse_updates{false};  // a running job's state, and cancelling
   std::atomic<bool> refuse_results{false};
+  // Sets refuse_results as the next job is claimed: the disk fills while that job runs.
+  std::atomic<bool> refuse_results_after_next_claim{false};
+  // What results() handed out: the most results in one call, and the calls.
+  std::atomic<std::size_t> largest_results_page{0};
+  std::atomic<std::size_t> results_reads{0};
   // Called as a job row is about to be written (set before the server starts).
   std::function<void()> before_create;
 
@@ -39,7 +45,14 @@ class FaultyJobStore : public JobStore {
     if (refuse_results) disk_full();
     store_.append_results(job_id, results);
   }
-  std::vector<v1::FitResult> results(const std::string& job_id) override { return store_.results(job_id); }
+  std::vector<v1::FitResult> results(const std::string& job_id, std::uint64_t first, std::size_t limit) override {
+    std::vector<v1::FitResult> page = store_.results(job_id, first, limit);
+    std::size_t largest = largest_results_page.load();
+    while (page.size() > largest && !largest_results_page.compare_exchange_weak(largest, page.size())) {
+    }
+    ++results_reads;
+    return page;
+  }
   std::optional<JobRecord> cancel(const std::string& job_id, const std::string& owner,
                                   std::int64_t now_unix_us) override {
     if (refuse_updates) disk_full();
@@ -47,7 +60,9 @@ class FaultyJobStore : public JobStore {
   }
   std::optional<JobRecord> claim(const std::string& worker, std::chrono::milliseconds lease,
                                  std::int64_t now_unix_us) override {
-    return store_.claim(worker, lease, now_unix_us);
+    std::optional<JobRecord> record = store_.claim(worker, lease, now_unix_us);
+    if (record && refuse_results_after_next_claim.exchange(false)) refuse_results = true;
+    return record;
   }
   LeaseState renew(const JobLease& lease, std::chrono::milliseconds duration) override {
     return store_.renew(lease, duration);
@@ -63,6 +78,11 @@ class FaultyJobStore : public JobStore {
   void release(const JobLease& lease, std::int64_t now_unix_us) override { store_.release(lease, now_unix_us); }
   std::vector<ReapedJob> reap(std::uint32_t max_attempts, std::int64_t now_unix_us) override {
     return store_.reap(max_attempts, now_unix_us);
+  }
+  // A full disk refuses the heartbeat's write as well as the job's.
+  void probe() override {
+    if (refuse_creates || refuse_updates || refuse_results) disk_full();
+    store_.probe();
   }
   void set_event_listener(std::function<void(const JobEvent&)> listener) override {
     store_.set_event_listener(std::move(listener));

@@ -33,7 +33,8 @@ class JobsTest : public ::testing::Test {
     options.data_dir = (dir_ / "data").string();
     options.recordings_root = (dir_ / "recordings").string();
     server_ = std::make_unique<PoseFuseServer>(options, std::move(make_store));
-    stub_ = v1::PoseFuse::NewStub(client::make_channel("127.0.0.1:" + std::to_string(server_->port())));
+    channel_ = client::make_channel("127.0.0.1:" + std::to_string(server_->port()));
+    stub_ = v1::PoseFuse::NewStub(channel_);
   }
 
   grpc::Status submit(const std::string& uri, v1::Job& job) {
@@ -136,6 +137,7 @@ class JobsTest : public ::testing::Test {
   posefuse::test::TempDir temp_;
   const fs::path& dir_ = temp_.path();
   std::unique_ptr<PoseFuseServer> server_;
+  std::shared_ptr<grpc::Channel> channel_;
   std::unique_ptr<v1::PoseFuse::Stub> stub_;
 };
 

@@ -9,9 +9,11 @@
 #include "client/demo_session.hpp"
 #include "client/fit_call.hpp"
 #include "posefuse/v1/service.grpc.pb.h"
+#include "server/job_limits.hpp"
 #include "server/posefuse_server.hpp"
 #include "server/sqlite_job_store.hpp"
 #include "session/chunk_file.hpp"
+#include "tests/server/faulty_job_store.hpp"
 #include "tests/server/jobs_fixture.hpp"
 #include "tests/server/test_support.hpp"
 
@@ -19,6 +21,20 @@ namespace posefuse::server {
 namespace {
 
 using test::orientation_samples;
+
+// A job of the demo recording in `state` with `results`, written to the data dir's SQLite store
+// before any server runs (as a stopped server leaves it); returns its id.
+std::string store_demo_job(const fs::path& dir, v1::Job::State state, const std::vector<v1::FitResult>& results) {
+  fs::create_directories(dir / "data");
+  SqliteJobStore store(dir / "data" / "jobs.sqlite");
+  v1::JobSpec spec;
+  spec.set_recording_uri("demo.pfchunks");
+  v1::Job job = store.create(spec, (dir / "recordings" / "demo.pfchunks").string(), "", 1);
+  job.set_state(state);
+  store.update(job);
+  store.append_results(job.job_id(), results);
+  return job.job_id();
+}
 
 TEST_F(JobsTest, SubmittedJobRunsToSucceededWithEveryResult) {
   start();
@@ -85,20 +101,9 @@ TEST_F(JobsTest, JobWithBadRecordingFailsWithTheField) {
 
 TEST_F(JobsTest, JobLeftRunningByAStoppedServerCompletesAfterRestart) {
   // What a server killed mid-job leaves behind: the job RUNNING with partial results.
-  std::string id;
-  {
-    fs::create_directories(dir_ / "data");
-    SqliteJobStore store(dir_ / "data" / "jobs.sqlite");
-    v1::JobSpec spec;
-    spec.set_recording_uri("demo.pfchunks");
-    v1::Job job = store.create(spec, (dir_ / "recordings" / "demo.pfchunks").string(), "", 1);
-    id = job.job_id();
-    job.set_state(v1::Job::RUNNING);
-    store.update(job);
-    v1::FitResult partial;
-    partial.mutable_progress()->set_chunks_processed(64);
-    store.append_results(id, {partial});
-  }
+  v1::FitResult partial;
+  partial.mutable_progress()->set_chunks_processed(64);
+  const std::string id = store_demo_job(dir_, v1::Job::RUNNING, {partial});
   start();
   const auto states = watch(id);
   ASSERT_FALSE(states.empty());
@@ -171,6 +176,49 @@ TEST_F(JobsTest, OversizedUploadIsResourceExhaustedAndLeavesNoJobAndNoFile) {
   const grpc::Status status = upload(demo::make_demo_session(), job);
   expect_refused(status, grpc::StatusCode::RESOURCE_EXHAUSTED, "upload: ");
   EXPECT_NE(status.error_message().find("--max-upload-mb"), std::string::npos);
+}
+
+// Two uploads at once that the spool quota cannot hold together: the one whose chunk would pass
+// it is refused, naming the flag, and leaves nothing; the other becomes a job and runs; once it
+// has given its bytes back the next upload fits.
+TEST_F(JobsTest, SpoolQuotaRefusesTheUploadThatWouldPassItAndTheOthersGoOn) {
+  const auto chunks = demo::make_demo_session();
+  std::uint64_t session_bytes = 0;  // as the spool counts them (upload_spool.cpp)
+  for (const auto& chunk : chunks) session_bytes += chunk.ByteSizeLong() + 10;
+  ServerOptions options;
+  options.max_spool_mb = 1.5 * static_cast<double>(session_bytes) / (1024.0 * 1024.0);
+  start(options);
+
+  // The first upload holds everything but its end marker, reserved in the quota.
+  const auto first = open_upload(chunks, chunks.size() - 1);
+  const std::uint64_t held = session_bytes - (chunks.back().ByteSizeLong() + 10);
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (server_->spool_quota().in_use() < held && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_EQ(server_->spool_quota().in_use(), held);
+
+  v1::Job refused;
+  const grpc::Status status = upload(chunks, refused);
+  EXPECT_EQ(status.error_code(), grpc::StatusCode::RESOURCE_EXHAUSTED) << status.error_message();
+  EXPECT_EQ(status.error_message().rfind("upload: the uploads in transit together would pass", 0), 0u)
+      << status.error_message();
+  EXPECT_NE(status.error_message().find("(--max-spool-mb)"), std::string::npos) << status.error_message();
+  EXPECT_EQ(server_->spool_quota().in_use(), held);  // the refused upload gave its bytes back
+  EXPECT_EQ(files_in_spool(), 1u);                   // the first upload's, nothing of the refused one
+
+  // The first upload is untouched: it completes and runs.
+  ASSERT_TRUE(first->send(chunks.back()));
+  const grpc::Status completed = first->close();
+  ASSERT_TRUE(completed.ok()) << completed.error_message();
+  EXPECT_EQ(watch(first->job.job_id()).back().state(), v1::Job::SUCCEEDED);
+  EXPECT_EQ(server_->spool_quota().in_use(), 0u);
+
+  v1::Job again;
+  const grpc::Status retried = upload(chunks, again);
+  ASSERT_TRUE(retried.ok()) << retried.error_message();
+  EXPECT_EQ(watch(again.job_id()).back().state(), v1::Job::SUCCEEDED);
+  EXPECT_EQ(job_count(), 2u);
 }
 
 TEST_F(JobsTest, UploadsThatCannotBeASessionAreInvalidArgumentNamingTheField) {
@@ -272,6 +320,28 @@ TEST_F(JobsTest, ResultsOfAnUnknownJobAreNotFound) {
   grpc::Status status;
   results("nope", &status);
   EXPECT_EQ(status.error_code(), grpc::StatusCode::NOT_FOUND);
+}
+
+// A finished job with more results than one page: GetJobResults streams every one, in order,
+// reading the store a bounded page at a time (never all of them at once).
+TEST_F(JobsTest, ResultsAreStreamedFromTheStoreInBoundedPagesCompleteAndInOrder) {
+  constexpr std::size_t kResults = 3 * kResultsPageSize + 5;
+  std::vector<v1::FitResult> stored(kResults);
+  for (std::size_t i = 0; i < kResults; ++i) stored[i].mutable_progress()->set_chunks_processed(i);
+  const std::string id = store_demo_job(dir_, v1::Job::SUCCEEDED, stored);
+  FaultyJobStore* store = nullptr;
+  start({}, [&store](const fs::path& data_dir) {
+    auto counting = std::make_unique<FaultyJobStore>(data_dir / "jobs.sqlite");
+    store = counting.get();
+    return counting;
+  });
+  grpc::Status status;
+  const auto all = results(id, &status);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  ASSERT_EQ(all.size(), kResults);
+  for (std::size_t i = 0; i < kResults; ++i) EXPECT_EQ(all[i].progress().chunks_processed(), i) << "result " << i;
+  EXPECT_LE(store->largest_results_page.load(), kResultsPageSize);
+  EXPECT_GE(store->results_reads.load(), kResults / kResultsPageSize);
 }
 
 }  // namespace

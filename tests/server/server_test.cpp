@@ -608,6 +608,9 @@ TEST(ServerOptions, BadValuesNameTheFlag) {
     options = ServerOptions{};
     options.max_upload_mb = mb;
     EXPECT_EQ(rejected_flag(options), "--max-upload-mb") << mb;
+    options = ServerOptions{};
+    options.max_spool_mb = mb;
+    EXPECT_EQ(rejected_flag(options), "--max-spool-mb") << mb;
   }
   for (const double mb : {-1.0, 2e6, std::nan("")}) {
     options = ServerOptions{};
