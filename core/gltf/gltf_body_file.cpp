@@ -133,8 +133,13 @@ void add_animation(const BodyAnimation& animation, BufferWriter& writer, tinyglt
   for (int j = 0; j < body::kNumJoints; ++j) {
     std::vector<float> xyzw;
     xyzw.reserve(4 * n);
+    Eigen::Quaternionf previous = Eigen::Quaternionf::Identity();
     for (const BodyPose& pose : animation.frames) {
-      const Eigen::Quaternionf q = pose.local[static_cast<size_t>(j)].cast<float>().normalized();
+      Eigen::Quaternionf q = pose.local[static_cast<size_t>(j)].cast<float>().normalized();
+      // q and -q are one rotation; keeping neighbours in one hemisphere makes every player's
+      // interpolation take the short way.
+      if (q.dot(previous) < 0) q.coeffs() = -q.coeffs();
+      previous = q;
       xyzw.insert(xyzw.end(), {q.x(), q.y(), q.z(), q.w()});
     }
     add_channel(kJointNode0 + j, "rotation",

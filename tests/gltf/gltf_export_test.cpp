@@ -239,6 +239,24 @@ TEST(GltfExport, ElbowAt90DegreesTurnsTheForearmAboutTheElbow) {
   EXPECT_GT(forearm_vertices, 10);
 }
 
+// q and -q are one rotation, and the fitted rotations may come with either sign; the keyframes
+// stay in one hemisphere so that a player's interpolation takes the short way.
+TEST(GltfExport, RotationKeyframesStayInOneHemisphere) {
+  const auto dir = fresh_dir("hemisphere");
+  const std::vector<gltf_fixture::Pose> poses = moving_poses();
+  gltf_fixture::write_posed_results(dir, poses, {.flip_odd_frames = true});
+  const tinygltf::Model model = load_glb(opensim::export_results(dir, opensim::ExportFormat::kGltf).file);
+  for (const tinygltf::AnimationChannel& channel : model.animations.at(0).channels) {
+    if (channel.target_path != "rotation") continue;
+    const std::vector<float> q =
+        accessor_values<float>(model, model.animations[0].samplers[static_cast<size_t>(channel.sampler)].output, 4);
+    for (size_t f = 1; f < poses.size(); ++f) {
+      const Eigen::Vector4f a(&q[4 * (f - 1)]), b(&q[4 * f]);
+      EXPECT_GT(a.dot(b), 0.9f) << model.nodes[static_cast<size_t>(channel.target_node)].name << " frame " << f;
+    }
+  }
+}
+
 TEST(GltfExport, WithoutFittedRotationsNamesTheMissingFile) {
   const auto dir = fresh_dir("no_rotations");
   gltf_fixture::write_posed_results(dir, moving_poses(), {.with_rotations = false});

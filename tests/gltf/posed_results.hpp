@@ -58,8 +58,9 @@ inline std::shared_ptr<const body::SmplModel> fixture_model() { return body::mak
 
 struct PosedResultsSpec {
   std::int64_t t0_us = 1'000'000;
-  bool with_rotations = true;  // false: the body fit was off
-  bool with_shape = true;      // false: a calibration report without betas and body model
+  bool with_rotations = true;    // false: the body fit was off
+  bool with_shape = true;        // false: a calibration report without betas and body model
+  bool flip_odd_frames = false;  // odd frames' rotations written as -q (the same rotations)
 };
 
 // One fitted frame per pose, 30 Hz from spec.t0_us.
@@ -78,7 +79,8 @@ inline void write_posed_results(const std::filesystem::path& dir, const std::vec
       joint.set_source(v1::VISUAL);
       joint.set_confidence(1.0);
       if (spec.with_rotations)
-        *frame.add_smpl_joint_rotations() = to_proto(geometry::Quat(evaluator.joint_rotation(j)));
+        *frame.add_smpl_joint_rotations() = to_proto(geometry::Quat(
+            (spec.flip_odd_frames && f % 2 == 1 ? -1.0 : 1.0) * geometry::Quat(evaluator.joint_rotation(j)).coeffs()));
     }
     files.write_frame(frame);
   }
