@@ -6,7 +6,7 @@
 //   posefuse demo-session OUT
 //   posefuse submit RECORDING_URI [--label TEXT] | jobs | watch JOB_ID | cancel JOB_ID
 //   posefuse results JOB_ID --out DIR          (all with --server ADDR)
-//   posefuse export RESULTS --format trc|mot|sto [--out FILE]
+//   posefuse export RESULTS --format trc|mot|sto|gltf [--out FILE]
 //   posefuse report RESULTS [--out FILE]
 // Every failure ends with one readable line on stderr and a non-zero exit status.
 #include <unistd.h>
@@ -44,11 +44,13 @@ constexpr const char* kUsage =
     "  posefuse info --server HOST:PORT    versions, stages, options and limits\n"
     "  posefuse demo-session OUT           write the synthetic demo session (a directory, or a\n"
     "                                      chunk file when OUT ends in .pfchunks)\n"
-    "  posefuse export RESULTS --format trc|mot|sto [--out FILE]\n"
+    "  posefuse export RESULTS --format trc|mot|sto|gltf [--out FILE]\n"
     "                                      OpenSim files from a result directory: joint centres as\n"
     "                                      markers (.trc), joint angles (.mot), IMU orientations for\n"
-    "                                      OpenSense (.sto); FILE defaults to RESULTS/markers.trc,\n"
-    "                                      joint_angles.mot, imu_orientations.sto (docs/exports.md)\n"
+    "                                      OpenSense (.sto); or the fitted body mesh with its\n"
+    "                                      skeleton animation as binary glTF 2.0 (gltf); FILE\n"
+    "                                      defaults to RESULTS/markers.trc, joint_angles.mot,\n"
+    "                                      imu_orientations.sto, body.glb (docs/exports.md)\n"
     "  posefuse report RESULTS [--out FILE]  one self-contained HTML report: angles over time,\n"
     "                                      range of motion per repetition, warnings, calibration\n"
     "                                      (default FILE: RESULTS/report.html; docs/report.md)\n"
@@ -441,7 +443,7 @@ int command_export(const Arguments& args) {
   check_flags(args, {"--format", "--out"});
   require(args.positional.size() == 1, "export takes one RESULTS directory");
   const auto format = posefuse::opensim::export_format(args.flag("--format", ""));
-  require(format.has_value(), "export needs --format trc, mot or sto");
+  require(format.has_value(), "export needs --format trc, mot, sto or gltf");
   const posefuse::opensim::ExportReport report =
       posefuse::opensim::export_results(args.positional[0], *format, args.flag("--out", ""));
   for (const std::string& warning : report.warnings)

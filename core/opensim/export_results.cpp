@@ -4,6 +4,10 @@
 #include <system_error>
 
 #include "common/error.hpp"
+#include "gltf/body_animation.hpp"
+#include "gltf/fitted_shape.hpp"
+#include "gltf/gltf_body_file.hpp"
+#include "gltf/skinned_mesh.hpp"
 #include "opensim/ground_frame.hpp"
 #include "opensim/mot_file.hpp"
 #include "opensim/sto_file.hpp"
@@ -15,6 +19,27 @@ namespace {
 const char* const kAssumedVertical =
     "calibration.json has no K_from_W (no calibrated arm IMU): the ground's y is the camera's y, which holds only "
     "for a level camera";
+
+std::string write_gltf(const session::ResultDirectory& results, const GroundFrame& ground, std::ostream& out,
+                       std::vector<std::string>& warnings) {
+  const gltf::BodyAnimation animation = gltf::body_animation(results);
+  const gltf::FittedShape shape = gltf::fitted_shape(results);
+  warnings.insert(warnings.end(), shape.warnings.begin(), shape.warnings.end());
+  if (!ground.vertical_measured) warnings.push_back(kAssumedVertical);
+  if (animation.incomplete_frames > 0)
+    warnings.push_back(std::to_string(animation.incomplete_frames) +
+                       " fitted frames left out: not all 24 joint rotations, or no pelvis position");
+  const gltf::SkinnedMesh mesh = gltf::skinned_mesh(*shape.model, shape.beta);
+  if (mesh.dropped_influences > 0)
+    warnings.push_back(std::to_string(mesh.dropped_influences) +
+                       " vertices have more than 4 skinning joints: the smallest weights were dropped");
+  Eigen::Isometry3d gltf_from_K = Eigen::Isometry3d::Identity();
+  gltf_from_K.linear() = gltf::gltf_from_ground() * ground.G_from_K;
+  gltf_from_K.translation() = -gltf_from_K.linear() * ground.origin_K;
+  const gltf::GltfSummary s = gltf::write_gltf_body(mesh, animation, gltf_from_K, out);
+  return std::to_string(s.frames) + " frames of 24 joints animating a mesh of " + std::to_string(s.vertices) +
+         " vertices";
+}
 
 std::string write_file(const session::ResultDirectory& results, ExportFormat format, const std::string& file_name,
                        std::ostream& out, std::vector<std::string>& warnings) {
@@ -46,6 +71,7 @@ std::string write_file(const session::ResultDirectory& results, ExportFormat for
       return std::to_string(s.rows) + " rows of " + std::to_string(s.imus) + " IMU orientations at " +
              std::to_string(static_cast<int>(std::lround(s.rate_hz))) + " Hz";
     }
+    case ExportFormat::kGltf: return write_gltf(results, ground, out, warnings);
   }
   throw Error(ErrorCode::kInternal, "format", "unknown export format");
 }
@@ -56,6 +82,7 @@ std::optional<ExportFormat> export_format(std::string_view name) {
   if (name == "trc") return ExportFormat::kTrc;
   if (name == "mot") return ExportFormat::kMot;
   if (name == "sto") return ExportFormat::kSto;
+  if (name == "gltf") return ExportFormat::kGltf;
   return std::nullopt;
 }
 
@@ -64,6 +91,7 @@ std::string default_export_name(ExportFormat format) {
     case ExportFormat::kTrc: return "markers.trc";
     case ExportFormat::kMot: return "joint_angles.mot";
     case ExportFormat::kSto: return "imu_orientations.sto";
+    case ExportFormat::kGltf: return "body.glb";
   }
   return "export";
 }

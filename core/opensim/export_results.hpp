@@ -1,5 +1,5 @@
 #pragma once
-// `posefuse export`: one OpenSim file from a result directory (docs/exports.md).
+// `posefuse export`: one OpenSim file, or the glTF body, from a result directory (docs/exports.md).
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -8,12 +8,12 @@
 
 namespace posefuse::opensim {
 
-enum class ExportFormat { kTrc, kMot, kSto };
+enum class ExportFormat { kTrc, kMot, kSto, kGltf };
 
-// "trc", "mot", "sto"; nullopt for anything else.
+// "trc", "mot", "sto", "gltf"; nullopt for anything else.
 std::optional<ExportFormat> export_format(std::string_view name);
 // The file written into the result directory when no output is named: markers.trc,
-// joint_angles.mot, imu_orientations.sto.
+// joint_angles.mot, imu_orientations.sto, body.glb (binary glTF: one self-contained file).
 std::string default_export_name(ExportFormat format);
 
 struct ExportReport {

@@ -387,6 +387,8 @@ TEST(BodyFitStage, ReportsThePersonalisedShape) {
   const v1::BodyShape& shape = full_run().report.body_shape();
   EXPECT_TRUE(shape.estimated());
   EXPECT_EQ(shape.betas_size(), 10);
+  EXPECT_EQ(shape.body_model(), header_with({}).sex() == v1::SessionHeader::FEMALE ? v1::BodyShape::TEMPLATE_FEMALE
+                                                                                   : v1::BodyShape::TEMPLATE_MALE);
   EXPECT_GT(shape.upper_arm_length_left_m(), 0.2);
   EXPECT_LT(shape.upper_arm_length_left_m(), 0.4);
 }

@@ -111,11 +111,11 @@ void BodyFitStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) 
       static_cast<int>(std::count_if(header.imu_devices().begin(), header.imu_devices().end(), [](const auto& d) {
         return d.role() == v1::ImuDevice::ARM_LEFT || d.role() == v1::ImuDevice::ARM_RIGHT;
       }));
-  const body::Sex sex = header.sex() == v1::SessionHeader::FEMALE ? body::Sex::kFemale : body::Sex::kMale;
+  sex_ = header.sex() == v1::SessionHeader::FEMALE ? body::Sex::kFemale : body::Sex::kMale;
   const raycast::DepthIntrinsics depth = session_cameras(header).depth;
   depth_width_ = depth.width;
   depth_height_ = depth.height;
-  tracker_ = std::make_unique<fit::BodyTracker>(body::make_template(sex), depth, tracker_options(options_));
+  tracker_ = std::make_unique<fit::BodyTracker>(body::make_template(sex_), depth, tracker_options(options_));
   tracker_->record_frame_stats(record_stats_);
 }
 
@@ -295,6 +295,7 @@ void BodyFitStage::report_shape(StageOutput& out) const {
   shape.set_shoulder_width_m(length(body::kLeftShoulder, body::kRightShoulder));
   shape.set_torso_length_m(length(body::kPelvis, body::kNeck));
   shape.set_estimated(fitted->estimated);
+  shape.set_body_model(sex_ == body::Sex::kFemale ? v1::BodyShape::TEMPLATE_FEMALE : v1::BodyShape::TEMPLATE_MALE);
 }
 
 }  // namespace posefuse::session

@@ -31,6 +31,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 
+#include "body/template_generator.hpp"
 #include "fit/body_tracker.hpp"
 #include "fit/packed_body_frame.hpp"
 #include "fit/tracked_skeleton.hpp"
@@ -92,6 +93,7 @@ class BodyFitStage : public Stage {
 
   bool enabled_ = false;
   std::unique_ptr<fit::BodyTracker> tracker_;
+  body::Sex sex_ = body::Sex::kMale;  // the template's (BodyShape.body_model)
   BodyFitOptions options_;
   int depth_width_ = 0, depth_height_ = 0;
   std::optional<std::uint32_t> body_id_;
