@@ -103,15 +103,15 @@ void fail_job(v1::Job& job, grpc::StatusCode code, const std::string& message) {
 
 }  // namespace
 
-JobRunner::JobRunner(JobStore& store, WorkerPool& pool, Metrics& metrics, JobRunnerOptions options)
+JobRunner::JobRunner(JobStore& store, Metrics& metrics, JobRunnerOptions options)
     : store_(store),
-      pool_(pool),
       metrics_(metrics),
       options_([&] {
         options.max_running = std::max(1u, options.max_running);
         return std::move(options);
       }()),
-      worker_id_(make_worker_id()) {
+      worker_id_(make_worker_id()),
+      pool_(options_.max_running) {
   store_.set_event_listener([this](const JobEvent& event) { on_event(event); });
 }
 

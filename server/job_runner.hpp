@@ -1,10 +1,13 @@
 #pragma once
 // Runs batch jobs: each job reads its recording and goes through the same SessionPipeline as a
-// Fit call, on the worker pool, at most max_running at once. The queue is the JobStore: a
-// dispatcher thread claims jobs under a lease (job_store.hpp), renews the leases of the jobs
-// it runs every heartbeat, and reaps jobs whose lease expired (their worker was killed), so any
-// number of runners on one shared store run every job exactly once at a time. Everything a job
-// produces is written to the store as it goes, through its lease.
+// Fit call, at most max_running at once, on this runner's own threads: a long or stuck job never
+// holds a thread that Fit calls and uploads need (those run on the server's WorkerPool).
+//
+// The queue is the JobStore: a dispatcher thread claims jobs under a lease (job_store.hpp),
+// renews the leases of the jobs it runs every heartbeat, and reaps jobs whose lease expired
+// (their worker was killed), so any number of runners on one shared store run every job exactly
+// once at a time. Everything a job produces is written to the store as it goes, through its
+// lease.
 //
 // The heartbeat also probes the store with a small write (JobStore::probe): while it fails no
 // job is claimed and the jobs' health is NOT_SERVING (docs/server.md, "Job store").
@@ -46,7 +49,7 @@ struct JobRunnerOptions {
 
 class JobRunner {
  public:
-  JobRunner(JobStore& store, WorkerPool& pool, Metrics& metrics, JobRunnerOptions options);
+  JobRunner(JobStore& store, Metrics& metrics, JobRunnerOptions options);
   ~JobRunner();  // hands running jobs back and waits for them
 
   // Whether the store takes writes: called on every change, from the dispatcher or a worker.
@@ -98,7 +101,6 @@ class JobRunner {
   void publish(const v1::Job& job);
 
   JobStore& store_;
-  WorkerPool& pool_;
   Metrics& metrics_;
   const JobRunnerOptions options_;
   const std::string worker_id_;
@@ -118,6 +120,7 @@ class JobRunner {
   std::string store_problem_;        // "" while the store takes writes
   bool store_health_known_ = false;  // reported at least once
   std::thread dispatcher_;
+  WorkerPool pool_;  // last: its threads are joined before anything they use is destroyed
 };
 
 }  // namespace posefuse::server

@@ -168,7 +168,7 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
     runner.heartbeat = seconds_to_ms(options_.job_heartbeat_s);
     runner.max_attempts = options_.job_max_attempts;
     runner.max_held_bytes = session_memory_bytes(options_);
-    jobs_ = std::make_unique<JobRunner>(*job_store_, *pool_, metrics_, std::move(runner));
+    jobs_ = std::make_unique<JobRunner>(*job_store_, metrics_, std::move(runner));
   }
   service_ = std::make_unique<PoseFuseService>(options_, *pool_, *registry_, metrics_, jobs_.get(), tokens_.get());
 

@@ -7,7 +7,7 @@ namespace posefuse::server {
 
 struct ServerOptions {
   std::string listen = "127.0.0.1:50051";  // host:port; port 0 picks a free one
-  unsigned workers = 0;                    // pipeline threads; 0 = one per CPU core
+  unsigned workers = 0;                    // Fit and upload pipeline threads; 0 = one per CPU core
   unsigned max_sessions = 16;              // concurrent Fit calls; beyond: RESOURCE_EXHAUSTED
   // Concurrent Fit calls and uploads of one tenant (docs/server.md "Security"); 0: max_sessions
   // split evenly between the tokens file's tenants (fair_share_of_sessions).
