@@ -1,6 +1,8 @@
-// A long or stuck job cannot starve Fit (server/job_runner.hpp): jobs run on threads of their
-// own. Through the real server on loopback; the job is held inside the read of its uploaded
-// recording by the store (tests/server/faulty_job_store.hpp).
+// A long or stuck job can neither starve Fit nor run for ever (server/job_runner.hpp): jobs run
+// on threads of their own, an attempt past --job-deadline-s or --job-stall-s fails with
+// DEADLINE_EXCEEDED, and a cancel reaches a job whose thread is blocked inside a read. Through
+// the real server on loopback; the job is held inside the read of its uploaded recording by
+// the store (tests/server/faulty_job_store.hpp).
 #include <chrono>
 #include <condition_variable>
 #include <mutex>
@@ -48,6 +50,14 @@ class JobWatchdogTest : public JobsTest {
     server_.reset();
   }
 
+  // Options with the watchdog off; each test turns on what it tries.
+  static ServerOptions options() {
+    ServerOptions options;
+    options.job_deadline_s = 0;
+    options.job_stall_s = 0;
+    return options;
+  }
+
   // Starts the server with `options` and the store calling `before_fetch` as a job's worker
   // fetches its upload; submits the demo session by upload.
   std::string start_with_upload(ServerOptions options, std::function<void()> before_fetch) {
@@ -62,11 +72,38 @@ class JobWatchdogTest : public JobsTest {
     return job.job_id();
   }
 
+  v1::Job final_state(const std::string& id) {
+    const auto states = watch(id);
+    return states.empty() ? v1::Job() : states.back();
+  }
+
+  // Lets the held job's thread return and waits for it: whatever it tries to write then is
+  // refused (the job's end was written without it), so the stored job stays as it was.
+  v1::Job stored_after_release(const std::string& id) {
+    gate_.open();
+    EXPECT_TRUE(server_->jobs()->wait_idle(std::chrono::seconds(60)));
+    grpc::ClientContext context;
+    set_test_deadline(context);
+    v1::GetJobRequest request;
+    request.set_job_id(id);
+    v1::Job job;
+    const grpc::Status status = stub_->GetJob(&context, request, &job);
+    EXPECT_TRUE(status.ok()) << status.error_message();
+    return job;
+  }
+
+  // Heartbeats (and so the watchdog's rounds) every 50 ms.
+  static ServerOptions quick_heartbeat(ServerOptions options) {
+    options.job_lease_s = 5;
+    options.job_heartbeat_s = 0.05;
+    return options;
+  }
+
   Gate gate_;
 };
 
 TEST_F(JobWatchdogTest, JobStuckInsideAReadLeavesFitServedWithOneWorker) {
-  ServerOptions options;
+  ServerOptions options = this->options();
   options.workers = 1;
   options.max_jobs = 1;
   start_with_upload(options, [this] { gate_.pass(); });
@@ -75,6 +112,49 @@ TEST_F(JobWatchdogTest, JobStuckInsideAReadLeavesFitServedWithOneWorker) {
   const grpc::Status fit = fit_demo(summary);
   EXPECT_TRUE(fit.ok()) << fit.error_message();
   EXPECT_TRUE(summary);
+}
+
+TEST_F(JobWatchdogTest, JobPastItsDeadlineFailsWithDeadlineExceeded) {
+  // The read takes longer than the whole deadline; the job stops at its first chunk.
+  ServerOptions options = this->options();
+  options.job_deadline_s = 0.1;
+  const std::string id =
+      start_with_upload(options, [] { std::this_thread::sleep_for(std::chrono::milliseconds(300)); });
+  const v1::Job job = final_state(id);
+  EXPECT_EQ(job.state(), v1::Job::FAILED);
+  EXPECT_EQ(job.error_code(), static_cast<int>(grpc::StatusCode::DEADLINE_EXCEEDED));
+  EXPECT_EQ(job.error_message().rfind("job: ran for longer than --job-deadline-s (0.1", 0), 0u) << job.error_message();
+}
+
+TEST_F(JobWatchdogTest, JobBlockedInsideAReadFailsWhenItReadsNoChunkForTheStallLimit) {
+  ServerOptions options = quick_heartbeat(this->options());
+  options.job_stall_s = 0.2;
+  const std::string id = start_with_upload(options, [this] { gate_.pass(); });
+  const v1::Job job = final_state(id);
+  EXPECT_EQ(job.state(), v1::Job::FAILED);
+  EXPECT_EQ(job.error_code(), static_cast<int>(grpc::StatusCode::DEADLINE_EXCEEDED));
+  EXPECT_EQ(job.error_message().rfind("job: read no chunk of its recording for --job-stall-s (0.2", 0), 0u)
+      << job.error_message();
+
+  const v1::Job stored = stored_after_release(id);
+  EXPECT_EQ(stored.state(), v1::Job::FAILED);
+  EXPECT_EQ(stored.error_message(), job.error_message());
+}
+
+TEST_F(JobWatchdogTest, CancelReachesAJobBlockedInsideARead) {
+  const std::string id = start_with_upload(quick_heartbeat(options()), [this] { gate_.pass(); });
+  ASSERT_TRUE(gate_.wait_entered());
+  {
+    grpc::ClientContext context;
+    set_test_deadline(context);
+    v1::CancelJobRequest request;
+    request.set_job_id(id);
+    v1::Job job;
+    const grpc::Status status = stub_->CancelJob(&context, request, &job);
+    ASSERT_TRUE(status.ok()) << status.error_message();
+  }
+  EXPECT_EQ(final_state(id).state(), v1::Job::CANCELLED);
+  EXPECT_EQ(stored_after_release(id).state(), v1::Job::CANCELLED);
 }
 
 }  // namespace
