@@ -5,6 +5,7 @@
 #include <chrono>
 #include <filesystem>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 
 #include "server/job_recording.hpp"
@@ -52,6 +53,12 @@ class RunAbandoned : public std::runtime_error {
 
  private:
   bool lease_lost_;
+};
+
+// The watchdog stopped the run (job_runner.hpp): the job fails with DEADLINE_EXCEEDED.
+class RunOverdue : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
 };
 
 template <class Write>
@@ -103,15 +110,15 @@ void fail_job(v1::Job& job, grpc::StatusCode code, const std::string& message) {
 
 }  // namespace
 
-JobRunner::JobRunner(JobStore& store, WorkerPool& pool, Metrics& metrics, JobRunnerOptions options)
+JobRunner::JobRunner(JobStore& store, Metrics& metrics, JobRunnerOptions options)
     : store_(store),
-      pool_(pool),
       metrics_(metrics),
       options_([&] {
         options.max_running = std::max(1u, options.max_running);
         return std::move(options);
       }()),
-      worker_id_(make_worker_id()) {
+      worker_id_(make_worker_id()),
+      pool_(options_.max_running) {
   store_.set_event_listener([this](const JobEvent& event) { on_event(event); });
 }
 
@@ -192,6 +199,7 @@ void JobRunner::dispatch_loop() {
         // Renewed even while the store fails: a lease that expired would make this worker's
         // running jobs start over once it works again.
         renew_leases();
+        watch_running();
         if (store_serving) reap_expired();
       }
     }
@@ -224,6 +232,69 @@ void JobRunner::renew_leases() {
       log_event("warning", "job_lease_renew_failed", {{"job", entry->lease.job_id}, {"error", error.what()}});
     }
   }
+}
+
+void JobRunner::watch_running() {
+  std::vector<std::shared_ptr<Running>> running;
+  {
+    std::lock_guard lock(mu_);
+    for (const auto& [id, entry] : running_) running.push_back(entry);
+  }
+  const Clock::time_point now = Clock::now();
+  for (const auto& entry : running) {
+    if (entry->ended_by_watchdog) continue;
+    if (entry->overdue == Overdue::kNo) {
+      const Clock::time_point last_read{Clock::duration(entry->last_read.load())};
+      if (options_.deadline.count() > 0 && now - entry->started >= options_.deadline) {
+        entry->overdue = Overdue::kDeadline;
+      } else if (options_.stall.count() > 0 && now - last_read >= options_.stall) {
+        entry->overdue = Overdue::kStalled;
+      }
+    }
+    const bool must_stop = entry->cancel || entry->overdue != Overdue::kNo;
+    // A heartbeat is far longer than a chunk takes: a stop still pending one heartbeat after it
+    // was seen is one the job's thread cannot get to.
+    if (must_stop && entry->stop_pending) end_unresponsive(*entry);
+    entry->stop_pending = must_stop;
+  }
+}
+
+void JobRunner::end_unresponsive(Running& running) {
+  const std::string& job_id = running.lease.job_id;
+  try {
+    const std::optional<JobRecord> record = store_.get(job_id);
+    if (!record || record->job.state() != v1::Job::RUNNING) return;
+    v1::Job job = record->job;
+    const Overdue overdue = running.overdue;
+    if (overdue != Overdue::kNo) {
+      fail_job(job, grpc::StatusCode::DEADLINE_EXCEEDED, overdue_message(overdue));
+    } else {
+      job.set_state(v1::Job::CANCELLED);
+    }
+    job.set_update_time_unix_us(now_unix_us());
+    store_.update_running(running.lease, job);  // a terminal state: the lease ends with it
+    running.ended_by_watchdog = true;
+    drop_upload(*record);
+    metrics_.job_finished(record->owner, v1::Job::State_Name(job.state()));
+    log_event("warning", "job_ended_unresponsive", {{"job", job_id}, {"state", v1::Job::State_Name(job.state())}});
+  } catch (const LeaseLost&) {
+    running.ended_by_watchdog = true;  // it ended meanwhile, or another attempt holds it
+  } catch (const std::exception& error) {
+    // Tried again at the next heartbeat; should the store stay away, the lease expires.
+    log_event("warning", "job_end_unresponsive_failed", {{"job", job_id}, {"error", error.what()}});
+  }
+}
+
+std::string JobRunner::overdue_message(Overdue overdue) const {
+  const auto seconds = [](std::chrono::milliseconds limit) {
+    std::ostringstream text;
+    text << limit.count() / 1000.0;
+    return text.str();
+  };
+  if (overdue == Overdue::kDeadline) {
+    return "job: ran for longer than --job-deadline-s (" + seconds(options_.deadline) + " s) and was stopped";
+  }
+  return "job: read no chunk of its recording for --job-stall-s (" + seconds(options_.stall) + " s) and was stopped";
 }
 
 void JobRunner::reap_expired() {
@@ -344,11 +415,17 @@ void JobRunner::run_job(Running& running, JobRecord& record) {
     session::SessionChunk chunk;
     bool cancelled = false;
     while (source->next(chunk)) {
+      running.last_read = Clock::now().time_since_epoch().count();
       if (stop_flag_) {
         handed_back = true;
         break;
       }
       if (running.lost) throw RunAbandoned("lease_lost", true);
+      // The deadline is checked here too, so that it holds to the chunk, not to the heartbeat.
+      if (options_.deadline.count() > 0 && Clock::now() - running.started >= options_.deadline) {
+        running.overdue = Overdue::kDeadline;
+      }
+      if (const Overdue overdue = running.overdue; overdue != Overdue::kNo) throw RunOverdue(overdue_message(overdue));
       cancelled = running.cancel;
       if (cancelled) break;
       pipeline.push(chunk);
@@ -360,6 +437,8 @@ void JobRunner::run_job(Running& running, JobRecord& record) {
     abandoned = reason;
   } catch (const StoreWriteFailed& failure) {
     store_failure = failure;
+  } catch (const RunOverdue& overdue) {
+    fail_job(job, grpc::StatusCode::DEADLINE_EXCEEDED, overdue.what());
   } catch (const Error& error) {
     fail_job(job, status_code(error.code()), error.what());
   } catch (const std::exception& error) {

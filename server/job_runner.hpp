@@ -1,10 +1,13 @@
 #pragma once
 // Runs batch jobs: each job reads its recording and goes through the same SessionPipeline as a
-// Fit call, on the worker pool, at most max_running at once. The queue is the JobStore: a
-// dispatcher thread claims jobs under a lease (job_store.hpp), renews the leases of the jobs
-// it runs every heartbeat, and reaps jobs whose lease expired (their worker was killed), so any
-// number of runners on one shared store run every job exactly once at a time. Everything a job
-// produces is written to the store as it goes, through its lease.
+// Fit call, at most max_running at once, on this runner's own threads: a long or stuck job never
+// holds a thread that Fit calls and uploads need (those run on the server's WorkerPool).
+//
+// The queue is the JobStore: a dispatcher thread claims jobs under a lease (job_store.hpp),
+// renews the leases of the jobs it runs every heartbeat, and reaps jobs whose lease expired
+// (their worker was killed), so any number of runners on one shared store run every job exactly
+// once at a time. Everything a job produces is written to the store as it goes, through its
+// lease.
 //
 // The heartbeat also probes the store with a small write (JobStore::probe): while it fails no
 // job is claimed and the jobs' health is NOT_SERVING (docs/server.md, "Job store").
@@ -12,6 +15,13 @@
 // Watchers (WatchJob) and cancellation follow the store's events, so they work whichever
 // replica runs the job. Shutdown hands work back: running jobs stop between two chunks and are
 // released to the queue for another worker (or the next start).
+//
+// A watchdog bounds each attempt: past its deadline, or after too long without reading a chunk,
+// the job stops between two chunks and fails with DEADLINE_EXCEEDED. A stop (those, or a
+// cancel) that the job's thread does not honour by the next heartbeat means the thread is
+// blocked inside a read or a write: the dispatcher then writes the job's end itself, which ends
+// the lease, so nothing the thread writes when (if ever) it returns is stored. Such a thread
+// keeps its slot of max_running until it returns.
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
@@ -41,12 +51,14 @@ struct JobRunnerOptions {
   std::chrono::milliseconds lease{30000};
   std::chrono::milliseconds heartbeat{10000};  // lease renewal, reaping and queue polling
   std::uint32_t max_attempts = 3;
-  std::uint64_t max_held_bytes = 0;  // a job's memory budget (session::PipelineOptions)
+  std::uint64_t max_held_bytes = 0;       // a job's memory budget (session::PipelineOptions)
+  std::chrono::milliseconds deadline{0};  // an attempt's longest run; zero: none
+  std::chrono::milliseconds stall{0};     // longest time without reading a chunk; zero: none
 };
 
 class JobRunner {
  public:
-  JobRunner(JobStore& store, WorkerPool& pool, Metrics& metrics, JobRunnerOptions options);
+  JobRunner(JobStore& store, Metrics& metrics, JobRunnerOptions options);
   ~JobRunner();  // hands running jobs back and waits for them
 
   // Whether the store takes writes: called on every change, from the dispatcher or a worker.
@@ -77,10 +89,19 @@ class JobRunner {
   bool wait_idle(std::chrono::milliseconds timeout);
 
  private:
+  using Clock = std::chrono::steady_clock;
+  enum class Overdue { kNo, kDeadline, kStalled };
   struct Running {
     JobLease lease;
     std::atomic<bool> cancel{false};
     std::atomic<bool> lost{false};
+    std::atomic<Overdue> overdue{Overdue::kNo};  // set by the watchdog, honoured by the job
+    Clock::time_point started = Clock::now();
+    std::atomic<Clock::rep> last_read{Clock::now().time_since_epoch().count()};  // last chunk read
+    // The dispatcher's alone: whether a stop was pending at its last heartbeat, and whether it
+    // wrote the job's end itself.
+    bool stop_pending = false;
+    bool ended_by_watchdog = false;
   };
 
   void dispatch_loop();
@@ -89,6 +110,9 @@ class JobRunner {
   void set_store_health(const std::string& problem);
   void renew_leases();
   void reap_expired();
+  void watch_running();
+  void end_unresponsive(Running& running);
+  std::string overdue_message(Overdue overdue) const;
   void claim_more();
   void run(const std::shared_ptr<Running>& running, JobRecord record);
   void run_job(Running& running, JobRecord& record);
@@ -98,7 +122,6 @@ class JobRunner {
   void publish(const v1::Job& job);
 
   JobStore& store_;
-  WorkerPool& pool_;
   Metrics& metrics_;
   const JobRunnerOptions options_;
   const std::string worker_id_;
@@ -118,6 +141,7 @@ class JobRunner {
   std::string store_problem_;        // "" while the store takes writes
   bool store_health_known_ = false;  // reported at least once
   std::thread dispatcher_;
+  WorkerPool pool_;  // last: its threads are joined before anything they use is destroyed
 };
 
 }  // namespace posefuse::server

@@ -93,6 +93,12 @@ void validate_options(const ServerOptions& o) {
                   "renewed before it expires)");
   }
   if (o.job_max_attempts == 0) throw_invalid("--job-max-attempts", "must be at least 1");
+  if (!(o.job_deadline_s >= 0.0 && o.job_deadline_s <= 31.0 * 86400.0)) {
+    throw_invalid("--job-deadline-s", "must be in [0, 2678400] seconds (0: no deadline)");
+  }
+  if (!(o.job_stall_s >= 0.0 && o.job_stall_s <= 31.0 * 86400.0)) {
+    throw_invalid("--job-stall-s", "must be in [0, 2678400] seconds (0: no limit)");
+  }
   if (!o.tls_client_ca.empty() && o.tls_cert.empty()) {
     throw_invalid("--tls-client-ca", "needs --tls-cert and --tls-key (mutual TLS is TLS first)");
   }
@@ -168,7 +174,9 @@ PoseFuseServer::PoseFuseServer(ServerOptions options, JobStoreFactory make_store
     runner.heartbeat = seconds_to_ms(options_.job_heartbeat_s);
     runner.max_attempts = options_.job_max_attempts;
     runner.max_held_bytes = session_memory_bytes(options_);
-    jobs_ = std::make_unique<JobRunner>(*job_store_, *pool_, metrics_, std::move(runner));
+    runner.deadline = seconds_to_ms(options_.job_deadline_s);
+    runner.stall = seconds_to_ms(options_.job_stall_s);
+    jobs_ = std::make_unique<JobRunner>(*job_store_, metrics_, std::move(runner));
   }
   service_ = std::make_unique<PoseFuseService>(options_, *pool_, *registry_, metrics_, jobs_.get(), tokens_.get());
 

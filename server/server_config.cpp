@@ -47,6 +47,8 @@ void set_server_option(ServerOptions& o, const std::string& key, const std::stri
   else if (key == "job-lease-s") o.job_lease_s = number();
   else if (key == "job-heartbeat-s") o.job_heartbeat_s = number();
   else if (key == "job-max-attempts") o.job_max_attempts = count();
+  else if (key == "job-deadline-s") o.job_deadline_s = number();
+  else if (key == "job-stall-s") o.job_stall_s = number();
   else if (key == "max-upload-mb") o.max_upload_mb = number();
   else if (key == "max-spool-mb") o.max_spool_mb = number();
   else if (key == "metrics-listen") o.metrics_listen = value;

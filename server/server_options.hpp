@@ -7,7 +7,7 @@ namespace posefuse::server {
 
 struct ServerOptions {
   std::string listen = "127.0.0.1:50051";  // host:port; port 0 picks a free one
-  unsigned workers = 0;                    // pipeline threads; 0 = one per CPU core
+  unsigned workers = 0;                    // Fit and upload pipeline threads; 0 = one per CPU core
   unsigned max_sessions = 16;              // concurrent Fit calls; beyond: RESOURCE_EXHAUSTED
   // Concurrent Fit calls and uploads of one tenant (docs/server.md "Security"); 0: max_sessions
   // split evenly between the tokens file's tenants (fair_share_of_sessions).
@@ -33,6 +33,13 @@ struct ServerOptions {
   double job_lease_s = 30.0;      // a running job's lease; expired: another worker
   double job_heartbeat_s = 10.0;  // lease renewal, reaping and queue polling
   unsigned job_max_attempts = 3;  // claims before a job whose lease keeps expiring fails
+  // A running attempt is stopped and its job FAILED (DEADLINE_EXCEEDED) after job_deadline_s,
+  // or after job_stall_s without reading a chunk; 0 disables either. A chunk is read and
+  // processed in well under a second, and a job runs several times faster than the session was
+  // recorded, so 6 h is far beyond any honest job (a 2 h session) and 5 min without a chunk is
+  // a read or a store that hangs.
+  double job_deadline_s = 21600.0;
+  double job_stall_s = 300.0;
   std::string recordings_root;    // SubmitJob by reference reads only under this
   unsigned max_jobs = 1;          // jobs running at once
   double max_upload_mb = 8192.0;  // SubmitJob by upload: whole recording, MiB

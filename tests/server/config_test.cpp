@@ -62,14 +62,17 @@ TEST_F(ConfigTest, JobStoreRoleAndLeaseKeys) {
   const std::string path = write_config(
       "job-store = host=/run/postgresql dbname=posefuse\n"
       "role = worker\n"
-      "job-lease-s = 12.5\n");
-  const CommandLine line =
-      parse_server_command_line({"--config", path, "--job-heartbeat-s", "2", "--job-max-attempts=5"});
+      "job-lease-s = 12.5\n"
+      "job-stall-s = 60\n");
+  const CommandLine line = parse_server_command_line(
+      {"--config", path, "--job-heartbeat-s", "2", "--job-max-attempts=5", "--job-deadline-s", "7200"});
   EXPECT_EQ(line.options.job_store, "host=/run/postgresql dbname=posefuse");
   EXPECT_EQ(line.options.role, "worker");
   EXPECT_DOUBLE_EQ(line.options.job_lease_s, 12.5);
   EXPECT_DOUBLE_EQ(line.options.job_heartbeat_s, 2.0);
   EXPECT_EQ(line.options.job_max_attempts, 5u);
+  EXPECT_DOUBLE_EQ(line.options.job_deadline_s, 7200.0);
+  EXPECT_DOUBLE_EQ(line.options.job_stall_s, 60.0);
 }
 
 TEST_F(ConfigTest, StreamRateKeys) {

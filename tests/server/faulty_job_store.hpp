@@ -1,7 +1,8 @@
 #pragma once
 // A JobStore for tests that passes every call to a real SQLite store, except the writes it is
 // told to refuse: those throw what SqliteJobStore throws when the disk is full. It also counts
-// how results are read.
+// how results are read, and can hold a job inside the read of its uploaded recording (a slow or
+// hung fetch).
 #include <atomic>
 #include <filesystem>
 #include <functional>
@@ -25,6 +26,8 @@ class FaultyJobStore : public JobStore {
   std::atomic<std::size_t> results_reads{0};
   // Called as a job row is about to be written (set before the server starts).
   std::function<void()> before_create;
+  // Called as a job's worker fetches its uploaded recording (set before the server starts).
+  std::function<void()> before_fetch;
 
   v1::Job create(const v1::JobSpec& spec, const std::string& recording_path, const std::string& owner,
                  std::int64_t now_unix_us) override {
@@ -90,6 +93,7 @@ class FaultyJobStore : public JobStore {
   std::string keep_upload(const std::filesystem::path& spooled) override { return store_.keep_upload(spooled); }
   std::filesystem::path local_recording(const std::string& recording_path,
                                         const std::filesystem::path& scratch_dir) override {
+    if (before_fetch) before_fetch();
     return store_.local_recording(recording_path, scratch_dir);
   }
   void drop_upload(const std::string& recording_path, const std::filesystem::path& scratch_dir) override {

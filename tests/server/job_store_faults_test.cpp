@@ -38,25 +38,6 @@ class JobStoreFaultsTest : public JobsTest {
     ASSERT_NE(faults_, nullptr);
   }
 
-  // The demo session through Fit: its status, and whether the summary came.
-  grpc::Status fit_demo(bool& summary) {
-    grpc::ClientContext context;
-    set_test_deadline(context);
-    auto stream = stub_->Fit(&context);
-    const auto chunks = demo::make_demo_session();
-    std::thread sender([&] {
-      for (const auto& chunk : chunks) {
-        if (!stream->Write(chunk)) return;
-      }
-      stream->WritesDone();
-    });
-    summary = false;
-    v1::FitResult result;
-    while (stream->Read(&result)) summary = summary || result.has_summary();
-    sender.join();
-    return stream->Finish();
-  }
-
   void expect_serving() {
     bool summary = false;
     const grpc::Status fit = fit_demo(summary);

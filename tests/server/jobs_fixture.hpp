@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <memory>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -29,7 +30,7 @@ class JobsTest : public ::testing::Test {
 
   void start(ServerOptions options = {}, JobStoreFactory make_store = {}) {
     options.listen = "127.0.0.1:0";
-    options.workers = 2;
+    if (options.workers == 0) options.workers = 2;
     options.data_dir = (dir_ / "data").string();
     options.recordings_root = (dir_ / "recordings").string();
     server_ = std::make_unique<PoseFuseServer>(options, std::move(make_store));
@@ -52,6 +53,25 @@ class JobsTest : public ::testing::Test {
     writer->Write(request);
     writer->WritesDone();
     return writer->Finish();
+  }
+
+  // The demo session through Fit: its status, and whether the summary came.
+  grpc::Status fit_demo(bool& summary) {
+    grpc::ClientContext context;
+    set_test_deadline(context);
+    auto stream = stub_->Fit(&context);
+    const auto chunks = demo::make_demo_session();
+    std::thread sender([&] {
+      for (const auto& chunk : chunks) {
+        if (!stream->Write(chunk)) return;
+      }
+      stream->WritesDone();
+    });
+    summary = false;
+    v1::FitResult result;
+    while (stream->Read(&result)) summary = summary || result.has_summary();
+    sender.join();
+    return stream->Finish();
   }
 
   // Every state WatchJob reports until the job has finished.

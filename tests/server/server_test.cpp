@@ -656,6 +656,11 @@ TEST(ServerOptions, JobStoreRolesAndLeasesThatCannotWorkNameTheFlag) {
   EXPECT_EQ(with([](ServerOptions& o) { o.job_heartbeat_s = o.job_lease_s; }), "--job-heartbeat-s");
   EXPECT_EQ(with([](ServerOptions& o) { o.job_lease_s = 0; }), "--job-lease-s");
   EXPECT_EQ(with([](ServerOptions& o) { o.job_max_attempts = 0; }), "--job-max-attempts");
+  for (const double seconds : {-1.0, std::nan(""), HUGE_VAL}) {
+    EXPECT_EQ(with([&](ServerOptions& o) { o.job_deadline_s = seconds; }), "--job-deadline-s") << seconds;
+    EXPECT_EQ(with([&](ServerOptions& o) { o.job_stall_s = seconds; }), "--job-stall-s") << seconds;
+  }
+  EXPECT_EQ(with([](ServerOptions& o) { o.job_deadline_s = o.job_stall_s = 0; }), "");  // 0: off
   EXPECT_EQ(with([](ServerOptions& o) {
               o.job_store = "postgresql:///posefuse?host=/run/postgresql";
               o.role = "api";
