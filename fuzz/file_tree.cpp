@@ -63,7 +63,7 @@ std::vector<TreeEntry> tree_entries(const std::uint8_t* data, std::size_t size) 
     const std::string entry = bytes.substr(at + 1, end == std::string::npos ? std::string::npos : end - at - 1);
     at = end;
     if (entry.empty()) continue;
-    const std::size_t newline = entry.find('\n');
+    const std::size_t newline = entry.find('\n', 1);
     TreeEntry e;
     e.kind = entry[0];
     e.path = safe_path(entry.substr(1, newline == std::string::npos ? std::string::npos : newline - 1));
