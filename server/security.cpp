@@ -7,7 +7,6 @@
 
 #include "common/error.hpp"
 #include "server/log.hpp"
-#include "server/text_lines.hpp"
 #include "session/file_bytes.hpp"
 
 namespace posefuse::server {
@@ -19,26 +18,6 @@ void require_pem(const std::string& text, std::string_view marker, const std::st
   if (text.find("-----BEGIN ") == std::string::npos || text.find(marker) == std::string::npos) {
     throw_invalid(flag, "'" + path + "' is not a PEM " + what);
   }
-}
-
-// Visible ASCII only: what a metadata value may carry and a file editor shows plainly.
-bool valid_token_characters(const std::string& token) {
-  for (const unsigned char c : token) {
-    if (c < 0x21 || c > 0x7e) return false;
-  }
-  return true;
-}
-
-// A tenant names who owns jobs and its folder of the recordings root: a plain name that is safe
-// in logs and as one path component.
-bool valid_tenant(const std::string& tenant) {
-  if (tenant.empty() || tenant.size() > 64 || tenant == "." || tenant == "..") return false;
-  for (const char c : tenant) {
-    const bool ok =
-        (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') || c == '_' || c == '.' || c == '-';
-    if (!ok) return false;
-  }
-  return true;
 }
 
 // Looks at every byte of `accepted` whatever `presented` holds, so the time taken tells nothing
@@ -91,30 +70,7 @@ std::string transport_mode(const ServerOptions& options) {
 }
 
 BearerTokens BearerTokens::load(const std::string& path) {
-  const std::string flag = "--tokens-file";
-  std::vector<AcceptedToken> tokens;
-  for (const TextLine& line : meaningful_lines(read_security_file(path, flag))) {
-    // "<token>" or "<token> <tenant>".
-    const std::size_t gap = line.text.find_first_of(" \t");
-    const std::string token = line.text.substr(0, gap);
-    const std::string tenant = gap == std::string::npos ? std::string() : trim_whitespace(line.text.substr(gap));
-    // The messages name the line, never the token.
-    const std::string where = "'" + path + "' line " + std::to_string(line.number);
-    if (gap != std::string::npos && !valid_tenant(tenant)) {
-      throw_invalid(flag,
-                    where + ": the tenant after the token must match [A-Za-z0-9_.-]{1,64} and not be '.' or '..'");
-    }
-    if (!valid_token_characters(token)) {
-      throw_invalid(flag, where + ": a token may hold only visible ASCII characters, no spaces");
-    }
-    if (token.size() < kMinTokenLength) {
-      throw_invalid(flag, where + ": token shorter than " + std::to_string(kMinTokenLength) +
-                              " characters (make one with: openssl rand -hex 32)");
-    }
-    tokens.push_back({token, tenant});
-  }
-  if (tokens.empty()) throw_invalid(flag, "'" + path + "' holds no tokens");
-  return BearerTokens(std::move(tokens));
+  return BearerTokens(parse_tokens_file(read_security_file(path, "--tokens-file"), path));
 }
 
 BearerTokens::BearerTokens(std::vector<AcceptedToken> tokens) : tokens_(std::move(tokens)) {}

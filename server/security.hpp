@@ -11,6 +11,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "server/server_options.hpp"
+#include "server/tokens_file.hpp"
 
 namespace posefuse::server {
 
@@ -31,23 +32,12 @@ bool listens_on_loopback_only(const std::string& listen);
 // "plaintext", "tls" or "mutual-tls": what the server logs at start.
 std::string transport_mode(const ServerOptions& options);
 
-// An accepted token and the tenant it belongs to. Jobs belong to the tenant that submitted
-// them and are visible to that tenant's tokens only; "" is the tenant of tokens listed without
-// one (and of every call on a server without tokens).
-struct AcceptedToken {
-  std::string token;
-  std::string tenant;
-};
-
 // The accepted bearer tokens. check() compares in time that does not depend on where a
 // presented token differs from an accepted one.
 class BearerTokens {
  public:
-  // One token per line, optionally followed by whitespace and its tenant
-  // ([A-Za-z0-9_.-]{1,64}, not "." or ".."); blank lines and lines starting with '#' are skipped; surrounding
-  // whitespace is trimmed. Throws posefuse::Error (field "--tokens-file") for an unreadable
-  // file, no tokens, a token that is too short or has characters not allowed in metadata, or a
-  // bad tenant name.
+  // The tokens file at `path` (parse_tokens_file); also throws posefuse::Error (field
+  // "--tokens-file") for an unreadable or empty file.
   static BearerTokens load(const std::string& path);
   explicit BearerTokens(std::vector<AcceptedToken> tokens);
 
@@ -74,8 +64,5 @@ class BearerTokens {
 // (never the token).
 grpc::Status authenticate_call(const BearerTokens* tokens, const grpc::CallbackServerContext& context, const char* call,
                                std::string& tenant);
-
-// Tokens this short are refused: they could be guessed.
-constexpr std::size_t kMinTokenLength = 16;
 
 }  // namespace posefuse::server

@@ -2,6 +2,7 @@
 
 #include <zlib.h>
 
+#include <algorithm>
 #include <cstring>
 #include <fstream>
 #include <sstream>
@@ -85,23 +86,46 @@ void convert(const char* data, size_t count, std::vector<double>& out) {
   }
 }
 
+// The output grows with what the stream really inflates to: the member's claimed size is not
+// allocated up front, so that a small archive claiming gigabytes costs what it holds.
 std::string inflate_raw(std::string_view compressed, uint64_t expected_size, const std::string& name) {
   if (expected_size > kMaxNpzMemberBytes)
     throw Error(ErrorCode::kResourceExhausted, name, std::to_string(expected_size) + " bytes exceeds the limit");
-  std::string out(expected_size, '\0');
   z_stream stream{};
   if (inflateInit2(&stream, -MAX_WBITS) != Z_OK) throw Error(ErrorCode::kInternal, name, "inflateInit2 failed");
   stream.next_in = reinterpret_cast<Bytef*>(const_cast<char*>(compressed.data()));
   stream.avail_in = static_cast<uInt>(compressed.size());
-  stream.next_out = reinterpret_cast<Bytef*>(out.data());
-  stream.avail_out = static_cast<uInt>(out.size());
-  const int status = inflate(&stream, Z_FINISH);
-  const uint64_t produced = stream.total_out;
+  std::string out;
+  char buffer[1 << 16];
+  int status = Z_OK;
+  while (status == Z_OK && out.size() <= expected_size) {
+    stream.next_out = reinterpret_cast<Bytef*>(buffer);
+    stream.avail_out = sizeof buffer;
+    status = inflate(&stream, Z_NO_FLUSH);
+    const std::size_t produced = sizeof buffer - stream.avail_out;
+    out.append(buffer, std::min<uint64_t>(produced, expected_size + 1 - out.size()));
+    if (status == Z_OK && produced == 0) break;  // input used up before the stream's end
+  }
   inflateEnd(&stream);
-  if (status != Z_STREAM_END || produced != expected_size)
-    data_loss(name, "deflate stream is corrupt or truncated (inflated " + std::to_string(produced) + " of " +
-                        std::to_string(expected_size) + " bytes)");
+  if (status != Z_STREAM_END || out.size() != expected_size)
+    data_loss(name, "deflate stream is corrupt, truncated or longer than claimed (inflated " +
+                        std::to_string(out.size()) + " bytes, " + std::to_string(expected_size) + " claimed)");
   return out;
+}
+
+// The number of elements of `shape`, refused above `limit` before the product could overflow.
+int64_t element_count(const std::vector<int64_t>& shape, uint64_t limit, const std::string& name) {
+  for (const int64_t d : shape) {
+    if (d == 0) return 0;
+  }
+  uint64_t count = 1;
+  for (const int64_t d : shape) {
+    if (static_cast<uint64_t>(d) > limit / count) {
+      throw Error(ErrorCode::kResourceExhausted, name, "array of more than " + std::to_string(limit) + " elements");
+    }
+    count *= static_cast<uint64_t>(d);
+  }
+  return static_cast<int64_t>(count);
 }
 
 }  // namespace
@@ -145,9 +169,7 @@ NpyArray parse_npy(std::string_view bytes, const std::string& name) {
   else if (t == "<i2" || t == "<u2") width = 2;
   else if (t == "|u1" || t == "|i1" || t == "|b1") width = 1;
   else throw_invalid(name + ".dtype", "unsupported dtype '" + t + "' (need little-endian int, uint or float)");
-  const int64_t count = array.size();
-  if (count < 0 || static_cast<uint64_t>(count) > kMaxNpzMemberBytes / width)
-    throw Error(ErrorCode::kResourceExhausted, name, "array of " + std::to_string(count) + " elements is too large");
+  const int64_t count = element_count(array.shape, kMaxNpzMemberBytes / width, name);
   const size_t data_start = header_start + header_length;
   const std::string_view data = reader.slice(data_start, static_cast<uint64_t>(count) * width);
   array.values.resize(static_cast<size_t>(count));

@@ -24,25 +24,6 @@ namespace {
 
 enum class FrameKind { kDepth, kBodyIndex, kColor };
 
-// A CSV file of the recording as a stream, opened beneath the recording's directory.
-std::unique_ptr<std::istream> open_stream_beneath(int directory, const std::string& relative) {
-  UniqueFd file = open_beneath(directory, relative, relative);
-  require_regular_file(file.get(), relative);
-  return std::make_unique<FdInputStream>(std::move(file));
-}
-
-// Whether the recording has the optional entry `entry` of `kind`; anything else under that
-// name (a link, a FIFO, a file where a folder belongs) is an error rather than silently skipped.
-bool has_entry(int directory, const std::string& entry, FileKind kind) {
-  const FileKind found = entry_kind(directory, entry);
-  if (found == FileKind::kMissing) return false;
-  if (found != kind) {
-    throw_invalid(entry, kind == FileKind::kDirectory ? "is not a directory (links are refused)"
-                                                      : "is not a regular file (links, FIFOs and devices are refused)");
-  }
-  return true;
-}
-
 // depth/, body_index/ or color/: one file per frame named <t_us>.<ext>, read in t_us order.
 class FrameFolderStream : public ChunkSource {
  public:

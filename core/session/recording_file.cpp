@@ -133,6 +133,22 @@ void require_directory(int fd, const std::string& name) {
   if (file_kind(fd) != FileKind::kDirectory) throw_invalid(name, "is not a directory");
 }
 
+std::unique_ptr<std::istream> open_stream_beneath(int directory, const std::string& relative) {
+  UniqueFd file = open_beneath(directory, relative, relative);
+  require_regular_file(file.get(), relative);
+  return std::make_unique<FdInputStream>(std::move(file));
+}
+
+bool has_entry(int directory, const std::string& entry, FileKind kind) {
+  const FileKind found = entry_kind(directory, entry);
+  if (found == FileKind::kMissing) return false;
+  if (found != kind) {
+    throw_invalid(entry, kind == FileKind::kDirectory ? "is not a directory (links are refused)"
+                                                      : "is not a regular file (links, FIFOs and devices are refused)");
+  }
+  return true;
+}
+
 std::vector<std::string> list_directory(int directory, const std::string& name) {
   // fdopendir takes over the descriptor it is given: a duplicate, so `directory` stays open.
   const int copy = ::dup(directory);

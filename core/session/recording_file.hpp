@@ -54,6 +54,14 @@ FileKind entry_kind(int directory, const std::string& entry);
 void require_regular_file(int fd, const std::string& name);
 void require_directory(int fd, const std::string& name);
 
+// Whether `directory` has the optional entry `entry` (one name) of `kind` (kRegular or
+// kDirectory); anything else under that name (a link, a FIFO, a file where a folder belongs)
+// throws kInvalidArgument naming `entry` rather than being silently skipped.
+bool has_entry(int directory, const std::string& entry, FileKind kind);
+// The regular file `relative` opened beneath `directory` as a stream (open_beneath,
+// require_regular_file); errors name `relative`.
+std::unique_ptr<std::istream> open_stream_beneath(int directory, const std::string& relative);
+
 // The names in an open directory, without "." and "..", in no particular order.
 std::vector<std::string> list_directory(int directory, const std::string& name);
 

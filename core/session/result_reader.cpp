@@ -2,15 +2,14 @@
 
 #include <algorithm>
 #include <cmath>
-#include <fstream>
 #include <utility>
 
 #include "body/smpl_model.hpp"
 #include "common/error.hpp"
 #include "measures/joint_angles.hpp"
 #include "session/directory_layout.hpp"
-#include "session/file_bytes.hpp"
 #include "session/json_message.hpp"
+#include "session/recording_file.hpp"
 #include "session/result_files.hpp"
 #include "session/session_validator.hpp"
 #include "session/text_fields.hpp"
@@ -21,11 +20,22 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// The result directory being read: every file is opened beneath its descriptor, without
+// following links, and only regular files are read (recording_file.hpp), so a link or a FIFO
+// in a result directory is an error rather than a read elsewhere or a hang.
+struct Reading {
+  UniqueFd directory;
+  ResultDirectory result;
+};
+
+// calibration.json is a few kilobytes.
+constexpr std::uint64_t kMaxJsonBytes = 1u << 20;
+
 // One opened result file: the CsvReader plus typed, checked field access.
 class ResultCsv {
  public:
-  ResultCsv(const fs::path& path, const std::string& name, const std::vector<std::string>& columns)
-      : csv_(path, name, columns) {}
+  ResultCsv(int directory, const std::string& name, const std::vector<std::string>& columns)
+      : csv_(open_stream_beneath(directory, name), name, columns) {}
   bool next() { return csv_.next(); }
   std::string text(std::size_t c) const { return std::string(csv_.at(c)); }
   std::int64_t int64(std::size_t c) const { return parse_int64(csv_.at(c), csv_.field(c)); }
@@ -84,23 +94,23 @@ class ResultCsv {
 
 // Whether an orientation file's header row is not `older`, the layout before each sample carried
 // its uncertainty.
-bool has_uncertainty_columns(const fs::path& path, const std::vector<std::string>& older_columns) {
-  std::ifstream in(path);
+bool has_uncertainty_columns(int directory, const std::string& name, const std::vector<std::string>& older_columns) {
+  const std::unique_ptr<std::istream> in = open_stream_beneath(directory, name);
   std::string header;
-  std::getline(in, header);
+  std::getline(*in, header);
   if (!header.empty() && header.back() == '\r') header.pop_back();
   std::string older;
   for (const std::string& c : older_columns) older += (older.empty() ? "" : ",") + c;
   return header != older;
 }
 
-std::vector<TimedOrientation> read_orientations(const fs::path& path, const std::string& name, bool forearm) {
+std::vector<TimedOrientation> read_orientations(int directory, const std::string& name, bool forearm) {
   namespace layout = result_layout;
   const std::vector<std::string>& older =
       forearm ? layout::kForearmOrientationColumnsWithoutUncertainty : layout::kOrientationColumnsWithoutUncertainty;
-  const bool uncertainty = has_uncertainty_columns(path, older);
+  const bool uncertainty = has_uncertainty_columns(directory, name, older);
   const std::vector<std::string>& today = forearm ? layout::kForearmOrientationColumns : layout::kOrientationColumns;
-  ResultCsv csv(path, name, uncertainty ? today : older);
+  ResultCsv csv(directory, name, uncertainty ? today : older);
   const int uncertainty_column = forearm ? 6 : 5;
   std::vector<TimedOrientation> rows;
   std::int64_t previous = 0;
@@ -119,31 +129,30 @@ std::vector<TimedOrientation> read_orientations(const fs::path& path, const std:
 }
 
 // imu_orientations/<id>.csv or forearm_orientations/<id>.csv, keyed by id.
-std::map<std::string, std::vector<TimedOrientation>> read_orientation_folder(ResultDirectory& out, const char* folder,
+std::map<std::string, std::vector<TimedOrientation>> read_orientation_folder(Reading& in, const char* folder,
                                                                              bool forearm) {
   std::map<std::string, std::vector<TimedOrientation>> by_device;
-  const fs::path dir = out.directory / folder;
-  if (!fs::is_directory(dir)) return by_device;
-  for (const fs::directory_entry& entry : fs::directory_iterator(dir)) {
-    if (!entry.is_regular_file() || entry.path().extension() != ".csv") continue;
-    const std::string device = entry.path().stem().string();
-    const std::string name = std::string(folder) + "/" + entry.path().filename().string();
+  if (!has_entry(in.directory.get(), folder, FileKind::kDirectory)) return by_device;
+  const UniqueFd dir = open_beneath(in.directory.get(), folder, folder);
+  for (const std::string& file : list_directory(dir.get(), folder)) {
+    if (fs::path(file).extension() != ".csv") continue;
+    const std::string device = fs::path(file).stem().string();
+    const std::string name = std::string(folder) + "/" + file;
     if (!is_valid_device_id(device)) throw_invalid(name, "file name is not a device id");
-    by_device[device] = read_orientations(entry.path(), name, forearm);
-    out.files.insert(name);
+    by_device[device] = read_orientations(in.directory.get(), name, forearm);
+    in.result.files.insert(name);
   }
   return by_device;
 }
 
 // The rows of one optional file of the layout: none when it is absent; else it is recorded in
-// out.files and each row parsed by row_of(csv, rows so far).
+// in.result.files and each row parsed by row_of(csv, rows so far).
 template <typename Row, typename RowOf>
-std::vector<Row> read_rows(ResultDirectory& out, const char* name, const std::vector<std::string>& columns,
-                           RowOf row_of) {
+std::vector<Row> read_rows(Reading& in, const char* name, const std::vector<std::string>& columns, RowOf row_of) {
   std::vector<Row> rows;
-  if (!fs::exists(out.directory / name)) return rows;
-  out.files.insert(name);
-  ResultCsv csv(out.directory / name, name, columns);
+  if (!has_entry(in.directory.get(), name, FileKind::kRegular)) return rows;
+  in.result.files.insert(name);
+  ResultCsv csv(in.directory.get(), name, columns);
   while (csv.next()) rows.push_back(row_of(csv, rows));
   return rows;
 }
@@ -161,7 +170,7 @@ int joint_of(const ResultCsv& csv, int joint_count, const char* const* names) {
   return static_cast<int>(joint);
 }
 
-std::vector<JointRow> read_joints(ResultDirectory& out, const char* name, int joint_count, const char* const* names) {
+std::vector<JointRow> read_joints(Reading& out, const char* name, int joint_count, const char* const* names) {
   std::int64_t previous = 0;
   return read_rows<JointRow>(out, name, result_layout::kJointColumns,
                              [&](const ResultCsv& csv, const std::vector<JointRow>& rows) {
@@ -175,7 +184,7 @@ std::vector<JointRow> read_joints(ResultDirectory& out, const char* name, int jo
                              });
 }
 
-std::vector<JointRotationRow> read_joint_rotations(ResultDirectory& out) {
+std::vector<JointRotationRow> read_joint_rotations(Reading& out) {
   std::int64_t previous = 0;
   return read_rows<JointRotationRow>(out, result_layout::kSmplJointRotationsCsv, result_layout::kJointRotationColumns,
                                      [&](const ResultCsv& csv, const std::vector<JointRotationRow>& rows) {
@@ -190,7 +199,7 @@ std::vector<JointRotationRow> read_joint_rotations(ResultDirectory& out) {
 // Not in time order, even per arm: the forearm stage and, with `fit.enabled`, the body-fit stage
 // both report each frame's forearms, the body fit up to `fit.imu_wait_s` later. Sorted by
 // (arm, t_us) here, the rows of one frame kept in file order.
-std::vector<ForearmRow> read_forearms(ResultDirectory& out) {
+std::vector<ForearmRow> read_forearms(Reading& out) {
   std::vector<ForearmRow> rows = read_rows<ForearmRow>(out, result_layout::kForearmsCsv, result_layout::kForearmColumns,
                                                        [&](const ResultCsv& csv, const std::vector<ForearmRow>&) {
                                                          ForearmRow row;
@@ -208,7 +217,7 @@ std::vector<ForearmRow> read_forearms(ResultDirectory& out) {
   return rows;
 }
 
-std::vector<ImuPositionRow> read_imu_positions(ResultDirectory& out) {
+std::vector<ImuPositionRow> read_imu_positions(Reading& out) {
   std::map<std::string, std::int64_t> previous;  // per device
   return read_rows<ImuPositionRow>(out, result_layout::kImuPositionsCsv, result_layout::kImuPositionColumns,
                                    [&](const ResultCsv& csv, const std::vector<ImuPositionRow>&) {
@@ -222,7 +231,7 @@ std::vector<ImuPositionRow> read_imu_positions(ResultDirectory& out) {
                                    });
 }
 
-std::vector<RecoveredRow> read_recovered(ResultDirectory& out) {
+std::vector<RecoveredRow> read_recovered(Reading& out) {
   std::int64_t previous = 0;
   return read_rows<RecoveredRow>(
       out, result_layout::kRecoveredSegmentsCsv, result_layout::kRecoveredSegmentColumns,
@@ -252,7 +261,7 @@ std::vector<RecoveredRow> read_recovered(ResultDirectory& out) {
       });
 }
 
-std::vector<AngleRow> read_angles(ResultDirectory& out) {
+std::vector<AngleRow> read_angles(Reading& out) {
   const std::vector<std::string> columns = result_layout::joint_angle_columns();
   const auto count = static_cast<std::size_t>(measures::kAngleCount);
   return read_rows<AngleRow>(out, result_layout::kJointAnglesCsv, columns, [&](ResultCsv& csv, const auto& rows) {
@@ -273,7 +282,7 @@ std::vector<AngleRow> read_angles(ResultDirectory& out) {
   });
 }
 
-std::vector<RepetitionRow> read_repetitions(ResultDirectory& out) {
+std::vector<RepetitionRow> read_repetitions(Reading& out) {
   return read_rows<RepetitionRow>(out, result_layout::kRepetitionsCsv, result_layout::kRepetitionColumns,
                                   [](ResultCsv& csv, const auto&) {
                                     RepetitionRow row;
@@ -299,27 +308,31 @@ ResultDirectory read_result_files(const fs::path& directory) {
   if (!fs::is_directory(directory)) {
     throw Error(ErrorCode::kNotFound, directory.string(), "is not a directory of result files");
   }
-  ResultDirectory out;
+  Reading in{open_path(directory, directory.string()), {}};
+  require_directory(in.directory.get(), directory.string());
+  ResultDirectory& out = in.result;
   out.directory = directory;
-  out.imu_orientations = read_orientation_folder(out, result_layout::kImuOrientationDir, false);
-  out.forearm_orientations = read_orientation_folder(out, result_layout::kForearmOrientationDir, true);
-  out.smpl_joints = read_joints(out, result_layout::kSmplJointsCsv, body::kNumJoints, body::smpl_joint_names().data());
-  out.smpl_joint_rotations = read_joint_rotations(out);
-  out.camera_joints = read_joints(out, result_layout::kCameraJointsCsv,
+  out.imu_orientations = read_orientation_folder(in, result_layout::kImuOrientationDir, false);
+  out.forearm_orientations = read_orientation_folder(in, result_layout::kForearmOrientationDir, true);
+  out.smpl_joints = read_joints(in, result_layout::kSmplJointsCsv, body::kNumJoints, body::smpl_joint_names().data());
+  out.smpl_joint_rotations = read_joint_rotations(in);
+  out.camera_joints = read_joints(in, result_layout::kCameraJointsCsv,
                                   static_cast<int>(layout::kKinectJointNames.size()), layout::kKinectJointNames.data());
-  out.forearms = read_forearms(out);
-  out.imu_positions = read_imu_positions(out);
-  out.recovered = read_recovered(out);
-  out.joint_angles = read_angles(out);
-  out.repetitions = read_repetitions(out);
-  if (fs::exists(directory / result_layout::kCalibrationJson)) {
-    out.files.insert(result_layout::kCalibrationJson);
+  out.forearms = read_forearms(in);
+  out.imu_positions = read_imu_positions(in);
+  out.recovered = read_recovered(in);
+  out.joint_angles = read_angles(in);
+  out.repetitions = read_repetitions(in);
+  const char* calibration = result_layout::kCalibrationJson;
+  if (has_entry(in.directory.get(), calibration, FileKind::kRegular)) {
+    out.files.insert(calibration);
+    const UniqueFd file = open_beneath(in.directory.get(), calibration, calibration);
+    require_regular_file(file.get(), calibration);
     v1::CalibrationReport report;
-    message_from_json(read_file_bytes(directory / result_layout::kCalibrationJson, result_layout::kCalibrationJson),
-                      result_layout::kCalibrationJson, report);
+    message_from_json(read_all(file.get(), calibration, kMaxJsonBytes), calibration, report);
     out.calibration = std::move(report);
   }
-  return out;
+  return std::move(in.result);
 }
 
 }  // namespace posefuse::session

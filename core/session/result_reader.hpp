@@ -5,15 +5,15 @@
 // with like (eval/result_score.hpp).
 //
 // Every file is optional (the writer creates a file only when such results arrived); the
-// directory itself must exist. Each file present is checked the way the writer wrote it: the
-// header row, the number of fields, numbers that parse and are finite, unit quaternions
-// (within 1e-3), joint indices and names in SMPL / Kinect v2 order, enum names (source, arm,
-// method), device ids that are safe file names, and t_us that never goes back in a file (per
-// device in imu_positions.csv, whose devices are written as each is ready; per segment in
-// recovered_segments.csv). forearms.csv is the exception: two stages write it (the forearm
-// stage and, with fit.enabled, the body fit a few seconds later), so its rows are sorted by arm
-// and time instead. A violation throws
-// posefuse::Error (kInvalidArgument) whose field is "<file>:<line>:<column>".
+// directory itself must exist. Its files are opened beneath it without following links, and
+// only regular files are read (session/recording_file.hpp): a link, a FIFO or a device where a
+// file or folder of the layout belongs throws kInvalidArgument naming it. Each file present is checked the way the
+// writer wrote it: the header row, the number of fields, numbers that parse and are finite, unit quaternions (within
+// 1e-3), joint indices and names in SMPL / Kinect v2 order, enum names (source, arm, method), device ids that are safe
+// file names, and t_us that never goes back in a file (per device in imu_positions.csv, whose devices are written as
+// each is ready; per segment in recovered_segments.csv). forearms.csv is the exception: two stages write it (the
+// forearm stage and, with fit.enabled, the body fit a few seconds later), so its rows are sorted by arm and time
+// instead. A violation throws posefuse::Error (kInvalidArgument) whose field is "<file>:<line>:<column>".
 #include <cstdint>
 #include <filesystem>
 #include <map>

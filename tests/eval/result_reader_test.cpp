@@ -1,8 +1,13 @@
 // session::read_result_files reads back what session::ResultFiles wrote, and names the file,
 // line and column of whatever does not read as the writer would have written it.
+#include <fcntl.h>
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <fstream>
+#include <functional>
+#include <thread>
 
 #include "../imu/expect_error.hpp"
 #include "common/error.hpp"
@@ -188,4 +193,51 @@ TEST(ResultReader, ForearmRowsOfTwoStagesAreSortedByArmAndTime) {
   EXPECT_EQ(r.forearms[0].t_us, r.forearms[1].t_us);
   EXPECT_EQ(r.forearms[0].source, before.forearms[0].source);  // file order kept within a frame
   EXPECT_EQ(r.forearms[1].source, v1::VISUAL);
+}
+
+// Found by fuzz/fuzz_result_reader: a FIFO where a file belongs hung the reader, and a link to
+// /dev/zero made it read without end. Links and anything but regular files are refused by name.
+TEST(ResultReader, RefusesLinksFifosAndDevicesByName) {
+  const auto dir = result_fixture::fresh_result_dir("links");
+  const auto outside = result_fixture::fresh_result_dir("links_outside");
+  result_fixture::write_fixture(outside, {});
+  struct Case {
+    const char* file;
+    std::function<void(const std::filesystem::path&)> replace;
+  };
+  const Case cases[] = {
+      {"camera_joints.csv",
+       [&](const auto& path) { std::filesystem::create_symlink(outside / "camera_joints.csv", path); }},
+      {"smpl_joint_rotations.csv", [](const auto& path) { std::filesystem::create_symlink("/dev/zero", path); }},
+      {"calibration.json",
+       [&](const auto& path) { std::filesystem::create_symlink(outside / "calibration.json", path); }},
+      {"imu_orientations",
+       [&](const auto& path) { std::filesystem::create_directory_symlink(outside / "imu_orientations", path); }},
+      {"imu_orientations/imu_right.csv",
+       [&](const auto& path) { std::filesystem::create_symlink(outside / "imu_orientations/imu_right.csv", path); }},
+  };
+  for (const Case& c : cases) {
+    std::filesystem::remove_all(dir);
+    result_fixture::write_fixture(dir, {});
+    std::filesystem::remove_all(dir / c.file);
+    c.replace(dir / c.file);
+    posefuse::testing::expect_error([&] { session::read_result_files(dir); }, ErrorCode::kInvalidArgument, c.file);
+  }
+
+  // A FIFO with a writer that closes at once: read before, it was an empty file (or, without a
+  // writer, a hang); now it is refused without being opened for reading.
+  std::filesystem::remove_all(dir);
+  result_fixture::write_fixture(dir, {});
+  const auto fifo = dir / "forearms.csv";
+  std::filesystem::remove(fifo);
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  std::thread writer([&] {
+    const int fd = ::open(fifo.c_str(), O_WRONLY);
+    if (fd >= 0) ::close(fd);
+  });
+  posefuse::testing::expect_error([&] { session::read_result_files(dir); }, ErrorCode::kInvalidArgument,
+                                  "forearms.csv");
+  const int release = ::open(fifo.c_str(), O_RDONLY | O_NONBLOCK);  // lets the writer's open return
+  writer.join();
+  ::close(release);
 }
