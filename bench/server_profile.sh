@@ -53,9 +53,10 @@ for line in open(sys.argv[1]):
     if not line.strip():
         flush()
         pid, stack = None, []
-    elif not line[0].isspace():
-        match = re.search(r"(\d+)/(\d+)", line)
-        pid, stack = (int(match.group(1)) if match else None), []
+    elif re.fullmatch(r"\s*\d+/\d+\s*", line):
+        # A sample's header ("PID/TID", padded to a width that depends on the PIDs' digits).
+        flush()
+        pid, stack = int(line.split("/")[0]), []
     else:
         stack.append(line.strip())
 flush()
