@@ -15,7 +15,7 @@ build_dir=${BUILD_DIR:-$root/build-fuzz}
 jobs=${POSEFUSE_JOBS:-$(nproc)}
 fuzz_jobs=${FUZZ_JOBS:-1}
 all_fuzzers="chunk_file image imu_batch json wav csv session_validator bvh npz result_reader server_files
-  directory_reader"
+  directory_reader session_pipeline"
 fuzzers=${FUZZERS:-$all_fuzzers}
 
 "$root/scripts/setup.sh"

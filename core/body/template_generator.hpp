@@ -72,4 +72,8 @@ TemplateGeometry build_template_geometry(const BodyDimensions& dimensions);
 // The full model: mesh, 10 shape directions, skinning weights, joint regressor, no posedirs.
 std::shared_ptr<SmplModel> make_template(Sex sex);
 
+// make_template(sex) built once per process and shared (it is deterministic): what every
+// session's fit starts from, without rebuilding it per session.
+std::shared_ptr<const SmplModel> shared_template(Sex sex);
+
 }  // namespace posefuse::body

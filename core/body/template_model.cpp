@@ -288,4 +288,14 @@ std::shared_ptr<SmplModel> make_template(Sex sex) {
   return model;
 }
 
+std::shared_ptr<const SmplModel> shared_template(Sex sex) {
+  // Function-local statics: each built on its first use, thread-safe.
+  if (sex == Sex::kMale) {
+    static const std::shared_ptr<const SmplModel> male = make_template(Sex::kMale);
+    return male;
+  }
+  static const std::shared_ptr<const SmplModel> female = make_template(Sex::kFemale);
+  return female;
+}
+
 }  // namespace posefuse::body

@@ -35,6 +35,17 @@ TEST_P(TemplateTest, IsDeterministic) {
   EXPECT_EQ(Eigen::MatrixXd(a->J_regressor), Eigen::MatrixXd(b->J_regressor));
 }
 
+TEST_P(TemplateTest, SharedTemplateIsBuiltOnceAndEqualsAFreshOne) {
+  const auto shared = shared_template(GetParam());
+  EXPECT_EQ(shared.get(), shared_template(GetParam()).get());
+  const Sex other = GetParam() == Sex::kMale ? Sex::kFemale : Sex::kMale;
+  EXPECT_NE(shared.get(), shared_template(other).get());
+  const auto fresh = make_template(GetParam());
+  EXPECT_EQ(shared->v_template, fresh->v_template);
+  EXPECT_EQ(shared->shapedirs, fresh->shapedirs);
+  EXPECT_EQ(Eigen::MatrixXd(shared->weights), Eigen::MatrixXd(fresh->weights));
+}
+
 INSTANTIATE_TEST_SUITE_P(Sexes, TemplateTest, ::testing::Values(Sex::kMale, Sex::kFemale));
 
 }  // namespace

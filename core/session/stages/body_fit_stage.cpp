@@ -115,7 +115,7 @@ void BodyFitStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) 
   const raycast::DepthIntrinsics depth = session_cameras(header).depth;
   depth_width_ = depth.width;
   depth_height_ = depth.height;
-  tracker_ = std::make_unique<fit::BodyTracker>(body::make_template(sex_), depth, tracker_options(options_));
+  tracker_ = std::make_unique<fit::BodyTracker>(body::shared_template(sex_), depth, tracker_options(options_));
   tracker_->record_frame_stats(record_stats_);
 }
 
