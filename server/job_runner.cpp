@@ -123,6 +123,11 @@ JobRunner::JobRunner(JobStore& store, Metrics& metrics, JobRunnerOptions options
 }
 
 JobRunner::~JobRunner() {
+  stop(std::chrono::milliseconds::max());
+  store_.set_event_listener({});
+}
+
+std::vector<std::string> JobRunner::stop(std::chrono::milliseconds bound) {
   {
     std::lock_guard lock(mu_);
     stopping_ = true;
@@ -130,11 +135,16 @@ JobRunner::~JobRunner() {
   }
   wake_cv_.notify_all();
   if (dispatcher_.joinable()) dispatcher_.join();
-  {
-    std::unique_lock lock(mu_);
-    idle_.wait(lock, [this] { return running_.empty(); });
+  std::unique_lock lock(mu_);
+  const auto stopped = [this] { return running_.empty(); };
+  if (bound == std::chrono::milliseconds::max()) {
+    idle_.wait(lock, stopped);
+  } else {
+    idle_.wait_for(lock, bound, stopped);
   }
-  store_.set_event_listener({});
+  std::vector<std::string> blocked;
+  for (const auto& [job_id, running] : running_) blocked.push_back(job_id);
+  return blocked;
 }
 
 void JobRunner::start(StoreHealthListener on_store_health) {

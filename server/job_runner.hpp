@@ -59,7 +59,14 @@ struct JobRunnerOptions {
 class JobRunner {
  public:
   JobRunner(JobStore& store, Metrics& metrics, JobRunnerOptions options);
-  ~JobRunner();  // hands running jobs back and waits for them
+  ~JobRunner();  // stop() without a bound
+
+  // Stops claiming and hands running jobs back (each stops between chunks and goes back to the
+  // queue), waiting at most `bound` for them. Returns the ids of the jobs still running then:
+  // each blocked inside a read that does not return. Their leases expire and another worker
+  // resumes them; the caller must not destroy this runner while they run (the server exits
+  // instead, docs/server.md "Job store").
+  std::vector<std::string> stop(std::chrono::milliseconds bound);
 
   // Whether the store takes writes: called on every change, from the dispatcher or a worker.
   // The heartbeat's probe (JobStore::probe) decides it, and a job's store write that failed

@@ -2,6 +2,7 @@
 // Flags: docs/server.md. Stops gracefully on SIGINT or SIGTERM.
 #include <csignal>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <string>
 #include <vector>
@@ -68,7 +69,13 @@ int main(int argc, char** argv) {
     int signal_number = 0;
     sigwait(&stop_signals, &signal_number);
     posefuse::server::log_event("info", "signal", {{"signal", signal_number == SIGINT ? "SIGINT" : "SIGTERM"}});
-    server.shutdown();
+    if (!server.shutdown().empty()) {
+      // A job thread blocked inside a read would hold the server's destruction for ever; the
+      // jobs' leases expire and another worker resumes them (docs/server.md, "Job store").
+      std::fflush(stdout);
+      std::fflush(stderr);
+      std::_Exit(0);
+    }
   } catch (const posefuse::Error& error) {
     std::fprintf(stderr, "posefuse-server: %s\n", error.what());
     return 2;

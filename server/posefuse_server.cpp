@@ -250,8 +250,8 @@ std::string PoseFuseServer::render_metrics() const {
                           service_->spool_quota().in_use()});
 }
 
-void PoseFuseServer::shutdown() {
-  if (shut_down_) return;
+std::vector<std::string> PoseFuseServer::shutdown() {
+  if (shut_down_) return blocked_jobs_;
   shut_down_ = true;
   log_event("info", "server_shutdown", {{"sessions", std::to_string(registry_->active())}});
   // Every service NOT_SERVING, and no later change (the job store's health) turns one back.
@@ -260,8 +260,20 @@ void PoseFuseServer::shutdown() {
       std::chrono::duration_cast<std::chrono::milliseconds>(std::chrono::duration<double>(options_.shutdown_grace_s));
   server_->Shutdown(std::chrono::system_clock::now() + grace);
   metrics_http_.reset();
-  jobs_.reset();  // running jobs stop between chunks and go back to the queue
-  log_event("info", "server_stopped");
+  // Running jobs stop between chunks and go back to the queue; one blocked inside a read is
+  // left to its lease.
+  if (jobs_) blocked_jobs_ = jobs_->stop(grace);
+  if (blocked_jobs_.empty()) {
+    jobs_.reset();
+    log_event("info", "server_stopped");
+  } else {
+    std::string ids;
+    for (const std::string& id : blocked_jobs_) ids += (ids.empty() ? "" : ",") + id;
+    log_event(
+        "warning", "server_stopped_with_blocked_jobs",
+        {{"jobs", ids}, {"reason", "each is blocked inside a read; its lease expires and another worker resumes it"}});
+  }
+  return blocked_jobs_;
 }
 
 void PoseFuseServer::wait() { server_->Wait(); }

@@ -6,6 +6,8 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include <grpcpp/grpcpp.h>
 
@@ -48,8 +50,11 @@ class PoseFuseServer {
   std::string render_metrics() const;
 
   // Health NOT_SERVING, stop accepting calls, give calls in flight shutdown_grace_s to finish,
-  // then cancel them. Idempotent.
-  void shutdown();
+  // then cancel them; then give running jobs shutdown_grace_s to go back to the queue.
+  // Idempotent. Returns the ids of the jobs still running after that, each blocked inside a
+  // read: while any is, this server must not be destroyed (posefuse-server's main exits
+  // without destroying it, and their leases expire).
+  std::vector<std::string> shutdown();
   // Blocks until shutdown() has completed.
   void wait();
 
@@ -68,6 +73,7 @@ class PoseFuseServer {
   std::unique_ptr<MetricsHttpServer> metrics_http_;
   int port_ = 0;
   bool shut_down_ = false;
+  std::vector<std::string> blocked_jobs_;  // shutdown()'s result
 };
 
 // Checks option values; throws kInvalidArgument naming the flag ("--workers").

@@ -19,7 +19,7 @@ struct ServerOptions {
   // Per session or job: the most its pipeline may hold for later frames (server/session_memory.hpp);
   // 0 = half this machine's (or container's) memory split between max_sessions + max_jobs.
   double max_session_memory_mb = 0.0;
-  double shutdown_grace_s = 10.0;  // calls in flight get this long to finish
+  double shutdown_grace_s = 10.0;  // calls in flight get this long to finish, then running jobs as long
   // Minimum stream rate (server/stream_rate.hpp): after stream_rate_grace_s of waiting for its
   // client, a Fit stream must have delivered at least min_stream_rate seconds of recording per
   // wall second or it is ended; 0 disables. 0.5 lets a live session lag to half real time.

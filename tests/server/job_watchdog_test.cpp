@@ -5,8 +5,10 @@
 // the store (tests/server/faulty_job_store.hpp).
 #include <chrono>
 #include <condition_variable>
+#include <future>
 #include <mutex>
 #include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -155,6 +157,19 @@ TEST_F(JobWatchdogTest, CancelReachesAJobBlockedInsideARead) {
   }
   EXPECT_EQ(final_state(id).state(), v1::Job::CANCELLED);
   EXPECT_EQ(stored_after_release(id).state(), v1::Job::CANCELLED);
+}
+
+TEST_F(JobWatchdogTest, ShutdownReturnsNamingAJobBlockedInsideARead) {
+  ServerOptions bounded = options();
+  bounded.shutdown_grace_s = 0.2;
+  const std::string id = start_with_upload(bounded, [this] { gate_.pass(); });
+  ASSERT_TRUE(gate_.wait_entered());
+  // Without a bound, shutdown waits for the blocked thread (until TearDown opens the gate).
+  auto stopped = std::async(std::launch::async, [this] { return server_->shutdown(); });
+  ASSERT_EQ(stopped.wait_for(std::chrono::seconds(60)), std::future_status::ready);
+  EXPECT_EQ(stopped.get(), std::vector<std::string>{id});
+  // The job is still the store's RUNNING one, for its lease to expire and another worker to take.
+  EXPECT_EQ(server_->jobs()->store().get(id)->job.state(), v1::Job::RUNNING);
 }
 
 }  // namespace
