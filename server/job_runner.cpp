@@ -284,6 +284,7 @@ void JobRunner::end_unresponsive(Running& running) {
     job.set_update_time_unix_us(now_unix_us());
     store_.update_running(running.lease, job);  // a terminal state: the lease ends with it
     running.ended_by_watchdog = true;
+    replace_blocked_thread();
     drop_upload(*record);
     metrics_.job_finished(record->owner, v1::Job::State_Name(job.state()));
     log_event("warning", "job_ended_unresponsive", {{"job", job_id}, {"state", v1::Job::State_Name(job.state())}});
@@ -293,6 +294,26 @@ void JobRunner::end_unresponsive(Running& running) {
     // Tried again at the next heartbeat; should the store stay away, the lease expires.
     log_event("warning", "job_end_unresponsive_failed", {{"job", job_id}, {"error", error.what()}});
   }
+}
+
+std::size_t JobRunner::blocked_jobs_locked() const {
+  std::size_t blocked = 0;
+  for (const auto& [id, entry] : running_) blocked += entry->ended_by_watchdog ? 1 : 0;
+  return blocked;
+}
+
+void JobRunner::replace_blocked_thread() {
+  // The ended job's thread is still blocked inside its read, holding a pool thread: one more
+  // thread takes its place so that later jobs do not wait behind it. At most max_running
+  // spares however many block: past that the reads themselves are what is wrong.
+  std::size_t blocked = 0;
+  {
+    std::lock_guard lock(mu_);
+    blocked = blocked_jobs_locked();
+  }
+  if (blocked > options_.max_running || pool_.threads() >= options_.max_running + blocked) return;
+  pool_.add_thread();
+  log_event("warning", "job_thread_replaced", {{"blocked_jobs", std::to_string(blocked)}});
 }
 
 std::string JobRunner::overdue_message(Overdue overdue) const {
@@ -326,7 +347,8 @@ void JobRunner::claim_more() {
   while (true) {
     {
       std::lock_guard lock(mu_);
-      if (stopping_ || running_.size() >= options_.max_running) return;
+      // A job ended by the watchdog whose thread is still blocked takes no slot.
+      if (stopping_ || running_.size() - blocked_jobs_locked() >= options_.max_running) return;
     }
     std::optional<JobRecord> record;
     try {

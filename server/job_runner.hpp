@@ -106,7 +106,7 @@ class JobRunner {
     Clock::time_point started = Clock::now();
     std::atomic<Clock::rep> last_read{Clock::now().time_since_epoch().count()};  // last chunk read
     // The dispatcher's alone: whether a stop was pending at its last heartbeat, and whether it
-    // wrote the job's end itself.
+    // wrote the job's end itself (the job's thread did not respond).
     bool stop_pending = false;
     bool ended_by_watchdog = false;
   };
@@ -119,6 +119,10 @@ class JobRunner {
   void reap_expired();
   void watch_running();
   void end_unresponsive(Running& running);
+  // Jobs in running_ ended by the watchdog whose threads have not returned. Under mu_, on the
+  // dispatcher.
+  std::size_t blocked_jobs_locked() const;
+  void replace_blocked_thread();
   std::string overdue_message(Overdue overdue) const;
   void claim_more();
   void run(const std::shared_ptr<Running>& running, JobRecord record);

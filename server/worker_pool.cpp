@@ -14,6 +14,7 @@ WorkerPool::~WorkerPool() {
     stopping_ = true;
   }
   ready_.notify_all();
+  // add_thread adds none once stopping_ is set, so threads_ no longer changes.
   for (std::thread& t : threads_) t.join();
 }
 
@@ -28,6 +29,16 @@ void WorkerPool::submit(std::function<void()> task) {
 std::size_t WorkerPool::queued() const {
   std::lock_guard lock(mu_);
   return tasks_.size();
+}
+
+std::size_t WorkerPool::threads() const {
+  std::lock_guard lock(mu_);
+  return threads_.size();
+}
+
+void WorkerPool::add_thread() {
+  std::lock_guard lock(mu_);
+  if (!stopping_) threads_.emplace_back([this] { run(); });
 }
 
 void WorkerPool::run() {

@@ -23,7 +23,9 @@ class WorkerPool {
   void submit(std::function<void()> task);
   // Tasks waiting for a thread (a gauge for logs and metrics).
   std::size_t queued() const;
-  std::size_t threads() const { return threads_.size(); }
+  std::size_t threads() const;
+  // One more thread, for a task that will not return soon (a job blocked inside a read).
+  void add_thread();
 
  private:
   void run();

@@ -3,9 +3,11 @@
 // DEADLINE_EXCEEDED, and a cancel reaches a job whose thread is blocked inside a read. Through
 // the real server on loopback; the job is held inside the read of its uploaded recording by
 // the store (tests/server/faulty_job_store.hpp).
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <future>
+#include <memory>
 #include <mutex>
 #include <thread>
 #include <vector>
@@ -157,6 +159,23 @@ TEST_F(JobWatchdogTest, CancelReachesAJobBlockedInsideARead) {
   }
   EXPECT_EQ(final_state(id).state(), v1::Job::CANCELLED);
   EXPECT_EQ(stored_after_release(id).state(), v1::Job::CANCELLED);
+}
+
+TEST_F(JobWatchdogTest, AJobBlockedInsideAReadGivesUpItsSlotOnceTheWatchdogEndsIt) {
+  ServerOptions stalls = quick_heartbeat(options());
+  stalls.max_jobs = 1;
+  stalls.job_stall_s = 0.3;
+  auto first = std::make_shared<std::atomic<bool>>(true);
+  const std::string blocked = start_with_upload(stalls, [this, first] {
+    if (first->exchange(false)) gate_.pass();
+  });
+  ASSERT_TRUE(gate_.wait_entered());
+  EXPECT_EQ(final_state(blocked).state(), v1::Job::FAILED);
+  // The only slot's thread is still inside the read; the next job runs all the same.
+  v1::Job next;
+  const grpc::Status status = upload(demo::make_demo_session(), next);
+  ASSERT_TRUE(status.ok()) << status.error_message();
+  EXPECT_EQ(final_state(next.job_id()).state(), v1::Job::SUCCEEDED);
 }
 
 TEST_F(JobWatchdogTest, ShutdownReturnsNamingAJobBlockedInsideARead) {
