@@ -71,7 +71,7 @@ void FitSession::OnReadDone(bool ok) {
     input_closed_ = true;
   } else {
     ++chunks_read_;
-    metrics_.chunk_received();
+    metrics_.chunk_received(tenant_);
     metrics_.queued_chunks_add(1);
     inbox_bytes_ += read_buffer_.ByteSizeLong();
     inbox_.push_back(std::move(read_buffer_));
@@ -161,7 +161,7 @@ void FitSession::enqueue_result(v1::FitResult&& result) {
   if (finished_ || final_status_) return;
   if (result.has_item_error()) {
     ++item_errors_;
-    metrics_.item_error();
+    metrics_.item_error(tenant_);
   }
   outbox_.push_back(std::move(result));
   if (!write_pending_) start_write_locked();

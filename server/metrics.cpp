@@ -71,6 +71,21 @@ void Metrics::session_finished(std::string_view tenant, std::string_view status)
   increment(sessions_finished_, labels(tenant, "status", status));
 }
 
+void Metrics::chunk_received(std::string_view tenant) {
+  std::lock_guard lock(mu_);
+  increment(chunks_received_, labels(tenant));
+}
+
+void Metrics::item_error(std::string_view tenant) {
+  std::lock_guard lock(mu_);
+  increment(item_errors_, labels(tenant));
+}
+
+void Metrics::job_submit_finished(std::string_view tenant, std::string_view status) {
+  std::lock_guard lock(mu_);
+  increment(job_submits_, labels(tenant, "status", status));
+}
+
 void Metrics::stage_time(std::string_view stage, double seconds) {
   std::lock_guard lock(mu_);
   auto it = stages_.find(stage);
@@ -88,10 +103,6 @@ std::string Metrics::render(const Gauges& gauges) const {
   std::string out;
   header(out, "posefuse_sessions_in_flight", "gauge", "Fit calls running now.");
   sample(out, "posefuse_sessions_in_flight", "", gauges.sessions_in_flight);
-  header(out, "posefuse_chunks_received_total", "counter", "Session chunks received by Fit calls.");
-  sample(out, "posefuse_chunks_received_total", "", static_cast<double>(chunks_received_.load()));
-  header(out, "posefuse_item_errors_total", "counter", "Chunks or items answered with ItemError.");
-  sample(out, "posefuse_item_errors_total", "", static_cast<double>(item_errors_.load()));
   header(out, "posefuse_queued_chunks", "gauge", "Chunks received and waiting for the pipeline, over all sessions.");
   sample(out, "posefuse_queued_chunks", "", static_cast<double>(queued_chunks_.load()));
   header(out, "posefuse_worker_queue_depth", "gauge", "Tasks waiting for a worker thread.");
@@ -112,6 +123,12 @@ std::string Metrics::render(const Gauges& gauges) const {
   samples(out, "posefuse_sessions_refused_total", sessions_refused_);
   header(out, "posefuse_sessions_finished_total", "counter", "Fit calls finished, by tenant and status.");
   samples(out, "posefuse_sessions_finished_total", sessions_finished_);
+  header(out, "posefuse_chunks_received_total", "counter", "Session chunks received by Fit calls, by tenant.");
+  if (!chunks_received_.contains("")) sample(out, "posefuse_chunks_received_total", "", 0);
+  samples(out, "posefuse_chunks_received_total", chunks_received_);
+  header(out, "posefuse_item_errors_total", "counter", "Chunks or items answered with ItemError, by tenant.");
+  if (!item_errors_.contains("")) sample(out, "posefuse_item_errors_total", "", 0);
+  samples(out, "posefuse_item_errors_total", item_errors_);
   header(out, "posefuse_stage_calls_total", "counter", "Pipeline stage calls, by stage.");
   for (const auto& [stage, totals] : stages_) {
     sample(out, "posefuse_stage_calls_total", "stage=\"" + stage + "\"", static_cast<double>(totals.calls));
@@ -120,6 +137,9 @@ std::string Metrics::render(const Gauges& gauges) const {
   for (const auto& [stage, totals] : stages_) {
     sample(out, "posefuse_stage_seconds_total", "stage=\"" + stage + "\"", totals.seconds);
   }
+  header(out, "posefuse_job_submits_total", "counter",
+         "SubmitJob calls (uploads and jobs by reference) finished, by tenant and status.");
+  samples(out, "posefuse_job_submits_total", job_submits_);
   header(out, "posefuse_jobs_finished_total", "counter", "Batch jobs finished, by tenant and state.");
   samples(out, "posefuse_jobs_finished_total", jobs_finished_);
   return out;

@@ -19,8 +19,10 @@ class Metrics {
   void session_started(std::string_view tenant);
   void session_refused(std::string_view tenant);
   void session_finished(std::string_view tenant, std::string_view status);  // gRPC status code name
-  void chunk_received() { chunks_received_.fetch_add(1); }
-  void item_error() { item_errors_.fetch_add(1); }
+  void chunk_received(std::string_view tenant);
+  void item_error(std::string_view tenant);
+  // A SubmitJob call's end (an upload or a job by reference), by its gRPC status code name.
+  void job_submit_finished(std::string_view tenant, std::string_view status);
   // Chunks read from clients and not yet processed, over all sessions.
   void queued_chunks_add(std::int64_t n) { queued_chunks_.fetch_add(n); }
   void stage_time(std::string_view stage, double seconds);
@@ -42,11 +44,12 @@ class Metrics {
   // Counts by their Prometheus label set, e.g. `tenant="clinic-a",status="OK"`.
   using Counts = std::map<std::string, std::uint64_t, std::less<>>;
 
-  std::atomic<std::uint64_t> chunks_received_{0}, item_errors_{0};
   std::atomic<std::int64_t> queued_chunks_{0};
   mutable std::mutex mu_;
   Counts sessions_started_, sessions_refused_;  // by tenant
   Counts sessions_finished_;                    // by tenant and status
+  Counts chunks_received_, item_errors_;        // by tenant
+  Counts job_submits_;                          // by tenant and status
   std::map<std::string, StageTotals, std::less<>> stages_;
   Counts jobs_finished_;  // by tenant and state
 };

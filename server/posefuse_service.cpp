@@ -40,7 +40,7 @@ PoseFuseService::PoseFuseService(const ServerOptions& options, WorkerPool& pool,
       tokens_(tokens),
       spool_quota_(static_cast<std::uint64_t>(options_.max_spool_mb * 1024 * 1024)) {
   if (jobs_) {
-    submit_context_.emplace(SubmitJobContext{*jobs_, pool_, registry_, options_.recordings_root,
+    submit_context_.emplace(SubmitJobContext{*jobs_, pool_, registry_, metrics_, options_.recordings_root,
                                              tokens_ && tokens_->names_tenants(), upload_spool_dir(options_.data_dir),
                                              static_cast<std::uint64_t>(options_.max_upload_mb * 1024 * 1024),
                                              spool_quota_, std::chrono::duration<double>(options_.idle_timeout_s)});

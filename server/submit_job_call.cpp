@@ -161,6 +161,7 @@ void SubmitJobCall::finish_locked(grpc::Status status) {
                {"chunks", std::to_string(spool_->chunks())}});
   }
   spool_.reset();  // an upload that did not become a job leaves no file
+  context_.metrics.job_submit_finished(tenant_, status_code_name(status.error_code()));
   Finish(std::move(status));
 }
 

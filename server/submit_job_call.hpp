@@ -20,6 +20,7 @@
 
 #include "posefuse/v1/service.grpc.pb.h"
 #include "server/job_runner.hpp"
+#include "server/metrics.hpp"
 #include "server/session_registry.hpp"
 #include "server/upload_spool.hpp"
 #include "server/worker_pool.hpp"
@@ -36,6 +37,7 @@ struct SubmitJobContext {
   JobRunner& runner;
   WorkerPool& pool;
   SessionRegistry& registry;
+  Metrics& metrics;
   std::filesystem::path recordings_root;  // by reference: empty = off
   // The tokens file names tenants: each submits by reference from its own folder of the root
   // only, and the tenant "" (tokens without one) cannot (server/job_recording.hpp).

@@ -278,6 +278,11 @@ TEST_F(TenantsTest, MetricsCountEachTenantAndNameNoPatient) {
            "posefuse_sessions_finished_total{tenant=\"clinic-a\",status=\"OK\"} 2",
            "posefuse_sessions_finished_total{tenant=\"clinic-b\",status=\"OK\"} 1",
            "posefuse_jobs_finished_total{tenant=\"clinic-a\",state=\"SUCCEEDED\"} 1",
+           "posefuse_job_submits_total{tenant=\"clinic-a\",status=\"OK\"} 1",
+           "posefuse_chunks_received_total 0",
+           "posefuse_chunks_received_total{tenant=\"clinic-a\"} 1904",
+           "posefuse_chunks_received_total{tenant=\"clinic-b\"} 952",
+           "posefuse_item_errors_total 0",
        }) {
     EXPECT_NE(metrics.find("\n" + std::string(line) + "\n"), std::string::npos) << line << " in\n" << metrics;
   }
