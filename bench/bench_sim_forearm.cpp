@@ -134,6 +134,7 @@ int frames(const fs::path& chunks, const fs::path& gt, std::optional<double> pro
   session::ChunkFileReader reader(chunks);
   v1::SessionChunk chunk;
   forearm::StrapCameras cameras;
+  std::optional<geometry::PixelRays> depth_rays;  // cameras.depth's
   std::map<std::int64_t, cv::Mat> depth, color;
   std::deque<v1::SkeletonFrame> skeletons;
   std::printf(
@@ -163,7 +164,7 @@ int frames(const fs::path& chunks, const fs::path& gt, std::optional<double> pro
       const bool occluded = truth.occluded.count({s.t_us(), arm}) ? truth.occluded.at({s.t_us(), arm}) : false;
       std::printf("%.3f %c %d | %+.3f ", 1e-6 * s.t_us(), arm == 0 ? 'L' : 'R', occluded ? 1 : 0,
                   along(wr, t_el, t_wr) - (t_wr - t_el).norm());
-      const auto axes = forearm::measure_arm_axes(mm, cameras.depth, sh, el, wr);
+      const auto axes = forearm::measure_arm_axes(mm, *depth_rays, sh, el, wr);
       Vec3 m_el = el, m_wr = wr;
       if (axes) {
         m_el = axes->forearm.elbow_K;
@@ -180,7 +181,7 @@ int frames(const fs::path& chunks, const fs::path& gt, std::optional<double> pro
         const Vec3 ray = (0.5 * (m_el + m_wr)).normalized();
         const Vec3 lat = dir.cross(ray).normalized();
         const std::vector<Vec3> pts =
-            forearm::depth_points_near_segment(mm, cameras.depth, m_el - 0.05 * dir, m_wr + 0.15 * dir, 0.09);
+            forearm::depth_points_near_segment(mm, *depth_rays, m_el - 0.05 * dir, m_wr + 0.15 * dir, 0.09);
         const double tw = along(t_wr, m_el, m_wr);
         std::map<int, std::vector<double>> slices;
         std::map<int, std::vector<double>> depths;
@@ -236,6 +237,7 @@ int frames(const fs::path& chunks, const fs::path& gt, std::optional<double> pro
     switch (chunk.chunk_case()) {
       case v1::SessionChunk::kHeader:
         cameras.depth = session::pinhole_camera(chunk.header().depth_intrinsics());
+        depth_rays.emplace(cameras.depth);
         cameras.color = session::pinhole_camera(chunk.header().color_intrinsics());
         {
           const auto& r = chunk.header().color_from_depth().rotation();
@@ -278,7 +280,7 @@ int pose_frames(const fs::path& chunks, const fs::path& gt, double t0_s, double 
   const Truth truth = read_truth(gt);
   session::ChunkFileReader reader(chunks);
   v1::SessionChunk chunk;
-  geometry::PinholeCamera depth_camera;
+  std::optional<geometry::PixelRays> depth_rays;
   std::map<std::int64_t, cv::Mat> depth;
   std::printf(
       "t_s arm | upper_arm_err_deg depth side | forearm_err_deg depth side | pose_frame_err_F_deg x y z | "
@@ -288,7 +290,7 @@ int pose_frames(const fs::path& chunks, const fs::path& gt, double t0_s, double 
   };
   while (reader.next(chunk)) {
     if (chunk.chunk_case() == v1::SessionChunk::kHeader)
-      depth_camera = session::pinhole_camera(chunk.header().depth_intrinsics());
+      depth_rays.emplace(session::pinhole_camera(chunk.header().depth_intrinsics()));
     if (chunk.chunk_case() == v1::SessionChunk::kDepth)
       depth[chunk.depth().t_us()] = session::decode_depth(chunk.depth());
     if (chunk.chunk_case() != v1::SessionChunk::kSkeleton) continue;
@@ -304,7 +306,7 @@ int pose_frames(const fs::path& chunks, const fs::path& gt, double t0_s, double 
       if (q == truth.K_from_F.end()) continue;
       const Vec3 sh = vec(s.joints(js)), el = vec(s.joints(js + 1)), wr = vec(s.joints(js + 2));
       const Vec3 t_sh = jt->second.at(js), t_el = jt->second.at(js + 1), t_wr = jt->second.at(js + 2);
-      const auto axes = forearm::measure_arm_axes(mm, depth_camera, sh, el, wr);
+      const auto axes = forearm::measure_arm_axes(mm, *depth_rays, sh, el, wr);
       std::printf("%.3f %c | ", 1e-6 * s.t_us(), arm == 0 ? 'L' : 'R');
       if (!axes || !axes->upper_arm) {
         std::printf("%s\n", axes ? "no upper arm" : "no forearm");
@@ -333,7 +335,7 @@ int pose_frames(const fs::path& chunks, const fs::path& gt, double t0_s, double 
         const Vec3 to_camera = -(t_el - t_el.dot(dir) * dir).normalized();
         const Vec3 lat = dir.cross(to_camera);
         std::map<int, std::vector<std::pair<double, double>>> slices;
-        for (const Vec3& p : forearm::depth_points_near_segment(mm, depth_camera, t_sh, t_el, 0.09)) {
+        for (const Vec3& p : forearm::depth_points_near_segment(mm, *depth_rays, t_sh, t_el, 0.09)) {
           const double a = (p - t_sh).dot(dir);
           slices[static_cast<int>(std::floor(a / 0.02))].push_back({(p - t_sh).dot(lat), (p - t_sh).dot(to_camera)});
         }

@@ -14,26 +14,27 @@ bool has_pixels(const auto& image) { return image.pixels != nullptr && image.wid
 }  // namespace
 
 void measure_arm_frame(ArmFrame& arm, const geometry::DepthImageView& depth, const geometry::GrayImageView& gray,
-                       const StrapCameras& cameras, const ArmMeasurementOptions& options) {
+                       const StrapCameras& cameras, const geometry::PixelRays& depth_rays,
+                       const ArmMeasurementOptions& options) {
   if (!arm.forearm_tracked || !has_pixels(depth)) return;
   if (options.axis_from_depth || options.upper_arm_from_depth) {
     std::optional<MeasuredUpperArm> upper_arm;
     if (options.axis_from_depth && arm.shoulder_tracked) {
       // Both limbs, so that the upper arm's points next to the elbow are not taken for the forearm's.
-      if (const auto axes = measure_arm_axes(depth, cameras.depth, arm.shoulder_K, arm.elbow_K, arm.wrist_K)) {
+      if (const auto axes = measure_arm_axes(depth, depth_rays, arm.shoulder_K, arm.elbow_K, arm.wrist_K)) {
         arm.elbow_K = axes->forearm.elbow_K;
         arm.wrist_K = axes->forearm.wrist_K;
         arm.axis_from_depth = true;
         upper_arm = axes->upper_arm;
       }
     } else if (options.axis_from_depth) {
-      if (const auto axis = measure_forearm_axis(depth, cameras.depth, arm.elbow_K, arm.wrist_K)) {
+      if (const auto axis = measure_forearm_axis(depth, depth_rays, arm.elbow_K, arm.wrist_K)) {
         arm.elbow_K = axis->elbow_K;
         arm.wrist_K = axis->wrist_K;
         arm.axis_from_depth = true;
       }
     } else if (options.calibrating && arm.shoulder_tracked) {
-      upper_arm = measure_upper_arm_axis(depth, cameras.depth, arm.shoulder_K, arm.elbow_K, arm.wrist_K);
+      upper_arm = measure_upper_arm_axis(depth, depth_rays, arm.shoulder_K, arm.elbow_K, arm.wrist_K);
     }
     // Used by the calibration only (the arm plane's upper arm, forearm.upper_arm = depth).
     if (upper_arm && options.upper_arm_from_depth && options.calibrating) {

@@ -6,6 +6,7 @@
 #include "forearm/forearm_track.hpp"
 #include "forearm/strap_detection.hpp"
 #include "geometry/image_view.hpp"
+#include "geometry/pixel_rays.hpp"
 
 namespace posefuse::forearm {
 
@@ -19,8 +20,9 @@ struct ArmMeasurementOptions {
 // Refines `arm`, whose SDK joints and tracking flags are set, in place: elbow_K, wrist_K and
 // axis_from_depth from the depth image, upper_arm_direction_K (calibrating only), strap_K from
 // the colour image. Only an arm whose forearm the SDK tracks is measured; an empty image is not
-// used.
+// used. depth_rays: cameras.depth's pixel rays, built once per session (geometry/pixel_rays.hpp).
 void measure_arm_frame(ArmFrame& arm, const geometry::DepthImageView& depth, const geometry::GrayImageView& gray,
-                       const StrapCameras& cameras, const ArmMeasurementOptions& options);
+                       const StrapCameras& cameras, const geometry::PixelRays& depth_rays,
+                       const ArmMeasurementOptions& options);
 
 }  // namespace posefuse::forearm

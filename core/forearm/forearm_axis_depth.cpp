@@ -8,7 +8,6 @@
 #include <Eigen/Eigenvalues>
 
 #include "common/error.hpp"
-#include "geometry/segment_distance.hpp"
 
 namespace posefuse::forearm {
 
@@ -32,8 +31,12 @@ Line principal_line(const std::vector<Vec3>& points) {
 }  // namespace
 
 std::vector<Vec3> depth_points_near_segment(const geometry::DepthImageView& depth,
-                                            const geometry::PinholeCamera& depth_camera, const Vec3& a, const Vec3& b,
+                                            const geometry::PixelRays& depth_rays, const Vec3& a, const Vec3& b,
                                             double radius_m) {
+  const geometry::PinholeCamera& depth_camera = depth_rays.camera();
+  if (!depth.pixels || depth.width != depth_camera.width || depth.height != depth_camera.height) {
+    throw_invalid("depth.pixels", "missing, or its size differs from the depth camera's");
+  }
   // Pixel window: both extended ends, widened by the search radius at the nearer depth.
   double col0 = depth.width, col1 = -1, row0 = depth.height, row1 = -1;
   double min_z = std::max(1e-3, std::min(a.z(), b.z()) - radius_m);
@@ -53,13 +56,23 @@ std::vector<Vec3> depth_points_near_segment(const geometry::DepthImageView& dept
   const int r0 = std::max(0, static_cast<int>(std::floor(row0 - margin_px)));
   const int r1 = std::min(depth.height - 1, static_cast<int>(std::ceil(row1 + margin_px)));
 
+  // geometry::distance_to_segment's arithmetic with the segment's parts hoisted out of the loop,
+  // and a depth outside the segment's depth range +- radius_m rejected first (most of the window
+  // is background or torso): the same points as testing each one in full.
+  const Vec3 ab = b - a;
+  const double ab_squared = ab.squaredNorm();
+  const double z_low = std::min(a.z(), b.z()) - radius_m, z_high = std::max(a.z(), b.z()) + radius_m;
   std::vector<Vec3> points;
   for (int row = r0; row <= r1; ++row) {
+    const std::uint16_t* depth_row = depth.pixels + static_cast<std::ptrdiff_t>(row) * depth.width;
     for (int col = c0; col <= c1; ++col) {
-      const std::uint16_t mm = depth.at(col, row);
+      const std::uint16_t mm = depth_row[col];
       if (mm == 0) continue;
-      const Vec3 p = geometry::back_project(depth_camera, col, row, 1e-3 * mm);
-      if (geometry::distance_to_segment(p, a, b) <= radius_m) points.push_back(p);
+      const double z = 1e-3 * mm;
+      if (z < z_low || z > z_high) continue;
+      const Vec3 p = depth_rays.point(col, row, z);
+      const double u = std::clamp((p - a).dot(ab) / ab_squared, 0.0, 1.0);
+      if ((p - (a + u * ab)).norm() <= radius_m) points.push_back(p);
     }
   }
   return points;
@@ -164,10 +177,10 @@ std::optional<double> wrist_from_width_profile(const std::vector<double>& along,
 }
 
 std::optional<MeasuredForearmAxis> measure_forearm_axis(const geometry::DepthImageView& depth,
-                                                        const geometry::PinholeCamera& depth_camera,
-                                                        const Vec3& elbow_K, const Vec3& wrist_K,
-                                                        const ForearmAxisOptions& options,
+                                                        const geometry::PixelRays& depth_rays, const Vec3& elbow_K,
+                                                        const Vec3& wrist_K, const ForearmAxisOptions& options,
                                                         const std::optional<SurfaceLine>& excluded) {
+  const geometry::PinholeCamera& depth_camera = depth_rays.camera();
   if (!depth.pixels || depth.width != depth_camera.width || depth.height != depth_camera.height) {
     throw_invalid("depth.pixels", "missing, or its size differs from the depth camera's");
   }
@@ -188,7 +201,7 @@ std::optional<MeasuredForearmAxis> measure_forearm_axis(const geometry::DepthIma
   }
   const Vec3 sdk_axis = (wrist_K - elbow_K).normalized();
   const Vec3 a = elbow_K - options.end_margin_m * sdk_axis, b = wrist_K + options.end_margin_m * sdk_axis;
-  std::vector<Vec3> points = depth_points_near_segment(depth, depth_camera, a, b, options.search_radius_m);
+  std::vector<Vec3> points = depth_points_near_segment(depth, depth_rays, a, b, options.search_radius_m);
   if (excluded) {
     std::erase_if(points, [&](const Vec3& p) {
       const Vec3 d = p - excluded->point;

@@ -25,6 +25,7 @@
 #include "forearm/forearm_types.hpp"
 #include "geometry/image_view.hpp"
 #include "geometry/pinhole_camera.hpp"
+#include "geometry/pixel_rays.hpp"
 
 namespace posefuse::forearm {
 
@@ -64,9 +65,11 @@ struct MeasuredForearmAxis {
 };
 
 // Depth pixels back-projected into K that lie within radius_m of the segment a-b (the pieces
-// below are shared with upper_arm_depth.hpp). The caller checks the image and the points.
+// below are shared with upper_arm_depth.hpp). depth_rays: the depth camera's pixel rays, built
+// once per camera (geometry/pixel_rays.hpp). Throws posefuse::Error kInvalidArgument
+// "depth.pixels" when the image is missing or not the camera's size.
 std::vector<Vec3> depth_points_near_segment(const geometry::DepthImageView& depth,
-                                            const geometry::PinholeCamera& depth_camera, const Vec3& a, const Vec3& b,
+                                            const geometry::PixelRays& depth_rays, const Vec3& a, const Vec3& b,
                                             double radius_m);
 
 // A principal-axis line through `points`, refitted `refinements` times on the points within
@@ -106,13 +109,13 @@ std::optional<CylinderAxis> cylinder_axis(const DepthLine& line, double depth_fx
 std::optional<double> wrist_from_width_profile(const std::vector<double>& along, const std::vector<double>& lateral,
                                                double along_max, const ForearmAxisOptions& options);
 
+// depth_rays: the depth camera's pixel rays (geometry/pixel_rays.hpp).
 // Throws posefuse::Error kInvalidArgument naming "depth.pixels", "elbow_K", "wrist_K" or
 // "options" for unusable input. nullopt when the depth image does not show a forearm there
 // (too few points, too short).
 std::optional<MeasuredForearmAxis> measure_forearm_axis(const geometry::DepthImageView& depth,
-                                                        const geometry::PinholeCamera& depth_camera,
-                                                        const Vec3& elbow_K, const Vec3& wrist_K,
-                                                        const ForearmAxisOptions& options = {},
+                                                        const geometry::PixelRays& depth_rays, const Vec3& elbow_K,
+                                                        const Vec3& wrist_K, const ForearmAxisOptions& options = {},
                                                         const std::optional<SurfaceLine>& excluded = std::nullopt);
 
 }  // namespace posefuse::forearm

@@ -21,9 +21,10 @@ void check_joint(const Vec3& p, const char* field) {
 }  // namespace
 
 std::optional<MeasuredUpperArm> measure_upper_arm_axis(const geometry::DepthImageView& depth,
-                                                       const geometry::PinholeCamera& depth_camera,
-                                                       const Vec3& shoulder_K, const Vec3& elbow_K, const Vec3& wrist_K,
+                                                       const geometry::PixelRays& depth_rays, const Vec3& shoulder_K,
+                                                       const Vec3& elbow_K, const Vec3& wrist_K,
                                                        const UpperArmAxisOptions& options) {
+  const geometry::PinholeCamera& depth_camera = depth_rays.camera();
   if (!depth.pixels || depth.width != depth_camera.width || depth.height != depth_camera.height) {
     throw_invalid("depth.pixels", "missing, or its size differs from the depth camera's");
   }
@@ -43,8 +44,7 @@ std::optional<MeasuredUpperArm> measure_upper_arm_axis(const geometry::DepthImag
   // Too short to hold a piece of arm, e.g. a straight arm's forearm end found up the upper arm.
   if (upper.norm() < options.min_length_m + options.elbow_clearance_m) return std::nullopt;
   const Vec3 start = shoulder_K + options.shoulder_skip_fraction * upper;
-  const std::vector<Vec3> near =
-      depth_points_near_segment(depth, depth_camera, start, elbow_K, options.search_radius_m);
+  const std::vector<Vec3> near = depth_points_near_segment(depth, depth_rays, start, elbow_K, options.search_radius_m);
   // Points beside the arm between the cuts across it: from shoulder_skip_fraction of the way from
   // the shoulder to elbow_clearance_m short of the elbow, measured along `direction` (through
   // `point`). A cut across the arm keeps the points symmetric about its axis (distance to the
@@ -170,7 +170,7 @@ std::optional<MeasuredUpperArm> measure_upper_arm_axis(const geometry::DepthImag
 }
 
 std::optional<MeasuredArm> measure_arm_axes(const geometry::DepthImageView& depth,
-                                            const geometry::PinholeCamera& depth_camera, const Vec3& shoulder_K,
+                                            const geometry::PixelRays& depth_rays, const Vec3& shoulder_K,
                                             const Vec3& elbow_K, const Vec3& wrist_K,
                                             const ForearmAxisOptions& forearm_options,
                                             const UpperArmAxisOptions& upper_arm_options, double min_bend_rad,
@@ -179,13 +179,13 @@ std::optional<MeasuredArm> measure_arm_axes(const geometry::DepthImageView& dept
   // arm from a straight one better than the SDK's joints. The upper arm is first looked for with
   // the SDK's elbow and wrist for the clearance (that forearm's elbow end may lie up the upper arm).
   std::optional<MeasuredForearmAxis> forearm =
-      measure_forearm_axis(depth, depth_camera, elbow_K, wrist_K, forearm_options);
+      measure_forearm_axis(depth, depth_rays, elbow_K, wrist_K, forearm_options);
   if (!forearm) return std::nullopt;
   bool excluded = false;
-  if (const auto near = measure_upper_arm_axis(depth, depth_camera, shoulder_K, elbow_K, wrist_K, upper_arm_options)) {
+  if (const auto near = measure_upper_arm_axis(depth, depth_rays, shoulder_K, elbow_K, wrist_K, upper_arm_options)) {
     const Vec3 forearm_direction = (forearm->wrist_K - forearm->elbow_K).normalized();
     if (std::acos(std::clamp(near->direction_K.dot(forearm_direction), -1.0, 1.0)) > min_bend_rad) {
-      forearm = measure_forearm_axis(depth, depth_camera, elbow_K, wrist_K, forearm_options,
+      forearm = measure_forearm_axis(depth, depth_rays, elbow_K, wrist_K, forearm_options,
                                      SurfaceLine{near->centroid_K, near->direction_K});
       if (!forearm) return std::nullopt;
       excluded = true;
@@ -194,7 +194,7 @@ std::optional<MeasuredArm> measure_arm_axes(const geometry::DepthImageView& dept
   MeasuredArm out;
   out.forearm = *forearm;
   out.upper_arm =
-      measure_upper_arm_axis(depth, depth_camera, shoulder_K, forearm->elbow_K, forearm->wrist_K, upper_arm_options);
+      measure_upper_arm_axis(depth, depth_rays, shoulder_K, forearm->elbow_K, forearm->wrist_K, upper_arm_options);
   if (excluded && out.upper_arm) {
     // Closest point of the forearm axis to the upper arm's (both lines, unit directions).
     const Vec3 d1 = (forearm->wrist_K - forearm->elbow_K).normalized(), d2 = out.upper_arm->direction_K;

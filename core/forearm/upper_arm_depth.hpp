@@ -32,7 +32,7 @@
 #include "forearm/forearm_axis_depth.hpp"
 #include "forearm/forearm_types.hpp"
 #include "geometry/image_view.hpp"
-#include "geometry/pinhole_camera.hpp"
+#include "geometry/pixel_rays.hpp"
 
 namespace posefuse::forearm {
 
@@ -61,13 +61,14 @@ struct MeasuredUpperArm {
   int points = 0;  // inliers of the last fit
 };
 
-// shoulder_K: the SDK's shoulder; elbow_K, wrist_K: the forearm axis (measured in depth,
+// depth_rays: the depth camera's pixel rays (geometry/pixel_rays.hpp); shoulder_K: the SDK's
+// shoulder; elbow_K, wrist_K: the forearm axis (measured in depth,
 // forearm_axis_depth.hpp). Throws posefuse::Error kInvalidArgument naming "depth.pixels",
 // "shoulder_K", "elbow_K", "wrist_K" or "options" for unusable input. nullopt when the depth image
 // does not show an upper arm there (too few points, too short).
 std::optional<MeasuredUpperArm> measure_upper_arm_axis(const geometry::DepthImageView& depth,
-                                                       const geometry::PinholeCamera& depth_camera,
-                                                       const Vec3& shoulder_K, const Vec3& elbow_K, const Vec3& wrist_K,
+                                                       const geometry::PixelRays& depth_rays, const Vec3& shoulder_K,
+                                                       const Vec3& elbow_K, const Vec3& wrist_K,
                                                        const UpperArmAxisOptions& options = {});
 
 // Both limbs of one arm, each without the other's points. The forearm fit alone
@@ -90,7 +91,7 @@ struct MeasuredArm {
   std::optional<MeasuredUpperArm> upper_arm;
 };
 std::optional<MeasuredArm> measure_arm_axes(const geometry::DepthImageView& depth,
-                                            const geometry::PinholeCamera& depth_camera, const Vec3& shoulder_K,
+                                            const geometry::PixelRays& depth_rays, const Vec3& shoulder_K,
                                             const Vec3& elbow_K, const Vec3& wrist_K,
                                             const ForearmAxisOptions& forearm_options = {},
                                             const UpperArmAxisOptions& upper_arm_options = {},

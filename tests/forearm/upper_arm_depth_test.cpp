@@ -63,7 +63,7 @@ TEST(UpperArmDepth, CalibrationFrameDoesNotFollowTheSdkShoulderBias) {
   double worst_sdk_deg = 0.0;
   for (const Vec3& bias : shoulder_biases()) {
     const Vec3 sdk_shoulder = *scene.shoulder_K + bias;
-    const auto arm = measure_arm_axes(images.depth_view(cameras), cameras.depth, sdk_shoulder,
+    const auto arm = measure_arm_axes(images.depth_view(cameras), geometry::PixelRays(cameras.depth), sdk_shoulder,
                                       scene.elbow_K + kElbowBias, scene.wrist_K + kWristBias);
     ASSERT_TRUE(arm.has_value());
     ASSERT_TRUE(arm->upper_arm.has_value());
@@ -110,9 +110,10 @@ TEST(UpperArmDepth, TaperedUpperArmKeepsTheRoll) {
   for (const Vec3& bias : shoulder_biases()) {
     const Vec3 sdk_shoulder = *scene.shoulder_K + bias;
     const Vec3 sdk_elbow = scene.elbow_K + kElbowBias, sdk_wrist = scene.wrist_K + kWristBias;
-    const auto arm = measure_arm_axes(images.depth_view(cameras), cameras.depth, sdk_shoulder, sdk_elbow, sdk_wrist);
-    const auto plain_arm =
-        measure_arm_axes(images.depth_view(cameras), cameras.depth, sdk_shoulder, sdk_elbow, sdk_wrist, {}, plain);
+    const auto arm = measure_arm_axes(images.depth_view(cameras), geometry::PixelRays(cameras.depth), sdk_shoulder,
+                                      sdk_elbow, sdk_wrist);
+    const auto plain_arm = measure_arm_axes(images.depth_view(cameras), geometry::PixelRays(cameras.depth),
+                                            sdk_shoulder, sdk_elbow, sdk_wrist, {}, plain);
     ASSERT_TRUE(arm && arm->upper_arm && plain_arm && plain_arm->upper_arm);
     const double roll_deg = twist_about_y(true_frame.conjugate() * frame_from(*arm, sdk_shoulder)) / kDeg;
     const double plain_roll_deg = twist_about_y(true_frame.conjugate() * frame_from(*plain_arm, sdk_shoulder)) / kDeg;
@@ -134,7 +135,7 @@ TEST(UpperArmDepth, TaperCorrectionOnACylinder) {
   double worst_roll_deg = 0.0;
   for (const Vec3& bias : shoulder_biases()) {
     const Vec3 sdk_shoulder = *scene.shoulder_K + bias;
-    const auto arm = measure_arm_axes(images.depth_view(cameras), cameras.depth, sdk_shoulder,
+    const auto arm = measure_arm_axes(images.depth_view(cameras), geometry::PixelRays(cameras.depth), sdk_shoulder,
                                       scene.elbow_K + kElbowBias, scene.wrist_K + kWristBias);
     ASSERT_TRUE(arm && arm->upper_arm);
     worst_roll_deg = std::max(worst_roll_deg,
@@ -151,7 +152,7 @@ TEST(UpperArmDepth, DepthNoiseOfTwoMillimetres) {
   for (std::uint64_t seed = 1; seed <= 3; ++seed) {
     const auto images = render_forearm(scene, cameras, 0.0, 0.002, seed);
     const Vec3 sdk_shoulder = *scene.shoulder_K + shoulder_biases()[seed];
-    const auto arm = measure_arm_axes(images.depth_view(cameras), cameras.depth, sdk_shoulder,
+    const auto arm = measure_arm_axes(images.depth_view(cameras), geometry::PixelRays(cameras.depth), sdk_shoulder,
                                       scene.elbow_K + kElbowBias, scene.wrist_K + kWristBias);
     ASSERT_TRUE(arm.has_value());
     ASSERT_TRUE(arm->upper_arm.has_value());
@@ -166,11 +167,12 @@ TEST(UpperArmDepth, NoUpperArmInDepthGivesNone) {
   scene.shoulder_K.reset();  // only the forearm is drawn
   const StrapCameras cameras = test_cameras();
   const auto images = render_forearm(scene, cameras);
-  EXPECT_FALSE(measure_upper_arm_axis(images.depth_view(cameras), cameras.depth, shoulder, scene.elbow_K, scene.wrist_K)
+  EXPECT_FALSE(measure_upper_arm_axis(images.depth_view(cameras), geometry::PixelRays(cameras.depth), shoulder,
+                                      scene.elbow_K, scene.wrist_K)
                    .has_value());
   // Both limbs: the forearm is still found, without an upper arm.
-  const auto arm = measure_arm_axes(images.depth_view(cameras), cameras.depth, shoulder, scene.elbow_K + kElbowBias,
-                                    scene.wrist_K + kWristBias);
+  const auto arm = measure_arm_axes(images.depth_view(cameras), geometry::PixelRays(cameras.depth), shoulder,
+                                    scene.elbow_K + kElbowBias, scene.wrist_K + kWristBias);
   ASSERT_TRUE(arm.has_value());
   EXPECT_FALSE(arm->upper_arm.has_value());
   EXPECT_LT(angle_deg(arm->forearm.wrist_K - arm->forearm.elbow_K, scene.wrist_K - scene.elbow_K), 2.0);
@@ -185,8 +187,9 @@ TEST(UpperArmDepth, StraightArmIsOneCylinder) {
   scene.wrist_K = Vec3(0.36, 0.21, 2.0);
   const StrapCameras cameras = test_cameras();
   const auto images = render_forearm(scene, cameras);
-  const auto arm = measure_arm_axes(images.depth_view(cameras), cameras.depth, *scene.shoulder_K + Vec3(0, 0.05, 0),
-                                    scene.elbow_K + kElbowBias, scene.wrist_K + kWristBias);
+  const auto arm =
+      measure_arm_axes(images.depth_view(cameras), geometry::PixelRays(cameras.depth),
+                       *scene.shoulder_K + Vec3(0, 0.05, 0), scene.elbow_K + kElbowBias, scene.wrist_K + kWristBias);
   ASSERT_TRUE(arm.has_value());
   // The forearm is 2.2 degrees from the upper arm's line here and the upper arm's points near the
   // elbow stay in its fit (not removed: the arm is not bent), which pulls it a little that way.
@@ -197,10 +200,11 @@ TEST(UpperArmDepth, BadInputNamesTheField) {
   const ForearmScene scene = calibration_scene();
   const StrapCameras cameras = test_cameras();
   const auto images = render_forearm(scene, cameras);
+  const geometry::PixelRays rays(cameras.depth);
   const auto field_of = [&](const DepthImageView& depth, const Vec3& shoulder, const Vec3& elbow, const Vec3& wrist,
                             const UpperArmAxisOptions& options) {
     try {
-      measure_upper_arm_axis(depth, cameras.depth, shoulder, elbow, wrist, options);
+      measure_upper_arm_axis(depth, rays, shoulder, elbow, wrist, options);
     } catch (const Error& e) {
       return e.field();
     }
@@ -219,7 +223,7 @@ TEST(UpperArmDepth, BadInputNamesTheField) {
   EXPECT_EQ(field_of(good, s, e, w, bad), "options");
   SurfaceLine not_unit{Vec3(0, 0, 2), Vec3(0, 0, 2)};
   try {
-    measure_forearm_axis(good, cameras.depth, e, w, {}, not_unit);
+    measure_forearm_axis(good, rays, e, w, {}, not_unit);
     ADD_FAILURE() << "no error";
   } catch (const Error& error) {
     EXPECT_EQ(error.field(), "excluded");

@@ -91,6 +91,7 @@ void ForearmStage::start(const v1::SessionHeader& header, StageOutput& out) {
     cameras.color_from_depth = session.color_from_depth;
     cameras.color_from_depth_m = session.color_from_depth_m;
     cameras_ = cameras;
+    depth_rays_.emplace(cameras.depth, "header.depth_intrinsics");
   } else {
     out.warn("FOREARM_NO_COLOR", "header.color_intrinsics",
              "no colour stream: the strap (paper 1, II-I) cannot be seen, so only forearm orientations are produced");
@@ -206,7 +207,7 @@ void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleto
     forearm::ArmFrame arm = arm_frame_from_skeleton(skeleton, *device.side, frame.t_us);
     if (cameras_) {
       forearm::measure_arm_frame(
-          arm, depth, gray, *cameras_,
+          arm, depth, gray, *cameras_, *depth_rays_,
           {options_.axis_from_depth, options_.upper_arm_from_depth, !device.tracker || device.from_motion});
     }
     if (device.tracker) {

@@ -55,6 +55,7 @@
 #include "forearm/forearm_track.hpp"
 #include "forearm/mounting_from_motion.hpp"
 #include "forearm/strap_detection.hpp"
+#include "geometry/pixel_rays.hpp"
 #include "session/pipeline_stage.hpp"
 #include "session/stages/forearm_options.hpp"
 #include "session/stages/stream_clocks.hpp"
@@ -144,6 +145,7 @@ class ForearmStage : public Stage {
   ForearmOptions options_;
   std::optional<std::uint32_t> body_id_;
   std::optional<forearm::StrapCameras> cameras_;
+  std::optional<geometry::PixelRays> depth_rays_;  // cameras_->depth's, with cameras_
   forearm::CalibrationOptions calibration_options_;
   std::unique_ptr<StreamClocks> clocks_;
   std::optional<sync::ClockMap> clock_map_;
