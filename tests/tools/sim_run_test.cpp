@@ -163,9 +163,9 @@ TEST(SimRun, SameSeedSameBytesWhateverTheThreads) {
   EXPECT_NE(tree_a.at("gt/truth.json"), tree_c.at("gt/truth.json"));
 }
 
-// The directory's depth PNGs come straight from the frame threads, the chunk file's depth is
-// zstd: both must hold the same frames.
-TEST(SimRun, DirectoryAndChunkFileHoldTheSameDepth) {
+// The directory's depth and body index PNGs come straight from the frame threads, the chunk
+// file's are zstd: both must hold the same frames.
+TEST(SimRun, DirectoryAndChunkFileHoldTheSameDepthAndBodyIndex) {
   tools::SimRunRequest dir;
   dir.options = small_options();
   dir.options.color = false;
@@ -178,7 +178,17 @@ TEST(SimRun, DirectoryAndChunkFileHoldTheSameDepth) {
   session::ChunkFileReader reader(*file.chunk_file);
   session::SessionChunk chunk;
   int frames = 0;
+  int body_index_frames = 0;
   while (reader.next(chunk)) {
+    if (chunk.has_body_index()) {
+      ASSERT_EQ(chunk.body_index().encoding(), v1::BodyIndexFrame::ZSTD_U8);
+      const cv::Mat from_file = session::decode_body_index(chunk.body_index(), "body_index");
+      const fs::path png = *dir.out_directory / "body_index" / (std::to_string(chunk.body_index().t_us()) + ".png");
+      const cv::Mat from_dir = cv::imread(png.string(), cv::IMREAD_UNCHANGED);
+      ASSERT_EQ(from_dir.type(), CV_8UC1) << png;
+      EXPECT_EQ(cv::countNonZero(from_file != from_dir), 0) << png;
+      ++body_index_frames;
+    }
     if (!chunk.has_depth()) continue;
     ASSERT_EQ(chunk.depth().encoding(), v1::DepthFrame::ZSTD_U16_LE);
     const cv::Mat from_file = session::decode_depth(chunk.depth(), "depth");
@@ -189,6 +199,7 @@ TEST(SimRun, DirectoryAndChunkFileHoldTheSameDepth) {
     ++frames;
   }
   EXPECT_EQ(frames, 31);
+  EXPECT_EQ(body_index_frames, 31);
 }
 
 TEST(SimRun, GtHasTheClientResultFilesColumns) {
