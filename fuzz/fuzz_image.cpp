@@ -1,5 +1,5 @@
 // The image decoders (session/image_codec.*): depth RAW_U16_LE / PNG16 / ZSTD_U16_LE, body
-// index RAW_U8 / PNG8, colour PNG / JPEG to grey, and the PNG / JPEG header sniffers, under the
+// index RAW_U8 / PNG8 / ZSTD_U8, colour PNG / JPEG to grey, and the PNG / JPEG header sniffers, under the
 // limits they apply themselves (kMaxImageSide, kMaxDepthPixels, kMaxColorPixels).
 //
 // Input: byte 0 picks the decoder, byte 1 the encoding, bytes 2-3 and 4-5 the chunk's width
@@ -51,7 +51,7 @@ extern "C" int LLVMFuzzerInitialize(int*, char***) {
       seeds.push_back(
           {"depth-" + std::to_string(e), input(kDepth, e, 8, 6, session::encode_depth(depth, e, 0).data())});
     }
-    for (const auto e : {v1::BodyIndexFrame::RAW_U8, v1::BodyIndexFrame::PNG8}) {
+    for (const auto e : {v1::BodyIndexFrame::RAW_U8, v1::BodyIndexFrame::PNG8, v1::BodyIndexFrame::ZSTD_U8}) {
       seeds.push_back({"body-index-" + std::to_string(e),
                        input(kBodyIndex, e, 8, 6, session::encode_body_index(ids, e, 0).data())});
     }

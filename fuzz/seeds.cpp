@@ -107,14 +107,15 @@ std::vector<v1::SessionChunk> tiny_session() {
   *chunks.emplace_back().mutable_header() = tiny_header();
   const v1::DepthFrame::Encoding depth_encodings[] = {v1::DepthFrame::RAW_U16_LE, v1::DepthFrame::PNG16,
                                                       v1::DepthFrame::ZSTD_U16_LE};
+  const v1::BodyIndexFrame::Encoding body_index_encodings[] = {v1::BodyIndexFrame::RAW_U8, v1::BodyIndexFrame::PNG8,
+                                                               v1::BodyIndexFrame::ZSTD_U8};
   for (int f = 0; f < 3; ++f) {
     const std::int64_t t_us = kStartUs + f * kFrameUs;
     *chunks.emplace_back().mutable_depth() =
         session::encode_depth(gradient(kWidth, kHeight, CV_16UC1), depth_encodings[f], t_us);
     cv::Mat ids(kHeight, kWidth, CV_8UC1, cv::Scalar(255));
     ids(cv::Rect(2, 1, 3, 4)).setTo(1);
-    *chunks.emplace_back().mutable_body_index() =
-        session::encode_body_index(ids, f % 2 ? v1::BodyIndexFrame::PNG8 : v1::BodyIndexFrame::RAW_U8, t_us);
+    *chunks.emplace_back().mutable_body_index() = session::encode_body_index(ids, body_index_encodings[f], t_us);
     *chunks.emplace_back().mutable_skeleton() = skeleton(t_us);
     v1::ColorFrame* color = chunks.emplace_back().mutable_color();
     color->set_t_us(t_us + 1'000);

@@ -13,7 +13,7 @@
 namespace posefuse::fuzz {
 
 // A small valid session: header, then every data chunk kind and encoding (depth RAW / PNG16 /
-// ZSTD, body index RAW / PNG8, skeleton, colour PNG / JPEG, IMU batches, audio, sync events),
+// ZSTD, body index RAW / PNG8 / ZSTD, skeleton, colour PNG / JPEG, IMU batches, audio, sync events),
 // then the end marker with the right counts. It passes SessionValidator.
 std::vector<v1::SessionChunk> tiny_session();
 // The session's header (8x6 depth, 8x6 colour, two IMUs, 16 kHz mono audio).

@@ -119,6 +119,58 @@ std::uint32_t read_be16(std::string_view bytes, std::size_t at) {
          static_cast<unsigned char>(bytes[at + 1]);
 }
 
+// One zstd context of each kind per thread, reused across frames: creating one allocates and
+// clears its tables (hundreds of KiB for compression), which costs more than a small frame.
+template <typename Context, Context* (*create)(), std::size_t (*release)(Context*)>
+Context* thread_context() {
+  struct Owner {
+    Context* context = create();
+    ~Owner() { release(context); }
+  };
+  thread_local Owner owner;
+  if (owner.context == nullptr) throw Error(ErrorCode::kInternal, "zstd", "cannot create a context");
+  return owner.context;
+}
+
+ZSTD_DCtx* thread_decompression_context() { return thread_context<ZSTD_DCtx, ZSTD_createDCtx, ZSTD_freeDCtx>(); }
+
+ZSTD_CCtx* thread_compression_context() { return thread_context<ZSTD_CCtx, ZSTD_createCCtx, ZSTD_freeCCtx>(); }
+
+// Decompresses a zstd frame straight into a new width x height image of `type`. The frame's
+// claimed content size is checked before anything is allocated, and the decoder never writes
+// past the image, so hostile bytes cost at most one image.
+cv::Mat zstd_to_mat(const std::string& data, int type, std::uint32_t width, std::uint32_t height,
+                    const std::string& field, const char* encoding_name) {
+  const std::size_t expected = std::size_t{width} * height * CV_ELEM_SIZE(type);
+  const auto wrong_size = [&](unsigned long long got) {
+    throw_invalid(field + ".data", "zstd content is " + std::to_string(got) + " bytes, expected " +
+                                       std::to_string(expected) + " (" + size_text(width, height) + " " +
+                                       encoding_name + ")");
+  };
+  const unsigned long long content = ZSTD_getFrameContentSize(data.data(), data.size());
+  if (content == ZSTD_CONTENTSIZE_ERROR) throw_invalid(field + ".data", "is not a zstd frame");
+  if (content != ZSTD_CONTENTSIZE_UNKNOWN && content != expected) wrong_size(content);
+  cv::Mat image(static_cast<int>(height), static_cast<int>(width), type);
+  const std::size_t got =
+      ZSTD_decompressDCtx(thread_decompression_context(), image.data, expected, data.data(), data.size());
+  if (ZSTD_isError(got)) throw_invalid(field + ".data", std::string("zstd: ") + ZSTD_getErrorName(got));
+  if (got != expected) wrong_size(got);
+  return image;
+}
+
+std::string mat_to_zstd(const cv::Mat& image, int level, const char* what) {
+  const cv::Mat contiguous = image.isContinuous() ? image : image.clone();
+  const std::size_t size = contiguous.total() * contiguous.elemSize();
+  std::string packed(ZSTD_compressBound(size), '\0');
+  const std::size_t written =
+      ZSTD_compressCCtx(thread_compression_context(), packed.data(), packed.size(), contiguous.data, size, level);
+  if (ZSTD_isError(written)) {
+    throw Error(ErrorCode::kInternal, what, std::string("zstd: ") + ZSTD_getErrorName(written));
+  }
+  packed.resize(written);
+  return packed;
+}
+
 }  // namespace
 
 cv::Mat decode_depth(const v1::DepthFrame& frame, const std::string& field) {
@@ -127,48 +179,11 @@ cv::Mat decode_depth(const v1::DepthFrame& frame, const std::string& field) {
     case v1::DepthFrame::RAW_U16_LE:
       return raw_to_mat(frame.data(), CV_16UC1, frame.width(), frame.height(), field, "RAW_U16_LE");
     case v1::DepthFrame::PNG16: return decode_png(frame.data(), CV_16UC1, frame.width(), frame.height(), field);
-    case v1::DepthFrame::ZSTD_U16_LE: {
-      const std::size_t expected = std::size_t{frame.width()} * frame.height() * 2;
-      const std::string& data = frame.data();
-      const unsigned long long content = ZSTD_getFrameContentSize(data.data(), data.size());
-      if (content == ZSTD_CONTENTSIZE_ERROR) {
-        throw_invalid(field + ".data", "is not a zstd frame");
-      }
-      if (content != ZSTD_CONTENTSIZE_UNKNOWN && content != expected) {
-        throw_invalid(field + ".data", "zstd content is " + std::to_string(content) + " bytes, expected " +
-                                           std::to_string(expected) + " (" + size_text(frame.width(), frame.height()) +
-                                           " u16)");
-      }
-      std::string raw(expected, '\0');
-      const std::size_t got = ZSTD_decompress(raw.data(), raw.size(), data.data(), data.size());
-      if (ZSTD_isError(got)) {
-        throw_invalid(field + ".data", std::string("zstd: ") + ZSTD_getErrorName(got));
-      }
-      if (got != expected) {
-        throw_invalid(field + ".data",
-                      "zstd content is " + std::to_string(got) + " bytes, expected " + std::to_string(expected));
-      }
-      return raw_to_mat(raw, CV_16UC1, frame.width(), frame.height(), field, "ZSTD_U16_LE");
-    }
+    case v1::DepthFrame::ZSTD_U16_LE:
+      return zstd_to_mat(frame.data(), CV_16UC1, frame.width(), frame.height(), field, "ZSTD_U16_LE");
     default: throw_invalid(field + ".encoding", "unknown depth encoding " + std::to_string(frame.encoding()));
   }
 }
-
-namespace {
-
-// One zstd compression context per thread, reused across frames (the bytes are the same as
-// ZSTD_compress's, without allocating and clearing a context per frame).
-ZSTD_CCtx* thread_compression_context() {
-  struct Owner {
-    ZSTD_CCtx* context = ZSTD_createCCtx();
-    ~Owner() { ZSTD_freeCCtx(context); }
-  };
-  thread_local Owner owner;
-  if (owner.context == nullptr) throw Error(ErrorCode::kInternal, "depth", "zstd: cannot create a context");
-  return owner.context;
-}
-
-}  // namespace
 
 v1::DepthFrame encode_depth(const cv::Mat& depth_mm, v1::DepthFrame::Encoding encoding, std::int64_t t_us,
                             int zstd_level) {
@@ -181,18 +196,7 @@ v1::DepthFrame encode_depth(const cv::Mat& depth_mm, v1::DepthFrame::Encoding en
   switch (encoding) {
     case v1::DepthFrame::RAW_U16_LE: frame.set_data(mat_bytes(depth_mm)); break;
     case v1::DepthFrame::PNG16: frame.set_data(encode_png(depth_mm)); break;
-    case v1::DepthFrame::ZSTD_U16_LE: {
-      const std::string raw = mat_bytes(depth_mm);
-      std::string packed(ZSTD_compressBound(raw.size()), '\0');
-      const std::size_t size = ZSTD_compressCCtx(thread_compression_context(), packed.data(), packed.size(), raw.data(),
-                                                 raw.size(), zstd_level);
-      if (ZSTD_isError(size)) {
-        throw Error(ErrorCode::kInternal, "depth", std::string("zstd: ") + ZSTD_getErrorName(size));
-      }
-      packed.resize(size);
-      frame.set_data(std::move(packed));
-      break;
-    }
+    case v1::DepthFrame::ZSTD_U16_LE: frame.set_data(mat_to_zstd(depth_mm, zstd_level, "depth")); break;
     default: throw_invalid("encoding", "unknown depth encoding " + std::to_string(encoding));
   }
   return frame;
@@ -239,12 +243,14 @@ cv::Mat decode_body_index(const v1::BodyIndexFrame& frame, const std::string& fi
     case v1::BodyIndexFrame::RAW_U8:
       return raw_to_mat(frame.data(), CV_8UC1, frame.width(), frame.height(), field, "RAW_U8");
     case v1::BodyIndexFrame::PNG8: return decode_png(frame.data(), CV_8UC1, frame.width(), frame.height(), field);
+    case v1::BodyIndexFrame::ZSTD_U8:
+      return zstd_to_mat(frame.data(), CV_8UC1, frame.width(), frame.height(), field, "ZSTD_U8");
     default: throw_invalid(field + ".encoding", "unknown body index encoding " + std::to_string(frame.encoding()));
   }
 }
 
 v1::BodyIndexFrame encode_body_index(const cv::Mat& body_index, v1::BodyIndexFrame::Encoding encoding,
-                                     std::int64_t t_us) {
+                                     std::int64_t t_us, int zstd_level) {
   if (body_index.type() != CV_8UC1) throw_invalid("body_index", "expected a CV_8UC1 image");
   v1::BodyIndexFrame frame;
   frame.set_t_us(t_us);
@@ -254,6 +260,7 @@ v1::BodyIndexFrame encode_body_index(const cv::Mat& body_index, v1::BodyIndexFra
   switch (encoding) {
     case v1::BodyIndexFrame::RAW_U8: frame.set_data(mat_bytes(body_index)); break;
     case v1::BodyIndexFrame::PNG8: frame.set_data(encode_png(body_index)); break;
+    case v1::BodyIndexFrame::ZSTD_U8: frame.set_data(mat_to_zstd(body_index, zstd_level, "body_index")); break;
     default: throw_invalid("encoding", "unknown body index encoding " + std::to_string(encoding));
   }
   return frame;

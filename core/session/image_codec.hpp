@@ -31,8 +31,9 @@ v1::DepthFrame encode_depth(const cv::Mat& depth_mm, v1::DepthFrame::Encoding en
 
 // Body index frame -> CV_8UC1 (255 = background, else body id 0..5).
 cv::Mat decode_body_index(const v1::BodyIndexFrame& frame, const std::string& field = "body_index");
+// zstd_level: ZSTD_U8 only.
 v1::BodyIndexFrame encode_body_index(const cv::Mat& body_index, v1::BodyIndexFrame::Encoding encoding,
-                                     std::int64_t t_us);
+                                     std::int64_t t_us, int zstd_level = 3);
 
 // Colour frame -> CV_8UC1 grey levels (the strap search, paper 1 II-I, needs brightness only),
 // from JPEG or PNG, 8-bit grey or BGR; checks the size against the chunk's width and height.

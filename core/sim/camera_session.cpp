@@ -109,7 +109,7 @@ CameraSessionResult simulate_camera_session(const CameraSessionOptions& options,
     result.chunks.emplace_back().mutable_depth()->CopyFrom(
         session::encode_depth(depth, v1::DepthFrame::ZSTD_U16_LE, t_us));
     result.chunks.emplace_back().mutable_body_index()->CopyFrom(
-        session::encode_body_index(body_index, v1::BodyIndexFrame::PNG8, t_us));
+        session::encode_body_index(body_index, v1::BodyIndexFrame::ZSTD_U8, t_us));
     result.chunks.emplace_back().mutable_skeleton()->CopyFrom(
         skeleton.simulate(joints, noisy.depth_mm, f, t_us, options.body_id));
     result.t_us.push_back(t_us);

@@ -33,6 +33,12 @@ constexpr int kFramesAheadPerWorker = 2;  // frames a worker may finish before t
 // ~2.5 times faster for 14 % larger depth payloads, 11 % larger sessions (docs/simulator.md,
 // "Speed").
 constexpr int kDepthZstdLevel = 1;
+
+// Body index chunks go with the depth encoding: PNG8 beside PNG16 (a recording directory
+// stores both as is), else ZSTD_U8, which the server decodes about 30 times faster than PNG8.
+v1::BodyIndexFrame::Encoding body_index_encoding(v1::DepthFrame::Encoding depth_encoding) {
+  return depth_encoding == v1::DepthFrame::PNG16 ? v1::BodyIndexFrame::PNG8 : v1::BodyIndexFrame::ZSTD_U8;
+}
 using Mat3 = Eigen::Matrix3d;
 
 double thread_cpu_s() {
@@ -186,9 +192,9 @@ class FrameWorker {
                              const_cast<std::uint8_t*>(noisy.body_index.data()));
     out.chunks.emplace_back().mutable_depth()->CopyFrom(
         session::encode_depth(depth, options_.depth_encoding, plan.t_us, kDepthZstdLevel));
-    out.chunks.emplace_back().mutable_body_index()->CopyFrom(
-        session::encode_body_index(body_index, v1::BodyIndexFrame::PNG8, plan.t_us));
-    lap("depth, body index: encode (zstd or PNG, PNG)");
+    out.chunks.emplace_back().mutable_body_index()->CopyFrom(session::encode_body_index(
+        body_index, body_index_encoding(options_.depth_encoding), plan.t_us, kDepthZstdLevel));
+    lap("depth, body index: encode (zstd or PNG)");
     out.chunks.emplace_back().mutable_skeleton()->CopyFrom(
         skeleton_.simulate(joints, noisy.depth_mm, plan.index, plan.t_us, 0));
     lap("skeleton");

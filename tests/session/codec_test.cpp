@@ -94,13 +94,69 @@ TEST(DepthCodec, PngOfTheRightSizeInAnotherPixelFormatIsRejectedByItsHeader) {
 TEST(BodyIndexCodec, RoundTripsAndChecksPngType) {
   cv::Mat ids(12, 16, CV_8UC1, cv::Scalar(255));
   ids(cv::Rect(2, 2, 5, 5)).setTo(3);
-  for (const auto encoding : {v1::BodyIndexFrame::RAW_U8, v1::BodyIndexFrame::PNG8}) {
-    EXPECT_EQ(cv::norm(decode_body_index(encode_body_index(ids, encoding, 0)), ids, cv::NORM_INF), 0.0);
+  for (const auto encoding : {v1::BodyIndexFrame::RAW_U8, v1::BodyIndexFrame::PNG8, v1::BodyIndexFrame::ZSTD_U8}) {
+    const cv::Mat back = decode_body_index(encode_body_index(ids, encoding, 0));
+    ASSERT_EQ(back.type(), CV_8UC1) << encoding;
+    EXPECT_EQ(cv::norm(back, ids, cv::NORM_INF), 0.0) << encoding;
   }
   // A 16-bit PNG is not a body index map.
   v1::BodyIndexFrame frame = encode_body_index(ids, v1::BodyIndexFrame::PNG8, 0);
   frame.set_data(encode_depth(ramp_depth(), v1::DepthFrame::PNG16, 0).data());
   expect_error([&] { decode_body_index(frame); }, ErrorCode::kInvalidArgument, "body_index.data");
+}
+
+TEST(BodyIndexCodec, ZstdOfWrongSizeIsInvalid) {
+  const cv::Mat ids(12, 16, CV_8UC1, cv::Scalar(255));
+  v1::BodyIndexFrame frame = encode_body_index(ids, v1::BodyIndexFrame::ZSTD_U8, 0);
+  frame.set_height(13);
+  expect_error([&] { decode_body_index(frame); }, ErrorCode::kInvalidArgument, "body_index.data");
+  frame.set_height(12);
+  frame.set_data("not zstd");
+  expect_error([&] { decode_body_index(frame); }, ErrorCode::kInvalidArgument, "body_index.data");
+  // Depth bytes of another size are not a body index map.
+  frame.set_data(encode_depth(ramp_depth(), v1::DepthFrame::ZSTD_U16_LE, 0).data());
+  expect_error([&] { decode_body_index(frame); }, ErrorCode::kInvalidArgument, "body_index.data");
+}
+
+// A zstd frame that does not state its content size (the format allows it): a header and
+// `blocks` RLE blocks, each `run` copies of `value`, so a few bytes can stand for gigabytes.
+std::string zstd_rle_frame(unsigned char value, int blocks, std::uint32_t run) {
+  std::string bytes = "\x28\xB5\x2F\xFD";  // magic number
+  bytes += '\x00';                         // no content size, no checksum, no dictionary
+  bytes += '\x38';                         // window 2^(10 + 7) = 128 KiB, the largest block
+  for (int b = 0; b < blocks; ++b) {
+    const std::uint32_t header = (run << 3) | (1u << 1) | (b + 1 == blocks ? 1u : 0u);  // size, RLE, last
+    bytes += static_cast<char>(header & 0xFF);
+    bytes += static_cast<char>((header >> 8) & 0xFF);
+    bytes += static_cast<char>((header >> 16) & 0xFF);
+    bytes += static_cast<char>(value);
+  }
+  return bytes;
+}
+
+TEST(BodyIndexCodec, ZstdWithoutContentSizeIsBoundedByTheImage) {
+  v1::BodyIndexFrame frame;
+  frame.set_width(16);
+  frame.set_height(12);
+  frame.set_encoding(v1::BodyIndexFrame::ZSTD_U8);
+  // Exactly the image: decodes (the hand-made frame is valid zstd).
+  frame.set_data(zstd_rle_frame(3, 1, 16 * 12));
+  const cv::Mat ids = decode_body_index(frame);
+  ASSERT_EQ(ids.type(), CV_8UC1);
+  EXPECT_EQ(cv::countNonZero(ids != 3), 0);
+  // 8 KB standing for 256 MiB: refused once the image is full, not decompressed.
+  frame.set_data(zstd_rle_frame(3, 2048, 128 * 1024));
+  ASSERT_LT(frame.data().size(), 10'000u);
+  expect_error([&] { decode_body_index(frame); }, ErrorCode::kInvalidArgument, "body_index.data");
+  // Less than the image.
+  frame.set_data(zstd_rle_frame(3, 1, 16 * 12 - 1));
+  try {
+    decode_body_index(frame);
+    FAIL() << "a short zstd frame was accepted";
+  } catch (const Error& error) {
+    EXPECT_EQ(error.field(), "body_index.data");
+    EXPECT_NE(std::string(error.what()).find("191 bytes, expected 192"), std::string::npos) << error.what();
+  }
 }
 
 TEST(ImageSize, ReadsPngAndJpegHeaders) {

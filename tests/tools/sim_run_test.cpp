@@ -163,9 +163,9 @@ TEST(SimRun, SameSeedSameBytesWhateverTheThreads) {
   EXPECT_NE(tree_a.at("gt/truth.json"), tree_c.at("gt/truth.json"));
 }
 
-// The directory's depth PNGs come straight from the frame threads, the chunk file's depth is
-// zstd: both must hold the same frames.
-TEST(SimRun, DirectoryAndChunkFileHoldTheSameDepth) {
+// The directory's depth and body index PNGs come straight from the frame threads, the chunk
+// file's are zstd: both must hold the same frames.
+TEST(SimRun, DirectoryAndChunkFileHoldTheSameDepthAndBodyIndex) {
   tools::SimRunRequest dir;
   dir.options = small_options();
   dir.options.color = false;
@@ -175,20 +175,32 @@ TEST(SimRun, DirectoryAndChunkFileHoldTheSameDepth) {
   file.chunk_file = fresh_dir("depth.pfchunks");
   tools::run_simulation(dir);
   tools::run_simulation(file);
+  // The directory's PNG of a frame holds the chunk file's decoded pixels.
+  const auto expect_same_as_directory = [&](const cv::Mat& from_file, const char* folder, std::int64_t t_us) {
+    const fs::path png = *dir.out_directory / folder / (std::to_string(t_us) + ".png");
+    const cv::Mat from_dir = cv::imread(png.string(), cv::IMREAD_UNCHANGED);
+    ASSERT_EQ(from_dir.type(), from_file.type()) << png;
+    EXPECT_EQ(cv::countNonZero(from_file != from_dir), 0) << png;
+  };
   session::ChunkFileReader reader(*file.chunk_file);
   session::SessionChunk chunk;
-  int frames = 0;
+  int depth_frames = 0;
+  int body_index_frames = 0;
   while (reader.next(chunk)) {
-    if (!chunk.has_depth()) continue;
-    ASSERT_EQ(chunk.depth().encoding(), v1::DepthFrame::ZSTD_U16_LE);
-    const cv::Mat from_file = session::decode_depth(chunk.depth(), "depth");
-    const fs::path png = *dir.out_directory / "depth" / (std::to_string(chunk.depth().t_us()) + ".png");
-    const cv::Mat from_dir = cv::imread(png.string(), cv::IMREAD_UNCHANGED);
-    ASSERT_EQ(from_dir.type(), CV_16UC1) << png;
-    EXPECT_EQ(cv::countNonZero(from_file != from_dir), 0) << png;
-    ++frames;
+    if (chunk.has_depth()) {
+      ASSERT_EQ(chunk.depth().encoding(), v1::DepthFrame::ZSTD_U16_LE);
+      expect_same_as_directory(session::decode_depth(chunk.depth(), "depth"), "depth", chunk.depth().t_us());
+      ++depth_frames;
+    }
+    if (chunk.has_body_index()) {
+      ASSERT_EQ(chunk.body_index().encoding(), v1::BodyIndexFrame::ZSTD_U8);
+      expect_same_as_directory(session::decode_body_index(chunk.body_index(), "body_index"), "body_index",
+                               chunk.body_index().t_us());
+      ++body_index_frames;
+    }
   }
-  EXPECT_EQ(frames, 31);
+  EXPECT_EQ(depth_frames, 31);
+  EXPECT_EQ(body_index_frames, 31);
 }
 
 TEST(SimRun, GtHasTheClientResultFilesColumns) {
