@@ -98,19 +98,21 @@ BehindSurfaceMap::BehindSurfaceMap(const PointCloud& cloud, const raycast::Depth
   // Depth (z in mm, as the frame stored it) inside the silhouette; the pixel bounding box of the
   // cloud bounds every loop below (nothing outside it has depth).
   depth_mm_.assign(pixels, kNoDepth);
+  // Level 0 of the min pyramid, filled in the same pass.
+  level_size_.push_back({camera.width(), camera.height()});
+  std::vector<uint16_t>& level0 = min_depth_mm_.emplace_back(pixels, kNoReading);
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(kInf), hi = Eigen::Vector3d::Constant(-kInf);
-  int col0 = camera.width(), col1 = -1, row0 = camera.height(), row1 = -1;
-  for (int row = 0; row < camera.height(); ++row)
-    for (int col = 0; col < camera.width(); ++col) {
+  const int col0 = cloud.box.col0, col1 = cloud.box.col1, row0 = cloud.box.row0, row1 = cloud.box.row1;
+  for (int row = row0; row <= row1; ++row)
+    for (int col = col0; col <= col1; ++col) {
       const size_t i = static_cast<size_t>(row) * camera.width() + col;
       if (!cloud.valid[i]) continue;
       const Eigen::Vector3d p = cloud.value_K[i].cast<double>();
       // The cloud holds z = depth_mm * 1e-3 (float); rounding recovers the integer millimetres.
       depth_mm_[i] = static_cast<uint16_t>(std::lround(p.z() * 1e3));
+      if (depth_mm_[i] != kNoDepth) level0[i] = depth_mm_[i];
       lo = lo.cwiseMin(p);
       hi = hi.cwiseMax(p);
-      col0 = std::min(col0, col), col1 = std::max(col1, col);
-      row0 = std::min(row0, row), row1 = std::max(row1, row);
     }
   lo -= Eigen::Vector3d::Constant(params.margin_m);
   hi += Eigen::Vector3d::Constant(params.margin_m);
@@ -124,13 +126,6 @@ BehindSurfaceMap::BehindSurfaceMap(const PointCloud& cloud, const raycast::Depth
 
   stamp_ = classification_stamp(camera, depth_mm_, {col0, row0, col1, row1}, origin_K_, size_, voxel_size_m_);
 
-  level_size_.push_back({camera.width(), camera.height()});
-  min_depth_mm_.emplace_back(pixels, kNoReading);
-  for (int row = row0; row <= row1; ++row)
-    for (int col = col0; col <= col1; ++col) {
-      const size_t i = static_cast<size_t>(row) * camera.width() + col;
-      if (depth_mm_[i] != kNoDepth) min_depth_mm_.back()[i] = depth_mm_[i];
-    }
   for (int level = 0; level_size_.back().x() > 1 || level_size_.back().y() > 1; ++level) {
     const Eigen::Vector2i fine = level_size_.back();
     const Eigen::Vector2i coarse((fine.x() + 1) / 2, (fine.y() + 1) / 2);

@@ -68,20 +68,32 @@ PointCloud build_point_cloud(const DepthFrame& frame, const raycast::DepthCamera
     std::memcpy(&word, p, sizeof word);
     return word == ~uint64_t{0};
   };
+  // Pixels are written directly (not through set()) so that the box is updated once per row.
+  Eigen::Vector3f* value = cloud.value_K.data();
+  uint8_t* valid = cloud.valid.data();
   for (int row = 0; row < frame.height; ++row) {
     const uint8_t* body = frame.body_index.data() + static_cast<size_t>(row) * frame.width;
+    const uint16_t* depth = frame.depth_mm.data() + static_cast<size_t>(row) * frame.width;
+    const size_t row_start = static_cast<size_t>(row) * frame.width;
+    int first = frame.width, last = -1;
     for (int col = 0; col < frame.width;) {
       if (col + 8 <= frame.width && background_word(body + col)) {
         col += 8;
         continue;
       }
       for (const int end = std::min(frame.width, col + 8); col < end; ++col) {
-        const size_t i = static_cast<size_t>(row) * frame.width + col;
-        if (body[col] == kNoBody || frame.depth_mm[i] == kNoDepth) continue;
+        if (body[col] == kNoBody || depth[col] == kNoDepth) continue;
         // Depth images store z, and pixel_ray has z = 1, so the point is z times the ray.
-        cloud.set(i, camera.pixel_ray(col, row) * (frame.depth_mm[i] * 1e-3f));
+        value[row_start + col] = camera.pixel_ray(col, row) * (depth[col] * 1e-3f);
+        valid[row_start + col] = 1;
+        ++cloud.count;
+        first = std::min(first, col);
+        last = col;
       }
     }
+    if (last < 0) continue;
+    if (cloud.box.col1 < 0) cloud.box = {first, row, last, row};
+    cloud.box = {std::min(cloud.box.col0, first), cloud.box.row0, std::max(cloud.box.col1, last), row};
   }
   if (cloud.count == 0) throw_precondition("frame.body_index", "the silhouette holds no pixel with a depth reading");
   return cloud;
