@@ -198,9 +198,18 @@ std::vector<int8_t> assign_zones_in_box(const PointCloud& cloud, const KinectSke
       near.clear();
       for (const Segment& segment : segments)
         if (std::sqrt(point_segment_distance2(centre, segment)) - radius <= bound + 1e-6) near.push_back(&segment);
+      // When the candidates share one zone, the nearest of them gives that zone to every cloud
+      // pixel of the tile, as long as its squared distance (at most bound^2) cannot overflow.
+      bool one_zone = bound < 1e150;
+      for (const Segment* segment : near) one_zone = one_zone && segment->zone == near.front()->zone;
       for (int row = tile_row; row <= std::min(box.row1, tile_row + kTile - 1); ++row)
         for (int col = tile_col; col <= std::min(box.col1, tile_col + kTile - 1); ++col) {
           if (!cloud.has(col, row)) continue;
+          if (one_zone) {
+            zone[static_cast<size_t>(row - box.row0) * box_width + (col - box.col0)] =
+                static_cast<int8_t>(near.front()->zone);
+            continue;
+          }
           const Eigen::Vector2d p(col, row);
           double best = std::numeric_limits<double>::infinity();
           for (const Segment* segment : near) {
