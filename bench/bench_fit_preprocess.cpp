@@ -129,7 +129,14 @@ void bench_frame(const char* name, const raycast::DepthCamera& camera, const fit
     fit::remove_off_body_depth(unpacked, tracked);
     fit::prepare_observation(unpacked, camera, skeleton_K, options);
   });
-  // Its parts, thread CPU medians over the same number of calls.
+  // The same with the buffers kept from frame to frame, as the body tracker runs it.
+  fit::ObservationBuffers buffers;
+  report(name, "the same, buffers reused", repeats, [&] {
+    fit::DepthFrame unpacked = fit::unpack_body_pixels(packed);
+    fit::remove_off_body_depth(unpacked, tracked);
+    fit::prepare_observation(buffers, unpacked, camera, skeleton_K, options);
+  });
+  // Its parts with the buffers reused, thread CPU medians over the same number of calls.
   std::vector<double> unpack_ms, cleanup_ms, cloud_ms, sampling_ms, normals_ms, d2d_ms, d3d_ms;
   for (int i = 0; i < repeats; ++i) {
     double lap = 1e3 * posefuse::bench::thread_cpu_seconds();
@@ -143,7 +150,7 @@ void bench_frame(const char* name, const raycast::DepthCamera& camera, const fit
     fit::remove_off_body_depth(unpacked, tracked);
     take(cleanup_ms);
     fit::ObservationTimes times;
-    fit::prepare_observation(unpacked, camera, skeleton_K, options, {}, &times);
+    fit::prepare_observation(buffers, unpacked, camera, skeleton_K, options, {}, &times);
     for (auto [part, s] : {std::pair{&cloud_ms, times.cloud_s},
                            {&sampling_ms, times.sampling_s},
                            {&normals_ms, times.normals_s},

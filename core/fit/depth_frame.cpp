@@ -59,8 +59,29 @@ VectorImage VectorImage::empty(int width, int height) {
 }
 
 PointCloud build_point_cloud(const DepthFrame& frame, const raycast::DepthCamera& camera) {
+  PointCloud cloud;
+  build_point_cloud(frame, camera, cloud);
+  return cloud;
+}
+
+void build_point_cloud(const DepthFrame& frame, const raycast::DepthCamera& camera, PointCloud& cloud) {
   validate(frame, camera);
-  PointCloud cloud = VectorImage::empty(frame.width, frame.height);
+  const size_t pixels = static_cast<size_t>(frame.width) * frame.height;
+  if (cloud.width == frame.width && cloud.height == frame.height && cloud.value_K.size() == pixels &&
+      cloud.valid.size() == pixels) {
+    // Every valid pixel lies in the box: clearing it leaves an empty image.
+    const PixelRect& box = cloud.box;
+    for (int row = box.row0; row <= box.row1; ++row) {
+      const size_t begin = static_cast<size_t>(row) * frame.width + box.col0;
+      const size_t length = static_cast<size_t>(box.col1 - box.col0 + 1);
+      std::fill_n(cloud.value_K.begin() + static_cast<ptrdiff_t>(begin), length, Eigen::Vector3f::Zero());
+      std::fill_n(cloud.valid.begin() + static_cast<ptrdiff_t>(begin), length, uint8_t{0});
+    }
+    cloud.count = 0;
+    cloud.box = PixelRect{};
+  } else {
+    cloud = VectorImage::empty(frame.width, frame.height);
+  }
   // Most of a frame is background: 8 background pixels at a time are passed over as one word.
   static_assert(kNoBody == 0xff, "the background word test assumes kNoBody = 0xff");
   const auto background_word = [](const uint8_t* p) {
@@ -96,7 +117,6 @@ PointCloud build_point_cloud(const DepthFrame& frame, const raycast::DepthCamera
     cloud.box = {std::min(cloud.box.col0, first), cloud.box.row0, std::max(cloud.box.col1, last), row};
   }
   if (cloud.count == 0) throw_precondition("frame.body_index", "the silhouette holds no pixel with a depth reading");
-  return cloud;
 }
 
 }  // namespace posefuse::fit

@@ -64,5 +64,8 @@ using PointCloud = VectorImage;
 
 // Throws posefuse::Error (field "frame.body_index") when the silhouette holds no pixel with depth.
 PointCloud build_point_cloud(const DepthFrame& frame, const raycast::DepthCamera& camera);
+// The same into `cloud`, reusing its buffers when it has the frame's size: only its previous box
+// is cleared, so that a frame costs no full-image allocation or clearing.
+void build_point_cloud(const DepthFrame& frame, const raycast::DepthCamera& camera, PointCloud& cloud);
 
 }  // namespace posefuse::fit
