@@ -18,7 +18,10 @@
 #include "body/template_generator.hpp"
 #include "dense_behind_surface.hpp"
 #include "fit/behind_surface_map.hpp"
+#include "fit/frame_observation.hpp"
+#include "fit/packed_body_frame.hpp"
 #include "fit/point_normals.hpp"
+#include "fit/silhouette_cleanup.hpp"
 #include "fit/silhouette_distance.hpp"
 #include "fit/zone_sampling.hpp"
 #include "model_frames.hpp"
@@ -117,6 +120,52 @@ void bench_frame(const char* name, const raycast::DepthCamera& camera, const fit
   report(name, "zone sampling, N_s = 250", repeats, [&] { fit::sample_depth_pixels(cloud, skeleton_K, camera); });
   const auto samples = fit::sample_depth_pixels(cloud, skeleton_K, camera);
   report(name, "normals of the 250 samples", repeats, [&] { fit::estimate_sample_normals(cloud, samples); });
+  // The body-fit stage's whole per-frame path: the queued frame unpacked, cleaned, preprocessed.
+  const fit::PackedBodyFrame packed = fit::pack_body_pixels(frame);
+  const fit::TrackedSkeleton tracked = fit::TrackedSkeleton::all_tracked(skeleton_K);
+  const fit::FitOptions options;
+  report(name, "unpack + cleanup + prepare_observation", repeats, [&] {
+    fit::DepthFrame unpacked = fit::unpack_body_pixels(packed);
+    fit::remove_off_body_depth(unpacked, tracked);
+    fit::prepare_observation(unpacked, camera, skeleton_K, options);
+  });
+  // The same with the buffers kept from frame to frame, as the body tracker runs it.
+  fit::ObservationBuffers buffers;
+  report(name, "the same, buffers reused", repeats, [&] {
+    fit::DepthFrame unpacked = fit::unpack_body_pixels(packed);
+    fit::remove_off_body_depth(unpacked, tracked);
+    fit::prepare_observation(buffers, unpacked, camera, skeleton_K, options);
+  });
+  // Its parts with the buffers reused, thread CPU medians over the same number of calls.
+  std::vector<double> unpack_ms, cleanup_ms, cloud_ms, sampling_ms, normals_ms, d2d_ms, d3d_ms;
+  for (int i = 0; i < repeats; ++i) {
+    double lap = 1e3 * posefuse::bench::thread_cpu_seconds();
+    const auto take = [&lap](std::vector<double>& part) {
+      const double now = 1e3 * posefuse::bench::thread_cpu_seconds();
+      part.push_back(now - lap);
+      lap = now;
+    };
+    fit::DepthFrame unpacked = fit::unpack_body_pixels(packed);
+    take(unpack_ms);
+    fit::remove_off_body_depth(unpacked, tracked);
+    take(cleanup_ms);
+    fit::ObservationTimes times;
+    fit::prepare_observation(buffers, unpacked, camera, skeleton_K, options, {}, &times);
+    for (auto [part, s] : {std::pair{&cloud_ms, times.cloud_s},
+                           {&sampling_ms, times.sampling_s},
+                           {&normals_ms, times.normals_s},
+                           {&d2d_ms, times.d2d_s},
+                           {&d3d_ms, times.d3d_s}})
+      part->push_back(1e3 * s);
+  }
+  const auto median = [](std::vector<double> v) {
+    std::sort(v.begin(), v.end());
+    return v[v.size() / 2];
+  };
+  std::printf(
+      "%-6s   of which: unpack %.2f, cleanup %.2f, cloud %.2f, zones %.2f, normals %.2f, D_2D %.2f, D_3D %.2f ms\n",
+      name, median(unpack_ms), median(cleanup_ms), median(cloud_ms), median(sampling_ms), median(normals_ms),
+      median(d2d_ms), median(d3d_ms));
 }
 
 }  // namespace

@@ -83,7 +83,12 @@ BehindSurfaceMap::BehindSurfaceMap(const DepthFrame& frame, const raycast::Depth
 
 BehindSurfaceMap::BehindSurfaceMap(const PointCloud& cloud, const raycast::DepthCamera& camera,
                                    const BehindSurfaceParams& params)
-    : camera_(&camera), voxel_size_m_(params.voxel_size_m) {
+    : camera_(&camera) {
+  rebuild(cloud, camera, params);
+}
+
+void BehindSurfaceMap::rebuild(const PointCloud& cloud, const raycast::DepthCamera& camera,
+                               const BehindSurfaceParams& params) {
   if (!std::isfinite(params.voxel_size_m) || params.voxel_size_m <= 0)
     throw_invalid("behind_params.voxel_size_m",
                   "must be positive and finite, got " + std::to_string(params.voxel_size_m));
@@ -94,23 +99,50 @@ BehindSurfaceMap::BehindSurfaceMap(const PointCloud& cloud, const raycast::Depth
       cloud.value_K.size() != pixels)
     throw_invalid("cloud.width", "cloud size does not match the camera");
   if (cloud.count == 0) throw_precondition("frame.body_index", "the silhouette holds no pixel with a depth reading");
+  camera_ = &camera;
+  voxel_size_m_ = params.voxel_size_m;
 
-  // Depth (z in mm, as the frame stored it) inside the silhouette; the pixel bounding box of the
-  // cloud bounds every loop below (nothing outside it has depth).
-  depth_mm_.assign(pixels, kNoDepth);
+  // The depth image and the min pyramid (every level, kNoReading where no pixel has depth).
+  // Reused when built for this image size: only the previous cloud's box holds readings, at
+  // level l its box >> l, and only that is cleared.
+  if (depth_mm_.size() == pixels && !level_size_.empty() &&
+      level_size_[0] == Eigen::Vector2i(camera.width(), camera.height())) {
+    for (size_t level = 0; level < min_depth_mm_.size(); ++level) {
+      const int shift = static_cast<int>(level);
+      const int width = level_size_[level].x();
+      for (int row = box_.row0 >> shift; row <= box_.row1 >> shift; ++row) {
+        const size_t begin = static_cast<size_t>(row) * width + (box_.col0 >> shift);
+        const size_t length = static_cast<size_t>((box_.col1 >> shift) - (box_.col0 >> shift) + 1);
+        std::fill_n(min_depth_mm_[level].begin() + static_cast<ptrdiff_t>(begin), length, kNoReading);
+        if (level == 0) std::fill_n(depth_mm_.begin() + static_cast<ptrdiff_t>(begin), length, kNoDepth);
+      }
+    }
+  } else {
+    depth_mm_.assign(pixels, kNoDepth);
+    level_size_.assign(1, {camera.width(), camera.height()});
+    while (level_size_.back().x() > 1 || level_size_.back().y() > 1)
+      level_size_.push_back({(level_size_.back().x() + 1) / 2, (level_size_.back().y() + 1) / 2});
+    min_depth_mm_.clear();
+    for (const Eigen::Vector2i& size : level_size_)
+      min_depth_mm_.emplace_back(static_cast<size_t>(size.x()) * size.y(), kNoReading);
+  }
+  box_ = cloud.box;
+
+  // Depth (z in mm, as the frame stored it) inside the silhouette and level 0 of the pyramid; the
+  // pixel bounding box of the cloud bounds every loop below (nothing outside it has depth).
+  std::vector<uint16_t>& level0 = min_depth_mm_[0];
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(kInf), hi = Eigen::Vector3d::Constant(-kInf);
-  int col0 = camera.width(), col1 = -1, row0 = camera.height(), row1 = -1;
-  for (int row = 0; row < camera.height(); ++row)
-    for (int col = 0; col < camera.width(); ++col) {
+  const int col0 = box_.col0, col1 = box_.col1, row0 = box_.row0, row1 = box_.row1;
+  for (int row = row0; row <= row1; ++row)
+    for (int col = col0; col <= col1; ++col) {
       const size_t i = static_cast<size_t>(row) * camera.width() + col;
       if (!cloud.valid[i]) continue;
       const Eigen::Vector3d p = cloud.value_K[i].cast<double>();
       // The cloud holds z = depth_mm * 1e-3 (float); rounding recovers the integer millimetres.
       depth_mm_[i] = static_cast<uint16_t>(std::lround(p.z() * 1e3));
+      if (depth_mm_[i] != kNoDepth) level0[i] = depth_mm_[i];
       lo = lo.cwiseMin(p);
       hi = hi.cwiseMax(p);
-      col0 = std::min(col0, col), col1 = std::max(col1, col);
-      row0 = std::min(row0, row), row1 = std::max(row1, row);
     }
   lo -= Eigen::Vector3d::Constant(params.margin_m);
   hi += Eigen::Vector3d::Constant(params.margin_m);
@@ -122,28 +154,19 @@ BehindSurfaceMap::BehindSurfaceMap(const PointCloud& cloud, const raycast::Depth
                 "the cloud's bounding box needs " + std::to_string(voxels) + " voxels, limit " +
                     std::to_string(params.max_voxels));
 
-  stamp_ = classification_stamp(camera, depth_mm_, {col0, row0, col1, row1}, origin_K_, size_, voxel_size_m_);
+  stamp_ = classification_stamp(camera, depth_mm_, box_, origin_K_, size_, voxel_size_m_);
 
-  level_size_.push_back({camera.width(), camera.height()});
-  min_depth_mm_.emplace_back(pixels, kNoReading);
-  for (int row = row0; row <= row1; ++row)
-    for (int col = col0; col <= col1; ++col) {
-      const size_t i = static_cast<size_t>(row) * camera.width() + col;
-      if (depth_mm_[i] != kNoDepth) min_depth_mm_.back()[i] = depth_mm_[i];
-    }
-  for (int level = 0; level_size_.back().x() > 1 || level_size_.back().y() > 1; ++level) {
-    const Eigen::Vector2i fine = level_size_.back();
-    const Eigen::Vector2i coarse((fine.x() + 1) / 2, (fine.y() + 1) / 2);
-    std::vector<uint16_t> next(static_cast<size_t>(coarse.x()) * coarse.y(), kNoReading);
-    const std::vector<uint16_t>& below = min_depth_mm_.back();
+  for (size_t level = 0; level + 1 < min_depth_mm_.size(); ++level) {
+    const int shift = static_cast<int>(level);
+    const int fine_width = level_size_[level].x(), coarse_width = level_size_[level + 1].x();
+    const std::vector<uint16_t>& below = min_depth_mm_[level];
+    std::vector<uint16_t>& next = min_depth_mm_[level + 1];
     // Blocks outside the cloud's box (at this level) hold no reading.
-    for (int row = row0 >> level; row <= row1 >> level; ++row)
-      for (int col = col0 >> level; col <= col1 >> level; ++col) {
-        uint16_t& m = next[static_cast<size_t>(row / 2) * coarse.x() + col / 2];
-        m = std::min(m, below[static_cast<size_t>(row) * fine.x() + col]);
+    for (int row = row0 >> shift; row <= row1 >> shift; ++row)
+      for (int col = col0 >> shift; col <= col1 >> shift; ++col) {
+        uint16_t& m = next[static_cast<size_t>(row / 2) * coarse_width + col / 2];
+        m = std::min(m, below[static_cast<size_t>(row) * fine_width + col]);
       }
-    min_depth_mm_.push_back(std::move(next));
-    level_size_.push_back(coarse);
   }
 }
 

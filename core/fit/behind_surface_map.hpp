@@ -59,6 +59,11 @@ class BehindSurfaceMap {
   // The same from the frame's point cloud (build_point_cloud), when the caller has it already.
   // Throws "cloud.width" for a cloud that does not match the camera.
   BehindSurfaceMap(const PointCloud& cloud, const raycast::DepthCamera& camera, const BehindSurfaceParams& params = {});
+  // The map of another cloud, as the constructor builds it, reusing this one's buffers when the
+  // image size is the same (only the previous cloud's pixel box is cleared): the per-frame way,
+  // without full-image allocation or clearing. Throws as the constructor; after a throw the map
+  // must be rebuilt before it is queried.
+  void rebuild(const PointCloud& cloud, const raycast::DepthCamera& camera, const BehindSurfaceParams& params = {});
 
   // Whether p_K lies behind the observed surface (exact test, no grid).
   bool is_behind(const Eigen::Vector3d& p_K) const;
@@ -94,10 +99,11 @@ class BehindSurfaceMap {
   // no pixel of the block has depth); level 0 is depth_mm_ with kNoReading for kNoDepth.
   std::vector<std::vector<uint16_t>> min_depth_mm_;
   std::vector<Eigen::Vector2i> level_size_;
+  PixelRect box_;       // the cloud's pixel box: every reading of depth_mm_ and the pyramid lies in it (>> level)
   uint64_t stamp_ = 0;  // identifies the classification for BehindSurfaceCache
   Eigen::Vector3d origin_K_;
   Eigen::Vector3i size_;
-  double voxel_size_m_;
+  double voxel_size_m_ = 0;
 };
 
 }  // namespace posefuse::fit

@@ -33,6 +33,7 @@ struct BodyTracker::Work {
   std::optional<Personalisation> personalisation;
   std::optional<SkeletonPoseInitializer> init;
   Eigen::Matrix3Xd rest_joints;
+  ObservationBuffers observation_buffers;  // the frames' preprocessing, reused from frame to frame
 
   Work(std::shared_ptr<const body::SmplModel> m, const raycast::DepthIntrinsics& intrinsics, const FitOptions& options,
        const PoseSmoothingOptions& smoothing)
@@ -169,8 +170,8 @@ BodyTracker::Output BodyTracker::fit(BodyFitFrame& frame, const ForearmOrientati
       remove_off_body_depth(frame.frame, *frame.skeleton);  // body index / depth misalignment
     }
     take(stats.cleanup_s);
-    const FrameObservation observation =
-        prepare_observation(frame.frame, w.camera, positions, w.fit_options, directions, &stats.observation);
+    const FrameObservation& observation = prepare_observation(w.observation_buffers, frame.frame, w.camera, positions,
+                                                              w.fit_options, directions, &stats.observation);
     lap = thread_cpu_seconds();
 
     // II-G: from the previous frame's pose and from the skeleton-built pose; the lower energy

@@ -59,8 +59,29 @@ VectorImage VectorImage::empty(int width, int height) {
 }
 
 PointCloud build_point_cloud(const DepthFrame& frame, const raycast::DepthCamera& camera) {
+  PointCloud cloud;
+  build_point_cloud(frame, camera, cloud);
+  return cloud;
+}
+
+void build_point_cloud(const DepthFrame& frame, const raycast::DepthCamera& camera, PointCloud& cloud) {
   validate(frame, camera);
-  PointCloud cloud = VectorImage::empty(frame.width, frame.height);
+  const size_t pixels = static_cast<size_t>(frame.width) * frame.height;
+  if (cloud.width == frame.width && cloud.height == frame.height && cloud.value_K.size() == pixels &&
+      cloud.valid.size() == pixels) {
+    // Every valid pixel lies in the box: clearing it leaves an empty image.
+    const PixelRect& box = cloud.box;
+    for (int row = box.row0; row <= box.row1; ++row) {
+      const size_t begin = static_cast<size_t>(row) * frame.width + box.col0;
+      const size_t length = static_cast<size_t>(box.col1 - box.col0 + 1);
+      std::fill_n(cloud.value_K.begin() + static_cast<ptrdiff_t>(begin), length, Eigen::Vector3f::Zero());
+      std::fill_n(cloud.valid.begin() + static_cast<ptrdiff_t>(begin), length, uint8_t{0});
+    }
+    cloud.count = 0;
+    cloud.box = PixelRect{};
+  } else {
+    cloud = VectorImage::empty(frame.width, frame.height);
+  }
   // Most of a frame is background: 8 background pixels at a time are passed over as one word.
   static_assert(kNoBody == 0xff, "the background word test assumes kNoBody = 0xff");
   const auto background_word = [](const uint8_t* p) {
@@ -68,23 +89,34 @@ PointCloud build_point_cloud(const DepthFrame& frame, const raycast::DepthCamera
     std::memcpy(&word, p, sizeof word);
     return word == ~uint64_t{0};
   };
+  // Pixels are written directly (not through set()) so that the box is updated once per row.
+  Eigen::Vector3f* value = cloud.value_K.data();
+  uint8_t* valid = cloud.valid.data();
   for (int row = 0; row < frame.height; ++row) {
     const uint8_t* body = frame.body_index.data() + static_cast<size_t>(row) * frame.width;
+    const uint16_t* depth = frame.depth_mm.data() + static_cast<size_t>(row) * frame.width;
+    const size_t row_start = static_cast<size_t>(row) * frame.width;
+    int first = frame.width, last = -1;
     for (int col = 0; col < frame.width;) {
       if (col + 8 <= frame.width && background_word(body + col)) {
         col += 8;
         continue;
       }
       for (const int end = std::min(frame.width, col + 8); col < end; ++col) {
-        const size_t i = static_cast<size_t>(row) * frame.width + col;
-        if (body[col] == kNoBody || frame.depth_mm[i] == kNoDepth) continue;
+        if (body[col] == kNoBody || depth[col] == kNoDepth) continue;
         // Depth images store z, and pixel_ray has z = 1, so the point is z times the ray.
-        cloud.set(i, camera.pixel_ray(col, row) * (frame.depth_mm[i] * 1e-3f));
+        value[row_start + col] = camera.pixel_ray(col, row) * (depth[col] * 1e-3f);
+        valid[row_start + col] = 1;
+        ++cloud.count;
+        first = std::min(first, col);
+        last = col;
       }
     }
+    if (last < 0) continue;
+    if (cloud.box.col1 < 0) cloud.box = {first, row, last, row};
+    cloud.box = {std::min(cloud.box.col0, first), cloud.box.row0, std::max(cloud.box.col1, last), row};
   }
   if (cloud.count == 0) throw_precondition("frame.body_index", "the silhouette holds no pixel with a depth reading");
-  return cloud;
 }
 
 }  // namespace posefuse::fit

@@ -2,6 +2,7 @@
 // One depth frame as the Kinect v2 SDK gives it, and its point cloud in the camera frame K
 // (x left, y up, z forward; metres) through the DepthCamera's unprojection (paper 2, II-A).
 #include <Eigen/Core>
+#include <algorithm>
 #include <cstdint>
 #include <vector>
 
@@ -39,14 +40,19 @@ struct VectorImage {
   std::vector<Eigen::Vector3f> value_K;  // zero where !valid
   std::vector<uint8_t> valid;
   int count = 0;  // number of valid pixels
+  // Smallest rectangle holding every valid pixel (empty when none): per-pixel passes over the
+  // image need to visit only this.
+  PixelRect box;
 
   // width x height pixels, none valid.
   static VectorImage empty(int width, int height);
   // Sets a pixel that is not valid yet.
-  void set(size_t pixel, const Eigen::Vector3f& v) {
+  void set(int col, int row, const Eigen::Vector3f& v) {
+    const size_t pixel = static_cast<size_t>(row) * width + col;
     value_K[pixel] = v;
     valid[pixel] = 1;
-    ++count;
+    if (count++ == 0) box = {col, row, col, row};
+    box = {std::min(box.col0, col), std::min(box.row0, row), std::max(box.col1, col), std::max(box.row1, row)};
   }
   bool has(int col, int row) const { return valid[static_cast<size_t>(row) * width + col] != 0; }
   const Eigen::Vector3f& at(int col, int row) const { return value_K[static_cast<size_t>(row) * width + col]; }
@@ -58,5 +64,8 @@ using PointCloud = VectorImage;
 
 // Throws posefuse::Error (field "frame.body_index") when the silhouette holds no pixel with depth.
 PointCloud build_point_cloud(const DepthFrame& frame, const raycast::DepthCamera& camera);
+// The same into `cloud`, reusing its buffers when it has the frame's size: only its previous box
+// is cleared, so that a frame costs no full-image allocation or clearing.
+void build_point_cloud(const DepthFrame& frame, const raycast::DepthCamera& camera, PointCloud& cloud);
 
 }  // namespace posefuse::fit

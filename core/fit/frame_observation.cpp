@@ -2,6 +2,7 @@
 
 #include <cmath>
 #include <string>
+#include <utility>
 
 #include "common/error.hpp"
 #include "common/thread_cpu_time.hpp"
@@ -41,6 +42,15 @@ void validate(const FrameObservation& o) {
 FrameObservation prepare_observation(const DepthFrame& frame, const raycast::DepthCamera& camera,
                                      const std::optional<KinectSkeleton>& skeleton_K, const FitOptions& options,
                                      const ForearmDirections& forearm, ObservationTimes* times) {
+  ObservationBuffers buffers;
+  prepare_observation(buffers, frame, camera, skeleton_K, options, forearm, times);
+  return std::move(buffers.observation);
+}
+
+const FrameObservation& prepare_observation(ObservationBuffers& buffers, const DepthFrame& frame,
+                                            const raycast::DepthCamera& camera,
+                                            const std::optional<KinectSkeleton>& skeleton_K, const FitOptions& options,
+                                            const ForearmDirections& forearm, ObservationTimes* times) {
   validate(options);
   validate(frame, camera);
   if (!skeleton_K) throw_precondition("skeleton", "missing: depth sampling needs the camera skeleton (paper 2, II-H)");
@@ -53,14 +63,17 @@ FrameObservation prepare_observation(const DepthFrame& frame, const raycast::Dep
     part += now - lap;
     lap = now;
   };
-  const PointCloud cloud = build_point_cloud(frame, camera);
+  PointCloud& cloud = buffers.cloud;
+  build_point_cloud(frame, camera, cloud);
   take(t.cloud_s);
   ZoneSamplingParams zones;
   zones.num_samples = options.num_samples;
   zones.seed = options.seed;
   const std::vector<DepthSample> samples = sample_depth_pixels(cloud, *skeleton_K, camera, zones);
   take(t.sampling_s);
-  FrameObservation o;
+  FrameObservation& o = buffers.observation;
+  o.points_K.clear();
+  o.normals_K.clear();
   o.points_K.reserve(samples.size());
   o.normals_K.reserve(samples.size());
   for (const DepthSample& s : samples) {
@@ -74,9 +87,11 @@ FrameObservation prepare_observation(const DepthFrame& frame, const raycast::Dep
                                              " depth samples with a surface normal; the fit needs at least " +
                                              std::to_string(kMinSamples));
   take(t.normals_s);
-  o.silhouette = silhouette_distance_map_near(silhouette_of(frame), frame.width, frame.height);
+  silhouette_of(frame, buffers.silhouette);
+  silhouette_distance_map_near(buffers.silhouette, frame.width, frame.height, o.silhouette);
   take(t.d2d_s);
-  o.behind.emplace(cloud, camera);
+  if (o.behind) o.behind->rebuild(cloud, camera);
+  else o.behind.emplace(cloud, camera);
   take(t.d3d_s);
   o.forearm = forearm;
   validate(o);

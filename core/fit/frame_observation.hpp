@@ -5,6 +5,7 @@
 // the preprocessing of fit/ (depth_frame, zone_sampling, point_normals, silhouette_distance,
 // behind_surface_map).
 #include <Eigen/Core>
+#include <cstdint>
 #include <optional>
 #include <vector>
 
@@ -55,5 +56,22 @@ struct ObservationTimes {
 FrameObservation prepare_observation(const DepthFrame& frame, const raycast::DepthCamera& camera,
                                      const std::optional<KinectSkeleton>& skeleton_K, const FitOptions& options,
                                      const ForearmDirections& forearm = {}, ObservationTimes* times = nullptr);
+
+// What prepare_observation keeps from one frame to the next so that a frame allocates and clears
+// no full-image buffer: the last observation (D_2D and D_3D are full-image maps) and the point
+// cloud, each cleared only over the region the last frame used. One per tracker (or thread).
+struct ObservationBuffers {
+  FrameObservation observation;
+  PointCloud cloud;
+  std::vector<uint8_t> silhouette;
+};
+
+// The same observation as prepare_observation, built in buffers.observation (returned) over the
+// buffers of the previous frame; errors as prepare_observation. After a throw the buffers stay
+// usable for the next frame, but buffers.observation must not be used.
+const FrameObservation& prepare_observation(ObservationBuffers& buffers, const DepthFrame& frame,
+                                            const raycast::DepthCamera& camera,
+                                            const std::optional<KinectSkeleton>& skeleton_K, const FitOptions& options,
+                                            const ForearmDirections& forearm = {}, ObservationTimes* times = nullptr);
 
 }  // namespace posefuse::fit

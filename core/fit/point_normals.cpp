@@ -94,7 +94,7 @@ NormalMap estimate_normals(const PointCloud& cloud, const NormalParams& params) 
       if (!cloud.has(col, row)) continue;
       const auto normal = normal_at(cloud, col, row, params);
       if (!normal) continue;
-      map.set(static_cast<size_t>(row) * cloud.width + col, *normal);
+      map.set(col, row, *normal);
     }
   return map;
 }

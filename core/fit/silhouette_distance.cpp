@@ -38,14 +38,19 @@ Eigen::Vector2d SilhouetteDistanceMap::closest(double u, double v) const {
 }
 
 std::vector<uint8_t> silhouette_of(const DepthFrame& frame) {
-  std::vector<uint8_t> silhouette(frame.body_index.size());
+  std::vector<uint8_t> silhouette;
+  silhouette_of(frame, silhouette);
+  return silhouette;
+}
+
+void silhouette_of(const DepthFrame& frame, std::vector<uint8_t>& silhouette) {
+  silhouette.resize(frame.body_index.size());
   // Plain pointers: through the vectors, each uint8_t store might alias the other vector's
   // members (a char type), which keeps the compiler from vectorising the loop.
   const uint8_t* body_index = frame.body_index.data();
   uint8_t* out = silhouette.data();
   const size_t n = silhouette.size();
   for (size_t i = 0; i < n; ++i) out[i] = body_index[i] != kNoBody;
-  return silhouette;
 }
 
 namespace {
@@ -141,10 +146,11 @@ SilhouetteDistanceMap silhouette_distance_map(const std::vector<uint8_t>& silhou
 
 namespace {
 
-// silhouette_distance_map over `region`; with_border: also the border pixels (closest() outside
-// the region).
-SilhouetteDistanceMap distance_map_in(const std::vector<uint8_t>& silhouette, int width, int height,
-                                      const PixelRect& region, bool with_border) {
+// silhouette_distance_map over `region` into `map`; with_border: also the border pixels
+// (closest() outside the region). The map's arrays are reused when they have the image's size:
+// only their previous region holds anything to clear.
+void distance_map_in(const std::vector<uint8_t>& silhouette, int width, int height, const PixelRect& region,
+                     bool with_border, SilhouetteDistanceMap& map) {
   if (width <= 0 || height <= 0)
     throw_invalid("silhouette", "size " + std::to_string(width) + "x" + std::to_string(height) + " is not valid");
   const size_t pixels = static_cast<size_t>(width) * height;
@@ -156,12 +162,24 @@ SilhouetteDistanceMap distance_map_in(const std::vector<uint8_t>& silhouette, in
     throw_invalid("region", "[" + std::to_string(region.col0) + ", " + std::to_string(region.col1) + "] x [" +
                                 std::to_string(region.row0) + ", " + std::to_string(region.row1) +
                                 "] is empty or leaves the image");
-  SilhouetteDistanceMap map;
-  map.width = width;
-  map.height = height;
+  if (map.width == width && map.height == height && map.distance_px.size() == pixels &&
+      map.closest_pixel.size() == pixels) {
+    const PixelRect& previous = map.region;
+    for (int row = previous.row0; row <= previous.row1; ++row) {
+      const size_t begin = static_cast<size_t>(row) * width + previous.col0;
+      const size_t length = static_cast<size_t>(previous.col1 - previous.col0 + 1);
+      std::fill_n(map.distance_px.begin() + static_cast<ptrdiff_t>(begin), length,
+                  std::numeric_limits<float>::infinity());
+      std::fill_n(map.closest_pixel.begin() + static_cast<ptrdiff_t>(begin), length, -1);
+    }
+  } else {
+    map.width = width;
+    map.height = height;
+    map.distance_px.assign(pixels, std::numeric_limits<float>::infinity());
+    map.closest_pixel.assign(pixels, -1);
+  }
   map.region = region;
-  map.distance_px.assign(pixels, std::numeric_limits<float>::infinity());
-  map.closest_pixel.assign(pixels, -1);
+  map.border_pixels.clear();
   bool any = false;
   for (int row = region.row0; row <= region.row1; ++row)
     for (int col = region.col0; col <= region.col1; ++col) {
@@ -178,28 +196,36 @@ SilhouetteDistanceMap distance_map_in(const std::vector<uint8_t>& silhouette, in
     }
   if (!any) throw_precondition("silhouette", "is empty");
   chamfer(map, region);
-  return map;
 }
 
 }  // namespace
 
 SilhouetteDistanceMap silhouette_distance_map(const std::vector<uint8_t>& silhouette, int width, int height,
                                               const PixelRect& region) {
-  return distance_map_in(silhouette, width, height, region, false);
+  SilhouetteDistanceMap map;
+  distance_map_in(silhouette, width, height, region, false, map);
+  return map;
 }
 
 SilhouetteDistanceMap silhouette_distance_map_near(const std::vector<uint8_t>& silhouette, int width, int height,
                                                    int margin_px) {
+  SilhouetteDistanceMap map;
+  silhouette_distance_map_near(silhouette, width, height, map, margin_px);
+  return map;
+}
+
+void silhouette_distance_map_near(const std::vector<uint8_t>& silhouette, int width, int height,
+                                  SilhouetteDistanceMap& map, int margin_px) {
   if (width <= 0 || height <= 0 || silhouette.size() != static_cast<size_t>(width) * height)
     throw_invalid("silhouette", "has " + std::to_string(silhouette.size()) + " values for a " + std::to_string(width) +
                                     "x" + std::to_string(height) + " image");
   const PixelRect box = nonzero_box(silhouette, width, height);
   if (box.col1 < 0) throw_precondition("silhouette", "is empty");
   const int margin = std::max(0, margin_px);
-  return distance_map_in(silhouette, width, height,
-                         PixelRect{std::max(0, box.col0 - margin), std::max(0, box.row0 - margin),
-                                   std::min(width - 1, box.col1 + margin), std::min(height - 1, box.row1 + margin)},
-                         true);
+  distance_map_in(silhouette, width, height,
+                  PixelRect{std::max(0, box.col0 - margin), std::max(0, box.row0 - margin),
+                            std::min(width - 1, box.col1 + margin), std::min(height - 1, box.row1 + margin)},
+                  true, map);
 }
 
 }  // namespace posefuse::fit

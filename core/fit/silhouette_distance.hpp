@@ -50,8 +50,14 @@ SilhouetteDistanceMap silhouette_distance_map(const std::vector<uint8_t>& silhou
 // pixels. Errors as silhouette_distance_map.
 SilhouetteDistanceMap silhouette_distance_map_near(const std::vector<uint8_t>& silhouette, int width, int height,
                                                    int margin_px = 16);
+// The same into `map`, reusing its arrays when they have the image's size (only its previous
+// region is cleared): the per-frame way, without full-image allocation or clearing.
+void silhouette_distance_map_near(const std::vector<uint8_t>& silhouette, int width, int height,
+                                  SilhouetteDistanceMap& map, int margin_px = 16);
 
 // Silhouette of a frame: body index != kNoBody (depth is not required).
 std::vector<uint8_t> silhouette_of(const DepthFrame& frame);
+// The same into `silhouette` (resized to the frame, every value written).
+void silhouette_of(const DepthFrame& frame, std::vector<uint8_t>& silhouette);
 
 }  // namespace posefuse::fit

@@ -59,9 +59,6 @@ double point_segment_distance2(const Eigen::Vector2d& p, const Segment& s) {
   return (s.a + t * s.ab - p).squaredNorm();
 }
 
-// Smallest rectangle holding every valid pixel of the cloud (empty for an empty cloud).
-PixelRect bounding_box(const PointCloud& cloud) { return nonzero_box(cloud.valid, cloud.width, cloud.height); }
-
 void validate(const ZoneSamplingParams& params) {
   if (params.num_samples < 1 || params.num_samples > 1'000'000)
     throw_invalid("zone_params.num_samples", "must be in [1, 1e6], got " + std::to_string(params.num_samples));
@@ -177,12 +174,14 @@ std::vector<Segment> projected_bones(const KinectSkeleton& skeleton_K, const ray
   return segments;
 }
 
-// assign_zones over the cloud's pixel box `box` (no cloud pixel lies outside it); the cloud's
-// size is checked.
-std::vector<int8_t> assign_zones_in(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
-                                    const raycast::DepthCamera& camera, const PixelRect& box) {
+// assign_zones over the cloud's box only: the zones of its pixels, row-major with the box's width
+// (-1 outside the cloud); the cloud's size is checked.
+std::vector<int8_t> assign_zones_in_box(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
+                                        const raycast::DepthCamera& camera) {
   const std::vector<Segment> segments = projected_bones(skeleton_K, camera);
-  std::vector<int8_t> zone(cloud.valid.size(), -1);
+  const PixelRect& box = cloud.box;
+  const int box_width = box.col1 - box.col0 + 1;
+  std::vector<int8_t> zone(static_cast<size_t>(box_width) * std::max(0, box.row1 - box.row0 + 1), -1);
   // Tiles of kTile x kTile pixels: a segment whose distance from the tile's centre, less the
   // tile's radius, exceeds the smallest (distance + radius) over the segments is farther from
   // every pixel of the tile than that one and can never be the nearest (nor tie): only the others
@@ -199,16 +198,26 @@ std::vector<int8_t> assign_zones_in(const PointCloud& cloud, const KinectSkeleto
       near.clear();
       for (const Segment& segment : segments)
         if (std::sqrt(point_segment_distance2(centre, segment)) - radius <= bound + 1e-6) near.push_back(&segment);
+      // When the candidates share one zone, the nearest of them gives that zone to every cloud
+      // pixel of the tile, as long as its squared distance (at most bound^2) cannot overflow.
+      bool one_zone = bound < 1e150;
+      for (const Segment* segment : near) one_zone = one_zone && segment->zone == near.front()->zone;
       for (int row = tile_row; row <= std::min(box.row1, tile_row + kTile - 1); ++row)
         for (int col = tile_col; col <= std::min(box.col1, tile_col + kTile - 1); ++col) {
           if (!cloud.has(col, row)) continue;
+          if (one_zone) {
+            zone[static_cast<size_t>(row - box.row0) * box_width + (col - box.col0)] =
+                static_cast<int8_t>(near.front()->zone);
+            continue;
+          }
           const Eigen::Vector2d p(col, row);
           double best = std::numeric_limits<double>::infinity();
           for (const Segment* segment : near) {
             const double d2 = point_segment_distance2(p, *segment);
             if (d2 < best) {
               best = d2;
-              zone[static_cast<size_t>(row) * cloud.width + col] = static_cast<int8_t>(segment->zone);
+              zone[static_cast<size_t>(row - box.row0) * box_width + (col - box.col0)] =
+                  static_cast<int8_t>(segment->zone);
             }
           }
         }
@@ -235,48 +244,58 @@ BodyZone nearest_bone_zone(const Eigen::Vector2d& pixel, const KinectSkeleton& s
 std::vector<int8_t> assign_zones(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
                                  const raycast::DepthCamera& camera) {
   check_size(cloud, camera);
-  return assign_zones_in(cloud, skeleton_K, camera, bounding_box(cloud));
+  const std::vector<int8_t> in_box = assign_zones_in_box(cloud, skeleton_K, camera);
+  std::vector<int8_t> zone(cloud.valid.size(), -1);
+  const PixelRect& box = cloud.box;
+  const size_t box_width = static_cast<size_t>(box.col1 - box.col0 + 1);
+  for (int row = box.row0; row <= box.row1; ++row)
+    std::copy_n(in_box.begin() + static_cast<ptrdiff_t>((row - box.row0) * box_width), box_width,
+                zone.begin() + static_cast<ptrdiff_t>(static_cast<size_t>(row) * cloud.width + box.col0));
+  return zone;
 }
 
 std::vector<DepthSample> sample_depth_pixels(const PointCloud& cloud, const KinectSkeleton& skeleton_K,
                                              const raycast::DepthCamera& camera, const ZoneSamplingParams& params) {
   validate(params);
   check_size(cloud, camera);
-  const PixelRect box = bounding_box(cloud);
-  const std::vector<int8_t> zone = assign_zones_in(cloud, skeleton_K, camera, box);
+  const PixelRect& box = cloud.box;
+  const std::vector<int8_t> zone = assign_zones_in_box(cloud, skeleton_K, camera);
+  const int box_width = box.col1 - box.col0 + 1;
 
   // Distance of each cloud pixel to the nearest pixel outside the cloud, needed only up to the
   // edge band: computed in the cloud's bounding box grown by the band (and a pixel), which holds
   // every outside pixel within the band of a cloud pixel; beyond it the map stays infinite,
-  // which is as far from the band as the exact distance. The cloud may fill the image.
+  // which is as far from the band as the exact distance. The cloud may fill the image. The map
+  // covers that region only (its own row-major image): the chamfer's distances depend only on
+  // the pixels inside the region, so they are those of the region in the whole image.
   const int grow = static_cast<int>(std::ceil(std::min<double>(params.edge_band_px, cloud.width + cloud.height))) + 1;
   const PixelRect band_region{std::max(0, box.col0 - grow), std::max(0, box.row0 - grow),
                               std::min(cloud.width - 1, box.col1 + grow), std::min(cloud.height - 1, box.row1 + grow)};
-  std::vector<uint8_t> outside(cloud.valid.size(), 0);
+  const int band_width = band_region.col1 - band_region.col0 + 1, band_height = band_region.row1 - band_region.row0 + 1;
+  std::vector<uint8_t> outside(static_cast<size_t>(band_width) * band_height);
   bool any_outside = false;
   // Plain pointers, so that the uint8_t stores (a char type) cannot alias the vectors' members
   // and the inner loop vectorises.
-  const uint8_t* valid = cloud.valid.data();
-  uint8_t* outside_pixels = outside.data();
   for (int row = band_region.row0; row <= band_region.row1; ++row) {
-    const size_t begin = static_cast<size_t>(row) * cloud.width + band_region.col0;
-    const size_t end = static_cast<size_t>(row) * cloud.width + band_region.col1 + 1;
+    const uint8_t* valid = cloud.valid.data() + static_cast<size_t>(row) * cloud.width + band_region.col0;
+    uint8_t* outside_pixels = outside.data() + static_cast<size_t>(row - band_region.row0) * band_width;
     uint8_t any_in_row = 0;
-    for (size_t i = begin; i < end; ++i) any_in_row |= outside_pixels[i] = !valid[i];
+    for (int k = 0; k < band_width; ++k) any_in_row |= outside_pixels[k] = !valid[k];
     any_outside |= any_in_row != 0;
   }
-  std::vector<float> to_outside_px;  // filled only once: these are full-image arrays
-  if (any_outside)
-    to_outside_px = std::move(silhouette_distance_map(outside, cloud.width, cloud.height, band_region).distance_px);
+  std::vector<float> to_outside_px;
+  if (any_outside) to_outside_px = std::move(silhouette_distance_map(outside, band_width, band_height).distance_px);
   else to_outside_px.assign(outside.size(), std::numeric_limits<float>::infinity());
 
   std::array<std::vector<int>, kBodyZoneCount> edge_pixels, inner_pixels;
-  // Zones are assigned inside the box only; row by row it is the same ascending pixel order.
+  // Row by row in the box: the ascending pixel order.
   for (int row = box.row0; row <= box.row1; ++row)
     for (int col = box.col0; col <= box.col1; ++col) {
-      const size_t i = static_cast<size_t>(row) * cloud.width + col;
-      if (zone[i] < 0) continue;
-      (to_outside_px[i] <= params.edge_band_px ? edge_pixels : inner_pixels)[zone[i]].push_back(static_cast<int>(i));
+      const int8_t z = zone[static_cast<size_t>(row - box.row0) * box_width + (col - box.col0)];
+      if (z < 0) continue;
+      const float to_outside =
+          to_outside_px[static_cast<size_t>(row - band_region.row0) * band_width + (col - band_region.col0)];
+      (to_outside <= params.edge_band_px ? edge_pixels : inner_pixels)[z].push_back(row * cloud.width + col);
     }
   std::array<int, kBodyZoneCount> available{};
   for (int z = 0; z < kBodyZoneCount; ++z)

@@ -72,6 +72,26 @@ TEST(FitPointCloud, EqualsThePerPixelUnprojectionOnASparseSilhouette) {
   EXPECT_EQ(cloud.count, expected_count);
 }
 
+TEST(FitPointCloud, BoxIsTheSmallestRectangleHoldingEveryCloudPixel) {
+  // Sparse random silhouettes (often a single pixel or none with depth): the box kept while the
+  // cloud is built equals the scan of every valid pixel.
+  const raycast::DepthCamera camera{testing::small_intrinsics(37, 19)};
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 100; ++trial) {
+    DepthFrame frame = testing::render_plane(camera, {0, 0, 2}, {0.1, -0.2, -1});
+    const unsigned keep = 1 + rng() % 200;  // about one pixel in `keep` is body
+    for (size_t i = 0; i < frame.body_index.size(); ++i)
+      if (rng() % keep != 0) frame.body_index[i] = kNoBody;
+    frame.body_index[rng() % frame.body_index.size()] = 0;  // never empty
+    const PointCloud cloud = build_point_cloud(frame, camera);
+    const PixelRect expected = nonzero_box(cloud.valid, cloud.width, cloud.height);
+    EXPECT_EQ(cloud.box.col0, expected.col0) << "trial " << trial;
+    EXPECT_EQ(cloud.box.row0, expected.row0) << "trial " << trial;
+    EXPECT_EQ(cloud.box.col1, expected.col1) << "trial " << trial;
+    EXPECT_EQ(cloud.box.row1, expected.row1) << "trial " << trial;
+  }
+}
+
 TEST(FitPixelRect, NonzeroBoxEqualsTheScanOfEveryPixel) {
   std::mt19937 rng(3);
   for (int trial = 0; trial < 200; ++trial) {
