@@ -271,7 +271,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
           damage(in, *chunk.mutable_depth()->mutable_data());
           pipeline.push(chunk);
           chunk.Clear();
-          const v1::BodyIndexFrame::Encoding index_encodings[] = {v1::BodyIndexFrame::RAW_U8, v1::BodyIndexFrame::PNG8};
+          const v1::BodyIndexFrame::Encoding index_encodings[] = {v1::BodyIndexFrame::RAW_U8, v1::BodyIndexFrame::PNG8,
+                                                                  v1::BodyIndexFrame::ZSTD_U8};
           *chunk.mutable_body_index() = session::encode_body_index(ids, in.PickValueInArray(index_encodings), t_us);
           damage(in, *chunk.mutable_body_index()->mutable_data());
           pipeline.push(chunk);
