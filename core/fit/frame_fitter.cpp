@@ -235,7 +235,9 @@ void FrameFitter::compute_used_vertex_jacobians() {
       for (int f : surface_.faces_of_vertex(v))
         for (int corner = 0; corner < 3; ++corner) use(faces(corner, f));
     }
-  for (int v : selected_) use(v);  // bg and float points
+  // The bg and float points build_blocks() chose from U_bg (the rest of U_bg has no residual).
+  for (const SilhouettePoint& s : bg_) use(s.index);
+  for (const BehindPoint& f : float_) use(f.vertex);
   eval_.compute_vertex_pose_jacobians(used_vertices_);
   for (int v : used_vertices_) used_[static_cast<size_t>(v)] = 0;
 }

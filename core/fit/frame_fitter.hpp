@@ -144,7 +144,8 @@ class FrameFitter {
   void build_blocks(const body::BodyEvaluator& eval, const FrameObservation& observation);
   // eval_'s vertex pose Jacobians for the vertices linearise() uses: the correspondences' corners,
   // the 1-rings of those whose normal Jacobian needs them (SurfacePoseJacobians::normal_needs_ring,
-  // after its reset()) and U_bg (pose_model evaluates with kPoseOnRequest).
+  // after its reset()) and the bg and float points of build_blocks() (pose_model evaluates with
+  // kPoseOnRequest).
   void compute_used_vertex_jacobians();
   // Fills the residual vector and pose / uv Jacobians at the current state; returns per-term energy.
   EnergyTerms linearise(const FrameObservation& observation, const Eigen::VectorXd& theta, const Eigen::VectorXd& beta);
