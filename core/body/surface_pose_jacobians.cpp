@@ -51,7 +51,9 @@ void SurfacePoseJacobians::find_face_columns(const BodySurface& surface, const B
   const int num_vertices = eval.model().num_vertices();
   // Joints whose DOFs move each vertex (BodyEvaluator::vertex_dofs), then over each 1-ring: the
   // unit normal of v depends on the positions of its ring.
-  std::vector<std::uint32_t> moving(static_cast<size_t>(num_vertices), 0u), ring(moving.size(), 0u);
+  std::vector<std::uint32_t> moving(static_cast<size_t>(num_vertices), 0u);
+  std::vector<std::uint32_t>& ring = ring_joints_;
+  ring.assign(moving.size(), 0u);
   for (int v = 0; v < num_vertices; ++v)
     for (int d : eval.vertex_dofs(v)) moving[static_cast<size_t>(v)] |= 1u << layout.dof(d).joint;
   for (int v = 0; v < num_vertices; ++v)
@@ -79,7 +81,7 @@ Eigen::Index SurfacePoseJacobians::slot(const BodySurface& surface, const BodyEv
   store_.middleCols(begin, 2 * n).setZero();
   eval.add_vertex_pose_jacobian(v, 1.0, store_.middleCols(begin, n));
   const std::uint32_t rigid = rigid_joints_[static_cast<size_t>(v)];
-  surface.vertex_normal_pose_jacobian(v, eval, store_.middleCols(begin + n, n), rigid);
+  if (normal_needs_ring(v)) surface.vertex_normal_pose_jacobian(v, eval, store_.middleCols(begin + n, n), rigid);
   const Eigen::Vector3d normal = surface.vertex_normals().col(v);
   for (int d : eval.vertex_dofs(v)) {
     const Dof& dof = eval.layout().dof(d);

@@ -44,6 +44,12 @@ class SurfacePoseJacobians {
   // other column of the dense Jacobian is zero.
   void evaluate_packed(const BodySurface& surface, const BodyEvaluator& eval, const SurfacePoint& s,
                        Eigen::Ref<Eigen::Matrix3Xd> d_position, Eigen::Ref<Eigen::Matrix3Xd> d_normal);
+  // Whether d n_v needs the pose Jacobians of v's 1-ring (valid after reset()): false when every
+  // joint that moves the ring turns it rigidly, so that the shortcut above gives all of d n_v and
+  // only v's own Jacobian is read (BodyEvaluator::kPoseOnRequest callers may skip the ring).
+  bool normal_needs_ring(int v) const {
+    return (ring_joints_[static_cast<size_t>(v)] & ~rigid_joints_[static_cast<size_t>(v)]) != 0;
+  }
   // The DOFs that can move a point of face f or turn its normal, ascending (valid after reset()).
   std::span<const int> face_columns(int face) const {
     return {face_columns_.data() + face_column_begin_[static_cast<size_t>(face)],
@@ -69,7 +75,8 @@ class SurfacePoseJacobians {
   int num_pose_ = 0;
   std::vector<int> face_column_begin_, face_columns_;
   std::vector<std::uint32_t> rigid_joints_;
-  std::vector<int> slot_of_vertex_;  // -1: not computed since reset()
+  std::vector<std::uint32_t> ring_joints_;  // per vertex, bit j: joint j's DOFs move some vertex of its 1-ring
+  std::vector<int> slot_of_vertex_;         // -1: not computed since reset()
   std::vector<int> cached_vertices_;
   Eigen::Matrix3Xd store_;  // 3 x (2N * number of vertices), filled in order of first use
 };

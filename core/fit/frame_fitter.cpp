@@ -60,6 +60,13 @@ FrameFitter::FrameFitter(std::shared_ptr<const body::SmplModel> model, body::Pos
   data_shape_jacobian_.setZero(6, model_->num_betas());
 }
 
+void FrameFitter::adopt_trial() {
+  // Swapping contents keeps each object's address (SurfacePoseJacobians keys on the evaluator's).
+  std::swap(eval_, trial_eval_);
+  std::swap(surface_, trial_surface_);
+  scene_.update_vertices(eval_.vertices());
+}
+
 void FrameFitter::split(const Eigen::VectorXd& x, Eigen::VectorXd& theta, Eigen::VectorXd& beta) const {
   const int n = layout_.size();
   theta = x.head(n);
@@ -218,12 +225,19 @@ void FrameFitter::compute_used_vertex_jacobians() {
     used_[static_cast<size_t>(v)] = 1;
     used_vertices_.push_back(v);
   };
-  // The data term: each correspondence's corners and their 1-rings (the vertex normals' Jacobians).
+  // The data term: each correspondence's corners and, where the vertex normal's Jacobian needs
+  // them, their 1-rings.
   for (const body::SurfacePoint& c : correspondences_)
-    for (int k = 0; k < 3; ++k)
-      for (int f : surface_.faces_of_vertex(faces(k, c.face)))
+    for (int k = 0; k < 3; ++k) {
+      const int v = faces(k, c.face);
+      use(v);
+      if (!surface_jacobians_.normal_needs_ring(v)) continue;
+      for (int f : surface_.faces_of_vertex(v))
         for (int corner = 0; corner < 3; ++corner) use(faces(corner, f));
-  for (int v : selected_) use(v);  // bg and float points
+    }
+  // The bg and float points build_blocks() chose from U_bg (the rest of U_bg has no residual).
+  for (const SilhouettePoint& s : bg_) use(s.index);
+  for (const BehindPoint& f : float_) use(f.vertex);
   eval_.compute_vertex_pose_jacobians(used_vertices_);
   for (int v : used_vertices_) used_[static_cast<size_t>(v)] = 0;
 }
@@ -231,13 +245,13 @@ void FrameFitter::compute_used_vertex_jacobians() {
 EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::VectorXd& theta,
                                    const Eigen::VectorXd& beta) {
   build_blocks(eval_, o);
+  surface_jacobians_.reset(surface_, eval_);
   compute_used_vertex_jacobians();
   const int n = static_cast<int>(data_.size());
   const int N = layout_.size();
   const int free = static_cast<int>(free_betas_.size());
   EnergyTerms e;
   system_.reset(num_parameters(), n);
-  surface_jacobians_.reset(surface_, eval_);
   int row = 0;
   auto take = [&](int count, double& energy) {
     energy += residual_.segment(row, count).squaredNorm();
@@ -432,7 +446,10 @@ FitResult FrameFitter::run(const FrameObservation& observation, const Eigen::Vec
           step_ = trial_x_ - x;
         }
         split(trial_x_, trial_theta_, trial_beta_);
-        trial_eval_.evaluate(trial_beta_, trial_theta_, body::Derivatives::kNone);
+        // With the shape fixed the trial is evaluated as pose_model() would: an accepted trial
+        // becomes the current model by a swap (adopt_trial) instead of a second evaluation.
+        trial_eval_.evaluate(trial_beta_, trial_theta_,
+                             free_betas_.empty() ? body::Derivatives::kPoseOnRequest : body::Derivatives::kNone);
         trial_surface_.update(trial_eval_.vertices());
         trial_correspondences_.resize(correspondences_.size());
         // II-I: the correspondences follow their (du, dv) over face borders.
@@ -473,7 +490,8 @@ FitResult FrameFitter::run(const FrameObservation& observation, const Eigen::Vec
     theta = trial_theta_;
     beta = trial_beta_;
     std::swap(correspondences_, trial_correspondences_);
-    pose_model(theta, beta);
+    if (free_betas_.empty()) adopt_trial();
+    else pose_model(theta, beta);
     update_correspondences(observation, iteration + 1);
     if (energy_before - energy_after < options_.min_relative_decrease * energy_before ||
         (joint_step < options_.min_joint_step_m && step_undamped)) {

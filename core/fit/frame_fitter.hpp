@@ -123,6 +123,9 @@ class FrameFitter {
   FitResult run(const FrameObservation& observation, const Eigen::VectorXd& theta0, const Eigen::VectorXd& beta0);
   void set_up_blocks(const FrameObservation& observation);
   void pose_model(const Eigen::VectorXd& theta, const Eigen::VectorXd& beta);
+  // Shape fixed: the accepted trial (trial_eval_ evaluated with kPoseOnRequest, trial_surface_)
+  // becomes the current model; the same state as pose_model() at the trial's (theta, beta).
+  void adopt_trial();
   // The LM parameters x = (theta, beta_free) and back.
   int num_parameters() const { return layout_.size() + static_cast<int>(free_betas_.size()); }
   void split(const Eigen::VectorXd& x, Eigen::VectorXd& theta, Eigen::VectorXd& beta) const;
@@ -139,8 +142,10 @@ class FrameFitter {
   void select_point_sets(const FrameObservation& observation);
   // The bg, float and bgJoint blocks of the chosen sets at the pose of `eval`.
   void build_blocks(const body::BodyEvaluator& eval, const FrameObservation& observation);
-  // eval_'s vertex pose Jacobians for the vertices linearise() uses: the 1-rings of the
-  // correspondences' corners and U_bg (pose_model evaluates with kPoseOnRequest).
+  // eval_'s vertex pose Jacobians for the vertices linearise() uses: the correspondences' corners,
+  // the 1-rings of those whose normal Jacobian needs them (SurfacePoseJacobians::normal_needs_ring,
+  // after its reset()) and the bg and float points of build_blocks() (pose_model evaluates with
+  // kPoseOnRequest).
   void compute_used_vertex_jacobians();
   // Fills the residual vector and pose / uv Jacobians at the current state; returns per-term energy.
   EnergyTerms linearise(const FrameObservation& observation, const Eigen::VectorXd& theta, const Eigen::VectorXd& beta);

@@ -147,6 +147,58 @@ TEST(SurfacePoseJacobians, PackedColumnsHoldEveryNonZeroColumn) {
   EXPECT_GT(fewer, 0);  // the lists are sparse somewhere (else the test would prove little)
 }
 
+TEST(SurfacePoseJacobians, NeedOnlyTheRingsTheyNameWithJacobiansOnRequest) {
+  // An evaluator with kPoseOnRequest whose vertex Jacobians are computed only for the corners of
+  // the sampled faces and the 1-rings that normal_needs_ring() names gives the direct Jacobians of
+  // one with every vertex's (kPose). The on-request evaluator's other vertices hold
+  // Jacobians of another pose, so a ring wrongly left out would show.
+  const auto model = make_template(Sex::kMale);
+  const PoseLayout layout = PoseLayout::upper_body();
+  std::mt19937 rng(7);
+  const Eigen::VectorXd beta = Eigen::VectorXd::Constant(10, 0.1);
+  const Eigen::VectorXd theta = random_pose(layout, rng);
+  BodyEvaluator full(model, layout), on_request(model, layout);
+  full.evaluate(beta, theta, Derivatives::kPose);
+  on_request.evaluate(beta, random_pose(layout, rng), Derivatives::kPose);  // stale Jacobians
+  on_request.evaluate(beta, theta, Derivatives::kPoseOnRequest);
+  BodySurface surface(model->faces, model->num_vertices());
+  surface.update(full.vertices());
+  SurfacePoseJacobians cached;
+  cached.reset(surface, on_request);
+  std::vector<int> faces, used;
+  std::vector<bool> in_use(static_cast<size_t>(model->num_vertices()), false);
+  const auto use = [&](int v) {
+    if (!in_use[static_cast<size_t>(v)]) used.push_back(v);
+    in_use[static_cast<size_t>(v)] = true;
+  };
+  int without_ring = 0;
+  for (int face = 0; face < model->num_faces(); face += 11) {
+    faces.push_back(face);
+    for (int k = 0; k < 3; ++k) {
+      const int v = surface.faces()(k, face);
+      use(v);
+      if (!cached.normal_needs_ring(v)) {
+        ++without_ring;
+        continue;
+      }
+      for (int f : surface.faces_of_vertex(v))
+        for (int corner = 0; corner < 3; ++corner) use(surface.faces()(corner, f));
+    }
+  }
+  on_request.compute_vertex_pose_jacobians(used);
+  for (int face : faces) {
+    const SurfacePoint s{face, 0.3, 0.4};
+    const Eigen::Index n = layout.size();
+    Eigen::Matrix3Xd ep = Eigen::Matrix3Xd::Zero(3, n), en = ep, cp(3, n), cn(3, n);
+    surface.position_pose_jacobian(s, full, ep);
+    surface.normal_pose_jacobian(s, full, en);
+    cached.evaluate(surface, on_request, s, cp, cn);
+    ASSERT_LT((cp - ep).cwiseAbs().maxCoeff(), 1e-12 * (1 + ep.cwiseAbs().maxCoeff())) << "face " << face;
+    ASSERT_LT((cn - en).cwiseAbs().maxCoeff(), 1e-12 * (1 + en.cwiseAbs().maxCoeff())) << "face " << face;
+  }
+  EXPECT_GT(without_ring, 0);  // some corners skip their ring (else the test would prove little)
+}
+
 TEST(BodySurface, AdjacencyOfTheTemplateIsSymmetricAndComplete) {
   const auto model = make_template(Sex::kMale);
   BodySurface surface(model->faces, model->num_vertices());
