@@ -56,34 +56,20 @@ void samples(std::string& out, const char* name, const Counts& counts) {
 
 }  // namespace
 
-void Metrics::session_started(std::string_view tenant) {
+void Metrics::count(Counts& counts, const std::string& label_set) {
   std::lock_guard lock(mu_);
-  increment(sessions_started_, labels(tenant));
+  increment(counts, label_set);
 }
 
-void Metrics::session_refused(std::string_view tenant) {
-  std::lock_guard lock(mu_);
-  increment(sessions_refused_, labels(tenant));
-}
-
+void Metrics::session_started(std::string_view tenant) { count(sessions_started_, labels(tenant)); }
+void Metrics::session_refused(std::string_view tenant) { count(sessions_refused_, labels(tenant)); }
 void Metrics::session_finished(std::string_view tenant, std::string_view status) {
-  std::lock_guard lock(mu_);
-  increment(sessions_finished_, labels(tenant, "status", status));
+  count(sessions_finished_, labels(tenant, "status", status));
 }
-
-void Metrics::chunk_received(std::string_view tenant) {
-  std::lock_guard lock(mu_);
-  increment(chunks_received_, labels(tenant));
-}
-
-void Metrics::item_error(std::string_view tenant) {
-  std::lock_guard lock(mu_);
-  increment(item_errors_, labels(tenant));
-}
-
+void Metrics::chunk_received(std::string_view tenant) { count(chunks_received_, labels(tenant)); }
+void Metrics::item_error(std::string_view tenant) { count(item_errors_, labels(tenant)); }
 void Metrics::job_submit_finished(std::string_view tenant, std::string_view status) {
-  std::lock_guard lock(mu_);
-  increment(job_submits_, labels(tenant, "status", status));
+  count(job_submits_, labels(tenant, "status", status));
 }
 
 void Metrics::stage_time(std::string_view stage, double seconds) {
@@ -95,8 +81,7 @@ void Metrics::stage_time(std::string_view stage, double seconds) {
 }
 
 void Metrics::job_finished(std::string_view tenant, std::string_view state) {
-  std::lock_guard lock(mu_);
-  increment(jobs_finished_, labels(tenant, "state", state));
+  count(jobs_finished_, labels(tenant, "state", state));
 }
 
 std::string Metrics::render(const Gauges& gauges) const {

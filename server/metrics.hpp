@@ -43,6 +43,7 @@ class Metrics {
   };
   // Counts by their Prometheus label set, e.g. `tenant="clinic-a",status="OK"`.
   using Counts = std::map<std::string, std::uint64_t, std::less<>>;
+  void count(Counts& counts, const std::string& label_set);  // one more, under mu_
 
   std::atomic<std::int64_t> queued_chunks_{0};
   mutable std::mutex mu_;
