@@ -76,6 +76,15 @@ class JobWatchdogTest : public JobsTest {
     return job.job_id();
   }
 
+  grpc::Status cancel(const std::string& id) {
+    grpc::ClientContext context;
+    set_test_deadline(context);
+    v1::CancelJobRequest request;
+    request.set_job_id(id);
+    v1::Job job;
+    return stub_->CancelJob(&context, request, &job);
+  }
+
   v1::Job final_state(const std::string& id) {
     const auto states = watch(id);
     return states.empty() ? v1::Job() : states.back();
@@ -148,15 +157,8 @@ TEST_F(JobWatchdogTest, JobBlockedInsideAReadFailsWhenItReadsNoChunkForTheStallL
 TEST_F(JobWatchdogTest, CancelReachesAJobBlockedInsideARead) {
   const std::string id = start_with_upload(quick_heartbeat(options()), [this] { gate_.pass(); });
   ASSERT_TRUE(gate_.wait_entered());
-  {
-    grpc::ClientContext context;
-    set_test_deadline(context);
-    v1::CancelJobRequest request;
-    request.set_job_id(id);
-    v1::Job job;
-    const grpc::Status status = stub_->CancelJob(&context, request, &job);
-    ASSERT_TRUE(status.ok()) << status.error_message();
-  }
+  const grpc::Status cancelled = cancel(id);
+  ASSERT_TRUE(cancelled.ok()) << cancelled.error_message();
   EXPECT_EQ(final_state(id).state(), v1::Job::CANCELLED);
   EXPECT_EQ(stored_after_release(id).state(), v1::Job::CANCELLED);
 }
@@ -171,15 +173,8 @@ TEST_F(JobWatchdogTest, AJobBlockedInsideAReadGivesUpItsSlotOnceTheWatchdogEndsI
     if (first->exchange(false)) gate_.pass();
   });
   ASSERT_TRUE(gate_.wait_entered());
-  {
-    grpc::ClientContext context;
-    set_test_deadline(context);
-    v1::CancelJobRequest request;
-    request.set_job_id(blocked);
-    v1::Job job;
-    const grpc::Status status = stub_->CancelJob(&context, request, &job);
-    ASSERT_TRUE(status.ok()) << status.error_message();
-  }
+  const grpc::Status cancelled = cancel(blocked);
+  ASSERT_TRUE(cancelled.ok()) << cancelled.error_message();
   EXPECT_EQ(final_state(blocked).state(), v1::Job::CANCELLED);
   // The only slot's thread is still inside the read; the next job runs all the same.
   v1::Job next;
