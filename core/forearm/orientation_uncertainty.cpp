@@ -10,10 +10,12 @@ double orientation_rms_rad(double axis_rms_rad, double roll_rms_rad, double filt
 
 double imu_orientation_rms_rad(double beyond_steady_rad) { return std::hypot(kFilterRmsRad, beyond_steady_rad); }
 
-double confidence_from_rms_rad(double rms_rad) {
-  if (!(rms_rad >= 0.0)) return 0.0;
-  const double bound_ratio = kBound99OverRms * rms_rad / kConfidentErrorBoundRad;
+double confidence_from_bound99_rad(double bound99_rad) {
+  if (!(bound99_rad >= 0.0)) return 0.0;
+  const double bound_ratio = bound99_rad / kConfidentErrorBoundRad;
   return std::exp2(-bound_ratio * bound_ratio);
 }
+
+double confidence_from_rms_rad(double rms_rad) { return confidence_from_bound99_rad(kBound99OverRms * rms_rad); }
 
 }  // namespace posefuse::forearm

@@ -32,6 +32,10 @@ double imu_orientation_rms_rad(double beyond_steady_rad);
 // sqrt(axis^2 + roll^2 + filter^2), rad.
 double orientation_rms_rad(double axis_rms_rad, double roll_rms_rad, double filter_rms_rad = kFilterRmsRad);
 
+// 2^-((b / 15 deg)^2) for an error whose 99 % bound is b: 1 at b = 0, 0.5 at 15 degrees. NaN or
+// negative b gives 0.
+double confidence_from_bound99_rad(double bound99_rad);
+
 // 2^-((1.944 u / 15 deg)^2): 1 at u = 0, 0.5 where the 99 % bound is 15 degrees, falling fast
 // beyond. NaN or negative u gives 0.
 double confidence_from_rms_rad(double rms_rad);

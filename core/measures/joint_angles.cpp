@@ -6,6 +6,7 @@
 #include <string>
 
 #include "common/error.hpp"
+#include "forearm/orientation_uncertainty.hpp"
 #include "geometry/axis_angles.hpp"
 
 namespace posefuse::measures {
@@ -111,7 +112,10 @@ void arm_angles(const PosedUpperBody& body, const Thorax& thorax, bool left, con
       std::asin(std::clamp(clavicle.normalized().dot(thorax.K_from_T.col(1)), -1.0, 1.0)), girdle_confidence);
 
   const double flexion = angle_between(upper, fore);
-  const double elbow_confidence = std::min({c[shoulder], c[elbow], c[wrist]});
+  const double flexion_spread =
+      elbow_flexion_spread_rad(upper.norm(), fore.norm(), (upper + fore).norm(), options.arm_length_uncertainty);
+  const double elbow_confidence =
+      std::min({c[shoulder], c[elbow], c[wrist], angle_confidence_from_rms_rad(flexion_spread)});
   out[static_cast<int>(id.elbow)] = defined_value(flexion, elbow_confidence);
 
   // Humerus, ISB's second frame: y from the elbow to the shoulder, z perpendicular to the plane
@@ -194,6 +198,21 @@ std::string_view angle_name(Angle angle) {
   return "unknown";
 }
 
+double elbow_flexion_spread_rad(double upper_arm_m, double forearm_m, double reach_m, double relative_length_error) {
+  const auto flexion = [&](double scale) {
+    const double a = scale * upper_arm_m, b = scale * forearm_m;
+    return std::acos(std::clamp((reach_m * reach_m - a * a - b * b) / (2 * a * b), -1.0, 1.0));
+  };
+  const double fitted = flexion(1.0);
+  return std::max(std::abs(flexion(1.0 + relative_length_error) - fitted),
+                  std::abs(flexion(1.0 - relative_length_error) - fitted));
+}
+
+double angle_confidence_from_rms_rad(double rms_rad) {
+  constexpr double kBound99OverRms = 2.576;  // two-sided 99 % of a normal error
+  return forearm::confidence_from_bound99_rad(kBound99OverRms * rms_rad);
+}
+
 JointAngles joint_angles(const PosedUpperBody& body, const JointAngleOptions& options, const JointAngles* previous) {
   if (body.smpl_joints_K.cols() != 24 || !body.smpl_joints_K.allFinite())
     throw_invalid("smpl_joints_K", "needs 24 finite joints, got " + std::to_string(body.smpl_joints_K.cols()));
@@ -205,6 +224,8 @@ JointAngles joint_angles(const PosedUpperBody& body, const JointAngleOptions& op
     throw_invalid("joint_angle_options.min_elbow_flexion_deg", "must be in [0, 90)");
   if (!(options.min_elevation_for_plane_deg > 0 && options.min_elevation_for_plane_deg < 90))
     throw_invalid("joint_angle_options.min_elevation_for_plane_deg", "must be in (0, 90)");
+  if (!(options.arm_length_uncertainty >= 0 && options.arm_length_uncertainty < 0.5))
+    throw_invalid("joint_angle_options.arm_length_uncertainty", "must be in [0, 0.5)");
 
   JointAngles out{};
   const Thorax thorax = thorax_frame(body);

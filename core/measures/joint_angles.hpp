@@ -81,6 +81,14 @@ struct JointAngleOptions {
   // Below this elevation (or above 180 minus it) the Y-X-Y plane of elevation is gimbal locked:
   // it is held at its last defined value and the axial rotation takes the whole turn about y.
   double min_elevation_for_plane_deg = 15.0;
+  // Relative RMS error of the fitted arms' segment lengths. Near full extension the elbow
+  // flexion of a fit is set by them more than by the image: at the same shoulder-wrist distance
+  // an arm 1 % too long must bend about 16 degrees (law of cosines), one too short stays
+  // straight. The flexion's confidence carries the spread this error gives
+  // (elbow_flexion_spread_rad). 0.05: the template's, whose arm lies between the sexes' mean
+  // humerus lengths (27.7 and 30.5 cm, 10 % apart); a personalised shape is not credited with
+  // less until that is measured (docs/measures.md, "Elbow flexion near full extension").
+  double arm_length_uncertainty = 0.05;
 };
 
 // The global frame G of the thorax angles (and of the OpenSim exports' ground): y along up_K,
@@ -93,6 +101,16 @@ Eigen::Matrix3d K_from_G(const Eigen::Vector3d& up_K, const Eigen::Vector3d& fro
 // joints, "up_K" / "front_K" for zero, non-finite or parallel references, "joint_angle_options.*".
 JointAngles joint_angles(const PosedUpperBody& body, const JointAngleOptions& options = {},
                          const JointAngles* previous = nullptr);
+
+// How far an elbow flexion moves when both arm segments (upper_arm_m, forearm_m) are
+// `relative_length_error` longer or shorter at the same shoulder-wrist distance `reach_m`: the
+// larger of the two changes, rad. An arm that cannot reach bends to 0; one that is too long bends
+// as reach^2 = a^2 + b^2 + 2 a b cos(flexion) requires.
+double elbow_flexion_spread_rad(double upper_arm_m, double forearm_m, double reach_m, double relative_length_error);
+
+// Confidence of an angle from its 1-sigma error, rad: 0.5 where the 99 % bound of a normal error
+// (2.576 sigma) reaches 15 degrees, the bound of a confident forearm sample (docs/forearm.md).
+double angle_confidence_from_rms_rad(double rms_rad);
 
 // Pronation (+) / supination (-) of a forearm from the neutral position, in which the thumb
 // points to the shoulder side of the elbow's flexion plane (thumb up with the upper arm hanging

@@ -292,11 +292,21 @@ RepetitionSummary segment_repetitions(const std::vector<double>& t_s, const std:
 }
 
 int dominant_series(const std::vector<std::vector<double>>& angle_series_deg) {
+  // An angle defined in only a few frames (pronation where a nearly straight elbow crosses the
+  // flexion bound for a moment, its plane then ill-conditioned) describes no exercise, however far
+  // those values scatter: only series defined in at least half as many frames as the most
+  // defined one compete.
+  std::size_t most_defined = 0;
+  for (const std::vector<double>& series : angle_series_deg) {
+    const auto defined = static_cast<std::size_t>(
+        std::count_if(series.begin(), series.end(), [](double v) { return std::isfinite(v); }));
+    most_defined = std::max(most_defined, defined);
+  }
   int best = -1;
   double best_spread = 0.0;
   for (std::size_t s = 0; s < angle_series_deg.size(); ++s) {
     const std::vector<double> finite = sorted_finite(angle_series_deg[s]);
-    if (finite.size() < 2) continue;
+    if (finite.size() < 2 || 2 * finite.size() < most_defined) continue;
     // Percentiles rather than max - min, so that a few outliers (a tracking glitch) cannot make a
     // still joint look like the one that moves.
     const double series_spread = percentile(finite, 0.95) - percentile(finite, 0.05);

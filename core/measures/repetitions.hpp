@@ -70,7 +70,9 @@ RepetitionSummary segment_repetitions(const std::vector<double>& t_s, const std:
 // Index of the series that moves most: the largest spread between its 5th and 95th percentiles
 // of finite samples (the exercise's dominant angle), so that a few outliers cannot make a still
 // joint win; percentiles interpolate linearly between ranks, the first of equal spreads wins.
-// -1 when no series has two finite samples.
+// Only series with at least half as many finite samples as the most complete one compete (a few
+// values of an angle that is mostly undefined describe no exercise). -1 when no series has two
+// finite samples.
 int dominant_series(const std::vector<std::vector<double>>& angle_series_deg);
 
 }  // namespace posefuse::measures

@@ -60,7 +60,9 @@ TEST(JointAngles, EveryAngleReadBackOnConstructedSkeletons) {
         PronationInput{*pronation_rad(J.col(16), J.col(18), J.col(20), b.left_thumb_K, true, 15), 1};
     b.body.right_pronation =
         PronationInput{*pronation_rad(J.col(17), J.col(19), J.col(21), b.right_thumb_K, false, 15), 1};
-    const JointAngles a = joint_angles(b.body);
+    JointAngleOptions exact_lengths;  // the skeleton's own segments: every angle as confident as its joints
+    exact_lengths.arm_length_uncertainty = 0;
+    const JointAngles a = joint_angles(b.body, exact_lengths);
     SCOPED_TRACE(trial);
     EXPECT_NEAR(deg(a, Angle::kThoraxFlexion), flexion, 1e-6);
     EXPECT_NEAR(deg(a, Angle::kThoraxLateralTilt), tilt, 1e-6);
@@ -191,11 +193,58 @@ TEST(JointAngles, ConfidenceFollowsTheJointsAndTheVertical) {
   Built b = build(Eigen::Matrix3d::Identity(), 0, 0, 0, ArmPose{0, 45, 0, 45, 0, 0}, ArmPose{0, 45, 0, 45, 0, 0});
   b.body.joint_confidence[21] = 0.5;  // right wrist inferred
   b.body.up_confidence = 0.5;         // vertical assumed
-  const JointAngles a = joint_angles(b.body);
+  JointAngleOptions exact_lengths;
+  exact_lengths.arm_length_uncertainty = 0;  // the arm lengths' share has its own tests below
+  const JointAngles a = joint_angles(b.body, exact_lengths);
   EXPECT_DOUBLE_EQ(a[static_cast<int>(Angle::kRightElbowFlexion)].confidence, 0.5);
   EXPECT_DOUBLE_EQ(a[static_cast<int>(Angle::kLeftElbowFlexion)].confidence, 1.0);
   EXPECT_DOUBLE_EQ(a[static_cast<int>(Angle::kThoraxFlexion)].confidence, 0.5);
   EXPECT_DOUBLE_EQ(a[static_cast<int>(Angle::kRightElevation)].confidence, 1.0);
+}
+
+TEST(JointAngles, ElbowFlexionSpreadFollowsTheLawOfCosines) {
+  const double a = 0.26, b = 0.23;
+  const auto reach = [&](double flexion_deg) {
+    return std::sqrt(a * a + b * b + 2 * a * b * std::cos(flexion_deg * kRad));
+  };
+  // Straight: segments 5 % too long bend to acos((d^2 - 1.05^2 (a^2 + b^2)) / (2 1.05^2 a b));
+  // 5 % too short cannot reach and stay straight.
+  const double longer = std::acos((reach(0) * reach(0) - 1.1025 * (a * a + b * b)) / (2 * 1.1025 * a * b));
+  EXPECT_NEAR(elbow_flexion_spread_rad(a, b, reach(0), 0.05), longer, 1e-12);
+  EXPECT_NEAR(longer / kRad, 35.6, 0.1);
+  // At 90 degrees the change is nearly linear: about 6 degrees either way.
+  EXPECT_NEAR(elbow_flexion_spread_rad(a, b, reach(90), 0.05) / kRad, 6.2, 0.1);
+  EXPECT_DOUBLE_EQ(elbow_flexion_spread_rad(a, b, reach(40), 0.0), 0.0);
+  // The sqrt-like growth near extension: 1 % already moves a straight arm by 16 degrees.
+  EXPECT_NEAR(elbow_flexion_spread_rad(a, b, reach(0), 0.01) / kRad, 16.2, 0.1);
+}
+
+TEST(JointAngles, ElbowFlexionNearFullExtensionIsNotConfident) {
+  Built straight = build(Eigen::Matrix3d::Identity(), 0, 0, 0, ArmPose{0, 30, 0, 3, 0, 0}, ArmPose{0, 30, 0, 3, 0, 0});
+  Built bent = build(Eigen::Matrix3d::Identity(), 0, 0, 0, ArmPose{0, 30, 0, 90, 0, 0}, ArmPose{0, 30, 0, 90, 0, 0});
+  const double straight_confidence =
+      joint_angles(straight.body)[static_cast<int>(Angle::kRightElbowFlexion)].confidence;
+  const double bent_confidence = joint_angles(bent.body)[static_cast<int>(Angle::kRightElbowFlexion)].confidence;
+  EXPECT_LT(straight_confidence, 0.01);
+  EXPECT_GT(bent_confidence, 0.3);
+  EXPECT_GT(bent_confidence, straight_confidence);
+  // Known arm lengths: both are as confident as their joints.
+  JointAngleOptions exact_lengths;
+  exact_lengths.arm_length_uncertainty = 0;
+  EXPECT_DOUBLE_EQ(joint_angles(straight.body, exact_lengths)[static_cast<int>(Angle::kLeftElbowFlexion)].confidence,
+                   1.0);
+  // The angle itself does not change, only what it claims.
+  EXPECT_DOUBLE_EQ(deg(joint_angles(bent.body, exact_lengths), Angle::kRightElbowFlexion),
+                   deg(joint_angles(bent.body), Angle::kRightElbowFlexion));
+  // The other arm angles keep the joints' confidence.
+  EXPECT_DOUBLE_EQ(joint_angles(straight.body)[static_cast<int>(Angle::kRightElevation)].confidence, 1.0);
+}
+
+TEST(JointAngles, AngleConfidenceIsHalfWhereThe99PercentBoundReaches15Degrees) {
+  EXPECT_DOUBLE_EQ(angle_confidence_from_rms_rad(0), 1.0);
+  EXPECT_NEAR(angle_confidence_from_rms_rad(15 * kRad / 2.576), 0.5, 1e-12);
+  EXPECT_DOUBLE_EQ(angle_confidence_from_rms_rad(std::nan("")), 0.0);
+  EXPECT_DOUBLE_EQ(angle_confidence_from_rms_rad(-1), 0.0);
 }
 
 TEST(JointAngles, BadInputNamesTheField) {
@@ -226,6 +275,11 @@ TEST(JointAngles, BadInputNamesTheField) {
   JointAngleOptions bad;
   bad.min_elevation_for_plane_deg = 0;
   EXPECT_EQ(field_of(b.body, bad), "joint_angle_options.min_elevation_for_plane_deg");
+  JointAngleOptions bad_lengths;
+  bad_lengths.arm_length_uncertainty = 0.5;
+  EXPECT_EQ(field_of(b.body, bad_lengths), "joint_angle_options.arm_length_uncertainty");
+  bad_lengths.arm_length_uncertainty = std::nan("");
+  EXPECT_EQ(field_of(b.body, bad_lengths), "joint_angle_options.arm_length_uncertainty");
 }
 
 TEST(JointAngles, NamesAreUniqueSnakeCase) {

@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <functional>
 #include <limits>
+#include <numbers>
 #include <random>
 #include <string>
 #include <vector>
@@ -525,6 +526,18 @@ TEST(DominantSeries, OutliersBelowFivePercentDoNotCount) {
   for (int i = 0; i < 6; ++i) many_glitches[i * 16] = 1000;  // 6 of 101: the 95th is 1000
   EXPECT_EQ(dominant_series({few_glitches, ramp}), 1);
   EXPECT_EQ(dominant_series({many_glitches, ramp}), 0);
+}
+
+TEST(DominantSeries, AnAngleDefinedInFewFramesDoesNotCompete) {
+  // Elevation swinging 10-150 deg in every frame; pronation defined in 9 of 600 frames, scattered
+  // over +-110 deg (a nearly straight elbow crossing the flexion bound for a moment).
+  std::vector<double> elevation, pronation(600, kNaN);
+  for (int i = 0; i < 600; ++i) elevation.push_back(80 - 70 * std::cos(2 * std::numbers::pi * i / 200));
+  for (int i = 0; i < 9; ++i) pronation[static_cast<std::size_t>(60 * i + 7)] = (i % 2 ? 110.0 : -110.0) + i;
+  EXPECT_EQ(dominant_series({pronation, elevation}), 1);
+  // Defined in half the frames it competes again, and its 220 deg spread wins.
+  for (std::size_t i = 0; i < 600; i += 2) pronation[i] = (i % 4 ? 110.0 : -110.0);
+  EXPECT_EQ(dominant_series({pronation, elevation}), 0);
 }
 
 TEST(DominantSeries, NoneWithoutTwoFiniteSamples) {

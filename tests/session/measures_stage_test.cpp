@@ -62,7 +62,10 @@ TEST(MeasuresStage, AnglesRepetitionsAndTheVertical) {
   const double period_s = 2.0;
   for (int f = 0; f < 30 * 9; ++f) stage.on_value(exercise_frame(f / 30.0, period_s, K_from_G), out);
   stage.finish(out);
-  EXPECT_TRUE(out.warnings.empty()) << out.warnings.front();
+  // The one warning: elbows at 20-100 deg with the default 5 % arm length uncertainty
+  // (ElbowFlexionConfidenceFollowsTheArmLengthUncertainty).
+  ASSERT_EQ(out.warnings.size(), 1u);
+  EXPECT_EQ(out.warnings[0].rfind("MEASURES_ELBOW_FLEXION_UNCERTAIN", 0), 0u) << out.warnings[0];
 
   int frames = 0;
   const v1::RepetitionSummary* summary = nullptr;
@@ -91,6 +94,35 @@ TEST(MeasuresStage, AnglesRepetitionsAndTheVertical) {
   EXPECT_EQ(summary->count(), 4u);  // 9 s of a 2 s period: four whole cycles and a partial one
   EXPECT_NEAR(summary->mean_range_deg(), 80, 0.5);
   EXPECT_NEAR(summary->mean_duration_s(), 2.0, 0.05);
+}
+
+TEST(MeasuresStage, ElbowFlexionConfidenceFollowsTheArmLengthUncertainty) {
+  const auto run = [](const char* uncertainty) {
+    MeasuresStage stage;
+    testing::CollectingOutput out;
+    v1::SessionHeader header;
+    if (uncertainty) (*header.mutable_options())["measures.arm_length_uncertainty"] = uncertainty;
+    stage.start(header, out);
+    ArmTrackStart start;
+    start.tracked = true;
+    start.K_from_W = geometry::Quat::FromTwoVectors(geometry::Vec3::UnitZ(), facing_camera() * geometry::Vec3::UnitY());
+    stage.on_value(start, out);
+    for (int f = 0; f < 60; ++f) stage.on_value(exercise_frame(f / 30.0, 2, facing_camera()), out);
+    stage.finish(out);
+    return out;
+  };
+  // The left elbow holds 30 deg: with 5 % its flexion spreads about 12 deg, not confident.
+  const testing::CollectingOutput uncertain = run(nullptr);
+  ASSERT_EQ(uncertain.warnings.size(), 1u);
+  EXPECT_NE(uncertain.warnings[0].find("elbow flexion values are below confidence 0.5"), std::string::npos);
+  EXPECT_LT(uncertain.results[0].joint_angles().angles(static_cast<int>(Angle::kLeftElbowFlexion)).confidence(), 0.5);
+  // Known arm lengths: no warning, the elbows as confident as their joints.
+  const testing::CollectingOutput exact = run("0");
+  EXPECT_TRUE(exact.warnings.empty()) << exact.warnings.front();
+  EXPECT_DOUBLE_EQ(exact.results[0].joint_angles().angles(static_cast<int>(Angle::kLeftElbowFlexion)).confidence(),
+                   1.0);
+  EXPECT_DOUBLE_EQ(exact.results[0].joint_angles().angles(static_cast<int>(Angle::kLeftElbowFlexion)).deg(),
+                   uncertain.results[0].joint_angles().angles(static_cast<int>(Angle::kLeftElbowFlexion)).deg());
 }
 
 TEST(MeasuresStage, WithoutKFromWTheVerticalIsAssumedAndSaid) {
@@ -178,6 +210,9 @@ TEST(MeasuresStage, BadOptionsNameTheOption) {
   EXPECT_EQ(field_of({{"measures.hysteresis_deg", "30"}}), "header.options[measures.min_amplitude_deg]");
   EXPECT_EQ(field_of({{"measures.min_repetition_s", "40"}}), "header.options[measures.max_repetition_s]");
   EXPECT_EQ(field_of({{"measures.min_elbow_flexion_deg", "90"}}), "header.options[measures.min_elbow_flexion_deg]");
+  EXPECT_EQ(field_of({{"measures.arm_length_uncertainty", "0.5"}}), "header.options[measures.arm_length_uncertainty]");
+  EXPECT_EQ(field_of({{"measures.arm_length_uncertainty", "-0.01"}}),
+            "header.options[measures.arm_length_uncertainty]");
 }
 
 }  // namespace

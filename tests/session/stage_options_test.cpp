@@ -54,7 +54,7 @@ TEST(StageOptions, EveryKeyIsDeclaredOnceUnderItsStagesPrefix) {
       }
     }
   }
-  EXPECT_EQ(keys.size(), 38u);
+  EXPECT_EQ(keys.size(), 39u);
 }
 
 TEST(StageOptions, DefaultsAreValidAndTheLibrariesOwn) {

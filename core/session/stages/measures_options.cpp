@@ -75,6 +75,13 @@ const OptionTable& measures_option_table() {
          .unit = "deg",
          .description =
              "below this elevation (or above 180 minus it) the plane of elevation is held (Y-X-Y gimbal lock)"},
+        {.key = kMeasuresArmLengthUncertaintyKey,
+         .type = OptionType::kReal,
+         .default_value = format_double(angles.arm_length_uncertainty),
+         .min = at_least(0),
+         .max = below(0.5),
+         .description = "relative RMS error of the fitted arm lengths; the elbow flexion's confidence carries the "
+                        "spread it gives near full extension"},
     };
   }();
   return table;
@@ -90,6 +97,7 @@ MeasuresOptions read_measures_options(const v1::SessionHeader& header) {
   out.repetitions.max_gap_s = options.real(kMeasuresMaxGapKey);
   out.angles.min_elbow_flexion_deg = options.real(kMeasuresMinElbowFlexionKey);
   out.angles.min_elevation_for_plane_deg = options.real(kMeasuresMinElevationKey);
+  out.angles.arm_length_uncertainty = options.real(kMeasuresArmLengthUncertaintyKey);
   for (int i = 0; i < measures::kAngleCount; ++i) {
     const auto angle = static_cast<measures::Angle>(i);
     if (options.choice_is(kMeasuresRepetitionAngleKey, measures::angle_name(angle))) out.repetition_angle = angle;

@@ -1,11 +1,13 @@
 #include "session/stages/measures_stage.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <string>
 
 #include "common/error.hpp"
 #include "fit/arm_roll.hpp"
 #include "session/stages/body_fit_options.hpp"
+#include "session/text_fields.hpp"
 
 namespace posefuse::session {
 namespace {
@@ -86,12 +88,35 @@ void MeasuresStage::add_frame(const FrameEstimate& frame, StageOutput& out) {
     return;
   }
   previous_ = angles.angles;
+  count_length_limited_elbows(body, angles.angles);
 
   series_.add(static_cast<double>(frame.t_us) * 1e-6, angles.angles);  // the merge sends frames in time order
   out.hand_on(std::move(angles));
 }
 
+void MeasuresStage::count_length_limited_elbows(const measures::PosedUpperBody& body,
+                                                const measures::JointAngles& angles) {
+  for (const bool left : {true, false}) {
+    const int shoulder = left ? 16 : 17, elbow = left ? 18 : 19, wrist = left ? 20 : 21;  // SMPL order
+    const auto& c = body.joint_confidence;
+    const double joints = std::min({c[shoulder], c[elbow], c[wrist]});
+    const auto angle = left ? measures::Angle::kLeftElbowFlexion : measures::Angle::kRightElbowFlexion;
+    ++elbows_;
+    if (joints >= measures::kConfidentAt && angles[static_cast<int>(angle)].confidence < measures::kConfidentAt)
+      ++length_limited_elbows_;
+  }
+}
+
 void MeasuresStage::finish(StageOutput& out) {
+  if (length_limited_elbows_ > 0) {
+    out.warn("MEASURES_ELBOW_FLEXION_UNCERTAIN", "joint_angles.elbow_flexion",
+             std::to_string(length_limited_elbows_) + " of " + std::to_string(elbows_) +
+                 " elbow flexion values are below confidence 0.5 though their joints are tracked: with arm lengths "
+                 "uncertain by " +
+                 format_double(100 * options_.angles.arm_length_uncertainty) +
+                 " % (measures.arm_length_uncertainty) a fit near full extension bends by tens of degrees "
+                 "(docs/measures.md, \"Elbow flexion near full extension\")");
+  }
   if (skipped_frames_ > 0) {
     out.warn("MEASURES_FRAME_SKIPPED", "joint_angles",
              std::to_string(skipped_frames_) + " fitted frames have no joint angles; the first at " + first_skip_);

@@ -36,6 +36,7 @@ class MeasuresStage : public Stage {
   std::size_t held_bytes() const override { return series_.held_bytes(); }
 
  private:
+  void count_length_limited_elbows(const measures::PosedUpperBody& body, const measures::JointAngles& angles);
   void add_frame(const FrameEstimate& frame, StageOutput& out);
 
   MeasuresOptions options_;
@@ -44,6 +45,9 @@ class MeasuresStage : public Stage {
   bool fit_enabled_ = false;
   std::size_t skipped_frames_ = 0;  // fitted frames whose joints gave no segment frames
   std::string first_skip_;
+  // Elbow flexion values (two per frame) whose joints are confident but whose arm lengths are
+  // not (measures.arm_length_uncertainty), and all elbow flexion values.
+  std::size_t length_limited_elbows_ = 0, elbows_ = 0;
   std::optional<measures::JointAngles> previous_;
   measures::AngleSeries series_;
 };
