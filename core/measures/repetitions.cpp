@@ -296,16 +296,16 @@ int dominant_series(const std::vector<std::vector<double>>& angle_series_deg) {
   // flexion bound for a moment, its plane then ill-conditioned) describes no exercise, however far
   // those values scatter: only series defined in at least half as many frames as the most
   // defined one compete.
+  std::vector<std::vector<double>> finite_series;
   std::size_t most_defined = 0;
   for (const std::vector<double>& series : angle_series_deg) {
-    const auto defined = static_cast<std::size_t>(
-        std::count_if(series.begin(), series.end(), [](double v) { return std::isfinite(v); }));
-    most_defined = std::max(most_defined, defined);
+    finite_series.push_back(sorted_finite(series));
+    most_defined = std::max(most_defined, finite_series.back().size());
   }
   int best = -1;
   double best_spread = 0.0;
-  for (std::size_t s = 0; s < angle_series_deg.size(); ++s) {
-    const std::vector<double> finite = sorted_finite(angle_series_deg[s]);
+  for (std::size_t s = 0; s < finite_series.size(); ++s) {
+    const std::vector<double>& finite = finite_series[s];
     if (finite.size() < 2 || 2 * finite.size() < most_defined) continue;
     // Percentiles rather than max - min, so that a few outliers (a tracking glitch) cannot make a
     // still joint look like the one that moves.

@@ -15,12 +15,18 @@ namespace {
 // Half confidence for the thorax angles while the vertical is the camera's y, not measured.
 constexpr double kAssumedVerticalConfidence = 0.5;
 
+// An arm's SMPL joints.
+struct ArmJoints {
+  int shoulder, elbow, wrist;
+};
+ArmJoints arm_joints(bool left) { return left ? ArmJoints{16, 18, 20} : ArmJoints{17, 19, 21}; }
+
 std::optional<measures::PronationInput> pronation_of(const FrameEstimate& frame, v1::Arm arm, double min_flexion_deg) {
   const bool left = arm == v1::LEFT;
   for (const ForearmEstimate& forearm : frame.forearms) {
     if (forearm.arm != arm || forearm.source == v1::SOURCE_UNSPECIFIED) continue;
     const auto& J = frame.smpl_joints;
-    const int shoulder = left ? 16 : 17, elbow = left ? 18 : 19, wrist = left ? 20 : 21;  // SMPL order
+    const auto [shoulder, elbow, wrist] = arm_joints(left);
     const geometry::Vec3 thumb_K =
         forearm.K_from_F * fit::thumb_axis_F(left ? fit::ArmSide::kLeft : fit::ArmSide::kRight);
     const std::optional<double> rad =
@@ -97,9 +103,9 @@ void MeasuresStage::add_frame(const FrameEstimate& frame, StageOutput& out) {
 void MeasuresStage::count_length_limited_elbows(const measures::PosedUpperBody& body,
                                                 const measures::JointAngles& angles) {
   for (const bool left : {true, false}) {
-    const int shoulder = left ? 16 : 17, elbow = left ? 18 : 19, wrist = left ? 20 : 21;  // SMPL order
+    const ArmJoints j = arm_joints(left);
     const auto& c = body.joint_confidence;
-    const double joints = std::min({c[shoulder], c[elbow], c[wrist]});
+    const double joints = std::min({c[j.shoulder], c[j.elbow], c[j.wrist]});
     const auto angle = left ? measures::Angle::kLeftElbowFlexion : measures::Angle::kRightElbowFlexion;
     ++elbows_;
     if (joints >= measures::kConfidentAt && angles[static_cast<int>(angle)].confidence < measures::kConfidentAt)
