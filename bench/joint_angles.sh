@@ -28,6 +28,7 @@ cleanup() {
   [ -n "${KEEP:-}" ] || rm -rf "$work"
 }
 trap cleanup EXIT
+: >"$work/server.log"  # before the background job's redirection, which the polling can outrun
 "$build/server/posefuse-server" --listen 127.0.0.1:0 >"$work/server.log" 2>&1 &
 server_pid=$!
 for _ in $(seq 100); do

@@ -39,6 +39,9 @@ if [ "$mode" = token ]; then
   token_args=(--token "$token")
 fi
 
+# The log exists before the server starts: the redirection happens in the background job, which
+# the polling below can otherwise outrun (sed then fails on a missing file).
+: >"$run/server.log"
 "$server" "${server_args[@]}" 2>"$run/server.log" &
 server_pid=$!
 stop_server() {
