@@ -16,7 +16,9 @@
 // wipe.bvh and box-1.bvh, retargeted by sim::bvh_motion; their first second is overridden by the
 // controlled pose]. Options: --no-fine-shape (rough shape only, fit.fine_shape = false),
 // --exercises=a,b (a subset of the six), --max-seconds=S (each exercise cut after S seconds, for
-// full-rate runs), --lambda-imu=X (the imu term's weight, fit.lambda_imu).
+// full-rate runs), --lambda-imu=X (the imu term's weight, fit.lambda_imu), --seed-base=K (K > 0:
+// other subjects, renders and IMU errors than the default K = 0, e.g. reporting seeds apart from
+// tuning ones), --subjects=N (each exercise N times, seed bases K to K + N - 1).
 // Environment: FIT_SKELETON_START_ENERGY sets the stage's fit.skeleton_start_energy (II-G start
 // policy; 0 = both starts on two threads); FIG4_STATS_CSV=path writes the per-frame phase times;
 // FIG4_OPTIONS="key=value,..." sets further stage options (fit.freeze_contour_after, fit.start_velocity_gain).
@@ -30,6 +32,7 @@
 #include <numbers>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -102,6 +105,9 @@ struct Table {
   Sums camera_occ, fit_occ, fit_no_imu_occ;
   std::vector<double> frame_s;                    // calling thread's CPU time per skeleton chunk (the first measure)
   std::vector<session::BodyFitFrameStats> stats;  // the stage's per-frame phases (all threads)
+  // Relative arm length errors (fitted / true - 1; upper arm, forearm, whole arm; left, right): the fitted shape where
+  // the personalisation ran, the template where it was refused, the template where it ran.
+  std::vector<double> segments_personalised, segments_refused, segments_template_where_personalised;
   double elevation_fit = 0, elevation_camera = 0;
   int elevation_n = 0;
   int frames = 0, occluded = 0;
@@ -297,6 +303,8 @@ int main(int argc, char** argv) {
   std::vector<std::string> exercises = {"arm_raising",  "shoulder_lift", "forearm_rolling",
                                         "hair_combing", "torso_tilt",    "air_punching"};
   double max_seconds = 1e9;
+  std::uint64_t seed_base = 0;
+  int subjects = 1;
   for (int a = 1; a < argc; ++a) {
     const std::string arg = argv[a];
     if (arg == "--no-fine-shape") {
@@ -311,6 +319,10 @@ int main(int argc, char** argv) {
       }
     } else if (arg.rfind("--lambda-imu=", 0) == 0) {
       g_lambda_imu = arg.substr(13);
+    } else if (arg.rfind("--subjects=", 0) == 0) {
+      subjects = std::max(1, std::atoi(arg.c_str() + 11));
+    } else if (arg.rfind("--seed-base=", 0) == 0) {
+      seed_base = std::strtoull(arg.c_str() + 12, nullptr, 10);
     } else if (arg.rfind("--max-seconds=", 0) == 0) {
       max_seconds = std::atof(arg.c_str() + 14);
     } else {
@@ -347,11 +359,23 @@ int main(int argc, char** argv) {
   bool overlay_written = false;
   const std::vector<std::string> all_exercises = {"arm_raising", "shoulder_lift", "forearm_rolling", "hair_combing",
                                                   "torso_tilt",  "air_punching",  "mocap wipe",      "mocap box-1"};
+  // Each exercise once per subject: the seed base picks the subject, render and IMU errors.
+  const size_t distinct = exercises.size();
+  std::vector<std::uint64_t> seed_bases(distinct, seed_base);
+  for (int k = 1; k < subjects; ++k)
+    for (size_t e = 0; e < distinct; ++e) {
+      const std::string name = exercises[e];
+      const sim::BodyMotion motion = motions[e];
+      exercises.push_back(name);
+      motions.push_back(motion);
+      seed_bases.push_back(seed_base + static_cast<std::uint64_t>(k));
+    }
   for (size_t e = 0; e < exercises.size(); ++e) {
     const sim::BodyMotion& motion = motions[e];
     // Seeds by the exercise's place in the full list, so that a subset sees the same sessions.
     const size_t seed_index = static_cast<size_t>(std::find(all_exercises.begin(), all_exercises.end(), exercises[e]) -
-                                                  all_exercises.begin());
+                                                  all_exercises.begin()) +
+                              1000 * seed_bases[e];
     Eigen::VectorXd controlled = motion.poses(0.0);
     controlled[left_z] = -45 * kDeg;
     controlled[right_z] = 45 * kDeg;
@@ -442,6 +466,32 @@ int main(int argc, char** argv) {
     std::printf(" (%s); upper-limb rest joints off by %.1f mm (template shape %.1f mm)\n",
                 shape.estimated() ? "personalised" : "template", rest_error_mm(fitted_beta),
                 rest_error_mm(Eigen::VectorXd::Zero(model->num_betas())));
+    // The arm segments' lengths (shoulder-elbow, elbow-wrist; left, then right) against the
+    // subject's: the error measures.arm_length_uncertainty stands for (docs/measures.md).
+    const auto segment_errors = [&](const Eigen::VectorXd& beta) {
+      const Eigen::Matrix3Xd a = fit::rest_joints(*model, beta), t = fit::rest_joints(*model, options.betas);
+      std::vector<double> out;
+      // A segment runs from kind `from` to kind `to` (0 shoulder, 1 elbow, 2 wrist): upper arm,
+      // forearm, then the whole arm (shoulder-wrist, which a straight arm shows).
+      for (int side = 0; side < 2; ++side)
+        for (const auto& [from_kind, to_kind] : {std::pair{0, 1}, std::pair{1, 2}, std::pair{0, 2}}) {
+          const int from = kSmplJoints[from_kind][side], to = kSmplJoints[to_kind][side];
+          out.push_back((a.col(to) - a.col(from)).norm() / (t.col(to) - t.col(from)).norm() - 1);
+        }
+      return out;
+    };
+    const std::vector<double> fitted_segments = segment_errors(fitted_beta);
+    const std::vector<double> template_segments = segment_errors(Eigen::VectorXd::Zero(model->num_betas()));
+    std::printf("%-17s arm lengths (upper, fore, whole; left, right) fitted", exercises[e].c_str());
+    for (double r : fitted_segments) std::printf(" %+.1f %%", 100 * r);
+    std::printf(", template");
+    for (double r : template_segments) std::printf(" %+.1f %%", 100 * r);
+    std::printf("\n");
+    std::vector<double>& fitted_list = shape.estimated() ? total.segments_personalised : total.segments_refused;
+    fitted_list.insert(fitted_list.end(), fitted_segments.begin(), fitted_segments.end());
+    if (shape.estimated())
+      total.segments_template_where_personalised.insert(total.segments_template_where_personalised.end(),
+                                                        template_segments.begin(), template_segments.end());
     total.stats.insert(total.stats.end(), table.stats.begin(), table.stats.end());
     std::printf("%-17s frames %3d (occluded %3d)  camera %5.1f mm  fit %5.1f mm  fit w/o imu %5.1f mm\n",
                 exercises[e].c_str(), table.frames, table.occluded, 1e3 * table.camera.mean_all(),
@@ -467,6 +517,29 @@ int main(int argc, char** argv) {
   if (total.elevation_n > 0) {
     std::printf("shoulder_lift: shoulder elevation error fit %.1f deg, camera skeleton %.1f deg (%d shoulder-frames)\n",
                 total.elevation_fit / total.elevation_n, total.elevation_camera / total.elevation_n, total.elevation_n);
+  }
+  // RMS and largest magnitude in per cent of the segments (whole = false: upper arms and forearms)
+  // or the whole arms.
+  const auto rms_and_max = [](const std::vector<double>& v, bool whole) {
+    double sum = 0, largest = 0;
+    int n = 0;
+    for (size_t k = 0; k < v.size(); ++k) {
+      if ((k % 3 == 2) != whole) continue;
+      sum += v[k] * v[k];
+      largest = std::max(largest, std::abs(v[k]));
+      ++n;
+    }
+    return std::pair<double, double>{n ? 100 * std::sqrt(sum / n) : NAN, n ? 100 * largest : NAN};
+  };
+  for (const bool whole : {false, true}) {
+    const auto [personalised_rms, personalised_max] = rms_and_max(total.segments_personalised, whole);
+    const auto [template_rms, template_max] = rms_and_max(total.segments_template_where_personalised, whole);
+    const auto [refused_rms, refused_max] = rms_and_max(total.segments_refused, whole);
+    std::printf(
+        "%s lengths (RMS / max): personalised in %zu sessions %.1f %% / %.1f %%, the template shape in the same "
+        "sessions %.1f %% / %.1f %%; template where refused (%zu sessions) %.1f %% / %.1f %%\n",
+        whole ? "whole arm" : "upper arm and forearm", total.segments_personalised.size() / 6, personalised_rms,
+        personalised_max, template_rms, template_max, total.segments_refused.size() / 6, refused_rms, refused_max);
   }
   std::printf(
       "time per frame (thread CPU of the calling thread per skeleton chunk): median %.1f ms, p95 %.1f ms (%zu "

@@ -86,8 +86,8 @@ struct JointAngleOptions {
   // an arm 1 % too long must bend about 16 degrees (law of cosines), one too short stays
   // straight. The flexion's confidence carries the spread this error gives
   // (elbow_flexion_spread_rad). 0.05: the template's, whose arm lies between the sexes' mean
-  // humerus lengths (27.7 and 30.5 cm, 10 % apart); a personalised shape is not credited with
-  // less until that is measured (docs/measures.md, "Elbow flexion near full extension").
+  // humerus lengths (27.7 and 30.5 cm, 10 % apart); a personalised shape's segments measured no
+  // better, 5.0 % RMS (docs/measures.md, "Elbow flexion near full extension").
   double arm_length_uncertainty = 0.05;
 };
 
