@@ -2,7 +2,7 @@
 // simulated with the project's IMU error model (core/sim/imu_synth.hpp): error against strength.
 //
 //   bench_imu_disturbances [--mode robust|robust-offline] [--seeds FIRST-LAST] [--rate HZ]
-//                          [--gyro-scale-sigma S]
+//                          [--gyro-scale-sigma S] [--family NAME]
 //
 // Every case is a 150 s recording at the rate (default BROAD's 285.7 Hz): 5 s of rest, then
 // varied rotation about all axes with a small translation, from one motion seed. The sensor is
@@ -17,6 +17,8 @@
 //   vibration           40 Hz acceleration of S m/s^2 amplitude on the accelerometer
 //   tapping             taps of S m/s^2 (10 ms half-sine) twice a second on the accelerometer
 //   bias step           the gyro bias steps by S deg/s in the middle of a 10 s break at 70 s
+//   sensor warm-up      the sensor warms by S kelvin from its first sample (time constant 60 s), its
+//                       biases with it at the error model's spread per kelvin (sim::SensorWarmUp)
 // Printed per row: mean over seeds of the total RMSE (deg, over the whole recording after the
 // first 5 s, breaks included), its worst seed, and the largest single-sample error. The ground truth is the
 // simulator's.
@@ -58,6 +60,7 @@ struct Case {
   std::function<Vec3(double)> extra_acc_m_s2;  // added to the accelerometer (sensor frame)
   double bias_step_t_s = -1.0;                 // < 0: none
   Vec3 bias_step_rad_s = Vec3::Zero();
+  sim::SensorWarmUp warm_up;
 };
 
 // 0 at rest, 1 in motion, raised-cosine ramps of 0.5 s so that rates and accelerations stay
@@ -133,6 +136,7 @@ Score run_case(const Case& c, unsigned seed, bool offline, double rate_hz, doubl
   options.error_model.soft_iron_diagonal_sigma = 0.01;
   options.error_model.soft_iron_off_diagonal_sigma = 0.005;
   options.disturbances = c.disturbances;
+  options.warm_up = c.warm_up;
   options.seed = seed;
   const std::vector<double> t = sim::uniform_times(0.0, kDurationS, rate_hz);
   sim::ImuSynthResult imu = sim::synthesize_imu(kinematics, t, options);
@@ -260,6 +264,15 @@ std::vector<Family> families() {
          c.bias_step_rad_s = s * kDeg * seeded_direction(seed, 4);
          return c;
        }},
+      {"sensor warm-up",
+       "K",
+       {0, 5, 10, 20},
+       [](double s, unsigned) {
+         Case c;
+         c.warm_up.rise_K = s;
+         c.warm_up.time_constant_s = 60;
+         return c;
+       }},
   };
 }
 
@@ -268,6 +281,7 @@ int run(int argc, char** argv) {
   unsigned first_seed = 1, last_seed = 4;
   double rate_hz = 2000.0 / 7.0;
   double gyro_scale_sigma = sim::ImuErrorModel().gyr_scale_sigma;
+  std::string only_family;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     if (arg == "--mode" && i + 1 < argc) {
@@ -287,17 +301,27 @@ int run(int argc, char** argv) {
       gyro_scale_sigma = std::atof(argv[++i]);
       if (!(gyro_scale_sigma >= 0.0 && gyro_scale_sigma <= 0.1))
         throw posefuse::Error(posefuse::ErrorCode::kInvalidArgument, "--gyro-scale-sigma", "must be 0..0.1");
+    } else if (arg == "--family" && i + 1 < argc) {
+      only_family = argv[++i];
     } else {
       std::fprintf(stderr,
                    "usage: bench_imu_disturbances [--mode robust|robust-offline] [--seeds FIRST-LAST] [--rate HZ] "
-                   "[--gyro-scale-sigma S]\n");
+                   "[--gyro-scale-sigma S] [--family NAME]\n");
       return 2;
     }
   }
   std::printf("robust filter %s, seeds %u-%u, %.1f Hz, %.0f s per case, gyro scale error sigma %.3g\n",
               offline ? "offline" : "causal", first_seed, last_seed, rate_hz, kDurationS, gyro_scale_sigma);
+  std::vector<Family> chosen;
+  std::string names;
+  for (Family& family : families()) {
+    names += std::string(names.empty() ? "" : ", ") + family.name;
+    if (only_family.empty() || only_family == family.name) chosen.push_back(std::move(family));
+  }
+  if (chosen.empty())
+    throw posefuse::Error(posefuse::ErrorCode::kInvalidArgument, "--family", "must be one of " + names);
   std::printf("%-18s %10s %10s %10s %10s\n", "family", "strength", "RMSE mean", "RMSE worst", "max error");
-  for (const Family& family : families()) {
+  for (const Family& family : chosen) {
     for (double strength : family.strengths) {
       double sum = 0.0, worst = 0.0, max_err = 0.0;
       for (unsigned seed = first_seed; seed <= last_seed; ++seed) {

@@ -46,11 +46,14 @@ void check_model(const ImuErrorModel& m) {
   require_non_negative(m.hard_iron_sigma_uT, "error_model.hard_iron_sigma_uT");
   require_non_negative(m.soft_iron_diagonal_sigma, "error_model.soft_iron_diagonal_sigma");
   require_non_negative(m.soft_iron_off_diagonal_sigma, "error_model.soft_iron_off_diagonal_sigma");
+  require_non_negative(m.gyr_bias_per_kelvin_sigma_rad_s, "error_model.gyr_bias_per_kelvin_sigma_rad_s");
+  require_non_negative(m.acc_bias_per_kelvin_sigma_m_s2, "error_model.acc_bias_per_kelvin_sigma_m_s2");
 }
 
 void check_errors(const ImuErrors& e) {
   if (!e.gyr_bias_rad_s.allFinite() || !e.gyr_scale_misalignment.allFinite() || !e.acc_bias_m_s2.allFinite() ||
-      !e.acc_scale_misalignment.allFinite() || !e.hard_iron_uT.allFinite() || !e.soft_iron.allFinite()) {
+      !e.acc_scale_misalignment.allFinite() || !e.hard_iron_uT.allFinite() || !e.soft_iron.allFinite() ||
+      !e.gyr_bias_per_kelvin_rad_s.allFinite() || !e.acc_bias_per_kelvin_m_s2.allFinite()) {
     throw_invalid("errors", "non-finite value in the IMU errors");
   }
   if (!e.soft_iron.isApprox(e.soft_iron.transpose(), 1e-12)) {
@@ -80,6 +83,11 @@ Vec3 disturbance_field(const std::vector<MagDisturbance>& events, double t_s, co
 
 Vec3 EarthField::m_W_uT() const { return {horizontal_uT, 0.0, -horizontal_uT * std::tan(dip_rad)}; }
 
+double SensorWarmUp::rise_at(double seconds_since_first_sample) const {
+  if (rise_K == 0.0) return 0.0;
+  return rise_K * -std::expm1(-std::max(0.0, seconds_since_first_sample) / time_constant_s);
+}
+
 ImuErrorModel ImuErrorModel::none() {
   ImuErrorModel m;
   m.gyr_noise_density_rad_s_sqrt_hz = 0;
@@ -94,6 +102,8 @@ ImuErrorModel ImuErrorModel::none() {
   m.hard_iron_sigma_uT = 0;
   m.soft_iron_diagonal_sigma = 0;
   m.soft_iron_off_diagonal_sigma = 0;
+  m.gyr_bias_per_kelvin_sigma_rad_s = 0;
+  m.acc_bias_per_kelvin_sigma_m_s2 = 0;
   return m;
 }
 
@@ -116,6 +126,10 @@ ImuErrors draw_imu_errors(const ImuErrorModel& model, std::uint64_t seed) {
     }
   }
   e.soft_iron = soft;
+  // Their own stream, so that the errors above are those of the same seed without them.
+  SimRng temperature(seed, "imu_temperature");
+  e.gyr_bias_per_kelvin_rad_s = normal_vec(temperature, model.gyr_bias_per_kelvin_sigma_rad_s);
+  e.acc_bias_per_kelvin_m_s2 = normal_vec(temperature, model.acc_bias_per_kelvin_sigma_m_s2);
   // A draw far in the tail could make S singular; the defaults make that astronomically rare,
   // but large user sigmas must not produce a meaningless magnetometer silently.
   check_errors(e);
@@ -145,6 +159,8 @@ ImuSynthResult synthesize_imu(const SensorKinematics& motion, const std::vector<
     throw_invalid("options.gyr_range_rad_s", "is " + std::to_string(options.gyr_range_rad_s) + ", must be > 0");
   if (!(options.acc_range_m_s2 > 0))
     throw_invalid("options.acc_range_m_s2", "is " + std::to_string(options.acc_range_m_s2) + ", must be > 0");
+  require_non_negative(options.warm_up.rise_K, "options.warm_up.rise_K");
+  require_positive(options.warm_up.time_constant_s, "options.warm_up.time_constant_s");
   for (std::size_t i = 0; i < options.disturbances.size(); ++i) {
     const MagDisturbance& d = options.disturbances[i];
     const std::string field = "options.disturbances[" + std::to_string(i) + "]";
@@ -182,18 +198,21 @@ ImuSynthResult synthesize_imu(const SensorKinematics& motion, const std::vector<
     }
     Vec3 hard_iron_jump_A;
     const Vec3 disturbance_A = disturbance_field(options.disturbances, t_s[k], A_from_W, hard_iron_jump_A);
+    const double warming_K = options.warm_up.rise_at(t_s[k] - t_s.front());
+    const Vec3 gyr_bias_now = gyr_bias + warming_K * e.gyr_bias_per_kelvin_rad_s;
 
     imu::ImuSample s;
     s.t_us = std::llround(t_s[k] * 1e6);
-    s.gyr_rad_s = saturated(e.gyr_scale_misalignment * m.omega_A_rad_s + gyr_bias + normal_vec(noise, gyr_sigma),
+    s.gyr_rad_s = saturated(e.gyr_scale_misalignment * m.omega_A_rad_s + gyr_bias_now + normal_vec(noise, gyr_sigma),
                             options.gyr_range_rad_s);
     const Vec3 f_A = A_from_W * (m.a_W_m_s2 + gravity_up_W);
-    s.acc_m_s2 = saturated(e.acc_scale_misalignment * f_A + e.acc_bias_m_s2 + normal_vec(noise, acc_sigma),
+    s.acc_m_s2 = saturated(e.acc_scale_misalignment * f_A + e.acc_bias_m_s2 + warming_K * e.acc_bias_per_kelvin_m_s2 +
+                               normal_vec(noise, acc_sigma),
                            options.acc_range_m_s2);
     const Vec3 m_A = A_from_W * m_W + disturbance_A;
     s.mag_uT = e.soft_iron * m_A + e.hard_iron_uT + hard_iron_jump_A + normal_vec(noise, model.mag_noise_uT);
     out.samples.push_back(s);
-    out.gyr_bias_rad_s.push_back(gyr_bias);
+    out.gyr_bias_rad_s.push_back(gyr_bias_now);
     out.W_from_A.push_back(m.W_from_A);
   }
   return out;

@@ -6,10 +6,11 @@
 //   specific force   f_A = A_from_W * (a_W + g z_W)     (reads +g up at rest)
 //   magnetic field   m_A = A_from_W * m_W,  m_W = (H, 0, -H tan(dip))  (W: x magnetic north, z up)
 // Measured signals (the error model below, all frames A):
-//   gyr = M_g omega_A + b_g(t) + n_g
-//   acc = M_a f_A + b_a + n_a
+//   gyr = M_g omega_A + b_g(t) + c_g dT(t) + n_g
+//   acc = M_a f_A + b_a + c_a dT(t) + n_a
 //   mag = S (m_A + A_from_W d_W(t)) + h + h_jump(t) + n_m
-// with M scale and misalignment matrices, b biases (the gyro's drifts as a random walk),
+// with M scale and misalignment matrices, b biases (the gyro's drifts as a random walk), c the
+// biases' change per kelvin and dT the sensor's warming since the first sample (SensorWarmUp),
 // S soft iron (symmetric), h hard iron, d_W transient external fields and h_jump hard-iron
 // steps (a magnet attached to the strap) from MagDisturbance events, n white noise.
 // The inverse of the magnetometer part is paper 1 eq. 3 with S = H diag(alpha, beta, gamma) H^T.
@@ -50,6 +51,14 @@ struct ImuErrorModel {
   double hard_iron_sigma_uT = 10.0;                 // per axis
   double soft_iron_diagonal_sigma = 0.05;           // S = I + E, E symmetric: diagonal
   double soft_iron_off_diagonal_sigma = 0.02;       // and off-diagonal entries
+  // The biases' change per kelvin of the sensor's temperature, per axis (only a warming sensor,
+  // SensorWarmUp, shows it). Gyro: 0.03 deg/s/K, the ITG-3200 class's figure; the MPU-6050 class
+  // allows +-20 deg/s over -40..85 C, about 0.16 deg/s/K (InvenSense's product specifications as
+  // quoted on its developer forum, "Am I interpreting 6150/9150 gyro bias specs correctly?").
+  // Accelerometer: 0.8 mg/K, the ICM-20948's zero-g level change over temperature (datasheet
+  // DS-000189 rev. 1.3, table 2).
+  double gyr_bias_per_kelvin_sigma_rad_s = 0.03 * static_cast<double>(EIGEN_PI) / 180.0;
+  double acc_bias_per_kelvin_sigma_m_s2 = 0.8e-3 * 9.80665;
 
   // All terms zero: ideal signals.
   static ImuErrorModel none();
@@ -63,6 +72,8 @@ struct ImuErrors {
   Mat3 acc_scale_misalignment = Mat3::Identity();
   Vec3 hard_iron_uT = Vec3::Zero();
   Mat3 soft_iron = Mat3::Identity();  // symmetric positive definite
+  Vec3 gyr_bias_per_kelvin_rad_s = Vec3::Zero();
+  Vec3 acc_bias_per_kelvin_m_s2 = Vec3::Zero();
 };
 
 // Draws the static errors: M = diag(1 + s) + N (N off-diagonal only), S = I + E symmetric.
@@ -81,6 +92,17 @@ struct MagDisturbance {
   Vec3 field_uT = Vec3::Zero();
 };
 
+// A sensor warming up after it is switched on and strapped to the skin: its temperature rises by
+// rise_K * (1 - exp(-t / time_constant_s)) over the t seconds since the first sample. Ours: a wrist's
+// skin is about 32-34 C against a room's 20-25 C, so a strap-on part warms by up to ~10 K, over
+// minutes for a small housing. Off (0) by default: a device worn for a while before the session
+// is at its temperature, and a minute of a 5-minute warm-up moves the gyro bias by ~0.05 deg/s.
+struct SensorWarmUp {
+  double rise_K = 0.0;             // >= 0
+  double time_constant_s = 300.0;  // > 0
+  double rise_at(double seconds_since_first_sample) const;
+};
+
 // A datasheet's g, in which accelerometer ranges are given.
 constexpr double kStandardGravity_m_s2 = 9.80665;
 
@@ -97,13 +119,14 @@ struct ImuSynthOptions {
   // The static errors; drawn from error_model with the seed when not given.
   std::optional<ImuErrors> errors;
   std::vector<MagDisturbance> disturbances;
+  SensorWarmUp warm_up;
   std::uint64_t seed = 1;
 };
 
 struct ImuSynthResult {
   std::vector<imu::ImuSample> samples;  // t_us = round(t_s * 1e6): the camera clock
   ImuErrors errors;                     // what was applied
-  std::vector<Vec3> gyr_bias_rad_s;     // true gyro bias at each sample (drift included)
+  std::vector<Vec3> gyr_bias_rad_s;     // true gyro bias at each sample (drift and warm-up included)
   std::vector<Quat> W_from_A;           // true orientation at each sample
 };
 

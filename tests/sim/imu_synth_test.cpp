@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <cstdio>
+#include <limits>
+#include <string>
 
 #include "common/error.hpp"
 #include "session/imu_batch.hpp"
@@ -202,6 +204,56 @@ TEST(ImuSynth, GyroBiasAndScaleAsReported) {
   EXPECT_FALSE(r.errors.gyr_scale_misalignment.isIdentity());
 }
 
+TEST(ImuSynth, AWarmingSensorsBiasesMoveByTheirChangePerKelvin) {
+  ImuSynthOptions o = ideal_options();
+  ImuErrors e;
+  e.gyr_bias_per_kelvin_rad_s = Vec3(1e-3, -2e-3, 0.5e-3);
+  e.acc_bias_per_kelvin_m_s2 = Vec3(0.01, 0.0, -0.02);
+  o.errors = e;
+  o.warm_up.rise_K = 10.0;
+  o.warm_up.time_constant_s = 5.0;
+  o.gyr_range_rad_s = o.acc_range_m_s2 = std::numeric_limits<double>::infinity();
+  const SensorKinematics motion = complex_motion(10.2);
+  const std::vector<double> t = uniform_times(0.05, 10.05, 80);
+  const ImuSynthResult warm = synthesize_imu(motion, t, o);
+  o.warm_up.rise_K = 0.0;
+  const ImuSynthResult cold = synthesize_imu(motion, t, o);
+  ASSERT_EQ(warm.samples.size(), t.size());
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    const double rise_K = 10.0 * (1.0 - std::exp(-(t[k] - t.front()) / 5.0));
+    EXPECT_LT((warm.samples[k].gyr_rad_s - cold.samples[k].gyr_rad_s - rise_K * e.gyr_bias_per_kelvin_rad_s).norm(),
+              1e-12);
+    EXPECT_LT((warm.samples[k].acc_m_s2 - cold.samples[k].acc_m_s2 - rise_K * e.acc_bias_per_kelvin_m_s2).norm(),
+              1e-12);
+    EXPECT_LT((warm.gyr_bias_rad_s[k] - rise_K * e.gyr_bias_per_kelvin_rad_s).norm(), 1e-15);
+    EXPECT_EQ(warm.samples[k].mag_uT, cold.samples[k].mag_uT);
+  }
+  // 8.6 K after two time constants.
+  EXPECT_NEAR(warm.gyr_bias_rad_s.back().y(), -2e-3 * 10.0 * (1.0 - std::exp(-2.0)), 1e-12);
+}
+
+TEST(ImuSynth, TheChangePerKelvinIsDrawnApartFromTheOtherErrors) {
+  // The same seed gives the same turn-on biases, scales and irons with or without the
+  // temperature terms, and those are drawn at the datasheet spread (0.03 deg/s/K, 0.8 mg/K).
+  ImuErrorModel without;
+  without.gyr_bias_per_kelvin_sigma_rad_s = without.acc_bias_per_kelvin_sigma_m_s2 = 0.0;
+  double gyr_sum_sq = 0, acc_sum_sq = 0;
+  constexpr int kSeeds = 300;
+  for (int seed = 1; seed <= kSeeds; ++seed) {
+    const ImuErrors with_terms = draw_imu_errors(ImuErrorModel(), static_cast<std::uint64_t>(seed));
+    const ImuErrors plain = draw_imu_errors(without, static_cast<std::uint64_t>(seed));
+    EXPECT_EQ(with_terms.gyr_bias_rad_s, plain.gyr_bias_rad_s);
+    EXPECT_EQ(with_terms.acc_scale_misalignment, plain.acc_scale_misalignment);
+    EXPECT_EQ(with_terms.soft_iron, plain.soft_iron);
+    EXPECT_EQ(plain.gyr_bias_per_kelvin_rad_s, Vec3::Zero());
+    gyr_sum_sq += with_terms.gyr_bias_per_kelvin_rad_s.squaredNorm();
+    acc_sum_sq += with_terms.acc_bias_per_kelvin_m_s2.squaredNorm();
+  }
+  // 900 draws each: the RMS is within 10 % of sigma (its relative std is ~2.4 %).
+  EXPECT_NEAR(std::sqrt(gyr_sum_sq / (3 * kSeeds)), 0.03 * kDeg, 0.003 * kDeg);
+  EXPECT_NEAR(std::sqrt(acc_sum_sq / (3 * kSeeds)), 0.8e-3 * 9.80665, 0.08e-3 * 9.80665);
+}
+
 TEST(ImuSynth, SameSeedSameOutputDifferentSeedDifferent) {
   const SensorKinematics motion = complex_motion(2.0);
   const std::vector<double> t = uniform_times(0.05, 1.9, 80);
@@ -268,6 +320,23 @@ TEST(ImuSynth, RejectsBadInput) {
   o = ImuSynthOptions();
   o.disturbances.push_back({MagDisturbance::Kind::kTransient, 1.0, 0.0, Vec3(1, 0, 0)});
   EXPECT_THROW(synthesize_imu(motion, {0.5}, o), Error);
+  const auto field_of = [&](const ImuSynthOptions& bad) {
+    try {
+      synthesize_imu(motion, {0.5}, bad);
+    } catch (const Error& error) {
+      return error.field();
+    }
+    return std::string("no error");
+  };
+  o = ImuSynthOptions();
+  o.warm_up.rise_K = -1;
+  EXPECT_EQ(field_of(o), "options.warm_up.rise_K");
+  o = ImuSynthOptions();
+  o.warm_up.time_constant_s = 0;
+  EXPECT_EQ(field_of(o), "options.warm_up.time_constant_s");
+  o = ImuSynthOptions();
+  o.error_model.gyr_bias_per_kelvin_sigma_rad_s = std::nan("");
+  EXPECT_EQ(field_of(o), "error_model.gyr_bias_per_kelvin_sigma_rad_s");
 }
 
 TEST(SensorKinematics, RejectsBadTrajectories) {

@@ -58,6 +58,8 @@ TEST(SimOptionsFile, AppliesEveryKindOfValue) {
       "bvh_max_glitch_frames = 30\n"
       "bvh_max_joint_rate_rad_s = 80\n"
       "acc_range_g = 8\n"
+      "imu_warm_up_K = 8\n"
+      "imu_warm_up_time_constant_s = 120\n"
       "threads = 3\n",
       "opts.txt", options);
   EXPECT_EQ(options.seed, 42u);
@@ -90,6 +92,8 @@ TEST(SimOptionsFile, AppliesEveryKindOfValue) {
   EXPECT_DOUBLE_EQ(options.buzzer.tone_hz, 3400.0);
   EXPECT_DOUBLE_EQ(options.imu.synth.gyr_range_rad_s, 1000 * 3.14159265358979323846 / 180);
   EXPECT_DOUBLE_EQ(options.imu.synth.acc_range_m_s2, 8 * 9.80665);
+  EXPECT_DOUBLE_EQ(options.imu.synth.warm_up.rise_K, 8.0);
+  EXPECT_DOUBLE_EQ(options.imu.synth.warm_up.time_constant_s, 120.0);
   EXPECT_FALSE(options.duration_from_motion);
   EXPECT_EQ(options.motion_options.bvh_smoothing, sim::BvhSmoothing::kNoiseLevel);
   EXPECT_EQ(options.motion_options.bvh_glitches.max_glitch_frames, 30);
@@ -139,6 +143,10 @@ TEST(SimOptionsFile, ErrorsNameFileLineKeyAndValue) {
       {"duration_s = clips\n", "opts.txt:1:duration_s", "value 'clips' is not a finite number"},
       {"gyro_range_dps = 100\n", "opts.txt:1:gyro_range_dps", "value '100' must be in 125..4000"},
       {"acc_range_g = 64\n", "opts.txt:1:acc_range_g", "value '64' must be in 2..32"},
+      {"imu_warm_up_K = 30\n", "opts.txt:1:imu_warm_up_K", "value '30' must be in 0..20"},
+      {"imu_warm_up_K = -1\n", "opts.txt:1:imu_warm_up_K", "value '-1'"},
+      {"imu_warm_up_time_constant_s = 0.5\n", "opts.txt:1:imu_warm_up_time_constant_s",
+       "value '0.5' must be in 1..3600"},
       {"bvh_max_glitch_frames = 0\n", "opts.txt:1:bvh_max_glitch_frames", "value '0' must be in 1..600"},
       {"bvh_max_joint_rate_rad_s = 5\n", "opts.txt:1:bvh_max_joint_rate_rad_s", "value '5' must be in 10..1000"},
       {"bvh_smoothing = median\n", "opts.txt:1:bvh_smoothing", "value 'median' must be gaussian or noise_level"},

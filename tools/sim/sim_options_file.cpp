@@ -268,6 +268,18 @@ const std::map<std::string, Setter>& setters() {
                          if (g < 2 || g > 32) bad(f, v, "must be in 2..32");
                          o.imu.synth.acc_range_m_s2 = g * sim::kStandardGravity_m_s2;
                        }}},
+      {"imu_warm_up_K", {"each IMU warms by this many K from its first sample (0..20; 0: none), its biases with it",
+                         [](Options& o, const std::string& v, const std::string& f) {
+                           const double kelvin = non_negative(v, f);
+                           if (kelvin > 20) bad(f, v, "must be in 0..20");
+                           o.imu.synth.warm_up.rise_K = kelvin;
+                         }}},
+      {"imu_warm_up_time_constant_s", {"time constant of the IMUs' warm-up, s (1..3600; 300)",
+                                       [](Options& o, const std::string& v, const std::string& f) {
+                                         const double seconds = number(v, f);
+                                         if (seconds < 1 || seconds > 3600) bad(f, v, "must be in 1..3600");
+                                         o.imu.synth.warm_up.time_constant_s = seconds;
+                                       }}},
       {"imu_errors", {"IMU error model on (true) or ideal signals (false)",
                       [](Options& o, const std::string& v, const std::string& f) {
                         o.imu.synth.error_model = boolean(v, f) ? sim::ImuErrorModel() : sim::ImuErrorModel::none();
