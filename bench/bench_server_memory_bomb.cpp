@@ -175,7 +175,9 @@ int run(int argc, char** argv) {
         std::string status_text;
         for (const auto& [code, count] : codes)
           status_text += (status_text.empty() ? "" : ", ") + std::to_string(count) + " x " +
-                         (code == "8" ? "RESOURCE_EXHAUSTED" : code == "3" ? "INVALID_ARGUMENT" : code);
+                         (code == "8"   ? "RESOURCE_EXHAUSTED"
+                          : code == "3" ? "INVALID_ARGUMENT"
+                                        : code);
         const double above_mib = peak_mib - idle_mib;
         std::printf("| %ux%u | %d | %d | %s | %.1f | %.1f | %.2f | %.2f | %.2f |\n", size.width, size.height, frames, n,
                     status_text.c_str(), above_mib, above_mib / n, above_mib / n / budget_mib,
