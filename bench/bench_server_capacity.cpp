@@ -27,7 +27,9 @@
 //  - frames behind: depth frames written minus FrameResults received, when half the session has
 //    been sent and when the last chunk has been sent (the largest over the N sessions); the
 //    backlog grows when the second exceeds the first by more than one second of frames;
-//  - RSS: the server's VmRSS, mean from 30 % to 90 % of the session, above idle, per session.
+//  - RSS: the server's VmRSS, mean from 30 % to 90 % of the session, above idle, per session;
+//    and per added session: the growth over the first row's, per session more than it ran (what
+//    one more session costs once the server's own growth, stacks and arenas, is paid).
 // The largest N with p95 latency <= 200 ms and no growing backlog is printed last.
 //
 // Offline: one session unpaced (written as fast as the server reads it; the same pipeline a
@@ -42,6 +44,7 @@
 #include <cstdlib>
 #include <map>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 #include <vector>
@@ -352,15 +355,24 @@ int main(int argc, char** argv) {
   std::printf("Paced in real time, N sessions at once (fresh server per row)\n");
   std::printf(
       "| sessions | server CPU s per session-s | first result s | held frames | live frames | latency p50 ms | p95 ms "
-      "| max ms | frames without result | frames behind at half / end | RSS per session MiB | holds |\n");
-  std::printf("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
+      "| max ms | frames without result | frames behind at half / end | RSS per session MiB | RSS per added session "
+      "MiB | holds |\n");
+  std::printf("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|\n");
   int largest = 0;
+  std::optional<Row> first_row;
   try {
     for (std::size_t r = 0; r < concurrency.size(); ++r) {
       const Row row = run_row(servers[r], session, concurrency[r]);
-      std::printf("| %d | %.3f | %.2f | %d | %d | %.1f | %.1f | %.1f | %d | %d / %d | %.1f | %s |\n", row.sessions,
+      if (!first_row) first_row = row;
+      const int added = row.sessions - first_row->sessions;
+      char added_mib[32] = "-";
+      if (added > 0)
+        std::snprintf(
+            added_mib, sizeof added_mib, "%.1f",
+            (row.rss_per_session_mib * row.sessions - first_row->rss_per_session_mib * first_row->sessions) / added);
+      std::printf("| %d | %.3f | %.2f | %d | %d | %.1f | %.1f | %.1f | %d | %d / %d | %.1f | %s | %s |\n", row.sessions,
                   row.cpu_per_session_s, row.first_result_s, row.held, row.frames, row.p50_ms, row.p95_ms, row.max_ms,
-                  row.without_result, row.behind_half, row.behind_end, row.rss_per_session_mib,
+                  row.without_result, row.behind_half, row.behind_end, row.rss_per_session_mib, added_mib,
                   row.holds ? "yes" : "no");
       std::fflush(stdout);
       if (row.holds) largest = std::max(largest, row.sessions);
