@@ -2,7 +2,7 @@
 // simulated with the project's IMU error model (core/sim/imu_synth.hpp): error against strength.
 //
 //   bench_imu_disturbances [--mode robust|robust-offline] [--seeds FIRST-LAST] [--rate HZ]
-//                          [--gyro-scale-sigma S] [--family NAME]
+//                          [--gyro-scale-sigma S] [--gyro-per-kelvin-sigma DEG_S_K] [--family NAME]
 //
 // Every case is a 150 s recording at the rate (default BROAD's 285.7 Hz): 5 s of rest, then
 // varied rotation about all axes with a small translation, from one motion seed. The sensor is
@@ -126,12 +126,14 @@ struct Score {
   double max_deg = 0.0;
 };
 
-Score run_case(const Case& c, unsigned seed, bool offline, double rate_hz, double gyro_scale_sigma) {
+Score run_case(const Case& c, unsigned seed, bool offline, double rate_hz, double gyro_scale_sigma,
+               double gyro_per_kelvin_sigma_rad_s) {
   const MotionShape shape = motion_shape(seed);
   const sim::SensorKinematics kinematics(trajectory(c, shape));
   sim::ImuSynthOptions options;
   options.nominal_rate_hz = rate_hz;
   options.error_model.gyr_scale_sigma = gyro_scale_sigma;
+  options.error_model.gyr_bias_per_kelvin_sigma_rad_s = gyro_per_kelvin_sigma_rad_s;
   options.error_model.hard_iron_sigma_uT = 1.0;  // calibrated beforehand, up to a residual
   options.error_model.soft_iron_diagonal_sigma = 0.01;
   options.error_model.soft_iron_off_diagonal_sigma = 0.005;
@@ -281,6 +283,7 @@ int run(int argc, char** argv) {
   unsigned first_seed = 1, last_seed = 4;
   double rate_hz = 2000.0 / 7.0;
   double gyro_scale_sigma = sim::ImuErrorModel().gyr_scale_sigma;
+  double gyro_per_kelvin_sigma_rad_s = sim::ImuErrorModel().gyr_bias_per_kelvin_sigma_rad_s;
   std::string only_family;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -301,17 +304,24 @@ int run(int argc, char** argv) {
       gyro_scale_sigma = std::atof(argv[++i]);
       if (!(gyro_scale_sigma >= 0.0 && gyro_scale_sigma <= 0.1))
         throw posefuse::Error(posefuse::ErrorCode::kInvalidArgument, "--gyro-scale-sigma", "must be 0..0.1");
+    } else if (arg == "--gyro-per-kelvin-sigma" && i + 1 < argc) {
+      const double deg_s_k = std::atof(argv[++i]);
+      if (!(deg_s_k >= 0.0 && deg_s_k <= 1.0))
+        throw posefuse::Error(posefuse::ErrorCode::kInvalidArgument, "--gyro-per-kelvin-sigma", "must be 0..1 deg/s/K");
+      gyro_per_kelvin_sigma_rad_s = deg_s_k * kDeg;
     } else if (arg == "--family" && i + 1 < argc) {
       only_family = argv[++i];
     } else {
       std::fprintf(stderr,
                    "usage: bench_imu_disturbances [--mode robust|robust-offline] [--seeds FIRST-LAST] [--rate HZ] "
-                   "[--gyro-scale-sigma S] [--family NAME]\n");
+                   "[--gyro-scale-sigma S] [--gyro-per-kelvin-sigma DEG_S_K] [--family NAME]\n");
       return 2;
     }
   }
   std::printf("robust filter %s, seeds %u-%u, %.1f Hz, %.0f s per case, gyro scale error sigma %.3g\n",
               offline ? "offline" : "causal", first_seed, last_seed, rate_hz, kDurationS, gyro_scale_sigma);
+  if (gyro_per_kelvin_sigma_rad_s != sim::ImuErrorModel().gyr_bias_per_kelvin_sigma_rad_s)
+    std::printf("gyro bias change per kelvin sigma %.3g deg/s/K\n", gyro_per_kelvin_sigma_rad_s / kDeg);
   std::vector<Family> chosen;
   std::string names;
   for (Family& family : families()) {
@@ -325,7 +335,8 @@ int run(int argc, char** argv) {
     for (double strength : family.strengths) {
       double sum = 0.0, worst = 0.0, max_err = 0.0;
       for (unsigned seed = first_seed; seed <= last_seed; ++seed) {
-        const Score s = run_case(family.make(strength, seed), seed, offline, rate_hz, gyro_scale_sigma);
+        const Score s = run_case(family.make(strength, seed), seed, offline, rate_hz, gyro_scale_sigma,
+                                 gyro_per_kelvin_sigma_rad_s);
         sum += s.rmse_deg;
         worst = std::max(worst, s.rmse_deg);
         max_err = std::max(max_err, s.max_deg);
