@@ -4,7 +4,7 @@
 # over the sessions (all frames, and the frames the result gives confidence >= 0.5), and per
 # session the repetitions counted against the truth's and the range of motion error per
 # repetition.
-#   bench/joint_angles.sh [BUILD_DIR] [MOTION:SEED:SPEED ...]
+#   bench/joint_angles.sh [BUILD_DIR] [MOTION:SEED:SPEED ...]     MOTION: an exercise's name or a .bvh clip
 # KEEP=DIR keeps each session's recording, results and gt/ under DIR (e.g. for posefuse report).
 # Default sessions: the scripted exercises at seeds 71 and 72 and speeds 0.9 and 1.15, both arms,
 # three repetitions, a subject unlike the template (female, betas 1.5,-1,0.5, clothing on), body
@@ -39,9 +39,15 @@ done
 [ -n "$port" ] || { echo "server did not start: $(cat "$work/server.log")" >&2; exit 1; }
 for spec in "${specs[@]}"; do
   IFS=: read -r motion seed speed <<<"$spec"
-  name="$motion-$seed-$speed"
-  printf 'motion = %s\nspeed = %s\narm = both\nrepetitions = 3\nsex = female\nbetas = 1.5,-1,0.5\nclothing = true\n' \
-    "$motion" "$speed" >"$work/$name.options"
+  subject='sex = female\nbetas = 1.5,-1,0.5\nclothing = true\n'
+  if [[ "$motion" == *.bvh ]]; then  # a whole mocap clip, the same subject
+    name="$(basename "$motion" .bvh)-$seed-$speed"
+    printf "motion = bvh\nbvh_path = %s\nspeed = %s\narm = both\nduration_s = clip\n$subject" \
+      "$motion" "$speed" >"$work/$name.options"
+  else
+    name="$motion-$seed-$speed"
+    printf "motion = %s\nspeed = %s\narm = both\nrepetitions = 3\n$subject" "$motion" "$speed" >"$work/$name.options"
+  fi
   "$build/tools/sim/posefuse-sim" --options "$work/$name.options" --seed "$seed" --duration clip --quiet \
     --chunk-file "$work/$name.pfchunks" --gt "$work/$name.gt" >/dev/null
   "$build/client/posefuse" fit "$work/$name.pfchunks" --server "127.0.0.1:$port" --out "$work/$name.out" \
@@ -55,6 +61,8 @@ pooled = {}  # angle -> [sum n*rms^2, n, max]
 sessions = []
 for spec in specs:
     motion, seed, speed = spec.split(":")
+    if motion.endswith(".bvh"):
+        motion = motion.rsplit("/", 1)[-1][: -len(".bvh")]
     name = f"{motion}-{seed}-{speed}"
     text = open(f"{work}/{name}.score").read()
     section = text.split("ISB joint angle error (deg)\n", 1)[1].split("\n\n", 1)[0] if "ISB joint" in text else ""
