@@ -129,6 +129,15 @@ void arm_angles(const PosedUpperBody& body, const Thorax& thorax, bool left, con
   // plane need only y_h (R's middle column); the axial rotation needs the humerus' plane.
   const Eigen::Vector3d y_in_T = thorax.K_from_T.transpose() * y_h;
   const double elevation = std::acos(std::clamp(y_in_T.y(), -1.0, 1.0));
+  // A joint position error e turns a segment of length l by about e / l; an angle about an axis
+  // that a second direction makes with it by that over the sine of their angle
+  // (JointAngleOptions::joint_position_uncertainty_m).
+  const auto plane_spread_rad = [&](double segment_m, double angle_rad) {
+    const double s = std::sin(angle_rad);
+    return s > 0 ? options.joint_position_uncertainty_m / (segment_m * s) : std::numbers::pi;
+  };
+  const double plane_confidence =
+      std::min(humerus_confidence, angle_confidence_from_rms_rad(plane_spread_rad(upper.norm(), elevation)));
   out[static_cast<int>(id.elevation)] = defined_value(elevation, humerus_confidence);
   const double plane = std::atan2(-y_in_T.x(), -y_in_T.z());
   const double lock = options.min_elevation_for_plane_deg / kDegPerRad;
@@ -136,7 +145,7 @@ void arm_angles(const PosedUpperBody& body, const Thorax& thorax, bool left, con
 
   AngleValue& plane_out = out[static_cast<int>(id.plane)];
   if (!plane_locked) {
-    plane_out = defined_value(plane, humerus_confidence);
+    plane_out = defined_value(plane, plane_confidence);
   } else {
     const AngleValue* last = previous ? &(*previous)[static_cast<int>(id.plane)] : nullptr;
     plane_out = AngleValue{last && last->defined ? last->deg : 0.0, true, true, 0.0, AngleSource::kBodyModel};
@@ -159,7 +168,8 @@ void arm_angles(const PosedUpperBody& body, const Thorax& thorax, bool left, con
       axial = elevation < lock ? plane + axial - held : axial - plane + held;
       axial = std::remainder(axial, 2.0 * std::numbers::pi);
     }
-    axial_out = defined_value(axial, std::min(humerus_confidence, c[wrist]));
+    axial_out = defined_value(axial, std::min({humerus_confidence, c[wrist],
+                                               angle_confidence_from_rms_rad(plane_spread_rad(fore.norm(), flexion))}));
   }
 
   const auto& pronation = left ? body.left_pronation : body.right_pronation;
@@ -226,6 +236,8 @@ JointAngles joint_angles(const PosedUpperBody& body, const JointAngleOptions& op
     throw_invalid("joint_angle_options.min_elevation_for_plane_deg", "must be in (0, 90)");
   if (!(options.arm_length_uncertainty >= 0 && options.arm_length_uncertainty < 0.5))
     throw_invalid("joint_angle_options.arm_length_uncertainty", "must be in [0, 0.5)");
+  if (!(options.joint_position_uncertainty_m >= 0 && options.joint_position_uncertainty_m <= 0.2))
+    throw_invalid("joint_angle_options.joint_position_uncertainty_m", "must be in [0, 0.2]");
 
   JointAngles out{};
   const Thorax thorax = thorax_frame(body);

@@ -89,6 +89,13 @@ struct JointAngleOptions {
   // humerus lengths (27.7 and 30.5 cm, 10 % apart); a personalised shape's segments measured no
   // better, 5.0 % RMS (docs/measures.md, "Elbow flexion near full extension").
   double arm_length_uncertainty = 0.05;
+  // RMS error of a fitted joint's position, m. An angle read from a segment's direction turns by
+  // about this over the segment's length, and one read from a plane of two segments by that over
+  // the sine of their angle: the humerus' axial rotation (the upper arm and forearm's plane)
+  // near a straight elbow, the plane of elevation near the gimbal lock. Their confidence carries
+  // that spread. 0.02: the body fit's mean error on the arm joints at 30 Hz (20.5 mm,
+  // docs/benchmarks.md, "Paper 2, Fig. 4"), not chosen on the sessions the angles are reported on.
+  double joint_position_uncertainty_m = 0.02;
 };
 
 // The global frame G of the thorax angles (and of the OpenSim exports' ground): y along up_K,

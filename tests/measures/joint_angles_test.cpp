@@ -60,8 +60,9 @@ TEST(JointAngles, EveryAngleReadBackOnConstructedSkeletons) {
         PronationInput{*pronation_rad(J.col(16), J.col(18), J.col(20), b.left_thumb_K, true, 15), 1};
     b.body.right_pronation =
         PronationInput{*pronation_rad(J.col(17), J.col(19), J.col(21), b.right_thumb_K, false, 15), 1};
-    JointAngleOptions exact_lengths;  // the skeleton's own segments: every angle as confident as its joints
+    JointAngleOptions exact_lengths;  // the skeleton's own exact joints: every angle as confident as they are
     exact_lengths.arm_length_uncertainty = 0;
+    exact_lengths.joint_position_uncertainty_m = 0;
     const JointAngles a = joint_angles(b.body, exact_lengths);
     SCOPED_TRACE(trial);
     EXPECT_NEAR(deg(a, Angle::kThoraxFlexion), flexion, 1e-6);
@@ -240,6 +241,32 @@ TEST(JointAngles, ElbowFlexionNearFullExtensionIsNotConfident) {
   EXPECT_DOUBLE_EQ(joint_angles(straight.body)[static_cast<int>(Angle::kRightElevation)].confidence, 1.0);
 }
 
+TEST(JointAngles, AxialRotationNearAStraightElbowAndThePlaneNearItsLockAreNotConfident) {
+  // 2 cm of joint error over a 25 cm forearm turns the arm's plane by 4.6 degrees / sin(flexion):
+  // 13 degrees at 20 degrees of flexion, 4.6 at 90; the plane of elevation likewise with the
+  // elevation.
+  Built low = build(Eigen::Matrix3d::Identity(), 0, 0, 0, ArmPose{30, 20, 10, 20, 0, 0}, ArmPose{30, 20, 10, 20, 0, 0});
+  Built high =
+      build(Eigen::Matrix3d::Identity(), 0, 0, 0, ArmPose{30, 90, 10, 90, 0, 0}, ArmPose{30, 90, 10, 90, 0, 0});
+  const JointAngles a_low = joint_angles(low.body), a_high = joint_angles(high.body);
+  const auto confidence = [](const JointAngles& a, Angle angle) { return a[static_cast<int>(angle)].confidence; };
+  EXPECT_LT(confidence(a_low, Angle::kRightHumerusAxialRotation), 0.5);
+  EXPECT_GT(confidence(a_high, Angle::kRightHumerusAxialRotation), 0.5);
+  EXPECT_LT(confidence(a_low, Angle::kRightPlaneOfElevation), 0.5);
+  EXPECT_GT(confidence(a_high, Angle::kRightPlaneOfElevation), 0.5);
+  EXPECT_LT(confidence(a_low, Angle::kLeftHumerusAxialRotation), 0.5);
+  // The elevation itself keeps its joints' confidence; the values do not change, only what they
+  // claim; exact joints claim their own confidence.
+  EXPECT_DOUBLE_EQ(confidence(a_low, Angle::kRightElevation), 1.0);
+  JointAngleOptions exact_joints;
+  exact_joints.joint_position_uncertainty_m = 0;
+  const JointAngles exact = joint_angles(low.body, exact_joints);
+  EXPECT_DOUBLE_EQ(confidence(exact, Angle::kRightHumerusAxialRotation), 1.0);
+  EXPECT_DOUBLE_EQ(confidence(exact, Angle::kRightPlaneOfElevation), 1.0);
+  EXPECT_DOUBLE_EQ(deg(exact, Angle::kRightHumerusAxialRotation), deg(a_low, Angle::kRightHumerusAxialRotation));
+  EXPECT_DOUBLE_EQ(deg(exact, Angle::kRightPlaneOfElevation), deg(a_low, Angle::kRightPlaneOfElevation));
+}
+
 TEST(JointAngles, AngleConfidenceIsHalfWhereThe99PercentBoundReaches15Degrees) {
   EXPECT_DOUBLE_EQ(angle_confidence_from_rms_rad(0), 1.0);
   EXPECT_NEAR(angle_confidence_from_rms_rad(15 * kRad / 2.576), 0.5, 1e-12);
@@ -280,6 +307,11 @@ TEST(JointAngles, BadInputNamesTheField) {
   EXPECT_EQ(field_of(b.body, bad_lengths), "joint_angle_options.arm_length_uncertainty");
   bad_lengths.arm_length_uncertainty = std::nan("");
   EXPECT_EQ(field_of(b.body, bad_lengths), "joint_angle_options.arm_length_uncertainty");
+  JointAngleOptions bad_positions;
+  bad_positions.joint_position_uncertainty_m = -0.01;
+  EXPECT_EQ(field_of(b.body, bad_positions), "joint_angle_options.joint_position_uncertainty_m");
+  bad_positions.joint_position_uncertainty_m = std::nan("");
+  EXPECT_EQ(field_of(b.body, bad_positions), "joint_angle_options.joint_position_uncertainty_m");
 }
 
 TEST(JointAngles, NamesAreUniqueSnakeCase) {

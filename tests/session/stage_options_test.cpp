@@ -54,7 +54,7 @@ TEST(StageOptions, EveryKeyIsDeclaredOnceUnderItsStagesPrefix) {
       }
     }
   }
-  EXPECT_EQ(keys.size(), 39u);
+  EXPECT_EQ(keys.size(), 40u);
 }
 
 TEST(StageOptions, DefaultsAreValidAndTheLibrariesOwn) {

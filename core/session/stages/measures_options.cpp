@@ -82,6 +82,15 @@ const OptionTable& measures_option_table() {
          .max = below(0.5),
          .description = "relative RMS error of the fitted arm lengths; the elbow flexion's confidence carries the "
                         "spread it gives near full extension"},
+        {.key = kMeasuresJointPositionUncertaintyKey,
+         .type = OptionType::kReal,
+         .default_value = format_double(angles.joint_position_uncertainty_m),
+         .min = at_least(0),
+         .max = at_most(0.2),
+         .unit = "m",
+         .description =
+             "RMS error of a fitted joint's position; the confidence of the humerus' axial rotation near a "
+             "straight elbow and of the plane of elevation near its gimbal lock carries the spread it gives"},
     };
   }();
   return table;
@@ -98,6 +107,7 @@ MeasuresOptions read_measures_options(const v1::SessionHeader& header) {
   out.angles.min_elbow_flexion_deg = options.real(kMeasuresMinElbowFlexionKey);
   out.angles.min_elevation_for_plane_deg = options.real(kMeasuresMinElevationKey);
   out.angles.arm_length_uncertainty = options.real(kMeasuresArmLengthUncertaintyKey);
+  out.angles.joint_position_uncertainty_m = options.real(kMeasuresJointPositionUncertaintyKey);
   for (int i = 0; i < measures::kAngleCount; ++i) {
     const auto angle = static_cast<measures::Angle>(i);
     if (options.choice_is(kMeasuresRepetitionAngleKey, measures::angle_name(angle))) out.repetition_angle = angle;

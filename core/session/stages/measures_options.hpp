@@ -18,6 +18,7 @@ inline constexpr const char* kMeasuresMaxGapKey = "measures.max_gap_s";
 inline constexpr const char* kMeasuresMinElbowFlexionKey = "measures.min_elbow_flexion_deg";
 inline constexpr const char* kMeasuresMinElevationKey = "measures.min_elevation_for_plane_deg";
 inline constexpr const char* kMeasuresArmLengthUncertaintyKey = "measures.arm_length_uncertainty";
+inline constexpr const char* kMeasuresJointPositionUncertaintyKey = "measures.joint_position_uncertainty_m";
 
 struct MeasuresOptions {
   measures::JointAngleOptions angles;
