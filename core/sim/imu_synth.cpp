@@ -84,7 +84,6 @@ Vec3 disturbance_field(const std::vector<MagDisturbance>& events, double t_s, co
 Vec3 EarthField::m_W_uT() const { return {horizontal_uT, 0.0, -horizontal_uT * std::tan(dip_rad)}; }
 
 double SensorWarmUp::rise_at(double seconds_since_first_sample) const {
-  if (rise_K == 0.0) return 0.0;
   return rise_K * -std::expm1(-std::max(0.0, seconds_since_first_sample) / time_constant_s);
 }
 
