@@ -336,7 +336,8 @@ void score_joint_angles(const session::ResultDirectory& result, const session::R
     }
     const session::AngleRow& want = truth.joint_angles[*f];
     for (std::size_t a = 0; a < count; ++a) {
-      // Truth with confidence 0 is a held plane of elevation (gimbal lock): not a value to score.
+      // Truth with confidence 0 is a value of the gimbal lock (the held plane of elevation, the axial
+      // rotation that depends on it): not a value to score.
       if (!want.deg[a] || want.confidence[a] <= 0.0) continue;
       if (!row.deg[a]) {
         ++undefined[a];

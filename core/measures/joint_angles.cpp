@@ -168,8 +168,15 @@ void arm_angles(const PosedUpperBody& body, const Thorax& thorax, bool left, con
       axial = elevation < lock ? plane + axial - held : axial - plane + held;
       axial = std::remainder(axial, 2.0 * std::numbers::pi);
     }
-    axial_out = defined_value(axial, std::min({humerus_confidence, c[wrist],
-                                               angle_confidence_from_rms_rad(plane_spread_rad(fore.norm(), flexion))}));
+    // Near the lock the plane of elevation and the axial rotation trade off (only their sum is
+    // well conditioned): tilting the humerus moves the plane by the tilt over sin(elevation) and
+    // the axial rotation by cos(elevation) times that. In the lock the value depends on which
+    // plane was held, i.e. on the session's history, not on this pose: it claims nothing.
+    const double tilt_spread = plane_spread_rad(upper.norm(), elevation) * std::abs(std::cos(elevation));
+    const double axial_spread = std::hypot(plane_spread_rad(fore.norm(), flexion), tilt_spread);
+    const double axial_confidence =
+        plane_locked ? 0.0 : std::min({humerus_confidence, c[wrist], angle_confidence_from_rms_rad(axial_spread)});
+    axial_out = defined_value(axial, axial_confidence);
   }
 
   const auto& pronation = left ? body.left_pronation : body.right_pronation;

@@ -11,9 +11,11 @@ AngleTruth angle_truth(const SimTruth& truth, const measures::JointAngleOptions&
   measures::AngleSeries series;
   const Vec3 up_K = truth.K_from_W * Vec3::UnitZ();  // W is z up
   const measures::JointAngles* previous = nullptr;
-  // The truth's arm segments are the subject's own: its elbow flexion is exact.
-  measures::JointAngleOptions exact_lengths = angle_options;
-  exact_lengths.arm_length_uncertainty = 0.0;
+  // The truth's joints and arm segments are the subject's own: its angles are exact (confidence
+  // 1) except where the geometry defines none (confidence 0: the gimbal lock's held values).
+  measures::JointAngleOptions exact_joints = angle_options;
+  exact_joints.arm_length_uncertainty = 0.0;
+  exact_joints.joint_position_uncertainty_m = 0.0;
   out.frames.reserve(truth.frames.size());
   for (const SimFrameTruth& frame : truth.frames) {
     measures::PosedUpperBody body;
@@ -31,7 +33,7 @@ AngleTruth angle_truth(const SimTruth& truth, const measures::JointAngleOptions&
           J.col(left ? body::kLeftWrist : body::kRightWrist), thumb_K, left, angle_options.min_elbow_flexion_deg);
       if (rad) (left ? body.left_pronation : body.right_pronation) = measures::PronationInput{*rad, 1.0};
     }
-    out.frames.push_back(measures::joint_angles(body, exact_lengths, previous));
+    out.frames.push_back(measures::joint_angles(body, exact_joints, previous));
     previous = &out.frames.back();
     series.add(static_cast<double>(frame.t_us) * 1e-6, out.frames.back());
   }

@@ -169,6 +169,8 @@ TEST(JointAngles, GimbalLockHoldsThePlaneAndKeepsTheTurnAboutVertical) {
   EXPECT_DOUBLE_EQ(plane.deg, 40);
   EXPECT_DOUBLE_EQ(plane.confidence, 0);
   EXPECT_NEAR(deg(a, Angle::kRightHumerusAxialRotation), 15, 1e-6);  // 15 + 40 - 40
+  // That value depends on the plane held from an earlier frame, not on this pose: it claims nothing.
+  EXPECT_DOUBLE_EQ(a[static_cast<int>(Angle::kRightHumerusAxialRotation)].confidence, 0);
   EXPECT_NEAR(deg(a, Angle::kRightElevation), 5, 1e-6);
   // Without a previous frame the plane is held at 0.
   const JointAngles first = joint_angles(locked.body);
@@ -255,6 +257,11 @@ TEST(JointAngles, AxialRotationNearAStraightElbowAndThePlaneNearItsLockAreNotCon
   EXPECT_LT(confidence(a_low, Angle::kRightPlaneOfElevation), 0.5);
   EXPECT_GT(confidence(a_high, Angle::kRightPlaneOfElevation), 0.5);
   EXPECT_LT(confidence(a_low, Angle::kLeftHumerusAxialRotation), 0.5);
+  // Near the gimbal lock the axial rotation trades off against the plane of elevation: with the
+  // elbow at 90 degrees it is confident with the arm horizontal, not at 25 degrees of elevation.
+  Built near_lock =
+      build(Eigen::Matrix3d::Identity(), 0, 0, 0, ArmPose{30, 25, 10, 90, 0, 0}, ArmPose{30, 25, 10, 90, 0, 0});
+  EXPECT_LT(confidence(joint_angles(near_lock.body), Angle::kRightHumerusAxialRotation), 0.5);
   // The elevation itself keeps its joints' confidence; the values do not change, only what they
   // claim; exact joints claim their own confidence.
   EXPECT_DOUBLE_EQ(confidence(a_low, Angle::kRightElevation), 1.0);
