@@ -9,7 +9,16 @@
 #include "body/body_evaluator.hpp"
 #include "body/template_generator.hpp"
 
-#if !defined(__SANITIZE_ADDRESS__)
+// GCC says so with __SANITIZE_ADDRESS__, clang 14 only through __has_feature.
+#if defined(__SANITIZE_ADDRESS__)
+#define POSEFUSE_UNDER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define POSEFUSE_UNDER_ASAN 1
+#endif
+#endif
+
+#if !defined(POSEFUSE_UNDER_ASAN)
 extern "C" void* __libc_malloc(size_t size);
 namespace {
 long g_malloc_calls = 0;
@@ -24,7 +33,7 @@ namespace posefuse::body {
 namespace {
 
 TEST(BodyEvaluator, EvaluateDoesNotAllocateAfterTheFirstCall) {
-#if defined(__SANITIZE_ADDRESS__)
+#if defined(POSEFUSE_UNDER_ASAN)
   GTEST_SKIP() << "malloc is owned by AddressSanitizer";
 #else
   const auto model = make_template(Sex::kMale);

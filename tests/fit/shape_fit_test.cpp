@@ -6,7 +6,6 @@
 #include <gtest/gtest.h>
 
 #include <cstdio>
-#include <numbers>
 #include <random>
 #include <utility>
 #include <vector>
@@ -24,7 +23,6 @@ namespace posefuse::fit {
 namespace {
 
 constexpr double kStep = 1e-6;
-constexpr double kDeg = std::numbers::pi / 180;
 
 // A posed template evaluated with pose and shape derivatives, and a probe for finite differences
 // in beta.

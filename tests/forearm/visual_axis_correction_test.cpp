@@ -134,9 +134,10 @@ TEST(VisualAxisCorrection, BadOptionsAreRefused) {
     expect_error([&] { VisualAxisCorrection c(VisualAxisCorrectionOptions{.gain_F = gain}); },
                  ErrorCode::kInvalidArgument, "VisualAxisCorrectionOptions.gain_F");
   }
-  for (const auto& [gain_K, gain_F] : {std::pair{0.0, 0.0}, std::pair{0.6, 0.5}}) {
-    expect_error([&] { VisualAxisCorrection c(VisualAxisCorrectionOptions{.gain_K = gain_K, .gain_F = gain_F}); },
-                 ErrorCode::kInvalidArgument, "VisualAxisCorrectionOptions.gain_K", "plus gain_F");
+  for (const auto& gains : {std::pair{0.0, 0.0}, std::pair{0.6, 0.5}}) {
+    expect_error(
+        [&] { VisualAxisCorrection c(VisualAxisCorrectionOptions{.gain_K = gains.first, .gain_F = gains.second}); },
+        ErrorCode::kInvalidArgument, "VisualAxisCorrectionOptions.gain_K", "plus gain_F");
   }
   for (const double max_angle : {0.0, 2.0, std::numeric_limits<double>::infinity()}) {
     expect_error([&] { VisualAxisCorrection c(VisualAxisCorrectionOptions{.max_angle_rad = max_angle}); },

@@ -199,12 +199,12 @@ TEST(StageOptions, EveryBodyFitOptionReachesTheStage) {
 }
 
 TEST(StageOptions, BodyFitBadValuesNameTheOption) {
-  for (const auto& [key, value] : std::vector<std::pair<std::string, std::string>>{{kFitSmoothingFramesKey, "2"},
-                                                                                   {kFitSmoothingFramesKey, "0"},
-                                                                                   {kFitMaxIterationsKey, "-1"},
-                                                                                   {kFitBodyIdKey, "-2"},
-                                                                                   {kFitLostEnergyKey, "0"}}) {
-    expect_field([&] { read_body_fit_options(header_with({{key, value}})); }, key);
+  for (const auto& option : std::vector<std::pair<std::string, std::string>>{{kFitSmoothingFramesKey, "2"},
+                                                                             {kFitSmoothingFramesKey, "0"},
+                                                                             {kFitMaxIterationsKey, "-1"},
+                                                                             {kFitBodyIdKey, "-2"},
+                                                                             {kFitLostEnergyKey, "0"}}) {
+    expect_field([&] { read_body_fit_options(header_with({option})); }, option.first);
   }
   expect_field([] { body_fit_enabled(header_with({{kFitEnabledKey, "maybe"}})); }, kFitEnabledKey);
 }
