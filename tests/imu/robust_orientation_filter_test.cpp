@@ -7,6 +7,7 @@
 #include <functional>
 #include <limits>
 #include <random>
+#include <string>
 #include <vector>
 
 #include "common/error.hpp"
@@ -45,10 +46,11 @@ struct SynthOptions {
     return Vec3(W_from_A.conjugate() * kField_W);
   };
   double gyro_noise_rad_s = 0.003, acc_noise_m_s2 = 0.03, mag_noise_uT = 0.2;
+  unsigned noise_seed = 7;
 };
 
 Synthetic make_stream(const SynthOptions& o) {
-  std::mt19937 rng(7);
+  std::mt19937 rng(o.noise_seed);
   std::normal_distribution<double> normal(0.0, 1.0);
   const auto noise = [&](double sigma) -> Vec3 { return Vec3(normal(rng), normal(rng), normal(rng)) * sigma; };
   Synthetic out;
@@ -136,49 +138,56 @@ TEST(RobustOrientationFilter, LostSamplesAreBridgedRecoveredAndReportedAsUncerta
   // Slow turning, and at 29.9 s a quick 50 degree turn (300 ms at up to 6 rad/s), with
   // accelerations of the arm (1.5 m/s^2 per sample, ~9 degrees of tilt). The turn's middle
   // 150 ms are lost: the filter cannot know that part, says so, and comes back to the
-  // accelerometer and magnetometer once the turn's accelerations are over.
-  SynthOptions o = turning(60.0);
-  o.acc_noise_m_s2 = 1.5;
-  const std::function<Vec3(double)> slow = o.body_rate_rad_s;
-  o.body_rate_rad_s = [slow](double t) {
-    const double u = t - 29.9;
-    if (u < 0.0 || u >= 0.3) return slow(t);
-    const double burst = std::pow(std::sin(EIGEN_PI * u / 0.3), 2);
-    return Vec3(slow(t) + Vec3(1.0, 0.5, 0.3).normalized() * 6.0 * burst);
-  };
-  Synthetic data = make_stream(o);
-  const std::size_t lost_from = index_at(30.0), lost_to = index_at(30.15);
-  data.imu.erase(data.imu.begin() + lost_from, data.imu.begin() + lost_to);
-  data.W_from_A.erase(data.W_from_A.begin() + lost_from, data.W_from_A.begin() + lost_to);
+  // accelerometer and magnetometer once the turn's accelerations are over. Eight noise draws:
+  // the error these accelerations leave varies from draw to draw (the largest after the gap
+  // 2.7-5.8 degrees over seeds 1-12), what the filter claims about it must hold on each.
+  for (unsigned seed = 1; seed <= 8; ++seed) {
+    SCOPED_TRACE("noise seed " + std::to_string(seed));
+    SynthOptions o = turning(60.0);
+    o.acc_noise_m_s2 = 1.5;
+    o.noise_seed = seed;
+    const std::function<Vec3(double)> slow = o.body_rate_rad_s;
+    o.body_rate_rad_s = [slow](double t) {
+      const double u = t - 29.9;
+      if (u < 0.0 || u >= 0.3) return slow(t);
+      const double burst = std::pow(std::sin(EIGEN_PI * u / 0.3), 2);
+      return Vec3(slow(t) + Vec3(1.0, 0.5, 0.3).normalized() * 6.0 * burst);
+    };
+    Synthetic data = make_stream(o);
+    const std::size_t lost_from = index_at(30.0), lost_to = index_at(30.15);
+    data.imu.erase(data.imu.begin() + lost_from, data.imu.begin() + lost_to);
+    data.W_from_A.erase(data.W_from_A.begin() + lost_from, data.W_from_A.begin() + lost_to);
 
-  RobustOrientationFilter filter;
-  const std::vector<ErrorAndUncertainty> run = run_with_uncertainty(filter, data);
-  double before_max = 0.0, late_max = 0.0, late_error_max = 0.0;
-  const double after_gap = run[lost_from].uncertainty_rad, error_after_gap = run[lost_from].error_rad;
-  std::size_t beyond_bound = 0;
-  for (const ErrorAndUncertainty& r : run) {
-    if (r.t_s > 5.0 && r.t_s < 30.0) before_max = std::max(before_max, r.uncertainty_rad);
-    beyond_bound += r.t_s >= 30.0 && r.beyond_bound();
-    if (r.t_s > 34.0) {
-      late_max = std::max(late_max, r.uncertainty_rad);
-      late_error_max = std::max(late_error_max, r.error_rad);
+    RobustOrientationFilter filter;
+    const std::vector<ErrorAndUncertainty> run = run_with_uncertainty(filter, data);
+    double before_max = 0.0, late_max = 0.0, late_error_max = 0.0;
+    const double after_gap = run[lost_from].uncertainty_rad, error_after_gap = run[lost_from].error_rad;
+    std::size_t beyond_bound = 0;
+    for (const ErrorAndUncertainty& r : run) {
+      if (r.t_s > 5.0 && r.t_s < 30.0) before_max = std::max(before_max, r.uncertainty_rad);
+      beyond_bound += r.t_s >= 30.0 && r.beyond_bound();
+      if (r.t_s > 34.0) {
+        late_max = std::max(late_max, r.uncertainty_rad);
+        late_error_max = std::max(late_error_max, r.error_rad);
+      }
     }
+    std::printf(
+        "seed %u, lost 150 ms: uncertainty before %.2f deg, after the gap %.1f deg (error %.1f deg); from 34 s: "
+        "%.2f deg (error max %.2f deg)\n",
+        seed, before_max / kDeg, after_gap / kDeg, error_after_gap / kDeg, late_max / kDeg, late_error_max / kDeg);
+    EXPECT_EQ(filter.gaps(), 1u);
+    EXPECT_NEAR(filter.lost_s(), 0.15, 0.011);
+    // The gap is reported as far larger than steady tracking's uncertainty, and every error
+    // from the gap on stays within the bound the filter states.
+    EXPECT_GT(after_gap, 10.0 * kDeg);
+    EXPECT_LT(before_max, 0.25 * after_gap);
+    EXPECT_EQ(beyond_bound, 0u);
+    // Recovered within 4 s, not over the magnetometer's 20 s time constant: the error is at
+    // most half the gap's, and the uncertainty has come down with the evidence of the samples
+    // that agree with the estimate.
+    EXPECT_LT(late_error_max, 0.5 * error_after_gap);
+    EXPECT_LT(late_max, 0.25 * after_gap);
   }
-  std::printf(
-      "lost 150 ms: uncertainty before %.2f deg, after the gap %.1f deg (error %.1f deg); from 34 s: %.2f deg "
-      "(error max %.2f deg)\n",
-      before_max / kDeg, after_gap / kDeg, error_after_gap / kDeg, late_max / kDeg, late_error_max / kDeg);
-  EXPECT_EQ(filter.gaps(), 1u);
-  EXPECT_NEAR(filter.lost_s(), 0.15, 0.011);
-  // Steady tracking adds only the lag its corrections keep showing.
-  EXPECT_LT(before_max, 3.0 * kDeg);
-  EXPECT_GT(after_gap, 10.0 * kDeg);
-  EXPECT_EQ(beyond_bound, 0u);
-  // Recovered within 4 s, not over the magnetometer's 20 s time constant: the error is back
-  // at what these accelerations allow, and the uncertainty has come down with the evidence of
-  // the samples that agree with the estimate.
-  EXPECT_LT(late_error_max, 4.0 * kDeg);
-  EXPECT_LT(late_max, 0.25 * after_gap);
 }
 
 TEST(RobustOrientationFilter, AStartInMotionIsReportedAsUncertainUntilTheSamplesHaveAveragedIt) {
