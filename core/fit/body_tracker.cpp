@@ -92,23 +92,32 @@ BodyTracker::Admitted BodyTracker::personalise_now() {
 std::vector<FitWarning> BodyTracker::personalise() {
   personalised_ = true;
   std::vector<FitWarning> warnings;
-  // Frames in which the camera skeleton's errors break the controlled pose (a straight arm looks
-  // bent by up to ~50 deg with the simulator's biases) are left out; when none is left, all go in
-  // and the pose check says why.
-  std::vector<TrackedSkeleton> all, in_pose;
-  std::vector<const BodyFitFrame*> all_frames, in_pose_frames;
+  // The frames whose camera skeleton shows the controlled pose even taken as exact go in: an
+  // elbow that looks bent is most often a large camera error, which would spoil the segment
+  // lengths. Without such frames, those within what the camera's arm joint error allows
+  // (ControlledPoseLimits); without those, all go in and the pose check says why.
+  ControlledPoseLimits exact_camera;
+  exact_camera.camera_arm_joint_error_m = 0.0;
+  const auto in_pose = [&](const TrackedSkeleton& skeleton, const ControlledPoseLimits& limits) {
+    try {
+      check_controlled_pose({skeleton}, &work_->camera, limits);
+      return true;
+    } catch (const Error&) {
+      return false;
+    }
+  };
+  std::vector<const BodyFitFrame*> all_frames, strict_frames, tolerant_frames;
   for (const BodyFitFrame& f : calibration_frames_) {
     if (!f.skeleton) continue;
-    all.push_back(*f.skeleton);
     all_frames.push_back(&f);
-    try {
-      check_controlled_pose({*f.skeleton}, &work_->camera);
-      in_pose.push_back(*f.skeleton);
-      in_pose_frames.push_back(&f);
-    } catch (const Error&) {
-    }
+    if (in_pose(*f.skeleton, exact_camera)) strict_frames.push_back(&f);
+    else if (in_pose(*f.skeleton, ControlledPoseLimits{})) tolerant_frames.push_back(&f);
   }
-  const std::vector<TrackedSkeleton>& skeletons = in_pose.empty() ? all : in_pose;
+  const std::vector<const BodyFitFrame*>& chosen_frames = !strict_frames.empty()     ? strict_frames
+                                                          : !tolerant_frames.empty() ? tolerant_frames
+                                                                                     : all_frames;
+  std::vector<TrackedSkeleton> skeletons;
+  for (const BodyFitFrame* f : chosen_frames) skeletons.push_back(*f->skeleton);
   Eigen::VectorXd beta = Eigen::VectorXd::Zero(work_->model->num_betas());
   // III-B on the same frames' depth (cleaned as every fitted frame). A refusal of the fine tuning
   // keeps the rough shape (III-A): the refiner's error is caught here, not in personalise().
@@ -116,7 +125,7 @@ std::vector<FitWarning> BodyTracker::personalise() {
   std::optional<Error> fine_error;
   if (options_.fine_shape) {
     std::vector<CalibrationFrame> depth_frames;
-    for (const BodyFitFrame* f : in_pose.empty() ? all_frames : in_pose_frames) {
+    for (const BodyFitFrame* f : chosen_frames) {
       depth_frames.push_back({f->frame, *f->skeleton});
       remove_off_body_depth(depth_frames.back().frame, depth_frames.back().skeleton);
     }

@@ -44,17 +44,26 @@ void check_frame(const TrackedSkeleton& s, const std::string& frame, const rayca
       throw_precondition(field, "outside the image: the subject must be fully in view");
   }
   const auto& p = s.positions_K;
-  auto too_bent = [&](const char* name, int a, int b, int c, double max_deg) {
-    const double bend = angle_deg(p[b] - p[a], p[c] - p[b]);
-    if (bend > max_deg)
-      throw_precondition(frame + ".pose." + name, "bent " + std::to_string(std::lround(bend)) + " deg, at most " +
-                                                      std::to_string(std::lround(max_deg)) +
-                                                      " deg in the controlled pose");
+  // `joint_error_m` across the middle joint bends the limb by up to atan(e / a) + atan(e / b).
+  auto too_bent = [&](const char* name, int a, int b, int c, double max_deg, double joint_error_m) {
+    const Eigen::Vector3d upper = p[b] - p[a], lower = p[c] - p[b];
+    const double bend = angle_deg(upper, lower);
+    const double allowed =
+        max_deg + (std::atan2(joint_error_m, upper.norm()) + std::atan2(joint_error_m, lower.norm())) / kDeg;
+    if (bend > allowed) {
+      std::string why = "bent " + std::to_string(std::lround(bend)) + " deg, at most " +
+                        std::to_string(std::lround(allowed)) + " deg in the controlled pose";
+      if (joint_error_m > 0)
+        why += " (" + std::to_string(std::lround(max_deg)) + " plus what a camera joint error of " +
+               std::to_string(std::lround(joint_error_m * 100)) + " cm allows)";
+      throw_precondition(frame + ".pose." + name, why);
+    }
   };
-  too_bent("left_knee", kHipLeft, kKneeLeft, kAnkleLeft, limits.max_knee_bend_deg);
-  too_bent("right_knee", kHipRight, kKneeRight, kAnkleRight, limits.max_knee_bend_deg);
-  too_bent("left_elbow", kShoulderLeft, kElbowLeft, kWristLeft, limits.max_elbow_bend_deg);
-  too_bent("right_elbow", kShoulderRight, kElbowRight, kWristRight, limits.max_elbow_bend_deg);
+  too_bent("left_knee", kHipLeft, kKneeLeft, kAnkleLeft, limits.max_knee_bend_deg, 0.0);
+  too_bent("right_knee", kHipRight, kKneeRight, kAnkleRight, limits.max_knee_bend_deg, 0.0);
+  const double arm_error_m = limits.camera_arm_joint_error_m;
+  too_bent("left_elbow", kShoulderLeft, kElbowLeft, kWristLeft, limits.max_elbow_bend_deg, arm_error_m);
+  too_bent("right_elbow", kShoulderRight, kElbowRight, kWristRight, limits.max_elbow_bend_deg, arm_error_m);
   const Eigen::Vector3d down = 0.5 * (p[kHipLeft] + p[kHipRight]) - 0.5 * (p[kShoulderLeft] + p[kShoulderRight]);
   for (const auto& [name, shoulder, elbow] :
        {std::tuple{"left_arm", kShoulderLeft, kElbowLeft}, std::tuple{"right_arm", kShoulderRight, kElbowRight}}) {
@@ -93,6 +102,8 @@ const char* rough_shape_stop_name(RoughShapeStop stop) {
 
 void check_controlled_pose(const std::vector<TrackedSkeleton>& frames, const raycast::DepthCamera* camera,
                            const ControlledPoseLimits& limits) {
+  if (!(limits.camera_arm_joint_error_m >= 0 && limits.camera_arm_joint_error_m < 1))
+    throw_invalid("pose_limits.camera_arm_joint_error_m", "must be in [0, 1) m");
   if (frames.empty()) throw_invalid("calibration_frames", "empty: personalisation needs frames of the controlled pose");
   for (size_t i = 0; i < frames.size(); ++i)
     check_frame(frames[i], "calibration_frames[" + std::to_string(i) + "]", camera, limits);

@@ -23,10 +23,16 @@
 namespace posefuse::fit {
 
 struct ControlledPoseLimits {
-  // Generous because the camera skeleton's own errors bend straight limbs: upper-limb biases of
-  // 5-10 cm (simulator, after paper 2's 50-101 mm) make a straight arm look bent by up to ~30 deg.
+  // Generous because the camera skeleton's own errors bend straight limbs.
   double max_knee_bend_deg = 30;
+  // An elbow may look bent by this plus what the camera's arm joint error allows: an error of
+  // camera_arm_joint_error_m across the arm at the elbow bends it by atan(e / upper arm) +
+  // atan(e / forearm), about 21 deg on an adult arm. 0.05 m: the low end of the mean errors of
+  // Kinect v2 arm joints, 50-101 mm (paper 2's introduction, citing Wang et al. 2015). Without
+  // it a straight arm's camera elbow bent past 40 deg in every calibration frame of 17 of 96
+  // simulated sessions (43-62 deg in the first) and their personalisation was refused.
   double max_elbow_bend_deg = 40;
+  double camera_arm_joint_error_m = 0.05;
   // Angle between an upper arm and the trunk's downward direction (shoulders -> hips).
   double min_arm_abduction_deg = 20, max_arm_abduction_deg = 100;
   // Angle of the shoulder line out of the image plane (0 = facing the camera squarely).
@@ -73,7 +79,8 @@ struct RoughShapeResult {
 
 // Throws posefuse::Error naming the frame and joint or segment (see above) when a frame is not the
 // controlled pose or the subject is not fully in view; "calibration_frames" when empty;
-// "rough_options.*" for bad options. `camera` may be null (no image-border check).
+// "rough_options.*" or "pose_limits.*" for bad options. `camera` may be null (no image-border
+// check).
 void check_controlled_pose(const std::vector<TrackedSkeleton>& calibration_frames, const raycast::DepthCamera* camera,
                            const ControlledPoseLimits& limits = {});
 

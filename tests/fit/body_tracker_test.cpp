@@ -92,6 +92,43 @@ TEST(FitBodyTracker, RefusedPersonalisationFitsTheTemplateShape) {
   EXPECT_TRUE(shape->beta.isZero());
 }
 
+// The camera's elbow 12 cm off across a straight arm: it looks bent about 49 degrees, past the
+// controlled pose's 40 but within what the camera's arm joint error allows.
+TrackedSkeleton camera_bent_elbow_skeleton() {
+  TrackedSkeleton skeleton = controlled_pose_skeleton();
+  skeleton.positions_K[kElbowLeft] += Eigen::Vector3d(0, 0, -0.12);
+  return skeleton;
+}
+
+std::optional<FittedShape> rough_shape_from(const std::vector<TrackedSkeleton>& skeletons,
+                                            std::vector<FitWarning>* warnings = nullptr) {
+  BodyTracker tracker(female(), raycast::DepthIntrinsics{}, rough_shape_only());
+  std::int64_t t = 0;
+  for (const TrackedSkeleton& s : skeletons) tracker.admit(frame_at(t += 100'000, s));
+  const BodyTracker::Admitted admitted = tracker.personalise_now();
+  if (warnings) *warnings = admitted.warnings;
+  return tracker.shape();
+}
+
+TEST(FitBodyTracker, PersonalisesFromTheFramesWhoseElbowsLookStraightestItCan) {
+  // Every frame's elbow looks bent within the camera's error: personalised from them.
+  std::vector<FitWarning> warnings;
+  const std::optional<FittedShape> bent_only =
+      rough_shape_from(std::vector<TrackedSkeleton>(3, camera_bent_elbow_skeleton()), &warnings);
+  ASSERT_TRUE(bent_only);
+  EXPECT_TRUE(bent_only->estimated);
+  EXPECT_TRUE(warnings.empty());
+  // With frames that show the pose even with the camera taken as exact, only those count: the
+  // shape is the straight frames' alone.
+  const std::optional<FittedShape> straight_only =
+      rough_shape_from(std::vector<TrackedSkeleton>(2, controlled_pose_skeleton()));
+  const std::optional<FittedShape> mixed = rough_shape_from({camera_bent_elbow_skeleton(), controlled_pose_skeleton(),
+                                                             camera_bent_elbow_skeleton(), controlled_pose_skeleton()});
+  ASSERT_TRUE(straight_only && mixed);
+  EXPECT_TRUE(mixed->beta.isApprox(straight_only->beta, 1e-12));
+  EXPECT_FALSE(bent_only->beta.isApprox(straight_only->beta, 1e-3));
+}
+
 TEST(FitBodyTracker, NoCalibrationFramesNoShape) {
   BodyTracker tracker(female(), raycast::DepthIntrinsics{}, rough_shape_only());
   const BodyTracker::Admitted admitted = tracker.personalise_now();

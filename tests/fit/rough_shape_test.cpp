@@ -98,7 +98,7 @@ TEST(FitRoughShape, RefusesWhenNotInThePoseOrNotInView) {
     theta[layout.index_of("translation_z")] = depth;
     return testing::pose_subject(*female(), layout, true_shape(), theta).skeleton;
   };
-  EXPECT_EQ(refusal(posed({{"left_elbow_y", -60}})), "calibration_frames[1].pose.left_elbow");
+  EXPECT_EQ(refusal(posed({{"left_elbow_y", -80}})), "calibration_frames[1].pose.left_elbow");
   EXPECT_EQ(refusal(posed({{"right_knee_x", 50}})), "calibration_frames[1].pose.right_knee");
   EXPECT_EQ(refusal(posed({{"left_shoulder_z", -55}})), "calibration_frames[1].pose.left_arm");  // arm hangs down
   EXPECT_EQ(refusal(posed({{"pelvis_y", 50}})), "calibration_frames[1].pose.facing");
@@ -114,6 +114,24 @@ TEST(FitRoughShape, RefusesWhenNotInThePoseOrNotInView) {
   bad.min_step = 0;
   EXPECT_EQ(testing::error_field([&] { estimate_rough_shape(*female(), {posed({})}, nullptr, bad); }),
             "rough_options.min_step");
+}
+
+TEST(FitRoughShape, AnElbowMayLookAsBentAsTheCamerasArmJointErrorAllows) {
+  // 55 degrees: past the pose's 40, within the ~21 that 5 cm of camera error across the elbow
+  // adds on this arm; refused when the camera is taken as exact.
+  const PoseLayout layout = PoseLayout::full_body();
+  Eigen::VectorXd theta = controlled_pose(layout);
+  theta += testing::facing_pose(layout, 0, {{"right_elbow_y", 55}}) - testing::facing_pose(layout, 0, {});
+  const TrackedSkeleton bent = testing::pose_subject(*female(), layout, true_shape(), theta).skeleton;
+  EXPECT_NO_THROW(check_controlled_pose({bent}, &kinect()));
+  ControlledPoseLimits exact_camera;
+  exact_camera.camera_arm_joint_error_m = 0;
+  EXPECT_EQ(testing::error_field([&] { check_controlled_pose({bent}, &kinect(), exact_camera); }),
+            "calibration_frames[0].pose.right_elbow");
+  ControlledPoseLimits bad;
+  bad.camera_arm_joint_error_m = -0.01;
+  EXPECT_EQ(testing::error_field([&] { check_controlled_pose({bent}, &kinect(), bad); }),
+            "pose_limits.camera_arm_joint_error_m");
 }
 
 // The fine-tuning seam: the refiner gets the rough shape and a full-body pose built from the chosen
