@@ -79,7 +79,8 @@ struct JointAngleOptions {
   // (and no pronation, fit/arm_roll.hpp uses the same bound).
   double min_elbow_flexion_deg = 15.0;
   // Below this elevation (or above 180 minus it) the Y-X-Y plane of elevation is gimbal locked:
-  // it is held at its last defined value and the axial rotation takes the whole turn about y.
+  // it is held at its last defined value and the axial rotation takes the whole turn about y (at
+  // confidence 0: that value depends on the held plane, not on the pose).
   double min_elevation_for_plane_deg = 15.0;
   // Relative RMS error of the fitted arms' segment lengths. Near full extension the elbow
   // flexion of a fit is set by them more than by the image: at the same shoulder-wrist distance

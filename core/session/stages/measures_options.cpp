@@ -74,7 +74,8 @@ const OptionTable& measures_option_table() {
          .max = below(90),
          .unit = "deg",
          .description =
-             "below this elevation (or above 180 minus it) the plane of elevation is held (Y-X-Y gimbal lock)"},
+             "below this elevation (or above 180 minus it) the plane of elevation is held (Y-X-Y gimbal lock) and "
+             "the humerus' axial rotation has confidence 0"},
         {.key = kMeasuresArmLengthUncertaintyKey,
          .type = OptionType::kReal,
          .default_value = format_double(angles.arm_length_uncertainty),
@@ -90,7 +91,8 @@ const OptionTable& measures_option_table() {
          .unit = "m",
          .description =
              "RMS error of a fitted joint's position; the confidence of the humerus' axial rotation near a "
-             "straight elbow and of the plane of elevation near its gimbal lock carries the spread it gives"},
+             "straight elbow or the gimbal lock and of the plane of elevation near the lock carries the spread it "
+             "gives"},
     };
   }();
   return table;
