@@ -423,8 +423,8 @@ void score_calibration(const session::ResultDirectory& result, const session::Re
   require_truth(truth, layout::kCalibrationJson);
   const v1::CalibrationReport& mine = *result.calibration;
   const v1::CalibrationReport& theirs = *truth.calibration;
-  const auto add = [&](std::string name, std::string unit, double r, double t) {
-    report.calibration.push_back({std::move(name), std::move(unit), r, t, r - t});
+  const auto add = [&](std::string name, std::string unit, double r, double t, double uncertainty = 0.0) {
+    report.calibration.push_back({std::move(name), std::move(unit), r, t, r - t, uncertainty});
   };
   const auto add_angle = [&](std::string name, const v1::Quaternion& r, const v1::Quaternion& t) {
     report.calibration.push_back(
@@ -444,7 +444,7 @@ void score_calibration(const session::ResultDirectory& result, const session::Re
       add(arm + "r", "m", f.r_m(), t->r_m());
       add(arm + "d_se", "m", f.d_se_m(), t->d_se_m());
       add(arm + "d_sw", "m", f.d_sw_m(), t->d_sw_m());
-      add(arm + "d_ul", "m", f.d_ul_m(), t->d_ul_m());
+      add(arm + "d_ul", "m", f.d_ul_m(), t->d_ul_m(), f.d_ul_uncertainty_m());
     }
     add_angle(arm + "A_from_F", f.a_from_f(), t->a_from_f());
   }
@@ -621,12 +621,12 @@ std::string format_score_report(const ScoreReport& report) {
   }
   if (!report.calibration.empty()) {
     out << "Calibration vs truth (angles: the rotation between result and truth)\n";
-    Table t({"value", "unit", "result", "truth", "error"});
+    Table t({"value", "unit", "result", "truth", "error", "claimed sigma"});
     for (const auto& s : report.calibration) {
       const int decimals = s.unit == "m" ? 4 : s.unit == "us" ? 0 : 2;
       const bool angle = s.unit == "deg" || s.unit == "deg/s";
       t.add({s.name, s.unit, angle ? "" : fixed(s.result, decimals), angle ? "" : fixed(s.truth, decimals),
-             fixed(s.error, decimals)});
+             fixed(s.error, decimals), s.uncertainty > 0.0 ? fixed(s.uncertainty, decimals) : ""});
     }
     out << t.str() << "\n";
   }

@@ -75,8 +75,9 @@ struct CalibrationScore {
   std::string name;  // "K_from_W", "RIGHT r", "clock_offset imu_left", ...
   std::string unit;  // "deg", "m", "us", "deg/s"
   double result = 0.0;
-  double truth = 0.0;  // for angles between rotations: 0 (the error is the angle)
-  double error = 0.0;  // result - truth, or the angle between the two rotations
+  double truth = 0.0;        // for angles between rotations: 0 (the error is the angle)
+  double error = 0.0;        // result - truth, or the angle between the two rotations
+  double uncertainty = 0.0;  // the result's own 1-sigma claim (0: it claims none)
 };
 
 // joint_angles.csv: per ISB angle, |result - truth| (wrapped to 180 deg) over the frames where

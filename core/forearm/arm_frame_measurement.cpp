@@ -47,4 +47,24 @@ void measure_arm_frame(ArmFrame& arm, const geometry::DepthImageView& depth, con
   }
 }
 
+std::size_t drop_straps_nearer_another_wrist(std::vector<ArmFrame>& arms) {
+  std::vector<bool> drop(arms.size(), false);
+  for (std::size_t i = 0; i < arms.size(); ++i) {
+    const ArmFrame& own = arms[i];
+    if (!own.strap_K || !own.forearm_tracked) continue;
+    const double own_distance_m = (*own.strap_K - own.sdk_wrist_K).norm();
+    for (std::size_t j = 0; j < arms.size(); ++j) {
+      const ArmFrame& other = arms[j];
+      if (j != i && other.forearm_tracked && (*own.strap_K - other.sdk_wrist_K).norm() < own_distance_m) drop[i] = true;
+    }
+  }
+  std::size_t dropped = 0;
+  for (std::size_t i = 0; i < arms.size(); ++i) {
+    if (!drop[i]) continue;
+    arms[i].strap_K.reset();
+    ++dropped;
+  }
+  return dropped;
+}
+
 }  // namespace posefuse::forearm

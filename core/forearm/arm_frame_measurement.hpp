@@ -3,6 +3,9 @@
 // axis from depth"): the SDK's joints only say where to look. The forearm axis (elbow and wrist)
 // is replaced by the one fitted to the depth image, the upper arm's direction is measured for
 // the calibration pose's arm plane, and the strap is searched for in the colour image.
+#include <cstddef>
+#include <vector>
+
 #include "forearm/forearm_track.hpp"
 #include "forearm/strap_detection.hpp"
 #include "geometry/image_view.hpp"
@@ -24,5 +27,13 @@ struct ArmMeasurementOptions {
 void measure_arm_frame(ArmFrame& arm, const geometry::DepthImageView& depth, const geometry::GrayImageView& gray,
                        const StrapCameras& cameras, const geometry::PixelRays& depth_rays,
                        const ArmMeasurementOptions& options);
+
+// Both arms' straps are alike dark bands just short of the wrist, and each arm's search runs
+// along its own forearm axis, which with the hands together can run on over the other forearm (on
+// the body render a right forearm axis 49 cm long, its search finding the left band 21 cm from
+// the right IMU). Nearest-neighbour association on the SDK's wrists, which carry the same kind of
+// error for both arms: a strap nearer another arm's wrist than its own (both forearms tracked in
+// the frame) is taken to be that arm's and dropped from this one. Returns how many were dropped.
+std::size_t drop_straps_nearer_another_wrist(std::vector<ArmFrame>& arms);
 
 }  // namespace posefuse::forearm

@@ -144,6 +144,7 @@ ForearmCalibration calibrate_forearm(const std::vector<CalibrationFrame>& frames
   out.model.d_sw_m = hold_wrist_distance(std::move(wrist_distances));
   out.model.F_from_A = geometry::chordal_mean(per_frame);
   out.F_from_A_spread_rad = geometry::rms_angle_rad(per_frame, out.model.F_from_A);
+  out.d_ul_uncertainty_m = std::sqrt(2.0 / 3.0) * options.camera_joint_error_m;
   const std::string hold = "the calibration hold of " + std::to_string(best_count) + " frames ";
   if (!(out.model.d_ul_m >= options.min_upper_arm_m && out.model.d_ul_m <= options.max_upper_arm_m)) {
     throw_precondition("frames", hold + "has an upper arm (shoulder to elbow) of " +

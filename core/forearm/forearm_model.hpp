@@ -51,6 +51,10 @@ struct CalibrationOptions {
   double min_upper_arm_m = 0.15;
   double max_upper_arm_m = 0.50;
   double max_F_from_A_spread_rad = 15.0 * 3.14159265358979323846 / 180.0;
+  // RMS 3D error of one SDK arm joint, for d_ul's uncertainty: the middle of Kinect v2's published
+  // mean arm joint errors, 50-101 mm (Wang et al. 2015, docs/simulator.md). The error is mostly a
+  // slowly changing bias, so averaging the hold removes the jitter but not this.
+  double camera_joint_error_m = 0.075;
 };
 
 struct ForearmCalibration {
@@ -58,6 +62,9 @@ struct ForearmCalibration {
   std::size_t first_frame = 0;  // the still run used
   std::size_t frame_count = 0;
   double F_from_A_spread_rad = 0.0;  // RMS angle of the per-frame eq. 9 results from their mean
+  // 1-sigma error of model.d_ul_m: the shoulder's and the elbow's independent errors along the
+  // upper arm, sqrt(2/3) camera_joint_error_m.
+  double d_ul_uncertainty_m = 0.0;
 };
 
 // Averages r, d_se, d_sw, d_ul and eq. 9 over the longest run of still frames. Throws

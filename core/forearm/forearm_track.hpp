@@ -36,6 +36,7 @@ struct ArmFrame {
   // (TRACKED or INFERRED): the live estimate's anchor in a gap.
   Vec3 sdk_elbow_K = Vec3::Zero();
   bool sdk_elbow_seen = false;
+  Vec3 sdk_wrist_K = Vec3::Zero();           // the SDK's own wrist (wrist_K may be the depth axis's)
   Quat K_from_wrist_sdk = Quat(0, 0, 0, 0);  // zero when the SDK gave none
   std::optional<Vec3> strap_K;               // strap seen (II-I)
   // Upper arm direction (shoulder -> elbow) measured in depth (upper_arm_depth.hpp), while the

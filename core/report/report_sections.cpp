@@ -187,6 +187,7 @@ std::string calibration_table(const session::ResultDirectory& results) {
     } else {
       text = "calibration hold of " + std::to_string(m.calibration_frames()) + " frames, spread " +
              fixed(m.a_from_f_spread_rad() * 180.0 / M_PI, 1) + " deg; upper arm " + cm(m.d_ul_m()) +
+             (m.d_ul_uncertainty_m() > 0.0 ? " (+/- " + cm(m.d_ul_uncertainty_m()) + ", the camera's joints)" : "") +
              ", strap to elbow " + cm(m.d_se_m()) + ", to wrist " + cm(m.d_sw_m()) + ", strap radius " + cm(m.r_m());
     }
     out += row({html_escape(arm + " forearm (" + m.device_id() + ")"), html_escape(text)});

@@ -16,6 +16,7 @@ forearm::ArmFrame arm_frame_from_skeleton(const Skeleton& skeleton, forearm::Sid
   arm.shoulder_tracked = joints[j.shoulder].state == JointState::kTracked;
   arm.forearm_tracked = joints[j.elbow].state == JointState::kTracked && joints[j.wrist].state == JointState::kTracked;
   arm.sdk_elbow_K = arm.elbow_K;
+  arm.sdk_wrist_K = arm.wrist_K;
   arm.sdk_elbow_seen = joints[j.elbow].state != JointState::kNotTracked;
   arm.K_from_wrist_sdk = joints[j.wrist].orientation;
   return arm;

@@ -24,6 +24,7 @@ void report_forearm_model(const std::string& device_id, forearm::Side side, cons
   model.set_d_se_m(has_model ? c.model.d_se_m : 0.0);
   model.set_d_sw_m(has_model ? c.model.d_sw_m : 0.0);
   model.set_d_ul_m(c.model.d_ul_m);
+  model.set_d_ul_uncertainty_m(c.d_ul_uncertainty_m);
   *model.mutable_a_from_f() = to_proto(forearm::Quat(c.model.F_from_A.conjugate()));
   model.set_estimated(true);
   model.set_calibration_frames(static_cast<std::uint32_t>(c.frame_count));

@@ -202,6 +202,8 @@ void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleto
   // The SDK's joints only say where to look; the axes and the strap are the images'.
   const geometry::DepthImageView depth = depth_view(frame.depth_mm);
   const geometry::GrayImageView gray = gray_view(frame.color_gray);
+  std::vector<Device*> arm_devices;
+  std::vector<forearm::ArmFrame> arms;
   for (Device& device : devices_) {
     if (!device.side || device.calibration_failed) continue;
     forearm::ArmFrame arm = arm_frame_from_skeleton(skeleton, *device.side, frame.t_us);
@@ -210,10 +212,15 @@ void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleto
           arm, depth, gray, *cameras_, *depth_rays_,
           {options_.axis_from_depth, options_.upper_arm_from_depth, !device.tracker || device.from_motion});
     }
-    if (device.tracker) {
-      device.tracker->add_frame(arm);
+    arm_devices.push_back(&device);
+    arms.push_back(arm);
+  }
+  forearm::drop_straps_nearer_another_wrist(arms);
+  for (std::size_t i = 0; i < arms.size(); ++i) {
+    if (arm_devices[i]->tracker) {
+      arm_devices[i]->tracker->add_frame(arms[i]);
     } else {
-      device.frames.push_back(arm);
+      arm_devices[i]->frames.push_back(arms[i]);
     }
   }
 }
