@@ -10,8 +10,9 @@ AngleSeries::AngleSeries(std::optional<Angle> angle) : named_(angle) {
   if (angle) {
     candidates_ = {*angle};
   } else {
-    candidates_ = {Angle::kLeftElevation, Angle::kRightElevation, Angle::kLeftElbowFlexion, Angle::kRightElbowFlexion,
-                   Angle::kLeftPronation, Angle::kRightPronation, Angle::kThoraxFlexion};
+    candidates_ = {Angle::kLeftElevation,     Angle::kRightElevation,    Angle::kLeftElbowFlexion,
+                   Angle::kRightElbowFlexion, Angle::kLeftPronation,     Angle::kRightPronation,
+                   Angle::kThoraxFlexion,     Angle::kThoraxLateralTilt, Angle::kThoraxAxialRotation};
   }
   series_deg_.assign(candidates_.size(), {});
 }

@@ -20,7 +20,7 @@ struct SessionRepetitions {
 class AngleSeries {
  public:
   // `angle`: the one to segment; none: choose among the arm and trunk candidates (elevation,
-  // elbow flexion and pronation of each arm, thorax flexion).
+  // elbow flexion and pronation of each arm, the thorax's flexion, lateral tilt and axial rotation).
   explicit AngleSeries(std::optional<Angle> angle = std::nullopt);
 
   // Frames in strictly increasing t_s; a frame not after the last is ignored (returns false).

@@ -86,10 +86,10 @@ struct JointAngleOptions {
   // flexion of a fit is set by them more than by the image: at the same shoulder-wrist distance
   // an arm 1 % too long must bend about 16 degrees (law of cosines), one too short stays
   // straight. The flexion's confidence carries the spread this error gives
-  // (elbow_flexion_spread_rad). 0.05: the template's, whose arm lies between the sexes' mean
-  // humerus lengths (27.7 and 30.5 cm, 10 % apart); a personalised shape's segments measured no
-  // better, 5.0 % RMS (docs/measures.md, "Elbow flexion near full extension").
-  double arm_length_uncertainty = 0.05;
+  // (elbow_flexion_spread_rad). 0.057: the RMS error of a personalised shape's upper arms and
+  // forearms over 336 simulated subjects (bench_fig4 seed bases 0-55); the template's measured
+  // 4.6 % there, so one value serves both (docs/measures.md, "Elbow flexion near full extension").
+  double arm_length_uncertainty = 0.057;
   // RMS error of a fitted joint's position, m. An angle read from a segment's direction turns by
   // about this over the segment's length, and one read from a plane of two segments by that over
   // the sine of their angle: the humerus' axial rotation (the upper arm and forearm's plane)

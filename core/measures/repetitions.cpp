@@ -226,6 +226,72 @@ void add_piece(const Piece& piece, const std::vector<double>& t_s, const std::ve
   add_cut_motion(troughs.back(), end);
 }
 
+// Appends the repetitions of one piece of an angle that swings about its zero (a trunk tilted
+// right then left, a forearm rolled into pronation then supination): each runs from the last
+// sample at rest (within the hysteresis of `rest_deg`) before the angle leaves it, to the first
+// sample back at rest, by at least the hysteresis from the side it comes from, once the angle has
+// been out on both sides. Crossing the rest on the way from one side to the other is not a
+// return. Motion cut by the start or the end of the piece is partial, as is a repetition whose
+// range or duration falls outside the bounds.
+void add_piece_about_zero(const Piece& piece, const std::vector<double>& t_s, const std::vector<double>& angle_deg,
+                          double rest_deg, const RepetitionOptions& options, std::vector<Repetition>& out) {
+  const std::vector<double> piece_speeds = speeds(piece, t_s, angle_deg);
+  const auto side_of = [&](std::size_t position) {
+    const double value = angle_deg[piece[position]] - rest_deg;
+    return value >= options.hysteresis_deg ? 1 : value <= -options.hysteresis_deg ? 2 : 0;
+  };
+  constexpr int kBothSides = 3;
+  bool out_of_rest = false, cut_by_start = false, rest_seen = false;
+  int sides_seen = 0, last_side = 0;
+  // Distances from the rest: the largest since the angle went out on last_side, the smallest since
+  // it came back to rest.
+  double last_side_extreme_deg = 0;
+  double rest_minimum_deg = 0;
+  std::size_t first = 0;  // where the current excursion left rest
+  std::size_t last_at_rest = 0;
+  for (std::size_t p = 0; p < piece.size(); ++p) {
+    const int side = side_of(p);
+    const double magnitude = std::abs(angle_deg[piece[p]] - rest_deg);
+    if (!out_of_rest) {
+      // Leaving rest takes a real move (the hysteresis) from where the angle rested, so noise
+      // just after a return does not start the next repetition.
+      if (side == 0 || (rest_seen && magnitude - rest_minimum_deg < options.hysteresis_deg)) {
+        if (side == 0) last_at_rest = p;
+        rest_minimum_deg = rest_seen ? std::min(rest_minimum_deg, magnitude) : magnitude;
+        rest_seen = rest_seen || side == 0;
+        continue;
+      }
+      out_of_rest = true;
+      cut_by_start = !rest_seen;
+      first = rest_seen ? last_at_rest : 0;
+      sides_seen = last_side = side;
+      last_side_extreme_deg = magnitude;
+      continue;
+    }
+    if (side != 0) {
+      last_side_extreme_deg = side == last_side ? std::max(last_side_extreme_deg, magnitude) : magnitude;
+      last_side = side;
+      sides_seen |= side;
+    }
+    // Back at rest, and by a real reversal (the hysteresis) from the last side: noise where the
+    // angle just reached that side must not end the repetition there.
+    const bool returned = side == 0 && last_side_extreme_deg - magnitude >= options.hysteresis_deg;
+    if (!returned || sides_seen != kBothSides) continue;
+    Repetition rep = describe(piece, t_s, angle_deg, piece_speeds, first, p);
+    const bool duration_ok = rep.duration_s >= options.min_duration_s && rep.duration_s <= options.max_duration_s;
+    rep.partial = cut_by_start || !duration_ok || rep.range_deg < options.min_amplitude_deg;
+    out.push_back(rep);
+    out_of_rest = false;
+    last_at_rest = p;
+    rest_minimum_deg = magnitude;
+  }
+  if (!out_of_rest) return;
+  Repetition rep = describe(piece, t_s, angle_deg, piece_speeds, first, piece.size() - 1);
+  if (rep.range_deg < options.hysteresis_deg) return;  // noise at the end, not motion
+  rep.partial = true;
+  out.push_back(rep);
+}
+
 double mean(const std::vector<double>& values) {
   if (values.empty()) return 0.0;
   double sum = 0.0;
@@ -276,16 +342,44 @@ double resting_half_limit(const std::vector<double>& angle_deg) {
   return 0.5 * (percentile(finite, 0.05) + percentile(finite, 0.95));
 }
 
+// Where an angle that swings about its zero rests: the median of its samples in the middle half
+// of its motion (between the 5th and 95th percentiles moved a quarter of their spread inwards),
+// where it holds between repetitions. Not zero itself: a fitted angle can be offset by several
+// degrees, more than the hysteresis, and would then never seem to come back.
+double middle_rest_deg(const std::vector<double>& angle_deg) {
+  const std::vector<double> finite = sorted_finite(angle_deg);
+  const double low = percentile(finite, 0.05), high = percentile(finite, 0.95);
+  const double quarter = 0.25 * (high - low);
+  std::vector<double> middle;
+  for (double v : finite)
+    if (v >= low + quarter && v <= high - quarter) middle.push_back(v);
+  return middle.empty() ? 0.0 : percentile(middle, 0.5);
+}
+
 }  // namespace
+
+bool swings_about_zero(const std::vector<double>& angle_deg) {
+  const std::vector<double> finite = sorted_finite(angle_deg);
+  if (finite.size() < 2) return false;
+  const double low = percentile(finite, 0.05), high = percentile(finite, 0.95);
+  const double quarter = 0.25 * (high - low);
+  return high > low && low + quarter <= 0.0 && 0.0 <= high - quarter;
+}
 
 RepetitionSummary segment_repetitions(const std::vector<double>& t_s, const std::vector<double>& angle_deg,
                                       const RepetitionOptions& options) {
   check_series(t_s, angle_deg);
   check_options(options);
   RepetitionSummary summary;
+  const bool about_zero = swings_about_zero(angle_deg);
   const double rest_limit_deg = resting_half_limit(angle_deg);
+  const double rest_deg = about_zero ? middle_rest_deg(angle_deg) : 0.0;
   for (const Piece& piece : split_at_gaps(t_s, angle_deg, options.max_gap_s)) {
-    add_piece(piece, t_s, angle_deg, options, rest_limit_deg, summary.repetitions);
+    if (about_zero) {
+      add_piece_about_zero(piece, t_s, angle_deg, rest_deg, options, summary.repetitions);
+    } else {
+      add_piece(piece, t_s, angle_deg, options, rest_limit_deg, summary.repetitions);
+    }
   }
   summarize(summary);
   return summary;

@@ -25,6 +25,17 @@
 // - A recording usually stops at rest, where nothing rises again to confirm the last trough: a
 //   final descent that has come back to within `hysteresis_deg` of the trough its cycle started
 //   from ends that cycle at its lowest sample; one that has not is partial.
+//
+// An angle that swings about its zero instead (swings_about_zero: a trunk tilted right then left,
+// a forearm rolled into pronation then supination) rests in the middle of its motion, where the
+// rules above would cut each repetition at its far side. It rests where its samples in the middle
+// half of the motion have their median (a fitted angle may rest several degrees off zero). Its
+// repetition runs from the last sample at rest (within `hysteresis_deg` of that) before the angle
+// leaves, out to both sides, to the first sample back at rest (and by at least `hysteresis_deg`
+// from the side it comes from); passing the rest on the way from one side to the other is not a
+// return. It counts when its range
+// (max - min) is at least `min_amplitude_deg` and its duration lies within the bounds; motion cut
+// by the start, the end or a gap is partial, as above.
 #include <vector>
 
 namespace posefuse::measures {
@@ -66,6 +77,11 @@ struct RepetitionSummary {
 // negative, or any of them NaN. An empty or all-NaN series has no repetitions.
 RepetitionSummary segment_repetitions(const std::vector<double>& t_s, const std::vector<double>& angle_deg,
                                       const RepetitionOptions& options = {});
+
+// Whether a series swings about the angle's zero (its anatomical neutral) rather than rising
+// from a rest at one end: zero lies in the middle half of its motion, between its 5th and 95th
+// percentiles of finite samples (as dominant_series) moved a quarter of their spread inwards.
+bool swings_about_zero(const std::vector<double>& angle_deg);
 
 // Index of the series that moves most: the largest spread between its 5th and 95th percentiles
 // of finite samples (the exercise's dominant angle), so that a few outliers cannot make a still

@@ -500,6 +500,135 @@ TEST(Repetitions, BadOptionsAreRefusedNamingTheOption) {
   EXPECT_EQ(segment(series, edges).count, 1);
 }
 
+// A trunk tilt as the simulator scripts it: from upright to one side, held, over to the other
+// side, held, back upright, held; each move a half-cosine ramp. Sampled at 100 Hz.
+struct Tilt {
+  double right_deg = 20, left_deg = -20;
+};
+
+void ramp_to(Series& series, double to_deg, double duration_s) {
+  const double t0 = series.t_s.empty() ? -kDt : series.t_s.back();
+  const double from_deg = series.angle_deg.empty() ? 0.0 : series.angle_deg.back();
+  const int steps = static_cast<int>(std::lround(duration_s / kDt));
+  for (int k = 1; k <= steps; ++k) {
+    const double phase = static_cast<double>(k) / steps;
+    series.t_s.push_back(t0 + k * kDt);
+    series.angle_deg.push_back(from_deg + (to_deg - from_deg) * (1 - std::cos(kPi * phase)) / 2);
+  }
+}
+
+void hold(Series& series, double duration_s) {
+  ramp_to(series, series.angle_deg.empty() ? 0.0 : series.angle_deg.back(), duration_s);
+}
+
+Series tilts(const std::vector<Tilt>& cycles) {
+  Series series;
+  hold(series, 0.5);
+  for (const Tilt& tilt : cycles) {
+    ramp_to(series, tilt.right_deg, 1.5);
+    hold(series, 0.5);
+    ramp_to(series, tilt.left_deg, 3.0);
+    hold(series, 0.5);
+    ramp_to(series, 0.0, 1.5);
+    hold(series, 0.5);
+  }
+  return series;
+}
+
+TEST(Repetitions, AnAngleSwingsAboutZeroWhenZeroIsInTheMiddleHalfOfItsMotion) {
+  EXPECT_TRUE(swings_about_zero(tilts({{}, {}}).angle_deg));
+  EXPECT_TRUE(swings_about_zero(tilts({{60, -30}}).angle_deg));  // zero at a third of the way
+  EXPECT_FALSE(swings_about_zero(tilts({{60, -10}}).angle_deg));
+  EXPECT_FALSE(swings_about_zero(exercise(std::vector<Cycle>(3, Cycle{90, 2})).angle_deg));
+  EXPECT_FALSE(swings_about_zero({kNaN, 3.0}));
+  EXPECT_FALSE(swings_about_zero({0.0, 0.0, 0.0}));
+}
+
+// Right, left, back upright: one repetition each, from leaving upright to coming back, with the
+// whole arc as its range. Trough to trough (the rule for a rest at one end) would cut each at its
+// left-most point and count one fewer.
+TEST(Repetitions, ASwingToBothSidesOfZeroAndBackIsOneRepetition) {
+  Series series = tilts({{}, {}, {}});
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> noise(-2.0, 2.0);
+  for (double& a : series.angle_deg) a += noise(rng);
+  const RepetitionSummary summary = segment(series);
+  ASSERT_EQ(summary.repetitions.size(), 3u);
+  EXPECT_EQ(summary.count, 3);
+  for (std::size_t k = 0; k < 3; ++k) {
+    SCOPED_TRACE("repetition " + std::to_string(k));
+    const Repetition& rep = summary.repetitions[k];
+    EXPECT_FALSE(rep.partial);
+    const double cycle_start_s = 0.5 + 7.5 * static_cast<double>(k);
+    // It leaves rest (5 deg, the hysteresis) about 0.5 s into the 1.5 s ramp and comes back the
+    // same time before the end of the last one.
+    EXPECT_NEAR(rep.t_start_s, cycle_start_s + 0.5, 0.15);
+    EXPECT_NEAR(rep.t_end_s, cycle_start_s + 7.0 - 0.5, 0.15);
+    EXPECT_NEAR(rep.min_deg, -20, 2.1);
+    EXPECT_NEAR(rep.max_deg, 20, 2.1);
+    EXPECT_NEAR(rep.range_deg, 40, 4.1);
+  }
+}
+
+// A fitted angle may rest off zero by more than the hysteresis (a pronation 13 deg off): the rest
+// is where the series holds in the middle of its motion, so the repetitions are the same.
+TEST(Repetitions, ASwingAboutZeroRestsWhereTheSeriesRestsNotAtZero) {
+  Series series = tilts({{}, {}, {}});
+  for (double& a : series.angle_deg) a -= 8;
+  ASSERT_TRUE(swings_about_zero(series.angle_deg));
+  const RepetitionSummary summary = segment(series);
+  ASSERT_EQ(summary.repetitions.size(), 3u);
+  EXPECT_EQ(summary.count, 3);
+  for (const Repetition& rep : summary.repetitions) {
+    EXPECT_NEAR(rep.min_deg, -28, 0.1);
+    EXPECT_NEAR(rep.max_deg, 12, 0.1);
+  }
+}
+
+// A rest at zero between the two sides (a forearm rolled into pronation, back to neutral, then
+// into supination) is inside the repetition: it ends only once both sides have been visited.
+TEST(Repetitions, ARestBetweenTheTwoSidesIsInsideTheRepetition) {
+  Series series;
+  hold(series, 0.5);
+  for (int k = 0; k < 2; ++k) {
+    ramp_to(series, 60, 1.0);
+    ramp_to(series, 0, 1.0);
+    hold(series, 1.0);
+    ramp_to(series, -60, 1.0);
+    ramp_to(series, 0, 1.0);
+    hold(series, 1.0);
+  }
+  const RepetitionSummary summary = segment(series);
+  EXPECT_EQ(summary.count, 2);
+  ASSERT_EQ(summary.repetitions.size(), 2u);
+  EXPECT_NEAR(summary.repetitions[0].range_deg, 120, 0.5);
+  EXPECT_GT(summary.repetitions[0].duration_s, 4.0);
+}
+
+// Motion cut by the start or the end of the series is partial; a swing whose whole arc is below
+// the minimum amplitude is partial too.
+TEST(Repetitions, ASwingAboutZeroCutOrTooSmallIsPartial) {
+  Series series = tilts({{}, {}, {8, -8}, {}});
+  const RepetitionSummary whole = segment(series);
+  ASSERT_EQ(whole.repetitions.size(), 4u);
+  EXPECT_EQ(whole.count, 3);
+  EXPECT_TRUE(whole.repetitions[2].partial);  // 16 deg of arc, under 20
+  EXPECT_NEAR(whole.repetitions[2].range_deg, 16, 0.1);
+
+  // Start in the middle of the first swing and stop in the middle of the last one.
+  Series cut;
+  for (std::size_t i = 0; i < series.t_s.size(); ++i) {
+    if (series.t_s[i] < 2.5 || series.t_s[i] > 26.0) continue;
+    cut.t_s.push_back(series.t_s[i]);
+    cut.angle_deg.push_back(series.angle_deg[i]);
+  }
+  const RepetitionSummary summary = segment(cut);
+  ASSERT_EQ(summary.repetitions.size(), 4u);
+  EXPECT_TRUE(summary.repetitions.front().partial);
+  EXPECT_TRUE(summary.repetitions.back().partial);
+  EXPECT_EQ(summary.count, 1);  // the second; the third is too small
+}
+
 // The exercise's joint is the one whose angle moves most; a still joint with noise loses to it,
 // missing samples are ignored.
 TEST(DominantSeries, PicksTheSeriesThatMoves) {

@@ -4,6 +4,7 @@
 #include <gtest/gtest.h>
 
 #include <unistd.h>
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -302,5 +303,35 @@ TEST(SimSessionTruth, AngleTruthCountsTheScriptedRepetitions) {
   for (const measures::JointAngles& a : angles.frames) {
     EXPECT_FALSE(a[static_cast<int>(measures::Angle::kRightHumerusAxialRotation)].defined);
     EXPECT_LT(a[static_cast<int>(measures::Angle::kRightElbowFlexion)].deg, 15);
+  }
+}
+
+// A trunk tilted right then left, and a forearm rolled into pronation then supination, rest in
+// the middle of their motion: three scripted repetitions read three counted ones of the whole
+// arc (trunk +-20 deg, forearm +-60 deg), not two cut at the far side.
+TEST(SimSessionTruth, AngleTruthCountsRepetitionsThatSwingAboutZero) {
+  struct Case {
+    const char* motion;
+    std::vector<measures::Angle> angles;
+    double range_deg;
+  };
+  for (const Case& c :
+       {Case{"torso_tilt", {measures::Angle::kThoraxLateralTilt}, 40},
+        Case{"forearm_rolling", {measures::Angle::kLeftPronation, measures::Angle::kRightPronation}, 120}}) {
+    SCOPED_TRACE(c.motion);
+    SimSessionOptions o = small(false);
+    o.motion = c.motion;
+    o.motion_options.exercise.repetitions = 3;
+    o.duration_from_motion = true;
+    ValidatingSink sink;
+    const AngleTruth angles = angle_truth(simulate_session(with_session_duration(o), sink));
+    ASSERT_TRUE(angles.repetitions.has_value());
+    EXPECT_NE(std::find(c.angles.begin(), c.angles.end(), angles.repetitions->angle), c.angles.end())
+        << measures::angle_name(angles.repetitions->angle);
+    EXPECT_EQ(angles.repetitions->summary.count, 3);
+    for (const measures::Repetition& r : angles.repetitions->summary.repetitions) {
+      if (r.partial) continue;
+      EXPECT_NEAR(r.range_deg, c.range_deg, 0.1 * c.range_deg);
+    }
   }
 }
