@@ -187,11 +187,14 @@ Repetition describe(const Piece& piece, const std::vector<double>& t_s, const st
 
 // Whether a trough -> peak -> trough cycle is a complete repetition: both swings large enough and
 // a plausible duration.
+bool duration_within_bounds(const Repetition& rep, const RepetitionOptions& options) {
+  return rep.duration_s >= options.min_duration_s && rep.duration_s <= options.max_duration_s;
+}
+
 bool is_complete(const Repetition& cycle, double start_deg, double end_deg, const RepetitionOptions& options) {
   const bool rise_ok = cycle.max_deg - start_deg >= options.min_amplitude_deg;
   const bool fall_ok = cycle.max_deg - end_deg >= options.min_amplitude_deg;
-  const bool duration_ok = cycle.duration_s >= options.min_duration_s && cycle.duration_s <= options.max_duration_s;
-  return rise_ok && fall_ok && duration_ok;
+  return rise_ok && fall_ok && duration_within_bounds(cycle, options);
 }
 
 // Appends the repetitions of one piece: the cycles between its troughs, and, as partial ones,
@@ -236,10 +239,6 @@ void add_piece(const Piece& piece, const std::vector<double>& t_s, const std::ve
 void add_piece_about_zero(const Piece& piece, const std::vector<double>& t_s, const std::vector<double>& angle_deg,
                           double rest_deg, const RepetitionOptions& options, std::vector<Repetition>& out) {
   const std::vector<double> piece_speeds = speeds(piece, t_s, angle_deg);
-  const auto side_of = [&](std::size_t position) {
-    const double value = angle_deg[piece[position]] - rest_deg;
-    return value >= options.hysteresis_deg ? 1 : value <= -options.hysteresis_deg ? 2 : 0;
-  };
   constexpr int kBothSides = 3;
   bool out_of_rest = false, cut_by_start = false, rest_seen = false;
   int sides_seen = 0, last_side = 0;
@@ -250,8 +249,9 @@ void add_piece_about_zero(const Piece& piece, const std::vector<double>& t_s, co
   std::size_t first = 0;  // where the current excursion left rest
   std::size_t last_at_rest = 0;
   for (std::size_t p = 0; p < piece.size(); ++p) {
-    const int side = side_of(p);
-    const double magnitude = std::abs(angle_deg[piece[p]] - rest_deg);
+    const double deviation = angle_deg[piece[p]] - rest_deg;
+    const double magnitude = std::abs(deviation);
+    const int side = magnitude < options.hysteresis_deg ? 0 : deviation > 0 ? 1 : 2;
     if (!out_of_rest) {
       // Leaving rest takes a real move (the hysteresis) from where the angle rested, so noise
       // just after a return does not start the next repetition.
@@ -278,8 +278,7 @@ void add_piece_about_zero(const Piece& piece, const std::vector<double>& t_s, co
     const bool returned = side == 0 && last_side_extreme_deg - magnitude >= options.hysteresis_deg;
     if (!returned || sides_seen != kBothSides) continue;
     Repetition rep = describe(piece, t_s, angle_deg, piece_speeds, first, p);
-    const bool duration_ok = rep.duration_s >= options.min_duration_s && rep.duration_s <= options.max_duration_s;
-    rep.partial = cut_by_start || !duration_ok || rep.range_deg < options.min_amplitude_deg;
+    rep.partial = cut_by_start || !duration_within_bounds(rep, options) || rep.range_deg < options.min_amplitude_deg;
     out.push_back(rep);
     out_of_rest = false;
     last_at_rest = p;
@@ -334,25 +333,31 @@ std::vector<double> sorted_finite(const std::vector<double>& series) {
   return finite;
 }
 
-// The middle of the series' range of motion, between its 5th and 95th percentiles (as
-// dominant_series, so that a glitch cannot move it); +inf for fewer than two finite samples.
-double resting_half_limit(const std::vector<double>& angle_deg) {
-  const std::vector<double> finite = sorted_finite(angle_deg);
-  if (finite.size() < 2) return std::numeric_limits<double>::infinity();
-  return 0.5 * (percentile(finite, 0.05) + percentile(finite, 0.95));
+// The series' range of motion between its 5th and 95th percentiles of finite samples (as
+// dominant_series, so that a glitch cannot move it), from the sorted finite samples.
+struct MotionRange {
+  double low = 0, high = 0;
+  double middle() const { return 0.5 * (low + high); }
+  // The middle half: the range moved a quarter of its spread inwards at both ends.
+  double middle_half_low() const { return low + 0.25 * (high - low); }
+  double middle_half_high() const { return high - 0.25 * (high - low); }
+};
+
+MotionRange motion_range(const std::vector<double>& sorted) {
+  return {percentile(sorted, 0.05), percentile(sorted, 0.95)};
+}
+
+bool zero_in_middle_half(const MotionRange& range) {
+  return range.high > range.low && range.middle_half_low() <= 0.0 && 0.0 <= range.middle_half_high();
 }
 
 // Where an angle that swings about its zero rests: the median of its samples in the middle half
-// of its motion (between the 5th and 95th percentiles moved a quarter of their spread inwards),
-// where it holds between repetitions. Not zero itself: a fitted angle can be offset by several
-// degrees, more than the hysteresis, and would then never seem to come back.
-double middle_rest_deg(const std::vector<double>& angle_deg) {
-  const std::vector<double> finite = sorted_finite(angle_deg);
-  const double low = percentile(finite, 0.05), high = percentile(finite, 0.95);
-  const double quarter = 0.25 * (high - low);
+// of its motion, where it holds between repetitions. Not zero itself: a fitted angle can be
+// offset by several degrees, more than the hysteresis, and would then never seem to come back.
+double middle_rest_deg(const std::vector<double>& sorted, const MotionRange& range) {
   std::vector<double> middle;
-  for (double v : finite)
-    if (v >= low + quarter && v <= high - quarter) middle.push_back(v);
+  for (double v : sorted)
+    if (v >= range.middle_half_low() && v <= range.middle_half_high()) middle.push_back(v);
   return middle.empty() ? 0.0 : percentile(middle, 0.5);
 }
 
@@ -360,10 +365,7 @@ double middle_rest_deg(const std::vector<double>& angle_deg) {
 
 bool swings_about_zero(const std::vector<double>& angle_deg) {
   const std::vector<double> finite = sorted_finite(angle_deg);
-  if (finite.size() < 2) return false;
-  const double low = percentile(finite, 0.05), high = percentile(finite, 0.95);
-  const double quarter = 0.25 * (high - low);
-  return high > low && low + quarter <= 0.0 && 0.0 <= high - quarter;
+  return finite.size() >= 2 && zero_in_middle_half(motion_range(finite));
 }
 
 RepetitionSummary segment_repetitions(const std::vector<double>& t_s, const std::vector<double>& angle_deg,
@@ -371,9 +373,14 @@ RepetitionSummary segment_repetitions(const std::vector<double>& t_s, const std:
   check_series(t_s, angle_deg);
   check_options(options);
   RepetitionSummary summary;
-  const bool about_zero = swings_about_zero(angle_deg);
-  const double rest_limit_deg = resting_half_limit(angle_deg);
-  const double rest_deg = about_zero ? middle_rest_deg(angle_deg) : 0.0;
+  const std::vector<double> finite = sorted_finite(angle_deg);
+  const bool has_range = finite.size() >= 2;
+  const MotionRange range = has_range ? motion_range(finite) : MotionRange{};
+  const bool about_zero = has_range && zero_in_middle_half(range);
+  // Only troughs in the resting half, at most the middle of the range, bound repetitions (any
+  // trough where there are fewer than two samples to give a range).
+  const double rest_limit_deg = has_range ? range.middle() : std::numeric_limits<double>::infinity();
+  const double rest_deg = about_zero ? middle_rest_deg(finite, range) : 0.0;
   for (const Piece& piece : split_at_gaps(t_s, angle_deg, options.max_gap_s)) {
     if (about_zero) {
       add_piece_about_zero(piece, t_s, angle_deg, rest_deg, options, summary.repetitions);
