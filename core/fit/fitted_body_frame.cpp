@@ -11,8 +11,14 @@ namespace posefuse::fit {
 
 namespace {
 
-// The camera's own estimate of an untracked (inferred or lost) joint is the weaker evidence.
-constexpr double kUntrackedConfidence = 0.5;
+// Where the camera does not track a joint (inferred or lost) the fit places it from the depth
+// around it and the body model, and the angles read from it cannot be acted on: on the joint-angle
+// bench's design sessions (seeds 61 and 62) the elbow flexions and humerus axial rotations read
+// from an untracked joint reached a 99 % error bound of 92 degrees (4143 values), which is
+// confidence 2^-(92/15)^2, i.e. none (forearm::confidence_from_bound99_rad). The elevation read
+// from an untracked elbow stayed within 7 degrees there; it is given no confidence either, as
+// the joint's confidence cannot tell which angle reads it (docs/fitting.md, "Joint confidence").
+constexpr double kUntrackedConfidence = 0.0;
 
 double confidence_of(const TrackedSkeleton& skeleton, int camera_joint) {
   return skeleton.tracking[static_cast<size_t>(camera_joint)] == JointTracking::kTracked ? 1.0 : kUntrackedConfidence;

@@ -16,7 +16,7 @@ namespace posefuse::fit {
 
 struct FittedJoint {
   Eigen::Vector3d p_K = Eigen::Vector3d::Zero();
-  double confidence = 0.0;  // 1 where the camera tracks the corresponding joint, else 0.5
+  double confidence = 0.0;  // 1 where the camera tracks the corresponding joint, else 0
 };
 
 struct FittedForearm {
