@@ -3,7 +3,7 @@
 # against the simulator's true angles (posefuse-score): per angle the RMS and max error pooled
 # over the sessions (all frames, and the frames the result gives confidence >= 0.5), and per
 # session the repetitions counted against the truth's and the range of motion error per
-# repetition.
+# repetition (all matched ones, and those whose range has confidence >= 0.5).
 #   bench/joint_angles.sh [BUILD_DIR] [MOTION:SEED:SPEED ...]     MOTION: an exercise's name or a .bvh clip
 # KEEP=DIR keeps each session's recording, results and gt/ under DIR (e.g. for posefuse report).
 # Default sessions: the scripted exercises at seeds 71 and 72 and speeds 0.9 and 1.15, both arms,
@@ -75,7 +75,8 @@ for spec in specs:
         if cn > 0:
             crms, cmx = float(f[5]), float(f[6])
             p[3] += cn * crms * crms; p[4] += cn; p[5] = max(p[5], cmx)
-    m = re.search(r"Repetitions.*\n.*\n(\S+)\s+(\S+)\s+(\d+)\s+(\d+)\s+(\d+)\s+(\S+)\s+(\S+)", text)
+    m = re.search(r"Repetitions.*\n.*\n(\S+)\s+(\S+)\s+(\d+)\s+(\d+)\s+(\d+)\s+(\S+)\s+(\S+)\s+(\d+)\s+(\S+)\s+(\S+)",
+                  text)
     sessions.append((name, m.groups() if m else None))
 print("Joint angle error, pooled over the sessions (deg)\n")
 print("| angle | frames | RMS | max | confident frames | confident RMS | confident max |")
@@ -84,12 +85,13 @@ for angle, (s, n, mx, cs, cn, cmx) in pooled.items():
     confident = f"{cn} | {math.sqrt(cs / cn):.2f} | {cmx:.2f}" if cn else "0 | - | -"
     print(f"| {angle} | {n} | {math.sqrt(s / n):.2f} | {mx:.2f} | {confident} |")
 print()
-print("Repetitions per session (counted; ROM error per matched repetition, deg)\n")
-print("| session | angle | true angle | count | true count | ROM error RMS | ROM error max |")
-print("|---|---|---|---|---|---|---|")
+print("Repetitions per session (counted; ROM error per matched repetition, deg; confident: those whose range")
+print("the result gives confidence >= 0.5)\n")
+print("| session | angle | true angle | count | true count | ROM error RMS | ROM error max | confident | confident RMS | confident max |")
+print("|---|---|---|---|---|---|---|---|---|---|")
 for name, g in sessions:
     if g is None:
-        print(f"| {name} | (no repetitions in the results) | | | | | |"); continue
-    angle, true_angle, count, true_count, matched, rms, mx = g
-    print(f"| {name} | {angle} | {true_angle} | {count} | {true_count} | {rms} | {mx} |")
+        print(f"| {name} | (no repetitions in the results) | | | | | | | | |"); continue
+    angle, true_angle, count, true_count, matched, rms, mx, cn, crms, cmx = g
+    print(f"| {name} | {angle} | {true_angle} | {count} | {true_count} | {rms} | {mx} | {cn} of {matched} | {crms} | {cmx} |")
 PY

@@ -384,7 +384,7 @@ void score_repetitions(const session::ResultDirectory& result, const session::Re
       }
       for (const measures::Repetition& r : measures::segment_repetitions(t_s, deg).repetitions) {
         resegmented.push_back({score.result_angle, r.t_start_s, r.t_peak_s, r.t_end_s, r.min_deg, r.max_deg,
-                               r.range_deg, r.peak_speed_deg_s, r.duration_s, !r.partial});
+                               r.range_deg, r.peak_speed_deg_s, r.duration_s, !r.partial, r.confidence});
       }
       report.notes.push_back("repetitions: the truth's dominant angle is " + score.truth_angle +
                              "; scored against the truth's " + score.result_angle + " (default options)");
@@ -396,7 +396,7 @@ void score_repetitions(const session::ResultDirectory& result, const session::Re
   }
   score.result_count = mine.size();
   score.truth_count = theirs.size();
-  std::vector<double> range_errors;
+  std::vector<double> range_errors, confident_range_errors;
   for (const session::RepetitionRow* want : theirs) {
     const session::RepetitionRow* best = nullptr;
     double best_overlap = 0.0;
@@ -407,10 +407,13 @@ void score_repetitions(const session::ResultDirectory& result, const session::Re
         best = got;
       }
     }
-    if (best) range_errors.push_back(std::abs(best->range_deg - want->range_deg));
+    if (!best) continue;
+    range_errors.push_back(std::abs(best->range_deg - want->range_deg));
+    if (best->confidence >= measures::kConfidentAt) confident_range_errors.push_back(range_errors.back());
   }
   score.matched = range_errors.size();
   score.range_deg = summarize_errors(range_errors);
+  score.confident_range_deg = summarize_errors(confident_range_errors);
   report.repetitions = score;
 }
 
@@ -643,9 +646,13 @@ std::string format_score_report(const ScoreReport& report) {
   if (report.repetitions) {
     const RepetitionScore& r = *report.repetitions;
     out << "Repetitions (counted) and range of motion per repetition (deg)\n";
-    Table t({"angle", "true angle", "count", "true count", "matched", "ROM error RMS", "ROM error max"});
+    Table t({"angle", "true angle", "count", "true count", "matched", "ROM error RMS", "ROM error max", "confident",
+             "confident RMS", "confident max"});
     t.add({r.result_angle, r.truth_angle, std::to_string(r.result_count), std::to_string(r.truth_count),
-           std::to_string(r.matched), fixed(r.range_deg.rms, 2), fixed(r.range_deg.max, 2)});
+           std::to_string(r.matched), fixed(r.range_deg.rms, 2), fixed(r.range_deg.max, 2),
+           std::to_string(r.confident_range_deg.count),
+           r.confident_range_deg.count > 0 ? fixed(r.confident_range_deg.rms, 2) : "-",
+           r.confident_range_deg.count > 0 ? fixed(r.confident_range_deg.max, 2) : "-"});
     out << t.str() << "\n";
   }
   for (const std::string& note : report.notes) out << "note: " << note << "\n";

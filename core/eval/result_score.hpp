@@ -100,6 +100,9 @@ struct RepetitionScore {
   std::size_t result_count = 0, truth_count = 0;
   std::size_t matched = 0;
   ErrorSummary range_deg;  // |range - true range| over matched repetitions
+  // The same over the matched repetitions whose range the result gives confidence >=
+  // measures::kConfidentAt (none for files without repetition confidences).
+  ErrorSummary confident_range_deg;
 };
 
 struct ScoreReport {

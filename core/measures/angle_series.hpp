@@ -38,6 +38,7 @@ class AngleSeries {
   std::vector<Angle> candidates_;
   std::vector<double> t_s_;
   std::vector<std::vector<double>> series_deg_;  // per candidate; NaN where undefined or held
+  std::vector<std::vector<float>> confidence_;   // per candidate; 0 where undefined or held
 };
 
 }  // namespace posefuse::measures

@@ -6,11 +6,13 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <optional>
 #include <string>
 #include <system_error>
 #include <vector>
 
 #include "common/error.hpp"
+#include "measures/joint_angles.hpp"
 
 namespace posefuse::measures {
 namespace {
@@ -42,6 +44,18 @@ void check_series(const std::vector<double>& t_s, const std::vector<double>& ang
       throw_invalid("angle_deg",
                     element("angle_deg", i, angle_deg[i]) + " is infinite (a missing sample is marked with NaN)");
     }
+  }
+}
+
+void check_confidence(const std::vector<double>& t_s, const std::vector<float>& confidence) {
+  if (confidence.empty()) return;
+  if (confidence.size() != t_s.size()) {
+    throw_invalid("confidence", "has " + std::to_string(confidence.size()) + " samples but t_s has " +
+                                    std::to_string(t_s.size()) + "; give one per sample or none");
+  }
+  for (std::size_t i = 0; i < confidence.size(); ++i) {
+    if (!(confidence[i] >= 0.0f && confidence[i] <= 1.0f))
+      throw_invalid("confidence", element("confidence", i, confidence[i]) + " is not in [0, 1]");
   }
 }
 
@@ -307,6 +321,37 @@ double spread(const std::vector<double>& values) {
   return std::sqrt(sum_sq / static_cast<double>(values.size() - 1));
 }
 
+// The confidence of a repetition's range: the lower of the confidences at its lowest and highest
+// samples (the first of equals). A repetition never spans a cut, so every finite sample between
+// its start and end belongs to it.
+double range_confidence(const Repetition& rep, const std::vector<double>& t_s, const std::vector<double>& angle_deg,
+                        const std::vector<float>& confidence) {
+  std::optional<double> at_min, at_max;
+  const auto first = static_cast<std::size_t>(std::lower_bound(t_s.begin(), t_s.end(), rep.t_start_s) - t_s.begin());
+  for (std::size_t i = first; i < t_s.size() && t_s[i] <= rep.t_end_s && !(at_min && at_max); ++i) {
+    if (!at_min && angle_deg[i] == rep.min_deg) at_min = confidence[i];
+    if (!at_max && angle_deg[i] == rep.max_deg) at_max = confidence[i];
+  }
+  return std::min(at_min.value_or(0.0), at_max.value_or(0.0));
+}
+
+// Each repetition's confidence, the share of confident samples and the uncertain counted ones.
+void add_confidences(RepetitionSummary& summary, const std::vector<double>& t_s, const std::vector<double>& angle_deg,
+                     const std::vector<float>& confidence) {
+  if (confidence.empty()) return;
+  std::size_t finite = 0, confident = 0;
+  for (std::size_t i = 0; i < angle_deg.size(); ++i) {
+    if (std::isnan(angle_deg[i])) continue;
+    ++finite;
+    if (confidence[i] >= kConfidentAt) ++confident;
+  }
+  summary.confident_fraction = finite > 0 ? static_cast<double>(confident) / static_cast<double>(finite) : 0.0;
+  for (Repetition& rep : summary.repetitions) {
+    rep.confidence = range_confidence(rep, t_s, angle_deg, confidence);
+    if (!rep.partial && rep.confidence < kConfidentAt) ++summary.uncertain_count;
+  }
+}
+
 void summarize(RepetitionSummary& summary) {
   std::vector<double> ranges, durations, peak_speeds;
   for (const Repetition& rep : summary.repetitions) {
@@ -369,8 +414,9 @@ bool swings_about_zero(const std::vector<double>& angle_deg) {
 }
 
 RepetitionSummary segment_repetitions(const std::vector<double>& t_s, const std::vector<double>& angle_deg,
-                                      const RepetitionOptions& options) {
+                                      const RepetitionOptions& options, const std::vector<float>& confidence) {
   check_series(t_s, angle_deg);
+  check_confidence(t_s, confidence);
   check_options(options);
   RepetitionSummary summary;
   const std::vector<double> finite = sorted_finite(angle_deg);
@@ -389,6 +435,7 @@ RepetitionSummary segment_repetitions(const std::vector<double>& t_s, const std:
     }
   }
   summarize(summary);
+  add_confidences(summary, t_s, angle_deg, confidence);
   return summary;
 }
 

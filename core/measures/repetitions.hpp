@@ -36,6 +36,12 @@
 // return. It counts when its range
 // (max - min) is at least `min_amplitude_deg` and its duration lies within the bounds; motion cut
 // by the start, the end or a gap is partial, as above.
+//
+// Confidence: segmenting does not look at the samples' confidences (an angle the method is unsure
+// of still moves as the exercise does); it reports them. Each repetition's range carries the
+// confidence of its two extremes, and the summary how much of the series was confident, so that a
+// count or range read off values not to act on says so (docs/measures.md, "Confidence of
+// repetitions").
 #include <vector>
 
 namespace posefuse::measures {
@@ -58,6 +64,9 @@ struct Repetition {
                                       // over the neighbouring finite samples; one-sided at a cut)
   double duration_s = 0;              // t_end - t_start
   bool partial = false;               // reported, not counted
+  // Of its range: the lower of the confidences at its lowest and highest samples (the range is
+  // their difference, so an error in either moves it); 1 where the series carries no confidences.
+  double confidence = 1.0;
 };
 
 struct RepetitionSummary {
@@ -67,16 +76,22 @@ struct RepetitionSummary {
   double mean_range_deg = 0, range_spread_deg = 0;
   double mean_duration_s = 0, duration_spread_s = 0;
   double mean_peak_speed_deg_s = 0;
+  // The share of the series' finite samples at confidence >= kConfidentAt (1 without confidences),
+  // and how many counted repetitions have a confidence below it.
+  double confident_fraction = 1.0;
+  int uncertain_count = 0;
 };
 
-// `t_s` strictly increasing, same size as `angle_deg`; NaN marks a missing sample. Throws
-// posefuse::Error (kInvalidArgument, field "t_s" / "angle_deg" / "repetition_options.*") for
-// mismatched sizes, non-increasing or non-finite times, infinite angles and bad options:
+// `t_s` strictly increasing, same size as `angle_deg`; NaN marks a missing sample. `confidence`:
+// each sample's, in [0, 1], or empty (every sample fully confident). Throws posefuse::Error
+// (kInvalidArgument, field "t_s" / "angle_deg" / "confidence" / "repetition_options.*") for
+// mismatched sizes, non-increasing or non-finite times, infinite angles, confidences outside
+// [0, 1] and bad options:
 // hysteresis_deg not positive, min_amplitude_deg below hysteresis_deg, min_duration_s negative,
 // max_duration_s below min_duration_s (named as "repetition_options.max_duration_s"), max_gap_s
 // negative, or any of them NaN. An empty or all-NaN series has no repetitions.
 RepetitionSummary segment_repetitions(const std::vector<double>& t_s, const std::vector<double>& angle_deg,
-                                      const RepetitionOptions& options = {});
+                                      const RepetitionOptions& options = {}, const std::vector<float>& confidence = {});
 
 // Whether a series swings about the angle's zero (its anatomical neutral) rather than rising
 // from a rest at one end: zero lies in the middle half of its motion, between its 5th and 95th

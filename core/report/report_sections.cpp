@@ -140,17 +140,21 @@ std::string repetition_table(const session::ResultDirectory& results) {
   const double t0 = results.joint_angles.empty() ? 0.0 : seconds(results.joint_angles.front().t_us);
   std::string out = "<table id=\"repetitions\">\n";
   out += row({"#", "angle", "start (s)", "end (s)", "duration (s)", "min (deg)", "max (deg)", "range of motion (deg)",
-              "peak speed (deg/s)", ""},
+              "peak speed (deg/s)", "confidence", ""},
              "th");
   std::map<std::string, std::vector<double>> ranges;
   int index = 0;
   for (const session::RepetitionRow& r : results.repetitions) {
     if (r.counted) ranges[r.angle].push_back(r.range_deg);
-    out += "<tr class=\"" + std::string(r.counted ? "counted" : "partial") + "\"><td>" + std::to_string(++index) +
-           "</td><td>" + html_escape(r.angle) + "</td><td>" + fixed(r.t_start_s - t0, 2) + "</td><td>" +
-           fixed(r.t_end_s - t0, 2) + "</td><td>" + fixed(r.duration_s, 2) + "</td><td>" + fixed(r.min_deg, 1) +
-           "</td><td>" + fixed(r.max_deg, 1) + "</td><td>" + fixed(r.range_deg, 1) + "</td><td>" +
-           fixed(r.peak_speed_deg_s, 0) + "</td><td>" + (r.counted ? "" : "partial, not counted") + "</td></tr>\n";
+    // A range read off an extreme below kConfidentAt is reported, and marked as not one to act on.
+    const bool uncertain = r.confidence < measures::kConfidentAt;
+    const std::string note = !r.counted ? "partial, not counted" : uncertain ? "range not confident" : "";
+    out += "<tr class=\"" + std::string(r.counted ? "counted" : "partial") + (uncertain ? " uncertain" : "") +
+           "\"><td>" + std::to_string(++index) + "</td><td>" + html_escape(r.angle) + "</td><td>" +
+           fixed(r.t_start_s - t0, 2) + "</td><td>" + fixed(r.t_end_s - t0, 2) + "</td><td>" + fixed(r.duration_s, 2) +
+           "</td><td>" + fixed(r.min_deg, 1) + "</td><td>" + fixed(r.max_deg, 1) + "</td><td>" + fixed(r.range_deg, 1) +
+           "</td><td>" + fixed(r.peak_speed_deg_s, 0) + "</td><td>" + fixed(r.confidence, 2) + "</td><td>" + note +
+           "</td></tr>\n";
   }
   out += "</table>\n<table id=\"repetition-summary\">\n";
   out += row({"angle", "repetitions counted", "mean range (deg)", "spread (SD, deg)"}, "th");

@@ -17,6 +17,7 @@ p.note, p.none { color: #555; font-size: 14px; }
 table { border-collapse: collapse; font-size: 14px; margin: 8px 0; }
 th, td { border: 1px solid #ccc; padding: 3px 8px; text-align: left; }
 tr.partial td { color: #888; font-style: italic; }
+tr.counted.uncertain td { color: #a05a00; }
 svg.plot { width: 100%; height: auto; margin: 6px 0; }
 svg.plot .plot-title { font-size: 14px; font-weight: bold; }
 svg.plot .tick, svg.plot .legend, svg.plot .axis-label { font-size: 11px; fill: #444; }
@@ -83,7 +84,9 @@ SessionReport session_report(const session::ResultDirectory& results, const std:
   }
   report.contents.plots = plots.size();
 
-  h += "<h2>Repetitions and range of motion</h2>\n" + repetition_table(results);
+  h += "<h2>Repetitions and range of motion</h2>\n<p class=\"note\">A repetition's confidence is the lower of its "
+       "angle's confidences at its minimum and maximum; below " +
+       fixed(kConfidentAt, 1) + " its range is not one to act on.</p>\n" + repetition_table(results);
   report.contents.repetitions = results.repetitions.size();
   h += "<h2>Warnings</h2>\n" + warning_list(warning_lines);
   report.contents.warnings = warning_lines.size();

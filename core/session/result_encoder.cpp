@@ -124,6 +124,7 @@ void encode(const Repetitions& value, v1::FitResult& result) {
     rep.set_peak_speed_deg_s(r.peak_speed_deg_s);
     rep.set_duration_s(r.duration_s);
     rep.set_partial(r.partial);
+    rep.set_confidence(r.confidence);
   }
   out.set_count(static_cast<std::uint32_t>(s.count));
   out.set_mean_range_deg(s.mean_range_deg);
@@ -131,6 +132,8 @@ void encode(const Repetitions& value, v1::FitResult& result) {
   out.set_mean_duration_s(s.mean_duration_s);
   out.set_duration_spread_s(s.duration_spread_s);
   out.set_mean_peak_speed_deg_s(s.mean_peak_speed_deg_s);
+  out.set_confident_fraction(s.confident_fraction);
+  out.set_uncertain_count(static_cast<std::uint32_t>(s.uncertain_count));
 }
 
 }  // namespace

@@ -58,6 +58,10 @@ inline const char* const kRepetitionsCsv = "repetitions.csv";
 inline const char* const kRepetitionSummaryJson = "repetition_summary.json";
 inline const std::vector<std::string> kRepetitionColumns = {
     "angle",   "repetition", "t_start_s",        "t_peak_s",   "t_end_s", "min_deg",
+    "max_deg", "range_deg",  "peak_speed_deg_s", "duration_s", "counted", "confidence"};
+// repetitions.csv as written before each repetition carried its confidence; still read.
+inline const std::vector<std::string> kRepetitionColumnsWithoutConfidence = {
+    "angle",   "repetition", "t_start_s",        "t_peak_s",   "t_end_s", "min_deg",
     "max_deg", "range_deg",  "peak_speed_deg_s", "duration_s", "counted"};
 // t_s, one column per angle, then one confidence column per angle.
 std::vector<std::string> joint_angle_columns();

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 #include "body/smpl_model.hpp"
@@ -92,9 +93,10 @@ class ResultCsv {
   CsvReader csv_;
 };
 
-// Whether an orientation file's header row is not `older`, the layout before each sample carried
-// its uncertainty.
-bool has_uncertainty_columns(int directory, const std::string& name, const std::vector<std::string>& older_columns) {
+// Whether a file's header row is not `older_columns`, an earlier layout of it with fewer columns
+// (an orientation file before each sample carried its uncertainty, repetitions.csv before each
+// repetition carried its confidence).
+bool newer_than(int directory, const std::string& name, const std::vector<std::string>& older_columns) {
   const std::unique_ptr<std::istream> in = open_stream_beneath(directory, name);
   std::string header;
   std::getline(*in, header);
@@ -108,7 +110,7 @@ std::vector<TimedOrientation> read_orientations(int directory, const std::string
   namespace layout = result_layout;
   const std::vector<std::string>& older =
       forearm ? layout::kForearmOrientationColumnsWithoutUncertainty : layout::kOrientationColumnsWithoutUncertainty;
-  const bool uncertainty = has_uncertainty_columns(directory, name, older);
+  const bool uncertainty = newer_than(directory, name, older);
   const std::vector<std::string>& today = forearm ? layout::kForearmOrientationColumns : layout::kOrientationColumns;
   ResultCsv csv(directory, name, uncertainty ? today : older);
   const int uncertainty_column = forearm ? 6 : 5;
@@ -283,23 +285,32 @@ std::vector<AngleRow> read_angles(Reading& out) {
 }
 
 std::vector<RepetitionRow> read_repetitions(Reading& out) {
-  return read_rows<RepetitionRow>(out, result_layout::kRepetitionsCsv, result_layout::kRepetitionColumns,
-                                  [](ResultCsv& csv, const auto&) {
-                                    RepetitionRow row;
-                                    row.angle = csv.text(0);
-                                    row.t_start_s = csv.number(2);
-                                    row.t_peak_s = csv.number(3);
-                                    row.t_end_s = csv.number(4);
-                                    row.min_deg = csv.number(5);
-                                    row.max_deg = csv.number(6);
-                                    row.range_deg = csv.number(7);
-                                    row.peak_speed_deg_s = csv.number(8);
-                                    row.duration_s = csv.number(9);
-                                    const std::string counted = csv.text(10);
-                                    if (counted != "0" && counted != "1") throw_invalid(csv.field(10), "is not 0 or 1");
-                                    row.counted = counted == "1";
-                                    return row;
-                                  });
+  namespace layout = result_layout;
+  const bool with_confidence =
+      !has_entry(out.directory.get(), layout::kRepetitionsCsv, FileKind::kRegular) ||
+      newer_than(out.directory.get(), layout::kRepetitionsCsv, layout::kRepetitionColumnsWithoutConfidence);
+  return read_rows<RepetitionRow>(
+      out, layout::kRepetitionsCsv,
+      with_confidence ? layout::kRepetitionColumns : layout::kRepetitionColumnsWithoutConfidence,
+      [with_confidence](ResultCsv& csv, const auto&) {
+        RepetitionRow row;
+        row.angle = csv.text(0);
+        row.t_start_s = csv.number(2);
+        row.t_peak_s = csv.number(3);
+        row.t_end_s = csv.number(4);
+        row.min_deg = csv.number(5);
+        row.max_deg = csv.number(6);
+        row.range_deg = csv.number(7);
+        row.peak_speed_deg_s = csv.number(8);
+        row.duration_s = csv.number(9);
+        const std::string counted = csv.text(10);
+        if (counted != "0" && counted != "1") throw_invalid(csv.field(10), "is not 0 or 1");
+        row.counted = counted == "1";
+        row.confidence = with_confidence ? csv.number(11) : std::numeric_limits<double>::quiet_NaN();
+        if (with_confidence && !(row.confidence >= 0.0 && row.confidence <= 1.0))
+          throw_invalid(csv.field(11), "is not a confidence in [0, 1]");
+        return row;
+      });
 }
 
 }  // namespace

@@ -88,6 +88,7 @@ struct RepetitionRow {
   double t_start_s = 0, t_peak_s = 0, t_end_s = 0;
   double min_deg = 0, max_deg = 0, range_deg = 0, peak_speed_deg_s = 0, duration_s = 0;
   bool counted = false;
+  double confidence = 0;  // of range_deg, 0..1; NaN in files written before repetitions carried one
 };
 
 struct ResultDirectory {

@@ -5,6 +5,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <fstream>
 #include <functional>
 #include <thread>
@@ -78,6 +79,7 @@ TEST(ResultReader, ReadsBackWhatResultFilesWrote) {
   EXPECT_DOUBLE_EQ(r.repetitions[1].range_deg, 50.0);
   EXPECT_DOUBLE_EQ(r.repetitions[1].t_start_s, 2.001);
   EXPECT_TRUE(r.repetitions[1].counted);
+  EXPECT_DOUBLE_EQ(r.repetitions[1].confidence, 0.3);
   EXPECT_FALSE(r.repetitions[2].counted);
 }
 
@@ -91,6 +93,31 @@ void drop_last_columns(const std::filesystem::path& file, int n) {
   }
   in.close();
   std::ofstream(file) << out;
+}
+
+TEST(ResultReader, RepetitionsWithoutTheConfidenceColumnStillRead) {
+  // As written before each repetition carried its confidence: the rows read, with none (NaN).
+  const auto dir = result_fixture::fresh_result_dir("repetitions_without_confidence");
+  result_fixture::write_fixture(dir, {});
+  drop_last_columns(dir / "repetitions.csv", 1);
+  const session::ResultDirectory r = session::read_result_files(dir);
+  ASSERT_EQ(r.repetitions.size(), 3u);
+  EXPECT_DOUBLE_EQ(r.repetitions[1].range_deg, 50.0);
+  EXPECT_TRUE(r.repetitions[1].counted);
+  EXPECT_TRUE(std::isnan(r.repetitions[1].confidence));
+}
+
+TEST(ResultReader, ARepetitionConfidenceOutsideZeroToOneIsRefusedNamingTheCell) {
+  const auto dir = result_fixture::fresh_result_dir("repetitions_bad_confidence");
+  result_fixture::write_fixture(dir, {});
+  drop_last_columns(dir / "repetitions.csv", 1);
+  std::ifstream in(dir / "repetitions.csv");
+  std::string text, line;
+  for (int row = 0; std::getline(in, line); ++row) text += line + (row == 0 ? ",confidence\n" : ",1.5\n");
+  in.close();
+  std::ofstream(dir / "repetitions.csv") << text;
+  posefuse::testing::expect_error([&] { session::read_result_files(dir); }, ErrorCode::kInvalidArgument,
+                                  "repetitions.csv:2:confidence");
 }
 
 TEST(ResultReader, OrientationFilesWithoutTheUncertaintyColumnsStillRead) {

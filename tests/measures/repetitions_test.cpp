@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "common/error.hpp"
+#include "measures/joint_angles.hpp"
 
 namespace posefuse::measures {
 namespace {
@@ -462,6 +463,93 @@ TEST(Repetitions, BadSeriesAreRefusedNamingTheField) {
       },
       "angle_deg", "angle_deg[1] = inf is infinite");
   expect_invalid([&] { segment_repetitions(t, {0.0, 10.0, -kInf, 10.0}); }, "angle_deg", "angle_deg[2] = -inf");
+}
+
+// Confidences are reported, not used to segment: each repetition carries the lower of the
+// confidences at its lowest and highest samples, the summary the share of confident samples and
+// how many counted repetitions fall below kConfidentAt.
+TEST(Repetitions, EachRepetitionCarriesTheConfidenceOfItsExtremes) {
+  const Series series = exercise(std::vector<Cycle>(4, Cycle{90, 2}));
+  std::vector<float> confidence(series.t_s.size(), 0.9f);
+  for (std::size_t i = 0; i < series.t_s.size(); ++i) {
+    const double t = series.t_s[i];
+    if (std::abs(t - 3.0) < 0.005) confidence[i] = 0.2f;  // the second repetition's peak
+    // The fourth's start at 6 s (the third ends there too, at a minimum equal to its start's,
+    // the first of equals: its range keeps the confidence at 4 s).
+    if (t > 5.5 && t < 6.5) confidence[i] = 0.3f;
+    if (t > 7.2 && t < 7.8) confidence[i] = 0.0f;  // the fourth's descent: no extreme
+  }
+  const RepetitionSummary with = segment_repetitions(series.t_s, series.angle_deg, {}, confidence);
+  const RepetitionSummary without = segment(series);
+  ASSERT_EQ(with.count, 4);
+  ASSERT_EQ(with.repetitions.size(), without.repetitions.size());
+  for (std::size_t k = 0; k < with.repetitions.size(); ++k) {
+    EXPECT_EQ(with.repetitions[k].t_start_s, without.repetitions[k].t_start_s);
+    EXPECT_EQ(with.repetitions[k].t_end_s, without.repetitions[k].t_end_s);
+    EXPECT_EQ(with.repetitions[k].range_deg, without.repetitions[k].range_deg);
+    EXPECT_DOUBLE_EQ(without.repetitions[k].confidence, 1.0);
+  }
+  EXPECT_FLOAT_EQ(with.repetitions[0].confidence, 0.9f);
+  EXPECT_FLOAT_EQ(with.repetitions[1].confidence, 0.2f);
+  EXPECT_FLOAT_EQ(with.repetitions[2].confidence, 0.9f);
+  EXPECT_FLOAT_EQ(with.repetitions[3].confidence, 0.3f);
+  EXPECT_EQ(with.uncertain_count, 2);
+  std::size_t confident = 0;
+  for (const float c : confidence) confident += c >= kConfidentAt ? 1 : 0;
+  EXPECT_DOUBLE_EQ(with.confident_fraction, static_cast<double>(confident) / static_cast<double>(confidence.size()));
+  EXPECT_DOUBLE_EQ(without.confident_fraction, 1.0);
+  EXPECT_EQ(without.uncertain_count, 0);
+}
+
+// The share of confident samples counts only the samples that have an angle, and a partial
+// repetition's low confidence is reported but not counted as an uncertain repetition.
+TEST(Repetitions, ConfidentFractionSkipsMissingSamplesAndPartialsAreNotUncertainCounts) {
+  Series series = exercise(std::vector<Cycle>(2, Cycle{90, 2}));
+  cut_after(series, 3.0);  // the second repetition is cut at its peak
+  std::vector<float> confidence(series.t_s.size(), 1.0f);
+  for (std::size_t i = 0; i < series.t_s.size(); ++i) {
+    if (series.t_s[i] > 2.5) confidence[i] = 0.1f;
+    if (series.t_s[i] > 0.45 && series.t_s[i] < 0.75) {
+      series.angle_deg[i] = kNaN;  // missing (bridged: shorter than max_gap_s), its confidence 0 not counted
+      confidence[i] = 0.0f;
+    }
+  }
+  const RepetitionSummary summary = segment_repetitions(series.t_s, series.angle_deg, {}, confidence);
+  ASSERT_EQ(summary.repetitions.size(), 2u);
+  EXPECT_FALSE(summary.repetitions[0].partial);
+  EXPECT_FLOAT_EQ(summary.repetitions[0].confidence, 1.0f);
+  EXPECT_TRUE(summary.repetitions[1].partial);
+  EXPECT_FLOAT_EQ(summary.repetitions[1].confidence, 0.1f);
+  EXPECT_EQ(summary.uncertain_count, 0);
+  std::size_t finite = 0, confident = 0;
+  for (std::size_t i = 0; i < series.t_s.size(); ++i) {
+    if (std::isnan(series.angle_deg[i])) continue;
+    ++finite;
+    confident += confidence[i] >= kConfidentAt ? 1 : 0;
+  }
+  EXPECT_LT(finite, series.t_s.size());
+  EXPECT_DOUBLE_EQ(summary.confident_fraction, static_cast<double>(confident) / static_cast<double>(finite));
+}
+
+TEST(Repetitions, BadConfidencesAreRefusedNamingTheField) {
+  const std::vector<double> t = {0.0, 0.1, 0.2, 0.3};
+  const std::vector<double> a = {0.0, 10.0, 20.0, 10.0};
+  expect_invalid([&] { segment_repetitions(t, a, {}, {1.0f, 1.0f}); }, "confidence", "has 2 samples but t_s has 4");
+  expect_invalid(
+      [&] {
+        segment_repetitions(t, a, {}, {1.0f, 1.5f, 1.0f, 1.0f});
+      },
+      "confidence", "confidence[1] = 1.5 is not in [0, 1]");
+  expect_invalid(
+      [&] {
+        segment_repetitions(t, a, {}, {1.0f, 1.0f, -0.5f, 1.0f});
+      },
+      "confidence", "confidence[2] = -0.5 is not in [0, 1]");
+  expect_invalid(
+      [&] {
+        segment_repetitions(t, a, {}, {1.0f, 1.0f, 1.0f, std::nanf("")});
+      },
+      "confidence", "confidence[3] = nan is not in [0, 1]");
 }
 
 TEST(Repetitions, BadOptionsAreRefusedNamingTheOption) {

@@ -29,7 +29,10 @@ TEST(SessionReport, HoldsThePlotsTablesWarningsAndCalibration) {
   const std::string html = read_text(dir / "report.html");
   EXPECT_EQ(count_occurrences(html, "<svg class=\"plot\""), 5u);
   EXPECT_NE(html.find("<table id=\"repetitions\">"), std::string::npos);
-  EXPECT_EQ(count_occurrences(html, "<tr class=\"counted\">"), 2u);
+  EXPECT_EQ(count_occurrences(html, "<tr class=\"counted\">"), 1u);
+  // The second counted repetition's range is at confidence 0.3: marked, still counted.
+  EXPECT_EQ(count_occurrences(html, "<tr class=\"counted uncertain\">"), 1u);
+  EXPECT_NE(html.find("<td>0.30</td><td>range not confident</td>"), std::string::npos);
   EXPECT_EQ(count_occurrences(html, "<tr class=\"partial\">"), 1u);
   EXPECT_NE(html.find("<table id=\"repetition-summary\">"), std::string::npos);
   EXPECT_NE(html.find("<td>right_elbow_flexion</td><td>2</td><td>45.0</td><td>7.1</td>"), std::string::npos);

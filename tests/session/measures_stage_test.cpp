@@ -62,10 +62,12 @@ TEST(MeasuresStage, AnglesRepetitionsAndTheVertical) {
   const double period_s = 2.0;
   for (int f = 0; f < 30 * 9; ++f) stage.on_value(exercise_frame(f / 30.0, period_s, K_from_G), out);
   stage.finish(out);
-  // The one warning: elbows at 20-100 deg with the default 5 % arm length uncertainty
-  // (ElbowFlexionConfidenceFollowsTheArmLengthUncertainty).
-  ASSERT_EQ(out.warnings.size(), 1u);
+  // The two warnings: elbows at 20-100 deg with the default arm length uncertainty
+  // (ElbowFlexionConfidenceFollowsTheArmLengthUncertainty), and so repetitions of an angle that
+  // is never confident (RepetitionsOnUnconfidentValuesAreCountedAndSaid).
+  ASSERT_EQ(out.warnings.size(), 2u);
   EXPECT_EQ(out.warnings[0].rfind("MEASURES_ELBOW_FLEXION_UNCERTAIN", 0), 0u) << out.warnings[0];
+  EXPECT_EQ(out.warnings[1].rfind("MEASURES_REPETITIONS_UNCERTAIN", 0), 0u) << out.warnings[1];
 
   int frames = 0;
   const v1::RepetitionSummary* summary = nullptr;
@@ -113,7 +115,7 @@ TEST(MeasuresStage, ElbowFlexionConfidenceFollowsTheArmLengthUncertainty) {
   };
   // The left elbow holds 30 deg: with 5 % its flexion spreads about 12 deg, not confident.
   const testing::CollectingOutput uncertain = run(nullptr);
-  ASSERT_EQ(uncertain.warnings.size(), 1u);
+  ASSERT_EQ(uncertain.warnings.size(), 2u);  // and MEASURES_REPETITIONS_UNCERTAIN
   EXPECT_NE(uncertain.warnings[0].find("elbow flexion values are below confidence 0.5"), std::string::npos);
   EXPECT_LT(uncertain.results[0].joint_angles().angles(static_cast<int>(Angle::kLeftElbowFlexion)).confidence(), 0.5);
   // Known arm lengths: no warning, the elbows as confident as their joints.
@@ -123,6 +125,56 @@ TEST(MeasuresStage, ElbowFlexionConfidenceFollowsTheArmLengthUncertainty) {
                    1.0);
   EXPECT_DOUBLE_EQ(exact.results[0].joint_angles().angles(static_cast<int>(Angle::kLeftElbowFlexion)).deg(),
                    uncertain.results[0].joint_angles().angles(static_cast<int>(Angle::kLeftElbowFlexion)).deg());
+}
+
+// Repetitions segmented on values not to act on are still reported, and the result says so: with
+// every joint untracked (confidence 0) the elbow's repetitions count as before, with confidence 0,
+// and warning MEASURES_REPETITIONS_UNCERTAIN; with exact arm lengths and tracked joints nothing is
+// said and every range is confident.
+TEST(MeasuresStage, RepetitionsOnUnconfidentValuesAreCountedAndSaid) {
+  const auto run = [](double joint_confidence) {
+    MeasuresStage stage;
+    testing::CollectingOutput out;
+    v1::SessionHeader header;
+    (*header.mutable_options())["measures.arm_length_uncertainty"] = "0";
+    stage.start(header, out);
+    ArmTrackStart start;
+    start.tracked = true;
+    start.K_from_W = geometry::Quat::FromTwoVectors(geometry::Vec3::UnitZ(), facing_camera() * geometry::Vec3::UnitY());
+    stage.on_value(start, out);
+    for (int f = 0; f < 30 * 9; ++f) {
+      FrameEstimate frame = exercise_frame(f / 30.0, 2, facing_camera());
+      for (JointEstimate& j : frame.smpl_joints) j.confidence = joint_confidence;
+      stage.on_value(frame, out);
+    }
+    stage.finish(out);
+    return out;
+  };
+  const auto summary_of = [](const testing::CollectingOutput& out) {
+    for (const v1::FitResult& r : out.results)
+      if (r.has_repetitions()) return r.repetitions();
+    ADD_FAILURE() << "no repetitions";
+    return v1::RepetitionSummary();
+  };
+  const testing::CollectingOutput untracked = run(0.0);
+  const v1::RepetitionSummary unsure = summary_of(untracked);
+  EXPECT_EQ(unsure.angle(), v1::RIGHT_ELBOW_FLEXION);
+  EXPECT_EQ(unsure.count(), 4u);
+  EXPECT_DOUBLE_EQ(unsure.confident_fraction(), 0.0);
+  EXPECT_EQ(unsure.uncertain_count(), 4u);
+  for (const v1::Repetition& rep : unsure.repetitions()) EXPECT_DOUBLE_EQ(rep.confidence(), 0.0);
+  ASSERT_EQ(untracked.warnings.size(), 1u);
+  EXPECT_EQ(untracked.warnings[0].rfind("MEASURES_REPETITIONS_UNCERTAIN", 0), 0u) << untracked.warnings[0];
+  EXPECT_NE(untracked.warnings[0].find("only 0 % of right_elbow_flexion's defined frames"), std::string::npos)
+      << untracked.warnings[0];
+
+  const testing::CollectingOutput tracked = run(1.0);
+  EXPECT_TRUE(tracked.warnings.empty()) << tracked.warnings.front();
+  const v1::RepetitionSummary sure = summary_of(tracked);
+  EXPECT_EQ(sure.count(), 4u);
+  EXPECT_DOUBLE_EQ(sure.confident_fraction(), 1.0);
+  EXPECT_EQ(sure.uncertain_count(), 0u);
+  for (const v1::Repetition& rep : sure.repetitions()) EXPECT_DOUBLE_EQ(rep.confidence(), 1.0);
 }
 
 TEST(MeasuresStage, WithoutKFromWTheVerticalIsAssumedAndSaid) {

@@ -134,7 +134,26 @@ void MeasuresStage::finish(StageOutput& out) {
                "fit.enabled is true but no frame had a fitted body: no joint angles or repetitions");
     return;
   }
-  if (auto repetitions = series_.repetitions(options_.repetitions)) out.hand_on(Repetitions{std::move(*repetitions)});
+  if (auto repetitions = series_.repetitions(options_.repetitions)) {
+    warn_uncertain_repetitions(*repetitions, out);
+    out.hand_on(Repetitions{std::move(*repetitions)});
+  }
+}
+
+void MeasuresStage::warn_uncertain_repetitions(const measures::SessionRepetitions& repetitions, StageOutput& out) {
+  const measures::RepetitionSummary& s = repetitions.summary;
+  const std::string angle(measures::angle_name(repetitions.angle));
+  const std::string confident_at = format_double(measures::kConfidentAt);
+  if (s.confident_fraction < 0.5) {
+    out.warn("MEASURES_REPETITIONS_UNCERTAIN", "repetitions",
+             "only " + format_double(std::round(100 * s.confident_fraction)) + " % of " + angle +
+                 "'s defined frames are at confidence " + confident_at +
+                 " or above: its repetitions' count and ranges rest on values not to act on");
+  } else if (s.uncertain_count > 0) {
+    out.warn("MEASURES_REPETITION_RANGE_UNCERTAIN", "repetitions",
+             std::to_string(s.uncertain_count) + " of " + std::to_string(s.count) + " counted repetitions of " + angle +
+                 " have a range below confidence " + confident_at + " (an extreme where the angle is not confident)");
+  }
 }
 
 }  // namespace posefuse::session

@@ -11,9 +11,11 @@
 // hands on a Repetitions value. Warnings: MEASURES_NO_BODY_FIT, fit.enabled but no frame had a
 // fitted body (with the fit off there are no angles, by design, and no warning);
 // MEASURES_FRAME_SKIPPED, fitted frames whose joints span no segment frame (counted, the first
-// named), which get no angles while the session goes on.
-// Holds: the candidate angles' series, 8 bytes per angle per frame (7 angles with auto: about
-// 6 MB per session-hour at 30 Hz), and the last frame's angles.
+// named), which get no angles while the session goes on; MEASURES_REPETITIONS_UNCERTAIN, fewer
+// than half of the segmented angle's frames at confidence >= measures::kConfidentAt, else
+// MEASURES_REPETITION_RANGE_UNCERTAIN, counted repetitions whose range is below it.
+// Holds: the candidate angles' series and confidences, 12 bytes per angle per frame (9 angles
+// with auto: about 12 MB per session-hour at 30 Hz), and the last frame's angles.
 #include <array>
 #include <optional>
 #include <vector>
@@ -38,6 +40,7 @@ class MeasuresStage : public Stage {
  private:
   void count_length_limited_elbows(const measures::PosedUpperBody& body, const measures::JointAngles& angles);
   void add_frame(const FrameEstimate& frame, StageOutput& out);
+  void warn_uncertain_repetitions(const measures::SessionRepetitions& repetitions, StageOutput& out);
 
   MeasuresOptions options_;
   std::optional<geometry::Vec3> up_K_;  // from K_from_W once known
