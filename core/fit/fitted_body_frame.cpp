@@ -12,16 +12,34 @@ namespace posefuse::fit {
 namespace {
 
 // Where the camera does not track a joint (inferred or lost) the fit places it from the depth
-// around it and the body model, and the angles read from it cannot be acted on: on the joint-angle
-// bench's design sessions (seeds 61 and 62) the elbow flexions and humerus axial rotations read
-// from an untracked joint reached a 99 % error bound of 92 degrees (4143 values), which is
-// confidence 2^-(92/15)^2, i.e. none (forearm::confidence_from_bound99_rad). The elevation read
-// from an untracked elbow stayed within 7 degrees there; it is given no confidence either, as
-// the joint's confidence cannot tell which angle reads it (docs/fitting.md, "Joint confidence").
-constexpr double kUntrackedConfidence = 0.0;
+// around it and the body model. Measured on the joint-angle bench's design sessions
+// (bench/joint_angles.sh, seeds 61 and 62), with the untracked joint the only one among an
+// angle's joints: the elbow flexions and humerus axial rotations read from an untracked wrist
+// reached a 99 % error bound of 96 degrees (1861 values, 4 sessions), confidence
+// 2^-(96/15)^2, i.e. none (forearm::confidence_from_bound99_rad); so an untracked wrist or hand
+// passes on none. The angles read from an untracked elbow stayed within 10.7 degrees (1317
+// values), within the 15 of a confident value; an untracked joint other than the hand's keeps
+// the weaker evidence's 0.5 (docs/fitting.md, "Joint confidence").
+constexpr double kUntrackedConfidence = 0.5;
+constexpr double kUntrackedHandConfidence = 0.0;
+
+bool is_hand_joint(int camera_joint) {
+  switch (camera_joint) {
+    case kWristLeft:
+    case kHandLeft:
+    case kHandTipLeft:
+    case kThumbLeft:
+    case kWristRight:
+    case kHandRight:
+    case kHandTipRight:
+    case kThumbRight: return true;
+    default: return false;
+  }
+}
 
 double confidence_of(const TrackedSkeleton& skeleton, int camera_joint) {
-  return skeleton.tracking[static_cast<size_t>(camera_joint)] == JointTracking::kTracked ? 1.0 : kUntrackedConfidence;
+  if (skeleton.tracking[static_cast<size_t>(camera_joint)] == JointTracking::kTracked) return 1.0;
+  return is_hand_joint(camera_joint) ? kUntrackedHandConfidence : kUntrackedConfidence;
 }
 
 // II-B: the forearm's IMU orientation turned onto the fitted axis, and its roll from the IMU.

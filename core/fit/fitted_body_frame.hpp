@@ -16,7 +16,8 @@ namespace posefuse::fit {
 
 struct FittedJoint {
   Eigen::Vector3d p_K = Eigen::Vector3d::Zero();
-  double confidence = 0.0;  // 1 where the camera tracks the corresponding joint, else 0
+  double confidence = 0.0;  // 1 where the camera tracks the corresponding joint; else 0 for a wrist
+                            // or hand, 0.5 for the others (docs/fitting.md, "Joint confidence")
 };
 
 struct FittedForearm {

@@ -6,6 +6,7 @@
 
 #include "body/template_generator.hpp"
 #include "fit/arm_roll.hpp"
+#include "fit/fitted_body_frame.hpp"
 #include "fit/pose_smoothing.hpp"
 #include "posed_subject.hpp"
 #include "synthetic_frames.hpp"
@@ -177,6 +178,40 @@ TEST(FitArmRoll, BadInputNamesTheField) {
   JointPose broken = pose;
   broken.positions_K.col(body::kLeftWrist) = broken.positions_K.col(body::kLeftElbow);
   EXPECT_EQ(testing::error_field([&] { forearm_roll(broken, ArmSide::kLeft, unit, unit); }), "pose");
+}
+
+// A fitted joint's confidence follows the camera's tracking of the joint it corresponds to: 1
+// tracked; untracked, 0 for the wrist and hand (angles read from them cannot be acted on,
+// docs/fitting.md "Joint confidence") and 0.5 for the others. The fitted forearm takes its
+// wrist's.
+TEST(FittedBodyFrame, JointConfidenceFollowsTheCameraTrackingState) {
+  const PoseLayout layout = PoseLayout::upper_body();
+  const Eigen::Matrix3Xd rest = rest_joints(*male(), Eigen::VectorXd());
+  TrackedSkeleton skeleton;
+  skeleton.tracking.fill(JointTracking::kTracked);
+  skeleton.tracking[kWristLeft] = JointTracking::kInferred;
+  skeleton.tracking[kElbowRight] = JointTracking::kInferred;
+  skeleton.tracking[kSpineMid] = JointTracking::kNotTracked;
+  const Eigen::VectorXd theta = testing::facing_pose(layout, 2.0, {});
+  const JointPose pose = pose_joints(rest, layout, theta);
+  // IMU orientations whose y lies along each fitted forearm, so that the roll is defined.
+  const auto along_forearm = [&](int elbow, int wrist) {
+    return Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitY(),
+                                              pose.positions_K.col(wrist) - pose.positions_K.col(elbow));
+  };
+  const FittedBodyFrame frame = make_fitted_body_frame(
+      rest, layout, theta, skeleton,
+      {along_forearm(body::kLeftElbow, body::kLeftWrist), along_forearm(body::kRightElbow, body::kRightWrist)});
+  ASSERT_EQ(frame.smpl_joints.size(), static_cast<size_t>(body::kNumJoints));
+  EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kLeftWrist].confidence, 0.0);
+  EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kRightElbow].confidence, 0.5);
+  EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kRightWrist].confidence, 1.0);
+  EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kLeftElbow].confidence, 1.0);
+  EXPECT_DOUBLE_EQ(frame.camera_joints[kWristLeft].confidence, 0.0);
+  EXPECT_DOUBLE_EQ(frame.camera_joints[kSpineMid].confidence, 0.5);
+  ASSERT_EQ(frame.forearms.size(), 2u);
+  for (const FittedForearm& forearm : frame.forearms)
+    EXPECT_DOUBLE_EQ(forearm.confidence, forearm.side == ArmSide::kLeft ? 0.0 : 1.0);
 }
 
 }  // namespace
