@@ -35,6 +35,7 @@ const expectedPlots = ['plot-thorax', 'plot-left-shoulder', 'plot-left-elbow', '
       })),
       repetitionRows: document.querySelectorAll('table#repetitions tr').length,
       partialRows: document.querySelectorAll('table#repetitions tr.partial').length,
+      uncertainRows: document.querySelectorAll('table#repetitions tr.counted.uncertain').length,
       summaryRows: document.querySelectorAll('table#repetition-summary tr').length,
       warnings: [...document.querySelectorAll('ul#warnings li')].map((li) => li.textContent),
       calibrationRows: document.querySelectorAll('table#calibration tr').length,
@@ -51,6 +52,7 @@ const expectedPlots = ['plot-thorax', 'plot-left-shoulder', 'plot-left-elbow', '
     const rightShades = dom.plots.filter((p) => p.id.startsWith('plot-right')).map((p) => p.shades);
     if (fixture && !rightShades.every((n) => n >= 2)) problems.push(`right arm plots shade ${rightShades} stretches, expected the occlusion and its legend`);
     if (fixture && (dom.repetitionRows !== 4 || dom.partialRows !== 1)) problems.push(`repetition table: ${dom.repetitionRows} rows, ${dom.partialRows} partial`);
+    if (fixture && dom.uncertainRows !== 1) problems.push(`repetition table: ${dom.uncertainRows} counted rows marked uncertain, expected 1`);
     if (fixture && dom.summaryRows !== 2) problems.push(`repetition summary: ${dom.summaryRows} rows`);
     if (fixture && dom.warnings.length !== Number(expectedWarnings)) problems.push(`${dom.warnings.length} warnings, expected ${expectedWarnings}`);
     if (fixture && !dom.warnings.some((w) => w.includes('<script>alert(1)</script> & <b>not bold</b>'))) problems.push('warning markup not shown as text');
