@@ -13,13 +13,13 @@ namespace {
 
 // Where the camera does not track a joint (inferred or lost) the fit places it from the depth
 // around it and the body model. Measured on the joint-angle bench's design sessions
-// (bench/joint_angles.sh, seeds 61 and 62), with the untracked joint the only one among an
-// angle's joints: the elbow flexions and humerus axial rotations read from an untracked wrist
-// reached a 99 % error bound of 96 degrees (1861 values, 4 sessions), confidence
-// 2^-(96/15)^2, i.e. none (forearm::confidence_from_bound99_rad); so an untracked wrist or hand
-// passes on none. The angles read from an untracked elbow stayed within 10.7 degrees (1317
-// values), within the 15 of a confident value; an untracked joint other than the hand's keeps
-// the weaker evidence's 0.5 (docs/fitting.md, "Joint confidence").
+// (bench/untracked_joint_angles.py on bench/joint_angles.sh's seeds 61 and 62), with the
+// untracked joint the only one among an angle's joints: the elbow flexions and humerus axial
+// rotations read from an untracked wrist reach a 99 % error bound of 94 degrees, confidence
+// 2^-(94/15)^2, i.e. none (forearm::confidence_from_bound99_rad); so an untracked wrist or hand
+// passes on none. The angles read from an untracked elbow stay within 10.7 degrees, within the
+// 15 of a confident value; an untracked joint other than the hand's keeps the weaker evidence's
+// 0.5 (docs/benchmarks.md, "Angles read from untracked joints").
 constexpr double kUntrackedConfidence = 0.5;
 constexpr double kUntrackedHandConfidence = 0.0;
 
