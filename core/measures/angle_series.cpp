@@ -44,7 +44,7 @@ std::optional<SessionRepetitions> AngleSeries::repetitions(const RepetitionOptio
   if (t_s_.empty()) return std::nullopt;
   int chosen = 0;
   if (!named_) {
-    chosen = dominant_series(series_deg_);
+    chosen = dominant_series(series_deg_, confidence_, options.min_amplitude_deg);
     if (chosen < 0) return std::nullopt;
   }
   SessionRepetitions out;

@@ -13,7 +13,7 @@ namespace posefuse::measures {
 
 struct SessionRepetitions {
   Angle angle = Angle::kRightElevation;
-  bool detected = false;  // chosen as the candidate that moves most
+  bool detected = false;  // chosen as the candidate that moves most (dominant_series)
   RepetitionSummary summary;
 };
 
@@ -29,7 +29,8 @@ class AngleSeries {
   // The memory the series take (session::Stage::held_bytes).
   std::size_t held_bytes() const;
 
-  // None when no frame was added or no candidate was ever defined. Throws as
+  // None when no frame was added or no candidate was ever defined. The candidate is chosen by
+  // dominant_series with the candidates' confidences and `options.min_amplitude_deg`. Throws as
   // segment_repetitions for bad options.
   std::optional<SessionRepetitions> repetitions(const RepetitionOptions& options) const;
 

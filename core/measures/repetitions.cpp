@@ -47,11 +47,13 @@ void check_series(const std::vector<double>& t_s, const std::vector<double>& ang
   }
 }
 
-void check_confidence(const std::vector<double>& t_s, const std::vector<float>& confidence) {
+// `confidence` pairs up with `paired` (named `paired_name`) sample by sample, or is empty.
+void check_confidence(const std::vector<float>& confidence, const std::vector<double>& paired,
+                      const std::string& paired_name) {
   if (confidence.empty()) return;
-  if (confidence.size() != t_s.size()) {
-    throw_invalid("confidence", "has " + std::to_string(confidence.size()) + " samples but t_s has " +
-                                    std::to_string(t_s.size()) + "; give one per sample or none");
+  if (confidence.size() != paired.size()) {
+    throw_invalid("confidence", "has " + std::to_string(confidence.size()) + " samples but " + paired_name + " has " +
+                                    std::to_string(paired.size()) + "; give one per sample or none");
   }
   for (std::size_t i = 0; i < confidence.size(); ++i) {
     if (!(confidence[i] >= 0.0f && confidence[i] <= 1.0f))
@@ -248,8 +250,10 @@ void add_piece(const Piece& piece, const std::vector<double>& t_s, const std::ve
 // sample at rest (within the hysteresis of `rest_deg`) before the angle leaves it, to the first
 // sample back at rest, by at least the hysteresis from the side it comes from, once the angle has
 // been out on both sides. Crossing the rest on the way from one side to the other is not a
-// return. Motion cut by the start or the end of the piece is partial, as is a repetition whose
-// range or duration falls outside the bounds.
+// return. An excursion to one side only that comes back to rest and then leaves to that same side
+// again ended where it came back (a crossing would go on to the other side): it is partial, and
+// the angle's next excursion starts afresh. Motion cut by the start or the end of the piece is
+// partial, as is a repetition whose range or duration falls outside the bounds.
 void add_piece_about_zero(const Piece& piece, const std::vector<double>& t_s, const std::vector<double>& angle_deg,
                           double rest_deg, const RepetitionOptions& options, std::vector<Repetition>& out) {
   const std::vector<double> piece_speeds = speeds(piece, t_s, angle_deg);
@@ -262,14 +266,20 @@ void add_piece_about_zero(const Piece& piece, const std::vector<double>& t_s, co
   double rest_minimum_deg = 0;
   std::size_t first = 0;  // where the current excursion left rest
   std::size_t last_at_rest = 0;
+  // Whether an excursion that has been out on one side only is back at rest, and where it came back.
+  bool back_from_one_side = false;
+  std::size_t came_back_at = 0;
+  // Leaving rest takes a real move (the hysteresis) from where the angle rested, so noise just
+  // after a return does not start the next excursion.
+  const auto still_at_rest = [&](int side, double magnitude) {
+    return side == 0 || magnitude - rest_minimum_deg < options.hysteresis_deg;
+  };
   for (std::size_t p = 0; p < piece.size(); ++p) {
     const double deviation = angle_deg[piece[p]] - rest_deg;
     const double magnitude = std::abs(deviation);
     const int side = magnitude < options.hysteresis_deg ? 0 : deviation > 0 ? 1 : 2;
     if (!out_of_rest) {
-      // Leaving rest takes a real move (the hysteresis) from where the angle rested, so noise
-      // just after a return does not start the next repetition.
-      if (side == 0 || (rest_seen && magnitude - rest_minimum_deg < options.hysteresis_deg)) {
+      if (side == 0 || (rest_seen && still_at_rest(side, magnitude))) {
         if (side == 0) last_at_rest = p;
         rest_minimum_deg = rest_seen ? std::min(rest_minimum_deg, magnitude) : magnitude;
         rest_seen = rest_seen || side == 0;
@@ -282,6 +292,27 @@ void add_piece_about_zero(const Piece& piece, const std::vector<double>& t_s, co
       last_side_extreme_deg = magnitude;
       continue;
     }
+    if (back_from_one_side) {
+      if (still_at_rest(side, magnitude)) {
+        if (side == 0) last_at_rest = p;
+        rest_minimum_deg = std::min(rest_minimum_deg, magnitude);
+        continue;
+      }
+      if (side == last_side) {
+        // Out to the side it came back from: that excursion is over, not on its way across (a
+        // series that starts out of rest, settles, and whose first swing goes the same way).
+        Repetition rep = describe(piece, t_s, angle_deg, piece_speeds, first, came_back_at);
+        rep.partial = true;
+        out.push_back(rep);
+        cut_by_start = false;
+        first = last_at_rest;
+        sides_seen = last_side = side;
+        last_side_extreme_deg = magnitude;
+        back_from_one_side = false;
+        continue;
+      }
+      back_from_one_side = false;  // on to the other side: a crossing, or a rest within the swing
+    }
     if (side != 0) {
       last_side_extreme_deg = side == last_side ? std::max(last_side_extreme_deg, magnitude) : magnitude;
       last_side = side;
@@ -290,7 +321,14 @@ void add_piece_about_zero(const Piece& piece, const std::vector<double>& t_s, co
     // Back at rest, and by a real reversal (the hysteresis) from the last side: noise where the
     // angle just reached that side must not end the repetition there.
     const bool returned = side == 0 && last_side_extreme_deg - magnitude >= options.hysteresis_deg;
-    if (!returned || sides_seen != kBothSides) continue;
+    if (returned && sides_seen != kBothSides) {
+      back_from_one_side = true;
+      came_back_at = p;
+      last_at_rest = p;
+      rest_minimum_deg = magnitude;
+      continue;
+    }
+    if (!returned) continue;
     Repetition rep = describe(piece, t_s, angle_deg, piece_speeds, first, p);
     rep.partial = cut_by_start || !duration_within_bounds(rep, options) || rep.range_deg < options.min_amplitude_deg;
     out.push_back(rep);
@@ -299,7 +337,9 @@ void add_piece_about_zero(const Piece& piece, const std::vector<double>& t_s, co
     rest_minimum_deg = magnitude;
   }
   if (!out_of_rest) return;
-  Repetition rep = describe(piece, t_s, angle_deg, piece_speeds, first, piece.size() - 1);
+  // An excursion to one side that came back to rest ends there: what follows is the rest.
+  Repetition rep =
+      describe(piece, t_s, angle_deg, piece_speeds, first, back_from_one_side ? came_back_at : piece.size() - 1);
   if (rep.range_deg < options.hysteresis_deg) return;  // noise at the end, not motion
   rep.partial = true;
   out.push_back(rep);
@@ -335,17 +375,24 @@ double range_confidence(const Repetition& rep, const std::vector<double>& t_s, c
   return std::min(at_min.value_or(0.0), at_max.value_or(0.0));
 }
 
+// The share of a series' finite samples at confidence >= kConfidentAt: 1 without confidences, 0
+// without finite samples.
+double confident_fraction(const std::vector<double>& angle_deg, const std::vector<float>& confidence) {
+  if (confidence.empty()) return 1.0;
+  std::size_t finite = 0, confident = 0;
+  for (std::size_t i = 0; i < angle_deg.size(); ++i) {
+    if (!std::isfinite(angle_deg[i])) continue;
+    ++finite;
+    if (confidence[i] >= kConfidentAt) ++confident;
+  }
+  return finite > 0 ? static_cast<double>(confident) / static_cast<double>(finite) : 0.0;
+}
+
 // Each repetition's confidence, the share of confident samples and the uncertain counted ones.
 void add_confidences(RepetitionSummary& summary, const std::vector<double>& t_s, const std::vector<double>& angle_deg,
                      const std::vector<float>& confidence) {
   if (confidence.empty()) return;
-  std::size_t finite = 0, confident = 0;
-  for (std::size_t i = 0; i < angle_deg.size(); ++i) {
-    if (std::isnan(angle_deg[i])) continue;
-    ++finite;
-    if (confidence[i] >= kConfidentAt) ++confident;
-  }
-  summary.confident_fraction = finite > 0 ? static_cast<double>(confident) / static_cast<double>(finite) : 0.0;
+  summary.confident_fraction = confident_fraction(angle_deg, confidence);
   for (Repetition& rep : summary.repetitions) {
     rep.confidence = range_confidence(rep, t_s, angle_deg, confidence);
     if (!rep.partial && rep.confidence < kConfidentAt) ++summary.uncertain_count;
@@ -416,7 +463,7 @@ bool swings_about_zero(const std::vector<double>& angle_deg) {
 RepetitionSummary segment_repetitions(const std::vector<double>& t_s, const std::vector<double>& angle_deg,
                                       const RepetitionOptions& options, const std::vector<float>& confidence) {
   check_series(t_s, angle_deg);
-  check_confidence(t_s, confidence);
+  check_confidence(confidence, t_s, "t_s");
   check_options(options);
   RepetitionSummary summary;
   const std::vector<double> finite = sorted_finite(angle_deg);
@@ -439,7 +486,12 @@ RepetitionSummary segment_repetitions(const std::vector<double>& t_s, const std:
   return summary;
 }
 
-int dominant_series(const std::vector<std::vector<double>>& angle_series_deg) {
+int dominant_series(const std::vector<std::vector<double>>& angle_series_deg,
+                    const std::vector<std::vector<float>>& confidence, double min_amplitude_deg) {
+  if (!confidence.empty() && confidence.size() != angle_series_deg.size()) {
+    throw_invalid("confidence", "has " + std::to_string(confidence.size()) + " series but angle_series_deg has " +
+                                    std::to_string(angle_series_deg.size()) + "; give one per angle series or none");
+  }
   // An angle defined in only a few frames (pronation where a nearly straight elbow crosses the
   // flexion bound for a moment, its plane then ill-conditioned) describes no exercise, however far
   // those values scatter: only series defined in at least half as many frames as the most
@@ -450,17 +502,38 @@ int dominant_series(const std::vector<std::vector<double>>& angle_series_deg) {
     finite_series.push_back(sorted_finite(series));
     most_defined = std::max(most_defined, finite_series.back().size());
   }
-  int best = -1;
-  double best_spread = 0.0;
+  struct Candidate {
+    std::size_t series;
+    double spread_deg;
+    bool confident;
+  };
+  std::vector<Candidate> candidates;
+  bool confident_one_moves = false;
   for (std::size_t s = 0; s < finite_series.size(); ++s) {
     const std::vector<double>& finite = finite_series[s];
     if (finite.size() < 2 || 2 * finite.size() < most_defined) continue;
     // Percentiles rather than max - min, so that a few outliers (a tracking glitch) cannot make a
     // still joint look like the one that moves.
-    const double series_spread = percentile(finite, 0.95) - percentile(finite, 0.05);
-    if (best < 0 || series_spread > best_spread) {  // ties go to the first
-      best = static_cast<int>(s);
-      best_spread = series_spread;
+    const double spread_deg = percentile(finite, 0.95) - percentile(finite, 0.05);
+    if (confidence.empty()) {
+      candidates.push_back({s, spread_deg, true});
+      continue;
+    }
+    check_confidence(confidence[s], angle_series_deg[s], "angle_series_deg[" + std::to_string(s) + "]");
+    const bool confident = 2 * confident_fraction(angle_series_deg[s], confidence[s]) >= 1.0;
+    candidates.push_back({s, spread_deg, confident});
+    confident_one_moves = confident_one_moves || (confident && spread_deg >= min_amplitude_deg);
+  }
+  int best = -1;
+  double best_spread = 0.0;
+  for (const Candidate& candidate : candidates) {
+    // A series mostly below confidence (the fit's elbow flexion near full extension, whose values
+    // scatter with the arm lengths) describes the exercise only when no confident one moves enough
+    // to make a repetition; otherwise its spread is the method's doubt, not the patient's motion.
+    if (confident_one_moves && !candidate.confident) continue;
+    if (best < 0 || candidate.spread_deg > best_spread) {  // ties go to the first
+      best = static_cast<int>(candidate.series);
+      best_spread = candidate.spread_deg;
     }
   }
   return best;

@@ -33,7 +33,12 @@
 // repetition runs from the last sample at rest (within `hysteresis_deg` of that) before the angle
 // leaves, out to both sides, to the first sample back at rest (and by at least `hysteresis_deg`
 // from the side it comes from); passing the rest on the way from one side to the other is not a
-// return. It counts when its range
+// return. An excursion to one side only that comes back to rest and then leaves to that same side
+// again has ended where it came back, since a crossing would go on to the other side (a series
+// that starts out of rest and settles before its first swing); it is partial. Leaving rest,
+// between repetitions or after such a return, takes a real move: at least `hysteresis_deg` from
+// where the angle came closest to rest. A settled start whose first swing goes the other way
+// cannot be told from a slow crossing and stays joined to it. A repetition counts when its range
 // (max - min) is at least `min_amplitude_deg` and its duration lies within the bounds; motion cut
 // by the start, the end or a gap is partial, as above.
 //
@@ -41,7 +46,7 @@
 // of still moves as the exercise does); it reports them. Each repetition's range carries the
 // confidence of its two extremes, and the summary how much of the series was confident, so that a
 // count or range read off values not to act on says so (docs/measures.md, "Confidence of
-// repetitions").
+// repetitions"). Choosing the angle does look at them (dominant_series).
 #include <vector>
 
 namespace posefuse::measures {
@@ -102,8 +107,15 @@ bool swings_about_zero(const std::vector<double>& angle_deg);
 // of finite samples (the exercise's dominant angle), so that a few outliers cannot make a still
 // joint win; percentiles interpolate linearly between ranks, the first of equal spreads wins.
 // Only series with at least half as many finite samples as the most complete one compete (a few
-// values of an angle that is mostly undefined describe no exercise). -1 when no series has two
-// finite samples.
-int dominant_series(const std::vector<std::vector<double>>& angle_series_deg);
+// values of an angle that is mostly undefined describe no exercise). With `confidence` (one
+// series per angle series, as segment_repetitions takes them), a series with fewer than half of
+// its finite samples at kConfidentAt competes only when no series that has that half spreads at
+// least `min_amplitude_deg`: an angle the method is unsure of (a fitted elbow near full extension)
+// can scatter more than the joint that moves, but it still describes the exercise when nothing
+// confident moves enough to make a repetition (pronation whose mounting roll is unknown). -1 when
+// no series has two finite samples. Throws posefuse::Error (kInvalidArgument, "confidence") for a
+// confidence series count or size that does not pair up, or a confidence outside [0, 1].
+int dominant_series(const std::vector<std::vector<double>>& angle_series_deg,
+                    const std::vector<std::vector<float>>& confidence = {}, double min_amplitude_deg = 0.0);
 
 }  // namespace posefuse::measures

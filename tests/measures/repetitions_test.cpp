@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstddef>
 #include <functional>
@@ -717,6 +718,109 @@ TEST(Repetitions, ASwingAboutZeroCutOrTooSmallIsPartial) {
   EXPECT_EQ(summary.count, 1);  // the second; the third is too small
 }
 
+// Forearm rolls as a fit gives them: the series starts 24 deg to one side of rest (pronation is
+// defined only once the elbow bends), settles to rest, and the rolls then go the other way first
+// (`first_roll_deg` negative: the way the start came from) or not.
+Series settled_start_then_rolls(double first_roll_deg) {
+  Series series{{0.0}, {-24.0}};
+  ramp_to(series, 0, 0.3);
+  hold(series, 1.0);
+  for (int k = 0; k < 3; ++k) {
+    ramp_to(series, first_roll_deg, 1.0);
+    ramp_to(series, -first_roll_deg, 2.0);
+    ramp_to(series, 0, 1.0);
+    hold(series, 0.5);
+  }
+  return series;
+}
+
+// A start out of rest that settles, followed by a roll to the same side: the start cannot be on
+// its way across (it would have gone on to the other side), so it ends where it came back to rest
+// and is partial on its own; all three rolls count.
+TEST(Repetitions, AStartOutOfRestThatSettlesBeforeASwingTheSameWayIsPartialOnItsOwn) {
+  Series series = settled_start_then_rolls(-60);
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> noise(-2.0, 2.0);
+  for (double& a : series.angle_deg) a += noise(rng);
+  ASSERT_TRUE(swings_about_zero(series.angle_deg));
+  const RepetitionSummary summary = segment(series);
+  ASSERT_EQ(summary.repetitions.size(), 4u);
+  EXPECT_EQ(summary.count, 3);
+  const Repetition& start = summary.repetitions[0];
+  EXPECT_TRUE(start.partial);
+  EXPECT_NEAR(start.min_deg, -24, 2.1);
+  EXPECT_LT(start.t_end_s, 0.35);  // where it came back within the hysteresis, not at the roll
+  for (std::size_t k = 1; k < 4; ++k) {
+    SCOPED_TRACE("roll " + std::to_string(k));
+    const Repetition& roll = summary.repetitions[k];
+    EXPECT_FALSE(roll.partial);
+    EXPECT_NEAR(roll.range_deg, 120, 4.1);
+    // Each leaves rest about a third of the way into its first 1 s ramp.
+    EXPECT_NEAR(roll.t_start_s, 1.3 + 4.5 * static_cast<double>(k - 1) + 0.3, 0.15);
+  }
+}
+
+// The same start before a roll the other way cannot be told from a slow roll crossing the rest,
+// so it stays joined to the first roll up to that roll's crossing, as a partial repetition; the
+// rolls after it are counted from crossing to crossing, one fewer (docs/measures.md, "Angles that
+// swing about their zero").
+TEST(Repetitions, AStartOutOfRestThatSettlesBeforeASwingTheOtherWayStaysJoinedToIt) {
+  const RepetitionSummary summary = segment(settled_start_then_rolls(60));
+  ASSERT_EQ(summary.repetitions.size(), 4u);
+  EXPECT_EQ(summary.count, 2);
+  const Repetition& start = summary.repetitions[0];
+  EXPECT_TRUE(start.partial);
+  EXPECT_NEAR(start.t_start_s, 0.0, 1e-9);
+  EXPECT_NEAR(start.max_deg, 60, 0.1);
+  EXPECT_GT(start.t_end_s, 3.0);  // in the first roll's crossing, on its way to -60
+  EXPECT_TRUE(summary.repetitions[3].partial);
+}
+
+// Back at rest after one side, leaving again takes a real move (the hysteresis) from where the
+// angle came closest to rest, as between repetitions: a fit's jolt 5.3 deg past rest, 5.8 deg from
+// where the trunk had settled, is not the other side, and the repetition runs on through the
+// real tilt to the left.
+TEST(Repetitions, AJoltPastRestAfterOneSideIsNotTheOtherSide) {
+  Series series;
+  hold(series, 0.5);
+  ramp_to(series, 20, 1.5);
+  hold(series, 0.5);
+  ramp_to(series, 0.5, 1.5);
+  series.t_s.push_back(series.t_s.back() + kDt);
+  series.angle_deg.push_back(-5.3);
+  ramp_to(series, 0, 0.2);
+  hold(series, 0.5);
+  ramp_to(series, -20, 1.5);
+  hold(series, 0.5);
+  ramp_to(series, 0, 1.5);
+  hold(series, 0.5);
+  const RepetitionSummary summary = segment(series);
+  ASSERT_EQ(summary.repetitions.size(), 1u);
+  EXPECT_EQ(summary.count, 1);
+  EXPECT_NEAR(summary.repetitions[0].range_deg, 40, 0.1);
+}
+
+// Mid-session, a move to one side and back, then a whole swing that starts out to that same
+// side: the first is partial on its own (a repetition goes out to both sides), the swing counts.
+TEST(Repetitions, AnExcursionToOneSideAndBackIsPartialWhenTheNextLeavesTheSameWay) {
+  Series series;
+  hold(series, 0.5);
+  ramp_to(series, 30, 1.0);
+  ramp_to(series, 0, 1.0);
+  hold(series, 1.0);
+  ramp_to(series, 30, 1.0);
+  ramp_to(series, -30, 2.0);
+  ramp_to(series, 0, 1.0);
+  hold(series, 0.5);
+  const RepetitionSummary summary = segment(series);
+  ASSERT_EQ(summary.repetitions.size(), 2u);
+  EXPECT_EQ(summary.count, 1);
+  EXPECT_TRUE(summary.repetitions[0].partial);
+  EXPECT_NEAR(summary.repetitions[0].range_deg, 30, 5.1);
+  EXPECT_FALSE(summary.repetitions[1].partial);
+  EXPECT_NEAR(summary.repetitions[1].range_deg, 60, 0.1);
+}
+
 // The exercise's joint is the one whose angle moves most; a still joint with noise loses to it,
 // missing samples are ignored.
 TEST(DominantSeries, PicksTheSeriesThatMoves) {
@@ -755,6 +859,56 @@ TEST(DominantSeries, AnAngleDefinedInFewFramesDoesNotCompete) {
   // Defined in half the frames it competes again, and its 220 deg spread wins.
   for (std::size_t i = 0; i < 600; i += 2) pronation[i] = (i % 4 ? 110.0 : -110.0);
   EXPECT_EQ(dominant_series({pronation, elevation}), 0);
+}
+
+// A trunk tilting +-18 deg at full confidence against a fitted elbow flexion that scatters over
+// 150 deg at confidence 0.1 (near full extension, its arm lengths uncertain): the tilt is the
+// exercise. Unsure angles still compete when nothing confident moves enough to make a repetition
+// (pronation at confidence ~0 in forearm rolling, the elbow held still), and a series that is
+// confident in just half of its frames counts as confident.
+TEST(DominantSeries, AnUnsureAngleGivesWayToAConfidentOneThatMovesEnough) {
+  const Series tilt_series = tilts({{18, -18}, {18, -18}});
+  const std::vector<double>& tilt = tilt_series.angle_deg;
+  const std::size_t n = tilt.size();
+  std::vector<double> elbow(n), still(n);
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> scatter(0.0, 150.0), noise(-2.0, 2.0);
+  for (std::size_t i = 0; i < n; ++i) {
+    elbow[i] = scatter(rng);
+    still[i] = 90 + noise(rng);
+  }
+  const std::vector<float> sure(n, 1.0f), unsure(n, 0.1f);
+  EXPECT_EQ(dominant_series({elbow, tilt}), 0);  // without confidences the spread decides
+  EXPECT_EQ(dominant_series({elbow, tilt}, {unsure, sure}, 20.0), 1);
+  // A confident angle that moves less than the minimum amplitude leaves the choice to spread.
+  EXPECT_EQ(dominant_series({elbow, still}, {unsure, sure}, 20.0), 0);
+  EXPECT_EQ(dominant_series({elbow, tilt}, {unsure, sure}, 40.0), 0);
+  // Half of the frames confident is confident; just under half is not.
+  const std::size_t half_n = (n + 1) / 2;
+  std::vector<float> half(n, 0.0f), under_half(n, 0.0f);
+  std::fill_n(half.begin(), half_n, 0.5f);
+  std::fill_n(under_half.begin(), half_n - 1, 0.5f);
+  EXPECT_EQ(dominant_series({elbow, tilt}, {half, sure}, 20.0), 0);
+  EXPECT_EQ(dominant_series({elbow, tilt}, {under_half, sure}, 20.0), 1);
+}
+
+TEST(DominantSeries, ConfidencesThatDoNotPairUpAreRefused) {
+  const std::vector<double> a{1.0, 2.0, 3.0}, b{4.0, 5.0, 6.0};
+  expect_invalid(
+      [&] {
+        dominant_series({a, b}, {{1, 1, 1}}, 20.0);
+      },
+      "confidence", "has 1 series but angle_series_deg has 2");
+  expect_invalid(
+      [&] {
+        dominant_series({a, b}, {{1, 1, 1}, {1, 1}}, 20.0);
+      },
+      "confidence", "has 2 samples but angle_series_deg[1] has 3");
+  expect_invalid(
+      [&] {
+        dominant_series({a, b}, {{1, 1, 1}, {1, 2, 1}}, 20.0);
+      },
+      "confidence", "confidence[1] = 2 is not in [0, 1]");
 }
 
 TEST(DominantSeries, NoneWithoutTwoFiniteSamples) {
