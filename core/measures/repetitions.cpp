@@ -333,6 +333,7 @@ void add_piece_about_zero(const Piece& piece, const std::vector<double>& t_s, co
     rep.partial = cut_by_start || !duration_within_bounds(rep, options) || rep.range_deg < options.min_amplitude_deg;
     out.push_back(rep);
     out_of_rest = false;
+    rest_seen = true;  // even if the piece started out of rest: the next leave starts from here
     last_at_rest = p;
     rest_minimum_deg = magnitude;
   }

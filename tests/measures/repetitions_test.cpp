@@ -776,6 +776,31 @@ TEST(Repetitions, AStartOutOfRestThatSettlesBeforeASwingTheOtherWayStaysJoinedTo
   EXPECT_TRUE(summary.repetitions[3].partial);
 }
 
+// Rolls back to back at 30 Hz, fast enough that the sample after each return to rest is already
+// out of the hysteresis band, after a start out of rest: every roll after the start leaves from
+// where the last one came back, not from the start of the series.
+TEST(Repetitions, BackToBackSwingsAfterAStartOutOfRestEachStartWhereTheLastEnded) {
+  Series series;
+  const double dt = 1.0 / 30;
+  const auto add = [&](double deg) {
+    series.t_s.push_back(series.t_s.empty() ? 0.0 : series.t_s.back() + dt);
+    series.angle_deg.push_back(deg);
+  };
+  for (int k = 0; k < 9; ++k) add(9.0);   // out of rest to one side
+  for (int k = 0; k < 40; ++k) add(0.0);  // settled
+  const double period_s = 1.2;
+  const int per_roll = static_cast<int>(std::lround(period_s / dt));
+  for (int k = 1; k <= 3 * per_roll; ++k) add(60 * std::sin(2 * kPi * k * dt / period_s));
+  for (int k = 0; k < 30; ++k) add(0.0);
+  const RepetitionSummary summary = segment(series);
+  ASSERT_EQ(summary.repetitions.size(), 4u);
+  EXPECT_TRUE(summary.repetitions[0].partial);
+  EXPECT_EQ(summary.count, 3);
+  for (std::size_t k = 1; k + 1 < summary.repetitions.size(); ++k) {
+    EXPECT_NEAR(summary.repetitions[k + 1].t_start_s, summary.repetitions[k].t_end_s, 1e-9) << k;
+  }
+}
+
 // Back at rest after one side, leaving again takes a real move (the hysteresis) from where the
 // angle came closest to rest, as between repetitions: a fit's jolt 5.3 deg past rest, 5.8 deg from
 // where the trunk had settled, is not the other side, and the repetition runs on through the
