@@ -8,6 +8,11 @@ double orientation_rms_rad(double axis_rms_rad, double roll_rms_rad, double filt
   return std::sqrt(axis_rms_rad * axis_rms_rad + roll_rms_rad * roll_rms_rad + filter_rms_rad * filter_rms_rad);
 }
 
+double pose_calibration_rms_rad(double hold_spread_rad) {
+  if (!(hold_spread_rad >= 0.0)) return std::nan("");
+  return std::hypot(kPoseCalibrationRmsRad, hold_spread_rad);
+}
+
 double imu_orientation_rms_rad(double beyond_steady_rad) { return std::hypot(kFilterRmsRad, beyond_steady_rad); }
 
 double confidence_from_bound99_rad(double bound99_rad) {

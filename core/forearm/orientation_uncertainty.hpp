@@ -25,6 +25,14 @@ inline constexpr double kFilterRmsRad = 1.92 * 3.14159265358979323846 / 180.0;
 // trusted beyond what one was measured to give. Sessions reported against it use other seeds.
 inline constexpr double kPoseCalibrationRmsRad = 5.6 * 3.14159265358979323846 / 180.0;
 
+// The mounting of one calibration hold: sqrt(kPoseCalibrationRmsRad^2 + spread^2), where spread is
+// the RMS angle of the hold's per-frame eq. 9 results from their mean (ArmCalibration's
+// F_from_A_spread_rad), rad. The IMU was still, so that scatter is the skeleton not showing one
+// pose, and a slowly drifting skeleton does not average out over the hold: its mean is trusted no
+// better than the frames agree, on top of what every accepted hold was measured to give. A NaN or
+// negative spread gives NaN (confidence 0).
+double pose_calibration_rms_rad(double hold_spread_rad);
+
 // An IMU orientation's predicted RMS error: sqrt(kFilterRmsRad^2 + beyond_steady^2), where
 // beyond_steady is imu::RobustOrientationFilter::orientation_uncertainty_rad(), rad.
 double imu_orientation_rms_rad(double beyond_steady_rad);

@@ -611,10 +611,24 @@ TEST(ForearmStage, NoCalibrationPoseIsNamedAndTheMountingComesFromMotion) {
   EXPECT_NEAR(model.orientation_uncertainty_rad(), predicted, 1e-12);
 }
 
-// Every sample carries at least the pose calibration's uncertainty, more where the camera's
-// forearm axis showed a larger error, and the confidence of what it carries.
+// Every sample carries at least its hold's uncertainty (the measured floor and the hold's own
+// spread, as the calibration report gives it), more where the camera's forearm axis showed a
+// larger error, and the confidence of what it carries.
 TEST(ForearmStage, CalibratedSamplesCarryThePoseCalibrationsUncertainty) {
   const StageRun& r = run_session({});
+  const v1::FitResult* summary = nullptr;
+  for (const auto& result : r.sink.results) {
+    if (result.has_calibration()) summary = &result;
+  }
+  ASSERT_NE(summary, nullptr);
+  ASSERT_EQ(summary->calibration().forearms_size(), 1);
+  const v1::ForearmModel& model = summary->calibration().forearms(0);
+  EXPECT_EQ(model.mounting_source(), v1::ForearmModel::CALIBRATION_POSE);
+  EXPECT_GT(model.a_from_f_spread_rad(), 0.0);
+  const double hold_rms = model.orientation_uncertainty_rad();
+  EXPECT_DOUBLE_EQ(hold_rms, forearm::pose_calibration_rms_rad(model.a_from_f_spread_rad()));
+  EXPECT_GT(hold_rms, forearm::kPoseCalibrationRmsRad);
+
   std::size_t samples = 0, frames = 0, raised = 0;
   for (const auto& result : r.sink.results) {
     if (result.has_forearm_orientations()) {
@@ -622,22 +636,22 @@ TEST(ForearmStage, CalibratedSamplesCarryThePoseCalibrationsUncertainty) {
       ASSERT_EQ(b.uncertainty_rad_size(), b.t_us_size());
       ASSERT_EQ(b.confidence_size(), b.t_us_size());
       for (int i = 0; i < b.t_us_size(); ++i, ++samples) {
-        EXPECT_GE(b.uncertainty_rad(i), forearm::kPoseCalibrationRmsRad);
-        raised += b.uncertainty_rad(i) > forearm::kPoseCalibrationRmsRad;
+        EXPECT_GE(b.uncertainty_rad(i), hold_rms);
+        raised += b.uncertainty_rad(i) > hold_rms;
         EXPECT_DOUBLE_EQ(b.confidence(i), forearm::confidence_from_rms_rad(b.uncertainty_rad(i)));
       }
     } else if (result.has_frame()) {
       for (const v1::ForearmOrientation& f : result.frame().forearms()) {
-        EXPECT_LE(f.confidence(), forearm::confidence_from_rms_rad(forearm::kPoseCalibrationRmsRad));
+        EXPECT_LE(f.confidence(), forearm::confidence_from_rms_rad(hold_rms));
         ++frames;
       }
     }
   }
-  std::printf("%zu of %zu samples above the pose's uncertainty (the camera's axis showed more)\n", raised, samples);
+  std::printf("%zu of %zu samples above the hold's uncertainty (the camera's axis showed more)\n", raised, samples);
   EXPECT_GT(samples, 50u);
   EXPECT_GT(frames, 50u);
   // Confident: its 99 % bound is below 15 degrees.
-  EXPECT_GT(forearm::confidence_from_rms_rad(forearm::kPoseCalibrationRmsRad), 0.5);
+  EXPECT_GT(forearm::confidence_from_rms_rad(hold_rms), 0.5);
 }
 
 TEST(ForearmStage, StrapNeverSeenGivesOrientationOnly) {

@@ -31,7 +31,7 @@ void report_forearm_model(const std::string& device_id, forearm::Side side, cons
   model.set_a_from_f_spread_rad(c.F_from_A_spread_rad);
   model.set_strap_frames(strap_frames);
   model.set_mounting_source(v1::ForearmModel::CALIBRATION_POSE);
-  model.set_orientation_uncertainty_rad(forearm::kPoseCalibrationRmsRad);
+  model.set_orientation_uncertainty_rad(forearm::pose_calibration_rms_rad(c.F_from_A_spread_rad));
 }
 
 void report_motion_mounting(const std::string& device_id, forearm::Side side, const forearm::MountingEstimate& m,

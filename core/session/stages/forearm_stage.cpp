@@ -320,9 +320,9 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
   }
   device.calibration = calibrated.calibration;
   const bool has_model = device.has_model = calibrated.has_model;
-  device.tracker =
-      std::make_unique<forearm::ForearmTrack>(*device.side, device.calibration->model, has_model, *K_from_W_,
-                                              calibrated.K_from_F_held, forearm::kPoseCalibrationRmsRad);
+  device.tracker = std::make_unique<forearm::ForearmTrack>(
+      *device.side, device.calibration->model, has_model, *K_from_W_, calibrated.K_from_F_held,
+      forearm::pose_calibration_rms_rad(calibrated.calibration.F_from_A_spread_rad));
   if (options_.axis_correction_on && options_.axis_from_depth && has_model) {
     device.tracker->use_axis_correction(options_.axis_correction);
   }
@@ -372,15 +372,17 @@ void ForearmStage::search_later_pose(Device& device, StageOutput& out) {
     const Vec3 pose_axis = pose_F_from_A.conjugate() * Vec3::UnitY();
     const Vec3 motion_axis = device.mounting->F_from_A.conjugate() * Vec3::UnitY();
     const double disagreement = std::acos(std::clamp(pose_axis.dot(motion_axis), -1.0, 1.0));
-    const double bound = forearm::kDirectionBound99OverRms * device.mounting->axis_rms_rad +
-                         forearm::kBound99OverRms * forearm::kPoseCalibrationRmsRad;
+    const double bound =
+        forearm::kDirectionBound99OverRms * device.mounting->axis_rms_rad +
+        forearm::kBound99OverRms * forearm::pose_calibration_rms_rad(calibrated.calibration.F_from_A_spread_rad);
     if (disagreement > bound) return;
   }
   device.later_pose = true;
   device.recent_frames.clear();
   device.calibration = calibrated.calibration;
   device.has_model = false;  // the gap recovery started without a strap model
-  device.tracker->set_mounting(pose_F_from_A, forearm::kPoseCalibrationRmsRad);
+  device.tracker->set_mounting(pose_F_from_A,
+                               forearm::pose_calibration_rms_rad(calibrated.calibration.F_from_A_spread_rad));
   device.tracker->set_pronation_reference(calibrated.K_from_F_held);
   out.warn("FOREARM_CALIBRATION_LATER", "forearm[" + device.id + "].calibration",
            "the calibration pose at " +
