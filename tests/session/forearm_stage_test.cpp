@@ -596,13 +596,10 @@ TEST(ForearmStage, NoCalibrationPoseIsNamedAndTheMountingComesFromMotion) {
     }
   }
   // The report says where the mounting came from and how well it is known.
-  const v1::FitResult* summary = nullptr;
-  for (const auto& result : r.sink.results) {
-    if (result.has_calibration()) summary = &result;
-  }
-  ASSERT_NE(summary, nullptr);
-  ASSERT_EQ(summary->calibration().forearms_size(), 1);
-  const v1::ForearmModel& model = summary->calibration().forearms(0);
+  const v1::CalibrationReport* calibration = calibration_of(r);
+  ASSERT_NE(calibration, nullptr);
+  ASSERT_EQ(calibration->forearms_size(), 1);
+  const v1::ForearmModel& model = calibration->forearms(0);
   EXPECT_EQ(model.mounting_source(), v1::ForearmModel::MOTION);
   EXPECT_GT(model.mounting_frames(), 15u);
   EXPECT_GT(model.roll_uncertainty_rad(), 0.0);
@@ -616,13 +613,10 @@ TEST(ForearmStage, NoCalibrationPoseIsNamedAndTheMountingComesFromMotion) {
 // larger error, and the confidence of what it carries.
 TEST(ForearmStage, CalibratedSamplesCarryThePoseCalibrationsUncertainty) {
   const StageRun& r = run_session({});
-  const v1::FitResult* summary = nullptr;
-  for (const auto& result : r.sink.results) {
-    if (result.has_calibration()) summary = &result;
-  }
-  ASSERT_NE(summary, nullptr);
-  ASSERT_EQ(summary->calibration().forearms_size(), 1);
-  const v1::ForearmModel& model = summary->calibration().forearms(0);
+  const v1::CalibrationReport* calibration = calibration_of(r);
+  ASSERT_NE(calibration, nullptr);
+  ASSERT_EQ(calibration->forearms_size(), 1);
+  const v1::ForearmModel& model = calibration->forearms(0);
   EXPECT_EQ(model.mounting_source(), v1::ForearmModel::CALIBRATION_POSE);
   EXPECT_GT(model.a_from_f_spread_rad(), 0.0);
   const double hold_rms = model.orientation_uncertainty_rad();
