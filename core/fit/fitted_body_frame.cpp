@@ -15,8 +15,8 @@ namespace {
 // around it and the body model. Measured on the joint-angle bench's design sessions
 // (bench/untracked_joint_angles.py on bench/joint_angles.sh's seeds 61 and 62), with the
 // untracked joint the only one among an angle's joints: the elbow flexions and humerus axial
-// rotations read from an untracked wrist reach a 99 % error bound of 94 degrees, confidence
-// 2^-(94/15)^2, i.e. none (forearm::confidence_from_bound99_rad); so an untracked wrist or hand
+// rotations read from an untracked wrist reach a 99 % error bound of 95 degrees, confidence
+// 2^-(95/15)^2, i.e. none (forearm::confidence_from_bound99_rad); so an untracked wrist or hand
 // passes on none. The angles read from an untracked elbow stay within 10.7 degrees, within the
 // 15 of a confident value; an untracked joint other than the hand's keeps the weaker evidence's
 // 0.5 (docs/benchmarks.md, "Angles read from untracked joints").
