@@ -499,8 +499,10 @@ int dominant_series(const std::vector<std::vector<double>>& angle_series_deg,
   // defined one compete.
   std::vector<std::vector<double>> finite_series;
   std::size_t most_defined = 0;
-  for (const std::vector<double>& series : angle_series_deg) {
-    finite_series.push_back(sorted_finite(series));
+  for (std::size_t s = 0; s < angle_series_deg.size(); ++s) {
+    if (!confidence.empty())
+      check_confidence(confidence[s], angle_series_deg[s], "angle_series_deg[" + std::to_string(s) + "]");
+    finite_series.push_back(sorted_finite(angle_series_deg[s]));
     most_defined = std::max(most_defined, finite_series.back().size());
   }
   struct Candidate {
@@ -516,12 +518,7 @@ int dominant_series(const std::vector<std::vector<double>>& angle_series_deg,
     // Percentiles rather than max - min, so that a few outliers (a tracking glitch) cannot make a
     // still joint look like the one that moves.
     const double spread_deg = percentile(finite, 0.95) - percentile(finite, 0.05);
-    if (confidence.empty()) {
-      candidates.push_back({s, spread_deg, true});
-      continue;
-    }
-    check_confidence(confidence[s], angle_series_deg[s], "angle_series_deg[" + std::to_string(s) + "]");
-    const bool confident = 2 * confident_fraction(angle_series_deg[s], confidence[s]) >= 1.0;
+    const bool confident = confidence.empty() || 2 * confident_fraction(angle_series_deg[s], confidence[s]) >= 1.0;
     candidates.push_back({s, spread_deg, confident});
     confident_one_moves = confident_one_moves || (confident && spread_deg >= min_amplitude_deg);
   }

@@ -368,21 +368,20 @@ void ForearmStage::search_later_pose(Device& device, StageOutput& out) {
   // A pose whose forearm axis in A disagrees with the motion's beyond both their 99 % bounds is
   // not the pose it seems (a passing arm that happened to hold still).
   const Quat& pose_F_from_A = calibrated.calibration.model.F_from_A;
+  const double pose_rms_rad = forearm::pose_calibration_rms_rad(calibrated.calibration.F_from_A_spread_rad);
   if (device.mounting) {
     const Vec3 pose_axis = pose_F_from_A.conjugate() * Vec3::UnitY();
     const Vec3 motion_axis = device.mounting->F_from_A.conjugate() * Vec3::UnitY();
     const double disagreement = std::acos(std::clamp(pose_axis.dot(motion_axis), -1.0, 1.0));
     const double bound =
-        forearm::kDirectionBound99OverRms * device.mounting->axis_rms_rad +
-        forearm::kBound99OverRms * forearm::pose_calibration_rms_rad(calibrated.calibration.F_from_A_spread_rad);
+        forearm::kDirectionBound99OverRms * device.mounting->axis_rms_rad + forearm::kBound99OverRms * pose_rms_rad;
     if (disagreement > bound) return;
   }
   device.later_pose = true;
   device.recent_frames.clear();
   device.calibration = calibrated.calibration;
   device.has_model = false;  // the gap recovery started without a strap model
-  device.tracker->set_mounting(pose_F_from_A,
-                               forearm::pose_calibration_rms_rad(calibrated.calibration.F_from_A_spread_rad));
+  device.tracker->set_mounting(pose_F_from_A, pose_rms_rad);
   device.tracker->set_pronation_reference(calibrated.K_from_F_held);
   out.warn("FOREARM_CALIBRATION_LATER", "forearm[" + device.id + "].calibration",
            "the calibration pose at " +
