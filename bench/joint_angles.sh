@@ -6,6 +6,8 @@
 # repetition (all matched ones, and those whose range has confidence >= 0.5).
 #   bench/joint_angles.sh [BUILD_DIR] [MOTION:SEED:SPEED ...]     MOTION: an exercise's name or a .bvh clip
 # KEEP=DIR keeps each session's recording, results and gt/ under DIR (e.g. for posefuse report).
+# SIM_OPTIONS='key = value\n...' adds posefuse-sim options to every session (e.g. a tilted camera:
+# 'camera_pitch_deg = 12\ncamera_roll_deg = -4').
 # Default sessions: the scripted exercises at seeds 71 and 72 and speeds 0.9 and 1.15, both arms,
 # three repetitions, a subject unlike the template (female, betas 1.5,-1,0.5, clothing on), body
 # fit on. Seeds 61 and 62 (speeds 0.8, 1.25) are where the repetitions' resting-half rule was
@@ -39,7 +41,7 @@ done
 [ -n "$port" ] || { echo "server did not start: $(cat "$work/server.log")" >&2; exit 1; }
 for spec in "${specs[@]}"; do
   IFS=: read -r motion seed speed <<<"$spec"
-  subject='sex = female\nbetas = 1.5,-1,0.5\nclothing = true\n'
+  subject="sex = female\nbetas = 1.5,-1,0.5\nclothing = true\n${SIM_OPTIONS:+$SIM_OPTIONS\n}"
   if [[ "$motion" == *.bvh ]]; then  # a whole mocap clip, the same subject
     name="$(basename "$motion" .bvh)-$seed-$speed"
     printf "motion = bvh\nbvh_path = %s\nspeed = %s\narm = both\nduration_s = clip\n$subject" \
@@ -94,4 +96,29 @@ for name, g in sessions:
         print(f"| {name} | (no repetitions in the results) | | | | | | | | |"); continue
     angle, true_angle, count, true_count, matched, rms, mx, cn, crms, cmx = g
     print(f"| {name} | {angle} | {true_angle} | {count} | {true_count} | {rms} | {mx} | {cn} of {matched} | {crms} | {cmx} |")
+
+import json
+def up_of(q):  # W's z (up) in K from a K_from_W quaternion
+    w, x, y, z = (q.get(k, 0.0) for k in "wxyz")
+    return (2 * (x * z + w * y), 2 * (y * z - w * x), 1 - 2 * (x * x + y * y))
+def angle(a, b):
+    dot = sum(p * q for p, q in zip(a, b)) / math.sqrt(sum(p * p for p in a) * sum(q * q for q in b))
+    return math.degrees(math.acos(max(-1.0, min(1.0, dot))))
+print()
+print("The vertical of the thorax angles (calibration.json's `vertical` against the true K_from_W; deg)\n")
+print("| session | true pitch | true roll | source | confidence | error | floor spread | IMU error |")
+print("|---|---|---|---|---|---|---|---|")
+for name, _ in sessions:
+    out = json.load(open(f"{work}/{name}.out/calibration.json"))
+    true_up = up_of(json.load(open(f"{work}/{name}.gt/calibration.json"))["K_from_W"])
+    v = out.get("vertical", {})
+    up = v.get("up_K", {})
+    used = (up.get("x", 0.0), up.get("y", 0.0), up.get("z", 0.0))
+    pitch = math.degrees(math.asin(-true_up[2]))
+    roll = math.degrees(math.atan2(-true_up[0], true_up[1]))
+    imu = out.get("K_from_W")
+    imu_error = f"{angle(up_of(imu), true_up):.2f}" if imu and any(imu.get(k, 0) for k in "wxyz") else "-"
+    spread = f"{v['floor_spread_deg']:.2f}" if v.get("source") == "FLOOR" else "-"
+    print(f"| {name} | {pitch:.1f} | {roll:.1f} | {v.get('source', '-')} | {v.get('confidence', 0):.2f} | "
+          f"{angle(used, true_up):.2f} | {spread} | {imu_error} |")
 PY

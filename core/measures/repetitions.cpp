@@ -269,6 +269,9 @@ void add_piece_about_zero(const Piece& piece, const std::vector<double>& t_s, co
   // Whether an excursion that has been out on one side only is back at rest, and where it came back.
   bool back_from_one_side = false;
   std::size_t came_back_at = 0;
+  // Whether the current excursion, cut by the start, came back to rest from one side and then
+  // crossed to the other: a settled start joined to the first swing, or a swing under way.
+  bool crossed_after_return_from_start = false;
   // Leaving rest takes a real move (the hysteresis) from where the angle rested, so noise just
   // after a return does not start the next excursion.
   const auto still_at_rest = [&](int side, double magnitude) {
@@ -312,6 +315,7 @@ void add_piece_about_zero(const Piece& piece, const std::vector<double>& t_s, co
         continue;
       }
       back_from_one_side = false;  // on to the other side: a crossing, or a rest within the swing
+      crossed_after_return_from_start = cut_by_start;
     }
     if (side != 0) {
       last_side_extreme_deg = side == last_side ? std::max(last_side_extreme_deg, magnitude) : magnitude;
@@ -331,8 +335,10 @@ void add_piece_about_zero(const Piece& piece, const std::vector<double>& t_s, co
     if (!returned) continue;
     Repetition rep = describe(piece, t_s, angle_deg, piece_speeds, first, p);
     rep.partial = cut_by_start || !duration_within_bounds(rep, options) || rep.range_deg < options.min_amplitude_deg;
+    rep.may_hold_repetition = crossed_after_return_from_start;
     out.push_back(rep);
     out_of_rest = false;
+    crossed_after_return_from_start = false;
     rest_seen = true;  // even if the piece started out of rest: the next leave starts from here
     last_at_rest = p;
     rest_minimum_deg = magnitude;

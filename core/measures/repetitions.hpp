@@ -38,9 +38,10 @@
 // that starts out of rest and settles before its first swing); it is partial. Leaving rest,
 // between repetitions or after such a return, takes a real move: at least `hysteresis_deg` from
 // where the angle came closest to rest. A settled start whose first swing goes the other way
-// cannot be told from a slow crossing and stays joined to it. A repetition counts when its range
-// (max - min) is at least `min_amplitude_deg` and its duration lies within the bounds; motion cut
-// by the start, the end or a gap is partial, as above.
+// cannot be told from a slow crossing and stays joined to it, a partial repetition marked
+// may_hold_repetition. A repetition counts when its range (max - min) is at least
+// `min_amplitude_deg` and its duration lies within the bounds; motion cut by the start, the end or
+// a gap is partial, as above.
 //
 // Confidence: segmenting does not look at the samples' confidences (an angle the method is unsure
 // of still moves as the exercise does); it reports them. Each repetition's range carries the
@@ -69,6 +70,11 @@ struct Repetition {
                                       // over the neighbouring finite samples; one-sided at a cut)
   double duration_s = 0;              // t_end - t_start
   bool partial = false;               // reported, not counted
+  // A partial repetition cut by the start of an angle that swings about its zero, which came back
+  // to rest from one side and then crossed to the other before its return: a settled start (a
+  // subject, or a fit, coming to rest) joined to the first swing, which would hold one repetition
+  // more, or a swing already under way when the recording began; the two look the same.
+  bool may_hold_repetition = false;
   // Of its range: the lower of the confidences at its lowest and highest samples (the range is
   // their difference, so an error in either moves it); 1 where the series carries no confidences.
   double confidence = 1.0;

@@ -125,6 +125,7 @@ void encode(const Repetitions& value, v1::FitResult& result) {
     rep.set_duration_s(r.duration_s);
     rep.set_partial(r.partial);
     rep.set_confidence(r.confidence);
+    rep.set_may_hold_repetition(r.may_hold_repetition);
   }
   out.set_count(static_cast<std::uint32_t>(s.count));
   out.set_mean_range_deg(s.mean_range_deg);

@@ -292,6 +292,15 @@ SimSessionOptions with_motion_duration(SimSessionOptions options, const BodyMoti
   return options;
 }
 
+// K_from_level: a level camera's frame turned by the options' pitch (about x, down for > 0) and
+// then roll (about z).
+Mat3 camera_tilt(const SimSessionOptions& options) {
+  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  return (Eigen::AngleAxisd(options.camera_roll_deg * kDeg, Vec3::UnitZ()) *
+          Eigen::AngleAxisd(-options.camera_pitch_deg * kDeg, Vec3::UnitX()))
+      .toRotationMatrix();
+}
+
 }  // namespace
 
 void validate(const SimSessionOptions& options) {
@@ -309,6 +318,10 @@ void validate(const SimSessionOptions& options) {
   require_positive(options.depth_rate_hz, "depth_rate_hz");
   require_positive(options.camera_height_m, "camera_height_m");
   require_positive(options.subject_distance_m, "subject_distance_m");
+  if (!(std::abs(options.camera_pitch_deg) <= 30.0))
+    throw_invalid("camera_pitch_deg", "is " + std::to_string(options.camera_pitch_deg) + ", must be in -30..30");
+  if (!(std::abs(options.camera_roll_deg) <= 20.0))
+    throw_invalid("camera_roll_deg", "is " + std::to_string(options.camera_roll_deg) + ", must be in -20..20");
   if (options.wall_distance_m <= options.subject_distance_m + 0.5) {
     throw_invalid("wall_distance_m",
                   "is " + std::to_string(options.wall_distance_m) + ", must be at least 0.5 m behind the subject");
@@ -364,8 +377,10 @@ SimTruth simulate_session(const SimSessionOptions& requested, session::ChunkSink
     rest.evaluate(options.betas, rest_layout.zero(), body::Derivatives::kNone);
     truth.rest_joints = rest.rest_joints();
   }
-  // Placement: the camera faces the subject (see camera_session.hpp); W shares Body's origin.
-  truth.K_from_Body = Eigen::Translation3d(0, -options.camera_height_m, options.subject_distance_m) *
+  // Placement: the camera faces the subject (see camera_session.hpp), tilted by the options' pitch
+  // and roll about itself; W shares Body's origin.
+  truth.K_from_Body = Eigen::Isometry3d(camera_tilt(options)) *
+                      Eigen::Translation3d(0, -options.camera_height_m, options.subject_distance_m) *
                       Eigen::AngleAxisd(pi, Eigen::Vector3d::UnitY());
   truth.W_from_Body = W_from_R(options.heading_rad);
   const Mat3 W_from_Body = truth.W_from_Body.toRotationMatrix();
@@ -615,7 +630,7 @@ SimTruth simulate_session(const SimSessionOptions& requested, session::ChunkSink
   const CameraSkeletonSimulator skeleton(camera, options.skeleton, options.seed);
   const Vec3 floor_normal_K = K_from_Body.linear() * Vec3::UnitY();
   const std::vector<RoomPlane> room = {RoomPlane{floor_normal_K, floor_normal_K.dot(K_from_Body.translation())},
-                                       RoomPlane{Vec3::UnitZ(), options.wall_distance_m}};
+                                       RoomPlane{camera_tilt(options) * Vec3::UnitZ(), options.wall_distance_m}};
   // The room's depth and incidence once; frames redo the error model's incidence near the body.
   const StaticBackground background(camera, room, options.depth_noise);
   const auto frames = static_cast<std::int64_t>(std::floor(options.duration_s * options.depth_rate_hz + 1e-9)) + 1;

@@ -67,7 +67,11 @@ struct SimSessionOptions {
   // Camera: depth at depth_rate_hz; the colour camera at the same rate and instants.
   raycast::DepthIntrinsics depth_intrinsics;
   double depth_rate_hz = 30.0;
-  double camera_height_m = 1.0;     // above the floor, level, looking at the subject
+  double camera_height_m = 1.0;  // above the floor, looking at the subject
+  // The camera's tilt: pitched down (> 0) or up about its left-right axis, then rolled about its
+  // viewing axis (> 0: its y turns towards its x, the subject's right); -30..30 and -20..20 deg.
+  double camera_pitch_deg = 0.0;
+  double camera_roll_deg = 0.0;
   double subject_distance_m = 2.5;  // camera to the subject's pelvis, horizontally
   double wall_distance_m = 4.0;
   DepthNoiseOptions depth_noise;

@@ -763,17 +763,39 @@ TEST(Repetitions, AStartOutOfRestThatSettlesBeforeASwingTheSameWayIsPartialOnIts
 // The same start before a roll the other way cannot be told from a slow roll crossing the rest,
 // so it stays joined to the first roll up to that roll's crossing, as a partial repetition; the
 // rolls after it are counted from crossing to crossing, one fewer (docs/measures.md, "Angles that
-// swing about their zero").
+// swing about their zero"). That partial says it may hold a repetition; nothing else does.
 TEST(Repetitions, AStartOutOfRestThatSettlesBeforeASwingTheOtherWayStaysJoinedToIt) {
   const RepetitionSummary summary = segment(settled_start_then_rolls(60));
   ASSERT_EQ(summary.repetitions.size(), 4u);
   EXPECT_EQ(summary.count, 2);
   const Repetition& start = summary.repetitions[0];
   EXPECT_TRUE(start.partial);
+  EXPECT_TRUE(start.may_hold_repetition);
   EXPECT_NEAR(start.t_start_s, 0.0, 1e-9);
   EXPECT_NEAR(start.max_deg, 60, 0.1);
   EXPECT_GT(start.t_end_s, 3.0);  // in the first roll's crossing, on its way to -60
+  for (std::size_t k = 1; k < 4; ++k) EXPECT_FALSE(summary.repetitions[k].may_hold_repetition) << k;
   EXPECT_TRUE(summary.repetitions[3].partial);
+}
+
+// A swing already under way when the recording starts, crossing the rest without stopping, is
+// marked as well (the two look the same at 100 Hz: samples within the hysteresis of rest as it
+// crosses); a series that starts at rest and one whose start settles before a swing the same way
+// are not.
+TEST(Repetitions, AStartOutOfRestThatCrossesMayHoldARepetitionWhetherItSettledOrNot) {
+  Series under_way{{0.0}, {-40.0}};  // out on one side from the first sample
+  ramp_to(under_way, 40, 2.0);       // across the rest without stopping
+  ramp_to(under_way, 0, 1.0);
+  hold(under_way, 0.5);
+  const RepetitionSummary crossing = segment(under_way);
+  ASSERT_EQ(crossing.repetitions.size(), 1u);
+  EXPECT_TRUE(crossing.repetitions[0].partial);
+  EXPECT_TRUE(crossing.repetitions[0].may_hold_repetition);
+  for (const Series& series : {tilts({{}, {}}), settled_start_then_rolls(-60)}) {
+    const RepetitionSummary summary = segment(series);
+    ASSERT_FALSE(summary.repetitions.empty());
+    for (const Repetition& rep : summary.repetitions) EXPECT_FALSE(rep.may_hold_repetition);
+  }
 }
 
 // Rolls back to back at 30 Hz, fast enough that the sample after each return to rest is already

@@ -282,6 +282,49 @@ TEST(SimSessionTruth, DurationClipPlaysTheWholeClipAndReportsItsGlitches) {
 
 // gt/'s joint angles and repetitions come from the true pose: arm raising with both arms, three
 // times, reads three counted repetitions of an elevation from the rest (8 deg out) to 150 deg.
+// A camera tilted on its stand turns the world in K, not the world: W's up in K is the level
+// camera's turned by the pitch and roll, the IMUs still sit on the rendered straps, and the true
+// angles (read against the true vertical) are those of the level camera.
+TEST(SimSessionTruth, ATiltedCameraTurnsTheRoomInKNotTheAngles) {
+  SimSessionOptions level = small(false);
+  level.motion = "torso_tilt";
+  SimSessionOptions tilted = level;
+  tilted.camera_pitch_deg = 12;
+  tilted.camera_roll_deg = -4;
+  ValidatingSink level_sink, tilted_sink;
+  const SimTruth level_truth = simulate_session(level, level_sink);
+  const SimTruth tilted_truth = simulate_session(tilted, tilted_sink);
+  tilted_sink.validator.finish();
+  constexpr double kDeg = 3.14159265358979323846 / 180;
+  const Vec3 up_K = tilted_truth.K_from_W * Vec3::UnitZ();
+  EXPECT_NEAR(std::asin(-up_K.z()) / kDeg, 12, 1e-9);             // pitched down
+  EXPECT_NEAR(std::atan2(-up_K.x(), up_K.y()) / kDeg, -4, 1e-9);  // rolled
+  for (const SimFrameTruth& frame : tilted_truth.frames) {
+    for (std::size_t a = 0; a < 2; ++a) EXPECT_LT(angle_deg(frame.K_from_imu[a], frame.K_from_F[a]), 0.05);
+  }
+  const AngleTruth level_angles = angle_truth(level_truth), tilted_angles = angle_truth(tilted_truth);
+  ASSERT_EQ(level_angles.frames.size(), tilted_angles.frames.size());
+  double worst_deg = 0;
+  for (std::size_t f = 0; f < level_angles.frames.size(); ++f) {
+    for (int i = 0; i < measures::kAngleCount; ++i) {
+      const measures::AngleValue& l = level_angles.frames[f][static_cast<std::size_t>(i)];
+      const measures::AngleValue& t = tilted_angles.frames[f][static_cast<std::size_t>(i)];
+      ASSERT_EQ(l.defined, t.defined);
+      if (l.defined) worst_deg = std::max(worst_deg, std::abs(l.deg - t.deg));
+    }
+  }
+  EXPECT_LT(worst_deg, 1e-6);
+  SimSessionOptions bad = level;
+  bad.camera_pitch_deg = 31;
+  ValidatingSink bad_sink;
+  try {
+    simulate_session(bad, bad_sink);
+    ADD_FAILURE() << "a 31 deg pitch was accepted";
+  } catch (const Error& e) {
+    EXPECT_EQ(e.field(), "camera_pitch_deg");
+  }
+}
+
 TEST(SimSessionTruth, AngleTruthCountsTheScriptedRepetitions) {
   SimSessionOptions o = small(false);
   o.motion = "arm_raising";

@@ -154,6 +154,16 @@ const std::map<std::string, Setter>& setters() {
                              o.camera_height_m = positive(v, f);
                              if (o.camera_height_m < 0.3 || o.camera_height_m > 2.5) bad(f, v, "must be in 0.3..2.5");
                            }}},
+      {"camera_pitch_deg", {"camera pitched down (> 0) or up, deg (-30..30) (0)",
+                            [](Options& o, const std::string& v, const std::string& f) {
+                              o.camera_pitch_deg = number(v, f);
+                              if (std::abs(o.camera_pitch_deg) > 30) bad(f, v, "must be in -30..30");
+                            }}},
+      {"camera_roll_deg", {"camera rolled about its view, its top towards its left (> 0), deg (-20..20) (0)",
+                           [](Options& o, const std::string& v, const std::string& f) {
+                             o.camera_roll_deg = number(v, f);
+                             if (std::abs(o.camera_roll_deg) > 20) bad(f, v, "must be in -20..20");
+                           }}},
       {"subject_distance_m", {"camera to subject, m (1..4)", [](Options& o, const std::string& v, const std::string& f) {
                                 o.subject_distance_m = positive(v, f);
                                 if (o.subject_distance_m < 1 || o.subject_distance_m > 4) bad(f, v, "must be in 1..4");

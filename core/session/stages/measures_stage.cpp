@@ -2,7 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <string>
+#include <vector>
+
+#include <opencv2/core.hpp>
 
 #include "common/error.hpp"
 #include "fit/arm_roll.hpp"
@@ -11,9 +15,6 @@
 
 namespace posefuse::session {
 namespace {
-
-// Half confidence for the thorax angles while the vertical is the camera's y, not measured.
-constexpr double kAssumedVerticalConfidence = 0.5;
 
 // An arm's SMPL joints.
 struct ArmJoints {
@@ -49,12 +50,33 @@ void MeasuresStage::start(const v1::SessionHeader& header, StageOutput& /*out*/)
   options_ = read_measures_options(header);
   fit_enabled_ = body_fit_enabled(header);
   series_ = measures::AngleSeries(options_.repetition_angle);
+  // Without a fit there are no angles, so no vertical to look for; without a depth camera, no floor.
+  if (fit_enabled_ && header.has_depth_intrinsics()) {
+    depth_camera_ = session_cameras(header).depth;
+    geometry::validate(*depth_camera_, "header.depth_intrinsics");
+  }
+}
+
+void MeasuresStage::on_camera_frame(const CameraFrame& frame, StageOutput& /*out*/) {
+  if (!depth_camera_ || frame.depth_mm.empty() || !vertical_.wants_floor(frame.t_us)) return;
+  const geometry::PinholeCamera& camera = *depth_camera_;
+  // A frame of another size is the body fit's to report (FIT_FRAME); it has no floor to give.
+  if (frame.depth_mm.type() != CV_16UC1 || frame.body_index.type() != CV_8UC1 || frame.depth_mm.cols != camera.width ||
+      frame.depth_mm.rows != camera.height || frame.body_index.size() != frame.depth_mm.size())
+    return;
+  const cv::Mat depth = frame.depth_mm.isContinuous() ? frame.depth_mm : frame.depth_mm.clone();
+  const cv::Mat body = frame.body_index.isContinuous() ? frame.body_index : frame.body_index.clone();
+  const auto* d = depth.ptr<std::uint16_t>();
+  const auto* b = body.ptr<std::uint8_t>();
+  const std::size_t pixels = depth.total();
+  vertical_.add_floor(frame.t_us, measures::floor_vertical(std::vector<std::uint16_t>(d, d + pixels),
+                                                           std::vector<std::uint8_t>(b, b + pixels), camera));
 }
 
 void MeasuresStage::on_value(const StageValue& value, StageOutput& out) {
   if (const auto* start = std::get_if<ArmTrackStart>(&value)) {
     // W is z up (docs/architecture.md, "Frames"); every tracked arm carries the same K_from_W.
-    if (start->tracked && !up_K_) up_K_ = start->K_from_W * geometry::Vec3::UnitZ();
+    if (start->tracked) vertical_.add_imu_up(start->K_from_W * geometry::Vec3::UnitZ());
   } else if (const auto* frame = std::get_if<FrameEstimate>(&value)) {
     add_frame(*frame, out);
   }
@@ -68,16 +90,15 @@ void MeasuresStage::add_frame(const FrameEstimate& frame, StageOutput& out) {
     body.smpl_joints_K.col(j) = frame.smpl_joints[static_cast<std::size_t>(j)].p_K;
     body.joint_confidence[static_cast<std::size_t>(j)] = frame.smpl_joints[static_cast<std::size_t>(j)].confidence;
   }
-  if (up_K_) {
-    body.up_K = *up_K_;
-  } else {
-    body.up_confidence = kAssumedVerticalConfidence;
-    if (!warned_vertical_) {
-      out.warn("MEASURES_VERTICAL_ASSUMED", "joint_angles.thorax",
-               "no world orientation yet (no calibrated arm IMU): the thorax angles take the camera's y as vertical, "
-               "at half confidence");
-      warned_vertical_ = true;
-    }
+  const measures::Vertical& vertical = vertical_.current();
+  body.up_K = vertical.up_K;
+  body.up_confidence = vertical.confidence;
+  if (vertical.source == measures::VerticalSource::kAssumed && !warned_vertical_) {
+    out.warn("MEASURES_VERTICAL_ASSUMED", "joint_angles.thorax",
+             "no vertical measured yet (no floor in the depth frames, no calibrated arm IMU): the thorax angles take "
+             "the camera's y as vertical, at confidence " +
+                 format_double(vertical.confidence));
+    warned_vertical_ = true;
   }
   const double min_flexion = options_.angles.min_elbow_flexion_deg;
   body.left_pronation = pronation_of(frame, v1::LEFT, min_flexion);
@@ -114,6 +135,7 @@ void MeasuresStage::count_length_limited_elbows(const measures::PosedUpperBody& 
 }
 
 void MeasuresStage::finish(StageOutput& out) {
+  if (fit_enabled_) report_vertical(out);
   if (length_limited_elbows_ > 0) {
     out.warn("MEASURES_ELBOW_FLEXION_UNCERTAIN", "joint_angles.elbow_flexion",
              std::to_string(length_limited_elbows_) + " of " + std::to_string(elbows_) +
@@ -144,6 +166,19 @@ void MeasuresStage::warn_uncertain_repetitions(const measures::SessionRepetition
   const measures::RepetitionSummary& s = repetitions.summary;
   const std::string angle(measures::angle_name(repetitions.angle));
   const std::string confident_at = format_double(measures::kConfidentAt);
+  for (const measures::Repetition& r : s.repetitions) {
+    if (!r.may_hold_repetition) continue;
+    out.warn("MEASURES_START_AMBIGUOUS", "repetitions",
+             angle +
+                 " starts out of rest, comes back to it and then crosses to the other side before its first "
+                 "return (" +
+                 format_double(std::round(10 * r.t_start_s) / 10) + "-" +
+                 format_double(std::round(10 * r.t_end_s) / 10) +
+                 " s, partial): a start that settled (the subject, or the fit, coming to rest) and a swing already "
+                 "under way look the same, so the count may be one short and the repetitions after it may run "
+                 "from one swing's second side to the next one's first (docs/measures.md, \"Angles that swing "
+                 "about their zero\")");
+  }
   if (s.confident_fraction < 0.5) {
     out.warn("MEASURES_REPETITIONS_UNCERTAIN", "repetitions",
              "only " + format_double(std::round(100 * s.confident_fraction)) + " % of " + angle +
@@ -154,6 +189,30 @@ void MeasuresStage::warn_uncertain_repetitions(const measures::SessionRepetition
              std::to_string(s.uncertain_count) + " of " + std::to_string(s.count) + " counted repetitions of " + angle +
                  " have a range below confidence " + confident_at + " (an extreme where the angle is not confident)");
   }
+}
+
+void MeasuresStage::report_vertical(StageOutput& out) const {
+  constexpr double kDeg = 180.0 / std::numbers::pi;
+  const measures::Vertical& vertical = vertical_.current();
+  v1::CameraVertical& report = *out.calibration().mutable_vertical();
+  switch (vertical.source) {
+    case measures::VerticalSource::kFloor: report.set_source(v1::CameraVertical::FLOOR); break;
+    case measures::VerticalSource::kImu: report.set_source(v1::CameraVertical::IMU); break;
+    case measures::VerticalSource::kAssumed: report.set_source(v1::CameraVertical::ASSUMED); break;
+  }
+  const geometry::Vec3& up = vertical.up_K;
+  report.mutable_up_k()->set_x(up.x());
+  report.mutable_up_k()->set_y(up.y());
+  report.mutable_up_k()->set_z(up.z());
+  report.set_confidence(vertical.confidence);
+  report.set_camera_pitch_deg(std::asin(std::clamp(-up.z(), -1.0, 1.0)) * kDeg);
+  report.set_camera_roll_deg(std::atan2(-up.x(), up.y()) * kDeg);
+  if (const auto& floor = vertical_.floor()) {
+    report.set_floor_spread_deg(floor->spread_rad * kDeg);
+    report.set_camera_height_m(floor->camera_height_m);
+    report.set_floor_points(static_cast<std::uint32_t>(floor->points));
+  }
+  report.set_floor_imu_angle_deg(vertical_.disagreement_rad() ? *vertical_.disagreement_rad() * kDeg : -1.0);
 }
 
 }  // namespace posefuse::session

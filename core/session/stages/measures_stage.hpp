@@ -4,22 +4,27 @@
 //
 // Consumes every FrameEstimate with 24 SMPL joints (a body fit) and hands on its ISB joint angles
 // (FrameAngles); pronation comes from the frame's forearm orientation K_from_F (the wrist IMU)
-// turned into the fitted arm. The vertical is the world's z mapped by the forearm stage's
-// K_from_W (ArmTrackStart); until one is known, K's y (a level camera), at half confidence for
-// the thorax angles, with warning MEASURES_VERTICAL_ASSUMED. After the last frame it segments
+// turned into the fitted arm. The vertical (measures/session_vertical.hpp) is the floor that the
+// camera frames' depth shows, or the world's z mapped by the forearm stage's K_from_W
+// (ArmTrackStart), whichever is known first; until one is, K's y (a level camera), at half
+// confidence for the thorax angles, with warning MEASURES_VERTICAL_ASSUMED. The calibration
+// report's `vertical` says which it was. After the last frame it segments
 // repetitions on measures.repetition_angle (auto: the arm or trunk angle that moves most) and
 // hands on a Repetitions value. Warnings: MEASURES_NO_BODY_FIT, fit.enabled but no frame had a
 // fitted body (with the fit off there are no angles, by design, and no warning);
 // MEASURES_FRAME_SKIPPED, fitted frames whose joints span no segment frame (counted, the first
 // named), which get no angles while the session goes on; MEASURES_REPETITIONS_UNCERTAIN, fewer
 // than half of the segmented angle's frames at confidence >= measures::kConfidentAt, else
-// MEASURES_REPETITION_RANGE_UNCERTAIN, counted repetitions whose range is below it.
+// MEASURES_REPETITION_RANGE_UNCERTAIN, counted repetitions whose range is below it;
+// MEASURES_START_AMBIGUOUS, a start out of rest that may hold one repetition more than counted.
 // Holds: the candidate angles' series and confidences, 12 bytes per angle per frame (9 angles
 // with auto: about 12 MB per session-hour at 30 Hz), and the last frame's angles.
 #include <array>
 #include <optional>
 #include <vector>
 
+#include "geometry/pinhole_camera.hpp"
+#include "measures/session_vertical.hpp"
 #include "session/pipeline_stage.hpp"
 #include "session/stages/measures_options.hpp"
 
@@ -33,6 +38,7 @@ class MeasuresStage : public Stage {
   std::vector<ValueKind> consumes() const override { return {ValueKind::kArmTrackStart, ValueKind::kFrameEstimate}; }
   std::vector<ValueKind> produces() const override { return {ValueKind::kFrameAngles, ValueKind::kRepetitions}; }
   void start(const v1::SessionHeader& header, StageOutput& out) override;
+  void on_camera_frame(const CameraFrame& frame, StageOutput& out) override;
   void on_value(const StageValue& value, StageOutput& out) override;
   void finish(StageOutput& out) override;
   std::size_t held_bytes() const override { return series_.held_bytes(); }
@@ -41,9 +47,11 @@ class MeasuresStage : public Stage {
   void count_length_limited_elbows(const measures::PosedUpperBody& body, const measures::JointAngles& angles);
   void add_frame(const FrameEstimate& frame, StageOutput& out);
   void warn_uncertain_repetitions(const measures::SessionRepetitions& repetitions, StageOutput& out);
+  void report_vertical(StageOutput& out) const;
 
   MeasuresOptions options_;
-  std::optional<geometry::Vec3> up_K_;  // from K_from_W once known
+  measures::SessionVertical vertical_;
+  std::optional<geometry::PinholeCamera> depth_camera_;  // for the floor search
   bool warned_vertical_ = false;
   bool fit_enabled_ = false;
   std::size_t skipped_frames_ = 0;  // fitted frames whose joints gave no segment frames
