@@ -70,7 +70,8 @@ void thorax_angles(const PosedUpperBody& body, const Thorax& thorax, JointAngles
   const double a = std::atan2(-R(0, 1), R(1, 1));
   const double b = std::asin(std::clamp(R(2, 1), -1.0, 1.0));
   const double c = std::atan2(-R(2, 0), R(2, 2));
-  const double confidence = thorax.confidence * std::clamp(body.up_confidence, 0.0, 1.0);
+  // The smallest, as for every angle's joints: each bounds how far the angle can be trusted.
+  const double confidence = std::min(thorax.confidence, std::clamp(body.up_confidence, 0.0, 1.0));
   out[static_cast<int>(Angle::kThoraxFlexion)] = defined_value(-a, confidence);  // +Z turns y backwards
   out[static_cast<int>(Angle::kThoraxLateralTilt)] = defined_value(b, confidence);
   out[static_cast<int>(Angle::kThoraxAxialRotation)] = defined_value(c, confidence);

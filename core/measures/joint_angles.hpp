@@ -67,7 +67,7 @@ struct PosedUpperBody {
   Eigen::Matrix3Xd smpl_joints_K;                   // 3 x 24, SMPL order
   std::array<double, 24> joint_confidence{};        // 0..1 per SMPL joint
   Eigen::Vector3d up_K = Eigen::Vector3d::UnitY();  // against gravity, in K
-  double up_confidence = 1.0;                       // < 1 where up is assumed, not measured
+  double up_confidence = 1.0;                       // the vertical's; the thorax angles' is at most this
   // The subject's reference front: the horizontal direction the thorax's axial rotation is
   // measured from. Default: facing the camera (K's -z).
   Eigen::Vector3d front_K = -Eigen::Vector3d::UnitZ();

@@ -23,6 +23,22 @@ geometry::PinholeCamera pinhole_camera(const v1::CameraIntrinsics& c) {
           c.p2()};
 }
 
+v1::CameraIntrinsics camera_intrinsics(const geometry::PinholeCamera& camera) {
+  v1::CameraIntrinsics out;
+  out.set_width(static_cast<std::uint32_t>(camera.width));
+  out.set_height(static_cast<std::uint32_t>(camera.height));
+  out.set_fx(camera.fx);
+  out.set_fy(camera.fy);
+  out.set_cx(camera.cx);
+  out.set_cy(camera.cy);
+  out.set_k1(camera.k1);
+  out.set_k2(camera.k2);
+  out.set_k3(camera.k3);
+  out.set_p1(camera.p1);
+  out.set_p2(camera.p2);
+  return out;
+}
+
 SessionCameras session_cameras(const v1::SessionHeader& header) {
   SessionCameras cameras;
   cameras.depth = pinhole_camera(header.depth_intrinsics());

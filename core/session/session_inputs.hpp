@@ -78,6 +78,8 @@ struct SessionCameras {
   double color_rate_hz = 0.0;  // 0: not given
 };
 geometry::PinholeCamera pinhole_camera(const v1::CameraIntrinsics& intrinsics);
+// The inverse: a header's intrinsics for a camera.
+v1::CameraIntrinsics camera_intrinsics(const geometry::PinholeCamera& camera);
 SessionCameras session_cameras(const v1::SessionHeader& header);
 
 }  // namespace posefuse::session

@@ -9,6 +9,7 @@
 #include "common/error.hpp"
 #include "raycast/mesh_scene.hpp"
 #include "session/image_codec.hpp"
+#include "session/session_inputs.hpp"
 #include "session/session_validator.hpp"
 #include "sim/option_checks.hpp"
 
@@ -30,17 +31,7 @@ v1::SessionHeader make_header(const CameraSessionOptions& options) {
 }  // namespace
 
 void set_camera_intrinsics(const raycast::DepthIntrinsics& in, v1::CameraIntrinsics* out) {
-  out->set_width(static_cast<std::uint32_t>(in.width));
-  out->set_height(static_cast<std::uint32_t>(in.height));
-  out->set_fx(in.fx);
-  out->set_fy(in.fy);
-  out->set_cx(in.cx);
-  out->set_cy(in.cy);
-  out->set_k1(in.k1);
-  out->set_k2(in.k2);
-  out->set_k3(in.k3);
-  out->set_p1(in.p1);
-  out->set_p2(in.p2);
+  *out = session::camera_intrinsics(in);
 }
 
 PoseSequence arm_raising_sequence(const body::PoseLayout& layout, double period_s) {

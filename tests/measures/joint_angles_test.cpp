@@ -203,6 +203,15 @@ TEST(JointAngles, ConfidenceFollowsTheJointsAndTheVertical) {
   EXPECT_DOUBLE_EQ(a[static_cast<int>(Angle::kLeftElbowFlexion)].confidence, 1.0);
   EXPECT_DOUBLE_EQ(a[static_cast<int>(Angle::kThoraxFlexion)].confidence, 0.5);
   EXPECT_DOUBLE_EQ(a[static_cast<int>(Angle::kRightElevation)].confidence, 1.0);
+  // The smallest of the thorax's joints and the vertical, not their product: an inferred spine2
+  // (0.5) under a floor measured to a fraction of a degree (0.99) stays at 0.5.
+  b.body.joint_confidence[21] = 1.0;
+  b.body.joint_confidence[6] = 0.5;  // spine2
+  b.body.up_confidence = 0.99;
+  const JointAngles measured = joint_angles(b.body, exact_lengths);
+  EXPECT_DOUBLE_EQ(measured[static_cast<int>(Angle::kThoraxFlexion)].confidence, 0.5);
+  b.body.joint_confidence[6] = 1.0;
+  EXPECT_DOUBLE_EQ(joint_angles(b.body, exact_lengths)[static_cast<int>(Angle::kThoraxLateralTilt)].confidence, 0.99);
 }
 
 TEST(JointAngles, ElbowFlexionSpreadFollowsTheLawOfCosines) {

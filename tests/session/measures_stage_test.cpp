@@ -256,16 +256,7 @@ TEST(MeasuresStage, TheVerticalComesFromTheFloorWhenTheDepthShowsOne) {
       Eigen::AngleAxisd(-10 * std::numbers::pi / 180, Eigen::Vector3d::UnitX()).toRotationMatrix() * facing_camera();
   v1::SessionHeader header;
   const geometry::PinholeCamera camera;
-  v1::CameraIntrinsics& in = *header.mutable_depth_intrinsics();
-  in.set_width(static_cast<std::uint32_t>(camera.width));
-  in.set_height(static_cast<std::uint32_t>(camera.height));
-  in.set_fx(camera.fx);
-  in.set_fy(camera.fy);
-  in.set_cx(camera.cx);
-  in.set_cy(camera.cy);
-  in.set_k1(camera.k1);
-  in.set_k2(camera.k2);
-  in.set_k3(camera.k3);
+  *header.mutable_depth_intrinsics() = camera_intrinsics(camera);
   const measures::testing::Frame depth = measures::testing::render(camera, room.planes);
   for (const bool with_depth : {true, false}) {
     SCOPED_TRACE(with_depth ? "with depth" : "without depth");

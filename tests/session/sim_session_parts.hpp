@@ -10,6 +10,7 @@
 
 #include "forearm/strap_detection.hpp"
 #include "posefuse/v1/session.pb.h"
+#include "session/session_inputs.hpp"
 #include "session/stages/proto_values.hpp"
 #include "sim/imu_device.hpp"
 #include "sim/sync_signals.hpp"
@@ -74,22 +75,6 @@ inline std::uint32_t add_sync_chunks(const sim::SimDevice& base, const sim::SimD
     ++counts.sync_events;
   }
   return audio.sample_rate_hz;
-}
-
-inline v1::CameraIntrinsics camera_intrinsics(const geometry::PinholeCamera& c) {
-  v1::CameraIntrinsics k;
-  k.set_width(static_cast<std::uint32_t>(c.width));
-  k.set_height(static_cast<std::uint32_t>(c.height));
-  k.set_fx(c.fx);
-  k.set_fy(c.fy);
-  k.set_cx(c.cx);
-  k.set_cy(c.cy);
-  k.set_k1(c.k1);
-  k.set_k2(c.k2);
-  k.set_k3(c.k3);
-  k.set_p1(c.p1);
-  k.set_p2(c.p2);
-  return k;
 }
 
 // Header fields for a right-arm IMU, a base IMU at 80 Hz, the strap cameras at 30 Hz and mono
