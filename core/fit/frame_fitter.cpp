@@ -19,12 +19,13 @@ constexpr double kContourVisibilityTolerance_m = 0.01;
 constexpr double kMinDepth_m = 0.05;
 
 // The bg target of a point projecting to `pixel` (options.silhouette_edge_px), or nullopt when the
-// point projects inside the silhouette.
+// point projects inside the silhouette or outside the image: the image shows nothing there, so a
+// body cut by the image's edge (feet below a camera that looks up) is not pulled into the view.
 std::optional<Eigen::Vector2d> silhouette_target(const SilhouetteDistanceMap& silhouette, const Eigen::Vector2d& pixel,
                                                  double edge_px) {
   const long col = std::lround(pixel.x()), row = std::lround(pixel.y());
   const bool in_image = col >= 0 && row >= 0 && col < silhouette.width && row < silhouette.height;
-  if (in_image && silhouette.distance_px[static_cast<size_t>(row) * silhouette.width + col] == 0) return std::nullopt;
+  if (!in_image || silhouette.distance_px[static_cast<size_t>(row) * silhouette.width + col] == 0) return std::nullopt;
   const Eigen::Vector2d centre = silhouette.closest(pixel.x(), pixel.y());
   const Eigen::Vector2d offset = pixel - centre;
   const double distance = offset.norm();

@@ -125,6 +125,31 @@ TEST(FrameFitter, FitsARenderedFrameBackFromAPerturbedStart) { expect_fits_rende
 // The stopping rule of issue 7 (U_bg frozen after freeze_contour_after iterations, so that the
 // joint-step test can fire): it stops these converged fits earlier than re-selecting U_bg at every
 // iteration, and only once the joints are within the same bounds.
+// A camera whose image ends above the hips (rows below 300 of 424 cut off, as when it looks up or
+// stands close): the image shows nothing of the legs and pelvis below its edge, so the silhouette
+// term must not pull them into the view. The same bounds as a whole body in view.
+TEST(FrameFitter, ABodyCutByTheImageEdgeIsNotPulledIntoTheView) {
+  Scene s;
+  raycast::DepthIntrinsics cut;
+  cut.height = 300;
+  const raycast::DepthCamera camera(cut);
+  FrameFitter fitter(s.model, s.layout, camera.intrinsics(), FitOptions{});
+  body::BodyEvaluator eval(s.model, s.layout);
+  for (int variant = 0; variant < 3; ++variant) {
+    const Eigen::VectorXd truth = testing::facing_pose(s.layout, 2.2, variant);
+    const testing::ModelFrame rendered = testing::render_model_frame(s.model, s.layout, s.beta, truth, camera);
+    const FrameObservation observation =
+        prepare_observation(rendered.frame, camera, rendered.skeleton_K, fitter.options(), ForearmDirections{});
+    const FitResult result = fitter.fit(observation, perturbed(s.layout, truth, 3 * kDeg, 0.02, 300 + variant), s.beta);
+    eval.evaluate(s.beta, result.theta, body::Derivatives::kNone);
+    const double joint_error = worst_joint_error_m(eval.joints(), rendered.joints_K);
+    const double bone_angle = worst_bone_angle_rad(eval.joints(), rendered.joints_K);
+    std::printf("cut variant %d: worst %.2f mm, bones %.2f deg\n", variant, 1e3 * joint_error, bone_angle / kDeg);
+    EXPECT_LT(joint_error, 0.005) << "variant " << variant;
+    EXPECT_LT(bone_angle, 2 * kDeg) << "variant " << variant;
+  }
+}
+
 TEST(FrameFitter, FrozenContourStopsAConvergedFitEarlyOnlyOnceTheJointsAreClose) {
   FitOptions reselect;
   reselect.freeze_contour_after = 0;
