@@ -14,8 +14,12 @@ bool SessionVertical::wants_floor(std::int64_t t_us) const {
 void SessionVertical::add_floor(std::int64_t t_us, const std::optional<FloorVertical>& floor) {
   last_try_us_ = t_us;
   if (!floor || floor_ || current_.source != VerticalSource::kAssumed) return;
+  const double confidence = angle_confidence_from_rms_rad(floor->spread_rad);
+  // An unsure floor (a small or bent patch) is not kept: it would hold its low confidence for the
+  // whole session, though a later frame or the IMU may measure the vertical well.
+  if (confidence < kConfidentAt) return;
   floor_ = floor;
-  current_ = {floor->up_K, angle_confidence_from_rms_rad(floor->spread_rad), VerticalSource::kFloor};
+  current_ = {floor->up_K, confidence, VerticalSource::kFloor};
 }
 
 void SessionVertical::add_imu_up(const geometry::Vec3& up_K) {

@@ -1,7 +1,8 @@
 #pragma once
 // Which vertical a session's thorax angles are read against, and how sure it is (docs/measures.md,
 // "The vertical"). Two measure it: the floor that the depth frames show (floor_vertical.hpp) and
-// the world's z mapped into the camera by a calibrated IMU's K_from_W. The first one known is
+// the world's z mapped into the camera by a calibrated IMU's K_from_W. A floor counts only when
+// its confidence (from its spread) is at least kConfidentAt. The first one known is
 // kept for the rest of the session, so that the thorax angles never step when the other arrives.
 // The floor is sought only until one is kept; an IMU's up that arrives after the floor is
 // compared with it. Before either, the camera's y is assumed (a level camera) at

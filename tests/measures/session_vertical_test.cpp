@@ -56,13 +56,22 @@ TEST(SessionVertical, TheFirstMeasuredIsKeptAndTheOtherCompared) {
   EXPECT_FALSE(imu_first.disagreement_rad().has_value());  // the floor was not searched for
 }
 
-// A floor that bends or is small spreads more, and the thorax angles' confidence follows.
+// A floor that bends or is small spreads more, and the thorax angles' confidence follows; one
+// whose confidence falls below 0.5 is not kept, so that a later frame or the IMU can do better.
 TEST(SessionVertical, AFloorsConfidenceFollowsItsSpread) {
-  SessionVertical sure, unsure;
+  SessionVertical sure, less_sure, unsure;
   sure.add_floor(0, floor_with(Vec3::UnitY(), 0.5));
+  less_sure.add_floor(0, floor_with(Vec3::UnitY(), 4.0));
   unsure.add_floor(0, floor_with(Vec3::UnitY(), 8.0));
   EXPECT_GT(sure.current().confidence, 0.99);
-  EXPECT_LT(unsure.current().confidence, 0.5);
+  EXPECT_EQ(less_sure.current().source, VerticalSource::kFloor);
+  EXPECT_LT(less_sure.current().confidence, sure.current().confidence);
+  EXPECT_GE(less_sure.current().confidence, 0.5);
+  EXPECT_EQ(unsure.current().source, VerticalSource::kAssumed);
+  EXPECT_TRUE(unsure.wants_floor(SessionVertical::kFloorRetryUs));
+  const Vec3 imu_up(0, std::cos(3 * kDeg), std::sin(3 * kDeg));
+  unsure.add_imu_up(imu_up);
+  EXPECT_EQ(unsure.current().source, VerticalSource::kImu);
 }
 
 TEST(SessionVertical, TheFloorIsSoughtOncePerSecondUntilFound) {
