@@ -2,10 +2,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numbers>
 #include <random>
 #include <string>
 
 #include "common/error.hpp"
+#include "geometry/axis_angles.hpp"
 #include "geometry/point_pca.hpp"
 
 namespace posefuse::measures {
@@ -15,7 +17,7 @@ using geometry::Vec3;
 
 constexpr std::uint8_t kBackground = 255;
 // Nearer K's y than its x or z: the floor, not a wall (see the header).
-const double kMinUpCosine = std::cos(45.0 * 3.14159265358979323846 / 180.0);
+const double kMinUpCosine = std::cos(std::numbers::pi / 4);
 // Below the camera by at least this: a plane through the camera is no floor to stand on.
 constexpr double kMinCameraHeightM = 0.2;
 
@@ -98,8 +100,6 @@ Vec3 up_normal(const geometry::PointPca& pca) {
   return n.dot(pca.centroid) > 0 ? Vec3(-n) : n;
 }
 
-double angle_between(const Vec3& a, const Vec3& b) { return std::atan2(a.cross(b).norm(), a.dot(b)); }
-
 // The RMS angle of the halves' normals to the whole floor's (see the header, step 3).
 double halves_spread_rad(const std::vector<Candidate>& floor, const Vec3& up_K) {
   std::vector<double> cols, depths;
@@ -121,8 +121,8 @@ double halves_spread_rad(const std::vector<Candidate>& floor, const Vec3& up_K) 
       if (first == (split % 2 == 0)) half.push_back(c.p_K);
     }
     // A half with fewer than three points spans no plane: the floor is too small to check.
-    if (half.size() < 3) return 3.14159265358979323846 / 2;
-    const double angle = angle_between(up_normal(geometry::point_pca(half)), up_K);
+    if (half.size() < 3) return std::numbers::pi / 2;
+    const double angle = geometry::angle_between(up_normal(geometry::point_pca(half)), up_K);
     sum_sq += angle * angle;
     ++halves;
   }
@@ -141,10 +141,13 @@ std::optional<FloorVertical> floor_vertical(const std::vector<std::uint16_t>& de
 
   std::mt19937 rng(options.seed);
   std::uniform_int_distribution<std::size_t> pick(0, candidates.size() - 1);
+  const auto on_plane = [&](const Plane& plane, const Candidate& c) {
+    return std::abs(plane.normal.dot(c.p_K) - plane.offset) <= options.inlier_distance_m;
+  };
   const auto inliers_of = [&](const Plane& plane) {
     std::vector<Candidate> inliers;
     for (const Candidate& c : candidates)
-      if (std::abs(plane.normal.dot(c.p_K) - plane.offset) <= options.inlier_distance_m) inliers.push_back(c);
+      if (on_plane(plane, c)) inliers.push_back(c);
     return inliers;
   };
   std::vector<Candidate> best;
@@ -152,8 +155,7 @@ std::optional<FloorVertical> floor_vertical(const std::vector<std::uint16_t>& de
     const auto plane = plane_through(candidates[pick(rng)].p_K, candidates[pick(rng)].p_K, candidates[pick(rng)].p_K);
     if (!plane || !is_floor(*plane)) continue;
     std::size_t count = 0;
-    for (const Candidate& c : candidates)
-      count += std::abs(plane->normal.dot(c.p_K) - plane->offset) <= options.inlier_distance_m;
+    for (const Candidate& c : candidates) count += on_plane(*plane, c);
     if (count > best.size()) best = inliers_of(*plane);
   }
   if (best.size() < static_cast<std::size_t>(options.min_points)) return std::nullopt;

@@ -1,7 +1,6 @@
 #include "measures/session_vertical.hpp"
 
-#include <cmath>
-
+#include "geometry/axis_angles.hpp"
 #include "measures/joint_angles.hpp"
 
 namespace posefuse::measures {
@@ -13,7 +12,7 @@ bool SessionVertical::wants_floor(std::int64_t t_us) const {
 
 void SessionVertical::add_floor(std::int64_t t_us, const std::optional<FloorVertical>& floor) {
   last_try_us_ = t_us;
-  if (!floor || floor_ || current_.source != VerticalSource::kAssumed) return;
+  if (!floor || current_.source != VerticalSource::kAssumed) return;
   const double confidence = angle_confidence_from_rms_rad(floor->spread_rad);
   // An unsure floor (a small or bent patch) is not kept: it would hold its low confidence for the
   // whole session, though a later frame or the IMU may measure the vertical well.
@@ -30,7 +29,7 @@ void SessionVertical::add_imu_up(const geometry::Vec3& up_K) {
 
 std::optional<double> SessionVertical::disagreement_rad() const {
   if (!floor_ || !imu_up_K_) return std::nullopt;
-  return std::atan2(floor_->up_K.cross(*imu_up_K_).norm(), floor_->up_K.dot(*imu_up_K_));
+  return geometry::angle_between(floor_->up_K, *imu_up_K_);
 }
 
 }  // namespace posefuse::measures

@@ -295,7 +295,7 @@ SimSessionOptions with_motion_duration(SimSessionOptions options, const BodyMoti
 // K_from_level: a level camera's frame turned by the options' pitch (about x, down for > 0) and
 // then roll (about z).
 Mat3 camera_tilt(const SimSessionOptions& options) {
-  constexpr double kDeg = 3.14159265358979323846 / 180.0;
+  constexpr double kDeg = pi / 180.0;
   return (Eigen::AngleAxisd(options.camera_roll_deg * kDeg, Vec3::UnitZ()) *
           Eigen::AngleAxisd(-options.camera_pitch_deg * kDeg, Vec3::UnitX()))
       .toRotationMatrix();

@@ -11,6 +11,7 @@
 #include "common/error.hpp"
 #include "fit/arm_roll.hpp"
 #include "session/stages/body_fit_options.hpp"
+#include "session/stages/proto_values.hpp"
 #include "session/text_fields.hpp"
 
 namespace posefuse::session {
@@ -64,13 +65,16 @@ void MeasuresStage::on_camera_frame(const CameraFrame& frame, StageOutput& /*out
   if (frame.depth_mm.type() != CV_16UC1 || frame.body_index.type() != CV_8UC1 || frame.depth_mm.cols != camera.width ||
       frame.depth_mm.rows != camera.height || frame.body_index.size() != frame.depth_mm.size())
     return;
-  const cv::Mat depth = frame.depth_mm.isContinuous() ? frame.depth_mm : frame.depth_mm.clone();
-  const cv::Mat body = frame.body_index.isContinuous() ? frame.body_index : frame.body_index.clone();
-  const auto* d = depth.ptr<std::uint16_t>();
-  const auto* b = body.ptr<std::uint8_t>();
-  const std::size_t pixels = depth.total();
-  vertical_.add_floor(frame.t_us, measures::floor_vertical(std::vector<std::uint16_t>(d, d + pixels),
-                                                           std::vector<std::uint8_t>(b, b + pixels), camera));
+  // Row by row: a cv::Mat need not be continuous.
+  std::vector<std::uint16_t> depth;
+  std::vector<std::uint8_t> body;
+  for (int row = 0; row < camera.height; ++row) {
+    const auto* d = frame.depth_mm.ptr<std::uint16_t>(row);
+    const auto* b = frame.body_index.ptr<std::uint8_t>(row);
+    depth.insert(depth.end(), d, d + camera.width);
+    body.insert(body.end(), b, b + camera.width);
+  }
+  vertical_.add_floor(frame.t_us, measures::floor_vertical(depth, body, camera));
 }
 
 void MeasuresStage::on_value(const StageValue& value, StageOutput& out) {
@@ -201,9 +205,7 @@ void MeasuresStage::report_vertical(StageOutput& out) const {
     case measures::VerticalSource::kAssumed: report.set_source(v1::CameraVertical::ASSUMED); break;
   }
   const geometry::Vec3& up = vertical.up_K;
-  report.mutable_up_k()->set_x(up.x());
-  report.mutable_up_k()->set_y(up.y());
-  report.mutable_up_k()->set_z(up.z());
+  *report.mutable_up_k() = to_proto(up);
   report.set_confidence(vertical.confidence);
   report.set_camera_pitch_deg(std::asin(std::clamp(-up.z(), -1.0, 1.0)) * kDeg);
   report.set_camera_roll_deg(std::atan2(-up.x(), up.y()) * kDeg);
