@@ -462,6 +462,10 @@ double middle_rest_deg(const std::vector<double>& sorted, const MotionRange& ran
 
 }  // namespace
 
+double counted_amplitude_deg(const RepetitionOptions& options, double spread_deg) {
+  return std::min(options.min_amplitude_deg, std::max(2 * options.hysteresis_deg, 0.5 * spread_deg));
+}
+
 bool swings_about_zero(const std::vector<double>& angle_deg) {
   const std::vector<double> finite = sorted_finite(angle_deg);
   return finite.size() >= 2 && zero_in_middle_half(motion_range(finite));
@@ -481,11 +485,13 @@ RepetitionSummary segment_repetitions(const std::vector<double>& t_s, const std:
   // trough where there are fewer than two samples to give a range).
   const double rest_limit_deg = has_range ? range.middle() : std::numeric_limits<double>::infinity();
   const double rest_deg = about_zero ? middle_rest_deg(finite, range) : 0.0;
+  RepetitionOptions counted = options;
+  counted.min_amplitude_deg = counted_amplitude_deg(options, range.high - range.low);
   for (const Piece& piece : split_at_gaps(t_s, angle_deg, options.max_gap_s)) {
     if (about_zero) {
-      add_piece_about_zero(piece, t_s, angle_deg, rest_deg, options, summary.repetitions);
+      add_piece_about_zero(piece, t_s, angle_deg, rest_deg, counted, summary.repetitions);
     } else {
-      add_piece(piece, t_s, angle_deg, options, rest_limit_deg, summary.repetitions);
+      add_piece(piece, t_s, angle_deg, counted, rest_limit_deg, summary.repetitions);
     }
   }
   summarize(summary);

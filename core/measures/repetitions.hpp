@@ -11,8 +11,9 @@
 // series' range (halfway between its 5th and 95th percentiles). A dip while the limb is held
 // away from rest (a wobble at the top of a raise, the strokes of hair combing) belongs to the
 // repetition it happens in instead of splitting it into partial pieces.
-// A trough -> peak -> trough cycle counts when both of its swings are at least
-// `min_amplitude_deg` and its duration lies within [min_duration_s, max_duration_s]; a cycle cut by
+// A trough -> peak -> trough cycle counts when both of its swings are at least the counted
+// amplitude (counted_amplitude_deg: `min_amplitude_deg`, or half the motion of a series that moves
+// less than twice that) and its duration lies within [min_duration_s, max_duration_s]; a cycle cut by
 // the start or the end of the series, by missing samples (NaN) longer than `max_gap_s`, or that
 // falls short of the amplitude or duration bounds is kept as partial: reported, not counted.
 //
@@ -39,8 +40,8 @@
 // between repetitions or after such a return, takes a real move: at least `hysteresis_deg` from
 // where the angle came closest to rest. A settled start whose first swing goes the other way
 // cannot be told from a slow crossing and stays joined to it, a partial repetition marked
-// may_hold_repetition. A repetition counts when its range (max - min) is at least
-// `min_amplitude_deg` and its duration lies within the bounds; motion cut by the start, the end or
+// may_hold_repetition. A repetition counts when its range (max - min) is at least the counted
+// amplitude and its duration lies within the bounds; motion cut by the start, the end or
 // a gap is partial, as above.
 //
 // Confidence: segmenting does not look at the samples' confidences (an angle the method is unsure
@@ -54,7 +55,7 @@ namespace posefuse::measures {
 
 struct RepetitionOptions {
   double hysteresis_deg = 5.0;      // smallest reversal that makes a turning point
-  double min_amplitude_deg = 20.0;  // both swings of a counted repetition at least this
+  double min_amplitude_deg = 20.0;  // a swing this large always counts (counted_amplitude_deg)
   double min_duration_s = 0.5;      // trough to trough
   double max_duration_s = 30.0;     // may be infinite: no upper bound
   double max_gap_s = 0.5;           // missing (NaN) stretches longer than this cut the series;
@@ -104,6 +105,16 @@ struct RepetitionSummary {
 RepetitionSummary segment_repetitions(const std::vector<double>& t_s, const std::vector<double>& angle_deg,
                                       const RepetitionOptions& options = {}, const std::vector<float>& confidence = {});
 
+// The amplitude a swing needs to count in a series whose motion (the spread between its 5th and
+// 95th percentiles of finite samples, as dominant_series) is `spread_deg`: `min_amplitude_deg`, or,
+// for a series that moves less than twice that (a shrug, a patient whose range is small), half its
+// motion: the middle of its range, the bound that troughs already keep to, so a counted swing
+// reaches from the resting half into the moving one. Never below twice `hysteresis_deg` (nor above
+// `min_amplitude_deg`): each end of a swing is known only to the hysteresis, so a smaller swing can
+// be noise at both ends. A fixed threshold alone would decide whether a motion as large as it
+// counts by its noise.
+double counted_amplitude_deg(const RepetitionOptions& options, double spread_deg);
+
 // Whether a series swings about the angle's zero (its anatomical neutral) rather than rising
 // from a rest at one end: zero lies in the middle half of its motion, between its 5th and 95th
 // percentiles of finite samples (as dominant_series) moved a quarter of their spread inwards.
@@ -116,7 +127,9 @@ bool swings_about_zero(const std::vector<double>& angle_deg);
 // values of an angle that is mostly undefined describe no exercise). With `confidence` (one
 // series per angle series, as segment_repetitions takes them), a series with fewer than half of
 // its finite samples at kConfidentAt competes only when no series that has that half spreads at
-// least `min_amplitude_deg`: an angle the method is unsure of (a fitted elbow near full extension)
+// least `min_amplitude_deg` (a swing that large always counts, counted_amplitude_deg; a confident
+// angle that moves less, such as an arm brought into position, is no reason to pass over the
+// unsure one that moves more): an angle the method is unsure of (a fitted elbow near full extension)
 // can scatter more than the joint that moves, but it still describes the exercise when nothing
 // confident moves enough to make a repetition (pronation whose mounting roll is unknown). -1 when
 // no series has two finite samples. Throws posefuse::Error (kInvalidArgument, "confidence") for a

@@ -47,5 +47,30 @@ TEST(AngleSeries, ChoosesAConfidentAngleThatMovesOverAnUnsureOneThatScatters) {
   }
 }
 
+// A shrug: the left elevation lifts 15 deg and back three times at full confidence while the
+// unsure elbow, hanging, scatters over 10 deg. 15 deg is under the default minimum amplitude, but
+// nothing moves more: the elevation is chosen and its three lifts count (counted_amplitude_deg).
+TEST(AngleSeries, ASmallConfidentMotionIsChosenAndCountedWhenNothingMovesMore) {
+  AngleSeries series;
+  std::mt19937 rng(17);
+  std::uniform_real_distribution<double> scatter(0.0, 10.0);
+  const double dt = 1.0 / 30;
+  const int frames = 3 * 90 + 30;  // three 3 s lifts, 1 s of rest at the end
+  for (int k = 0; k < frames; ++k) {
+    const double t = k * dt;
+    const double phase = std::fmod(t, 3.0) / 3.0;
+    const double lift = k < 3 * 90 ? 7.5 * (1 - std::cos(2 * std::numbers::pi * phase)) : 0.0;
+    JointAngles angles{};
+    angles[static_cast<int>(Angle::kLeftElevation)] = value(8 + lift, 1.0);
+    angles[static_cast<int>(Angle::kLeftElbowFlexion)] = value(scatter(rng), 0.05);
+    ASSERT_TRUE(series.add(t, angles));
+  }
+  const std::optional<SessionRepetitions> reps = series.repetitions(RepetitionOptions{});
+  ASSERT_TRUE(reps.has_value());
+  EXPECT_EQ(reps->angle, Angle::kLeftElevation);
+  EXPECT_EQ(reps->summary.count, 3);
+  EXPECT_NEAR(reps->summary.mean_range_deg, 15.0, 0.1);
+}
+
 }  // namespace
 }  // namespace posefuse::measures

@@ -207,6 +207,51 @@ TEST(Repetitions, AWiggleBelowTheMinimumAmplitudeIsPartial) {
   EXPECT_NEAR(summary.mean_duration_s, 2.0, 1e-9);
 }
 
+// The amplitude a swing needs follows the series' motion: half of it, between twice the
+// hysteresis and the minimum amplitude.
+TEST(Repetitions, TheCountedAmplitudeIsHalfTheMotionBetweenTwiceTheHysteresisAndTheMinimum) {
+  const RepetitionOptions options;  // hysteresis 5, minimum amplitude 20
+  EXPECT_EQ(counted_amplitude_deg(options, 0.0), 10.0);
+  EXPECT_EQ(counted_amplitude_deg(options, 15.0), 10.0);
+  EXPECT_EQ(counted_amplitude_deg(options, 30.0), 15.0);
+  EXPECT_EQ(counted_amplitude_deg(options, 40.0), 20.0);
+  EXPECT_EQ(counted_amplitude_deg(options, 150.0), 20.0);
+  RepetitionOptions low = options;
+  low.min_amplitude_deg = 8.0;  // below twice the hysteresis: the minimum still bounds it
+  EXPECT_EQ(counted_amplitude_deg(low, 0.0), 8.0);
+}
+
+// A motion smaller than the minimum amplitude (a shrug, a patient with a small range) counts when
+// each swing reaches half of the series' motion, and a motion exactly as large as the minimum no
+// longer counts or not by a rounding of its swings. A swing well short of the rest is partial.
+TEST(Repetitions, ASmallMotionCountsWhenItsSwingsReachHalfOfIt) {
+  for (const double amplitude_deg : {12.0, 15.0, 19.9, 20.0}) {
+    SCOPED_TRACE("amplitude " + std::to_string(amplitude_deg));
+    const RepetitionSummary summary = segment(exercise(std::vector<Cycle>(3, Cycle{amplitude_deg, 2})));
+    EXPECT_EQ(summary.count, 3);
+    EXPECT_NEAR(summary.mean_range_deg, amplitude_deg, 0.1);
+  }
+  const RepetitionSummary with_short_one = segment(exercise({{15, 2}, {6, 1}, {15, 2}}));
+  EXPECT_EQ(with_short_one.count, 2);
+  ASSERT_EQ(with_short_one.repetitions.size(), 3u);
+  EXPECT_TRUE(with_short_one.repetitions[1].partial);
+}
+
+// Noise at rest larger than the hysteresis makes turning points, but no swing twice the
+// hysteresis: a still series counts nothing, however small its own motion.
+TEST(Repetitions, NoiseAtRestCountsNothingThoughTheMotionIsSmall) {
+  Series series;
+  std::mt19937 rng(23);
+  std::uniform_real_distribution<double> noise(-4.5, 4.5);
+  for (int k = 0; k <= 1000; ++k) {
+    series.t_s.push_back(k * kDt);
+    series.angle_deg.push_back(30 + noise(rng));
+  }
+  const RepetitionSummary summary = segment(series);
+  EXPECT_GT(summary.repetitions.size(), 0u);  // the noise does make turning points
+  EXPECT_EQ(summary.count, 0);
+}
+
 // A raise held at the top with a 30 deg dip in it (hair combing's strokes, a wobble of the fit):
 // the dip's trough lies above the middle of the range, so it bounds no repetition and each raise
 // counts once, its range the whole excursion.
@@ -716,6 +761,14 @@ TEST(Repetitions, ASwingAboutZeroCutOrTooSmallIsPartial) {
   EXPECT_TRUE(summary.repetitions.front().partial);
   EXPECT_TRUE(summary.repetitions.back().partial);
   EXPECT_EQ(summary.count, 1);  // the second; the third is too small
+}
+
+// About zero the same: tilts of 8 deg each way, 16 deg of arc, count when they are the series'
+// whole motion (beside 20 deg tilts they are partial: ASwingAboutZeroCutOrTooSmallIsPartial).
+TEST(Repetitions, SmallSwingsAboutZeroCountWhenTheyAreTheWholeMotion) {
+  const RepetitionSummary tilted = segment(tilts({{8, -8}, {8, -8}, {8, -8}}));
+  EXPECT_EQ(tilted.count, 3);
+  EXPECT_NEAR(tilted.mean_range_deg, 16.0, 0.1);
 }
 
 // Forearm rolls as a fit gives them: the series starts 24 deg to one side of rest (pronation is

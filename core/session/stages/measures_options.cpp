@@ -40,9 +40,10 @@ const OptionTable& measures_option_table() {
          .default_value = format_double(reps.min_amplitude_deg),
          .min = above(0),
          .unit = "deg",
-         .description = "both swings of a counted repetition at least this (smaller ones are partial); with "
-                        "repetition_angle auto, the spread an angle confident in half its frames needs to be "
-                        "chosen over unsure ones"},
+         .description = "a swing this large always counts; an angle that moves less than twice this needs "
+                        "half its motion (5th to 95th percentile), at least twice hysteresis_deg; smaller swings "
+                        "are partial. With repetition_angle auto, the spread an angle confident in half its frames "
+                        "needs to be chosen over unsure ones"},
         {.key = kMeasuresMinDurationKey,
          .type = OptionType::kReal,
          .default_value = format_double(reps.min_duration_s),
