@@ -10,6 +10,11 @@ angles where every joint is tracked. Prints RMS, the 99th percentile and the con
 bound gives (2^-(bound / 15 deg)^2, forearm::confidence_from_bound99_rad): the evidence for the
 fit's confidence of an untracked joint (docs/fitting.md, "Joint confidence").
 
+A second table gives the girdle elevation's own error where every joint it is read from is
+tracked (the collars have no camera joint and count as tracked): RMS, 99th percentile, the share
+beyond 15 deg and beyond the default 99 % bound (2.576 x measures.girdle_elevation_uncertainty_deg,
+8.4 deg): the evidence for that option (docs/measures.md, "Confidence").
+
 A joint is untracked where its fitted confidence is below 1; frames where the fit lost tracking
 (a joint at the 0.1 cap) are left out. Girdle elevation is left out (its error is the girdle's
 own, tracked or not), as are elbow flexions whose confidence lies between 0 and 0.5 (limited by
@@ -39,11 +44,19 @@ def joints_of(angle):
     return THORAX + [shoulder, elbow]
 
 
+GIRDLE_RMS_DEG = 8.4  # measures.girdle_elevation_uncertainty_deg's default
+
+
+def percentile_99(sorted_errors):
+    return sorted_errors[int(0.99 * (len(sorted_errors) - 1))]
+
+
 def main(work):
     angles = ["thorax_flexion", "thorax_lateral_tilt", "thorax_axial_rotation"] + [
         f"{side}_{kind}" for side in ("left", "right") for kind in ARM_ANGLES]
     errors = collections.defaultdict(list)
     sessions = collections.defaultdict(set)
+    girdle_errors, girdle_sessions = [], set()
     for out in sorted(glob.glob(os.path.join(work, "*.out"))):
         name = os.path.basename(out)[: -len(".out")]
         confidence = collections.defaultdict(dict)
@@ -55,6 +68,13 @@ def main(work):
             joints = confidence.get(round(float(row["t_s"]) * 1e6))
             if not true_row or not joints or any(c == 0.1 for c in joints.values()):
                 continue
+            for side in ("left", "right"):
+                angle = f"{side}_girdle_elevation"
+                if row[angle] == "" or true_row[angle] == "":
+                    continue
+                if all(joints.get(j, 1.0) == 1.0 for j in THORAX + [f"{side}_shoulder"]):
+                    girdle_errors.append(abs(float(row[angle]) - float(true_row[angle])))
+                    girdle_sessions.add(name)
             for angle in angles:
                 if row[angle] == "" or true_row[angle] == "":
                     continue
@@ -72,9 +92,20 @@ def main(work):
     print("|---|---:|---:|---:|---:|---:|")
     for key in sorted(errors, key=lambda k: (k == "none", k)):
         e = sorted(errors[key])
-        bound = e[int(0.99 * (len(e) - 1))]
+        bound = percentile_99(e)
         rms = math.sqrt(sum(x * x for x in e) / len(e))
         print(f"| {key} | {len(e)} | {len(sessions[key])} | {rms:.1f} | {bound:.1f} | {2 ** (-(bound / 15) ** 2):.3f} |")
+    if girdle_errors:
+        e = sorted(girdle_errors)
+        rms = math.sqrt(sum(x * x for x in e) / len(e))
+        default_bound = 2.576 * GIRDLE_RMS_DEG
+        share = lambda limit: 100.0 * sum(x > limit for x in e) / len(e)
+        print()
+        print("| girdle elevation, joints tracked | values | sessions | RMS, deg | 99 % bound, deg | beyond 15 deg "
+              f"| beyond {default_bound:.1f} deg (default bound) |")
+        print("|---|---:|---:|---:|---:|---:|---:|")
+        print(f"| both sides | {len(e)} | {len(girdle_sessions)} | {rms:.1f} | {percentile_99(e):.1f} "
+              f"| {share(15):.1f} % | {share(default_bound):.2f} % |")
 
 
 if __name__ == "__main__":

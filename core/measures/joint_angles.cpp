@@ -108,7 +108,9 @@ void arm_angles(const PosedUpperBody& body, const Thorax& thorax, bool left, con
   if (upper.norm() < 1e-6 || fore.norm() < 1e-6 || clavicle.norm() < 1e-6)
     throw_invalid("smpl_joints_K", std::string(left ? "left" : "right") + " arm joints coincide");
 
-  const double girdle_confidence = std::min({thorax.confidence, c[collar], c[shoulder]});
+  const double girdle_confidence =
+      std::min({thorax.confidence, c[collar], c[shoulder],
+                angle_confidence_from_rms_rad(options.girdle_elevation_uncertainty_deg / kDegPerRad)});
   out[static_cast<int>(id.girdle)] = defined_value(
       std::asin(std::clamp(clavicle.normalized().dot(thorax.K_from_T.col(1)), -1.0, 1.0)), girdle_confidence);
 
@@ -226,6 +228,13 @@ double elbow_flexion_spread_rad(double upper_arm_m, double forearm_m, double rea
                   std::abs(flexion(1.0 - relative_length_error) - fitted));
 }
 
+JointAngleOptions exact_joint_options(JointAngleOptions options) {
+  options.arm_length_uncertainty = 0.0;
+  options.joint_position_uncertainty_m = 0.0;
+  options.girdle_elevation_uncertainty_deg = 0.0;
+  return options;
+}
+
 double angle_confidence_from_rms_rad(double rms_rad) {
   constexpr double kBound99OverRms = 2.576;  // two-sided 99 % of a normal error
   return forearm::confidence_from_bound99_rad(kBound99OverRms * rms_rad);
@@ -246,6 +255,8 @@ JointAngles joint_angles(const PosedUpperBody& body, const JointAngleOptions& op
     throw_invalid("joint_angle_options.arm_length_uncertainty", "must be in [0, 0.5)");
   if (!(options.joint_position_uncertainty_m >= 0 && options.joint_position_uncertainty_m <= 0.2))
     throw_invalid("joint_angle_options.joint_position_uncertainty_m", "must be in [0, 0.2]");
+  if (!(options.girdle_elevation_uncertainty_deg >= 0 && options.girdle_elevation_uncertainty_deg <= 90))
+    throw_invalid("joint_angle_options.girdle_elevation_uncertainty_deg", "must be in [0, 90]");
 
   JointAngles out{};
   const Thorax thorax = thorax_frame(body);

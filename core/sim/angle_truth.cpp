@@ -13,9 +13,7 @@ AngleTruth angle_truth(const SimTruth& truth, const measures::JointAngleOptions&
   const measures::JointAngles* previous = nullptr;
   // The truth's joints and arm segments are the subject's own: its angles are exact (confidence
   // 1) except where the geometry defines none (confidence 0: the gimbal lock's held values).
-  measures::JointAngleOptions exact_joints = angle_options;
-  exact_joints.arm_length_uncertainty = 0.0;
-  exact_joints.joint_position_uncertainty_m = 0.0;
+  const measures::JointAngleOptions exact_joints = measures::exact_joint_options(angle_options);
   out.frames.reserve(truth.frames.size());
   for (const SimFrameTruth& frame : truth.frames) {
     measures::PosedUpperBody body;

@@ -60,10 +60,8 @@ TEST(JointAngles, EveryAngleReadBackOnConstructedSkeletons) {
         PronationInput{*pronation_rad(J.col(16), J.col(18), J.col(20), b.left_thumb_K, true, 15), 1};
     b.body.right_pronation =
         PronationInput{*pronation_rad(J.col(17), J.col(19), J.col(21), b.right_thumb_K, false, 15), 1};
-    JointAngleOptions exact_lengths;  // the skeleton's own exact joints: every angle as confident as they are
-    exact_lengths.arm_length_uncertainty = 0;
-    exact_lengths.joint_position_uncertainty_m = 0;
-    const JointAngles a = joint_angles(b.body, exact_lengths);
+    // The skeleton's own exact joints: every angle as confident as they are.
+    const JointAngles a = joint_angles(b.body, exact_joint_options({}));
     SCOPED_TRACE(trial);
     EXPECT_NEAR(deg(a, Angle::kThoraxFlexion), flexion, 1e-6);
     EXPECT_NEAR(deg(a, Angle::kThoraxLateralTilt), tilt, 1e-6);
@@ -214,6 +212,25 @@ TEST(JointAngles, ConfidenceFollowsTheJointsAndTheVertical) {
   EXPECT_DOUBLE_EQ(joint_angles(b.body, exact_lengths)[static_cast<int>(Angle::kThoraxLateralTilt)].confidence, 0.99);
 }
 
+// The girdle elevation carries its own error (the collars have no camera joint): with every
+// joint tracked it is below confidence 0.5 at the default 8.4 deg RMS (99 % bound 22 deg), at what
+// the option allows, and as confident as its joints with exact joints.
+TEST(JointAngles, GirdleElevationCarriesItsOwnError) {
+  const Built b = build(Eigen::Matrix3d::Identity(), 0, 0, 0, ArmPose{0, 45, 0, 45, 0, 0}, ArmPose{0, 45, 0, 45, 0, 0});
+  const auto girdle_confidence = [&](const JointAngleOptions& options) {
+    return joint_angles(b.body, options)[static_cast<int>(Angle::kRightGirdleElevation)].confidence;
+  };
+  const double by_default = girdle_confidence({});
+  EXPECT_LT(by_default, 0.5);
+  EXPECT_DOUBLE_EQ(by_default, angle_confidence_from_rms_rad(8.4 * kRad));
+  JointAngleOptions sharper;
+  sharper.girdle_elevation_uncertainty_deg = 2.0;
+  EXPECT_GT(girdle_confidence(sharper), 0.5);
+  EXPECT_DOUBLE_EQ(girdle_confidence(exact_joint_options({})), 1.0);
+  // The other arm angles do not take it.
+  EXPECT_DOUBLE_EQ(joint_angles(b.body)[static_cast<int>(Angle::kRightElevation)].confidence, 1.0);
+}
+
 TEST(JointAngles, ElbowFlexionSpreadFollowsTheLawOfCosines) {
   const double a = 0.26, b = 0.23;
   const auto reach = [&](double flexion_deg) {
@@ -328,6 +345,9 @@ TEST(JointAngles, BadInputNamesTheField) {
   EXPECT_EQ(field_of(b.body, bad_positions), "joint_angle_options.joint_position_uncertainty_m");
   bad_positions.joint_position_uncertainty_m = std::nan("");
   EXPECT_EQ(field_of(b.body, bad_positions), "joint_angle_options.joint_position_uncertainty_m");
+  JointAngleOptions bad_girdle;
+  bad_girdle.girdle_elevation_uncertainty_deg = -1;
+  EXPECT_EQ(field_of(b.body, bad_girdle), "joint_angle_options.girdle_elevation_uncertainty_deg");
 }
 
 TEST(JointAngles, NamesAreUniqueSnakeCase) {

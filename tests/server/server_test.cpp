@@ -514,7 +514,7 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   EXPECT_EQ(info.stages(3).name(), "forearm_gaps");
   EXPECT_EQ(info.stages(4).name(), "frame_merge");
   EXPECT_EQ(info.stages(5).name(), "measures");
-  ASSERT_EQ(info.options_size(), 40);
+  ASSERT_EQ(info.options_size(), 41);
   EXPECT_EQ(info.options(30).key(), "measures.repetition_angle");
   EXPECT_EQ(info.options(30).default_value(), "auto");
   EXPECT_EQ(info.options(16).key(), "fit.enabled");

@@ -96,6 +96,14 @@ const OptionTable& measures_option_table() {
              "RMS error of a fitted joint's position; the confidence of the humerus' axial rotation near a "
              "straight elbow or the gimbal lock and of the plane of elevation near the lock carries the spread it "
              "gives"},
+        {.key = kMeasuresGirdleElevationUncertaintyKey,
+         .type = OptionType::kReal,
+         .default_value = format_double(angles.girdle_elevation_uncertainty_deg),
+         .min = at_least(0),
+         .max = at_most(90),
+         .unit = "deg",
+         .description = "RMS error of the fitted girdle elevation (the collars have no camera joint); its "
+                        "confidence is at most what this allows"},
     };
   }();
   return table;
@@ -113,6 +121,7 @@ MeasuresOptions read_measures_options(const v1::SessionHeader& header) {
   out.angles.min_elevation_for_plane_deg = options.real(kMeasuresMinElevationKey);
   out.angles.arm_length_uncertainty = options.real(kMeasuresArmLengthUncertaintyKey);
   out.angles.joint_position_uncertainty_m = options.real(kMeasuresJointPositionUncertaintyKey);
+  out.angles.girdle_elevation_uncertainty_deg = options.real(kMeasuresGirdleElevationUncertaintyKey);
   for (int i = 0; i < measures::kAngleCount; ++i) {
     const auto angle = static_cast<measures::Angle>(i);
     if (options.choice_is(kMeasuresRepetitionAngleKey, measures::angle_name(angle))) out.repetition_angle = angle;

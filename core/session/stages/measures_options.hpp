@@ -19,6 +19,7 @@ inline constexpr const char* kMeasuresMinElbowFlexionKey = "measures.min_elbow_f
 inline constexpr const char* kMeasuresMinElevationKey = "measures.min_elevation_for_plane_deg";
 inline constexpr const char* kMeasuresArmLengthUncertaintyKey = "measures.arm_length_uncertainty";
 inline constexpr const char* kMeasuresJointPositionUncertaintyKey = "measures.joint_position_uncertainty_m";
+inline constexpr const char* kMeasuresGirdleElevationUncertaintyKey = "measures.girdle_elevation_uncertainty_deg";
 
 struct MeasuresOptions {
   measures::JointAngleOptions angles;
