@@ -57,7 +57,7 @@ for spec in "${specs[@]}"; do
   "$build/tools/score/posefuse-score" "$work/$name.out" "$work/$name.gt" >"$work/$name.score"
 done
 python3 - "$work" "${specs[@]}" <<'PY'
-import math, re, sys
+import csv, math, re, sys
 work, specs = sys.argv[1], sys.argv[2:]
 pooled = {}  # angle -> [sum n*rms^2, n, max]
 sessions = []
@@ -79,7 +79,11 @@ for spec in specs:
             p[3] += cn * crms * crms; p[4] += cn; p[5] = max(p[5], cmx)
     m = re.search(r"Repetitions.*\n.*\n(\S+)\s+(\S+)\s+(\d+)\s+(\d+)\s+(\d+)\s+(\S+)\s+(\S+)\s+(\d+)\s+(\S+)\s+(\S+)",
                   text)
-    sessions.append((name, m.groups() if m else None))
+    # The truth's own choice of angle and its count: posefuse-score scores a result that chose
+    # another angle against the truth's series of that angle, which hides a wrong choice.
+    own = [r for r in csv.DictReader(open(f"{work}/{name}.gt/repetitions.csv")) if r["counted"] == "1"]
+    truth_own = f"{own[0]['angle']}: {len(own)}" if own else "none"
+    sessions.append((name, m.groups() if m else None, truth_own))
 print("Joint angle error, pooled over the sessions (deg)\n")
 print("| angle | frames | RMS | max | confident frames | confident RMS | confident max |")
 print("|---|---|---|---|---|---|---|")
@@ -89,13 +93,13 @@ for angle, (s, n, mx, cs, cn, cmx) in pooled.items():
 print()
 print("Repetitions per session (counted; ROM error per matched repetition, deg; confident: those whose range")
 print("the result gives confidence >= 0.5)\n")
-print("| session | angle | true angle | count | true count | ROM error RMS | ROM error max | confident | confident RMS | confident max |")
-print("|---|---|---|---|---|---|---|---|---|---|")
-for name, g in sessions:
+print("| session | angle | true angle | count | true count | ROM error RMS | ROM error max | confident | confident RMS | confident max | the truth's own angle: count |")
+print("|---|---|---|---|---|---|---|---|---|---|---|")
+for name, g, truth_own in sessions:
     if g is None:
-        print(f"| {name} | (no repetitions in the results) | | | | | | | | |"); continue
+        print(f"| {name} | (no repetitions in the results) | | | | | | | | | {truth_own} |"); continue
     angle, true_angle, count, true_count, matched, rms, mx, cn, crms, cmx = g
-    print(f"| {name} | {angle} | {true_angle} | {count} | {true_count} | {rms} | {mx} | {cn} of {matched} | {crms} | {cmx} |")
+    print(f"| {name} | {angle} | {true_angle} | {count} | {true_count} | {rms} | {mx} | {cn} of {matched} | {crms} | {cmx} | {truth_own} |")
 
 import json
 def up_of(q):  # W's z (up) in K from a K_from_W quaternion
