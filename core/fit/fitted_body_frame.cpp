@@ -37,8 +37,21 @@ bool is_hand_joint(int camera_joint) {
   }
 }
 
-double confidence_of(const TrackedSkeleton& skeleton, int camera_joint) {
-  if (skeleton.tracking[static_cast<size_t>(camera_joint)] == JointTracking::kTracked) return 1.0;
+bool tracked(const TrackedSkeleton& skeleton, int camera_joint) {
+  return skeleton.tracking[static_cast<size_t>(camera_joint)] == JointTracking::kTracked;
+}
+
+// Whether the camera tracks a joint that is an SMPL joint (smpl_joint_at_camera_joint) far from
+// where the fit has it (kCameraDisagreementM). The camera joints the fit derives (hand tips,
+// thumbs, head, spine shoulder) are compared with nothing: the published error is that of the
+// joints themselves.
+bool far_from_fit(const TrackedSkeleton& skeleton, int camera_joint, const Eigen::Vector3d& fitted_K) {
+  return tracked(skeleton, camera_joint) && smpl_joint_at_camera_joint(camera_joint) >= 0 &&
+         !((skeleton.positions_K[static_cast<size_t>(camera_joint)] - fitted_K).norm() <= kCameraDisagreementM);
+}
+
+double confidence_of(const TrackedSkeleton& skeleton, int camera_joint, const Eigen::Vector3d& fitted_K) {
+  if (tracked(skeleton, camera_joint) && !far_from_fit(skeleton, camera_joint, fitted_K)) return 1.0;
   return is_hand_joint(camera_joint) ? kUntrackedHandConfidence : kUntrackedConfidence;
 }
 
@@ -50,7 +63,7 @@ FittedForearm fitted_forearm(const JointPose& pose, ArmSide side, const Eigen::Q
   const Eigen::Vector3d axis_K = (pose.positions_K.col(wrist) - pose.positions_K.col(elbow)).normalized();
   const Eigen::Quaterniond onto_fit = Eigen::Quaterniond::FromTwoVectors(K_from_F * Eigen::Vector3d::UnitY(), axis_K);
   FittedForearm forearm{side, (onto_fit * K_from_F).normalized(), 0.0, 0.0};
-  forearm.confidence = confidence_of(skeleton, left ? kWristLeft : kWristRight);
+  forearm.confidence = confidence_of(skeleton, left ? kWristLeft : kWristRight, pose.positions_K.col(wrist));
   try {
     ArmRollOptions roll_options;
     roll_options.thumb_F = thumb_axis_F(side);
@@ -74,14 +87,15 @@ FittedBodyFrame make_fitted_body_frame(const Eigen::Matrix3Xd& rest_joints, cons
   smpl_confidence.fill(1.0);
   for (int j = 0; j < kKinectJointCount; ++j) {
     const int smpl = smpl_joint_at_camera_joint(j);
-    if (smpl >= 0) smpl_confidence[static_cast<size_t>(smpl)] = confidence_of(skeleton, j);
+    if (smpl >= 0) smpl_confidence[static_cast<size_t>(smpl)] = confidence_of(skeleton, j, camera_joints.col(j));
   }
   for (int j = 0; j < body::kNumJoints; ++j) {
     out.smpl_joints.push_back({pose.positions_K.col(j), smpl_confidence[static_cast<size_t>(j)]});
   }
   for (int j = 0; j < body::kNumJoints; ++j) out.K_from_joint.emplace_back(pose.K_from_joint[static_cast<size_t>(j)]);
   for (int j = 0; j < kKinectJointCount; ++j) {
-    out.camera_joints.push_back({camera_joints.col(j), confidence_of(skeleton, j)});
+    out.camera_joints.push_back({camera_joints.col(j), confidence_of(skeleton, j, camera_joints.col(j))});
+    if (far_from_fit(skeleton, j, camera_joints.col(j))) ++out.joints_off_camera;
   }
   if (K_from_F.left) out.forearms.push_back(fitted_forearm(pose, ArmSide::kLeft, *K_from_F.left, skeleton));
   if (K_from_F.right) out.forearms.push_back(fitted_forearm(pose, ArmSide::kRight, *K_from_F.right, skeleton));

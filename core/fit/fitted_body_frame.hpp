@@ -14,10 +14,22 @@
 
 namespace posefuse::fit {
 
+// A camera joint reported TRACKED that lies farther than this from the fitted SMPL joint it is
+// (shoulders, elbows, wrists, hands, spine, hips, legs; not the hand tips, thumbs and head the fit
+// derives): the camera
+// and the fit disagree by more than the camera's own error explains, and nothing in the frame
+// says which is wrong (a fit folded into a wrong pose, or a camera joint gone off track), so
+// the camera's tracking does not vouch for the fitted joint. 0.25 m: the 99.9th percentile of a
+// 3-D normal error whose mean is 101 mm, the largest published mean error of the Kinect v2's
+// upper-limb joints (paper 2's introduction, citing Wang et al. 2015; docs/simulator.md); the
+// fit's own error (about 20 mm) adds little to it.
+inline constexpr double kCameraDisagreementM = 0.25;
+
 struct FittedJoint {
   Eigen::Vector3d p_K = Eigen::Vector3d::Zero();
-  double confidence = 0.0;  // 1 where the camera tracks the corresponding joint; else 0 for a wrist
-                            // or hand, 0.5 for the others (docs/fitting.md, "Joint confidence")
+  // 1 where the camera tracks the corresponding joint within kCameraDisagreementM; else 0 for a
+  // wrist or hand, 0.5 for the others (docs/fitting.md, "Joint confidence").
+  double confidence = 0.0;
 };
 
 struct FittedForearm {
@@ -36,6 +48,9 @@ struct FittedBodyFrame {
   std::vector<FittedJoint> camera_joints;        // kKinectJointCount
   std::vector<Eigen::Quaterniond> K_from_joint;  // global rotation per SMPL joint (rest T-pose: identity)
   std::vector<FittedForearm> forearms;           // left then right, those with an orientation
+  // Camera joints reported TRACKED but farther than kCameraDisagreementM from the SMPL joint they
+  // are: those fitted joints take an untracked joint's confidence.
+  int joints_off_camera = 0;
 };
 
 // The forearm orientations K_from_F (paper 1's F: y from elbow to wrist) at one frame.
@@ -44,7 +59,8 @@ struct ForearmOrientationPair {
 };
 
 // The output for pose `theta` of a frame: joints from `rest_joints` (fit::rest_joints of the
-// shape), confidences from `skeleton`'s tracking states, forearms from `K_from_F`.
+// shape), confidences from `skeleton`'s tracking states and its distance to the fit, forearms
+// from `K_from_F`.
 FittedBodyFrame make_fitted_body_frame(const Eigen::Matrix3Xd& rest_joints, const body::PoseLayout& layout,
                                        const Eigen::VectorXd& theta, const TrackedSkeleton& skeleton,
                                        const ForearmOrientationPair& K_from_F);

@@ -6,6 +6,7 @@
 
 #include "body/template_generator.hpp"
 #include "fit/arm_roll.hpp"
+#include "fit/camera_joints.hpp"
 #include "fit/fitted_body_frame.hpp"
 #include "fit/pose_smoothing.hpp"
 #include "posed_subject.hpp"
@@ -187,13 +188,15 @@ TEST(FitArmRoll, BadInputNamesTheField) {
 TEST(FittedBodyFrame, JointConfidenceFollowsTheCameraTrackingState) {
   const PoseLayout layout = PoseLayout::upper_body();
   const Eigen::Matrix3Xd rest = rest_joints(*male(), Eigen::VectorXd());
+  const Eigen::VectorXd theta = testing::facing_pose(layout, 2.0, {});
+  const JointPose pose = pose_joints(rest, layout, theta);
+  const Eigen::Matrix3Xd camera = camera_joints_from_pose(pose);  // the camera sees the fitted pose
   TrackedSkeleton skeleton;
+  for (int j = 0; j < kKinectJointCount; ++j) skeleton.positions_K[static_cast<size_t>(j)] = camera.col(j);
   skeleton.tracking.fill(JointTracking::kTracked);
   skeleton.tracking[kWristLeft] = JointTracking::kInferred;
   skeleton.tracking[kElbowRight] = JointTracking::kInferred;
   skeleton.tracking[kSpineMid] = JointTracking::kNotTracked;
-  const Eigen::VectorXd theta = testing::facing_pose(layout, 2.0, {});
-  const JointPose pose = pose_joints(rest, layout, theta);
   // IMU orientations whose y lies along each fitted forearm, so that the roll is defined.
   const auto along_forearm = [&](int elbow, int wrist) {
     return Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitY(),
@@ -212,6 +215,33 @@ TEST(FittedBodyFrame, JointConfidenceFollowsTheCameraTrackingState) {
   ASSERT_EQ(frame.forearms.size(), 2u);
   for (const FittedForearm& forearm : frame.forearms)
     EXPECT_DOUBLE_EQ(forearm.confidence, forearm.side == ArmSide::kLeft ? 0.0 : 1.0);
+}
+
+// A camera joint reported TRACKED far from the fitted joint (a fit folded into a wrong pose, or
+// the camera off track): the camera does not vouch for that fitted joint, which takes an
+// untracked joint's confidence, and the frame counts it. Within kCameraDisagreementM it stays 1.
+TEST(FittedBodyFrame, ATrackedJointFarFromTheFitDoesNotVouchForIt) {
+  const PoseLayout layout = PoseLayout::upper_body();
+  const Eigen::Matrix3Xd rest = rest_joints(*male(), Eigen::VectorXd());
+  const Eigen::VectorXd theta = testing::facing_pose(layout, 2.0, {});
+  const Eigen::Matrix3Xd fitted = camera_joints_from_pose(pose_joints(rest, layout, theta));
+  TrackedSkeleton skeleton;
+  for (int j = 0; j < kKinectJointCount; ++j) skeleton.positions_K[static_cast<size_t>(j)] = fitted.col(j);
+  skeleton.tracking.fill(JointTracking::kTracked);
+  const Eigen::Vector3d just_within(0, kCameraDisagreementM - 0.01, 0), beyond(0, 0, kCameraDisagreementM + 0.01);
+  skeleton.positions_K[kWristLeft] += beyond;  // the camera's wrist where the fit's is not
+  skeleton.positions_K[kElbowLeft] += beyond;
+  skeleton.positions_K[kWristRight] += just_within;  // the camera's usual error
+  skeleton.positions_K[kElbowRight] += beyond;
+  skeleton.tracking[kElbowRight] = JointTracking::kInferred;  // untracked anyway: not counted
+  const FittedBodyFrame frame = make_fitted_body_frame(rest, layout, theta, skeleton, {});
+  EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kLeftWrist].confidence, 0.0);
+  EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kLeftElbow].confidence, 0.5);
+  EXPECT_DOUBLE_EQ(frame.camera_joints[kWristLeft].confidence, 0.0);
+  EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kRightWrist].confidence, 1.0);
+  EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kRightElbow].confidence, 0.5);
+  EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kLeftShoulder].confidence, 1.0);
+  EXPECT_EQ(frame.joints_off_camera, 2);
 }
 
 }  // namespace

@@ -428,6 +428,34 @@ TEST(BodyFitStage, NoSkeletonIsAWarning) {
   EXPECT_TRUE(out.warned("FIT_NO_SKELETON", "skeleton"));
 }
 
+// A camera wrist reported TRACKED half a metre from the body after the calibration frames (a
+// camera off track, or a fit folded the wrong way: the frame cannot tell which): the fitted wrist
+// takes an untracked wrist's confidence there and the session says how many frames.
+TEST(BodyFitStage, AWristTheCameraTracksFarFromTheFitIsNotConfident) {
+  sim::CameraSessionResult moved = session();
+  const std::int64_t from_t_us = 100000;
+  for (v1::SessionChunk& chunk : moved.chunks) {
+    if (!chunk.has_skeleton() || chunk.skeleton().t_us() < from_t_us) continue;
+    v1::Vec3& wrist = *chunk.mutable_skeleton()->mutable_joints(fit::kWristLeft)->mutable_position_m();
+    wrist.set_x(wrist.x() + 0.5);
+  }
+  const Output out = run(header_with({}, moved), kAllChunks, moved);
+  ASSERT_FALSE(out.frames().empty());
+  int far = 0;
+  for (const v1::FrameResult* frame : out.frames()) {
+    const double confidence = frame->smpl_joints(body::kLeftWrist).confidence();
+    if (frame->t_us() < from_t_us) {
+      EXPECT_EQ(confidence, 1.0) << frame->t_us();
+    } else {
+      EXPECT_EQ(confidence, 0.0) << frame->t_us();
+      EXPECT_EQ(frame->smpl_joints(body::kRightWrist).confidence(), 1.0) << frame->t_us();
+      ++far;
+    }
+  }
+  EXPECT_GT(far, 0);
+  EXPECT_TRUE(out.warned("FIT_OFF_CAMERA", "skeleton"));
+}
+
 TEST(BodyFitStage, AnotherPersonsIdFitsNothing) {
   const Output out = run(header_with({{"fit.body_id", "3"}}), [](const v1::SessionChunk&) { return true; });
   EXPECT_TRUE(out.frames().empty());

@@ -246,7 +246,10 @@ void BodyFitStage::fit_ready(bool all, StageOutput& out) {
 }
 
 void BodyFitStage::hand_on(fit::BodyTracker::Output&& fitted, StageOutput& out) {
-  for (const fit::FittedBodyFrame& f : fitted.frames) out.hand_on(fitted_frame_from(f));
+  for (const fit::FittedBodyFrame& f : fitted.frames) {
+    if (f.joints_off_camera > 0) ++frames_off_camera_;
+    out.hand_on(fitted_frame_from(f));
+  }
   for (const fit::FitWarning& w : fitted.warnings) out.warn(w.code, w.field, w.message);
 }
 
@@ -269,6 +272,13 @@ void BodyFitStage::finish(StageOutput& out) {
              std::to_string(frames_without_imu_) + " of " + std::to_string(fitted) +
                  " frames fitted without the forearm orientation of every arm IMU (none within " +
                  format_double(options_.imu_wait_s) + " s of camera time, fit.imu_wait_s)");
+  }
+  if (frames_off_camera_ > 0) {
+    out.warn("FIT_OFF_CAMERA", "skeleton",
+             std::to_string(frames_off_camera_) + " of " + std::to_string(fitted) +
+                 " frames have a fitted joint more than " + format_double(fit::kCameraDisagreementM) +
+                 " m from the camera's tracked joint, farther than the camera's error explains: those joints "
+                 "have an untracked joint's confidence");
   }
   if (tracker_->frames_lost() > 0) {
     out.warn("FIT_LOST", "fit",
