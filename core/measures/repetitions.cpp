@@ -218,12 +218,18 @@ bool is_complete(const Repetition& cycle, double start_deg, double end_deg, cons
 // (at least the hysteresis) rather than noise.
 // Only troughs in the resting half of the motion (at most `rest_limit_deg`) bound repetitions:
 // a dip while the limb is held away from rest (a wobble at the top of a raise) is part of the
-// repetition, not the end of one.
+// repetition, not the end of one. The times of troughs within the hysteresis of that bound, on
+// either side, go to `troughs_near_middle_t_s`.
 void add_piece(const Piece& piece, const std::vector<double>& t_s, const std::vector<double>& angle_deg,
-               const RepetitionOptions& options, double rest_limit_deg, std::vector<Repetition>& out) {
+               const RepetitionOptions& options, double rest_limit_deg, std::vector<Repetition>& out,
+               std::vector<double>& troughs_near_middle_t_s) {
   std::vector<std::size_t> troughs;
-  for (const std::size_t trough : find_troughs(piece, angle_deg, options.hysteresis_deg))
-    if (angle_deg[piece[trough]] <= rest_limit_deg) troughs.push_back(trough);
+  for (const std::size_t trough : find_troughs(piece, angle_deg, options.hysteresis_deg)) {
+    const double value = angle_deg[piece[trough]];
+    if (value <= rest_limit_deg) troughs.push_back(trough);
+    if (std::abs(value - rest_limit_deg) < options.hysteresis_deg)
+      troughs_near_middle_t_s.push_back(t_s[piece[trough]]);
+  }
   const std::vector<double> piece_speeds = speeds(piece, t_s, angle_deg);
   const auto add_cut_motion = [&](std::size_t first, std::size_t last) {
     Repetition rep = describe(piece, t_s, angle_deg, piece_speeds, first, last);
@@ -491,7 +497,7 @@ RepetitionSummary segment_repetitions(const std::vector<double>& t_s, const std:
     if (about_zero) {
       add_piece_about_zero(piece, t_s, angle_deg, rest_deg, counted, summary.repetitions);
     } else {
-      add_piece(piece, t_s, angle_deg, counted, rest_limit_deg, summary.repetitions);
+      add_piece(piece, t_s, angle_deg, counted, rest_limit_deg, summary.repetitions, summary.troughs_near_middle_t_s);
     }
   }
   summarize(summary);

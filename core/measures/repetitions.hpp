@@ -92,6 +92,11 @@ struct RepetitionSummary {
   // and how many counted repetitions have a confidence below it.
   double confident_fraction = 1.0;
   int uncertain_count = 0;
+  // Times (series seconds) of the troughs of an angle that rests at one end which lie within
+  // `hysteresis_deg` of the middle of its range, the bound below which a trough ends a repetition:
+  // whether they end one turns on a few degrees (a hold half way, such as paper 1's protocol at
+  // 90 degrees of elevation), so the repetitions may be cut elsewhere than the motion's own.
+  std::vector<double> troughs_near_middle_t_s;
 };
 
 // `t_s` strictly increasing, same size as `angle_deg`; NaN marks a missing sample. `confidence`:

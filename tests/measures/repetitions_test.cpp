@@ -252,6 +252,41 @@ TEST(Repetitions, NoiseAtRestCountsNothingThoughTheMotionIsSmall) {
   EXPECT_EQ(summary.count, 0);
 }
 
+// Reaches from a hold half way (paper 1's protocol holds the arm at 90 deg of elevation between
+// its reaches): rest at 0 and reaches to 160 are held long enough to be the 5th and 95th
+// percentiles, so the middle of the range is 80. A hold within the hysteresis of it is reported;
+// one well below ends repetitions and one well above does not, and neither is reported.
+TEST(Repetitions, TurnsNearTheMiddleOfTheRangeAreReported) {
+  const auto reaches_from_a_hold = [](double hold_deg) {
+    Series series;
+    const auto segment_to = [&](double to_deg, int samples) {
+      const double from = series.angle_deg.empty() ? 0.0 : series.angle_deg.back();
+      for (int k = 1; k <= samples; ++k) {
+        series.t_s.push_back(static_cast<double>(series.t_s.size()) * kDt);
+        series.angle_deg.push_back(from + (to_deg - from) * k / samples);
+      }
+    };
+    series.t_s.push_back(0);
+    series.angle_deg.push_back(0);
+    segment_to(0, 100);  // rest
+    for (int r = 0; r < 3; ++r) {
+      segment_to(160, 50);
+      segment_to(160, 50);  // held at the top
+      segment_to(hold_deg, 50);
+      segment_to(hold_deg, 50);  // held half way
+    }
+    segment_to(0, 50);
+    segment_to(0, 100);
+    return series;
+  };
+  const RepetitionSummary near = segment(reaches_from_a_hold(82));
+  ASSERT_EQ(near.troughs_near_middle_t_s.size(), 2u);       // the holds between reaches; the last one falls to rest
+  EXPECT_NEAR(near.troughs_near_middle_t_s[0], 2.5, 1e-9);  // where the first hold begins
+  EXPECT_TRUE(segment(reaches_from_a_hold(40)).troughs_near_middle_t_s.empty());
+  EXPECT_TRUE(segment(reaches_from_a_hold(120)).troughs_near_middle_t_s.empty());
+  EXPECT_EQ(segment(reaches_from_a_hold(40)).count, 3);
+}
+
 // A raise held at the top with a 30 deg dip in it (hair combing's strokes, a wobble of the fit):
 // the dip's trough lies above the middle of the range, so it bounds no repetition and each raise
 // counts once, its range the whole excursion.

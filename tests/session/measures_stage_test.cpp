@@ -31,10 +31,10 @@ Eigen::Matrix3d facing_camera() {
 using measures::Angle;
 using measures::testing::ArmPose;
 
-// A frame of an elbow-flexion exercise: right elbow 20 + 80 (1 - cos) / 2 deg, `cycles` per
-// `period_s`, with the camera tilted 10 deg (K_from_G) and the right forearm pronated 30 deg.
-FrameEstimate exercise_frame(double t_s, double period_s, const Eigen::Matrix3d& K_from_G) {
-  const double elbow = 20 + 80 * (1 - std::cos(2 * std::numbers::pi * t_s / period_s)) / 2;
+// A frame with the right elbow at `elbow` deg, the camera tilted 10 deg (K_from_G) and the right
+// forearm pronated 30 deg; exercise_frame: an elbow-flexion exercise, 20 + 80 (1 - cos) / 2 deg
+// with period `period_s`.
+FrameEstimate elbow_frame(double t_s, double elbow, const Eigen::Matrix3d& K_from_G) {
   const ArmPose right{30, 40, 10, elbow, 30, 0};
   const ArmPose left{0, 20, 0, 30, 0, 0};
   const measures::testing::Built b = measures::testing::build(K_from_G, 5, 0, 0, left, right);
@@ -49,6 +49,10 @@ FrameEstimate exercise_frame(double t_s, double period_s, const Eigen::Matrix3d&
   K_from_F.col(0) = K_from_F.col(1).cross(K_from_F.col(2));
   frame.forearms.push_back({v1::RIGHT, geometry::Quat(K_from_F), 0.0, v1::FUSED, 0.8});
   return frame;
+}
+
+FrameEstimate exercise_frame(double t_s, double period_s, const Eigen::Matrix3d& K_from_G) {
+  return elbow_frame(t_s, 20 + 80 * (1 - std::cos(2 * std::numbers::pi * t_s / period_s)) / 2, K_from_G);
 }
 
 TEST(MeasuresStage, AnglesRepetitionsAndTheVertical) {
@@ -243,6 +247,38 @@ TEST(MeasuresStage, AStartThatMayHoldARepetitionIsSaid) {
     int said = 0;
     for (const std::string& w : out.warnings) said += w.rfind("MEASURES_START_AMBIGUOUS", 0) == 0;
     EXPECT_EQ(said, settling_start ? 1 : 0);
+  }
+}
+
+// Reaches from a hold half way: the elbow rests at 20, reaches 160 and holds at 92 between
+// reaches, 2 deg from the middle of its range (90). The session says that those turns may or
+// may not end repetitions; with the hold at 50 it says nothing.
+TEST(MeasuresStage, TurnsNearTheMiddleOfTheRangeAreSaid) {
+  for (const double hold_deg : {92.0, 50.0}) {
+    SCOPED_TRACE("hold at " + std::to_string(hold_deg));
+    v1::SessionHeader header;
+    (*header.mutable_options())["measures.repetition_angle"] = "right_elbow_flexion";
+    MeasuresStage stage;
+    testing::CollectingOutput out;
+    stage.start(header, out);
+    std::vector<std::pair<double, double>> path = {{0, 20}, {1, 20}};  // (s, deg), linear between
+    for (int r = 0; r < 3; ++r) {
+      const double t = path.back().first;
+      path.insert(path.end(), {{t + 1, 160}, {t + 1.5, 160}, {t + 2.5, hold_deg}, {t + 3, hold_deg}});
+    }
+    path.insert(path.end(), {{path.back().first + 1, 20}, {path.back().first + 2, 20}});
+    for (int f = 0; f / 30.0 <= path.back().first; ++f) {
+      const double t = f / 30.0;
+      std::size_t i = 1;
+      while (path[i].first < t) ++i;
+      const double u = (t - path[i - 1].first) / (path[i].first - path[i - 1].first);
+      stage.on_value(elbow_frame(t, path[i - 1].second + u * (path[i].second - path[i - 1].second), facing_camera()),
+                     out);
+    }
+    stage.finish(out);
+    int said = 0;
+    for (const std::string& w : out.warnings) said += w.rfind("MEASURES_REST_AMBIGUOUS", 0) == 0;
+    EXPECT_EQ(said, hold_deg == 92.0 ? 1 : 0);
   }
 }
 

@@ -183,6 +183,19 @@ void MeasuresStage::warn_uncertain_repetitions(const measures::SessionRepetition
                  "from one swing's second side to the next one's first (docs/measures.md, \"Angles that swing "
                  "about their zero\")");
   }
+  if (!s.troughs_near_middle_t_s.empty()) {
+    std::string times;
+    for (std::size_t i = 0; i < s.troughs_near_middle_t_s.size() && i < 5; ++i)
+      times += (i ? ", " : "") + format_double(std::round(10 * s.troughs_near_middle_t_s[i]) / 10);
+    if (s.troughs_near_middle_t_s.size() > 5) times += ", ...";
+    out.warn("MEASURES_REST_AMBIGUOUS", "repetitions",
+             std::to_string(s.troughs_near_middle_t_s.size()) + " of " + angle +
+                 "'s turns lie within measures.hysteresis_deg of the middle of its range, the bound below which a "
+                 "turn ends a repetition (at " +
+                 times +
+                 " s): whether they end one turns on a few degrees, so the repetitions and their ranges may be cut "
+                 "elsewhere than the motion's own (docs/measures.md, \"Repetitions\")");
+  }
   if (s.confident_fraction < 0.5) {
     out.warn("MEASURES_REPETITIONS_UNCERTAIN", "repetitions",
              "only " + format_double(std::round(100 * s.confident_fraction)) + " % of " + angle +

@@ -16,7 +16,8 @@
 // named), which get no angles while the session goes on; MEASURES_REPETITIONS_UNCERTAIN, fewer
 // than half of the segmented angle's frames at confidence >= measures::kConfidentAt, else
 // MEASURES_REPETITION_RANGE_UNCERTAIN, counted repetitions whose range is below it;
-// MEASURES_START_AMBIGUOUS, a start out of rest that may hold one repetition more than counted.
+// MEASURES_START_AMBIGUOUS, a start out of rest that may hold one repetition more than counted;
+// MEASURES_REST_AMBIGUOUS, turns within the hysteresis of the resting-half bound.
 // Holds: the candidate angles' series and confidences, 12 bytes per angle per frame (9 angles
 // with auto: about 12 MB per session-hour at 30 Hz), and the last frame's angles.
 #include <array>
