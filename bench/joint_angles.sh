@@ -112,7 +112,7 @@ print()
 print("The vertical of the thorax angles (calibration.json's `vertical` against the true K_from_W; deg)\n")
 print("| session | true pitch | true roll | source | confidence | error | floor spread | IMU error |")
 print("|---|---|---|---|---|---|---|---|")
-for name, _ in sessions:
+for name, *_ in sessions:
     out = json.load(open(f"{work}/{name}.out/calibration.json"))
     true_up = up_of(json.load(open(f"{work}/{name}.gt/calibration.json"))["K_from_W"])
     v = out.get("vertical", {})

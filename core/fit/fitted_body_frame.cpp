@@ -37,33 +37,23 @@ bool is_hand_joint(int camera_joint) {
   }
 }
 
-bool tracked(const TrackedSkeleton& skeleton, int camera_joint) {
-  return skeleton.tracking[static_cast<size_t>(camera_joint)] == JointTracking::kTracked;
-}
-
-// Whether the camera tracks a joint that is an SMPL joint (smpl_joint_at_camera_joint) far from
+// Whether the camera has a joint that is an SMPL joint (smpl_joint_at_camera_joint) far from
 // where the fit has it (kCameraDisagreementM). The camera joints the fit derives (hand tips,
 // thumbs, head, spine shoulder) are compared with nothing: the published error is that of the
 // joints themselves.
 bool far_from_fit(const TrackedSkeleton& skeleton, int camera_joint, const Eigen::Vector3d& fitted_K) {
-  return tracked(skeleton, camera_joint) && smpl_joint_at_camera_joint(camera_joint) >= 0 &&
+  return smpl_joint_at_camera_joint(camera_joint) >= 0 &&
          !((skeleton.positions_K[static_cast<size_t>(camera_joint)] - fitted_K).norm() <= kCameraDisagreementM);
-}
-
-double confidence_of(const TrackedSkeleton& skeleton, int camera_joint, const Eigen::Vector3d& fitted_K) {
-  if (tracked(skeleton, camera_joint) && !far_from_fit(skeleton, camera_joint, fitted_K)) return 1.0;
-  return is_hand_joint(camera_joint) ? kUntrackedHandConfidence : kUntrackedConfidence;
 }
 
 // II-B: the forearm's IMU orientation turned onto the fitted axis, and its roll from the IMU.
 FittedForearm fitted_forearm(const JointPose& pose, ArmSide side, const Eigen::Quaterniond& K_from_F,
-                             const TrackedSkeleton& skeleton) {
+                             double wrist_confidence) {
   const bool left = side == ArmSide::kLeft;
   const int elbow = left ? body::kLeftElbow : body::kRightElbow, wrist = left ? body::kLeftWrist : body::kRightWrist;
   const Eigen::Vector3d axis_K = (pose.positions_K.col(wrist) - pose.positions_K.col(elbow)).normalized();
   const Eigen::Quaterniond onto_fit = Eigen::Quaterniond::FromTwoVectors(K_from_F * Eigen::Vector3d::UnitY(), axis_K);
-  FittedForearm forearm{side, (onto_fit * K_from_F).normalized(), 0.0, 0.0};
-  forearm.confidence = confidence_of(skeleton, left ? kWristLeft : kWristRight, pose.positions_K.col(wrist));
+  FittedForearm forearm{side, (onto_fit * K_from_F).normalized(), 0.0, wrist_confidence};
   try {
     ArmRollOptions roll_options;
     roll_options.thumb_F = thumb_axis_F(side);
@@ -83,22 +73,29 @@ FittedBodyFrame make_fitted_body_frame(const Eigen::Matrix3Xd& rest_joints, cons
   const JointPose pose = pose_joints(rest_joints, layout, theta);
   const Eigen::Matrix3Xd camera_joints = camera_joints_from_pose(pose);
   FittedBodyFrame out;
+  std::array<double, kKinectJointCount> camera_confidence;
+  for (int j = 0; j < kKinectJointCount; ++j) {
+    const bool tracked = skeleton.tracking[static_cast<size_t>(j)] == JointTracking::kTracked;
+    const bool off_camera = tracked && far_from_fit(skeleton, j, camera_joints.col(j));
+    if (off_camera) ++out.joints_off_camera;
+    camera_confidence[static_cast<size_t>(j)] =
+        tracked && !off_camera ? 1.0 : (is_hand_joint(j) ? kUntrackedHandConfidence : kUntrackedConfidence);
+    out.camera_joints.push_back({camera_joints.col(j), camera_confidence[static_cast<size_t>(j)]});
+  }
   std::array<double, body::kNumJoints> smpl_confidence;
   smpl_confidence.fill(1.0);
   for (int j = 0; j < kKinectJointCount; ++j) {
     const int smpl = smpl_joint_at_camera_joint(j);
-    if (smpl >= 0) smpl_confidence[static_cast<size_t>(smpl)] = confidence_of(skeleton, j, camera_joints.col(j));
+    if (smpl >= 0) smpl_confidence[static_cast<size_t>(smpl)] = camera_confidence[static_cast<size_t>(j)];
   }
   for (int j = 0; j < body::kNumJoints; ++j) {
     out.smpl_joints.push_back({pose.positions_K.col(j), smpl_confidence[static_cast<size_t>(j)]});
   }
   for (int j = 0; j < body::kNumJoints; ++j) out.K_from_joint.emplace_back(pose.K_from_joint[static_cast<size_t>(j)]);
-  for (int j = 0; j < kKinectJointCount; ++j) {
-    out.camera_joints.push_back({camera_joints.col(j), confidence_of(skeleton, j, camera_joints.col(j))});
-    if (far_from_fit(skeleton, j, camera_joints.col(j))) ++out.joints_off_camera;
-  }
-  if (K_from_F.left) out.forearms.push_back(fitted_forearm(pose, ArmSide::kLeft, *K_from_F.left, skeleton));
-  if (K_from_F.right) out.forearms.push_back(fitted_forearm(pose, ArmSide::kRight, *K_from_F.right, skeleton));
+  if (K_from_F.left)
+    out.forearms.push_back(fitted_forearm(pose, ArmSide::kLeft, *K_from_F.left, camera_confidence[kWristLeft]));
+  if (K_from_F.right)
+    out.forearms.push_back(fitted_forearm(pose, ArmSide::kRight, *K_from_F.right, camera_confidence[kWristRight]));
   return out;
 }
 

@@ -6,12 +6,14 @@
 #include <cmath>
 #include <cstddef>
 #include <limits>
+#include <numbers>
 #include <optional>
 #include <string>
 #include <system_error>
 #include <vector>
 
 #include "common/error.hpp"
+#include "forearm/orientation_uncertainty.hpp"
 #include "measures/joint_angles.hpp"
 
 namespace posefuse::measures {
@@ -213,42 +215,86 @@ bool is_complete(const Repetition& cycle, double start_deg, double end_deg, cons
   return rise_ok && fall_ok && duration_within_bounds(cycle, options);
 }
 
+// The range of positions [first, last] of `piece`, and the position of its highest sample (the
+// first of equals).
+struct PieceRange {
+  double range_deg = 0;
+  std::size_t peak = 0;
+};
+PieceRange range_over(const Piece& piece, const std::vector<double>& angle_deg, std::size_t first, std::size_t last) {
+  double low = angle_deg[piece[first]];
+  PieceRange out{0.0, first};
+  for (std::size_t p = first; p <= last; ++p) {
+    const double value = angle_deg[piece[p]];
+    low = std::min(low, value);
+    if (value > angle_deg[piece[out.peak]]) out.peak = p;
+  }
+  out.range_deg = angle_deg[piece[out.peak]] - low;
+  return out;
+}
+
+// How much the range of the repetition between bounds[k] and bounds[k + 1] would change were the
+// turns near the middle of the range read the other way: a bounding turn near it (bound_near[k])
+// not ending the repetition, which then runs on to the neighbouring bound, and a turn near it
+// inside (inner_near) ending one, which leaves the repetition the part that holds its peak. Either
+// reading is as likely as the other, so the change is the range's error bound.
+double cut_ambiguity_deg(const Piece& piece, const std::vector<double>& angle_deg,
+                         const std::vector<std::size_t>& bounds, const std::vector<bool>& bound_near,
+                         const std::vector<std::size_t>& inner_near, std::size_t k) {
+  const PieceRange own = range_over(piece, angle_deg, bounds[k], bounds[k + 1]);
+  const std::size_t merged_first = bound_near[k] ? bounds[k - 1] : bounds[k];
+  const std::size_t merged_last = bound_near[k + 1] ? bounds[k + 2] : bounds[k + 1];
+  std::size_t split_first = bounds[k], split_last = bounds[k + 1];
+  for (const std::size_t turn : inner_near) {
+    if (turn > split_first && turn <= own.peak) split_first = turn;
+    if (turn < split_last && turn >= own.peak) split_last = turn;
+  }
+  const double merged = range_over(piece, angle_deg, merged_first, merged_last).range_deg;
+  const double split = range_over(piece, angle_deg, split_first, split_last).range_deg;
+  return std::max(merged - own.range_deg, own.range_deg - split);
+}
+
 // Appends the repetitions of one piece: the cycles between its troughs, and, as partial ones,
 // the motion before its first trough and after its last, when that motion is a real reversal
 // (at least the hysteresis) rather than noise.
 // Only troughs in the resting half of the motion (at most `rest_limit_deg`) bound repetitions:
 // a dip while the limb is held away from rest (a wobble at the top of a raise) is part of the
 // repetition, not the end of one. The times of troughs within the hysteresis of that bound, on
-// either side, go to `troughs_near_middle_t_s`.
+// either side, go to `troughs_near_middle_t_s`, and each repetition they bound or lie in gets its
+// cut_ambiguity_deg.
 void add_piece(const Piece& piece, const std::vector<double>& t_s, const std::vector<double>& angle_deg,
                const RepetitionOptions& options, double rest_limit_deg, std::vector<Repetition>& out,
                std::vector<double>& troughs_near_middle_t_s) {
-  std::vector<std::size_t> troughs;
+  // The repetitions run between consecutive bounds: the piece's ends and the troughs in between.
+  const std::size_t end = piece.size() - 1;
+  std::vector<std::size_t> bounds{0}, inner_near;
+  std::vector<bool> bound_near{false};
   for (const std::size_t trough : find_troughs(piece, angle_deg, options.hysteresis_deg)) {
     const double value = angle_deg[piece[trough]];
-    if (value <= rest_limit_deg) troughs.push_back(trough);
-    if (std::abs(value - rest_limit_deg) < options.hysteresis_deg)
-      troughs_near_middle_t_s.push_back(t_s[piece[trough]]);
+    const bool near = std::abs(value - rest_limit_deg) < options.hysteresis_deg;
+    if (near) troughs_near_middle_t_s.push_back(t_s[piece[trough]]);
+    if (value <= rest_limit_deg) {
+      bounds.push_back(trough);
+      bound_near.push_back(near);
+    } else if (near) {
+      inner_near.push_back(trough);
+    }
   }
+  bounds.push_back(end);
+  bound_near.push_back(false);
   const std::vector<double> piece_speeds = speeds(piece, t_s, angle_deg);
-  const auto add_cut_motion = [&](std::size_t first, std::size_t last) {
-    Repetition rep = describe(piece, t_s, angle_deg, piece_speeds, first, last);
-    if (rep.range_deg < options.hysteresis_deg) return;
-    rep.partial = true;
+  for (std::size_t k = 0; k + 1 < bounds.size(); ++k) {
+    Repetition rep = describe(piece, t_s, angle_deg, piece_speeds, bounds[k], bounds[k + 1]);
+    const bool cut = k == 0 || k + 2 == bounds.size();  // by the start or the end of the piece
+    if (cut) {
+      if (rep.range_deg < options.hysteresis_deg) continue;
+      rep.partial = true;
+    } else {
+      rep.partial = !is_complete(rep, angle_deg[piece[bounds[k]]], angle_deg[piece[bounds[k + 1]]], options);
+    }
+    rep.cut_ambiguity_deg = cut_ambiguity_deg(piece, angle_deg, bounds, bound_near, inner_near, k);
     out.push_back(rep);
-  };
-  const std::size_t end = piece.size() - 1;
-  if (troughs.empty()) {
-    add_cut_motion(0, end);
-    return;
   }
-  add_cut_motion(0, troughs.front());
-  for (std::size_t j = 0; j + 1 < troughs.size(); ++j) {
-    Repetition cycle = describe(piece, t_s, angle_deg, piece_speeds, troughs[j], troughs[j + 1]);
-    cycle.partial = !is_complete(cycle, angle_deg[piece[troughs[j]]], angle_deg[piece[troughs[j + 1]]], options);
-    out.push_back(cycle);
-  }
-  add_cut_motion(troughs.back(), end);
 }
 
 // Appends the repetitions of one piece of an angle that swings about its zero (a trunk tilted
@@ -401,13 +447,15 @@ double confident_fraction(const std::vector<double>& angle_deg, const std::vecto
   return finite > 0 ? static_cast<double>(confident) / static_cast<double>(finite) : 0.0;
 }
 
-// Each repetition's confidence, the share of confident samples and the uncertain counted ones.
+// Each repetition's confidence (its samples' and its cut's), the share of confident samples and the
+// uncertain counted ones.
 void add_confidences(RepetitionSummary& summary, const std::vector<double>& t_s, const std::vector<double>& angle_deg,
                      const std::vector<float>& confidence) {
-  if (confidence.empty()) return;
   summary.confident_fraction = confident_fraction(angle_deg, confidence);
   for (Repetition& rep : summary.repetitions) {
-    rep.confidence = range_confidence(rep, t_s, angle_deg, confidence);
+    const double of_samples = confidence.empty() ? 1.0 : range_confidence(rep, t_s, angle_deg, confidence);
+    rep.confidence =
+        std::min(of_samples, forearm::confidence_from_bound99_rad(rep.cut_ambiguity_deg * std::numbers::pi / 180.0));
     if (!rep.partial && rep.confidence < kConfidentAt) ++summary.uncertain_count;
   }
 }

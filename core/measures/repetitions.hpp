@@ -46,8 +46,8 @@
 //
 // Confidence: segmenting does not look at the samples' confidences (an angle the method is unsure
 // of still moves as the exercise does); it reports them. Each repetition's range carries the
-// confidence of its two extremes, and the summary how much of the series was confident, so that a
-// count or range read off values not to act on says so (docs/measures.md, "Confidence of
+// confidence of its two extremes and of its cut (cut_ambiguity_deg), and the summary how much of the series was
+// confident, so that a count or range read off values not to act on says so (docs/measures.md, "Confidence of
 // repetitions"). Choosing the angle does look at them (dominant_series).
 #include <vector>
 
@@ -76,8 +76,15 @@ struct Repetition {
   // subject, or a fit, coming to rest) joined to the first swing, which would hold one repetition
   // more, or a swing already under way when the recording began; the two look the same.
   bool may_hold_repetition = false;
+  // How much its range would change were the turns within `hysteresis_deg` of the middle of the
+  // range (troughs_near_middle_t_s) that bound it or lie inside it read the other way: a bounding
+  // one as no end (the repetition runs on to the next bound), an inner one as an end (the
+  // repetition keeps the part that holds its peak). 0 where no such turn touches it.
+  double cut_ambiguity_deg = 0;
   // Of its range: the lower of the confidences at its lowest and highest samples (the range is
-  // their difference, so an error in either moves it); 1 where the series carries no confidences.
+  // their difference, so an error in either moves it; 1 where the series carries no confidences),
+  // and at most that of an error whose 99 % bound is cut_ambiguity_deg (2^-(bound / 15 deg)^2):
+  // either reading of such a turn is as likely, so the range may be off by that much.
   double confidence = 1.0;
 };
 

@@ -11,6 +11,7 @@
 #include <numbers>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "common/error.hpp"
@@ -285,6 +286,73 @@ TEST(Repetitions, TurnsNearTheMiddleOfTheRangeAreReported) {
   EXPECT_TRUE(segment(reaches_from_a_hold(40)).troughs_near_middle_t_s.empty());
   EXPECT_TRUE(segment(reaches_from_a_hold(120)).troughs_near_middle_t_s.empty());
   EXPECT_EQ(segment(reaches_from_a_hold(40)).count, 3);
+
+  // A hold just below the middle cuts: the reach between the two holds (78 -> 160 -> 78) would be
+  // the whole 0 -> 160 read the other way, so its range is off by up to 78 degrees and not
+  // confident; the first and last reaches hold the whole excursion either way.
+  const RepetitionSummary cut = segment(reaches_from_a_hold(78));
+  ASSERT_EQ(cut.count, 3);
+  std::vector<const Repetition*> counted;
+  for (const Repetition& rep : cut.repetitions)
+    if (!rep.partial) counted.push_back(&rep);
+  ASSERT_EQ(counted.size(), 3u);
+  EXPECT_NEAR(counted[1]->range_deg, 82, 1e-9);
+  EXPECT_NEAR(counted[1]->cut_ambiguity_deg, 78, 1e-9);
+  EXPECT_LT(counted[1]->confidence, 1e-6);
+  for (const Repetition* rep : {counted[0], counted[2]}) {
+    EXPECT_NEAR(rep->range_deg, 160, 1e-9);
+    EXPECT_EQ(rep->cut_ambiguity_deg, 0);
+    EXPECT_EQ(rep->confidence, 1);
+  }
+  EXPECT_EQ(cut.uncertain_count, 1);
+  // Holds well away from the middle touch no range.
+  for (const double hold_deg : {40.0, 120.0})
+    for (const Repetition& rep : segment(reaches_from_a_hold(hold_deg)).repetitions) {
+      EXPECT_EQ(rep.cut_ambiguity_deg, 0) << hold_deg;
+      EXPECT_EQ(rep.confidence, 1) << hold_deg;
+    }
+}
+
+// Turns near the middle inside a repetition, read as ends, would leave it the part that holds its
+// peak: three reaches with dips to 82 between them (just above the middle, 80) keep the whole
+// 0 -> 160 in the part that holds the highest one when that is the first, but only 160 - 82 when
+// it is the middle one, between the two dips.
+TEST(Repetitions, TurnsNearTheMiddleInsideARepetitionBoundItsRange) {
+  const auto reaches_with_dips = [](const std::vector<double>& tops_deg) {
+    Series series;
+    const auto segment_to = [&](double to_deg, int samples) {
+      const double from = series.angle_deg.empty() ? 0.0 : series.angle_deg.back();
+      for (int k = 1; k <= samples; ++k) {
+        series.t_s.push_back(static_cast<double>(series.t_s.size()) * kDt);
+        series.angle_deg.push_back(from + (to_deg - from) * k / samples);
+      }
+    };
+    series.t_s.push_back(0);
+    series.angle_deg.push_back(0);
+    segment_to(0, 200);
+    for (int r = 0; r < 2; ++r) {
+      for (std::size_t k = 0; k < tops_deg.size(); ++k) {
+        if (k > 0) segment_to(82, 50);
+        segment_to(tops_deg[k], 50);
+        segment_to(tops_deg[k], 100);
+      }
+      segment_to(0, 50);
+      segment_to(0, 200);
+    }
+    return series;
+  };
+  for (const auto& [tops, ambiguity] :
+       {std::pair{std::vector<double>{160, 150, 150}, 0.0}, std::pair{std::vector<double>{150, 160, 150}, 82.0}}) {
+    const RepetitionSummary summary = segment(reaches_with_dips(tops));
+    EXPECT_EQ(summary.troughs_near_middle_t_s.size(), 4u) << ambiguity;
+    ASSERT_EQ(summary.count, 2) << ambiguity;
+    for (const Repetition& rep : summary.repetitions) {
+      if (rep.partial) continue;
+      EXPECT_NEAR(rep.range_deg, 160, 1e-9) << ambiguity;
+      EXPECT_NEAR(rep.cut_ambiguity_deg, ambiguity, 1e-9);
+      EXPECT_EQ(rep.confidence<kConfidentAt, ambiguity> 15) << ambiguity;
+    }
+  }
 }
 
 // A raise held at the top with a 30 deg dip in it (hair combing's strokes, a wobble of the fit):

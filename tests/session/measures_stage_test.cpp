@@ -250,14 +250,18 @@ TEST(MeasuresStage, AStartThatMayHoldARepetitionIsSaid) {
   }
 }
 
-// Reaches from a hold half way: the elbow rests at 20, reaches 160 and holds at 92 between
+// Reaches from a hold half way: the elbow rests at 20, reaches 160 and holds at 92 or 88 between
 // reaches, 2 deg from the middle of its range (90). The session says that those turns may or
-// may not end repetitions; with the hold at 50 it says nothing.
+// may not end repetitions; with the hold at 50 it says nothing. Held at 92 the holds end none
+// (one repetition); held at 88 they end repetitions, and the reach between two of them, whose
+// range would be the whole excursion were they read the other way, has an unconfident range,
+// which the session says too (exact arm lengths: every sample is confident).
 TEST(MeasuresStage, TurnsNearTheMiddleOfTheRangeAreSaid) {
-  for (const double hold_deg : {92.0, 50.0}) {
+  for (const double hold_deg : {92.0, 88.0, 50.0}) {
     SCOPED_TRACE("hold at " + std::to_string(hold_deg));
     v1::SessionHeader header;
     (*header.mutable_options())["measures.repetition_angle"] = "right_elbow_flexion";
+    (*header.mutable_options())["measures.arm_length_uncertainty"] = "0";
     MeasuresStage stage;
     testing::CollectingOutput out;
     stage.start(header, out);
@@ -276,9 +280,17 @@ TEST(MeasuresStage, TurnsNearTheMiddleOfTheRangeAreSaid) {
                      out);
     }
     stage.finish(out);
-    int said = 0;
-    for (const std::string& w : out.warnings) said += w.rfind("MEASURES_REST_AMBIGUOUS", 0) == 0;
-    EXPECT_EQ(said, hold_deg == 92.0 ? 1 : 0);
+    int said = 0, range_said = 0;
+    for (const std::string& w : out.warnings) {
+      said += w.rfind("MEASURES_REST_AMBIGUOUS", 0) == 0;
+      range_said += w.rfind("MEASURES_REPETITION_RANGE_UNCERTAIN", 0) == 0;
+    }
+    EXPECT_EQ(said, hold_deg == 50.0 ? 0 : 1);
+    ASSERT_TRUE(out.results.back().has_repetitions());
+    const v1::RepetitionSummary& summary = out.results.back().repetitions();
+    EXPECT_EQ(summary.count(), hold_deg == 92.0 ? 1u : 3u);
+    EXPECT_EQ(summary.uncertain_count(), hold_deg == 88.0 ? 1u : 0u);
+    EXPECT_EQ(range_said, hold_deg == 88.0 ? 1 : 0);
   }
 }
 

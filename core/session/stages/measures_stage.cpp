@@ -39,6 +39,9 @@ std::optional<measures::PronationInput> pronation_of(const FrameEstimate& frame,
   return std::nullopt;
 }
 
+// A series time as a warning quotes it: seconds to a tenth.
+std::string seconds_text(double t_s) { return format_double(std::round(10 * t_s) / 10); }
+
 }  // namespace
 
 std::string_view MeasuresStage::description() const {
@@ -176,8 +179,7 @@ void MeasuresStage::warn_uncertain_repetitions(const measures::SessionRepetition
              angle +
                  " starts out of rest, comes back to it and then crosses to the other side before its first "
                  "return (" +
-                 format_double(std::round(10 * r.t_start_s) / 10) + "-" +
-                 format_double(std::round(10 * r.t_end_s) / 10) +
+                 seconds_text(r.t_start_s) + "-" + seconds_text(r.t_end_s) +
                  " s, partial): a start that settled (the subject, or the fit, coming to rest) and a swing already "
                  "under way look the same, so the count may be one short and the repetitions after it may run "
                  "from one swing's second side to the next one's first (docs/measures.md, \"Angles that swing "
@@ -186,7 +188,7 @@ void MeasuresStage::warn_uncertain_repetitions(const measures::SessionRepetition
   if (!s.troughs_near_middle_t_s.empty()) {
     std::string times;
     for (std::size_t i = 0; i < s.troughs_near_middle_t_s.size() && i < 5; ++i)
-      times += (i ? ", " : "") + format_double(std::round(10 * s.troughs_near_middle_t_s[i]) / 10);
+      times += (i ? ", " : "") + seconds_text(s.troughs_near_middle_t_s[i]);
     if (s.troughs_near_middle_t_s.size() > 5) times += ", ...";
     out.warn("MEASURES_REST_AMBIGUOUS", "repetitions",
              std::to_string(s.troughs_near_middle_t_s.size()) + " of " + angle +
@@ -204,7 +206,8 @@ void MeasuresStage::warn_uncertain_repetitions(const measures::SessionRepetition
   } else if (s.uncertain_count > 0) {
     out.warn("MEASURES_REPETITION_RANGE_UNCERTAIN", "repetitions",
              std::to_string(s.uncertain_count) + " of " + std::to_string(s.count) + " counted repetitions of " + angle +
-                 " have a range below confidence " + confident_at + " (an extreme where the angle is not confident)");
+                 " have a range below confidence " + confident_at +
+                 " (an extreme where the angle is not confident, or a cut at a turn near the middle of the range)");
   }
 }
 
