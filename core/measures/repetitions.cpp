@@ -234,22 +234,24 @@ PieceRange range_over(const Piece& piece, const std::vector<double>& angle_deg, 
 }
 
 // How much the range of the repetition between bounds[k] and bounds[k + 1] would change were the
-// turns near the middle of the range read the other way: a bounding turn near it (bound_near[k])
-// not ending the repetition, which then runs on to the neighbouring bound, and a turn near it
-// inside (inner_near) ending one, which leaves the repetition the part that holds its peak. Either
-// reading is as likely as the other, so the change is the range's error bound.
+// turns near the middle of the range read the other way: bounding turns near it (bound_near) not
+// ending repetitions, so that this one runs on past them to the nearest bound that is not, and
+// turns near it inside (inner_near) ending them, which leaves the repetition the part that holds
+// its peak. Either reading is as likely as the other, so the change is the range's error bound.
+// The piece's ends (bounds' first and last) are never near.
 double cut_ambiguity_deg(const Piece& piece, const std::vector<double>& angle_deg,
                          const std::vector<std::size_t>& bounds, const std::vector<bool>& bound_near,
                          const std::vector<std::size_t>& inner_near, std::size_t k) {
   const PieceRange own = range_over(piece, angle_deg, bounds[k], bounds[k + 1]);
-  const std::size_t merged_first = bound_near[k] ? bounds[k - 1] : bounds[k];
-  const std::size_t merged_last = bound_near[k + 1] ? bounds[k + 2] : bounds[k + 1];
+  std::size_t first_bound = k, last_bound = k + 1;
+  while (bound_near[first_bound]) --first_bound;
+  while (bound_near[last_bound]) ++last_bound;
   std::size_t split_first = bounds[k], split_last = bounds[k + 1];
   for (const std::size_t turn : inner_near) {
     if (turn > split_first && turn <= own.peak) split_first = turn;
     if (turn < split_last && turn >= own.peak) split_last = turn;
   }
-  const double merged = range_over(piece, angle_deg, merged_first, merged_last).range_deg;
+  const double merged = range_over(piece, angle_deg, bounds[first_bound], bounds[last_bound]).range_deg;
   const double split = range_over(piece, angle_deg, split_first, split_last).range_deg;
   return std::max(merged - own.range_deg, own.range_deg - split);
 }

@@ -77,9 +77,9 @@ struct Repetition {
   // more, or a swing already under way when the recording began; the two look the same.
   bool may_hold_repetition = false;
   // How much its range would change were the turns within `hysteresis_deg` of the middle of the
-  // range (troughs_near_middle_t_s) that bound it or lie inside it read the other way: a bounding
-  // one as no end (the repetition runs on to the next bound), an inner one as an end (the
-  // repetition keeps the part that holds its peak). 0 where no such turn touches it.
+  // range (troughs_near_middle_t_s) that bound it or lie inside it read the other way: bounding
+  // ones as no ends (the repetition runs on past them to the nearest other bound), inner ones as
+  // ends (the repetition keeps the part that holds its peak). 0 where no such turn touches it.
   double cut_ambiguity_deg = 0;
   // Of its range: the lower of the confidences at its lowest and highest samples (the range is
   // their difference, so an error in either moves it; 1 where the series carries no confidences),

@@ -313,6 +313,50 @@ TEST(Repetitions, TurnsNearTheMiddleOfTheRangeAreReported) {
     }
 }
 
+// Read the other way, turns near the middle are no ends all at once: after a reach from rest (0)
+// to 160, a hold at 78 with a 6 deg wobble in it makes two such turns in a row, and the next reach
+// comes down to 20. That reach's range (140) would run back over both turns to the rest at 0
+// (160), not only over the nearer one (whose range would stay 140).
+TEST(Repetitions, TurnsNearTheMiddleInARowAreReadTheOtherWayTogether) {
+  Series series;
+  const auto segment_to = [&](double to_deg, int samples) {
+    const double from = series.angle_deg.empty() ? 0.0 : series.angle_deg.back();
+    for (int k = 1; k <= samples; ++k) {
+      series.t_s.push_back(static_cast<double>(series.t_s.size()) * kDt);
+      series.angle_deg.push_back(from + (to_deg - from) * k / samples);
+    }
+  };
+  series.t_s.push_back(0);
+  series.angle_deg.push_back(0);
+  segment_to(0, 300);
+  for (const auto& [to_deg, samples] : std::vector<std::pair<double, int>>{{160, 50},
+                                                                           {160, 150},
+                                                                           {78, 50},
+                                                                           {78, 30},
+                                                                           {84, 10},
+                                                                           {78, 10},
+                                                                           {78, 30},
+                                                                           {160, 50},
+                                                                           {160, 150},
+                                                                           {20, 50},
+                                                                           {20, 50},
+                                                                           {160, 50},
+                                                                           {160, 150},
+                                                                           {0, 50},
+                                                                           {0, 300}})
+    segment_to(to_deg, samples);
+  const RepetitionSummary summary = segment(series);
+  ASSERT_EQ(summary.troughs_near_middle_t_s.size(), 2u);
+  const Repetition* after_wobble = nullptr;
+  for (const Repetition& rep : summary.repetitions)
+    if (!rep.partial && std::abs(rep.min_deg - 20) < 1e-9 && rep.t_start_s > summary.troughs_near_middle_t_s[1] - 1e-9)
+      after_wobble = &rep;
+  ASSERT_NE(after_wobble, nullptr);
+  EXPECT_NEAR(after_wobble->range_deg, 140, 1e-9);
+  EXPECT_NEAR(after_wobble->cut_ambiguity_deg, 20, 1e-9);
+  EXPECT_LT(after_wobble->confidence, kConfidentAt);
+}
+
 // Turns near the middle inside a repetition, read as ends, would leave it the part that holds its
 // peak: three reaches with dips to 82 between them (just above the middle, 80) keep the whole
 // 0 -> 160 in the part that holds the highest one when that is the first, but only 160 - 82 when
