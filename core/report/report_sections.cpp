@@ -146,9 +146,12 @@ std::string repetition_table(const session::ResultDirectory& results) {
   int index = 0;
   for (const session::RepetitionRow& r : results.repetitions) {
     if (r.counted) ranges[r.angle].push_back(r.range_deg);
-    // A range read off an extreme below kConfidentAt is reported, and marked as not one to act on.
+    // A range read off an extreme below kConfidentAt, or cut at a turn that may not end it, is
+    // reported, and marked as not one to act on; the cut's doubt is named where it is one.
     const bool uncertain = r.confidence < measures::kConfidentAt;
-    const std::string note = !r.counted ? "partial, not counted" : uncertain ? "range not confident" : "";
+    std::string note = !r.counted ? "partial, not counted" : uncertain ? "range not confident" : "";
+    if (r.counted && uncertain && r.cut_ambiguity_deg > 0)
+      note += ": cut at a turn near the middle of the range, up to " + fixed(r.cut_ambiguity_deg, 0) + " deg";
     out += "<tr class=\"" + std::string(r.counted ? "counted" : "partial") + (uncertain ? " uncertain" : "") +
            "\"><td>" + std::to_string(++index) + "</td><td>" + html_escape(r.angle) + "</td><td>" +
            fixed(r.t_start_s - t0, 2) + "</td><td>" + fixed(r.t_end_s - t0, 2) + "</td><td>" + fixed(r.duration_s, 2) +

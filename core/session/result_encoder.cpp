@@ -126,6 +126,7 @@ void encode(const Repetitions& value, v1::FitResult& result) {
     rep.set_partial(r.partial);
     rep.set_confidence(r.confidence);
     rep.set_may_hold_repetition(r.may_hold_repetition);
+    rep.set_cut_ambiguity_deg(r.cut_ambiguity_deg);
   }
   out.set_count(static_cast<std::uint32_t>(s.count));
   out.set_mean_range_deg(s.mean_range_deg);

@@ -217,7 +217,7 @@ void ResultFiles::write_repetitions(const v1::RepetitionSummary& summary) {
     csv.row({angle, std::to_string(index++), format_seconds(r.t_start_us()), format_seconds(r.t_peak_us()),
              format_seconds(r.t_end_us()), format_double(r.min_deg()), format_double(r.max_deg()),
              format_double(r.range_deg()), format_double(r.peak_speed_deg_s()), format_double(r.duration_s()),
-             r.partial() ? "0" : "1", format_double(r.confidence())});
+             r.partial() ? "0" : "1", format_double(r.confidence()), format_double(r.cut_ambiguity_deg())});
   }
   csv.close();
   v1::RepetitionSummary totals = summary;

@@ -57,6 +57,10 @@ inline const char* const kJointAnglesCsv = "joint_angles.csv";
 inline const char* const kRepetitionsCsv = "repetitions.csv";
 inline const char* const kRepetitionSummaryJson = "repetition_summary.json";
 inline const std::vector<std::string> kRepetitionColumns = {
+    "angle",     "repetition",       "t_start_s",  "t_peak_s", "t_end_s",    "min_deg",          "max_deg",
+    "range_deg", "peak_speed_deg_s", "duration_s", "counted",  "confidence", "cut_ambiguity_deg"};
+// repetitions.csv as written before each repetition carried its cut's ambiguity; still read.
+inline const std::vector<std::string> kRepetitionColumnsWithoutCutAmbiguity = {
     "angle",   "repetition", "t_start_s",        "t_peak_s",   "t_end_s", "min_deg",
     "max_deg", "range_deg",  "peak_speed_deg_s", "duration_s", "counted", "confidence"};
 // repetitions.csv as written before each repetition carried its confidence; still read.

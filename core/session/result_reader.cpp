@@ -93,17 +93,21 @@ class ResultCsv {
   CsvReader csv_;
 };
 
-// Whether a file's header row is not `older_columns`, an earlier layout of it with fewer columns
-// (an orientation file before each sample carried its uncertainty, repetitions.csv before each
-// repetition carried its confidence).
-bool newer_than(int directory, const std::string& name, const std::vector<std::string>& older_columns) {
+// Whether a file's header row is `columns` exactly.
+bool has_header(int directory, const std::string& name, const std::vector<std::string>& columns) {
   const std::unique_ptr<std::istream> in = open_stream_beneath(directory, name);
   std::string header;
   std::getline(*in, header);
   if (!header.empty() && header.back() == '\r') header.pop_back();
-  std::string older;
-  for (const std::string& c : older_columns) older += (older.empty() ? "" : ",") + c;
-  return header != older;
+  std::string expected;
+  for (const std::string& c : columns) expected += (expected.empty() ? "" : ",") + c;
+  return header == expected;
+}
+
+// Whether a file's header row is not `older_columns`, an earlier layout of it with fewer columns
+// (an orientation file before each sample carried its uncertainty).
+bool newer_than(int directory, const std::string& name, const std::vector<std::string>& older_columns) {
+  return !has_header(directory, name, older_columns);
 }
 
 std::vector<TimedOrientation> read_orientations(int directory, const std::string& name, bool forearm) {
@@ -286,13 +290,18 @@ std::vector<AngleRow> read_angles(Reading& out) {
 
 std::vector<RepetitionRow> read_repetitions(Reading& out) {
   namespace layout = result_layout;
-  const bool with_confidence =
-      !has_entry(out.directory.get(), layout::kRepetitionsCsv, FileKind::kRegular) ||
-      newer_than(out.directory.get(), layout::kRepetitionsCsv, layout::kRepetitionColumnsWithoutConfidence);
+  // Earlier layouts, with fewer columns: before each repetition carried its confidence, and its
+  // cut's ambiguity. Any other header is read as today's (and refused there if it is not).
+  const bool present = has_entry(out.directory.get(), layout::kRepetitionsCsv, FileKind::kRegular);
+  const bool with_confidence = !present || !has_header(out.directory.get(), layout::kRepetitionsCsv,
+                                                       layout::kRepetitionColumnsWithoutConfidence);
+  const bool with_cut = with_confidence && (!present || !has_header(out.directory.get(), layout::kRepetitionsCsv,
+                                                                    layout::kRepetitionColumnsWithoutCutAmbiguity));
+  const std::vector<std::string>& columns = with_cut          ? layout::kRepetitionColumns
+                                            : with_confidence ? layout::kRepetitionColumnsWithoutCutAmbiguity
+                                                              : layout::kRepetitionColumnsWithoutConfidence;
   return read_rows<RepetitionRow>(
-      out, layout::kRepetitionsCsv,
-      with_confidence ? layout::kRepetitionColumns : layout::kRepetitionColumnsWithoutConfidence,
-      [with_confidence](ResultCsv& csv, const auto&) {
+      out, layout::kRepetitionsCsv, columns, [with_confidence, with_cut](ResultCsv& csv, const auto&) {
         RepetitionRow row;
         row.angle = csv.text(0);
         row.t_start_s = csv.number(2);
@@ -309,6 +318,8 @@ std::vector<RepetitionRow> read_repetitions(Reading& out) {
         row.confidence = with_confidence ? csv.number(11) : std::numeric_limits<double>::quiet_NaN();
         if (with_confidence && !(row.confidence >= 0.0 && row.confidence <= 1.0))
           throw_invalid(csv.field(11), "is not a confidence in [0, 1]");
+        row.cut_ambiguity_deg = with_cut ? csv.number(12) : std::numeric_limits<double>::quiet_NaN();
+        if (with_cut && !(row.cut_ambiguity_deg >= 0.0)) throw_invalid(csv.field(12), "is not an angle >= 0");
         return row;
       });
 }

@@ -89,6 +89,8 @@ struct RepetitionRow {
   double min_deg = 0, max_deg = 0, range_deg = 0, peak_speed_deg_s = 0, duration_s = 0;
   bool counted = false;
   double confidence = 0;  // of range_deg, 0..1; NaN in files written before repetitions carried one
+  // Degrees (results.proto's Repetition.cut_ambiguity_deg); NaN in files written before it.
+  double cut_ambiguity_deg = 0;
 };
 
 struct ResultDirectory {

@@ -34,8 +34,9 @@ struct FixtureSpec {
   int frames = 10;                // camera frames at 30 Hz; forearm samples at 80 Hz over the same span
   double angle_offset_deg = 0.0;  // added to every joint angle and repetition range
   bool right_pronation_defined = true;
-  bool with_repetitions = true;  // two counted repetitions of right_elbow_flexion (the second's range
-                                 // at confidence 0.3) and a partial one
+  bool with_repetitions = true;              // two counted repetitions of right_elbow_flexion (the second's range
+                                             // at confidence 0.3) and a partial one
+  double uncertain_cut_ambiguity_deg = 0.0;  // the second repetition's cut_ambiguity_deg
   v1::JointAngleKind repetition_angle = v1::RIGHT_ELBOW_FLEXION;
 };
 
@@ -130,6 +131,7 @@ inline void write_fixture(const std::filesystem::path& dir, const FixtureSpec& s
       rep.set_duration_s(2.0);
       rep.set_partial(r == 2);
       rep.set_confidence(r == 1 ? 0.3 : 0.9);  // the second counted one's range is not confident
+      if (r == 1) rep.set_cut_ambiguity_deg(spec.uncertain_cut_ambiguity_deg);
     }
     summary.set_count(2);
     files.write_repetitions(summary);

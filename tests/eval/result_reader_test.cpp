@@ -80,6 +80,7 @@ TEST(ResultReader, ReadsBackWhatResultFilesWrote) {
   EXPECT_DOUBLE_EQ(r.repetitions[1].t_start_s, 2.001);
   EXPECT_TRUE(r.repetitions[1].counted);
   EXPECT_DOUBLE_EQ(r.repetitions[1].confidence, 0.3);
+  EXPECT_DOUBLE_EQ(r.repetitions[1].cut_ambiguity_deg, 0.0);
   EXPECT_FALSE(r.repetitions[2].counted);
 }
 
@@ -95,27 +96,57 @@ void drop_last_columns(const std::filesystem::path& file, int n) {
   std::ofstream(file) << out;
 }
 
+// A column `name` appended to a CSV file, `value` in every row.
+void append_column(const std::filesystem::path& file, const std::string& name, const std::string& value) {
+  std::ifstream in(file);
+  std::string text, line;
+  for (int row = 0; std::getline(in, line); ++row) text += line + "," + (row == 0 ? name : value) + "\n";
+  in.close();
+  std::ofstream(file) << text;
+}
+
 TEST(ResultReader, RepetitionsWithoutTheConfidenceColumnStillRead) {
-  // As written before each repetition carried its confidence: the rows read, with none (NaN).
+  // As written before each repetition carried its confidence (and its cut's ambiguity): the rows
+  // read, with neither (NaN).
   const auto dir = result_fixture::fresh_result_dir("repetitions_without_confidence");
   result_fixture::write_fixture(dir, {});
-  drop_last_columns(dir / "repetitions.csv", 1);
+  drop_last_columns(dir / "repetitions.csv", 2);
   const session::ResultDirectory r = session::read_result_files(dir);
   ASSERT_EQ(r.repetitions.size(), 3u);
   EXPECT_DOUBLE_EQ(r.repetitions[1].range_deg, 50.0);
   EXPECT_TRUE(r.repetitions[1].counted);
   EXPECT_TRUE(std::isnan(r.repetitions[1].confidence));
+  EXPECT_TRUE(std::isnan(r.repetitions[1].cut_ambiguity_deg));
+}
+
+TEST(ResultReader, RepetitionsWithoutTheCutAmbiguityColumnStillRead) {
+  // As written before each repetition carried its cut's ambiguity: the rows read, with none (NaN).
+  const auto dir = result_fixture::fresh_result_dir("repetitions_without_cut_ambiguity");
+  result_fixture::FixtureSpec spec;
+  spec.uncertain_cut_ambiguity_deg = 40;
+  result_fixture::write_fixture(dir, spec);
+  EXPECT_DOUBLE_EQ(session::read_result_files(dir).repetitions[1].cut_ambiguity_deg, 40.0);
+  drop_last_columns(dir / "repetitions.csv", 1);
+  const session::ResultDirectory r = session::read_result_files(dir);
+  ASSERT_EQ(r.repetitions.size(), 3u);
+  EXPECT_DOUBLE_EQ(r.repetitions[1].confidence, 0.3);
+  EXPECT_TRUE(std::isnan(r.repetitions[1].cut_ambiguity_deg));
+}
+
+TEST(ResultReader, ANegativeCutAmbiguityIsRefusedNamingTheCell) {
+  const auto dir = result_fixture::fresh_result_dir("repetitions_bad_cut_ambiguity");
+  result_fixture::write_fixture(dir, {});
+  drop_last_columns(dir / "repetitions.csv", 1);
+  append_column(dir / "repetitions.csv", "cut_ambiguity_deg", "-2");
+  posefuse::testing::expect_error([&] { session::read_result_files(dir); }, ErrorCode::kInvalidArgument,
+                                  "repetitions.csv:2:cut_ambiguity_deg");
 }
 
 TEST(ResultReader, ARepetitionConfidenceOutsideZeroToOneIsRefusedNamingTheCell) {
   const auto dir = result_fixture::fresh_result_dir("repetitions_bad_confidence");
   result_fixture::write_fixture(dir, {});
-  drop_last_columns(dir / "repetitions.csv", 1);
-  std::ifstream in(dir / "repetitions.csv");
-  std::string text, line;
-  for (int row = 0; std::getline(in, line); ++row) text += line + (row == 0 ? ",confidence\n" : ",1.5\n");
-  in.close();
-  std::ofstream(dir / "repetitions.csv") << text;
+  drop_last_columns(dir / "repetitions.csv", 2);
+  append_column(dir / "repetitions.csv", "confidence", "1.5");
   posefuse::testing::expect_error([&] { session::read_result_files(dir); }, ErrorCode::kInvalidArgument,
                                   "repetitions.csv:2:confidence");
 }

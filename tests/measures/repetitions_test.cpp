@@ -45,6 +45,19 @@ struct Series {
 // The cycles back to back, sampled at 100 Hz from t = 0 to the end of the last one (both troughs
 // included). Sample k sits at exactly k * kDt; the troughs fall on samples when the periods are
 // multiples of kDt.
+// A series at 100 Hz from 0 deg at t = 0, built leg by leg: each goes linearly to `to_deg` over
+// `samples` samples (a hold: to where it is).
+struct PiecewiseLinear {
+  Series series{{0.0}, {0.0}};
+  void to(double to_deg, int samples) {
+    const double from = series.angle_deg.back();
+    for (int k = 1; k <= samples; ++k) {
+      series.t_s.push_back(static_cast<double>(series.t_s.size()) * kDt);
+      series.angle_deg.push_back(from + (to_deg - from) * k / samples);
+    }
+  }
+};
+
 Series exercise(const std::vector<Cycle>& cycles) {
   Series series;
   double cycle_start_s = 0;
@@ -259,26 +272,17 @@ TEST(Repetitions, NoiseAtRestCountsNothingThoughTheMotionIsSmall) {
 // one well below ends repetitions and one well above does not, and neither is reported.
 TEST(Repetitions, TurnsNearTheMiddleOfTheRangeAreReported) {
   const auto reaches_from_a_hold = [](double hold_deg) {
-    Series series;
-    const auto segment_to = [&](double to_deg, int samples) {
-      const double from = series.angle_deg.empty() ? 0.0 : series.angle_deg.back();
-      for (int k = 1; k <= samples; ++k) {
-        series.t_s.push_back(static_cast<double>(series.t_s.size()) * kDt);
-        series.angle_deg.push_back(from + (to_deg - from) * k / samples);
-      }
-    };
-    series.t_s.push_back(0);
-    series.angle_deg.push_back(0);
-    segment_to(0, 100);  // rest
+    PiecewiseLinear legs;
+    legs.to(0, 100);  // rest
     for (int r = 0; r < 3; ++r) {
-      segment_to(160, 50);
-      segment_to(160, 50);  // held at the top
-      segment_to(hold_deg, 50);
-      segment_to(hold_deg, 50);  // held half way
+      legs.to(160, 50);
+      legs.to(160, 50);  // held at the top
+      legs.to(hold_deg, 50);
+      legs.to(hold_deg, 50);  // held half way
     }
-    segment_to(0, 50);
-    segment_to(0, 100);
-    return series;
+    legs.to(0, 50);
+    legs.to(0, 100);
+    return legs.series;
   };
   const RepetitionSummary near = segment(reaches_from_a_hold(82));
   ASSERT_EQ(near.troughs_near_middle_t_s.size(), 2u);       // the holds between reaches; the last one falls to rest
@@ -318,17 +322,8 @@ TEST(Repetitions, TurnsNearTheMiddleOfTheRangeAreReported) {
 // comes down to 20. That reach's range (140) would run back over both turns to the rest at 0
 // (160), not only over the nearer one (whose range would stay 140).
 TEST(Repetitions, TurnsNearTheMiddleInARowAreReadTheOtherWayTogether) {
-  Series series;
-  const auto segment_to = [&](double to_deg, int samples) {
-    const double from = series.angle_deg.empty() ? 0.0 : series.angle_deg.back();
-    for (int k = 1; k <= samples; ++k) {
-      series.t_s.push_back(static_cast<double>(series.t_s.size()) * kDt);
-      series.angle_deg.push_back(from + (to_deg - from) * k / samples);
-    }
-  };
-  series.t_s.push_back(0);
-  series.angle_deg.push_back(0);
-  segment_to(0, 300);
+  PiecewiseLinear legs;
+  legs.to(0, 300);
   for (const auto& [to_deg, samples] : std::vector<std::pair<double, int>>{{160, 50},
                                                                            {160, 150},
                                                                            {78, 50},
@@ -344,8 +339,8 @@ TEST(Repetitions, TurnsNearTheMiddleInARowAreReadTheOtherWayTogether) {
                                                                            {160, 150},
                                                                            {0, 50},
                                                                            {0, 300}})
-    segment_to(to_deg, samples);
-  const RepetitionSummary summary = segment(series);
+    legs.to(to_deg, samples);
+  const RepetitionSummary summary = segment(legs.series);
   ASSERT_EQ(summary.troughs_near_middle_t_s.size(), 2u);
   const Repetition* after_wobble = nullptr;
   for (const Repetition& rep : summary.repetitions)
@@ -363,27 +358,18 @@ TEST(Repetitions, TurnsNearTheMiddleInARowAreReadTheOtherWayTogether) {
 // it is the middle one, between the two dips.
 TEST(Repetitions, TurnsNearTheMiddleInsideARepetitionBoundItsRange) {
   const auto reaches_with_dips = [](const std::vector<double>& tops_deg) {
-    Series series;
-    const auto segment_to = [&](double to_deg, int samples) {
-      const double from = series.angle_deg.empty() ? 0.0 : series.angle_deg.back();
-      for (int k = 1; k <= samples; ++k) {
-        series.t_s.push_back(static_cast<double>(series.t_s.size()) * kDt);
-        series.angle_deg.push_back(from + (to_deg - from) * k / samples);
-      }
-    };
-    series.t_s.push_back(0);
-    series.angle_deg.push_back(0);
-    segment_to(0, 200);
+    PiecewiseLinear legs;
+    legs.to(0, 200);
     for (int r = 0; r < 2; ++r) {
       for (std::size_t k = 0; k < tops_deg.size(); ++k) {
-        if (k > 0) segment_to(82, 50);
-        segment_to(tops_deg[k], 50);
-        segment_to(tops_deg[k], 100);
+        if (k > 0) legs.to(82, 50);
+        legs.to(tops_deg[k], 50);
+        legs.to(tops_deg[k], 100);
       }
-      segment_to(0, 50);
-      segment_to(0, 200);
+      legs.to(0, 50);
+      legs.to(0, 200);
     }
-    return series;
+    return legs.series;
   };
   for (const auto& [tops, ambiguity] :
        {std::pair{std::vector<double>{160, 150, 150}, 0.0}, std::pair{std::vector<double>{150, 160, 150}, 82.0}}) {

@@ -33,6 +33,14 @@ TEST(SessionReport, HoldsThePlotsTablesWarningsAndCalibration) {
   // The second counted repetition's range is at confidence 0.3: marked, still counted.
   EXPECT_EQ(count_occurrences(html, "<tr class=\"counted uncertain\">"), 1u);
   EXPECT_NE(html.find("<td>0.30</td><td>range not confident</td>"), std::string::npos);
+  // Cut at a turn near the middle of the range, the row says so and by how much.
+  spec.uncertain_cut_ambiguity_deg = 40;
+  result_fixture::write_fixture(dir, spec);
+  report::write_session_report(dir, dir / "report.html");
+  EXPECT_NE(read_text(dir / "report.html")
+                .find("<td>0.30</td><td>range not confident: cut at a turn near the middle of the range, up to 40 "
+                      "deg</td>"),
+            std::string::npos);
   EXPECT_EQ(count_occurrences(html, "<tr class=\"partial\">"), 1u);
   EXPECT_NE(html.find("<table id=\"repetition-summary\">"), std::string::npos);
   EXPECT_NE(html.find("<td>right_elbow_flexion</td><td>2</td><td>45.0</td><td>7.1</td>"), std::string::npos);

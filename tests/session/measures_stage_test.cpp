@@ -291,6 +291,12 @@ TEST(MeasuresStage, TurnsNearTheMiddleOfTheRangeAreSaid) {
     EXPECT_EQ(summary.count(), hold_deg == 92.0 ? 1u : 3u);
     EXPECT_EQ(summary.uncertain_count(), hold_deg == 88.0 ? 1u : 0u);
     EXPECT_EQ(range_said, hold_deg == 88.0 ? 1 : 0);
+    // The result carries how far the cut may move each range: the reach between the holds
+    // (88 -> 160) would run from the rest at 20.
+    double largest_cut_deg = 0;
+    for (const v1::Repetition& rep : summary.repetitions())
+      if (!rep.partial()) largest_cut_deg = std::max(largest_cut_deg, rep.cut_ambiguity_deg());
+    EXPECT_NEAR(largest_cut_deg, hold_deg == 88.0 ? 160 - 20 - (160 - 88) : 0, 0.5);
   }
 }
 
