@@ -1,6 +1,8 @@
 #include "fit/fitted_body_frame.hpp"
 
+#include <algorithm>
 #include <array>
+#include <vector>
 
 #include "body/smpl_model.hpp"
 #include "common/error.hpp"
@@ -46,6 +48,33 @@ bool far_from_fit(const TrackedSkeleton& skeleton, int camera_joint, const Eigen
          !((skeleton.positions_K[static_cast<size_t>(camera_joint)] - fitted_K).norm() <= kCameraDisagreementM);
 }
 
+// An SMPL joint the camera has no joint for (spine1, spine3, the collars, the head) is placed by
+// the fit between joints the camera has, so it is trusted no more than the least trusted of them:
+// the nearest such joint towards the root and the nearest ones down each of its branches.
+void bound_by_neighbours(std::array<double, body::kNumJoints>& confidence,
+                         const std::array<bool, body::kNumJoints>& from_camera) {
+  const auto& parents = body::kSmplParents;
+  const std::array<double, body::kNumJoints> own = confidence;
+  for (int j = 0; j < body::kNumJoints; ++j) {
+    if (from_camera[static_cast<size_t>(j)]) continue;
+    double bound = 1.0;
+    int up = parents[static_cast<size_t>(j)];
+    while (up >= 0 && !from_camera[static_cast<size_t>(up)]) up = parents[static_cast<size_t>(up)];
+    if (up >= 0) bound = own[static_cast<size_t>(up)];
+    std::vector<int> below = {j};
+    while (!below.empty()) {
+      const int k = below.back();
+      below.pop_back();
+      for (int child = k + 1; child < body::kNumJoints; ++child) {  // a parent has a lower id
+        if (parents[static_cast<size_t>(child)] != k) continue;
+        if (from_camera[static_cast<size_t>(child)]) bound = std::min(bound, own[static_cast<size_t>(child)]);
+        else below.push_back(child);
+      }
+    }
+    confidence[static_cast<size_t>(j)] = bound;
+  }
+}
+
 // II-B: the forearm's IMU orientation turned onto the fitted axis, and its roll from the IMU.
 FittedForearm fitted_forearm(const JointPose& pose, ArmSide side, const Eigen::Quaterniond& K_from_F,
                              double wrist_confidence) {
@@ -83,11 +112,15 @@ FittedBodyFrame make_fitted_body_frame(const Eigen::Matrix3Xd& rest_joints, cons
     out.camera_joints.push_back({camera_joints.col(j), camera_confidence[static_cast<size_t>(j)]});
   }
   std::array<double, body::kNumJoints> smpl_confidence;
+  std::array<bool, body::kNumJoints> from_camera{};
   smpl_confidence.fill(1.0);
   for (int j = 0; j < kKinectJointCount; ++j) {
     const int smpl = smpl_joint_at_camera_joint(j);
-    if (smpl >= 0) smpl_confidence[static_cast<size_t>(smpl)] = camera_confidence[static_cast<size_t>(j)];
+    if (smpl < 0) continue;
+    smpl_confidence[static_cast<size_t>(smpl)] = camera_confidence[static_cast<size_t>(j)];
+    from_camera[static_cast<size_t>(smpl)] = true;
   }
+  bound_by_neighbours(smpl_confidence, from_camera);
   for (int j = 0; j < body::kNumJoints; ++j) {
     out.smpl_joints.push_back({pose.positions_K.col(j), smpl_confidence[static_cast<size_t>(j)]});
   }

@@ -29,7 +29,9 @@ inline constexpr double kCameraDisagreementM = 0.29;
 struct FittedJoint {
   Eigen::Vector3d p_K = Eigen::Vector3d::Zero();
   // 1 where the camera tracks the corresponding joint within kCameraDisagreementM; else 0 for a
-  // wrist or hand, 0.5 for the others (docs/fitting.md, "Joint confidence").
+  // wrist or hand, 0.5 for the others (docs/fitting.md, "Joint confidence"). An SMPL joint with no
+  // camera joint (spine1, spine3, the collars, the head) takes the lowest of the nearest ones
+  // around it in the kinematic tree.
   double confidence = 0.0;
 };
 

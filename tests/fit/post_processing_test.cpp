@@ -217,6 +217,29 @@ TEST(FittedBodyFrame, JointConfidenceFollowsTheCameraTrackingState) {
     EXPECT_DOUBLE_EQ(forearm.confidence, forearm.side == ArmSide::kLeft ? 0.0 : 1.0);
 }
 
+// The SMPL joints with no camera joint are trusted no more than the camera-backed joints around
+// them: with the left shoulder inferred the left collar and spine3 take its 0.5, the right collar
+// keeps 1; with the neck untracked the head follows it; with every joint tracked all are 1.
+TEST(FittedBodyFrame, JointsWithoutACameraJointTakeTheirNeighboursConfidence) {
+  const PoseLayout layout = PoseLayout::upper_body();
+  const Eigen::Matrix3Xd rest = rest_joints(*male(), Eigen::VectorXd());
+  const Eigen::VectorXd theta = testing::facing_pose(layout, 2.0, {});
+  const Eigen::Matrix3Xd camera = camera_joints_from_pose(pose_joints(rest, layout, theta));
+  TrackedSkeleton skeleton;
+  for (int j = 0; j < kKinectJointCount; ++j) skeleton.positions_K[static_cast<size_t>(j)] = camera.col(j);
+  skeleton.tracking.fill(JointTracking::kTracked);
+  const FittedBodyFrame all = make_fitted_body_frame(rest, layout, theta, skeleton, {});
+  for (const FittedJoint& joint : all.smpl_joints) EXPECT_DOUBLE_EQ(joint.confidence, 1.0);
+  skeleton.tracking[kShoulderLeft] = JointTracking::kInferred;
+  skeleton.tracking[kNeck] = JointTracking::kNotTracked;
+  const FittedBodyFrame frame = make_fitted_body_frame(rest, layout, theta, skeleton, {});
+  EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kLeftCollar].confidence, 0.5);
+  EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kSpine3].confidence, 0.5);
+  EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kHead].confidence, 0.5);
+  EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kRightCollar].confidence, 1.0);
+  EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kSpine1].confidence, 1.0);
+}
+
 // A camera joint reported TRACKED far from the fitted joint (a fit folded into a wrong pose, or
 // the camera off track): the camera does not vouch for that fitted joint, which takes an
 // untracked joint's confidence, and the frame counts it. Within kCameraDisagreementM it stays 1.
