@@ -93,7 +93,9 @@ class ResultCsv {
   CsvReader csv_;
 };
 
-// Whether a file's header row is `columns` exactly.
+// Whether a file's header row is `columns` exactly (an earlier layout of it with fewer columns: an
+// orientation file before each sample carried its uncertainty, repetitions.csv before each
+// repetition carried its confidence or its cut's ambiguity).
 bool has_header(int directory, const std::string& name, const std::vector<std::string>& columns) {
   const std::unique_ptr<std::istream> in = open_stream_beneath(directory, name);
   std::string header;
@@ -104,17 +106,11 @@ bool has_header(int directory, const std::string& name, const std::vector<std::s
   return header == expected;
 }
 
-// Whether a file's header row is not `older_columns`, an earlier layout of it with fewer columns
-// (an orientation file before each sample carried its uncertainty).
-bool newer_than(int directory, const std::string& name, const std::vector<std::string>& older_columns) {
-  return !has_header(directory, name, older_columns);
-}
-
 std::vector<TimedOrientation> read_orientations(int directory, const std::string& name, bool forearm) {
   namespace layout = result_layout;
   const std::vector<std::string>& older =
       forearm ? layout::kForearmOrientationColumnsWithoutUncertainty : layout::kOrientationColumnsWithoutUncertainty;
-  const bool uncertainty = newer_than(directory, name, older);
+  const bool uncertainty = !has_header(directory, name, older);
   const std::vector<std::string>& today = forearm ? layout::kForearmOrientationColumns : layout::kOrientationColumns;
   ResultCsv csv(directory, name, uncertainty ? today : older);
   const int uncertainty_column = forearm ? 6 : 5;
@@ -293,10 +289,11 @@ std::vector<RepetitionRow> read_repetitions(Reading& out) {
   // Earlier layouts, with fewer columns: before each repetition carried its confidence, and its
   // cut's ambiguity. Any other header is read as today's (and refused there if it is not).
   const bool present = has_entry(out.directory.get(), layout::kRepetitionsCsv, FileKind::kRegular);
-  const bool with_confidence = !present || !has_header(out.directory.get(), layout::kRepetitionsCsv,
-                                                       layout::kRepetitionColumnsWithoutConfidence);
-  const bool with_cut = with_confidence && (!present || !has_header(out.directory.get(), layout::kRepetitionsCsv,
-                                                                    layout::kRepetitionColumnsWithoutCutAmbiguity));
+  const auto written_as = [&](const std::vector<std::string>& columns) {
+    return present && has_header(out.directory.get(), layout::kRepetitionsCsv, columns);
+  };
+  const bool with_confidence = !written_as(layout::kRepetitionColumnsWithoutConfidence);
+  const bool with_cut = with_confidence && !written_as(layout::kRepetitionColumnsWithoutCutAmbiguity);
   const std::vector<std::string>& columns = with_cut          ? layout::kRepetitionColumns
                                             : with_confidence ? layout::kRepetitionColumnsWithoutCutAmbiguity
                                                               : layout::kRepetitionColumnsWithoutConfidence;

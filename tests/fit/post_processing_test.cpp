@@ -181,6 +181,15 @@ TEST(FitArmRoll, BadInputNamesTheField) {
   EXPECT_EQ(testing::error_field([&] { forearm_roll(broken, ArmSide::kLeft, unit, unit); }), "pose");
 }
 
+// A camera skeleton that sees `pose` exactly, every joint tracked.
+TrackedSkeleton tracked_at(const JointPose& pose) {
+  const Eigen::Matrix3Xd camera = camera_joints_from_pose(pose);
+  TrackedSkeleton skeleton;
+  for (int j = 0; j < kKinectJointCount; ++j) skeleton.positions_K[static_cast<size_t>(j)] = camera.col(j);
+  skeleton.tracking.fill(JointTracking::kTracked);
+  return skeleton;
+}
+
 // A fitted joint's confidence follows the camera's tracking of the joint it corresponds to: 1
 // tracked; untracked, 0 for the wrist and hand (angles read from them cannot be acted on,
 // docs/fitting.md "Joint confidence") and 0.5 for the others. The fitted forearm takes its
@@ -190,10 +199,7 @@ TEST(FittedBodyFrame, JointConfidenceFollowsTheCameraTrackingState) {
   const Eigen::Matrix3Xd rest = rest_joints(*male(), Eigen::VectorXd());
   const Eigen::VectorXd theta = testing::facing_pose(layout, 2.0, {});
   const JointPose pose = pose_joints(rest, layout, theta);
-  const Eigen::Matrix3Xd camera = camera_joints_from_pose(pose);  // the camera sees the fitted pose
-  TrackedSkeleton skeleton;
-  for (int j = 0; j < kKinectJointCount; ++j) skeleton.positions_K[static_cast<size_t>(j)] = camera.col(j);
-  skeleton.tracking.fill(JointTracking::kTracked);
+  TrackedSkeleton skeleton = tracked_at(pose);
   skeleton.tracking[kWristLeft] = JointTracking::kInferred;
   skeleton.tracking[kElbowRight] = JointTracking::kInferred;
   skeleton.tracking[kSpineMid] = JointTracking::kNotTracked;
@@ -224,10 +230,7 @@ TEST(FittedBodyFrame, JointsWithoutACameraJointTakeTheirNeighboursConfidence) {
   const PoseLayout layout = PoseLayout::upper_body();
   const Eigen::Matrix3Xd rest = rest_joints(*male(), Eigen::VectorXd());
   const Eigen::VectorXd theta = testing::facing_pose(layout, 2.0, {});
-  const Eigen::Matrix3Xd camera = camera_joints_from_pose(pose_joints(rest, layout, theta));
-  TrackedSkeleton skeleton;
-  for (int j = 0; j < kKinectJointCount; ++j) skeleton.positions_K[static_cast<size_t>(j)] = camera.col(j);
-  skeleton.tracking.fill(JointTracking::kTracked);
+  TrackedSkeleton skeleton = tracked_at(pose_joints(rest, layout, theta));
   const FittedBodyFrame all = make_fitted_body_frame(rest, layout, theta, skeleton, {});
   for (const FittedJoint& joint : all.smpl_joints) EXPECT_DOUBLE_EQ(joint.confidence, 1.0);
   skeleton.tracking[kShoulderLeft] = JointTracking::kInferred;
@@ -247,10 +250,7 @@ TEST(FittedBodyFrame, ATrackedJointFarFromTheFitDoesNotVouchForIt) {
   const PoseLayout layout = PoseLayout::upper_body();
   const Eigen::Matrix3Xd rest = rest_joints(*male(), Eigen::VectorXd());
   const Eigen::VectorXd theta = testing::facing_pose(layout, 2.0, {});
-  const Eigen::Matrix3Xd fitted = camera_joints_from_pose(pose_joints(rest, layout, theta));
-  TrackedSkeleton skeleton;
-  for (int j = 0; j < kKinectJointCount; ++j) skeleton.positions_K[static_cast<size_t>(j)] = fitted.col(j);
-  skeleton.tracking.fill(JointTracking::kTracked);
+  TrackedSkeleton skeleton = tracked_at(pose_joints(rest, layout, theta));
   const Eigen::Vector3d just_within(0, kCameraDisagreementM - 0.01, 0), beyond(0, 0, kCameraDisagreementM + 0.01);
   skeleton.positions_K[kWristLeft] += beyond;  // the camera's wrist where the fit's is not
   skeleton.positions_K[kElbowLeft] += beyond;
