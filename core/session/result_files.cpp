@@ -147,6 +147,10 @@ void ResultFiles::write_frame(const v1::FrameResult& frame) {
         .row({std::to_string(t), std::to_string(j), body::smpl_joint_names()[static_cast<std::size_t>(j)],
               format_double(q.w()), format_double(q.x()), format_double(q.y()), format_double(q.z())});
   }
+  if (frame.smpl_joint_rotations_size() > 0) {  // a body-fit frame: its fit's energy E
+    opened_file(fit_energy_, result_layout::kFitEnergyCsv, result_layout::kFitEnergyColumns)
+        .row({std::to_string(t), format_double(frame.fit_energy())});
+  }
   if (frame.camera_joints_size() > 0) {
     write_joints(opened_file(camera_joints_, result_layout::kCameraJointsCsv, result_layout::kJointColumns), t,
                  frame.camera_joints(), layout::kKinectJointNames.data());
@@ -232,7 +236,8 @@ void ResultFiles::write_calibration(const v1::CalibrationReport& report) {
 void ResultFiles::close() {
   for (auto& [device, csv] : orientations_) csv->close();
   for (auto& [device, csv] : forearm_orientations_) csv->close();
-  for (auto* file : {&smpl_joints_, &camera_joints_, &forearms_, &imu_positions_, &segments_, &angles_}) {
+  for (auto* file : {&smpl_joints_, &smpl_rotations_, &fit_energy_, &camera_joints_, &forearms_, &imu_positions_,
+                     &segments_, &angles_}) {
     if (*file) (*file)->close();
   }
 }

@@ -50,6 +50,7 @@ inline const char* const kRecoveredSegmentsCsv = "recovered_segments.csv";
 inline const char* const kSmplJointsCsv = "smpl_joints.csv";
 inline const char* const kCameraJointsCsv = "camera_joints.csv";
 inline const char* const kSmplJointRotationsCsv = "smpl_joint_rotations.csv";
+inline const char* const kFitEnergyCsv = "fit_energy.csv";
 inline const char* const kForearmsCsv = "forearms.csv";
 inline const char* const kImuPositionsCsv = "imu_positions.csv";
 inline const char* const kCalibrationJson = "calibration.json";
@@ -81,6 +82,7 @@ inline const std::vector<std::string> kForearmOrientationColumnsWithoutUncertain
 inline const std::vector<std::string> kJointColumns = {"t_us", "joint", "joint_name", "x_m",
                                                        "y_m",  "z_m",   "source",     "confidence"};
 inline const std::vector<std::string> kJointRotationColumns = {"t_us", "joint", "joint_name", "w", "x", "y", "z"};
+inline const std::vector<std::string> kFitEnergyColumns = {"t_us", "fit_energy"};
 inline const std::vector<std::string> kForearmColumns = {"t_us", "arm",           "qw",     "qx",        "qy",
                                                          "qz",   "pronation_rad", "source", "confidence"};
 inline const std::vector<std::string> kImuPositionColumns = {"t_us", "device_id", "x_m", "y_m", "z_m", "source"};
@@ -122,7 +124,8 @@ class ResultFiles {
   std::filesystem::path directory_;
   std::map<std::string, std::unique_ptr<CsvWriter>> orientations_;
   std::map<std::string, std::unique_ptr<CsvWriter>> forearm_orientations_;
-  std::optional<CsvWriter> smpl_joints_, smpl_rotations_, camera_joints_, forearms_, imu_positions_, segments_, angles_;
+  std::optional<CsvWriter> smpl_joints_, smpl_rotations_, fit_energy_, camera_joints_, forearms_, imu_positions_,
+      segments_, angles_;
   std::uint64_t orientation_samples_ = 0;
   std::uint64_t forearm_samples_ = 0;
   std::uint64_t frames_ = 0;

@@ -198,6 +198,17 @@ std::vector<JointRotationRow> read_joint_rotations(Reading& out) {
                                      });
 }
 
+std::vector<FitEnergyRow> read_fit_energies(Reading& out) {
+  std::int64_t previous = 0;
+  return read_rows<FitEnergyRow>(out, result_layout::kFitEnergyCsv, result_layout::kFitEnergyColumns,
+                                 [&](const ResultCsv& csv, const std::vector<FitEnergyRow>& rows) {
+                                   FitEnergyRow row;
+                                   row.t_us = csv.time_after(0, previous, rows.empty());
+                                   row.fit_energy = csv.number_or_nan(1);  // nan: a fit that failed
+                                   return row;
+                                 });
+}
+
 // Not in time order, even per arm: the forearm stage and, with `fit.enabled`, the body-fit stage
 // both report each frame's forearms, the body fit up to `fit.imu_wait_s` later. Sorted by
 // (arm, t_us) here, the rows of one frame kept in file order.
@@ -335,6 +346,7 @@ ResultDirectory read_result_files(const fs::path& directory) {
   out.forearm_orientations = read_orientation_folder(in, result_layout::kForearmOrientationDir, true);
   out.smpl_joints = read_joints(in, result_layout::kSmplJointsCsv, body::kNumJoints, body::smpl_joint_names().data());
   out.smpl_joint_rotations = read_joint_rotations(in);
+  out.fit_energies = read_fit_energies(in);
   out.camera_joints = read_joints(in, result_layout::kCameraJointsCsv,
                                   static_cast<int>(layout::kKinectJointNames.size()), layout::kKinectJointNames.data());
   out.forearms = read_forearms(in);

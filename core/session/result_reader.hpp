@@ -51,6 +51,12 @@ struct JointRotationRow {
   geometry::Quat K_from_joint = geometry::Quat::Identity();
 };
 
+// One row of fit_energy.csv: the body fit's energy E (paper 2 eq. 4) at a fitted frame.
+struct FitEnergyRow {
+  std::int64_t t_us = 0;
+  double fit_energy = 0.0;
+};
+
 struct ForearmRow {
   std::int64_t t_us = 0;
   v1::Arm arm = v1::ARM_UNSPECIFIED;
@@ -101,6 +107,7 @@ struct ResultDirectory {
   std::map<std::string, std::vector<TimedOrientation>> forearm_orientations;  // by device id, camera clock
   std::vector<JointRow> smpl_joints, camera_joints;
   std::vector<JointRotationRow> smpl_joint_rotations;  // t_us never goes back
+  std::vector<FitEnergyRow> fit_energies;              // t_us never goes back
   std::vector<ForearmRow> forearms;
   std::vector<ImuPositionRow> imu_positions;
   std::vector<RecoveredRow> recovered;

@@ -46,6 +46,9 @@ inline double fixture_angle_deg(int a, double t_s) { return 10.0 * a + 30.0 * t_
 inline geometry::Quat fixture_K_from_F(double t_s) {
   return geometry::quat_from_rotation_vector(geometry::Vec3(0.3 * t_s, 0.1, -0.2));
 }
+
+inline double fixture_fit_energy(double t_s) { return 20.0 + 100.0 * t_s; }
+
 inline geometry::Quat fixture_K_from_joint(int joint, double t_s) {
   return geometry::quat_from_rotation_vector(geometry::Vec3(0.01 * joint, 0.2 * t_s, -0.1));
 }
@@ -90,6 +93,7 @@ inline void write_fixture(const std::filesystem::path& dir, const FixtureSpec& s
         joint.set_confidence(1.0);
       }
       for (int j = 0; j < 24; ++j) *frame.add_smpl_joint_rotations() = to_proto(fixture_K_from_joint(j, t));
+      frame.set_fit_energy(fixture_fit_energy(t));
     }
     v1::ForearmOrientation& forearm = *frame.add_forearms();
     forearm.set_arm(v1::RIGHT);

@@ -46,6 +46,9 @@ TEST(ResultReader, ReadsBackWhatResultFilesWrote) {
   EXPECT_EQ(rotation.joint, 7);
   EXPECT_EQ(rotation.t_us, 1000 + static_cast<std::int64_t>(3 / 30.0 * 1e6));
   EXPECT_LT(geometry::angle_between(rotation.K_from_joint, result_fixture::fixture_K_from_joint(7, 3 / 30.0)), 1e-6);
+  ASSERT_EQ(r.fit_energies.size(), 10u);
+  EXPECT_EQ(r.fit_energies[3].t_us, rotation.t_us);
+  EXPECT_DOUBLE_EQ(r.fit_energies[3].fit_energy, result_fixture::fixture_fit_energy(3 / 30.0));
   ASSERT_EQ(r.forearm_orientations.at("imu_right").size(), 27u);
   const auto& first = r.forearm_orientations.at("imu_right").front();
   EXPECT_EQ(first.t_us, 1000);
@@ -201,6 +204,7 @@ TEST(ResultReader, NamesWhatIsWrong) {
       {"imu_orientations/imu_right.csv", "\n5012500,", "\n5012500,2,", "imu_orientations/imu_right.csv:3"},
       {"calibration.json", "\"forearms\"", "\"forearm_models\"", "calibration.json"},
       {"smpl_joint_rotations.csv", ",spine1,", ",spine,", "smpl_joint_rotations.csv:5:joint_name"},
+      {"fit_energy.csv", "\n0,20\n", "\n0,inf\n", "fit_energy.csv:2:fit_energy"},
   };
   const auto dir = result_fixture::fresh_result_dir("bad");
   for (const Case& c : cases) {
