@@ -8,6 +8,8 @@
 # KEEP=DIR keeps each session's recording, results and gt/ under DIR (e.g. for posefuse report).
 # SIM_OPTIONS='key = value\n...' adds posefuse-sim options to every session (e.g. a tilted camera:
 # 'camera_pitch_deg = 12\ncamera_roll_deg = -4').
+# FIT_OPTIONS='KEY=VALUE ...' adds stage options to every fit call (e.g. 'fit.trusted_energy=100'
+# for bench/fit_energy_confidence.py).
 # Default sessions: the scripted exercises at seeds 71 and 72 and speeds 0.9 and 1.15, both arms,
 # three repetitions, a subject unlike the template (female, betas 1.5,-1,0.5, clothing on), body
 # fit on. Seeds 61 and 62 (speeds 0.8, 1.25) are where the repetitions' resting-half rule was
@@ -22,6 +24,8 @@ if [ ${#specs[@]} -eq 0 ]; then
          forearm_rolling:71:0.9 forearm_rolling:72:1.15 hair_combing:71:1.15 hair_combing:72:0.9
          torso_tilt:71:0.9 torso_tilt:72:1.15 forearm_protocol:71:1.0 forearm_protocol:72:1.0)
 fi
+fit_options=()
+for option in ${FIT_OPTIONS:-}; do fit_options+=(--option "$option"); done
 work=${KEEP:-$(mktemp -d)}
 mkdir -p "$work"
 server_pid=
@@ -53,7 +57,7 @@ for spec in "${specs[@]}"; do
   "$build/tools/sim/posefuse-sim" --options "$work/$name.options" --seed "$seed" --duration clip --quiet \
     --chunk-file "$work/$name.pfchunks" --gt "$work/$name.gt" >/dev/null
   "$build/client/posefuse" fit "$work/$name.pfchunks" --server "127.0.0.1:$port" --out "$work/$name.out" \
-    --option fit.enabled=true >/dev/null 2>"$work/$name.fit.log" || { cat "$work/$name.fit.log" >&2; exit 1; }
+    --option fit.enabled=true "${fit_options[@]}" >/dev/null 2>"$work/$name.fit.log" || { cat "$work/$name.fit.log" >&2; exit 1; }
   "$build/tools/score/posefuse-score" "$work/$name.out" "$work/$name.gt" >"$work/$name.score"
 done
 python3 - "$work" "${specs[@]}" <<'PY'

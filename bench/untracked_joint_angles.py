@@ -15,11 +15,11 @@ tracked (the collars have no camera joint and count as tracked): RMS, 99th perce
 beyond 15 deg and beyond the default 99 % bound (2.576 x measures.girdle_elevation_uncertainty_deg,
 8.4 deg): the evidence for that option (docs/measures.md, "Confidence").
 
-A joint is untracked where its fitted confidence is below 1; frames where the fit lost tracking
-(a joint at the 0.1 cap) are left out. Girdle elevation is left out (its error is the girdle's
-own, tracked or not), as are elbow flexions whose confidence lies between 0 and 0.5 (limited by
-the arm lengths, docs/measures.md, not by a joint) and planes of elevation held in the gimbal
-lock.
+A joint is untracked where its fitted confidence is below 1; frames whose fit was lost or ended
+above fit.trusted_energy (the pelvis, which the camera's SpineBase backs, below 0.5) are left
+out. Girdle elevation is left out (its error is the girdle's own, tracked or not), as are elbow
+flexions whose confidence lies between 0 and 0.5 (limited by the arm lengths, docs/measures.md,
+not by a joint) and planes of elevation held in the gimbal lock.
 """
 import collections
 import csv
@@ -66,7 +66,7 @@ def main(work):
         for row in csv.DictReader(open(os.path.join(out, "joint_angles.csv"))):
             true_row = truth.get(row["t_s"])
             joints = confidence.get(round(float(row["t_s"]) * 1e6))
-            if not true_row or not joints or any(c == 0.1 for c in joints.values()):
+            if not true_row or not joints or joints.get("pelvis", 1.0) < 0.5:
                 continue
             for side in ("left", "right"):
                 angle = f"{side}_girdle_elevation"

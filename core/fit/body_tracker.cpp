@@ -270,7 +270,11 @@ BodyTracker::Output BodyTracker::fit(BodyFitFrame& frame, const ForearmOrientati
     // wrists are 12-15 cm off). On paper 1's protocol (seeds 1 / 2) keeping it took the arms' six
     // joints from 21.2 / 22.8 to 18.8 / 18.2 mm; restarting from the last pose below the threshold
     // plus the skeleton start gave 20.2 / 18.3 mm (docs/fitting.md, "Paper 1's protocol").
-    if (energy > options_.lost_energy) ++frames_lost_;
+    if (energy > options_.lost_energy) {
+      ++frames_lost_;
+    } else if (!(energy <= options_.trusted_energy)) {
+      ++frames_untrusted_;
+    }
     previous_theta_ = best->theta;
     previous_t_us_ = frame.t_us;
     fitted_.push_back({frame.t_us, *frame.skeleton, energy, directions.left_K || directions.right_K});
@@ -295,6 +299,8 @@ FittedBodyFrame BodyTracker::release(const Eigen::VectorXd& theta, const Forearm
   out.t_us = f.t_us;
   out.energy = f.energy;
   out.lost = f.energy > options_.lost_energy;
+  out.untrusted = !(f.energy <= options_.trusted_energy);
+  if (out.untrusted) cap_confidence(out, untrusted_fit_confidence());
   out.imu_used = f.imu_used;
   return out;
 }

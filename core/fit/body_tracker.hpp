@@ -16,6 +16,7 @@
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -42,6 +43,8 @@ struct BodyTrackerOptions {
   StartExtrapolationOptions extrapolation;
   double skeleton_start_energy = 0;  // needs_skeleton_start; 0: both starts always, on two threads
   double lost_energy = 0;            // above it a frame's tracking is lost
+  // Above it (or at a NaN energy) a frame's confidences are capped (FittedBodyFrame::untrusted).
+  double trusted_energy = std::numeric_limits<double>::infinity();
 };
 
 // One frame as the fit consumes it.
@@ -117,6 +120,8 @@ class BodyTracker {
 
   std::uint64_t frames_fitted() const { return frames_fitted_; }
   std::uint64_t frames_lost() const { return frames_lost_; }
+  // Frames fitted above trusted_energy (or at a NaN energy) but not lost.
+  std::uint64_t frames_untrusted() const { return frames_untrusted_; }
 
   // With `on`, every fitted frame from then on appends a BodyFitFrameStats.
   void record_frame_stats(bool on) { record_stats_ = on; }
@@ -148,7 +153,7 @@ class BodyTracker {
   std::optional<FittedPose> before_last_fit_;
   bool record_stats_ = false;
   std::vector<BodyFitFrameStats> stats_;
-  std::uint64_t frames_fitted_ = 0, frames_lost_ = 0;
+  std::uint64_t frames_fitted_ = 0, frames_lost_ = 0, frames_untrusted_ = 0;
 };
 
 }  // namespace posefuse::fit

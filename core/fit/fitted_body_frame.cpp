@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <array>
+#include <numbers>
 #include <vector>
 
 #include "body/smpl_model.hpp"
 #include "common/error.hpp"
 #include "fit/camera_joints.hpp"
 #include "fit/joint_kinematics.hpp"
+#include "forearm/orientation_uncertainty.hpp"
 
 namespace posefuse::fit {
 
@@ -130,6 +132,17 @@ FittedBodyFrame make_fitted_body_frame(const Eigen::Matrix3Xd& rest_joints, cons
   if (K_from_F.right)
     out.forearms.push_back(fitted_forearm(pose, ArmSide::kRight, *K_from_F.right, camera_confidence[kWristRight]));
   return out;
+}
+
+double untrusted_fit_confidence() {
+  return forearm::confidence_from_bound99_rad(kUntrustedFitBound99Deg * std::numbers::pi / 180.0);
+}
+
+void cap_confidence(FittedBodyFrame& frame, double cap) {
+  for (auto* joints : {&frame.smpl_joints, &frame.camera_joints}) {
+    for (FittedJoint& j : *joints) j.confidence = std::min(j.confidence, cap);
+  }
+  for (FittedForearm& f : frame.forearms) f.confidence = std::min(f.confidence, cap);
 }
 
 }  // namespace posefuse::fit

@@ -26,6 +26,15 @@ namespace posefuse::fit {
 // would raise ten. The fit's own error (about 20 mm) adds little.
 inline constexpr double kCameraDisagreementM = 0.29;
 
+// A frame fitted at an energy above the tracker's trusted_energy matched its depth and silhouette
+// less well than the fits measured to stay within a confident value's 15 degrees: on the
+// joint-angle bench's tuning sessions (docs/benchmarks.md, "Fit energy and confidence") the
+// confident angle values of frames fitted at 15 <= E < 100 reach a 99 % error bound of 28 degrees
+// (pooled over the angles read from the joints). So such a frame's joints and forearms take at
+// most the confidence of that bound, 2^-(28/15)^2 = 0.089 (untrusted_fit_confidence).
+inline constexpr double kUntrustedFitBound99Deg = 28.0;
+double untrusted_fit_confidence();
+
 struct FittedJoint {
   Eigen::Vector3d p_K = Eigen::Vector3d::Zero();
   // 1 where the camera tracks the corresponding joint within kCameraDisagreementM; else 0 for a
@@ -46,6 +55,7 @@ struct FittedBodyFrame {
   std::int64_t t_us = 0;
   double energy = 0.0;                           // paper 2 eq. 4, the winning start's
   bool lost = false;                             // energy above the tracker's lost_energy
+  bool untrusted = false;                        // above its trusted_energy (or NaN): confidences capped
   bool imu_used = false;                         // a forearm direction entered the fit (imu term, eq. 9-11)
   std::vector<FittedJoint> smpl_joints;          // body::kNumJoints
   std::vector<FittedJoint> camera_joints;        // kKinectJointCount
@@ -55,6 +65,9 @@ struct FittedBodyFrame {
   // are: those fitted joints take an untracked joint's confidence.
   int joints_off_camera = 0;
 };
+
+// Caps every joint's and forearm's confidence at `cap`.
+void cap_confidence(FittedBodyFrame& frame, double cap);
 
 // The forearm orientations K_from_F (paper 1's F: y from elbow to wrist) at one frame.
 struct ForearmOrientationPair {

@@ -1,7 +1,9 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Geometry>
+#include <cmath>
 #include <numbers>
+#include <optional>
 #include <random>
 
 #include "body/template_generator.hpp"
@@ -190,27 +192,37 @@ TrackedSkeleton tracked_at(const JointPose& pose) {
   return skeleton;
 }
 
+// The male template facing the camera at 2 m and a camera skeleton that sees it exactly (every
+// joint tracked), for make_fitted_body_frame.
+struct FacingFit {
+  PoseLayout layout = PoseLayout::upper_body();
+  Eigen::Matrix3Xd rest = rest_joints(*male(), Eigen::VectorXd());
+  Eigen::VectorXd theta = testing::facing_pose(layout, 2.0, {});
+  JointPose pose = pose_joints(rest, layout, theta);
+  TrackedSkeleton skeleton = tracked_at(pose);
+
+  // An IMU orientation whose y lies along the fitted forearm, so that its roll is defined.
+  Eigen::Quaterniond along_forearm(ArmSide side) const {
+    const bool left = side == ArmSide::kLeft;
+    return Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitY(),
+                                              pose.positions_K.col(left ? body::kLeftWrist : body::kRightWrist) -
+                                                  pose.positions_K.col(left ? body::kLeftElbow : body::kRightElbow));
+  }
+  FittedBodyFrame fitted(const ForearmOrientationPair& K_from_F = {}) const {
+    return make_fitted_body_frame(rest, layout, theta, skeleton, K_from_F);
+  }
+};
+
 // A fitted joint's confidence follows the camera's tracking of the joint it corresponds to: 1
 // tracked; untracked, 0 for the wrist and hand (angles read from them cannot be acted on,
 // docs/fitting.md "Joint confidence") and 0.5 for the others. The fitted forearm takes its
 // wrist's.
 TEST(FittedBodyFrame, JointConfidenceFollowsTheCameraTrackingState) {
-  const PoseLayout layout = PoseLayout::upper_body();
-  const Eigen::Matrix3Xd rest = rest_joints(*male(), Eigen::VectorXd());
-  const Eigen::VectorXd theta = testing::facing_pose(layout, 2.0, {});
-  const JointPose pose = pose_joints(rest, layout, theta);
-  TrackedSkeleton skeleton = tracked_at(pose);
-  skeleton.tracking[kWristLeft] = JointTracking::kInferred;
-  skeleton.tracking[kElbowRight] = JointTracking::kInferred;
-  skeleton.tracking[kSpineMid] = JointTracking::kNotTracked;
-  // IMU orientations whose y lies along each fitted forearm, so that the roll is defined.
-  const auto along_forearm = [&](int elbow, int wrist) {
-    return Eigen::Quaterniond::FromTwoVectors(Eigen::Vector3d::UnitY(),
-                                              pose.positions_K.col(wrist) - pose.positions_K.col(elbow));
-  };
-  const FittedBodyFrame frame = make_fitted_body_frame(
-      rest, layout, theta, skeleton,
-      {along_forearm(body::kLeftElbow, body::kLeftWrist), along_forearm(body::kRightElbow, body::kRightWrist)});
+  FacingFit fit;
+  fit.skeleton.tracking[kWristLeft] = JointTracking::kInferred;
+  fit.skeleton.tracking[kElbowRight] = JointTracking::kInferred;
+  fit.skeleton.tracking[kSpineMid] = JointTracking::kNotTracked;
+  const FittedBodyFrame frame = fit.fitted({fit.along_forearm(ArmSide::kLeft), fit.along_forearm(ArmSide::kRight)});
   ASSERT_EQ(frame.smpl_joints.size(), static_cast<size_t>(body::kNumJoints));
   EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kLeftWrist].confidence, 0.0);
   EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kRightElbow].confidence, 0.5);
@@ -227,15 +239,11 @@ TEST(FittedBodyFrame, JointConfidenceFollowsTheCameraTrackingState) {
 // them: with the left shoulder inferred the left collar and spine3 take its 0.5, the right collar
 // keeps 1; with the neck untracked the head follows it; with every joint tracked all are 1.
 TEST(FittedBodyFrame, JointsWithoutACameraJointTakeTheirNeighboursConfidence) {
-  const PoseLayout layout = PoseLayout::upper_body();
-  const Eigen::Matrix3Xd rest = rest_joints(*male(), Eigen::VectorXd());
-  const Eigen::VectorXd theta = testing::facing_pose(layout, 2.0, {});
-  TrackedSkeleton skeleton = tracked_at(pose_joints(rest, layout, theta));
-  const FittedBodyFrame all = make_fitted_body_frame(rest, layout, theta, skeleton, {});
-  for (const FittedJoint& joint : all.smpl_joints) EXPECT_DOUBLE_EQ(joint.confidence, 1.0);
-  skeleton.tracking[kShoulderLeft] = JointTracking::kInferred;
-  skeleton.tracking[kNeck] = JointTracking::kNotTracked;
-  const FittedBodyFrame frame = make_fitted_body_frame(rest, layout, theta, skeleton, {});
+  FacingFit fit;
+  for (const FittedJoint& joint : fit.fitted().smpl_joints) EXPECT_DOUBLE_EQ(joint.confidence, 1.0);
+  fit.skeleton.tracking[kShoulderLeft] = JointTracking::kInferred;
+  fit.skeleton.tracking[kNeck] = JointTracking::kNotTracked;
+  const FittedBodyFrame frame = fit.fitted();
   EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kLeftCollar].confidence, 0.5);
   EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kSpine3].confidence, 0.5);
   EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kHead].confidence, 0.5);
@@ -247,17 +255,14 @@ TEST(FittedBodyFrame, JointsWithoutACameraJointTakeTheirNeighboursConfidence) {
 // the camera off track): the camera does not vouch for that fitted joint, which takes an
 // untracked joint's confidence, and the frame counts it. Within kCameraDisagreementM it stays 1.
 TEST(FittedBodyFrame, ATrackedJointFarFromTheFitDoesNotVouchForIt) {
-  const PoseLayout layout = PoseLayout::upper_body();
-  const Eigen::Matrix3Xd rest = rest_joints(*male(), Eigen::VectorXd());
-  const Eigen::VectorXd theta = testing::facing_pose(layout, 2.0, {});
-  TrackedSkeleton skeleton = tracked_at(pose_joints(rest, layout, theta));
+  FacingFit fit;
   const Eigen::Vector3d just_within(0, kCameraDisagreementM - 0.01, 0), beyond(0, 0, kCameraDisagreementM + 0.01);
-  skeleton.positions_K[kWristLeft] += beyond;  // the camera's wrist where the fit's is not
-  skeleton.positions_K[kElbowLeft] += beyond;
-  skeleton.positions_K[kWristRight] += just_within;  // the camera's usual error
-  skeleton.positions_K[kElbowRight] += beyond;
-  skeleton.tracking[kElbowRight] = JointTracking::kInferred;  // untracked anyway: not counted
-  const FittedBodyFrame frame = make_fitted_body_frame(rest, layout, theta, skeleton, {});
+  fit.skeleton.positions_K[kWristLeft] += beyond;  // the camera's wrist where the fit's is not
+  fit.skeleton.positions_K[kElbowLeft] += beyond;
+  fit.skeleton.positions_K[kWristRight] += just_within;  // the camera's usual error
+  fit.skeleton.positions_K[kElbowRight] += beyond;
+  fit.skeleton.tracking[kElbowRight] = JointTracking::kInferred;  // untracked anyway: not counted
+  const FittedBodyFrame frame = fit.fitted();
   EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kLeftWrist].confidence, 0.0);
   EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kLeftElbow].confidence, 0.5);
   EXPECT_DOUBLE_EQ(frame.camera_joints[kWristLeft].confidence, 0.0);
@@ -265,6 +270,25 @@ TEST(FittedBodyFrame, ATrackedJointFarFromTheFitDoesNotVouchForIt) {
   EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kRightElbow].confidence, 0.5);
   EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kLeftShoulder].confidence, 1.0);
   EXPECT_EQ(frame.joints_off_camera, 2);
+}
+
+// An untrusted fit's frame (energy above the tracker's trusted_energy): every joint and forearm
+// confidence is capped at the confidence of the 99 % bound measured for such frames, 28 degrees,
+// 2^-(28/15)^2; lower confidences stay as they were.
+TEST(FittedBodyFrame, AnUntrustedFitCapsEveryConfidence) {
+  EXPECT_NEAR(untrusted_fit_confidence(), std::pow(2.0, -std::pow(28.0 / 15.0, 2)), 1e-12);
+  FacingFit fit;
+  fit.skeleton.tracking[kWristLeft] = JointTracking::kInferred;
+  FittedBodyFrame frame = fit.fitted({std::nullopt, fit.along_forearm(ArmSide::kRight)});
+  ASSERT_EQ(frame.forearms.size(), 1u);
+  ASSERT_EQ(frame.forearms[0].confidence, 1.0);
+  cap_confidence(frame, 0.25);
+  for (const FittedJoint& joint : frame.smpl_joints) EXPECT_LE(joint.confidence, 0.25);
+  EXPECT_EQ(frame.smpl_joints[body::kRightWrist].confidence, 0.25);
+  EXPECT_EQ(frame.smpl_joints[body::kLeftWrist].confidence, 0.0);
+  EXPECT_EQ(frame.camera_joints[kSpineMid].confidence, 0.25);
+  EXPECT_EQ(frame.camera_joints[kWristLeft].confidence, 0.0);
+  EXPECT_EQ(frame.forearms[0].confidence, 0.25);
 }
 
 }  // namespace

@@ -15,6 +15,7 @@
 #include "opensim/mot_file.hpp"
 #include "opensim/sto_file.hpp"
 #include "opensim/trc_file.hpp"
+#include "session/frame_merge.hpp"
 
 using namespace posefuse;
 
@@ -47,7 +48,7 @@ session::ResultDirectory smpl_results(int frames) {
       row.t_us = 1'000'000 + f * 33'333;
       row.joint = j;
       row.p_K = joint_K(f, j);
-      row.confidence = (f == 1 && j == 5) ? 0.1 : 0.9;
+      row.confidence = (f == 1 && j == 5) ? session::kLostFitConfidence : 0.9;
       results.smpl_joints.push_back(row);
     }
   }

@@ -399,7 +399,9 @@ TEST(BodyFitStage, FineShapeTuningSetsWhatTheSkeletonCannotSeeAndCanBeTurnedOff)
   const v1::BodyShape& fine = full_run().report.body_shape();
   ASSERT_EQ(fine.betas_size(), 10);
   EXPECT_GT(std::abs(fine.betas(6)) + std::abs(fine.betas(7)) + std::abs(fine.betas(8)), 0.05);
-  const Output rough = run(header_with({{"fit.fine_shape", "false"}}), [](const v1::SessionChunk&) { return true; });
+  // The rough shape's fit reaches fit.trusted_energy in a frame (FIT_UNTRUSTED, tested on its own).
+  const Output rough = run(header_with({{"fit.fine_shape", "false"}, {"fit.trusted_energy", "100"}}),
+                           [](const v1::SessionChunk&) { return true; });
   for (const auto& w : rough.warnings) ADD_FAILURE() << w.code() << " " << w.field() << ": " << w.message();
   const v1::BodyShape& shape = rough.report.body_shape();
   EXPECT_TRUE(shape.estimated());
@@ -439,7 +441,8 @@ TEST(BodyFitStage, AWristTheCameraTracksFarFromTheFitIsNotConfident) {
     v1::Vec3& wrist = *chunk.mutable_skeleton()->mutable_joints(fit::kWristLeft)->mutable_position_m();
     wrist.set_x(wrist.x() + 0.5);
   }
-  const Output out = run(header_with({}, moved), kAllChunks, moved);
+  // Pulled by the far wrist, a frame's fit reaches fit.trusted_energy (tested on its own).
+  const Output out = run(header_with({{"fit.trusted_energy", "100"}}, moved), kAllChunks, moved);
   ASSERT_FALSE(out.frames().empty());
   int far = 0;
   for (const v1::FrameResult* frame : out.frames()) {
@@ -619,9 +622,57 @@ TEST(BodyFitStage, LostTrackingIsCountedAndTheNextFrameStillStartsFromTheFittedP
   }
 }
 
+// A frame fitted above fit.trusted_energy keeps its pose, but its joints and forearms give at most
+// the untrusted fit's confidence, and the session says how many frames. The threshold is set at
+// the session's median frame energy, so about half the frames lie above it.
+TEST(BodyFitStage, FramesFittedAboveTheTrustedEnergyHaveLittleConfidence) {
+  const Output trusting = run(header_with({{"fit.trusted_energy", "100"}}), kAllChunks, session());
+  const auto trusted_frames = trusting.frames();
+  ASSERT_GE(trusted_frames.size(), 3u);
+  std::vector<double> energies;
+  for (const v1::FrameResult* frame : trusted_frames) energies.push_back(frame->fit_energy());
+  std::nth_element(energies.begin(), energies.begin() + energies.size() / 2, energies.end());
+  const double threshold = energies[energies.size() / 2];
+  ASSERT_LT(threshold, 100.0);
+
+  const Output out = run(header_with({{"fit.trusted_energy", format_double(threshold)}}), kAllChunks, session());
+  const auto frames = out.frames();
+  ASSERT_EQ(frames.size(), trusted_frames.size());
+  int untrusted = 0;
+  for (size_t i = 0; i < frames.size(); ++i) {
+    const v1::FrameResult& frame = *frames[i];
+    const v1::FrameResult& trusted = *trusted_frames[i];
+    ASSERT_EQ(frame.fit_energy(), trusted.fit_energy()) << "frame " << i;
+    const bool above = frame.fit_energy() > threshold;
+    untrusted += above;
+    for (int j = 0; j < body::kNumJoints; ++j) {
+      const double was = trusted.smpl_joints(j).confidence();
+      EXPECT_EQ(frame.smpl_joints(j).position_m().x(), trusted.smpl_joints(j).position_m().x());
+      EXPECT_EQ(frame.smpl_joints(j).confidence(), above ? std::min(was, fit::untrusted_fit_confidence()) : was)
+          << "frame " << i << " joint " << j;
+    }
+    for (int f = 0; f < frame.forearms_size(); ++f) {
+      EXPECT_LE(frame.forearms(f).confidence(), above ? fit::untrusted_fit_confidence() : 1.0) << "frame " << i;
+    }
+  }
+  EXPECT_GE(untrusted, 1);
+  EXPECT_FALSE(trusting.warned("FIT_UNTRUSTED", "fit"));
+  ASSERT_TRUE(out.warned("FIT_UNTRUSTED", "fit"));
+  for (const auto& w : out.warnings) {
+    if (w.code() == "FIT_UNTRUSTED") {
+      EXPECT_EQ(w.message().rfind(std::to_string(untrusted) + " of " + std::to_string(frames.size()) + " frames", 0),
+                0u)
+          << w.message();
+      EXPECT_NE(w.message().find("confidence at most 0.089"), std::string::npos) << w.message();
+    }
+  }
+}
+
 TEST(BodyFitStage, BothStartsRunOnTwoThreadsWhenThePolicyIsOff) {
   std::vector<BodyFitFrameStats> stats;
-  const Output out = run(header_with({{"fit.skeleton_start_energy", "0"}}), kAllChunks, session(), &stats);
+  // Both starts reach fit.trusted_energy in two frames (FIT_UNTRUSTED, tested on its own).
+  const Output out = run(header_with({{"fit.skeleton_start_energy", "0"}, {"fit.trusted_energy", "100"}}), kAllChunks,
+                         session(), &stats);
   for (const auto& w : out.warnings) ADD_FAILURE() << w.code() << " " << w.field() << ": " << w.message();
   ASSERT_EQ(stats.size(), out.frames().size());
   for (size_t i = 0; i < stats.size(); ++i) {

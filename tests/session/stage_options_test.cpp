@@ -54,7 +54,7 @@ TEST(StageOptions, EveryKeyIsDeclaredOnceUnderItsStagesPrefix) {
       }
     }
   }
-  EXPECT_EQ(keys.size(), 41u);
+  EXPECT_EQ(keys.size(), 42u);
 }
 
 TEST(StageOptions, DefaultsAreValidAndTheLibrariesOwn) {
@@ -174,6 +174,7 @@ TEST(StageOptions, EveryBodyFitOptionReachesTheStage) {
                                                               {kFitSmoothingFramesKey, "5"},
                                                               {kFitImuWaitSKey, "12"},
                                                               {kFitLostEnergyKey, "80"},
+                                                              {kFitTrustedEnergyKey, "30"},
                                                               {kFitMaxIterationsKey, "11"},
                                                               {kFitFineShapeKey, "false"},
                                                               {kFitLambdaImuKey, "0"},
@@ -187,6 +188,7 @@ TEST(StageOptions, EveryBodyFitOptionReachesTheStage) {
   EXPECT_EQ(o.smoothing.window_frames, 5);
   EXPECT_EQ(o.imu_wait_s, 12.0);
   EXPECT_EQ(o.lost_energy, 80.0);
+  EXPECT_EQ(o.trusted_energy, 30.0);
   EXPECT_EQ(o.fit.max_iterations, 11);
   EXPECT_FALSE(o.fine_shape);
   EXPECT_EQ(o.fit.lambda_imu, 0.0);
@@ -203,7 +205,8 @@ TEST(StageOptions, BodyFitBadValuesNameTheOption) {
                                                                              {kFitSmoothingFramesKey, "0"},
                                                                              {kFitMaxIterationsKey, "-1"},
                                                                              {kFitBodyIdKey, "-2"},
-                                                                             {kFitLostEnergyKey, "0"}}) {
+                                                                             {kFitLostEnergyKey, "0"},
+                                                                             {kFitTrustedEnergyKey, "0"}}) {
     expect_field([&] { read_body_fit_options(header_with({option})); }, option.first);
   }
   expect_field([] { body_fit_enabled(header_with({{kFitEnabledKey, "maybe"}})); }, kFitEnabledKey);

@@ -63,6 +63,14 @@ const OptionTable& body_fit_option_table() {
          .default_value = "100",
          .min = above(0),
          .description = "frames fitted above this energy (eq. 4) are counted as lost tracking (FIT_LOST)"},
+        // Chosen on the joint-angle bench's tuning sessions (docs/fitting.md, "Joint confidence";
+        // docs/benchmarks.md, "Fit energy and confidence").
+        {.key = kFitTrustedEnergyKey,
+         .type = OptionType::kReal,
+         .default_value = "15",
+         .min = above(0),
+         .description = "frames fitted above this energy (eq. 4) give their joints and forearms a confidence of at "
+                        "most 0.089 (FIT_UNTRUSTED); above fit.lost_energy none"},
         {.key = kFitMaxIterationsKey,
          .type = OptionType::kInteger,
          .default_value = std::to_string(fit_defaults.max_iterations),
@@ -132,6 +140,7 @@ BodyFitOptions read_body_fit_options(const v1::SessionHeader& header) {
   }
   out.imu_wait_s = options.real(kFitImuWaitSKey);
   out.lost_energy = options.real(kFitLostEnergyKey);
+  out.trusted_energy = options.real(kFitTrustedEnergyKey);
   out.fine_shape = options.boolean(kFitFineShapeKey);
   out.skeleton_start_energy = options.real(kFitSkeletonStartEnergyKey);
   out.fit.max_iterations = static_cast<int>(options.integer(kFitMaxIterationsKey));

@@ -17,6 +17,7 @@ inline constexpr const char* kFitBodyIdKey = "fit.body_id";
 inline constexpr const char* kFitSmoothingFramesKey = "fit.smoothing_frames";
 inline constexpr const char* kFitImuWaitSKey = "fit.imu_wait_s";
 inline constexpr const char* kFitLostEnergyKey = "fit.lost_energy";
+inline constexpr const char* kFitTrustedEnergyKey = "fit.trusted_energy";
 inline constexpr const char* kFitMaxIterationsKey = "fit.max_iterations";
 inline constexpr const char* kFitFineShapeKey = "fit.fine_shape";
 inline constexpr const char* kFitLambdaImuKey = "fit.lambda_imu";
@@ -33,6 +34,7 @@ struct BodyFitOptions {
   fit::PoseSmoothingOptions smoothing;   // window_frames: fit.smoothing_frames
   double imu_wait_s = 0;                 // fit.imu_wait_s
   double lost_energy = 0;                // fit.lost_energy
+  double trusted_energy = 0;             // fit.trusted_energy
   bool fine_shape = false;               // fit.fine_shape
   double skeleton_start_energy = 0;      // fit.skeleton_start_energy
   // max_iterations, lambda_imu, freeze_contour_after, joint_step_stop_max_damping and

@@ -8,6 +8,7 @@
 
 #include "body/template_generator.hpp"
 #include "common/held_bytes.hpp"
+#include "common/number_text.hpp"
 #include "common/thread_cpu_time.hpp"
 #include "forearm/orientation_uncertainty.hpp"
 #include "session/stages/proto_values.hpp"
@@ -44,6 +45,7 @@ fit::BodyTrackerOptions tracker_options(const BodyFitOptions& options) {
   out.extrapolation = options.extrapolation;
   out.skeleton_start_energy = options.skeleton_start_energy;
   out.lost_energy = options.lost_energy;
+  out.trusted_energy = options.trusted_energy;
   return out;
 }
 
@@ -279,6 +281,14 @@ void BodyFitStage::finish(StageOutput& out) {
                  " frames have a fitted joint more than " + format_double(fit::kCameraDisagreementM) +
                  " m from the camera's tracked joint, farther than the camera's error explains: those joints "
                  "have an untracked joint's confidence");
+  }
+  if (tracker_->frames_untrusted() > 0) {
+    out.warn("FIT_UNTRUSTED", "fit",
+             std::to_string(tracker_->frames_untrusted()) + " of " + std::to_string(fitted) +
+                 " frames fitted at an energy above " + format_double(options_.trusted_energy) +
+                 " (fit.trusted_energy) but not lost: the fit matches their depth less well than fits measured to "
+                 "be within 15 deg; their joints and forearms have confidence at most " +
+                 fixed_text(fit::untrusted_fit_confidence(), 3));
   }
   if (tracker_->frames_lost() > 0) {
     out.warn("FIT_LOST", "fit",
