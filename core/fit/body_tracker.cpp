@@ -299,8 +299,7 @@ FittedBodyFrame BodyTracker::release(const Eigen::VectorXd& theta, const Forearm
   out.t_us = f.t_us;
   out.energy = f.energy;
   out.lost = f.energy > options_.lost_energy;
-  out.untrusted = !(f.energy <= options_.trusted_energy);
-  if (out.untrusted) cap_confidence(out, untrusted_fit_confidence());
+  if (!(f.energy <= options_.trusted_energy)) cap_confidence(out, untrusted_fit_confidence());
   out.imu_used = f.imu_used;
   return out;
 }

@@ -43,7 +43,7 @@ struct BodyTrackerOptions {
   StartExtrapolationOptions extrapolation;
   double skeleton_start_energy = 0;  // needs_skeleton_start; 0: both starts always, on two threads
   double lost_energy = 0;            // above it a frame's tracking is lost
-  // Above it (or at a NaN energy) a frame's confidences are capped (FittedBodyFrame::untrusted).
+  // Above it (or at a NaN energy) a frame's confidences are capped at untrusted_fit_confidence().
   double trusted_energy = std::numeric_limits<double>::infinity();
 };
 

@@ -55,7 +55,6 @@ struct FittedBodyFrame {
   std::int64_t t_us = 0;
   double energy = 0.0;                           // paper 2 eq. 4, the winning start's
   bool lost = false;                             // energy above the tracker's lost_energy
-  bool untrusted = false;                        // above its trusted_energy (or NaN): confidences capped
   bool imu_used = false;                         // a forearm direction entered the fit (imu term, eq. 9-11)
   std::vector<FittedJoint> smpl_joints;          // body::kNumJoints
   std::vector<FittedJoint> camera_joints;        // kKinectJointCount

@@ -4,6 +4,8 @@
 #include <string>
 
 #include "common/error.hpp"
+#include "common/number_text.hpp"
+#include "fit/fitted_body_frame.hpp"
 #include "session/option_reader.hpp"
 #include "session/text_fields.hpp"
 
@@ -63,14 +65,16 @@ const OptionTable& body_fit_option_table() {
          .default_value = "100",
          .min = above(0),
          .description = "frames fitted above this energy (eq. 4) are counted as lost tracking (FIT_LOST)"},
-        // Chosen on the joint-angle bench's tuning sessions (docs/fitting.md, "Joint confidence";
+        // Chosen on the joint-angle bench's tuning sessions (docs/fitting.md, "A fit's energy";
         // docs/benchmarks.md, "Fit energy and confidence").
         {.key = kFitTrustedEnergyKey,
          .type = OptionType::kReal,
          .default_value = "15",
          .min = above(0),
          .description = "frames fitted above this energy (eq. 4) give their joints and forearms a confidence of at "
-                        "most 0.089 (FIT_UNTRUSTED); above fit.lost_energy none"},
+                        "most " +
+                        fixed_text(fit::untrusted_fit_confidence(), 3) +
+                        " (FIT_UNTRUSTED); above fit.lost_energy none"},
         {.key = kFitMaxIterationsKey,
          .type = OptionType::kInteger,
          .default_value = std::to_string(fit_defaults.max_iterations),
