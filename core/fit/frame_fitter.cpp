@@ -351,9 +351,25 @@ EnergyTerms FrameFitter::energy_at(const FrameObservation& o, const body::BodyEv
 }
 
 FitResult FrameFitter::fit(const FrameObservation& observation, const Eigen::VectorXd& theta0,
-                           const Eigen::VectorXd& beta) {
+                           const Eigen::VectorXd& beta, std::span<const int> held_dofs) {
   clear_shape_freedom();
-  return run(observation, theta0, beta);
+  std::vector<bool> seen(static_cast<size_t>(layout_.size()), false);
+  for (int d : held_dofs) {
+    if (d < 0 || d >= layout_.size() || seen[static_cast<size_t>(d)])
+      throw_invalid("held_dofs", "index " + std::to_string(d) + " is out of range [0, " +
+                                     std::to_string(layout_.size()) + ") or repeated");
+    seen[static_cast<size_t>(d)] = true;
+  }
+  held_dofs_.assign(held_dofs.begin(), held_dofs.end());
+  std::sort(held_dofs_.begin(), held_dofs_.end());
+  try {
+    FitResult result = run(observation, theta0, beta);
+    held_dofs_.clear();
+    return result;
+  } catch (...) {
+    held_dofs_.clear();
+    throw;
+  }
 }
 
 FitResult FrameFitter::fit_shape_and_pose(const FrameObservation& observation, const Eigen::VectorXd& theta0,
@@ -440,7 +456,7 @@ FitResult FrameFitter::run(const FrameObservation& observation, const Eigen::Vec
     double energy_after = energy_before, joint_step = 0;
     bool accepted = false;
     while (gamma <= options_.max_damping) {
-      if (system_.solve(gamma, step_, uv_step_)) {
+      if (system_.solve(gamma, step_, uv_step_, held_dofs_)) {
         trial_x_ = x + step_;
         if (options_.project_steps_onto_limits) {
           project_onto_limits(x, trial_x_);

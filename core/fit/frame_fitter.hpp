@@ -20,6 +20,7 @@
 // reuses them, so after the first frame the loop allocates little (see docs/fitting.md).
 #include <Eigen/Core>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "body/body_evaluator.hpp"
@@ -87,10 +88,12 @@ class FrameFitter {
   FrameFitter(std::shared_ptr<const body::SmplModel> model, body::PoseLayout layout,
               const raycast::DepthIntrinsics& intrinsics, const FitOptions& options = {});
 
-  // Fits theta from theta0 with the shape beta held fixed. Throws posefuse::Error for an invalid
-  // observation (see validate(FrameObservation)), a theta0 of the wrong size or not finite
-  // ("theta"), or a beta that does not fit the model ("beta").
-  FitResult fit(const FrameObservation& observation, const Eigen::VectorXd& theta0, const Eigen::VectorXd& beta);
+  // Fits theta from theta0 with the shape beta held fixed, and the pose DOFs `held_dofs` (indices
+  // into the layout) held at theta0's values. Throws posefuse::Error for an invalid observation
+  // (see validate(FrameObservation)), a theta0 of the wrong size or not finite ("theta"), a beta
+  // that does not fit the model ("beta"), or a held DOF out of range or repeated ("held_dofs").
+  FitResult fit(const FrameObservation& observation, const Eigen::VectorXd& theta0, const Eigen::VectorXd& beta,
+                std::span<const int> held_dofs = {});
 
   // Paper 2, III-B: fits theta, the free betas and the correspondences together from (theta0,
   // beta0). The other betas stay at beta0's values. Errors as fit(), plus "shape_freedom.free_betas"
@@ -156,6 +159,7 @@ class FrameFitter {
 
   std::shared_ptr<const body::SmplModel> model_;
   body::PoseLayout layout_;
+  std::vector<int> held_dofs_;  // fit()'s, for the current run
   raycast::DepthIntrinsics intrinsics_;
   FitOptions options_;
   body::BodyEvaluator eval_, trial_eval_;

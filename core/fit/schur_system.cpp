@@ -85,7 +85,8 @@ void SchurSystem::linearise(const Eigen::Ref<const Eigen::MatrixXd>& J_pose, con
   add_pose_rows(J_pose.bottomRows(rest), r.tail(rest));
 }
 
-bool SchurSystem::solve(double gamma, Eigen::VectorXd& d_pose, std::vector<Eigen::Vector2d>& d_uv) {
+bool SchurSystem::solve(double gamma, Eigen::VectorXd& d_pose, std::vector<Eigen::Vector2d>& d_uv,
+                        std::span<const int> held) {
   reduced_ = hessian_;
   for (int d = 0; d < num_pose_; ++d) reduced_(d, d) += gamma * std::max(diagonal(d), kMinDiagonal);
   rhs_ = -gradient_;
@@ -116,9 +117,26 @@ bool SchurSystem::solve(double gamma, Eigen::VectorXd& d_pose, std::vector<Eigen
       }
     }
   }
-  ldlt_.compute(reduced_);  // reuses its storage from the previous solve
-  if (ldlt_.info() != Eigen::Success || !ldlt_.isPositive()) return false;
-  d_pose = ldlt_.solve(rhs_);
+  if (held.empty()) {
+    ldlt_.compute(reduced_);  // reuses its storage from the previous solve
+    if (ldlt_.info() != Eigen::Success || !ldlt_.isPositive()) return false;
+    d_pose = ldlt_.solve(rhs_);
+  } else {
+    // The system over the free DOFs alone, in their order: the same matrix, entry for entry, as a
+    // layout without the held DOFs would build (their step is 0).
+    free_.clear();
+    for (int d = 0, h = 0; d < num_pose_; ++d) {
+      while (h < static_cast<int>(held.size()) && held[h] < d) ++h;
+      if (h == static_cast<int>(held.size()) || held[h] != d) free_.push_back(d);
+    }
+    free_system_ = reduced_(free_, free_);
+    ldlt_.compute(free_system_);
+    if (ldlt_.info() != Eigen::Success || !ldlt_.isPositive()) return false;
+    free_rhs_ = rhs_(free_);
+    free_step_ = ldlt_.solve(free_rhs_);
+    d_pose.setZero(num_pose_);
+    d_pose(free_) = free_step_;
+  }
   if (!d_pose.allFinite()) return false;
   d_uv.resize(num_blocks_);
   for (int i = 0; i < num_blocks_; ++i) {

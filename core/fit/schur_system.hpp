@@ -44,8 +44,10 @@ class SchurSystem {
                  const std::vector<UvJacobian>& J_uv, int num_blocks);
 
   // Solves (J^T J + gamma diag(J^T J)) delta = -J^T r for delta = (d_pose, d_uv[0 .. n-1]).
-  // Returns false when the reduced system is not positive definite (the caller raises gamma).
-  bool solve(double gamma, Eigen::VectorXd& d_pose, std::vector<Eigen::Vector2d>& d_uv);
+  // The pose DOFs in `held` (ascending) keep d_pose = 0: the system is solved over the other
+  // unknowns, as if the held DOFs' columns were not in J. Returns false when the reduced system is
+  // not positive definite (the caller raises gamma).
+  bool solve(double gamma, Eigen::VectorXd& d_pose, std::vector<Eigen::Vector2d>& d_uv, std::span<const int> held = {});
   // Decrease of the quadratic model |r + J delta|^2 for a step solve() returned with this gamma:
   // gamma delta^T D delta - g^T delta (for LM's gain ratio).
   double predicted_decrease(double gamma, const Eigen::VectorXd& d_pose,
@@ -72,6 +74,9 @@ class SchurSystem {
   Eigen::MatrixXd reduced_;
   Eigen::VectorXd rhs_;
   std::vector<Eigen::Matrix2d> damped_inverse_;
+  std::vector<int> free_;  // the DOFs solve() does not hold
+  Eigen::MatrixXd free_system_;
+  Eigen::VectorXd free_rhs_, free_step_;
   Eigen::LDLT<Eigen::MatrixXd, Eigen::Lower> ldlt_;
 };
 

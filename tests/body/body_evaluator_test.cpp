@@ -181,5 +181,21 @@ TEST(PoseLayout, DofCountsMatchPaper2) {
   EXPECT_NO_THROW(upper.index_of("spine2_y"));
 }
 
+// The body tracker fits frames with straight legs in the upper body and keeps full-body poses: the
+// full body's first 40 DOFs are the upper body's, and the 8 after them are the knees and ankles.
+TEST(PoseLayout, TheFullBodyIsTheUpperBodyThenTheKneesAndAnkles) {
+  const PoseLayout upper = PoseLayout::upper_body(), full = PoseLayout::full_body();
+  for (int d = 0; d < upper.size(); ++d) {
+    EXPECT_EQ(full.dof(d).name, upper.dof(d).name) << d;
+    EXPECT_EQ(full.dof(d).min_rad, upper.dof(d).min_rad) << d;
+    EXPECT_EQ(full.dof(d).max_rad, upper.dof(d).max_rad) << d;
+  }
+  for (int d = upper.size(); d < full.size(); ++d) {
+    const int joint = full.dof(d).joint;
+    EXPECT_TRUE(joint == kLeftKnee || joint == kRightKnee || joint == kLeftAnkle || joint == kRightAnkle)
+        << full.dof(d).name;
+  }
+}
+
 }  // namespace
 }  // namespace posefuse::body

@@ -122,6 +122,54 @@ double expect_fits_rendered_frames_back(const FitOptions& options) {
 
 TEST(FrameFitter, FitsARenderedFrameBackFromAPerturbedStart) { expect_fits_rendered_frames_back(FitOptions{}); }
 
+// Held DOFs keep the start's values exactly while the others are fitted: here the left elbow,
+// started 10 deg off, stays there and the fit moves the rest.
+TEST(FrameFitter, HeldDofsKeepTheStartsValues) {
+  Scene s;
+  FrameFitter fitter(s.model, s.layout, s.camera.intrinsics());
+  const Eigen::VectorXd truth = testing::facing_pose(s.layout, 2.2, 0);
+  const testing::ModelFrame rendered = testing::render_model_frame(s.model, s.layout, s.beta, truth, s.camera);
+  const FrameObservation observation = prepare_observation(rendered.frame, s.camera, rendered.skeleton_K, {});
+  Eigen::VectorXd start = perturbed(s.layout, truth, 3 * kDeg, 0.02, 300);
+  const std::vector<int>& held = s.layout.dofs_of_joint(body::kLeftElbow);
+  for (int d : held) start[d] = truth[d] + 10 * kDeg;
+  const FitResult result = fitter.fit(observation, start, s.beta, held);
+  for (int d : held) EXPECT_EQ(result.theta[d], start[d]) << s.layout.dof(d).name;
+  const int right_elbow = s.layout.dofs_of_joint(body::kRightElbow).front();
+  EXPECT_NE(result.theta[right_elbow], start[right_elbow]);
+  EXPECT_LT(result.energy.total(), result.initial_energy.total());
+  // The next fit without held DOFs moves the left elbow back.
+  const FitResult free = fitter.fit(observation, start, s.beta);
+  for (int d : held) EXPECT_LT(std::abs(free.theta[d] - truth[d]), 3 * kDeg) << s.layout.dof(d).name;
+}
+
+// The full-body layout with its knees and ankles held is paper 2's upper-body fit: the same pose,
+// energy and iterations from the same start, up to rounding (the larger system sums in another
+// order).
+TEST(FrameFitter, HeldLegsOfTheFullBodyFitAsTheUpperBody) {
+  Scene s;
+  const body::PoseLayout full = body::PoseLayout::full_body();
+  FrameFitter upper_fitter(s.model, s.layout, s.camera.intrinsics());
+  FrameFitter full_fitter(s.model, full, s.camera.intrinsics());
+  std::vector<int> legs;
+  for (int joint : {body::kLeftKnee, body::kRightKnee, body::kLeftAnkle, body::kRightAnkle})
+    for (int d : full.dofs_of_joint(joint)) legs.push_back(d);
+  for (int variant = 0; variant < 2; ++variant) {
+    const Eigen::VectorXd truth = testing::facing_pose(s.layout, 2.2, variant);
+    const testing::ModelFrame rendered = testing::render_model_frame(s.model, s.layout, s.beta, truth, s.camera);
+    const FrameObservation observation = prepare_observation(rendered.frame, s.camera, rendered.skeleton_K, {});
+    const Eigen::VectorXd start = perturbed(s.layout, truth, 3 * kDeg, 0.02, 400 + variant);
+    Eigen::VectorXd full_start = Eigen::VectorXd::Zero(full.size());
+    full_start.head(s.layout.size()) = start;
+    const FitResult upper = upper_fitter.fit(observation, start, s.beta);
+    const FitResult held = full_fitter.fit(observation, full_start, s.beta, legs);
+    EXPECT_EQ(held.iterations, upper.iterations) << "variant " << variant;
+    EXPECT_NEAR(held.energy.total(), upper.energy.total(), 1e-6 * upper.energy.total()) << "variant " << variant;
+    EXPECT_LT((held.theta.head(s.layout.size()) - upper.theta).cwiseAbs().maxCoeff(), 1e-5) << "variant " << variant;
+    EXPECT_TRUE(held.theta.tail(full.size() - s.layout.size()).isZero()) << "variant " << variant;
+  }
+}
+
 // The stopping rule of issue 7 (U_bg frozen after freeze_contour_after iterations, so that the
 // joint-step test can fire): it stops these converged fits earlier than re-selecting U_bg at every
 // iteration, and only once the joints are within the same bounds.
@@ -266,6 +314,9 @@ TEST_F(DegenerateInputs, BadObservationPoseShapeAndOptionsAreRefused) {
   EXPECT_EQ(testing::error_field([&] { fitter.fit(good, nan_theta, s.beta); }), "theta[7]");
   EXPECT_EQ(testing::error_field([&] { fitter.fit(good, truth.head(12), s.beta); }), "theta");
   EXPECT_EQ(testing::error_field([&] { fitter.fit(good, truth, Eigen::VectorXd::Zero(14)); }), "beta");
+  const std::vector<int> out_of_range = {3, s.layout.size()}, repeated = {5, 5};
+  EXPECT_EQ(testing::error_field([&] { fitter.fit(good, truth, s.beta, out_of_range); }), "held_dofs");
+  EXPECT_EQ(testing::error_field([&] { fitter.fit(good, truth, s.beta, repeated); }), "held_dofs");
   FitOptions bad = options;
   bad.sigma_p_m = 0;
   EXPECT_EQ(testing::error_field([&] { FrameFitter(s.model, s.layout, s.camera.intrinsics(), bad); }),

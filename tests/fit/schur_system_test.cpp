@@ -11,37 +11,72 @@
 namespace posefuse::fit {
 namespace {
 
-TEST(FitSchurSystem, EqualsDenseSolveOfTheFullDampedSystem) {
-  std::mt19937 rng(11);
-  std::normal_distribution<double> normal;
-  const int N = 12, n = 20, extra_rows = 15;
-  const int K = 6 * n + extra_rows;
-  Eigen::MatrixXd J_pose(K, N);
-  for (int i = 0; i < K; ++i)
-    for (int j = 0; j < N; ++j) J_pose(i, j) = normal(rng);
-  Eigen::VectorXd r(K);
-  for (int i = 0; i < K; ++i) r[i] = normal(rng);
-  std::vector<UvJacobian> J_uv(n);
-  for (auto& b : J_uv)
-    for (int i = 0; i < 6; ++i)
-      for (int j = 0; j < 2; ++j) b(i, j) = normal(rng);
-  // Full Jacobian over (theta, u_1, v_1, ...).
-  Eigen::MatrixXd J = Eigen::MatrixXd::Zero(K, N + 2 * n);
-  J.leftCols(N) = J_pose;
-  for (int i = 0; i < n; ++i) J.block(6 * i, N + 2 * i, 6, 2) = J_uv[i];
-  SchurSystem system;
-  system.linearise(J_pose, r, J_uv, n);
-  for (double gamma : {0.0, 1e-3, 1.0, 100.0}) {
+// Random normal equations: N pose DOF, n correspondence blocks and extra pose-only rows.
+struct RandomProblem {
+  int N, n;
+  Eigen::MatrixXd J_pose;
+  Eigen::VectorXd r;
+  std::vector<UvJacobian> J_uv;
+
+  RandomProblem(unsigned seed, int num_pose, int num_blocks, int extra_rows)
+      : N(num_pose), n(num_blocks), J_pose(6 * num_blocks + extra_rows, num_pose), r(J_pose.rows()), J_uv(num_blocks) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<double> normal;
+    for (int i = 0; i < J_pose.rows(); ++i)
+      for (int j = 0; j < N; ++j) J_pose(i, j) = normal(rng);
+    for (int i = 0; i < r.size(); ++i) r[i] = normal(rng);
+    for (auto& b : J_uv)
+      for (int i = 0; i < 6; ++i)
+        for (int j = 0; j < 2; ++j) b(i, j) = normal(rng);
+  }
+
+  // The full Jacobian over (the pose DOFs `columns`, u_1, v_1, ...) and its damped LM step.
+  Eigen::VectorXd dense_step(const std::vector<int>& columns, double gamma) const {
+    const int F = static_cast<int>(columns.size());
+    Eigen::MatrixXd J = Eigen::MatrixXd::Zero(J_pose.rows(), F + 2 * n);
+    for (int c = 0; c < F; ++c) J.col(c) = J_pose.col(columns[c]);
+    for (int i = 0; i < n; ++i) J.block(6 * i, F + 2 * i, 6, 2) = J_uv[i];
     Eigen::MatrixXd A = J.transpose() * J;
     const Eigen::VectorXd diagonal = A.diagonal();
     for (int k = 0; k < A.rows(); ++k) A(k, k) += gamma * std::max(diagonal[k], SchurSystem::kMinDiagonal);
-    const Eigen::VectorXd expected = A.ldlt().solve(-J.transpose() * r);
+    return A.ldlt().solve(-J.transpose() * r);
+  }
+};
+
+TEST(FitSchurSystem, EqualsDenseSolveOfTheFullDampedSystem) {
+  const RandomProblem p(11, 12, 20, 15);
+  std::vector<int> all(p.N);
+  for (int d = 0; d < p.N; ++d) all[d] = d;
+  SchurSystem system;
+  system.linearise(p.J_pose, p.r, p.J_uv, p.n);
+  for (double gamma : {0.0, 1e-3, 1.0, 100.0}) {
+    const Eigen::VectorXd expected = p.dense_step(all, gamma);
     Eigen::VectorXd d_pose;
     std::vector<Eigen::Vector2d> d_uv;
     ASSERT_TRUE(system.solve(gamma, d_pose, d_uv));
-    EXPECT_LT((d_pose - expected.head(N)).norm(), 1e-9 * (1 + expected.norm())) << "gamma " << gamma;
-    for (int i = 0; i < n; ++i)
-      EXPECT_LT((d_uv[i] - expected.segment<2>(N + 2 * i)).norm(), 1e-9 * (1 + expected.norm())) << "block " << i;
+    EXPECT_LT((d_pose - expected.head(p.N)).norm(), 1e-9 * (1 + expected.norm())) << "gamma " << gamma;
+    for (int i = 0; i < p.n; ++i)
+      EXPECT_LT((d_uv[i] - expected.segment<2>(p.N + 2 * i)).norm(), 1e-9 * (1 + expected.norm())) << "block " << i;
+  }
+}
+
+TEST(FitSchurSystem, HeldDofsEqualTheSolveWithoutTheirColumns) {
+  const RandomProblem p(12, 10, 15, 12);
+  const std::vector<int> held = {2, 7, 9}, free = {0, 1, 3, 4, 5, 6, 8};
+  const int F = static_cast<int>(free.size());
+  SchurSystem system;
+  system.linearise(p.J_pose, p.r, p.J_uv, p.n);
+  for (double gamma : {1e-3, 1.0}) {
+    const Eigen::VectorXd expected = p.dense_step(free, gamma);
+    Eigen::VectorXd d_pose;
+    std::vector<Eigen::Vector2d> d_uv;
+    ASSERT_TRUE(system.solve(gamma, d_pose, d_uv, held));
+    for (int d : held) EXPECT_EQ(d_pose[d], 0.0) << "held DOF " << d;
+    for (int c = 0; c < F; ++c)
+      EXPECT_NEAR(d_pose[free[c]], expected[c], 1e-9 * (1 + expected.norm()))
+          << "gamma " << gamma << " DOF " << free[c];
+    for (int i = 0; i < p.n; ++i)
+      EXPECT_LT((d_uv[i] - expected.segment<2>(F + 2 * i)).norm(), 1e-9 * (1 + expected.norm())) << "block " << i;
   }
 }
 
