@@ -10,6 +10,7 @@
 #include "fit/frame_fitter.hpp"
 #include "fit/frame_observation.hpp"
 #include "fit/joint_kinematics.hpp"
+#include "fit/limb_bend.hpp"
 #include "fit/personalisation.hpp"
 #include "fit/shape_pose_refiner.hpp"
 #include "fit/silhouette_cleanup.hpp"
@@ -24,10 +25,16 @@ bool needs_skeleton_start(std::optional<double> previous_energy, double skeleton
 struct BodyTracker::Work {
   std::shared_ptr<const body::SmplModel> model;
   raycast::DepthCamera camera;
-  body::PoseLayout layout = body::PoseLayout::upper_body();
+  // The tracker's poses are full body (48 DOF). While the camera shows neither leg bent, a frame is
+  // fitted by paper 2's upper-body fit (40 DOF, the full body's first ones) with the legs straight;
+  // once one bends, by the full body with the straight leg held (limb_bend.hpp).
+  body::PoseLayout layout = body::PoseLayout::full_body();
+  body::PoseLayout upper_layout = body::PoseLayout::upper_body();
   FitOptions fit_options;
-  FrameFitter fitter;
-  std::optional<FrameFitter> second_fitter;  // the skeleton start's, when both run on two threads
+  FrameFitter fitter;                      // upper body
+  std::optional<FrameFitter> legs_fitter;  // full body, built when a leg first bends
+  // The skeleton start's, when both starts run on two threads.
+  std::optional<FrameFitter> second_fitter, second_legs_fitter;
   PoseSmoother smoother;
   Eigen::VectorXd beta;
   std::optional<Personalisation> personalisation;
@@ -40,13 +47,27 @@ struct BodyTracker::Work {
       : model(std::move(m)),
         camera(intrinsics),
         fit_options(options),
-        fitter(model, layout, intrinsics, options),
+        fitter(model, upper_layout, intrinsics, options),
         smoother(layout, smoothing),
         beta(Eigen::VectorXd::Zero(model->num_betas())) {}
 
-  FrameFitter& fitter_for_second_thread() {
-    if (!second_fitter) second_fitter.emplace(model, layout, camera.intrinsics(), fit_options);
-    return *second_fitter;
+  FrameFitter& built(std::optional<FrameFitter>& f, const body::PoseLayout& of) {
+    if (!f) f.emplace(model, of, camera.intrinsics(), fit_options);
+    return *f;
+  }
+
+  // Fits one start (a full-body theta) on this or the second thread's fitters.
+  FitResult fit(const FrameObservation& observation, const Eigen::VectorXd& start, BentLegs bent, bool second_thread) {
+    if (bent.left || bent.right) {
+      FrameFitter& f = built(second_thread ? second_legs_fitter : legs_fitter, layout);
+      return f.fit(observation, start, beta, held_leg_dofs(layout, bent));
+    }
+    FrameFitter& f = second_thread ? built(second_fitter, upper_layout) : fitter;
+    FitResult result = f.fit(observation, start.head(upper_layout.size()), beta);
+    Eigen::VectorXd theta = Eigen::VectorXd::Zero(layout.size());
+    theta.head(upper_layout.size()) = result.theta;
+    result.theta = std::move(theta);
+    return result;
   }
 
   void set_shape(const Eigen::VectorXd& shape) {
@@ -188,6 +209,12 @@ BodyTracker::Output BodyTracker::fit(BodyFitFrame& frame, const ForearmOrientati
     // skeleton_start_energy or above (docs/fitting.md, "Start policy"); with the policy off both
     // always run, the skeleton start on a second thread.
     const Eigen::VectorXd previous = previous_theta_.value_or(Eigen::VectorXd());
+    // The legs the camera does not show bent are straight in both starts.
+    const BentLegs bent = camera_bent_legs(frame.skeleton ? &*frame.skeleton : nullptr);
+    const std::vector<int> held = held_leg_dofs(w.layout, bent);
+    const auto straighten_legs = [&held](Eigen::VectorXd& theta) {
+      for (int d : held) theta[d] = 0;
+    };
     // The previous-frame start, moved on by the last frames' velocity where that is trusted.
     Eigen::VectorXd previous_start = previous;
     if (previous.size() > 0 && before_last_fit_ && options_.extrapolation.velocity_gain > 0) {
@@ -197,6 +224,7 @@ BodyTracker::Output BodyTracker::fit(BodyFitFrame& frame, const ForearmOrientati
         stats.extrapolated = true;
       }
     }
+    if (previous_start.size() > 0) straighten_legs(previous_start);
     std::optional<FitResult> best;
     const auto keep_lower = [&](FitResult&& result, bool from_previous) {
       if (from_previous) {
@@ -215,6 +243,7 @@ BodyTracker::Output BodyTracker::fit(BodyFitFrame& frame, const ForearmOrientati
     const auto skeleton_start = [&]() -> std::optional<Eigen::VectorXd> {
       try {
         Eigen::VectorXd theta = w.init->initialise(*frame.skeleton, previous).theta;
+        straighten_legs(theta);
         take(stats.start_pose_s);
         return theta;
       } catch (const Error&) {
@@ -225,14 +254,13 @@ BodyTracker::Output BodyTracker::fit(BodyFitFrame& frame, const ForearmOrientati
     };
     if (previous.size() > 0 && options_.skeleton_start_energy == 0.0) {
       if (const auto start = skeleton_start()) {
-        FrameFitter& second = w.fitter_for_second_thread();
         auto job = std::async(std::launch::async, [&] {
           const double cpu_start = thread_cpu_seconds();
-          FitResult result = second.fit(observation, *start, w.beta);
+          FitResult result = w.fit(observation, *start, bent, true);
           return std::make_pair(std::move(result), thread_cpu_seconds() - cpu_start);
         });
         lap = thread_cpu_seconds();
-        FitResult from_previous = w.fitter.fit(observation, previous_start, w.beta);
+        FitResult from_previous = w.fit(observation, previous_start, bent, false);
         take(stats.fit_previous_s);
         auto [from_skeleton, skeleton_cpu_s] = job.get();
         lap = thread_cpu_seconds();  // waiting is not work
@@ -240,18 +268,18 @@ BodyTracker::Output BodyTracker::fit(BodyFitFrame& frame, const ForearmOrientati
         keep_lower(std::move(from_previous), true);
         keep_lower(std::move(from_skeleton), false);
       } else {
-        keep_lower(w.fitter.fit(observation, previous_start, w.beta), true);
+        keep_lower(w.fit(observation, previous_start, bent, false), true);
         take(stats.fit_previous_s);
       }
     } else {
       if (previous.size() > 0) {
-        keep_lower(w.fitter.fit(observation, previous_start, w.beta), true);
+        keep_lower(w.fit(observation, previous_start, bent, false), true);
         take(stats.fit_previous_s);
       }
       if (needs_skeleton_start(best ? std::optional<double>(best->energy.total()) : std::nullopt,
                                options_.skeleton_start_energy)) {
         if (const auto start = skeleton_start()) {
-          keep_lower(w.fitter.fit(observation, *start, w.beta), false);
+          keep_lower(w.fit(observation, *start, bent, false), false);
           take(stats.fit_skeleton_s);
         }
       }

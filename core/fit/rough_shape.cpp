@@ -44,12 +44,9 @@ void check_frame(const TrackedSkeleton& s, const std::string& frame, const rayca
       throw_precondition(field, "outside the image: the subject must be fully in view");
   }
   const auto& p = s.positions_K;
-  // `joint_error_m` across the middle joint bends the limb by up to atan(e / a) + atan(e / b).
   auto too_bent = [&](const char* name, int a, int b, int c, double max_deg, double joint_error_m) {
-    const Eigen::Vector3d upper = p[b] - p[a], lower = p[c] - p[b];
-    const double bend = angle_deg(upper, lower);
-    const double allowed =
-        max_deg + (std::atan2(joint_error_m, upper.norm()) + std::atan2(joint_error_m, lower.norm())) / kDeg;
+    const double bend = limb_bend_deg(p[a], p[b], p[c]);
+    const double allowed = max_deg + bend_from_offset_deg(p[a], p[b], p[c], joint_error_m);
     if (bend > allowed) {
       std::string why = "bent " + std::to_string(std::lround(bend)) + " deg, at most " +
                         std::to_string(std::lround(allowed)) + " deg in the controlled pose";

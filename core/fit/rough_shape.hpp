@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "body/smpl_model.hpp"
+#include "fit/limb_bend.hpp"
 #include "fit/segment_measurements.hpp"
 #include "fit/tracked_skeleton.hpp"
 #include "raycast/depth_camera.hpp"
@@ -25,14 +26,12 @@ namespace posefuse::fit {
 struct ControlledPoseLimits {
   // Generous because the camera skeleton's own errors bend straight limbs.
   double max_knee_bend_deg = 30;
-  // An elbow may look bent by this plus what the camera's arm joint error allows: an error of
-  // camera_arm_joint_error_m across the arm at the elbow bends it by atan(e / upper arm) +
-  // atan(e / forearm), about 21 deg on an adult arm. 0.05 m: the low end of the mean errors of
-  // Kinect v2 arm joints, 50-101 mm (paper 2's introduction, citing Wang et al. 2015). Without
-  // it a straight arm's camera elbow bent past 40 deg in every calibration frame of 17 of 96
-  // simulated sessions (43-62 deg in the first) and their personalisation was refused.
+  // An elbow may look bent by this plus what the camera's arm joint error allows
+  // at the elbow (bend_from_offset_deg, about 21 deg on an adult arm). Without it a straight arm's camera
+  // elbow bent past 40 deg in every calibration frame of 17 of 96 simulated sessions (43-62 deg in
+  // the first) and their personalisation was refused.
   double max_elbow_bend_deg = 40;
-  double camera_arm_joint_error_m = 0.05;
+  double camera_arm_joint_error_m = kCameraJointErrorM;
   // Angle between an upper arm and the trunk's downward direction (shoulders -> hips).
   double min_arm_abduction_deg = 20, max_arm_abduction_deg = 100;
   // Angle of the shoulder line out of the image plane (0 = facing the camera squarely).

@@ -26,8 +26,8 @@
 namespace posefuse::session {
 
 // A lost fit's joints say nothing one can act on: on the joint-angle bench's tuning sessions the
-// angles of frames fitted above fit.lost_energy reach a 99 % error bound of 152 degrees,
-// confidence 2^-(152/15)^2 < 1e-30 (docs/benchmarks.md, "Fit energy and confidence"). 0 also
+// angles of frames fitted above fit.lost_energy reach a 99 % error bound of 114 degrees,
+// confidence 2^-(114/15)^2 < 1e-17 (docs/benchmarks.md, "Fit energy and confidence"). 0 also
 // keeps them apart from an untrusted fit's (fit::untrusted_fit_confidence).
 inline constexpr double kLostFitConfidence = 0.0;
 // Beyond the longest wait an earlier stage may take (fit.imu_wait_s <= 60 s).

@@ -2,8 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Geometry>
 #include <cmath>
+#include <numbers>
 
+#include "model_frames.hpp"
 #include "posed_subject.hpp"
 
 namespace posefuse::fit {
@@ -160,6 +163,60 @@ TEST(FitBodyTracker, UnfittableFrameIsAWarning) {
   EXPECT_EQ(tracker.frames_fitted(), 0u);
   EXPECT_TRUE(tracker.frame_stats().empty());
   EXPECT_TRUE(tracker.flush(no_orientation).frames.empty());
+}
+
+// The knee's rotation relative to the hip, degrees.
+double knee_rotation_deg(const FittedBodyFrame& f, int hip, int knee) {
+  return Eigen::AngleAxisd(f.K_from_joint[hip].inverse() * f.K_from_joint[knee]).angle() * 180 / std::numbers::pi;
+}
+
+// A subject of the template shape with the left knee bent 60 degrees (thigh 40 forward), the right
+// leg straight, rendered with its error-free camera skeleton; `left_ankle` is the camera's tracking
+// of the left ankle. Returns the fitted frames of the calibration frame and one after it.
+std::vector<FittedBodyFrame> fit_bent_left_leg(JointTracking left_ankle) {
+  const PoseLayout layout = PoseLayout::full_body();
+  const Eigen::VectorXd beta = Eigen::VectorXd::Zero(10);
+  const Eigen::VectorXd theta = testing::facing_pose(
+      layout, 3.0, {{"left_shoulder_z", -30}, {"right_shoulder_z", 30}, {"left_hip_x", -40}, {"left_knee_x", 60}});
+  const raycast::DepthCamera camera{raycast::DepthIntrinsics{}};
+  const testing::ModelFrame rendered = testing::render_model_frame(female(), layout, beta, theta, camera);
+  TrackedSkeleton skeleton = TrackedSkeleton::all_tracked(rendered.skeleton_K);
+  skeleton.tracking[kAnkleLeft] = left_ankle;
+  BodyTrackerOptions options = rough_shape_only();
+  options.calibration_s = 0.05;  // the first frame; its bent knee refuses the shape: the template
+  options.smoothing.window_frames = 1;
+  BodyTracker tracker(female(), camera.intrinsics(), options);
+  std::vector<FittedBodyFrame> fitted;
+  for (std::int64_t t : {0, 100'000}) {
+    BodyFitFrame frame = frame_at(t, skeleton);
+    frame.frame = rendered.frame;
+    for (BodyFitFrame& admitted : tracker.admit(std::move(frame)).frames) {
+      BodyTracker::Output out = tracker.fit(admitted, no_orientation);
+      EXPECT_TRUE(out.warnings.empty()) << out.warnings.front().message;
+      for (FittedBodyFrame& f : out.frames) fitted.push_back(std::move(f));
+    }
+  }
+  for (FittedBodyFrame& f : tracker.flush(no_orientation).frames) fitted.push_back(std::move(f));
+  EXPECT_FALSE(tracker.shape()->estimated);
+  return fitted;
+}
+
+// The camera shows the left knee bent 60 degrees: that leg is fitted free and follows the depth;
+// the straight right leg's knee is held at zero.
+TEST(FitBodyTracker, BendsTheLegsTheCameraShowsBentAndHoldsTheOthersStraight) {
+  const std::vector<FittedBodyFrame> fitted = fit_bent_left_leg(JointTracking::kTracked);
+  ASSERT_EQ(fitted.size(), 2u);
+  for (const FittedBodyFrame& f : fitted) {
+    EXPECT_NEAR(knee_rotation_deg(f, body::kLeftHip, body::kLeftKnee), 60, 5) << f.t_us;
+    EXPECT_LT(knee_rotation_deg(f, body::kRightHip, body::kRightKnee), 1e-6) << f.t_us;
+  }
+}
+
+// An inferred ankle is the camera's guess: the leg stays straight as in paper 2's upper-body fit.
+TEST(FitBodyTracker, AGuessedLegIsHeldStraight) {
+  const std::vector<FittedBodyFrame> fitted = fit_bent_left_leg(JointTracking::kInferred);
+  ASSERT_EQ(fitted.size(), 2u);
+  for (const FittedBodyFrame& f : fitted) EXPECT_LT(knee_rotation_deg(f, body::kLeftHip, body::kLeftKnee), 1e-6);
 }
 
 }  // namespace

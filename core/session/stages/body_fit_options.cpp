@@ -73,7 +73,7 @@ const OptionTable& body_fit_option_table() {
          .min = above(0),
          .description = "frames fitted above this energy (eq. 4) give their joints and forearms a confidence of at "
                         "most " +
-                        fixed_text(fit::untrusted_fit_confidence(), 3) +
+                        fixed_text(fit::untrusted_fit_confidence(), 4) +
                         " (FIT_UNTRUSTED); above fit.lost_energy none"},
         {.key = kFitMaxIterationsKey,
          .type = OptionType::kInteger,

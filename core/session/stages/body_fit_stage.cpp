@@ -288,7 +288,7 @@ void BodyFitStage::finish(StageOutput& out) {
                  " frames fitted at an energy above " + format_double(options_.trusted_energy) +
                  " (fit.trusted_energy) but not lost: the fit matches their depth less well than fits measured to "
                  "be within 15 deg; their joints and forearms have confidence at most " +
-                 fixed_text(fit::untrusted_fit_confidence(), 3));
+                 fixed_text(fit::untrusted_fit_confidence(), 4));
   }
   if (tracker_->frames_lost() > 0) {
     out.warn("FIT_LOST", "fit",
