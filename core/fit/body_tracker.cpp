@@ -56,11 +56,13 @@ struct BodyTracker::Work {
     return *f;
   }
 
-  // Fits one start (a full-body theta) on this or the second thread's fitters.
-  FitResult fit(const FrameObservation& observation, const Eigen::VectorXd& start, BentLegs bent, bool second_thread) {
+  // Fits one start (a full-body theta) on this or the second thread's fitters; `held` are
+  // held_leg_dofs(layout, bent).
+  FitResult fit(const FrameObservation& observation, const Eigen::VectorXd& start, BentLegs bent,
+                const std::vector<int>& held, bool second_thread) {
     if (bent.left || bent.right) {
       FrameFitter& f = built(second_thread ? second_legs_fitter : legs_fitter, layout);
-      return f.fit(observation, start, beta, held_leg_dofs(layout, bent));
+      return f.fit(observation, start, beta, held);
     }
     FrameFitter& f = second_thread ? built(second_fitter, upper_layout) : fitter;
     FitResult result = f.fit(observation, start.head(upper_layout.size()), beta);
@@ -256,11 +258,11 @@ BodyTracker::Output BodyTracker::fit(BodyFitFrame& frame, const ForearmOrientati
       if (const auto start = skeleton_start()) {
         auto job = std::async(std::launch::async, [&] {
           const double cpu_start = thread_cpu_seconds();
-          FitResult result = w.fit(observation, *start, bent, true);
+          FitResult result = w.fit(observation, *start, bent, held, true);
           return std::make_pair(std::move(result), thread_cpu_seconds() - cpu_start);
         });
         lap = thread_cpu_seconds();
-        FitResult from_previous = w.fit(observation, previous_start, bent, false);
+        FitResult from_previous = w.fit(observation, previous_start, bent, held, false);
         take(stats.fit_previous_s);
         auto [from_skeleton, skeleton_cpu_s] = job.get();
         lap = thread_cpu_seconds();  // waiting is not work
@@ -268,18 +270,18 @@ BodyTracker::Output BodyTracker::fit(BodyFitFrame& frame, const ForearmOrientati
         keep_lower(std::move(from_previous), true);
         keep_lower(std::move(from_skeleton), false);
       } else {
-        keep_lower(w.fit(observation, previous_start, bent, false), true);
+        keep_lower(w.fit(observation, previous_start, bent, held, false), true);
         take(stats.fit_previous_s);
       }
     } else {
       if (previous.size() > 0) {
-        keep_lower(w.fit(observation, previous_start, bent, false), true);
+        keep_lower(w.fit(observation, previous_start, bent, held, false), true);
         take(stats.fit_previous_s);
       }
       if (needs_skeleton_start(best ? std::optional<double>(best->energy.total()) : std::nullopt,
                                options_.skeleton_start_energy)) {
         if (const auto start = skeleton_start()) {
-          keep_lower(w.fit(observation, *start, bent, false), false);
+          keep_lower(w.fit(observation, *start, bent, held, false), false);
           take(stats.fit_skeleton_s);
         }
       }

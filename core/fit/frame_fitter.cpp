@@ -12,6 +12,17 @@
 namespace posefuse::fit {
 namespace {
 
+// Throws "field" unless every index lies in [0, size) and none repeats.
+void check_distinct_indices(std::span<const int> indices, int size, const std::string& field) {
+  std::vector<bool> seen(static_cast<size_t>(size), false);
+  for (int i : indices) {
+    if (i < 0 || i >= size || seen[static_cast<size_t>(i)])
+      throw_invalid(field,
+                    "index " + std::to_string(i) + " is out of range [0, " + std::to_string(size) + ") or repeated");
+    seen[static_cast<size_t>(i)] = true;
+  }
+}
+
 // A model point on the visible contour sees itself along its ray up to this gap: grazing rays
 // meet the neighbouring faces of the vertex a little before it.
 constexpr double kContourVisibilityTolerance_m = 0.01;
@@ -353,23 +364,10 @@ EnergyTerms FrameFitter::energy_at(const FrameObservation& o, const body::BodyEv
 FitResult FrameFitter::fit(const FrameObservation& observation, const Eigen::VectorXd& theta0,
                            const Eigen::VectorXd& beta, std::span<const int> held_dofs) {
   clear_shape_freedom();
-  std::vector<bool> seen(static_cast<size_t>(layout_.size()), false);
-  for (int d : held_dofs) {
-    if (d < 0 || d >= layout_.size() || seen[static_cast<size_t>(d)])
-      throw_invalid("held_dofs", "index " + std::to_string(d) + " is out of range [0, " +
-                                     std::to_string(layout_.size()) + ") or repeated");
-    seen[static_cast<size_t>(d)] = true;
-  }
-  held_dofs_.assign(held_dofs.begin(), held_dofs.end());
-  std::sort(held_dofs_.begin(), held_dofs_.end());
-  try {
-    FitResult result = run(observation, theta0, beta);
-    held_dofs_.clear();
-    return result;
-  } catch (...) {
-    held_dofs_.clear();
-    throw;
-  }
+  check_distinct_indices(held_dofs, layout_.size(), "held_dofs");
+  std::vector<int> held(held_dofs.begin(), held_dofs.end());
+  std::sort(held.begin(), held.end());
+  return run(observation, theta0, beta, held);
 }
 
 FitResult FrameFitter::fit_shape_and_pose(const FrameObservation& observation, const Eigen::VectorXd& theta0,
@@ -380,13 +378,7 @@ FitResult FrameFitter::fit_shape_and_pose(const FrameObservation& observation, c
   std::vector<int> free = freedom.free_betas;
   if (free.empty())
     for (int b = 0; b < num_betas; ++b) free.push_back(b);
-  std::vector<bool> seen(static_cast<size_t>(num_betas), false);
-  for (int b : free) {
-    if (b < 0 || b >= num_betas || seen[static_cast<size_t>(b)])
-      throw_invalid("shape_freedom.free_betas", "index " + std::to_string(b) + " is out of range [0, " +
-                                                    std::to_string(num_betas) + ") or repeated");
-    seen[static_cast<size_t>(b)] = true;
-  }
+  check_distinct_indices(free, num_betas, "shape_freedom.free_betas");
   if (layout_.size() + static_cast<int>(free.size()) > SchurSystem::kMaxPose)
     throw_invalid("shape_freedom.free_betas", "too many parameters for the solver");
   const Eigen::Index k = freedom.prior_matrix.rows();
@@ -424,7 +416,7 @@ void FrameFitter::project_onto_limits(const Eigen::VectorXd& x, Eigen::VectorXd&
 }
 
 FitResult FrameFitter::run(const FrameObservation& observation, const Eigen::VectorXd& theta0,
-                           const Eigen::VectorXd& beta0) {
+                           const Eigen::VectorXd& beta0, std::span<const int> held) {
   validate(observation);
   FitResult result;
   set_up_blocks(observation);
@@ -456,7 +448,7 @@ FitResult FrameFitter::run(const FrameObservation& observation, const Eigen::Vec
     double energy_after = energy_before, joint_step = 0;
     bool accepted = false;
     while (gamma <= options_.max_damping) {
-      if (system_.solve(gamma, step_, uv_step_, held_dofs_)) {
+      if (system_.solve(gamma, step_, uv_step_, held)) {
         trial_x_ = x + step_;
         if (options_.project_steps_onto_limits) {
           project_onto_limits(x, trial_x_);

@@ -123,7 +123,9 @@ class FrameFitter {
     prior_matrix_.resize(0, 0);
     prior_target_.resize(0);
   }
-  FitResult run(const FrameObservation& observation, const Eigen::VectorXd& theta0, const Eigen::VectorXd& beta0);
+  // The LM loop; the pose DOFs `held` (ascending) keep theta0's values.
+  FitResult run(const FrameObservation& observation, const Eigen::VectorXd& theta0, const Eigen::VectorXd& beta0,
+                std::span<const int> held = {});
   void set_up_blocks(const FrameObservation& observation);
   void pose_model(const Eigen::VectorXd& theta, const Eigen::VectorXd& beta);
   // Shape fixed: the accepted trial (trial_eval_ evaluated with kPoseOnRequest, trial_surface_)
@@ -159,7 +161,6 @@ class FrameFitter {
 
   std::shared_ptr<const body::SmplModel> model_;
   body::PoseLayout layout_;
-  std::vector<int> held_dofs_;  // fit()'s, for the current run
   raycast::DepthIntrinsics intrinsics_;
   FitOptions options_;
   body::BodyEvaluator eval_, trial_eval_;

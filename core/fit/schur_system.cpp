@@ -125,9 +125,10 @@ bool SchurSystem::solve(double gamma, Eigen::VectorXd& d_pose, std::vector<Eigen
     // The system over the free DOFs alone, in their order: the same matrix, entry for entry, as a
     // layout without the held DOFs would build (their step is 0).
     free_.clear();
-    for (int d = 0, h = 0; d < num_pose_; ++d) {
-      while (h < static_cast<int>(held.size()) && held[h] < d) ++h;
-      if (h == static_cast<int>(held.size()) || held[h] != d) free_.push_back(d);
+    auto next_held = held.begin();
+    for (int d = 0; d < num_pose_; ++d) {
+      if (next_held != held.end() && *next_held == d) ++next_held;
+      else free_.push_back(d);
     }
     free_system_ = reduced_(free_, free_);
     ldlt_.compute(free_system_);
