@@ -129,7 +129,9 @@ std::string truth_json(const SimTruth& truth) {
       << ", \"acc_scale_misalignment\": " << json_mat(e.acc_scale_misalignment)
       << ",\n     \"hard_iron_uT\": " << json_vec(e.hard_iron_uT) << ", \"soft_iron\": " << json_mat(e.soft_iron)
       << ",\n     \"gyr_bias_per_kelvin_rad_s\": " << json_vec(e.gyr_bias_per_kelvin_rad_s)
-      << ", \"acc_bias_per_kelvin_m_s2\": " << json_vec(e.acc_bias_per_kelvin_m_s2) << "}";
+      << ", \"acc_bias_per_kelvin_m_s2\": " << json_vec(e.acc_bias_per_kelvin_m_s2)
+      << ",\n     \"gyr_scale_per_kelvin\": " << json_vec(e.gyr_scale_per_kelvin)
+      << ", \"acc_scale_per_kelvin\": " << json_vec(e.acc_scale_per_kelvin) << "}";
     first = false;
   }
   s << "\n  ],\n  \"buzzer_stop_camera_s\": " << format_double(truth.buzzer_stop_camera_s)

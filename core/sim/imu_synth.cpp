@@ -48,12 +48,15 @@ void check_model(const ImuErrorModel& m) {
   require_non_negative(m.soft_iron_off_diagonal_sigma, "error_model.soft_iron_off_diagonal_sigma");
   require_non_negative(m.gyr_bias_per_kelvin_sigma_rad_s, "error_model.gyr_bias_per_kelvin_sigma_rad_s");
   require_non_negative(m.acc_bias_per_kelvin_sigma_m_s2, "error_model.acc_bias_per_kelvin_sigma_m_s2");
+  require_non_negative(m.gyr_scale_per_kelvin_sigma, "error_model.gyr_scale_per_kelvin_sigma");
+  require_non_negative(m.acc_scale_per_kelvin_sigma, "error_model.acc_scale_per_kelvin_sigma");
 }
 
 void check_errors(const ImuErrors& e) {
   if (!e.gyr_bias_rad_s.allFinite() || !e.gyr_scale_misalignment.allFinite() || !e.acc_bias_m_s2.allFinite() ||
       !e.acc_scale_misalignment.allFinite() || !e.hard_iron_uT.allFinite() || !e.soft_iron.allFinite() ||
-      !e.gyr_bias_per_kelvin_rad_s.allFinite() || !e.acc_bias_per_kelvin_m_s2.allFinite()) {
+      !e.gyr_bias_per_kelvin_rad_s.allFinite() || !e.acc_bias_per_kelvin_m_s2.allFinite() ||
+      !e.gyr_scale_per_kelvin.allFinite() || !e.acc_scale_per_kelvin.allFinite()) {
     throw_invalid("errors", "non-finite value in the IMU errors");
   }
   if (!e.soft_iron.isApprox(e.soft_iron.transpose(), 1e-12)) {
@@ -103,6 +106,8 @@ ImuErrorModel ImuErrorModel::none() {
   m.soft_iron_off_diagonal_sigma = 0;
   m.gyr_bias_per_kelvin_sigma_rad_s = 0;
   m.acc_bias_per_kelvin_sigma_m_s2 = 0;
+  m.gyr_scale_per_kelvin_sigma = 0;
+  m.acc_scale_per_kelvin_sigma = 0;
   return m;
 }
 
@@ -129,6 +134,8 @@ ImuErrors draw_imu_errors(const ImuErrorModel& model, std::uint64_t seed) {
   SimRng temperature(seed, "imu_temperature");
   e.gyr_bias_per_kelvin_rad_s = normal_vec(temperature, model.gyr_bias_per_kelvin_sigma_rad_s);
   e.acc_bias_per_kelvin_m_s2 = normal_vec(temperature, model.acc_bias_per_kelvin_sigma_m_s2);
+  e.gyr_scale_per_kelvin = normal_vec(temperature, model.gyr_scale_per_kelvin_sigma);
+  e.acc_scale_per_kelvin = normal_vec(temperature, model.acc_scale_per_kelvin_sigma);
   // A draw far in the tail could make S singular; the defaults make that astronomically rare,
   // but large user sigmas must not produce a meaningless magnetometer silently.
   check_errors(e);
@@ -202,11 +209,14 @@ ImuSynthResult synthesize_imu(const SensorKinematics& motion, const std::vector<
 
     imu::ImuSample s;
     s.t_us = std::llround(t_s[k] * 1e6);
-    s.gyr_rad_s = saturated(e.gyr_scale_misalignment * m.omega_A_rad_s + gyr_bias_now + normal_vec(noise, gyr_sigma),
-                            options.gyr_range_rad_s);
+    const Vec3 omega_A = m.omega_A_rad_s;
+    s.gyr_rad_s =
+        saturated(e.gyr_scale_misalignment * omega_A + warming_K * e.gyr_scale_per_kelvin.cwiseProduct(omega_A) +
+                      gyr_bias_now + normal_vec(noise, gyr_sigma),
+                  options.gyr_range_rad_s);
     const Vec3 f_A = A_from_W * (m.a_W_m_s2 + gravity_up_W);
-    s.acc_m_s2 = saturated(e.acc_scale_misalignment * f_A + e.acc_bias_m_s2 + warming_K * e.acc_bias_per_kelvin_m_s2 +
-                               normal_vec(noise, acc_sigma),
+    s.acc_m_s2 = saturated(e.acc_scale_misalignment * f_A + warming_K * e.acc_scale_per_kelvin.cwiseProduct(f_A) +
+                               e.acc_bias_m_s2 + warming_K * e.acc_bias_per_kelvin_m_s2 + normal_vec(noise, acc_sigma),
                            options.acc_range_m_s2);
     const Vec3 m_A = A_from_W * m_W + disturbance_A;
     s.mag_uT = e.soft_iron * m_A + e.hard_iron_uT + hard_iron_jump_A + normal_vec(noise, model.mag_noise_uT);

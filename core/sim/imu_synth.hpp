@@ -6,11 +6,12 @@
 //   specific force   f_A = A_from_W * (a_W + g z_W)     (reads +g up at rest)
 //   magnetic field   m_A = A_from_W * m_W,  m_W = (H, 0, -H tan(dip))  (W: x magnetic north, z up)
 // Measured signals (the error model below, all frames A):
-//   gyr = M_g omega_A + b_g(t) + c_g dT(t) + n_g
-//   acc = M_a f_A + b_a + c_a dT(t) + n_a
+//   gyr = (M_g + diag(k_g) dT(t)) omega_A + b_g(t) + c_g dT(t) + n_g
+//   acc = (M_a + diag(k_a) dT(t)) f_A + b_a + c_a dT(t) + n_a
 //   mag = S (m_A + A_from_W d_W(t)) + h + h_jump(t) + n_m
 // with M scale and misalignment matrices, b biases (the gyro's drifts as a random walk), c the
-// biases' change per kelvin and dT the sensor's warming since the first sample (SensorWarmUp),
+// biases' and k the scale factors' change per kelvin, dT the sensor's warming since the first
+// sample (SensorWarmUp),
 // S soft iron (symmetric), h hard iron, d_W transient external fields and h_jump hard-iron
 // steps (a magnet attached to the strap) from MagDisturbance events, n white noise.
 // The inverse of the magnetometer part is paper 1 eq. 3 with S = H diag(alpha, beta, gamma) H^T.
@@ -59,6 +60,13 @@ struct ImuErrorModel {
   // DS-000189 rev. 1.3, table 2).
   double gyr_bias_per_kelvin_sigma_rad_s = 0.03 * static_cast<double>(EIGEN_PI) / 180.0;
   double acc_bias_per_kelvin_sigma_m_s2 = 0.8e-3 * 9.80665;
+  // The scale factors' relative change per kelvin, per axis. Gyro: 1.6e-4 (0.016 %/K), the
+  // MPU-6050's sensitivity scale factor variation of +-2 % over -40..85 C; Android's
+  // compatibility definition asks high-fidelity gyros for at most 0.02 %/K, and newer parts
+  // (ICM-42688-P) specify 0.005 %/K. Accelerometer: 2.6e-4 (0.026 %/K), the MPU-9250 class's
+  // sensitivity change vs. temperature (Android asks for at most 0.03 %/K).
+  double gyr_scale_per_kelvin_sigma = 1.6e-4;
+  double acc_scale_per_kelvin_sigma = 2.6e-4;
 
   // All terms zero: ideal signals.
   static ImuErrorModel none();
@@ -74,6 +82,8 @@ struct ImuErrors {
   Mat3 soft_iron = Mat3::Identity();  // symmetric positive definite
   Vec3 gyr_bias_per_kelvin_rad_s = Vec3::Zero();
   Vec3 acc_bias_per_kelvin_m_s2 = Vec3::Zero();
+  Vec3 gyr_scale_per_kelvin = Vec3::Zero();  // k_g: relative, per axis
+  Vec3 acc_scale_per_kelvin = Vec3::Zero();  // k_a
 };
 
 // Draws the static errors: M = diag(1 + s) + N (N off-diagonal only), S = I + E symmetric.

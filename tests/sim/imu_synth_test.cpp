@@ -232,26 +232,66 @@ TEST(ImuSynth, AWarmingSensorsBiasesMoveByTheirChangePerKelvin) {
   EXPECT_NEAR(warm.gyr_bias_rad_s.back().y(), -2e-3 * 10.0 * (1.0 - std::exp(-2.0)), 1e-12);
 }
 
+TEST(ImuSynth, AWarmingSensorsScaleFactorsChangeByTheirChangePerKelvin) {
+  // Ideal otherwise: the cold signals are the true rate and specific force.
+  ImuSynthOptions o = ideal_options();
+  ImuErrors e;
+  e.gyr_scale_per_kelvin = Vec3(2e-4, -1e-4, 3e-4);
+  e.acc_scale_per_kelvin = Vec3(-3e-4, 2e-4, 1e-4);
+  o.errors = e;
+  o.warm_up.rise_K = 10.0;
+  o.warm_up.time_constant_s = 5.0;
+  o.gyr_range_rad_s = o.acc_range_m_s2 = std::numeric_limits<double>::infinity();
+  const SensorKinematics motion = complex_motion(10.2);
+  const std::vector<double> t = uniform_times(0.05, 10.05, 80);
+  const ImuSynthResult warm = synthesize_imu(motion, t, o);
+  o.warm_up.rise_K = 0.0;
+  const ImuSynthResult cold = synthesize_imu(motion, t, o);
+  double largest_gyr_change = 0;
+  for (std::size_t k = 0; k < t.size(); ++k) {
+    const double rise_K = 10.0 * (1.0 - std::exp(-(t[k] - t.front()) / 5.0));
+    const Vec3 omega = cold.samples[k].gyr_rad_s, f = cold.samples[k].acc_m_s2;
+    EXPECT_LT((warm.samples[k].gyr_rad_s - omega - rise_K * e.gyr_scale_per_kelvin.cwiseProduct(omega)).norm(), 1e-12);
+    EXPECT_LT((warm.samples[k].acc_m_s2 - f - rise_K * e.acc_scale_per_kelvin.cwiseProduct(f)).norm(), 1e-12);
+    // A scale error is no bias: the reported true bias stays 0.
+    EXPECT_EQ(warm.gyr_bias_rad_s[k], Vec3::Zero());
+    largest_gyr_change = std::max(largest_gyr_change, (warm.samples[k].gyr_rad_s - omega).norm());
+  }
+  EXPECT_GT(largest_gyr_change, 1e-4);  // the motion turns fast enough to show it
+}
+
 TEST(ImuSynth, TheChangePerKelvinIsDrawnApartFromTheOtherErrors) {
   // The same seed gives the same turn-on biases, scales and irons with or without the
-  // temperature terms, and those are drawn at the datasheet spread (0.03 deg/s/K, 0.8 mg/K).
+  // temperature terms, and the biases' terms with or without the scale factors' (drawn after
+  // them); all are drawn at the datasheet spread (0.03 deg/s/K, 0.8 mg/K, 0.016 %/K, 0.026 %/K).
   ImuErrorModel without;
   without.gyr_bias_per_kelvin_sigma_rad_s = without.acc_bias_per_kelvin_sigma_m_s2 = 0.0;
-  double gyr_sum_sq = 0, acc_sum_sq = 0;
+  without.gyr_scale_per_kelvin_sigma = without.acc_scale_per_kelvin_sigma = 0.0;
+  ImuErrorModel biases_only;
+  biases_only.gyr_scale_per_kelvin_sigma = biases_only.acc_scale_per_kelvin_sigma = 0.0;
+  double gyr_sum_sq = 0, acc_sum_sq = 0, gyr_scale_sum_sq = 0, acc_scale_sum_sq = 0;
   constexpr int kSeeds = 300;
   for (int seed = 1; seed <= kSeeds; ++seed) {
     const ImuErrors with_terms = draw_imu_errors(ImuErrorModel(), static_cast<std::uint64_t>(seed));
     const ImuErrors plain = draw_imu_errors(without, static_cast<std::uint64_t>(seed));
+    const ImuErrors with_biases = draw_imu_errors(biases_only, static_cast<std::uint64_t>(seed));
     EXPECT_EQ(with_terms.gyr_bias_rad_s, plain.gyr_bias_rad_s);
     EXPECT_EQ(with_terms.acc_scale_misalignment, plain.acc_scale_misalignment);
     EXPECT_EQ(with_terms.soft_iron, plain.soft_iron);
     EXPECT_EQ(plain.gyr_bias_per_kelvin_rad_s, Vec3::Zero());
+    EXPECT_EQ(plain.gyr_scale_per_kelvin, Vec3::Zero());
+    EXPECT_EQ(with_terms.gyr_bias_per_kelvin_rad_s, with_biases.gyr_bias_per_kelvin_rad_s);
+    EXPECT_EQ(with_terms.acc_bias_per_kelvin_m_s2, with_biases.acc_bias_per_kelvin_m_s2);
     gyr_sum_sq += with_terms.gyr_bias_per_kelvin_rad_s.squaredNorm();
     acc_sum_sq += with_terms.acc_bias_per_kelvin_m_s2.squaredNorm();
+    gyr_scale_sum_sq += with_terms.gyr_scale_per_kelvin.squaredNorm();
+    acc_scale_sum_sq += with_terms.acc_scale_per_kelvin.squaredNorm();
   }
   // 900 draws each: the RMS is within 10 % of sigma (its relative std is ~2.4 %).
   EXPECT_NEAR(std::sqrt(gyr_sum_sq / (3 * kSeeds)), 0.03 * kDeg, 0.003 * kDeg);
   EXPECT_NEAR(std::sqrt(acc_sum_sq / (3 * kSeeds)), 0.8e-3 * 9.80665, 0.08e-3 * 9.80665);
+  EXPECT_NEAR(std::sqrt(gyr_scale_sum_sq / (3 * kSeeds)), 1.6e-4, 0.16e-4);
+  EXPECT_NEAR(std::sqrt(acc_scale_sum_sq / (3 * kSeeds)), 2.6e-4, 0.26e-4);
 }
 
 TEST(ImuSynth, SameSeedSameOutputDifferentSeedDifferent) {
@@ -337,6 +377,9 @@ TEST(ImuSynth, RejectsBadInput) {
   o = ImuSynthOptions();
   o.error_model.gyr_bias_per_kelvin_sigma_rad_s = std::nan("");
   EXPECT_EQ(field_of(o), "error_model.gyr_bias_per_kelvin_sigma_rad_s");
+  o = ImuSynthOptions();
+  o.error_model.acc_scale_per_kelvin_sigma = -1e-4;
+  EXPECT_EQ(field_of(o), "error_model.acc_scale_per_kelvin_sigma");
 }
 
 TEST(SensorKinematics, RejectsBadTrajectories) {
