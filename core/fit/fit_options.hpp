@@ -51,6 +51,14 @@ struct FitOptions {
   // 2's arm raising went 18.7 -> 29.7 mm in bench_fig4).
   bool project_steps_onto_limits = true;
   double limit_projection_margin_rad = 0.1;
+  // The pose fit linearises bg, bgJoint and float as distances to their closest points, which
+  // slide with the model point, rather than as offsets to a held target (paper 2; point-to-point
+  // ICP's linearisation, fit::SilhouetteResidual). Same energy. Off by default: measured, it lowers
+  // the fits' energies and the confident angles' errors, but one start-up frame of
+  // BodyFitStage.FitsEveryFrameCloseToTheTruth and wipe's hanging arm end in worse local minima
+  // (docs/benchmarks.md, "The silhouette terms linearised as distances"). The shape fit (III-B)
+  // always uses the offsets.
+  bool linearise_distances = false;
   // Stop when an accepted step lowers the energy by less than this fraction ...
   double min_relative_decrease = 1e-5;
   // ... or moves none of the 16 bgJoint joints by more than this (ours). Without it the fit spends

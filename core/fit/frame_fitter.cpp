@@ -121,7 +121,8 @@ void FrameFitter::set_up_blocks(const FrameObservation& o) {
   const int free = static_cast<int>(free_betas_.size());
   shape_bound_.weight = free > 0 ? std::sqrt(options_.lambda_limit / free) : 0.0;
   // Largest residual count: every set at its cap (data rows live in the residual vector only).
-  const int max_rows = 6 * static_cast<int>(n) + 5 * options_.max_bg_points + 2 * kBgJointCount + limited + free +
+  // (A U_bg point is a bg or a float residual: at most 3 rows, the float offset of the shape fit.)
+  const int max_rows = 6 * static_cast<int>(n) + 3 * options_.max_bg_points + 2 * kBgJointCount + limited + free +
                        static_cast<int>(prior_matrix_.rows()) + 6;
   const int p = num_parameters();
   if (jacobian_.rows() < max_rows || jacobian_.cols() != p) jacobian_.resize(max_rows, p);
@@ -289,22 +290,35 @@ EnergyTerms FrameFitter::linearise(const FrameObservation& o, const Eigen::Vecto
     take(6, e.data);
   }
   const int pose_rows_begin = row;
+  // bg, bgJoint and float as offsets to held targets, or (pose fit, FitOptions::linearise_distances)
+  // as distances (SilhouetteResidual).
+  const bool offsets = free > 0 || !options_.linearise_distances;
+  const auto add_silhouette = [&](const SilhouetteResidual& block, const Eigen::Vector3d& x,
+                                  const Eigen::Ref<const PoseRows3>& d_x, double& energy) {
+    if (offsets) {
+      block.evaluate_offset(intrinsics_, x, d_x, residual_.segment<2>(row), jacobian_.middleRows(row, 2));
+      take(2, energy);
+    } else {
+      block.evaluate(intrinsics_, x, d_x, residual_[row], jacobian_.middleRows(row, 1));
+      take(1, energy);
+    }
+  };
   for (const SilhouettePoint& s : bg_) {
     vertex_jacobian(s.index, point_jacobian_);
-    s.block.evaluate(intrinsics_, eval_.vertices().col(s.index), point_jacobian_, residual_.segment<2>(row),
-                     jacobian_.middleRows(row, 2));
-    take(2, e.bg);
+    add_silhouette(s.block, eval_.vertices().col(s.index), point_jacobian_, e.bg);
   }
-  for (const SilhouettePoint& s : bg_joint_) {
-    s.block.evaluate(intrinsics_, eval_.joints().col(s.index), joint_jacobian().middleRows<3>(3 * s.index),
-                     residual_.segment<2>(row), jacobian_.middleRows(row, 2));
-    take(2, e.bg_joint);
-  }
+  for (const SilhouettePoint& s : bg_joint_)
+    add_silhouette(s.block, eval_.joints().col(s.index), joint_jacobian().middleRows<3>(3 * s.index), e.bg_joint);
   for (const BehindPoint& f : float_) {
     vertex_jacobian(f.vertex, point_jacobian_);
-    f.block.evaluate(eval_.vertices().col(f.vertex), point_jacobian_, residual_.segment<3>(row),
-                     jacobian_.middleRows(row, 3));
-    take(3, e.float_term);
+    if (offsets) {
+      f.block.evaluate_offset(eval_.vertices().col(f.vertex), point_jacobian_, residual_.segment<3>(row),
+                              jacobian_.middleRows(row, 3));
+      take(3, e.float_term);
+    } else {
+      f.block.evaluate(eval_.vertices().col(f.vertex), point_jacobian_, residual_[row], jacobian_.middleRows(row, 1));
+      take(1, e.float_term);
+    }
   }
   const int limited = LimitResidual::size(layout_);
   limit_.evaluate(layout_, theta, residual_.segment(row, limited), jacobian_.middleRows(row, limited));
@@ -350,11 +364,10 @@ EnergyTerms FrameFitter::energy_at(const FrameObservation& o, const body::BodyEv
   build_blocks(eval, o);
   EnergyTerms e;
   for (size_t i = 0; i < data_.size(); ++i) e.data += data_[i].residual(surface, correspondences[i]).squaredNorm();
-  for (const SilhouettePoint& s : bg_)
-    e.bg += s.block.residual(intrinsics_, eval.vertices().col(s.index)).squaredNorm();
+  for (const SilhouettePoint& s : bg_) e.bg += s.block.offset(intrinsics_, eval.vertices().col(s.index)).squaredNorm();
   for (const SilhouettePoint& s : bg_joint_)
-    e.bg_joint += s.block.residual(intrinsics_, eval.joints().col(s.index)).squaredNorm();
-  for (const BehindPoint& f : float_) e.float_term += f.block.residual(eval.vertices().col(f.vertex)).squaredNorm();
+    e.bg_joint += s.block.offset(intrinsics_, eval.joints().col(s.index)).squaredNorm();
+  for (const BehindPoint& f : float_) e.float_term += f.block.offset(eval.vertices().col(f.vertex)).squaredNorm();
   e.limit = limit_.energy(layout_, theta);
   e.shape = shape_bound_energy(beta);
   for (const ForearmDirectionResidual& f : imu_) e.imu += f.residual(eval.joints()).squaredNorm();

@@ -51,22 +51,51 @@ void DataResidual::evaluate_shape(const body::BodySurface& surface, const body::
   d_r_d_beta.bottomRows<3>() *= normal_weight;
 }
 
-Eigen::Vector2d SilhouetteResidual::residual(const raycast::DepthIntrinsics& intrinsics,
-                                             const Eigen::Vector3d& x_K) const {
+namespace {
+
+// r = weight |offset| and its 1 x N Jacobian weight u^T d_offset, u = offset / |offset|; a zero
+// offset has no direction, and its row is zero.
+template <int Dim>
+void distance_residual(const Eigen::Matrix<double, Dim, 1>& offset,
+                       const Eigen::Ref<const Eigen::Matrix<double, Dim, Eigen::Dynamic>>& d_offset, double weight,
+                       double& r, Eigen::Ref<Eigen::MatrixXd> d_r_d_theta) {
+  const double distance = offset.norm();
+  r = weight * distance;
+  if (distance > 0) d_r_d_theta.noalias() = ((weight / distance) * offset.transpose()) * d_offset;
+  else d_r_d_theta.setZero();
+}
+
+}  // namespace
+
+Eigen::Vector2d SilhouetteResidual::offset(const raycast::DepthIntrinsics& intrinsics,
+                                           const Eigen::Vector3d& x_K) const {
   return weight * (project_with_jacobian(intrinsics, x_K).pixel - target_pixel);
 }
 
 void SilhouetteResidual::evaluate(const raycast::DepthIntrinsics& intrinsics, const Eigen::Vector3d& x_K,
-                                  const Eigen::Ref<const PoseRows3>& d_x_d_theta, Eigen::Ref<Eigen::Vector2d> r,
+                                  const Eigen::Ref<const PoseRows3>& d_x_d_theta, double& r,
                                   Eigen::Ref<Eigen::MatrixXd> d_r_d_theta) const {
+  const Projection p = project_with_jacobian(intrinsics, x_K);
+  const Eigen::Matrix<double, 2, Eigen::Dynamic> d_pixel = p.d_pixel_d_point * d_x_d_theta;
+  distance_residual<2>(p.pixel - target_pixel, d_pixel, weight, r, d_r_d_theta);
+}
+
+void SilhouetteResidual::evaluate_offset(const raycast::DepthIntrinsics& intrinsics, const Eigen::Vector3d& x_K,
+                                         const Eigen::Ref<const PoseRows3>& d_x_d_theta, Eigen::Ref<Eigen::Vector2d> r,
+                                         Eigen::Ref<Eigen::MatrixXd> d_r_d_theta) const {
   const Projection p = project_with_jacobian(intrinsics, x_K);
   r = weight * (p.pixel - target_pixel);
   d_r_d_theta.noalias() = (weight * p.d_pixel_d_point) * d_x_d_theta;
 }
 
-void BehindResidual::evaluate(const Eigen::Vector3d& x_K, const Eigen::Ref<const PoseRows3>& d_x_d_theta,
-                              Eigen::Ref<Eigen::Vector3d> r, Eigen::Ref<Eigen::MatrixXd> d_r_d_theta) const {
-  r = residual(x_K);
+void BehindResidual::evaluate(const Eigen::Vector3d& x_K, const Eigen::Ref<const PoseRows3>& d_x_d_theta, double& r,
+                              Eigen::Ref<Eigen::MatrixXd> d_r_d_theta) const {
+  distance_residual<3>(x_K - target_K, d_x_d_theta, weight, r, d_r_d_theta);
+}
+
+void BehindResidual::evaluate_offset(const Eigen::Vector3d& x_K, const Eigen::Ref<const PoseRows3>& d_x_d_theta,
+                                     Eigen::Ref<Eigen::Vector3d> r, Eigen::Ref<Eigen::MatrixXd> d_r_d_theta) const {
+  r = offset(x_K);
   d_r_d_theta = weight * d_x_d_theta;
 }
 

@@ -6,7 +6,7 @@
 // each block's `weight` as square roots, so the total energy is the plain sum of squares.
 //
 // Blocks are value types with no state beyond their constants; the fitter decides which
-// points enter which block (and holds D_2D / D_3D targets fixed within an LM iteration).
+// points enter which block and takes their D_2D / D_3D targets at the pose it evaluates.
 #include <Eigen/Core>
 
 #include "body/body_evaluator.hpp"
@@ -49,31 +49,53 @@ struct DataResidual {
               Eigen::Ref<Eigen::MatrixXd> d_r_d_theta, Eigen::Ref<Eigen::Matrix<double, 6, 2>> d_r_d_uv) const;
 };
 
-// bg (eq. 6) and bgJoint (eq. 7), one point x(theta): r = weight (Pi(x) - q), where q is
-// D_2D(Pi(x)) taken at the start of the iteration (a silhouette pixel; the term is zero for points
+// bg (eq. 6) and bgJoint (eq. 7), one point x(theta): r = weight |Pi(x) - q|, where q is the
+// silhouette target of Pi(x) (D_2D, the fitter's silhouette_target; the term is zero for points
 // that project inside the silhouette, and the fitter does not create blocks for those).
 // weight = sqrt(lambda / H) or sqrt(lambda / |J_bg|).
+//
+// Two linearisations of the same energy. evaluate: the distance, one residual. The closest
+// silhouette pixel q slides along the silhouette's edge as x moves, so the energy changes only
+// with the distance, and its derivative is u^T dPi/dtheta with u the unit offset
+// (Pi(x) - q) / |Pi(x) - q|. evaluate_offset: the offset with q held (paper 2, two residuals),
+// which credits a step along the edge with a decrease the energy does not have, the slow
+// convergence of point-to-point ICP. The fitter uses the offsets unless
+// FitOptions::linearise_distances (pose fit only).
 struct SilhouetteResidual {
   Eigen::Vector2d target_pixel = Eigen::Vector2d::Zero();
   double weight = 1;
 
-  // Requires x.z() > 0.
-  Eigen::Vector2d residual(const raycast::DepthIntrinsics& intrinsics, const Eigen::Vector3d& x_K) const;
-  // d_x_d_theta: 3 x N Jacobian of the point; writes r and d r / d theta (2 x N).
+  // weight (Pi(x) - q) and r = its norm. Require x.z() > 0.
+  Eigen::Vector2d offset(const raycast::DepthIntrinsics& intrinsics, const Eigen::Vector3d& x_K) const;
+  double residual(const raycast::DepthIntrinsics& intrinsics, const Eigen::Vector3d& x_K) const {
+    return offset(intrinsics, x_K).norm();
+  }
+  // d_x_d_theta: 3 x N Jacobian of the point; writes r and d r / d theta (1 x N; zero where Pi(x)
+  // is q itself).
   void evaluate(const raycast::DepthIntrinsics& intrinsics, const Eigen::Vector3d& x_K,
-                const Eigen::Ref<const PoseRows3>& d_x_d_theta, Eigen::Ref<Eigen::Vector2d> r,
+                const Eigen::Ref<const PoseRows3>& d_x_d_theta, double& r,
                 Eigen::Ref<Eigen::MatrixXd> d_r_d_theta) const;
+  // The offset and its Jacobian, q held (2 x N).
+  void evaluate_offset(const raycast::DepthIntrinsics& intrinsics, const Eigen::Vector3d& x_K,
+                       const Eigen::Ref<const PoseRows3>& d_x_d_theta, Eigen::Ref<Eigen::Vector2d> r,
+                       Eigen::Ref<Eigen::MatrixXd> d_r_d_theta) const;
 };
 
-// float (eq. 12), one point: r = weight (x - D_3D(x)) with D_3D(x) taken at the start of the
-// iteration; weight = sqrt(lambda_float / Q).
+// float (eq. 12), one point: r = weight |x - D_3D(x)| with D_3D(x) the closest point behind the
+// observed surface (BehindSurfaceMap); weight = sqrt(lambda_float / Q). Linearised as
+// SilhouetteResidual: the distance (evaluate) or the offset with the target held (evaluate_offset).
 struct BehindResidual {
   Eigen::Vector3d target_K = Eigen::Vector3d::Zero();
   double weight = 1;
 
-  Eigen::Vector3d residual(const Eigen::Vector3d& x_K) const { return weight * (x_K - target_K); }
-  void evaluate(const Eigen::Vector3d& x_K, const Eigen::Ref<const PoseRows3>& d_x_d_theta,
-                Eigen::Ref<Eigen::Vector3d> r, Eigen::Ref<Eigen::MatrixXd> d_r_d_theta) const;
+  Eigen::Vector3d offset(const Eigen::Vector3d& x_K) const { return weight * (x_K - target_K); }
+  double residual(const Eigen::Vector3d& x_K) const { return offset(x_K).norm(); }
+  // r and d r / d theta (1 x N; zero where x is its target).
+  void evaluate(const Eigen::Vector3d& x_K, const Eigen::Ref<const PoseRows3>& d_x_d_theta, double& r,
+                Eigen::Ref<Eigen::MatrixXd> d_r_d_theta) const;
+  // The offset and its Jacobian, target held (3 x N).
+  void evaluate_offset(const Eigen::Vector3d& x_K, const Eigen::Ref<const PoseRows3>& d_x_d_theta,
+                       Eigen::Ref<Eigen::Vector3d> r, Eigen::Ref<Eigen::MatrixXd> d_r_d_theta) const;
 };
 
 // limit (eq. 8): one residual per limited DOF d (the N_theta - 6 non-global ones),

@@ -102,27 +102,61 @@ TEST(FitResidualBlocks, SilhouetteResidualOfVertexAndJointMatchesFiniteDifferenc
   const raycast::DepthIntrinsics intrinsics;
   const SilhouetteResidual block{{250.0, 200.0}, std::sqrt(10.0 / 150)};
   Eigen::Matrix3Xd vertex_jacobian(3, m.layout.size());
-  Eigen::Vector2d r;
-  Eigen::MatrixXd J(2, m.layout.size());
+  double r = 0;
+  Eigen::MatrixXd J(1, m.layout.size());
+  const auto as_vector = [](double value) { return Eigen::VectorXd::Constant(1, value); };
   for (int vertex : {5, 300, 777}) {  // bg: a model vertex
     vertex_jacobian.setZero();
     m.eval.add_vertex_pose_jacobian(vertex, 1.0, vertex_jacobian);
     block.evaluate(intrinsics, m.eval.vertices().col(vertex), vertex_jacobian, r, J);
-    EXPECT_LT((r - block.residual(intrinsics, m.eval.vertices().col(vertex))).norm(), 1e-12);
+    EXPECT_NEAR(r, block.residual(intrinsics, m.eval.vertices().col(vertex)), 1e-12);
+    EXPECT_GT(r, 0.0);
     for (int d = 0; d < m.layout.size(); ++d) {
-      const Eigen::VectorXd fd = m.pose_difference(
-          d, [&] { return Eigen::VectorXd(block.residual(intrinsics, m.probe.vertices().col(vertex))); });
+      const Eigen::VectorXd fd =
+          m.pose_difference(d, [&] { return as_vector(block.residual(intrinsics, m.probe.vertices().col(vertex))); });
       ASSERT_LT((fd - J.col(d)).norm(), 1e-4 * (1 + fd.norm())) << "vertex " << vertex << " dof " << d;
     }
   }
   for (int joint : {body::kLeftWrist, body::kHead, body::kPelvis}) {  // bgJoint
     block.evaluate(intrinsics, m.eval.joints().col(joint), m.eval.joint_pose_jacobian().middleRows<3>(3 * joint), r, J);
     for (int d = 0; d < m.layout.size(); ++d) {
-      const Eigen::VectorXd fd = m.pose_difference(
-          d, [&] { return Eigen::VectorXd(block.residual(intrinsics, m.probe.joints().col(joint))); });
+      const Eigen::VectorXd fd =
+          m.pose_difference(d, [&] { return as_vector(block.residual(intrinsics, m.probe.joints().col(joint))); });
       ASSERT_LT((fd - J.col(d)).norm(), 1e-4 * (1 + fd.norm())) << "joint " << joint << " dof " << d;
     }
   }
+}
+
+TEST(FitResidualBlocks, SilhouetteResidualSeesNoDecreaseAlongTheEdgeOnlyAcrossIt) {
+  // The point projects 10 px right of its target on a vertical silhouette edge. A motion that
+  // moves its image down (along the edge, where the closest pixel follows it) leaves the
+  // distance as it is to first order; a motion to the right changes it by the image motion.
+  const raycast::DepthIntrinsics intrinsics;
+  const Eigen::Vector3d x_K(0.0, 0.0, 2.0);
+  const Eigen::Vector2d pixel = project_with_jacobian(intrinsics, x_K).pixel;
+  const SilhouetteResidual block{pixel - Eigen::Vector2d(10.0, 0.0), 0.5};
+  PoseRows3 d_x(3, 2);
+  d_x.col(0) = Eigen::Vector3d(0.0, 0.01, 0.0);  // down the image (K: y down)
+  d_x.col(1) = Eigen::Vector3d(0.01, 0.0, 0.0);  // to the right
+  double r = 0;
+  Eigen::MatrixXd J(1, 2);
+  block.evaluate(intrinsics, x_K, d_x, r, J);
+  EXPECT_NEAR(r, 0.5 * 10.0, 1e-9);
+  EXPECT_NEAR(J(0, 0), 0.0, 1e-12);
+  const Eigen::Matrix<double, 2, 3> d_pixel = project_with_jacobian(intrinsics, x_K).d_pixel_d_point;
+  EXPECT_NEAR(J(0, 1), 0.5 * d_pixel(0, 0) * 0.01, 1e-12);
+  EXPECT_GT(std::abs(J(0, 1)), 0.5 * 0.5 * intrinsics.fx * 0.01 / 2.0);  // about fx / z per metre
+  // The offset form (q held) credits the slide along the edge with the image motion.
+  Eigen::Vector2d offset;
+  Eigen::MatrixXd J_offset(2, 2);
+  block.evaluate_offset(intrinsics, x_K, d_x, offset, J_offset);
+  EXPECT_NEAR(offset.norm(), r, 1e-12);
+  EXPECT_GT(std::abs(J_offset(1, 0)), 0.5 * 0.5 * intrinsics.fy * 0.01 / 2.0);
+  // On the target itself the distance has no direction: no row, not NaN.
+  const SilhouetteResidual on_target{pixel, 0.5};
+  on_target.evaluate(intrinsics, x_K, d_x, r, J);
+  EXPECT_EQ(r, 0.0);
+  EXPECT_TRUE(J.isZero(0.0));
 }
 
 TEST(FitResidualBlocks, BehindResidualMatchesFiniteDifferences) {
@@ -131,12 +165,13 @@ TEST(FitResidualBlocks, BehindResidualMatchesFiniteDifferences) {
   Eigen::Matrix3Xd vertex_jacobian = Eigen::Matrix3Xd::Zero(3, m.layout.size());
   const int vertex = 420;
   m.eval.add_vertex_pose_jacobian(vertex, 1.0, vertex_jacobian);
-  Eigen::Vector3d r;
-  Eigen::MatrixXd J(3, m.layout.size());
+  double r = 0;
+  Eigen::MatrixXd J(1, m.layout.size());
   block.evaluate(m.eval.vertices().col(vertex), vertex_jacobian, r, J);
+  EXPECT_NEAR(r, block.weight * (m.eval.vertices().col(vertex) - block.target_K).norm(), 1e-15);
   for (int d = 0; d < m.layout.size(); ++d) {
-    const Eigen::VectorXd fd =
-        m.pose_difference(d, [&] { return Eigen::VectorXd(block.residual(m.probe.vertices().col(vertex))); });
+    const Eigen::VectorXd fd = m.pose_difference(
+        d, [&] { return Eigen::VectorXd::Constant(1, block.residual(m.probe.vertices().col(vertex))); });
     ASSERT_LT((fd - J.col(d)).norm(), 1e-6 * (1 + fd.norm())) << "dof " << d;
   }
 }

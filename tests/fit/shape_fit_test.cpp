@@ -70,7 +70,8 @@ TEST(FitShapeJacobians, DataResidualShapeColumnsMatchFiniteDifferences) {
   }
 }
 
-TEST(FitShapeJacobians, SilhouetteAndBehindResidualsOfVerticesAndJointsMatchFiniteDifferences) {
+// The shape fit linearises the offsets (SilhouetteResidual).
+TEST(FitShapeJacobians, SilhouetteAndBehindOffsetsOfVerticesAndJointsMatchFiniteDifferences) {
   ShapedModel m;
   const raycast::DepthIntrinsics intrinsics;
   const SilhouetteResidual silhouette{{250.0, 200.0}, std::sqrt(10.0 / 150)};
@@ -80,23 +81,22 @@ TEST(FitShapeJacobians, SilhouetteAndBehindResidualsOfVerticesAndJointsMatchFini
   Eigen::MatrixXd J2(2, 10), J3(3, 10);
   for (int vertex : {5, 300, 777}) {  // bg and float points are model vertices
     const Eigen::Matrix3Xd d_x_d_beta = m.eval.vertex_shape_jacobian(vertex);
-    silhouette.evaluate(intrinsics, m.eval.vertices().col(vertex), d_x_d_beta, r2, J2);
-    behind.evaluate(m.eval.vertices().col(vertex), d_x_d_beta, r3, J3);
+    silhouette.evaluate_offset(intrinsics, m.eval.vertices().col(vertex), d_x_d_beta, r2, J2);
+    behind.evaluate_offset(m.eval.vertices().col(vertex), d_x_d_beta, r3, J3);
     for (int b = 0; b < 10; ++b) {
       const Eigen::VectorXd fd2 =
-          m.shape_difference(b, [&] { return silhouette.residual(intrinsics, m.probe.vertices().col(vertex)); });
-      const Eigen::VectorXd fd3 =
-          m.shape_difference(b, [&] { return behind.residual(m.probe.vertices().col(vertex)); });
+          m.shape_difference(b, [&] { return silhouette.offset(intrinsics, m.probe.vertices().col(vertex)); });
+      const Eigen::VectorXd fd3 = m.shape_difference(b, [&] { return behind.offset(m.probe.vertices().col(vertex)); });
       ASSERT_LT((fd2 - J2.col(b)).norm(), 1e-4 * (1 + fd2.norm())) << "vertex " << vertex << " beta " << b;
       ASSERT_LT((fd3 - J3.col(b)).norm(), 1e-6 * (1 + fd3.norm())) << "vertex " << vertex << " beta " << b;
     }
   }
   for (int joint : {body::kLeftWrist, body::kHead, body::kLeftKnee, body::kRightShoulder}) {  // bgJoint
-    silhouette.evaluate(intrinsics, m.eval.joints().col(joint), m.eval.joint_shape_jacobian().middleRows<3>(3 * joint),
-                        r2, J2);
+    silhouette.evaluate_offset(intrinsics, m.eval.joints().col(joint),
+                               m.eval.joint_shape_jacobian().middleRows<3>(3 * joint), r2, J2);
     for (int b = 0; b < 10; ++b) {
       const Eigen::VectorXd fd =
-          m.shape_difference(b, [&] { return silhouette.residual(intrinsics, m.probe.joints().col(joint)); });
+          m.shape_difference(b, [&] { return silhouette.offset(intrinsics, m.probe.joints().col(joint)); });
       ASSERT_LT((fd - J2.col(b)).norm(), 1e-4 * (1 + fd.norm())) << "joint " << joint << " beta " << b;
     }
   }

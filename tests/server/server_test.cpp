@@ -514,9 +514,9 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   EXPECT_EQ(info.stages(3).name(), "forearm_gaps");
   EXPECT_EQ(info.stages(4).name(), "frame_merge");
   EXPECT_EQ(info.stages(5).name(), "measures");
-  ASSERT_EQ(info.options_size(), 42);
-  EXPECT_EQ(info.options(31).key(), "measures.repetition_angle");
-  EXPECT_EQ(info.options(31).default_value(), "auto");
+  ASSERT_EQ(info.options_size(), 43);
+  EXPECT_EQ(info.options(32).key(), "measures.repetition_angle");
+  EXPECT_EQ(info.options(32).default_value(), "auto");
   EXPECT_EQ(info.options(16).key(), "fit.enabled");
   EXPECT_EQ(info.options(16).default_value(), "true");
   EXPECT_EQ(info.options(22).key(), "fit.trusted_energy");

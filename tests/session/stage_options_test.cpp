@@ -54,7 +54,7 @@ TEST(StageOptions, EveryKeyIsDeclaredOnceUnderItsStagesPrefix) {
       }
     }
   }
-  EXPECT_EQ(keys.size(), 42u);
+  EXPECT_EQ(keys.size(), 43u);
 }
 
 TEST(StageOptions, DefaultsAreValidAndTheLibrariesOwn) {

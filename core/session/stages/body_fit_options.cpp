@@ -115,6 +115,11 @@ const OptionTable& body_fit_option_table() {
          .default_value = fit_defaults.project_steps_onto_limits ? "true" : "false",
          .description = "LM: each trial step clamped to the pose limits widened by 0.1 rad (false = paper 2's soft "
                         "limits alone)"},
+        {.key = kFitLineariseDistancesKey,
+         .type = OptionType::kBool,
+         .default_value = fit_defaults.linearise_distances ? "true" : "false",
+         .description = "LM: bg, bgJoint and float linearised as distances to their sliding closest points (false = "
+                        "as offsets to held targets, paper 2)"},
         // Off by default: measured, it did not lower the iterations and raised the occluded error
         // (docs/fitting.md, "Start policy").
         {.key = kFitStartVelocityGainKey,
@@ -152,6 +157,7 @@ BodyFitOptions read_body_fit_options(const v1::SessionHeader& header) {
   out.fit.freeze_contour_after = static_cast<int>(options.integer(kFitFreezeContourAfterKey));
   out.fit.joint_step_stop_max_damping = options.real(kFitJointStepStopMaxDampingKey);
   out.fit.project_steps_onto_limits = options.boolean(kFitProjectStepsOntoLimitsKey);
+  out.fit.linearise_distances = options.boolean(kFitLineariseDistancesKey);
   out.extrapolation.velocity_gain = options.real(kFitStartVelocityGainKey);
   return out;
 }

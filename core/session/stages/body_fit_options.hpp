@@ -25,6 +25,7 @@ inline constexpr const char* kFitSkeletonStartEnergyKey = "fit.skeleton_start_en
 inline constexpr const char* kFitFreezeContourAfterKey = "fit.freeze_contour_after";
 inline constexpr const char* kFitJointStepStopMaxDampingKey = "fit.joint_step_stop_max_damping";
 inline constexpr const char* kFitProjectStepsOntoLimitsKey = "fit.project_steps_onto_limits";
+inline constexpr const char* kFitLineariseDistancesKey = "fit.linearise_distances";
 inline constexpr const char* kFitStartVelocityGainKey = "fit.start_velocity_gain";
 
 // What the options say, as the stage uses it. The defaults are the table's (read_body_fit_options).
