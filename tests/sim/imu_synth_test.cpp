@@ -204,58 +204,67 @@ TEST(ImuSynth, GyroBiasAndScaleAsReported) {
   EXPECT_FALSE(r.errors.gyr_scale_misalignment.isIdentity());
 }
 
-TEST(ImuSynth, AWarmingSensorsBiasesMoveByTheirChangePerKelvin) {
+namespace {
+
+// The same motion synthesised by a sensor warming by 10 K (time constant 5 s) and by one at its
+// temperature, with the given static errors, no noise and no saturation.
+struct WarmAndCold {
+  std::vector<double> t;
+  ImuSynthResult warm, cold;
+  double rise_K(std::size_t k) const { return 10.0 * (1.0 - std::exp(-(t[k] - t.front()) / 5.0)); }
+};
+WarmAndCold warm_and_cold(const ImuErrors& errors) {
   ImuSynthOptions o = ideal_options();
-  ImuErrors e;
-  e.gyr_bias_per_kelvin_rad_s = Vec3(1e-3, -2e-3, 0.5e-3);
-  e.acc_bias_per_kelvin_m_s2 = Vec3(0.01, 0.0, -0.02);
-  o.errors = e;
+  o.errors = errors;
   o.warm_up.rise_K = 10.0;
   o.warm_up.time_constant_s = 5.0;
   o.gyr_range_rad_s = o.acc_range_m_s2 = std::numeric_limits<double>::infinity();
   const SensorKinematics motion = complex_motion(10.2);
-  const std::vector<double> t = uniform_times(0.05, 10.05, 80);
-  const ImuSynthResult warm = synthesize_imu(motion, t, o);
+  WarmAndCold out;
+  out.t = uniform_times(0.05, 10.05, 80);
+  out.warm = synthesize_imu(motion, out.t, o);
   o.warm_up.rise_K = 0.0;
-  const ImuSynthResult cold = synthesize_imu(motion, t, o);
-  ASSERT_EQ(warm.samples.size(), t.size());
-  for (std::size_t k = 0; k < t.size(); ++k) {
-    const double rise_K = 10.0 * (1.0 - std::exp(-(t[k] - t.front()) / 5.0));
-    EXPECT_LT((warm.samples[k].gyr_rad_s - cold.samples[k].gyr_rad_s - rise_K * e.gyr_bias_per_kelvin_rad_s).norm(),
+  out.cold = synthesize_imu(motion, out.t, o);
+  return out;
+}
+
+}  // namespace
+
+TEST(ImuSynth, AWarmingSensorsBiasesMoveByTheirChangePerKelvin) {
+  ImuErrors e;
+  e.gyr_bias_per_kelvin_rad_s = Vec3(1e-3, -2e-3, 0.5e-3);
+  e.acc_bias_per_kelvin_m_s2 = Vec3(0.01, 0.0, -0.02);
+  const WarmAndCold r = warm_and_cold(e);
+  ASSERT_EQ(r.warm.samples.size(), r.t.size());
+  for (std::size_t k = 0; k < r.t.size(); ++k) {
+    const double rise_K = r.rise_K(k);
+    EXPECT_LT((r.warm.samples[k].gyr_rad_s - r.cold.samples[k].gyr_rad_s - rise_K * e.gyr_bias_per_kelvin_rad_s).norm(),
               1e-12);
-    EXPECT_LT((warm.samples[k].acc_m_s2 - cold.samples[k].acc_m_s2 - rise_K * e.acc_bias_per_kelvin_m_s2).norm(),
+    EXPECT_LT((r.warm.samples[k].acc_m_s2 - r.cold.samples[k].acc_m_s2 - rise_K * e.acc_bias_per_kelvin_m_s2).norm(),
               1e-12);
-    EXPECT_LT((warm.gyr_bias_rad_s[k] - rise_K * e.gyr_bias_per_kelvin_rad_s).norm(), 1e-15);
-    EXPECT_EQ(warm.samples[k].mag_uT, cold.samples[k].mag_uT);
+    EXPECT_LT((r.warm.gyr_bias_rad_s[k] - rise_K * e.gyr_bias_per_kelvin_rad_s).norm(), 1e-15);
+    EXPECT_EQ(r.warm.samples[k].mag_uT, r.cold.samples[k].mag_uT);
   }
   // 8.6 K after two time constants.
-  EXPECT_NEAR(warm.gyr_bias_rad_s.back().y(), -2e-3 * 10.0 * (1.0 - std::exp(-2.0)), 1e-12);
+  EXPECT_NEAR(r.warm.gyr_bias_rad_s.back().y(), -2e-3 * 10.0 * (1.0 - std::exp(-2.0)), 1e-12);
 }
 
 TEST(ImuSynth, AWarmingSensorsScaleFactorsChangeByTheirChangePerKelvin) {
   // Ideal otherwise: the cold signals are the true rate and specific force.
-  ImuSynthOptions o = ideal_options();
   ImuErrors e;
   e.gyr_scale_per_kelvin = Vec3(2e-4, -1e-4, 3e-4);
   e.acc_scale_per_kelvin = Vec3(-3e-4, 2e-4, 1e-4);
-  o.errors = e;
-  o.warm_up.rise_K = 10.0;
-  o.warm_up.time_constant_s = 5.0;
-  o.gyr_range_rad_s = o.acc_range_m_s2 = std::numeric_limits<double>::infinity();
-  const SensorKinematics motion = complex_motion(10.2);
-  const std::vector<double> t = uniform_times(0.05, 10.05, 80);
-  const ImuSynthResult warm = synthesize_imu(motion, t, o);
-  o.warm_up.rise_K = 0.0;
-  const ImuSynthResult cold = synthesize_imu(motion, t, o);
+  const WarmAndCold r = warm_and_cold(e);
   double largest_gyr_change = 0;
-  for (std::size_t k = 0; k < t.size(); ++k) {
-    const double rise_K = 10.0 * (1.0 - std::exp(-(t[k] - t.front()) / 5.0));
-    const Vec3 omega = cold.samples[k].gyr_rad_s, f = cold.samples[k].acc_m_s2;
-    EXPECT_LT((warm.samples[k].gyr_rad_s - omega - rise_K * e.gyr_scale_per_kelvin.cwiseProduct(omega)).norm(), 1e-12);
-    EXPECT_LT((warm.samples[k].acc_m_s2 - f - rise_K * e.acc_scale_per_kelvin.cwiseProduct(f)).norm(), 1e-12);
+  for (std::size_t k = 0; k < r.t.size(); ++k) {
+    const double rise_K = r.rise_K(k);
+    const Vec3 omega = r.cold.samples[k].gyr_rad_s, f = r.cold.samples[k].acc_m_s2;
+    EXPECT_LT((r.warm.samples[k].gyr_rad_s - omega - rise_K * e.gyr_scale_per_kelvin.cwiseProduct(omega)).norm(),
+              1e-12);
+    EXPECT_LT((r.warm.samples[k].acc_m_s2 - f - rise_K * e.acc_scale_per_kelvin.cwiseProduct(f)).norm(), 1e-12);
     // A scale error is no bias: the reported true bias stays 0.
-    EXPECT_EQ(warm.gyr_bias_rad_s[k], Vec3::Zero());
-    largest_gyr_change = std::max(largest_gyr_change, (warm.samples[k].gyr_rad_s - omega).norm());
+    EXPECT_EQ(r.warm.gyr_bias_rad_s[k], Vec3::Zero());
+    largest_gyr_change = std::max(largest_gyr_change, (r.warm.samples[k].gyr_rad_s - omega).norm());
   }
   EXPECT_GT(largest_gyr_change, 1e-4);  // the motion turns fast enough to show it
 }
