@@ -26,9 +26,11 @@ STAGES = [
     ("body fit: depth preprocessing (fit::prepare_observation)", ["fit::prepare_observation"]),
     ("body fit: LM (fit::FrameFitter, SchurSystem)", ["fit::FrameFitter::", "fit::SchurSystem"]),
     ("body fit: the rest (frame assembly, tracker, packing, cleanup)", ["fit::", "BodyFitStage", "body::"]),
-    ("forearm stage: arm axes and strap in depth and colour (measure_arm_frame)", ["forearm::measure_arm_frame"]),
+    # Before the forearm stage: the stage decodes its colour rectangles itself.
+    ("decoding: colour JPEG to grey (the strap rectangles)", ["decode_color_gray", "ColorImage::"]),
+    ("forearm stage: arm axes and strap in depth and colour (measure_arm_frame, find_arm_strap)",
+     ["forearm::measure_arm_frame", "forearm::find_arm_strap"]),
     ("forearm stage and gaps: the rest (tracking, clocks, recovery)", ["ForearmStage", "forearm::", "ForearmGapsStage", "sync::"]),
-    ("decoding: colour JPEG to grey", ["decode_color_gray"]),
     ("decoding: depth (zstd) and body index (PNG)", ["decode_depth", "decode_body_index", "cv::imdecode"]),
     ("validation", ["SessionValidator", "validate_chunk"]),
     ("IMU orientation filter", ["imu::"]),

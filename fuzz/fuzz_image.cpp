@@ -1,5 +1,6 @@
 // The image decoders (session/image_codec.*): depth RAW_U16_LE / PNG16 / ZSTD_U16_LE, body
-// index RAW_U8 / PNG8 / ZSTD_U8, colour PNG / JPEG to grey, and the PNG / JPEG header sniffers, under the
+// index RAW_U8 / PNG8 / ZSTD_U8, colour PNG / JPEG to grey (whole, and a rectangle as the strap
+// search decodes it), and the PNG / JPEG header sniffers, under the
 // limits they apply themselves (kMaxImageSide, kMaxDepthPixels, kMaxColorPixels).
 //
 // Input: byte 0 picks the decoder, byte 1 the encoding, bytes 2-3 and 4-5 the chunk's width
@@ -12,6 +13,7 @@
 
 #include "common/error.hpp"
 #include "seeds.hpp"
+#include "session/color_image.hpp"
 #include "session/image_codec.hpp"
 
 using namespace posefuse;
@@ -103,6 +105,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         frame.set_height(height);
         frame.set_encoding(static_cast<v1::ColorFrame::Encoding>(encoding));
         frame.set_data(payload);
+        // The strap search's decoder (session/color_image.hpp): a rectangle of the chunk's image.
+        try {
+          const session::ColorImage image = session::ColorImage::from_frame(frame);
+          cv::Mat gray;
+          const int w = static_cast<int>(width), h = static_cast<int>(height);
+          image.decode_gray({w / 4, h / 3, w / 2 + 1, h / 2 + 1}, gray);
+          check(gray, width, height, CV_8UC1, "color region");
+        } catch (const Error&) {
+        }
         check(session::decode_color_gray(frame), width, height, CV_8UC1, "color");
         break;
       }

@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <vector>
 
+#include "geometry/image_view.hpp"
 #include "raycast/depth_camera.hpp"
 
 namespace posefuse::fit {
@@ -13,10 +14,7 @@ namespace posefuse::fit {
 inline constexpr uint16_t kNoDepth = 0;  // depth pixel without a reading
 inline constexpr uint8_t kNoBody = 255;  // body-index pixel outside every body
 
-// A rectangle of pixels, bounds inclusive (empty when col0 > col1 or row0 > row1).
-struct PixelRect {
-  int col0 = 0, row0 = 0, col1 = -1, row1 = -1;
-};
+using geometry::PixelRect;
 
 // Smallest rectangle holding every non-zero pixel of a row-major width x height mask (empty when
 // there is none). The caller checks mask.size() == width * height.

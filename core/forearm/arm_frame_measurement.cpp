@@ -13,8 +13,7 @@ bool has_pixels(const auto& image) { return image.pixels != nullptr && image.wid
 
 }  // namespace
 
-void measure_arm_frame(ArmFrame& arm, const geometry::DepthImageView& depth, const geometry::GrayImageView& gray,
-                       const StrapCameras& cameras, const geometry::PixelRays& depth_rays,
+void measure_arm_frame(ArmFrame& arm, const geometry::DepthImageView& depth, const geometry::PixelRays& depth_rays,
                        const ArmMeasurementOptions& options) {
   if (!arm.forearm_tracked || !has_pixels(depth)) return;
   if (options.axis_from_depth || options.upper_arm_from_depth) {
@@ -41,10 +40,13 @@ void measure_arm_frame(ArmFrame& arm, const geometry::DepthImageView& depth, con
       arm.upper_arm_direction_K = upper_arm->direction_K;
     }
   }
-  if (has_pixels(gray)) {
-    const StrapDetection strap = detect_strap(gray, depth, cameras, arm.elbow_K, arm.wrist_K);
-    if (strap.found()) arm.strap_K = strap.strap_K;
-  }
+}
+
+void find_arm_strap(ArmFrame& arm, const geometry::DepthImageView& depth, const geometry::GrayImageView& gray,
+                    const StrapCameras& cameras) {
+  if (!arm.forearm_tracked || !has_pixels(depth) || !has_pixels(gray)) return;
+  const StrapDetection strap = detect_strap(gray, depth, cameras, arm.elbow_K, arm.wrist_K);
+  if (strap.found()) arm.strap_K = strap.strap_K;
 }
 
 std::size_t drop_straps_nearer_another_wrist(std::vector<ArmFrame>& arms) {

@@ -21,12 +21,18 @@ struct ArmMeasurementOptions {
 };
 
 // Refines `arm`, whose SDK joints and tracking flags are set, in place: elbow_K, wrist_K and
-// axis_from_depth from the depth image, upper_arm_direction_K (calibrating only), strap_K from
-// the colour image. Only an arm whose forearm the SDK tracks is measured; an empty image is not
-// used. depth_rays: cameras.depth's pixel rays, built once per session (geometry/pixel_rays.hpp).
-void measure_arm_frame(ArmFrame& arm, const geometry::DepthImageView& depth, const geometry::GrayImageView& gray,
-                       const StrapCameras& cameras, const geometry::PixelRays& depth_rays,
+// axis_from_depth from the depth image, upper_arm_direction_K (calibrating only). Only an arm
+// whose forearm the SDK tracks is measured; an empty image is not used. depth_rays: the depth
+// camera's pixel rays, built once per session (geometry/pixel_rays.hpp).
+void measure_arm_frame(ArmFrame& arm, const geometry::DepthImageView& depth, const geometry::PixelRays& depth_rays,
                        const ArmMeasurementOptions& options);
+
+// Then the strap: strap_K where detect_strap finds it along the measured forearm. Reads only the
+// pixels of strap_profile_rect(cameras, arm.elbow_K, arm.wrist_K) in `gray`, so a colour frame
+// decoded over the arms' rectangles alone will do (session/color_image.hpp). An arm whose forearm
+// the SDK does not track, or an empty image: nothing.
+void find_arm_strap(ArmFrame& arm, const geometry::DepthImageView& depth, const geometry::GrayImageView& gray,
+                    const StrapCameras& cameras);
 
 // Both arms' straps are alike dark bands just short of the wrist, and each arm's search runs
 // along its own forearm axis, which with the hands together can run on over the other forearm (on

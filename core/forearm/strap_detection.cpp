@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -58,6 +59,24 @@ void check_inputs(const GrayImageView& color, const DepthImageView& depth, const
   }
 }
 
+struct ProjectedForearm {
+  Vec2 elbow_px, wrist_px;
+};
+
+// The elbow and wrist in the colour image, or nullopt when either is behind the camera or outside
+// the image.
+std::optional<ProjectedForearm> project_forearm(const StrapCameras& cameras, const Vec3& elbow_K, const Vec3& wrist_K) {
+  const Quat color_from_K = cameras.color_from_depth.normalized();
+  const auto to_color = [&](const Vec3& p_K) { return Vec3(color_from_K * p_K + cameras.color_from_depth_m); };
+  const auto elbow_px = geometry::project(cameras.color, to_color(elbow_K));
+  const auto wrist_px = geometry::project(cameras.color, to_color(wrist_K));
+  if (!elbow_px || !wrist_px || !geometry::inside_image(cameras.color, *elbow_px) ||
+      !geometry::inside_image(cameras.color, *wrist_px)) {
+    return std::nullopt;
+  }
+  return ProjectedForearm{*elbow_px, *wrist_px};
+}
+
 // Closest point of segment [a, b] to the ray origin + s * direction (s >= 0).
 Vec3 closest_on_segment_to_ray(const Vec3& a, const Vec3& b, const Vec3& origin, const Vec3& direction) {
   const Vec3 d1 = b - a, d2 = direction.normalized(), r = a - origin;
@@ -98,21 +117,21 @@ StrapDetection detect_strap(const GrayImageView& color, const DepthImageView& de
   StrapDetection out;
   const Quat color_from_K = cameras.color_from_depth.normalized();
   const auto to_color = [&](const Vec3& p_K) { return Vec3(color_from_K * p_K + cameras.color_from_depth_m); };
-  const auto elbow_px = geometry::project(cameras.color, to_color(elbow_K));
-  const auto wrist_px = geometry::project(cameras.color, to_color(wrist_K));
-  if (!elbow_px || !wrist_px || !geometry::inside_image(cameras.color, *elbow_px) ||
-      !geometry::inside_image(cameras.color, *wrist_px)) {
+  const std::optional<ProjectedForearm> projected = project_forearm(cameras, elbow_K, wrist_K);
+  if (!projected) {
     out.miss = StrapMiss::kOutsideImage;
     return out;
   }
+  const Vec2& elbow_px = projected->elbow_px;
+  const Vec2& wrist_px = projected->wrist_px;
 
   // 1. Grey profile along the projected segment.
-  const double length_px = (*wrist_px - *elbow_px).norm();
+  const double length_px = (wrist_px - elbow_px).norm();
   const int n = std::max(options.min_samples, static_cast<int>(std::ceil(length_px)) + 1);
   std::vector<double> profile(static_cast<std::size_t>(n));
   for (int i = 0; i < n; ++i) {
     const double f = static_cast<double>(i) / (n - 1);
-    profile[static_cast<std::size_t>(i)] = bilinear(color, *elbow_px + f * (*wrist_px - *elbow_px));
+    profile[static_cast<std::size_t>(i)] = bilinear(color, elbow_px + f * (wrist_px - elbow_px));
   }
   // 2. Moving average (odd window, centred); darkest centre inside the search range.
   const int half = std::max(1, static_cast<int>(std::lround(options.window_fraction * (n - 1) / 2.0)));
@@ -135,7 +154,7 @@ StrapDetection detect_strap(const GrayImageView& color, const DepthImageView& de
     }
   }
   out.fraction = static_cast<double>(best) / (n - 1);
-  out.color_px = *elbow_px + out.fraction * (*wrist_px - *elbow_px);
+  out.color_px = elbow_px + out.fraction * (wrist_px - elbow_px);
   out.band_level = best_level;
   out.contrast = median(profile) - best_level;
   if (out.contrast < options.min_contrast || best_level > options.max_strap_level) {
@@ -201,6 +220,21 @@ StrapDetection detect_strap(const GrayImageView& color, const DepthImageView& de
   }
   if (out.depth_samples < options.min_depth_samples) out.miss = StrapMiss::kNoDepth;
   return out;
+}
+
+geometry::PixelRect strap_profile_rect(const StrapCameras& cameras, const Vec3& elbow_K, const Vec3& wrist_K) {
+  const std::optional<ProjectedForearm> projected = project_forearm(cameras, elbow_K, wrist_K);
+  if (!projected) return {};
+  // bilinear() reads the pixel at a sample's floor and the next one; the profile's samples lie on
+  // the segment, up to rounding.
+  const Vec2 low = projected->elbow_px.cwiseMin(projected->wrist_px);
+  const Vec2 high = projected->elbow_px.cwiseMax(projected->wrist_px);
+  geometry::PixelRect rect;
+  rect.col0 = std::max(0, static_cast<int>(std::floor(low.x())) - 1);
+  rect.row0 = std::max(0, static_cast<int>(std::floor(low.y())) - 1);
+  rect.col1 = std::min(cameras.color.width - 1, static_cast<int>(std::floor(high.x())) + 2);
+  rect.row1 = std::min(cameras.color.height - 1, static_cast<int>(std::floor(high.y())) + 2);
+  return rect;
 }
 
 }  // namespace posefuse::forearm

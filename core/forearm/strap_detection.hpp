@@ -88,4 +88,10 @@ struct StrapDetection {
 StrapDetection detect_strap(const GrayImageView& color, const DepthImageView& depth, const StrapCameras& cameras,
                             const Vec3& elbow_K, const Vec3& wrist_K, const StrapDetectionOptions& options = {});
 
+// The colour pixels detect_strap reads for this forearm (its grey profile along the projected
+// elbow-wrist segment, bilinear), with a pixel to spare on every side, clipped to the image; an
+// empty rectangle where the segment leaves the image (detect_strap's kOutsideImage). A colour image
+// decoded over this rectangle alone gives detect_strap the result of the whole image.
+geometry::PixelRect strap_profile_rect(const StrapCameras& cameras, const Vec3& elbow_K, const Vec3& wrist_K);
+
 }  // namespace posefuse::forearm

@@ -101,8 +101,8 @@ FrameAssembler::Pending& FrameAssembler::frame_at(std::int64_t t_us, const std::
   return p;
 }
 
-void FrameAssembler::keep_color(std::int64_t t_us, cv::Mat gray) {
-  colors_.push_back({t_us, std::move(gray), false});
+void FrameAssembler::keep_color(std::int64_t t_us, ColorImage image) {
+  colors_.push_back({t_us, std::move(image), false});
   last_color_us_ = t_us;
   while (colors_.size() > kMaxKeptColorFrames) {
     if (!colors_.front().used) {
@@ -152,7 +152,7 @@ void FrameAssembler::add(const v1::SessionChunk& chunk, cv::Mat decoded, const s
       break;
     }
     case v1::SessionChunk::kColor: {
-      keep_color(chunk.color().t_us(), decode_color_gray(chunk.color(), field + ".color"));
+      keep_color(chunk.color().t_us(), ColorImage::from_frame(chunk.color(), field + ".color"));
       break;
     }
     case v1::SessionChunk::kImu: {
@@ -201,7 +201,7 @@ void FrameAssembler::release_front(std::vector<SessionInput>& ready) {
     }
   }
   if (nearest) {
-    p.frame.color_gray = nearest->gray;
+    p.frame.color = nearest->image;
     p.frame.color_t_us = nearest->t_us;
   }
   last_released_us_ = p.t_us;
@@ -229,10 +229,10 @@ std::size_t image_bytes(const cv::Mat& image) { return image.total() * image.ele
 std::size_t FrameAssembler::held_bytes() const {
   std::size_t held = posefuse::held_bytes(pending_) + posefuse::held_bytes(colors_);
   for (const Pending& p : pending_) {
-    held += image_bytes(p.frame.depth_mm) + image_bytes(p.frame.body_index) + image_bytes(p.frame.color_gray) +
+    held += image_bytes(p.frame.depth_mm) + image_bytes(p.frame.body_index) + p.frame.color.held_bytes() +
             posefuse::held_bytes(p.frame.skeletons);
   }
-  for (const Color& c : colors_) held += image_bytes(c.gray);
+  for (const Color& c : colors_) held += c.image.held_bytes();
   return held;
 }
 

@@ -69,7 +69,7 @@ class FrameAssembler {
   };
   struct Color {
     std::int64_t t_us = 0;
-    cv::Mat gray;
+    ColorImage image;
     bool used = false;
   };
   // The pending frame within the tolerance of t_us that `fits` accepts, or a new one at t_us
@@ -78,7 +78,7 @@ class FrameAssembler {
   Pending* find_frame(std::int64_t t_us, bool (*fits)(const Pending&));
   void release_ready(std::vector<SessionInput>& ready, bool all);
   void release_front(std::vector<SessionInput>& ready);
-  void keep_color(std::int64_t t_us, cv::Mat gray);
+  void keep_color(std::int64_t t_us, ColorImage image);
 
   Options options_;
   unsigned audio_channels_ = 0;

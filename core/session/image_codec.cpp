@@ -202,10 +202,9 @@ v1::DepthFrame encode_depth(const cv::Mat& depth_mm, v1::DepthFrame::Encoding en
   return frame;
 }
 
-cv::Mat decode_color_gray(const v1::ColorFrame& frame, const std::string& field) {
+void check_color_header(const v1::ColorFrame& frame, const std::string& field) {
   check_dimensions(frame.width(), frame.height(), kMaxColorPixels, field);
   const std::string data_field = field + ".data";
-  // The header first: rejects other bytes and oversized images before any decoding.
   ImageSize header;
   switch (frame.encoding()) {
     case v1::ColorFrame::PNG: header = png_size(frame.data(), data_field); break;
@@ -216,6 +215,12 @@ cv::Mat decode_color_gray(const v1::ColorFrame& frame, const std::string& field)
     throw_invalid(data_field, "image is " + size_text(header.width, header.height) + ", the chunk says " +
                                   size_text(frame.width(), frame.height()));
   }
+}
+
+cv::Mat decode_color_gray(const v1::ColorFrame& frame, const std::string& field) {
+  // The header first: rejects other bytes and oversized images before any decoding.
+  check_color_header(frame, field);
+  const std::string data_field = field + ".data";
   const cv::Mat encoded(1, static_cast<int>(frame.data().size()), CV_8UC1, const_cast<char*>(frame.data().data()));
   cv::Mat gray = cv::imdecode(encoded, cv::IMREAD_GRAYSCALE);
   if (gray.empty() || gray.type() != CV_8UC1) throw_invalid(data_field, "image cannot be decoded");

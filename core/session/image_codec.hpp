@@ -35,6 +35,9 @@ cv::Mat decode_body_index(const v1::BodyIndexFrame& frame, const std::string& fi
 v1::BodyIndexFrame encode_body_index(const cv::Mat& body_index, v1::BodyIndexFrame::Encoding encoding,
                                      std::int64_t t_us, int zstd_level = 3);
 
+// What a colour frame must be before any decoding: a known encoding, a size within
+// kMaxColorPixels, and the file's header (PNG or JPEG) saying the chunk's width and height.
+void check_color_header(const v1::ColorFrame& frame, const std::string& field = "color");
 // Colour frame -> CV_8UC1 grey levels (the strap search, paper 1 II-I, needs brightness only),
 // from JPEG or PNG, 8-bit grey or BGR; checks the size against the chunk's width and height.
 cv::Mat decode_color_gray(const v1::ColorFrame& frame, const std::string& field = "color");

@@ -14,6 +14,7 @@
 #include "geometry/pinhole_camera.hpp"
 #include "imu/imu_sample.hpp"
 #include "posefuse/v1/session.pb.h"
+#include "session/color_image.hpp"
 
 namespace posefuse::session {
 
@@ -40,7 +41,7 @@ struct CameraFrame {
   cv::Mat depth_mm;                 // CV_16UC1, millimetres, 0 = no reading
   cv::Mat body_index;               // CV_8UC1, the body id of each pixel, 255 = background
   std::vector<Skeleton> skeletons;  // one per body seen, by body id
-  cv::Mat color_gray;               // CV_8UC1 brightness of the colour frame nearest in time
+  ColorImage color;                 // the colour frame nearest in time (decoded where a stage looks)
   std::int64_t color_t_us = 0;
 
   // The skeleton of `body_id`, or nullptr.

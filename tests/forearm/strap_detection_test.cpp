@@ -97,6 +97,46 @@ TEST(StrapDetection, SegmentOutsideOrNoDepth) {
   EXPECT_EQ(hole.miss, StrapMiss::kNoDepth);
 }
 
+TEST(StrapDetection, ReadsOnlyTheProfileRectangle) {
+  // The colour image with every pixel outside strap_profile_rect set to 0 (as a colour frame
+  // decoded over that rectangle alone may leave them) gives the whole image's result, bit for bit.
+  const StrapCameras cameras = test_cameras();
+  ForearmScene across;
+  across.elbow_K = Vec3(-0.2, 0.0, 1.8);
+  across.wrist_K = Vec3(0.05, 0.05, 1.9);
+  across.strap_to_elbow_m = 0.21;
+  ForearmScene unseen;
+  unseen.strap_visible = false;
+  for (const ForearmScene& scene : {ForearmScene{}, across, unseen}) {
+    for (std::uint64_t seed = 1; seed <= 3; ++seed) {
+      const ForearmImages images = render_forearm(scene, cameras, 10.0, 0.003, seed);
+      const geometry::PixelRect rect = strap_profile_rect(cameras, scene.elbow_K, scene.wrist_K);
+      ASSERT_FALSE(rect.empty());
+      // A forearm's rectangle, not the image.
+      EXPECT_LT((rect.col1 - rect.col0 + 1) * (rect.row1 - rect.row0 + 1),
+                cameras.color.width * cameras.color.height / 4);
+      std::vector<std::uint8_t> only_rect(images.gray.size(), 0);
+      for (int row = rect.row0; row <= rect.row1; ++row)
+        for (int col = rect.col0; col <= rect.col1; ++col) {
+          const std::size_t i = static_cast<std::size_t>(row) * cameras.color.width + col;
+          only_rect[i] = images.gray[i];
+        }
+      const StrapDetection whole =
+          detect_strap(images.gray_view(cameras), images.depth_view(cameras), cameras, scene.elbow_K, scene.wrist_K);
+      const StrapDetection part = detect_strap({cameras.color.width, cameras.color.height, only_rect.data()},
+                                               images.depth_view(cameras), cameras, scene.elbow_K, scene.wrist_K);
+      EXPECT_EQ(part.miss, whole.miss);
+      EXPECT_EQ(part.fraction, whole.fraction);
+      EXPECT_EQ(part.contrast, whole.contrast);
+      EXPECT_EQ(part.side_contrast, whole.side_contrast);
+      EXPECT_EQ(part.strap_K, whole.strap_K);
+    }
+  }
+  // Where detect_strap finds the forearm outside the image there is nothing to decode.
+  EXPECT_TRUE(strap_profile_rect(cameras, Vec3(3.0, 0.0, 2.0), ForearmScene{}.wrist_K).empty());
+  EXPECT_TRUE(strap_profile_rect(cameras, Vec3(0.0, 0.0, -1.0), ForearmScene{}.wrist_K).empty());
+}
+
 TEST(StrapDetection, RefusesBadInput) {
   const StrapCameras cameras = test_cameras();
   const ForearmScene scene;

@@ -60,9 +60,9 @@ TEST(FrameAssembler, PairsEveryCameraStreamOfAnInstantIntoOneFrame) {
   EXPECT_EQ(frames[1].skeletons.size(), 2u);
   EXPECT_NE(frames[1].skeleton(2), nullptr);
   EXPECT_EQ(frames[0].color_t_us, frames[0].t_us + 1000);
-  EXPECT_FALSE(frames[0].color_gray.empty());
-  EXPECT_FALSE(frames[1].color_gray.empty());
-  EXPECT_TRUE(frames[2].color_gray.empty());
+  EXPECT_FALSE(frames[0].color.empty());
+  EXPECT_FALSE(frames[1].color.empty());
+  EXPECT_TRUE(frames[2].color.empty());
   EXPECT_TRUE(s.warnings.empty());
   // IMU batches, audio chunks and the sync events that a stage reads (not OTHER).
   std::size_t imu_samples = 0;
@@ -115,7 +115,7 @@ TEST(FrameAssembler, AColourFrameFarFromEveryCameraFrameIsWarned) {
   // Half a second after the last camera frame: no frame within a colour period.
   chunks[testing::index_of(chunks, v1::SessionChunk::kColor, 1)].mutable_color()->set_t_us(1'600'000);
   const AssembledSession s = assemble_session(chunks);
-  EXPECT_TRUE(all_of<CameraFrame>(s.inputs)[1].color_gray.empty());
+  EXPECT_TRUE(all_of<CameraFrame>(s.inputs)[1].color.empty());
   EXPECT_TRUE(warned(s, "CAMERA_FRAME_UNMATCHED", "color"));
 }
 

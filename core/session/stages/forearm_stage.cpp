@@ -126,7 +126,7 @@ void ForearmStage::on_camera_frame(const CameraFrame& frame, StageOutput& out) {
   if (const Skeleton* skeleton = body_id_ ? frame.skeleton(*body_id_) : nullptr) {
     if (!first_frame_us_) first_frame_us_ = frame.t_us;
     last_frame_us_ = frame.t_us;
-    detect_arms(frame, *skeleton);
+    detect_arms(frame, *skeleton, out);
   }
   advance(out);
   hand_on_frames_done(false, out);
@@ -198,10 +198,9 @@ void ForearmStage::advance(StageOutput& out) {
   feed_trackers(false, out);
 }
 
-void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleton) {
+void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleton, StageOutput& out) {
   // The SDK's joints only say where to look; the axes and the strap are the images'.
   const geometry::DepthImageView depth = depth_view(frame.depth_mm);
-  const geometry::GrayImageView gray = gray_view(frame.color_gray);
   std::vector<Device*> arm_devices;
   std::vector<forearm::ArmFrame> arms;
   for (Device& device : devices_) {
@@ -209,12 +208,13 @@ void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleto
     forearm::ArmFrame arm = arm_frame_from_skeleton(skeleton, *device.side, frame.t_us);
     if (cameras_) {
       forearm::measure_arm_frame(
-          arm, depth, gray, *cameras_, *depth_rays_,
+          arm, depth, *depth_rays_,
           {options_.axis_from_depth, options_.upper_arm_from_depth, !device.tracker || device.from_motion});
     }
     arm_devices.push_back(&device);
     arms.push_back(arm);
   }
+  if (cameras_ && !frame.color.empty()) find_straps(frame, depth, arms, out);
   forearm::drop_straps_nearer_another_wrist(arms);
   for (std::size_t i = 0; i < arms.size(); ++i) {
     if (arm_devices[i]->tracker) {
@@ -223,6 +223,29 @@ void ForearmStage::detect_arms(const CameraFrame& frame, const Skeleton& skeleto
       arm_devices[i]->frames.push_back(arms[i]);
     }
   }
+}
+
+void ForearmStage::find_straps(const CameraFrame& frame, const geometry::DepthImageView& depth,
+                               std::vector<forearm::ArmFrame>& arms, StageOutput& out) {
+  // The colour frame is decoded only where the arms' strap searches read it, in one pass.
+  std::vector<geometry::PixelRect> rects;
+  for (const forearm::ArmFrame& arm : arms) {
+    if (!arm.forearm_tracked) continue;
+    const geometry::PixelRect rect = forearm::strap_profile_rect(*cameras_, arm.elbow_K, arm.wrist_K);
+    if (!rect.empty()) rects.push_back(rect);
+  }
+  if (rects.empty()) return;
+  try {
+    frame.color.decode_gray(rects, color_gray_, "color");
+  } catch (const Error& error) {
+    // The frame's headers were checked when it arrived; its pixel data fails only now. The frame
+    // is measured as one without a colour image: no strap.
+    out.warn("FOREARM_COLOR_UNDECODABLE", error.field(),
+             "the colour frame at t_us " + std::to_string(frame.color_t_us) + ": " + error.what() +
+                 "; no strap search in it");
+    return;
+  }
+  for (forearm::ArmFrame& arm : arms) forearm::find_arm_strap(arm, depth, gray_view(color_gray_), *cameras_);
 }
 
 void ForearmStage::try_calibrate(bool finishing, StageOutput& out) {

@@ -55,6 +55,7 @@
 #include "forearm/forearm_track.hpp"
 #include "forearm/mounting_from_motion.hpp"
 #include "forearm/strap_detection.hpp"
+#include "geometry/image_view.hpp"
 #include "geometry/pixel_rays.hpp"
 #include "session/pipeline_stage.hpp"
 #include "session/stages/forearm_options.hpp"
@@ -118,7 +119,10 @@ class ForearmStage : public Stage {
 
   // Calibrates once the calibration window has passed, then feeds the trackers.
   void advance(StageOutput& out);
-  void detect_arms(const CameraFrame& frame, const Skeleton& skeleton);
+  void detect_arms(const CameraFrame& frame, const Skeleton& skeleton, StageOutput& out);
+  // The arms' straps in the frame's colour image (cameras_ set, the frame has colour).
+  void find_straps(const CameraFrame& frame, const geometry::DepthImageView& depth,
+                   std::vector<forearm::ArmFrame>& arms, StageOutput& out);
   void try_calibrate(bool finishing, StageOutput& out);
   void calibrate_arm(Device& device, StageOutput& out);
   std::vector<std::string> arm_device_ids() const;  // the arm IMUs, header order
@@ -146,6 +150,7 @@ class ForearmStage : public Stage {
   std::optional<std::uint32_t> body_id_;
   std::optional<forearm::StrapCameras> cameras_;
   std::optional<geometry::PixelRays> depth_rays_;  // cameras_->depth's, with cameras_
+  cv::Mat color_gray_;                             // the colour pixels the strap searches read, decoded frame by frame
   forearm::CalibrationOptions calibration_options_;
   std::unique_ptr<StreamClocks> clocks_;
   std::optional<sync::ClockMap> clock_map_;
