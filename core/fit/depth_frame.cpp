@@ -82,13 +82,6 @@ void build_point_cloud(const DepthFrame& frame, const raycast::DepthCamera& came
   } else {
     cloud = VectorImage::empty(frame.width, frame.height);
   }
-  // Most of a frame is background: 8 background pixels at a time are passed over as one word.
-  static_assert(kNoBody == 0xff, "the background word test assumes kNoBody = 0xff");
-  const auto background_word = [](const uint8_t* p) {
-    uint64_t word;
-    std::memcpy(&word, p, sizeof word);
-    return word == ~uint64_t{0};
-  };
   // Pixels are written directly (not through set()) so that the box is updated once per row.
   Eigen::Vector3f* value = cloud.value_K.data();
   uint8_t* valid = cloud.valid.data();

@@ -4,6 +4,7 @@
 #include <Eigen/Core>
 #include <algorithm>
 #include <cstdint>
+#include <cstring>
 #include <vector>
 
 #include "geometry/image_view.hpp"
@@ -13,6 +14,15 @@ namespace posefuse::fit {
 
 inline constexpr uint16_t kNoDepth = 0;  // depth pixel without a reading
 inline constexpr uint8_t kNoBody = 255;  // body-index pixel outside every body
+
+// Whether the 8 body-index pixels from `body` on are all background. Most of a frame is, and the
+// per-pixel loops pass over it a word at a time.
+inline bool background_word(const uint8_t* body) {
+  static_assert(kNoBody == 0xff, "the background word test assumes kNoBody = 0xff");
+  uint64_t word;
+  std::memcpy(&word, body, sizeof word);
+  return word == ~uint64_t{0};
+}
 
 using geometry::PixelRect;
 

@@ -33,6 +33,10 @@ PackedBodyFrame pack_body_pixels(const DepthFrame& frame) {
   for (std::size_t row_start = 0; row_start < pixels; row_start += width) {
     // Runs end at row ends too, so that unpacking needs no wrap-around.
     for (std::size_t i = row_start; i < row_start + width;) {
+      if (i + 8 <= row_start + width && background_word(frame.body_index.data() + i)) {
+        i += 8;
+        continue;
+      }
       const std::uint8_t body = frame.body_index[i];
       if (body == kNoBody) {
         ++i;

@@ -3,7 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <cstring>
 #include <limits>
 
 namespace posefuse::fit {
@@ -23,16 +22,10 @@ std::size_t remove_off_body_depth(DepthFrame& frame, const TrackedSkeleton& skel
   const std::size_t n = std::min(frame.depth_mm.size(), frame.body_index.size());
   uint8_t* body = frame.body_index.data();
   const uint16_t* depth = frame.depth_mm.data();
-  // Most of a frame is background: 8 background pixels at a time are passed over as one word.
-  static_assert(kNoBody == 0xff, "the background word test assumes kNoBody = 0xff");
   for (std::size_t i = 0; i < n;) {
-    if (i + 8 <= n) {
-      uint64_t word;
-      std::memcpy(&word, body + i, sizeof word);
-      if (word == ~uint64_t{0}) {
-        i += 8;
-        continue;
-      }
+    if (i + 8 <= n && background_word(body + i)) {
+      i += 8;
+      continue;
     }
     for (const std::size_t end = std::min(n, i + 8); i < end; ++i) {
       if (body[i] == kNoBody || depth[i] == kNoDepth) continue;

@@ -32,23 +32,27 @@ DepthFrame two_people(int width, int height, unsigned seed) {
 }
 
 TEST(FitPackedBodyFrame, UnpacksToTheSilhouetteAndItsDepthOnly) {
-  const DepthFrame frame = two_people(64, 48, 7);
-  const PackedBodyFrame packed = pack_body_pixels(frame);
-  const DepthFrame back = unpack_body_pixels(packed);
-  ASSERT_EQ(back.width, 64);
-  ASSERT_EQ(back.height, 48);
-  int body_pixels = 0;
-  for (size_t i = 0; i < frame.depth_mm.size(); ++i) {
-    EXPECT_EQ(back.body_index[i], frame.body_index[i]) << "pixel " << i;
-    if (frame.body_index[i] != kNoBody) {
-      ++body_pixels;
-      EXPECT_EQ(back.depth_mm[i], frame.depth_mm[i]) << "pixel " << i;
-    } else {
-      EXPECT_EQ(back.depth_mm[i], kNoDepth) << "pixel " << i;  // background depth is not kept
+  // Rows of whole 8-pixel words and rows that end inside one (the background is passed a word at a
+  // time).
+  for (const auto& [width, height] : {std::pair{64, 48}, std::pair{61, 37}}) {
+    const DepthFrame frame = two_people(width, height, 7);
+    const PackedBodyFrame packed = pack_body_pixels(frame);
+    const DepthFrame back = unpack_body_pixels(packed);
+    ASSERT_EQ(back.width, width);
+    ASSERT_EQ(back.height, height);
+    int body_pixels = 0;
+    for (size_t i = 0; i < frame.depth_mm.size(); ++i) {
+      EXPECT_EQ(back.body_index[i], frame.body_index[i]) << width << "x" << height << " pixel " << i;
+      if (frame.body_index[i] != kNoBody) {
+        ++body_pixels;
+        EXPECT_EQ(back.depth_mm[i], frame.depth_mm[i]) << "pixel " << i;
+      } else {
+        EXPECT_EQ(back.depth_mm[i], kNoDepth) << "pixel " << i;  // background depth is not kept
+      }
     }
+    EXPECT_EQ(packed.depth_mm.size(), static_cast<size_t>(body_pixels));
+    EXPECT_LT(packed.bytes(), frame.depth_mm.size() * 3);
   }
-  EXPECT_EQ(packed.depth_mm.size(), static_cast<size_t>(body_pixels));
-  EXPECT_LT(packed.bytes(), frame.depth_mm.size() * 3);
 }
 
 TEST(FitPackedBodyFrame, AnEmptySilhouetteStaysEmpty) {
