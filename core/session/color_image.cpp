@@ -24,9 +24,8 @@ struct JpegDecoder {
 };
 
 [[noreturn]] void jump_to_caller(j_common_ptr info) {
-  // `errors` is the first member after `info`; libjpeg hands back the pointer it was given.
-  JpegDecoder* decoder =
-      reinterpret_cast<JpegDecoder*>(reinterpret_cast<char*>(info->err) - offsetof(JpegDecoder, errors));
+  // `info` is the decoder's first member.
+  JpegDecoder* decoder = reinterpret_cast<JpegDecoder*>(info);
   (*info->err->format_message)(info, decoder->message);
   std::longjmp(decoder->on_error, 1);
 }

@@ -2,10 +2,10 @@
 // A colour frame as the stages get it. Only the forearm stage's strap search looks at colour, and
 // only along each forearm (a few thousand of the frame's pixels), so a JPEG frame is kept encoded
 // and decoded to grey over the rows and columns asked for: libjpeg-turbo skips the IDCT and the
-// colour conversion of every other block (on the simulator's 960 x 540 frames a forearm's
-// rectangle took 0.18 ms against 0.87 ms for the whole frame; docs/benchmarks.md, "Server
-// capacity"). One pass decodes every rectangle a frame needs (both forearms), and the rows below
-// the lowest are not read. The pixels decoded are the whole frame's decode's, exactly. A PNG frame (no such
+// colour conversion of every other block, and one pass decodes every rectangle a frame needs (both
+// forearms) without reading the rows below the lowest (on the demo's 960 x 540 frames 0.28 ms
+// against 0.88 ms for the whole frame; docs/benchmarks.md, "Depth, body index and colour decoding
+// per frame"). The pixels decoded are the whole frame's decode's, exactly. A PNG frame (no such
 // shortcut) is decoded to grey when it arrives.
 #include <cstdint>
 #include <memory>
