@@ -1,6 +1,7 @@
 // bench_server_capacity: how many live sessions with the body fit on one posefuse-server holds.
 //
 //   bench_server_capacity [--session FILE] [--duration-s S] [--sessions N,N,...] [--imu-batch K]
+//                         [--option KEY=VALUE]...
 //
 // The session is a recorded chunk file (default build/demo/demo-session.pfchunks, which
 // scripts/demo.sh writes: paper 1's protocol, both arms, depth + body index + skeleton + colour at
@@ -11,7 +12,8 @@
 // device clocks have offsets of their own; a chunk file written in another order (posefuse-sim
 // orders by raw timestamps across clocks) is put in that order, each stream's own order kept.
 // --imu-batch K re-cuts every IMU batch into batches of at most K samples (a device streaming
-// more often); by default the recording's batches are sent as they are.
+// more often); by default the recording's batches are sent as they are. --option sets a stage
+// option in the header besides fit.enabled (e.g. fit.min_joint_step_m=0.002), as the client's does.
 //
 // Each row runs N such sessions at once, paced in real time, on a fresh server process (forked
 // before any thread exists, default ServerOptions but max_sessions), clients as threads of this
@@ -124,8 +126,10 @@ std::vector<v1::SessionChunk> recut_imu(const v1::SessionChunk& chunk, int sampl
   return out;
 }
 
-Session load_session(const std::string& path, double duration_s, int imu_batch) {
-  client::Recording recording(path, {{"fit.enabled", "true"}});
+Session load_session(const std::string& path, double duration_s, int imu_batch,
+                     std::map<std::string, std::string> header_options) {
+  header_options.emplace("fit.enabled", "true");
+  client::Recording recording(path, std::move(header_options));
   v1::SessionChunk chunk;
   if (!recording.next(chunk) || !chunk.has_header()) throw Error(ErrorCode::kInvalidArgument, path, "no header first");
   const v1::SessionChunk header = chunk;
@@ -314,16 +318,25 @@ int main(int argc, char** argv) {
   double duration_s = 0.0;
   std::vector<int> concurrency = {1, 2, 4};
   int imu_batch = 0;
+  std::map<std::string, std::string> header_options;
   for (int i = 1; i < argc; i += 2) {
     const std::string flag = i + 1 < argc ? argv[i] : "";
     if (flag == "--session") path = argv[i + 1];
     else if (flag == "--duration-s") duration_s = session::parse_double(argv[i + 1], flag);
     else if (flag == "--sessions") concurrency = bench::parse_int_list(argv[i + 1], flag);
     else if (flag == "--imu-batch") imu_batch = static_cast<int>(session::parse_uint64(argv[i + 1], flag));
-    else {
+    else if (flag == "--option") {
+      try {
+        auto [key, value] = client::parse_header_option(argv[i + 1]);
+        header_options.insert_or_assign(std::move(key), std::move(value));
+      } catch (const Error& error) {
+        std::fprintf(stderr, "bench: %s\n", error.what());
+        return 2;
+      }
+    } else {
       std::fprintf(stderr,
                    "usage: bench_server_capacity [--session FILE] [--duration-s S] [--sessions N,N,...] "
-                   "[--imu-batch K]\n");
+                   "[--imu-batch K] [--option KEY=VALUE]...\n");
       return 2;
     }
   }
@@ -340,7 +353,7 @@ int main(int argc, char** argv) {
 
   Session session;
   try {
-    session = load_session(path, duration_s, imu_batch);
+    session = load_session(path, duration_s, imu_batch, header_options);
   } catch (const Error& error) {
     std::fprintf(stderr, "bench: %s (scripts/demo.sh writes the default session)\n", error.what());
     stop_all();
@@ -348,6 +361,7 @@ int main(int argc, char** argv) {
   }
   std::printf("posefuse-server capacity, body fit on (server in its own process, %u CPUs, load average %s)\n",
               std::thread::hardware_concurrency(), bench::load_average().c_str());
+  for (const auto& [key, value] : header_options) std::printf("option %s = %s\n", key.c_str(), value.c_str());
   std::printf("session: %s, first %.1f s, %d depth frames, %zu chunks, IMU batches %s\n\n", path.c_str(),
               session.duration_s, session.depth_frames, session.chunks.size(),
               imu_batch > 0 ? ("of at most " + std::to_string(imu_batch) + " samples").c_str() : "as recorded");

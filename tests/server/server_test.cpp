@@ -514,9 +514,9 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   EXPECT_EQ(info.stages(3).name(), "forearm_gaps");
   EXPECT_EQ(info.stages(4).name(), "frame_merge");
   EXPECT_EQ(info.stages(5).name(), "measures");
-  ASSERT_EQ(info.options_size(), 43);
-  EXPECT_EQ(info.options(32).key(), "measures.repetition_angle");
-  EXPECT_EQ(info.options(32).default_value(), "auto");
+  ASSERT_EQ(info.options_size(), 44);
+  EXPECT_EQ(info.options(33).key(), "measures.repetition_angle");
+  EXPECT_EQ(info.options(33).default_value(), "auto");
   EXPECT_EQ(info.options(16).key(), "fit.enabled");
   EXPECT_EQ(info.options(16).default_value(), "true");
   EXPECT_EQ(info.options(22).key(), "fit.trusted_energy");
@@ -525,8 +525,9 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   EXPECT_EQ(info.options(25).key(), "fit.lambda_imu");
   EXPECT_EQ(info.options(26).key(), "fit.skeleton_start_energy");
   EXPECT_EQ(info.options(26).default_value(), "45");
-  EXPECT_EQ(info.options(28).key(), "fit.joint_step_stop_max_damping");
-  EXPECT_EQ(info.options(28).default_value(), "30");
+  EXPECT_EQ(info.options(28).key(), "fit.min_joint_step_m");
+  EXPECT_EQ(info.options(29).key(), "fit.joint_step_stop_max_damping");
+  EXPECT_EQ(info.options(29).default_value(), "30");
   EXPECT_EQ(info.options(0).key(), "imu.tau_acc_s");
   EXPECT_EQ(info.options(2).key(), "imu.mag_calibration.<device_id>");
   EXPECT_EQ(info.options(3).key(), "forearm.K_from_B");

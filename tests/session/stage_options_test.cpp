@@ -54,7 +54,7 @@ TEST(StageOptions, EveryKeyIsDeclaredOnceUnderItsStagesPrefix) {
       }
     }
   }
-  EXPECT_EQ(keys.size(), 43u);
+  EXPECT_EQ(keys.size(), 44u);
 }
 
 TEST(StageOptions, DefaultsAreValidAndTheLibrariesOwn) {
@@ -84,6 +84,7 @@ TEST(StageOptions, DefaultsAreValidAndTheLibrariesOwn) {
   EXPECT_EQ(fit.fit.max_iterations, fit_defaults.max_iterations);
   EXPECT_EQ(fit.fit.lambda_imu, fit_defaults.lambda_imu);
   EXPECT_EQ(fit.fit.freeze_contour_after, fit_defaults.freeze_contour_after);
+  EXPECT_EQ(fit.fit.min_joint_step_m, fit_defaults.min_joint_step_m);
   EXPECT_EQ(fit.fit.joint_step_stop_max_damping, fit_defaults.joint_step_stop_max_damping);
   EXPECT_EQ(fit.fit.project_steps_onto_limits, fit_defaults.project_steps_onto_limits);
   EXPECT_EQ(fit.smoothing.window_frames, fit::PoseSmoothingOptions().window_frames);
@@ -180,6 +181,7 @@ TEST(StageOptions, EveryBodyFitOptionReachesTheStage) {
                                                               {kFitLambdaImuKey, "0"},
                                                               {kFitSkeletonStartEnergyKey, "0"},
                                                               {kFitFreezeContourAfterKey, "0"},
+                                                              {kFitMinJointStepMKey, "0.004"},
                                                               {kFitJointStepStopMaxDampingKey, "1e8"},
                                                               {kFitProjectStepsOntoLimitsKey, "false"},
                                                               {kFitStartVelocityGainKey, "1"}}));
@@ -194,6 +196,7 @@ TEST(StageOptions, EveryBodyFitOptionReachesTheStage) {
   EXPECT_EQ(o.fit.lambda_imu, 0.0);
   EXPECT_EQ(o.skeleton_start_energy, 0.0);
   EXPECT_EQ(o.fit.freeze_contour_after, 0);
+  EXPECT_EQ(o.fit.min_joint_step_m, 0.004);
   EXPECT_EQ(o.fit.joint_step_stop_max_damping, 1e8);
   EXPECT_FALSE(o.fit.project_steps_onto_limits);
   EXPECT_EQ(o.extrapolation.velocity_gain, 1.0);
@@ -206,7 +209,8 @@ TEST(StageOptions, BodyFitBadValuesNameTheOption) {
                                                                              {kFitMaxIterationsKey, "-1"},
                                                                              {kFitBodyIdKey, "-2"},
                                                                              {kFitLostEnergyKey, "0"},
-                                                                             {kFitTrustedEnergyKey, "0"}}) {
+                                                                             {kFitTrustedEnergyKey, "0"},
+                                                                             {kFitMinJointStepMKey, "-0.001"}}) {
     expect_field([&] { read_body_fit_options(header_with({option})); }, option.first);
   }
   expect_field([] { body_fit_enabled(header_with({{kFitEnabledKey, "maybe"}})); }, kFitEnabledKey);

@@ -104,12 +104,17 @@ const OptionTable& body_fit_option_table() {
          .max = at_most(kMaxInt),
          .description = "LM: U_bg (bg / float points) is re-selected in the first this many iterations only (0 = "
                         "always)"},
+        {.key = kFitMinJointStepMKey,
+         .type = OptionType::kReal,
+         .default_value = format_double(fit_defaults.min_joint_step_m),
+         .min = at_least(0),
+         .description = "LM: stop once an accepted step moves none of the 16 bgJoint joints by more than this (m)"},
         {.key = kFitJointStepStopMaxDampingKey,
          .type = OptionType::kReal,
          .default_value = format_double(fit_defaults.joint_step_stop_max_damping),
          .min = above(0),
-         .description = "LM: stop on a joint step under 1 mm only after a step damped by at most this (1e8 = after "
-                        "any step)"},
+         .description = "LM: stop on a joint step under fit.min_joint_step_m only after a step damped by at most this "
+                        "(1e8 = after any step)"},
         {.key = kFitProjectStepsOntoLimitsKey,
          .type = OptionType::kBool,
          .default_value = fit_defaults.project_steps_onto_limits ? "true" : "false",
@@ -155,6 +160,7 @@ BodyFitOptions read_body_fit_options(const v1::SessionHeader& header) {
   out.fit.max_iterations = static_cast<int>(options.integer(kFitMaxIterationsKey));
   out.fit.lambda_imu = options.real(kFitLambdaImuKey);
   out.fit.freeze_contour_after = static_cast<int>(options.integer(kFitFreezeContourAfterKey));
+  out.fit.min_joint_step_m = options.real(kFitMinJointStepMKey);
   out.fit.joint_step_stop_max_damping = options.real(kFitJointStepStopMaxDampingKey);
   out.fit.project_steps_onto_limits = options.boolean(kFitProjectStepsOntoLimitsKey);
   out.fit.linearise_distances = options.boolean(kFitLineariseDistancesKey);

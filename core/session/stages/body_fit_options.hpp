@@ -23,6 +23,7 @@ inline constexpr const char* kFitFineShapeKey = "fit.fine_shape";
 inline constexpr const char* kFitLambdaImuKey = "fit.lambda_imu";
 inline constexpr const char* kFitSkeletonStartEnergyKey = "fit.skeleton_start_energy";
 inline constexpr const char* kFitFreezeContourAfterKey = "fit.freeze_contour_after";
+inline constexpr const char* kFitMinJointStepMKey = "fit.min_joint_step_m";
 inline constexpr const char* kFitJointStepStopMaxDampingKey = "fit.joint_step_stop_max_damping";
 inline constexpr const char* kFitProjectStepsOntoLimitsKey = "fit.project_steps_onto_limits";
 inline constexpr const char* kFitLineariseDistancesKey = "fit.linearise_distances";
@@ -38,8 +39,9 @@ struct BodyFitOptions {
   double trusted_energy = 0;             // fit.trusted_energy
   bool fine_shape = false;               // fit.fine_shape
   double skeleton_start_energy = 0;      // fit.skeleton_start_energy
-  // max_iterations, lambda_imu, freeze_contour_after, joint_step_stop_max_damping and
-  // project_steps_onto_limits from the options, the rest fit::FitOptions' own defaults.
+  // max_iterations, lambda_imu, freeze_contour_after, min_joint_step_m, joint_step_stop_max_damping,
+  // project_steps_onto_limits and linearise_distances from the options, the rest fit::FitOptions'
+  // own defaults.
   fit::FitOptions fit;
   fit::StartExtrapolationOptions extrapolation;  // velocity_gain: fit.start_velocity_gain
 };
