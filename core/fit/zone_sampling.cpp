@@ -225,6 +225,64 @@ std::vector<int8_t> assign_zones_in_box(const PointCloud& cloud, const KinectSke
   return zone;
 }
 
+// Which cloud pixels of the box lie within `band_px` (quasi-Euclidean, silhouette_distance.hpp) of
+// a pixel outside the cloud, row-major with the box's width (other pixels of the box may be set
+// too). The pixels within that distance of a pixel form a disc that holds, in the row dy off its
+// centre, the columns up to half_width[|dy|] off; so a pixel is near the outside when some row dy
+// off it has an outside pixel within half_width[|dy|] columns. Only outside pixels that are in the
+// image count, as for the distance map over the box grown by the band.
+std::vector<uint8_t> near_outside_in_box(const PointCloud& cloud, float band_px) {
+  const PixelRect& box = cloud.box;
+  const int box_width = box.col1 - box.col0 + 1, box_height = box.row1 - box.row0 + 1;
+  std::vector<uint8_t> near(box.empty() ? 0 : static_cast<size_t>(box_width) * box_height, 0);
+  if (box.empty() || !(band_px >= 0)) return near;
+  // Offsets beyond the image never reach an image pixel.
+  const int reach =
+      static_cast<int>(std::min<float>(std::floor(band_px), static_cast<float>(cloud.width + cloud.height)));
+  std::vector<int> half_width(static_cast<size_t>(reach) + 1);
+  for (int dy = 0; dy <= reach; ++dy) {
+    int w = -1;
+    while (w + 1 <= reach && quasi_euclidean_distance(w + 1, dy) <= band_px) ++w;
+    half_width[static_cast<size_t>(dy)] = w;
+  }
+  // row_gap: per row from reach above the box to reach below it (within the image), the column
+  // distance from each box column to that row's nearest outside pixel, capped at reach + 1: a scan
+  // each way along the row.
+  const int row0 = std::max(0, box.row0 - reach), row1 = std::min(cloud.height - 1, box.row1 + reach);
+  const int col0 = std::max(0, box.col0 - reach), col1 = std::min(cloud.width - 1, box.col1 + reach);
+  const int span = col1 - col0 + 1, far = reach + 1;
+  std::vector<int> row_gap(static_cast<size_t>(row1 - row0 + 1) * box_width), gap(static_cast<size_t>(span));
+  bool any_outside = false;
+  for (int row = row0; row <= row1; ++row) {
+    const uint8_t* valid = cloud.valid.data() + static_cast<size_t>(row) * cloud.width + col0;
+    int distance = far;
+    for (int k = 0; k < span; ++k) gap[static_cast<size_t>(k)] = distance = valid[k] ? std::min(distance + 1, far) : 0;
+    // A row without outside pixels (the cloud fills it) is far all along.
+    if (distance == far && std::find(valid, valid + span, 0) == valid + span) {
+      std::fill_n(row_gap.begin() + static_cast<ptrdiff_t>(row - row0) * box_width, box_width, far);
+      continue;
+    }
+    any_outside = true;
+    distance = far;
+    for (int k = span - 1; k >= 0; --k) {
+      distance = valid[k] ? std::min(distance + 1, far) : 0;
+      gap[static_cast<size_t>(k)] = std::min(gap[static_cast<size_t>(k)], distance);
+    }
+    std::copy_n(gap.begin() + (box.col0 - col0), box_width,
+                row_gap.begin() + static_cast<ptrdiff_t>(row - row0) * box_width);
+  }
+  if (!any_outside) return near;
+  for (int row = box.row0; row <= box.row1; ++row) {
+    uint8_t* out = near.data() + static_cast<size_t>(row - box.row0) * box_width;
+    for (int other = std::max(row0, row - reach); other <= std::min(row1, row + reach); ++other) {
+      const int* gap = row_gap.data() + static_cast<size_t>(other - row0) * box_width;
+      const int limit = half_width[static_cast<size_t>(std::abs(other - row))];
+      for (int k = 0; k < box_width; ++k) out[k] |= static_cast<uint8_t>(gap[k] <= limit);
+    }
+  }
+  return near;
+}
+
 }  // namespace
 
 BodyZone nearest_bone_zone(const Eigen::Vector2d& pixel, const KinectSkeleton& skeleton_K,
@@ -262,40 +320,15 @@ std::vector<DepthSample> sample_depth_pixels(const PointCloud& cloud, const Kine
   const std::vector<int8_t> zone = assign_zones_in_box(cloud, skeleton_K, camera);
   const int box_width = box.col1 - box.col0 + 1;
 
-  // Distance of each cloud pixel to the nearest pixel outside the cloud, needed only up to the
-  // edge band: computed in the cloud's bounding box grown by the band (and a pixel), which holds
-  // every outside pixel within the band of a cloud pixel; beyond it the map stays infinite,
-  // which is as far from the band as the exact distance. The cloud may fill the image. The map
-  // covers that region only (its own row-major image): the chamfer's distances depend only on
-  // the pixels inside the region, so they are those of the region in the whole image.
-  const int grow = static_cast<int>(std::ceil(std::min<double>(params.edge_band_px, cloud.width + cloud.height))) + 1;
-  const PixelRect band_region{std::max(0, box.col0 - grow), std::max(0, box.row0 - grow),
-                              std::min(cloud.width - 1, box.col1 + grow), std::min(cloud.height - 1, box.row1 + grow)};
-  const int band_width = band_region.col1 - band_region.col0 + 1, band_height = band_region.row1 - band_region.row0 + 1;
-  std::vector<uint8_t> outside(static_cast<size_t>(band_width) * band_height);
-  bool any_outside = false;
-  // Plain pointers, so that the uint8_t stores (a char type) cannot alias the vectors' members
-  // and the inner loop vectorises.
-  for (int row = band_region.row0; row <= band_region.row1; ++row) {
-    const uint8_t* valid = cloud.valid.data() + static_cast<size_t>(row) * cloud.width + band_region.col0;
-    uint8_t* outside_pixels = outside.data() + static_cast<size_t>(row - band_region.row0) * band_width;
-    uint8_t any_in_row = 0;
-    for (int k = 0; k < band_width; ++k) any_in_row |= outside_pixels[k] = !valid[k];
-    any_outside |= any_in_row != 0;
-  }
-  std::vector<float> to_outside_px;
-  if (any_outside) to_outside_px = std::move(silhouette_distance_map(outside, band_width, band_height).distance_px);
-  else to_outside_px.assign(outside.size(), std::numeric_limits<float>::infinity());
-
+  const std::vector<uint8_t> near_edge = near_outside_in_box(cloud, params.edge_band_px);
   std::array<std::vector<int>, kBodyZoneCount> edge_pixels, inner_pixels;
   // Row by row in the box: the ascending pixel order.
   for (int row = box.row0; row <= box.row1; ++row)
     for (int col = box.col0; col <= box.col1; ++col) {
       const int8_t z = zone[static_cast<size_t>(row - box.row0) * box_width + (col - box.col0)];
       if (z < 0) continue;
-      const float to_outside =
-          to_outside_px[static_cast<size_t>(row - band_region.row0) * band_width + (col - band_region.col0)];
-      (to_outside <= params.edge_band_px ? edge_pixels : inner_pixels)[z].push_back(row * cloud.width + col);
+      const bool edge = near_edge[static_cast<size_t>(row - box.row0) * box_width + (col - box.col0)];
+      (edge ? edge_pixels : inner_pixels)[z].push_back(row * cloud.width + col);
     }
   std::array<int, kBodyZoneCount> available{};
   for (int z = 0; z < kBodyZoneCount; ++z)

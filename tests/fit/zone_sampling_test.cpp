@@ -147,28 +147,81 @@ TEST(FitZoneSampling, SmallCloudGivesEveryPixel) {
   EXPECT_EQ(static_cast<int>(samples.size()), figure.cloud.count);
 }
 
-TEST(FitZoneSampling, EveryPixelSampledCarriesItsZoneAndEdgeFlag) {
-  // Drawing more samples than pixels takes every pixel with a zone (the pixel lists are built over
-  // the cloud's box only): the same pixels as a scan of the whole image, each with the zone of
-  // assign_zones and the edge flag of the full-image distance to the outside.
-  const StickFigure figure(true);
+// Drawing more samples than pixels takes every pixel with a zone (the pixel lists are built over
+// the cloud's box only): the same pixels as a scan of the whole image, each with the zone of
+// assign_zones and the edge flag of the full-image distance to the outside, for any band.
+void expect_every_pixel_with_zone_and_edge_flag(const PointCloud& cloud, const KinectSkeleton& skeleton,
+                                                const raycast::DepthCamera& camera, float band_px) {
+  SCOPED_TRACE("edge_band_px " + std::to_string(band_px));
   ZoneSamplingParams params;
-  params.num_samples = figure.cloud.count + 100;
-  const auto samples = sample_depth_pixels(figure.cloud, figure.skeleton, figure.camera, params);
-  const std::vector<int8_t> zone = assign_zones(figure.cloud, figure.skeleton, figure.camera);
-  std::vector<uint8_t> outside(figure.cloud.valid.size());
-  for (size_t i = 0; i < outside.size(); ++i) outside[i] = !figure.cloud.valid[i];
-  const auto to_outside = silhouette_distance_map(outside, figure.cloud.width, figure.cloud.height);
+  params.num_samples = cloud.count + 100;
+  params.edge_band_px = band_px;
+  const auto samples = sample_depth_pixels(cloud, skeleton, camera, params);
+  const std::vector<int8_t> zone = assign_zones(cloud, skeleton, camera);
+  std::vector<uint8_t> outside(cloud.valid.size());
+  for (size_t i = 0; i < outside.size(); ++i) outside[i] = !cloud.valid[i];
+  const auto to_outside = silhouette_distance_map(outside, cloud.width, cloud.height);
   std::set<size_t> expected, seen;
   for (size_t i = 0; i < zone.size(); ++i)
     if (zone[i] >= 0) expected.insert(i);
+  int near_edge = 0;
   for (const auto& s : samples) {
-    const size_t i = static_cast<size_t>(s.row) * figure.cloud.width + s.col;
+    const size_t i = static_cast<size_t>(s.row) * cloud.width + s.col;
     EXPECT_TRUE(seen.insert(i).second);
     EXPECT_EQ(static_cast<int>(s.zone), zone[i]);
-    EXPECT_EQ(s.near_edge, to_outside.distance_px[i] <= params.edge_band_px);
+    EXPECT_EQ(s.near_edge, to_outside.distance_px[i] <= band_px) << s.col << ", " << s.row;
+    near_edge += s.near_edge;
   }
   EXPECT_EQ(seen, expected);
+  if (band_px >= 1) {
+    EXPECT_GT(near_edge, 0);
+  }
+}
+
+// Holes of single pixels inside the cloud, away from its box's edges (the box stays the same).
+void punch_holes(PointCloud& cloud, int count, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_int_distribution<int> col(cloud.box.col0 + 1, cloud.box.col1 - 1),
+      row(cloud.box.row0 + 1, cloud.box.row1 - 1);
+  for (int k = 0; k < count; ++k) {
+    const size_t i = static_cast<size_t>(row(rng)) * cloud.width + col(rng);
+    if (!cloud.valid[i]) continue;
+    cloud.valid[i] = 0;
+    cloud.value_K[i].setZero();
+    --cloud.count;
+  }
+}
+
+TEST(FitZoneSampling, EveryPixelSampledCarriesItsZoneAndEdgeFlag) {
+  StickFigure figure(true);
+  for (const float band : {0.0f, 1.0f, 1.5f, 2.5f, 3.0f, 4.2f, 6.0f})
+    expect_every_pixel_with_zone_and_edge_flag(figure.cloud, figure.skeleton, figure.camera, band);
+  punch_holes(figure.cloud, 400, 7);
+  for (const float band : {1.0f, 3.0f, 4.2f})
+    expect_every_pixel_with_zone_and_edge_flag(figure.cloud, figure.skeleton, figure.camera, band);
+}
+
+TEST(FitZoneSampling, EdgeFlagsOfACloudThatTouchesTheImageBorder) {
+  // The image's border is not outside the cloud: only pixels without a depth reading are.
+  const StickFigure figure(true);
+  PointCloud cloud = VectorImage::empty(figure.cloud.width, figure.cloud.height);
+  for (int row = 0; row < cloud.height; ++row)
+    for (int col = 0; col < 120; ++col) cloud.set(col, row, Eigen::Vector3f(0, 0, 2));
+  for (const float band : {1.0f, 3.0f})
+    expect_every_pixel_with_zone_and_edge_flag(cloud, figure.skeleton, figure.camera, band);
+  punch_holes(cloud, 300, 11);
+  for (const float band : {1.0f, 3.0f, 4.2f})
+    expect_every_pixel_with_zone_and_edge_flag(cloud, figure.skeleton, figure.camera, band);
+
+  // A cloud that fills the image has no pixel near an edge; with holes, those around them.
+  PointCloud full = VectorImage::empty(figure.cloud.width, figure.cloud.height);
+  for (int row = 0; row < full.height; ++row)
+    for (int col = 0; col < full.width; ++col) full.set(col, row, Eigen::Vector3f(0, 0, 2));
+  ZoneSamplingParams params;
+  params.num_samples = full.count;
+  for (const auto& s : sample_depth_pixels(full, figure.skeleton, figure.camera, params)) ASSERT_FALSE(s.near_edge);
+  punch_holes(full, 50, 13);
+  expect_every_pixel_with_zone_and_edge_flag(full, figure.skeleton, figure.camera, 3.0f);
 }
 
 TEST(FitZoneSampling, BadInputNamesTheField) {
