@@ -64,6 +64,8 @@ struct FitOptions {
   // ... or moves none of the 16 bgJoint joints by more than this (ours). Without it the fit spends
   // its iterations trading nearly redundant DOFs (spine2 / spine3 twist) against each other while
   // the point sets and correspondences are re-selected: the energy keeps changing, the body not.
+  // The steps after the first few are 1-3 mm, so this sets most fits' iteration count; 2 mm costs
+  // about 1 mm of joint error for a fifth less CPU (docs/benchmarks.md, "A looser joint-step stop").
   double min_joint_step_m = 0.001;
   // ... but only after a step taken at a damping gamma of at most this (ours). Where the undamped
   // step raises the energy (behind the back on paper 1's protocol: 4 rejected trials, gamma 0.01
@@ -78,7 +80,8 @@ struct FitOptions {
   // step, so the two tests above rarely fire and most fits ran 13-15 of their 20 iterations. With
   // U_bg fixed the LM steps and the discrete update only lower one energy and the joint-step test
   // fires. 6 keeps the accuracy at 5 frames/s (where a start is 200 ms old and the contour moves
-  // for longer); at 30 frames/s 4 was as accurate (docs/fitting.md, "Solver").
+  // for longer); at 30 frames/s 4 saves a tenth of the iterations but costs 1-2 mm of joint error
+  // (docs/benchmarks.md, "A looser joint-step stop").
   int freeze_contour_after = 6;
 
   // --- Correspondences (II-I, II-J) ---
