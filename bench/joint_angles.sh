@@ -8,6 +8,8 @@
 # KEEP=DIR keeps each session's recording, results and gt/ under DIR (e.g. for posefuse report).
 # SIM_OPTIONS='key = value\n...' adds posefuse-sim options to every session (e.g. a tilted camera:
 # 'camera_pitch_deg = 12\ncamera_roll_deg = -4').
+# SUBJECT='key = value\n...' replaces the subject's posefuse-sim options (default: 'sex = female\nbetas =
+# 1.5,-1,0.5\nclothing = true'; e.g. the fitted template's own shape, 'sex = female\nbetas = 0\nclothing = true').
 # FIT_OPTIONS='KEY=VALUE ...' adds stage options to every fit call (e.g. 'fit.trusted_energy=100'
 # for bench/fit_energy_confidence.py).
 # Default sessions: the scripted exercises at seeds 71 and 72 and speeds 0.9 and 1.15, both arms,
@@ -45,7 +47,7 @@ done
 [ -n "$port" ] || { echo "server did not start: $(cat "$work/server.log")" >&2; exit 1; }
 for spec in "${specs[@]}"; do
   IFS=: read -r motion seed speed <<<"$spec"
-  subject="sex = female\nbetas = 1.5,-1,0.5\nclothing = true\n${SIM_OPTIONS:+$SIM_OPTIONS\n}"
+  subject="${SUBJECT:-sex = female\nbetas = 1.5,-1,0.5\nclothing = true}\n${SIM_OPTIONS:+$SIM_OPTIONS\n}"
   if [[ "$motion" == *.bvh ]]; then  # a whole mocap clip, the same subject
     name="$(basename "$motion" .bvh)-$seed-$speed"
     printf "motion = bvh\nbvh_path = %s\nspeed = %s\narm = both\nduration_s = clip\n$subject" \
