@@ -325,10 +325,10 @@ std::vector<DepthSample> sample_depth_pixels(const PointCloud& cloud, const Kine
   // Row by row in the box: the ascending pixel order.
   for (int row = box.row0; row <= box.row1; ++row)
     for (int col = box.col0; col <= box.col1; ++col) {
-      const int8_t z = zone[static_cast<size_t>(row - box.row0) * box_width + (col - box.col0)];
+      const size_t in_box = static_cast<size_t>(row - box.row0) * box_width + (col - box.col0);
+      const int8_t z = zone[in_box];
       if (z < 0) continue;
-      const bool edge = near_edge[static_cast<size_t>(row - box.row0) * box_width + (col - box.col0)];
-      (edge ? edge_pixels : inner_pixels)[z].push_back(row * cloud.width + col);
+      (near_edge[in_box] ? edge_pixels : inner_pixels)[z].push_back(row * cloud.width + col);
     }
   std::array<int, kBodyZoneCount> available{};
   for (int z = 0; z < kBodyZoneCount; ++z)
