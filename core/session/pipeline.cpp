@@ -11,6 +11,7 @@
 
 #include "session/result_encoder.hpp"
 #include "session/stage_inputs.hpp"
+#include "session/unknown_options.hpp"
 
 namespace posefuse::session {
 
@@ -98,6 +99,17 @@ void SessionPipeline::timed(Stage& stage, Call&& call) {
   options_.on_stage_time(stage.name(), std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
 }
 
+void SessionPipeline::warn_unknown_options(const v1::SessionHeader& header) {
+  std::vector<const OptionTable*> tables;
+  for (const auto& stage : stages_) tables.push_back(&stage->options());
+  for (const UnknownOption& option : unknown_stage_options(header, tables)) {
+    output_->warn("OPTION_UNKNOWN", option_field(option.key),
+                  "is not an option of this server's stages (`posefuse info` lists them); ignored, the defaults "
+                  "stand" +
+                      (option.closest.empty() ? std::string() : "; did you mean '" + option.closest + "'?"));
+  }
+}
+
 void SessionPipeline::push(const v1::SessionChunk& chunk) {
   const std::uint64_t index = index_++;
   const std::string field = "chunk[" + std::to_string(index) + "]";
@@ -122,6 +134,7 @@ void SessionPipeline::push(const v1::SessionChunk& chunk) {
       Stage& stage = *stages_[current_stage_];
       timed(stage, [&] { stage.start(chunk.header(), *output_); });
     }
+    warn_unknown_options(chunk.header());
     return;
   }
   if (chunk.has_end()) {

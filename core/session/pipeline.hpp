@@ -93,6 +93,8 @@ class SessionPipeline {
   void end_session();
   // One warning per code and field whose repeats were not listed, saying how many.
   void warn_unlisted_repeats();
+  // OPTION_UNKNOWN for each header option under a stage's prefix that no stage declares.
+  void warn_unknown_options(const v1::SessionHeader& header);
   void emit_progress();
   void note_camera_time(const v1::SessionChunk& chunk);
   // Throws kResourceExhausted naming `field` when the session holds more than max_held_bytes.

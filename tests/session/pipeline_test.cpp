@@ -280,6 +280,31 @@ TEST(SessionPipeline, BadStageOptionEndsTheSession) {
   }
 }
 
+// A key under a stage's prefix that no stage declares is most likely misspelt: a warning names it
+// and the nearest declared key; metadata under other prefixes and declared keys pass unremarked.
+TEST(SessionPipeline, AMisspeltStageOptionIsWarnedAboutWithTheNearestKey) {
+  auto chunks = demo::make_demo_session();
+  auto& options = *chunks[0].mutable_header()->mutable_options();
+  options["fit.smoothing_frame"] = "5";
+  options["forearm.no_such_thing_at_all"] = "1";
+  options["sim.seed"] = "7";
+  options["fit.smoothing_frames"] = "3";
+  options[mag_calibration_option_key(demo::kArmDevice)] = "0 0 0 1 0 0 0 1 0 0 0 1";
+  CollectingSink sink;
+  SessionPipeline pipeline(make_default_stages(), sink);
+  pipeline.push(chunks[0]);
+  std::map<std::string, std::string> warned;  // field -> message
+  for (const auto& r : sink.of(v1::FitResult::kWarning)) {
+    if (r.warning().code() == "OPTION_UNKNOWN") warned[r.warning().field()] = r.warning().message();
+  }
+  ASSERT_EQ(warned.size(), 2u);
+  EXPECT_NE(warned["header.options[fit.smoothing_frame]"].find("did you mean 'fit.smoothing_frames'?"),
+            std::string::npos)
+      << warned["header.options[fit.smoothing_frame]"];
+  EXPECT_NE(warned["header.options[forearm.no_such_thing_at_all]"].find("ignored"), std::string::npos);
+  EXPECT_EQ(warned["header.options[forearm.no_such_thing_at_all]"].find("did you mean"), std::string::npos);
+}
+
 // A magnetometer calibration in the header (paper 1 eq. 3) is applied before the filter: hard
 // iron added to the arm IMU's readings and the same offset given as its calibration leave the
 // orientations as they were; without the calibration the heading is off.

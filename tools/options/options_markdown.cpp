@@ -30,7 +30,10 @@ std::string options_markdown(const std::vector<std::unique_ptr<session::Stage>>&
       "The keys the pipeline's stages read from `SessionHeader.options`, all text. `posefuse fit` and "
       "`posefuse upload` set one with `--option KEY=VALUE`; `posefuse info` lists them as the server has them. "
       "A key that is not set takes its default; a value the table does not allow ends the session with "
-      "`INVALID_ARGUMENT` naming `header.options[KEY]`.\n";
+      "`INVALID_ARGUMENT` naming `header.options[KEY]`. A key under a stage's prefix (`imu.`, `fit.`, ...) that "
+      "no stage declares, most likely a misspelt one, is ignored with an `OPTION_UNKNOWN` warning naming the "
+      "nearest declared key; keys under other prefixes (`sim.seed`) are the session's own notes and pass "
+      "unremarked.\n";
   for (const auto& stage : stages) {
     if (stage->options().empty()) continue;
     md += "\n## " + std::string(stage->name()) + "\n\n";
