@@ -108,7 +108,7 @@ struct Table {
   // Relative arm length errors (fitted / true - 1; upper arm, forearm, whole arm; left, right): the fitted shape where
   // the personalisation ran, the template where it was refused, the template where it ran.
   std::vector<double> segments_personalised, segments_refused, segments_template_where_personalised;
-  double elevation_fit = 0, elevation_camera = 0;
+  double elevation_fit = 0, elevation_camera = 0, elevation_fit_signed = 0;
   int elevation_n = 0;
   int frames = 0, occluded = 0;
 };
@@ -429,8 +429,10 @@ int main(int argc, char** argv) {
           const double true_elevation =
               elevation_deg(truth.smpl_joints_K.col(body::kPelvis), truth.smpl_joints_K.col(body::kNeck),
                             truth.smpl_joints_K.col(kSmplJoints[0][s]));
-          total.elevation_fit +=
-              std::abs(elevation_deg(p(body::kPelvis), p(body::kNeck), p(kSmplJoints[0][s])) - true_elevation);
+          const double fit_error =
+              elevation_deg(p(body::kPelvis), p(body::kNeck), p(kSmplJoints[0][s])) - true_elevation;
+          total.elevation_fit += std::abs(fit_error);
+          total.elevation_fit_signed += fit_error;
           total.elevation_camera += std::abs(elevation_deg(q(0), q(2), q(kCameraJoints[0][s])) - true_elevation);
           ++total.elevation_n;
         }
@@ -515,8 +517,11 @@ int main(int argc, char** argv) {
               100 * (total.fit_no_imu_occ.mean(2) / total.fit_occ.mean(2) - 1),
               100 * (total.fit_no_imu_occ.mean(1) / total.fit_occ.mean(1) - 1));
   if (total.elevation_n > 0) {
-    std::printf("shoulder_lift: shoulder elevation error fit %.1f deg, camera skeleton %.1f deg (%d shoulder-frames)\n",
-                total.elevation_fit / total.elevation_n, total.elevation_camera / total.elevation_n, total.elevation_n);
+    std::printf(
+        "shoulder_lift: shoulder elevation error fit %.1f deg (signed mean %+.1f), camera skeleton %.1f deg (%d "
+        "shoulder-frames)\n",
+        total.elevation_fit / total.elevation_n, total.elevation_fit_signed / total.elevation_n,
+        total.elevation_camera / total.elevation_n, total.elevation_n);
   }
   // RMS and largest magnitude in per cent of the segments (whole = false: upper arms and forearms)
   // or the whole arms.
