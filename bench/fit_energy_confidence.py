@@ -2,7 +2,7 @@
 """Joint-angle errors by the body fit's energy: the evidence for fit.trusted_energy and for the
 confidence of untrusted and lost fits (docs/fitting.md, "A fit's energy").
 
-    bench/fit_energy_confidence.py DIR [DIR ...]
+    bench/fit_energy_confidence.py [--trusted-energy E] DIR [DIR ...]
 
 DIR: a bench/joint_angles.sh KEEP directory (each session's NAME.out results with
 fit_energy.csv and NAME.gt truth). Run the sessions with FIT_OPTIONS='fit.trusted_energy=100' so
@@ -31,7 +31,7 @@ import sys
 ANGLES = ["thorax_flexion", "thorax_lateral_tilt", "thorax_axial_rotation", "elevation", "plane_of_elevation",
           "humerus_axial_rotation", "elbow_flexion"]
 EDGES = [0, 10, 15, 20, 25, 30, 40, 50, 60, 80, 100]
-TRUSTED_ENERGY = 15.0  # fit.trusted_energy's default
+TRUSTED_ENERGY = 10.0  # fit.trusted_energy's default; --trusted-energy E splits the second table at E
 LOST_ENERGY = 100.0  # fit.lost_energy's default
 
 
@@ -121,6 +121,10 @@ def report(name, errors):
 
 
 if __name__ == "__main__":
-    if len(sys.argv) < 2:
+    args = sys.argv[1:]
+    if len(args) >= 2 and args[0] == "--trusted-energy":
+        TRUSTED_ENERGY = float(args[1])
+        args = args[2:]
+    if not args:
         sys.exit(__doc__)
-    main(sys.argv[1:])
+    main(args)

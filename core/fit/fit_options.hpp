@@ -21,12 +21,16 @@ struct FitOptions {
   // (paper: "normal vector points perpendicular to the camera's optical axis"). Ours: a vertex
   // qualifies when |n . ray| <= bg_contour_max_cos and it is visible (Embree ray cast).
   double bg_contour_max_cos = 0.35;
-  // D_2D returns silhouette pixel centres, but the silhouette's edge lies up to about half a
-  // pixel diagonal beyond them: a model point exactly on the true outline often rounds to a pixel
-  // outside. Ours: a point counts as outside only beyond this distance from the closest
-  // silhouette pixel centre, and its target is that far from the centre towards the point.
-  // With 0 (the paper's reading) the bg term pulls a correct pose inwards.
-  double silhouette_edge_px = 0.7;
+  // The silhouette's outline is known to about 2 px only: D_2D returns pixel centres (the true
+  // edge lies up to half a pixel diagonal, 0.7 px, beyond them), the body index is misaligned
+  // with the depth by 1-2 px (Kinect v2; the simulator's max_edge_shift_px = 2), and the ToF
+  // sensor drops the grazing pixels along every outline. Ours: a point counts as outside only
+  // beyond this distance from the closest silhouette pixel centre, and its target is that far
+  // from the centre towards the point. With 0 (the paper's reading), or 0.7 (pixel centres
+  // alone), the bg term pulls a correct pose inwards wherever the silhouette is eroded: on the
+  // simulator a forearm pointing at the camera was fitted 2-3 cm high. 2 was chosen among 0.7,
+  // 1.5, 2 and 2.5 on the joint-angle bench's design seeds (docs/fitting.md, "Per-frame fit").
+  double silhouette_edge_px = 2.0;
 
   // --- Solver (II-F) ---
   int max_iterations = 20;  // paper 2 IV-C: at most 20 LM iterations per frame

@@ -29,10 +29,10 @@ inline constexpr double kCameraDisagreementM = 0.29;
 // A frame fitted at an energy above the tracker's trusted_energy matched its depth and silhouette
 // less well than the fits measured to stay within a confident value's 15 degrees: on the
 // joint-angle bench's tuning sessions (docs/benchmarks.md, "Fit energy and confidence") the
-// confident angle values of frames fitted at 15 < E <= 100 reach a 99 % error bound of 42.1 degrees
+// confident angle values of frames fitted at 10 < E <= 100 reach a 99 % error bound of 33.2 degrees
 // (pooled over the angles read from the joints). So such a frame's joints and forearms take at
-// most the confidence of that bound, 2^-(42.1/15)^2 = 0.0043 (untrusted_fit_confidence).
-inline constexpr double kUntrustedFitBound99Deg = 42.1;
+// most the confidence of that bound, 2^-(33.2/15)^2 = 0.033 (untrusted_fit_confidence).
+inline constexpr double kUntrustedFitBound99Deg = 33.2;
 double untrusted_fit_confidence();
 
 struct FittedJoint {

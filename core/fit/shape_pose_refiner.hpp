@@ -35,12 +35,17 @@ struct ShapeRefinerOptions {
   // III-B uses data, bg, bgJoint and limit only). The shape needs more iterations than a
   // tracked frame (ours: 60), and the tracking's stopping rules (1 mm joint motion, 1e-5
   // relative decrease) ended shape fits after 7 iterations, before the shape had settled (E 1.04
-  // instead of 0.93 after 17): ours 0.1 mm and 1e-6.
+  // instead of 0.93 after 17): ours 0.1 mm and 1e-6. The silhouette's edge tolerance stays at
+  // pixel centres (0.7 px), not the pose fit's 2 px: the girth betas (hip width, torso and limb
+  // girth) rest on the silhouette's width, which a 2 px dead zone leaves free by about 1.5 cm a
+  // side (on an exact render a girth beta ended 0.54 off instead of within 0.08), and the priors
+  // below were chosen with 0.7.
   FitOptions fit = [] {
     FitOptions o;
     o.max_iterations = 60;
     o.min_joint_step_m = 1e-4;
     o.min_relative_decrease = 1e-6;
+    o.silhouette_edge_px = 0.7;
     return o;
   }();
   ShapeFreedom freedom;  // all betas, |beta| <= 3 (its prior is set by the refiner)

@@ -514,13 +514,13 @@ TEST_F(ServerTest, ServerInfoListsStagesOptionsAndLimits) {
   EXPECT_EQ(info.stages(3).name(), "forearm_gaps");
   EXPECT_EQ(info.stages(4).name(), "frame_merge");
   EXPECT_EQ(info.stages(5).name(), "measures");
-  ASSERT_EQ(info.options_size(), 44);
-  EXPECT_EQ(info.options(33).key(), "measures.repetition_angle");
-  EXPECT_EQ(info.options(33).default_value(), "auto");
+  ASSERT_EQ(info.options_size(), 45);
+  EXPECT_EQ(info.options(34).key(), "measures.repetition_angle");
+  EXPECT_EQ(info.options(34).default_value(), "auto");
   EXPECT_EQ(info.options(16).key(), "fit.enabled");
   EXPECT_EQ(info.options(16).default_value(), "true");
   EXPECT_EQ(info.options(22).key(), "fit.trusted_energy");
-  EXPECT_EQ(info.options(22).default_value(), "15");
+  EXPECT_EQ(info.options(22).default_value(), "10");
   EXPECT_EQ(info.options(24).key(), "fit.fine_shape");
   EXPECT_EQ(info.options(25).key(), "fit.lambda_imu");
   EXPECT_EQ(info.options(26).key(), "fit.skeleton_start_energy");

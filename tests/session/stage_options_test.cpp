@@ -54,7 +54,7 @@ TEST(StageOptions, EveryKeyIsDeclaredOnceUnderItsStagesPrefix) {
       }
     }
   }
-  EXPECT_EQ(keys.size(), 44u);
+  EXPECT_EQ(keys.size(), 45u);
 }
 
 TEST(StageOptions, DefaultsAreValidAndTheLibrariesOwn) {
@@ -87,6 +87,7 @@ TEST(StageOptions, DefaultsAreValidAndTheLibrariesOwn) {
   EXPECT_EQ(fit.fit.min_joint_step_m, fit_defaults.min_joint_step_m);
   EXPECT_EQ(fit.fit.joint_step_stop_max_damping, fit_defaults.joint_step_stop_max_damping);
   EXPECT_EQ(fit.fit.project_steps_onto_limits, fit_defaults.project_steps_onto_limits);
+  EXPECT_EQ(fit.fit.silhouette_edge_px, fit_defaults.silhouette_edge_px);
   EXPECT_EQ(fit.smoothing.window_frames, fit::PoseSmoothingOptions().window_frames);
   EXPECT_EQ(fit.extrapolation.velocity_gain, 0.0);  // off (the table says why)
   EXPECT_NO_THROW(fit::validate(fit.fit));
@@ -184,6 +185,7 @@ TEST(StageOptions, EveryBodyFitOptionReachesTheStage) {
                                                               {kFitMinJointStepMKey, "0.004"},
                                                               {kFitJointStepStopMaxDampingKey, "1e8"},
                                                               {kFitProjectStepsOntoLimitsKey, "false"},
+                                                              {kFitSilhouetteEdgePxKey, "1.25"},
                                                               {kFitStartVelocityGainKey, "1"}}));
   EXPECT_EQ(o.calibration_s, 2.0);
   EXPECT_EQ(o.body_id, 3u);
@@ -199,6 +201,7 @@ TEST(StageOptions, EveryBodyFitOptionReachesTheStage) {
   EXPECT_EQ(o.fit.min_joint_step_m, 0.004);
   EXPECT_EQ(o.fit.joint_step_stop_max_damping, 1e8);
   EXPECT_FALSE(o.fit.project_steps_onto_limits);
+  EXPECT_EQ(o.fit.silhouette_edge_px, 1.25);
   EXPECT_EQ(o.extrapolation.velocity_gain, 1.0);
   EXPECT_TRUE(body_fit_enabled(header_with({{kFitEnabledKey, "1"}})));
 }
@@ -210,7 +213,9 @@ TEST(StageOptions, BodyFitBadValuesNameTheOption) {
                                                                              {kFitBodyIdKey, "-2"},
                                                                              {kFitLostEnergyKey, "0"},
                                                                              {kFitTrustedEnergyKey, "0"},
-                                                                             {kFitMinJointStepMKey, "-0.001"}}) {
+                                                                             {kFitMinJointStepMKey, "-0.001"},
+                                                                             {kFitSilhouetteEdgePxKey, "-1"},
+                                                                             {kFitSilhouetteEdgePxKey, "17"}}) {
     expect_field([&] { read_body_fit_options(header_with({option})); }, option.first);
   }
   expect_field([] { body_fit_enabled(header_with({{kFitEnabledKey, "maybe"}})); }, kFitEnabledKey);

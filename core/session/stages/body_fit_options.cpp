@@ -69,7 +69,7 @@ const OptionTable& body_fit_option_table() {
         // docs/benchmarks.md, "Fit energy and confidence").
         {.key = kFitTrustedEnergyKey,
          .type = OptionType::kReal,
-         .default_value = "15",
+         .default_value = "10",
          .min = above(0),
          .description = "frames fitted above this energy (eq. 4) give their joints and forearms a confidence of at "
                         "most " +
@@ -125,6 +125,13 @@ const OptionTable& body_fit_option_table() {
          .default_value = fit_defaults.linearise_distances ? "true" : "false",
          .description = "LM: bg, bgJoint and float linearised as distances to their sliding closest points (false = "
                         "as offsets to held targets, paper 2)"},
+        {.key = kFitSilhouetteEdgePxKey,
+         .type = OptionType::kReal,
+         .default_value = format_double(fit_defaults.silhouette_edge_px),
+         .min = at_least(0),
+         .max = at_most(16),
+         .description = "bg / bgJoint: a model point counts as outside the silhouette only beyond this many pixels "
+                        "from the closest silhouette pixel (the body index's misalignment with the depth)"},
         // Off by default: measured, it did not lower the iterations and raised the occluded error
         // (docs/fitting.md, "Start policy").
         {.key = kFitStartVelocityGainKey,
@@ -164,6 +171,7 @@ BodyFitOptions read_body_fit_options(const v1::SessionHeader& header) {
   out.fit.joint_step_stop_max_damping = options.real(kFitJointStepStopMaxDampingKey);
   out.fit.project_steps_onto_limits = options.boolean(kFitProjectStepsOntoLimitsKey);
   out.fit.linearise_distances = options.boolean(kFitLineariseDistancesKey);
+  out.fit.silhouette_edge_px = options.real(kFitSilhouetteEdgePxKey);
   out.extrapolation.velocity_gain = options.real(kFitStartVelocityGainKey);
   return out;
 }

@@ -27,6 +27,7 @@ inline constexpr const char* kFitMinJointStepMKey = "fit.min_joint_step_m";
 inline constexpr const char* kFitJointStepStopMaxDampingKey = "fit.joint_step_stop_max_damping";
 inline constexpr const char* kFitProjectStepsOntoLimitsKey = "fit.project_steps_onto_limits";
 inline constexpr const char* kFitLineariseDistancesKey = "fit.linearise_distances";
+inline constexpr const char* kFitSilhouetteEdgePxKey = "fit.silhouette_edge_px";
 inline constexpr const char* kFitStartVelocityGainKey = "fit.start_velocity_gain";
 
 // What the options say, as the stage uses it. The defaults are the table's (read_body_fit_options).
@@ -40,8 +41,8 @@ struct BodyFitOptions {
   bool fine_shape = false;               // fit.fine_shape
   double skeleton_start_energy = 0;      // fit.skeleton_start_energy
   // max_iterations, lambda_imu, freeze_contour_after, min_joint_step_m, joint_step_stop_max_damping,
-  // project_steps_onto_limits and linearise_distances from the options, the rest fit::FitOptions'
-  // own defaults.
+  // project_steps_onto_limits, linearise_distances and silhouette_edge_px from the options, the rest
+  // fit::FitOptions' own defaults.
   fit::FitOptions fit;
   fit::StartExtrapolationOptions extrapolation;  // velocity_gain: fit.start_velocity_gain
 };
