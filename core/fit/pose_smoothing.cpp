@@ -61,8 +61,11 @@ std::vector<Eigen::VectorXd> PoseSmoother::flush() {
 }
 
 Eigen::VectorXd PoseSmoother::average_around(std::size_t centre) const {
-  const std::size_t first = centre >= static_cast<std::size_t>(half_) ? centre - half_ : 0;
-  const std::size_t last = std::min(frames_.size() - 1, centre + half_);
+  // Near the ends the window shrinks on both sides, so it stays centred: a one-sided window lags
+  // (or leads) a moving body by half a frame per frame it leaves out.
+  const std::size_t half = std::min({static_cast<std::size_t>(half_), centre, frames_.size() - 1 - centre});
+  const std::size_t first = centre - half;
+  const std::size_t last = centre + half;
   Eigen::VectorXd sum = Eigen::VectorXd::Zero(layout_.size());
   for (std::size_t i = first; i <= last; ++i) sum += frames_[i];
   return sum / static_cast<double>(last - first + 1);

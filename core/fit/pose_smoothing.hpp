@@ -19,8 +19,9 @@ struct PoseSmoothingOptions {
 };
 
 // Streaming: push each frame's fitted theta in time order; each push returns the smoothed pose of
-// the frame window / 2 frames back once its window is complete; flush() returns the last ones
-// (their windows shrink at the end of the sequence, as at its start).
+// the frame window / 2 frames back once its window is complete; flush() returns the last ones.
+// Within window / 2 frames of either end the window shrinks on both sides so that it stays
+// centred: the first and the last frame are their own fitted poses.
 class PoseSmoother {
  public:
   // Throws posefuse::Error "smoothing_options.window_frames" for an even or non-positive window.

@@ -26,13 +26,29 @@ TEST(FitPoseSmoothing, CentredMovingAverageOfThreeFrames) {
   for (int t = 0; t < 6; ++t) raw.push_back(Eigen::VectorXd::Constant(layout.size(), 0.01 * t * t));
   const std::vector<Eigen::VectorXd> smoothed = smooth_poses(layout, raw);
   ASSERT_EQ(smoothed.size(), raw.size());
-  // Ends average the frames that exist.
-  EXPECT_TRUE(smoothed[0].isApprox((raw[0] + raw[1]) / 2));
+  // At the ends the window shrinks on both sides and stays centred: the end frames are their own.
+  EXPECT_EQ(smoothed[0], raw[0]);
   for (int t = 1; t < 5; ++t) EXPECT_TRUE(smoothed[t].isApprox((raw[t - 1] + raw[t] + raw[t + 1]) / 3)) << t;
-  EXPECT_TRUE(smoothed[5].isApprox((raw[4] + raw[5]) / 2));
-  // Window 1 is the raw sequence; window 5 averages five.
+  EXPECT_EQ(smoothed[5], raw[5]);
+  // Window 1 is the raw sequence; window 5 averages five, three next to an end, one at it.
   EXPECT_EQ(smooth_poses(layout, raw, {1}), raw);
-  EXPECT_TRUE(smooth_poses(layout, raw, {5})[2].isApprox((raw[0] + raw[1] + raw[2] + raw[3] + raw[4]) / 5));
+  const std::vector<Eigen::VectorXd> five = smooth_poses(layout, raw, {5});
+  EXPECT_TRUE(five[2].isApprox((raw[0] + raw[1] + raw[2] + raw[3] + raw[4]) / 5));
+  EXPECT_TRUE(five[1].isApprox((raw[0] + raw[1] + raw[2]) / 3));
+  EXPECT_TRUE(five[4].isApprox((raw[3] + raw[4] + raw[5]) / 3));
+  EXPECT_EQ(five[5], raw[5]);
+}
+
+// A body moving at constant speed: a centred window, however short at the ends, does not lag.
+TEST(FitPoseSmoothing, ConstantSpeedIsNotDelayedAtTheEnds) {
+  const PoseLayout layout = PoseLayout::upper_body();
+  std::vector<Eigen::VectorXd> raw;
+  for (int t = 0; t < 7; ++t) raw.push_back(Eigen::VectorXd::Constant(layout.size(), 0.05 * t));
+  for (int window : {3, 5}) {
+    const std::vector<Eigen::VectorXd> smoothed = smooth_poses(layout, raw, {window});
+    for (int t = 0; t < 7; ++t)
+      EXPECT_TRUE(smoothed[t].isApprox(raw[t], 1e-12)) << "window " << window << " frame " << t;
+  }
 }
 
 TEST(FitPoseSmoothing, StreamingEmitsOneFrameLate) {
@@ -42,10 +58,13 @@ TEST(FitPoseSmoothing, StreamingEmitsOneFrameLate) {
   EXPECT_FALSE(smoother.push(a).has_value());
   const auto first = smoother.push(b);
   ASSERT_TRUE(first.has_value());
-  EXPECT_TRUE(first->isApprox((a + b) / 2));
+  EXPECT_TRUE(first->isApprox(a));  // the first frame's window is itself
+  const auto second = smoother.push(a);
+  ASSERT_TRUE(second.has_value());
+  EXPECT_TRUE(second->isApprox((a + b + a) / 3));
   const std::vector<Eigen::VectorXd> rest = smoother.flush();
   ASSERT_EQ(rest.size(), 1u);
-  EXPECT_TRUE(rest[0].isApprox((a + b) / 2));
+  EXPECT_TRUE(rest[0].isApprox(a));  // and the last frame's
 }
 
 // A subject facing the camera turns slowly through 180 degrees about y, where the pelvis rotation
