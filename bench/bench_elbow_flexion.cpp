@@ -24,6 +24,7 @@
 
 #include "body/template_generator.hpp"
 #include "fit/frame_fitter.hpp"
+#include "fit/limb_bend.hpp"
 #include "fit/silhouette_cleanup.hpp"
 #include "fit/skeleton_pose_init.hpp"
 #include "model_frames.hpp"
@@ -39,10 +40,8 @@ namespace {
 constexpr double kDeg = std::numbers::pi / 180;
 
 double flexion_deg(const Eigen::Matrix3Xd& J, bool left) {
-  const int s = left ? body::kLeftShoulder : body::kRightShoulder, e = left ? body::kLeftElbow : body::kRightElbow,
-            w = left ? body::kLeftWrist : body::kRightWrist;
-  const Eigen::Vector3d u = J.col(e) - J.col(s), f = J.col(w) - J.col(e);
-  return std::atan2(u.cross(f).norm(), u.dot(f)) / kDeg;
+  return left ? fit::limb_bend_deg(J.col(body::kLeftShoulder), J.col(body::kLeftElbow), J.col(body::kLeftWrist))
+              : fit::limb_bend_deg(J.col(body::kRightShoulder), J.col(body::kRightElbow), J.col(body::kRightWrist));
 }
 
 struct Errors {

@@ -49,11 +49,8 @@ std::vector<UnknownOption> unknown_stage_options(const v1::SessionHeader& header
   std::set<std::string_view> prefixes;
   for (const OptionTable* table : tables)
     for (const OptionSpec& spec : *table) prefixes.insert(prefix_of(spec.key));
-  const std::set<std::string> keys = [&] {
-    std::set<std::string> sorted;
-    for (const auto& [key, value] : header.options()) sorted.insert(key);
-    return sorted;
-  }();
+  std::set<std::string> keys;  // sorted: the header's map has no order
+  for (const auto& [key, value] : header.options()) keys.insert(key);
   std::vector<UnknownOption> unknown;
   for (const std::string& key : keys) {
     if (key.find('.') == std::string::npos || !prefixes.contains(prefix_of(key))) continue;
