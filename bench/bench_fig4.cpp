@@ -43,6 +43,7 @@
 #include "body/pose_parameters.hpp"
 #include "body/template_generator.hpp"
 #include "fit/joint_kinematics.hpp"
+#include "forearm/orientation_uncertainty.hpp"
 #include "session/frame_merge.hpp"
 #include "session/image_codec.hpp"
 #include "session/result_encoder.hpp"
@@ -133,7 +134,7 @@ std::vector<session::ForearmOrientations> forearm_batches(const sim::CameraSessi
       batch.K_from_F.push_back(random_turn(rng, 3 * kDeg) * sim.truth[i].forearms[static_cast<size_t>(a)].K_from_F);
       batch.pronation_rad.push_back(0.0);
       batch.orientation_rms_rad.push_back(3 * kDeg);  // the turn's size: confident, as a calibrated arm's
-      batch.model_rms_rad.push_back(3 * kDeg);
+      batch.axis_rms_rad.push_back(forearm::kDirectionRmsOverOrientationRms * 3 * kDeg);
     }
   }
   return out;

@@ -25,20 +25,23 @@ std::int64_t microseconds(double seconds) { return static_cast<std::int64_t>(std
 
 }  // namespace
 
-double camera_observed_rms_rad(double disagreement_rad) { return disagreement_rad / std::sqrt(2.0 / 3.0); }
+double camera_observed_rms_rad(double disagreement_rad) { return disagreement_rad / kDirectionRmsOverOrientationRms; }
 
 ForearmTrack::ForearmTrack(Side side, const ForearmModel& model, bool has_model, const Quat& K_from_W,
-                           const std::optional<Quat>& K_from_F_reference, double orientation_rms_rad)
+                           const std::optional<Quat>& K_from_F_reference, double orientation_rms_rad,
+                           std::optional<double> axis_rms_rad)
     : side_(side),
       model_(model),
       has_model_(has_model),
       K_from_W_(K_from_W),
       K_from_F_reference_(K_from_F_reference),
-      orientation_rms_rad_(orientation_rms_rad) {}
+      orientation_rms_rad_(orientation_rms_rad),
+      axis_rms_rad_(axis_rms_rad.value_or(kDirectionRmsOverOrientationRms * orientation_rms_rad)) {}
 
-void ForearmTrack::set_mounting(const Quat& F_from_A, double orientation_rms_rad) {
+void ForearmTrack::set_mounting(const Quat& F_from_A, double orientation_rms_rad, std::optional<double> axis_rms_rad) {
   model_.F_from_A = F_from_A.normalized();
   orientation_rms_rad_ = orientation_rms_rad;
+  axis_rms_rad_ = axis_rms_rad.value_or(kDirectionRmsOverOrientationRms * orientation_rms_rad);
 }
 
 void ForearmTrack::set_pronation_reference(const Quat& K_from_F_reference) {
@@ -73,7 +76,7 @@ std::optional<std::int64_t> ForearmTrack::oldest_queued_us() const {
 std::size_t ForearmTrack::held_bytes() const {
   using posefuse::held_bytes;
   return held_bytes(arm_) + held_bytes(K_from_F_imu_) + held_bytes(K_from_A_imu_) +
-         held_bytes(orientation_rms_rad_of_) + held_bytes(mounting_rms_rad_of_) + held_bytes(settled_rms_rad_) +
+         held_bytes(orientation_rms_rad_of_) + held_bytes(axis_rms_rad_of_) + held_bytes(settled_rms_rad_) +
          held_bytes(K_from_F_) + held_bytes(track_) + held_bytes(frames_);
 }
 
@@ -92,7 +95,7 @@ void ForearmTrack::add_imu(const std::vector<std::int64_t>& t_us, const std::vec
     // The filter's own uncertainty (start-up, lost samples) adds to the mounting's, independently.
     const double filter_rad = i < filter_uncertainty_rad.size() ? filter_uncertainty_rad[i] : 0.0;
     orientation_rms_rad_of_.push_back(std::sqrt(orientation_rms_rad_ * orientation_rms_rad_ + filter_rad * filter_rad));
-    mounting_rms_rad_of_.push_back(orientation_rms_rad_);
+    axis_rms_rad_of_.push_back(axis_rms_rad_);
   }
 }
 
@@ -109,7 +112,7 @@ void ForearmTrack::take_settled(std::vector<SettledArmSample>& out) {
   for (; settled_taken_ < K_from_F_.size(); ++settled_taken_) {
     const Quat& K_from_F = K_from_F_[settled_taken_];
     out.push_back({arm_[settled_taken_], K_from_F, pronation(settled_taken_, K_from_F),
-                   settled_rms_rad_[settled_taken_], mounting_rms_rad_of_[settled_taken_]});
+                   settled_rms_rad_[settled_taken_], axis_rms_rad_of_[settled_taken_]});
   }
 }
 

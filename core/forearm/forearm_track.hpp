@@ -52,12 +52,13 @@ struct SettledArmSample {
   // Predicted RMS angle of K_from_F's error (orientation_uncertainty.hpp), at least what the
   // camera's last forearm axis before it showed.
   double orientation_rms_rad = 0.0;
-  // The mounting's alone (with the filter's steady error), before the filter's own uncertainty
-  // (lost samples, start-up) and the camera's check: what the body fit gates its imu term on.
-  // With the filter's uncertainty in the gate, the demo's right arm fed the imu term on 122 of
-  // 1581 samples instead of 981, and its fitted joints were 44.7 mm off on average instead of
-  // 20.2 (docs/forearm.md).
-  double model_rms_rad = 0.0;
+  // Predicted RMS angle of the forearm axis y_F's direction error: the mounting's axis and the
+  // filter's steady error, before the filter's own uncertainty (lost samples, start-up) and the
+  // camera's check. The body fit's imu term uses y_F alone, so this is what it gates on: the roll
+  // about y_F (+-30 deg from motion) does not move it. With the filter's uncertainty in the gate,
+  // the demo's right arm fed the imu term on 122 of 1581 samples instead of 981, and its fitted
+  // joints were 44.7 mm off on average instead of 20.2 (docs/forearm.md).
+  double axis_rms_rad = 0.0;
 };
 
 // A camera frame once tracked: the strap's IMU position when visible, and the forearm
@@ -93,13 +94,17 @@ class ForearmTrack {
   // `has_model` false: the strap was never seen in the calibration, so r and d_se are unknown
   // and no frame is visible (orientations only). K_from_F_reference: the forearm in the
   // calibration pose, the zero of the pronation angle; none (a mounting from motion): the
-  // pronation angle is NaN. orientation_rms_rad: the predicted RMS error of every K_from_F.
+  // pronation angle is NaN. orientation_rms_rad: the predicted RMS error of every K_from_F;
+  // axis_rms_rad: that of its forearm axis y_F alone (forearm_axis_rms_rad), none: the orientation's
+  // error taken as isotropic (kDirectionRmsOverOrientationRms times it).
   ForearmTrack(Side side, const ForearmModel& model, bool has_model, const Quat& K_from_W,
-               const std::optional<Quat>& K_from_F_reference, double orientation_rms_rad);
+               const std::optional<Quat>& K_from_F_reference, double orientation_rms_rad,
+               std::optional<double> axis_rms_rad = std::nullopt);
 
   // A refined mounting (from motion) for the IMU samples added from now on; those before keep
-  // theirs, each sample carrying the RMS error it was made with.
-  void set_mounting(const Quat& F_from_A, double orientation_rms_rad);
+  // theirs, each sample carrying the RMS errors it was made with.
+  void set_mounting(const Quat& F_from_A, double orientation_rms_rad,
+                    std::optional<double> axis_rms_rad = std::nullopt);
   // The calibration pose found later in the session: the pronation angle's zero for the IMU
   // samples added from now on (those before keep NaN).
   void set_pronation_reference(const Quat& K_from_F_reference);
@@ -164,13 +169,14 @@ class ForearmTrack {
   std::optional<Quat> K_from_F_reference_;
   std::size_t reference_from_ = 0;  // the first sample whose pronation uses it
   double orientation_rms_rad_;
+  double axis_rms_rad_;
 
   // Every IMU sample; K_from_A is eq. 11's until the sample is settled, then corrected.
   std::vector<ArmSample> arm_;
   std::vector<Quat> K_from_F_imu_;              // eq. 11, before the axis correction
   std::vector<Quat> K_from_A_imu_;              // eq. 11, before the axis correction
   std::vector<double> orientation_rms_rad_of_;  // per sample, the mounting's and the filter's
-  std::vector<double> mounting_rms_rad_of_;     // per sample, the mounting's alone (model_rms_rad)
+  std::vector<double> axis_rms_rad_of_;         // per sample, y_F's alone (SettledArmSample::axis_rms_rad)
   std::vector<double> settled_rms_rad_;         // per settled sample: at least the camera's observed
   // The previous frame's implied mounting and uncertainty, and the frames flagged for a step.
   std::optional<Quat> last_frame_A_from_F_;

@@ -24,18 +24,6 @@ bool usable(const MountingFrame& f) {
          f.forearm_K.norm() > 1e-6;
 }
 
-// Effective sample count of a series whose neighbours share their error (AR(1)): n (1-rho)/(1+rho).
-double effective_count(const std::vector<Eigen::Vector2d>& residuals) {
-  const std::size_t n = residuals.size();
-  double lag0 = 0.0, lag1 = 0.0;
-  for (std::size_t i = 0; i < n; ++i) {
-    lag0 += residuals[i].squaredNorm();
-    if (i > 0) lag1 += residuals[i].dot(residuals[i - 1]);
-  }
-  const double rho = lag0 > 0.0 ? std::clamp(lag1 / lag0, 0.0, 0.99) : 0.0;
-  return std::max(1.0, static_cast<double>(n) * (1.0 - rho) / (1.0 + rho));
-}
-
 // The forearm axis in A fitted to frames: the normalised sum of each frame's forearm direction
 // turned into A, the residuals (in a plane normal to it), their RMS angle, and how far the
 // forearm turned in K (RMS angle from its mean direction).
@@ -171,7 +159,10 @@ std::optional<MountingEstimate> estimate_mounting(const std::vector<MountingFram
   estimate.outlier_frames = outliers;
   estimate.seconds = 1e-6 * static_cast<double>(frames.back().t_us - frames.front().t_us);
   estimate.axis_spread_rad = fit.spread_rms;
-  estimate.axis_rms_rad = fit.residual_rms / std::sqrt(effective_count(fit.residuals));
+  // Trusted as one frame's depth axis agrees, not as the mean of independent ones: the depth
+  // axis's error depends on the pose and recurs with it as the motion repeats, so it does not
+  // average out (docs/forearm.md, "Mounting from motion").
+  estimate.axis_rms_rad = fit.residual_rms;
 
   // The roll: psi with A_from_F = A_from_B * Ry(psi). The nominal mounting is A_from_F = I.
   const double nominal_psi = twist_about_y(A_from_B.conjugate());

@@ -8,6 +8,10 @@ double orientation_rms_rad(double axis_rms_rad, double roll_rms_rad, double filt
   return std::sqrt(axis_rms_rad * axis_rms_rad + roll_rms_rad * roll_rms_rad + filter_rms_rad * filter_rms_rad);
 }
 
+double forearm_axis_rms_rad(double axis_rms_rad, double filter_rms_rad) {
+  return std::hypot(axis_rms_rad, kDirectionRmsOverOrientationRms * filter_rms_rad);
+}
+
 double pose_calibration_rms_rad(double hold_spread_rad) {
   if (!(hold_spread_rad >= 0.0)) return std::nan("");
   return std::hypot(kPoseCalibrationRmsRad, hold_spread_rad);
@@ -22,5 +26,9 @@ double confidence_from_bound99_rad(double bound99_rad) {
 }
 
 double confidence_from_rms_rad(double rms_rad) { return confidence_from_bound99_rad(kBound99OverRms * rms_rad); }
+
+double direction_confidence_from_rms_rad(double rms_rad) {
+  return confidence_from_bound99_rad(kDirectionBound99OverRms * rms_rad);
+}
 
 }  // namespace posefuse::forearm

@@ -40,6 +40,20 @@ double imu_orientation_rms_rad(double beyond_steady_rad);
 // sqrt(axis^2 + roll^2 + filter^2), rad.
 double orientation_rms_rad(double axis_rms_rad, double roll_rms_rad, double filter_rms_rad = kFilterRmsRad);
 
+// The RMS angle by which an isotropic 3-D orientation error of RMS angle u moves one direction:
+// sqrt(2/3) u (a turn by phi about an axis at angle a to the direction moves it by about phi sin a,
+// and sin^2 a averages 2/3 over random axes).
+inline constexpr double kDirectionRmsOverOrientationRms = 0.816496580927726;
+
+// The forearm axis y_F's predicted RMS direction error in K: the mounting's axis error and the
+// filter's steady error as a direction's, sqrt(axis^2 + (2/3) filter^2), rad. The roll about y_F
+// does not move y_F, so it is not in it.
+double forearm_axis_rms_rad(double axis_rms_rad, double filter_rms_rad = kFilterRmsRad);
+
+// 2^-((2.146 u / 15 deg)^2) for a direction of RMS error u (the Rayleigh 99 % bound): 0.5 where
+// the direction is predicted within 15 degrees 99 % of the time. NaN or negative u gives 0.
+double direction_confidence_from_rms_rad(double rms_rad);
+
 // 2^-((b / 15 deg)^2) for an error whose 99 % bound is b: 1 at b = 0, 0.5 at 15 degrees. NaN or
 // negative b gives 0.
 double confidence_from_bound99_rad(double bound99_rad);

@@ -39,7 +39,7 @@ struct ForearmOrientations {
   std::vector<geometry::Quat> K_from_F;
   std::vector<double> pronation_rad;        // NaN without the calibration pose
   std::vector<double> orientation_rms_rad;  // predicted RMS error (forearm/orientation_uncertainty.hpp)
-  std::vector<double> model_rms_rad;        // the mounting's alone (SettledArmSample::model_rms_rad)
+  std::vector<double> axis_rms_rad;         // y_F's alone (SettledArmSample::axis_rms_rad)
 };
 
 // The forearm stage's decision on one arm IMU once its calibration is over: tracked (with the
@@ -73,7 +73,7 @@ inline ForearmOrientations forearm_orientations_of(const std::string& device_id,
     out.K_from_F.push_back(s.K_from_F);
     out.pronation_rad.push_back(s.pronation_rad);
     out.orientation_rms_rad.push_back(s.orientation_rms_rad);
-    out.model_rms_rad.push_back(s.model_rms_rad);
+    out.axis_rms_rad.push_back(s.axis_rms_rad);
   }
   return out;
 }

@@ -89,7 +89,8 @@ TEST(ForearmTrack, TheOrientationFiltersOwnUncertaintyAddsToTheMountings) {
   ASSERT_EQ(out.samples.size(), filter_deg.size());
   for (std::size_t i = 0; i < filter_deg.size(); ++i) {
     EXPECT_NEAR(out.samples[i].orientation_rms_rad, std::hypot(4.0, filter_deg[i]) * kDeg, 1e-12) << i;
-    EXPECT_DOUBLE_EQ(out.samples[i].model_rms_rad, 4.0 * kDeg) << i;  // the body fit's gate: the mounting's
+    // The body fit's gate: y_F's alone, the mounting's error taken as isotropic, no filter's.
+    EXPECT_NEAR(out.samples[i].axis_rms_rad, kDirectionRmsOverOrientationRms * 4.0 * kDeg, 1e-15) << i;
   }
   EXPECT_LT(confidence_from_rms_rad(out.samples[2].orientation_rms_rad), 0.01);
   EXPECT_GT(confidence_from_rms_rad(out.samples[4].orientation_rms_rad), 0.5);
@@ -181,7 +182,7 @@ TEST(ForearmTrack, TheCamerasForearmAxisRaisesTheUncertaintyOfTheSamplesAfterIt)
   const double observed = 30 * kDeg / std::sqrt(2.0 / 3.0);
   for (std::size_t i = 0; i < out.samples.size(); ++i) {
     EXPECT_NEAR(out.samples[i].orientation_rms_rad, i < 4 ? 2.0 * kDeg : observed, 1e-9) << i;
-    EXPECT_DOUBLE_EQ(out.samples[i].model_rms_rad, 2.0 * kDeg) << i;
+    EXPECT_NEAR(out.samples[i].axis_rms_rad, kDirectionRmsOverOrientationRms * 2.0 * kDeg, 1e-15) << i;
   }
   ASSERT_EQ(out.frames.size(), 1u);
   EXPECT_NEAR(out.frames[0].orientation_rms_rad, observed, 1e-9);

@@ -295,8 +295,9 @@ TEST(SessionMemoryBudget, FramesFarCloserThanACameraSendsEndTheSessionNamingWhat
 }
 
 // The forearm stage's per-sample K_from_F, here the truth, one sample per frame, handed on as the
-// forearm stage hands them on: right, left.
-void hand_truth_forearms(BodyFitStage& stage, StageOutput& out) {
+// forearm stage hands them on: right, left; predicted errors as given (0: the truth).
+void hand_truth_forearms(BodyFitStage& stage, StageOutput& out, double orientation_rms_rad = 0.0,
+                         double axis_rms_rad = 0.0) {
   for (int strap = 0; strap < 2; ++strap) {
     ForearmOrientations batch;
     batch.arm = strap == 0 ? v1::RIGHT : v1::LEFT;
@@ -304,8 +305,8 @@ void hand_truth_forearms(BodyFitStage& stage, StageOutput& out) {
       batch.t_us.push_back(session().t_us[i]);
       batch.K_from_F.push_back(session().truth[i].forearms[static_cast<size_t>(strap)].K_from_F);
       batch.pronation_rad.push_back(0.0);
-      batch.orientation_rms_rad.push_back(0.0);  // the truth
-      batch.model_rms_rad.push_back(0.0);
+      batch.orientation_rms_rad.push_back(orientation_rms_rad);
+      batch.axis_rms_rad.push_back(axis_rms_rad);
     }
     stage.on_value(batch, out);
   }
@@ -336,6 +337,28 @@ TEST(BodyFitStage, ForearmOrientationsEnterTheFitAndTheResult) {
                                        .normalized();
       EXPECT_LT(std::acos(std::min(1.0, (got * Eigen::Vector3d::UnitY()).dot(axis))), 1e-6);
       EXPECT_LT(got.angularDistance(want), 10 * kDeg) << "frame " << i << (is_left ? " left" : " right");
+    }
+  }
+}
+
+// The imu term uses the forearm axis y_F alone, so it is gated on y_F's predicted error: a mounting
+// from motion, whose roll is known to +-30 deg only, still feeds it where its axis is known to a
+// few degrees; an axis known to 10 deg (99 % bound 21 deg) does not.
+TEST(BodyFitStage, TheForearmAxisEntersTheFitWhateverTheRollsError) {
+  for (const double axis_deg : {3.0, 10.0}) {
+    SCOPED_TRACE("axis RMS " + std::to_string(axis_deg) + " deg");
+    Output out;
+    BodyFitStage stage;
+    const AssembledSession inputs = assemble(header_with({}));
+    stage.start(header_with({}), out);
+    hand_truth_forearms(stage, out, 30 * kDeg, axis_deg * kDeg);
+    for (const SessionInput& input : inputs.inputs) deliver_input(stage, input, out);
+    stage.finish(out);
+    const auto frames = out.frames();
+    ASSERT_EQ(frames.size(), session().truth.size());
+    for (const v1::FrameResult* f : frames) {
+      for (const int wrist : {body::kLeftWrist, body::kRightWrist})
+        EXPECT_EQ(f->smpl_joints(wrist).source(), axis_deg < 5 ? v1::FUSED : v1::VISUAL);
     }
   }
 }

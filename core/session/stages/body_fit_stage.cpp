@@ -183,12 +183,14 @@ void BodyFitStage::on_value(const StageValue& value, StageOutput& out) {
     const Eigen::Quaterniond& q = batch->K_from_F[i];
     if (!q.coeffs().allFinite() || std::abs(q.norm() - 1.0) > 1e-3) continue;
     if (!samples.empty() && batch->t_us[i] <= samples.back().first) continue;
-    // The mounting's and the filter's predicted error, not the camera-checked one: the fit
-    // weighs the depth itself, and a camera check of the depth axis would count its noise twice.
-    // A sample without one is not confident.
-    const double rms_rad =
-        i < batch->model_rms_rad.size() ? batch->model_rms_rad[i] : std::numeric_limits<double>::quiet_NaN();
-    const bool confident = forearm::confidence_from_rms_rad(rms_rad) >= forearm::kConfidentAt;
+    // The imu term uses the forearm axis y_F alone, so it is gated on y_F's predicted error (the
+    // mounting's axis and the filter's steady error), not the whole orientation's: a mounting
+    // from motion knows its roll to +-30 deg only, and its axis to a few degrees. Not the
+    // camera-checked error either: the fit weighs the depth itself, and a camera check of the
+    // depth axis would count its noise twice. A sample without one is not confident.
+    const double axis_rms_rad =
+        i < batch->axis_rms_rad.size() ? batch->axis_rms_rad[i] : std::numeric_limits<double>::quiet_NaN();
+    const bool confident = forearm::direction_confidence_from_rms_rad(axis_rms_rad) >= forearm::kConfidentAt;
     samples.emplace_back(batch->t_us[i], confident ? std::optional<Eigen::Quaterniond>(q.normalized()) : std::nullopt);
   }
   if (tracker_->personalised()) fit_ready(false, out);

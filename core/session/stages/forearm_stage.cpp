@@ -446,7 +446,8 @@ void ForearmStage::estimate_motion_mountings(bool finishing, StageOutput& out) {
     const double rms_rad = forearm::orientation_rms_rad(estimate->axis_rms_rad, estimate->roll_rms_rad);
     device.mounting = estimate;
     if (device.tracker) {
-      device.tracker->set_mounting(device.mounting->F_from_A, rms_rad);
+      device.tracker->set_mounting(device.mounting->F_from_A, rms_rad,
+                                   forearm::forearm_axis_rms_rad(estimate->axis_rms_rad));
     } else {
       start_motion_track(device, *device.mounting, out);
     }
@@ -472,7 +473,8 @@ void ForearmStage::start_motion_track(Device& device, const forearm::MountingEst
   forearm::ForearmModel model;
   model.F_from_A = estimate.F_from_A;
   device.tracker =
-      std::make_unique<forearm::ForearmTrack>(*device.side, model, false, *K_from_W_, std::nullopt, rms_rad);
+      std::make_unique<forearm::ForearmTrack>(*device.side, model, false, *K_from_W_, std::nullopt, rms_rad,
+                                              forearm::forearm_axis_rms_rad(estimate.axis_rms_rad));
   for (const forearm::ArmFrame& f : device.frames) device.tracker->add_frame(f);
   device.frames.clear();
   device.frames_at_last_estimate = 0;  // from now on counted in tracked frames (mounting_frames)
