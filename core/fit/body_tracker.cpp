@@ -194,8 +194,14 @@ BodyTracker::Output BodyTracker::fit(BodyFitFrame& frame, const ForearmOrientati
   try {
     ForearmDirections directions;
     const auto left = K_from_F_at(ArmSide::kLeft, frame.t_us), right = K_from_F_at(ArmSide::kRight, frame.t_us);
-    if (left) directions.left_K = *left * Eigen::Vector3d::UnitY();  // F's y: elbow -> wrist
-    if (right) directions.right_K = *right * Eigen::Vector3d::UnitY();
+    if (left) {
+      directions.left_K = left->K_from_F * Eigen::Vector3d::UnitY();  // F's y: elbow -> wrist
+      directions.left_weight = left->axis_weight;
+    }
+    if (right) {
+      directions.right_K = right->K_from_F * Eigen::Vector3d::UnitY();
+      directions.right_weight = right->axis_weight;
+    }
     std::optional<KinectSkeleton> positions;
     if (frame.skeleton) {
       positions = frame.skeleton->positions_K;
@@ -323,9 +329,14 @@ BodyTracker::Output BodyTracker::fit(BodyFitFrame& frame, const ForearmOrientati
 FittedBodyFrame BodyTracker::release(const Eigen::VectorXd& theta, const ForearmOrientationAt& K_from_F_at) {
   const Fitted f = std::move(fitted_.front());
   fitted_.pop_front();
-  FittedBodyFrame out =
-      make_fitted_body_frame(work_->rest_joints, work_->layout, theta, f.skeleton,
-                             {K_from_F_at(ArmSide::kLeft, f.t_us), K_from_F_at(ArmSide::kRight, f.t_us)});
+  // The reported forearms turn the IMU's K_from_F onto the fitted axis: only where it is confident.
+  const auto confident = [&](ArmSide side) -> std::optional<Eigen::Quaterniond> {
+    const auto sample = K_from_F_at(side, f.t_us);
+    if (!sample || sample->axis_weight < 1.0) return std::nullopt;
+    return sample->K_from_F;
+  };
+  FittedBodyFrame out = make_fitted_body_frame(work_->rest_joints, work_->layout, theta, f.skeleton,
+                                               {confident(ArmSide::kLeft), confident(ArmSide::kRight)});
   out.t_us = f.t_us;
   out.energy = f.energy;
   out.lost = f.energy > options_.lost_energy;

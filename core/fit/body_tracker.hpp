@@ -66,8 +66,13 @@ struct FitWarning {
 // `skeleton_start_energy` or above (or at a NaN energy).
 bool needs_skeleton_start(std::optional<double> previous_energy, double skeleton_start_energy);
 
-// A forearm's orientation K_from_F at a camera time, where known (the caller's IMU data).
-using ForearmOrientationAt = std::function<std::optional<Eigen::Quaterniond>(ArmSide side, std::int64_t t_us)>;
+// A forearm's orientation K_from_F at a camera time, where known (the caller's IMU data), with the
+// imu term's weight for its forearm axis (forearm_direction_weight: 1 where the axis is confident).
+struct ForearmOrientationSample {
+  Eigen::Quaterniond K_from_F;
+  double axis_weight = 1.0;
+};
+using ForearmOrientationAt = std::function<std::optional<ForearmOrientationSample>(ArmSide side, std::int64_t t_us)>;
 
 // The fitted shape, for the calibration report.
 struct FittedShape {

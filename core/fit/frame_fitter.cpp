@@ -114,8 +114,12 @@ void FrameFitter::set_up_blocks(const FrameObservation& o) {
     data_[i] = {o.points_K[i], o.normals_K[i], 1 / (options_.sigma_p_m * sqrt_n), 1 / (options_.sigma_n * sqrt_n)};
   imu_.clear();
   const double imu_weight = std::sqrt(options_.lambda_imu);
-  if (o.forearm.left_K) imu_.push_back({body::kLeftElbow, body::kLeftWrist, *o.forearm.left_K, imu_weight});
-  if (o.forearm.right_K) imu_.push_back({body::kRightElbow, body::kRightWrist, *o.forearm.right_K, imu_weight});
+  if (o.forearm.left_K && o.forearm.left_weight > 0)
+    imu_.push_back(
+        {body::kLeftElbow, body::kLeftWrist, *o.forearm.left_K, imu_weight * std::sqrt(o.forearm.left_weight)});
+  if (o.forearm.right_K && o.forearm.right_weight > 0)
+    imu_.push_back(
+        {body::kRightElbow, body::kRightWrist, *o.forearm.right_K, imu_weight * std::sqrt(o.forearm.right_weight)});
   const int limited = LimitResidual::size(layout_);
   limit_.weight = limited > 0 ? std::sqrt(options_.lambda_limit / limited) : 0.0;
   const int free = static_cast<int>(free_betas_.size());

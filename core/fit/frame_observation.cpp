@@ -7,6 +7,7 @@
 #include "common/error.hpp"
 #include "common/thread_cpu_time.hpp"
 #include "fit/point_normals.hpp"
+#include "forearm/orientation_uncertainty.hpp"
 
 namespace posefuse::fit {
 namespace {
@@ -37,6 +38,18 @@ void validate(const FrameObservation& o) {
   if (!o.behind) throw_invalid("observation.behind", "D_3D map missing");
   check_unit(o.forearm.left_K, "observation.forearm.left_K");
   check_unit(o.forearm.right_K, "observation.forearm.right_K");
+  for (const auto& [weight, field] : {std::pair{o.forearm.left_weight, "observation.forearm.left_weight"},
+                                      std::pair{o.forearm.right_weight, "observation.forearm.right_weight"}}) {
+    if (!(weight >= 0.0 && weight <= 1.0)) throw_invalid(field, "not in [0, 1]");
+  }
+}
+
+double forearm_direction_weight(double axis_rms_rad) {
+  if (!(axis_rms_rad >= 0.0)) return 0.0;
+  const double confident_rms_rad = forearm::kConfidentErrorBoundRad / forearm::kDirectionBound99OverRms;
+  if (axis_rms_rad <= confident_rms_rad) return 1.0;
+  const double ratio = confident_rms_rad / axis_rms_rad;
+  return ratio * ratio;
 }
 
 FrameObservation prepare_observation(const DepthFrame& frame, const raycast::DepthCamera& camera,

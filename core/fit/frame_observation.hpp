@@ -19,10 +19,18 @@
 namespace posefuse::fit {
 
 // Forearm pointing directions E_left, E_right of eq. 9 in K (unit, elbow -> wrist), from the
-// wrist IMU orientations; absent when that IMU has no orientation for the frame.
+// wrist IMU orientations; absent when that IMU has no orientation for the frame. Each direction's
+// imu term is weighted by lambda_imu times its weight (forearm_direction_weight).
 struct ForearmDirections {
   std::optional<Eigen::Vector3d> left_K, right_K;
+  double left_weight = 1.0, right_weight = 1.0;
 };
+
+// The imu term's weight for a forearm direction of predicted RMS error axis_rms_rad: 1 where the
+// direction is confident (its Rayleigh 99 % bound within 15 degrees, u <= 7.0 degrees), and
+// inverse to its variance beyond, (7.0 degrees / u)^2, so that an axis known less well still keeps
+// a hidden forearm out of directions far from it while pulling a seen one little. NaN gives 0.
+double forearm_direction_weight(double axis_rms_rad);
 
 struct FrameObservation {
   std::vector<Eigen::Vector3d> points_K;   // p_i, metres

@@ -40,7 +40,7 @@ BodyFitFrame frame_at(std::int64_t t_us, std::optional<TrackedSkeleton> skeleton
   return frame;
 }
 
-std::optional<Eigen::Quaterniond> no_orientation(ArmSide, std::int64_t) { return std::nullopt; }
+std::optional<ForearmOrientationSample> no_orientation(ArmSide, std::int64_t) { return std::nullopt; }
 
 TEST(FitBodyTracker, SkeletonStartPolicy) {
   EXPECT_TRUE(needs_skeleton_start(std::nullopt, 45));  // no previous frame: the skeleton start alone

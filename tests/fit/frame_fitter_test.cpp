@@ -326,6 +326,11 @@ TEST_F(DegenerateInputs, BadObservationPoseShapeAndOptionsAreRefused) {
   FrameObservation bad_imu = good;
   bad_imu.forearm.left_K = Eigen::Vector3d(0, 0, 2);
   EXPECT_EQ(testing::error_field([&] { fitter.fit(bad_imu, truth, s.beta); }), "observation.forearm.left_K");
+  for (const double weight : {-0.1, 1.5, std::numeric_limits<double>::quiet_NaN()}) {
+    FrameObservation bad_weight = good;
+    bad_weight.forearm.right_weight = weight;
+    EXPECT_EQ(testing::error_field([&] { fitter.fit(bad_weight, truth, s.beta); }), "observation.forearm.right_weight");
+  }
   Eigen::VectorXd nan_theta = truth;
   nan_theta[7] = std::numeric_limits<double>::infinity();
   EXPECT_EQ(testing::error_field([&] { fitter.fit(good, nan_theta, s.beta); }), "theta[7]");
@@ -355,9 +360,10 @@ TEST_F(DegenerateInputs, BadObservationPoseShapeAndOptionsAreRefused) {
   EXPECT_TRUE(result.theta.allFinite());
 }
 
-TEST(FrameFitterEnergy, ImuTermPullsTheForearmTowardsTheImuDirection) {
+TEST(FrameFitterEnergy, ImuTermPullsTheForearmTowardsTheImuDirectionByItsWeight) {
   // Same frame, the left forearm IMU says the forearm points 20 degrees elsewhere: with the imu
-  // term the fitted forearm turns towards it, without it (lambda_imu = 0) it does not.
+  // term the fitted forearm turns towards it, the more the larger the direction's weight
+  // (forearm_direction_weight); without it (lambda_imu = 0, or weight 0) it does not.
   Scene s;
   const Eigen::VectorXd truth = testing::facing_pose(s.layout, 2.2, 0);
   const testing::ModelFrame rendered = testing::render_model_frame(s.model, s.layout, s.beta, truth, s.camera);
@@ -365,22 +371,37 @@ TEST(FrameFitterEnergy, ImuTermPullsTheForearmTowardsTheImuDirection) {
   const Eigen::Vector3d axis = true_direction.unitOrthogonal();
   const Eigen::Vector3d imu_direction = Eigen::AngleAxisd(20 * kDeg, axis) * true_direction;
   body::BodyEvaluator eval(s.model, s.layout);
-  double angle_to_imu[2];
-  for (int with_imu = 0; with_imu < 2; ++with_imu) {
+  const auto angle_to_imu = [&](double lambda_imu, double weight) {
     FitOptions options;
-    options.lambda_imu = with_imu ? 15 : 0;
+    options.lambda_imu = lambda_imu;
     FrameFitter fitter(s.model, s.layout, s.camera.intrinsics(), options);
-    const FrameObservation observation = prepare_observation(rendered.frame, s.camera, rendered.skeleton_K, options,
-                                                             ForearmDirections{imu_direction, std::nullopt});
+    ForearmDirections imu{imu_direction, std::nullopt};
+    imu.left_weight = weight;
+    const FrameObservation observation =
+        prepare_observation(rendered.frame, s.camera, rendered.skeleton_K, options, imu);
     const FitResult result = fitter.fit(observation, truth, s.beta);
-    eval.evaluate(s.beta, result.theta, body::Derivatives::kNone);
-    angle_to_imu[with_imu] =
-        std::acos(std::clamp(testing::forearm_direction(eval.joints(), true).dot(imu_direction), -1.0, 1.0));
-    if (!with_imu) {
+    if (lambda_imu == 0 || weight == 0) {
       EXPECT_EQ(result.energy.imu, 0.0);
     }
-  }
-  EXPECT_LT(angle_to_imu[1], angle_to_imu[0] - 2 * kDeg);
+    eval.evaluate(s.beta, result.theta, body::Derivatives::kNone);
+    return std::acos(std::clamp(testing::forearm_direction(eval.joints(), true).dot(imu_direction), -1.0, 1.0));
+  };
+  const double without = angle_to_imu(0, 1), quarter = angle_to_imu(15, 0.25), full = angle_to_imu(15, 1);
+  EXPECT_NEAR(angle_to_imu(15, 0), without, 1e-9);
+  EXPECT_LT(quarter, without - 1 * kDeg);
+  EXPECT_LT(full, quarter - 1 * kDeg);
+}
+
+// A direction confident at 99 % within 15 degrees (RMS up to 6.99 degrees) has the full weight;
+// beyond, the weight falls as the inverse of its variance; an unknown error gives none.
+TEST(ForearmDirectionWeight, FullWhereConfidentThenInverseToTheVariance) {
+  const double confident_rms = 15 * kDeg / 2.146;
+  EXPECT_EQ(forearm_direction_weight(0.0), 1.0);
+  EXPECT_EQ(forearm_direction_weight(0.999 * confident_rms), 1.0);
+  EXPECT_NEAR(forearm_direction_weight(2 * confident_rms), 0.25, 1e-3);
+  EXPECT_NEAR(forearm_direction_weight(14 * kDeg), std::pow(confident_rms / (14 * kDeg), 2), 1e-12);
+  EXPECT_EQ(forearm_direction_weight(std::numeric_limits<double>::quiet_NaN()), 0.0);
+  EXPECT_EQ(forearm_direction_weight(-1.0), 0.0);
 }
 
 }  // namespace

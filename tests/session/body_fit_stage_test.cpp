@@ -341,11 +341,13 @@ TEST(BodyFitStage, ForearmOrientationsEnterTheFitAndTheResult) {
   }
 }
 
-// The imu term uses the forearm axis y_F alone, so it is gated on y_F's predicted error: a mounting
-// from motion, whose roll is known to +-30 deg only, still feeds it where its axis is known to a
-// few degrees; an axis known to 10 deg (99 % bound 21 deg) does not.
+// The imu term uses the forearm axis y_F alone, so it is weighted by y_F's predicted error: a
+// mounting from motion, whose roll is known to +-30 deg only, feeds it fully where its axis is
+// known to a few degrees, and with less weight where it is known to 10 deg (the frames are FUSED,
+// but the result reports no forearm turned from a K_from_F that is not confident); without a
+// predicted error it does not enter.
 TEST(BodyFitStage, TheForearmAxisEntersTheFitWhateverTheRollsError) {
-  for (const double axis_deg : {3.0, 10.0}) {
+  for (const double axis_deg : {3.0, 10.0, std::numeric_limits<double>::quiet_NaN()}) {
     SCOPED_TRACE("axis RMS " + std::to_string(axis_deg) + " deg");
     Output out;
     BodyFitStage stage;
@@ -358,7 +360,8 @@ TEST(BodyFitStage, TheForearmAxisEntersTheFitWhateverTheRollsError) {
     ASSERT_EQ(frames.size(), session().truth.size());
     for (const v1::FrameResult* f : frames) {
       for (const int wrist : {body::kLeftWrist, body::kRightWrist})
-        EXPECT_EQ(f->smpl_joints(wrist).source(), axis_deg < 5 ? v1::FUSED : v1::VISUAL);
+        EXPECT_EQ(f->smpl_joints(wrist).source(), std::isnan(axis_deg) ? v1::VISUAL : v1::FUSED);
+      EXPECT_EQ(f->forearms_size(), axis_deg < 5 ? 2 : 0);
     }
   }
 }

@@ -183,15 +183,17 @@ void BodyFitStage::on_value(const StageValue& value, StageOutput& out) {
     const Eigen::Quaterniond& q = batch->K_from_F[i];
     if (!q.coeffs().allFinite() || std::abs(q.norm() - 1.0) > 1e-3) continue;
     if (!samples.empty() && batch->t_us[i] <= samples.back().first) continue;
-    // The imu term uses the forearm axis y_F alone, so it is gated on y_F's predicted error (the
+    // The imu term uses the forearm axis y_F alone, so it is weighted by y_F's predicted error (the
     // mounting's axis and the filter's steady error), not the whole orientation's: a mounting
-    // from motion knows its roll to +-30 deg only, and its axis to a few degrees. Not the
-    // camera-checked error either: the fit weighs the depth itself, and a camera check of the
-    // depth axis would count its noise twice. A sample without one is not confident.
+    // from motion knows its roll to +-30 deg only, and its axis better. Not the camera-checked
+    // error either: the fit weighs the depth itself, and a camera check of the depth axis would
+    // count its noise twice. A sample without one does not enter.
     const double axis_rms_rad =
         i < batch->axis_rms_rad.size() ? batch->axis_rms_rad[i] : std::numeric_limits<double>::quiet_NaN();
-    const bool confident = forearm::direction_confidence_from_rms_rad(axis_rms_rad) >= forearm::kConfidentAt;
-    samples.emplace_back(batch->t_us[i], confident ? std::optional<Eigen::Quaterniond>(q.normalized()) : std::nullopt);
+    const double weight = fit::forearm_direction_weight(axis_rms_rad);
+    samples.emplace_back(batch->t_us[i], weight > 0 ? std::optional<fit::ForearmOrientationSample>(
+                                                          fit::ForearmOrientationSample{q.normalized(), weight})
+                                                    : std::nullopt);
   }
   if (tracker_->personalised()) fit_ready(false, out);
 }
@@ -204,13 +206,13 @@ void BodyFitStage::enqueue(fit::BodyTracker::Admitted&& admitted, StageOutput& o
   }
 }
 
-std::optional<Eigen::Quaterniond> BodyFitStage::K_from_F_at(fit::ArmSide side, std::int64_t t_us) const {
+std::optional<fit::ForearmOrientationSample> BodyFitStage::K_from_F_at(fit::ArmSide side, std::int64_t t_us) const {
   const auto it = K_from_F_.find(arm_of(side));
   if (it == K_from_F_.end() || it->second.empty()) return std::nullopt;
   const auto& samples = it->second;
   const auto after =
       std::lower_bound(samples.begin(), samples.end(), t_us, [](const auto& s, std::int64_t t) { return s.first < t; });
-  const std::pair<std::int64_t, std::optional<Eigen::Quaterniond>>* best = nullptr;
+  const std::pair<std::int64_t, std::optional<fit::ForearmOrientationSample>>* best = nullptr;
   if (after != samples.end()) best = &*after;
   if (after != samples.begin() && (!best || t_us - std::prev(after)->first < best->first - t_us))
     best = &*std::prev(after);

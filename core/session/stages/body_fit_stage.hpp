@@ -88,7 +88,7 @@ class BodyFitStage : public Stage {
   // Fits the queued frames whose forearm orientations are known (all when `all`).
   void fit_ready(bool all, StageOutput& out);
   void hand_on(fit::BodyTracker::Output&& fitted, StageOutput& out);
-  std::optional<Eigen::Quaterniond> K_from_F_at(fit::ArmSide side, std::int64_t t_us) const;
+  std::optional<fit::ForearmOrientationSample> K_from_F_at(fit::ArmSide side, std::int64_t t_us) const;
   void report_shape(StageOutput& out) const;
 
   bool enabled_ = false;
@@ -111,7 +111,7 @@ class BodyFitStage : public Stage {
   // Forearm orientations by arm (v1::Arm), camera clock.
   // Per arm: each forearm sample's time and orientation, none where its confidence is below
   // forearm::kConfidentAt (it still tells that the forearm stage has reached that time).
-  std::map<int, std::deque<std::pair<std::int64_t, std::optional<Eigen::Quaterniond>>>> K_from_F_;
+  std::map<int, std::deque<std::pair<std::int64_t, std::optional<fit::ForearmOrientationSample>>>> K_from_F_;
   bool record_stats_ = false;
 };
 
