@@ -46,9 +46,8 @@ void validate(const FrameObservation& o) {
 
 double forearm_direction_weight(double axis_rms_rad) {
   if (!(axis_rms_rad >= 0.0)) return 0.0;
-  const double confident_rms_rad = forearm::kConfidentErrorBoundRad / forearm::kDirectionBound99OverRms;
-  if (axis_rms_rad <= confident_rms_rad) return 1.0;
-  const double ratio = confident_rms_rad / axis_rms_rad;
+  if (axis_rms_rad <= forearm::kConfidentDirectionRmsRad) return 1.0;
+  const double ratio = forearm::kConfidentDirectionRmsRad / axis_rms_rad;
   return ratio * ratio;
 }
 

@@ -54,8 +54,8 @@ struct SettledArmSample {
   double orientation_rms_rad = 0.0;
   // Predicted RMS angle of the forearm axis y_F's direction error: the mounting's axis and the
   // filter's steady error, before the filter's own uncertainty (lost samples, start-up) and the
-  // camera's check. The body fit's imu term uses y_F alone, so this is what it gates on: the roll
-  // about y_F (+-30 deg from motion) does not move it. With the filter's uncertainty in the gate,
+  // camera's check. The body fit's imu term uses y_F alone, so this is what weights it: the roll
+  // about y_F (+-30 deg from motion) does not move it. With the filter's uncertainty in it (then a gate),
   // the demo's right arm fed the imu term on 122 of 1581 samples instead of 981, and its fitted
   // joints were 44.7 mm off on average instead of 20.2 (docs/forearm.md).
   double axis_rms_rad = 0.0;

@@ -51,8 +51,10 @@ inline constexpr double kDirectionRmsOverOrientationRms = 0.816496580927726;
 double forearm_axis_rms_rad(double axis_rms_rad, double filter_rms_rad = kFilterRmsRad);
 
 // 2^-((2.146 u / 15 deg)^2) for a direction of RMS error u (the Rayleigh 99 % bound): 0.5 where
-// the direction is predicted within 15 degrees 99 % of the time. NaN or negative u gives 0.
+// the direction is predicted within 15 degrees 99 % of the time (u = kConfidentDirectionRmsRad,
+// 7.0 degrees). NaN or negative u gives 0.
 double direction_confidence_from_rms_rad(double rms_rad);
+inline constexpr double kConfidentDirectionRmsRad = kConfidentErrorBoundRad / kDirectionBound99OverRms;
 
 // 2^-((b / 15 deg)^2) for an error whose 99 % bound is b: 1 at b = 0, 0.5 at 15 degrees. NaN or
 // negative b gives 0.
