@@ -143,7 +143,9 @@ std::vector<FitWarning> BodyTracker::personalise() {
   for (const BodyFitFrame* f : chosen_frames) skeletons.push_back(*f->skeleton);
   Eigen::VectorXd beta = Eigen::VectorXd::Zero(work_->model->num_betas());
   // III-B on the same frames' depth (cleaned as every fitted frame). A refusal of the fine tuning
-  // keeps the rough shape (III-A): the refiner's error is caught here, not in personalise().
+  // fits the template shape: the rough shape alone (III-A) follows the camera skeleton's joint
+  // errors and is further from the subject than the template (docs/fitting.md, "Personalisation").
+  // The refiner's error is caught here, not in personalise().
   ShapePoseRefiner refiner;
   std::optional<Error> fine_error;
   if (options_.fine_shape) {
@@ -165,11 +167,14 @@ std::vector<FitWarning> BodyTracker::personalise() {
   try {
     work_->personalisation = fit::personalise(work_->model, skeletons, &work_->camera, refiner);
     if (fine_error) {
-      work_->personalisation->fine_tuned = false;
-      warnings.push_back(
-          {"FIT_FINE_SHAPE", fine_error->field(), std::string(fine_error->what()) + "; using the rough shape (III-A)"});
+      work_->personalisation.reset();
+      warnings.push_back({"FIT_FINE_SHAPE", fine_error->field(),
+                          std::string(fine_error->what()) +
+                              "; fitting the template shape (beta = 0): the rough shape alone is further from "
+                              "the subject's"});
+    } else {
+      beta = work_->personalisation->beta();
     }
-    beta = work_->personalisation->beta();
   } catch (const Error& e) {
     warnings.push_back(
         {"FIT_PERSONALISATION", e.field(), std::string(e.what()) + "; fitting the template shape (beta = 0)"});

@@ -3,8 +3,8 @@
 //  1. Personalisation (III): the frames of the first calibration_s seconds are kept; fit::personalise
 //     on their skeletons gives the rough shape (III-A), then the fine tuning of shape and pose on the
 //     middle frame's depth (III-B, fit::make_depth_shape_refiner; fine_shape). When the fine tuning
-//     refuses (FIT_FINE_SHAPE) the rough shape is used; when the subject is not in the controlled
-//     pose (FIT_PERSONALISATION) the template shape (beta = 0).
+//     refuses (FIT_FINE_SHAPE) or the subject is not in the controlled pose (FIT_PERSONALISATION),
+//     the template shape (beta = 0); with fine_shape off, the rough shape.
 //  2. Per frame, the start policy of II-G (docs/fitting.md, "Start policy"): an LM fit from the
 //     previous frame's pose (moved on by constant velocity, fit/start_extrapolation.hpp) and one
 //     from the pose built from the camera skeleton, the lower energy wins. A winner above

@@ -95,6 +95,23 @@ TEST(FitBodyTracker, RefusedPersonalisationFitsTheTemplateShape) {
   EXPECT_TRUE(shape->beta.isZero());
 }
 
+// A fine tuning that refuses (here: no depth to fit) leaves the template shape, not the rough
+// shape, whose arms follow the camera skeleton's joint errors.
+TEST(FitBodyTracker, RefusedFineTuningFitsTheTemplateShape) {
+  BodyTrackerOptions options = rough_shape_only();
+  options.fine_shape = true;
+  BodyTracker tracker(female(), raycast::DepthIntrinsics{}, options);
+  tracker.admit(frame_at(0, controlled_pose_skeleton()));
+  const BodyTracker::Admitted admitted = tracker.personalise_now();
+  ASSERT_EQ(admitted.warnings.size(), 1u);
+  EXPECT_EQ(admitted.warnings[0].code, "FIT_FINE_SHAPE");
+  EXPECT_NE(admitted.warnings[0].message.find("template shape"), std::string::npos) << admitted.warnings[0].message;
+  const std::optional<FittedShape> shape = tracker.shape();
+  ASSERT_TRUE(shape);
+  EXPECT_FALSE(shape->estimated);
+  EXPECT_TRUE(shape->beta.isZero());
+}
+
 // The camera's elbow 12 cm off across a straight arm: it looks bent about 49 degrees, past the
 // controlled pose's 40 but within what the camera's arm joint error allows.
 TrackedSkeleton camera_bent_elbow_skeleton() {
