@@ -6,9 +6,11 @@
 
 #include "common/error.hpp"
 #include "common/held_bytes.hpp"
+#include "common/number_text.hpp"
 #include "common/thread_cpu_time.hpp"
 #include "fit/frame_fitter.hpp"
 #include "fit/frame_observation.hpp"
+#include "fit/height_shape.hpp"
 #include "fit/joint_kinematics.hpp"
 #include "fit/limb_bend.hpp"
 #include "fit/personalisation.hpp"
@@ -164,20 +166,25 @@ std::vector<FitWarning> BodyTracker::personalise() {
       }
     };
   }
+  // Without a personalised shape: the template's, or the one the subject's measured height implies.
+  const auto fallback = [&]() -> std::string {
+    if (!options_.subject_height_m) return "fitting the template shape (beta = 0)";
+    beta = shape_from_height(*work_->model, *options_.subject_height_m);
+    return "fitting the shape of the subject's height (" + fixed_text(*options_.subject_height_m, 3) +
+           " m, header.height_m)";
+  };
   try {
     work_->personalisation = fit::personalise(work_->model, skeletons, &work_->camera, refiner);
     if (fine_error) {
       work_->personalisation.reset();
       warnings.push_back({"FIT_FINE_SHAPE", fine_error->field(),
-                          std::string(fine_error->what()) +
-                              "; fitting the template shape (beta = 0): the rough shape alone is further from "
-                              "the subject's"});
+                          std::string(fine_error->what()) + "; " + fallback() +
+                              ": the rough shape alone is further from the subject's"});
     } else {
       beta = work_->personalisation->beta();
     }
   } catch (const Error& e) {
-    warnings.push_back(
-        {"FIT_PERSONALISATION", e.field(), std::string(e.what()) + "; fitting the template shape (beta = 0)"});
+    warnings.push_back({"FIT_PERSONALISATION", e.field(), std::string(e.what()) + "; " + fallback()});
   }
   work_->set_shape(beta);
   return warnings;

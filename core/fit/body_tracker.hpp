@@ -4,7 +4,8 @@
 //     on their skeletons gives the rough shape (III-A), then the fine tuning of shape and pose on the
 //     middle frame's depth (III-B, fit::make_depth_shape_refiner; fine_shape). When the fine tuning
 //     refuses (FIT_FINE_SHAPE) or the subject is not in the controlled pose (FIT_PERSONALISATION),
-//     the template shape (beta = 0); with fine_shape off, the rough shape.
+//     the shape of the subject's measured height (subject_height_m, fit/height_shape.hpp), else the
+//     template shape (beta = 0); with fine_shape off, the rough shape.
 //  2. Per frame, the start policy of II-G (docs/fitting.md, "Start policy"): an LM fit from the
 //     previous frame's pose (moved on by constant velocity, fit/start_extrapolation.hpp) and one
 //     from the pose built from the camera skeleton, the lower energy wins. A winner above
@@ -38,6 +39,9 @@ namespace posefuse::fit {
 struct BodyTrackerOptions {
   double calibration_s = 0;  // personalisation frames: the first this many seconds
   bool fine_shape = true;    // III-B after III-A
+  // The subject's measured standing height (session header height_m): without a personalised
+  // shape, the shape it implies (fit/height_shape.hpp) instead of the template's.
+  std::optional<double> subject_height_m;
   FitOptions fit;
   PoseSmoothingOptions smoothing;
   StartExtrapolationOptions extrapolation;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <numbers>
 
+#include "body/standing_height.hpp"
 #include "model_frames.hpp"
 #include "posed_subject.hpp"
 
@@ -93,6 +94,22 @@ TEST(FitBodyTracker, RefusedPersonalisationFitsTheTemplateShape) {
   ASSERT_TRUE(shape);
   EXPECT_FALSE(shape->estimated);
   EXPECT_TRUE(shape->beta.isZero());
+}
+
+// With the subject's measured height, a refused personalisation fits the shape of that height.
+TEST(FitBodyTracker, RefusedPersonalisationFitsTheShapeOfTheSubjectsHeight) {
+  BodyTrackerOptions options = rough_shape_only();
+  options.subject_height_m = 1.75;
+  BodyTracker tracker(female(), raycast::DepthIntrinsics{}, options);
+  tracker.admit(frame_at(0, std::nullopt));
+  const BodyTracker::Admitted admitted = tracker.personalise_now();
+  ASSERT_EQ(admitted.warnings.size(), 1u);
+  EXPECT_EQ(admitted.warnings[0].code, "FIT_PERSONALISATION");
+  EXPECT_NE(admitted.warnings[0].message.find("height"), std::string::npos) << admitted.warnings[0].message;
+  const std::optional<FittedShape> shape = tracker.shape();
+  ASSERT_TRUE(shape);
+  EXPECT_FALSE(shape->estimated);
+  EXPECT_NEAR(body::standing_height(*female(), shape->beta).height_m, 1.75, 0.01);  // the height's sigma
 }
 
 // A fine tuning that refuses (here: no depth to fit) leaves the template shape, not the rough

@@ -117,7 +117,9 @@ void BodyFitStage::start(const v1::SessionHeader& header, StageOutput& /*out*/) 
   const raycast::DepthIntrinsics depth = session_cameras(header).depth;
   depth_width_ = depth.width;
   depth_height_ = depth.height;
-  tracker_ = std::make_unique<fit::BodyTracker>(body::shared_template(sex_), depth, tracker_options(options_));
+  fit::BodyTrackerOptions tracker = tracker_options(options_);
+  if (header.has_height_m()) tracker.subject_height_m = header.height_m();
+  tracker_ = std::make_unique<fit::BodyTracker>(body::shared_template(sex_), depth, tracker);
   tracker_->record_frame_stats(record_stats_);
 }
 
