@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "body/body_evaluator.hpp"
+#include "body/standing_height.hpp"
 #include "common/error.hpp"
 #include "raycast/mesh_scene.hpp"
 #include "session/chunk_order.hpp"
@@ -333,6 +334,8 @@ void validate(const SimSessionOptions& options) {
   require_positive(options.strap_to_elbow_m, "strap_to_elbow_m");
   require_positive(options.strap_radius_m, "strap_radius_m");
   require_non_negative(options.mount_sigma_rad, "mount_sigma_rad");
+  require_non_negative(options.height_error_m, "height_error_m");
+  if (options.height_error_m > 0.1) throw_invalid("height_error_m", "must be at most 0.1 m");
   require_non_negative(options.strap_slip.max_rotation_rad, "strap_slip.max_rotation_rad");
   require_non_negative(options.strap_slip.max_slide_m, "strap_slip.max_slide_m");
   require_positive(options.strap_slip.period_s, "strap_slip.period_s");
@@ -551,6 +554,11 @@ SimTruth simulate_session(const SimSessionOptions& requested, session::ChunkSink
   header.set_format_version(session::kFormatVersion);
   header.set_subject_id("sim-" + std::to_string(options.seed));
   header.set_sex(options.sex == body::Sex::kMale ? v1::SessionHeader::MALE : v1::SessionHeader::FEMALE);
+  if (options.record_height) {
+    SimRng height_rng(options.seed, "height_measurement");
+    header.set_height_m(body::standing_height(*fitted, options.betas).height_m +
+                        options.height_error_m * height_rng.normal());
+  }
   for (const SimDeviceTruth& device : truth.devices) {
     auto* d = header.add_imu_devices();
     d->set_device_id(device.device_id);

@@ -63,6 +63,11 @@ struct SimSessionOptions {
   body::Sex sex = body::Sex::kMale;
   Eigen::VectorXd betas = Eigen::VectorXd::Zero(body::kTemplateNumBetas);
   double heading_rad = 0.3;  // subject's facing, from magnetic north towards west
+  // The subject's standing height as a clinic records it in the header (height_m): the body's own
+  // (body/standing_height.hpp) plus a measurement error N(0, height_error_m^2) drawn from the seed
+  // (a stadiometer's reading, posture, footwear); none in the header when record_height is off.
+  bool record_height = true;
+  double height_error_m = 0.01;  // 0..0.1
 
   // Camera: depth at depth_rate_hz; the colour camera at the same rate and instants.
   raycast::DepthIntrinsics depth_intrinsics;

@@ -192,6 +192,13 @@ const std::map<std::string, Setter>& setters() {
       {"strap_width_m", {"strap band width along the forearm, m", [](Options& o, const std::string& v, const std::string& f) {
                            o.color_camera.strap_width_m = positive(v, f);
                          }}},
+      {"record_height", {"the header records the subject's standing height (true/false)",
+                         [](Options& o, const std::string& v, const std::string& f) { o.record_height = boolean(v, f); }}},
+      {"height_error_m", {"error of the recorded height, 1 sigma, m (<= 0.1)",
+                          [](Options& o, const std::string& v, const std::string& f) {
+                            o.height_error_m = non_negative(v, f);
+                            if (o.height_error_m > 0.1) bad(f, v, "must be at most 0.1");
+                          }}},
       {"clothing", {"clothing / soft-tissue offsets on (true/false)",
                     [](Options& o, const std::string& v, const std::string& f) { o.clothing.enabled = boolean(v, f); }}},
       {"clothing_subdivisions", {"template subdivision levels for rendering, 0..2",
