@@ -83,7 +83,10 @@ struct BodyTracker::Work {
 
 BodyTracker::BodyTracker(std::shared_ptr<const body::SmplModel> model, const raycast::DepthIntrinsics& intrinsics,
                          const BodyTrackerOptions& options)
-    : options_(options), work_(std::make_unique<Work>(std::move(model), intrinsics, options.fit, options.smoothing)) {}
+    : options_(options), work_(std::make_unique<Work>(std::move(model), intrinsics, options.fit, options.smoothing)) {
+  // Checked here, so that a refused personalisation cannot fail on it later.
+  if (options.subject_height_m) shape_from_height(*work_->model, *options.subject_height_m);
+}
 
 BodyTracker::~BodyTracker() = default;
 

@@ -40,7 +40,8 @@ struct BodyTrackerOptions {
   double calibration_s = 0;  // personalisation frames: the first this many seconds
   bool fine_shape = true;    // III-B after III-A
   // The subject's measured standing height (session header height_m): without a personalised
-  // shape, the shape it implies (fit/height_shape.hpp) instead of the template's.
+  // shape, the shape it implies (fit/height_shape.hpp) instead of the template's. The tracker's
+  // constructor throws posefuse::Error "height_m" outside 0.5 .. 2.5 m.
   std::optional<double> subject_height_m;
   FitOptions fit;
   PoseSmoothingOptions smoothing;

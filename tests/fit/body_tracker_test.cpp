@@ -9,6 +9,7 @@
 #include "body/standing_height.hpp"
 #include "model_frames.hpp"
 #include "posed_subject.hpp"
+#include "synthetic_frames.hpp"
 
 namespace posefuse::fit {
 namespace {
@@ -110,6 +111,8 @@ TEST(FitBodyTracker, RefusedPersonalisationFitsTheShapeOfTheSubjectsHeight) {
   ASSERT_TRUE(shape);
   EXPECT_FALSE(shape->estimated);
   EXPECT_NEAR(body::standing_height(*female(), shape->beta).height_m, 1.75, 0.01);  // the height's sigma
+  options.subject_height_m = 3.1;
+  EXPECT_EQ(testing::error_field([&] { BodyTracker(female(), raycast::DepthIntrinsics{}, options); }), "height_m");
 }
 
 // A fine tuning that refuses (here: no depth to fit) leaves the template shape, not the rough
