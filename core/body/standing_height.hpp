@@ -8,6 +8,9 @@
 
 namespace posefuse::body {
 
+// The standing heights a session header may record (SessionHeader.height_m), metres.
+inline constexpr double kMinStandingHeightM = 0.5, kMaxStandingHeightM = 2.5;
+
 struct StandingHeight {
   double height_m = 0;
   // d height / d beta (1 x B) with the same highest and lowest vertices: height is piecewise linear

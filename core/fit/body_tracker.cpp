@@ -40,6 +40,7 @@ struct BodyTracker::Work {
   PoseSmoother smoother;
   Eigen::VectorXd beta;
   std::optional<Personalisation> personalisation;
+  std::optional<Eigen::VectorXd> height_beta;  // the shape of the subject's measured height, if known
   std::optional<SkeletonPoseInitializer> init;
   Eigen::Matrix3Xd rest_joints;
   ObservationBuffers observation_buffers;  // the frames' preprocessing, reused from frame to frame
@@ -84,8 +85,8 @@ struct BodyTracker::Work {
 BodyTracker::BodyTracker(std::shared_ptr<const body::SmplModel> model, const raycast::DepthIntrinsics& intrinsics,
                          const BodyTrackerOptions& options)
     : options_(options), work_(std::make_unique<Work>(std::move(model), intrinsics, options.fit, options.smoothing)) {
-  // Checked here, so that a refused personalisation cannot fail on it later.
-  if (options.subject_height_m) shape_from_height(*work_->model, *options.subject_height_m);
+  // Here, so that a bad height is refused at once and a refused personalisation cannot fail on it.
+  if (options.subject_height_m) work_->height_beta = shape_from_height(*work_->model, *options.subject_height_m);
 }
 
 BodyTracker::~BodyTracker() = default;
@@ -171,8 +172,8 @@ std::vector<FitWarning> BodyTracker::personalise() {
   }
   // Without a personalised shape: the template's, or the one the subject's measured height implies.
   const auto fallback = [&]() -> std::string {
-    if (!options_.subject_height_m) return "fitting the template shape (beta = 0)";
-    beta = shape_from_height(*work_->model, *options_.subject_height_m);
+    if (!work_->height_beta) return "fitting the template shape (beta = 0)";
+    beta = *work_->height_beta;
     return "fitting the shape of the subject's height (" + fixed_text(*options_.subject_height_m, 3) +
            " m, header.height_m)";
   };

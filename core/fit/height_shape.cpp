@@ -5,12 +5,15 @@
 
 #include "body/standing_height.hpp"
 #include "common/error.hpp"
+#include "common/number_text.hpp"
 
 namespace posefuse::fit {
 
 Eigen::VectorXd shape_from_height(const body::SmplModel& model, double height_m, const HeightShapeOptions& options) {
-  if (!std::isfinite(height_m) || height_m < 0.5 || height_m > 2.5)
-    throw_invalid("height_m", "is " + std::to_string(height_m) + " m, must be 0.5..2.5 m");
+  if (!std::isfinite(height_m) || height_m < body::kMinStandingHeightM || height_m > body::kMaxStandingHeightM)
+    throw_invalid("height_m", "is " + std::to_string(height_m) + " m, must be " +
+                                  fixed_text(body::kMinStandingHeightM, 1) + ".." +
+                                  fixed_text(body::kMaxStandingHeightM, 1) + " m");
   if (!(options.height_sigma_m > 0)) throw_invalid("height_shape_options.height_sigma_m", "must be positive");
   if (!(options.beta_sigma > 0)) throw_invalid("height_shape_options.beta_sigma", "must be positive");
   // Minimises ((h(beta) - height) / s_h)^2 + |beta / s_b|^2 with h linearised at beta (g its

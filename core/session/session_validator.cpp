@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <set>
 
+#include "body/standing_height.hpp"
 #include "common/error.hpp"
 #include "imu/imu_sample.hpp"
 #include "session/image_codec.hpp"
@@ -244,8 +245,10 @@ void validate_header(const v1::SessionHeader& header, const std::string& field) 
   }
   if (header.has_height_m()) {
     require_finite(header.height_m(), field + ".height_m");
-    if (header.height_m() < 0.5 || header.height_m() > 2.5) {
-      throw_invalid(field + ".height_m", "is " + number_text(header.height_m()) + " m, must be 0.5..2.5 m");
+    if (header.height_m() < body::kMinStandingHeightM || header.height_m() > body::kMaxStandingHeightM) {
+      throw_invalid(field + ".height_m", "is " + number_text(header.height_m()) + " m, must be " +
+                                             number_text(body::kMinStandingHeightM) + ".." +
+                                             number_text(body::kMaxStandingHeightM) + " m");
     }
   }
   std::set<std::string> ids;
