@@ -129,7 +129,7 @@ std::vector<v1::SessionChunk> recut_imu(const v1::SessionChunk& chunk, int sampl
 Session load_session(const std::string& path, double duration_s, int imu_batch,
                      std::map<std::string, std::string> header_options) {
   header_options.emplace("fit.enabled", "true");
-  client::Recording recording(path, std::move(header_options));
+  client::Recording recording(path, client::HeaderEdits{.options = std::move(header_options), .height_m = {}});
   v1::SessionChunk chunk;
   if (!recording.next(chunk) || !chunk.has_header()) throw Error(ErrorCode::kInvalidArgument, path, "no header first");
   const v1::SessionChunk header = chunk;

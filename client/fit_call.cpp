@@ -111,11 +111,11 @@ std::string status_line(const grpc::Status& status, const std::string& address) 
 
 FitOutcome run_fit(const std::shared_ptr<grpc::Channel>& channel, const std::filesystem::path& recording,
                    ResultWriter& writer, const std::function<void(const FitProgress&)>& on_progress,
-                   const std::map<std::string, std::string>& header_options) {
+                   const HeaderEdits& header_edits) {
   FitOutcome outcome;
   std::unique_ptr<Recording> source;
   try {
-    source = std::make_unique<Recording>(recording, header_options);
+    source = std::make_unique<Recording>(recording, header_edits);
   } catch (const Error& error) {
     outcome.local_error = error;
     return outcome;

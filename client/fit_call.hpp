@@ -5,7 +5,6 @@
 #include <cstdint>
 #include <filesystem>
 #include <functional>
-#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -13,6 +12,7 @@
 #include <grpcpp/grpcpp.h>
 
 #include "client/channel_security.hpp"
+#include "client/recording.hpp"
 #include "client/result_writer.hpp"
 #include "common/error.hpp"
 
@@ -33,12 +33,12 @@ struct FitOutcome {
 };
 
 // Streams `recording` over `channel` and writes results with `writer`. `on_progress` is called
-// from the receiving thread now and then (at most every 200 ms). `header_options` replace the
-// recording's SessionHeader.options of the same keys (see Recording). Never throws for
-// server-side problems: look at the outcome.
+// from the receiving thread now and then (at most every 200 ms). `header_edits` replace the
+// recording's own header values (see Recording). Never throws for server-side problems: look at
+// the outcome.
 FitOutcome run_fit(const std::shared_ptr<grpc::Channel>& channel, const std::filesystem::path& recording,
                    ResultWriter& writer, const std::function<void(const FitProgress&)>& on_progress = {},
-                   const std::map<std::string, std::string>& header_options = {});
+                   const HeaderEdits& header_edits = {});
 
 // A channel to `address` (host:port) with the client's message size limits, secured as
 // `security` says (plaintext, no token by default).

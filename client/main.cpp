@@ -39,6 +39,10 @@ constexpr const char* kUsage =
     "      [--option KEY=VALUE ...]        set a stage option in the recording's header for this\n"
     "                                      call (e.g. --option fit.enabled=false; posefuse info\n"
     "                                      lists them); fit and upload take it\n"
+    "      [--height M]                    the subject's standing height in metres (e.g. 1.72),\n"
+    "                                      replacing the recording's: the body fit takes the shape\n"
+    "                                      it implies when it cannot personalise; fit and upload\n"
+    "                                      take it\n"
     "  posefuse convert IN OUT             recording directory <-> chunk file (.pfchunks)\n"
     "  posefuse health --server HOST:PORT  exit 0 when the server is SERVING\n"
     "  posefuse info --server HOST:PORT    versions, stages, options and limits\n"
@@ -57,7 +61,7 @@ constexpr const char* kUsage =
     "batch jobs (server started with --data-dir):\n"
     "  posefuse submit RECORDING_URI [--label TEXT]  a recording under the server's\n"
     "                                      --recordings-root; prints the job id\n"
-    "  posefuse upload RECORDING [--label TEXT] [--option KEY=VALUE ...]\n"
+    "  posefuse upload RECORDING [--label TEXT] [--option KEY=VALUE ...] [--height M]\n"
     "                                      stream a local recording into the server's\n"
     "                                      job store; prints the job id\n"
     "  posefuse jobs                       list jobs, newest first\n"
@@ -112,11 +116,24 @@ void require(bool ok, const std::string& what) {
   if (!ok) throw Error(posefuse::ErrorCode::kInvalidArgument, "usage", what);
 }
 
+// What --option and --height set in the recording's header.
+client::HeaderEdits header_edits(const Arguments& args) {
+  client::HeaderEdits edits;
+  edits.options = args.header_options;
+  if (args.flags.count("--height") == 1) edits.height_m = client::parse_height_m(args.flags.at("--height"));
+  return edits;
+}
+
 void check_flags(const Arguments& args, const std::vector<std::string>& known) {
   if (!args.header_options.empty()) {
     bool takes_options = false;
     for (const auto& k : known) takes_options = takes_options || k == "--option";
     require(takes_options, "unknown option --option (only fit and upload set stage options)");
+  }
+  if (args.flags.count("--height") == 1) {
+    bool takes_height = false;
+    for (const auto& k : known) takes_height = takes_height || k == "--height";
+    require(takes_height, "unknown option --height (only fit and upload set the subject's height)");
   }
   for (const auto& [name, value] : args.flags) {
     bool found = false;
@@ -185,15 +202,15 @@ class ProgressLine {
 };
 
 int command_fit(const Arguments& args) {
-  check_server_flags(args, {"--out", "--option"});
+  check_server_flags(args, {"--out", "--option", "--height"});
   require(args.positional.size() == 1, "fit takes one RECORDING (see posefuse --help)");
   require(args.flags.count("--out") == 1, "fit needs --out DIR");
+  const client::HeaderEdits edits = header_edits(args);
   const std::string server = args.flag("--server", "127.0.0.1:50051");
   client::ResultWriter writer(args.flag("--out", ""));
   ProgressLine progress;
   const client::FitOutcome outcome = client::run_fit(
-      connect(args), args.positional[0], writer, [&](const client::FitProgress& p) { progress.show(p, false); },
-      args.header_options);
+      connect(args), args.positional[0], writer, [&](const client::FitProgress& p) { progress.show(p, false); }, edits);
   if (outcome.local_error) {
     progress.interrupt();
     throw *outcome.local_error;
@@ -322,7 +339,7 @@ std::string job_line(const posefuse::v1::Job& job) {
 std::unique_ptr<posefuse::v1::PoseFuse::Stub> job_stub(const Arguments& args, std::size_t positional,
                                                        bool takes_header_options = false) {
   std::vector<std::string> known{"--label", "--out"};
-  if (takes_header_options) known.emplace_back("--option");
+  if (takes_header_options) known.insert(known.end(), {"--option", "--height"});
   check_server_flags(args, known);
   require(args.positional.size() == positional, "wrong number of arguments (see --help)");
   return posefuse::v1::PoseFuse::NewStub(connect(args));
@@ -355,7 +372,7 @@ int command_submit(const Arguments& args) {
 // spools it to disk and runs it like a job by reference.
 int command_upload(const Arguments& args) {
   auto stub = job_stub(args, 1, true);
-  client::Recording recording(args.positional[0], args.header_options);
+  client::Recording recording(args.positional[0], header_edits(args));
   grpc::ClientContext context;  // no deadline: a long recording takes as long as it takes
   posefuse::v1::Job job;
   auto writer = stub->SubmitJob(&context, &job);

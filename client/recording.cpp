@@ -1,12 +1,17 @@
 #include "client/recording.hpp"
 
+#include <cmath>
 #include <utility>
 
+#include "body/standing_height.hpp"
+
 #include "common/error.hpp"
+#include "common/number_text.hpp"
 #include "session/directory_layout.hpp"
 #include "session/directory_reader.hpp"
 #include "session/file_bytes.hpp"
 #include "session/json_message.hpp"
+#include "session/text_fields.hpp"
 
 namespace posefuse::client {
 
@@ -31,8 +36,8 @@ std::uint64_t expected_directory_chunks(const std::filesystem::path& directory) 
 
 }  // namespace
 
-Recording::Recording(const std::filesystem::path& path, std::map<std::string, std::string> header_options)
-    : header_options_(std::move(header_options)) {
+Recording::Recording(const std::filesystem::path& path, HeaderEdits header_edits)
+    : header_edits_(std::move(header_edits)) {
   if (!std::filesystem::exists(path)) {
     throw Error(ErrorCode::kNotFound, path.string(), "no such file or directory");
   }
@@ -53,7 +58,9 @@ bool Recording::next(session::SessionChunk& chunk) {
   if (!reader_->next(chunk)) return false;
   ++chunks_read_;
   if (chunk.has_header()) {
-    for (const auto& [key, value] : header_options_) (*chunk.mutable_header()->mutable_options())[key] = value;
+    v1::SessionHeader& header = *chunk.mutable_header();
+    for (const auto& [key, value] : header_edits_.options) (*header.mutable_options())[key] = value;
+    if (header_edits_.height_m) header.set_height_m(*header_edits_.height_m);
   }
   return true;
 }
@@ -78,6 +85,23 @@ std::pair<std::string, std::string> parse_header_option(const std::string& text)
     }
   }
   return {text.substr(0, eq), text.substr(eq + 1)};
+}
+
+double parse_height_m(const std::string& text) {
+  const double height_m = session::parse_double(text, "--height");
+  const std::string range =
+      fixed_text(body::kMinStandingHeightM, 1) + ".." + fixed_text(body::kMaxStandingHeightM, 1) + " m";
+  if (std::isfinite(height_m) && height_m >= 100 * body::kMinStandingHeightM &&
+      height_m <= 100 * body::kMaxStandingHeightM) {
+    throw Error(ErrorCode::kInvalidArgument, "--height",
+                "is " + text + ": the subject's standing height in metres (" + range + "), e.g. " +
+                    fixed_text(height_m / 100, 2) + " for " + text + " cm");
+  }
+  if (!std::isfinite(height_m) || height_m < body::kMinStandingHeightM || height_m > body::kMaxStandingHeightM) {
+    throw Error(ErrorCode::kInvalidArgument, "--height",
+                "is " + text + ": the subject's standing height must be " + range);
+  }
+  return height_m;
 }
 
 }  // namespace posefuse::client

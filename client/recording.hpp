@@ -1,12 +1,13 @@
 #pragma once
 // A recording on disk, read as a session chunk stream: a recording directory or a chunk file
 // (docs/recording-format.md), with an estimate of how much of it has been read (for the
-// progress line's ETA), and stage options set on the command line (`--option KEY=VALUE`) put
-// into its header on the way out, so that a recording needs no rewrite to change a stage option.
+// progress line's ETA), and what the command line sets in its header (`--option KEY=VALUE`,
+// `--height M`) put in on the way out, so that a recording needs no rewrite to change them.
 #include <cstdint>
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 
@@ -14,12 +15,17 @@
 
 namespace posefuse::client {
 
+// What the command line sets in a recording's header, replacing the recording's own values.
+struct HeaderEdits {
+  std::map<std::string, std::string> options;  // SessionHeader.options by key (`--option KEY=VALUE`)
+  std::optional<double> height_m;              // SessionHeader.height_m (`--height M`)
+};
+
 class Recording : public session::ChunkSource {
  public:
   // A directory is read with DirectoryReader, anything else as a chunk file. Throws
   // posefuse::Error (kNotFound, kInvalidArgument) naming the path.
-  // `header_options` are set in SessionHeader.options, replacing the recording's own values.
-  explicit Recording(const std::filesystem::path& path, std::map<std::string, std::string> header_options = {});
+  explicit Recording(const std::filesystem::path& path, HeaderEdits header_edits = {});
   ~Recording() override;
 
   bool next(session::SessionChunk& chunk) override;
@@ -28,7 +34,7 @@ class Recording : public session::ChunkSource {
 
  private:
   std::unique_ptr<session::ChunkSource> reader_;
-  std::map<std::string, std::string> header_options_;
+  HeaderEdits header_edits_;
   const session::ChunkFileReader* chunk_file_ = nullptr;  // when reading a chunk file
   std::uint64_t file_bytes_ = 0;
   std::uint64_t expected_chunks_ = 0;  // directory: from end.json; 0 = unknown
@@ -39,5 +45,10 @@ class Recording : public session::ChunkSource {
 // `--option` when there is no '=', the key is empty or either side has whitespace or control
 // characters (a key is a stage option name such as `fit.enabled`).
 std::pair<std::string, std::string> parse_header_option(const std::string& text);
+
+// The subject's standing height of a `--height` flag, in metres. Throws posefuse::Error naming
+// `--height` when the text is not a number or lies outside the heights a header may record
+// (body::kMinStandingHeightM..kMaxStandingHeightM); centimetres (e.g. 172) are refused by name.
+double parse_height_m(const std::string& text);
 
 }  // namespace posefuse::client

@@ -172,7 +172,10 @@ std::vector<FitWarning> BodyTracker::personalise() {
   }
   // Without a personalised shape: the template's, or the one the subject's measured height implies.
   const auto fallback = [&]() -> std::string {
-    if (!work_->height_beta) return "fitting the template shape (beta = 0)";
+    if (!work_->height_beta) {
+      return "fitting the template shape (beta = 0; the subject's standing height, header.height_m or the client's "
+             "--height, would shape it)";
+    }
     beta = *work_->height_beta;
     return "fitting the shape of the subject's height (" + fixed_text(*options_.subject_height_m, 3) +
            " m, header.height_m)";

@@ -2,6 +2,7 @@
 // in-process server, result files, and error lines.
 #include <filesystem>
 #include <fstream>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -63,7 +64,8 @@ TEST_F(ClientTest, RecordingReadsBothFormsWithProgress) {
 
 TEST_F(ClientTest, RecordingPutsCommandLineOptionsIntoTheHeader) {
   demo::write_demo_session(dir_ / "demo.pfchunks");
-  Recording recording(dir_ / "demo.pfchunks", {{"fit.enabled", "true"}, {"imu.tau_acc_s", "2.5"}});
+  Recording recording(dir_ / "demo.pfchunks",
+                      HeaderEdits{.options = {{"fit.enabled", "true"}, {"imu.tau_acc_s", "2.5"}}, .height_m = {}});
   session::SessionChunk chunk;
   std::uint64_t headers = 0;
   while (recording.next(chunk)) {
@@ -73,6 +75,59 @@ TEST_F(ClientTest, RecordingPutsCommandLineOptionsIntoTheHeader) {
     EXPECT_EQ(chunk.header().options().at("imu.tau_acc_s"), "2.5");
   }
   EXPECT_EQ(headers, 1u);
+}
+
+TEST_F(ClientTest, RecordingPutsTheCommandLineHeightIntoTheHeader) {
+  demo::write_demo_session(dir_ / "demo.pfchunks");
+  const auto header_of = [&](const HeaderEdits& edits) {
+    Recording recording(dir_ / "demo.pfchunks", edits);
+    session::SessionChunk chunk;
+    while (recording.next(chunk)) {
+      if (chunk.has_header()) return chunk.header();
+    }
+    ADD_FAILURE() << "no header";
+    return v1::SessionHeader();
+  };
+  const v1::SessionHeader recorded = header_of({});
+  const v1::SessionHeader edited = header_of(HeaderEdits{.options = {}, .height_m = 1.72});
+  EXPECT_FALSE(recorded.has_height_m());
+  ASSERT_TRUE(edited.has_height_m());
+  EXPECT_EQ(edited.height_m(), 1.72);
+  EXPECT_EQ(edited.options().size(), recorded.options().size());  // nothing else changed
+  EXPECT_EQ(edited.depth_intrinsics().fx(), recorded.depth_intrinsics().fx());
+}
+
+TEST_F(ClientTest, HeightTextIsMetresWithinTheRecordableRange) {
+  EXPECT_EQ(parse_height_m("1.72"), 1.72);
+  EXPECT_EQ(parse_height_m("0.5"), 0.5);
+  EXPECT_EQ(parse_height_m("2.5"), 2.5);
+  for (const char* bad : {"", "tall", "1.72m", "nan", "inf", "0.49", "2.51", "-1.7", "172"}) {
+    try {
+      parse_height_m(bad);
+      ADD_FAILURE() << "no error for '" << bad << "'";
+    } catch (const Error& e) {
+      EXPECT_EQ(e.field(), "--height") << bad;
+      EXPECT_EQ(e.code(), ErrorCode::kInvalidArgument) << bad;
+    }
+  }
+  try {
+    parse_height_m("172");
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("1.72 for 172 cm"), std::string::npos) << e.what();
+  }
+}
+
+// The height reaches the server's validator: one outside what a header may record ends the call
+// with an error naming header.height_m.
+TEST_F(ClientTest, FitSendsTheHeightToTheServer) {
+  server::PoseFuseServer server(one_worker_on_a_free_port());
+  demo::write_demo_session(dir_ / "demo.pfchunks");
+  ResultWriter writer(dir_ / "out");
+  const FitOutcome outcome = run_fit(make_channel("127.0.0.1:" + std::to_string(server.port())), dir_ / "demo.pfchunks",
+                                     writer, {}, HeaderEdits{.options = {}, .height_m = 3.0});
+  ASSERT_FALSE(outcome.local_error);
+  EXPECT_FALSE(outcome.status.ok());
+  EXPECT_NE(outcome.status.error_message().find("height_m"), std::string::npos) << outcome.status.error_message();
 }
 
 TEST_F(ClientTest, HeaderOptionTextIsKeyEqualsValue) {
@@ -97,7 +152,7 @@ TEST_F(ClientTest, FitSendsHeaderOptionsToTheServer) {
   demo::write_demo_session(dir_ / "demo.pfchunks");
   ResultWriter writer(dir_ / "out");
   const FitOutcome outcome = run_fit(make_channel("127.0.0.1:" + std::to_string(server.port())), dir_ / "demo.pfchunks",
-                                     writer, {}, {{"fit.enabled", "yes"}});
+                                     writer, {}, HeaderEdits{.options = {{"fit.enabled", "yes"}}, .height_m = {}});
   ASSERT_FALSE(outcome.local_error);
   EXPECT_FALSE(outcome.status.ok());
   EXPECT_NE(outcome.status.error_message().find("fit.enabled"), std::string::npos) << outcome.status.error_message();
