@@ -1,6 +1,7 @@
 #include "forearm/orientation_uncertainty.hpp"
 
 #include <cmath>
+#include <limits>
 
 namespace posefuse::forearm {
 
@@ -23,6 +24,12 @@ double confidence_from_bound99_rad(double bound99_rad) {
   if (!(bound99_rad >= 0.0)) return 0.0;
   const double bound_ratio = bound99_rad / kConfidentErrorBoundRad;
   return std::exp2(-bound_ratio * bound_ratio);
+}
+
+double bound99_rad_from_confidence(double confidence) {
+  if (!(confidence > 0.0)) return std::numeric_limits<double>::infinity();
+  if (confidence >= 1.0) return 0.0;
+  return kConfidentErrorBoundRad * std::sqrt(-std::log2(confidence));
 }
 
 double confidence_from_rms_rad(double rms_rad) { return confidence_from_bound99_rad(kBound99OverRms * rms_rad); }

@@ -59,6 +59,9 @@ inline constexpr double kConfidentDirectionRmsRad = kConfidentErrorBoundRad / kD
 // 2^-((b / 15 deg)^2) for an error whose 99 % bound is b: 1 at b = 0, 0.5 at 15 degrees. NaN or
 // negative b gives 0.
 double confidence_from_bound99_rad(double bound99_rad);
+// Its inverse: the 99 % bound a confidence allows, 15 degrees sqrt(-log2 c); 0 at confidence 1,
+// infinite at 0 or below (and for NaN).
+double bound99_rad_from_confidence(double confidence);
 
 // 2^-((1.944 u / 15 deg)^2): 1 at u = 0, 0.5 where the 99 % bound is 15 degrees, falling fast
 // beyond. NaN or negative u gives 0.

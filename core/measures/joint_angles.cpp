@@ -18,6 +18,7 @@ constexpr int kSpine2 = 6, kNeck = 12, kLeftCollar = 13, kRightCollar = 14, kLef
               kLeftElbow = 18, kRightElbow = 19, kLeftWrist = 20, kRightWrist = 21;
 
 constexpr double kDegPerRad = 180.0 / std::numbers::pi;
+constexpr double kBound99OverRms = 2.576;  // two-sided 99 % of a normal error
 
 using geometry::angle_between;
 using geometry::perpendicular;
@@ -139,8 +140,15 @@ void arm_angles(const PosedUpperBody& body, const Thorax& thorax, bool left, con
     const double s = std::sin(angle_rad);
     return s > 0 ? options.joint_position_uncertainty_m / (segment_m * s) : std::numbers::pi;
   };
+  // These angles are read in the thorax frame, so its own error (at most what its confidence
+  // allows) is theirs too; independent errors add in quadrature, a smallest confidence would
+  // claim either error alone.
+  const double thorax_rms = angle_rms_rad_from_confidence(thorax.confidence);
+  const auto with_thorax_confidence = [&](double own_rms_rad) {
+    return angle_confidence_from_rms_rad(std::hypot(thorax_rms, own_rms_rad));
+  };
   const double plane_confidence =
-      std::min(humerus_confidence, angle_confidence_from_rms_rad(plane_spread_rad(upper.norm(), elevation)));
+      std::min(humerus_confidence, with_thorax_confidence(plane_spread_rad(upper.norm(), elevation)));
   out[static_cast<int>(id.elevation)] = defined_value(elevation, humerus_confidence);
   const double plane = std::atan2(-y_in_T.x(), -y_in_T.z());
   const double lock = options.min_elevation_for_plane_deg / kDegPerRad;
@@ -178,7 +186,7 @@ void arm_angles(const PosedUpperBody& body, const Thorax& thorax, bool left, con
     const double tilt_spread = plane_spread_rad(upper.norm(), elevation) * std::abs(std::cos(elevation));
     const double axial_spread = std::hypot(plane_spread_rad(fore.norm(), flexion), tilt_spread);
     const double axial_confidence =
-        plane_locked ? 0.0 : std::min({humerus_confidence, c[wrist], angle_confidence_from_rms_rad(axial_spread)});
+        plane_locked ? 0.0 : std::min({humerus_confidence, c[wrist], with_thorax_confidence(axial_spread)});
     axial_out = defined_value(axial, axial_confidence);
   }
 
@@ -236,8 +244,11 @@ JointAngleOptions exact_joint_options(JointAngleOptions options) {
 }
 
 double angle_confidence_from_rms_rad(double rms_rad) {
-  constexpr double kBound99OverRms = 2.576;  // two-sided 99 % of a normal error
   return forearm::confidence_from_bound99_rad(kBound99OverRms * rms_rad);
+}
+
+double angle_rms_rad_from_confidence(double confidence) {
+  return forearm::bound99_rad_from_confidence(confidence) / kBound99OverRms;
 }
 
 JointAngles joint_angles(const PosedUpperBody& body, const JointAngleOptions& options, const JointAngles* previous) {

@@ -130,6 +130,8 @@ double elbow_flexion_spread_rad(double upper_arm_m, double forearm_m, double rea
 // Confidence of an angle from its 1-sigma error, rad: 0.5 where the 99 % bound of a normal error
 // (2.576 sigma) reaches 15 degrees, the bound of a confident forearm sample (docs/forearm.md).
 double angle_confidence_from_rms_rad(double rms_rad);
+// Its inverse: the 1-sigma error a confidence allows at most, rad (0 at 1, infinite at 0).
+double angle_rms_rad_from_confidence(double confidence);
 
 // Pronation (+) / supination (-) of a forearm from the neutral position, in which the thumb
 // points to the shoulder side of the elbow's flexion plane (thumb up with the upper arm hanging

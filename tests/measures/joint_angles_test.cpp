@@ -300,11 +300,46 @@ TEST(JointAngles, AxialRotationNearAStraightElbowAndThePlaneNearItsLockAreNotCon
   EXPECT_DOUBLE_EQ(deg(exact, Angle::kRightPlaneOfElevation), deg(a_low, Angle::kRightPlaneOfElevation));
 }
 
+// The plane of elevation and the humerus' axial rotation are read in the thorax frame: the
+// thorax's error adds to their own in quadrature. An inferred spine2 (thorax confidence 0.5, a 15
+// degree bound) leaves the elevation at 0.5 but takes both below it, where the smallest of the
+// two confidences kept them at 0.5 while claiming only one of the errors.
+TEST(JointAngles, AnglesInTheThoraxFrameAddTheThoraxError) {
+  Built b = build(Eigen::Matrix3d::Identity(), 0, 0, 0, ArmPose{30, 90, 10, 90, 0, 0}, ArmPose{30, 90, 10, 90, 0, 0});
+  const auto confidence = [](const JointAngles& a, Angle angle) { return a[static_cast<int>(angle)].confidence; };
+  const JointAngles tracked = joint_angles(b.body);
+  ASSERT_GT(confidence(tracked, Angle::kRightPlaneOfElevation), 0.5);
+  ASSERT_GT(confidence(tracked, Angle::kRightHumerusAxialRotation), 0.5);
+  b.body.joint_confidence[6] = 0.5;  // spine2 inferred
+  const JointAngles inferred = joint_angles(b.body);
+  EXPECT_DOUBLE_EQ(confidence(inferred, Angle::kRightElevation), 0.5);
+  for (const Angle angle : {Angle::kRightPlaneOfElevation, Angle::kRightHumerusAxialRotation,
+                            Angle::kLeftPlaneOfElevation, Angle::kLeftHumerusAxialRotation}) {
+    SCOPED_TRACE(std::string(angle_name(angle)));
+    const double own_rms = angle_rms_rad_from_confidence(confidence(tracked, angle));
+    EXPECT_LT(confidence(inferred, angle), 0.5);
+    EXPECT_NEAR(confidence(inferred, angle),
+                angle_confidence_from_rms_rad(std::hypot(angle_rms_rad_from_confidence(0.5), own_rms)), 1e-12);
+    EXPECT_DOUBLE_EQ(deg(inferred, angle), deg(tracked, angle));  // only the claim changes
+  }
+  // Exact joints have no error of their own: the thorax's alone.
+  JointAngleOptions exact_joints;
+  exact_joints.joint_position_uncertainty_m = 0;
+  EXPECT_NEAR(confidence(joint_angles(b.body, exact_joints), Angle::kRightPlaneOfElevation), 0.5, 1e-12);
+}
+
 TEST(JointAngles, AngleConfidenceIsHalfWhereThe99PercentBoundReaches15Degrees) {
   EXPECT_DOUBLE_EQ(angle_confidence_from_rms_rad(0), 1.0);
   EXPECT_NEAR(angle_confidence_from_rms_rad(15 * kRad / 2.576), 0.5, 1e-12);
   EXPECT_DOUBLE_EQ(angle_confidence_from_rms_rad(std::nan("")), 0.0);
   EXPECT_DOUBLE_EQ(angle_confidence_from_rms_rad(-1), 0.0);
+  // and back
+  EXPECT_DOUBLE_EQ(angle_rms_rad_from_confidence(1.0), 0.0);
+  EXPECT_NEAR(angle_rms_rad_from_confidence(0.5), 15 * kRad / 2.576, 1e-12);
+  for (const double rms_deg : {0.5, 3.0, 5.8, 12.0})
+    EXPECT_NEAR(angle_rms_rad_from_confidence(angle_confidence_from_rms_rad(rms_deg * kRad)), rms_deg * kRad, 1e-9);
+  EXPECT_TRUE(std::isinf(angle_rms_rad_from_confidence(0.0)));
+  EXPECT_TRUE(std::isinf(angle_rms_rad_from_confidence(std::nan(""))));
 }
 
 TEST(JointAngles, BadInputNamesTheField) {
