@@ -133,12 +133,13 @@ void arm_angles(const PosedUpperBody& body, const Thorax& thorax, bool left, con
   // plane need only y_h (R's middle column); the axial rotation needs the humerus' plane.
   const Eigen::Vector3d y_in_T = thorax.K_from_T.transpose() * y_h;
   const double elevation = std::acos(std::clamp(y_in_T.y(), -1.0, 1.0));
-  // A joint position error e turns a segment of length l by about e / l; an angle about an axis
-  // that a second direction makes with it by that over the sine of their angle
-  // (JointAngleOptions::joint_position_uncertainty_m).
+  // A joint position error e turns a segment of length l by about e / l (the elevation's own
+  // spread); an angle about an axis that a second direction makes with it by that over the sine
+  // of their angle (JointAngleOptions::joint_position_uncertainty_m).
+  const auto direction_spread_rad = [&](double segment_m) { return options.joint_position_uncertainty_m / segment_m; };
   const auto plane_spread_rad = [&](double segment_m, double angle_rad) {
     const double s = std::sin(angle_rad);
-    return s > 0 ? options.joint_position_uncertainty_m / (segment_m * s) : std::numbers::pi;
+    return s > 0 ? direction_spread_rad(segment_m) / s : std::numbers::pi;
   };
   // These angles are read in the thorax frame, so its own error (at most what its confidence
   // allows) is theirs too; independent errors add in quadrature, a smallest confidence would
@@ -149,7 +150,9 @@ void arm_angles(const PosedUpperBody& body, const Thorax& thorax, bool left, con
   };
   const double plane_confidence =
       std::min(humerus_confidence, with_thorax_confidence(plane_spread_rad(upper.norm(), elevation)));
-  out[static_cast<int>(id.elevation)] = defined_value(elevation, humerus_confidence);
+  const double elevation_confidence =
+      std::min(humerus_confidence, with_thorax_confidence(direction_spread_rad(upper.norm())));
+  out[static_cast<int>(id.elevation)] = defined_value(elevation, elevation_confidence);
   const double plane = std::atan2(-y_in_T.x(), -y_in_T.z());
   const double lock = options.min_elevation_for_plane_deg / kDegPerRad;
   const bool plane_locked = elevation < lock || elevation > std::numbers::pi - lock;

@@ -90,12 +90,13 @@ struct JointAngleOptions {
   // forearms over 336 simulated subjects (bench_fig4 seed bases 0-55); the template's measured
   // 4.6 % there, so one value serves both (docs/measures.md, "Elbow flexion near full extension").
   double arm_length_uncertainty = 0.057;
-  // RMS error of a fitted joint's position, m. An angle read from a segment's direction turns by
-  // about this over the segment's length, and one read from a plane of two segments by that over
-  // the sine of their angle: the humerus' axial rotation (the upper arm and forearm's plane)
-  // near a straight elbow, the plane of elevation near the gimbal lock. Their confidence carries
-  // that spread. 0.02: the body fit's mean error on the arm joints at 30 Hz (20.5 mm,
-  // docs/benchmarks.md, "Paper 2, Fig. 4"), not chosen on the sessions the angles are reported on.
+  // RMS error of a fitted joint's position, m. An angle read from a segment's direction (the
+  // elevation) turns by about this over the segment's length, and one read from a plane of two
+  // segments by that over the sine of their angle: the humerus' axial rotation (the upper arm and
+  // forearm's plane) near a straight elbow, the plane of elevation near the gimbal lock. Their
+  // confidence carries that spread, and the thorax's error in quadrature. 0.02: the body fit's mean error on the arm
+  // joints at 30 Hz (20.5 mm, docs/benchmarks.md, "Paper 2, Fig. 4"), not chosen on the sessions the angles are
+  // reported on.
   double joint_position_uncertainty_m = 0.02;
   // RMS error of the fitted girdle elevation, degrees; its confidence is at most what this allows.
   // The collars have no camera joint (docs/fitting.md, "Joint confidence"): the model's shape and

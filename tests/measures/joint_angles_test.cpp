@@ -29,6 +29,10 @@ using testing::Ry;
 using testing::Rz;
 
 double deg(const JointAngles& a, Angle angle) { return a[static_cast<int>(angle)].deg; }
+
+// The elevation's confidence with every joint tracked: the default 2 cm joint error over the
+// constructed skeleton's 0.3 m upper arm (constructed_skeleton.hpp).
+double tracked_elevation_confidence() { return angle_confidence_from_rms_rad(0.02 / 0.3); }
 bool defined(const JointAngles& a, Angle angle) { return a[static_cast<int>(angle)].defined; }
 
 void expect_arm(const JointAngles& a, bool left, const ArmPose& want, double tolerance_deg) {
@@ -200,7 +204,7 @@ TEST(JointAngles, ConfidenceFollowsTheJointsAndTheVertical) {
   EXPECT_DOUBLE_EQ(a[static_cast<int>(Angle::kRightElbowFlexion)].confidence, 0.5);
   EXPECT_DOUBLE_EQ(a[static_cast<int>(Angle::kLeftElbowFlexion)].confidence, 1.0);
   EXPECT_DOUBLE_EQ(a[static_cast<int>(Angle::kThoraxFlexion)].confidence, 0.5);
-  EXPECT_DOUBLE_EQ(a[static_cast<int>(Angle::kRightElevation)].confidence, 1.0);
+  EXPECT_DOUBLE_EQ(a[static_cast<int>(Angle::kRightElevation)].confidence, tracked_elevation_confidence());
   // The smallest of the thorax's joints and the vertical, not their product: an inferred spine2
   // (0.5) under a floor measured to a fraction of a degree (0.99) stays at 0.5.
   b.body.joint_confidence[21] = 1.0;
@@ -228,7 +232,8 @@ TEST(JointAngles, GirdleElevationCarriesItsOwnError) {
   EXPECT_GT(girdle_confidence(sharper), 0.5);
   EXPECT_DOUBLE_EQ(girdle_confidence(exact_joint_options({})), 1.0);
   // The other arm angles do not take it.
-  EXPECT_DOUBLE_EQ(joint_angles(b.body)[static_cast<int>(Angle::kRightElevation)].confidence, 1.0);
+  EXPECT_DOUBLE_EQ(joint_angles(b.body)[static_cast<int>(Angle::kRightElevation)].confidence,
+                   tracked_elevation_confidence());
 }
 
 TEST(JointAngles, ElbowFlexionSpreadFollowsTheLawOfCosines) {
@@ -265,8 +270,9 @@ TEST(JointAngles, ElbowFlexionNearFullExtensionIsNotConfident) {
   // The angle itself does not change, only what it claims.
   EXPECT_DOUBLE_EQ(deg(joint_angles(bent.body, exact_lengths), Angle::kRightElbowFlexion),
                    deg(joint_angles(bent.body), Angle::kRightElbowFlexion));
-  // The other arm angles keep the joints' confidence.
-  EXPECT_DOUBLE_EQ(joint_angles(straight.body)[static_cast<int>(Angle::kRightElevation)].confidence, 1.0);
+  // The other arm angles do not take it.
+  EXPECT_DOUBLE_EQ(joint_angles(straight.body)[static_cast<int>(Angle::kRightElevation)].confidence,
+                   tracked_elevation_confidence());
 }
 
 TEST(JointAngles, AxialRotationNearAStraightElbowAndThePlaneNearItsLockAreNotConfident) {
@@ -288,33 +294,35 @@ TEST(JointAngles, AxialRotationNearAStraightElbowAndThePlaneNearItsLockAreNotCon
   Built near_lock =
       build(Eigen::Matrix3d::Identity(), 0, 0, 0, ArmPose{30, 25, 10, 90, 0, 0}, ArmPose{30, 25, 10, 90, 0, 0});
   EXPECT_LT(confidence(joint_angles(near_lock.body), Angle::kRightHumerusAxialRotation), 0.5);
-  // The elevation itself keeps its joints' confidence; the values do not change, only what they
-  // claim; exact joints claim their own confidence.
-  EXPECT_DOUBLE_EQ(confidence(a_low, Angle::kRightElevation), 1.0);
+  // The elevation's own spread does not depend on the elevation; the values do not change, only
+  // what they claim; exact joints claim their own confidence.
+  EXPECT_DOUBLE_EQ(confidence(a_low, Angle::kRightElevation), tracked_elevation_confidence());
+  EXPECT_DOUBLE_EQ(confidence(a_high, Angle::kRightElevation), tracked_elevation_confidence());
   JointAngleOptions exact_joints;
   exact_joints.joint_position_uncertainty_m = 0;
   const JointAngles exact = joint_angles(low.body, exact_joints);
   EXPECT_DOUBLE_EQ(confidence(exact, Angle::kRightHumerusAxialRotation), 1.0);
   EXPECT_DOUBLE_EQ(confidence(exact, Angle::kRightPlaneOfElevation), 1.0);
+  EXPECT_DOUBLE_EQ(confidence(exact, Angle::kRightElevation), 1.0);
   EXPECT_DOUBLE_EQ(deg(exact, Angle::kRightHumerusAxialRotation), deg(a_low, Angle::kRightHumerusAxialRotation));
   EXPECT_DOUBLE_EQ(deg(exact, Angle::kRightPlaneOfElevation), deg(a_low, Angle::kRightPlaneOfElevation));
 }
 
-// The plane of elevation and the humerus' axial rotation are read in the thorax frame: the
-// thorax's error adds to their own in quadrature. An inferred spine2 (thorax confidence 0.5, a 15
-// degree bound) leaves the elevation at 0.5 but takes both below it, where the smallest of the
-// two confidences kept them at 0.5 while claiming only one of the errors.
+// The humerothoracic angles are read in the thorax frame: the thorax's error adds to their own in
+// quadrature. An inferred spine2 (thorax confidence 0.5, a 15 degree bound) takes all three below
+// 0.5, where the smallest of the two confidences kept them at 0.5 while claiming only one of the
+// errors.
 TEST(JointAngles, AnglesInTheThoraxFrameAddTheThoraxError) {
   Built b = build(Eigen::Matrix3d::Identity(), 0, 0, 0, ArmPose{30, 90, 10, 90, 0, 0}, ArmPose{30, 90, 10, 90, 0, 0});
   const auto confidence = [](const JointAngles& a, Angle angle) { return a[static_cast<int>(angle)].confidence; };
   const JointAngles tracked = joint_angles(b.body);
   ASSERT_GT(confidence(tracked, Angle::kRightPlaneOfElevation), 0.5);
   ASSERT_GT(confidence(tracked, Angle::kRightHumerusAxialRotation), 0.5);
+  ASSERT_GT(confidence(tracked, Angle::kRightElevation), 0.5);
   b.body.joint_confidence[6] = 0.5;  // spine2 inferred
   const JointAngles inferred = joint_angles(b.body);
-  EXPECT_DOUBLE_EQ(confidence(inferred, Angle::kRightElevation), 0.5);
-  for (const Angle angle : {Angle::kRightPlaneOfElevation, Angle::kRightHumerusAxialRotation,
-                            Angle::kLeftPlaneOfElevation, Angle::kLeftHumerusAxialRotation}) {
+  for (const Angle angle : {Angle::kRightPlaneOfElevation, Angle::kRightHumerusAxialRotation, Angle::kRightElevation,
+                            Angle::kLeftPlaneOfElevation, Angle::kLeftHumerusAxialRotation, Angle::kLeftElevation}) {
     SCOPED_TRACE(std::string(angle_name(angle)));
     const double own_rms = angle_rms_rad_from_confidence(confidence(tracked, angle));
     EXPECT_LT(confidence(inferred, angle), 0.5);
@@ -326,6 +334,7 @@ TEST(JointAngles, AnglesInTheThoraxFrameAddTheThoraxError) {
   JointAngleOptions exact_joints;
   exact_joints.joint_position_uncertainty_m = 0;
   EXPECT_NEAR(confidence(joint_angles(b.body, exact_joints), Angle::kRightPlaneOfElevation), 0.5, 1e-12);
+  EXPECT_NEAR(confidence(joint_angles(b.body, exact_joints), Angle::kRightElevation), 0.5, 1e-12);
 }
 
 TEST(JointAngles, AngleConfidenceIsHalfWhereThe99PercentBoundReaches15Degrees) {

@@ -93,9 +93,9 @@ const OptionTable& measures_option_table() {
          .max = at_most(0.2),
          .unit = "m",
          .description =
-             "RMS error of a fitted joint's position; the confidence of the humerus' axial rotation near a "
-             "straight elbow or the gimbal lock and of the plane of elevation near the lock carries the spread it "
-             "gives"},
+             "RMS error of a fitted joint's position; the confidence of the elevation, of the plane of elevation "
+             "(most near the gimbal lock) and of the humerus' axial rotation (most near a straight elbow or the "
+             "lock) carries the spread it gives"},
         {.key = kMeasuresGirdleElevationUncertaintyKey,
          .type = OptionType::kReal,
          .default_value = format_double(angles.girdle_elevation_uncertainty_deg),
