@@ -4,7 +4,6 @@
 #include <utility>
 
 #include "body/standing_height.hpp"
-
 #include "common/error.hpp"
 #include "common/number_text.hpp"
 #include "session/directory_layout.hpp"
