@@ -134,6 +134,43 @@ TEST(MeasuresStage, ElbowFlexionConfidenceFollowsTheArmLengthUncertainty) {
                    uncertain.results[0].joint_angles().angles(static_cast<int>(Angle::kLeftElbowFlexion)).deg());
 }
 
+// An inferred thorax joint takes the elevations below 0.5 while no joint they are read from is:
+// the stage says how many and why; with the thorax tracked it says nothing of them.
+TEST(MeasuresStage, ElevationsUnconfidentForAnInferredThoraxAreSaid) {
+  const auto run = [](double spine2_confidence) {
+    MeasuresStage stage;
+    testing::CollectingOutput out;
+    v1::SessionHeader header;
+    (*header.mutable_options())["measures.arm_length_uncertainty"] = "0";  // the elbows' warning off
+    stage.start(header, out);
+    ArmTrackStart start;
+    start.tracked = true;
+    start.K_from_W = geometry::Quat::FromTwoVectors(geometry::Vec3::UnitZ(), facing_camera() * geometry::Vec3::UnitY());
+    stage.on_value(start, out);
+    for (int f = 0; f < 60; ++f) {
+      FrameEstimate frame = exercise_frame(f / 30.0, 2, facing_camera());
+      if (f % 2 == 0) frame.smpl_joints[6].confidence = spine2_confidence;
+      stage.on_value(frame, out);
+    }
+    stage.finish(out);
+    return out;
+  };
+  const testing::CollectingOutput inferred = run(0.5);
+  const auto warned = [](const testing::CollectingOutput& out) {
+    return std::find_if(out.warnings.begin(), out.warnings.end(),
+                        [](const std::string& w) { return w.rfind("MEASURES_ELEVATION_UNCERTAIN", 0) == 0; });
+  };
+  ASSERT_NE(warned(inferred), inferred.warnings.end());
+  EXPECT_NE(warned(inferred)->find("60 of 120 elevation values"), std::string::npos) << *warned(inferred);
+  EXPECT_LT(inferred.results[0].joint_angles().angles(static_cast<int>(Angle::kRightElevation)).confidence(), 0.5);
+  EXPECT_GE(inferred.results[1].joint_angles().angles(static_cast<int>(Angle::kRightElevation)).confidence(), 0.5);
+  const testing::CollectingOutput tracked = run(1.0);
+  EXPECT_EQ(warned(tracked), tracked.warnings.end());
+  // Untracked (0): the joint itself says so; nothing to add.
+  const testing::CollectingOutput lost = run(0.0);
+  EXPECT_EQ(warned(lost), lost.warnings.end());
+}
+
 // Repetitions segmented on values not to act on are still reported, and the result says so: with
 // every joint untracked (confidence 0) the elbow's repetitions count as before, with confidence 0,
 // and warning MEASURES_REPETITIONS_UNCERTAIN; with exact arm lengths and tracked joints nothing is

@@ -123,6 +123,7 @@ void MeasuresStage::add_frame(const FrameEstimate& frame, StageOutput& out) {
   }
   previous_ = angles.angles;
   count_length_limited_elbows(body, angles.angles);
+  count_thorax_limited_elevations(body, angles.angles);
 
   series_.add(static_cast<double>(frame.t_us) * 1e-6, angles.angles);  // the merge sends frames in time order
   out.hand_on(std::move(angles));
@@ -135,9 +136,24 @@ void MeasuresStage::count_length_limited_elbows(const measures::PosedUpperBody& 
     const auto& c = body.joint_confidence;
     const double joints = std::min({c[j.shoulder], c[j.elbow], c[j.wrist]});
     const auto angle = left ? measures::Angle::kLeftElbowFlexion : measures::Angle::kRightElbowFlexion;
-    ++elbows_;
+    ++arm_values_;
     if (joints >= measures::kConfidentAt && angles[static_cast<int>(angle)].confidence < measures::kConfidentAt)
       ++length_limited_elbows_;
+  }
+}
+
+void MeasuresStage::count_thorax_limited_elevations(const measures::PosedUpperBody& body,
+                                                    const measures::JointAngles& angles) {
+  constexpr int kThoraxJoints[] = {6, 12, 13, 14};  // spine2, neck, the collars (SMPL order)
+  const auto& c = body.joint_confidence;
+  double thorax = 1.0;
+  for (const int j : kThoraxJoints) thorax = std::min(thorax, c[static_cast<std::size_t>(j)]);
+  for (const bool left : {true, false}) {
+    const ArmJoints j = arm_joints(left);
+    const double joints = std::min({thorax, c[j.shoulder], c[j.elbow]});
+    const auto angle = left ? measures::Angle::kLeftElevation : measures::Angle::kRightElevation;
+    if (joints >= measures::kConfidentAt && angles[static_cast<int>(angle)].confidence < measures::kConfidentAt)
+      ++thorax_limited_elevations_;
   }
 }
 
@@ -145,12 +161,22 @@ void MeasuresStage::finish(StageOutput& out) {
   if (fit_enabled_) report_vertical(out);
   if (length_limited_elbows_ > 0) {
     out.warn("MEASURES_ELBOW_FLEXION_UNCERTAIN", "joint_angles.elbow_flexion",
-             std::to_string(length_limited_elbows_) + " of " + std::to_string(elbows_) +
+             std::to_string(length_limited_elbows_) + " of " + std::to_string(arm_values_) +
                  " elbow flexion values are below confidence 0.5 though their joints are tracked: with arm lengths "
                  "uncertain by " +
                  format_double(100 * options_.angles.arm_length_uncertainty) +
                  " % (measures.arm_length_uncertainty) a fit near full extension bends by tens of degrees "
                  "(docs/measures.md, \"Elbow flexion near full extension\")");
+  }
+  if (thorax_limited_elevations_ > 0) {
+    out.warn("MEASURES_ELEVATION_UNCERTAIN", "joint_angles.elevation",
+             std::to_string(thorax_limited_elevations_) + " of " + std::to_string(arm_values_) +
+                 " elevation values are below confidence 0.5 though no joint they are read from is: a thorax joint "
+                 "the camera did not track (spine2, the neck or a collar; confidence 0.5, a 15 degree bound) adds "
+                 "its error to the humerus' own; the planes of elevation and the humerus' axial rotations there are "
+                 "not confident "
+                 "either (docs/measures.md, \"The elevation, the plane of elevation and the humerus' axial "
+                 "rotation\")");
   }
   if (skipped_frames_ > 0) {
     out.warn("MEASURES_FRAME_SKIPPED", "joint_angles",

@@ -46,6 +46,7 @@ class MeasuresStage : public Stage {
 
  private:
   void count_length_limited_elbows(const measures::PosedUpperBody& body, const measures::JointAngles& angles);
+  void count_thorax_limited_elevations(const measures::PosedUpperBody& body, const measures::JointAngles& angles);
   void add_frame(const FrameEstimate& frame, StageOutput& out);
   void warn_uncertain_repetitions(const measures::SessionRepetitions& repetitions, StageOutput& out);
   void report_vertical(StageOutput& out) const;
@@ -58,8 +59,11 @@ class MeasuresStage : public Stage {
   std::size_t skipped_frames_ = 0;  // fitted frames whose joints gave no segment frames
   std::string first_skip_;
   // Elbow flexion values (two per frame) whose joints are confident but whose arm lengths are
-  // not (measures.arm_length_uncertainty), and all elbow flexion values.
-  std::size_t length_limited_elbows_ = 0, elbows_ = 0;
+  // not (measures.arm_length_uncertainty), and the values of each arm angle (two per frame).
+  std::size_t length_limited_elbows_ = 0, arm_values_ = 0;
+  // Elevations (two per frame) below confidence 0.5 although every joint they are read from is
+  // at least 0.5: the thorax's error and the humerus' own add up (docs/measures.md).
+  std::size_t thorax_limited_elevations_ = 0;
   std::optional<measures::JointAngles> previous_;
   measures::AngleSeries series_;
 };
