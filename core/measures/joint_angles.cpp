@@ -61,8 +61,7 @@ Thorax thorax_frame(const PosedUpperBody& body) {
   const Eigen::Vector3d right = J.col(kRightCollar) - J.col(kLeftCollar);
   if (up.norm() < 1e-6 || right.norm() < 1e-6 || perpendicular(right, up.normalized()).isZero())
     throw_invalid("smpl_joints_K", "spine2, neck and the collars span no thorax frame");
-  const auto& c = body.joint_confidence;
-  return {frame_from_y_and_z(up, right), std::min({c[kSpine2], c[kNeck], c[kLeftCollar], c[kRightCollar]})};
+  return {frame_from_y_and_z(up, right), thorax_joint_confidence(body)};
 }
 
 void thorax_angles(const PosedUpperBody& body, const Thorax& thorax, JointAngles& out) {
@@ -252,6 +251,11 @@ double angle_confidence_from_rms_rad(double rms_rad) {
 
 double angle_rms_rad_from_confidence(double confidence) {
   return forearm::bound99_rad_from_confidence(confidence) / kBound99OverRms;
+}
+
+double thorax_joint_confidence(const PosedUpperBody& body) {
+  const auto& c = body.joint_confidence;
+  return std::min({c[kSpine2], c[kNeck], c[kLeftCollar], c[kRightCollar]});
 }
 
 JointAngles joint_angles(const PosedUpperBody& body, const JointAngleOptions& options, const JointAngles* previous) {

@@ -94,9 +94,9 @@ struct JointAngleOptions {
   // elevation) turns by about this over the segment's length, and one read from a plane of two
   // segments by that over the sine of their angle: the humerus' axial rotation (the upper arm and
   // forearm's plane) near a straight elbow, the plane of elevation near the gimbal lock. Their
-  // confidence carries that spread, and the thorax's error in quadrature. 0.02: the body fit's mean error on the arm
-  // joints at 30 Hz (20.5 mm, docs/benchmarks.md, "Paper 2, Fig. 4"), not chosen on the sessions the angles are
-  // reported on.
+  // confidence carries that spread, and the thorax's error in quadrature. 0.02: the body fit's
+  // mean error on the arm joints at 30 Hz (20.5 mm, docs/benchmarks.md, "Paper 2, Fig. 4"), not
+  // chosen on the sessions the angles are reported on.
   double joint_position_uncertainty_m = 0.02;
   // RMS error of the fitted girdle elevation, degrees; its confidence is at most what this allows.
   // The collars have no camera joint (docs/fitting.md, "Joint confidence"): the model's shape and
@@ -133,6 +133,10 @@ double elbow_flexion_spread_rad(double upper_arm_m, double forearm_m, double rea
 double angle_confidence_from_rms_rad(double rms_rad);
 // Its inverse: the 1-sigma error a confidence allows at most, rad (0 at 1, infinite at 0).
 double angle_rms_rad_from_confidence(double confidence);
+
+// The thorax frame's confidence: the smallest of the joints it is built from (spine2, the neck
+// and the collars). The thorax angles take it, and the humerothoracic ones its error.
+double thorax_joint_confidence(const PosedUpperBody& body);
 
 // Pronation (+) / supination (-) of a forearm from the neutral position, in which the thumb
 // points to the shoulder side of the elbow's flexion plane (thumb up with the upper arm hanging

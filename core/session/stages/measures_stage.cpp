@@ -144,10 +144,8 @@ void MeasuresStage::count_length_limited_elbows(const measures::PosedUpperBody& 
 
 void MeasuresStage::count_thorax_limited_elevations(const measures::PosedUpperBody& body,
                                                     const measures::JointAngles& angles) {
-  constexpr int kThoraxJoints[] = {6, 12, 13, 14};  // spine2, neck, the collars (SMPL order)
   const auto& c = body.joint_confidence;
-  double thorax = 1.0;
-  for (const int j : kThoraxJoints) thorax = std::min(thorax, c[static_cast<std::size_t>(j)]);
+  const double thorax = measures::thorax_joint_confidence(body);
   for (const bool left : {true, false}) {
     const ArmJoints j = arm_joints(left);
     const double joints = std::min({thorax, c[j.shoulder], c[j.elbow]});
@@ -169,14 +167,14 @@ void MeasuresStage::finish(StageOutput& out) {
                  "(docs/measures.md, \"Elbow flexion near full extension\")");
   }
   if (thorax_limited_elevations_ > 0) {
-    out.warn("MEASURES_ELEVATION_UNCERTAIN", "joint_angles.elevation",
-             std::to_string(thorax_limited_elevations_) + " of " + std::to_string(arm_values_) +
-                 " elevation values are below confidence 0.5 though no joint they are read from is: a thorax joint "
-                 "the camera did not track (spine2, the neck or a collar; confidence 0.5, a 15 degree bound) adds "
-                 "its error to the humerus' own; the planes of elevation and the humerus' axial rotations there are "
-                 "not confident "
-                 "either (docs/measures.md, \"The elevation, the plane of elevation and the humerus' axial "
-                 "rotation\")");
+    out.warn(
+        "MEASURES_ELEVATION_UNCERTAIN", "joint_angles.elevation",
+        std::to_string(thorax_limited_elevations_) + " of " + std::to_string(arm_values_) +
+            " elevation values are below confidence 0.5 though no joint they are read from is: a thorax joint "
+            "the camera did not track (spine2, the neck or a collar; confidence 0.5, a 15 degree bound) adds "
+            "its error to the humerus' own; the planes of elevation and the humerus' axial rotations there are "
+            "not confident either (docs/measures.md, \"The elevation, the plane of elevation and the humerus' axial "
+            "rotation\")");
   }
   if (skipped_frames_ > 0) {
     out.warn("MEASURES_FRAME_SKIPPED", "joint_angles",
