@@ -81,4 +81,15 @@ void validate(const SmplModel& model) {
     }
 }
 
+int dominant_joint(const SmplModel& model, int vertex) {
+  int best = 0;
+  double best_weight = -1;
+  for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(model.weights, vertex); it; ++it)
+    if (it.value() > best_weight) {
+      best_weight = it.value();
+      best = static_cast<int>(it.col());
+    }
+  return best;
+}
+
 }  // namespace posefuse::body

@@ -80,4 +80,7 @@ struct SmplModel {
 // to one, a kinematic tree other than SMPL's.
 void validate(const SmplModel& model);
 
+// The joint with the largest skinning weight at a vertex: the bone that carries it.
+int dominant_joint(const SmplModel& model, int vertex);
+
 }  // namespace posefuse::body

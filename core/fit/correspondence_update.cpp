@@ -24,17 +24,6 @@ bool is_limb_neck_or_head(int joint) {
   }
 }
 
-int dominant_joint(const body::SmplModel& model, int vertex) {
-  int best = 0;
-  double best_weight = -1;
-  for (Eigen::SparseMatrix<double, Eigen::RowMajor>::InnerIterator it(model.weights, vertex); it; ++it)
-    if (it.value() > best_weight) {
-      best_weight = it.value();
-      best = static_cast<int>(it.col());
-    }
-  return best;
-}
-
 constexpr body::SurfacePoint centroid(int face) { return {face, 1.0 / 3, 1.0 / 3}; }
 
 }  // namespace
@@ -54,7 +43,8 @@ DiscreteCorrespondenceUpdate::DiscreteCorrespondenceUpdate(const body::SmplModel
                           c = model.v_template.col(model.faces(2, f));
     const double area = 0.5 * (b - a).cross(c - a).norm();
     face_weight[f] =
-        area * (is_limb_neck_or_head(dominant_joint(model, model.faces(0, f))) ? options.limb_candidate_density : 1.0);
+        area *
+        (is_limb_neck_or_head(body::dominant_joint(model, model.faces(0, f))) ? options.limb_candidate_density : 1.0);
   }
   std::mt19937_64 rng(options.seed);
   std::discrete_distribution<int> pick(face_weight.begin(), face_weight.end());

@@ -201,8 +201,7 @@ RenderModel make_render_model(const body::SmplModel& fitted, const Eigen::Vector
   // not tear the surface.
   Eigen::VectorXd amplitude(s);
   for (int i = 0; i < s; ++i) {
-    int dominant = 0;
-    surface.weights.row(i).toDense().maxCoeff(&dominant);
+    const int dominant = body::dominant_joint(surface, i);
     const Region region = region_of(dominant);
     const double a = region == Region::kTorso    ? options.torso_offset_m
                      : region == Region::kSleeve ? options.sleeve_offset_m
