@@ -38,7 +38,8 @@ Frame simulate(const sim::CameraSkeletonSimulator& simulator, const raycast::Dep
   sim::SmplJointsK smpl{f.truth.positions_K, f.truth.K_from_joint};
   f.true_camera_joints = sim::camera_joints_from_smpl(smpl);
   const std::vector<uint16_t> no_depth(static_cast<size_t>(camera.width()) * camera.height(), 0);
-  const v1::SkeletonFrame frame = simulator.simulate(smpl, no_depth, index, index * 33'333, 1);
+  const std::vector<std::int32_t> no_face(no_depth.size(), -1);
+  const v1::SkeletonFrame frame = simulator.simulate(smpl, no_depth, no_face, index, index * 33'333, 1);
   for (int j = 0; j < fit::kKinectJointCount; ++j) {
     const auto& joint = frame.joints(j);
     f.skeleton.positions_K[j] = {joint.position_m().x(), joint.position_m().y(), joint.position_m().z()};
@@ -66,8 +67,8 @@ double median(std::vector<double> v) {
 
 int main() {
   const raycast::DepthCamera camera{raycast::DepthIntrinsics{}};
-  const sim::CameraSkeletonSimulator simulator(camera, sim::CameraSkeletonOptions{}, 42);
   const auto model = body::make_template(body::Sex::kMale);
+  const sim::CameraSkeletonSimulator simulator(camera, sim::CameraSkeletonOptions{}, 42, *model);
   Eigen::VectorXd beta = Eigen::VectorXd::Zero(10);
   beta << 0.5, 0.3, -0.4, 0.6, 0.5, -0.3, 0, 0, 0, 0.2;
   const Eigen::Matrix3Xd rest = fit::rest_joints(*model, beta);

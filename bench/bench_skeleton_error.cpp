@@ -14,7 +14,8 @@
 //    forearm is occluded in the camera's view (the truth's forearm_visible_fraction < 0.5, as
 //    gt/occlusion.csv's forearm_occluded) or visible, with the mean |e| per state;
 //  - the off-track rate: frames where a joint leaves its own 5-frame running median by more
-//    than 0.1 m (a jump out and back), per joint group and for any of the eight joints.
+//    than 0.1 m (a jump out and back), per joint group and for any of the eight joints;
+//  - the trunk's joints' tracking states (SpineBase, SpineMid, SpineShoulder, Neck, hips).
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -42,6 +43,11 @@ constexpr int kGroups = 4;
 constexpr const char* kGroupNames[kGroups] = {"shoulders", "elbows", "wrists", "hands"};
 constexpr int kGroupJoints[kGroups][2] = {
     {kShoulderLeft, kShoulderRight}, {kElbowLeft, kElbowRight}, {kWristLeft, kWristRight}, {kHandLeft, kHandRight}};
+
+constexpr int kTrunkJoints = 6;
+constexpr const char* kTrunkNames[kTrunkJoints] = {"SpineBase", "SpineMid", "SpineShoulder",
+                                                   "Neck",      "HipLeft",  "HipRight"};
+constexpr int kTrunk[kTrunkJoints] = {kSpineBase, kSpineMid, kSpineShoulder, kNeck, kHipLeft, kHipRight};
 
 class SkeletonSink : public session::ChunkSink {
  public:
@@ -75,6 +81,7 @@ struct Totals {
   std::size_t off_track[kGroups] = {}, joint_frames[kGroups] = {};
   std::size_t frames = 0, frames_any_off = 0, occluded_arm_frames = 0, arm_frames = 0;
   StateCount states[kConditions][kGroups];
+  StateCount trunk[kTrunkJoints];
   Totals() {
     for (int g = 0; g < kGroups; ++g) mean_abs_min[g] = 1e9, mean_abs_max[g] = -1e9;
   }
@@ -138,6 +145,11 @@ int main(int argc, char** argv) {
         const auto it = sink.frames.find(frame.t_us);
         if (it == sink.frames.end()) continue;
         const v1::SkeletonFrame& skeleton = it->second;
+        for (int k = 0; k < kTrunkJoints; ++k) {
+          const int j = kTrunk[k];
+          t.trunk[k].add(static_cast<int>(skeleton.joints(j).state()),
+                         (position(skeleton, j) - frame.camera_joints_K.col(j)).norm());
+        }
         for (int side = 0; side < 2; ++side) {
           const bool occ = frame.forearm_visible_fraction[static_cast<std::size_t>(side)] < 0.5;
           occluded[side].push_back(occ);
@@ -209,6 +221,16 @@ int main(int argc, char** argv) {
                   pct(s.n[v1::SkeletonJoint::INFERRED], s.total()), pct(s.n[v1::SkeletonJoint::NOT_TRACKED], s.total()),
                   mean_mm(v1::SkeletonJoint::TRACKED), mean_mm(v1::SkeletonJoint::INFERRED));
     }
+  }
+  std::printf(
+      "\n| trunk joint | frames | TRACKED %% | INFERRED %% | mean abs error mm TRACKED / INFERRED |\n"
+      "| --- | --- | --- | --- | --- |\n");
+  for (int k = 0; k < kTrunkJoints; ++k) {
+    const StateCount& s = t.trunk[k];
+    const auto mean_mm = [&](int state) { return s.n[state] ? 1e3 * s.error_sum[state] / s.n[state] : NAN; };
+    std::printf("| %s | %zu | %.1f | %.1f | %.1f / %.1f |\n", kTrunkNames[k], s.total(),
+                pct(s.n[v1::SkeletonJoint::TRACKED], s.total()), pct(s.n[v1::SkeletonJoint::INFERRED], s.total()),
+                mean_mm(v1::SkeletonJoint::TRACKED), mean_mm(v1::SkeletonJoint::INFERRED));
   }
   return 0;
 }

@@ -66,7 +66,7 @@ CameraSessionResult simulate_camera_session(const CameraSessionOptions& options,
   const auto model = body::make_template(options.sex);
   body::BodyEvaluator evaluator(model, layout);
   raycast::MeshScene scene(raycast::EmbreeDevice::shared(), model->faces, model->num_vertices());
-  const CameraSkeletonSimulator skeleton(camera, options.skeleton, options.seed);
+  const CameraSkeletonSimulator skeleton(camera, options.skeleton, options.seed, *model);
 
   // The floor y_W = 0 in K: normal R e_y through the point t (W's origin).
   const Eigen::Vector3d floor_normal_K = options.K_from_W.linear() * Eigen::Vector3d::UnitY();
@@ -102,7 +102,7 @@ CameraSessionResult simulate_camera_session(const CameraSessionOptions& options,
     result.chunks.emplace_back().mutable_body_index()->CopyFrom(
         session::encode_body_index(body_index, v1::BodyIndexFrame::ZSTD_U8, t_us));
     result.chunks.emplace_back().mutable_skeleton()->CopyFrom(
-        skeleton.simulate(joints, noisy.depth_mm, f, t_us, options.body_id));
+        skeleton.simulate(joints, noisy.depth_mm, images.face, f, t_us, options.body_id));
     result.t_us.push_back(t_us);
     result.true_camera_joints_K.push_back(camera_joints_from_smpl(joints));
     result.truth.push_back(frame_truth(evaluator, scene, options.K_from_W, options.forearm_straps));

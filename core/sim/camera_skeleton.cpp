@@ -61,6 +61,24 @@ Eigen::Vector3d random_unit(SimRng& rng) {
 
 double uniform_in(SimRng& rng, double lo, double hi) { return lo + (hi - lo) * rng.uniform(); }
 
+// Whether a face carried by SMPL joint `smpl_joint` is the camera joint's own surface, which
+// does not hide it (CameraSkeletonSimulator, step 2). Limb joints lie within the margin of their
+// surface, so only the trunk's joints have one.
+bool is_own_surface(int camera_joint, int smpl_joint) {
+  const bool trunk_surface = smpl_joint == body::kPelvis || smpl_joint == body::kSpine1 ||
+                             smpl_joint == body::kSpine2 || smpl_joint == body::kSpine3 || smpl_joint == body::kNeck ||
+                             smpl_joint == body::kLeftCollar || smpl_joint == body::kRightCollar;
+  switch (camera_joint) {
+    case kSpineBase:
+    case kSpineMid:
+    case kSpineShoulder:
+    case kNeck: return trunk_surface;
+    case kHipLeft: return trunk_surface || smpl_joint == body::kLeftHip;
+    case kHipRight: return trunk_surface || smpl_joint == body::kRightHip;
+    default: return false;
+  }
+}
+
 void set_quaternion(const Eigen::Quaterniond& q, v1::Quaternion* out) {
   out->set_w(q.w());
   out->set_x(q.x());
@@ -125,9 +143,15 @@ Eigen::Matrix3Xd camera_joints_from_smpl(const SmplJointsK& smpl) {
 }
 
 CameraSkeletonSimulator::CameraSkeletonSimulator(const raycast::DepthCamera& camera,
-                                                 const CameraSkeletonOptions& options, std::uint64_t seed)
+                                                 const CameraSkeletonOptions& options, std::uint64_t seed,
+                                                 const body::SmplModel& rendered)
     : camera_(camera), options_(options), seed_(seed) {
   validate(options);
+  joint_of_face_.resize(static_cast<std::size_t>(rendered.num_faces()));
+  for (int f = 0; f < rendered.num_faces(); ++f) {
+    joint_of_face_[static_cast<std::size_t>(f)] =
+        static_cast<std::int8_t>(body::dominant_joint(rendered, rendered.faces(0, f)));
+  }
   SimRng rng(seed, "skeleton_bias");
   for (int j = 0; j < kCameraJointCount; ++j) {
     bias_length_m_[j] = is_upper_limb(j) ? uniform_in(rng, options.upper_limb_bias_min_m, options.upper_limb_bias_max_m)
@@ -142,12 +166,22 @@ CameraSkeletonSimulator::CameraSkeletonSimulator(const raycast::DepthCamera& cam
 }
 
 v1::SkeletonFrame CameraSkeletonSimulator::simulate(const SmplJointsK& smpl, const std::vector<uint16_t>& depth_mm,
-                                                    std::int64_t frame_index, std::int64_t t_us,
-                                                    std::uint32_t body_id) const {
+                                                    const std::vector<std::int32_t>& face, std::int64_t frame_index,
+                                                    std::int64_t t_us, std::uint32_t body_id) const {
   const int width = camera_.width(), height = camera_.height();
-  if (depth_mm.size() != static_cast<std::size_t>(width) * height) {
+  const auto pixels = static_cast<std::size_t>(width) * height;
+  if (depth_mm.size() != pixels) {
     throw_invalid("depth_mm",
-                  "has " + std::to_string(depth_mm.size()) + " pixels, the camera " + std::to_string(width * height));
+                  "has " + std::to_string(depth_mm.size()) + " pixels, the camera " + std::to_string(pixels));
+  }
+  if (face.size() != pixels) {
+    throw_invalid("face", "has " + std::to_string(face.size()) + " pixels, the camera " + std::to_string(pixels));
+  }
+  const auto faces = static_cast<std::int32_t>(joint_of_face_.size());
+  if (const auto bad = std::find_if(face.begin(), face.end(), [&](std::int32_t f) { return f < -1 || f >= faces; });
+      bad != face.end()) {
+    throw_invalid("face", "pixel " + std::to_string(bad - face.begin()) + " holds face " + std::to_string(*bad) +
+                              ", the rendered mesh has " + std::to_string(faces));
   }
   for (int j = 0; j < body::kNumJoints; ++j) {
     if (!smpl.K_from_joint[j].allFinite())
@@ -179,8 +213,11 @@ v1::SkeletonFrame CameraSkeletonSimulator::simulate(const SmplJointsK& smpl, con
     if (uv) {
       const long col = std::lround((*uv).x()), row = std::lround((*uv).y());
       if (col >= 0 && row >= 0 && col < width && row < height) {
-        const uint16_t d = depth_mm[static_cast<std::size_t>(row) * width + col];
-        occluded = d != 0 && d * 1e-3 < p.z() - options_.occlusion_margin_m;
+        const std::size_t pixel = static_cast<std::size_t>(row) * width + col;
+        const uint16_t d = depth_mm[pixel];
+        const std::int32_t f = face[pixel];
+        const bool own = f >= 0 && is_own_surface(j, joint_of_face_[static_cast<std::size_t>(f)]);
+        occluded = d != 0 && d * 1e-3 < p.z() - options_.occlusion_margin_m && !own;
       }
     }
     inferred[j] = occluded;

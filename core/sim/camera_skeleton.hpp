@@ -24,7 +24,10 @@
 //  2. occlusion: a joint whose projected pixel has a depth more than occlusion_margin_m
 //     nearer than the joint (or that projects outside the image) is INFERRED and gets an
 //     extra bias of inferred_error_m; an inferred shoulder drops by inferred_shoulder_drop_m
-//     along `down_K`;
+//     along `down_K`. The trunk's joints (SpineBase, SpineMid, SpineShoulder, Neck, the hips)
+//     lie deeper in the body than the margin, so the trunk's own surface in front of one does
+//     not hide it: only another part (an arm, a hand, the head) does. The SDK finds a joint
+//     from the pixels of its own body part (Shotton et al. 2011), which the trunk shows;
 //  3. a smooth per-joint bias of fixed length (upper-limb joints: uniform in
 //     [upper_limb_bias_min_m, upper_limb_bias_max_m], other joints in [other_bias_min_m,
 //     other_bias_max_m]) whose direction turns slowly (period bias_period_s) about a random
@@ -85,12 +88,17 @@ Eigen::Matrix3Xd camera_joints_from_smpl(const SmplJointsK& smpl);
 
 class CameraSkeletonSimulator {
  public:
-  CameraSkeletonSimulator(const raycast::DepthCamera& camera, const CameraSkeletonOptions& options, std::uint64_t seed);
+  // `rendered` is the mesh whose faces the renders' face images index (its skinning weights
+  // say which body part each face belongs to).
+  CameraSkeletonSimulator(const raycast::DepthCamera& camera, const CameraSkeletonOptions& options, std::uint64_t seed,
+                          const body::SmplModel& rendered);
 
   // One frame. depth_mm is the depth image the SDK sees (width x height of the camera, 0 =
-  // nothing), used for the occlusion test. t_us is also the time of the slow bias.
-  v1::SkeletonFrame simulate(const SmplJointsK& smpl, const std::vector<uint16_t>& depth_mm, std::int64_t frame_index,
-                             std::int64_t t_us, std::uint32_t body_id) const;
+  // nothing), face the subject's face seen at each pixel (-1: not the subject; RenderImages::face),
+  // both used for the occlusion test. t_us is also the time of the slow bias.
+  v1::SkeletonFrame simulate(const SmplJointsK& smpl, const std::vector<uint16_t>& depth_mm,
+                             const std::vector<std::int32_t>& face, std::int64_t frame_index, std::int64_t t_us,
+                             std::uint32_t body_id) const;
 
  private:
   raycast::DepthCamera camera_;
@@ -100,6 +108,7 @@ class CameraSkeletonSimulator {
   std::array<double, kCameraJointCount> bias_length_m_{};
   std::array<Eigen::Vector3d, kCameraJointCount> bias_u_, bias_v_, inferred_direction_;
   std::array<double, kCameraJointCount> bias_phase_{};
+  std::vector<std::int8_t> joint_of_face_;  // the SMPL joint whose bone carries each face
 };
 
 }  // namespace posefuse::sim

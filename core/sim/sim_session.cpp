@@ -197,7 +197,7 @@ class FrameWorker {
         body_index, body_index_encoding(options_.depth_encoding), plan.t_us, kDepthZstdLevel));
     lap("depth, body index: encode (zstd or PNG)");
     out.chunks.emplace_back().mutable_skeleton()->CopyFrom(
-        skeleton_.simulate(joints, noisy.depth_mm, plan.index, plan.t_us, 0));
+        skeleton_.simulate(joints, noisy.depth_mm, images_.face, plan.index, plan.t_us, 0));
     lap("skeleton");
     if (color_) {
       const cv::Mat bgr = color_->render(vertices_K, plan.index);
@@ -635,7 +635,7 @@ SimTruth simulate_session(const SimSessionOptions& requested, session::ChunkSink
 
   // Frames on `threads` workers; each frame's numbers depend only on its index.
   const raycast::DepthCamera camera(options.depth_intrinsics);
-  const CameraSkeletonSimulator skeleton(camera, options.skeleton, options.seed);
+  const CameraSkeletonSimulator skeleton(camera, options.skeleton, options.seed, *render.model);
   const Vec3 floor_normal_K = K_from_Body.linear() * Vec3::UnitY();
   const std::vector<RoomPlane> room = {RoomPlane{floor_normal_K, floor_normal_K.dot(K_from_Body.translation())},
                                        RoomPlane{camera_tilt(options) * Vec3::UnitZ(), options.wall_distance_m}};

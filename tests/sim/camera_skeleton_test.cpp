@@ -31,10 +31,13 @@ constexpr double kDeg = pi / 180.0;
 struct PosedScene {
   SmplJointsK joints;
   std::vector<uint16_t> depth_mm;
+  std::vector<std::int32_t> face;
 };
 
+const body::SmplModel& template_model() { return *body::shared_template(body::Sex::kMale); }
+
 PosedScene posed_scene(double spine_deg = 0.0, double yaw_deg = 0.0) {
-  static const auto model = body::make_template(body::Sex::kMale);
+  const auto model = body::shared_template(body::Sex::kMale);
   const body::PoseLayout layout = body::PoseLayout::all_joints();
   body::BodyEvaluator eval(model, layout);
   Eigen::VectorXd theta = layout.zero();
@@ -49,7 +52,7 @@ PosedScene posed_scene(double spine_deg = 0.0, double yaw_deg = 0.0) {
   scene.update_vertices(eval.vertices());
   raycast::RenderImages images;
   scene.render(small_camera(), 0, images);
-  return {smpl_joints_in_camera(eval, Eigen::Isometry3d::Identity()), images.depth_mm};
+  return {smpl_joints_in_camera(eval, Eigen::Isometry3d::Identity()), images.depth_mm, images.face};
 }
 
 CameraSkeletonOptions error_free() {
@@ -80,8 +83,8 @@ constexpr std::int64_t kFrameUs = 33333;
 
 TEST(CameraSkeleton, ErrorFreeFrameHasSdkStructure) {
   const PosedScene scene = posed_scene();
-  const CameraSkeletonSimulator sim(small_camera(), error_free(), 1);
-  const v1::SkeletonFrame f = sim.simulate(scene.joints, scene.depth_mm, 0, 1000, 2);
+  const CameraSkeletonSimulator sim(small_camera(), error_free(), 1, template_model());
+  const v1::SkeletonFrame f = sim.simulate(scene.joints, scene.depth_mm, scene.face, 0, 1000, 2);
   ASSERT_EQ(f.joints_size(), kCameraJointCount);
   EXPECT_EQ(f.t_us(), 1000);
   EXPECT_EQ(f.body_id(), 2u);
@@ -109,12 +112,12 @@ TEST(CameraSkeleton, UpperLimbErrorWithinConfiguredBand) {
   const PosedScene scene = posed_scene();
   CameraSkeletonOptions options;
   options.jump_probability = 0;
-  const CameraSkeletonSimulator sim(small_camera(), options, 17);
+  const CameraSkeletonSimulator sim(small_camera(), options, 17, template_model());
   const Eigen::Matrix3Xd truth = camera_joints_from_smpl(scene.joints);
   const int frames = 600;
   std::array<double, kCameraJointCount> sum_error{};
   for (int k = 0; k < frames; ++k) {
-    const v1::SkeletonFrame f = sim.simulate(scene.joints, scene.depth_mm, k, k * kFrameUs, 0);
+    const v1::SkeletonFrame f = sim.simulate(scene.joints, scene.depth_mm, scene.face, k, k * kFrameUs, 0);
     for (int j = 0; j < kCameraJointCount; ++j) {
       ASSERT_EQ(f.joints(j).state(), v1::SkeletonJoint::TRACKED) << "joint " << j;
       sum_error[j] += (position(f, j) - truth.col(j)).norm();
@@ -152,12 +155,12 @@ TEST(CameraSkeleton, OccludedJointsAreInferredWithLargerError) {
       scene.depth_mm[static_cast<std::size_t>(row) * camera.width() + col] = 1500;
   }
   const Eigen::Matrix3Xd truth = camera_joints_from_smpl(scene.joints);
-  const CameraSkeletonSimulator sim(camera, CameraSkeletonOptions{}, 5);
+  const CameraSkeletonSimulator sim(camera, CameraSkeletonOptions{}, 5, template_model());
   std::array<int, kCameraJointCount> inferred_frames{};
   double inferred_error = 0, tracked_error = 0;
   int inferred_count = 0, tracked_count = 0;
   for (int k = 0; k < 300; ++k) {
-    const v1::SkeletonFrame f = sim.simulate(scene.joints, scene.depth_mm, k, k * kFrameUs, 0);
+    const v1::SkeletonFrame f = sim.simulate(scene.joints, scene.depth_mm, scene.face, k, k * kFrameUs, 0);
     for (int j = 0; j < kCameraJointCount; ++j) {
       const bool inferred = f.joints(j).state() == v1::SkeletonJoint::INFERRED;
       inferred_frames[j] += inferred;
@@ -181,8 +184,8 @@ TEST(CameraSkeleton, OccludedJointsAreInferredWithLargerError) {
   // An inferred shoulder is lowered.
   CameraSkeletonOptions drop_only = error_free();
   drop_only.inferred_shoulder_drop_m = 0.05;
-  const v1::SkeletonFrame f =
-      CameraSkeletonSimulator(camera, drop_only, 5).simulate(scene.joints, scene.depth_mm, 0, 0, 0);
+  const v1::SkeletonFrame f = CameraSkeletonSimulator(camera, drop_only, 5, template_model())
+                                  .simulate(scene.joints, scene.depth_mm, scene.face, 0, 0, 0);
   EXPECT_NEAR(position(f, kShoulderLeft).y(), truth(1, kShoulderLeft) - 0.05, 1e-9);
   EXPECT_NEAR(position(f, kShoulderRight).y(), truth(1, kShoulderRight), 1e-9);
 }
@@ -192,8 +195,8 @@ TEST(CameraSkeleton, FarArmOfSideViewIsInferred) {
   const PosedScene scene = posed_scene(0.0, 90.0);
   const Eigen::Matrix3Xd truth = camera_joints_from_smpl(scene.joints);
   ASSERT_GT(truth(2, kElbowLeft), truth(2, kElbowRight) + 0.3);
-  const v1::SkeletonFrame f =
-      CameraSkeletonSimulator(small_camera(), error_free(), 2).simulate(scene.joints, scene.depth_mm, 0, 0, 0);
+  const v1::SkeletonFrame f = CameraSkeletonSimulator(small_camera(), error_free(), 2, template_model())
+                                  .simulate(scene.joints, scene.depth_mm, scene.face, 0, 0, 0);
   for (int j : {kElbowLeft, kWristLeft, kHandLeft}) EXPECT_EQ(f.joints(j).state(), v1::SkeletonJoint::INFERRED) << j;
   for (int j : {kShoulderRight, kElbowRight, kWristRight, kHandRight, kHead}) {
     EXPECT_EQ(f.joints(j).state(), v1::SkeletonJoint::TRACKED) << j;
@@ -206,12 +209,13 @@ TEST(CameraSkeleton, JumpRateNearConfigured) {
   with_jumps.jump_probability = 0.03;
   CameraSkeletonOptions without = with_jumps;
   without.jump_probability = 0;
-  const CameraSkeletonSimulator a(small_camera(), with_jumps, 9), b(small_camera(), without, 9);
+  const CameraSkeletonSimulator a(small_camera(), with_jumps, 9, template_model()),
+      b(small_camera(), without, 9, template_model());
   const int frames = 3000;
   int jumped_frames = 0;
   for (int k = 0; k < frames; ++k) {
-    const v1::SkeletonFrame fa = a.simulate(scene.joints, scene.depth_mm, k, k * kFrameUs, 0);
-    const v1::SkeletonFrame fb = b.simulate(scene.joints, scene.depth_mm, k, k * kFrameUs, 0);
+    const v1::SkeletonFrame fa = a.simulate(scene.joints, scene.depth_mm, scene.face, k, k * kFrameUs, 0);
+    const v1::SkeletonFrame fb = b.simulate(scene.joints, scene.depth_mm, scene.face, k, k * kFrameUs, 0);
     int moved = 0;
     for (int j = 0; j < kCameraJointCount; ++j) {
       const double d = (position(fa, j) - position(fb, j)).norm();
@@ -233,11 +237,12 @@ TEST(CameraSkeleton, HandOrientationSometimesFlipped) {
   const PosedScene scene = posed_scene();
   CameraSkeletonOptions flips = error_free();
   flips.hand_flip_probability = 0.05;
-  const CameraSkeletonSimulator a(small_camera(), flips, 4), b(small_camera(), error_free(), 4);
+  const CameraSkeletonSimulator a(small_camera(), flips, 4, template_model()),
+      b(small_camera(), error_free(), 4, template_model());
   int flipped = 0, hands = 0;
   for (int k = 0; k < 2000; ++k) {
-    const v1::SkeletonFrame fa = a.simulate(scene.joints, scene.depth_mm, k, k * kFrameUs, 0);
-    const v1::SkeletonFrame fb = b.simulate(scene.joints, scene.depth_mm, k, k * kFrameUs, 0);
+    const v1::SkeletonFrame fa = a.simulate(scene.joints, scene.depth_mm, scene.face, k, k * kFrameUs, 0);
+    const v1::SkeletonFrame fb = b.simulate(scene.joints, scene.depth_mm, scene.face, k, k * kFrameUs, 0);
     for (int j : {kHandLeft, kHandRight}) {
       ++hands;
       const Eigen::Quaterniond qa = orientation(fa, j), qb = orientation(fb, j);
@@ -254,13 +259,50 @@ TEST(CameraSkeleton, HandOrientationSometimesFlipped) {
   EXPECT_NEAR(rate, flips.hand_flip_probability, 0.015);
 }
 
+TEST(CameraSkeleton, TrunkJointsAreHiddenOnlyByAnotherPart) {
+  const PosedScene scene = posed_scene();
+  const Eigen::Matrix3Xd truth = camera_joints_from_smpl(scene.joints);
+  // No margin: every joint's own surface lies in front of it. The trunk's own surface does not
+  // hide a trunk joint; a limb joint has only the depth rule.
+  CameraSkeletonOptions no_margin = error_free();
+  no_margin.occlusion_margin_m = 0;
+  const CameraSkeletonSimulator sim(small_camera(), no_margin, 6, template_model());
+  const v1::SkeletonFrame f = sim.simulate(scene.joints, scene.depth_mm, scene.face, 0, 0, 0);
+  for (int j : {kSpineBase, kSpineMid, kSpineShoulder, kHipLeft, kHipRight}) {
+    EXPECT_EQ(f.joints(j).state(), v1::SkeletonJoint::TRACKED) << j;
+  }
+  for (int j : {kElbowLeft, kElbowRight}) EXPECT_EQ(f.joints(j).state(), v1::SkeletonJoint::INFERRED) << j;
+
+  // A hand held 20 cm in front of SpineMid: another part, which hides it.
+  int hand_face = -1;
+  for (int face = 0; face < template_model().num_faces() && hand_face < 0; ++face) {
+    if (body::dominant_joint(template_model(), template_model().faces(0, face)) == body::kLeftWrist) hand_face = face;
+  }
+  ASSERT_GE(hand_face, 0);
+  const raycast::DepthCamera camera = small_camera();
+  const Eigen::Vector2d uv = *camera.project(truth.col(kSpineMid));
+  PosedScene covered = scene;
+  for (int row = static_cast<int>(uv.y()) - 3; row <= static_cast<int>(uv.y()) + 3; ++row) {
+    for (int col = static_cast<int>(uv.x()) - 3; col <= static_cast<int>(uv.x()) + 3; ++col) {
+      const auto pixel = static_cast<std::size_t>(row) * camera.width() + col;
+      covered.depth_mm[pixel] = static_cast<uint16_t>(std::lround(1000 * (truth(2, kSpineMid) - 0.2)));
+      covered.face[pixel] = hand_face;
+    }
+  }
+  const CameraSkeletonSimulator standard(small_camera(), error_free(), 6, template_model());
+  EXPECT_EQ(standard.simulate(scene.joints, scene.depth_mm, scene.face, 0, 0, 0).joints(kSpineMid).state(),
+            v1::SkeletonJoint::TRACKED);
+  EXPECT_EQ(standard.simulate(covered.joints, covered.depth_mm, covered.face, 0, 0, 0).joints(kSpineMid).state(),
+            v1::SkeletonJoint::INFERRED);
+}
+
 TEST(CameraSkeleton, SpineStaysStraightWhenBent) {
   const PosedScene scene = posed_scene(15.0);
   const Eigen::Matrix3Xd truth = camera_joints_from_smpl(scene.joints);
   const Eigen::Vector3d base = truth.col(kSpineBase), top = truth.col(kSpineShoulder);
   auto off_line_m = [&](const Eigen::Vector3d& p) { return (p - base).cross((top - base).normalized()).norm(); };
-  const v1::SkeletonFrame f =
-      CameraSkeletonSimulator(small_camera(), error_free(), 3).simulate(scene.joints, scene.depth_mm, 0, 0, 0);
+  const v1::SkeletonFrame f = CameraSkeletonSimulator(small_camera(), error_free(), 3, template_model())
+                                  .simulate(scene.joints, scene.depth_mm, scene.face, 0, 0, 0);
   std::printf("bent spine: SMPL spine2 %.1f mm off the base-shoulder line, reported SpineMid %.3f mm\n",
               1000 * off_line_m(truth.col(kSpineMid)), 1000 * off_line_m(position(f, kSpineMid)));
   EXPECT_GT(off_line_m(truth.col(kSpineMid)), 0.01);
@@ -269,30 +311,35 @@ TEST(CameraSkeleton, SpineStaysStraightWhenBent) {
 
 TEST(CameraSkeleton, DeterministicForSeedAndFrame) {
   const PosedScene scene = posed_scene();
-  const CameraSkeletonSimulator a(small_camera(), CameraSkeletonOptions{}, 8),
-      b(small_camera(), CameraSkeletonOptions{}, 8);
-  const CameraSkeletonSimulator c(small_camera(), CameraSkeletonOptions{}, 9);
-  const std::string fa = a.simulate(scene.joints, scene.depth_mm, 5, 5 * kFrameUs, 0).SerializeAsString();
-  EXPECT_EQ(fa, b.simulate(scene.joints, scene.depth_mm, 5, 5 * kFrameUs, 0).SerializeAsString());
-  EXPECT_NE(fa, a.simulate(scene.joints, scene.depth_mm, 6, 5 * kFrameUs, 0).SerializeAsString());
-  EXPECT_NE(fa, c.simulate(scene.joints, scene.depth_mm, 5, 5 * kFrameUs, 0).SerializeAsString());
+  const CameraSkeletonSimulator a(small_camera(), CameraSkeletonOptions{}, 8, template_model()),
+      b(small_camera(), CameraSkeletonOptions{}, 8, template_model());
+  const CameraSkeletonSimulator c(small_camera(), CameraSkeletonOptions{}, 9, template_model());
+  const std::string fa = a.simulate(scene.joints, scene.depth_mm, scene.face, 5, 5 * kFrameUs, 0).SerializeAsString();
+  EXPECT_EQ(fa, b.simulate(scene.joints, scene.depth_mm, scene.face, 5, 5 * kFrameUs, 0).SerializeAsString());
+  EXPECT_NE(fa, a.simulate(scene.joints, scene.depth_mm, scene.face, 6, 5 * kFrameUs, 0).SerializeAsString());
+  EXPECT_NE(fa, c.simulate(scene.joints, scene.depth_mm, scene.face, 5, 5 * kFrameUs, 0).SerializeAsString());
 }
 
 TEST(CameraSkeleton, RejectsBadInput) {
   const PosedScene scene = posed_scene();
   CameraSkeletonOptions bad;
   bad.upper_limb_bias_max_m = 0.01;  // below the minimum
-  EXPECT_THROW(CameraSkeletonSimulator(small_camera(), bad, 1), Error);
+  EXPECT_THROW(CameraSkeletonSimulator(small_camera(), bad, 1, template_model()), Error);
   bad = CameraSkeletonOptions{};
   bad.jump_probability = 2;
   EXPECT_THROW(validate(bad), Error);
   bad = CameraSkeletonOptions{};
   bad.down_K = Eigen::Vector3d(0, 0, 0);
   EXPECT_THROW(validate(bad), Error);
-  const CameraSkeletonSimulator sim(small_camera(), CameraSkeletonOptions{}, 1);
+  const CameraSkeletonSimulator sim(small_camera(), CameraSkeletonOptions{}, 1, template_model());
   std::vector<uint16_t> short_depth(scene.depth_mm.begin(), scene.depth_mm.end() - 1);
-  EXPECT_THROW(sim.simulate(scene.joints, short_depth, 0, 0, 0), Error);
+  EXPECT_THROW(sim.simulate(scene.joints, short_depth, scene.face, 0, 0, 0), Error);
+  std::vector<std::int32_t> short_face(scene.face.begin(), scene.face.end() - 1);
+  EXPECT_THROW(sim.simulate(scene.joints, scene.depth_mm, short_face, 0, 0, 0), Error);
+  std::vector<std::int32_t> foreign_face = scene.face;
+  foreign_face[foreign_face.size() / 2] = template_model().num_faces();  // a face of some other mesh
+  EXPECT_THROW(sim.simulate(scene.joints, scene.depth_mm, foreign_face, 0, 0, 0), Error);
   SmplJointsK nan_joints = scene.joints;
   nan_joints.positions_K(0, 3) = std::nan("");
-  EXPECT_THROW(sim.simulate(nan_joints, scene.depth_mm, 0, 0, 0), Error);
+  EXPECT_THROW(sim.simulate(nan_joints, scene.depth_mm, scene.face, 0, 0, 0), Error);
 }
