@@ -325,11 +325,7 @@ BodyTracker::Output BodyTracker::fit(BodyFitFrame& frame, const ForearmOrientati
     // wrists are 12-15 cm off). On paper 1's protocol (seeds 1 / 2) keeping it took the arms' six
     // joints from 21.2 / 22.8 to 18.8 / 18.2 mm; restarting from the last pose below the threshold
     // plus the skeleton start gave 20.2 / 18.3 mm (docs/fitting.md, "Paper 1's protocol").
-    if (energy > options_.lost_energy) {
-      ++frames_lost_;
-    } else if (!(energy <= options_.trusted_energy)) {
-      ++frames_untrusted_;
-    }
+    if (energy > options_.lost_energy) ++frames_lost_;
     previous_theta_ = best->theta;
     previous_t_us_ = frame.t_us;
     fitted_.push_back({frame.t_us, *frame.skeleton, energy, directions.left_K || directions.right_K});
@@ -359,7 +355,22 @@ FittedBodyFrame BodyTracker::release(const Eigen::VectorXd& theta, const Forearm
   out.t_us = f.t_us;
   out.energy = f.energy;
   out.lost = f.energy > options_.lost_energy;
-  if (!(f.energy <= options_.trusted_energy)) cap_confidence(out, untrusted_fit_confidence());
+  // The smoothed pose averages the fits of its window (PoseSmoother: centred, shrinking at the
+  // ends), so it carries part of any of their errors: it is trusted only where each of them is.
+  const auto half = static_cast<std::size_t>(options_.smoothing.window_frames / 2);
+  const std::size_t reach = std::min({half, released_energies_.size(), fitted_.size()});
+  const auto trusted = [&](double energy) { return energy <= options_.trusted_energy; };
+  bool window_trusted = trusted(f.energy);
+  for (std::size_t k = 0; k < reach; ++k) {
+    window_trusted =
+        window_trusted && trusted(released_energies_[released_energies_.size() - 1 - k]) && trusted(fitted_[k].energy);
+  }
+  if (!window_trusted) {
+    cap_confidence(out, untrusted_fit_confidence());
+    if (!out.lost) ++frames_untrusted_;
+  }
+  released_energies_.push_back(f.energy);
+  if (released_energies_.size() > half) released_energies_.pop_front();
   out.imu_used = f.imu_used;
   return out;
 }

@@ -48,7 +48,8 @@ struct BodyTrackerOptions {
   StartExtrapolationOptions extrapolation;
   double skeleton_start_energy = 0;  // needs_skeleton_start; 0: both starts always, on two threads
   double lost_energy = 0;            // above it a frame's tracking is lost
-  // Above it (or at a NaN energy) a frame's confidences are capped at untrusted_fit_confidence().
+  // A released frame's pose averages the fits of its smoothing window, so where any of them lies
+  // above it (or at a NaN energy) the frame's confidences are capped at untrusted_fit_confidence().
   double trusted_energy = std::numeric_limits<double>::infinity();
 };
 
@@ -130,7 +131,8 @@ class BodyTracker {
 
   std::uint64_t frames_fitted() const { return frames_fitted_; }
   std::uint64_t frames_lost() const { return frames_lost_; }
-  // Frames fitted above trusted_energy (or at a NaN energy) but not lost.
+  // Released frames not lost whose smoothing window holds a fit above trusted_energy (or at a
+  // NaN energy): their confidences were capped.
   std::uint64_t frames_untrusted() const { return frames_untrusted_; }
 
   // With `on`, every fitted frame from then on appends a BodyFitFrameStats.
@@ -157,6 +159,8 @@ class BodyTracker {
   std::size_t calibration_pixel_bytes_ = 0;  // their images' buffers
   bool personalised_ = false;
   std::deque<Fitted> fitted_;
+  // The energies of the last released frames, as many as the smoothing window reaches back.
+  std::deque<double> released_energies_;
   std::optional<Eigen::VectorXd> previous_theta_;
   std::int64_t previous_t_us_ = 0;
   // The fit before previous_theta_, while both belong to one track (the constant-velocity start).

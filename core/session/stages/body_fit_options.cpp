@@ -71,8 +71,8 @@ const OptionTable& body_fit_option_table() {
          .type = OptionType::kReal,
          .default_value = "10",
          .min = above(0),
-         .description = "frames fitted above this energy (eq. 4) give their joints and forearms a confidence of at "
-                        "most " +
+         .description = "frames whose smoothing window (fit.smoothing_frames) holds a fit above this energy "
+                        "(eq. 4) give their joints and forearms a confidence of at most " +
                         fixed_text(fit::untrusted_fit_confidence(), 4) +
                         " (FIT_UNTRUSTED); above fit.lost_energy none"},
         {.key = kFitMaxIterationsKey,

@@ -291,7 +291,8 @@ void BodyFitStage::finish(StageOutput& out) {
   if (tracker_->frames_untrusted() > 0) {
     out.warn("FIT_UNTRUSTED", "fit",
              std::to_string(tracker_->frames_untrusted()) + " of " + std::to_string(fitted) +
-                 " frames fitted at an energy above " + format_double(options_.trusted_energy) +
+                 " frames fitted, or smoothed with a neighbour fitted, at an energy above " +
+                 format_double(options_.trusted_energy) +
                  " (fit.trusted_energy) but not lost: the fit matches their depth less well than fits measured to "
                  "be within 15 deg; their joints and forearms have confidence at most " +
                  fixed_text(fit::untrusted_fit_confidence(), 4));
