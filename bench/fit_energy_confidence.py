@@ -2,7 +2,7 @@
 """Joint-angle errors by the body fit's energy: the evidence for fit.trusted_energy and for the
 confidence of untrusted and lost fits (docs/fitting.md, "A fit's energy").
 
-    bench/fit_energy_confidence.py [--trusted-energy E] DIR [DIR ...]
+    bench/fit_energy_confidence.py [--trusted-energy E] [--smoothing-frames N] DIR [DIR ...]
 
 DIR: a bench/joint_angles.sh KEEP directory (each session's NAME.out results with
 fit_energy.csv and NAME.gt truth). Run the sessions with FIT_OPTIONS='fit.trusted_energy=100' so
@@ -20,6 +20,12 @@ the confidence that bound gives (2^-(bound / 15 deg)^2, forearm::confidence_from
 for the confident values of frames at or below the trusted energy, between it and the lost
 energy, and for every value of the frames above the lost energy (whose confidences the lost fit
 has already set to 0).
+
+Third table: every angle's confident values (pronation too) and those more than 15 deg off, with
+the trusted energy applied as the server applies it, to every fit of the frame's smoothing window
+(the frame and --smoothing-frames / 2 neighbours each side in fit order, the window shrinking at
+the session's ends as fit::PoseSmoother's), beside the frame's own fit alone: a value stays
+confident where its run gave it confidence >= 0.5 and the rule trusts its frame.
 """
 import collections
 import csv
@@ -53,7 +59,22 @@ def percentile_99(sorted_errors):
     return sorted_errors[int(0.99 * (len(sorted_errors) - 1))]
 
 
+SMOOTHING_FRAMES = 3  # fit.smoothing_frames' default; --smoothing-frames N
+
+
+def window_energies(energies):
+    """The largest energy of each frame's smoothing window (NaN if any is NaN), in fit order."""
+    half = SMOOTHING_FRAMES // 2
+    out = []
+    for i in range(len(energies)):
+        reach = min(half, i, len(energies) - 1 - i)
+        window = energies[i - reach:i + reach + 1]
+        out.append(float("nan") if any(math.isnan(e) for e in window) else max(window))
+    return out
+
+
 def main(works):
+    by_rule = {"own": [0, 0], "window": [0, 0]}  # confident values, beyond 15 deg
     frames = collections.Counter()
     confident = collections.defaultdict(lambda: collections.defaultdict(list))  # angle -> band -> |error|
     lost_errors = []
@@ -64,7 +85,9 @@ def main(works):
             if not os.path.exists(energy_file):
                 continue
             sessions += 1
-            energy = {int(r["t_us"]): float(r["fit_energy"]) for r in csv.DictReader(open(energy_file))}
+            energy_rows = [(int(r["t_us"]), float(r["fit_energy"])) for r in csv.DictReader(open(energy_file))]
+            energy = dict(energy_rows)
+            window = dict(zip((t for t, _ in energy_rows), window_energies([e for _, e in energy_rows])))
             truth = {r["t_s"]: r for r in csv.DictReader(open(out[: -len(".out")] + ".gt/joint_angles.csv"))}
             for row in csv.DictReader(open(os.path.join(out, "joint_angles.csv"))):
                 true_row = truth.get(row["t_s"])
@@ -73,6 +96,16 @@ def main(works):
                     continue
                 b = band_of(e)
                 frames[b] += 1
+                trusted = {"own": e <= TRUSTED_ENERGY, "window": window[round(float(row["t_s"]) * 1e6)] <= TRUSTED_ENERGY}
+                for column in [c for angle in ANGLES + ["pronation"] for c in columns(angle)]:
+                    if row[column] == "" or true_row[column] == "" or float(row[column + "_confidence"]) < 0.5:
+                        continue
+                    error = abs(float(row[column]) - float(true_row[column])) % 360
+                    error = min(error, 360 - error)
+                    for rule, counts in by_rule.items():
+                        if trusted[rule]:
+                            counts[0] += 1
+                            counts[1] += error > 15
                 for angle in ANGLES:
                     for column in columns(angle):
                         if row[column] == "" or true_row[column] == "":
@@ -109,6 +142,12 @@ def main(works):
         errors = sorted(x for angle in ANGLES for b, v in confident[angle].items() if in_group(b) for x in v)
         report(name, errors)
     report(f"E > {LOST_ENERGY:g} (lost), every value", sorted(lost_errors))
+    print()
+    print(f"| trusted where (E <= {TRUSTED_ENERGY:g}) | confident values | beyond 15 deg |")
+    print("|---|---:|---:|")
+    for rule, name in (("own", "the frame's own fit"), ("window", "every fit of its smoothing window")):
+        n, beyond = by_rule[rule]
+        print(f"| {name} | {n} | {beyond} ({100 * beyond / max(n, 1):.2f} %) |")
 
 
 def report(name, errors):
@@ -122,8 +161,11 @@ def report(name, errors):
 
 if __name__ == "__main__":
     args = sys.argv[1:]
-    if len(args) >= 2 and args[0] == "--trusted-energy":
-        TRUSTED_ENERGY = float(args[1])
+    while len(args) >= 2 and args[0] in ("--trusted-energy", "--smoothing-frames"):
+        if args[0] == "--trusted-energy":
+            TRUSTED_ENERGY = float(args[1])
+        else:
+            SMOOTHING_FRAMES = int(args[1])
         args = args[2:]
     if not args:
         sys.exit(__doc__)
