@@ -67,6 +67,7 @@ struct StateCount {
     error_sum[state] += error_m;
   }
   std::size_t total() const { return n[0] + n[1] + n[2] + n[3]; }
+  double mean_mm(int state) const { return n[state] ? 1e3 * error_sum[state] / static_cast<double>(n[state]) : NAN; }
 };
 
 enum Condition { kAll = 0, kOccluded, kVisible, kConditions };
@@ -215,11 +216,10 @@ int main(int argc, char** argv) {
   for (int c = 0; c < kConditions; ++c) {
     for (int g = 0; g < kGroups; ++g) {
       const StateCount& s = t.states[c][g];
-      const auto mean_mm = [&](int state) { return s.n[state] ? 1e3 * s.error_sum[state] / s.n[state] : NAN; };
       std::printf("| %s | %s | %zu | %.1f | %.1f | %.1f | %.1f / %.1f |\n", kConditionNames[c], kGroupNames[g],
                   s.total(), pct(s.n[v1::SkeletonJoint::TRACKED], s.total()),
                   pct(s.n[v1::SkeletonJoint::INFERRED], s.total()), pct(s.n[v1::SkeletonJoint::NOT_TRACKED], s.total()),
-                  mean_mm(v1::SkeletonJoint::TRACKED), mean_mm(v1::SkeletonJoint::INFERRED));
+                  s.mean_mm(v1::SkeletonJoint::TRACKED), s.mean_mm(v1::SkeletonJoint::INFERRED));
     }
   }
   std::printf(
@@ -227,10 +227,9 @@ int main(int argc, char** argv) {
       "| --- | --- | --- | --- | --- |\n");
   for (int k = 0; k < kTrunkJoints; ++k) {
     const StateCount& s = t.trunk[k];
-    const auto mean_mm = [&](int state) { return s.n[state] ? 1e3 * s.error_sum[state] / s.n[state] : NAN; };
     std::printf("| %s | %zu | %.1f | %.1f | %.1f / %.1f |\n", kTrunkNames[k], s.total(),
                 pct(s.n[v1::SkeletonJoint::TRACKED], s.total()), pct(s.n[v1::SkeletonJoint::INFERRED], s.total()),
-                mean_mm(v1::SkeletonJoint::TRACKED), mean_mm(v1::SkeletonJoint::INFERRED));
+                s.mean_mm(v1::SkeletonJoint::TRACKED), s.mean_mm(v1::SkeletonJoint::INFERRED));
   }
   return 0;
 }

@@ -73,6 +73,14 @@ def window_energies(energies):
     return out
 
 
+def angle_error(row, true_row, column):
+    """|result - truth| of one angle column in degrees, wrapped to 0..180; None where either is empty."""
+    if row[column] == "" or true_row[column] == "":
+        return None
+    error = abs(float(row[column]) - float(true_row[column])) % 360
+    return min(error, 360 - error)
+
+
 def main(works):
     by_rule = {"own": [0, 0], "window": [0, 0]}  # confident values, beyond 15 deg
     frames = collections.Counter()
@@ -91,27 +99,26 @@ def main(works):
             truth = {r["t_s"]: r for r in csv.DictReader(open(out[: -len(".out")] + ".gt/joint_angles.csv"))}
             for row in csv.DictReader(open(os.path.join(out, "joint_angles.csv"))):
                 true_row = truth.get(row["t_s"])
-                e = energy.get(round(float(row["t_s"]) * 1e6))
+                t_us = round(float(row["t_s"]) * 1e6)
+                e = energy.get(t_us)
                 if true_row is None or e is None:
                     continue
                 b = band_of(e)
                 frames[b] += 1
-                trusted = {"own": e <= TRUSTED_ENERGY, "window": window[round(float(row["t_s"]) * 1e6)] <= TRUSTED_ENERGY}
+                trusted = {"own": e <= TRUSTED_ENERGY, "window": window[t_us] <= TRUSTED_ENERGY}
                 for column in [c for angle in ANGLES + ["pronation"] for c in columns(angle)]:
-                    if row[column] == "" or true_row[column] == "" or float(row[column + "_confidence"]) < 0.5:
+                    error = angle_error(row, true_row, column)
+                    if error is None or float(row[column + "_confidence"]) < 0.5:
                         continue
-                    error = abs(float(row[column]) - float(true_row[column])) % 360
-                    error = min(error, 360 - error)
                     for rule, counts in by_rule.items():
                         if trusted[rule]:
                             counts[0] += 1
                             counts[1] += error > 15
                 for angle in ANGLES:
                     for column in columns(angle):
-                        if row[column] == "" or true_row[column] == "":
+                        error = angle_error(row, true_row, column)
+                        if error is None:
                             continue
-                        error = abs(float(row[column]) - float(true_row[column])) % 360
-                        error = min(error, 360 - error)
                         if b == len(EDGES) - 1:
                             lost_errors.append(error)
                         elif float(row[column + "_confidence"]) >= 0.5:
