@@ -26,6 +26,14 @@ namespace {
 // 0.5 (docs/benchmarks.md, "Angles read from untracked joints").
 constexpr double kUntrackedConfidence = 0.5;
 constexpr double kUntrackedHandConfidence = 0.0;
+// A joint the camera tracks but puts more than kCameraDisagreementM from the fit is a different
+// case from one the camera cannot see: there the camera's own view contradicts the fit. Unless
+// the camera has gone off track (its error beyond 0.29 m in one value in 10^4), the fitted joint
+// is itself about 0.29 - 0.101 = 0.19 m or more from the truth (0.101 m: the camera's published
+// mean error), which turns a 0.3 m segment by some 30 degrees: a 99 % bound of that size has
+// confidence 2^-(30/15)^2 = 0.06, i.e. none (the untracked elbow's 0.5 was measured where
+// nothing contradicted the fit; docs/fitting.md, "Joint confidence").
+constexpr double kOffCameraConfidence = 0.0;
 
 bool is_hand_joint(int camera_joint) {
   switch (camera_joint) {
@@ -109,8 +117,10 @@ FittedBodyFrame make_fitted_body_frame(const Eigen::Matrix3Xd& rest_joints, cons
     const bool tracked = skeleton.tracking[static_cast<size_t>(j)] == JointTracking::kTracked;
     const bool off_camera = tracked && far_from_fit(skeleton, j, camera_joints.col(j));
     if (off_camera) ++out.joints_off_camera;
-    camera_confidence[static_cast<size_t>(j)] =
-        tracked && !off_camera ? 1.0 : (is_hand_joint(j) ? kUntrackedHandConfidence : kUntrackedConfidence);
+    camera_confidence[static_cast<size_t>(j)] = off_camera         ? kOffCameraConfidence
+                                                : tracked          ? 1.0
+                                                : is_hand_joint(j) ? kUntrackedHandConfidence
+                                                                   : kUntrackedConfidence;
     out.camera_joints.push_back({camera_joints.col(j), camera_confidence[static_cast<size_t>(j)]});
   }
   std::array<double, body::kNumJoints> smpl_confidence;

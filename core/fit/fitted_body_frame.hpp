@@ -37,8 +37,9 @@ double untrusted_fit_confidence();
 
 struct FittedJoint {
   Eigen::Vector3d p_K = Eigen::Vector3d::Zero();
-  // 1 where the camera tracks the corresponding joint within kCameraDisagreementM; else 0 for a
-  // wrist or hand, 0.5 for the others (docs/fitting.md, "Joint confidence"). An SMPL joint with no
+  // 1 where the camera tracks the corresponding joint within kCameraDisagreementM, 0 where it
+  // tracks it farther away; where it does not track it, 0 for a wrist or hand and 0.5 for the
+  // others (docs/fitting.md, "Joint confidence"). An SMPL joint with no
   // camera joint (spine1, spine3, the collars, the head) takes the lowest of the nearest ones
   // around it in the kinematic tree.
   double confidence = 0.0;
@@ -61,7 +62,7 @@ struct FittedBodyFrame {
   std::vector<Eigen::Quaterniond> K_from_joint;  // global rotation per SMPL joint (rest T-pose: identity)
   std::vector<FittedForearm> forearms;           // left then right, those with an orientation
   // Camera joints reported TRACKED but farther than kCameraDisagreementM from the SMPL joint they
-  // are: those fitted joints take an untracked joint's confidence.
+  // are: those fitted joints have no confidence.
   int joints_off_camera = 0;
 };
 

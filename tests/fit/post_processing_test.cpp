@@ -271,24 +271,28 @@ TEST(FittedBodyFrame, JointsWithoutACameraJointTakeTheirNeighboursConfidence) {
 }
 
 // A camera joint reported TRACKED far from the fitted joint (a fit folded into a wrong pose, or
-// the camera off track): the camera does not vouch for that fitted joint, which takes an
-// untracked joint's confidence, and the frame counts it. Within kCameraDisagreementM it stays 1.
+// the camera off track): the camera's own view contradicts the fitted joint, which has no
+// confidence then, not even an untracked elbow's 0.5, and the frame counts it. Within
+// kCameraDisagreementM it stays 1.
 TEST(FittedBodyFrame, ATrackedJointFarFromTheFitDoesNotVouchForIt) {
   FacingFit fit;
   const Eigen::Vector3d just_within(0, kCameraDisagreementM - 0.01, 0), beyond(0, 0, kCameraDisagreementM + 0.01);
   fit.skeleton.positions_K[kWristLeft] += beyond;  // the camera's wrist where the fit's is not
   fit.skeleton.positions_K[kElbowLeft] += beyond;
+  fit.skeleton.positions_K[kShoulderLeft] += beyond;
   fit.skeleton.positions_K[kWristRight] += just_within;  // the camera's usual error
   fit.skeleton.positions_K[kElbowRight] += beyond;
   fit.skeleton.tracking[kElbowRight] = JointTracking::kInferred;  // untracked anyway: not counted
   const FittedBodyFrame frame = fit.fitted();
   EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kLeftWrist].confidence, 0.0);
-  EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kLeftElbow].confidence, 0.5);
+  EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kLeftElbow].confidence, 0.0);
+  EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kLeftShoulder].confidence, 0.0);
   EXPECT_DOUBLE_EQ(frame.camera_joints[kWristLeft].confidence, 0.0);
+  EXPECT_DOUBLE_EQ(frame.camera_joints[kElbowLeft].confidence, 0.0);
   EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kRightWrist].confidence, 1.0);
   EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kRightElbow].confidence, 0.5);
-  EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kLeftShoulder].confidence, 1.0);
-  EXPECT_EQ(frame.joints_off_camera, 2);
+  EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kRightShoulder].confidence, 1.0);
+  EXPECT_EQ(frame.joints_off_camera, 3);
 }
 
 // An untrusted fit's frame (energy above the tracker's trusted_energy): every joint and forearm

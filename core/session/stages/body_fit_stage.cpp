@@ -286,7 +286,7 @@ void BodyFitStage::finish(StageOutput& out) {
              std::to_string(frames_off_camera_) + " of " + std::to_string(fitted) +
                  " frames have a fitted joint more than " + format_double(fit::kCameraDisagreementM) +
                  " m from the camera's tracked joint, farther than the camera's error explains: those joints "
-                 "have an untracked joint's confidence");
+                 "have no confidence, since either the fit or the camera is that far off");
   }
   if (tracker_->frames_untrusted() > 0) {
     out.warn("FIT_UNTRUSTED", "fit",
