@@ -64,7 +64,8 @@ Thorax thorax_frame(const PosedUpperBody& body) {
   return {frame_from_y_and_z(up, right), thorax_joint_confidence(body)};
 }
 
-void thorax_angles(const PosedUpperBody& body, const Thorax& thorax, JointAngles& out) {
+void thorax_angles(const PosedUpperBody& body, const Thorax& thorax, const JointAngleOptions& options,
+                   JointAngles& out) {
   const Eigen::Matrix3d R = K_from_G(body.up_K, body.front_K).transpose() * thorax.K_from_T;
   // ISB Z-X-Y: R = Rz(a) Rx(b) Ry(c).
   const double a = std::atan2(-R(0, 1), R(1, 1));
@@ -72,9 +73,19 @@ void thorax_angles(const PosedUpperBody& body, const Thorax& thorax, JointAngles
   const double c = std::atan2(-R(2, 0), R(2, 2));
   // The smallest, as for every angle's joints: each bounds how far the angle can be trusted.
   const double confidence = std::min(thorax.confidence, std::clamp(body.up_confidence, 0.0, 1.0));
-  out[static_cast<int>(Angle::kThoraxFlexion)] = defined_value(-a, confidence);  // +Z turns y backwards
-  out[static_cast<int>(Angle::kThoraxLateralTilt)] = defined_value(b, confidence);
-  out[static_cast<int>(Angle::kThoraxAxialRotation)] = defined_value(c, confidence);
+  // A joint position error e turns the thorax by about e / l about each axis (l: spine2 -> neck).
+  // Z-X-Y passes that on to the lateral tilt as it is and to the flexion and the axial rotation
+  // over cos(b): tilted towards 90 degrees the first and third axes meet (gimbal lock) and only
+  // their sum is defined (docs/measures.md, "Gimbal lock of the thorax's Z-X-Y").
+  const auto& J = body.smpl_joints_K;
+  const double turn_rad = options.joint_position_uncertainty_m / (J.col(kNeck) - J.col(kSpine2)).norm();
+  const double cos_tilt = std::cos(b);
+  const double locked_turn_rad = cos_tilt > 0 ? turn_rad / cos_tilt : std::numbers::pi;
+  const double tilt_confidence = std::min(confidence, angle_confidence_from_rms_rad(turn_rad));
+  const double locked_confidence = std::min(confidence, angle_confidence_from_rms_rad(locked_turn_rad));
+  out[static_cast<int>(Angle::kThoraxFlexion)] = defined_value(-a, locked_confidence);  // +Z turns y backwards
+  out[static_cast<int>(Angle::kThoraxLateralTilt)] = defined_value(b, tilt_confidence);
+  out[static_cast<int>(Angle::kThoraxAxialRotation)] = defined_value(c, locked_confidence);
 }
 
 struct ArmAngleIds {
@@ -278,7 +289,7 @@ JointAngles joint_angles(const PosedUpperBody& body, const JointAngleOptions& op
 
   JointAngles out{};
   const Thorax thorax = thorax_frame(body);
-  thorax_angles(body, thorax, out);
+  thorax_angles(body, thorax, options, out);
   arm_angles(body, thorax, true, options, previous, out);
   arm_angles(body, thorax, false, options, previous, out);
   return out;

@@ -94,7 +94,9 @@ struct JointAngleOptions {
   // elevation) turns by about this over the segment's length, and one read from a plane of two
   // segments by that over the sine of their angle: the humerus' axial rotation (the upper arm and
   // forearm's plane) near a straight elbow, the plane of elevation near the gimbal lock. Their
-  // confidence carries that spread, and the thorax's error in quadrature. 0.02: the body fit's
+  // confidence carries that spread, and the thorax's error in quadrature. The thorax angles take
+  // it over spine2 -> neck, the flexion and axial rotation over the cosine of the lateral tilt
+  // (Z-X-Y's gimbal lock at 90 degrees of tilt). 0.02: the body fit's
   // mean error on the arm joints at 30 Hz (20.5 mm, docs/benchmarks.md, "Paper 2, Fig. 4"), not
   // chosen on the sessions the angles are reported on.
   double joint_position_uncertainty_m = 0.02;

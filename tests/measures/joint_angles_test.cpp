@@ -213,7 +213,37 @@ TEST(JointAngles, ConfidenceFollowsTheJointsAndTheVertical) {
   const JointAngles measured = joint_angles(b.body, exact_lengths);
   EXPECT_DOUBLE_EQ(measured[static_cast<int>(Angle::kThoraxFlexion)].confidence, 0.5);
   b.body.joint_confidence[6] = 1.0;
-  EXPECT_DOUBLE_EQ(joint_angles(b.body, exact_lengths)[static_cast<int>(Angle::kThoraxLateralTilt)].confidence, 0.99);
+  JointAngleOptions exact_joints = exact_lengths;
+  exact_joints.joint_position_uncertainty_m = 0;  // the thorax's own spread has its own test below
+  EXPECT_DOUBLE_EQ(joint_angles(b.body, exact_joints)[static_cast<int>(Angle::kThoraxLateralTilt)].confidence, 0.99);
+}
+
+// The thorax turns by about e / l (2 cm over the constructed skeleton's 0.25 m spine2 -> neck) about
+// each axis; Z-X-Y passes that on to the lateral tilt as it is and to the flexion and the axial
+// rotation over cos(tilt), whose first and third axes meet at 90 degrees of tilt.
+TEST(JointAngles, ThoraxFlexionAndAxialRotationCarryTheirGimbalLock) {
+  const double turn_rad = 0.02 / 0.25;
+  const auto confidence = [](const JointAngles& a, Angle angle) { return a[static_cast<int>(angle)].confidence; };
+  const JointAngles upright = joint_angles(
+      build(Eigen::Matrix3d::Identity(), 10, 0, 20, ArmPose{0, 45, 0, 45, 0, 0}, ArmPose{0, 45, 0, 45, 0, 0}).body);
+  for (const Angle angle : {Angle::kThoraxFlexion, Angle::kThoraxLateralTilt, Angle::kThoraxAxialRotation})
+    EXPECT_NEAR(confidence(upright, angle), angle_confidence_from_rms_rad(turn_rad), 1e-12);
+  EXPECT_GT(confidence(upright, Angle::kThoraxFlexion), 0.5);
+
+  const Built tilted =
+      build(Eigen::Matrix3d::Identity(), 10, 60, 20, ArmPose{0, 45, 0, 45, 0, 0}, ArmPose{0, 45, 0, 45, 0, 0});
+  const JointAngles a = joint_angles(tilted.body);
+  EXPECT_NEAR(deg(a, Angle::kThoraxFlexion), 10, 1e-6);
+  EXPECT_NEAR(deg(a, Angle::kThoraxLateralTilt), 60, 1e-6);
+  EXPECT_NEAR(deg(a, Angle::kThoraxAxialRotation), 20, 1e-6);
+  EXPECT_NEAR(confidence(a, Angle::kThoraxLateralTilt), angle_confidence_from_rms_rad(turn_rad), 1e-12);
+  for (const Angle angle : {Angle::kThoraxFlexion, Angle::kThoraxAxialRotation}) {
+    EXPECT_NEAR(confidence(a, angle), angle_confidence_from_rms_rad(turn_rad / std::cos(60 * kRad)), 1e-12);
+    EXPECT_LT(confidence(a, angle), 0.5);
+  }
+  // Exact joints: no spread to pass on, however tilted.
+  const JointAngles exact = joint_angles(tilted.body, exact_joint_options({}));
+  EXPECT_DOUBLE_EQ(confidence(exact, Angle::kThoraxFlexion), 1.0);
 }
 
 // The girdle elevation carries its own error (the collars have no camera joint): with every

@@ -55,17 +55,30 @@ FrameEstimate exercise_frame(double t_s, double period_s, const Eigen::Matrix3d&
   return elbow_frame(t_s, 20 + 80 * (1 - std::cos(2 * std::numbers::pi * t_s / period_s)) / 2, K_from_G);
 }
 
+// A tracked arm IMU whose world z (up) is G's y: the stage takes its vertical from it.
+ArmTrackStart arm_start_with_up(const Eigen::Vector3d& up_K) {
+  ArmTrackStart start;
+  start.tracked = true;
+  start.K_from_W = geometry::Quat::FromTwoVectors(geometry::Vec3::UnitZ(), up_K);
+  return start;
+}
+
+// Starts `stage` for a level camera facing the subject, its vertical from a tracked arm IMU, with
+// measures.arm_length_uncertainty set where given ("0": the elbows' warning off).
+void start_facing(MeasuresStage& stage, testing::CollectingOutput& out, const char* arm_length_uncertainty) {
+  v1::SessionHeader header;
+  if (arm_length_uncertainty) (*header.mutable_options())["measures.arm_length_uncertainty"] = arm_length_uncertainty;
+  stage.start(header, out);
+  stage.on_value(arm_start_with_up(facing_camera() * geometry::Vec3::UnitY()), out);
+}
+
 TEST(MeasuresStage, AnglesRepetitionsAndTheVertical) {
   const Eigen::Matrix3d K_from_G =
       Eigen::AngleAxisd(10 * std::numbers::pi / 180, Eigen::Vector3d::UnitX()).toRotationMatrix() * facing_camera();
   MeasuresStage stage;
   testing::CollectingOutput out;
   stage.start(v1::SessionHeader(), out);
-  // W's z (up) is G's y: K_from_W maps z_W onto K_from_G * y.
-  ArmTrackStart start;
-  start.tracked = true;
-  start.K_from_W = geometry::Quat::FromTwoVectors(geometry::Vec3::UnitZ(), K_from_G * geometry::Vec3::UnitY());
-  stage.on_value(start, out);
+  stage.on_value(arm_start_with_up(K_from_G * geometry::Vec3::UnitY()), out);
   const double period_s = 2.0;
   for (int f = 0; f < 30 * 9; ++f) stage.on_value(exercise_frame(f / 30.0, period_s, K_from_G), out);
   stage.finish(out);
@@ -109,13 +122,7 @@ TEST(MeasuresStage, ElbowFlexionConfidenceFollowsTheArmLengthUncertainty) {
   const auto run = [](const char* uncertainty) {
     MeasuresStage stage;
     testing::CollectingOutput out;
-    v1::SessionHeader header;
-    if (uncertainty) (*header.mutable_options())["measures.arm_length_uncertainty"] = uncertainty;
-    stage.start(header, out);
-    ArmTrackStart start;
-    start.tracked = true;
-    start.K_from_W = geometry::Quat::FromTwoVectors(geometry::Vec3::UnitZ(), facing_camera() * geometry::Vec3::UnitY());
-    stage.on_value(start, out);
+    start_facing(stage, out, uncertainty);
     for (int f = 0; f < 60; ++f) stage.on_value(exercise_frame(f / 30.0, 2, facing_camera()), out);
     stage.finish(out);
     return out;
@@ -140,13 +147,7 @@ TEST(MeasuresStage, ElevationsUnconfidentForAnInferredThoraxAreSaid) {
   const auto run = [](double spine2_confidence) {
     MeasuresStage stage;
     testing::CollectingOutput out;
-    v1::SessionHeader header;
-    (*header.mutable_options())["measures.arm_length_uncertainty"] = "0";  // the elbows' warning off
-    stage.start(header, out);
-    ArmTrackStart start;
-    start.tracked = true;
-    start.K_from_W = geometry::Quat::FromTwoVectors(geometry::Vec3::UnitZ(), facing_camera() * geometry::Vec3::UnitY());
-    stage.on_value(start, out);
+    start_facing(stage, out, "0");
     for (int f = 0; f < 60; ++f) {
       FrameEstimate frame = exercise_frame(f / 30.0, 2, facing_camera());
       if (f % 2 == 0) frame.smpl_joints[6].confidence = spine2_confidence;
@@ -171,6 +172,35 @@ TEST(MeasuresStage, ElevationsUnconfidentForAnInferredThoraxAreSaid) {
   EXPECT_EQ(warned(lost), lost.warnings.end());
 }
 
+// A trunk tilted 60 deg to the side takes the thorax flexion below 0.5 while its joints and the
+// vertical are confident (Z-X-Y near its gimbal lock): the stage says how many and why.
+TEST(MeasuresStage, ThoraxValuesUnconfidentForATiltedTrunkAreSaid) {
+  MeasuresStage stage;
+  testing::CollectingOutput out;
+  start_facing(stage, out, "0");
+  for (int f = 0; f < 60; ++f) {
+    const double tilt_deg = f % 3 == 0 ? 60 : 10;
+    const measures::testing::Built b = measures::testing::build(
+        facing_camera(), 5, tilt_deg, 0, ArmPose{0, 20, 0, 30, 0, 0}, ArmPose{30, 40, 10, 60, 0, 0});
+    FrameEstimate frame;
+    frame.t_us = std::llround(f / 30.0 * 1e6);
+    for (int j = 0; j < 24; ++j) frame.smpl_joints.push_back({b.body.smpl_joints_K.col(j), v1::FUSED, 1.0});
+    stage.on_value(frame, out);
+  }
+  stage.finish(out);
+  const auto warned = std::find_if(out.warnings.begin(), out.warnings.end(),
+                                   [](const std::string& w) { return w.rfind("MEASURES_THORAX_TILTED", 0) == 0; });
+  ASSERT_NE(warned, out.warnings.end());
+  EXPECT_NE(warned->find("20 of 60 frames have their thorax flexion"), std::string::npos) << *warned;
+  const auto flexion = [&](int f) {
+    return out.results[static_cast<size_t>(f)].joint_angles().angles(static_cast<int>(Angle::kThoraxFlexion));
+  };
+  EXPECT_NEAR(flexion(0).deg(), 5, 1e-6);
+  EXPECT_LT(flexion(0).confidence(), 0.5);
+  EXPECT_GE(flexion(1).confidence(), 0.5);
+  EXPECT_GE(out.results[0].joint_angles().angles(static_cast<int>(Angle::kThoraxLateralTilt)).confidence(), 0.5);
+}
+
 // Repetitions segmented on values not to act on are still reported, and the result says so: with
 // every joint untracked (confidence 0) the elbow's repetitions count as before, with confidence 0,
 // and warning MEASURES_REPETITIONS_UNCERTAIN; with exact arm lengths and tracked joints nothing is
@@ -182,10 +212,7 @@ TEST(MeasuresStage, RepetitionsOnUnconfidentValuesAreCountedAndSaid) {
     v1::SessionHeader header;
     (*header.mutable_options())["measures.arm_length_uncertainty"] = "0";
     stage.start(header, out);
-    ArmTrackStart start;
-    start.tracked = true;
-    start.K_from_W = geometry::Quat::FromTwoVectors(geometry::Vec3::UnitZ(), facing_camera() * geometry::Vec3::UnitY());
-    stage.on_value(start, out);
+    stage.on_value(arm_start_with_up(facing_camera() * geometry::Vec3::UnitY()), out);
     for (int f = 0; f < 30 * 9; ++f) {
       FrameEstimate frame = exercise_frame(f / 30.0, 2, facing_camera());
       for (JointEstimate& j : frame.smpl_joints) j.confidence = joint_confidence;
@@ -268,10 +295,7 @@ TEST(MeasuresStage, AStartThatMayHoldARepetitionIsSaid) {
     MeasuresStage stage;
     testing::CollectingOutput out;
     stage.start(v1::SessionHeader(), out);
-    ArmTrackStart start;
-    start.tracked = true;
-    start.K_from_W = geometry::Quat::FromTwoVectors(geometry::Vec3::UnitZ(), geometry::Vec3::UnitY());
-    stage.on_value(start, out);
+    stage.on_value(arm_start_with_up(geometry::Vec3::UnitY()), out);
     for (const FrameEstimate& frame : tilt_session(settling_start)) stage.on_value(frame, out);
     stage.finish(out);
     const v1::FitResult& last = out.results.back();
@@ -371,7 +395,8 @@ TEST(MeasuresStage, TheVerticalComesFromTheFloorWhenTheDepthShowsOne) {
     const v1::CameraVertical& vertical = out.report.vertical();
     if (with_depth) {
       EXPECT_NEAR(flexion.deg(), 5, 0.3);
-      EXPECT_GT(flexion.confidence(), 0.99);
+      // The floor's (above 0.99) leaves the thorax's own spread the smaller (measures::joint_angles).
+      EXPECT_GT(flexion.confidence(), 0.6);
       EXPECT_FALSE(assumed);
       EXPECT_EQ(vertical.source(), v1::CameraVertical::FLOOR);
       EXPECT_NEAR(vertical.camera_pitch_deg(), 10, 0.3);

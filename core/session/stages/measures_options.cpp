@@ -93,7 +93,8 @@ const OptionTable& measures_option_table() {
          .max = at_most(0.2),
          .unit = "m",
          .description =
-             "RMS error of a fitted joint's position; the confidence of the elevation, of the plane of elevation "
+             "RMS error of a fitted joint's position; the confidence of the thorax angles (the flexion and axial "
+             "rotation most with the trunk tilted far to the side), of the elevation, of the plane of elevation "
              "(most near the gimbal lock) and of the humerus' axial rotation (most near a straight elbow or the "
              "lock) carries the spread it gives"},
         {.key = kMeasuresGirdleElevationUncertaintyKey,

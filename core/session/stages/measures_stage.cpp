@@ -124,6 +124,7 @@ void MeasuresStage::add_frame(const FrameEstimate& frame, StageOutput& out) {
   previous_ = angles.angles;
   count_length_limited_elbows(body, angles.angles);
   count_thorax_limited_elevations(body, angles.angles);
+  count_tilt_limited_thorax(body, angles.angles);
 
   series_.add(static_cast<double>(frame.t_us) * 1e-6, angles.angles);  // the merge sends frames in time order
   out.hand_on(std::move(angles));
@@ -155,6 +156,15 @@ void MeasuresStage::count_thorax_limited_elevations(const measures::PosedUpperBo
   }
 }
 
+void MeasuresStage::count_tilt_limited_thorax(const measures::PosedUpperBody& body,
+                                              const measures::JointAngles& angles) {
+  ++thorax_values_;
+  const double sources = std::min(measures::thorax_joint_confidence(body), body.up_confidence);
+  if (sources >= measures::kConfidentAt &&
+      angles[static_cast<int>(measures::Angle::kThoraxFlexion)].confidence < measures::kConfidentAt)
+    ++tilt_limited_thorax_;
+}
+
 void MeasuresStage::finish(StageOutput& out) {
   if (fit_enabled_) report_vertical(out);
   if (length_limited_elbows_ > 0) {
@@ -175,6 +185,15 @@ void MeasuresStage::finish(StageOutput& out) {
             "its error to the humerus' own; the planes of elevation and the humerus' axial rotations there are "
             "not confident either (docs/measures.md, \"The elevation, the plane of elevation and the humerus' axial "
             "rotation\")");
+  }
+  if (tilt_limited_thorax_ > 0) {
+    out.warn("MEASURES_THORAX_TILTED", "joint_angles.thorax",
+             std::to_string(tilt_limited_thorax_) + " of " + std::to_string(thorax_values_) +
+                 " frames have their thorax flexion and axial rotation below confidence 0.5 though the thorax's "
+                 "joints and the vertical are not: the trunk tilted far to the side, where ISB's Z-X-Y sequence nears "
+                 "its gimbal "
+                 "lock and the two angles take the thorax's error over the cosine of the tilt (docs/measures.md, "
+                 "\"Gimbal lock of the thorax's Z-X-Y\")");
   }
   if (skipped_frames_ > 0) {
     out.warn("MEASURES_FRAME_SKIPPED", "joint_angles",

@@ -47,6 +47,7 @@ class MeasuresStage : public Stage {
  private:
   void count_length_limited_elbows(const measures::PosedUpperBody& body, const measures::JointAngles& angles);
   void count_thorax_limited_elevations(const measures::PosedUpperBody& body, const measures::JointAngles& angles);
+  void count_tilt_limited_thorax(const measures::PosedUpperBody& body, const measures::JointAngles& angles);
   void add_frame(const FrameEstimate& frame, StageOutput& out);
   void warn_uncertain_repetitions(const measures::SessionRepetitions& repetitions, StageOutput& out);
   void report_vertical(StageOutput& out) const;
@@ -64,6 +65,9 @@ class MeasuresStage : public Stage {
   // Elevations (two per frame) below confidence 0.5 although every joint they are read from is
   // at least 0.5: the thorax's error and the humerus' own add up (docs/measures.md).
   std::size_t thorax_limited_elevations_ = 0;
+  // Frames whose thorax flexion is below confidence 0.5 although its joints and the vertical are
+  // at least 0.5: the trunk tilted sideways towards Z-X-Y's gimbal lock (docs/measures.md).
+  std::size_t tilt_limited_thorax_ = 0, thorax_values_ = 0;
   std::optional<measures::JointAngles> previous_;
   measures::AngleSeries series_;
 };
