@@ -191,9 +191,8 @@ void MeasuresStage::finish(StageOutput& out) {
              std::to_string(tilt_limited_thorax_) + " of " + std::to_string(thorax_values_) +
                  " frames have their thorax flexion and axial rotation below confidence 0.5 though the thorax's "
                  "joints and the vertical are not: the trunk tilted far to the side, where ISB's Z-X-Y sequence nears "
-                 "its gimbal "
-                 "lock and the two angles take the thorax's error over the cosine of the tilt (docs/measures.md, "
-                 "\"Gimbal lock of the thorax's Z-X-Y\")");
+                 "its gimbal lock and the two angles take the thorax's error over the cosine of the tilt "
+                 "(docs/measures.md, \"Gimbal lock of the thorax's Z-X-Y\")");
   }
   if (skipped_frames_ > 0) {
     out.warn("MEASURES_FRAME_SKIPPED", "joint_angles",
