@@ -157,7 +157,7 @@ int main(int argc, char** argv) {
                                                                      noise_model, 1 + seed, frame_index++);
                 frame.depth_mm = noisy.depth_mm;
                 frame.body_index = noisy.body_index;
-                fit::remove_off_body_depth(frame, fit::TrackedSkeleton::all_tracked(clean.skeleton_K));
+                fit::remove_off_body_depth(frame, fit::TrackedSkeleton::all_tracked(clean.skeleton_K), {}, &camera);
               }
               const fit::FrameObservation observation =
                   fit::prepare_observation(frame, camera, clean.skeleton_K, options);

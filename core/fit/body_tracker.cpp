@@ -158,7 +158,7 @@ std::vector<FitWarning> BodyTracker::personalise() {
     std::vector<CalibrationFrame> depth_frames;
     for (const BodyFitFrame* f : chosen_frames) {
       depth_frames.push_back({f->frame, *f->skeleton});
-      remove_off_body_depth(depth_frames.back().frame, depth_frames.back().skeleton);
+      remove_off_body_depth(depth_frames.back().frame, depth_frames.back().skeleton, {}, &work_->camera);
     }
     refiner = [&, depth = make_depth_shape_refiner(work_->model, work_->camera, std::move(depth_frames))](
                   std::size_t frame_index, const Eigen::VectorXd& beta0, const Eigen::VectorXd& theta0) {
@@ -224,7 +224,7 @@ BodyTracker::Output BodyTracker::fit(BodyFitFrame& frame, const ForearmOrientati
     std::optional<KinectSkeleton> positions;
     if (frame.skeleton) {
       positions = frame.skeleton->positions_K;
-      remove_off_body_depth(frame.frame, *frame.skeleton);  // body index / depth misalignment
+      remove_off_body_depth(frame.frame, *frame.skeleton, {}, &w.camera);  // misaligned index, flying pixels
     }
     take(stats.cleanup_s);
     const FrameObservation& observation = prepare_observation(w.observation_buffers, frame.frame, w.camera, positions,

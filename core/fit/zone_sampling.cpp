@@ -17,36 +17,6 @@ namespace posefuse::fit {
 
 namespace {
 
-struct Bone {
-  int from, to;
-  BodyZone zone;
-};
-
-constexpr Bone kBones[] = {
-    {kSpineShoulder, kNeck, BodyZone::kHead},
-    {kNeck, kHead, BodyZone::kHead},
-    {kSpineBase, kSpineMid, BodyZone::kTorso},
-    {kSpineMid, kSpineShoulder, BodyZone::kTorso},
-    {kSpineShoulder, kShoulderLeft, BodyZone::kTorso},
-    {kSpineShoulder, kShoulderRight, BodyZone::kTorso},
-    {kSpineBase, kHipLeft, BodyZone::kTorso},
-    {kSpineBase, kHipRight, BodyZone::kTorso},
-    {kShoulderLeft, kElbowLeft, BodyZone::kLeftUpperArm},
-    {kElbowLeft, kWristLeft, BodyZone::kLeftForearm},
-    {kWristLeft, kHandLeft, BodyZone::kLeftForearm},
-    {kHandLeft, kHandTipLeft, BodyZone::kLeftForearm},
-    {kShoulderRight, kElbowRight, BodyZone::kRightUpperArm},
-    {kElbowRight, kWristRight, BodyZone::kRightForearm},
-    {kWristRight, kHandRight, BodyZone::kRightForearm},
-    {kHandRight, kHandTipRight, BodyZone::kRightForearm},
-    {kHipLeft, kKneeLeft, BodyZone::kLeftLeg},
-    {kKneeLeft, kAnkleLeft, BodyZone::kLeftLeg},
-    {kAnkleLeft, kFootLeft, BodyZone::kLeftLeg},
-    {kHipRight, kKneeRight, BodyZone::kRightLeg},
-    {kKneeRight, kAnkleRight, BodyZone::kRightLeg},
-    {kAnkleRight, kFootRight, BodyZone::kRightLeg},
-};
-
 // A projected bone with what the point-segment distance needs precomputed.
 struct Segment {
   Eigen::Vector2d a, ab;
@@ -165,7 +135,7 @@ std::vector<Segment> projected_bones(const KinectSkeleton& skeleton_K, const ray
     joint_px[j] = camera.project(skeleton_K[j]);
   }
   std::vector<Segment> segments;
-  for (const Bone& bone : kBones)
+  for (const ZoneBone& bone : kZoneBones)
     if (joint_px[bone.from] && joint_px[bone.to]) {
       const Eigen::Vector2d ab = *joint_px[bone.to] - *joint_px[bone.from];
       segments.push_back({*joint_px[bone.from], ab, ab.squaredNorm(), bone.zone});

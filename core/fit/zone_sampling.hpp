@@ -29,6 +29,39 @@ enum class BodyZone : int {
 inline constexpr int kBodyZoneCount = 8;
 const char* body_zone_name(BodyZone zone);
 
+using enum geometry::KinectJoint;
+
+// A bone of the camera skeleton (Kinect joints) and the zone its pixels belong to.
+struct ZoneBone {
+  int from, to;
+  BodyZone zone;
+};
+
+inline constexpr ZoneBone kZoneBones[] = {
+    {kSpineShoulder, kNeck, BodyZone::kHead},
+    {kNeck, kHead, BodyZone::kHead},
+    {kSpineBase, kSpineMid, BodyZone::kTorso},
+    {kSpineMid, kSpineShoulder, BodyZone::kTorso},
+    {kSpineShoulder, kShoulderLeft, BodyZone::kTorso},
+    {kSpineShoulder, kShoulderRight, BodyZone::kTorso},
+    {kSpineBase, kHipLeft, BodyZone::kTorso},
+    {kSpineBase, kHipRight, BodyZone::kTorso},
+    {kShoulderLeft, kElbowLeft, BodyZone::kLeftUpperArm},
+    {kElbowLeft, kWristLeft, BodyZone::kLeftForearm},
+    {kWristLeft, kHandLeft, BodyZone::kLeftForearm},
+    {kHandLeft, kHandTipLeft, BodyZone::kLeftForearm},
+    {kShoulderRight, kElbowRight, BodyZone::kRightUpperArm},
+    {kElbowRight, kWristRight, BodyZone::kRightForearm},
+    {kWristRight, kHandRight, BodyZone::kRightForearm},
+    {kHandRight, kHandTipRight, BodyZone::kRightForearm},
+    {kHipLeft, kKneeLeft, BodyZone::kLeftLeg},
+    {kKneeLeft, kAnkleLeft, BodyZone::kLeftLeg},
+    {kAnkleLeft, kFootLeft, BodyZone::kLeftLeg},
+    {kHipRight, kKneeRight, BodyZone::kRightLeg},
+    {kKneeRight, kAnkleRight, BodyZone::kRightLeg},
+    {kAnkleRight, kFootRight, BodyZone::kRightLeg},
+};
+
 struct ZoneSamplingParams {
   int num_samples = 250;  // N_s (paper 2, IV-C)
   // Share of N_s per zone (indexed by BodyZone); must sum to 1. Arms and head get more than their
