@@ -29,10 +29,10 @@ inline constexpr double kCameraDisagreementM = 0.29;
 // A frame fitted at an energy above the tracker's trusted_energy matched its depth and silhouette
 // less well than the fits measured to stay within a confident value's 15 degrees: on the
 // joint-angle bench's tuning sessions (docs/benchmarks.md, "Fit energy and confidence") the
-// confident angle values of frames fitted at 10 < E <= 100 reach a 99 % error bound of 33.2 degrees
+// confident angle values of frames fitted at 10 < E <= 100 reach a 99 % error bound of 47.0 degrees
 // (pooled over the angles read from the joints). So such a frame's joints and forearms take at
-// most the confidence of that bound, 2^-(33.2/15)^2 = 0.033 (untrusted_fit_confidence).
-inline constexpr double kUntrustedFitBound99Deg = 33.2;
+// most the confidence of that bound, 2^-(47.0/15)^2 = 0.0011 (untrusted_fit_confidence).
+inline constexpr double kUntrustedFitBound99Deg = 47.0;
 double untrusted_fit_confidence();
 
 struct FittedJoint {

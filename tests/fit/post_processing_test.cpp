@@ -296,10 +296,10 @@ TEST(FittedBodyFrame, ATrackedJointFarFromTheFitDoesNotVouchForIt) {
 }
 
 // An untrusted fit's frame (energy above the tracker's trusted_energy): every joint and forearm
-// confidence is capped at the confidence of the 99 % bound measured for such frames, 33.2 degrees,
-// 2^-(33.2/15)^2; lower confidences stay as they were.
+// confidence is capped at the confidence of the 99 % bound measured for such frames, 47.0 degrees,
+// 2^-(47.0/15)^2; lower confidences stay as they were.
 TEST(FittedBodyFrame, AnUntrustedFitCapsEveryConfidence) {
-  EXPECT_NEAR(untrusted_fit_confidence(), std::pow(2.0, -std::pow(33.2 / 15.0, 2)), 1e-12);
+  EXPECT_NEAR(untrusted_fit_confidence(), std::pow(2.0, -std::pow(47.0 / 15.0, 2)), 1e-12);
   FacingFit fit;
   fit.skeleton.tracking[kWristLeft] = JointTracking::kInferred;
   FittedBodyFrame frame = fit.fitted({std::nullopt, fit.along_forearm(ArmSide::kRight)});
