@@ -350,7 +350,7 @@ FittedBodyFrame BodyTracker::release(const Eigen::VectorXd& theta, const Forearm
     if (!sample || sample->axis_weight < 1.0) return std::nullopt;
     return sample->K_from_F;
   };
-  FittedBodyFrame out = make_fitted_body_frame(work_->rest_joints, work_->layout, theta, f.skeleton,
+  FittedBodyFrame out = make_fitted_body_frame(work_->rest_joints, work_->layout, theta, f.skeleton, work_->camera,
                                                {confident(ArmSide::kLeft), confident(ArmSide::kRight)});
   out.t_us = f.t_us;
   out.energy = f.energy;

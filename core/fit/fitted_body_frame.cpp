@@ -35,6 +35,16 @@ constexpr double kUntrackedHandConfidence = 0.0;
 // nothing contradicted the fit; docs/fitting.md, "Joint confidence").
 constexpr double kOffCameraConfidence = 0.0;
 
+// A fitted joint outside the depth image was placed by the kinematic chain from what the image
+// shows, with no observation of its own: less than an untracked wrist has (whose arm the depth
+// still sees, and which already has none).
+constexpr double kOutOfViewConfidence = 0.0;
+
+bool in_view(const raycast::DepthCamera& camera, const Eigen::Vector3d& p_K) {
+  const auto px = camera.project(p_K);
+  return px && px->x() >= 0 && px->x() < camera.width() && px->y() >= 0 && px->y() < camera.height();
+}
+
 bool is_hand_joint(int camera_joint) {
   switch (camera_joint) {
     case kWristLeft:
@@ -108,7 +118,7 @@ FittedForearm fitted_forearm(const JointPose& pose, ArmSide side, const Eigen::Q
 
 FittedBodyFrame make_fitted_body_frame(const Eigen::Matrix3Xd& rest_joints, const body::PoseLayout& layout,
                                        const Eigen::VectorXd& theta, const TrackedSkeleton& skeleton,
-                                       const ForearmOrientationPair& K_from_F) {
+                                       const raycast::DepthCamera& camera, const ForearmOrientationPair& K_from_F) {
   const JointPose pose = pose_joints(rest_joints, layout, theta);
   const Eigen::Matrix3Xd camera_joints = camera_joints_from_pose(pose);
   FittedBodyFrame out;
@@ -117,7 +127,10 @@ FittedBodyFrame make_fitted_body_frame(const Eigen::Matrix3Xd& rest_joints, cons
     const bool tracked = skeleton.tracking[static_cast<size_t>(j)] == JointTracking::kTracked;
     const bool off_camera = tracked && far_from_fit(skeleton, j, camera_joints.col(j));
     if (off_camera) ++out.joints_off_camera;
-    camera_confidence[static_cast<size_t>(j)] = off_camera         ? kOffCameraConfidence
+    const bool out_of_view = !in_view(camera, camera_joints.col(j));
+    if (out_of_view) ++out.joints_out_of_view;
+    camera_confidence[static_cast<size_t>(j)] = out_of_view        ? kOutOfViewConfidence
+                                                : off_camera       ? kOffCameraConfidence
                                                 : tracked          ? 1.0
                                                 : is_hand_joint(j) ? kUntrackedHandConfidence
                                                                    : kUntrackedConfidence;

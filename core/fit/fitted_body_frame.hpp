@@ -11,6 +11,7 @@
 #include "body/pose_parameters.hpp"
 #include "fit/arm_roll.hpp"
 #include "fit/tracked_skeleton.hpp"
+#include "raycast/depth_camera.hpp"
 
 namespace posefuse::fit {
 
@@ -38,10 +39,9 @@ double untrusted_fit_confidence();
 struct FittedJoint {
   Eigen::Vector3d p_K = Eigen::Vector3d::Zero();
   // 1 where the camera tracks the corresponding joint within kCameraDisagreementM, 0 where it
-  // tracks it farther away; where it does not track it, 0 for a wrist or hand and 0.5 for the
-  // others (docs/fitting.md, "Joint confidence"). An SMPL joint with no
-  // camera joint (spine1, spine3, the collars, the head) takes the lowest of the nearest ones
-  // around it in the kinematic tree.
+  // tracks it farther away or where the fitted joint lies outside the camera's view; where it does not track it, 0 for
+  // a wrist or hand and 0.5 for the others (docs/fitting.md, "Joint confidence"). An SMPL joint with no camera joint
+  // (spine1, spine3, the collars, the head) takes the lowest of the nearest ones around it in the kinematic tree.
   double confidence = 0.0;
 };
 
@@ -64,6 +64,9 @@ struct FittedBodyFrame {
   // Camera joints reported TRACKED but farther than kCameraDisagreementM from the SMPL joint they
   // are: those fitted joints have no confidence.
   int joints_off_camera = 0;
+  // Fitted camera joints outside the depth image: neither the depth, the silhouette nor the
+  // camera's skeleton sees them, so they have no confidence.
+  int joints_out_of_view = 0;
 };
 
 // Caps every joint's and forearm's confidence at `cap`.
@@ -75,10 +78,10 @@ struct ForearmOrientationPair {
 };
 
 // The output for pose `theta` of a frame: joints from `rest_joints` (fit::rest_joints of the
-// shape), confidences from `skeleton`'s tracking states and its distance to the fit, forearms
-// from `K_from_F`.
+// shape), confidences from `skeleton`'s tracking states, its distance to the fit and whether the
+// fitted joint lies in `camera`'s image, forearms from `K_from_F`.
 FittedBodyFrame make_fitted_body_frame(const Eigen::Matrix3Xd& rest_joints, const body::PoseLayout& layout,
                                        const Eigen::VectorXd& theta, const TrackedSkeleton& skeleton,
-                                       const ForearmOrientationPair& K_from_F);
+                                       const raycast::DepthCamera& camera, const ForearmOrientationPair& K_from_F);
 
 }  // namespace posefuse::fit

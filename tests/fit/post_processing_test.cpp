@@ -219,6 +219,7 @@ struct FacingFit {
   Eigen::VectorXd theta = testing::facing_pose(layout, 2.0, {});
   JointPose pose = pose_joints(rest, layout, theta);
   TrackedSkeleton skeleton = tracked_at(pose);
+  raycast::DepthCamera camera{raycast::DepthIntrinsics{}};
 
   // An IMU orientation whose y lies along the fitted forearm, so that its roll is defined.
   Eigen::Quaterniond along_forearm(ArmSide side) const {
@@ -228,7 +229,7 @@ struct FacingFit {
                                                   pose.positions_K.col(left ? body::kLeftElbow : body::kRightElbow));
   }
   FittedBodyFrame fitted(const ForearmOrientationPair& K_from_F = {}) const {
-    return make_fitted_body_frame(rest, layout, theta, skeleton, K_from_F);
+    return make_fitted_body_frame(rest, layout, theta, skeleton, camera, K_from_F);
   }
 };
 
@@ -293,6 +294,35 @@ TEST(FittedBodyFrame, ATrackedJointFarFromTheFitDoesNotVouchForIt) {
   EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kRightElbow].confidence, 0.5);
   EXPECT_DOUBLE_EQ(frame.smpl_joints[body::kRightShoulder].confidence, 1.0);
   EXPECT_EQ(frame.joints_off_camera, 3);
+}
+
+// A fitted joint outside the depth image has no confidence, whatever the camera reports: nothing
+// the camera gives sees it. With the image ending 20 px right of the optical axis, the subject's
+// right arm (x > 0 at 2 m) lies outside it; the left arm stays in view and keeps 1.
+TEST(FittedBodyFrame, AJointOutsideTheImageHasNoConfidence) {
+  FacingFit fit;
+  EXPECT_EQ(fit.fitted().joints_out_of_view, 0);
+  raycast::DepthIntrinsics cut;
+  cut.cx = 20;
+  const raycast::DepthCamera camera{cut};
+  const FittedBodyFrame frame =
+      make_fitted_body_frame(fit.rest, fit.layout, fit.theta, fit.skeleton, camera,
+                             {fit.along_forearm(ArmSide::kLeft), fit.along_forearm(ArmSide::kRight)});
+  for (const int j : {body::kRightShoulder, body::kRightElbow, body::kRightWrist})
+    EXPECT_DOUBLE_EQ(frame.smpl_joints[static_cast<size_t>(j)].confidence, 0.0) << j;
+  for (const int j : {body::kLeftShoulder, body::kLeftElbow, body::kLeftWrist})
+    EXPECT_DOUBLE_EQ(frame.smpl_joints[static_cast<size_t>(j)].confidence, 1.0) << j;
+  EXPECT_DOUBLE_EQ(frame.camera_joints[kHandRight].confidence, 0.0);
+  int outside = 0;
+  for (const FittedJoint& joint : frame.camera_joints) {
+    const auto px = camera.project(joint.p_K);
+    outside += !px || px->x() < 0;
+  }
+  EXPECT_GE(outside, 6);
+  EXPECT_EQ(frame.joints_out_of_view, outside);
+  ASSERT_EQ(frame.forearms.size(), 2u);
+  for (const FittedForearm& forearm : frame.forearms)
+    EXPECT_DOUBLE_EQ(forearm.confidence, forearm.side == ArmSide::kLeft ? 1.0 : 0.0);
 }
 
 // An untrusted fit's frame (energy above the tracker's trusted_energy): every joint and forearm

@@ -19,6 +19,7 @@
 
 #include "body/smpl_model.hpp"
 #include "common/error.hpp"
+#include "raycast/depth_camera.hpp"
 #include "session/frame_merge.hpp"
 #include "session/pipeline.hpp"
 #include "session/result_encoder.hpp"
@@ -68,7 +69,9 @@ struct Output : StageOutput {
   v1::CalibrationReport report;
 };
 
-sim::CameraSessionResult simulate(double duration_s, double first_angle_deg) {
+// The arms at first_angle_deg for 0.1 s, then rising by 30 deg over 0.1 s while the subject steps
+// step_aside_m sideways.
+sim::CameraSessionResult simulate(double duration_s, double first_angle_deg, double step_aside_m = 0.0) {
   sim::CameraSessionOptions options;
   options.duration_s = duration_s;
   options.betas = Eigen::VectorXd::Zero(10);
@@ -76,12 +79,14 @@ sim::CameraSessionResult simulate(double duration_s, double first_angle_deg) {
   options.forearm_straps = {sim::ForearmStrap{sim::BodySide::kRight}, sim::ForearmStrap{sim::BodySide::kLeft}};
   const body::PoseLayout layout = body::PoseLayout::full_body();
   const int left = layout.index_of("left_shoulder_z"), right = layout.index_of("right_shoulder_z");
+  const int aside = layout.index_of("translation_x");
   return sim::simulate_camera_session(options, layout, [=](double t_s) {
     Eigen::VectorXd theta = layout.zero();
     const double raise = t_s < 0.1 ? 0.0 : std::min(1.0, (t_s - 0.1) / 0.1);
     const double angle = (first_angle_deg + 30.0 * raise) * kDeg;  // 0 = arms horizontal
     theta[left] = angle;
     theta[right] = -angle;
+    theta[aside] = step_aside_m * raise;
     return theta;
   });
 }
@@ -487,6 +492,28 @@ TEST(BodyFitStage, AWristTheCameraTracksFarFromTheFitIsNotConfident) {
   }
   EXPECT_GT(far, 0);
   EXPECT_TRUE(out.warned("FIT_OFF_CAMERA", "skeleton"));
+}
+
+// A subject who steps 1.6 m sideways leaves the depth image in part: every fitted joint that lies
+// outside it has confidence 0, whatever the camera skeleton says, and the session says how many
+// frames.
+TEST(BodyFitStage, JointsOutsideTheDepthImageHaveNoConfidence) {
+  const sim::CameraSessionResult aside = simulate(0.3, -45.0, 1.6);
+  const Output out = run(header_with({{"fit.trusted_energy", "100"}}, aside), kAllChunks, aside);
+  ASSERT_FALSE(out.frames().empty());
+  const raycast::DepthCamera camera{sim::CameraSessionOptions{}.intrinsics};
+  int outside = 0;
+  for (const v1::FrameResult* frame : out.frames()) {
+    for (const auto& joint : frame->camera_joints()) {
+      const auto px = camera.project(vec(joint.position_m()));
+      if (px && px->x() >= 0 && px->x() < camera.width() && px->y() >= 0 && px->y() < camera.height()) continue;
+      EXPECT_EQ(joint.confidence(), 0.0) << frame->t_us();
+      ++outside;
+    }
+  }
+  EXPECT_GT(outside, 0);
+  EXPECT_TRUE(out.warned("FIT_OUT_OF_VIEW", "fit"));
+  EXPECT_FALSE(run(header_with({{"fit.trusted_energy", "100"}}), kAllChunks).warned("FIT_OUT_OF_VIEW", "fit"));
 }
 
 TEST(BodyFitStage, AnotherPersonsIdFitsNothing) {

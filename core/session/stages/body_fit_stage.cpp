@@ -256,6 +256,7 @@ void BodyFitStage::fit_ready(bool all, StageOutput& out) {
 void BodyFitStage::hand_on(fit::BodyTracker::Output&& fitted, StageOutput& out) {
   for (const fit::FittedBodyFrame& f : fitted.frames) {
     if (f.joints_off_camera > 0) ++frames_off_camera_;
+    if (f.joints_out_of_view > 0) ++frames_out_of_view_;
     out.hand_on(fitted_frame_from(f));
   }
   for (const fit::FitWarning& w : fitted.warnings) out.warn(w.code, w.field, w.message);
@@ -287,6 +288,12 @@ void BodyFitStage::finish(StageOutput& out) {
                  " frames have a fitted joint more than " + format_double(fit::kCameraDisagreementM) +
                  " m from the camera's tracked joint, farther than the camera's error explains: those joints "
                  "have no confidence, since either the fit or the camera is that far off");
+  }
+  if (frames_out_of_view_ > 0) {
+    out.warn("FIT_OUT_OF_VIEW", "fit",
+             std::to_string(frames_out_of_view_) + " of " + std::to_string(fitted) +
+                 " frames have a fitted joint outside the depth image: nothing the camera gives sees those joints, "
+                 "which have no confidence (the subject partly out of view)");
   }
   if (tracker_->frames_untrusted() > 0) {
     out.warn("FIT_UNTRUSTED", "fit",

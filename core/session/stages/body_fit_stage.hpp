@@ -102,6 +102,7 @@ class BodyFitStage : public Stage {
   std::uint64_t frames_without_skeleton_ = 0;  // depth frames without the fitted person's skeleton
   std::uint64_t frames_without_imu_ = 0;       // fitted while an arm IMU's orientation was missing
   std::uint64_t frames_off_camera_ = 0;        // with a tracked camera joint far from the fit
+  std::uint64_t frames_out_of_view_ = 0;       // with a fitted camera joint outside the depth image
 
   std::optional<std::int64_t> last_frame_t_us_;
   std::optional<std::int64_t> last_camera_t_us_;  // any camera frame
