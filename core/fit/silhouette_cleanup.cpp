@@ -159,9 +159,9 @@ std::size_t remove_off_body_depth(DepthFrame& frame, const TrackedSkeleton& skel
   // Every body pixel lies in the box.
   const int box_width = box.col1 - box.col0 + 1;
   for (int row = box.row0; row <= box.row1; ++row) {
-    const uint8_t* inner_row = inner.data() + static_cast<size_t>(row - box.row0) * box_width - box.col0;
+    const uint8_t* inner_row = inner.data() + static_cast<size_t>(row - box.row0) * box_width;
     for (int col = box.col0; col <= box.col1; ++col)
-      test(static_cast<size_t>(row) * frame.width + col, !inner_row[col], col, row);
+      test(static_cast<size_t>(row) * frame.width + col, !inner_row[col - box.col0], col, row);
   }
   return removed;
 }
