@@ -9,23 +9,24 @@
 
 namespace posefuse::fit {
 
-PixelRect nonzero_box(const std::vector<uint8_t>& mask, int width, int height) {
+PixelRect occupied_box(const std::vector<uint8_t>& mask, int width, int height, uint8_t empty) {
   PixelRect box{width, height, -1, -1};
-  // Per row: skip zero 8-byte words from each end (most of a frame is background).
-  const auto zero_word = [](const uint8_t* p) {
+  // Per row: skip empty 8-byte words from each end (most of a frame is background).
+  const uint64_t empty_word = 0x0101010101010101ull * empty;
+  const auto is_empty_word = [empty_word](const uint8_t* p) {
     uint64_t word;
     std::memcpy(&word, p, sizeof word);
-    return word == 0;
+    return word == empty_word;
   };
   for (int row = 0; row < height; ++row) {
     const uint8_t* line = mask.data() + static_cast<size_t>(row) * width;
     int first = 0;
-    while (first + 8 <= width && zero_word(line + first)) first += 8;
-    while (first < width && !line[first]) ++first;
+    while (first + 8 <= width && is_empty_word(line + first)) first += 8;
+    while (first < width && line[first] == empty) ++first;
     if (first == width) continue;
     int last = width - 1;
-    while (last - 7 > first && zero_word(line + last - 7)) last -= 8;
-    while (!line[last]) --last;
+    while (last - 7 > first && is_empty_word(line + last - 7)) last -= 8;
+    while (line[last] == empty) --last;
     box.col0 = std::min(box.col0, first);
     box.col1 = std::max(box.col1, last);
     box.row0 = std::min(box.row0, row);

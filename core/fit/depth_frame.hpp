@@ -26,9 +26,10 @@ inline bool background_word(const uint8_t* body) {
 
 using geometry::PixelRect;
 
-// Smallest rectangle holding every non-zero pixel of a row-major width x height mask (empty when
-// there is none). The caller checks mask.size() == width * height.
-PixelRect nonzero_box(const std::vector<uint8_t>& mask, int width, int height);
+// Smallest rectangle holding every pixel other than `empty` of a row-major width x height mask
+// (empty when there is none): a 0/1 mask's ones, a body index's body pixels with kNoBody. The
+// caller checks mask.size() == width * height.
+PixelRect occupied_box(const std::vector<uint8_t>& mask, int width, int height, uint8_t empty = 0);
 
 struct DepthFrame {
   int width = 0;

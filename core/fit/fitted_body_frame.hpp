@@ -39,9 +39,10 @@ double untrusted_fit_confidence();
 struct FittedJoint {
   Eigen::Vector3d p_K = Eigen::Vector3d::Zero();
   // 1 where the camera tracks the corresponding joint within kCameraDisagreementM, 0 where it
-  // tracks it farther away or where the fitted joint lies outside the camera's view; where it does not track it, 0 for
-  // a wrist or hand and 0.5 for the others (docs/fitting.md, "Joint confidence"). An SMPL joint with no camera joint
-  // (spine1, spine3, the collars, the head) takes the lowest of the nearest ones around it in the kinematic tree.
+  // tracks it farther away or where the fitted joint lies outside the camera's view; where it
+  // does not track it, 0 for a wrist or hand and 0.5 for the others (docs/fitting.md, "Joint
+  // confidence"). An SMPL joint with no camera joint (spine1, spine3, the collars, the head)
+  // takes the lowest of the nearest ones around it in the kinematic tree.
   double confidence = 0.0;
 };
 

@@ -43,23 +43,6 @@ bool near_bone(const Eigen::Vector3f& p, const BoneSegment& s, float r2) {
   return (s.a + t * s.ab - p).squaredNorm() <= r2;
 }
 
-// The smallest rectangle holding every body pixel (empty when none).
-PixelRect body_box(const DepthFrame& frame) {
-  PixelRect box{frame.width, frame.height, -1, -1};
-  for (int row = 0; row < frame.height; ++row) {
-    const uint8_t* body = frame.body_index.data() + static_cast<size_t>(row) * frame.width;
-    for (int col = 0; col < frame.width; ++col) {
-      if (col + 8 <= frame.width && background_word(body + col)) {
-        col += 7;
-        continue;
-      }
-      if (body[col] == kNoBody) continue;
-      box = {std::min(box.col0, col), std::min(box.row0, row), std::max(box.col1, col), std::max(box.row1, row)};
-    }
-  }
-  return box;
-}
-
 // Which body pixels of `box` are inside the silhouette: every pixel within kRingPx rows and
 // columns is body too. Row-major over the box; a square's test is a row pass and a column pass
 // of running counts over the box padded with background.
@@ -119,11 +102,12 @@ std::size_t remove_off_body_depth(DepthFrame& frame, const TrackedSkeleton& skel
   const std::size_t n = std::min(frame.depth_mm.size(), frame.body_index.size());
   // The ring's test needs whole images of the camera's size.
   const bool whole = camera != nullptr && camera->width() == frame.width && camera->height() == frame.height &&
-                     frame.width > 0 && static_cast<size_t>(frame.width) * frame.height == n &&
+                     static_cast<size_t>(frame.width) * frame.height == n &&
                      frame.body_index.size() == frame.depth_mm.size();
   const float radius = static_cast<float>(options.depth_margin_m), radius2 = radius * radius;
   const std::vector<BoneSegment> bones = whole ? usable_bones(skeleton, radius) : std::vector<BoneSegment>{};
-  const PixelRect box = bones.empty() ? PixelRect{} : body_box(frame);
+  const PixelRect box =
+      bones.empty() ? PixelRect{} : occupied_box(frame.body_index, frame.width, frame.height, kNoBody);
   const std::vector<uint8_t> inner = box.empty() ? std::vector<uint8_t>{} : inner_pixels(frame, box);
 
   const double near_mm = 1000.0 * (min_z - options.depth_margin_m), far_mm = 1000.0 * (max_z + options.depth_margin_m);

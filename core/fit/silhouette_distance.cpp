@@ -219,7 +219,7 @@ void silhouette_distance_map_near(const std::vector<uint8_t>& silhouette, int wi
   if (width <= 0 || height <= 0 || silhouette.size() != static_cast<size_t>(width) * height)
     throw_invalid("silhouette", "has " + std::to_string(silhouette.size()) + " values for a " + std::to_string(width) +
                                     "x" + std::to_string(height) + " image");
-  const PixelRect box = nonzero_box(silhouette, width, height);
+  const PixelRect box = occupied_box(silhouette, width, height);
   if (box.col1 < 0) throw_precondition("silhouette", "is empty");
   const int margin = std::max(0, margin_px);
   distance_map_in(silhouette, width, height,

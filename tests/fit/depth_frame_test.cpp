@@ -84,7 +84,7 @@ TEST(FitPointCloud, BoxIsTheSmallestRectangleHoldingEveryCloudPixel) {
       if (rng() % keep != 0) frame.body_index[i] = kNoBody;
     frame.body_index[rng() % frame.body_index.size()] = 0;  // never empty
     const PointCloud cloud = build_point_cloud(frame, camera);
-    const PixelRect expected = nonzero_box(cloud.valid, cloud.width, cloud.height);
+    const PixelRect expected = occupied_box(cloud.valid, cloud.width, cloud.height);
     EXPECT_EQ(cloud.box.col0, expected.col0) << "trial " << trial;
     EXPECT_EQ(cloud.box.row0, expected.row0) << "trial " << trial;
     EXPECT_EQ(cloud.box.col1, expected.col1) << "trial " << trial;
@@ -106,7 +106,7 @@ TEST(FitPixelRect, NonzeroBoxEqualsTheScanOfEveryPixel) {
           expected = {std::min(expected.col0, col), std::min(expected.row0, row), std::max(expected.col1, col),
                       std::max(expected.row1, row)};
         }
-    const PixelRect box = nonzero_box(mask, width, height);
+    const PixelRect box = occupied_box(mask, width, height);
     ASSERT_EQ(box.col0, expected.col0) << "trial " << trial;
     ASSERT_EQ(box.col1, expected.col1) << "trial " << trial;
     ASSERT_EQ(box.row0, expected.row0) << "trial " << trial;
