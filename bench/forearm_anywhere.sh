@@ -3,7 +3,8 @@
 # exercises, most of which never show the calibration pose, at several speeds and seeds, both
 # arms, the body render and the full IMU error model, through SessionPipeline (bench_sim_forearm
 # replay) and scored by posefuse-score against the simulator's truth. Per session and arm:
-#   mounting   where A_from_F came from (pose: paper 1's calibration; motion; none)
+#   mounting   where A_from_F came from (pose: paper 1's calibration at the start; motion; later:
+#              motion, then a calibration pose later in the session; none)
 #   RMS/max    forearm orientation error over the samples emitted (deg)
 #   emitted    samples emitted (matched to the truth within half an IMU period) / samples the
 #              arm IMU took (gt)
@@ -11,6 +12,9 @@
 #   bound      samples within the 99 % bound of their predicted error / emitted
 #   first      seconds from the first emitted sample to the first confident one
 #   A_from_F   the mounting's error against the truth (deg)
+#   offline    the offline solution (forearm_orientations_offline/, every sample re-solved with the
+#              final mounting at the session's end): RMS/max, confident share and how many beyond
+#              15 deg, samples within the 99 % bound
 # Then, from the same runs, per session and IMU: the orientation filter's W_from_A against the
 # truth (RMS/max), its confident samples and their max error and count beyond 15 deg, and the
 # samples within the 99 % bound of their predicted error (imu_orientations/<id>.csv).
@@ -18,7 +22,8 @@
 #   REPLAY_OPTIONS="KEY=VALUE ..." sets header options for every replay (e.g. fit.enabled=false:
 #   the body fit is on by default and costs about 10 ms per frame).
 #   MOTION: an exercise name, or a BVH clip's path (its whole length, as it is) or a path with
-#   "+pose" appended (paper 1's calibration pose first: sim calibration_prefix).
+#   "+pose" appended (paper 1's calibration pose first: sim calibration_prefix) or "+pose_end"
+#   (the pose after the clip: sim calibration_suffix).
 # Default: the 11 exercises at speeds 0.7, 1.0, 1.3 on seeds 51 and 52, 20 s, then every clip in
 # ../shared/data/mocap with and without the pose, seed 51, speed 1. Nothing was chosen on these
 # seeds (the pose calibration's uncertainty comes from seeds 41 and 43,
@@ -41,16 +46,20 @@ if [ ${#specs[@]} -eq 0 ]; then
 fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
-printf '%-34s %-5s %-8s %-10s %-8s %-16s %-7s %-6s %s\n' session arm mounting "RMS/max" emitted confident bound first A_from_F
+printf '%-34s %-5s %-8s %-10s %-8s %-16s %-7s %-6s %-8s %s\n' session arm mounting "RMS/max" emitted confident bound first A_from_F \
+  "offline: RMS/max, confident, bound"
 for spec in "${specs[@]}"; do
   IFS=: read -r motion seed speed <<<"$spec"
-  if [[ "$motion" == *.bvh || "$motion" == *.bvh+pose ]]; then
-    clip=${motion%+pose}
+  if [[ "$motion" == *.bvh || "$motion" == *.bvh+pose || "$motion" == *.bvh+pose_end ]]; then
+    clip=${motion%+pose_end}
+    clip=${clip%+pose}
     prefix=false
+    suffix=false
     if [[ "$motion" == *+pose ]]; then prefix=true; fi
-    name="$(basename "$clip" .bvh)$([ "$prefix" = true ] && echo +pose || true)-$seed-$speed"
-    printf 'motion = bvh\nbvh_path = %s\ncalibration_prefix = %s\nspeed = %s\narm = both\nduration_s = clip\n' \
-      "$clip" "$prefix" "$speed" >"$work/$name.options"
+    if [[ "$motion" == *+pose_end ]]; then suffix=true; fi
+    name="$(basename "$motion" | sed 's/\.bvh//')-$seed-$speed"
+    printf 'motion = bvh\nbvh_path = %s\ncalibration_prefix = %s\ncalibration_suffix = %s\nspeed = %s\narm = both\nduration_s = clip\n' \
+      "$clip" "$prefix" "$suffix" "$speed" >"$work/$name.options"
   else
     name="$motion-$seed-$speed"
     printf 'motion = %s\nspeed = %s\narm = both\nduration_s = 20\n' "$motion" "$speed" >"$work/$name.options"
@@ -69,6 +78,7 @@ for spec in "${specs[@]}"; do
 import json, os, re, sys
 name, out, gt, score, imu_rows = sys.argv[1:]
 rows, conf, mounting_error = {}, {}, {}
+offline_rows, offline_conf = {}, {}
 imu = {}
 for line in open(score):
     f = line.split()
@@ -77,14 +87,20 @@ for line in open(score):
     if len(f) in (6, 9) and re.match(r"forearm_orientations/imu_(left|right)\.csv$", f[0]):
         arm = f[1].split("_")[1].upper()
         (conf if len(f) == 9 else rows)[arm] = f
+    if len(f) in (6, 9) and re.match(r"forearm_orientations_offline/imu_(left|right)\.csv$", f[0]):
+        arm = f[1].split("_")[1].upper()
+        (offline_conf if len(f) == 9 else offline_rows)[arm] = f
     m = re.match(r"(LEFT|RIGHT) A_from_F\s+deg\s+([\d.]+)", line)
     if m: mounting_error[m.group(1)] = float(m.group(2))
+warnings = open(out + "/warnings.txt").readlines() if os.path.exists(out + "/warnings.txt") else []
 sources = {f["arm"]: f.get("mounting_source", "CALIBRATION_POSE")
            for f in json.load(open(out + "/calibration.json")).get("forearms", [])}
 for arm in ("LEFT", "RIGHT"):
     truth = os.path.join(gt, "forearm_orientations", f"imu_{arm.lower()}.csv")
     taken = sum(1 for _ in open(truth)) - 1 if os.path.exists(truth) else 0
     mounting = {"CALIBRATION_POSE": "pose", "MOTION": "motion"}.get(sources.get(arm), "none")
+    if any("FOREARM_CALIBRATION_LATER" in w and f"forearm[imu_{arm.lower()}]" in w for w in warnings):
+        mounting = "later"
     if arm not in rows:
         print(f"{name:34s} {arm:5s} {mounting:8s} {'-':10s} {'0':8s}")
         continue
@@ -99,7 +115,15 @@ for arm in ("LEFT", "RIGHT"):
     else:
         confident, bound, first = "-", "-", "-"
     a = f"{mounting_error[arm]:.1f}" if arm in mounting_error else "-"
-    print(f"{name:34s} {arm:5s} {mounting:8s} {error:10s} {emitted:8s} {confident:16s} {bound:7s} {first:6s} {a}")
+    offline = "-"
+    if arm in offline_rows and arm in offline_conf:
+        o, oc = offline_rows[arm], offline_conf[arm]
+        on = int(o[2])
+        within, scored = (int(x) for x in oc[7].split("/"))
+        offline = (f"{float(o[3]):.1f}/{float(o[4]):.1f} {100 * int(oc[3]) / on:.0f}% {oc[6]} "
+                   f"{100 * within / max(1, scored):.0f}%")
+    print(f"{name:34s} {arm:5s} {mounting:8s} {error:10s} {emitted:8s} {confident:16s} {bound:7s} {first:6s} {a:8s} "
+          f"{offline}")
 with open(imu_rows, "a") as o:
     for device, f in sorted(imu.items()):
         r, c = f["rows"], f["conf"]

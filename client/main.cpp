@@ -234,6 +234,10 @@ int command_fit(const Arguments& args) {
                 static_cast<unsigned long long>(writer.imu_positions()),
                 static_cast<unsigned long long>(writer.recovered_segments()));
   }
+  if (writer.offline_forearm_samples() > 0) {
+    std::printf("  %llu forearm orientations re-solved with the final mounting in forearm_orientations_offline/\n",
+                static_cast<unsigned long long>(writer.offline_forearm_samples()));
+  }
   if (summary != nullptr) {
     std::printf("  %llu chunks, %llu depth frames, %.1f s of recording processed in %.2f s\n",
                 static_cast<unsigned long long>(summary->chunks()),

@@ -1,6 +1,7 @@
 #pragma once
 // Writes a Fit call's results into an output directory as they arrive:
-//   imu_orientations/, forearm_orientations/, smpl_joints.csv, camera_joints.csv, forearms.csv,
+//   imu_orientations/, forearm_orientations/, forearm_orientations_offline/, smpl_joints.csv,
+//   camera_joints.csv, forearms.csv,
 //   imu_positions.csv, recovered_segments.csv, calibration.json
 //                       through session::ResultFiles (session/result_files.hpp, which lists the
 //                       columns), the same code path that writes the simulator's ground truth (gt/)
@@ -33,6 +34,7 @@ class ResultWriter {
   std::uint64_t item_errors() const { return item_errors_; }
   std::uint64_t orientation_samples() const { return files_.orientation_samples(); }
   std::uint64_t forearm_samples() const { return files_.forearm_samples(); }
+  std::uint64_t offline_forearm_samples() const { return files_.offline_forearm_samples(); }
   std::uint64_t imu_positions() const { return files_.imu_positions(); }
   std::uint64_t recovered_segments() const { return files_.recovered_segments(); }
   const std::filesystem::path& directory() const { return directory_; }

@@ -126,6 +126,14 @@ void score_orientation_folders(const session::ResultDirectory& result, const ses
         report.notes.push_back(std::string(folder) + "/" + device + ".csv: not in the results");
     }
   }
+  // The offline solution has the live folder's truth (gt/ has one solution: the truth).
+  for (const auto& [device, rows] : result.offline_forearm_orientations) {
+    const std::string file = std::string(layout::kForearmOrientationOfflineDir) + "/" + device + ".csv";
+    const std::string truth_file = std::string(layout::kForearmOrientationDir) + "/" + device + ".csv";
+    require_truth(truth, truth_file);
+    report.orientations.push_back(
+        score_angles(file, device, rows, truth.forearm_orientations.at(device), quat, false, options));
+  }
 }
 
 void score_forearms(const session::ResultDirectory& result, const session::ResultDirectory& truth,

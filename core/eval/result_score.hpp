@@ -8,6 +8,7 @@
 //  - imu_orientations/<id>.csv: W_from_A per device (device clock), paper 1 eqs. 14-15 and the
 //    heading part of the error (about W's z; orientation_error.hpp);
 //  - forearm_orientations/<id>.csv: K_from_F per arm IMU sample (camera clock), eqs. 14-15;
+//    forearm_orientations_offline/<id>.csv (the offline solution) against the same truth;
 //  - forearms.csv: K_from_F per camera frame and arm, eqs. 14-15;
 //  - imu_positions.csv: |p_K - p_K true| per device over all frames, VISUAL and PREDICTED
 //    frames, and the frames gt's occlusion.csv marks occluded (when given);

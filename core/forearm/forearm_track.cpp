@@ -40,6 +40,7 @@ ForearmTrack::ForearmTrack(Side side, const ForearmModel& model, bool has_model,
 
 void ForearmTrack::set_mounting(const Quat& F_from_A, double orientation_rms_rad, std::optional<double> axis_rms_rad) {
   model_.F_from_A = F_from_A.normalized();
+  mounting_changed_ = true;
   orientation_rms_rad_ = orientation_rms_rad;
   axis_rms_rad_ = axis_rms_rad.value_or(kDirectionRmsOverOrientationRms * orientation_rms_rad);
 }
@@ -47,6 +48,7 @@ void ForearmTrack::set_mounting(const Quat& F_from_A, double orientation_rms_rad
 void ForearmTrack::set_pronation_reference(const Quat& K_from_F_reference) {
   K_from_F_reference_ = K_from_F_reference.normalized();
   reference_from_ = arm_.size();
+  mounting_changed_ = true;
 }
 
 double ForearmTrack::pronation(std::size_t i, const Quat& K_from_F) const {
@@ -77,7 +79,8 @@ std::size_t ForearmTrack::held_bytes() const {
   using posefuse::held_bytes;
   return held_bytes(arm_) + held_bytes(K_from_F_imu_) + held_bytes(K_from_A_imu_) +
          held_bytes(orientation_rms_rad_of_) + held_bytes(axis_rms_rad_of_) + held_bytes(settled_rms_rad_) +
-         held_bytes(K_from_F_) + held_bytes(track_) + held_bytes(frames_);
+         held_bytes(filter_rms_rad_of_) + held_bytes(depth_axes_) + held_bytes(K_from_F_) + held_bytes(track_) +
+         held_bytes(frames_);
 }
 
 void ForearmTrack::add_imu(const std::vector<std::int64_t>& t_us, const std::vector<Quat>& W_from_A,
@@ -94,10 +97,13 @@ void ForearmTrack::add_imu(const std::vector<std::int64_t>& t_us, const std::vec
                                                   : geometry::same_hemisphere(K_from_F, K_from_F_imu_.back()));
     // The filter's own uncertainty (start-up, lost samples) adds to the mounting's, independently.
     const double filter_rad = i < filter_uncertainty_rad.size() ? filter_uncertainty_rad[i] : 0.0;
-    orientation_rms_rad_of_.push_back(std::sqrt(orientation_rms_rad_ * orientation_rms_rad_ + filter_rad * filter_rad));
+    orientation_rms_rad_of_.push_back(std::hypot(orientation_rms_rad_, filter_rad));
+    filter_rms_rad_of_.push_back(filter_rad);
     axis_rms_rad_of_.push_back(axis_rms_rad_);
   }
 }
+
+void ForearmTrack::add_frame(const ArmFrame& frame) { frames_.push_back(frame); }
 
 void ForearmTrack::settle_orientations_up_to(std::int64_t t_us) {
   const AxisCorrection correction = axis_correction();
@@ -248,6 +254,9 @@ TrackedArmFrame ForearmTrack::track_frame(const ArmFrame& frame, const TrackSamp
     if (axis_K.norm() > 0.0 && axis_K.allFinite()) {
       const double d = std::acos(std::clamp((tracked.K_from_F * Vec3::UnitY()).dot(axis_K.normalized()), -1.0, 1.0));
       observed_rms_rad_ = camera_observed_rms_rad(d);
+      if (depth_axes_.empty() || frame.t_us > depth_axes_.back().t_us) {
+        depth_axes_.push_back({frame.t_us, axis_K.normalized()});
+      }
     }
   }
   tracked.orientation_rms_rad =
@@ -262,6 +271,45 @@ TrackedArmFrame ForearmTrack::track_frame(const ArmFrame& frame, const TrackSamp
     }
   }
   return tracked;
+}
+
+std::vector<SettledArmSample> ForearmTrack::offline_samples() const {
+  std::vector<SettledArmSample> out;
+  out.reserve(K_from_F_.size());
+  if (!mounting_changed_) {
+    for (std::size_t i = 0; i < K_from_F_.size(); ++i) {
+      out.push_back({arm_[i], K_from_F_[i], pronation(i, K_from_F_[i]), settled_rms_rad_[i], axis_rms_rad_of_[i]});
+    }
+    return out;
+  }
+  // A changed mounting means a track without the axis correction (only a calibration at the start
+  // gets one, and its mounting does not change): K_from_F is eq. 11's with the final mounting.
+  const Quat A_from_F = model_.F_from_A.conjugate();
+  std::vector<Quat> K_from_F(K_from_F_.size());
+  for (std::size_t i = 0; i < K_from_F.size(); ++i) {
+    K_from_F[i] = (K_from_A_imu_[i] * A_from_F).normalized();
+    if (i > 0) K_from_F[i] = geometry::same_hemisphere(K_from_F[i], K_from_F[i - 1]);
+  }
+  // What each depth axis shows of the re-solved orientation at its frame.
+  std::vector<double> observed_rms_rad(depth_axes_.size());
+  // Samples not settled yet (offline_samples before process(true)) are not re-solved.
+  const auto re_solved = [&](std::size_t i) { return K_from_F[std::min(i, K_from_F.size() - 1)]; };
+  for (std::size_t k = 0; k < depth_axes_.size() && !K_from_F.empty(); ++k) {
+    const Vec3 y_K = slerp_at(depth_axes_[k].t_us, re_solved) * Vec3::UnitY();
+    observed_rms_rad[k] = camera_observed_rms_rad(std::acos(std::clamp(y_K.dot(depth_axes_[k].axis_K), -1.0, 1.0)));
+  }
+  for (std::size_t i = 0; i < K_from_F.size(); ++i) {
+    double rms_rad = std::hypot(orientation_rms_rad_, filter_rms_rad_of_[i]);
+    // The frames on either side: offline, the one after the sample is known too.
+    const std::size_t before = index_at_or_before(depth_axes_, arm_[i].t_us);
+    if (before != kNoIndex) rms_rad = std::max(rms_rad, observed_rms_rad[before]);
+    const std::size_t after = before == kNoIndex ? 0 : before + 1;
+    if (after < depth_axes_.size()) rms_rad = std::max(rms_rad, observed_rms_rad[after]);
+    const double pronation_rad = K_from_F_reference_ ? pronation_angle(*K_from_F_reference_, K_from_F[i], side_)
+                                                     : std::numeric_limits<double>::quiet_NaN();
+    out.push_back({arm_[i], K_from_F[i], pronation_rad, rms_rad, axis_rms_rad_});
+  }
+  return out;
 }
 
 }  // namespace posefuse::forearm

@@ -121,7 +121,7 @@ class ForearmTrack {
   // error beyond its steady one, added to the mounting's in each sample's uncertainty.
   void add_imu(const std::vector<std::int64_t>& t_us, const std::vector<Quat>& W_from_A,
                const std::vector<Vec3>& specific_force_A, const std::vector<double>& filter_uncertainty_rad = {});
-  void add_frame(const ArmFrame& frame) { frames_.push_back(frame); }
+  void add_frame(const ArmFrame& frame);
   // Tracks the queued frames up to the last IMU sample (K_from_F interpolated, not extrapolated;
   // with `all`, every queued frame: end of session) and returns them with the samples settled.
   ForearmTrackOutput process(bool all);
@@ -137,6 +137,16 @@ class ForearmTrack {
   // Detections with no other within 500 ms before or after them: counted, and treated as
   // occluded.
   std::uint64_t lone_detections() const { return lone_detections_; }
+  // The whole session again with the mounting and pronation reference the track has now (call
+  // after process(true)): the offline solution. Every IMU sample's K_from_F from the final
+  // mounting, its pronation relative to the final reference (a calibration pose found late in the
+  // session gives every sample its angle), and its uncertainty from the final mounting's and the
+  // filter's, at least what the camera's depth axis at the frames on either side of it showed
+  // against the re-solved orientation. A track whose mounting never changed returns its live
+  // samples: they are already final (and may carry an axis correction the re-solve would lose).
+  std::vector<SettledArmSample> offline_samples() const;
+  bool mounting_changed() const { return mounting_changed_; }
+
   // The oldest frame not tracked yet (none: every frame added has been returned).
   std::optional<std::int64_t> oldest_queued_us() const;
   // The memory the session's samples and the queued frames take (session::Stage::held_bytes).
@@ -178,6 +188,15 @@ class ForearmTrack {
   std::vector<double> orientation_rms_rad_of_;  // per sample, the mounting's and the filter's
   std::vector<double> axis_rms_rad_of_;         // per sample, y_F's alone (SettledArmSample::axis_rms_rad)
   std::vector<double> settled_rms_rad_;         // per settled sample: at least the camera's observed
+  std::vector<double> filter_rms_rad_of_;       // per sample, the filter's own beyond its steady error
+  // The depth-measured forearm axis (unit, camera frame) of every tracked frame that had one: the
+  // offline solution's camera check.
+  struct DepthAxis {
+    std::int64_t t_us = 0;
+    Vec3 axis_K = Vec3::UnitY();
+  };
+  std::vector<DepthAxis> depth_axes_;
+  bool mounting_changed_ = false;  // set_mounting or set_pronation_reference after the start
   // The previous frame's implied mounting and uncertainty, and the frames flagged for a step.
   std::optional<Quat> last_frame_A_from_F_;
   double last_frame_rms_rad_ = 0.0;

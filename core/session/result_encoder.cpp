@@ -28,6 +28,7 @@ void encode(const ForearmOrientations& value, v1::FitResult& result) {
   v1::ForearmOrientationBatch& batch = *result.mutable_forearm_orientations();
   batch.set_device_id(value.device_id);
   batch.set_arm(value.arm);
+  batch.set_offline(value.offline);
   for (std::size_t i = 0; i < value.t_us.size(); ++i) {
     batch.add_t_us(value.t_us[i]);
     for (const double v : geometry::to_wxyz(value.K_from_F[i])) batch.add_k_from_f(v);

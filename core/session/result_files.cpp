@@ -95,9 +95,10 @@ void ResultFiles::write_forearm_orientations(const v1::ForearmOrientationBatch& 
                     std::to_string(batch.confidence_size()) + " confidences for " + std::to_string(batch.t_us_size()) +
                     " samples");
   }
-  auto& csv = forearm_orientations_[batch.device_id()];
+  auto& csv = (batch.offline() ? offline_forearm_orientations_ : forearm_orientations_)[batch.device_id()];
   if (!csv) {
-    const std::filesystem::path folder = directory_ / result_layout::kForearmOrientationDir;
+    const std::filesystem::path folder = directory_ / (batch.offline() ? result_layout::kForearmOrientationOfflineDir
+                                                                       : result_layout::kForearmOrientationDir);
     std::error_code error;
     std::filesystem::create_directories(folder, error);
     if (error) {
@@ -111,7 +112,7 @@ void ResultFiles::write_forearm_orientations(const v1::ForearmOrientationBatch& 
               format_double(batch.k_from_f(4 * i + 3)), format_double(batch.pronation_rad(i)),
               format_double(batch.uncertainty_rad(i)), format_double(batch.confidence(i))});
   }
-  forearm_samples_ += static_cast<std::uint64_t>(batch.t_us_size());
+  (batch.offline() ? offline_forearm_samples_ : forearm_samples_) += static_cast<std::uint64_t>(batch.t_us_size());
 }
 
 CsvWriter& ResultFiles::opened_file(std::optional<CsvWriter>& file, const char* name,

@@ -8,6 +8,9 @@
 //   forearm_orientations/<device_id>.csv  t_us,w,x,y,z,pronation_rad,uncertainty_rad,confidence
 //                                     K_from_F per arm IMU sample (camera clock; pronation + /
 //                                     supination -)
+//   forearm_orientations_offline/<device_id>.csv  the same columns: the offline solution, every
+//                                     sample re-solved at the session's end with the final mounting
+//                                     (ForearmOrientationBatch.offline)
 //   smpl_joints.csv                   t_us,joint,joint_name,x_m,y_m,z_m,source,confidence
 //                                     (24 rows per frame, SMPL order, p_K)
 //   camera_joints.csv                 the same columns, 25 rows per frame, Kinect v2 JointType order
@@ -46,6 +49,7 @@ namespace posefuse::session {
 namespace result_layout {
 inline const char* const kImuOrientationDir = "imu_orientations";
 inline const char* const kForearmOrientationDir = "forearm_orientations";
+inline const char* const kForearmOrientationOfflineDir = "forearm_orientations_offline";
 inline const char* const kRecoveredSegmentsCsv = "recovered_segments.csv";
 inline const char* const kSmplJointsCsv = "smpl_joints.csv";
 inline const char* const kCameraJointsCsv = "camera_joints.csv";
@@ -112,7 +116,8 @@ class ResultFiles {
   void close();
 
   std::uint64_t orientation_samples() const { return orientation_samples_; }
-  std::uint64_t forearm_samples() const { return forearm_samples_; }
+  std::uint64_t forearm_samples() const { return forearm_samples_; }  // live ones
+  std::uint64_t offline_forearm_samples() const { return offline_forearm_samples_; }
   std::uint64_t frames() const { return frames_; }
   std::uint64_t imu_positions() const { return imu_positions_count_; }
   std::uint64_t recovered_segments() const { return recovered_segments_; }
@@ -123,11 +128,12 @@ class ResultFiles {
 
   std::filesystem::path directory_;
   std::map<std::string, std::unique_ptr<CsvWriter>> orientations_;
-  std::map<std::string, std::unique_ptr<CsvWriter>> forearm_orientations_;
+  std::map<std::string, std::unique_ptr<CsvWriter>> forearm_orientations_, offline_forearm_orientations_;
   std::optional<CsvWriter> smpl_joints_, smpl_rotations_, fit_energy_, camera_joints_, forearms_, imu_positions_,
       segments_, angles_;
   std::uint64_t orientation_samples_ = 0;
   std::uint64_t forearm_samples_ = 0;
+  std::uint64_t offline_forearm_samples_ = 0;
   std::uint64_t frames_ = 0;
   std::uint64_t imu_positions_count_ = 0;
   std::uint64_t recovered_segments_ = 0;

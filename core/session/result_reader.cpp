@@ -130,7 +130,7 @@ std::vector<TimedOrientation> read_orientations(int directory, const std::string
   return rows;
 }
 
-// imu_orientations/<id>.csv or forearm_orientations/<id>.csv, keyed by id.
+// imu_orientations/<id>.csv, forearm_orientations/<id>.csv or its offline folder's, keyed by id.
 std::map<std::string, std::vector<TimedOrientation>> read_orientation_folder(Reading& in, const char* folder,
                                                                              bool forearm) {
   std::map<std::string, std::vector<TimedOrientation>> by_device;
@@ -344,6 +344,7 @@ ResultDirectory read_result_files(const fs::path& directory) {
   out.directory = directory;
   out.imu_orientations = read_orientation_folder(in, result_layout::kImuOrientationDir, false);
   out.forearm_orientations = read_orientation_folder(in, result_layout::kForearmOrientationDir, true);
+  out.offline_forearm_orientations = read_orientation_folder(in, result_layout::kForearmOrientationOfflineDir, true);
   out.smpl_joints = read_joints(in, result_layout::kSmplJointsCsv, body::kNumJoints, body::smpl_joint_names().data());
   out.smpl_joint_rotations = read_joint_rotations(in);
   out.fit_energies = read_fit_energies(in);

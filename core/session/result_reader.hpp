@@ -103,8 +103,9 @@ struct ResultDirectory {
   std::filesystem::path directory;
   std::set<std::string> files;  // the layout's files that were present, e.g. "imu_positions.csv",
                                 // "imu_orientations/imu_left.csv"
-  std::map<std::string, std::vector<TimedOrientation>> imu_orientations;      // by device id, device clock
-  std::map<std::string, std::vector<TimedOrientation>> forearm_orientations;  // by device id, camera clock
+  std::map<std::string, std::vector<TimedOrientation>> imu_orientations;              // by device id, device clock
+  std::map<std::string, std::vector<TimedOrientation>> forearm_orientations;          // by device id, camera clock
+  std::map<std::string, std::vector<TimedOrientation>> offline_forearm_orientations;  // the same, offline
   std::vector<JointRow> smpl_joints, camera_joints;
   std::vector<JointRotationRow> smpl_joint_rotations;  // t_us never goes back
   std::vector<FitEnergyRow> fit_energies;              // t_us never goes back

@@ -40,6 +40,9 @@ struct ForearmOrientations {
   std::vector<double> pronation_rad;        // NaN without the calibration pose
   std::vector<double> orientation_rms_rad;  // predicted RMS error (forearm/orientation_uncertainty.hpp)
   std::vector<double> axis_rms_rad;         // y_F's alone (SettledArmSample::axis_rms_rad)
+  // The session re-solved at its end with the final mounting (ForearmTrack::offline_samples), sent
+  // after every live batch; the live samples are not repeated in it.
+  bool offline = false;
 };
 
 // The forearm stage's decision on one arm IMU once its calibration is over: tracked (with the
@@ -67,7 +70,7 @@ struct ArmTrack {
 // The orientations of one arm's settled samples, as the forearm stage hands them on.
 inline ForearmOrientations forearm_orientations_of(const std::string& device_id, v1::Arm arm,
                                                    const std::vector<forearm::SettledArmSample>& samples) {
-  ForearmOrientations out{device_id, arm, {}, {}, {}, {}, {}};
+  ForearmOrientations out{device_id, arm, {}, {}, {}, {}, {}, false};
   for (const forearm::SettledArmSample& s : samples) {
     out.t_us.push_back(s.sample.t_us);
     out.K_from_F.push_back(s.K_from_F);

@@ -62,4 +62,31 @@ BodyMotion with_calibration_prefix(const BodyMotion& calibration, const BodyMoti
   return out;
 }
 
+BodyMotion with_calibration_suffix(const BodyMotion& clip, const BodyMotion& calibration, double blend_s) {
+  if (clip.duration_s < blend_s) {
+    throw_invalid("motion.duration_s", "the clip (" + std::to_string(clip.duration_s) +
+                                           " s) is shorter than the blend into the calibration pose (" +
+                                           std::to_string(blend_s) + " s)");
+  }
+  const double calib0 = clip.duration_s;
+  const double blend_begin = calib0 - blend_s;
+  BodyMotion out;
+  out.duration_s = calib0 + calibration.duration_s;
+  out.warnings = clip.warnings;
+  out.warnings.insert(out.warnings.end(), calibration.warnings.begin(), calibration.warnings.end());
+  const sim::PoseSequence moving = clip.poses, calib = calibration.poses;
+  out.poses = [=](double t) -> Eigen::VectorXd {
+    if (t <= blend_begin) return moving(t);
+    if (t >= calib0) return calib(t - calib0);
+    return blend(moving(t), calib(t - calib0), smootherstep((t - blend_begin) / blend_s));
+  };
+  out.phases = clip.phases;
+  for (MotionPhase p : calibration.phases) {
+    p.begin_s += calib0;
+    p.end_s += calib0;
+    out.phases.push_back(p);
+  }
+  return out;
+}
+
 }  // namespace posefuse::sim

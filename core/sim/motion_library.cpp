@@ -73,8 +73,14 @@ BodyMotion select_motion(const std::string& name, const MotionOptions& options, 
     bvh.joint_map = options.bvh_joint_map;
     require_positive(options.exercise.speed, "speed");
     const BodyMotion clip = played_at(clip_motion(options.bvh_path, options.bvh_glitches, bvh), options.exercise.speed);
-    if (!options.calibration_prefix) return clip;
-    return with_calibration_prefix(make_exercise("calibration_pose", options.exercise), clip);
+    BodyMotion motion = clip;
+    if (options.calibration_prefix) {
+      motion = with_calibration_prefix(make_exercise("calibration_pose", options.exercise), motion);
+    }
+    if (options.calibration_suffix) {
+      motion = with_calibration_suffix(motion, make_exercise("calibration_pose", options.exercise));
+    }
+    return motion;
   }
   const std::vector<std::string> exercises = exercise_names();
   if (std::find(exercises.begin(), exercises.end(), name) == exercises.end()) {

@@ -92,6 +92,25 @@ TEST(ResultScore, KnownOffsetsComeBackAsErrors) {
   EXPECT_NE(table.find("K_from_W"), std::string::npos);
 }
 
+TEST(ResultScore, TheOfflineSolutionIsScoredAgainstTheLiveFoldersTruth) {
+  FixtureSpec result, truth;
+  result.forearm_angle_rad = 10.0 * pi / 180.0;
+  const Pair p = write_pair("offline", result, truth);
+  std::filesystem::copy(p.result / "forearm_orientations", p.result / "forearm_orientations_offline",
+                        std::filesystem::copy_options::recursive);
+  const eval::ScoreReport r = eval::score_directories(p.result, p.truth);
+  const eval::AngleScore* offline = r.orientation("forearm_orientations_offline/imu_right.csv", "imu_right");
+  ASSERT_NE(offline, nullptr);
+  EXPECT_EQ(offline->deg.count, 27u);
+  EXPECT_NEAR(offline->deg.rms, 10.0, 1e-6);
+  // A truth without the live folder: the offline one has nothing to be scored against.
+  std::filesystem::remove_all(p.result / "forearm_orientations");
+  std::filesystem::remove_all(p.truth / "forearm_orientations");
+  posefuse::testing::expect_error([&] { eval::score_directories(p.result, p.truth); }, ErrorCode::kNotFound,
+                                  (p.truth / "forearm_orientations/imu_right.csv").string(),
+                                  "missing in the truth directory");
+}
+
 TEST(ResultScore, RepetitionsOnAnotherDominantAngleAreScoredOnTheTruthsSeriesOfThatAngle) {
   FixtureSpec result, truth;
   truth.repetition_angle = v1::LEFT_ELBOW_FLEXION;

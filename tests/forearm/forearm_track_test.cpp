@@ -1,4 +1,5 @@
-// ForearmTrack's per-sample uncertainty and its pronation without a calibration pose.
+// ForearmTrack's per-sample uncertainty, its pronation without a calibration pose, and its offline
+// solution.
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -187,6 +188,93 @@ TEST(ForearmTrack, TheCamerasForearmAxisRaisesTheUncertaintyOfTheSamplesAfterIt)
   ASSERT_EQ(out.frames.size(), 1u);
   EXPECT_NEAR(out.frames[0].orientation_rms_rad, observed, 1e-9);
   EXPECT_LT(confidence_from_rms_rad(observed), 0.01);
+}
+
+TEST(ForearmTrack, TheOfflineSolutionGivesEverySampleTheFinalMountingAndReference) {
+  // A mounting from motion (no reference, 30 degrees), refined at 50 ms, then a calibration pose
+  // found at 100 ms: live, the first samples keep the old mounting and no pronation; offline,
+  // every sample has the pose's mounting, its uncertainty and the angle relative to it.
+  ForearmTrack track(Side::kRight, ForearmModel{}, false, Quat::Identity(), std::nullopt, 30.0 * kDeg);
+  EXPECT_FALSE(track.mounting_changed());
+  add_samples(track, 0, 5);
+  track.set_mounting(Quat(Eigen::AngleAxisd(0.2, Vec3::UnitY())), 12.0 * kDeg);
+  add_samples(track, 50'000, 5);
+  const Quat pose_F_from_A = Quat(Eigen::AngleAxisd(0.3, Vec3::UnitY()));
+  const Quat reference = Quat(Eigen::AngleAxisd(0.1, Vec3::UnitX()));
+  track.set_mounting(pose_F_from_A, 5.0 * kDeg);
+  track.set_pronation_reference(reference);
+  add_samples(track, 100'000, 5);
+  EXPECT_TRUE(track.mounting_changed());
+  const ForearmTrackOutput live = track.process(true);
+  ASSERT_EQ(live.samples.size(), 15u);
+  EXPECT_TRUE(std::isnan(live.samples[0].pronation_rad));
+
+  const std::vector<SettledArmSample> offline = track.offline_samples();
+  ASSERT_EQ(offline.size(), live.samples.size());
+  for (std::size_t i = 0; i < offline.size(); ++i) {
+    const SettledArmSample& s = offline[i];
+    EXPECT_EQ(s.sample.t_us, live.samples[i].sample.t_us) << i;
+    const Quat expected = (live.samples[i].sample.K_from_A * pose_F_from_A.conjugate()).normalized();
+    EXPECT_LT(geometry::angle_between(s.K_from_F, expected), 1e-9) << i;
+    EXPECT_NEAR(s.pronation_rad, pronation_angle(reference, expected, Side::kRight), 1e-9) << i;
+    EXPECT_DOUBLE_EQ(s.orientation_rms_rad, 5.0 * kDeg) << i;
+    EXPECT_NEAR(s.axis_rms_rad, kDirectionRmsOverOrientationRms * 5.0 * kDeg, 1e-15) << i;
+  }
+}
+
+TEST(ForearmTrack, TheOfflineSolutionKeepsTheFiltersUncertaintyAndChecksItAgainstTheCamera) {
+  // Mounting refined from 30 to 2 degrees at 50 ms; the filter lost samples before the ninth;
+  // depth axes at 35 ms (30 degrees off the final mounting's y) and at 65 ms (on it). Offline,
+  // every sample has the final mounting's and the filter's uncertainty together, at least what
+  // the frames on either side of it showed: the one after a sample counts too.
+  ForearmTrack track(Side::kRight, ForearmModel{}, false, Quat::Identity(), std::nullopt, 30.0 * kDeg);
+  std::vector<std::int64_t> t_us;
+  std::vector<Quat> W_from_A;
+  std::vector<Vec3> force;
+  std::vector<double> filter_rad;
+  for (int i = 0; i < 10; ++i) {
+    t_us.push_back(10'000 * i);
+    W_from_A.push_back(Quat::Identity());
+    force.push_back(Vec3(0, kGravity, 0));
+    filter_rad.push_back(i == 8 ? 20.0 * kDeg : 0.0);
+  }
+  const auto first = [](const auto& v, int n) { return std::vector(v.begin(), v.begin() + n); };
+  const auto rest = [](const auto& v, int n) { return std::vector(v.begin() + n, v.end()); };
+  track.add_imu(first(t_us, 5), first(W_from_A, 5), first(force, 5), first(filter_rad, 5));
+  track.set_mounting(Quat::Identity(), 2.0 * kDeg);
+  track.add_imu(rest(t_us, 5), rest(W_from_A, 5), rest(force, 5), rest(filter_rad, 5));
+  for (const auto& [t, off_rad] : {std::pair{35'000, 30 * kDeg}, std::pair{65'000, 0.0}}) {
+    ArmFrame seen;
+    seen.t_us = t;
+    seen.axis_from_depth = true;
+    seen.forearm_tracked = true;
+    seen.elbow_K = Vec3(0, 0, 2);
+    seen.wrist_K = seen.elbow_K + 0.25 * Vec3(std::sin(off_rad), std::cos(off_rad), 0);
+    track.add_frame(seen);
+  }
+  track.process(true);
+  const std::vector<SettledArmSample> offline = track.offline_samples();
+  ASSERT_EQ(offline.size(), 10u);
+  const double observed = 30 * kDeg / std::sqrt(2.0 / 3.0);
+  for (std::size_t i = 0; i < offline.size(); ++i) {
+    const double expected = i <= 6 ? observed : i == 8 ? std::hypot(2.0, 20.0) * kDeg : 2.0 * kDeg;
+    EXPECT_NEAR(offline[i].orientation_rms_rad, expected, 1e-9) << i;
+    EXPECT_TRUE(std::isnan(offline[i].pronation_rad)) << i;
+  }
+}
+
+TEST(ForearmTrack, TheOfflineSolutionOfAnUnchangedMountingIsTheLiveOne) {
+  ForearmTrack track(Side::kLeft, ForearmModel{}, false, Quat::Identity(), Quat::Identity(), 4.0 * kDeg);
+  add_samples(track, 0, 10);
+  const ForearmTrackOutput live = track.process(true);
+  const std::vector<SettledArmSample> offline = track.offline_samples();
+  ASSERT_EQ(offline.size(), live.samples.size());
+  for (std::size_t i = 0; i < offline.size(); ++i) {
+    EXPECT_EQ(offline[i].sample.t_us, live.samples[i].sample.t_us);
+    EXPECT_EQ(offline[i].K_from_F.coeffs(), live.samples[i].K_from_F.coeffs());
+    EXPECT_EQ(offline[i].pronation_rad, live.samples[i].pronation_rad);
+    EXPECT_EQ(offline[i].orientation_rms_rad, live.samples[i].orientation_rms_rad);
+  }
 }
 
 }  // namespace

@@ -56,7 +56,7 @@ struct EmittedOrientation {
 std::vector<EmittedOrientation> orientations(const CollectingOutput& out) {
   std::vector<EmittedOrientation> all;
   for (const v1::FitResult& r : out.results) {
-    if (!r.has_forearm_orientations()) continue;
+    if (!r.has_forearm_orientations() || r.forearm_orientations().offline()) continue;
     const v1::ForearmOrientationBatch& b = r.forearm_orientations();
     for (int i = 0; i < b.t_us_size(); ++i) {
       all.push_back(

@@ -248,7 +248,7 @@ Vec3 vec(const v1::Vec3& v) { return {v.x(), v.y(), v.z()}; }
 }  // namespace
 
 ForearmSessionErrors evaluate_forearm_results(const ForearmSessionTruth& truth,
-                                              const std::vector<v1::FitResult>& results) {
+                                              const std::vector<v1::FitResult>& results, bool offline_solution) {
   constexpr std::size_t kNone = static_cast<std::size_t>(-1);
   ForearmSessionErrors e;
   double orientation_sq = 0.0, visible_sq = 0.0;
@@ -256,6 +256,7 @@ ForearmSessionErrors evaluate_forearm_results(const ForearmSessionTruth& truth,
   for (const v1::FitResult& result : results) {
     if (result.has_forearm_orientations()) {
       const v1::ForearmOrientationBatch& b = result.forearm_orientations();
+      if (b.offline() != offline_solution) continue;
       for (int i = 0; i < b.t_us_size() && 4 * i + 3 < b.k_from_f_size() && i < b.pronation_rad_size(); ++i) {
         const std::size_t k = frame_near(truth, b.t_us(i));
         if (k == kNone) continue;

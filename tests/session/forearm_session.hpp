@@ -93,7 +93,9 @@ struct ForearmSessionErrors {
   std::map<int, Recovered> recovered;
   std::size_t segments = 0;
 };
+// The orientation figures are the live batches' or, with `offline_solution`, the offline ones'
+// (ForearmOrientationBatch.offline); the frames and segments are the same either way.
 ForearmSessionErrors evaluate_forearm_results(const ForearmSessionTruth& truth,
-                                              const std::vector<v1::FitResult>& results);
+                                              const std::vector<v1::FitResult>& results, bool offline_solution = false);
 
 }  // namespace posefuse::session::testing

@@ -147,7 +147,7 @@ TEST(ForearmStage, RepeatedBroadcastsGiveTheDriftBetweenTheImus) {
   EXPECT_LT(e.orientation_rms_rad, 3.0 * kDeg);
   std::map<std::string, std::int64_t> last_t;
   for (const auto& result : r.sink.results) {
-    if (!result.has_forearm_orientations()) continue;
+    if (!result.has_forearm_orientations() || result.forearm_orientations().offline()) continue;
     const auto& batch = result.forearm_orientations();
     for (const std::int64_t t : batch.t_us()) {
       if (last_t.contains(batch.device_id())) {
@@ -390,7 +390,7 @@ TEST(ForearmStage, WithTheBodyFitTheGapWaitsForItsElbows) {
     std::set<std::int64_t> frame_times;
     for (std::size_t i = 0; i < sink.results.size(); ++i) {
       const v1::FitResult& x = sink.results[i];
-      if (x.has_forearm_orientations()) last_orientations = i;
+      if (x.has_forearm_orientations() && !x.forearm_orientations().offline()) last_orientations = i;
       if (x.has_recovered_segment()) first_segment = std::min(first_segment, i);
       if (x.has_frame()) {
         fit_frames += x.frame().smpl_joints_size() > 0;
@@ -431,7 +431,7 @@ TEST(ForearmStage, AxisCorrectionCanBeTurnedOff) {
     pipeline.close();
     errors[correction] = testing::evaluate_forearm_results(truth, sink.results);
     for (const v1::FitResult& r : sink.results) {
-      if (!r.has_forearm_orientations()) continue;
+      if (!r.has_forearm_orientations() || r.forearm_orientations().offline()) continue;
       for (const std::int64_t t : r.forearm_orientations().t_us()) sample_times[correction].push_back(t);
     }
     std::printf("axis correction %s: orientation RMS %.3f deg, max %.3f deg over %zu samples\n", correction.c_str(),
@@ -465,7 +465,7 @@ TEST(ForearmStage, ACalibrationPoseLaterInTheSessionReplacesTheMountingFromMotio
   std::size_t before = 0, after = 0;
   double after_max_error = 0.0;
   for (const auto& result : r.sink.results) {
-    if (!result.has_forearm_orientations()) continue;
+    if (!result.has_forearm_orientations() || result.forearm_orientations().offline()) continue;
     const v1::ForearmOrientationBatch& b = result.forearm_orientations();
     for (int i = 0; i < b.t_us_size(); ++i) {
       if (std::isnan(b.pronation_rad(i))) {
@@ -487,6 +487,19 @@ TEST(ForearmStage, ACalibrationPoseLaterInTheSessionReplacesTheMountingFromMotio
   EXPECT_EQ(e.confident_beyond_15_deg, 0u);
   EXPECT_LT(after_max_error, 6.0 * kDeg);
   EXPECT_LT(e.pronation_max_rad, 6.0 * kDeg);
+  // Offline, the whole session has the pose's mounting: every sample again, each with its
+  // pronation, none confident beyond 15 degrees, the samples before the pose closer to the truth.
+  const testing::ForearmSessionErrors offline =
+      testing::evaluate_forearm_results(r.truth, r.sink.results, /*offline_solution=*/true);
+  std::printf("later pose offline: %zu samples, RMS %.2f deg (live %.2f), %zu confident (live %zu)\n",
+              offline.orientation_samples, offline.orientation_rms_rad / kDeg, e.orientation_rms_rad / kDeg,
+              offline.confident_samples, e.confident_samples);
+  EXPECT_EQ(offline.orientation_samples, e.orientation_samples);
+  EXPECT_EQ(offline.pronation_nan, 0u);
+  EXPECT_LT(offline.pronation_max_rad, 6.0 * kDeg);
+  EXPECT_EQ(offline.confident_beyond_15_deg, 0u);
+  EXPECT_LT(offline.orientation_rms_rad, e.orientation_rms_rad);
+  EXPECT_GT(offline.confident_samples, e.confident_samples);
   // The report: the pose's mounting.
   for (const auto& result : r.sink.results) {
     if (result.has_calibration()) {
@@ -505,7 +518,7 @@ TEST(ForearmStage, LostArmImuSamplesLowerTheConfidenceUntilTheFilterHasRecovered
   const StageRun& r = run_session(options);
   double before = 0.0, after = 0.0, late = 0.0;
   for (const auto& result : r.sink.results) {
-    if (!result.has_forearm_orientations()) continue;
+    if (!result.has_forearm_orientations() || result.forearm_orientations().offline()) continue;
     const auto& b = result.forearm_orientations();
     for (int i = 0; i < b.t_us_size(); ++i) {
       const double t_s = 1e-6 * static_cast<double>(b.t_us(i));
@@ -583,12 +596,30 @@ TEST(ForearmStage, NoCalibrationPoseIsNamedAndTheMountingComesFromMotion) {
   // predicted better than the first.
   std::vector<double> uncertainty;
   for (const auto& result : r.sink.results) {
-    if (!result.has_forearm_orientations()) continue;
+    if (!result.has_forearm_orientations() || result.forearm_orientations().offline()) continue;
     for (const double u : result.forearm_orientations().uncertainty_rad()) uncertainty.push_back(u);
   }
   ASSERT_FALSE(uncertainty.empty());
   std::printf("predicted RMS: first %.1f deg, last %.1f deg\n", uncertainty.front() / kDeg, uncertainty.back() / kDeg);
   EXPECT_LT(uncertainty.back(), uncertainty.front());
+  // Offline, every sample has the last estimate's uncertainty (or more where the camera showed
+  // more), and the prediction still brackets the error.
+  const testing::ForearmSessionErrors offline =
+      testing::evaluate_forearm_results(r.truth, r.sink.results, /*offline_solution=*/true);
+  std::printf("offline: RMS %.2f deg, max %.2f deg\n", offline.orientation_rms_rad / kDeg,
+              offline.orientation_max_rad / kDeg);
+  EXPECT_EQ(offline.orientation_samples, e.orientation_samples);
+  EXPECT_EQ(offline.pronation_nan, offline.orientation_samples);
+  EXPECT_EQ(offline.confident_beyond_15_deg, 0u);
+  EXPECT_GE(static_cast<double>(offline.within_predicted_bound),
+            0.95 * static_cast<double>(offline.orientation_samples));
+  const v1::CalibrationReport* final_report = calibration_of(r);
+  ASSERT_TRUE(final_report != nullptr && final_report->forearms_size() == 1);
+  const double final_rms_rad = final_report->forearms(0).orientation_uncertainty_rad();
+  for (const auto& result : r.sink.results) {
+    if (!result.has_forearm_orientations() || !result.forearm_orientations().offline()) continue;
+    for (const double u : result.forearm_orientations().uncertainty_rad()) EXPECT_GE(u, final_rms_rad - 1e-12);
+  }
   // No strap model: orientations only.
   for (const auto& result : r.sink.results) {
     if (result.has_frame()) {
@@ -625,7 +656,7 @@ TEST(ForearmStage, CalibratedSamplesCarryThePoseCalibrationsUncertainty) {
 
   std::size_t samples = 0, frames = 0, raised = 0;
   for (const auto& result : r.sink.results) {
-    if (result.has_forearm_orientations()) {
+    if (result.has_forearm_orientations() && !result.forearm_orientations().offline()) {
       const v1::ForearmOrientationBatch& b = result.forearm_orientations();
       ASSERT_EQ(b.uncertainty_rad_size(), b.t_us_size());
       ASSERT_EQ(b.confidence_size(), b.t_us_size());

@@ -276,3 +276,34 @@ TEST(CalibrationPrefix, CalibrationHoldThenTheClipShifted) {
   EXPECT_NEAR(phase(out, "raised").begin_s, phase(clip, "raised").begin_s + hold_end + blend_s, 1e-12);
   EXPECT_THROW(calibration_hold_end_s(clip), Error);
 }
+
+// The calibration pose after a clip (calibration_prefix.hpp): the clip up to its last blend, the
+// whole calibration exercise shifted by the clip's duration, phases from both.
+TEST(CalibrationSuffix, TheClipThenTheCalibrationExerciseShifted) {
+  ExerciseOptions both;
+  both.arm = ExerciseArm::kBoth;
+  const BodyMotion calibration = make_exercise("calibration_pose", both);
+  const BodyMotion clip = make_exercise("arm_raising", both);
+  const double blend_s = 1.5;
+  const BodyMotion out = with_calibration_suffix(clip, calibration, blend_s);
+  EXPECT_NEAR(out.duration_s, clip.duration_s + calibration.duration_s, 1e-12);
+  for (const double t : {0.0, 1.0, clip.duration_s - blend_s}) {
+    EXPECT_LT((out.poses(t) - clip.poses(t)).norm(), 1e-12) << t;
+  }
+  for (const double t : {0.0, 1.0, calibration_hold_end_s(calibration), calibration.duration_s}) {
+    EXPECT_LT((out.poses(clip.duration_s + t) - calibration.poses(t)).norm(), 1e-12) << t;
+  }
+  // Inside the blend the pose lies between the clip's and the calibration's start.
+  const double t_mid = clip.duration_s - 0.5 * blend_s;
+  const double mid_y = pose_at(out, t_mid).joints.col(body::kRightWrist).y();
+  const double clip_y = pose_at(clip, t_mid).joints.col(body::kRightWrist).y();
+  const double rest_y = pose_at(calibration, 0.0).joints.col(body::kRightWrist).y();
+  EXPECT_LE(mid_y, std::max(clip_y, rest_y) + 1e-9);
+  EXPECT_GE(mid_y, std::min(clip_y, rest_y) - 1e-9);
+  EXPECT_NEAR(calibration_hold_end_s(out), clip.duration_s + calibration_hold_end_s(calibration), 1e-12);
+  EXPECT_NEAR(phase(out, "raised").begin_s, phase(clip, "raised").begin_s, 1e-12);
+  // A clip shorter than the blend is refused by name.
+  BodyMotion short_clip = clip;
+  short_clip.duration_s = 1.0;
+  EXPECT_THROW(with_calibration_suffix(short_clip, calibration, blend_s), Error);
+}

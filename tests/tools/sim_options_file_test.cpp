@@ -53,6 +53,7 @@ TEST(SimOptionsFile, AppliesEveryKindOfValue) {
       "arm = both\n"
       "bvh_path = /tmp/clip.bvh\n"
       "calibration_prefix = true\n"
+      "calibration_suffix = true\n"
       "gyro_range_dps = 1000\n"
       "bvh_smoothing = noise_level\n"
       "bvh_max_glitch_frames = 30\n"
@@ -88,6 +89,7 @@ TEST(SimOptionsFile, AppliesEveryKindOfValue) {
   EXPECT_EQ(options.motion_options.exercise.arm, sim::ExerciseArm::kBoth);
   EXPECT_EQ(options.motion_options.bvh_path, "/tmp/clip.bvh");
   EXPECT_TRUE(options.motion_options.calibration_prefix);
+  EXPECT_TRUE(options.motion_options.calibration_suffix);
   EXPECT_EQ(options.threads, 3);
   EXPECT_DOUBLE_EQ(options.buzzer.tone_hz, 3400.0);
   EXPECT_DOUBLE_EQ(options.imu.synth.gyr_range_rad_s, 1000 * 3.14159265358979323846 / 180);

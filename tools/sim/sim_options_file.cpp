@@ -110,6 +110,10 @@ const std::map<std::string, Setter>& setters() {
                               [](Options& o, const std::string& v, const std::string& f) {
                                 o.motion_options.calibration_prefix = boolean(v, f);
                               }}},
+      {"calibration_suffix", {"motion bvh: paper 1's calibration pose (with arm) after the clip, blended in (false)",
+                              [](Options& o, const std::string& v, const std::string& f) {
+                                o.motion_options.calibration_suffix = boolean(v, f);
+                              }}},
       {"speed", {"playback speed factor of the exercise or BVH clip, > 0; 2 halves every movement and hold (1)",
                  [](Options& o, const std::string& v, const std::string& f) {
                    o.motion_options.exercise.speed = positive(v, f);

@@ -179,7 +179,8 @@ void BodyFitStage::add_camera_frame(const CameraFrame& camera, StageOutput& out)
 
 void BodyFitStage::on_value(const StageValue& value, StageOutput& out) {
   const auto* batch = std::get_if<ForearmOrientations>(&value);
-  if (!enabled_ || !batch) return;
+  // The offline solution comes after the last frame, too late for any fit.
+  if (!enabled_ || !batch || batch->offline) return;
   auto& samples = K_from_F_[batch->arm];
   for (std::size_t i = 0; i < batch->t_us.size(); ++i) {
     const Eigen::Quaterniond& q = batch->K_from_F[i];

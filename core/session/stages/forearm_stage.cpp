@@ -32,6 +32,8 @@ constexpr double kCalibrationGraceS = 10.0;
 // A mounting from motion is re-estimated once this many new frames (a second at 30 Hz) or a
 // tenth more have been tracked.
 constexpr std::size_t kMinNewMountingFrames = 30;
+// The offline solution's samples per message: 51 s at 80 Hz, about 300 kB encoded.
+constexpr std::size_t kOfflineBatchSamples = 4096;
 
 double degrees(double rad) { return rad * 180.0 / std::numbers::pi; }
 
@@ -549,6 +551,24 @@ void ForearmStage::feed_trackers(bool all, StageOutput& out) {
   }
 }
 
+void ForearmStage::hand_on_offline_solutions(StageOutput& out) {
+  for (const Device& device : devices_) {
+    if (!device.tracker) continue;
+    const v1::Arm arm = *device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT;
+    const std::vector<forearm::SettledArmSample> samples = device.tracker->offline_samples();
+    // In batches, so that no message grows with the session's length.
+    for (std::size_t begin = 0; begin < samples.size(); begin += kOfflineBatchSamples) {
+      const std::size_t end = std::min(samples.size(), begin + kOfflineBatchSamples);
+      ForearmOrientations batch = forearm_orientations_of(
+          device.id, arm,
+          std::vector<forearm::SettledArmSample>(samples.begin() + static_cast<std::ptrdiff_t>(begin),
+                                                 samples.begin() + static_cast<std::ptrdiff_t>(end)));
+      batch.offline = true;
+      out.hand_on(std::move(batch));
+    }
+  }
+}
+
 std::size_t ForearmStage::held_bytes() const {
   std::size_t held = 0;
   for (const Device& device : devices_) {
@@ -572,6 +592,7 @@ void ForearmStage::finish(StageOutput& out) {
     feed_trackers(true, out);
   }
   hand_on_frames_done(true, out);
+  hand_on_offline_solutions(out);
   for (const Device& device : devices_) {
     if (!device.tracker || device.tracker->orientation_steps() == 0) continue;
     out.warn("FOREARM_ORIENTATION_STEP", "forearm[" + device.id + "].orientation",

@@ -38,6 +38,8 @@
 //     the estimate's predicted error and confidence, grow more certain as the estimate is
 //     refined, and have no pronation relative to a calibration pose (NaN); no strap model, so no
 //     IMU positions. FOREARM_MOUNTING_NOT_OBSERVABLE names an arm for which motion gave none.
+//  5. At the end, every tracked arm's offline solution (ForearmOrientations with offline set): the
+//     whole session again with the final mounting (forearm_track.hpp offline_samples).
 // Problems that stop an arm are warnings naming them (the rest of the session goes on):
 // FOREARM_NO_BASE_IMU, FOREARM_NO_CAMERA_ALIGNMENT, FOREARM_NO_SYNC (no buzzer event, the stop
 // not heard, no shared BLE broadcast), FOREARM_CALIBRATION (too short or no calibration hold, or
@@ -130,6 +132,8 @@ class ForearmStage : public Stage {
   void feed_trackers(bool all, StageOutput& out);
   // The arm's new settled samples and tracked frames, handed on.
   void hand_on_track(Device& device, forearm::ForearmTrackOutput&& track, StageOutput& out);
+  // Every tracked arm's offline solution (ForearmTrack::offline_samples), after its last live batch.
+  void hand_on_offline_solutions(StageOutput& out);
   // FramesDone: every frame up to the oldest one still held (all at the end or when inactive).
   void hand_on_frames_done(bool all, StageOutput& out);
   std::optional<forearm::Quat> W_from_A_at(const Device& device, std::int64_t t_camera_us) const;
