@@ -24,6 +24,9 @@ ArmCalibration calibrate_arm(const CalibrationFrames& frames, const Quat& K_from
     held.push_back(used[out.calibration.first_frame + i].K_from_F_sdk);
   }
   out.K_from_F_held = geometry::chordal_mean(held);
+  if (out.calibration.frame_count > 0) {
+    out.hold_end_us = used[out.calibration.first_frame + out.calibration.frame_count - 1].t_us;
+  }
   return out;
 }
 

@@ -13,9 +13,10 @@ namespace posefuse::forearm {
 
 struct ArmCalibration {
   ForearmCalibration calibration;
-  bool has_model = false;      // from the strap frames: r, d_se, d_sw known (eq. 10 positions)
-  Quat K_from_F_held;          // the chordal mean forearm orientation of the hold's frames
-  std::string strap_not_seen;  // why the strap frames gave no model; empty when they did
+  bool has_model = false;        // from the strap frames: r, d_se, d_sw known (eq. 10 positions)
+  Quat K_from_F_held;            // the chordal mean forearm orientation of the hold's frames
+  std::int64_t hold_end_us = 0;  // the last frame of the still run used
+  std::string strap_not_seen;    // why the strap frames gave no model; empty when they did
 };
 
 // Throws posefuse::Error kFailedPrecondition "frames" when neither set of frames calibrates,

@@ -41,6 +41,8 @@ ForearmTrack::ForearmTrack(Side side, const ForearmModel& model, bool has_model,
 void ForearmTrack::set_mounting(const Quat& F_from_A, double orientation_rms_rad, std::optional<double> axis_rms_rad) {
   model_.F_from_A = F_from_A.normalized();
   mounting_changed_ = true;
+  mounting_from_ = arm_.size();
+  mounting_from_later_pose_ = false;
   orientation_rms_rad_ = orientation_rms_rad;
   axis_rms_rad_ = axis_rms_rad.value_or(kDirectionRmsOverOrientationRms * orientation_rms_rad);
 }
@@ -49,6 +51,7 @@ void ForearmTrack::set_pronation_reference(const Quat& K_from_F_reference) {
   K_from_F_reference_ = K_from_F_reference.normalized();
   reference_from_ = arm_.size();
   mounting_changed_ = true;
+  mounting_from_later_pose_ = mounting_from_ == reference_from_;
 }
 
 double ForearmTrack::pronation(std::size_t i, const Quat& K_from_F) const {
@@ -298,8 +301,17 @@ std::vector<SettledArmSample> ForearmTrack::offline_samples() const {
     const Vec3 y_K = slerp_at(depth_axes_[k].t_us, re_solved) * Vec3::UnitY();
     observed_rms_rad[k] = camera_observed_rms_rad(std::acos(std::clamp(y_K.dot(depth_axes_[k].axis_K), -1.0, 1.0)));
   }
+  // The filter's whole predicted error during the hold (the samples just before the pose was found).
+  const double hold_imu_rms_rad =
+      mounting_from_later_pose_ && mounting_from_ > 0 && mounting_from_ <= filter_rms_rad_of_.size()
+          ? imu_orientation_rms_rad(filter_rms_rad_of_[mounting_from_ - 1])
+          : 0.0;
   for (std::size_t i = 0; i < K_from_F.size(); ++i) {
     double rms_rad = std::hypot(orientation_rms_rad_, filter_rms_rad_of_[i]);
+    if (mounting_from_later_pose_ && i < mounting_from_) {
+      rms_rad = std::sqrt(rms_rad * rms_rad + hold_imu_rms_rad * hold_imu_rms_rad +
+                          std::pow(imu_orientation_rms_rad(filter_rms_rad_of_[i]), 2));
+    }
     // The frames on either side: offline, the one after the sample is known too.
     const std::size_t before = index_at_or_before(depth_axes_, arm_[i].t_us);
     if (before != kNoIndex) rms_rad = std::max(rms_rad, observed_rms_rad[before]);

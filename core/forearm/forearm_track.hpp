@@ -144,6 +144,13 @@ class ForearmTrack {
   // filter's, at least what the camera's depth axis at the frames on either side of it showed
   // against the re-solved orientation. A track whose mounting never changed returns its live
   // samples: they are already final (and may carry an axis correction the re-solve would lose).
+  // A mounting from a calibration pose found later holds the IMU's orientation error during the
+  // hold; at another orientation that error no longer cancels, and the sample's own does not
+  // either. The samples before such a pose therefore also carry the filter's predicted error at
+  // the hold and at their own time (imu_orientation_rms_rad of each), as independent errors: the
+  // pose's measured uncertainty (kPoseCalibrationRmsRad) was measured forward in time from a pose
+  // at the start, and an IMU whose error the filter under-predicts showed confident samples
+  // beyond 15 degrees without them (docs/forearm.md "The offline solution").
   std::vector<SettledArmSample> offline_samples() const;
   bool mounting_changed() const { return mounting_changed_; }
 
@@ -197,6 +204,10 @@ class ForearmTrack {
   };
   std::vector<DepthAxis> depth_axes_;
   bool mounting_changed_ = false;  // set_mounting or set_pronation_reference after the start
+  std::size_t mounting_from_ = 0;  // the first sample made with the current mounting
+  // The current mounting came from a calibration pose found later (set_pronation_reference with
+  // it): what the IMU's orientation error was during the hold is in it.
+  bool mounting_from_later_pose_ = false;
   // The previous frame's implied mounting and uncertainty, and the frames flagged for a step.
   std::optional<Quat> last_frame_A_from_F_;
   double last_frame_rms_rad_ = 0.0;

@@ -78,7 +78,9 @@ BodyMotion select_motion(const std::string& name, const MotionOptions& options, 
       motion = with_calibration_prefix(make_exercise("calibration_pose", options.exercise), motion);
     }
     if (options.calibration_suffix) {
-      motion = with_calibration_suffix(motion, make_exercise("calibration_pose", options.exercise));
+      ExerciseOptions once = options.exercise;  // one pose at the end, not `repetitions` of them
+      once.repetitions = 1;
+      motion = with_calibration_suffix(motion, make_exercise("calibration_pose", once));
     }
     return motion;
   }

@@ -29,7 +29,7 @@ struct MotionOptions {
   // hold first and blend into the clip (calibration_prefix.hpp): the forearm stage needs paper
   // 1's calibration pose (II-H), which a mocap clip does not start in.
   bool calibration_prefix = false;
-  // Motion "bvh": the calibration_pose exercise after the clip, blended in (a session whose
+  // Motion "bvh": the calibration_pose exercise, once, after the clip, blended in (a session whose
   // calibration pose comes last; calibration_prefix.hpp).
   bool calibration_suffix = false;
   BvhSmoothing bvh_smoothing = BvhSmoothing::kGaussian;  // motion "bvh" (bvh_motion.hpp)
