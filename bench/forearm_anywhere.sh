@@ -25,7 +25,7 @@
 #   "+pose" appended (paper 1's calibration pose first: sim calibration_prefix) or "+pose_end"
 #   (the pose after the clip: sim calibration_suffix).
 # Default: the 11 exercises at speeds 0.7, 1.0, 1.3 on seeds 51 and 52, 20 s, then every clip in
-# ../shared/data/mocap with and without the pose, seed 51, speed 1. Nothing was chosen on these
+# ../shared/data/mocap without the pose, with it first and with it at the end, seed 51, speed 1. Nothing was chosen on these
 # seeds (the pose calibration's uncertainty comes from seeds 41 and 43,
 # bench/calibration_refusals.sh; the mounting-from-motion constants are principles).
 set -euo pipefail
@@ -42,7 +42,9 @@ if [ ${#specs[@]} -eq 0 ]; then
       done
     done
   done
-  for clip in "$root"/../shared/data/mocap/*.bvh; do specs+=("$clip:51:1.0" "$clip+pose:51:1.0"); done
+  for clip in "$root"/../shared/data/mocap/*.bvh; do
+    specs+=("$clip:51:1.0" "$clip+pose:51:1.0" "$clip+pose_end:51:1.0")
+  done
 fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT

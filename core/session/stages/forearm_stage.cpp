@@ -154,8 +154,7 @@ void ForearmStage::hand_on_frames_done(bool all, StageOutput& out) {
   out.hand_on(FramesDone{FrameSource::kForearm, up_to});
 }
 
-void ForearmStage::hand_on_track(Device& device, forearm::ForearmTrackOutput&& track, bool finishing,
-                                 StageOutput& out) {
+void ForearmStage::hand_on_track(Device& device, forearm::ForearmTrackOutput&& track, StageOutput& out) {
   const v1::Arm arm = *device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT;
   ForearmOrientations orientations = forearm_orientations_of(device.id, arm, track.samples);
   // Searched every kMinNewMountingFrames frames however many come at once (a track started late
@@ -171,11 +170,8 @@ void ForearmStage::hand_on_track(Device& device, forearm::ForearmTrackOutput&& t
     }
     if (device.frames_since_pose_search >= kMinNewMountingFrames) {
       device.frames_since_pose_search = 0;
-      search_later_pose(device, false, out);
+      search_later_pose(device, out);
     }
-  }
-  if (finishing && device.from_motion && !device.later_pose && !device.recent_frames.empty()) {
-    search_later_pose(device, true, out);
   }
   // The track first: the gaps' live estimate of these frames uses the fit's frames up to the
   // last call, as the fit's frames that these orientations complete come after it.
@@ -377,7 +373,7 @@ forearm::CalibrationFrameOptions ForearmStage::calibration_frame_options() const
   return frame_options;
 }
 
-void ForearmStage::search_later_pose(Device& device, bool finishing, StageOutput& out) {
+void ForearmStage::search_later_pose(Device& device, StageOutput& out) {
   std::vector<forearm::ArmFrame> frames;
   for (const auto& [frame, W_from_A] : device.recent_frames) frames.push_back(frame);
   const auto W_from_A_at = [&](std::int64_t t_us) -> std::optional<Quat> {
@@ -396,7 +392,9 @@ void ForearmStage::search_later_pose(Device& device, bool finishing, StageOutput
   }
   // A hold still going on at the window's end is taken once it is over (from all its frames), not
   // from its first frames: those gave mountings 1-3 degrees worse on clips with the pose at the end.
-  if (!finishing && calibrated.hold_end_us >= frames.back().t_us) return;
+  // One still going on when the session ends is not taken: arm_raising cut at 20 s with the arm
+  // raised and still passed every bound and the axis check, 26 degrees off.
+  if (calibrated.hold_end_us >= frames.back().t_us) return;
   // A pose whose forearm axis in A disagrees with the motion's beyond both their 99 % bounds is
   // not the pose it seems (a passing arm that happened to hold still).
   const Quat& pose_F_from_A = calibrated.calibration.model.F_from_A;
@@ -554,7 +552,7 @@ void ForearmStage::feed_trackers(bool all, StageOutput& out) {
       device.imu.clear();
     }
     device.tracker->add_imu(t_us, W_from_A, force, filter_uncertainty_rad);
-    hand_on_track(device, device.tracker->process(all), all, out);
+    hand_on_track(device, device.tracker->process(all), out);
   }
 }
 

@@ -131,8 +131,7 @@ class ForearmStage : public Stage {
   void refit_clocks(bool finishing);
   void feed_trackers(bool all, StageOutput& out);
   // The arm's new settled samples and tracked frames, handed on.
-  // `finishing`: the session's last frames (a hold still going on at the end is taken).
-  void hand_on_track(Device& device, forearm::ForearmTrackOutput&& track, bool finishing, StageOutput& out);
+  void hand_on_track(Device& device, forearm::ForearmTrackOutput&& track, StageOutput& out);
   // Every tracked arm's offline solution (ForearmTrack::offline_samples), after its last live batch.
   void hand_on_offline_solutions(StageOutput& out);
   // FramesDone: every frame up to the oldest one still held (all at the end or when inactive).
@@ -144,9 +143,9 @@ class ForearmStage : public Stage {
   void start_motion_track(Device& device, const forearm::MountingEstimate& estimate, StageOutput& out);
   std::vector<forearm::MountingFrame> buffered_mounting_frames(const Device& device) const;
   // A calibration pose among the recent tracked frames of an arm whose mounting came from motion:
-  // taken when calibrate_arm accepts it, its hold is over (or the session is) and its forearm axis
-  // agrees with the motion's estimate.
-  void search_later_pose(Device& device, bool finishing, StageOutput& out);
+  // taken when calibrate_arm accepts it, its hold is over and its forearm axis agrees with the
+  // motion's estimate.
+  void search_later_pose(Device& device, StageOutput& out);
   forearm::CalibrationFrameOptions calibration_frame_options() const;
 
   bool active_ = false;
