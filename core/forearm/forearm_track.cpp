@@ -309,8 +309,7 @@ std::vector<SettledArmSample> ForearmTrack::offline_samples() const {
   for (std::size_t i = 0; i < K_from_F.size(); ++i) {
     double rms_rad = std::hypot(orientation_rms_rad_, filter_rms_rad_of_[i]);
     if (mounting_from_later_pose_ && i < mounting_from_) {
-      rms_rad = std::sqrt(rms_rad * rms_rad + hold_imu_rms_rad * hold_imu_rms_rad +
-                          std::pow(imu_orientation_rms_rad(filter_rms_rad_of_[i]), 2));
+      rms_rad = std::hypot(rms_rad, hold_imu_rms_rad, imu_orientation_rms_rad(filter_rms_rad_of_[i]));
     }
     // The frames on either side: offline, the one after the sample is known too.
     const std::size_t before = index_at_or_before(depth_axes_, arm_[i].t_us);

@@ -18,7 +18,7 @@ void report_clock(const std::string& device_id, const sync::LinearClock& camera_
 void report_forearm_model(const std::string& device_id, forearm::Side side, const forearm::ForearmCalibration& c,
                           bool has_model, std::uint32_t strap_frames, v1::CalibrationReport& report) {
   v1::ForearmModel& model = *report.add_forearms();
-  model.set_arm(side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT);
+  model.set_arm(to_proto_arm(side));
   model.set_device_id(device_id);
   model.set_r_m(has_model ? c.model.r_m : 0.0);
   model.set_d_se_m(has_model ? c.model.d_se_m : 0.0);
@@ -37,7 +37,7 @@ void report_forearm_model(const std::string& device_id, forearm::Side side, cons
 void report_motion_mounting(const std::string& device_id, forearm::Side side, const forearm::MountingEstimate& m,
                             v1::CalibrationReport& report) {
   v1::ForearmModel& model = *report.add_forearms();
-  model.set_arm(side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT);
+  model.set_arm(to_proto_arm(side));
   model.set_device_id(device_id);
   *model.mutable_a_from_f() = to_proto(forearm::Quat(m.F_from_A.conjugate()));
   model.set_estimated(true);

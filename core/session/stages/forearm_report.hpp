@@ -12,6 +12,9 @@
 
 namespace posefuse::session {
 
+// The result schema's arm of a forearm side.
+inline v1::Arm to_proto_arm(forearm::Side side) { return side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT; }
+
 // The clock's offset at the device's first sample (camera minus device time), its sigma there
 // and its drift.
 void report_clock(const std::string& device_id, const sync::LinearClock& camera_from_device, double first_device_us,

@@ -155,7 +155,7 @@ void ForearmStage::hand_on_frames_done(bool all, StageOutput& out) {
 }
 
 void ForearmStage::hand_on_track(Device& device, forearm::ForearmTrackOutput&& track, StageOutput& out) {
-  const v1::Arm arm = *device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT;
+  const v1::Arm arm = to_proto_arm(*device.side);
   ForearmOrientations orientations = forearm_orientations_of(device.id, arm, track.samples);
   // Searched every kMinNewMountingFrames frames however many come at once (a track started late
   // tracks every frame buffered until then in one call).
@@ -355,7 +355,7 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
   device.frames.clear();
   ArmTrackStart start;
   start.device_id = device.id;
-  start.arm = *device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT;
+  start.arm = to_proto_arm(*device.side);
   start.tracked = true;
   start.model = device.calibration->model;
   start.has_model = has_model;
@@ -465,7 +465,7 @@ void ForearmStage::estimate_motion_mountings(bool finishing, StageOutput& out) {
     device.frames.clear();
     ArmTrackStart refused;
     refused.device_id = device.id;
-    refused.arm = *device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT;
+    refused.arm = to_proto_arm(*device.side);
     out.hand_on(std::move(refused));
     out.warn("FOREARM_MOUNTING_NOT_OBSERVABLE", "forearm[" + device.id + "].mounting",
              "no calibration pose and the session's motion does not show the IMU's mounting: " +
@@ -487,7 +487,7 @@ void ForearmStage::start_motion_track(Device& device, const forearm::MountingEst
   device.frames_at_last_estimate = 0;  // from now on counted in tracked frames (mounting_frames)
   ArmTrackStart start;
   start.device_id = device.id;
-  start.arm = *device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT;
+  start.arm = to_proto_arm(*device.side);
   start.tracked = true;
   start.model = model;
   start.has_model = false;
@@ -559,7 +559,7 @@ void ForearmStage::feed_trackers(bool all, StageOutput& out) {
 void ForearmStage::hand_on_offline_solutions(StageOutput& out) {
   for (const Device& device : devices_) {
     if (!device.tracker) continue;
-    const v1::Arm arm = *device.side == forearm::Side::kLeft ? v1::LEFT : v1::RIGHT;
+    const v1::Arm arm = to_proto_arm(*device.side);
     const std::vector<forearm::SettledArmSample> samples = device.tracker->offline_samples();
     // In batches, so that no message grows with the session's length.
     for (std::size_t begin = 0; begin < samples.size(); begin += kOfflineBatchSamples) {
