@@ -22,6 +22,14 @@ CalibrationFrames select_calibration_frames(const std::vector<ArmFrame>& frames,
       ++out.not_raised;  // not the calibration pose (e.g. an arm resting at the side)
       continue;
     }
+    if (!upper_arm_lowered_for_calibration(f.shoulder_K, f.elbow_K, up_K)) {
+      ++out.overhead;
+      continue;
+    }
+    if (!elbow_flexed_for_calibration(f.shoulder_K, f.elbow_K, f.wrist_K)) {
+      ++out.straight;
+      continue;
+    }
     const std::optional<Quat> W_from_A = W_from_A_at(f.t_us);
     if (!W_from_A) continue;
     CalibrationFrame c;

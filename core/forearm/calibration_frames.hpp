@@ -25,9 +25,12 @@ struct CalibrationFrameOptions {
 struct CalibrationFrames {
   std::vector<CalibrationFrame> with_strap;     // the strap seen: the full model (II-H)
   std::vector<CalibrationFrame> without_strap;  // every frame in the pose: eq. 9 only
-  std::size_t not_raised = 0;                   // tracked frames whose forearm was not raised
-  std::size_t upper_arm_frames = 0;             // frames whose upper arm the depth image showed
-  bool depth_upper_arm = false;                 // the arm plane's upper arm came from depth
+  // Tracked frames not in the pose (calibration_pose_check.hpp), by the first test they fail.
+  std::size_t not_raised = 0;        // the forearm not raised
+  std::size_t overhead = 0;          // the upper arm raised above the pose's
+  std::size_t straight = 0;          // the elbow not flexed
+  std::size_t upper_arm_frames = 0;  // frames whose upper arm the depth image showed
+  bool depth_upper_arm = false;      // the arm plane's upper arm came from depth
 };
 
 // `frames` in time order; those after window_end_us are not used. `W_from_A_at(t_us)`: the arm

@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 namespace posefuse::forearm {
 namespace {
 
@@ -27,6 +29,14 @@ TEST(CalibrationFrames, FramesInThePoseWithTheImuAreKeptTheOthersCounted) {
   ArmFrame resting = pose_frame(6 * 33'333, true);
   resting.wrist_K = resting.elbow_K + Vec3(0.0, -0.25, 0.0);  // hanging at the side
   frames.push_back(resting);
+  ArmFrame overhead = pose_frame(6 * 33'333 + 10'000, true);
+  overhead.elbow_K = overhead.shoulder_K + Vec3(0.05, 0.28, 0.0);  // raised straight up, the SDK's bend
+  overhead.wrist_K = overhead.elbow_K + Vec3(0.1, 0.23, 0.0);
+  frames.push_back(overhead);
+  ArmFrame straight = pose_frame(6 * 33'333 + 20'000, true);
+  straight.elbow_K = straight.shoulder_K + 0.28 * Vec3(std::cos(0.7), std::sin(0.7), 0.0);  // raised 40 degrees
+  straight.wrist_K = straight.elbow_K + 0.25 * Vec3(std::cos(0.87), std::sin(0.87), 0.0);   // 10 degrees more
+  frames.push_back(straight);
   ArmFrame untracked = pose_frame(7 * 33'333, true);
   untracked.forearm_tracked = false;
   frames.push_back(untracked);
@@ -42,6 +52,8 @@ TEST(CalibrationFrames, FramesInThePoseWithTheImuAreKeptTheOthersCounted) {
   EXPECT_EQ(c.without_strap.size(), 6u);
   EXPECT_EQ(c.with_strap.size(), 3u);
   EXPECT_EQ(c.not_raised, 1u);
+  EXPECT_EQ(c.overhead, 1u);
+  EXPECT_EQ(c.straight, 1u);
   EXPECT_FALSE(c.depth_upper_arm);
   // Without a strap the strap point is a placeholder on the forearm.
   EXPECT_TRUE(c.without_strap[1].strap_K.isApprox(frames[1].elbow_K + 0.8 * (frames[1].wrist_K - frames[1].elbow_K)));

@@ -334,8 +334,10 @@ void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
     out.warn("FOREARM_CALIBRATION", field + ".calibration",
              std::string("no usable calibration pose (paper 1, II-H) in the first ") +
                  format_double(options_.calibration_s) + " s: " + error.what() + " (" +
-                 std::to_string(selected.not_raised) +
-                 " tracked frames skipped: forearm not raised, paper 1 Fig. 3b); the IMU's mounting is estimated "
+                 std::to_string(selected.not_raised) + " tracked frames skipped: forearm not raised; " +
+                 std::to_string(selected.overhead) + ": upper arm raised overhead; " +
+                 std::to_string(selected.straight) +
+                 ": elbow not flexed; paper 1 Fig. 3b); the IMU's mounting is estimated "
                  "from the session's motion instead, with no pronation relative to the calibration pose");
     return;
   }
