@@ -18,16 +18,19 @@
 # Then, from the same runs, per session and IMU: the orientation filter's W_from_A against the
 # truth (RMS/max), its confident samples and their max error and count beyond 15 deg, and the
 # samples within the 99 % bound of their predicted error (imu_orientations/<id>.csv).
-#   bench/forearm_anywhere.sh [BUILD_DIR] [MOTION:SEED:SPEED ...]
+#   bench/forearm_anywhere.sh [BUILD_DIR] [MOTION:SEED:SPEED[:KEY=VALUE,...] ...]
 #   REPLAY_OPTIONS="KEY=VALUE ..." sets header options for every replay (e.g. fit.enabled=false:
 #   the body fit is on by default and costs about 10 ms per frame).
 #   MOTION: an exercise name, or a BVH clip's path (its whole length, as it is) or a path with
 #   "+pose" appended (paper 1's calibration pose first: sim calibration_prefix) or "+pose_end"
-#   (the pose after the clip: sim calibration_suffix).
+#   (the pose after the clip: sim calibration_suffix). KEY=VALUE: posefuse-sim options that
+#   replace the script's (e.g. arm=right: only the right arm exercises, the left hangs with its
+#   IMU; imu_roles_swapped=true: the header names each arm IMU for the other arm).
 # Default: the 11 exercises at speeds 0.7, 1.0, 1.3 on seeds 51 and 52, 20 s, then every clip in
-# ../shared/data/mocap without the pose, with it first and with it at the end, seed 51, speed 1. Nothing was chosen on these
-# seeds (the pose calibration's uncertainty comes from seeds 41 and 43,
-# bench/calibration_refusals.sh; the mounting-from-motion constants are principles).
+# ../shared/data/mocap without the pose, with it first and with it at the end, seed 51, speed 1,
+# then six adversarial sessions (below). Nothing was chosen on these seeds (the pose
+# calibration's uncertainty comes from seeds 41 and 43, bench/calibration_refusals.sh; the
+# mounting-from-motion constants are principles).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 build=${1:-$root/build}
@@ -45,13 +48,20 @@ if [ ${#specs[@]} -eq 0 ]; then
   for clip in "$root"/../shared/data/mocap/*.bvh; do
     specs+=("$clip:51:1.0" "$clip+pose:51:1.0" "$clip+pose_end:51:1.0")
   done
+  # Adversarial: one arm hanging at rest with its IMU all session; the IMUs on the wrong arms.
+  for seed in 51 52; do
+    specs+=("forearm_rolling:$seed:1.0:arm=right" "calibration_pose:$seed:1.0:imu_roles_swapped=true"
+      "forearm_rolling:$seed:1.0:imu_roles_swapped=true")
+  done
 fi
 work=$(mktemp -d)
 trap 'rm -rf "$work"' EXIT
 printf '%-34s %-5s %-8s %-10s %-8s %-16s %-7s %-6s %-8s %s\n' session arm mounting "RMS/max" emitted confident bound first A_from_F \
   "offline: RMS/max, confident, bound"
 for spec in "${specs[@]}"; do
-  IFS=: read -r motion seed speed <<<"$spec"
+  IFS=: read -r motion seed speed extra <<<"$spec"
+  extra_lines=$(tr ',' '\n' <<<"${extra:-}" | sed -n 's/^\([a-z_]*\)=\(.*\)$/\1 = \2/p')
+  extra_keys=$(sed -n 's/^\([a-z_]*\) = .*/\1/p' <<<"$extra_lines" | paste -sd'|')
   if [[ "$motion" == *.bvh || "$motion" == *.bvh+pose || "$motion" == *.bvh+pose_end ]]; then
     clip=${motion%+pose_end}
     clip=${clip%+pose}
@@ -60,18 +70,30 @@ for spec in "${specs[@]}"; do
     if [[ "$motion" == *+pose ]]; then prefix=true; fi
     if [[ "$motion" == *+pose_end ]]; then suffix=true; fi
     name="$(basename "$motion" | sed 's/\.bvh//')-$seed-$speed"
-    printf 'motion = bvh\nbvh_path = %s\ncalibration_prefix = %s\ncalibration_suffix = %s\nspeed = %s\narm = both\nduration_s = clip\n' \
-      "$clip" "$prefix" "$suffix" "$speed" >"$work/$name.options"
+    options=$(printf 'motion = bvh\nbvh_path = %s\ncalibration_prefix = %s\ncalibration_suffix = %s\nspeed = %s\narm = both\nduration_s = clip\n' \
+      "$clip" "$prefix" "$suffix" "$speed")
   else
     name="$motion-$seed-$speed"
-    printf 'motion = %s\nspeed = %s\narm = both\nduration_s = 20\n' "$motion" "$speed" >"$work/$name.options"
+    options=$(printf 'motion = %s\nspeed = %s\narm = both\nduration_s = 20\n' "$motion" "$speed")
   fi
+  if [ -n "$extra_lines" ]; then
+    name="$name-$(tr ',=' '-_' <<<"$extra")"
+    options=$(grep -v -E "^($extra_keys) =" <<<"$options"; echo "$extra_lines")
+  fi
+  echo "$options" >"$work/$name.options"
   "$build/tools/sim/posefuse-sim" --options "$work/$name.options" --seed "$seed" --quiet \
     --chunk-file "$work/$name.pfchunks" --gt "$work/$name.gt" >/dev/null
   replay_options=()
   for option in ${REPLAY_OPTIONS:-}; do replay_options+=(--option "$option"); done
   "$build/bench/bench_sim_forearm" replay "$work/$name.pfchunks" "$work/$name.gt" "$work/$name.out" \
     "${replay_options[@]}" >/dev/null
+  if grep -q '^imu_roles_swapped = true$' <<<"$options"; then
+    # Each device is scored against the forearm the header names (the A_from_F column then compares
+    # unrelated mountings).
+    truth="$work/$name.gt/forearm_orientations"
+    mv "$truth/imu_left.csv" "$truth/swap.csv" && mv "$truth/imu_right.csv" "$truth/imu_left.csv" &&
+      mv "$truth/swap.csv" "$truth/imu_right.csv"
+  fi
   # Every emitted sample against the truth sample nearest in time within half the IMU's period
   # (80 Hz): a sample whose mapped camera time is a few ms off (an arm clock's drift, which one
   # BLE burst cannot show) is scored with that error in it, not left out.

@@ -562,7 +562,11 @@ SimTruth simulate_session(const SimSessionOptions& requested, session::ChunkSink
   for (const SimDeviceTruth& device : truth.devices) {
     auto* d = header.add_imu_devices();
     d->set_device_id(device.device_id);
-    d->set_role(device.role);
+    v1::ImuDevice::Role role = device.role;
+    if (options.arm_imu_roles_swapped && role != v1::ImuDevice::BASE) {
+      role = role == v1::ImuDevice::ARM_LEFT ? v1::ImuDevice::ARM_RIGHT : v1::ImuDevice::ARM_LEFT;
+    }
+    d->set_role(role);
     d->set_nominal_rate_hz(options.imu.rate_hz);
   }
   set_camera_intrinsics(options.depth_intrinsics, header.mutable_depth_intrinsics());

@@ -88,6 +88,9 @@ struct SimSessionOptions {
 
   // IMUs: one per listed arm (0 left, 1 right) and the base on the camera.
   std::array<bool, 2> arm_imu = {true, true};
+  // The header names each arm IMU for the other arm (a clinic's mix-up: the straps swapped, or
+  // the devices paired the wrong way round). The truth keeps each device on its own arm.
+  bool arm_imu_roles_swapped = false;
   double strap_to_elbow_m = 0.15;  // d_se
   double strap_radius_m = 0.035;   // r
   double mount_sigma_rad = 0.05;   // random F_from_A per arm, per-axis standard deviation

@@ -43,6 +43,15 @@ SimSessionOptions small(bool slip) {
   return o;
 }
 
+class HeaderSink : public session::ChunkSink {
+ public:
+  void write(const session::SessionChunk& chunk) override {
+    if (chunk.has_header()) header = chunk.header();
+  }
+  void finish() override {}
+  v1::SessionHeader header;
+};
+
 double angle_deg(const Quat& a, const Quat& b) { return geometry::angle_between(a, b) * 180.0 / 3.14159265358979; }
 
 }  // namespace
@@ -377,4 +386,20 @@ TEST(SimSessionTruth, AngleTruthCountsRepetitionsThatSwingAboutZero) {
       EXPECT_NEAR(r.range_deg, c.range_deg, 0.1 * c.range_deg);
     }
   }
+}
+
+TEST(SimSessionTruth, SwappedImuRolesAreSwappedInTheHeaderOnly) {
+  SimSessionOptions o = small(false);
+  o.duration_s = 1.0;
+  o.arm_imu_roles_swapped = true;
+  HeaderSink sink;
+  const SimTruth truth = simulate_session(o, sink);
+  ASSERT_EQ(sink.header.imu_devices_size(), 3);
+  EXPECT_EQ(sink.header.imu_devices(0).device_id(), "imu_left");
+  EXPECT_EQ(sink.header.imu_devices(0).role(), v1::ImuDevice::ARM_RIGHT);
+  EXPECT_EQ(sink.header.imu_devices(1).device_id(), "imu_right");
+  EXPECT_EQ(sink.header.imu_devices(1).role(), v1::ImuDevice::ARM_LEFT);
+  EXPECT_EQ(sink.header.imu_devices(2).role(), v1::ImuDevice::BASE);
+  EXPECT_EQ(truth.devices[0].role, v1::ImuDevice::ARM_LEFT);
+  EXPECT_EQ(truth.devices[1].role, v1::ImuDevice::ARM_RIGHT);
 }

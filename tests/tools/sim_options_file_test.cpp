@@ -41,6 +41,7 @@ TEST(SimOptionsFile, AppliesEveryKindOfValue) {
       "color = false\n"
       "color_width = 480\n"
       "imu_arms = left\r\n"
+      "imu_roles_swapped = true\n"
       "buzzer_tone_hz = 3400\n"
       "strap_slip = off\n"
       "clothing_subdivisions = 2\n"
@@ -78,6 +79,7 @@ TEST(SimOptionsFile, AppliesEveryKindOfValue) {
   EXPECT_DOUBLE_EQ(options.color_camera.intrinsics.fx, 264.0);
   EXPECT_TRUE(options.arm_imu[0]);
   EXPECT_FALSE(options.arm_imu[1]);
+  EXPECT_TRUE(options.arm_imu_roles_swapped);
   EXPECT_FALSE(options.strap_slip.enabled);
   EXPECT_EQ(options.clothing.subdivisions, 2);
   EXPECT_DOUBLE_EQ(options.imu.packet_loss.loss_rate, 0.05);

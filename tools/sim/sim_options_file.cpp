@@ -255,6 +255,10 @@ const std::map<std::string, Setter>& setters() {
                       else if (v == "none") o.arm_imu = {false, false};
                       else bad(f, v, "must be both, left, right or none");
                     }}},
+      {"imu_roles_swapped", {"the header names each arm IMU for the other arm (false)",
+                             [](Options& o, const std::string& v, const std::string& f) {
+                               o.arm_imu_roles_swapped = boolean(v, f);
+                             }}},
       {"strap_to_elbow_m", {"d_se: strap centre to elbow, m", [](Options& o, const std::string& v, const std::string& f) {
                               o.strap_to_elbow_m = positive(v, f);
                             }}},
