@@ -117,12 +117,12 @@ for line in open(score):
     m = re.match(r"(LEFT|RIGHT) A_from_F\s+deg\s+([\d.]+)", line)
     if m: mounting_error[m.group(1)] = float(m.group(2))
 warnings = open(out + "/warnings.txt").readlines() if os.path.exists(out + "/warnings.txt") else []
-sources = {f["arm"]: f.get("mounting_source", "CALIBRATION_POSE")
+sources = {f["device_id"]: f.get("mounting_source", "CALIBRATION_POSE")
            for f in json.load(open(out + "/calibration.json")).get("forearms", [])}
 for arm in ("LEFT", "RIGHT"):
     truth = os.path.join(gt, "forearm_orientations", f"imu_{arm.lower()}.csv")
     taken = sum(1 for _ in open(truth)) - 1 if os.path.exists(truth) else 0
-    mounting = {"CALIBRATION_POSE": "pose", "MOTION": "motion"}.get(sources.get(arm), "none")
+    mounting = {"CALIBRATION_POSE": "pose", "MOTION": "motion"}.get(sources.get(f"imu_{arm.lower()}"), "none")
     if any("FOREARM_CALIBRATION_LATER" in w and f"forearm[imu_{arm.lower()}]" in w for w in warnings):
         mounting = "later"
     if arm not in rows:

@@ -97,6 +97,28 @@ std::optional<Quat> K_from_neutral_forearm(const Vec3& upper_arm_K, const Vec3& 
   return Quat(K_from_N).normalized();
 }
 
+std::optional<std::string> imu_on_other_arm(const std::vector<MountingFrame>& own,
+                                            const std::vector<MountingFrame>& other,
+                                            const MountingFromMotionOptions& options) {
+  const auto scatter = [&](const std::vector<MountingFrame>& all) -> std::optional<double> {
+    std::vector<MountingFrame> frames;
+    for (const MountingFrame& f : all) {
+      if (usable(f)) frames.push_back(f);
+    }
+    if (frames.size() < options.min_frames) return std::nullopt;
+    const AxisFit fit = fit_axis(frames);
+    if (!fit.defined) return std::nullopt;
+    return fit.residual_rms;
+  };
+  const std::optional<double> own_rms = scatter(own), other_rms = scatter(other);
+  if (!own_rms || !other_rms || *own_rms <= options.max_axis_residual_rad || *other_rms >= *own_rms) {
+    return std::nullopt;
+  }
+  return "the forearm axes seen by the camera, turned into the IMU's frame, scatter " + degrees_text(*own_rms) +
+         " deg RMS (bound " + degrees_text(options.max_axis_residual_rad) + " deg) and the other forearm's " +
+         degrees_text(*other_rms) + " deg: the IMU turns with the other arm";
+}
+
 std::optional<MountingEstimate> estimate_mounting(const std::vector<MountingFrame>& all_frames, Side side,
                                                   const MountingFromMotionOptions& options, std::string& why_not) {
   std::vector<MountingFrame> frames;

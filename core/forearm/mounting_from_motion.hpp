@@ -74,6 +74,16 @@ struct MountingEstimate {
 std::optional<MountingEstimate> estimate_mounting(const std::vector<MountingFrame>& frames, Side side,
                                                   const MountingFromMotionOptions& options, std::string& why_not);
 
+// Is the IMU on the other arm? `own`: this arm's frames with this IMU's K_from_A; `other`: the
+// other arm's frames with the same IMU's K_from_A. Its own forearm's axes, turned into A, scatter
+// about their mean beyond max_axis_residual_rad (the IMU does not turn with this forearm, as
+// estimate_mounting reads it) and the other forearm's scatter less: the other arm explains the
+// IMU better. Returns that in words, or none (also with fewer than min_frames usable frames in
+// either set).
+std::optional<std::string> imu_on_other_arm(const std::vector<MountingFrame>& own,
+                                            const std::vector<MountingFrame>& other,
+                                            const MountingFromMotionOptions& options);
+
 // The forearm's neutral frame N (zero pronation) from the hinge plane; none when the elbow is
 // flexed less than min_flexion_rad or either direction is zero.
 std::optional<Quat> K_from_neutral_forearm(const Vec3& upper_arm_K, const Vec3& forearm_K, Side side,

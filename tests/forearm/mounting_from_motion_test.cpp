@@ -149,6 +149,25 @@ TEST(MountingFromMotion, AnImuThatDoesNotTurnWithTheForearmIsRefused) {
   EXPECT_NE(why.find("scatter"), std::string::npos) << why;
 }
 
+TEST(MountingFromMotion, AnImuOnTheOtherArmIsNamed) {
+  // The left forearm moves as the right one mirrored left-right; the IMU named for the left arm is
+  // strapped to the right one.
+  const Quat F_from_A = rot(10 * kDeg, Vec3::UnitY());
+  const std::vector<MountingFrame> right = frames_of(Side::kRight, F_from_A, 300, 40 * kDeg, 60 * kDeg, 3 * kDeg);
+  std::vector<MountingFrame> left = right;
+  for (MountingFrame& f : left) f.forearm_K.x() = -f.forearm_K.x();
+  // With the IMU on the right forearm: the left forearm's axes scatter in its frame, the right's do not.
+  const std::optional<std::string> named = imu_on_other_arm(left, right, {});
+  ASSERT_TRUE(named);
+  EXPECT_NE(named->find("the IMU turns with the other arm"), std::string::npos) << *named;
+  // Named for the arm it is on: nothing to say.
+  EXPECT_FALSE(imu_on_other_arm(right, left, {}));
+  // Both forearms the same (parallel arms): the other arm explains the IMU no better.
+  EXPECT_FALSE(imu_on_other_arm(right, right, {}));
+  // Too few frames of the other arm to compare.
+  EXPECT_FALSE(imu_on_other_arm(left, std::vector<MountingFrame>(right.begin(), right.begin() + 10), {}));
+}
+
 TEST(MountingFromMotion, AMinorityOfFramesWithAWrongForearmAxisIsLeftOut) {
   const Quat F_from_A = rot(10 * kDeg, Vec3::UnitY());
   std::vector<MountingFrame> frames = frames_of(Side::kRight, F_from_A, 300, 60 * kDeg, 70 * kDeg);

@@ -9,7 +9,10 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
 #include <iostream>
+#include <iterator>
+#include <string>
 
 #include "../scratch_dir.hpp"
 #include "client/result_writer.hpp"
@@ -169,4 +172,26 @@ TEST(DemoScore, RestingArmIsNotCalibratedAndNeverConfident) {
   ASSERT_NE(right, nullptr);
   EXPECT_LT(right->deg.rms, 20.0);
   EXPECT_LT(r.calibration_value("K_from_W")->error, 3.0);
+}
+
+// The header names each arm IMU for the other arm (a clinic's mix-up). Eq. 9 would calibrate
+// either IMU from the other arm's hold, and with both forearms vertical the camera check cannot
+// see the mirrored roll (docs/benchmarks.md, "Adversarial sessions": up to 75 confident samples
+// beyond 15 deg). The rise into the pose shows each IMU turning with the other forearm: both arms
+// are named and get no results.
+TEST(DemoScore, ImusOnTheWrongArmsAreNamedAndGiveNoResults) {
+  const ScoredRun run = simulate_run_and_score("swapped",
+                                               "motion = calibration_pose\n"
+                                               "repetitions = 1\n"
+                                               "arm = both\n"
+                                               "duration_s = 7\n"
+                                               "imu_roles_swapped = true\n");
+  std::ifstream in(run.results / "warnings.txt");
+  const std::string warnings((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  for (const char* device : {"imu_left", "imu_right"}) {
+    EXPECT_NE(warnings.find(std::string("FOREARM_IMU_ON_OTHER_ARM] forearm[") + device + "].arm"), std::string::npos)
+        << warnings;
+    EXPECT_EQ(run.report.orientation(std::string("forearm_orientations/") + device + ".csv", device), nullptr)
+        << device;
+  }
 }

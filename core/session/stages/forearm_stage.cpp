@@ -290,8 +290,28 @@ void ForearmStage::try_calibrate(bool finishing, StageOutput& out) {
   for (const ImuRecord& r : base.imu) W_from_B.push_back(r.W_from_A);
   K_from_W_ = (*options_.K_from_B * geometry::chordal_mean(W_from_B).conjugate()).normalized();  // eq. 7
   calibrated_ = true;
+  check_arm_assignment();
   for (Device& device : devices_) {
     if (device.side) calibrate_arm(device, out);
+  }
+}
+
+void ForearmStage::check_arm_assignment() {
+  for (Device& device : devices_) {
+    if (!device.side) continue;
+    for (const Device& other : devices_) {
+      if (!other.side || *other.side == *device.side) continue;
+      std::vector<forearm::MountingFrame> other_frames;
+      for (const forearm::ArmFrame& f : other.frames) {
+        const std::optional<Quat> W_from_A = W_from_A_at(device, f.t_us);
+        if (!W_from_A) continue;
+        if (const auto frame = mounting_frame(f, (*K_from_W_ * *W_from_A).normalized())) other_frames.push_back(*frame);
+      }
+      if (const std::optional<std::string> why = forearm::imu_on_other_arm(
+              buffered_mounting_frames(device), other_frames, forearm::MountingFromMotionOptions{})) {
+        device.on_other_arm = *why;
+      }
+    }
   }
 }
 
@@ -315,6 +335,16 @@ std::optional<Quat> ForearmStage::W_from_A_at(const Device& device, std::int64_t
 
 void ForearmStage::calibrate_arm(Device& device, StageOutput& out) {
   const std::string field = "forearm[" + device.id + "]";
+  if (!device.on_other_arm.empty()) {
+    device.from_motion = true;
+    device.mounting_why_not = device.on_other_arm;
+    out.warn("FOREARM_IMU_ON_OTHER_ARM", field + ".arm",
+             std::string("the IMU named for the ") + (*device.side == forearm::Side::kLeft ? "left" : "right") +
+                 " arm: " + device.on_other_arm +
+                 ": the IMUs are on the wrong arms, or the header names them the wrong way round; no calibration "
+                 "and no mounting from motion for this arm");
+    return;
+  }
   const std::int64_t window_end_us = *first_frame_us_ + seconds_to_us(options_.calibration_s);
   const forearm::CalibrationFrames selected = forearm::select_calibration_frames(
       device.frames, window_end_us, *K_from_W_ * Vec3::UnitZ(),
@@ -436,7 +466,7 @@ std::vector<forearm::MountingFrame> ForearmStage::buffered_mounting_frames(const
 
 void ForearmStage::estimate_motion_mountings(bool finishing, StageOutput& out) {
   for (Device& device : devices_) {
-    if (!device.from_motion || device.later_pose) continue;
+    if (!device.from_motion || device.later_pose || !device.on_other_arm.empty()) continue;
     // Each estimate uses every frame so far; re-estimating once the frames have grown by a tenth
     // keeps the work linear in the session's length.
     const std::size_t seen = device.tracker ? device.mounting_frames.size() : device.frames.size();

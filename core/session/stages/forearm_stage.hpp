@@ -117,6 +117,9 @@ class ForearmStage : public Stage {
     std::deque<std::pair<forearm::ArmFrame, forearm::Quat>> recent_frames;
     std::size_t frames_since_pose_search = 0;
     bool later_pose = false;
+    // The IMU turns with the other arm's forearm (forearm::imu_on_other_arm), in words: no
+    // results for this arm.
+    std::string on_other_arm;
   };
 
   // Calibrates once the calibration window has passed, then feeds the trackers.
@@ -126,6 +129,8 @@ class ForearmStage : public Stage {
   void find_straps(const CameraFrame& frame, const geometry::DepthImageView& depth,
                    std::vector<forearm::ArmFrame>& arms, StageOutput& out);
   void try_calibrate(bool finishing, StageOutput& out);
+  // Before the calibration: each arm IMU checked against both forearms' frames so far.
+  void check_arm_assignment();
   void calibrate_arm(Device& device, StageOutput& out);
   std::vector<std::string> arm_device_ids() const;  // the arm IMUs, header order
   void refit_clocks(bool finishing);
