@@ -111,12 +111,17 @@ std::optional<std::string> imu_on_other_arm(const std::vector<MountingFrame>& ow
     return fit.residual_rms;
   };
   const std::optional<double> own_rms = scatter(own), other_rms = scatter(other);
-  if (!own_rms || !other_rms || *own_rms <= options.max_axis_residual_rad || *other_rms >= *own_rms) {
-    return std::nullopt;
-  }
+  if (!own_rms || !other_rms) return std::nullopt;
+  // What the own forearm adds beyond the other's scatter must itself exceed what the depth axis's
+  // error can explain: forearms that move alike (parallel, turning about their own axes) differ
+  // by no more than that, and then the depth's noise alone would decide.
+  const double excess_sq = *own_rms * *own_rms - *other_rms * *other_rms;
+  const double bound = options.max_axis_residual_rad;
+  if (excess_sq <= bound * bound) return std::nullopt;
   return "the forearm axes seen by the camera, turned into the IMU's frame, scatter " + degrees_text(*own_rms) +
-         " deg RMS (bound " + degrees_text(options.max_axis_residual_rad) + " deg) and the other forearm's " +
-         degrees_text(*other_rms) + " deg: the IMU turns with the other arm";
+         " deg RMS and the other forearm's " + degrees_text(*other_rms) +
+         " deg: " + degrees_text(std::sqrt(excess_sq)) + " deg RMS more than the other arm explains (bound " +
+         degrees_text(bound) + " deg), the IMU turns with the other arm";
 }
 
 std::optional<MountingEstimate> estimate_mounting(const std::vector<MountingFrame>& all_frames, Side side,

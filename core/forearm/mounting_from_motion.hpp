@@ -75,11 +75,12 @@ std::optional<MountingEstimate> estimate_mounting(const std::vector<MountingFram
                                                   const MountingFromMotionOptions& options, std::string& why_not);
 
 // Is the IMU on the other arm? `own`: this arm's frames with this IMU's K_from_A; `other`: the
-// other arm's frames with the same IMU's K_from_A. Its own forearm's axes, turned into A, scatter
-// about their mean beyond max_axis_residual_rad (the IMU does not turn with this forearm, as
-// estimate_mounting reads it) and the other forearm's scatter less: the other arm explains the
-// IMU better. Returns that in words, or none (also with fewer than min_frames usable frames in
-// either set).
+// other arm's frames with the same IMU's K_from_A. Each set's forearm axes, turned into A,
+// scatter about their mean (RMS); the own set's scatter exceeds the other's by more than
+// max_axis_residual_rad (in quadrature: the mismatch alone is beyond what the depth axis's error
+// explains, as estimate_mounting reads that bound): the other arm explains the IMU, its own does
+// not. Returns that in words, or none (also with fewer than min_frames usable frames in either
+// set).
 std::optional<std::string> imu_on_other_arm(const std::vector<MountingFrame>& own,
                                             const std::vector<MountingFrame>& other,
                                             const MountingFromMotionOptions& options);

@@ -164,6 +164,11 @@ TEST(MountingFromMotion, AnImuOnTheOtherArmIsNamed) {
   EXPECT_FALSE(imu_on_other_arm(right, left, {}));
   // Both forearms the same (parallel arms): the other arm explains the IMU no better.
   EXPECT_FALSE(imu_on_other_arm(right, right, {}));
+  // Forearms that move alike, the IMU's own seen with more depth noise (beyond the 15 degree
+  // bound) than the other: the difference is the noise's, not a mismatch.
+  const std::vector<MountingFrame> noisy = frames_of(Side::kRight, F_from_A, 300, 40 * kDeg, 60 * kDeg, 12 * kDeg, 2);
+  const std::vector<MountingFrame> cleaner = frames_of(Side::kRight, F_from_A, 300, 40 * kDeg, 60 * kDeg, 8 * kDeg, 3);
+  EXPECT_FALSE(imu_on_other_arm(noisy, cleaner, {}));
   // Too few frames of the other arm to compare.
   EXPECT_FALSE(imu_on_other_arm(left, std::vector<MountingFrame>(right.begin(), right.begin() + 10), {}));
 }
