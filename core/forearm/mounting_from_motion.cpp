@@ -24,6 +24,14 @@ bool usable(const MountingFrame& f) {
          f.forearm_K.norm() > 1e-6;
 }
 
+std::vector<MountingFrame> usable_frames(const std::vector<MountingFrame>& all) {
+  std::vector<MountingFrame> frames;
+  for (const MountingFrame& f : all) {
+    if (usable(f)) frames.push_back(f);
+  }
+  return frames;
+}
+
 // The forearm axis in A fitted to frames: the normalised sum of each frame's forearm direction
 // turned into A, the residuals (in a plane normal to it), their RMS angle, and how far the
 // forearm turned in K (RMS angle from its mean direction).
@@ -101,10 +109,7 @@ std::optional<std::string> imu_on_other_arm(const std::vector<MountingFrame>& ow
                                             const std::vector<MountingFrame>& other,
                                             const MountingFromMotionOptions& options) {
   const auto scatter = [&](const std::vector<MountingFrame>& all) -> std::optional<double> {
-    std::vector<MountingFrame> frames;
-    for (const MountingFrame& f : all) {
-      if (usable(f)) frames.push_back(f);
-    }
+    const std::vector<MountingFrame> frames = usable_frames(all);
     if (frames.size() < options.min_frames) return std::nullopt;
     const AxisFit fit = fit_axis(frames);
     if (!fit.defined) return std::nullopt;
@@ -126,10 +131,7 @@ std::optional<std::string> imu_on_other_arm(const std::vector<MountingFrame>& ow
 
 std::optional<MountingEstimate> estimate_mounting(const std::vector<MountingFrame>& all_frames, Side side,
                                                   const MountingFromMotionOptions& options, std::string& why_not) {
-  std::vector<MountingFrame> frames;
-  for (const MountingFrame& f : all_frames) {
-    if (usable(f)) frames.push_back(f);
-  }
+  std::vector<MountingFrame> frames = usable_frames(all_frames);
   std::sort(frames.begin(), frames.end(),
             [](const MountingFrame& a, const MountingFrame& b) { return a.t_us < b.t_us; });
   if (frames.size() < options.min_frames) {

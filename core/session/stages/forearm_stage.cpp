@@ -301,14 +301,9 @@ void ForearmStage::check_arm_assignment() {
     if (!device.side) continue;
     for (const Device& other : devices_) {
       if (!other.side || *other.side == *device.side) continue;
-      std::vector<forearm::MountingFrame> other_frames;
-      for (const forearm::ArmFrame& f : other.frames) {
-        const std::optional<Quat> W_from_A = W_from_A_at(device, f.t_us);
-        if (!W_from_A) continue;
-        if (const auto frame = mounting_frame(f, (*K_from_W_ * *W_from_A).normalized())) other_frames.push_back(*frame);
-      }
-      if (const std::optional<std::string> why = forearm::imu_on_other_arm(
-              buffered_mounting_frames(device), other_frames, forearm::MountingFromMotionOptions{})) {
+      if (const std::optional<std::string> why = forearm::imu_on_other_arm(mounting_frames_of(device, device.frames),
+                                                                           mounting_frames_of(device, other.frames),
+                                                                           forearm::MountingFromMotionOptions{})) {
         device.on_other_arm = *why;
       }
     }
@@ -454,9 +449,10 @@ void ForearmStage::search_later_pose(Device& device, StageOutput& out) {
                "on; IMU positions still need the pose within forearm.calibration_s of the start");
 }
 
-std::vector<forearm::MountingFrame> ForearmStage::buffered_mounting_frames(const Device& device) const {
+std::vector<forearm::MountingFrame> ForearmStage::mounting_frames_of(
+    const Device& device, const std::vector<forearm::ArmFrame>& arm_frames) const {
   std::vector<forearm::MountingFrame> frames;
-  for (const forearm::ArmFrame& f : device.frames) {
+  for (const forearm::ArmFrame& f : arm_frames) {
     const std::optional<Quat> W_from_A = W_from_A_at(device, f.t_us);
     if (!W_from_A) continue;
     if (const auto frame = mounting_frame(f, (*K_from_W_ * *W_from_A).normalized())) frames.push_back(*frame);
@@ -476,7 +472,7 @@ void ForearmStage::estimate_motion_mountings(bool finishing, StageOutput& out) {
     device.frames_at_last_estimate = seen;
     std::string why_not;
     const std::optional<forearm::MountingEstimate> estimate =
-        forearm::estimate_mounting(device.tracker ? device.mounting_frames : buffered_mounting_frames(device),
+        forearm::estimate_mounting(device.tracker ? device.mounting_frames : mounting_frames_of(device, device.frames),
                                    *device.side, forearm::MountingFromMotionOptions{}, why_not);
     if (!estimate) {
       device.mounting_why_not = why_not;

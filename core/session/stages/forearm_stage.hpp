@@ -146,7 +146,9 @@ class ForearmStage : public Stage {
   // pronation reference), later ones refine it; at the end, an arm with none is named.
   void estimate_motion_mountings(bool finishing, StageOutput& out);
   void start_motion_track(Device& device, const forearm::MountingEstimate& estimate, StageOutput& out);
-  std::vector<forearm::MountingFrame> buffered_mounting_frames(const Device& device) const;
+  // Buffered arm frames (this device's arm or the other's) with this device's K_from_A at each.
+  std::vector<forearm::MountingFrame> mounting_frames_of(const Device& device,
+                                                         const std::vector<forearm::ArmFrame>& arm_frames) const;
   // A calibration pose among the recent tracked frames of an arm whose mounting came from motion:
   // taken when calibrate_arm accepts it, its hold is over and its forearm axis agrees with the
   // motion's estimate.
